@@ -1,0 +1,46 @@
+//! `documentation/index.html`: the variables with units, and the model's equations.
+
+use rustfmu::fmi2::FmuEntry;
+use rustfmu::fmi2::variables::Value;
+
+fn escape(s: &str) -> String {
+    quick_xml::escape::escape(s).into_owned()
+}
+
+pub fn index_html(entry: &FmuEntry) -> String {
+    let info = entry.info;
+    let mut rows = String::new();
+    for v in entry.variables {
+        let start = if v.has_start() {
+            match v.start {
+                Value::Real(x) => format!("{x:?}"),
+                Value::Integer(x) => x.to_string(),
+                Value::Boolean(x) => x.to_string(),
+            }
+        } else {
+            String::new()
+        };
+        rows.push_str(&format!(
+            "<tr><td><code>{}</code></td><td>{}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            escape(v.name),
+            v.value_reference,
+            v.causality,
+            v.variability,
+            escape(v.unit),
+            start,
+            escape(v.description.trim())
+        ));
+    }
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\
+         <style>body{{font-family:sans-serif;max-width:60em;margin:auto}}td,th{{padding:2px 8px;text-align:left}}\
+         tr:nth-child(even){{background:#f3f3f3}}pre{{background:#f6f6f6;padding:8px}}</style></head><body>\n\
+         <h1>{id}</h1>\n<p>{description}</p>\n<p>FMI 2.0 co-simulation FMU, version {version}, built by rustfmu.</p>\n\
+         <h2>Variables</h2>\n<table><tr><th>name</th><th>value reference</th><th>causality</th><th>variability</th>\
+         <th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n{doc}\n</body></html>\n",
+        id = escape(info.identifier),
+        description = escape(info.description),
+        version = escape(info.version),
+        doc = info.documentation_html,
+    )
+}

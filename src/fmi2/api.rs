@@ -1,0 +1,640 @@
+//! The C boundary: every `fmi2*` function, generic over the model. The export macro
+//! ([`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)) forwards the `#[no_mangle]`
+//! symbols of an FMU crate here. This is the one module with `unsafe`: pointers from the importer
+//! are checked for NULL and turned into slices and references, and every call runs under
+//! `catch_unwind`, so no panic crosses into the host.
+#![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
+
+use super::abi::*;
+use super::instance::{Call, Instance, State};
+use super::logging::Logger;
+use super::model::CoSimModel;
+use super::variables::FmiValue;
+use std::ffi::CStr;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ptr;
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        format!("panic: {s}")
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        format!("panic: {s}")
+    } else {
+        "panic".into()
+    }
+}
+
+/// Runs `f` on the instance behind `c`, after the state check for `call`.
+/// A NULL instance cannot be logged to: the answer is fmi2Error.
+unsafe fn with_instance<M: CoSimModel>(
+    c: fmi2Component,
+    call: Call,
+    function: &str,
+    f: impl FnOnce(&mut Instance<M>) -> fmi2Status,
+) -> fmi2Status {
+    if c.is_null() {
+        return fmi2Error;
+    }
+    let instance = c as *mut Instance<M>;
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and
+        // that was not freed (the standard forbids any other); calls on it are not concurrent.
+        let inst = unsafe { &mut *instance };
+        match inst.check_state(call, function) {
+            Ok(()) => f(inst),
+            Err(status) => status,
+        }
+    }));
+    match result {
+        Ok(status) => status,
+        Err(payload) => {
+            let what = panic_text(&*payload);
+            // SAFETY: as above; the closure's borrow ended with the unwind.
+            let inst = unsafe { &mut *instance };
+            let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
+            fmi2Fatal
+        }
+    }
+}
+
+/// An importer's array argument: NULL is fine only when it is empty.
+unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+    if n == 0 {
+        Some(&[])
+    } else if p.is_null() {
+        None
+    } else {
+        // SAFETY: the standard makes the importer pass n valid elements.
+        Some(unsafe { std::slice::from_raw_parts(p, n) })
+    }
+}
+
+unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+    if n == 0 {
+        Some(&mut [])
+    } else if p.is_null() {
+        None
+    } else {
+        // SAFETY: as for `slice`.
+        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
+    }
+}
+
+unsafe fn text<'a>(s: fmi2String) -> Option<std::borrow::Cow<'a, str>> {
+    if s.is_null() {
+        None
+    } else {
+        // SAFETY: the importer passes NUL-terminated strings.
+        Some(unsafe { CStr::from_ptr(s) }.to_string_lossy())
+    }
+}
+
+pub fn get_types_platform() -> fmi2String {
+    TYPES_PLATFORM.as_ptr()
+}
+
+pub fn get_version() -> fmi2String {
+    VERSION.as_ptr()
+}
+
+pub unsafe fn instantiate<M: CoSimModel>(
+    instance_name: fmi2String,
+    fmu_type: fmi2Type,
+    guid: fmi2String,
+    resource_location: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    let made = catch_unwind(AssertUnwindSafe(|| {
+        if functions.is_null() {
+            return ptr::null_mut();
+        }
+        // SAFETY: non-NULL, and the standard makes it point to the importer's callbacks.
+        let callbacks = unsafe { *functions };
+        // SAFETY: NUL-terminated strings from the importer, or NULL.
+        let (name, guid, resources) = unsafe { (text(instance_name), text(guid), text(resource_location)) };
+        let Some(logger) = Logger::new(&callbacks, name.as_deref().unwrap_or(""), logging_on != fmi2False) else {
+            return ptr::null_mut();
+        };
+        let refuse = |why: String| {
+            logger.log(
+                fmi2Error,
+                super::logging::Category::StatusError,
+                &format!("fmi2Instantiate: {why}"),
+            );
+            ptr::null_mut()
+        };
+        match name.as_deref() {
+            None => return refuse("instanceName is NULL; an instance needs a name".into()),
+            Some("") => return refuse("instanceName is empty; an instance needs a name".into()),
+            Some(_) => {}
+        }
+        if fmu_type != fmi2CoSimulation {
+            return refuse(format!(
+                "fmuType = {fmu_type}{}: {} is a co-simulation FMU only (fmuType must be fmi2CoSimulation = 1)",
+                if fmu_type == fmi2ModelExchange {
+                    " (fmi2ModelExchange)"
+                } else {
+                    ""
+                },
+                M::INFO.identifier
+            ));
+        }
+        let own_guid = match super::xml::guid::<M>() {
+            Ok(g) => g,
+            Err(e) => return refuse(format!("the model's declarations are invalid: {e}")),
+        };
+        match guid.as_deref() {
+            None => return refuse(format!("GUID is NULL; expected {own_guid}")),
+            Some(g) if g != own_guid => {
+                return refuse(format!(
+                    "GUID '{g}' does not match this binary's {own_guid}: modelDescription.xml and \
+                     binaries/ come from different builds of {}",
+                    M::INFO.identifier
+                ));
+            }
+            Some(_) => {}
+        }
+        let inst = Instance::<M>::new(logger, own_guid);
+        inst.event(|| match resources.as_deref().map(super::resources::resource_dir) {
+            Some(Some(dir)) => format!("resourceLocation resolves to {} (no resources needed)", dir.display()),
+            Some(None) => format!("resourceLocation {resources:?} is not a file URI; no resources are needed"),
+            None => "resourceLocation is NULL; no resources are needed".into(),
+        });
+        Box::into_raw(Box::new(inst)) as fmi2Component
+    }));
+    made.unwrap_or(ptr::null_mut())
+}
+
+pub unsafe fn free_instance<M: CoSimModel>(c: fmi2Component) {
+    if c.is_null() {
+        return;
+    }
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: returned by fmi2Instantiate as a Box<Instance<M>>, freed once (standard).
+        drop(unsafe { Box::from_raw(c as *mut Instance<M>) });
+    }));
+}
+
+pub unsafe fn set_debug_logging<M: CoSimModel>(
+    c: fmi2Component,
+    logging_on: fmi2Boolean,
+    n: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetDebugLogging, "fmi2SetDebugLogging", |inst| {
+            let Some(cats) = slice(categories, n) else {
+                return inst.error(&format!(
+                    "fmi2SetDebugLogging: categories is NULL with nCategories = {n}"
+                ));
+            };
+            let mut names = Vec::with_capacity(n);
+            for (i, s) in cats.iter().enumerate() {
+                match text(*s) {
+                    Some(t) => names.push(t.into_owned()),
+                    None => return inst.error(&format!("fmi2SetDebugLogging: categories[{i}] is NULL")),
+                }
+            }
+            inst.set_debug_logging(logging_on != fmi2False, &names)
+        })
+    }
+}
+
+pub unsafe fn setup_experiment<M: CoSimModel>(
+    c: fmi2Component,
+    tolerance_defined: fmi2Boolean,
+    tolerance: fmi2Real,
+    start_time: fmi2Real,
+    stop_time_defined: fmi2Boolean,
+    stop_time: fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetupExperiment, "fmi2SetupExperiment", |inst| {
+            inst.trace(|| {
+                format!(
+                    "fmi2SetupExperiment(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, \
+                     startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
+                )
+            });
+            inst.setup_experiment(
+                (tolerance_defined != fmi2False).then_some(tolerance),
+                start_time,
+                (stop_time_defined != fmi2False).then_some(stop_time),
+            )
+        })
+    }
+}
+
+macro_rules! simple_call {
+    ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
+        pub unsafe fn $fn_name<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+            unsafe {
+                with_instance::<M>(c, Call::$call, $c_name, |inst| {
+                    inst.trace(|| concat!($c_name, "()").to_string());
+                    inst.$method()
+                })
+            }
+        }
+    };
+}
+
+simple_call!(
+    enter_initialization_mode,
+    EnterInitializationMode,
+    "fmi2EnterInitializationMode",
+    enter_initialization_mode
+);
+simple_call!(
+    exit_initialization_mode,
+    ExitInitializationMode,
+    "fmi2ExitInitializationMode",
+    exit_initialization_mode
+);
+simple_call!(terminate, Terminate, "fmi2Terminate", terminate);
+simple_call!(reset, Reset, "fmi2Reset", reset);
+
+pub unsafe fn get<M: CoSimModel, T: FmiValue>(
+    c: fmi2Component,
+    function: &'static str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut T,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, function, |inst| {
+            match (slice(vr, nvr), slice_mut(value, nvr)) {
+                (Some(vrs), Some(out)) => inst.get_values(function, vrs, out),
+                _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn set<M: CoSimModel, T: FmiValue>(
+    c: fmi2Component,
+    function: &'static str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const T,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetValues, function, |inst| {
+            match (slice(vr, nvr), slice(value, nvr)) {
+                (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
+                _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+/// Booleans cross the ABI as `fmi2Boolean` (int): converted to and from `bool` here.
+pub unsafe fn get_boolean<M: CoSimModel>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, "fmi2GetBoolean", |inst| {
+            match (slice(vr, nvr), slice_mut(value, nvr)) {
+                (Some(vrs), Some(out)) => {
+                    for (v, o) in vrs.iter().zip(out.iter_mut()) {
+                        let mut b = [false];
+                        let status = inst.get_values("fmi2GetBoolean", std::slice::from_ref(v), &mut b);
+                        if status != fmi2OK {
+                            return status;
+                        }
+                        *o = if b[0] { fmi2True } else { fmi2False };
+                    }
+                    fmi2OK
+                }
+                _ => inst.error(&format!("fmi2GetBoolean: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_boolean<M: CoSimModel>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetValues, "fmi2SetBoolean", |inst| {
+            match (slice(vr, nvr), slice(value, nvr)) {
+                (Some(vrs), Some(values)) => {
+                    let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
+                    inst.set_values("fmi2SetBoolean", vrs, &values)
+                }
+                _ => inst.error(&format!("fmi2SetBoolean: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+/// No model here has String variables: every value reference is unknown, nvr = 0 is fine.
+pub unsafe fn get_string<M: CoSimModel>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, "fmi2GetString", |inst| {
+            match (slice(vr, nvr), slice_mut(value, nvr)) {
+                (Some([]), _) => fmi2OK,
+                (Some([first, ..]), Some(_)) => inst.error(&format!(
+                    "fmi2GetString: value reference {first} is not a String variable of {} (it has none)",
+                    M::INFO.identifier
+                )),
+                _ => inst.error(&format!("fmi2GetString: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_string<M: CoSimModel>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetValues, "fmi2SetString", |inst| {
+            match (slice(vr, nvr), slice(value, nvr)) {
+                (Some([]), _) => fmi2OK,
+                (Some([first, ..]), Some(_)) => inst.error(&format!(
+                    "fmi2SetString: value reference {first} is not a String variable of {} (it has none)",
+                    M::INFO.identifier
+                )),
+                _ => inst.error(&format!("fmi2SetString: vr or value is NULL with nvr = {nvr}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn get_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2GetFMUstate", |inst| {
+            if state.is_null() {
+                return inst.error("fmi2GetFMUstate: FMUstate is NULL");
+            }
+            let existing = *state as *mut super::instance::Sim<M>;
+            if existing.is_null() {
+                *state = Box::into_raw(Box::new(inst.sim.clone())) as fmi2FMUstate;
+            } else {
+                // SAFETY: a non-NULL *FMUstate is one this FMU handed out before (standard).
+                (*existing).clone_from(&inst.sim);
+            }
+            fmi2OK
+        })
+    }
+}
+
+pub unsafe fn set_fmu_state<M: CoSimModel>(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2SetFMUstate", |inst| {
+            if state.is_null() {
+                return inst.error("fmi2SetFMUstate: FMUstate is NULL");
+            }
+            // SAFETY: handed out by fmi2GetFMUstate or fmi2DeSerializeFMUstate of this FMU.
+            inst.sim.clone_from(&*(state as *const super::instance::Sim<M>));
+            fmi2OK
+        })
+    }
+}
+
+pub unsafe fn free_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |_inst| {
+            if !state.is_null() && !(*state).is_null() {
+                // SAFETY: a Box<Sim<M>> handed out by this FMU, freed once.
+                drop(Box::from_raw(*state as *mut super::instance::Sim<M>));
+                *state = ptr::null_mut();
+            }
+            fmi2OK
+        })
+    }
+}
+
+pub unsafe fn serialized_fmu_state_size<M: CoSimModel>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2SerializedFMUstateSize", |inst| {
+            if state.is_null() || size.is_null() {
+                return inst.error("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
+            }
+            match super::state::serialize(&inst.guid, &*(state as *const super::instance::Sim<M>)) {
+                Ok(bytes) => {
+                    *size = bytes.len();
+                    fmi2OK
+                }
+                Err(e) => inst.error(&format!("fmi2SerializedFMUstateSize: {e}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn serialize_fmu_state<M: CoSimModel>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    bytes: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2SerializeFMUstate", |inst| {
+            if state.is_null() || bytes.is_null() {
+                return inst.error("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
+            }
+            match super::state::serialize(&inst.guid, &*(state as *const super::instance::Sim<M>)) {
+                Ok(data) if data.len() == size => {
+                    ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
+                    fmi2OK
+                }
+                Ok(data) => inst.error(&format!(
+                    "fmi2SerializeFMUstate: size = {size}, but the state takes {} bytes \
+                     (ask fmi2SerializedFMUstateSize)",
+                    data.len()
+                )),
+                Err(e) => inst.error(&format!("fmi2SerializeFMUstate: {e}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn deserialize_fmu_state<M: CoSimModel>(
+    c: fmi2Component,
+    bytes: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::FmuState, "fmi2DeSerializeFMUstate", |inst| {
+            if state.is_null() {
+                return inst.error("fmi2DeSerializeFMUstate: FMUstate is NULL");
+            }
+            let Some(data) = slice(bytes as *const u8, size) else {
+                return inst.error(&format!(
+                    "fmi2DeSerializeFMUstate: serializedState is NULL with size = {size}"
+                ));
+            };
+            match super::state::deserialize::<M>(&inst.guid, data) {
+                Ok(sim) => {
+                    let existing = *state as *mut super::instance::Sim<M>;
+                    if existing.is_null() {
+                        *state = Box::into_raw(Box::new(sim)) as fmi2FMUstate;
+                    } else {
+                        *existing = sim;
+                    }
+                    fmi2OK
+                }
+                Err(e) => inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
+            }
+        })
+    }
+}
+
+pub unsafe fn get_directional_derivative<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(
+            c,
+            Call::GetDirectionalDerivative,
+            "fmi2GetDirectionalDerivative",
+            |inst| inst.error("fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative=\"false\")"),
+        )
+    }
+}
+
+pub unsafe fn set_real_input_derivatives<M: CoSimModel>(c: fmi2Component, nvr: usize) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(
+            c,
+            Call::SetRealInputDerivatives,
+            "fmi2SetRealInputDerivatives",
+            |inst| {
+                if nvr == 0 {
+                    return fmi2OK;
+                }
+                inst.error("fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs=\"false\")")
+            },
+        )
+    }
+}
+
+pub unsafe fn get_real_output_derivatives<M: CoSimModel>(c: fmi2Component, nvr: usize) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(
+            c,
+            Call::GetRealOutputDerivatives,
+            "fmi2GetRealOutputDerivatives",
+            |inst| {
+                if nvr == 0 {
+                    return fmi2OK;
+                }
+                inst.error("fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=\"0\")")
+            },
+        )
+    }
+}
+
+pub unsafe fn do_step<M: CoSimModel>(
+    c: fmi2Component,
+    current_communication_point: fmi2Real,
+    communication_step_size: fmi2Real,
+    _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::DoStep, "fmi2DoStep", |inst| {
+            inst.do_step(current_communication_point, communication_step_size)
+        })
+    }
+}
+
+pub unsafe fn cancel_step<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::CancelStep, "fmi2CancelStep", |_| {
+            unreachable!("CancelStep is allowed in no state of a synchronous FMU")
+        })
+    }
+}
+
+pub unsafe fn get_status<M: CoSimModel>(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetStatus, "fmi2GetStatus", |inst| {
+            if value.is_null() {
+                return inst.error("fmi2GetStatus: value is NULL");
+            }
+            inst.status_unavailable("fmi2GetStatus", kind)
+        })
+    }
+}
+
+pub unsafe fn get_real_status<M: CoSimModel>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetStatus, "fmi2GetRealStatus", |inst| match value.as_mut() {
+            Some(v) => inst.real_status(kind, v),
+            None => inst.error("fmi2GetRealStatus: value is NULL"),
+        })
+    }
+}
+
+pub unsafe fn get_integer_status<M: CoSimModel>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetStatus, "fmi2GetIntegerStatus", |inst| {
+            if value.is_null() {
+                return inst.error("fmi2GetIntegerStatus: value is NULL");
+            }
+            inst.status_unavailable("fmi2GetIntegerStatus", kind)
+        })
+    }
+}
+
+pub unsafe fn get_boolean_status<M: CoSimModel>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetStatus, "fmi2GetBooleanStatus", |inst| {
+            match value.as_mut() {
+                Some(v) => inst.boolean_status(kind, v),
+                None => inst.error("fmi2GetBooleanStatus: value is NULL"),
+            }
+        })
+    }
+}
+
+pub unsafe fn get_string_status<M: CoSimModel>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::GetStatus, "fmi2GetStringStatus", |inst| {
+            if value.is_null() {
+                return inst.error("fmi2GetStringStatus: value is NULL");
+            }
+            inst.status_unavailable("fmi2GetStringStatus", kind)
+        })
+    }
+}
+
+/// The state an instance is in, for tests written against the runtime in Rust.
+pub unsafe fn state_of<M: CoSimModel>(c: fmi2Component) -> Option<State> {
+    // SAFETY: as in `with_instance`.
+    unsafe { (c as *const Instance<M>).as_ref().map(|i| i.state()) }
+}

@@ -1,0 +1,299 @@
+//! `export_fmi2_cosimulation!(Model)`: the one line an FMU crate needs. It defines every
+//! function of the FMI 2.0 co-simulation interface as an unmangled `extern "C"` symbol with the
+//! standard's exact signature and forwards it to [`crate::fmi2::api`].
+
+#[macro_export]
+macro_rules! export_fmi2_cosimulation {
+    ($model:ty) => {
+        #[allow(non_snake_case, clippy::missing_safety_doc)]
+        mod fmi2_exports {
+            use super::*;
+            use $crate::fmi2::abi::*;
+            use $crate::fmi2::api;
+            type M = $model;
+
+            #[unsafe(no_mangle)]
+            pub extern "C" fn fmi2GetTypesPlatform() -> fmi2String {
+                api::get_types_platform()
+            }
+            #[unsafe(no_mangle)]
+            pub extern "C" fn fmi2GetVersion() -> fmi2String {
+                api::get_version()
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetDebugLogging(
+                c: fmi2Component,
+                loggingOn: fmi2Boolean,
+                nCategories: usize,
+                categories: *const fmi2String,
+            ) -> fmi2Status {
+                unsafe { api::set_debug_logging::<M>(c, loggingOn, nCategories, categories) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2Instantiate(
+                instanceName: fmi2String,
+                fmuType: fmi2Type,
+                fmuGUID: fmi2String,
+                fmuResourceLocation: fmi2String,
+                functions: *const fmi2CallbackFunctions,
+                visible: fmi2Boolean,
+                loggingOn: fmi2Boolean,
+            ) -> fmi2Component {
+                unsafe {
+                    api::instantiate::<M>(
+                        instanceName,
+                        fmuType,
+                        fmuGUID,
+                        fmuResourceLocation,
+                        functions,
+                        visible,
+                        loggingOn,
+                    )
+                }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+                unsafe { api::free_instance::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetupExperiment(
+                c: fmi2Component,
+                toleranceDefined: fmi2Boolean,
+                tolerance: fmi2Real,
+                startTime: fmi2Real,
+                stopTimeDefined: fmi2Boolean,
+                stopTime: fmi2Real,
+            ) -> fmi2Status {
+                unsafe {
+                    api::setup_experiment::<M>(
+                        c,
+                        toleranceDefined,
+                        tolerance,
+                        startTime,
+                        stopTimeDefined,
+                        stopTime,
+                    )
+                }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+                unsafe { api::enter_initialization_mode::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+                unsafe { api::exit_initialization_mode::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+                unsafe { api::terminate::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+                unsafe { api::reset::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetReal(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *mut fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::get::<M, f64>(c, "fmi2GetReal", vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetInteger(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *mut fmi2Integer,
+            ) -> fmi2Status {
+                unsafe { api::get::<M, i32>(c, "fmi2GetInteger", vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetBoolean(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *mut fmi2Boolean,
+            ) -> fmi2Status {
+                unsafe { api::get_boolean::<M>(c, vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetString(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *mut fmi2String,
+            ) -> fmi2Status {
+                unsafe { api::get_string::<M>(c, vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetReal(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *const fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::set::<M, f64>(c, "fmi2SetReal", vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetInteger(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *const fmi2Integer,
+            ) -> fmi2Status {
+                unsafe { api::set::<M, i32>(c, "fmi2SetInteger", vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetBoolean(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *const fmi2Boolean,
+            ) -> fmi2Status {
+                unsafe { api::set_boolean::<M>(c, vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetString(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                nvr: usize,
+                value: *const fmi2String,
+            ) -> fmi2Status {
+                unsafe { api::set_string::<M>(c, vr, nvr, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
+                unsafe { api::get_fmu_state::<M>(c, FMUstate) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+                unsafe { api::set_fmu_state::<M>(c, FMUstate) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
+                unsafe { api::free_fmu_state::<M>(c, FMUstate) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+                c: fmi2Component,
+                FMUstate: fmi2FMUstate,
+                size: *mut usize,
+            ) -> fmi2Status {
+                unsafe { api::serialized_fmu_state_size::<M>(c, FMUstate, size) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SerializeFMUstate(
+                c: fmi2Component,
+                FMUstate: fmi2FMUstate,
+                serializedState: *mut fmi2Byte,
+                size: usize,
+            ) -> fmi2Status {
+                unsafe { api::serialize_fmu_state::<M>(c, FMUstate, serializedState, size) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+                c: fmi2Component,
+                serializedState: *const fmi2Byte,
+                size: usize,
+                FMUstate: *mut fmi2FMUstate,
+            ) -> fmi2Status {
+                unsafe { api::deserialize_fmu_state::<M>(c, serializedState, size, FMUstate) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+                c: fmi2Component,
+                _vUnknown_ref: *const fmi2ValueReference,
+                _nUnknown: usize,
+                _vKnown_ref: *const fmi2ValueReference,
+                _nKnown: usize,
+                _dvKnown: *const fmi2Real,
+                _dvUnknown: *mut fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::get_directional_derivative::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+                c: fmi2Component,
+                _vr: *const fmi2ValueReference,
+                nvr: usize,
+                _order: *const fmi2Integer,
+                _value: *const fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::set_real_input_derivatives::<M>(c, nvr) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+                c: fmi2Component,
+                _vr: *const fmi2ValueReference,
+                nvr: usize,
+                _order: *const fmi2Integer,
+                _value: *mut fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::get_real_output_derivatives::<M>(c, nvr) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2DoStep(
+                c: fmi2Component,
+                currentCommunicationPoint: fmi2Real,
+                communicationStepSize: fmi2Real,
+                noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+            ) -> fmi2Status {
+                unsafe {
+                    api::do_step::<M>(
+                        c,
+                        currentCommunicationPoint,
+                        communicationStepSize,
+                        noSetFMUStatePriorToCurrentPoint,
+                    )
+                }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+                unsafe { api::cancel_step::<M>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetStatus(
+                c: fmi2Component,
+                s: fmi2StatusKind,
+                value: *mut fmi2Status,
+            ) -> fmi2Status {
+                unsafe { api::get_status::<M>(c, s, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetRealStatus(
+                c: fmi2Component,
+                s: fmi2StatusKind,
+                value: *mut fmi2Real,
+            ) -> fmi2Status {
+                unsafe { api::get_real_status::<M>(c, s, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetIntegerStatus(
+                c: fmi2Component,
+                s: fmi2StatusKind,
+                value: *mut fmi2Integer,
+            ) -> fmi2Status {
+                unsafe { api::get_integer_status::<M>(c, s, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetBooleanStatus(
+                c: fmi2Component,
+                s: fmi2StatusKind,
+                value: *mut fmi2Boolean,
+            ) -> fmi2Status {
+                unsafe { api::get_boolean_status::<M>(c, s, value) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetStringStatus(
+                c: fmi2Component,
+                s: fmi2StatusKind,
+                value: *mut fmi2String,
+            ) -> fmi2Status {
+                unsafe { api::get_string_status::<M>(c, s, value) }
+            }
+        }
+        pub use fmi2_exports::*;
+    };
+}

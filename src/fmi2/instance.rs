@@ -1,0 +1,518 @@
+//! One FMU instance: the standard's state machine as a table, argument checks, and the calls
+//! into the model. Safe Rust: the C boundary (pointers, panics) is in [`super::api`].
+#![allow(non_upper_case_globals)]
+
+use super::abi::*;
+use super::logging::{Category, Logger};
+use super::model::CoSimModel;
+use super::variables::{Causality, FmiValue, Initial, Value, VarDecl, VarType, Variability, VariableSet};
+use serde::{Deserialize, Serialize};
+
+/// States of the FMI 2.0 co-simulation state machine (section 4.2.4). `StepInProgress` does not
+/// occur: every step here is synchronous.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[repr(u8)]
+pub enum State {
+    Instantiated = 0,
+    InitializationMode = 1,
+    StepComplete = 2,
+    StepFailed = 3,
+    StepCanceled = 4,
+    Terminated = 5,
+    Error = 6,
+    Fatal = 7,
+}
+
+const fn bit(s: State) -> u16 {
+    1 << s as u8
+}
+const INSTANTIATED: u16 = bit(State::Instantiated);
+const INIT: u16 = bit(State::InitializationMode);
+const STEP_COMPLETE: u16 = bit(State::StepComplete);
+const STEP_FAILED: u16 = bit(State::StepFailed);
+const STEP_CANCELED: u16 = bit(State::StepCanceled);
+const TERMINATED: u16 = bit(State::Terminated);
+const ERROR: u16 = bit(State::Error);
+const FATAL: u16 = bit(State::Fatal);
+const ANY_BUT_FATAL: u16 = INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR;
+
+/// The functions whose legality depends on the state, with the states each is allowed in,
+/// from the standard's table in section 4.2.4 (as the Reference-FMUs encode it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Call {
+    SetDebugLogging,
+    FreeInstance,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    GetValues,
+    SetValues,
+    FmuState,
+    GetDirectionalDerivative,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+}
+
+impl Call {
+    pub const fn allowed_in(self) -> u16 {
+        match self {
+            Call::SetDebugLogging => ANY_BUT_FATAL,
+            Call::FreeInstance => ANY_BUT_FATAL | FATAL,
+            Call::SetupExperiment => INSTANTIATED,
+            Call::EnterInitializationMode => INSTANTIATED,
+            Call::ExitInitializationMode => INIT,
+            Call::Terminate => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED,
+            Call::Reset => ANY_BUT_FATAL,
+            Call::GetValues => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
+            Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE,
+            Call::FmuState => ANY_BUT_FATAL,
+            Call::GetDirectionalDerivative => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
+            Call::SetRealInputDerivatives => INSTANTIATED | INIT | STEP_COMPLETE,
+            Call::GetRealOutputDerivatives => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
+            Call::DoStep => STEP_COMPLETE,
+            Call::CancelStep => 0,
+            Call::GetStatus => STEP_COMPLETE | STEP_FAILED | TERMINATED,
+        }
+    }
+}
+
+fn state_names(mask: u16) -> String {
+    const ALL: [State; 8] = [
+        State::Instantiated,
+        State::InitializationMode,
+        State::StepComplete,
+        State::StepFailed,
+        State::StepCanceled,
+        State::Terminated,
+        State::Error,
+        State::Fatal,
+    ];
+    let names: Vec<String> = ALL
+        .iter()
+        .filter(|s| mask & bit(**s) != 0)
+        .map(|s| format!("{s:?}"))
+        .collect();
+    if names.is_empty() {
+        "no state of this FMU".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// Everything an FMU state snapshot holds: the model and the runtime's own bookkeeping.
+/// The logger and the importer's callbacks are not part of it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Sim<M> {
+    pub state: State,
+    pub model: M,
+    pub start_time: f64,
+    pub stop_time: Option<f64>,
+    pub tolerance: Option<f64>,
+    pub time: f64,
+    pub last_successful_time: f64,
+    pub terminate_requested: bool,
+    /// Calculated variables are stale in initialization mode after a set.
+    pub init_dirty: bool,
+}
+
+impl<M: CoSimModel> Sim<M> {
+    pub fn new() -> Self {
+        Sim {
+            state: State::Instantiated,
+            model: M::new(),
+            start_time: 0.0,
+            stop_time: None,
+            tolerance: None,
+            time: 0.0,
+            last_successful_time: 0.0,
+            terminate_requested: false,
+            init_dirty: true,
+        }
+    }
+}
+
+impl<M: CoSimModel> Default for Sim<M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+pub struct Instance<M: CoSimModel> {
+    pub logger: Logger,
+    pub guid: String,
+    pub sim: Sim<M>,
+}
+
+type Outcome = Result<(), fmi2Status>;
+
+impl<M: CoSimModel> Instance<M> {
+    pub fn new(logger: Logger, guid: String) -> Self {
+        Instance {
+            logger,
+            guid,
+            sim: Sim::new(),
+        }
+    }
+
+    pub fn state(&self) -> State {
+        self.sim.state
+    }
+
+    pub fn model(&self) -> &M {
+        &self.sim.model
+    }
+
+    pub fn error(&self, message: &str) -> fmi2Status {
+        self.logger.log(fmi2Error, Category::StatusError, message);
+        fmi2Error
+    }
+
+    pub fn event(&self, message: impl FnOnce() -> String) {
+        if self.logger.wants(fmi2OK, Category::Events) {
+            self.logger.log(fmi2OK, Category::Events, &message());
+        }
+    }
+
+    pub fn trace(&self, message: impl FnOnce() -> String) {
+        if self.logger.wants(fmi2OK, Category::Calls) {
+            self.logger.log(fmi2OK, Category::Calls, &message());
+        }
+    }
+
+    /// A panic was caught at the boundary: nothing about this instance can be trusted any more.
+    pub fn fatal(&mut self, function: &str, what: &str) {
+        self.sim.state = State::Fatal;
+        self.logger.log(
+            fmi2Fatal,
+            Category::StatusFatal,
+            &format!("{function}: internal error ({what}); this instance can only be freed"),
+        );
+    }
+
+    /// The one place where the state machine is enforced.
+    pub fn check_state(&self, call: Call, function: &str) -> Outcome {
+        let allowed = call.allowed_in();
+        if allowed & bit(self.sim.state) != 0 {
+            return Ok(());
+        }
+        Err(self.error(&format!(
+            "{function} is not allowed in state {:?} (allowed in: {})",
+            self.sim.state,
+            state_names(allowed)
+        )))
+    }
+
+    pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[String]) -> fmi2Status {
+        let mut known = Vec::with_capacity(categories.len());
+        for name in categories {
+            match Category::from_name(name) {
+                Some(c) => known.push(c),
+                None => {
+                    return self.error(&format!(
+                        "fmi2SetDebugLogging: unknown log category '{name}' (declared: {})",
+                        super::logging::CATEGORIES
+                            .iter()
+                            .map(|c| c.0)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ));
+                }
+            }
+        }
+        self.logger.set_debug_logging(logging_on, &known);
+        fmi2OK
+    }
+
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> fmi2Status {
+        if !start.is_finite() {
+            return self.error(&format!("fmi2SetupExperiment: startTime = {start} is not finite"));
+        }
+        if let Some(tol) = tolerance
+            && !(tol.is_finite() && tol > 0.0)
+        {
+            return self.error(&format!(
+                "fmi2SetupExperiment: tolerance = {tol} must be finite and > 0"
+            ));
+        }
+        if let Some(stop) = stop
+            && !(stop.is_finite() && stop >= start)
+        {
+            return self.error(&format!(
+                "fmi2SetupExperiment: stopTime = {stop} must be finite and not before startTime = {start}"
+            ));
+        }
+        self.sim.tolerance = tolerance;
+        self.sim.start_time = start;
+        self.sim.stop_time = stop;
+        self.sim.time = start;
+        self.sim.last_successful_time = start;
+        fmi2OK
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> fmi2Status {
+        self.sim.state = State::InitializationMode;
+        self.sim.init_dirty = true;
+        fmi2OK
+    }
+
+    /// Brings the calculated variables up to date with what was set in initialization mode.
+    fn initialize_model(&mut self, function: &str) -> Outcome {
+        if !self.sim.init_dirty {
+            return Ok(());
+        }
+        match self.sim.model.initialize(self.sim.start_time, self.sim.tolerance) {
+            Ok(()) => {
+                self.sim.init_dirty = false;
+                Ok(())
+            }
+            Err(message) => Err(self.error(&format!("{function}: initialization failed: {message}"))),
+        }
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> fmi2Status {
+        self.sim.init_dirty = true;
+        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode") {
+            return status;
+        }
+        self.sim.state = State::StepComplete;
+        self.sim.time = self.sim.start_time;
+        self.sim.last_successful_time = self.sim.start_time;
+        self.event(|| format!("initialized at t = {}", self.sim.start_time));
+        fmi2OK
+    }
+
+    pub fn terminate(&mut self) -> fmi2Status {
+        self.sim.state = State::Terminated;
+        self.event(|| format!("terminated at t = {}", self.sim.time));
+        fmi2OK
+    }
+
+    pub fn reset(&mut self) -> fmi2Status {
+        self.sim = Sim::new();
+        self.event(|| "reset: every variable is back at its start value".into());
+        fmi2OK
+    }
+
+    pub fn get_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model(function)
+        {
+            return status;
+        }
+        let vars = self.sim.model.vars();
+        for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            match vars.get(*vr) {
+                Some(value) => match T::from_value(value) {
+                    Some(v) => *slot = v,
+                    None => return self.type_mismatch(function, *vr, value.var_type(), T::TYPE),
+                },
+                None => return self.unknown_vr(function, *vr, T::TYPE),
+            }
+        }
+        fmi2OK
+    }
+
+    fn unknown_vr(&self, function: &str, vr: u32, ty: VarType) -> fmi2Status {
+        self.error(&format!(
+            "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
+            M::INFO.identifier
+        ))
+    }
+
+    fn type_mismatch(&self, function: &str, vr: u32, is: VarType, asked: VarType) -> fmi2Status {
+        let name = M::Vars::decl(vr).map_or("?", |d| d.name);
+        self.error(&format!(
+            "{function}: value reference {vr} ('{name}') is a {is:?} variable, not a {asked:?}"
+        ))
+    }
+
+    /// Whether the standard lets this variable be set in the current state (FMI 2.0, 4.2.4).
+    fn settable(&self, decl: &VarDecl) -> bool {
+        let initial_exact_or_approx = matches!(decl.effective_initial(), Some(Initial::Exact | Initial::Approx));
+        if decl.variability == Variability::Constant {
+            return false;
+        }
+        match self.sim.state {
+            State::Instantiated => initial_exact_or_approx || decl.causality == Causality::Input,
+            State::InitializationMode => {
+                decl.causality == Causality::Input || decl.effective_initial() == Some(Initial::Exact)
+            }
+            State::StepComplete => {
+                decl.causality == Causality::Input
+                    || (decl.causality == Causality::Parameter && decl.variability == Variability::Tunable)
+            }
+            _ => false,
+        }
+    }
+
+    fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static VarDecl, fmi2Status> {
+        let Some(decl) = M::Vars::decl(vr) else {
+            return Err(self.unknown_vr(function, vr, value.var_type()));
+        };
+        if decl.var_type != value.var_type() {
+            return Err(self.type_mismatch(function, vr, decl.var_type, value.var_type()));
+        }
+        if !self.settable(decl) {
+            return Err(self.error(&format!(
+                "{function}: '{}' (vr {vr}, causality {:?}, variability {:?}) cannot be set in state {:?}",
+                decl.name, decl.causality, decl.variability, self.sim.state
+            )));
+        }
+        if let Value::Real(x) = value {
+            if !x.is_finite() {
+                return Err(self.error(&format!(
+                    "{function}: {x} for '{}' (vr {vr}) is not a finite number; refused, value unchanged",
+                    decl.name
+                )));
+            }
+            let below = decl.min.is_some_and(|min| x < min);
+            let above = decl.max.is_some_and(|max| x > max);
+            if below || above {
+                return Err(self.error(&format!(
+                    "{function}: {x} for '{}' (vr {vr}) is outside [{}, {}]; refused, value unchanged",
+                    decl.name,
+                    decl.min.map_or("-inf".into(), |v| v.to_string()),
+                    decl.max.map_or("inf".into(), |v| v.to_string())
+                )));
+            }
+        }
+        if let Err(why) = self.sim.model.check(vr, value) {
+            return Err(self.error(&format!(
+                "{function}: {value:?} for '{}' (vr {vr}) refused: {why}",
+                decl.name
+            )));
+        }
+        Ok(decl)
+    }
+
+    /// Sets all values or none: each is checked before any is stored.
+    pub fn set_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> fmi2Status {
+        let mut parameter_changed = false;
+        for (vr, v) in vrs.iter().zip(values) {
+            match self.check_one(function, *vr, v.into_value()) {
+                Ok(decl) => parameter_changed |= decl.causality == Causality::Parameter,
+                Err(status) => return status,
+            }
+        }
+        let previous =
+            (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.vars().clone());
+        let vars = self.sim.model.vars_mut();
+        for (vr, v) in vrs.iter().zip(values) {
+            vars.set(*vr, v.into_value());
+        }
+        if self.sim.state == State::InitializationMode {
+            self.sim.init_dirty = true;
+        }
+        if let Some(previous) = previous {
+            if let Err(why) = self.sim.model.parameters_changed() {
+                *self.sim.model.vars_mut() = previous;
+                let _ = self.sim.model.parameters_changed();
+                return self.error(&format!(
+                    "{function}: parameter change refused: {why}; values unchanged"
+                ));
+            }
+            self.event(|| format!("{function}: tunable parameters changed at t = {}", self.sim.time));
+        }
+        fmi2OK
+    }
+
+    /// Importers compute communication points as start + n·h or by summing h, so the point
+    /// is compared with a relative tolerance rather than exactly.
+    fn time_matches(&self, t: f64, h: f64) -> bool {
+        let tol = 1e-8 * self.sim.time.abs().max(h).max(1e-300);
+        (t - self.sim.time).abs() <= tol
+    }
+
+    pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
+        if !(h.is_finite() && h > 0.0) {
+            return self.error(&format!(
+                "fmi2DoStep: communicationStepSize = {h} must be finite and > 0; time stays {}",
+                self.sim.time
+            ));
+        }
+        if !t.is_finite() || !self.time_matches(t, h) {
+            return self.error(&format!(
+                "fmi2DoStep: currentCommunicationPoint = {t} does not match the FMU's time {}",
+                self.sim.time
+            ));
+        }
+        let end = t + h;
+        if end <= t {
+            return self.error(&format!(
+                "fmi2DoStep: communicationStepSize = {h} is too small to advance time from {t}"
+            ));
+        }
+        if let Some(stop) = self.sim.stop_time
+            && end > stop + 1e-8 * stop.abs().max(h)
+        {
+            return self.error(&format!(
+                "fmi2DoStep: the step from {t} by {h} ends after stopTime = {stop} set in fmi2SetupExperiment"
+            ));
+        }
+        self.trace(|| format!("fmi2DoStep(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
+        match self.sim.model.do_step(t, h) {
+            Ok(()) => {
+                self.sim.time = end;
+                self.sim.last_successful_time = end;
+                fmi2OK
+            }
+            Err(failure) => {
+                self.sim.time = failure.reached_time;
+                self.sim.last_successful_time = failure.reached_time;
+                self.sim.state = State::StepFailed;
+                self.logger.log(
+                    fmi2Discard,
+                    Category::StatusDiscard,
+                    &format!(
+                        "fmi2DoStep from t = {t} by h = {h} discarded at t = {}: {}",
+                        failure.reached_time, failure.message
+                    ),
+                );
+                fmi2Discard
+            }
+        }
+    }
+
+    pub fn real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {
+        if kind == fmi2LastSuccessfulTime {
+            *value = self.sim.last_successful_time;
+            return fmi2OK;
+        }
+        self.status_unavailable("fmi2GetRealStatus", kind)
+    }
+
+    pub fn boolean_status(&self, kind: fmi2StatusKind, value: &mut fmi2Boolean) -> fmi2Status {
+        if kind == fmi2Terminated {
+            *value = if self.sim.terminate_requested {
+                fmi2True
+            } else {
+                fmi2False
+            };
+            return fmi2OK;
+        }
+        self.status_unavailable("fmi2GetBooleanStatus", kind)
+    }
+
+    /// The standard's answer for a status this FMU does not have: fmi2Discard.
+    pub fn status_unavailable(&self, function: &str, kind: fmi2StatusKind) -> fmi2Status {
+        let what = match kind {
+            fmi2DoStepStatus | fmi2PendingStatus => {
+                "there is no asynchronous step (fmi2DoStep never returns fmi2Pending)"
+            }
+            fmi2LastSuccessfulTime => "fmi2LastSuccessfulTime is a Real status (fmi2GetRealStatus)",
+            fmi2Terminated => "fmi2Terminated is a Boolean status (fmi2GetBooleanStatus)",
+            _ => "unknown fmi2StatusKind",
+        };
+        self.logger.log(
+            fmi2Discard,
+            Category::StatusDiscard,
+            &format!("{function}(kind = {kind}): not available: {what}"),
+        );
+        fmi2Discard
+    }
+}

@@ -1,0 +1,3 @@
+//! Physics and control, as the paper writes them. Plain Rust: no FMI, no unsafe.
+
+pub mod pendulum;

@@ -1,0 +1,170 @@
+//! The double inverted pendulum with actuators at both joints, as the paper models it:
+//! Lipták, Kelemen, Gmitterko, Virgala, Hroncová, "The control of holonomic system".
+//!
+//! State x = (α1, α̇1, α2, α̇2): α1 and α2 are ABSOLUTE angles of links 1 and 2 from the upward
+//! vertical [rad] (the coupling terms use cos(α1 − α2)); inputs u = (M1, M2) are the generalized
+//! torques [N·m] of equations (6) and (7). The right-hand side is generic over dual numbers, so
+//! the Jacobian of equation (12) comes from this same code, exactly, not from finite differences.
+
+use nalgebra::{Matrix2, SMatrix, SVector, Vector2, Vector4};
+use num_dual::{DualNum, DualSVec64, jacobian};
+use serde::{Deserialize, Serialize};
+
+/// Physical parameters. Paper defaults (section 3): m1 = m2 = 0.5 kg, l1 = l2 = 1 m.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PendulumParams {
+    /// Mass of link 1 [kg]
+    pub m1: f64,
+    /// Mass of link 2 [kg]
+    pub m2: f64,
+    /// Length of link 1 [m]
+    pub l1: f64,
+    /// Length of link 2 [m]
+    pub l2: f64,
+    /// Gravitational acceleration [m/s²]
+    pub g: f64,
+}
+
+impl Default for PendulumParams {
+    fn default() -> Self {
+        PendulumParams {
+            m1: 0.5,
+            m2: 0.5,
+            l1: 1.0,
+            l2: 1.0,
+            g: 9.81,
+        }
+    }
+}
+
+/// Indices into the state vector.
+pub const ALPHA1: usize = 0;
+pub const OMEGA1: usize = 1;
+pub const ALPHA2: usize = 2;
+pub const OMEGA2: usize = 3;
+
+impl PendulumParams {
+    /// Refuses a parameter set the equations cannot use, naming the parameter.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [("m1", self.m1), ("m2", self.m2), ("l1", self.l1), ("l2", self.l2)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{name} = {v} must be a finite number > 0"));
+            }
+        }
+        if !self.g.is_finite() {
+            return Err(format!("g = {} must be finite", self.g));
+        }
+        Ok(())
+    }
+
+    /// Mass matrix M(α) of equations (6)–(7):
+    /// [ (m1+m2) l1²/3            m2 l1 l2 cos(α1−α2)/3 ]
+    /// [ m2 l1 l2 cos(α1−α2)/3    m2 l2²/3              ]
+    pub fn mass_matrix<D: DualNum<Primitive = f64> + Copy>(&self, alpha1: D, alpha2: D) -> [[D; 2]; 2] {
+        let c = (alpha1 - alpha2).cos();
+        let m12 = c * (self.m2 * self.l1 * self.l2 / 3.0);
+        [
+            [D::from((self.m1 + self.m2) * self.l1 * self.l1 / 3.0), m12],
+            [m12, D::from(self.m2 * self.l2 * self.l2 / 3.0)],
+        ]
+    }
+
+    /// ẋ = f(x, u): equations (6) and (7) solved for the angular accelerations.
+    ///
+    /// With s = sin(α1 − α2), the velocity terms of (6) reduce to +m2 l1 l2 α̇2² s / 3 and those
+    /// of (7) to −m2 l1 l2 α̇1² s / 3; gravity gives −(m1 g l1/2 + m2 g l1) sin α1 in (6) and
+    /// −m2 g l2/2 sin α2 in (7). Moving them to the right: M(α) α̈ = r.
+    pub fn rhs<D: DualNum<Primitive = f64> + Copy>(&self, x: [D; 4], u: [D; 2]) -> [D; 4] {
+        let [alpha1, omega1, alpha2, omega2] = x;
+        let [torque1, torque2] = u;
+        let s = (alpha1 - alpha2).sin();
+        let k = self.m2 * self.l1 * self.l2 / 3.0;
+        let gravity1 = alpha1.sin() * (self.m1 * self.g * self.l1 / 2.0 + self.m2 * self.g * self.l1);
+        let gravity2 = alpha2.sin() * (self.m2 * self.g * self.l2 / 2.0);
+        let r1 = torque1 - omega2 * omega2 * s * k + gravity1; // eq. (6)
+        let r2 = torque2 + omega1 * omega1 * s * k + gravity2; // eq. (7)
+        let [[m11, m12], [m21, m22]] = self.mass_matrix(alpha1, alpha2);
+        // 2×2 solve by Cramer's rule: det M = m2 l1² l2² (m1 + m2 sin²(α1−α2)) / 9 > 0 always.
+        let det = m11 * m22 - m12 * m21;
+        let acc1 = (r1 * m22 - r2 * m12) / det;
+        let acc2 = (r2 * m11 - r1 * m21) / det;
+        [omega1, acc1, omega2, acc2]
+    }
+
+    /// `rhs` on nalgebra vectors, for the integrator.
+    #[inline]
+    pub fn derivative(&self, x: &Vector4<f64>, u: &Vector2<f64>) -> Vector4<f64> {
+        Vector4::from(self.rhs([x[0], x[1], x[2], x[3]], [u[0], u[1]]))
+    }
+
+    /// Total energy, equations (2)–(5) [J]: E = Ek1 + Ek2 + Ep1 + Ep2. Conserved when M1 = M2 = 0.
+    pub fn energy(&self, x: &Vector4<f64>) -> f64 {
+        let (a1, w1, a2, w2) = (x[ALPHA1], x[OMEGA1], x[ALPHA2], x[OMEGA2]);
+        let (m1, m2, l1, l2, g) = (self.m1, self.m2, self.l1, self.l2, self.g);
+        let ek1 = m1 * l1 * l1 * w1 * w1 / 6.0; // (2)
+        let ek2 = m2 * l1 * l1 * w1 * w1 / 6.0
+            + m2 * l2 * l2 * w2 * w2 / 6.0
+            + m2 * l1 * l2 * w1 * w2 * (a1 - a2).cos() / 3.0; // (3)
+        let ep1 = m1 * g * l1 / 2.0 * a1.cos(); // (4)
+        let ep2 = m2 * g * (l1 * a1.cos() + l2 / 2.0 * a2.cos()); // (5)
+        ek1 + ek2 + ep1 + ep2
+    }
+
+    /// Joint 2 (tip of link 1) and tip of link 2, (x, y) [m], pivot at the origin, y up.
+    pub fn positions(&self, x: &Vector4<f64>) -> [(f64, f64); 2] {
+        let joint = (self.l1 * x[ALPHA1].sin(), self.l1 * x[ALPHA1].cos());
+        let tip = (joint.0 + self.l2 * x[ALPHA2].sin(), joint.1 + self.l2 * x[ALPHA2].cos());
+        [joint, tip]
+    }
+
+    /// Exact Jacobians A = ∂f/∂x and B = ∂f/∂u at (x0, u0), by forward-mode dual numbers.
+    /// At the upright rest position with zero torques this is equation (12).
+    pub fn linearize(&self, x0: &Vector4<f64>, u0: &Vector2<f64>) -> (SMatrix<f64, 4, 4>, SMatrix<f64, 4, 2>) {
+        let z = SVector::<f64, 6>::new(x0[0], x0[1], x0[2], x0[3], u0[0], u0[1]);
+        let (_, j) = jacobian(
+            |z: SVector<DualSVec64<6>, 6>| {
+                let f = self.rhs([z[0], z[1], z[2], z[3]], [z[4], z[5]]);
+                SVector::from(f)
+            },
+            &z,
+        );
+        (
+            j.fixed_view::<4, 4>(0, 0).into_owned(),
+            j.fixed_view::<4, 2>(0, 4).into_owned(),
+        )
+    }
+
+    /// Output matrix of equation (12): the two angles are measured.
+    pub fn output_matrix() -> SMatrix<f64, 2, 4> {
+        SMatrix::<f64, 2, 4>::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0)
+    }
+
+    /// Mass matrix at rest, for documentation and tests.
+    pub fn mass_matrix_upright(&self) -> Matrix2<f64> {
+        let [[a, b], [c, d]] = self.mass_matrix(0.0, 0.0);
+        Matrix2::new(a, b, c, d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn energy_rate_is_zero_without_torque() {
+        // dE/dt = ∇E · f(x) must vanish for the paper's Lagrangian system.
+        let p = PendulumParams::default();
+        let x = Vector4::new(0.7, -1.3, -2.1, 2.4);
+        let f = p.derivative(&x, &Vector2::zeros());
+        let h = 1e-6;
+        let mut de = 0.0;
+        for i in 0..4 {
+            let mut xp = x;
+            let mut xm = x;
+            xp[i] += h;
+            xm[i] -= h;
+            de += (p.energy(&xp) - p.energy(&xm)) / (2.0 * h) * f[i];
+        }
+        assert!(de.abs() < 1e-7, "dE/dt = {de}");
+    }
+}

@@ -1,0 +1,3 @@
+//! Numerical methods the models step with.
+
+pub mod ode;

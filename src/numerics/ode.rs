@@ -1,0 +1,329 @@
+//! Adaptive explicit Runge–Kutta: Dormand–Prince 5(4) with PI step-size control
+//! (Hairer, Nørsett & Wanner, "Solving ODEs I", II.4 and II.5; the DOPRI5 code).
+//!
+//! Written here rather than taken from a crate because an FMU step has needs the ODE crates on
+//! crates.io (ode_solvers, diffsol) do not meet together: integrate over one communication step
+//! without allocating (ode_solvers pushes every step into Vecs), keep the step-size controller's
+//! memory across calls so the next communication step starts with a good step, and be a plain
+//! `Clone + Serialize` value so it is part of the FMU state.
+
+use nalgebra::SVector;
+use serde::{Deserialize, Serialize};
+
+/// Relative and absolute error tolerances, per component: err_i / (atol + rtol·|x_i|) ≤ 1.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Tolerances {
+    pub rtol: f64,
+    pub atol: f64,
+}
+
+/// Work counters, cumulative since the integrator was created or reset.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    pub rhs_evaluations: u64,
+    pub accepted_steps: u64,
+    pub rejected_steps: u64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum OdeError {
+    /// The step size fell below what time resolution allows, at time `t`.
+    StepSizeTooSmall { t: f64, h: f64 },
+    /// The right-hand side returned NaN or infinity at time `t`.
+    NonFinite { t: f64 },
+    /// More than the allowed number of steps for one call, having reached `t`.
+    TooManySteps { t: f64, steps: u64 },
+}
+
+impl OdeError {
+    /// The time up to which the integration succeeded.
+    pub fn time(&self) -> f64 {
+        match *self {
+            OdeError::StepSizeTooSmall { t, .. } | OdeError::NonFinite { t } | OdeError::TooManySteps { t, .. } => t,
+        }
+    }
+}
+
+impl std::fmt::Display for OdeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OdeError::StepSizeTooSmall { t, h } => write!(f, "step size {h:e} s too small at t = {t} s"),
+            OdeError::NonFinite { t } => write!(f, "the state became NaN or infinite at t = {t} s"),
+            OdeError::TooManySteps { t, steps } => {
+                write!(
+                    f,
+                    "gave up after {steps} internal steps at t = {t} s (communication step too long?)"
+                )
+            }
+        }
+    }
+}
+
+// Dormand–Prince 5(4) tableau.
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+// Error coefficients: 5th-order weights minus 4th-order weights.
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+
+// Step-size controller (DOPRI5 defaults): safety factor, bounds of the change, PI exponents.
+const SAFETY: f64 = 0.9;
+const FAC_MIN: f64 = 0.2;
+const FAC_MAX: f64 = 10.0;
+const BETA: f64 = 0.04;
+const ALPHA: f64 = 0.2 - BETA * 0.75;
+
+/// The integrator's memory between calls: the proposed next step and the controller's error.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Dopri5 {
+    /// Step size to try next; 0 until the first call chooses one.
+    pub h_next: f64,
+    err_old: f64,
+    /// Upper bound of the step size (0: none).
+    pub h_max: f64,
+    /// Most internal steps allowed in one call of [`Dopri5::integrate`].
+    pub max_steps: u64,
+    pub stats: Stats,
+}
+
+impl Default for Dopri5 {
+    fn default() -> Self {
+        Dopri5 {
+            h_next: 0.0,
+            err_old: 1e-4,
+            h_max: 0.0,
+            max_steps: 100_000,
+            stats: Stats::default(),
+        }
+    }
+}
+
+fn error_norm<const N: usize>(
+    err: &SVector<f64, N>,
+    x0: &SVector<f64, N>,
+    x1: &SVector<f64, N>,
+    tol: Tolerances,
+) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..N {
+        let sc = tol.atol + tol.rtol * x0[i].abs().max(x1[i].abs());
+        let r = err[i] / sc;
+        sum += r * r;
+    }
+    (sum / N as f64).sqrt()
+}
+
+impl Dopri5 {
+    /// Forgets the step-size history (after a discontinuous change of the state or of a
+    /// parameter).
+    pub fn restart(&mut self) {
+        self.h_next = 0.0;
+        self.err_old = 1e-4;
+    }
+
+    /// Hairer's starting step: from the sizes of x, f(x) and a trial Euler step.
+    fn initial_step<const N: usize, F>(
+        &mut self,
+        f: &mut F,
+        t: f64,
+        x: &SVector<f64, N>,
+        k1: &SVector<f64, N>,
+        tol: Tolerances,
+        span: f64,
+    ) -> f64
+    where
+        F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
+    {
+        let sc = x.map(|xi| tol.atol + tol.rtol * xi.abs());
+        let d0 = (x.component_div(&sc).norm_squared() / N as f64).sqrt();
+        let d1 = (k1.component_div(&sc).norm_squared() / N as f64).sqrt();
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 }.min(span);
+        let x1 = x + k1 * h0;
+        let k2 = f(t + h0, &x1);
+        self.stats.rhs_evaluations += 1;
+        let d2 = ((k2 - k1).component_div(&sc).norm_squared() / N as f64).sqrt() / h0;
+        let h1 = if d1.max(d2) <= 1e-15 {
+            (h0 * 1e-3).max(1e-6)
+        } else {
+            (0.01 / d1.max(d2)).powf(0.2)
+        };
+        (100.0 * h0).min(h1).min(span)
+    }
+
+    /// Integrates `x' = f(t, x)` from `t0` to `t_end` in place. On error, `x` holds the state at
+    /// the time the error names, which the integrator reached with full accuracy.
+    pub fn integrate<const N: usize, F>(
+        &mut self,
+        mut f: F,
+        t0: f64,
+        x: &mut SVector<f64, N>,
+        t_end: f64,
+        tol: Tolerances,
+    ) -> Result<(), OdeError>
+    where
+        F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
+    {
+        let mut t = t0;
+        let mut k1 = f(t, x);
+        self.stats.rhs_evaluations += 1;
+        if !k1.iter().all(|v| v.is_finite()) {
+            return Err(OdeError::NonFinite { t });
+        }
+        let span = t_end - t0;
+        if self.h_next <= 0.0 {
+            self.h_next = self.initial_step(&mut f, t, x, &k1, tol, span);
+        }
+        let mut steps = 0u64;
+        let mut reject = false;
+        while t < t_end {
+            if steps >= self.max_steps {
+                return Err(OdeError::TooManySteps { t, steps });
+            }
+            steps += 1;
+            let mut h_proposed = self.h_next;
+            if self.h_max > 0.0 {
+                h_proposed = h_proposed.min(self.h_max);
+            }
+            // Land exactly on t_end; a step that would end within a hair of it is stretched.
+            let remaining = t_end - t;
+            let last = h_proposed >= remaining * (1.0 - 1e-12);
+            let h = if last { remaining } else { h_proposed };
+            if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
+                return Err(OdeError::StepSizeTooSmall { t, h });
+            }
+
+            let x2 = *x + h * (A21 * k1);
+            let k2 = f(t + C2 * h, &x2);
+            let x3 = *x + h * (A31 * k1 + A32 * k2);
+            let k3 = f(t + C3 * h, &x3);
+            let x4 = *x + h * (A41 * k1 + A42 * k2 + A43 * k3);
+            let k4 = f(t + C4 * h, &x4);
+            let x5 = *x + h * (A51 * k1 + A52 * k2 + A53 * k3 + A54 * k4);
+            let k5 = f(t + C5 * h, &x5);
+            let x6 = *x + h * (A61 * k1 + A62 * k2 + A63 * k3 + A64 * k4 + A65 * k5);
+            let k6 = f(t + h, &x6);
+            let x_new = *x + h * (A71 * k1 + A73 * k3 + A74 * k4 + A75 * k5 + A76 * k6);
+            let k7 = f(t + h, &x_new);
+            self.stats.rhs_evaluations += 6;
+            let err_vec = h * (E1 * k1 + E3 * k3 + E4 * k4 + E5 * k5 + E6 * k6 + E7 * k7);
+            let err = error_norm(&err_vec, x, &x_new, tol);
+
+            if !err.is_finite() || !x_new.iter().all(|v| v.is_finite()) {
+                // Shrink hard and retry: a finite error may come with a smaller step.
+                self.stats.rejected_steps += 1;
+                self.h_next = h * FAC_MIN;
+                reject = true;
+                if self.h_next <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
+                    return Err(OdeError::NonFinite { t });
+                }
+                continue;
+            }
+
+            if err <= 1.0 {
+                // PI controller on accepted steps.
+                let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
+                let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                let mut h_new = h_proposed / fac;
+                if reject {
+                    h_new = h_new.min(h_proposed);
+                }
+                self.err_old = err.max(1e-4);
+                self.stats.accepted_steps += 1;
+                t = if last { t_end } else { t + h };
+                *x = x_new;
+                k1 = k7;
+                // A step cut short to land on t_end says nothing about the next step size:
+                // keep the larger proposal.
+                self.h_next = if last { h_new.max(h_proposed) } else { h_new };
+                reject = false;
+            } else {
+                let fac = (err.powf(ALPHA) / SAFETY).min(1.0 / FAC_MIN);
+                self.h_next = h / fac;
+                self.stats.rejected_steps += 1;
+                reject = true;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector2;
+
+    #[test]
+    fn harmonic_oscillator_matches_the_exact_solution_to_tolerance() {
+        let mut ode = Dopri5::default();
+        let tol = Tolerances {
+            rtol: 1e-10,
+            atol: 1e-10,
+        };
+        let mut x = Vector2::new(1.0, 0.0);
+        let mut t = 0.0;
+        for _ in 0..1000 {
+            ode.integrate(
+                |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]),
+                t,
+                &mut x,
+                t + 0.01,
+                tol,
+            )
+            .unwrap();
+            t += 0.01;
+        }
+        let exact = Vector2::new(t.cos(), -t.sin());
+        assert!((x - exact).norm() < 1e-8, "error {} after 10 s", (x - exact).norm());
+    }
+
+    #[test]
+    fn too_many_steps_is_an_error_not_a_hang() {
+        let mut ode = Dopri5 {
+            max_steps: 10,
+            ..Default::default()
+        };
+        let tol = Tolerances {
+            rtol: 1e-12,
+            atol: 1e-12,
+        };
+        let mut x = Vector2::new(1.0, 0.0);
+        let e = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), 0.0, &mut x, 1e6, tol);
+        assert!(matches!(e, Err(OdeError::TooManySteps { .. })), "{e:?}");
+    }
+
+    #[test]
+    fn blow_up_is_reported_as_non_finite() {
+        let mut ode = Dopri5::default();
+        let tol = Tolerances { rtol: 1e-8, atol: 1e-8 };
+        let mut x = SVector::<f64, 1>::new(1.0);
+        // x' = x², x(0) = 1 blows up at t = 1.
+        let e = ode.integrate(|_, x: &SVector<f64, 1>| x.map(|v| v * v), 0.0, &mut x, 2.0, tol);
+        assert!(e.is_err(), "integrated through a singularity: {x:?}");
+    }
+}
