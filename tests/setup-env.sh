@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs what the tests and examples need, on a fresh machine: Debian's libclang-dev (fmi-sys
+# runs bindgen at build time) and valgrind, and a Python venv at .venv with tests/python/requirements.txt.
+# Safe to run again: it only installs what is missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+need=()
+dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
+command -v valgrind >/dev/null 2>&1 || need+=(valgrind)
+command -v nm >/dev/null 2>&1 || need+=(binutils)
+if ((${#need[@]})); then
+  echo "setup-env: apt-get install ${need[*]}"
+  sudo=""
+  [ "$(id -u)" = 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" >/dev/null
+fi
+
+if [ ! -x .venv/bin/python ]; then
+  echo "setup-env: creating .venv"
+  python3 -m venv .venv
+fi
+stamp=.venv/.requirements.sha
+want=$(sha256sum tests/python/requirements.txt | cut -d' ' -f1)
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  echo "setup-env: pip install -r tests/python/requirements.txt"
+  .venv/bin/pip install -q --disable-pip-version-check -r tests/python/requirements.txt
+  echo "$want" >"$stamp"
+fi
