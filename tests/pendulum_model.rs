@@ -29,7 +29,7 @@ fn result_does_not_depend_on_the_communication_step() {
     let mut finals = Vec::new();
     for h in [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1] {
         let mut p = pendulum(0.3, 0.0, -0.2, 1.0);
-        let n = (0.1 / h as f64).round() as usize;
+        let n = (0.1 / h).round() as usize;
         for k in 0..n {
             p.do_step(k as f64 * h, h).unwrap();
         }
