@@ -27,7 +27,7 @@ fn energy_is_conserved_without_torque() {
 fn result_does_not_depend_on_the_communication_step() {
     // Same 0.1 s with h = 1e-6 ... 0.1: the error control makes them agree to ~tolerance.
     let mut finals = Vec::new();
-    for h in [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1] {
+    for h in [1e-6_f64, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1] {
         let mut p = pendulum(0.3, 0.0, -0.2, 1.0);
         let n = (0.1 / h).round() as usize;
         for k in 0..n {
