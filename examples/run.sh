@@ -7,7 +7,6 @@ cd "$(dirname "$0")/.."
 bash tests/setup-env.sh
 cargo run --release -p fmu-build -- build --python .venv/bin/python
 mkdir -p out
-.venv/bin/python examples/pendulum_open_loop.py --out out
 cargo run --release --example paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
 .venv/bin/python examples/composed_demo.py --out out
