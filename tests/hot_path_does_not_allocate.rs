@@ -192,3 +192,25 @@ fn changing_a_tunable_tolerance_between_steps_makes_no_heap_allocation() {
     // SAFETY: as above.
     unsafe { fmi2FreeInstance(c) };
 }
+
+#[test]
+fn the_count_sees_inside_fmi2_do_step_when_call_logging_allocates() {
+    // With logCalls on, fmi2DoStep formats a message: the count must see it, or the zero above
+    // would prove nothing about fmi2DoStep.
+    let cb = callbacks();
+    let c = swinging_pendulum(&cb);
+    let category = [c"logCalls".as_ptr()];
+    // SAFETY: c is a live instance; one category name, NUL-terminated.
+    assert_eq!(
+        unsafe { fmi2SetDebugLogging(c, fmi2True, 1, category.as_ptr()) },
+        fmi2OK
+    );
+    // SAFETY: as above.
+    let n = allocations_in(|| assert_eq!(unsafe { fmi2DoStep(c, 0.0, 1e-3, fmi2True) }, fmi2OK));
+    assert!(
+        n > 0,
+        "fmi2DoStep with logCalls on formats a log message, yet 0 allocations were counted"
+    );
+    // SAFETY: as above.
+    unsafe { fmi2FreeInstance(c) };
+}

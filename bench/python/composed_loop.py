@@ -41,7 +41,10 @@ H = 1e-3
 
 def cargo_bin(*args):
     cmd = ["cargo", "run", "--release", "-q", "-p", "rustfmu-bench", "--bin", "composed-loop", "--", *args]
-    return subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, text=True).stdout
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if run.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr}")
+    return run.stdout
 
 
 class Loop:
@@ -64,6 +67,16 @@ class Loop:
                 return v.valueReference
         have = ", ".join(v.name for v in self.md[instance].modelVariables)
         sys.exit(f"{instance} has no variable '{name}'; it has: {have}")
+
+    def start(self, instance, name):
+        """The value `name` has after initialization: the loop's start value, else the FMU's."""
+        for (inst, n), value in self.topo["start_values"]:
+            if (inst, n) == (instance, name):
+                return value
+        for v in self.md[instance].modelVariables:
+            if v.name == name:
+                return float(v.start)
+        sys.exit(f"{instance} has no variable '{name}'")
 
     def connectors(self, instance, ssd=False):
         """(name, kind) of every variable of `instance` the loop reads or writes. In the SSD, the
@@ -247,11 +260,14 @@ def run_libcosim(loop, ssp, n):
         fb_states = [loop.vr(fb["plant"], s) for s in fb["states"]]
         fb_inputs = [loop.vr(fb["plant"], u) for u in fb["inputs"]]
         p = index[fb["plant"]]
+        # The observer has values only once the execution ran: the first input comes from the
+        # start values, every later one from the state the observer saw after the last step.
+        x = [loop.start(fb["plant"], s) for s in fb["states"]]
         ok = True
         for _ in range(n):
-            x = observer.last_real_values(p, fb_states)
             manipulator.slave_real_values(p, fb_inputs, [float(v) for v in law(x)])
             ok = ex.step(1) and ok
+            x = observer.last_real_values(p, fb_states)
     else:
         ok = ex.simulate_until(n * h_ns)
     wall = time.perf_counter() - start
@@ -304,6 +320,12 @@ def main():
         print(f"  {r['master']}: {r['final']}")
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps(dict(topology=topo, seconds=seconds, rows=rows), indent=1))
+    # Every master ran the same loop: the same final state, or one of them did not.
+    ref = np.array(rows[0]["final"])
+    for r in rows[1:]:
+        x = np.array(list(r["final"].values()) if isinstance(r["final"], dict) else r["final"])
+        if np.max(np.abs(x - ref)) > 1e-6:
+            sys.exit(f"{r['master']} ends at {x.tolist()}, the native master at {ref.tolist()}: not the same loop")
 
 
 if __name__ == "__main__":

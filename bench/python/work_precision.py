@@ -34,8 +34,8 @@ T_END = 1.0
 
 
 def reference():
-    tight = paper_model.reference(X0, [0.0, T_END], rtol=1e-13, atol=1e-13)[:, -1]
-    looser = paper_model.reference(X0, [0.0, T_END], rtol=1e-12, atol=1e-12)[:, -1]
+    tight = paper_model.reference(X0, [0.0, T_END], rtol=1e-13, atol=1e-13)[-1]
+    looser = paper_model.reference(X0, [0.0, T_END], rtol=1e-12, atol=1e-12)[-1]
     return tight, float(np.max(np.abs(tight - looser)))
 
 
@@ -46,8 +46,10 @@ def rust_rows(ref, tols):
         "--reference", ",".join(repr(float(v)) for v in ref),
         "--tols", ",".join(f"{t:e}" for t in tols),
     ]
-    out = subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True, text=True).stdout
-    return [json.loads(line) for line in out.splitlines() if line.strip()]
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if run.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr}")
+    return [json.loads(line) for line in run.stdout.splitlines() if line.strip()]
 
 
 def scipy_rows(ref, tols, method):
