@@ -18,5 +18,7 @@ echo "== modelDescription/ is up to date"
 cargo run --release -p fmu-build -- xml --check
 echo "== Rust tests"
 cargo test --workspace --release
+echo "== Benchmarks still run (quick mode, no timing asserted)"
+bash bench/quick.sh
 echo "== Python tests"
 python -m pytest tests/python -q -p no:cacheprovider

@@ -1,0 +1,103 @@
+//! `cargo bench -p rustfmu-bench` (quick check that every benchmark runs: `-- --test`).
+//!
+//! - pendulum_step/{direct,fmi2DoStep}/h=1ms|10ms: the plant's step called in Rust against the
+//!   same step through the packaged `.so`'s C API (default tolerances rtol = atol = 1e-10);
+//! - pendulum_round_trip/{direct,fmi}: the same with the fmi2SetReal (M1, M2) and fmi2GetReal
+//!   (alpha1, omega1, alpha2, omega2) a master makes around each step;
+//! - fmi2DoStep/<id>/h=1ms: every other packaged FMU (Controller, DCMotor, ...), inputs set and
+//!   outputs read as a master does;
+//! - composed_loop/10s_at_1ms/<topology>: the whole loop in the native master.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use rustfmu_bench::master::Master;
+use rustfmu_bench::single::{Direct, ViaFmi, time_steps};
+use rustfmu_bench::{packaged_fmus, topology};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+const STATES: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
+
+fn pendulum_step(c: &mut Criterion) {
+    let mut g = c.benchmark_group("pendulum_step");
+    let mut direct = Direct::new();
+    let mut fmi = ViaFmi::new("Pendulum", Some(&STATES)).unwrap_or_else(|e| panic!("{e}"));
+    for (label, h) in [("h=1ms", 1e-3), ("h=10ms", 1e-2)] {
+        g.bench_function(format!("direct/{label}"), |b| {
+            b.iter_custom(|iters| time_steps(&mut direct, iters, h, Direct::restart, |d, t, h| d.step(t, h)))
+        });
+        g.bench_function(format!("fmi2DoStep/{label}"), |b| {
+            b.iter_custom(|iters| time_steps(&mut fmi, iters, h, |f| f.restart().unwrap(), |f, t, h| f.step(t, h)))
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("pendulum_round_trip");
+    let h = 1e-3;
+    g.bench_function("direct/h=1ms", |b| {
+        b.iter_custom(|iters| {
+            time_steps(&mut direct, iters, h, Direct::restart, |d, t, h| {
+                black_box(d.round_trip(t, h, black_box([0.0, 0.0])));
+            })
+        })
+    });
+    g.bench_function("fmi/h=1ms", |b| {
+        b.iter_custom(|iters| {
+            time_steps(
+                &mut fmi,
+                iters,
+                h,
+                |f| f.restart().unwrap(),
+                |f, t, h| {
+                    black_box(f.round_trip(t, h, black_box(&[0.0, 0.0])));
+                },
+            )
+        })
+    });
+    g.finish();
+}
+
+fn other_fmus(c: &mut Criterion) {
+    let mut g = c.benchmark_group("fmi2DoStep");
+    for id in packaged_fmus().into_iter().filter(|id| id != "Pendulum") {
+        let mut fmu = ViaFmi::new(&id, None).unwrap_or_else(|e| panic!("{e}"));
+        let u = vec![0.0; fmu.in_vrs.len()];
+        g.bench_function(format!("{id}/h=1ms"), |b| {
+            b.iter_custom(|iters| {
+                time_steps(
+                    &mut fmu,
+                    iters,
+                    1e-3,
+                    |f| f.restart().unwrap(),
+                    |f, t, h| {
+                        black_box(f.round_trip(t, h, &u));
+                    },
+                )
+            })
+        });
+    }
+    g.finish();
+}
+
+fn composed_loop(c: &mut Criterion) {
+    let topo = topology::best_available();
+    let name = topo.name;
+    let mut master = Master::new(topo).unwrap_or_else(|e| panic!("{e}"));
+    let mut g = c.benchmark_group("composed_loop");
+    g.sample_size(10);
+    g.bench_function(format!("10s_at_1ms/{name}"), |b| {
+        b.iter_custom(|iters| {
+            let mut total = Duration::ZERO;
+            for _ in 0..iters {
+                master.initialize(10.0).unwrap_or_else(|e| panic!("{e}"));
+                let start = Instant::now();
+                master.run(10_000, 1e-3).unwrap_or_else(|e| panic!("{e}"));
+                total += start.elapsed();
+            }
+            total
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, pendulum_step, other_fmus, composed_loop);
+criterion_main!(benches);

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Instructions per step of the plant's step, called directly and through the packaged .so's C API,
+# counted by callgrind (independent of the machine's load, unlike wall time). Each variant runs
+# 1000 and 2000 steps; the difference / 1000 is the cost of one step without the setup.
+# Needs valgrind, the packaged Pendulum FMU and `cargo build --release -p rustfmu-bench`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+exe=target/release/perf-report
+out=$(mktemp -d)
+count() {
+    valgrind --tool=callgrind --callgrind-out-file="$out/cg.$1.$2" "$exe" --only "$1" --steps "$2" 2>&1 |
+        sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
+}
+declare -A per_step
+for v in direct-1ms fmi-1ms direct-round-trip-1ms fmi-round-trip-1ms; do
+    a=$(count "$v" 1000)
+    b=$(count "$v" 2000)
+    per_step[$v]=$(((b - a) / 1000))
+    echo "$v: ${per_step[$v]} instructions per step"
+done
+for pair in "1ms" "round-trip-1ms"; do
+    d=${per_step[direct-$pair]}
+    f=${per_step[fmi-$pair]}
+    echo "overhead $pair: $((f - d)) instructions, $(awk "BEGIN { printf \"%+.1f\", ($f / $d - 1) * 100 }") %"
+done
+echo "profiles (callgrind_annotate FILE): $out"

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Quick mode of every benchmark, for CI: proves that each still builds and runs end to end
+# (criterion benches once each, the step-cost report, the native composed loop, the
+# work-precision and Python composed-loop scripts on short runs). Asserts nothing about time.
+# Needs the packaged FMUs (cargo run --release -p fmu-build) and the venv (tests/setup-env.sh).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-.venv/bin/python}
+cargo bench -p rustfmu-bench --bench fmu_step -- --test
+cargo run --release -q -p rustfmu-bench --bin perf-report -- --rounds 1
+cargo run --release -q -p rustfmu-bench --bin composed-loop -- --seconds 0.1 --repeat 1
+"$PY" bench/python/work_precision.py --quick
+"$PY" bench/python/composed_loop.py --quick

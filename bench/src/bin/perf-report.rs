@@ -1,0 +1,148 @@
+//! The step-cost tables of docs/performance.md: the plant's step called directly against the
+//! same step through the packaged `.so`, alone and with the master's fmi2SetReal/fmi2GetReal,
+//! and the composed loop. The variants are timed in interleaved rounds (each round runs every
+//! variant for one simulated second of the swing), so a busy machine slows all of them alike;
+//! the table gives the fastest round (least disturbed) and the median round.
+//!
+//!     cargo run --release -p rustfmu-bench --bin perf-report -- [--rounds 31]
+//!
+//! For a profile (instruction counts do not depend on the machine's load):
+//!
+//!     valgrind --tool=callgrind target/release/perf-report --only fmi-1ms --steps 2000
+
+use rustfmu_bench::master::Master;
+use rustfmu_bench::single::{Direct, ViaFmi};
+use rustfmu_bench::topology;
+use std::hint::black_box;
+use std::time::Instant;
+
+const STATES: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
+
+struct Subjects {
+    direct: Direct,
+    fmi: ViaFmi,
+}
+
+/// Runs `steps` steps of `variant` from the start of the swing; returns seconds per step.
+fn run(s: &mut Subjects, variant: &str, steps: usize) -> Result<f64, String> {
+    let h = if variant.ends_with("10ms") { 1e-2 } else { 1e-3 };
+    s.direct.restart();
+    s.fmi.restart()?;
+    let start = Instant::now();
+    match variant {
+        "direct-1ms" | "direct-10ms" => {
+            for k in 0..steps {
+                s.direct.step(k as f64 * h, h);
+            }
+        }
+        "fmi-1ms" | "fmi-10ms" => {
+            for k in 0..steps {
+                s.fmi.step(k as f64 * h, h);
+            }
+        }
+        "direct-round-trip-1ms" => {
+            for k in 0..steps {
+                black_box(s.direct.round_trip(k as f64 * h, h, black_box([0.0, 0.0])));
+            }
+        }
+        "fmi-round-trip-1ms" => {
+            for k in 0..steps {
+                black_box(s.fmi.round_trip(k as f64 * h, h, black_box(&[0.0, 0.0])));
+            }
+        }
+        other => return Err(format!("unknown variant '{other}'")),
+    }
+    Ok(start.elapsed().as_secs_f64() / steps as f64)
+}
+
+const VARIANTS: [&str; 6] = [
+    "direct-1ms",
+    "fmi-1ms",
+    "direct-10ms",
+    "fmi-10ms",
+    "direct-round-trip-1ms",
+    "fmi-round-trip-1ms",
+];
+
+fn main() {
+    if let Err(e) = report() {
+        eprintln!("perf-report: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn stats(mut v: Vec<f64>) -> (f64, f64) {
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2])
+}
+
+fn report() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let value = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let mut s = Subjects {
+        direct: Direct::new(),
+        fmi: ViaFmi::new("Pendulum", Some(&STATES))?,
+    };
+    if let Some(variant) = value("--only") {
+        let steps = value("--steps").map_or(Ok(1000), |v| v.parse().map_err(|_| format!("--steps {v}")))?;
+        let t = run(&mut s, &variant, steps)?;
+        println!("{variant}: {steps} steps, {:.1} ns per step", t * 1e9);
+        return Ok(());
+    }
+    let rounds: usize = value("--rounds").map_or(Ok(31), |v| v.parse().map_err(|_| format!("--rounds {v}")))?;
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); VARIANTS.len()];
+    for _ in 0..rounds {
+        for (i, v) in VARIANTS.iter().enumerate() {
+            // One simulated second per round: 1000 steps at 1 ms, 100 at 10 ms.
+            let steps = if v.ends_with("10ms") { 100 } else { 1000 };
+            times[i].push(run(&mut s, v, steps)?);
+        }
+    }
+    let st: Vec<(f64, f64)> = times.into_iter().map(stats).collect();
+    println!("Pendulum, swing from alpha1 = 0.1 rad, alpha2 = 0.15 rad, default tolerances; {rounds} rounds\n");
+    println!("| step | direct Rust call | through the C API (.so) | overhead (fastest / median round) |");
+    println!("|---|---|---|---|");
+    for (label, d, f) in [
+        ("do_step vs fmi2DoStep, h = 1 ms", 0, 1),
+        ("do_step vs fmi2DoStep, h = 10 ms", 2, 3),
+        ("set M1 M2, step, get 4 states, h = 1 ms", 4, 5),
+    ] {
+        let (dmin, dmed) = st[d];
+        let (fmin, fmed) = st[f];
+        println!(
+            "| {label} | {:.0} ns / {:.0} ns | {:.0} ns / {:.0} ns | {:+.1} % / {:+.1} % |",
+            dmin * 1e9,
+            dmed * 1e9,
+            fmin * 1e9,
+            fmed * 1e9,
+            (fmin / dmin - 1.0) * 100.0,
+            (fmed / dmed - 1.0) * 100.0
+        );
+    }
+
+    let topo = topology::best_available();
+    let mut master = Master::new(topo)?;
+    let mut walls = Vec::new();
+    for _ in 0..rounds.clamp(3, 11) {
+        master.initialize(10.0)?;
+        let start = Instant::now();
+        master.run(10_000, 1e-3)?;
+        walls.push(start.elapsed().as_secs_f64());
+    }
+    let (wmin, wmed) = stats(walls);
+    println!(
+        "\ncomposed loop '{}' ({}), 10 s at 1 ms, native master: fastest {:.2} ms, median {:.2} ms, \
+         real-time factor {:.0} (median)",
+        master.topology.name,
+        master.topology.description,
+        wmin * 1e3,
+        wmed * 1e3,
+        10.0 / wmed
+    );
+    Ok(())
+}

@@ -1,0 +1,143 @@
+//! The plant's integrator across tolerances: error at t_end against a reference state, right-hand
+//! side evaluations, and time per simulated second; and a fixed-step RK4 with the same number of
+//! evaluations. One JSON object per line; `bench/python/work_precision.py` gives the reference
+//! and sets scipy's integrators beside these rows.
+//!
+//!     cargo run --release -p rustfmu-bench --bin work-precision -- \
+//!         --x0 0.5,0,-0.3,0 --t-end 1 --reference A1,W1,A2,W2 --tols 1e-3,1e-6,1e-9
+
+use nalgebra::{Vector2, Vector4};
+use rustfmu::fmi2::model::CoSimModel;
+use rustfmu::fmus::pendulum::Pendulum;
+use rustfmu::models::pendulum::PendulumParams;
+use rustfmu::numerics::ode::{Dopri5, Tolerances};
+use rustfmu_bench::rk4;
+use std::hint::black_box;
+use std::time::Instant;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("work-precision: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn numbers(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(|v| v.trim().parse().map_err(|_| format!("'{v}' is not a number")))
+        .collect()
+}
+
+/// Median wall time of `f` over enough repetitions to last about 50 ms (at least 3).
+fn median_seconds(mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    f();
+    let once = start.elapsed().as_secs_f64().max(1e-9);
+    let reps = ((0.05 / once) as usize).clamp(3, 10_000);
+    let mut times: Vec<f64> = (0..reps)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[reps / 2]
+}
+
+fn max_abs_error(x: &Vector4<f64>, reference: &[f64]) -> f64 {
+    x.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+}
+
+fn run() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let value = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+            .ok_or_else(|| format!("{flag} is required"))
+    };
+    let x0 = numbers(&value("--x0")?)?;
+    let reference = numbers(&value("--reference")?)?;
+    let t_end: f64 = value("--t-end")?
+        .parse()
+        .map_err(|_| "--t-end: not a number".to_string())?;
+    let tols = numbers(&value("--tols")?)?;
+    if x0.len() != 4 || reference.len() != 4 {
+        return Err("--x0 and --reference take 4 numbers: alpha1, omega1, alpha2, omega2".into());
+    }
+    let x0 = Vector4::new(x0[0], x0[1], x0[2], x0[3]);
+    let p = PendulumParams::default();
+    let u = Vector2::zeros();
+    let f = |x: &Vector4<f64>| p.derivative(x, &u);
+
+    for tol in tols {
+        let tol_pair = Tolerances { rtol: tol, atol: tol };
+        // Dopri5 over [0, t_end] in one call: the integrator alone.
+        let one_call = || {
+            let mut ode = Dopri5::default();
+            let mut x = x0;
+            ode.integrate(|_, x: &Vector4<f64>| f(x), 0.0, &mut x, t_end, tol_pair)
+                .map(|()| (x, ode.stats))
+        };
+        let (x, stats) = one_call().map_err(|e| format!("Dopri5 at tol {tol:e}: {e}"))?;
+        let seconds = median_seconds(|| {
+            black_box(one_call().ok());
+        });
+        println!(
+            "{{\"method\": \"rustfmu Dopri5, one call\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {}, \
+             \"accepted\": {}, \"rejected\": {}, \"seconds_per_simulated_second\": {:e}}}",
+            max_abs_error(&x, &reference),
+            stats.rhs_evaluations,
+            stats.accepted_steps,
+            stats.rejected_steps,
+            seconds / t_end
+        );
+        // The FMU's model stepped at h = 1 ms: what the FMU does for an importer.
+        let h = 1e-3;
+        let n = (t_end / h).round() as usize;
+        let fmu_run = || {
+            let mut m = Pendulum::new();
+            (m.v.alpha1, m.v.omega1, m.v.alpha2, m.v.omega2) = (x0[0], x0[1], x0[2], x0[3]);
+            (m.v.rtol, m.v.atol) = (tol, tol);
+            m.initialize(0.0, None)?;
+            for k in 0..n {
+                m.do_step(k as f64 * h, h).map_err(|e| e.message)?;
+            }
+            Ok::<_, String>((m.state(), m.ode.stats))
+        };
+        let (x, stats) = fmu_run().map_err(|e| format!("Pendulum model at tol {tol:e}: {e}"))?;
+        let seconds = median_seconds(|| {
+            black_box(fmu_run().ok());
+        });
+        println!(
+            "{{\"method\": \"rustfmu Pendulum do_step, h = 1 ms\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {}, \
+             \"accepted\": {}, \"rejected\": {}, \"seconds_per_simulated_second\": {:e}}}",
+            max_abs_error(&x, &reference),
+            stats.rhs_evaluations,
+            stats.accepted_steps,
+            stats.rejected_steps,
+            seconds / t_end
+        );
+        // RK4 with as many evaluations as the one-call Dopri5.
+        let one_call_rhs = one_call().map_err(|e| e.to_string())?.1.rhs_evaluations;
+        let steps = (one_call_rhs / 4).max(1) as usize;
+        let rk4_run = || {
+            let mut x = x0;
+            let rhs = rk4::integrate(f, &mut x, t_end / steps as f64, steps);
+            (x, rhs)
+        };
+        let (x, rhs) = rk4_run();
+        let seconds = median_seconds(|| {
+            black_box(rk4_run());
+        });
+        println!(
+            "{{\"method\": \"RK4 fixed step, equal cost\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {rhs}, \
+             \"accepted\": {steps}, \"rejected\": 0, \"seconds_per_simulated_second\": {:e}}}",
+            max_abs_error(&x, &reference),
+            seconds / t_end
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,155 @@
+//! Shared pieces of the benchmarks (`cargo bench -p rustfmu-bench`, the `perf-report`,
+//! `composed-loop` and `work-precision` binaries, and the Python scripts in `bench/python/`):
+//!
+//! - where the packaged FMUs are ([`fmu_path`]),
+//! - an FMU loaded through the `fmi` crate's importer, its variables looked up by name in its
+//!   modelDescription.xml ([`Fmu`]),
+//! - the composed loop as data: which FMUs, which connections ([`topology`]),
+//! - a native co-simulation master that runs it without allocating per step ([`master`]),
+//! - the fixed-step RK4 that the work-precision table sets against the plant's integrator
+//!   ([`rk4`]).
+
+pub mod master;
+pub mod rk4;
+pub mod topology;
+
+use fmi::fmi2::import::Fmi2Import;
+use fmi::fmi2::instance::InstanceCS;
+use fmi::fmi2::schema::{Causality, ScalarVariableElement};
+use fmi::traits::FmiImport;
+use std::path::{Path, PathBuf};
+
+/// The workspace root (the parent of this crate).
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("bench/ lies inside the workspace")
+        .to_path_buf()
+}
+
+/// `target/fmu/`, where `cargo run --release -p fmu-build` packages the FMUs (honours
+/// `CARGO_TARGET_DIR`).
+pub fn fmu_dir() -> PathBuf {
+    let target = match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) => {
+            let dir = PathBuf::from(dir);
+            if dir.is_absolute() {
+                dir
+            } else {
+                workspace_root().join(dir)
+            }
+        }
+        None => workspace_root().join("target"),
+    };
+    target.join("fmu")
+}
+
+/// `target/fmu/<id>.fmu`.
+pub fn fmu_path(id: &str) -> PathBuf {
+    fmu_dir().join(format!("{id}.fmu"))
+}
+
+/// Ids of every packaged FMU in `target/fmu/`, sorted.
+pub fn packaged_fmus() -> Vec<String> {
+    let mut ids: Vec<String> = std::fs::read_dir(fmu_dir())
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let p = e.path();
+            (p.extension()? == "fmu").then(|| p.file_stem()?.to_str().map(str::to_owned))?
+        })
+        .collect();
+    ids.sort();
+    ids
+}
+
+/// One Real variable of an FMU, as its modelDescription.xml declares it.
+#[derive(Debug, Clone)]
+pub struct RealVar {
+    pub name: String,
+    pub vr: u32,
+    pub causality: Causality,
+    pub start: Option<f64>,
+}
+
+/// A packaged FMU, unzipped and parsed by the `fmi` crate's importer.
+pub struct Fmu {
+    pub id: String,
+    pub import: Fmi2Import,
+    pub reals: Vec<RealVar>,
+}
+
+impl Fmu {
+    /// Loads `target/fmu/<id>.fmu`; the error says how to build it.
+    pub fn load(id: &str) -> Result<Fmu, String> {
+        let path = fmu_path(id);
+        if !path.exists() {
+            return Err(format!(
+                "{} is missing: run `cargo run --release -p fmu-build` first",
+                path.display()
+            ));
+        }
+        let import: Fmi2Import =
+            fmi::import::from_path(&path).map_err(|e| format!("{}: cannot import: {e}", path.display()))?;
+        let reals = import
+            .model_description()
+            .model_variables
+            .variables
+            .iter()
+            .filter_map(|v| match &v.elem {
+                ScalarVariableElement::Real(r) => Some(RealVar {
+                    name: v.name.clone(),
+                    vr: v.value_reference,
+                    causality: v.causality.clone(),
+                    start: r.start,
+                }),
+                _ => None,
+            })
+            .collect();
+        Ok(Fmu {
+            id: id.to_owned(),
+            import,
+            reals,
+        })
+    }
+
+    /// The value reference of the Real variable `name`; the error lists the ones there are.
+    pub fn vr(&self, name: &str) -> Result<u32, String> {
+        self.reals.iter().find(|v| v.name == name).map(|v| v.vr).ok_or_else(|| {
+            format!(
+                "{} has no Real variable '{name}' in its modelDescription.xml; it has: {}",
+                self.id,
+                self.reals
+                    .iter()
+                    .map(|v| v.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+    }
+
+    /// Value references of the given variables, in order.
+    pub fn vrs(&self, names: &[&str]) -> Result<Vec<u32>, String> {
+        names.iter().map(|n| self.vr(n)).collect()
+    }
+
+    /// The Real variables of a causality (inputs, outputs, ...), in declaration order.
+    pub fn reals_of(&self, causality: Causality) -> impl Iterator<Item = &RealVar> {
+        self.reals.iter().filter(move |v| v.causality == causality)
+    }
+
+    /// A co-simulation instance of the FMU's binary, loaded as an importer loads it.
+    pub fn instantiate(&self, instance_name: &str) -> Result<InstanceCS, String> {
+        self.import
+            .instantiate_cs(instance_name, false, false)
+            .map_err(|e| format!("{}: fmi2Instantiate of '{instance_name}' failed: {e}", self.id))
+    }
+}
+
+/// The swing every single-FMU benchmark runs: the plant released from rest at α1 = 0.1 rad,
+/// α2 = 0.15 rad with no torque, so it falls and swings; the integrator's work per step is that
+/// of a moving pendulum, not of one resting at its equilibrium.
+pub const SWING_START: [(&str, f64); 2] = [("alpha1", 0.1), ("alpha2", 0.15)];
+
+pub mod single;
