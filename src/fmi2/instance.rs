@@ -66,7 +66,9 @@ impl Call {
             Call::SetupExperiment => INSTANTIATED,
             Call::EnterInitializationMode => INSTANTIATED,
             Call::ExitInitializationMode => INIT,
-            Call::Terminate => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED,
+            // Not from StepCanceled: after fmi2CancelStep only fmi2Reset and fmi2FreeInstance
+            // are meant to follow (the Reference FMUs' mask is StepComplete | StepFailed too).
+            Call::Terminate => STEP_COMPLETE | STEP_FAILED,
             Call::Reset => ANY_BUT_FATAL,
             Call::GetValues => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
             Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE,
