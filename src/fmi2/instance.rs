@@ -424,9 +424,13 @@ impl<M: CoSimModel> Instance<M> {
     }
 
     /// Importers compute communication points as start + n·h or by summing h, so the point
-    /// is compared with a relative tolerance rather than exactly.
+    /// is compared with a tolerance rather than exactly. The round-off is relative to the size
+    /// of the times involved (the FMU's time and the start time), so that is what the tolerance
+    /// scales with; the step size only adds a few of its own ulps. (Scaling with h, as before,
+    /// let a huge step accept any point: at t = 0 a step of 1e9 s accepted a point 5 s off.)
     fn time_matches(&self, t: f64, h: f64) -> bool {
-        let tol = 1e-8 * self.sim.time.abs().max(h).max(1e-300);
+        let scale = self.sim.time.abs().max(self.sim.start_time.abs());
+        let tol = 1e-8 * scale + 4.0 * f64::EPSILON * h;
         (t - self.sim.time).abs() <= tol
     }
 
