@@ -3,6 +3,8 @@
 //! fmi2Error, a logged reason, and the FMU state exactly as it was (compared byte for byte
 //! through the serialized FMU state).
 
+#![allow(non_upper_case_globals)] // fmi2OK etc. are the standard's names, matched on
+
 use fmi2_conformance::instance::{Args, Instance, excitation, excite, run, run_on, status_name, step_size};
 use fmi2_conformance::state::{STATES, name};
 use fmi2_conformance::{Type, all};
