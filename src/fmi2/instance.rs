@@ -262,23 +262,28 @@ impl<M: CoSimModel> Instance<M> {
         fmi2OK
     }
 
-    /// Brings the calculated variables up to date with what was set in initialization mode.
-    fn initialize_model(&mut self, function: &str) -> Outcome {
-        if !self.sim.init_dirty {
+    /// Brings the calculated variables up to date with what was set in initialization mode
+    /// (always when `force`, else only if something was set since). All or nothing: when the
+    /// model refuses, it is put back as it was, so a call answering fmi2Error changes nothing.
+    fn initialize_model(&mut self, function: &str, force: bool) -> Outcome {
+        if !force && !self.sim.init_dirty {
             return Ok(());
         }
+        let before = self.sim.model.clone();
         match self.sim.model.initialize(self.sim.start_time, self.sim.tolerance) {
             Ok(()) => {
                 self.sim.init_dirty = false;
                 Ok(())
             }
-            Err(message) => Err(self.error(&format!("{function}: initialization failed: {message}"))),
+            Err(message) => {
+                self.sim.model = before;
+                Err(self.error(&format!("{function}: initialization failed: {message}")))
+            }
         }
     }
 
     pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        self.sim.init_dirty = true;
-        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode") {
+        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode", true) {
             return status;
         }
         self.sim.state = State::StepComplete;
@@ -301,8 +306,17 @@ impl<M: CoSimModel> Instance<M> {
     }
 
     pub fn get_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
+        // Every reference is checked before anything is computed: a refused get changes nothing
+        // (it used to run the initialization first, then refuse an unknown reference).
+        for vr in vrs {
+            match M::Vars::decl(*vr) {
+                Some(d) if d.var_type == T::TYPE => {}
+                Some(d) => return self.type_mismatch(function, *vr, d.var_type, T::TYPE),
+                None => return self.unknown_vr(function, *vr, T::TYPE),
+            }
+        }
         if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(function)
+            && let Err(status) = self.initialize_model(function, false)
         {
             return status;
         }
