@@ -13,6 +13,7 @@ pub mod api;
 pub mod description;
 pub mod instance;
 pub mod logger;
+pub mod standard;
 pub mod state;
 
 pub use api::Api;
