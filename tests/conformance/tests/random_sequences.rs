@@ -775,6 +775,25 @@ fn regressions_found_by_random_sequences() {
         ),
     ];
     for fmu in all() {
+        let mut cases = cases.clone();
+        let vars = &fmu.md.variables;
+        if let (Some(b), Some(r)) = (
+            vars.iter().position(|v| v.ty == Type::Boolean),
+            vars.iter().position(|v| v.ty == Type::Real),
+        ) {
+            // fmi2GetBoolean of a Boolean then a Real in initialization mode: one reference at
+            // a time, the first one initialized the model before the second was refused.
+            cases.push((
+                "a Boolean and a Real read as Booleans in initialization mode",
+                [
+                    &init[..],
+                    &[Op::GetBoolean {
+                        vrs: vec![Vr::Known(b), Vr::Known(r)],
+                    }],
+                ]
+                .concat(),
+            ));
+        }
         for (what, ops) in &cases {
             for logging_on in [false, true] {
                 if let Err(e) = execute(fmu, logging_on, ops) {
