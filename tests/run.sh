@@ -14,9 +14,11 @@ echo "== cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --release -- -D warnings
 echo "== fmu-build (build, package, validate with fmpy)"
 cargo run --release -p fmu-build -- build --python .venv/bin/python
+echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU"
+for fmu in target/fmu/*.fmu; do fmutool -input "$fmu" -check; done
 echo "== modelDescription/ is up to date"
 cargo run --release -p fmu-build -- xml --check
-echo "== Rust tests"
+echo "== Rust tests (with the FMI 2.0 conformance suite, tests/conformance, on every FMU in target/fmu)"
 cargo test --workspace --release
 echo "== Benchmarks still run (quick mode, no timing asserted)"
 bash bench/quick.sh

@@ -300,15 +300,17 @@ pub unsafe fn get_boolean<M: CoSimModel>(
         with_instance::<M>(c, Call::GetValues, "fmi2GetBoolean", |inst| {
             match (slice(vr, nvr), slice_mut(value, nvr)) {
                 (Some(vrs), Some(out)) => {
-                    for (v, o) in vrs.iter().zip(out.iter_mut()) {
-                        let mut b = [false];
-                        let status = inst.get_values("fmi2GetBoolean", std::slice::from_ref(v), &mut b);
-                        if status != fmi2OK {
-                            return status;
+                    // One call for all references, so that they are all checked before anything
+                    // is computed (one call per reference initialized the model, then refused
+                    // the next reference).
+                    let mut values = vec![false; vrs.len()];
+                    let status = inst.get_values("fmi2GetBoolean", vrs, &mut values);
+                    if status == fmi2OK {
+                        for (o, v) in out.iter_mut().zip(values) {
+                            *o = if v { fmi2True } else { fmi2False };
                         }
-                        *o = if b[0] { fmi2True } else { fmi2False };
                     }
-                    fmi2OK
+                    status
                 }
                 _ => inst.error(&format!("fmi2GetBoolean: vr or value is NULL with nvr = {nvr}")),
             }

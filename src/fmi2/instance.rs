@@ -66,7 +66,9 @@ impl Call {
             Call::SetupExperiment => INSTANTIATED,
             Call::EnterInitializationMode => INSTANTIATED,
             Call::ExitInitializationMode => INIT,
-            Call::Terminate => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED,
+            // Not from StepCanceled: after fmi2CancelStep only fmi2Reset and fmi2FreeInstance
+            // are meant to follow (the Reference FMUs' mask is StepComplete | StepFailed too).
+            Call::Terminate => STEP_COMPLETE | STEP_FAILED,
             Call::Reset => ANY_BUT_FATAL,
             Call::GetValues => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
             Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE,
@@ -260,23 +262,28 @@ impl<M: CoSimModel> Instance<M> {
         fmi2OK
     }
 
-    /// Brings the calculated variables up to date with what was set in initialization mode.
-    fn initialize_model(&mut self, function: &str) -> Outcome {
-        if !self.sim.init_dirty {
+    /// Brings the calculated variables up to date with what was set in initialization mode
+    /// (always when `force`, else only if something was set since). All or nothing: when the
+    /// model refuses, it is put back as it was, so a call answering fmi2Error changes nothing.
+    fn initialize_model(&mut self, function: &str, force: bool) -> Outcome {
+        if !force && !self.sim.init_dirty {
             return Ok(());
         }
+        let before = self.sim.model.clone();
         match self.sim.model.initialize(self.sim.start_time, self.sim.tolerance) {
             Ok(()) => {
                 self.sim.init_dirty = false;
                 Ok(())
             }
-            Err(message) => Err(self.error(&format!("{function}: initialization failed: {message}"))),
+            Err(message) => {
+                self.sim.model = before;
+                Err(self.error(&format!("{function}: initialization failed: {message}")))
+            }
         }
     }
 
     pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        self.sim.init_dirty = true;
-        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode") {
+        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode", true) {
             return status;
         }
         self.sim.state = State::StepComplete;
@@ -299,8 +306,17 @@ impl<M: CoSimModel> Instance<M> {
     }
 
     pub fn get_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
+        // Every reference is checked before anything is computed: a refused get changes nothing
+        // (it used to run the initialization first, then refuse an unknown reference).
+        for vr in vrs {
+            match M::Vars::decl(*vr) {
+                Some(d) if d.var_type == T::TYPE => {}
+                Some(d) => return self.type_mismatch(function, *vr, d.var_type, T::TYPE),
+                None => return self.unknown_vr(function, *vr, T::TYPE),
+            }
+        }
         if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(function)
+            && let Err(status) = self.initialize_model(function, false)
         {
             return status;
         }
@@ -422,9 +438,13 @@ impl<M: CoSimModel> Instance<M> {
     }
 
     /// Importers compute communication points as start + n·h or by summing h, so the point
-    /// is compared with a relative tolerance rather than exactly.
+    /// is compared with a tolerance rather than exactly. The round-off is relative to the size
+    /// of the times involved (the FMU's time and the start time), so that is what the tolerance
+    /// scales with; the step size only adds a few of its own ulps. (Scaling with h, as before,
+    /// let a huge step accept any point: at t = 0 a step of 1e9 s accepted a point 5 s off.)
     fn time_matches(&self, t: f64, h: f64) -> bool {
-        let tol = 1e-8 * self.sim.time.abs().max(h).max(1e-300);
+        let scale = self.sim.time.abs().max(self.sim.start_time.abs());
+        let tol = 1e-8 * scale + 4.0 * f64::EPSILON * h;
         (t - self.sim.time).abs() <= tol
     }
 

@@ -1,0 +1,203 @@
+//! `modelDescription.xml` as an importer reads it: what the suite needs to drive any FMU without
+//! knowing it (value references, types, causality, variability, initial, start, min/max, flags).
+
+use quick_xml::Reader;
+use quick_xml::events::Event;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Type {
+    Real,
+    Integer,
+    Boolean,
+    String,
+    Enumeration,
+}
+
+#[derive(Debug, Clone)]
+pub struct Variable {
+    pub name: String,
+    pub vr: u32,
+    pub ty: Type,
+    pub causality: String,
+    pub variability: String,
+    /// As written in the XML; see [`Variable::initial`] for the one in force.
+    pub initial_attr: Option<String>,
+    pub start: Option<String>,
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+}
+
+impl Variable {
+    /// The `initial` in force: written, or the default of FMI 2.0 section 2.2.7 (table of
+    /// causality × variability). `None` where `initial` is not defined (inputs, independent).
+    pub fn initial(&self) -> Option<&str> {
+        if let Some(i) = &self.initial_attr {
+            return Some(i);
+        }
+        match (self.causality.as_str(), self.variability.as_str()) {
+            ("input" | "independent", _) => None,
+            (_, "constant") => Some("exact"),
+            ("parameter", _) => Some("exact"),
+            ("calculatedParameter" | "output" | "local", _) => Some("calculated"),
+            _ => None,
+        }
+    }
+
+    pub fn start_real(&self) -> Option<f64> {
+        self.start.as_deref().and_then(|s| s.parse().ok())
+    }
+
+    pub fn start_integer(&self) -> Option<i32> {
+        self.start.as_deref().and_then(|s| s.parse().ok())
+    }
+
+    pub fn start_boolean(&self) -> Option<bool> {
+        self.start.as_deref().map(|s| s == "true" || s == "1")
+    }
+
+    /// Whether FMI 2.0 (section 4.2.4, the conditions on fmi2SetXXX in the co-simulation state
+    /// table) lets an importer set this variable in the state of that name. Written here from
+    /// the standard, independently of the runtime's own rule.
+    pub fn settable_in(&self, state: &str) -> bool {
+        if self.variability == "constant" {
+            return false;
+        }
+        let input = self.causality == "input";
+        match state {
+            // "variability != constant that have initial = exact or approx" (and inputs, whose
+            // start values an importer sets before initialization)
+            "Instantiated" => input || matches!(self.initial(), Some("exact" | "approx")),
+            // "variability != constant that have initial = exact, or causality = input"
+            "InitializationMode" => input || self.initial() == Some("exact"),
+            // "causality = input, or causality = parameter and variability = tunable"
+            "StepComplete" => input || (self.causality == "parameter" && self.variability == "tunable"),
+            _ => false,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Description {
+    pub model_identifier: String,
+    pub guid: String,
+    pub fmi_version: String,
+    pub can_get_and_set_fmu_state: bool,
+    pub can_serialize_fmu_state: bool,
+    pub provides_directional_derivative: bool,
+    pub can_handle_variable_step: bool,
+    pub log_categories: Vec<String>,
+    /// startTime, stopTime, stepSize of `<DefaultExperiment>`.
+    pub default_experiment: (Option<f64>, Option<f64>, Option<f64>),
+    pub variables: Vec<Variable>,
+}
+
+impl Description {
+    pub fn parse(xml: &str) -> Result<Description, String> {
+        let mut reader = Reader::from_str(xml);
+        let mut d = Description {
+            model_identifier: String::new(),
+            guid: String::new(),
+            fmi_version: String::new(),
+            can_get_and_set_fmu_state: false,
+            can_serialize_fmu_state: false,
+            provides_directional_derivative: false,
+            can_handle_variable_step: false,
+            log_categories: vec![],
+            default_experiment: (None, None, None),
+            variables: vec![],
+        };
+        let mut current: Option<Variable> = None;
+        loop {
+            let event = reader
+                .read_event()
+                .map_err(|e| format!("modelDescription.xml at byte {}: {e}", reader.error_position()))?;
+            match event {
+                Event::Eof => break,
+                Event::Start(e) | Event::Empty(e) => {
+                    let attr = |name: &[u8]| -> Option<String> {
+                        e.attributes()
+                            .flatten()
+                            .find(|a| a.key.as_ref() == name)
+                            .and_then(|a| a.unescape_value().ok())
+                            .map(|v| v.into_owned())
+                    };
+                    let flag = |name: &[u8]| attr(name).as_deref() == Some("true");
+                    let real = |name: &[u8]| attr(name).and_then(|v| v.parse::<f64>().ok());
+                    match e.name().as_ref() {
+                        b"fmiModelDescription" => {
+                            d.fmi_version = attr(b"fmiVersion").unwrap_or_default();
+                            d.guid = attr(b"guid").unwrap_or_default();
+                        }
+                        b"CoSimulation" => {
+                            d.model_identifier = attr(b"modelIdentifier").unwrap_or_default();
+                            d.can_get_and_set_fmu_state = flag(b"canGetAndSetFMUstate");
+                            d.can_serialize_fmu_state = flag(b"canSerializeFMUstate");
+                            d.provides_directional_derivative = flag(b"providesDirectionalDerivative");
+                            d.can_handle_variable_step = flag(b"canHandleVariableCommunicationStepSize");
+                        }
+                        b"Category" => d.log_categories.push(attr(b"name").unwrap_or_default()),
+                        b"DefaultExperiment" => {
+                            d.default_experiment = (real(b"startTime"), real(b"stopTime"), real(b"stepSize"))
+                        }
+                        b"ScalarVariable" => {
+                            current = Some(Variable {
+                                name: attr(b"name").unwrap_or_default(),
+                                vr: attr(b"valueReference")
+                                    .and_then(|v| v.parse().ok())
+                                    .ok_or("a ScalarVariable without a valid valueReference")?,
+                                ty: Type::Real,
+                                causality: attr(b"causality").unwrap_or_else(|| "local".into()),
+                                variability: attr(b"variability").unwrap_or_else(|| "continuous".into()),
+                                initial_attr: attr(b"initial"),
+                                start: None,
+                                min: None,
+                                max: None,
+                            })
+                        }
+                        tag @ (b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration") => {
+                            if let Some(mut v) = current.take() {
+                                v.ty = match tag {
+                                    b"Real" => Type::Real,
+                                    b"Integer" => Type::Integer,
+                                    b"Boolean" => Type::Boolean,
+                                    b"String" => Type::String,
+                                    _ => Type::Enumeration,
+                                };
+                                v.start = attr(b"start");
+                                v.min = real(b"min");
+                                v.max = real(b"max");
+                                d.variables.push(v);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+                _ => {}
+            }
+        }
+        if d.model_identifier.is_empty() {
+            return Err("no <CoSimulation modelIdentifier=...>".into());
+        }
+        Ok(d)
+    }
+
+    pub fn of_type(&self, ty: Type) -> impl Iterator<Item = &Variable> {
+        self.variables.iter().filter(move |v| v.ty == ty)
+    }
+
+    pub fn vrs_of_type(&self, ty: Type) -> Vec<u32> {
+        self.of_type(ty).map(|v| v.vr).collect()
+    }
+
+    pub fn variable(&self, name: &str) -> &Variable {
+        self.variables
+            .iter()
+            .find(|v| v.name == name)
+            .unwrap_or_else(|| panic!("{} has no variable '{name}'", self.model_identifier))
+    }
+
+    /// A value reference that names no variable of any type.
+    pub fn unknown_vr(&self) -> u32 {
+        self.variables.iter().map(|v| v.vr).max().unwrap_or(0) + 1000
+    }
+}

@@ -1,0 +1,58 @@
+//! The states of the FMI 2.0 co-simulation state machine in which the standard allows each
+//! function (section 4.2.4; the Reference FMUs encode the same masks). Written from the
+//! standard, independently of the runtime's own table, which the suite checks against it.
+
+use rustfmu::fmi2::instance::State::{self, *};
+
+pub const ALL_BUT_FATAL: &[State] = &[
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+];
+pub const GETTERS: &[State] = &[
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+];
+pub const SETTERS: &[State] = &[Instantiated, InitializationMode, StepComplete];
+pub const STATUS: &[State] = &[StepComplete, StepFailed, Terminated];
+
+/// Where `function` may be called. fmi2CancelStep only in StepInProgress, which a synchronous
+/// FMU never enters; fmi2Terminate not after fmi2CancelStep (StepCanceled).
+pub fn allowed_states(function: &str) -> &'static [State] {
+    match function {
+        "fmi2SetDebugLogging"
+        | "fmi2Reset"
+        | "fmi2GetFMUstate"
+        | "fmi2SetFMUstate"
+        | "fmi2FreeFMUstate"
+        | "fmi2SerializedFMUstateSize"
+        | "fmi2SerializeFMUstate"
+        | "fmi2DeSerializeFMUstate" => ALL_BUT_FATAL,
+        "fmi2SetupExperiment" | "fmi2EnterInitializationMode" => &[Instantiated],
+        "fmi2ExitInitializationMode" => &[InitializationMode],
+        "fmi2Terminate" => &[StepComplete, StepFailed],
+        "fmi2GetReal" | "fmi2GetInteger" | "fmi2GetBoolean" | "fmi2GetString" | "fmi2GetDirectionalDerivative" => {
+            GETTERS
+        }
+        "fmi2SetReal" | "fmi2SetInteger" | "fmi2SetBoolean" | "fmi2SetString" | "fmi2SetRealInputDerivatives" => {
+            SETTERS
+        }
+        "fmi2GetRealOutputDerivatives" => &[StepComplete, StepFailed, StepCanceled, Terminated, Error],
+        "fmi2DoStep" => &[StepComplete],
+        "fmi2CancelStep" => &[],
+        "fmi2GetStatus"
+        | "fmi2GetRealStatus"
+        | "fmi2GetIntegerStatus"
+        | "fmi2GetBooleanStatus"
+        | "fmi2GetStringStatus" => STATUS,
+        other => panic!("{other} is not a co-simulation function with a state"),
+    }
+}

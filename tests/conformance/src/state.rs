@@ -1,0 +1,101 @@
+//! Reading and forging serialized FMU states.
+//!
+//! The runtime's format (documented in `rustfmu::fmi2::state`): magic | version u32 | GUID
+//! length u16 | GUID | payload length u32 | payload | CRC-32, little-endian, and the payload is
+//! the postcard encoding of `Sim`, whose first field is the state-machine state (one byte, the
+//! variant index of `rustfmu::fmi2::instance::State`). The suite reads that byte to observe
+//! the state machine from outside, and writes it to put an instance in a state that its model
+//! cannot reach on its own (StepFailed of an FMU whose steps never fail, StepCanceled, Error,
+//! Fatal). [`parse`] checks every field, so a change of the format fails the suite loudly.
+
+use rustfmu::fmi2::instance::State;
+use rustfmu::fmi2::state::{FORMAT_VERSION, MAGIC};
+
+/// Every state of `State`, indexed by its discriminant.
+pub const STATES: [State; 8] = [
+    State::Instantiated,
+    State::InitializationMode,
+    State::StepComplete,
+    State::StepFailed,
+    State::StepCanceled,
+    State::Terminated,
+    State::Error,
+    State::Fatal,
+];
+
+pub fn name(s: State) -> String {
+    format!("{s:?}")
+}
+
+/// Where the fields of a serialized state are.
+#[derive(Debug, Clone, Copy)]
+pub struct Layout {
+    pub version_at: usize,
+    pub guid_at: usize,
+    pub guid_len: usize,
+    pub payload_at: usize,
+    pub payload_len: usize,
+    pub crc_at: usize,
+}
+
+pub fn parse(bytes: &[u8]) -> Result<Layout, String> {
+    let u16_at = |i: usize| bytes.get(i..i + 2).map(|b| u16::from_le_bytes([b[0], b[1]]) as usize);
+    let u32_at = |i: usize| {
+        bytes
+            .get(i..i + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    if bytes.get(..8) != Some(&MAGIC[..]) {
+        return Err("serialized state does not start with the runtime's magic bytes".into());
+    }
+    if u32_at(8) != Some(FORMAT_VERSION as usize) {
+        return Err(format!("serialized state is not format version {FORMAT_VERSION}"));
+    }
+    let guid_len = u16_at(12).ok_or("truncated")?;
+    let payload_len = u32_at(14 + guid_len).ok_or("truncated")?;
+    let payload_at = 18 + guid_len;
+    let crc_at = payload_at + payload_len;
+    if bytes.len() != crc_at + 4 {
+        return Err(format!(
+            "serialized state has {} bytes, its fields say {}",
+            bytes.len(),
+            crc_at + 4
+        ));
+    }
+    if crc32fast::hash(&bytes[..crc_at]) as usize != u32_at(crc_at).unwrap_or(usize::MAX) {
+        return Err("serialized state's CRC does not match".into());
+    }
+    Ok(Layout {
+        version_at: 8,
+        guid_at: 14,
+        guid_len,
+        payload_at,
+        payload_len,
+        crc_at,
+    })
+}
+
+/// The state-machine state recorded in a serialized FMU state.
+pub fn machine_state(bytes: &[u8]) -> Result<State, String> {
+    let l = parse(bytes)?;
+    let b = bytes[l.payload_at];
+    STATES
+        .get(b as usize)
+        .copied()
+        .ok_or_else(|| format!("state byte {b} is no State"))
+}
+
+/// Recomputes the trailing CRC after an edit.
+pub fn reseal(bytes: &mut [u8], l: &Layout) {
+    let crc = crc32fast::hash(&bytes[..l.crc_at]);
+    bytes[l.crc_at..].copy_from_slice(&crc.to_le_bytes());
+}
+
+/// The same serialized state with another state-machine state, correctly sealed.
+pub fn forge(bytes: &[u8], state: State) -> Vec<u8> {
+    let l = parse(bytes).unwrap_or_else(|e| panic!("{e}"));
+    let mut out = bytes.to_vec();
+    out[l.payload_at] = state as u8;
+    reseal(&mut out, &l);
+    out
+}
