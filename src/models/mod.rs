@@ -1,3 +1,5 @@
 //! Physics and control, as the paper writes them. Plain Rust: no FMI, no unsafe.
 
+pub mod controller;
+pub mod dc_motor;
 pub mod pendulum;

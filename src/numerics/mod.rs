@@ -1,3 +1,6 @@
-//! Numerical methods the models step with.
+//! Numerical methods the models step with, and the linear-systems tools the controller is
+//! designed with.
 
+pub mod lqr;
+pub mod lti;
 pub mod ode;

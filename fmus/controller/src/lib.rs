@@ -1,0 +1,2 @@
+//! The Controller FMU: `binaries/linux64/Controller.so`.
+rustfmu::export_fmi2_cosimulation!(rustfmu::fmus::controller::Controller);

@@ -1,0 +1,347 @@
+//! The paper's controller, sampled: full-state LQR feedback (section 3, equation (14)), a PID
+//! per joint (equation (16)), or both, and the conversion of torque demands to motor voltages.
+//!
+//! Measured: x = (α1, ω1, α2, ω2) [rad, rad/s]; references α1_ref, α2_ref [rad].
+//! Control errors e_i = α_i,ref − α_i.
+//!
+//!     M_LQR = −K (x − x_ref),  x_ref = (α1_ref, 0, α2_ref, 0)                     (14)
+//!     M_PID,i = Kp_i e_i + Ki_i ∫e_i dt − Kd_i ω_f,i                               (16)
+//!
+//! The derivative acts on the measurement, not on the error (no kick when a reference jumps),
+//! through the first-order filter Tf dω_f/dt = ω − ω_f, i.e. Kd s/(Tf s + 1) on −α. With the
+//! references piecewise constant this is the derivative term of (16) with a filter.
+//! M = M_LQR and/or M_PID, limited to ±M_max.
+//!
+//! Voltages for the DC motors: each motor i drives the generalized coordinate α_i through a
+//! gear of ratio n (see `dc_motor`), so the demanded torque needs the steady-state voltage
+//! (the current settles in L/R ≈ 55 µs, far below the sampling period)
+//!     U_i = R/(n km) · (M_i + n² B ω_i) + n kb ω_i,    limited to ±U_max.
+//!
+//! Anti-windup by conditional integration: while M_i (or, driving motors, U_i) is at its limit, ∫e_i stops growing
+//! in the direction that pushes further into the limit.
+//!
+//! Sampling: the controller reads its inputs at a communication point t_k, and its outputs
+//! change only at communication points. During the step to t_k + h the integral advances by
+//! e_i(t_k)·h and the filter exactly (ω held): both follow the actual step size h.
+
+use super::dc_motor::DcMotorParams;
+use super::pendulum::PendulumParams;
+use crate::numerics::lqr::lqr;
+use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
+use serde::{Deserialize, Serialize};
+
+/// Which feedback the controller applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Mode {
+    /// M = −K (x − x_ref)
+    Lqr = 1,
+    /// M = PID per joint
+    Pid = 2,
+    /// M = −K (x − x_ref) + PID per joint
+    LqrPid = 3,
+}
+
+impl Mode {
+    pub fn from_code(code: i32) -> Result<Mode, String> {
+        match code {
+            1 => Ok(Mode::Lqr),
+            2 => Ok(Mode::Pid),
+            3 => Ok(Mode::LqrPid),
+            _ => Err(format!("mode = {code} is not one of 1 (LQR), 2 (PID), 3 (LQR+PID)")),
+        }
+    }
+    fn lqr(self) -> bool {
+        self != Mode::Pid
+    }
+    fn pid(self) -> bool {
+        self != Mode::Lqr
+    }
+}
+
+/// PID gains of one joint.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PidGains {
+    /// Proportional gain [N·m/rad]
+    pub kp: f64,
+    /// Integral gain [N·m/(rad·s)]
+    pub ki: f64,
+    /// Derivative gain [N·m·s/rad]
+    pub kd: f64,
+}
+
+/// Default PID gains (joint 1, joint 2). Tuned on the linearized plant (12) with the derivative
+/// filter: a grid search over Kp, Ki, Kd maximizing the decay rate of the slowest eigenvalue of
+/// the closed loop in both PID and LQR+PID modes, with damping ratio ≥ 0.5, then rounded.
+/// Kp_i must exceed the gravity stiffness (7.3575 and 2.4525 N·m/rad) for PID alone to hold
+/// the pendulum up. The test `pid_defaults_stabilize_the_linearized_plant` checks them.
+pub const DEFAULT_PID: [PidGains; 2] = [
+    PidGains {
+        kp: 30.0,
+        ki: 15.0,
+        kd: 5.0,
+    },
+    PidGains {
+        kp: 10.0,
+        ki: 5.0,
+        kd: 5.0,
+    },
+];
+
+/// Everything the control law needs, fixed during a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlLaw {
+    pub mode: Mode,
+    /// LQR gain [N·m/rad, N·m·s/rad, N·m/rad, N·m·s/rad] per row
+    pub k: SMatrix<f64, 2, 4>,
+    pub pid: [PidGains; 2],
+    /// Derivative filter time constant Tf [s]; 0 uses ω unfiltered
+    pub tf: f64,
+    /// Torque limit M_max [N·m]
+    pub m_max: f64,
+    /// The motors the voltages are computed for
+    pub motor: DcMotorParams,
+    /// Whether U1, U2 drive the plant (through motors): then the voltage limit also stops the
+    /// integrators; when M1, M2 drive it directly only M_max does.
+    pub drives_motors: bool,
+}
+
+/// The controller's memory between samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct ControllerState {
+    /// ∫ e_i dt [rad·s]
+    pub integral: [f64; 2],
+    /// Filtered joint speeds ω_f [rad/s]
+    pub rate_filter: [f64; 2],
+}
+
+/// One sample of the outputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Command {
+    /// Torque demands M1, M2 [N·m], limited to ±M_max
+    pub m: Vector2<f64>,
+    /// Voltage commands U1, U2 [V], limited to ±U_max
+    pub u: Vector2<f64>,
+    /// Whether joint i's command is at a limit that stops its integrator
+    pub saturated: [bool; 2],
+}
+
+/// The paper's LQR design for a plant: Q, R as given, linearized at the upright rest position
+/// from the same model code the Pendulum FMU integrates.
+pub fn lqr_gain(plant: &PendulumParams, q: &Matrix4<f64>, r: &Matrix2<f64>) -> Result<SMatrix<f64, 2, 4>, String> {
+    plant.validate()?;
+    let (a, b) = plant.linearize(&Vector4::zeros(), &Vector2::zeros());
+    lqr(&a, &b, q, r).map_err(|e| format!("LQR design failed: {e}"))
+}
+
+const ANGLE: [usize; 2] = [0, 2];
+const RATE: [usize; 2] = [1, 3];
+
+impl ControlLaw {
+    pub fn validate(&self) -> Result<(), String> {
+        self.motor.validate()?;
+        if !(self.tf.is_finite() && self.tf >= 0.0) {
+            return Err(format!("Tf = {} must be a finite number >= 0", self.tf));
+        }
+        if !(self.m_max.is_finite() && self.m_max > 0.0) {
+            return Err(format!("M_max = {} must be a finite number > 0", self.m_max));
+        }
+        Ok(())
+    }
+
+    /// The filter state that makes the derivative term start without a transient.
+    pub fn initial_state(&self, x: &Vector4<f64>) -> ControllerState {
+        ControllerState {
+            integral: [0.0; 2],
+            rate_filter: [x[1], x[3]],
+        }
+    }
+
+    /// The outputs for measurement `x`, references `reference` and memory `s`.
+    pub fn command(&self, s: &ControllerState, x: &Vector4<f64>, reference: &Vector2<f64>) -> Command {
+        let mut m = Vector2::zeros();
+        if self.mode.lqr() {
+            let x_ref = Vector4::new(reference[0], 0.0, reference[1], 0.0);
+            m -= self.k * (x - x_ref);
+        }
+        if self.mode.pid() {
+            for i in 0..2 {
+                let e = reference[i] - x[ANGLE[i]];
+                let g = self.pid[i];
+                m[i] += g.kp * e + g.ki * s.integral[i] - g.kd * s.rate_filter[i];
+            }
+        }
+        let mut saturated = [false; 2];
+        let mut u = Vector2::zeros();
+        let p = &self.motor;
+        let n = p.gear_ratio;
+        for i in 0..2 {
+            let limited = m[i].clamp(-self.m_max, self.m_max);
+            let omega = x[RATE[i]];
+            let volts = p.r / (n * p.km) * (limited + n * n * p.b * omega) + n * p.kb * omega;
+            u[i] = p.applied_voltage(volts);
+            saturated[i] = limited != m[i] || (self.drives_motors && u[i] != volts);
+            m[i] = limited;
+        }
+        Command { m, u, saturated }
+    }
+
+    /// The memory after a step of `h` [s] from a sample with measurement `x` and command `c`.
+    pub fn advance(
+        &self,
+        s: &ControllerState,
+        x: &Vector4<f64>,
+        reference: &Vector2<f64>,
+        c: &Command,
+        h: f64,
+    ) -> ControllerState {
+        let mut next = *s;
+        for i in 0..2 {
+            let e = reference[i] - x[ANGLE[i]];
+            // Conditional integration: no growth into a limit. The sign of the command tells
+            // which limit; integrating e > 0 raises the command when Ki > 0.
+            let into_limit = c.saturated[i] && e * c.m[i] > 0.0;
+            if self.mode.pid() && !into_limit {
+                next.integral[i] += e * h;
+            }
+            let omega = x[RATE[i]];
+            next.rate_filter[i] = if self.tf > 0.0 {
+                omega + (s.rate_filter[i] - omega) * (-h / self.tf).exp()
+            } else {
+                omega
+            };
+        }
+        next
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::SMatrix;
+
+    fn law(mode: Mode) -> ControlLaw {
+        let plant = PendulumParams::default();
+        let c = PendulumParams::output_matrix();
+        ControlLaw {
+            mode,
+            k: lqr_gain(&plant, &(c.transpose() * c), &Matrix2::identity()).unwrap(),
+            pid: DEFAULT_PID,
+            tf: 0.01,
+            m_max: 1e3,
+            motor: DcMotorParams::default(),
+            drives_motors: false,
+        }
+    }
+
+    /// The linearized loop: plant (12) + controller with the integrals and filters as states,
+    /// z = (x, ∫e1, ∫e2, ω_f1, ω_f2), continuous time.
+    fn closed_loop(l: &ControlLaw) -> SMatrix<f64, 8, 8> {
+        let (a, b) = PendulumParams::default().linearize(&Vector4::zeros(), &Vector2::zeros());
+        let mut f = SMatrix::<f64, 8, 8>::zeros();
+        f.fixed_view_mut::<4, 4>(0, 0).copy_from(&a);
+        let mut gain = SMatrix::<f64, 2, 8>::zeros();
+        if l.mode.lqr() {
+            gain.fixed_view_mut::<2, 4>(0, 0).copy_from(&(-l.k));
+        }
+        for i in 0..2 {
+            if l.mode.pid() {
+                gain[(i, ANGLE[i])] -= l.pid[i].kp;
+                gain[(i, 4 + i)] += l.pid[i].ki;
+                gain[(i, 6 + i)] -= l.pid[i].kd;
+            }
+            f[(4 + i, ANGLE[i])] = -1.0;
+            f[(6 + i, RATE[i])] = 1.0 / l.tf;
+            f[(6 + i, 6 + i)] = -1.0 / l.tf;
+        }
+        let bg = b * gain;
+        let mut top = f.fixed_view_mut::<4, 8>(0, 0);
+        top += bg;
+        f
+    }
+
+    #[test]
+    fn pid_defaults_stabilize_the_linearized_plant() {
+        for mode in [Mode::Pid, Mode::LqrPid] {
+            let eig = closed_loop(&law(mode)).complex_eigenvalues();
+            let slowest = eig.iter().map(|l| l.re).fold(f64::NEG_INFINITY, f64::max);
+            let damping = eig.iter().map(|l| -l.re / l.norm()).fold(f64::INFINITY, f64::min);
+            assert!(
+                slowest < -0.45,
+                "{mode:?}: slowest eigenvalue should decay faster than -0.45/s: {eig}"
+            );
+            assert!(damping > 0.5, "{mode:?}: damping ratio should exceed 0.5: {eig}");
+        }
+    }
+
+    #[test]
+    fn lqr_command_is_minus_k_x() {
+        let l = law(Mode::Lqr);
+        let x = Vector4::new(0.1, 0.2, -0.05, 0.3);
+        let c = l.command(&l.initial_state(&x), &x, &Vector2::zeros());
+        let want = -l.k * x;
+        assert!((c.m - want).norm() < 1e-12, "expected M = {want}, got {}", c.m);
+    }
+
+    #[test]
+    fn voltage_is_the_steady_state_inverse_of_the_motor() {
+        let mut l = law(Mode::Lqr);
+        l.motor = DcMotorParams {
+            gear_ratio: 200.0,
+            b: 1e-6,
+            ..DcMotorParams::default()
+        };
+        let x = Vector4::new(0.01, 0.2, -0.01, -0.1);
+        let c = l.command(&l.initial_state(&x), &x, &Vector2::zeros());
+        for i in 0..2 {
+            let omega_m = 200.0 * x[RATE[i]];
+            let current = (c.u[i] - l.motor.kb * omega_m) / l.motor.r;
+            let torque = 200.0 * (l.motor.km * current - l.motor.b * omega_m);
+            assert!(
+                (torque - c.m[i]).abs() < 1e-12,
+                "joint {i}: motor would give {torque} N.m for demand {}",
+                c.m[i]
+            );
+        }
+    }
+
+    #[test]
+    fn integral_stops_growing_into_the_limit() {
+        let mut l = law(Mode::Pid);
+        l.m_max = 1.0;
+        let x = Vector4::new(-0.5, 0.0, 0.0, 0.0); // e1 = +0.5 rad: M1 = 15 N.m, limited to 1
+        let mut s = l.initial_state(&x);
+        for _ in 0..100 {
+            let c = l.command(&s, &x, &Vector2::zeros());
+            assert!(c.saturated[0], "M1 should be at its limit");
+            s = l.advance(&s, &x, &Vector2::zeros(), &c, 0.01);
+        }
+        assert_eq!(
+            s.integral[0], 0.0,
+            "the integral of joint 1 wound up to {}",
+            s.integral[0]
+        );
+    }
+
+    #[test]
+    fn integral_and_filter_follow_the_actual_step() {
+        let l = law(Mode::LqrPid);
+        let x = Vector4::new(0.01, 1.0, 0.0, 0.0);
+        let s0 = ControllerState::default();
+        let c = l.command(&s0, &x, &Vector2::zeros());
+        let one = l.advance(&s0, &x, &Vector2::zeros(), &c, 0.004);
+        let mut two = l.advance(&s0, &x, &Vector2::zeros(), &c, 0.001);
+        two = l.advance(&two, &x, &Vector2::zeros(), &c, 0.003);
+        for i in 0..2 {
+            assert!(
+                (one.integral[i] - two.integral[i]).abs() < 1e-15,
+                "integral: {one:?} vs {two:?}"
+            );
+            assert!(
+                (one.rate_filter[i] - two.rate_filter[i]).abs() < 1e-15,
+                "filter: {one:?} vs {two:?}"
+            );
+        }
+        assert!((one.integral[0] + 0.01 * 0.004).abs() < 1e-15);
+        assert!((one.rate_filter[0] - (1.0 - (-0.4f64).exp())).abs() < 1e-12);
+    }
+}
