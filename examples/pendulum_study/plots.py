@@ -63,28 +63,29 @@ def _marker_area(ax, fig, size, d) -> float:
 
 
 def robustness(df: pd.DataFrame, path, spread: float) -> None:
-    """Settling time and peak voltage (or torque) distributions, one colour per control law."""
+    """Distributions, one colour per control law: settling time, peak motor voltage (the
+    controller's command) and peak torque on the joints (what the motors deliver)."""
     modes = sorted(df["controller.mode"].unique())
-    has_voltage = df["peak_voltage"].notna().any()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.3))
-    for mode in modes:
-        d = df[df["controller.mode"] == mode]
-        s = d[d["stabilized"]]
-        label = f"{MODES.get(int(mode), mode)}: {len(s)}/{len(d)} stabilized"
-        a.hist(s["settling_time"], bins=30, alpha=0.6, label=label)
-        peak = d["peak_voltage"] if has_voltage else d["peak_torque"]
-        b.hist(peak.dropna(), bins=30, alpha=0.6, label=f"{MODES.get(int(mode), mode)} (all {len(d)} runs)")
-    a.set_xlabel("settling time [s]")
-    a.set_ylabel("runs")
-    a.set_title("Settling time (|α1|, |α2| ≤ band)")
-    a.legend(fontsize=8)
-    b.set_xlabel("peak |U| [V]" if has_voltage else "peak |M| [N·m]")
-    b.set_ylabel("runs")
-    b.set_title("Peak motor voltage" if has_voltage else "Peak torque")
-    b.legend(fontsize=8)
+    panels = [("settling_time", "settling time [s]", "Settling time (|α1|, |α2| ≤ band)", True)]
+    if df["peak_voltage"].notna().any():
+        panels.append(("peak_voltage", "peak |U| [V]", "Peak motor voltage command", False))
+    panels.append(("peak_torque", "peak |M| [N·m]", "Peak torque on the joints", False))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.3))
+    for ax, (col, xlabel, title, stabilized_only) in zip(axes, panels):
+        d_all = df[df["stabilized"]] if stabilized_only else df
+        values = d_all[col].dropna()
+        bins = np.histogram_bin_edges(values, bins=40) if len(values) else 10
+        for mode in modes:
+            d = df[df["controller.mode"] == mode]
+            shown = d[d["stabilized"]] if stabilized_only else d
+            what = f"{len(shown)}/{len(d)} stabilized" if stabilized_only else f"{len(shown)} runs"
+            ax.hist(shown[col].dropna(), bins=bins, alpha=0.6, label=f"{MODES.get(int(mode), mode)}: {what}")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("runs")
+        ax.set_title(title)
+        ax.legend(fontsize=8)
     n = len(df) // max(1, len(modes))
     fig.suptitle(f"Robustness: {n} plants drawn within ±{100 * spread:g} % of nominal; the controller keeps its nominal model")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
-

@@ -21,6 +21,7 @@ import dataclasses
 import hashlib
 import io
 import json
+import logging
 import math
 import os
 import pathlib
@@ -261,7 +262,8 @@ def run_study(
                     n_workers=n_workers,
                     threads_per_worker=threads_per_worker,
                     processes=processes,
-                    dashboard_address=None,
+                    dashboard_address=":0",  # any free port: several studies may run at once
+                    silence_logs=logging.CRITICAL,  # workers' heartbeat complaints at shutdown
                 )
             )
             client = stack.enter_context(Client(cluster))
