@@ -14,15 +14,17 @@ FMUs come from target/fmu (build them with `cargo run --release -p fmu-build`).
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import sys
+import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "examples"))
 
 from pendulum_study import plots, studies  # noqa: E402
 from pendulum_study.closed_loop import Criteria  # noqa: E402
-from pendulum_study.runner import run_study  # noqa: E402
+from pendulum_study.runner import run_sequential, run_study  # noqa: E402
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -63,6 +65,7 @@ def main(argv=None) -> int:
     _common(bench)
     bench.add_argument("--runs", type=int, default=64)
     bench.add_argument("--counts", type=int, nargs="+", default=[1, 2], help="worker counts to measure")
+    bench.add_argument("--system", choices=("torque", "motors"), default="motors")
     args = parser.parse_args(argv)
 
     out = pathlib.Path(args.out)
@@ -93,15 +96,21 @@ def main(argv=None) -> int:
         plots.robustness(_only(plots.read(csv), specs), out / "robust.png", args.spread)
         print(f"wrote {out / 'robust.png'}")
     else:
-        # The same runs for every worker count, each into a fresh file (nothing to skip).
-        specs = studies.robustness(paths, args.runs, 0.2, 1, (1,), "motors", stop_time=args.stop_time, step=args.step, criteria=criteria)
-        print(f"{len(specs)} runs of the motors system, horizon {args.stop_time:g} s, step {args.step:g} s")
+        # The same runs for every worker count, each into a fresh file (nothing to skip), and
+        # once one after another in this process without Dask, for the overhead.
+        specs = studies.robustness(paths, args.runs, 0.2, 1, (1,), args.system, stop_time=args.stop_time, step=args.step, criteria=criteria)
+        print(f"{len(specs)} runs of the {args.system} system, horizon {args.stop_time:g} s, step {args.step:g} s, on {os.cpu_count()} cores")
+        t0, load0 = time.perf_counter(), os.getloadavg()[0]
+        run_sequential(specs, paths)
+        seq = len(specs) / (time.perf_counter() - t0)
+        print(f"  no Dask, one after another: {seq:.2f} runs/s (load average {load0:.2f} -> {os.getloadavg()[0]:.2f})")
         results = {}
         for n in args.counts:
             csv = out / f"bench-{n}.csv"
             csv.unlink(missing_ok=True)
+            load0 = os.getloadavg()[0]
             report = run_study(specs, csv, n_workers=n, **run)
-            print(f"  {n} worker(s): {report}")
+            print(f"  {n} worker(s): {report} (load average {load0:.2f} -> {os.getloadavg()[0]:.2f})")
             results[n] = report.runs_per_second
         base = results[args.counts[0]]
         for n, r in results.items():
