@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The main job: build and package every FMU, then run the demo simulations through fmpy.
+# The main job: build and package every FMU (and the SSP files of the composed systems), print the
+# paper's numbers as computed, draw Figures 6-8, and run the full composed demo (4 FMUs) through fmpy.
 # Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,3 +8,6 @@ bash tests/setup-env.sh
 cargo run --release -p fmu-build -- build --python .venv/bin/python
 mkdir -p out
 .venv/bin/python examples/pendulum_open_loop.py --out out
+cargo run --release --example paper_numbers | tee out/paper_numbers.txt
+.venv/bin/python examples/paper_figures.py --out out
+.venv/bin/python examples/composed_demo.py --out out

@@ -4,6 +4,7 @@
 
 mod docs;
 mod package;
+mod ssp;
 mod validate;
 
 use clap::{Parser, Subcommand};
@@ -21,7 +22,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Build every FMU (release), refresh modelDescription/, package target/fmu/*.fmu and
-    /// validate them (the default).
+    /// validate them (the default); with no names, also write the SSP files of the composed systems.
     Build {
         /// Only these FMUs (model identifiers); all when none is given.
         names: Vec<String>,
@@ -35,6 +36,8 @@ enum Cmd {
         #[arg(long)]
         check: bool,
     },
+    /// Write target/fmu/<system>.ssp for the composed systems (needs the packaged FMUs).
+    Ssp,
     /// Validate packaged FMUs: archive layout, description, binary symbols, a smoke run.
     Validate {
         /// FMU files; all of target/fmu when none is given.
@@ -141,7 +144,18 @@ fn build(names: &[String], python: Option<&Path>) -> Result<(), String> {
         eprintln!("fmu-build: packaged {}", out.display());
         built.push(out);
     }
-    validate_all(&built, python)
+    validate_all(&built, python)?;
+    if names.is_empty() {
+        write_ssp()?;
+    }
+    Ok(())
+}
+
+fn write_ssp() -> Result<(), String> {
+    for path in ssp::write_all(&fmu_dir())? {
+        eprintln!("fmu-build: wrote {}", path.display());
+    }
+    Ok(())
 }
 
 fn validate_all(fmus: &[PathBuf], python: Option<&Path>) -> Result<(), String> {
@@ -177,6 +191,7 @@ fn main() -> ExitCode {
     }) {
         Cmd::Build { names, python } => build(&names, python.as_deref()),
         Cmd::Xml { check } => write_xml(check),
+        Cmd::Ssp => write_ssp(),
         Cmd::Validate { fmus, python } => {
             let fmus = if fmus.is_empty() {
                 rustfmu::fmus::ALL

@@ -4,8 +4,10 @@
 //! Measured: x = (α1, ω1, α2, ω2) [rad, rad/s]; references α1_ref, α2_ref [rad].
 //! Control errors e_i = α_i,ref − α_i.
 //!
-//!     M_LQR = −K (x − x_ref),  x_ref = (α1_ref, 0, α2_ref, 0)                     (14)
-//!     M_PID,i = Kp_i e_i + Ki_i ∫e_i dt − Kd_i ω_f,i                               (16)
+//! ```text
+//! M_LQR = −K (x − x_ref),  x_ref = (α1_ref, 0, α2_ref, 0)                     (14)
+//! M_PID,i = Kp_i e_i + Ki_i ∫e_i dt − Kd_i ω_f,i                               (16)
+//! ```
 //!
 //! The derivative acts on the measurement, not on the error (no kick when a reference jumps),
 //! through the first-order filter Tf dω_f/dt = ω − ω_f, i.e. Kd s/(Tf s + 1) on −α. With the
@@ -15,7 +17,9 @@
 //! Voltages for the DC motors: each motor i drives the generalized coordinate α_i through a
 //! gear of ratio n (see `dc_motor`), so the demanded torque needs the steady-state voltage
 //! (the current settles in L/R ≈ 55 µs, far below the sampling period)
-//!     U_i = R/(n km) · (M_i + n² B ω_i) + n kb ω_i,    limited to ±U_max.
+//! ```text
+//! U_i = R/(n km) · (M_i + n² B ω_i) + n kb ω_i,    limited to ±U_max.
+//! ```
 //!
 //! Anti-windup by conditional integration: while M_i (or, driving motors, U_i) is at its limit, ∫e_i stops growing
 //! in the direction that pushes further into the limit.

@@ -2,11 +2,15 @@
 //!
 //! Armature circuit and rotor, motor side (ω_m rotor speed [rad/s], i armature current [A]):
 //!
-//!     L di/dt   = U − R i − kb ω_m
-//!     J dω_m/dt = km i − B ω_m − τ_load/n
+//! ```text
+//! L di/dt   = U − R i − kb ω_m
+//! J dω_m/dt = km i − B ω_m − τ_load/n
+//! ```
 //!
 //! Unloaded (τ_load = 0) the speed answers the voltage with
-//!     ω_m/U = km / (J L s² + (J R + B L) s + (B R + km kb))                        (17)
+//! ```text
+//! ω_m/U = km / (J L s² + (J R + B L) s + (B R + km kb))                        (17)
+//! ```
 //! The paper prints 27.19 for the constant term; its own parameters give
 //! B R + km kb = 9.0946 · 2.22 + 0.00449 · 0.00448 = 20.19.
 //!

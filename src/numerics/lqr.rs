@@ -1,6 +1,8 @@
 //! Linear-quadratic regulator: the continuous algebraic Riccati equation (CARE)
 //!
-//!     Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0,        K = R⁻¹ Bᵀ X,
+//! ```text
+//! Aᵀ X + X A − X B R⁻¹ Bᵀ X + Q = 0,        K = R⁻¹ Bᵀ X,
+//! ```
 //!
 //! whose stabilizing solution X gives the gain of MATLAB's `K = lqr(A, B, Q, R)` (the paper's
 //! equation (14)); u = −K x minimizes ∫ xᵀQx + uᵀRu dt.

@@ -1,0 +1,15 @@
+"""Co-simulation of the project's FMUs as an importer sees them: a fixed-step master loop on
+fmpy's FMU2Slave, the two composed systems of the paper, and their linear reference.
+
+Used by the examples (`examples/composed_demo.py`, `examples/paper_figures.py`) and by the tests
+(`tests/python/test_composition.py`), which put `examples/` on sys.path.
+"""
+
+from .master import Connection, Component, System, simulate  # noqa: F401
+from .systems import (  # noqa: F401
+    DEMO_MOTOR,
+    closed_loop_matrices,
+    linear_response,
+    plant_and_controller,
+    plant_motors_controller,
+)
