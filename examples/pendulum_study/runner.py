@@ -6,7 +6,8 @@ run has the same id in every study that contains it.
 
 Each finished run is appended as one CSV row as soon as its result arrives; a study that is
 started again on the same file skips every run id already in it (an interrupted study resumes
-where it stopped; a row cut short by the interruption is dropped and its run redone).
+where it stopped; a row cut short by the interruption is dropped and its run redone). Rows
+carry a digest of the FMU files: a file written with other FMUs is refused, not resumed.
 
 On Dask every run is one task. A worker plugin carries the FMU files to each worker, which
 extracts them once into its local directory; each worker thread instantiates each FMU once and
@@ -55,10 +56,19 @@ RESULT_COLUMNS = [
     "worker",
     "loop_id",
     "loop_runs",
+    "fmus",
 ]
 
 #: Columns that describe where and how fast a run ran, not what it computed.
-BOOKKEEPING_COLUMNS = ["elapsed", "worker", "loop_id", "loop_runs"]
+BOOKKEEPING_COLUMNS = ["elapsed", "worker", "loop_id", "loop_runs", "fmus"]
+
+
+def fmu_digest(paths: dict[str, str]) -> str:
+    """Identifies the FMU files a study ran on: 12 hex digits of a SHA-256 over them."""
+    h = hashlib.sha256()
+    for ident in sorted(paths):
+        h.update(ident.encode() + b"\0" + pathlib.Path(paths[ident]).read_bytes())
+    return h.hexdigest()[:12]
 
 
 def make_spec(system: str, start: dict, stop_time: float, step: float, criteria: Criteria = Criteria()) -> dict:
@@ -147,9 +157,10 @@ def _format(value) -> str:
 class RowFile:
     """The study's CSV file: one row per finished run, appended and flushed as each arrives."""
 
-    def __init__(self, path: str | os.PathLike, columns: list[str]):
+    def __init__(self, path: str | os.PathLike, columns: list[str], fmus: str):
         self.path = pathlib.Path(path).resolve()
         self.columns = columns
+        self.fmus = fmus
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.done: dict[str, str] = {}  # run id -> status
         if self.path.exists() and self.path.stat().st_size > 0:
@@ -178,9 +189,15 @@ class RowFile:
         for row in reader:
             if len(row) == len(header):
                 record = dict(zip(header, row))
+                if record["fmus"] != self.fmus:
+                    raise ValueError(
+                        f"{self.path} holds runs of other FMU files (digest {record['fmus']}, now "
+                        f"{self.fmus}): its rows would not be this study's; give another output file"
+                    )
                 self.done[record["run_id"]] = record["status"]
 
     def append(self, row: dict) -> None:
+        row = {**row, "fmus": self.fmus}
         with open(self.path, "a", newline="") as f:
             f.write(self._line([_format(row.get(c)) for c in self.columns]))
             f.flush()
@@ -248,7 +265,7 @@ def run_study(
     from tqdm import tqdm
 
     specs = unique_specs(specs)
-    rows = RowFile(out, columns_of(specs))
+    rows = RowFile(out, columns_of(specs), fmu_digest(fmu_paths))
     keep = {"ok"} if retry_failed else {"ok", "failed"}
     todo = [s for s in specs if rows.done.get(run_id(s)) not in keep]
     report = StudyReport(len(specs), len(specs) - len(todo), 0, 0, 0.0, 0.0, 0, str(rows.path))
@@ -300,7 +317,7 @@ def run_sequential(specs: list[dict], fmu_paths: dict[str, str], fresh: bool = F
     """The same runs one after another in this process, without Dask. `fresh`: a new instance
     of every FMU for every run (no fmi2Reset), the reference the pooled runs are checked against."""
     specs = unique_specs(specs)
-    rows = RowFile(out, columns_of(specs)) if out is not None else None
+    rows = RowFile(out, columns_of(specs), fmu_digest(fmu_paths)) if out is not None else None
     result = []
     fmus = FmuSet(fmu_paths)
     try:

@@ -133,6 +133,14 @@ def test_study_file_of_another_study_is_refused(reference):
         runner.run_study(other, reference, paths(), progress=False)
 
 
+def test_study_file_of_other_fmus_is_refused(reference, tmp_path):
+    changed = dict(paths())
+    changed["Pendulum"] = str(tmp_path / "Pendulum.fmu")
+    pathlib.Path(changed["Pendulum"]).write_bytes(pathlib.Path(paths()["Pendulum"]).read_bytes() + b"\0")
+    with pytest.raises(ValueError, match="other FMU files"):
+        runner.run_study(small_study(), reference, changed, progress=False)
+
+
 def test_pictures_are_written(dask_run, tmp_path):
     _, out = dask_run
     df = pd.read_csv(out)
@@ -142,3 +150,33 @@ def test_pictures_are_written(dask_run, tmp_path):
     for name in ("roa.png", "robust.png"):
         data = (tmp_path / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000, f"{name}: {len(data)} bytes"
+
+
+@pytest.mark.parametrize("system", ["torque", "motors"])
+def test_study_runs_match_the_composition_master_loop(system):
+    """The study's closed loop (instances kept, fmi2Reset) against examples/cosim's master loop
+    (fresh instances): same systems, same call order, so the same trajectory to the last bit."""
+    from cosim import DEMO_MOTOR, plant_and_controller, plant_motors_controller, simulate
+
+    from pendulum_study.closed_loop import DEMO_MOTOR as STUDY_MOTOR
+    from pendulum_study.closed_loop import FmuSet
+
+    assert STUDY_MOTOR == DEMO_MOTOR
+    p = paths()
+    if system == "torque":
+        composed = plant_and_controller(p["Pendulum"], p["Controller"], 0.1, -0.05, mode=2)
+    else:
+        composed = plant_motors_controller(p["Pendulum"], p["Controller"], p["DCMotor"], 0.1, -0.05, mode=3)
+    stop, step = 1.0, 1e-3
+    traj = simulate(composed, stop, step, {"pendulum": ["alpha1", "alpha2"]})
+    fmus = FmuSet(p)
+    try:
+        loop = fmus.checkout(system)
+        start = {"controller.mode": 2 if system == "torque" else 3, "pendulum.alpha1": 0.1, "pendulum.alpha2": -0.05}
+        loop.run({**start, "pendulum.m1": 0.6}, stop, step)  # a different run first: reset must undo it
+        row = loop.run(start, stop, step)
+    finally:
+        fmus.close()
+    a1, a2 = traj["pendulum.alpha1"], traj["pendulum.alpha2"]
+    assert row["peak_alpha1"] == abs(a1).max() and row["peak_alpha2"] == abs(a2).max(), (row, abs(a1).max(), abs(a2).max())
+    assert row["final_error"] == math.hypot(a1[-1], a2[-1]), (row["final_error"], math.hypot(a1[-1], a2[-1]))
