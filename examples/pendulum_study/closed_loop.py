@@ -226,7 +226,7 @@ class ClosedLoop:
         n = int(round(stop_time / step))
         self.runs += 1
         self.log.clear()
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), time.thread_time()
         m = _Metrics(criteria, step, has_voltage=self.system == "motors")
         t = 0.0
         try:
@@ -258,10 +258,10 @@ class ClosedLoop:
             # After fmi2Fatal only fmi2FreeInstance is allowed: this loop must not be reused.
             self.broken = self.broken or e.status >= 4
             status = STATUS_NAMES[e.status] if 0 <= e.status < len(STATUS_NAMES) else str(e.status)
-            return m.failed(t, f"{e}" + self._log_text(), status, e.function, time.perf_counter() - t0)
+            return m.failed(t, f"{e}" + self._log_text(), status, e.function, _times(t0, cpu0))
         except Exception as e:  # a bad study specification: recorded like an FMU failure
-            return m.failed(t, f"{type(e).__name__}: {e}" + self._log_text(), "", "", time.perf_counter() - t0)
-        return m.result(n * step, time.perf_counter() - t0)
+            return m.failed(t, f"{type(e).__name__}: {e}" + self._log_text(), "", "", _times(t0, cpu0))
+        return m.result(n * step, _times(t0, cpu0))
 
     def _log_text(self) -> str:
         return (" | FMU log: " + " / ".join(self.log)) if self.log else ""
@@ -273,6 +273,11 @@ class ClosedLoop:
             except Exception:  # freeing is best effort; the process may be going away
                 pass
         self.slaves.clear()
+
+
+def _times(t0: float, cpu0: float) -> dict:
+    """Wall time and this thread's CPU time since t0, cpu0, s."""
+    return {"elapsed": time.perf_counter() - t0, "cpu": time.thread_time() - cpu0}
 
 
 def _default_callbacks():
@@ -312,7 +317,7 @@ class _Metrics:
             return False
         return True
 
-    def _common(self, elapsed: float) -> dict:
+    def _common(self, times: dict) -> dict:
         return {
             "t_end": self.t,
             "peak_alpha1": self.peak_alpha1,
@@ -320,10 +325,10 @@ class _Metrics:
             "peak_torque": self.peak_torque,
             "peak_voltage": self.peak_voltage,
             "final_error": math.hypot(*self.final),
-            "elapsed": elapsed,
+            **times,
         }
 
-    def result(self, stop_time: float, elapsed: float) -> dict:
+    def result(self, stop_time: float, times: dict) -> dict:
         if self.fell_at is not None:
             outcome, settling = "fell", math.nan
         else:
@@ -337,20 +342,20 @@ class _Metrics:
             "outcome": outcome,
             "stabilized": outcome == "stabilized",
             "settling_time": settling,
-            **self._common(elapsed),
+            **self._common(times),
             "fmi_status": "OK",
             "fmi_function": "",
             "error": "",
         }
 
-    def failed(self, t: float, error: str, status: str, function: str, elapsed: float) -> dict:
+    def failed(self, t: float, error: str, status: str, function: str, times: dict) -> dict:
         self.t = t
         return {
             "status": "failed",
             "outcome": "failed",
             "stabilized": False,
             "settling_time": math.nan,
-            **self._common(elapsed),
+            **self._common(times),
             "fmi_status": status,
             "fmi_function": function,
             "error": error,

@@ -53,6 +53,7 @@ RESULT_COLUMNS = [
     "fmi_function",
     "error",
     "elapsed",
+    "cpu",
     "worker",
     "loop_id",
     "loop_runs",
@@ -60,7 +61,7 @@ RESULT_COLUMNS = [
 ]
 
 #: Columns that describe where and how fast a run ran, not what it computed.
-BOOKKEEPING_COLUMNS = ["elapsed", "worker", "loop_id", "loop_runs", "fmus"]
+BOOKKEEPING_COLUMNS = ["elapsed", "cpu", "worker", "loop_id", "loop_runs", "fmus"]
 
 
 def fmu_digest(paths: dict[str, str]) -> str:
@@ -210,6 +211,7 @@ class StudyReport:
     executed: int
     failed: int
     wall_time: float  # from the first submission to the last result, s
+    cpu_time: float  # CPU time of the runs in the workers' threads, summed, s
     setup_time: float  # starting or connecting to the cluster, shipping the FMUs, s
     workers: int
     path: str
@@ -218,11 +220,18 @@ class StudyReport:
     def runs_per_second(self) -> float:
         return self.executed / self.wall_time if self.wall_time > 0 else math.nan
 
+    @property
+    def cpu_share(self) -> float:
+        """Fraction of the wall time the workers' threads spent computing runs: 1 = every
+        worker had a core to itself the whole time."""
+        return self.cpu_time / (self.wall_time * self.workers) if self.wall_time > 0 and self.workers else math.nan
+
     def __str__(self) -> str:
         return (
             f"{self.executed} runs executed ({self.failed} failed), {self.skipped} of {self.total} "
             f"already in {self.path}; {self.wall_time:.2f} s on {self.workers} worker(s) = "
-            f"{self.runs_per_second:.2f} runs/s (cluster setup {self.setup_time:.2f} s)"
+            f"{self.runs_per_second:.2f} runs/s, {self.cpu_time / max(1, self.executed) * 1e3:.0f} ms CPU per run, "
+            f"workers computing {100 * self.cpu_share:.0f} % of the time (cluster setup {self.setup_time:.2f} s)"
         )
 
 
@@ -268,7 +277,7 @@ def run_study(
     rows = RowFile(out, columns_of(specs), fmu_digest(fmu_paths))
     keep = {"ok"} if retry_failed else {"ok", "failed"}
     todo = [s for s in specs if rows.done.get(run_id(s)) not in keep]
-    report = StudyReport(len(specs), len(specs) - len(todo), 0, 0, 0.0, 0.0, 0, str(rows.path))
+    report = StudyReport(len(specs), len(specs) - len(todo), 0, 0, 0.0, 0.0, 0.0, 0, str(rows.path))
     if not todo:
         return report
     t0 = time.perf_counter()
@@ -306,6 +315,7 @@ def run_study(
                 rows.append(flatten(spec, result))
                 report.executed += 1
                 report.failed += result["status"] == "failed"
+                report.cpu_time += result.get("cpu", 0.0)
                 bar.update()
         finally:
             report.wall_time = time.perf_counter() - t1
