@@ -214,6 +214,7 @@ class StudyReport:
     cpu_time: float  # CPU time of the runs in the workers' threads, summed, s
     setup_time: float  # starting or connecting to the cluster, shipping the FMUs, s
     workers: int
+    threads: int  # worker threads in all
     path: str
 
     @property
@@ -222,16 +223,16 @@ class StudyReport:
 
     @property
     def cpu_share(self) -> float:
-        """Fraction of the wall time the workers' threads spent computing runs: 1 = every
-        worker had a core to itself the whole time."""
-        return self.cpu_time / (self.wall_time * self.workers) if self.wall_time > 0 and self.workers else math.nan
+        """Fraction of the wall time the worker threads spent computing runs: 1 = every
+        thread had a core to itself the whole time."""
+        return self.cpu_time / (self.wall_time * self.threads) if self.wall_time > 0 and self.threads else math.nan
 
     def __str__(self) -> str:
         return (
             f"{self.executed} runs executed ({self.failed} failed), {self.skipped} of {self.total} "
             f"already in {self.path}; {self.wall_time:.2f} s on {self.workers} worker(s) = "
             f"{self.runs_per_second:.2f} runs/s, {self.cpu_time / max(1, self.executed) * 1e3:.0f} ms CPU per run, "
-            f"workers computing {100 * self.cpu_share:.0f} % of the time (cluster setup {self.setup_time:.2f} s)"
+            f"worker threads computing {100 * self.cpu_share:.0f} % of the time (cluster setup {self.setup_time:.2f} s)"
         )
 
 
@@ -277,7 +278,7 @@ def run_study(
     rows = RowFile(out, columns_of(specs), fmu_digest(fmu_paths))
     keep = {"ok"} if retry_failed else {"ok", "failed"}
     todo = [s for s in specs if rows.done.get(run_id(s)) not in keep]
-    report = StudyReport(len(specs), len(specs) - len(todo), 0, 0, 0.0, 0.0, 0.0, 0, str(rows.path))
+    report = StudyReport(len(specs), len(specs) - len(todo), 0, 0, 0.0, 0.0, 0.0, 0, 0, str(rows.path))
     if not todo:
         return report
     t0 = time.perf_counter()
@@ -299,7 +300,8 @@ def run_study(
             tmp = stack.enter_context(tempfile.TemporaryDirectory())
             client.upload_file(_package_zip(tmp))
         client.register_plugin(FmuPlugin(fmu_paths))
-        report.workers = len(client.scheduler_info()["workers"])
+        workers = client.scheduler_info()["workers"].values()
+        report.workers, report.threads = len(workers), sum(w["nthreads"] for w in workers)
         report.setup_time = time.perf_counter() - t0
         t1 = time.perf_counter()
         futures = client.map(_task, todo, key=[f"run-{run_id(s)}" for s in todo], pure=False)
