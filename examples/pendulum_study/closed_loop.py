@@ -114,8 +114,9 @@ class _Fmu:
 
 
 class _RealPort:
-    """A fixed list of Real value references of one instance, read or written without
-    re-building ctypes arrays at every communication point."""
+    """A fixed list of Real value references of one instance, read or written through ctypes
+    arrays built once. fmpy's getReal builds both arrays on every call: 10 us per call against
+    4 us here (measured, 4 values), and a run makes about ten such calls per communication point."""
 
     def __init__(self, slave: FMU2Slave, vrs: list[int]):
         self.slave = slave
