@@ -122,6 +122,10 @@ def test_resume_skips_finished_runs_and_redoes_a_row_cut_short(reference, tmp_pa
     assert (report.skipped, report.executed) == (finished, len(specs) - finished), str(report)
     df = pd.read_csv(out)
     assert df["run_id"].is_unique and len(df) == len(specs), f"{len(df)} rows, {df['run_id'].nunique()} ids"
+    ran_on_cluster = int((df["worker"] != "local").sum())  # the reference rows ran "local"
+    assert ran_on_cluster == len(specs) - finished, f"{ran_on_cluster} runs executed on the cluster"
+    per_loop = df[df["worker"] != "local"].groupby("system")["loop_runs"].max()
+    assert per_loop.sum() == len(specs) - finished, f"runs per pooled loop of the one worker: {per_loop.to_dict()}"
     assert_same_results(df, pd.read_csv(reference), "resumed")
     again = runner.run_study(specs, out, paths(), scheduler="tcp://127.0.0.1:9", progress=False)  # no cluster needed
     assert (again.skipped, again.executed) == (len(specs), 0), str(again)
