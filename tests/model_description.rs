@@ -150,7 +150,31 @@ fn illegal_causality_variability_initial_combinations_are_refused() {
     for d in good {
         check_declarations(&[d]).unwrap();
     }
+    let mut fractional_integer_bound = decl(Parameter, Fixed, None);
+    (fractional_integer_bound.var_type, fractional_integer_bound.start) = (VarType::Integer, Value::Integer(1));
+    fractional_integer_bound.min = Some(0.5);
+    assert!(check_declarations(&[fractional_integer_bound]).is_err());
+    let mut start_outside_bounds = decl(Parameter, Fixed, None);
+    start_outside_bounds.min = Some(1.0);
+    assert!(
+        check_declarations(&[start_outside_bounds])
+            .unwrap_err()
+            .contains("outside")
+    );
     let mut unknown_unit = decl(Output, Continuous, None);
     unknown_unit.unit = "furlong";
     assert!(check_declarations(&[unknown_unit]).unwrap_err().contains("furlong"));
+}
+
+#[test]
+fn integer_bounds_are_written_as_integers() {
+    let xml = rustfmu::fmus::ALL
+        .iter()
+        .find(|e| e.info.identifier == "Controller")
+        .map(|e| (e.model_description)().unwrap())
+        .expect("the Controller FMU is declared");
+    assert!(
+        xml.contains(r#"<Integer min="1" max="3" start="1"/>"#),
+        "mode's bounds: {xml}"
+    );
 }

@@ -20,7 +20,7 @@ echo "== modelDescription/ is up to date"
 cargo run --release -p fmu-build -- xml --check
 echo "== Rust tests (with the FMI 2.0 conformance suite, tests/conformance, on every FMU in target/fmu)"
 cargo test --workspace --release
-echo "== Benchmarks still run (quick mode, no timing asserted)"
-bash bench/quick.sh
 echo "== Python tests"
 python -m pytest tests/python -q -p no:cacheprovider
+echo "== Benchmarks still run (quick mode, no timing asserted)"
+bash bench/quick.sh

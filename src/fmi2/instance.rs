@@ -379,23 +379,28 @@ impl<M: CoSimModel> Instance<M> {
                 decl.name, decl.causality, decl.variability, self.sim.state
             )));
         }
-        if let Value::Real(x) = value {
-            if !x.is_finite() {
-                return Err(self.error(&format!(
-                    "{function}: {x} for '{}' (vr {vr}) is not a finite number; refused, value unchanged",
-                    decl.name
-                )));
-            }
-            let below = decl.min.is_some_and(|min| x < min);
-            let above = decl.max.is_some_and(|max| x > max);
-            if below || above {
-                return Err(self.error(&format!(
-                    "{function}: {x} for '{}' (vr {vr}) is outside [{}, {}]; refused, value unchanged",
-                    decl.name,
-                    decl.min.map_or("-inf".into(), |v| v.to_string()),
-                    decl.max.map_or("inf".into(), |v| v.to_string())
-                )));
-            }
+        if let Value::Real(x) = value
+            && !x.is_finite()
+        {
+            return Err(self.error(&format!(
+                "{function}: {x} for '{}' (vr {vr}) is not a finite number; refused, value unchanged",
+                decl.name
+            )));
+        }
+        let number = match value {
+            Value::Real(x) => Some(x),
+            Value::Integer(n) => Some(n as f64),
+            Value::Boolean(_) => None,
+        };
+        if let Some(x) = number
+            && (decl.min.is_some_and(|min| x < min) || decl.max.is_some_and(|max| x > max))
+        {
+            return Err(self.error(&format!(
+                "{function}: {x} for '{}' (vr {vr}) is outside [{}, {}]; refused, value unchanged",
+                decl.name,
+                decl.min.map_or("-inf".into(), |v| v.to_string()),
+                decl.max.map_or("inf".into(), |v| v.to_string())
+            )));
         }
         if let Err(why) = self.sim.model.check(vr, value) {
             return Err(self.error(&format!(

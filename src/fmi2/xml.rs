@@ -53,6 +53,26 @@ pub fn check_declarations(decls: &[VarDecl]) -> Result<(), String> {
         if d.start.var_type() != d.var_type {
             return Err(format!("{at}: start value {:?} is not a {:?}", d.start, d.var_type));
         }
+        for bound in [d.min, d.max].into_iter().flatten() {
+            let fits = match d.var_type {
+                VarType::Real => bound.is_finite(),
+                VarType::Integer => bound.fract() == 0.0 && bound.abs() <= i32::MAX as f64,
+                VarType::Boolean => false,
+            };
+            if !fits {
+                return Err(format!("{at}: bound {bound} does not fit a {:?} variable", d.var_type));
+            }
+        }
+        let start = match d.start {
+            Value::Real(x) => Some(x),
+            Value::Integer(x) => Some(x as f64),
+            Value::Boolean(_) => None,
+        };
+        if let Some(x) = start
+            && (d.min.is_some_and(|m| x < m) || d.max.is_some_and(|m| x > m))
+        {
+            return Err(format!("{at}: start value {x} is outside [min, max]"));
+        }
         if d.var_type != VarType::Real && d.variability == Variability::Continuous {
             return Err(format!("{at}: only Real variables may be continuous"));
         }
@@ -244,8 +264,13 @@ fn write_description<M: CoSimModel>(guid: &str) -> Result<String, String> {
             Value::Integer(x) => x.to_string(),
             Value::Boolean(x) => x.to_string(),
         };
-        let min = d.min.map(real_text);
-        let max = d.max.map(real_text);
+        // An Integer's bounds are written as integers ("1", not "1.0": the XSD type is xs:int).
+        let bound_text = |x: f64| match d.var_type {
+            VarType::Integer => (x as i64).to_string(),
+            _ => real_text(x),
+        };
+        let min = d.min.map(bound_text);
+        let max = d.max.map(bound_text);
         let mut type_attrs: Vec<(&str, &str)> = Vec::new();
         if d.var_type == VarType::Real && !d.unit.is_empty() {
             type_attrs.push(("unit", d.unit));

@@ -34,7 +34,7 @@ fmi2_variables! {
         /// Voltage command U2 for the motor of joint 2, as U1; sampled like M1
         U2: f64 = 0.0, vr = 13, Output, Discrete, unit = "V", depends = [];
         /// Control law: 1 = LQR (M = -K (x - x_ref)), 2 = PID per joint, 3 = LQR + PID
-        mode: i32 = 1, vr = 20, Parameter, Tunable;
+        mode: i32 = 1, vr = 20, Parameter, Tunable, min = 1.0, max = 3.0;
         /// PID proportional gain of joint 1
         Kp1: f64 = DEFAULT_PID[0].kp, vr = 21, Parameter, Tunable, unit = "N.m/rad";
         /// PID integral gain of joint 1
