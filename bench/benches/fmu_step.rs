@@ -4,11 +4,12 @@
 //!   same step through the packaged `.so`'s C API (default tolerances rtol = atol = 1e-10);
 //! - pendulum_round_trip/{direct,fmi}: the same with the fmi2SetReal (M1, M2) and fmi2GetReal
 //!   (alpha1, omega1, alpha2, omega2) a master makes around each step;
-//! - fmi2DoStep/<id>/h=1ms: every other packaged FMU (Controller, DCMotor, ...), inputs set and
-//!   outputs read as a master does;
-//! - composed_loop/10s_at_1ms/<topology>: the whole loop in the native master.
+//! - fmi2DoStep/<id>/h=1ms: every other packaged FMU (Controller, DCMotor, ...) with its
+//!   parameters of the `full` loop, inputs set and outputs read as a master does;
+//! - composed_loop/10s_at_1ms/{controller-plant,full}: the whole loop in the native master.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use rustfmu::fmi2::variables::Value;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::single::{Direct, ViaFmi, time_steps};
 use rustfmu_bench::{packaged_fmus, topology};
@@ -58,8 +59,18 @@ fn pendulum_step(c: &mut Criterion) {
 
 fn other_fmus(c: &mut Criterion) {
     let mut g = c.benchmark_group("fmi2DoStep");
+    // Each with the parameter values it has in the full loop (Controller in LQR + PID mode
+    // computing voltages, DCMotor with the 200:1 gear), inputs held at 0.
+    let full = topology::full();
     for id in packaged_fmus().into_iter().filter(|id| id != "Pendulum") {
-        let mut fmu = ViaFmi::new(&id, None).unwrap_or_else(|e| panic!("{e}"));
+        let instance = full.slaves.iter().find(|s| s.fmu == id).map(|s| s.instance);
+        let starts: Vec<(&str, Value)> = full
+            .start_values
+            .iter()
+            .filter(|((inst, _), _)| Some(*inst) == instance)
+            .map(|((_, var), v)| (*var, *v))
+            .collect();
+        let mut fmu = ViaFmi::with_starts(&id, None, &starts).unwrap_or_else(|e| panic!("{e}"));
         let u = vec![0.0; fmu.in_vrs.len()];
         g.bench_function(format!("{id}/h=1ms"), |b| {
             b.iter_custom(|iters| {
@@ -79,23 +90,24 @@ fn other_fmus(c: &mut Criterion) {
 }
 
 fn composed_loop(c: &mut Criterion) {
-    let topo = topology::best_available();
-    let name = topo.name;
-    let mut master = Master::new(topo).unwrap_or_else(|e| panic!("{e}"));
     let mut g = c.benchmark_group("composed_loop");
     g.sample_size(10);
-    g.bench_function(format!("10s_at_1ms/{name}"), |b| {
-        b.iter_custom(|iters| {
-            let mut total = Duration::ZERO;
-            for _ in 0..iters {
-                master.initialize(10.0).unwrap_or_else(|e| panic!("{e}"));
-                let start = Instant::now();
-                master.run(10_000, 1e-3).unwrap_or_else(|e| panic!("{e}"));
-                total += start.elapsed();
-            }
-            total
-        })
-    });
+    for (name, _) in topology::TOPOLOGIES {
+        let mut master =
+            Master::new(topology::by_name(name).unwrap_or_else(|e| panic!("{e}"))).unwrap_or_else(|e| panic!("{e}"));
+        g.bench_function(format!("10s_at_1ms/{name}"), |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    master.initialize(10.0).unwrap_or_else(|e| panic!("{e}"));
+                    let start = Instant::now();
+                    master.run(10_000, 1e-3).unwrap_or_else(|e| panic!("{e}"));
+                    total += start.elapsed();
+                }
+                total
+            })
+        });
+    }
     g.finish();
 }
 

@@ -1,25 +1,30 @@
 """The composed loop through three Python-driven masters in one run, beside the native Rust one.
 
-    .venv/bin/python bench/python/composed_loop.py [--quick] [--topology NAME] [--json out.json]
+    .venv/bin/python bench/python/composed_loop.py [--quick] [--topology full|controller-plant] [--json out.json]
 
-The loop (which FMUs, which connections, start values, and, while no Controller FMU is
-packaged, the stand-in LQR state feedback computed by the master) comes from the Rust table,
-`cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json`, so every master
-runs the same loop. Masters, all fixed step h = 1 ms, Jacobi (outputs at t read, inputs set,
-every FMU steps):
+The loop (FMU instances, parameter and start values of every type, connections) comes from the
+Rust table, `cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json`, which
+derives it from the systems of `rustfmu::systems`, the same description `fmu-build` writes as
+`target/fmu/<system>.ssp`. Masters, all fixed step h = 1 ms, Jacobi (outputs at t read, inputs
+set, every FMU steps):
 
 - native: the Rust master on the `fmi` crate (bench/src/master.rs);
-- fmpy loop: a hand-written master loop over fmpy's FMU2Slave;
-- fmpy.ssp: fmpy.ssp.simulation.simulate_ssp on the SSP file written here;
-- libcosim: libcosimpy's CosimExecution on the same SSP file.
+- fmpy loop: a hand-written master loop over fmpy's FMU2Slave, with the same call sequence as the
+  native master and the project's fmpy master (examples/cosim/master.py): start values after
+  instantiation, connections propagated once per instance in initialization mode;
+- fmpy.ssp: fmpy.ssp.simulation.simulate_ssp on the system's SSP file written by fmu-build;
+- libcosim: libcosimpy's CosimExecution on the same SSP file, one simulate_until call.
 
 Share inside our FMUs: the native master's time for the same loop (fastest of 5 runs) is (nearly
-all) time spent in the FMUs' functions, so share = native time / master's wall time. For the fmpy loop it is also
-measured directly, by timing each FMU call (that includes ctypes' own cost per call).
+all) time spent in the FMUs' functions, so share = native time / master's wall time. For the fmpy
+loop it is also measured directly, by timing each FMU call (that includes ctypes' own cost per call).
 
-With the stand-in feedback, fmpy.ssp gets it by wrapping fmpy.ssp.simulation.do_step, and
-libcosim by stepping one step at a time with an override manipulator: the controller runs in
-Python there, and its cost is part of those masters' wall time.
+Cross-check: native, fmpy loop and libcosim make the same calls, so they must end in the same
+state to round-off (1e-9 of the largest state component). fmpy.ssp starts every connector at 0 and does not propagate in
+initialization mode (the controller sees the true state one step late, the plant and the motors
+get 0 in the first step): an O(h) difference at the start that the closed loop damps, printed
+against the native master; to check that fmpy.ssp ran the same loop, the fmpy loop is run once
+more starting the way fmpy.ssp starts, and the two must agree to round-off too.
 """
 
 import argparse
@@ -28,10 +33,8 @@ import pathlib
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 import types
-import zipfile
 
 import numpy as np
 
@@ -47,6 +50,10 @@ def cargo_bin(*args):
     return run.stdout
 
 
+#: Masters that make the same calls agree to round-off: relative to the largest state component.
+EXACT = 1e-9
+
+
 class Loop:
     """The topology, with every name resolved against the FMUs' model descriptions."""
 
@@ -59,84 +66,56 @@ class Loop:
             if not pathlib.Path(s["path"]).exists():
                 sys.exit(f"{s['path']} is missing: run `cargo run --release -p fmu-build` first")
             self.md[s["instance"]] = read_model_description(s["path"])
-        self.fmu_of = {s["instance"]: s for s in topo["slaves"]}
+        if not pathlib.Path(topo["ssp"]).exists():
+            sys.exit(f"{topo['ssp']} is missing: run `cargo run --release -p fmu-build` first")
 
-    def vr(self, instance, name):
+    def var(self, instance, name):
         for v in self.md[instance].modelVariables:
             if v.name == name:
-                return v.valueReference
+                return v
         have = ", ".join(v.name for v in self.md[instance].modelVariables)
         sys.exit(f"{instance} has no variable '{name}'; it has: {have}")
 
-    def start(self, instance, name):
-        """The value `name` has after initialization: the loop's start value, else the FMU's."""
-        for (inst, n), value in self.topo["start_values"]:
-            if (inst, n) == (instance, name):
-                return value
-        for v in self.md[instance].modelVariables:
-            if v.name == name:
-                return float(v.start)
-        sys.exit(f"{instance} has no variable '{name}'")
+    def vr(self, instance, name):
+        return self.var(instance, name).valueReference
 
-    def connectors(self, instance, ssd=False):
-        """(name, kind) of every variable of `instance` the loop reads or writes. In the SSD, the
-        inputs the master's feedback drives are left out: fmpy.ssp wants every declared input
-        connected, libcosim wants every connection between two elements, and the feedback sets
-        them itself."""
+    def starts(self):
+        """((instance, name), type, value) of every parameter and start value, type checked."""
+        out = []
+        for (inst, name), (kind, value) in self.topo["start_values"]:
+            declared = self.var(inst, name).type
+            if declared != kind:
+                sys.exit(f"{inst}.{name} is {declared} in its model description, the loop gives a {kind}")
+            out.append(((inst, name), kind, value))
+        return out
+
+    def connectors(self, instance):
+        """(name, kind) of every variable of `instance` the loop reads or writes."""
         out = []
         for (a, b) in self.topo["connections"]:
             if a[0] == instance and (a[1], "output") not in out:
                 out.append((a[1], "output"))
             if b[0] == instance and (b[1], "input") not in out:
                 out.append((b[1], "input"))
-        fb = self.topo["feedback"]
-        if fb and fb["plant"] == instance:
-            out += [(s, "output") for s in fb["states"] if (s, "output") not in out]
-            if not ssd:
-                out += [(u, "input") for u in fb["inputs"] if (u, "input") not in out]
         return out
 
-    def write_ssp(self, path, stop_time):
-        """An SSP 1.0 archive: SystemStructure.ssd and the FMUs under resources/."""
-        comps = []
-        for s in self.topo["slaves"]:
-            conns = "".join(
-                f'<ssd:Connector name="{n}" kind="{k}"><ssc:Real/></ssd:Connector>'
-                for n, k in self.connectors(s["instance"], ssd=True)
-            )
-            comps.append(
-                f'<ssd:Component name="{s["instance"]}" type="application/x-fmu-sharedlibrary" '
-                f'source="resources/{s["fmu"]}.fmu"><ssd:Connectors>{conns}</ssd:Connectors></ssd:Component>'
-            )
-        connections = "".join(
-            f'<ssd:Connection startElement="{a[0]}" startConnector="{a[1]}" endElement="{b[0]}" endConnector="{b[1]}"/>'
-            for a, b in self.topo["connections"]
-        )
-        ssd = (
-            '<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" '
-            'xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="composed_loop">'
-            f'<ssd:System name="loop"><ssd:Elements>{"".join(comps)}</ssd:Elements>'
-            + (f"<ssd:Connections>{connections}</ssd:Connections>" if connections else "")
-            + f'</ssd:System><ssd:DefaultExperiment startTime="0" stopTime="{stop_time}"/>'
-            "</ssd:SystemStructureDescription>"
-        )
-        with zipfile.ZipFile(path, "w") as z:
-            z.writestr("SystemStructure.ssd", ssd)
-            for fmu in {s["fmu"]: s["path"] for s in self.topo["slaves"]}.items():
-                z.write(fmu[1], f"resources/{fmu[0]}.fmu")
+
+def set_typed(slave, vr, kind, value):
+    if kind == "Real":
+        slave.setReal([vr], [float(value)])
+    elif kind == "Integer":
+        slave.setInteger([vr], [int(value)])
+    elif kind == "Boolean":
+        slave.setBoolean([vr], [bool(value)])
+    else:
+        sys.exit(f"unsupported type {kind}")
 
 
-def feedback_law(topo):
-    fb = topo["feedback"]
-    if not fb:
-        return None
-    K = np.array(fb["K"])
-    return lambda x: -(K @ np.asarray(x))
+def run_fmpy_loop(loop, n, timed_calls=False, like_fmpy_ssp=False):
+    """A master loop over fmpy's FMU2Slave. Returns (wall s, s inside FMU calls or None, plant state).
 
-
-def run_fmpy_loop(loop, n, timed_calls=False):
-    """A master loop over fmpy's FMU2Slave. Returns (wall s, s inside FMU calls or None, plant state)."""
+    like_fmpy_ssp: start as fmpy.ssp does (no propagation in initialization mode, every input 0
+    in the first step), to check that fmpy.ssp ran this loop."""
     from fmpy import extract
     from fmpy.fmi2 import FMU2Slave
 
@@ -146,59 +125,71 @@ def run_fmpy_loop(loop, n, timed_calls=False):
         md = loop.md[s["instance"]]
         d = extract(s["path"])
         dirs.append(d)
-        f = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName=s["instance"])
+        slaves[s["instance"]] = FMU2Slave(guid=md.guid, unzipDirectory=d,
+                                          modelIdentifier=md.coSimulation.modelIdentifier,
+                                          instanceName=s["instance"])
+    starts = loop.starts()
+    for i, f in slaves.items():
         f.instantiate()
+        for (inst, name), kind, value in starts:
+            if inst == i:
+                set_typed(f, loop.vr(inst, name), kind, value)
         f.setupExperiment(startTime=0.0, stopTime=n * H)
-        f.enterInitializationMode()
-        slaves[s["instance"]] = f
-    for (inst, name), value in topo["start_values"]:
-        slaves[inst].setReal([loop.vr(inst, name)], [value])
     for f in slaves.values():
-        f.exitInitializationMode()
+        f.enterInitializationMode()
 
     outs = {i: [loop.vr(i, n_) for n_, k in loop.connectors(i) if k == "output"] for i in slaves}
     ins = {i: [loop.vr(i, n_) for n_, k in loop.connectors(i) if k == "input"] for i in slaves}
     out_names = {i: [n_ for n_, k in loop.connectors(i) if k == "output"] for i in slaves}
     in_names = {i: [n_ for n_, k in loop.connectors(i) if k == "input"] for i in slaves}
     links = [((a[0], out_names[a[0]].index(a[1])), (b[0], in_names[b[0]].index(b[1]))) for a, b in topo["connections"]]
-    fb, law = topo["feedback"], feedback_law(topo)
-    if fb:
-        fb_states = [out_names[fb["plant"]].index(s) for s in fb["states"]]
-        fb_inputs = [in_names[fb["plant"]].index(u) for u in fb["inputs"]]
     in_values = {i: [0.0] * len(ins[i]) for i in slaves}
+
+    def exchange():
+        out_values = {i: f.getReal(outs[i]) if outs[i] else [] for i, f in slaves.items()}
+        for (fi, fj), (ti, tj) in links:
+            in_values[ti][tj] = out_values[fi][fj]
+        for i, f in slaves.items():
+            if ins[i]:
+                f.setReal(ins[i], in_values[i])
+
+    if not like_fmpy_ssp:
+        for _ in slaves:
+            exchange()
+    for f in slaves.values():
+        f.exitInitializationMode()
+
     inside = 0.0
     clock = time.perf_counter
     start = clock()
     for k in range(n):
         t = k * H
+        if like_fmpy_ssp and k == 0:
+            for i, f in slaves.items():
+                if ins[i]:
+                    f.setReal(ins[i], [0.0] * len(ins[i]))
+            for f in slaves.values():
+                f.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+            continue
+        if not timed_calls:
+            exchange()
+            for f in slaves.values():
+                f.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+            continue
         out_values = {}
         for i, f in slaves.items():
             if outs[i]:
-                if timed_calls:
-                    c0 = clock(); out_values[i] = f.getReal(outs[i]); inside += clock() - c0
-                else:
-                    out_values[i] = f.getReal(outs[i])
+                c0 = clock(); out_values[i] = f.getReal(outs[i]); inside += clock() - c0
         for (fi, fj), (ti, tj) in links:
             in_values[ti][tj] = out_values[fi][fj]
-        if fb:
-            u = law([out_values[fb["plant"]][j] for j in fb_states])
-            for j, v in zip(fb_inputs, u):
-                in_values[fb["plant"]][j] = float(v)
         for i, f in slaves.items():
-            if timed_calls:
-                c0 = clock()
-                if ins[i]:
-                    f.setReal(ins[i], in_values[i])
-                f.doStep(currentCommunicationPoint=t, communicationStepSize=H)
-                inside += clock() - c0
-            else:
-                if ins[i]:
-                    f.setReal(ins[i], in_values[i])
-                f.doStep(currentCommunicationPoint=t, communicationStepSize=H)
+            if ins[i]:
+                c0 = clock(); f.setReal(ins[i], in_values[i]); inside += clock() - c0
+        for f in slaves.values():
+            c0 = clock(); f.doStep(currentCommunicationPoint=t, communicationStepSize=H); inside += clock() - c0
     wall = clock() - start
-    plant = "Pendulum"
-    x = slaves[plant].getReal([loop.vr(plant, s) for s in ["alpha1", "omega1", "alpha2", "omega2"]])
+    plant = topo["plant"]
+    x = slaves[plant].getReal([loop.vr(plant, s) for s in topo["states"]])
     for f in slaves.values():
         f.terminate()
         f.freeInstance()
@@ -207,69 +198,51 @@ def run_fmpy_loop(loop, n, timed_calls=False):
     return wall, (inside if timed_calls else None), list(x)
 
 
-def run_fmpy_ssp(loop, ssp, n):
+def run_fmpy_ssp(loop, n):
+    """fmpy.ssp on the system's SSP file. simulate_ssp does not apply the SSD's ParameterBindings
+    (only its `parameter_set` argument), so the same values are passed there, typed."""
     import fmpy.ssp.simulation as sim
 
     topo = loop.topo
-    fb, law = topo["feedback"], feedback_law(topo)
-    original = sim.do_step
-    if fb:
-        def do_step(component, t, h):
-            if component.name == fb["plant"]:
-                x = [sim.get_value(component, s) for s in fb["states"]]
-                for name, value in zip(fb["inputs"], law(x)):
-                    sim.set_value(component, name, value)
-            original(component, t, h)
-        sim.do_step = do_step
     params = types.SimpleNamespace(parameters=[
-        types.SimpleNamespace(name=f"{inst}.{name}", value=value) for (inst, name), value in topo["start_values"]
+        types.SimpleNamespace(name=f"{inst}.{name}", value=value) for (inst, name), _, value in loop.starts()
     ])
-    try:
-        start = time.perf_counter()
-        # fmpy.ssp loops `while time < stop_time` on a running sum: stop half a step early so it
-        # takes exactly n steps.
-        result = sim.simulate_ssp(str(ssp), start_time=0.0, stop_time=(n - 0.5) * H, step_size=H,
-                                  parameter_set=params)
-        wall = time.perf_counter() - start
-    finally:
-        sim.do_step = original
-    cols = [c for c in result.dtype.names if c.endswith(("alpha1", "omega1", "alpha2", "omega2"))]
-    return wall, len(result), {c: float(result[c][-1]) for c in cols}
+    start = time.perf_counter()
+    # fmpy.ssp loops `while time < stop_time` on a running sum: stop half a step early so it
+    # takes exactly n steps.
+    result = sim.simulate_ssp(topo["ssp"], start_time=0.0, stop_time=(n - 0.5) * H, step_size=H,
+                              parameter_set=params)
+    wall = time.perf_counter() - start
+    if len(result) != n:
+        sys.exit(f"fmpy.ssp took {len(result)} steps, expected {n}")
+    return wall, [float(result[f"{topo['plant']}.{s}"][-1]) for s in topo["states"]]
 
 
-def run_libcosim(loop, ssp, n):
+def run_libcosim(loop, n):
+    """libcosim's fixed-step algorithm on the system's SSP file, in one simulate_until call.
+    libcosim applies the SSD's parameter values only to parameters and inputs (not to the
+    Pendulum's initial state, the start of its outputs alpha1..omega2), so every start value is
+    also given through *_initial_value."""
     from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver
 
+    log_output_level(CosimLogLevel.ERROR)
     topo = loop.topo
     h_ns = int(round(H * 1e9))
-    ex = CosimExecution.from_ssp_file(str(ssp), step_size=h_ns)
+    ex = CosimExecution.from_ssp_file(topo["ssp"], step_size=h_ns)
     index = {i.name.decode(): i.index for i in ex.slave_infos()}
-    for (inst, name), value in topo["start_values"]:
-        ex.real_initial_value(index[inst], loop.vr(inst, name), value)
+    for (inst, name), kind, value in loop.starts():
+        setter = {"Real": ex.real_initial_value, "Integer": ex.integer_initial_value,
+                  "Boolean": ex.boolean_initial_value}[kind]
+        if not setter(index[inst], loop.vr(inst, name), value):
+            sys.exit(f"libcosim refused the initial value {inst}.{name} = {value}")
     observer = CosimObserver.create_last_value()
     ex.add_observer(observer)
-    fb, law = topo["feedback"], feedback_law(topo)
-    plant = index["Pendulum"]
-    states = [loop.vr("Pendulum", s) for s in ["alpha1", "omega1", "alpha2", "omega2"]]
+    plant = index[topo["plant"]]
+    states = [loop.vr(topo["plant"], s) for s in topo["states"]]
     start = time.perf_counter()
-    if fb:
-        manipulator = CosimManipulator.create_override()
-        ex.add_manipulator(manipulator)
-        fb_states = [loop.vr(fb["plant"], s) for s in fb["states"]]
-        fb_inputs = [loop.vr(fb["plant"], u) for u in fb["inputs"]]
-        p = index[fb["plant"]]
-        # The observer has values only once the execution ran: the first input comes from the
-        # start values, every later one from the state the observer saw after the last step.
-        x = [loop.start(fb["plant"], s) for s in fb["states"]]
-        ok = True
-        for _ in range(n):
-            manipulator.slave_real_values(p, fb_inputs, [float(v) for v in law(x)])
-            ok = ex.step(1) and ok
-            x = observer.last_real_values(p, fb_states)
-    else:
-        ok = ex.simulate_until(n * h_ns)
+    ok = ex.simulate_until(n * h_ns)
     wall = time.perf_counter() - start
     if not ok:
         sys.exit("libcosim: the simulation failed")
@@ -279,7 +252,7 @@ def run_libcosim(loop, ssp, n):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="0.2 s of simulated time (CI: proves the script runs)")
-    ap.add_argument("--topology", help="stand-in, controller-plant or full (default: the richest packaged)")
+    ap.add_argument("--topology", help="full (default) or controller-plant")
     ap.add_argument("--json", help="also write the results to this file")
     args = ap.parse_args()
     seconds = 0.2 if args.quick else 10.0
@@ -287,46 +260,54 @@ def main():
     sel = ["--topology", args.topology] if args.topology else []
     topo = json.loads(cargo_bin(*sel, "--topology-json"))
     loop = Loop(topo)
-    print(f"loop: {topo['name']}: {topo['description']}")
+    print(f"loop: {topo['name']} (system {topo['system']}, {pathlib.Path(topo['ssp']).name}): {topo['description']}")
     print(f"{seconds:g} s at h = {H * 1e3:g} ms ({n} steps)\n")
 
     native = json.loads(cargo_bin(*sel, "--seconds", str(seconds), "--repeat", "5"))
     # The FMUs' own time: the native master's fastest of 5 runs (least disturbed by other load).
     t_fmu = native["wall_best_s"]
     rows = [dict(master="native Rust (fmi crate), fastest of 5", wall=t_fmu, share=1.0, measured_share=None,
-                 final=native["final_state"])]
+                 final=native["final_state"], tol=0.0)]
     wall, _, x = run_fmpy_loop(loop, n)
     _, inside, _ = run_fmpy_loop(loop, n, timed_calls=True)
     rows.append(dict(master="fmpy master loop (FMU2Slave)", wall=wall, share=t_fmu / wall, measured_share=inside / wall,
-                     final=x))
-    with tempfile.TemporaryDirectory() as tmp:
-        ssp = pathlib.Path(tmp) / "composed_loop.ssp"
-        loop.write_ssp(ssp, seconds)
-        wall, steps, x = run_fmpy_ssp(loop, ssp, n)
-        rows.append(dict(master="fmpy.ssp simulate_ssp", wall=wall, share=t_fmu / wall, measured_share=None,
-                         final=x, steps=steps))
-        wall, x = run_libcosim(loop, ssp, n)
-        rows.append(dict(master="libcosim (libcosimpy, SSP)", wall=wall, share=t_fmu / wall, measured_share=None,
-                         final=x))
+                     final=x, tol=EXACT))
+    wall, x = run_fmpy_ssp(loop, n)
+    rows.append(dict(master="fmpy.ssp simulate_ssp (SSP file)", wall=wall, share=t_fmu / wall, measured_share=None,
+                     final=x, tol=None))
+    _, _, like_ssp = run_fmpy_loop(loop, n, like_fmpy_ssp=True)
+    ssp_vs_replica = float(np.max(np.abs(np.array(x) - np.array(like_ssp))))
+    wall, x = run_libcosim(loop, n)
+    rows.append(dict(master="libcosim (libcosimpy, same SSP file)", wall=wall, share=t_fmu / wall,
+                     measured_share=None, final=x, tol=EXACT))
 
+    ref = np.array(rows[0]["final"])
+    for r in rows:
+        r["diff"] = float(np.max(np.abs(np.array(r["final"]) - ref)))
     print("| master | wall time | real-time factor | share inside our FMUs (native time / wall) "
-          "| share, FMU calls timed |")
-    print("|---|---|---|---|---|")
+          "| share, FMU calls timed | final state vs native |")
+    print("|---|---|---|---|---|---|")
     for r in rows:
         measured = "" if r["measured_share"] is None else f"{100 * r['measured_share']:.0f} % (incl. ctypes)"
+        diff = "" if r is rows[0] else f"{r['diff']:.1e}"
+        if r["tol"] is None:
+            diff += f" (starts differently; vs the fmpy loop started alike: {ssp_vs_replica:.1e})"
         print(f"| {r['master']} | {r['wall'] * 1e3:.1f} ms | {seconds / r['wall']:.0f} | {100 * r['share']:.1f} % "
-              f"| {measured} |")
-    print("\nfinal plant state per master (alpha1, omega1, alpha2, omega2):")
+              f"| {measured} | {diff} |")
+    print(f"\nfinal plant state per master ({', '.join(topo['states'])}):")
     for r in rows:
         print(f"  {r['master']}: {r['final']}")
     if args.json:
         pathlib.Path(args.json).write_text(json.dumps(dict(topology=topo, seconds=seconds, rows=rows), indent=1))
-    # Every master ran the same loop: the same final state, or one of them did not.
-    ref = np.array(rows[0]["final"])
+    # Every master ran the same loop: the same final state (fmpy.ssp: as the same loop started alike).
+    scale = float(np.max(np.abs(ref)))
+    if not ssp_vs_replica <= EXACT * scale:
+        sys.exit(f"fmpy.ssp ends at {rows[2]['final']}, the fmpy loop started as fmpy.ssp starts at {like_ssp}: "
+                 f"differs by {ssp_vs_replica:.2e}, more than {EXACT:.0e} x {scale:.2e}: not the same loop")
     for r in rows[1:]:
-        x = np.array(list(r["final"].values()) if isinstance(r["final"], dict) else r["final"])
-        if np.max(np.abs(x - ref)) > 1e-6:
-            sys.exit(f"{r['master']} ends at {x.tolist()}, the native master at {ref.tolist()}: not the same loop")
+        if r["tol"] is not None and not r["diff"] <= r["tol"] * scale:
+            sys.exit(f"{r['master']} ends at {r['final']}, the native master at {ref.tolist()}: differs by "
+                     f"{r['diff']:.2e}, more than {r['tol']:.0e} x {scale:.2e}: not the same loop")
 
 
 if __name__ == "__main__":

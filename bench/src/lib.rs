@@ -4,7 +4,7 @@
 //! - where the packaged FMUs are ([`fmu_path`]),
 //! - an FMU loaded through the `fmi` crate's importer, its variables looked up by name in its
 //!   modelDescription.xml ([`Fmu`]),
-//! - the composed loop as data: which FMUs, which connections ([`topology`]),
+//! - the composed loops, derived from the systems of [`rustfmu::systems`] ([`topology`]),
 //! - a native co-simulation master that runs it without allocating per step ([`master`]),
 //! - the fixed-step RK4 that the work-precision table sets against the plant's integrator
 //!   ([`rk4`]).
@@ -17,6 +17,7 @@ use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::InstanceCS;
 use fmi::fmi2::schema::{Causality, ScalarVariableElement};
 use fmi::traits::FmiImport;
+use rustfmu::fmi2::variables::VarType;
 use std::path::{Path, PathBuf};
 
 /// The workspace root (the parent of this crate).
@@ -78,6 +79,8 @@ pub struct Fmu {
     pub id: String,
     pub import: Fmi2Import,
     pub reals: Vec<RealVar>,
+    /// Every Real, Integer and Boolean variable: (name, value reference, type).
+    pub scalars: Vec<(String, u32, VarType)>,
 }
 
 impl Fmu {
@@ -107,10 +110,26 @@ impl Fmu {
                 _ => None,
             })
             .collect();
+        let scalars = import
+            .model_description()
+            .model_variables
+            .variables
+            .iter()
+            .filter_map(|v| {
+                let t = match &v.elem {
+                    ScalarVariableElement::Real(_) => VarType::Real,
+                    ScalarVariableElement::Integer(_) => VarType::Integer,
+                    ScalarVariableElement::Boolean(_) => VarType::Boolean,
+                    _ => return None,
+                };
+                Some((v.name.clone(), v.value_reference, t))
+            })
+            .collect();
         Ok(Fmu {
             id: id.to_owned(),
             import,
             reals,
+            scalars,
         })
     }
 
@@ -127,6 +146,27 @@ impl Fmu {
                     .join(", ")
             )
         })
+    }
+
+    /// The value reference of the variable `name`, which must have type `t`; the error says
+    /// what the FMU has instead.
+    pub fn typed_vr(&self, name: &str, t: VarType) -> Result<u32, String> {
+        match self.scalars.iter().find(|(n, _, _)| n == name) {
+            Some((_, vr, have)) if *have == t => Ok(*vr),
+            Some((_, _, have)) => Err(format!(
+                "{}: variable '{name}' is {have:?} in its modelDescription.xml, not {t:?}",
+                self.id
+            )),
+            None => Err(format!(
+                "{} has no variable '{name}' in its modelDescription.xml; it has: {}",
+                self.id,
+                self.scalars
+                    .iter()
+                    .map(|(n, _, _)| n.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        }
     }
 
     /// Value references of the given variables, in order.

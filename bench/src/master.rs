@@ -2,10 +2,17 @@
 //! Jacobi scheme (all outputs at t are read, all inputs set, then every FMU steps from t to t+h,
 //! as fmpy.ssp and libcosim's fixed-step algorithm do). All buffers are made when the master is
 //! built, so a step allocates nothing and the time measured is the FMUs' and the wrapper's.
+//!
+//! Its call sequence is that of the project's fmpy master (`examples/cosim/master.py`) and of
+//! libcosim: parameter and start values after fmi2Instantiate, then in initialization mode the
+//! connections are propagated once per instance (so the controller's first sample sees the
+//! initial state), then the Jacobi steps. The three therefore end in the same state up to
+//! round-off.
 
 use crate::Fmu;
 use crate::topology::Topology;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
+use rustfmu::fmi2::variables::Value;
 
 struct Slave {
     name: &'static str,
@@ -16,7 +23,7 @@ struct Slave {
     /// Inputs set before each step.
     in_vrs: Vec<u32>,
     in_values: Vec<f64>,
-    starts: Vec<(u32, f64)>,
+    starts: Vec<(u32, Value)>,
 }
 
 /// (from slave, index into its out_values) -> (to slave, index into its in_values)
@@ -26,19 +33,10 @@ struct Link {
     to: (usize, usize),
 }
 
-struct Feedback {
-    plant: usize,
-    /// Indices of x in the plant's out_values, and of u in its in_values.
-    states: [usize; 4],
-    inputs: [usize; 2],
-    k: [[f64; 4]; 2],
-}
-
 pub struct Master {
     pub topology: Topology,
     slaves: Vec<Slave>,
     links: Vec<Link>,
-    feedback: Option<Feedback>,
     /// Kept alive for the instances (they hold the libraries these unzipped).
     _fmus: Vec<Fmu>,
     pub time: f64,
@@ -99,29 +97,9 @@ impl Master {
         }
         for ((inst, var), value) in &topology.start_values {
             let (i, fmu) = fmu_of(inst)?;
-            let vr = fmu.vr(var)?;
+            let vr = fmu.typed_vr(var, value.var_type())?;
             slaves[i].starts.push((vr, *value));
         }
-        let feedback = match &topology.feedback {
-            None => None,
-            Some(f) => {
-                let (p, fmu) = fmu_of(f.plant)?;
-                let mut states = [0; 4];
-                for (slot, name) in states.iter_mut().zip(f.states) {
-                    *slot = index_of(&mut slaves[p].out_vrs, fmu.vr(name)?);
-                }
-                let mut inputs = [0; 2];
-                for (slot, name) in inputs.iter_mut().zip(f.inputs) {
-                    *slot = index_of(&mut slaves[p].in_vrs, fmu.vr(name)?);
-                }
-                Some(Feedback {
-                    plant: p,
-                    states,
-                    inputs,
-                    k: f.k,
-                })
-            }
-        };
         for s in &mut slaves {
             s.out_values = vec![0.0; s.out_vrs.len()];
             s.in_values = vec![0.0; s.in_vrs.len()];
@@ -130,41 +108,51 @@ impl Master {
             topology,
             slaves,
             links,
-            feedback,
             _fmus: fmus,
             time: 0.0,
         })
     }
 
     /// (Re)starts every instance at t = 0 for a run to `stop_time`: fmi2Reset if it ran before,
-    /// setup, start values, initialization.
+    /// parameter and start values, setup, initialization with the connections propagated once
+    /// per instance.
     pub fn initialize(&mut self, stop_time: f64) -> Result<(), String> {
         for s in &mut self.slaves {
             let name = s.name;
             let e = |what: &str, err: fmi::fmi2::Fmi2Error| format!("{name}: {what} failed: {err:?}");
             s.instance.reset().map_err(|err| e("fmi2Reset", err))?;
+            for (vr, v) in &s.starts {
+                let vr = [*vr];
+                match *v {
+                    Value::Real(x) => s.instance.set_real(&vr, &[x]),
+                    Value::Integer(x) => s.instance.set_integer(&vr, &[x]),
+                    Value::Boolean(x) => s.instance.set_boolean(&vr, &[i32::from(x)]),
+                }
+                .map_err(|err| e(&format!("setting the start value {v:?} (vr {})", vr[0]), err))?;
+            }
             s.instance
                 .setup_experiment(None, 0.0, Some(stop_time))
                 .map_err(|err| e("fmi2SetupExperiment", err))?;
+        }
+        for s in &mut self.slaves {
             s.instance
                 .enter_initialization_mode()
-                .map_err(|err| e("fmi2EnterInitializationMode", err))?;
-            for (vr, v) in &s.starts {
-                s.instance
-                    .set_real(&[*vr], &[*v])
-                    .map_err(|err| e("fmi2SetReal (start value)", err))?;
-            }
+                .map_err(|err| format!("{}: fmi2EnterInitializationMode failed: {err:?}", s.name))?;
+        }
+        for _ in 0..self.slaves.len() {
+            self.exchange(0.0)?;
+        }
+        for s in &mut self.slaves {
             s.instance
                 .exit_initialization_mode()
-                .map_err(|err| e("fmi2ExitInitializationMode", err))?;
+                .map_err(|err| format!("{}: fmi2ExitInitializationMode failed: {err:?}", s.name))?;
         }
         self.time = 0.0;
         Ok(())
     }
 
-    /// One communication step of size `h` from `self.time`. Allocates nothing.
-    pub fn step(&mut self, h: f64) -> Result<(), String> {
-        let t = self.time;
+    /// Reads every connected output and sets every connected input. Allocates nothing.
+    fn exchange(&mut self, t: f64) -> Result<(), String> {
         for s in &mut self.slaves {
             if !s.out_vrs.is_empty() {
                 s.instance
@@ -176,19 +164,21 @@ impl Master {
             let v = self.slaves[l.from.0].out_values[l.from.1];
             self.slaves[l.to.0].in_values[l.to.1] = v;
         }
-        if let Some(f) = &self.feedback {
-            let p = &mut self.slaves[f.plant];
-            for (row, input) in f.k.iter().zip(f.inputs) {
-                let u: f64 = -row.iter().zip(f.states).map(|(k, i)| k * p.out_values[i]).sum::<f64>();
-                p.in_values[input] = u;
-            }
-        }
         for s in &mut self.slaves {
             if !s.in_vrs.is_empty() {
                 s.instance
                     .set_real(&s.in_vrs, &s.in_values)
                     .map_err(|err| format!("{}: fmi2SetReal at t = {t} failed: {err:?}", s.name))?;
             }
+        }
+        Ok(())
+    }
+
+    /// One communication step of size `h` from `self.time`. Allocates nothing.
+    pub fn step(&mut self, h: f64) -> Result<(), String> {
+        let t = self.time;
+        self.exchange(t)?;
+        for s in &mut self.slaves {
             s.instance
                 .do_step(t, h, true)
                 .map_err(|err| format!("{}: fmi2DoStep({t}, {h}) failed: {err:?}", s.name))?;
@@ -205,6 +195,16 @@ impl Master {
             self.step(h)?;
         }
         Ok(())
+    }
+
+    /// The plant's state (alpha1, omega1, alpha2, omega2) now.
+    pub fn plant_state(&mut self) -> Result<Vec<f64>, String> {
+        let plant = self.topology.plant;
+        let vrs = rustfmu::systems::STATE
+            .iter()
+            .map(|v| self.vr(plant, v))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.get(plant, &vrs)
     }
 
     /// Current Real values of an instance's variables (for checks after a run).

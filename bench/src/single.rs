@@ -7,6 +7,7 @@ use crate::{Fmu, SWING_START};
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::fmi2::schema::Causality;
 use rustfmu::fmi2::model::CoSimModel;
+use rustfmu::fmi2::variables::Value;
 use rustfmu::fmus::pendulum::Pendulum;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -58,7 +59,7 @@ impl Direct {
 pub struct ViaFmi {
     pub instance: InstanceCS,
     pub fmu: Fmu,
-    starts: Vec<(u32, f64)>,
+    starts: Vec<(u32, Value)>,
     pub in_vrs: Vec<u32>,
     pub out_vrs: Vec<u32>,
     out_values: Vec<f64>,
@@ -68,16 +69,22 @@ impl ViaFmi {
     /// `id`'s FMU, with the swing's start values if it is the Pendulum. A master sets the Real
     /// inputs and reads `outputs` (all Real outputs when `None`).
     pub fn new(id: &str, outputs: Option<&[&str]>) -> Result<ViaFmi, String> {
-        let fmu = Fmu::load(id)?;
-        let instance = fmu.instantiate("bench")?;
-        let starts = if id == "Pendulum" {
-            SWING_START
-                .iter()
-                .map(|(n, v)| Ok((fmu.vr(n)?, *v)))
-                .collect::<Result<_, String>>()?
+        let starts: Vec<(&str, Value)> = if id == "Pendulum" {
+            SWING_START.iter().map(|(n, v)| (*n, Value::Real(*v))).collect()
         } else {
             vec![]
         };
+        ViaFmi::with_starts(id, outputs, &starts)
+    }
+
+    /// `id`'s FMU with the given parameter and start values (set in initialization mode).
+    pub fn with_starts(id: &str, outputs: Option<&[&str]>, starts: &[(&str, Value)]) -> Result<ViaFmi, String> {
+        let fmu = Fmu::load(id)?;
+        let instance = fmu.instantiate("bench")?;
+        let starts = starts
+            .iter()
+            .map(|(n, v)| Ok((fmu.typed_vr(n, v.var_type())?, *v)))
+            .collect::<Result<_, String>>()?;
         let in_vrs = fmu.reals_of(Causality::Input).map(|v| v.vr).collect();
         let out_vrs: Vec<u32> = match outputs {
             Some(names) => fmu.vrs(names)?,
@@ -107,9 +114,13 @@ impl ViaFmi {
             .enter_initialization_mode()
             .map_err(|err| e("fmi2EnterInitializationMode", err))?;
         for (vr, v) in &self.starts {
-            self.instance
-                .set_real(&[*vr], &[*v])
-                .map_err(|err| e("fmi2SetReal", err))?;
+            let vr = [*vr];
+            match *v {
+                Value::Real(x) => self.instance.set_real(&vr, &[x]),
+                Value::Integer(x) => self.instance.set_integer(&vr, &[x]),
+                Value::Boolean(x) => self.instance.set_boolean(&vr, &[i32::from(x)]),
+            }
+            .map_err(|err| e(&format!("setting start value {v:?} (vr {})", vr[0]), err))?;
         }
         self.instance
             .exit_initialization_mode()

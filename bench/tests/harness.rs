@@ -1,7 +1,9 @@
 //! The benchmark harness measures what it says: the direct and the C-API step compute the same
-//! thing, the native master closes the loop, and a wrong name in the loop table is reported.
-//! Needs the packaged Pendulum FMU (tests/run.sh builds it before the Rust tests).
+//! thing, the native master runs the real loops (they stand the pendulum up), and a wrong name or
+//! type in a loop is reported. Needs the packaged FMUs (tests/run.sh builds them before the Rust
+//! tests).
 
+use rustfmu::fmi2::variables::Value;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::single::{Direct, ViaFmi};
 use rustfmu_bench::topology::{self, Slave, Topology};
@@ -27,29 +29,81 @@ fn direct_and_c_api_steps_compute_the_same_swing() {
     );
 }
 
+/// The composed loop the benchmarks time is the real one: Controller, two DC motors and the
+/// plant, with the parameters of `rustfmu::systems`, stand the pendulum up.
 #[test]
-fn stand_in_feedback_brings_the_pendulum_back_upright() {
-    let mut master = Master::new(topology::stand_in()).unwrap_or_else(|e| panic!("{e}"));
+fn full_loop_stands_the_pendulum_up_in_the_native_master() {
+    let mut master = Master::new(topology::full()).unwrap_or_else(|e| panic!("{e}"));
     master.initialize(10.0).unwrap_or_else(|e| panic!("{e}"));
     master.run(10_000, 1e-3).unwrap_or_else(|e| panic!("{e}"));
-    let vrs: Vec<u32> = STATES.iter().map(|s| master.vr("Pendulum", s).unwrap()).collect();
-    let x = master.get("Pendulum", &vrs).unwrap();
+    let x = master.plant_state().unwrap_or_else(|e| panic!("{e}"));
     assert!(
-        x.iter().all(|v| v.abs() < 1e-6),
-        "from alpha1 = 0.1, alpha2 = -0.05 the LQR of eq. (14) should be upright at rest after 10 s, got {x:?}"
+        x[0].abs() < 1e-3 && x[2].abs() < 1e-3,
+        "from alpha1 = 0.1, alpha2 = -0.05 rad the motor loop should hold the pendulum within 1e-3 rad after \
+         10 s, got (alpha1, omega1, alpha2, omega2) = {x:?}"
     );
 }
 
 #[test]
+fn controller_plant_loop_brings_the_pendulum_upright_at_rest() {
+    let mut master = Master::new(topology::controller_plant()).unwrap_or_else(|e| panic!("{e}"));
+    master.initialize(10.0).unwrap_or_else(|e| panic!("{e}"));
+    master.run(10_000, 1e-3).unwrap_or_else(|e| panic!("{e}"));
+    let x = master.plant_state().unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        x.iter().all(|v| v.abs() < 1e-6),
+        "from alpha1 = 0.1, alpha2 = -0.05 rad the Controller FMU's LQR should be upright at rest after 10 s, \
+         got {x:?}"
+    );
+}
+
+#[test]
+fn every_parameter_of_the_system_reaches_the_loop() {
+    let topo = topology::full();
+    let system = rustfmu::systems::system(topo.system).unwrap();
+    let n: usize = system.components.iter().map(|c| c.parameters.len()).sum();
+    assert_eq!(
+        topo.start_values.len(),
+        n,
+        "the loop must set every parameter of {}",
+        system.name
+    );
+    for ((inst, var), value) in [
+        (("controller", "mode"), Value::Integer(3)),
+        (("controller", "drives_motors"), Value::Boolean(true)),
+        (("motor2", "gear_ratio"), Value::Real(200.0)),
+    ] {
+        assert!(
+            topo.start_values.contains(&((inst, var), value)),
+            "expected {inst}.{var} = {value:?} in the full loop, it sets {:?}",
+            topo.start_values
+        );
+    }
+}
+
+#[test]
 fn a_wrong_variable_name_in_the_loop_is_reported_with_the_names_that_exist() {
-    let mut topo = topology::stand_in();
-    topo.start_values.push((("Pendulum", "torque"), 1.0));
+    let mut topo = topology::controller_plant();
+    topo.start_values.push((("pendulum", "torque"), Value::Real(1.0)));
     let err = Master::new(topo)
         .err()
-        .expect("a loop naming 'Pendulum.torque' must be refused");
+        .expect("a loop naming 'pendulum.torque' must be refused");
     assert!(
-        err.contains("no Real variable 'torque'") && err.contains("M1") && err.contains("alpha1"),
+        err.contains("no variable 'torque'") && err.contains("M1") && err.contains("alpha1"),
         "the error should name the missing variable and list the existing ones: {err}"
+    );
+}
+
+#[test]
+fn a_start_value_of_the_wrong_type_is_reported() {
+    let mut topo = topology::controller_plant();
+    topo.start_values.push((("controller", "mode"), Value::Real(1.0)));
+    let err = Master::new(topo)
+        .err()
+        .expect("a Real value for the Integer 'mode' must be refused");
+    assert!(
+        err.contains("'mode' is Integer") && err.contains("not Real"),
+        "the error should say the declared and the given type: {err}"
     );
 }
 
@@ -57,6 +111,7 @@ fn a_wrong_variable_name_in_the_loop_is_reported_with_the_names_that_exist() {
 fn a_missing_fmu_is_reported_with_the_command_that_builds_it() {
     let topo = Topology {
         name: "test",
+        system: "none",
         description: "an FMU that is not packaged",
         slaves: vec![Slave {
             instance: "X",
@@ -64,7 +119,7 @@ fn a_missing_fmu_is_reported_with_the_command_that_builds_it() {
         }],
         connections: vec![],
         start_values: vec![],
-        feedback: None,
+        plant: "X",
     };
     let err = Master::new(topo)
         .err()

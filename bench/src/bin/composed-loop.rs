@@ -3,7 +3,8 @@
 //!     cargo run --release -p rustfmu-bench --bin composed-loop -- [--topology NAME] [--seconds 10] [--step 1e-3] [--repeat 5]
 //!     cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json
 //!
-//! Without `--topology`: the richest loop whose FMUs are packaged (see `topology::best_available`).
+//! Topologies (`bench/src/topology.rs`, from the systems of `rustfmu::systems`): `full` (the
+//! default: Controller, two DC motors, Pendulum) and `controller-plant` (Controller, Pendulum).
 
 use rustfmu_bench::master::Master;
 use rustfmu_bench::topology;
@@ -29,11 +30,7 @@ fn run() -> Result<(), String> {
             v.parse().map_err(|_| format!("{flag} {v}: not a number"))
         })
     };
-    let topo = match value("--topology") {
-        Some(name) => topology::by_name(&name)
-            .ok_or_else(|| format!("unknown topology '{name}' (stand-in, controller-plant, full)"))?,
-        None => topology::best_available(),
-    };
+    let topo = topology::by_name(&value("--topology").unwrap_or_else(|| topology::DEFAULT.to_owned()))?;
     if args.iter().any(|a| a == "--topology-json") {
         println!("{}", topo.to_json());
         return Ok(());
@@ -53,11 +50,7 @@ fn run() -> Result<(), String> {
     walls.sort_by(f64::total_cmp);
     let best = walls[0];
     let median = walls[walls.len() / 2];
-    let vrs = ["alpha1", "omega1", "alpha2", "omega2"]
-        .iter()
-        .map(|v| master.vr("Pendulum", v))
-        .collect::<Result<Vec<_>, _>>()?;
-    let x = master.get("Pendulum", &vrs)?;
+    let x = master.plant_state()?;
     println!(
         "{{\"topology\": \"{}\", \"description\": \"{}\", \"seconds\": {seconds}, \"step\": {h}, \"steps\": {n}, \
          \"runs\": {}, \"wall_best_s\": {best:.6e}, \"wall_median_s\": {median:.6e}, \"real_time_factor\": {:.1}, \
@@ -66,7 +59,7 @@ fn run() -> Result<(), String> {
         master.topology.description,
         walls.len(),
         seconds / median,
-        x.iter().map(|v| format!("{v:.6e}")).collect::<Vec<_>>().join(", ")
+        x.iter().map(|v| format!("{v:.17e}")).collect::<Vec<_>>().join(", ")
     );
     Ok(())
 }

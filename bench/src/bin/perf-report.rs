@@ -125,24 +125,25 @@ fn report() -> Result<(), String> {
         );
     }
 
-    let topo = topology::best_available();
-    let mut master = Master::new(topo)?;
-    let mut walls = Vec::new();
-    for _ in 0..rounds.clamp(3, 11) {
-        master.initialize(10.0)?;
-        let start = Instant::now();
-        master.run(10_000, 1e-3)?;
-        walls.push(start.elapsed().as_secs_f64());
+    for (name, _) in topology::TOPOLOGIES {
+        let mut master = Master::new(topology::by_name(name)?)?;
+        let mut walls = Vec::new();
+        for _ in 0..rounds.clamp(3, 11) {
+            master.initialize(10.0)?;
+            let start = Instant::now();
+            master.run(10_000, 1e-3)?;
+            walls.push(start.elapsed().as_secs_f64());
+        }
+        let (wmin, wmed) = stats(walls);
+        println!(
+            "\ncomposed loop '{}' ({}), 10 s at 1 ms, native master: fastest {:.2} ms, median {:.2} ms, \
+             real-time factor {:.0} (median)",
+            master.topology.name,
+            master.topology.description,
+            wmin * 1e3,
+            wmed * 1e3,
+            10.0 / wmed
+        );
     }
-    let (wmin, wmed) = stats(walls);
-    println!(
-        "\ncomposed loop '{}' ({}), 10 s at 1 ms, native master: fastest {:.2} ms, median {:.2} ms, \
-         real-time factor {:.0} (median)",
-        master.topology.name,
-        master.topology.description,
-        wmin * 1e3,
-        wmed * 1e3,
-        10.0 / wmed
-    );
     Ok(())
 }
