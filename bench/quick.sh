@@ -6,7 +6,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
-cargo bench -p rustfmu-bench --bench fmu_step -- --test
+# `cargo test --release` runs the criterion target once per benchmark (test mode) and shares the
+# release artifacts that `cargo test --workspace --release` already built; `cargo bench` would
+# rebuild everything under the bench profile (about 3 minutes on 2 cores).
+cargo test --release -p rustfmu-bench --bench fmu_step
 cargo run --release -q -p rustfmu-bench --bin perf-report -- --rounds 1
 cargo run --release -q -p rustfmu-bench --bin composed-loop -- --seconds 0.1 --repeat 1
 "$PY" bench/python/work_precision.py --quick
