@@ -6,9 +6,30 @@
 //! Topologies (`bench/src/topology.rs`, from the systems of `rustfmu::systems`): `full` (the
 //! default: Controller, two DC motors, Pendulum) and `controller-plant` (Controller, Pendulum).
 
+use clap::Parser;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::topology;
 use std::time::Instant;
+
+/// The composed loop in the native master: wall time and real-time factor, as one JSON line.
+#[derive(Parser)]
+struct Args {
+    /// Loop to run: `full` or `controller-plant`.
+    #[arg(long, default_value = topology::DEFAULT)]
+    topology: String,
+    /// Print the loop table as JSON (for bench/python/composed_loop.py) and exit.
+    #[arg(long)]
+    topology_json: bool,
+    /// Simulated time [s].
+    #[arg(long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Communication step [s].
+    #[arg(long, default_value_t = 1e-3)]
+    step: f64,
+    /// Runs; the fastest and the median are reported.
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+}
 
 fn main() {
     if let Err(e) = run() {
@@ -18,26 +39,13 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let number = |flag: &str, default: f64| -> Result<f64, String> {
-        value(flag).map_or(Ok(default), |v| {
-            v.parse().map_err(|_| format!("{flag} {v}: not a number"))
-        })
-    };
-    let topo = topology::by_name(&value("--topology").unwrap_or_else(|| topology::DEFAULT.to_owned()))?;
-    if args.iter().any(|a| a == "--topology-json") {
+    let args = Args::parse();
+    let topo = topology::by_name(&args.topology)?;
+    if args.topology_json {
         println!("{}", topo.to_json());
         return Ok(());
     }
-    let seconds = number("--seconds", 10.0)?;
-    let h = number("--step", 1e-3)?;
-    let repeat = number("--repeat", 5.0)? as usize;
+    let (seconds, h, repeat) = (args.seconds, args.step, args.repeat);
     let n = (seconds / h).round() as usize;
     let mut master = Master::new(topo)?;
     let mut walls = Vec::new();

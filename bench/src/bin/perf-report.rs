@@ -10,6 +10,7 @@
 //!
 //!     valgrind --tool=callgrind target/release/perf-report --only fmi-1ms --steps 2000
 
+use clap::Parser;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::single::{Direct, ViaFmi};
 use rustfmu_bench::topology;
@@ -76,25 +77,33 @@ fn stats(mut v: Vec<f64>) -> (f64, f64) {
     (v[0], v[v.len() / 2])
 }
 
+/// Step cost of the Pendulum, direct and through the C API, and the composed loops.
+#[derive(clap::Parser)]
+struct Args {
+    /// Interleaved rounds of every variant.
+    #[arg(long, default_value_t = 31)]
+    rounds: usize,
+    /// Run only this variant (e.g. `fmi-1ms`), for profiling under callgrind.
+    #[arg(long)]
+    only: Option<String>,
+    /// Steps of the `--only` variant.
+    #[arg(long, default_value_t = 1000)]
+    steps: usize,
+}
+
 fn report() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
+    let args = Args::parse();
     let mut s = Subjects {
         direct: Direct::new(),
         fmi: ViaFmi::new("Pendulum", Some(&STATES))?,
     };
-    if let Some(variant) = value("--only") {
-        let steps = value("--steps").map_or(Ok(1000), |v| v.parse().map_err(|_| format!("--steps {v}")))?;
+    if let Some(variant) = args.only {
+        let steps = args.steps;
         let t = run(&mut s, &variant, steps)?;
         println!("{variant}: {steps} steps, {:.1} ns per step", t * 1e9);
         return Ok(());
     }
-    let rounds: usize = value("--rounds").map_or(Ok(31), |v| v.parse().map_err(|_| format!("--rounds {v}")))?;
+    let rounds = args.rounds;
     let mut times: Vec<Vec<f64>> = vec![Vec::new(); VARIANTS.len()];
     for _ in 0..rounds {
         for (i, v) in VARIANTS.iter().enumerate() {

@@ -6,6 +6,7 @@
 //!     cargo run --release -p rustfmu-bench --bin work-precision -- \
 //!         --x0 0.5,0,-0.3,0 --t-end 1 --reference A1,W1,A2,W2 --tols 1e-3,1e-6,1e-9
 
+use clap::Parser;
 use nalgebra::{Vector2, Vector4};
 use rustfmu::fmi2::model::CoSimModel;
 use rustfmu::fmus::pendulum::Pendulum;
@@ -20,12 +21,6 @@ fn main() {
         eprintln!("work-precision: {e}");
         std::process::exit(1);
     }
-}
-
-fn numbers(s: &str) -> Result<Vec<f64>, String> {
-    s.split(',')
-        .map(|v| v.trim().parse().map_err(|_| format!("'{v}' is not a number")))
-        .collect()
 }
 
 /// Median wall time of `f` over enough repetitions to last about 50 ms (at least 3).
@@ -49,21 +44,26 @@ fn max_abs_error(x: &Vector4<f64>, reference: &[f64]) -> f64 {
     x.iter().zip(reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
 }
 
+/// Work-precision rows of the plant's integrator, one JSON object per line.
+#[derive(clap::Parser)]
+struct Args {
+    /// Initial state alpha1,omega1,alpha2,omega2 [rad, rad/s].
+    #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
+    x0: Vec<f64>,
+    /// Reference state at t_end, same order.
+    #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
+    reference: Vec<f64>,
+    /// End time [s].
+    #[arg(long)]
+    t_end: f64,
+    /// Tolerances (rtol = atol) to run.
+    #[arg(long, value_delimiter = ',', required = true, allow_hyphen_values = true)]
+    tols: Vec<f64>,
+}
+
 fn run() -> Result<(), String> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let value = |flag: &str| {
-        args.iter()
-            .position(|a| a == flag)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-            .ok_or_else(|| format!("{flag} is required"))
-    };
-    let x0 = numbers(&value("--x0")?)?;
-    let reference = numbers(&value("--reference")?)?;
-    let t_end: f64 = value("--t-end")?
-        .parse()
-        .map_err(|_| "--t-end: not a number".to_string())?;
-    let tols = numbers(&value("--tols")?)?;
+    let args = Args::parse();
+    let (x0, reference, t_end, tols) = (args.x0, args.reference, args.t_end, args.tols);
     if x0.len() != 4 || reference.len() != 4 {
         return Err("--x0 and --reference take 4 numbers: alpha1, omega1, alpha2, omega2".into());
     }
