@@ -1,8 +1,8 @@
 //! The Pendulum FMU's model stepped in Rust (no C ABI): energy, parameter checks, step sizes.
 
 use rustfmu::fmi2::model::CoSimModel;
-use rustfmu::fmi2::variables::Value;
-use rustfmu::fmus::pendulum::Pendulum;
+use rustfmu::fmi2::variables::{Value, VariableSet};
+use rustfmu::fmus::pendulum::{Pendulum, PendulumVariables};
 
 fn pendulum(alpha1: f64, omega1: f64, alpha2: f64, omega2: f64) -> Pendulum {
     let mut p = Pendulum::new();
@@ -45,14 +45,15 @@ fn result_does_not_depend_on_the_communication_step() {
 #[test]
 fn nonsense_parameters_are_refused_naming_the_variable() {
     let p = Pendulum::new();
-    for (vr, name) in [(20, "mass"), (21, "mass"), (22, "length"), (23, "length")] {
+    for (var, quantity) in [("m1", "mass"), ("m2", "mass"), ("l1", "length"), ("l2", "length")] {
+        let decl = PendulumVariables::DECLS.iter().find(|d| d.name == var).unwrap();
         for bad in [0.0, -1.0] {
             let e = p
-                .check(vr, Value::Real(bad))
+                .check(decl, Value::Real(bad))
                 .expect_err("accepted a nonsense parameter");
-            assert!(e.contains(name), "message '{e}' should say which quantity is wrong");
+            assert!(e.contains(quantity), "message '{e}' should say which quantity is wrong");
         }
-        assert!(p.check(vr, Value::Real(0.3)).is_ok());
+        assert!(p.check(decl, Value::Real(0.3)).is_ok());
     }
 }
 

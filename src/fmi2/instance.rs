@@ -402,7 +402,7 @@ impl<M: CoSimModel> Instance<M> {
                 decl.max.map_or("inf".into(), |v| v.to_string())
             )));
         }
-        if let Err(why) = self.sim.model.check(vr, value) {
+        if let Err(why) = self.sim.model.check(decl, value) {
             return Err(self.error(&format!(
                 "{function}: {value:?} for '{}' (vr {vr}) refused: {why}",
                 decl.name

@@ -44,9 +44,10 @@ pub trait CoSimModel: Clone + Serialize + DeserializeOwned + Send + 'static {
     fn vars(&self) -> &Self::Vars;
     fn vars_mut(&mut self) -> &mut Self::Vars;
 
-    /// Checks one value before it is stored (the runtime has already checked type, finiteness
-    /// and declared min/max). `Err` names what is wrong; the value is then refused.
-    fn check(&self, _vr: u32, _value: super::variables::Value) -> Result<(), String> {
+    /// Checks one value for the variable `decl` before it is stored (the runtime has already
+    /// checked type, finiteness, declared min/max and whether it may be set now). `Err` says what
+    /// is wrong; the value is then refused and the runtime logs it with the variable's name.
+    fn check(&self, _decl: &super::variables::VarDecl, _value: super::variables::Value) -> Result<(), String> {
         Ok(())
     }
 

@@ -2,7 +2,7 @@
 //! controller, with torque outputs for the plant and voltage outputs for the DC motors.
 
 use crate::fmi2::model::{CoSimModel, DefaultExperiment, ModelInfo, StepFailure};
-use crate::fmi2::variables::{Value, VariableSet};
+use crate::fmi2::variables::{Value, VarDecl};
 use crate::fmi2_variables;
 use crate::models::controller::{Command, ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
 use crate::models::dc_motor::DcMotorParams;
@@ -208,10 +208,7 @@ impl CoSimModel for Controller {
         &mut self.v
     }
 
-    fn check(&self, vr: u32, value: Value) -> Result<(), String> {
-        let Some(decl) = ControllerVariables::decl(vr) else {
-            return Ok(());
-        };
+    fn check(&self, decl: &VarDecl, value: Value) -> Result<(), String> {
         match (decl.name, value) {
             ("mode", Value::Integer(m)) => Mode::from_code(m).map(|_| ()),
             (

@@ -2,7 +2,7 @@
 //! limit; joint speed in, joint torque out.
 
 use crate::fmi2::model::{CoSimModel, DefaultExperiment, ModelInfo, StepFailure};
-use crate::fmi2::variables::{Value, VariableSet};
+use crate::fmi2::variables::{Value, VarDecl};
 use crate::fmi2_variables;
 use crate::models::dc_motor::{DcMotorParams, DcMotorState};
 use serde::{Deserialize, Serialize};
@@ -102,8 +102,8 @@ impl CoSimModel for DcMotor {
         &mut self.v
     }
 
-    fn check(&self, vr: u32, value: Value) -> Result<(), String> {
-        let (Value::Real(x), Some(decl)) = (value, DcMotorVariables::decl(vr)) else {
+    fn check(&self, decl: &VarDecl, value: Value) -> Result<(), String> {
+        let Value::Real(x) = value else {
             return Ok(());
         };
         match decl.name {

@@ -2,7 +2,7 @@
 //! control inside each communication step.
 
 use crate::fmi2::model::{CoSimModel, DefaultExperiment, ModelInfo, StepFailure};
-use crate::fmi2::variables::{Value, VariableSet};
+use crate::fmi2::variables::{Value, VarDecl};
 use crate::fmi2_variables;
 use crate::models::pendulum::PendulumParams;
 use crate::numerics::ode::{Dopri5, Tolerances};
@@ -127,8 +127,8 @@ impl CoSimModel for Pendulum {
         &mut self.v
     }
 
-    fn check(&self, vr: u32, value: Value) -> Result<(), String> {
-        let (Value::Real(x), Some(decl)) = (value, PendulumVariables::decl(vr)) else {
+    fn check(&self, decl: &VarDecl, value: Value) -> Result<(), String> {
+        let Value::Real(x) = value else {
             return Ok(());
         };
         match decl.name {
