@@ -4,13 +4,14 @@ A `ClosedLoop` instantiates its FMUs once (fmi2Instantiate) and runs any number 
 on them, each starting with fmi2Reset: every variable is back at its start value, then the
 experiment's parameters and initial state are set, the FMUs are initialized and stepped.
 
-Two systems, wired as the Controller FMU's documentation says:
+Two systems, the project's composed systems as `fmu-build` writes them to SSP files (read by
+`cosim.systems`, the same description the composition demo and its master loop use):
 
-- ``torque``: Pendulum + Controller; Controller.M1/M2 drive Pendulum.M1/M2.
-- ``motors``: Pendulum + Controller + two DCMotor FMUs; Controller.U1/U2 -> DCMotor.U,
-  Pendulum.omega_i -> DCMotor.omega, DCMotor.tau -> Pendulum.M_i. The paper's motors cannot hold
-  the pendulum (stall torque 0.012 N.m at 6 V), so the motors get a 200:1 gearbox and a friction
-  typical of small DC motors (`DEMO_MOTOR`), and the controller computes its voltages for them.
+- ``torque`` = PendulumLQR: Pendulum + Controller; Controller.M1/M2 drive Pendulum.M1/M2.
+- ``motors`` = PendulumMotors: Pendulum + Controller + two geared DCMotor FMUs; Controller.U1/U2
+  -> DCMotor.U, Pendulum.omega_i -> DCMotor.omega, DCMotor.tau -> Pendulum.M_i.
+
+Every run starts from the SSD's parameter values; the experiment's own values are set on top.
 
 The master is a fixed-step Jacobi master: at each communication point every connected output is
 copied to its input, then every FMU steps over the same interval. No output of these FMUs depends
@@ -38,46 +39,25 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.logging import addLoggerProxy
 
-#: The motors of the ``motors`` system: the paper's electrical constants (the FMU's defaults) with
-#: a 200:1 gearbox (stall torque 2.4 N.m at the joint) and friction B = 1e-6 N.m.s/rad.
-DEMO_MOTOR = {"gear_ratio": 200.0, "B": 1e-6}
+from cosim.master import System
+from cosim.systems import read_ssp, ssp_path
 
-STATE = ("alpha1", "omega1", "alpha2", "omega2")
+#: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
+#: (`src/systems.rs` describes them: components, parameter values, connections).
+SSP_SYSTEMS = {"torque": "PendulumLQR", "motors": "PendulumMotors"}
 
-#: Components of each system: instance name -> FMU model identifier.
-SYSTEMS = {
-    "torque": {"pendulum": "Pendulum", "controller": "Controller"},
-    "motors": {"pendulum": "Pendulum", "controller": "Controller", "motor1": "DCMotor", "motor2": "DCMotor"},
-}
 
-#: Start values every run of a system gets before the experiment's own values.
-SYSTEM_START = {
-    "torque": {},
-    "motors": {
-        "controller.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "controller.motor_B": DEMO_MOTOR["B"],
-        "controller.drives_motors": True,
-        "motor1.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "motor1.B": DEMO_MOTOR["B"],
-        "motor2.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "motor2.B": DEMO_MOTOR["B"],
-    },
-}
+def study_systems(paths: dict[str, str]) -> dict[str, System]:
+    """The study's systems, read from PendulumLQR.ssp and PendulumMotors.ssp next to the
+    Pendulum FMU of `paths`; each component's `fmu` is its FMU's model identifier (a key of
+    `paths`)."""
+    return {name: read_ssp(ssp_path(ssp, paths["Pendulum"])) for name, ssp in SSP_SYSTEMS.items()}
 
-#: Connections (source, output) -> (target, input), in the order the master copies them.
-CONNECTIONS = {
-    "torque": [(("pendulum", s), ("controller", s)) for s in STATE]
-    + [(("controller", "M1"), ("pendulum", "M1")), (("controller", "M2"), ("pendulum", "M2"))],
-    "motors": [(("pendulum", s), ("controller", s)) for s in STATE]
-    + [
-        (("controller", "U1"), ("motor1", "U")),
-        (("controller", "U2"), ("motor2", "U")),
-        (("pendulum", "omega1"), ("motor1", "omega")),
-        (("pendulum", "omega2"), ("motor2", "omega")),
-        (("motor1", "tau"), ("pendulum", "M1")),
-        (("motor2", "tau"), ("pendulum", "M2")),
-    ],
-}
+
+def system_start(system: System) -> dict:
+    """The system's start values (the SSD's parameter bindings) as {"component.variable": value}."""
+    return {f"{c.name}.{k}": v for c in system.components for k, v in c.start.items()}
+
 
 STATUS_NAMES = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
 
@@ -135,19 +115,29 @@ class _RealPort:
 
 
 class ClosedLoop:
-    """The FMU instances of one system, instantiated once, reset before every run."""
+    """The FMU instances of one system, instantiated once, reset before every run.
+
+    Its communication-point sequence (start values, initialization with one propagation per
+    component, then propagate / sample / step every FMU) is the one of `cosim.master.simulate`,
+    and a test checks both give the same trajectory to the last bit. It is kept as its own loop
+    because the study needs what that master does not do: instances reused across runs with
+    fmi2Reset (and freed only when the pool closes), the FMUs' log kept for the error report,
+    an FMU failure returned as a row instead of raised, a run stopped when the pendulum falls,
+    metrics accumulated per point instead of recorded arrays, and Real connections moved through
+    prebuilt ctypes ports (`_RealPort`, for its measured speed).
+    """
 
     _ids = itertools.count()
 
-    def __init__(self, system: str, fmus: dict[str, _Fmu]):
-        if system not in SYSTEMS:
-            raise ValueError(f"unknown system '{system}', expected one of {sorted(SYSTEMS)}")
+    def __init__(self, system: str, description: System, fmus: dict[str, _Fmu]):
         self.system = system
+        self.description = description
+        self.start = system_start(description)
         self.id = next(ClosedLoop._ids)
         self.runs = 0
         self.broken = False
         self.log: deque[str] = deque(maxlen=20)
-        self.fmus = {name: fmus[ident] for name, ident in SYSTEMS[system].items()}
+        self.fmus = {c.name: fmus[c.fmu] for c in description.components}
         # One logger for all instances of this loop: keeps the FMUs' messages for error reports.
         self._logger = fmi2CallbackLoggerTYPE(self._log_message)
         self._callbacks = fmi2CallbackFunctions()
@@ -180,7 +170,8 @@ class ClosedLoop:
         writes each target once."""
         sources: dict[str, list[str]] = {}
         targets: dict[str, list[tuple[str, str, str]]] = {}
-        for (src, out), (dst, inp) in CONNECTIONS[self.system]:
+        for k in self.description.connections:
+            src, out, dst, inp = k.source, k.source_var, k.target, k.target_var
             if out not in sources.setdefault(src, []):
                 sources[src].append(out)
             targets.setdefault(dst, []).append((inp, src, out))
@@ -233,7 +224,7 @@ class ClosedLoop:
         try:
             for slave in self.slaves.values():
                 slave.reset()
-            for qualified, value in {**SYSTEM_START[self.system], **start}.items():
+            for qualified, value in {**self.start, **start}.items():
                 self._set_start(qualified, value)
             for slave in self.slaves.values():
                 slave.setupExperiment(startTime=0.0, stopTime=n * step)
@@ -368,7 +359,10 @@ class FmuSet:
     per system: a loop is taken for a run and given back after it, so each thread of a worker
     instantiates each FMU once and later runs reuse it with fmi2Reset."""
 
-    def __init__(self, paths: dict[str, str], workdir: str | None = None):
+    def __init__(self, paths: dict[str, str], workdir: str | None = None, systems: dict[str, System] | None = None):
+        """`systems`: the study's systems as `study_systems` reads them (default: from the SSP
+        files next to `paths["Pendulum"]`); Dask workers get them read by the client."""
+        self.systems = systems if systems is not None else study_systems(paths)
         self._own_workdir = workdir is None
         self.workdir = workdir or tempfile.mkdtemp(prefix="pendulum-study-")
         self.fmus = {ident: _Fmu(path, self.workdir) for ident, path in paths.items()}
@@ -380,7 +374,9 @@ class FmuSet:
             free = self._free.setdefault(system, [])
             if free:
                 return free.pop()
-        return ClosedLoop(system, self.fmus)
+        if system not in self.systems:
+            raise ValueError(f"unknown system '{system}', expected one of {sorted(self.systems)}")
+        return ClosedLoop(system, self.systems[system], self.fmus)
 
     def checkin(self, loop: ClosedLoop) -> None:
         if loop.broken:
