@@ -1,8 +1,9 @@
 """One closed-loop co-simulation of the project's FMUs through fmpy, with instances kept alive.
 
 A `ClosedLoop` instantiates its FMUs once (fmi2Instantiate) and runs any number of experiments
-on them, each starting with fmi2Reset: every variable is back at its start value, then the
-experiment's parameters and initial state are set, the FMUs are initialized and stepped.
+on them, each after the first starting with fmi2Reset: every variable is back at its start
+value, then the experiment's parameters and initial state are set, the FMUs are initialized and
+stepped.
 
 Two systems, the project's composed systems as `fmu-build` writes them to SSP files (read by
 `cosim.systems`, the same description the composition demo and its master loop use):
