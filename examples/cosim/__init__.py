@@ -1,5 +1,6 @@
 """Co-simulation of the project's FMUs as an importer sees them: a fixed-step master loop on
-fmpy's FMU2Slave, the two composed systems of the paper, and their linear reference.
+fmpy's FMU2Slave, the two composed systems of the paper (read from the SSP files fmu-build
+writes), and their linear reference.
 
 Used by the examples (`examples/composed_demo.py`, `examples/paper_figures.py`) and by the tests
 (`tests/python/test_composition.py`), which put `examples/` on sys.path.
@@ -7,9 +8,11 @@ Used by the examples (`examples/composed_demo.py`, `examples/paper_figures.py`) 
 
 from .master import Connection, Component, System, simulate  # noqa: F401
 from .systems import (  # noqa: F401
-    DEMO_MOTOR,
+    bind,
     closed_loop_matrices,
     linear_response,
     plant_and_controller,
     plant_motors_controller,
+    read_ssp,
+    ssp_path,
 )

@@ -1,73 +1,115 @@
-"""The paper's two composed systems, and the linear closed loop they are checked against.
+"""The paper's two composed systems, read from the SSP files `fmu-build` writes, and the linear
+closed loop they are checked against.
 
-- plant + controller: Controller.M1/M2 drive Pendulum.M1/M2 (the paper's Figure 7 setting);
-- plant + two DC motors + controller: Controller.U1/U2 -> DCMotor.U, Pendulum.omega_i ->
-  DCMotor.omega, DCMotor.tau -> Pendulum.M_i (Figure 8). The paper's motors cannot hold the
-  pendulum (stall torque 0.012 N.m at 6 V); the demo motor has a 200:1 gearbox and a realistic
-  friction (docs/composition.md).
+The systems are described once, in Rust (`src/systems.rs`): `fmu-build` writes them as
+`target/fmu/PendulumLQR.ssp` and `target/fmu/PendulumMotors.ssp`. This module reads the
+`SystemStructure.ssd` inside them (components with their FMU, parameter bindings with their
+types and values, connections) and writes none of those values itself:
 
-The same two systems are written as SSP files by `fmu-build ssp`; tests check they agree.
+- PendulumLQR: Controller.M1/M2 drive Pendulum.M1/M2 (the paper's Figure 7 setting);
+- PendulumMotors: Controller.U1/U2 -> DCMotor.U, Pendulum.omega_i -> DCMotor.omega,
+  DCMotor.tau -> Pendulum.M_i (Figure 8), with the demo motor (200:1 gearbox, realistic friction;
+  docs/composition.md).
 """
 
 from __future__ import annotations
+
+import dataclasses
+import pathlib
+import xml.etree.ElementTree as ET
+import zipfile
 
 import numpy as np
 import scipy.linalg
 
 from .master import Component, Connection, System
 
-ALPHA1_0 = 0.1
-ALPHA2_0 = -0.05
+_NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+}
 
-#: The demo's motor: the paper's electrical constants with a 200:1 gearbox and friction typical
-#: of a small DC motor. The controller computes its voltages for the same motor.
-DEMO_MOTOR = {"gear_ratio": 200.0, "B": 1e-6}
+#: SSP parameter types -> Python values (SSP Boolean literals are "true"/"false").
+_VALUE = {
+    "Real": float,
+    "Integer": int,
+    "Boolean": lambda text: {"true": True, "false": False}[text.strip().lower()],
+}
 
-STATE = ("alpha1", "omega1", "alpha2", "omega2")
+
+def ssp_path(name: str, fmu: str | pathlib.Path) -> pathlib.Path:
+    """Where fmu-build writes system `name`: next to the FMUs (target/fmu/<name>.ssp)."""
+    return pathlib.Path(fmu).resolve().parent / f"{name}.ssp"
 
 
-def plant_and_controller(pendulum_fmu: str, controller_fmu: str, alpha1=ALPHA1_0, alpha2=ALPHA2_0, mode=1) -> System:
-    return System(
-        "PendulumLQR",
-        (
-            Component("pendulum", pendulum_fmu, {"alpha1": alpha1, "alpha2": alpha2}),
-            Component("controller", controller_fmu, {"mode": mode}),
-        ),
-        tuple(Connection("pendulum", s, "controller", s) for s in STATE)
-        + (
-            Connection("controller", "M1", "pendulum", "M1"),
-            Connection("controller", "M2", "pendulum", "M2"),
-        ),
+def read_ssp(path: str | pathlib.Path) -> System:
+    """The system in the SSP file's SystemStructure.ssd. Each component's `fmu` is the model
+    identifier of its FMU (the stem of its `source`, e.g. "resources/Pendulum.fmu" ->
+    "Pendulum"); `bind` replaces it by an FMU file. Start values are the typed values of the
+    component's ParameterBindings."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path} is missing: run `cargo run --release -p fmu-build` (it writes the SSP files)")
+    with zipfile.ZipFile(path) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    system = root.find("ssd:System", _NS)
+    if system is None:
+        raise ValueError(f"{path}: SystemStructure.ssd has no ssd:System")
+    components = []
+    for c in system.iterfind("ssd:Elements/ssd:Component", _NS):
+        start = {}
+        for p in c.iterfind("ssd:ParameterBindings/ssd:ParameterBinding/ssd:ParameterValues/ssv:ParameterSet/ssv:Parameters/ssv:Parameter", _NS):
+            typed = [e for e in p if e.tag.split("}")[-1] in _VALUE]
+            if len(typed) != 1:
+                raise ValueError(f"{path}: {c.get('name')}.{p.get('name')}: expected one ssv:Real, ssv:Integer or ssv:Boolean")
+            kind = typed[0].tag.split("}")[-1]
+            start[p.get("name")] = _VALUE[kind](typed[0].get("value"))
+        components.append(Component(c.get("name"), pathlib.PurePosixPath(c.get("source")).stem, start))
+    connections = tuple(
+        Connection(k.get("startElement"), k.get("startConnector"), k.get("endElement"), k.get("endConnector"))
+        for k in system.iterfind("ssd:Connections/ssd:Connection", _NS)
+    )
+    return System(system.get("name"), tuple(components), connections)
+
+
+def bind(system: System, fmus: dict[str, str], overrides: dict | None = None) -> System:
+    """`system` (as `read_ssp` returns it) with each component's model identifier replaced by
+    its FMU file `fmus[identifier]`, and `overrides` ({"component.variable": value}) applied on
+    top of the SSD's start values (None values are ignored)."""
+    overrides = {k: v for k, v in (overrides or {}).items() if v is not None}
+    names = {c.name for c in system.components}
+    for key in overrides:
+        if key.partition(".")[0] not in names:
+            raise KeyError(f"'{key}': system {system.name} has no component '{key.partition('.')[0]}' (has {sorted(names)})")
+    components = []
+    for c in system.components:
+        if c.fmu not in fmus:
+            raise KeyError(f"{system.name}: component '{c.name}' needs the {c.fmu} FMU, given only {sorted(fmus)}")
+        start = dict(c.start)
+        start.update({k.partition(".")[2]: v for k, v in overrides.items() if k.partition(".")[0] == c.name})
+        components.append(dataclasses.replace(c, fmu=fmus[c.fmu], start=start))
+    return dataclasses.replace(system, components=tuple(components))
+
+
+def plant_and_controller(pendulum_fmu: str, controller_fmu: str, alpha1=None, alpha2=None, mode=None, ssp=None) -> System:
+    """PendulumLQR from `ssp` (default: PendulumLQR.ssp next to `pendulum_fmu`), with the given
+    FMU files; alpha1, alpha2 (initial angles, rad) and mode (controller law) override the SSD."""
+    return bind(
+        read_ssp(ssp or ssp_path("PendulumLQR", pendulum_fmu)),
+        {"Pendulum": pendulum_fmu, "Controller": controller_fmu},
+        {"pendulum.alpha1": alpha1, "pendulum.alpha2": alpha2, "controller.mode": mode},
     )
 
 
 def plant_motors_controller(
-    pendulum_fmu: str, controller_fmu: str, motor_fmu: str, alpha1=ALPHA1_0, alpha2=ALPHA2_0, mode=3
+    pendulum_fmu: str, controller_fmu: str, motor_fmu: str, alpha1=None, alpha2=None, mode=None, ssp=None
 ) -> System:
-    motor_start = dict(DEMO_MOTOR)
-    controller_start = {
-        "mode": mode,
-        "gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "motor_B": DEMO_MOTOR["B"],
-        "drives_motors": True,
-    }
-    return System(
-        "PendulumMotors",
-        (
-            Component("pendulum", pendulum_fmu, {"alpha1": alpha1, "alpha2": alpha2}),
-            Component("controller", controller_fmu, controller_start),
-            Component("motor1", motor_fmu, motor_start),
-            Component("motor2", motor_fmu, motor_start),
-        ),
-        tuple(Connection("pendulum", s, "controller", s) for s in STATE)
-        + (
-            Connection("controller", "U1", "motor1", "U"),
-            Connection("controller", "U2", "motor2", "U"),
-            Connection("pendulum", "omega1", "motor1", "omega"),
-            Connection("pendulum", "omega2", "motor2", "omega"),
-            Connection("motor1", "tau", "pendulum", "M1"),
-            Connection("motor2", "tau", "pendulum", "M2"),
-        ),
+    """PendulumMotors from `ssp` (default: PendulumMotors.ssp next to `pendulum_fmu`), with the
+    given FMU files; alpha1, alpha2 (rad) and mode override the SSD."""
+    return bind(
+        read_ssp(ssp or ssp_path("PendulumMotors", pendulum_fmu)),
+        {"Pendulum": pendulum_fmu, "Controller": controller_fmu, "DCMotor": motor_fmu},
+        {"pendulum.alpha1": alpha1, "pendulum.alpha2": alpha2, "controller.mode": mode},
     )
 
 

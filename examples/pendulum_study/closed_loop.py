@@ -1,20 +1,23 @@
 """One closed-loop co-simulation of the project's FMUs through fmpy, with instances kept alive.
 
 A `ClosedLoop` instantiates its FMUs once (fmi2Instantiate) and runs any number of experiments
-on them, each starting with fmi2Reset: every variable is back at its start value, then the
-experiment's parameters and initial state are set, the FMUs are initialized and stepped.
+on them, each after the first starting with fmi2Reset: every variable is back at its start
+value, then the experiment's parameters and initial state are set, the FMUs are initialized and
+stepped.
 
-Two systems, wired as the Controller FMU's documentation says:
+Two systems, the project's composed systems as `fmu-build` writes them to SSP files (read by
+`cosim.systems`, the same description the composition demo and its master loop use):
 
-- ``torque``: Pendulum + Controller; Controller.M1/M2 drive Pendulum.M1/M2.
-- ``motors``: Pendulum + Controller + two DCMotor FMUs; Controller.U1/U2 -> DCMotor.U,
-  Pendulum.omega_i -> DCMotor.omega, DCMotor.tau -> Pendulum.M_i. The paper's motors cannot hold
-  the pendulum (stall torque 0.012 N.m at 6 V), so the motors get a 200:1 gearbox and a friction
-  typical of small DC motors (`DEMO_MOTOR`), and the controller computes its voltages for them.
+- ``torque`` = PendulumLQR: Pendulum + Controller; Controller.M1/M2 drive Pendulum.M1/M2.
+- ``motors`` = PendulumMotors: Pendulum + Controller + two geared DCMotor FMUs; Controller.U1/U2
+  -> DCMotor.U, Pendulum.omega_i -> DCMotor.omega, DCMotor.tau -> Pendulum.M_i.
 
-The master is a fixed-step Jacobi master: at each communication point every connected output is
-copied to its input, then every FMU steps over the same interval. No output of these FMUs depends
-directly on an input (ModelStructure dependencies=""), so there is no algebraic loop.
+Every run starts from the SSD's parameter values; the experiment's own values are set on top.
+
+The master is `cosim.master.Loop`, the one fixed-step Jacobi master of the project's Python side:
+at each communication point every connected output is copied to its input, then every FMU steps
+over the same interval. No output of these FMUs depends directly on an input (ModelStructure
+dependencies=""), so there is no algebraic loop.
 
 The experiment's parameters are set only on the components they name: a perturbed plant is
 ``pendulum.m1`` etc.; the Controller keeps its nominal plant model and nominal motor model
@@ -33,51 +36,29 @@ import threading
 import time
 from collections import deque
 
-from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.logging import addLoggerProxy
 
-#: The motors of the ``motors`` system: the paper's electrical constants (the FMU's defaults) with
-#: a 200:1 gearbox (stall torque 2.4 N.m at the joint) and friction B = 1e-6 N.m.s/rad.
-DEMO_MOTOR = {"gear_ratio": 200.0, "B": 1e-6}
+from cosim.master import Fmu, Loop, System
+from cosim.systems import read_ssp, ssp_path
 
-STATE = ("alpha1", "omega1", "alpha2", "omega2")
+#: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
+#: (`src/systems.rs` describes them: components, parameter values, connections).
+SSP_SYSTEMS = {"torque": "PendulumLQR", "motors": "PendulumMotors"}
 
-#: Components of each system: instance name -> FMU model identifier.
-SYSTEMS = {
-    "torque": {"pendulum": "Pendulum", "controller": "Controller"},
-    "motors": {"pendulum": "Pendulum", "controller": "Controller", "motor1": "DCMotor", "motor2": "DCMotor"},
-}
 
-#: Start values every run of a system gets before the experiment's own values.
-SYSTEM_START = {
-    "torque": {},
-    "motors": {
-        "controller.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "controller.motor_B": DEMO_MOTOR["B"],
-        "controller.drives_motors": True,
-        "motor1.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "motor1.B": DEMO_MOTOR["B"],
-        "motor2.gear_ratio": DEMO_MOTOR["gear_ratio"],
-        "motor2.B": DEMO_MOTOR["B"],
-    },
-}
+def study_systems(paths: dict[str, str]) -> dict[str, System]:
+    """The study's systems, read from PendulumLQR.ssp and PendulumMotors.ssp next to the
+    Pendulum FMU of `paths`; each component's `fmu` is its FMU's model identifier (a key of
+    `paths`)."""
+    return {name: read_ssp(ssp_path(ssp, paths["Pendulum"])) for name, ssp in SSP_SYSTEMS.items()}
 
-#: Connections (source, output) -> (target, input), in the order the master copies them.
-CONNECTIONS = {
-    "torque": [(("pendulum", s), ("controller", s)) for s in STATE]
-    + [(("controller", "M1"), ("pendulum", "M1")), (("controller", "M2"), ("pendulum", "M2"))],
-    "motors": [(("pendulum", s), ("controller", s)) for s in STATE]
-    + [
-        (("controller", "U1"), ("motor1", "U")),
-        (("controller", "U2"), ("motor2", "U")),
-        (("pendulum", "omega1"), ("motor1", "omega")),
-        (("pendulum", "omega2"), ("motor2", "omega")),
-        (("motor1", "tau"), ("pendulum", "M1")),
-        (("motor2", "tau"), ("pendulum", "M2")),
-    ],
-}
+
+def system_start(system: System) -> dict:
+    """The system's start values (the SSD's parameter bindings) as {"component.variable": value}."""
+    return {f"{c.name}.{k}": v for c in system.components for k, v in c.start.items()}
+
 
 STATUS_NAMES = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
 
@@ -97,57 +78,19 @@ class Criteria:
     fall: float = math.pi / 2
 
 
-class _Fmu:
-    """One FMU extracted once, with its variables' value references."""
-
-    def __init__(self, path: str, workdir: str):
-        self.path = path
-        self.md = read_model_description(path)
-        self.dir = extract(path, unzipdir=tempfile.mkdtemp(prefix=self.md.coSimulation.modelIdentifier + "-", dir=workdir))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-
-    def var(self, name: str):
-        try:
-            return self.vars[name]
-        except KeyError:
-            raise KeyError(f"{self.md.modelName} has no variable '{name}'") from None
-
-
-class _RealPort:
-    """A fixed list of Real value references of one instance, read or written through ctypes
-    arrays built once. fmpy's getReal builds both arrays on every call: 10 us per call against
-    4 us here (measured, 4 values), and a run makes about ten such calls per communication point."""
-
-    def __init__(self, slave: FMU2Slave, vrs: list[int]):
-        self.slave = slave
-        self.n = len(vrs)
-        self.vr = (ctypes.c_uint * self.n)(*vrs)
-        self.buf = (ctypes.c_double * self.n)()
-
-    def get(self):
-        self.slave.fmi2GetReal(self.slave.component, self.vr, self.n, self.buf)
-        return self.buf
-
-    def set(self, values) -> None:
-        for i, x in enumerate(values):
-            self.buf[i] = x
-        self.slave.fmi2SetReal(self.slave.component, self.vr, self.n, self.buf)
-
-
 class ClosedLoop:
-    """The FMU instances of one system, instantiated once, reset before every run."""
+    """A `cosim.master.Loop` of one study system, kept for many runs (fmi2Reset between them),
+    with what a study adds: the FMUs' log kept for the error report, an FMU failure returned as a
+    row instead of raised, a run stopped when the pendulum falls, and metrics accumulated at each
+    communication point instead of recorded arrays."""
 
     _ids = itertools.count()
 
-    def __init__(self, system: str, fmus: dict[str, _Fmu]):
-        if system not in SYSTEMS:
-            raise ValueError(f"unknown system '{system}', expected one of {sorted(SYSTEMS)}")
+    def __init__(self, system: str, description: System, fmus: dict[str, Fmu]):
         self.system = system
         self.id = next(ClosedLoop._ids)
-        self.runs = 0
         self.broken = False
         self.log: deque[str] = deque(maxlen=20)
-        self.fmus = {name: fmus[ident] for name, ident in SYSTEMS[system].items()}
         # One logger for all instances of this loop: keeps the FMUs' messages for error reports.
         self._logger = fmi2CallbackLoggerTYPE(self._log_message)
         self._callbacks = fmi2CallbackFunctions()
@@ -156,124 +99,57 @@ class ClosedLoop:
         self._callbacks.freeMemory = _default_callbacks().freeMemory
         # The FMUs log printf-style ("%s", text); fmpy's native proxy formats before calling us.
         addLoggerProxy(ctypes.byref(self._callbacks))
-        self.slaves: dict[str, FMU2Slave] = {}
-        for name, fmu in self.fmus.items():
-            slave = FMU2Slave(
-                guid=fmu.md.guid,
-                unzipDirectory=fmu.dir,
-                modelIdentifier=fmu.md.coSimulation.modelIdentifier,
-                instanceName=name,
-            )
-            slave.instantiate(callbacks=self._callbacks, loggingOn=False)
-            self.slaves[name] = slave
-        self._build_ports()
+        self.loop = Loop(description, fmus, self._callbacks)
+        self._state = self.loop.port("pendulum", ("alpha1", "alpha2"))
+        # The torque on the plant: the controller's demand, or what the motors deliver.
+        motors = [c.name for c in description.components if c.fmu == "DCMotor"]
+        if motors:
+            self._torque = [self.loop.port(m, ("tau",)) for m in motors]
+            self._voltage = self.loop.port("controller", ("U1", "U2"))
+        else:
+            self._torque = [self.loop.port("controller", ("M1", "M2"))]
+            self._voltage = None
+
+    @property
+    def runs(self) -> int:
+        return self.loop.runs
 
     def _log_message(self, _component, instance, status, category, message) -> None:
         label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
         self.log.append(f"[{instance.decode()}: {label}] {message.decode(errors='replace')}")
 
-    def _vr(self, component: str, name: str) -> int:
-        return self.fmus[component].var(name).valueReference
-
-    def _build_ports(self) -> None:
-        """Groups the connections so that each communication point reads each source once and
-        writes each target once."""
-        sources: dict[str, list[str]] = {}
-        targets: dict[str, list[tuple[str, str, str]]] = {}
-        for (src, out), (dst, inp) in CONNECTIONS[self.system]:
-            if out not in sources.setdefault(src, []):
-                sources[src].append(out)
-            targets.setdefault(dst, []).append((inp, src, out))
-        self._reads = {c: _RealPort(self.slaves[c], [self._vr(c, v) for v in vs]) for c, vs in sources.items()}
-        self._read_index = {(c, v): i for c, vs in sources.items() for i, v in enumerate(vs)}
-        self._writes = [
-            (_RealPort(self.slaves[c], [self._vr(c, inp) for inp, _, _ in conns]), [(src, self._read_index[(src, out)]) for _, src, out in conns])
-            for c, conns in targets.items()
-        ]
-        self._state = _RealPort(self.slaves["pendulum"], [self._vr("pendulum", s) for s in ("alpha1", "alpha2")])
-        # The torque on the plant: the controller's demand, or what the motors deliver.
-        if self.system == "torque":
-            self._torque = [_RealPort(self.slaves["controller"], [self._vr("controller", v) for v in ("M1", "M2")])]
-            self._voltage = None
-        else:
-            self._torque = [_RealPort(self.slaves[m], [self._vr(m, "tau")]) for m in ("motor1", "motor2")]
-            self._voltage = _RealPort(self.slaves["controller"], [self._vr("controller", v) for v in ("U1", "U2")])
-
-    def _propagate(self) -> None:
-        values = {c: list(port.get()) for c, port in self._reads.items()}
-        for port, sources in self._writes:
-            port.set([values[src][i] for src, i in sources])
-
-    def _set_start(self, qualified: str, value) -> None:
-        component, _, name = qualified.partition(".")
-        if component not in self.slaves:
-            raise KeyError(f"'{qualified}': system '{self.system}' has no component '{component}' (has {sorted(self.slaves)})")
-        v = self.fmus[component].var(name)
-        slave = self.slaves[component]
-        if v.type == "Real":
-            slave.setReal([v.valueReference], [float(value)])
-        elif v.type == "Integer":
-            slave.setInteger([v.valueReference], [int(value)])
-        elif v.type == "Boolean":
-            slave.setBoolean([v.valueReference], [bool(value)])
-        else:
-            raise TypeError(f"{qualified}: unsupported type {v.type}")
-
     def run(self, start: dict, stop_time: float, step: float, criteria: Criteria = Criteria()) -> dict:
-        """One experiment: fmi2Reset, start values (`start` maps "component.variable" to a value,
+        """One experiment: fmi2Reset (from the second run on), the system's start values and the
+        run's own on top (`start` maps "component.variable" to a value,
         e.g. "pendulum.alpha1", "pendulum.m1", "controller.mode"), initialization, then
         `stop_time / step` communication steps. Returns the run's metrics; a failure (an FMU
         refusing a value or a step) is returned as status "failed" with the reason, not raised."""
-        n = int(round(stop_time / step))
-        self.runs += 1
         self.log.clear()
         t0, cpu0 = time.perf_counter(), time.thread_time()
-        m = _Metrics(criteria, step, has_voltage=self.system == "motors")
-        t = 0.0
+        m = _Metrics(criteria, step, has_voltage=self._voltage is not None)
+
+        def observe(_k, t):
+            a1, a2 = self._state.get()
+            torque = max(abs(x) for port in self._torque for x in port.get())
+            voltage = max(abs(x) for x in self._voltage.get()) if self._voltage is not None else math.nan
+            return m.sample(t, a1, a2, torque, voltage)
+
         try:
-            for slave in self.slaves.values():
-                slave.reset()
-            for qualified, value in {**SYSTEM_START[self.system], **start}.items():
-                self._set_start(qualified, value)
-            for slave in self.slaves.values():
-                slave.setupExperiment(startTime=0.0, stopTime=n * step)
-            for slave in self.slaves.values():
-                slave.enterInitializationMode()
-            for _ in self.slaves:  # outputs computed from inputs (the first sample) see the state
-                self._propagate()
-            for slave in self.slaves.values():
-                slave.exitInitializationMode()
-            for k in range(n + 1):
-                t = k * step
-                self._propagate()
-                a1, a2 = self._state.get()
-                torque = max(abs(x) for port in self._torque for x in port.get())
-                voltage = max(abs(x) for x in self._voltage.get()) if self._voltage is not None else math.nan
-                if not m.sample(t, a1, a2, torque, voltage) or k == n:
-                    break
-                for slave in self.slaves.values():
-                    slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
-            for slave in self.slaves.values():
-                slave.terminate()
+            self.loop.run(stop_time, step, start, observe)
         except FMICallException as e:
             # After fmi2Fatal only fmi2FreeInstance is allowed: this loop must not be reused.
             self.broken = self.broken or e.status >= 4
             status = STATUS_NAMES[e.status] if 0 <= e.status < len(STATUS_NAMES) else str(e.status)
-            return m.failed(t, f"{e}" + self._log_text(), status, e.function, _times(t0, cpu0))
+            return m.failed(m.t, f"{e}" + self._log_text(), status, e.function, _times(t0, cpu0))
         except Exception as e:  # a bad study specification: recorded like an FMU failure
-            return m.failed(t, f"{type(e).__name__}: {e}" + self._log_text(), "", "", _times(t0, cpu0))
-        return m.result(n * step, _times(t0, cpu0))
+            return m.failed(m.t, f"{type(e).__name__}: {e}" + self._log_text(), "", "", _times(t0, cpu0))
+        return m.result(int(round(stop_time / step)) * step, _times(t0, cpu0))
 
     def _log_text(self) -> str:
         return (" | FMU log: " + " / ".join(self.log)) if self.log else ""
 
     def close(self) -> None:
-        for slave in self.slaves.values():
-            try:
-                slave.freeInstance()
-            except Exception:  # freeing is best effort; the process may be going away
-                pass
-        self.slaves.clear()
+        self.loop.close()
 
 
 def _times(t0: float, cpu0: float) -> dict:
@@ -368,10 +244,13 @@ class FmuSet:
     per system: a loop is taken for a run and given back after it, so each thread of a worker
     instantiates each FMU once and later runs reuse it with fmi2Reset."""
 
-    def __init__(self, paths: dict[str, str], workdir: str | None = None):
+    def __init__(self, paths: dict[str, str], workdir: str | None = None, systems: dict[str, System] | None = None):
+        """`systems`: the study's systems as `study_systems` reads them (default: from the SSP
+        files next to `paths["Pendulum"]`); Dask workers get them read by the client."""
+        self.systems = systems if systems is not None else study_systems(paths)
         self._own_workdir = workdir is None
         self.workdir = workdir or tempfile.mkdtemp(prefix="pendulum-study-")
-        self.fmus = {ident: _Fmu(path, self.workdir) for ident, path in paths.items()}
+        self.fmus = {ident: Fmu(path, self.workdir) for ident, path in paths.items()}
         self._free: dict[str, list[ClosedLoop]] = {}
         self._lock = threading.Lock()
 
@@ -380,7 +259,9 @@ class FmuSet:
             free = self._free.setdefault(system, [])
             if free:
                 return free.pop()
-        return ClosedLoop(system, self.fmus)
+        if system not in self.systems:
+            raise ValueError(f"unknown system '{system}', expected one of {sorted(self.systems)}")
+        return ClosedLoop(system, self.systems[system], self.fmus)
 
     def checkin(self, loop: ClosedLoop) -> None:
         if loop.broken:

@@ -33,7 +33,7 @@ import zipfile
 from distributed import Client, LocalCluster, as_completed, get_worker
 from distributed.diagnostics.plugin import WorkerPlugin
 
-from .closed_loop import Criteria, FmuSet
+from .closed_loop import Criteria, FmuSet, study_systems
 
 PLUGIN_NAME = "pendulum-study-fmus"
 
@@ -99,13 +99,15 @@ def execute(spec: dict, fmus: FmuSet) -> dict:
 
 
 class FmuPlugin(WorkerPlugin):
-    """Carries the FMU files to every worker (also to workers that join later) and keeps, per
-    worker, the extracted FMUs and the pool of instantiated closed loops."""
+    """Carries the FMU files and the systems (read from the SSP files here, on the client) to
+    every worker (also to workers that join later) and keeps, per worker, the extracted FMUs and
+    the pool of instantiated closed loops."""
 
     name = PLUGIN_NAME
 
     def __init__(self, paths: dict[str, str]):
         self.files = {ident: pathlib.Path(path).read_bytes() for ident, path in paths.items()}
+        self.systems = study_systems(paths)
         self.fmus: FmuSet | None = None
 
     def setup(self, worker):
@@ -117,7 +119,7 @@ class FmuPlugin(WorkerPlugin):
             path = workdir / f"{ident}.fmu"
             path.write_bytes(data)
             paths[ident] = str(path)
-        self.fmus = FmuSet(paths, str(workdir))
+        self.fmus = FmuSet(paths, str(workdir), self.systems)
 
     def teardown(self, worker):
         if self.fmus is not None:
@@ -237,12 +239,14 @@ class StudyReport:
 
 
 def _package_zip(directory: str) -> str:
-    """This package as a zip file, for workers of an existing cluster that do not have it."""
+    """This package and the `cosim` package it uses (its systems) as a zip file, for workers of
+    an existing cluster that do not have them."""
     pkg = pathlib.Path(__file__).resolve().parent
     path = pathlib.Path(directory) / f"{pkg.name}.zip"
     with zipfile.ZipFile(path, "w") as z:
-        for f in sorted(pkg.glob("*.py")):
-            z.write(f, f"{pkg.name}/{f.name}")
+        for d in (pkg, pkg.parent / "cosim"):
+            for f in sorted(d.glob("*.py")):
+                z.write(f, f"{d.name}/{f.name}")
     return str(path)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from fmpy import read_model_description
 
-from .closed_loop import SYSTEM_START, Criteria
+from .closed_loop import Criteria, study_systems, system_start
 from .runner import make_spec
 
 MODES = {1: "LQR", 2: "PID", 3: "LQR+PID"}
@@ -28,7 +28,7 @@ def fmu_paths(fmu_dir: str) -> dict[str, str]:
 
 def nominal(paths: dict[str, str], system: str) -> dict[str, float]:
     """Nominal values of the uncertain parameters: the FMUs' start values, overridden by the
-    system's own settings (e.g. the motors' gear)."""
+    system's own settings (the SSD's parameter values)."""
     starts = {}
     for ident, path in paths.items():
         starts[ident] = {v.name: float(v.start) for v in read_model_description(path).modelVariables if v.start is not None and v.type == "Real"}
@@ -36,7 +36,7 @@ def nominal(paths: dict[str, str], system: str) -> dict[str, float]:
     if system == "motors":
         for m in ("motor1", "motor2"):
             values.update({f"{m}.{p}": starts["DCMotor"][p] for p in MOTOR_UNCERTAIN})
-    for k, v in SYSTEM_START[system].items():
+    for k, v in system_start(study_systems(paths)[system]).items():
         if k in values:
             values[k] = float(v)
     return values

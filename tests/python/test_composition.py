@@ -17,7 +17,7 @@ from cosim import (  # noqa: E402
     plant_motors_controller,
     simulate,
 )
-from cosim.ssp import simulate_fmpy_ssp, simulate_libcosim, ssp_connections  # noqa: E402
+from cosim.ssp import simulate_fmpy_ssp, simulate_libcosim, ssp_connections, ssp_start_values  # noqa: E402
 
 ANGLES = ["pendulum.alpha1", "pendulum.alpha2"]
 K_NAMES = [f"K{i}{j}" for i in (1, 2) for j in (1, 2, 3, 4)]
@@ -109,11 +109,17 @@ def test_motor_loop_settles_upright_within_voltage_limits(motor_run):
 
 
 @pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
-def test_ssp_files_describe_the_master_loops_systems(name):
+def test_master_loop_reads_the_same_system_from_the_ssp_as_fmpy(name):
+    """The master loop's systems come from the SSP files (cosim.systems reads the SSD with
+    xml.etree); fmpy's own SSD reader must find the same connections and typed start values."""
     system = lqr_system() if name == "PendulumLQR" else motor_system()
     expected = {(k.source, k.source_var, k.target, k.target_var) for k in system.connections}
     got = ssp_connections(ssp(name))
-    assert got == expected, f"{name}.ssp connections differ: only in SSP {got - expected}, only in master {expected - got}"
+    assert got == expected, f"{name}.ssp connections differ: only in fmpy's reading {got - expected}, only in master {expected - got}"
+    starts = {f"{c.name}.{k}": v for c in system.components for k, v in c.start.items()}
+    fmpy_starts = {p.name: p.value for p in ssp_start_values(ssp(name)).parameters}
+    assert starts == fmpy_starts, f"{name}.ssp start values: master loop reads {starts}, fmpy reads {fmpy_starts}"
+    assert all(type(v) is type(fmpy_starts[k]) for k, v in starts.items()), f"{name}: types differ: {starts} vs {fmpy_starts}"
 
 
 @pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
