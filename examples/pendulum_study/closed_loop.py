@@ -26,7 +26,6 @@ The experiment's parameters are set only on the components they name: a perturbe
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import itertools
 import math
@@ -37,9 +36,7 @@ import time
 from collections import deque
 
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-from fmpy.logging import addLoggerProxy
-
+from cosim.fmu_log import LogRoute
 from cosim.master import Fmu, Loop, System
 from cosim.systems import read_ssp, ssp_path
 
@@ -91,15 +88,10 @@ class ClosedLoop:
         self.id = next(ClosedLoop._ids)
         self.broken = False
         self.log: deque[str] = deque(maxlen=20)
-        # One logger for all instances of this loop: keeps the FMUs' messages for error reports.
-        self._logger = fmi2CallbackLoggerTYPE(self._log_message)
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = self._logger
-        self._callbacks.allocateMemory = _default_callbacks().allocateMemory
-        self._callbacks.freeMemory = _default_callbacks().freeMemory
-        # The FMUs log printf-style ("%s", text); fmpy's native proxy formats before calling us.
-        addLoggerProxy(ctypes.byref(self._callbacks))
-        self.loop = Loop(description, fmus, self._callbacks)
+        # One log route for all instances of this loop: keeps the FMUs' messages for error
+        # reports, and only this loop's (cosim.fmu_log says why a plain fmpy logger is not enough).
+        self._route = LogRoute(self._log_message)
+        self.loop = Loop(description, fmus, self._route.callbacks)
         self._state = self.loop.port("pendulum", ("alpha1", "alpha2"))
         # The torque on the plant: the controller's demand, or what the motors deliver.
         motors = [c.name for c in description.components if c.fmu == "DCMotor"]
@@ -114,9 +106,9 @@ class ClosedLoop:
     def runs(self) -> int:
         return self.loop.runs
 
-    def _log_message(self, _component, instance, status, category, message) -> None:
+    def _log_message(self, instance: str, status: int, _category: str, message: str) -> None:
         label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
-        self.log.append(f"[{instance.decode()}: {label}] {message.decode(errors='replace')}")
+        self.log.append(f"[{instance}: {label}] {message}")
 
     def run(self, start: dict, stop_time: float, step: float, criteria: Criteria = Criteria()) -> dict:
         """One experiment: fmi2Reset (from the second run on), the system's start values and the
@@ -150,17 +142,12 @@ class ClosedLoop:
 
     def close(self) -> None:
         self.loop.close()
+        self._route.close()
 
 
 def _times(t0: float, cpu0: float) -> dict:
     """Wall time and this thread's CPU time since t0, cpu0, s."""
     return {"elapsed": time.perf_counter() - t0, "cpu": time.thread_time() - cpu0}
-
-
-def _default_callbacks():
-    from fmpy.fmi2 import defaultCallbacks
-
-    return defaultCallbacks
 
 
 class _Metrics:

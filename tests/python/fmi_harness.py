@@ -1,19 +1,15 @@
 """Helpers for driving our FMUs through fmpy's FMU2Slave with a logger that keeps the messages."""
 
 import shutil
-from ctypes import byref
+import sys
 
 import fmpy
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
-from fmpy.logging import addLoggerProxy
-from ctypes import cdll, c_size_t, c_void_p
-import ctypes.util
+from fmpy.fmi2 import FMU2Slave
 
-_libc = cdll.LoadLibrary(ctypes.util.find_library("c"))
-_libc.calloc.restype = c_void_p
-_libc.calloc.argtypes = [c_size_t, c_size_t]
-_libc.free.argtypes = [c_void_p]
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "examples"))
+from cosim.fmu_log import LogRoute  # noqa: E402
 
 
 class LoggedSlave:
@@ -24,24 +20,16 @@ class LoggedSlave:
         self.unzipdir = fmpy.extract(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
-
-        def log(env, instance, status, category, message):
-            self.messages.append((status, category.decode(), message.decode()))
-
-        # Kept on self: ctypes callbacks must outlive the instance.
-        self._logger = fmi2CallbackLoggerTYPE(log)
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = self._logger
-        self._callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
-        self._callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
-        addLoggerProxy(byref(self._callbacks))  # formats the variadic message in C
+        # Routed by componentEnvironment: fmpy's proxy alone would hand every instance's messages
+        # to the logger registered last (examples/cosim/fmu_log.py).
+        self._route = LogRoute(lambda _instance, status, category, text: self.messages.append((status, category, text)))
         self.fmu = FMU2Slave(
             guid=self.md.guid,
             unzipDirectory=self.unzipdir,
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=name,
         )
-        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=logging_on)
+        self.fmu.instantiate(callbacks=self._route.callbacks, loggingOn=logging_on)
 
     def set(self, **values):
         self.fmu.setReal([self.vr[k] for k in values], list(values.values()))
@@ -54,4 +42,5 @@ class LoggedSlave:
 
     def close(self):
         self.fmu.freeInstance()
+        self._route.close()
         shutil.rmtree(self.unzipdir, ignore_errors=True)

@@ -182,3 +182,21 @@ def test_study_runs_match_the_composition_master_loop(system):
     a1, a2 = traj["pendulum.alpha1"], traj["pendulum.alpha2"]
     assert row["peak_alpha1"] == abs(a1).max() and row["peak_alpha2"] == abs(a2).max(), (row, abs(a1).max(), abs(a2).max())
     assert row["final_error"] == math.hypot(a1[-1], a2[-1]), (row["final_error"], math.hypot(a1[-1], a2[-1]))
+
+
+def test_each_loop_keeps_its_own_fmu_messages_when_loops_are_pooled():
+    # fmpy's native logger proxy sends every instance's messages to the Python logger registered
+    # last; the study routes them by componentEnvironment instead. Here the torque loop is built
+    # first, the motors loop after it, then the torque loop's controller refuses a value: its
+    # message must reach the torque run's error text, and no motors run's.
+    specs = [
+        runner.make_spec("torque", {"pendulum.alpha1": 0.05}, 0.2, STEP),
+        runner.make_spec("motors", {"pendulum.alpha1": 0.05}, 0.2, STEP),
+        runner.make_spec("torque", {"controller.mode": 7}, 0.2, STEP),
+        runner.make_spec("motors", {"pendulum.m1": -1.0}, 0.2, STEP),
+    ]
+    rows = runner.run_sequential(specs, paths(), fresh=False)
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed", "failed"], [r["error"] for r in rows]
+    assert "[controller: Error]" in rows[2]["error"] and "'mode'" in rows[2]["error"], rows[2]["error"]
+    assert "[pendulum: Error]" in rows[3]["error"] and "'m1'" in rows[3]["error"], rows[3]["error"]
+    assert "'mode'" not in rows[3]["error"], rows[3]["error"]
