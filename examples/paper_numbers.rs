@@ -4,11 +4,11 @@
 //! Everything is derived from the model code the FMUs run: A and B are the exact Jacobians of
 //! equations (6)–(7), K solves the Riccati equation, the polynomials come from A − BK.
 
+use holonomic::models::controller::lqr_gain;
+use holonomic::models::dc_motor::DcMotorParams;
+use holonomic::models::pendulum::PendulumParams;
+use holonomic::numerics::lti::{characteristic_polynomial, controllability_matrix, rank, transfer_numerator};
 use nalgebra::{DMatrix, Matrix2, Vector2, Vector4};
-use rustfmu::models::controller::lqr_gain;
-use rustfmu::models::dc_motor::DcMotorParams;
-use rustfmu::models::pendulum::PendulumParams;
-use rustfmu::numerics::lti::{characteristic_polynomial, controllability_matrix, rank, transfer_numerator};
 
 fn dyn_matrix<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -> DMatrix<f64> {
     DMatrix::from_column_slice(R, C, m.as_slice())

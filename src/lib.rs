@@ -1,21 +1,67 @@
-//! FMI 2.0 co-simulation FMUs from plain Rust models.
+//! # rustfmu: FMI 2.0 FMUs from plain Rust models
 //!
-//! - [`models`]: the physics and control of "The control of holonomic system" (Lipták et al.),
-//!   plain Rust with the paper's symbols and equation numbers; no FMI.
-//! - [`numerics`]: the integrators the models step with.
-//! - [`fmi2`]: the generic FMI 2.0 co-simulation runtime (C ABI, state machine, logging, FMU
-//!   state, model description).
-//! - [`fmus`]: each FMU's variable declarations, joining a model to the runtime.
-//! - [`systems`]: the composed systems (FMU instances, parameters, connections), described once
-//!   for the SSP files and the benchmarks.
+//! A model is a Rust struct. Its variables are declared on its fields with
+//! `#[derive(Model)]`; it implements [`Model`] (initialization, checks) and [`CoSimulation`]
+//! (a communication step); one line, [`export_fmi2!`], makes the crate's `cdylib` an FMU.
+//! `cargo fmu build` (from the `fmu-build` package) packages it.
+//!
+//! ```ignore
+//! use rustfmu::prelude::*;
+//!
+//! /// A first-order lag: T dy/dt = u - y.
+//! #[derive(Model, Clone, Debug, serde::Serialize, serde::Deserialize)]
+//! pub struct Lag {
+//!     /// Input u
+//!     #[variable(vr = 0, input)]
+//!     pub u: f64,
+//!     /// Output y; its start value is the initial state
+//!     #[variable(vr = 1, output, initial = exact, depends = [])]
+//!     pub y: f64,
+//!     /// Time constant T
+//!     #[variable(vr = 2, parameter, tunable, start = 0.1, unit = "s", min > 0.0)]
+//!     pub T: f64,
+//! }
+//!
+//! impl Model for Lag {}
+//! impl CoSimulation for Lag {
+//!     fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+//!         self.y = self.u + (self.y - self.u) * (-h / self.T).exp();
+//!         Ok(())
+//!     }
+//! }
+//!
+//! rustfmu::export_fmi2!(Lag);
+//! ```
+//!
+//! What the runtime does for every model: the FMI 2.0 state machine; all-or-nothing argument
+//! checks (unknown value references, NULL arrays, NaN and infinite values, values outside the
+//! declared bounds, variables that cannot be set in the current state); logging through the
+//! importer's logger (always with `"%s"`); versioned, checked FMU state get/set/serialize;
+//! the GUID; `catch_unwind` at every entry point. The declaration attributes are documented in
+//! `docs/declarations.md` and on [`macro@Model`].
 
 extern crate self as rustfmu;
 
-pub mod fmi2;
-pub mod fmus;
-pub mod models;
-pub mod numerics;
-pub mod systems;
+pub mod description;
+mod model;
+mod value;
+
+pub use model::{CoSimulation, Context, Model, StepFailure, Variables};
+pub use rustfmu_derive::{FmuEnum, Model};
+pub use value::{FmiType, FmuEnum, Value};
 
 #[doc(hidden)]
-pub use serde;
+pub mod fmi2;
+
+/// Everything a model file needs.
+pub mod prelude {
+    pub use crate::description::Variable;
+    pub use crate::{CoSimulation, Context, FmuEnum, Model, StepFailure, Value};
+}
+
+/// What the macros expand to; not part of the API.
+#[doc(hidden)]
+pub mod __private {
+    pub use crate::fmi2::{abi, api};
+    pub use serde;
+}

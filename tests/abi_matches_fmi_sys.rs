@@ -6,8 +6,29 @@
 use fmi_sys::fmi2 as sys;
 use std::mem::{align_of, offset_of, size_of};
 
-// The export macro expanded into this test binary: the very functions every FMU exports.
-rustfmu::export_fmi2_cosimulation!(rustfmu::fmus::pendulum::Pendulum);
+// The export macro expanded into this test binary, for a model of one variable: the very
+// functions every FMU exports.
+mod model {
+    use rustfmu::prelude::*;
+
+    /// A constant output.
+    #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+    pub struct Probe {
+        /// An output
+        #[variable(vr = 0, output, initial = exact, start = 1.0, depends = [])]
+        pub y: f64,
+    }
+
+    impl Model for Probe {}
+    impl CoSimulation for Probe {
+        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+            Ok(())
+        }
+    }
+
+    rustfmu::export_fmi2!(Probe);
+}
+use model::*;
 
 macro_rules! same_signature {
     ($($f:ident: $t:ident),* $(,)?) => {
@@ -59,7 +80,7 @@ type OurInstantiate = unsafe extern "C" fn(
     sys::fmi2Type,
     sys::fmi2String,
     sys::fmi2String,
-    *const rustfmu::fmi2::abi::fmi2CallbackFunctions,
+    *const rustfmu::__private::abi::fmi2CallbackFunctions,
     sys::fmi2Boolean,
     sys::fmi2Boolean,
 ) -> sys::fmi2Component;
@@ -69,7 +90,7 @@ const fn same<T>(_: &T, _: &T) {}
 
 #[test]
 fn callback_struct_has_the_headers_layout() {
-    use rustfmu::fmi2::abi::fmi2CallbackFunctions as Ours;
+    use rustfmu::__private::abi::fmi2CallbackFunctions as Ours;
     use sys::fmi2CallbackFunctions as Theirs;
     assert_eq!(size_of::<Ours>(), size_of::<Theirs>());
     assert_eq!(align_of::<Ours>(), align_of::<Theirs>());
@@ -104,7 +125,7 @@ fn callback_struct_has_the_headers_layout() {
 
 #[test]
 fn enum_constants_match_the_headers() {
-    use rustfmu::fmi2::abi as ours;
+    use rustfmu::__private::abi as ours;
     assert_eq!(ours::fmi2OK, sys::fmi2Status_fmi2OK);
     assert_eq!(ours::fmi2Warning, sys::fmi2Status_fmi2Warning);
     assert_eq!(ours::fmi2Discard, sys::fmi2Status_fmi2Discard);

@@ -9,7 +9,7 @@
 //! - composed_loop/10s_at_1ms/{controller-plant,full}: the whole loop in the native master.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rustfmu::fmi2::variables::Value;
+use rustfmu::Value;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::single::{Direct, ViaFmi, time_steps};
 use rustfmu_bench::{packaged_fmus, topology};

@@ -17,7 +17,7 @@ use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::InstanceCS;
 use fmi::fmi2::schema::{Causality, ScalarVariableElement};
 use fmi::traits::FmiImport;
-use rustfmu::fmi2::variables::VarType;
+use rustfmu::description::VarType;
 use std::path::{Path, PathBuf};
 
 /// The workspace root (the parent of this crate).
@@ -193,3 +193,6 @@ impl Fmu {
 pub const SWING_START: [(&str, f64); 2] = [("alpha1", 0.1), ("alpha2", 0.15)];
 
 pub mod single;
+
+/// The plant's state variables, in the order of eq. (12).
+pub const STATE: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];

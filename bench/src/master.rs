@@ -12,7 +12,7 @@
 use crate::Fmu;
 use crate::topology::Topology;
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
-use rustfmu::fmi2::variables::Value;
+use rustfmu::Value;
 
 struct Slave {
     name: &'static str,
@@ -200,7 +200,7 @@ impl Master {
     /// The plant's state (alpha1, omega1, alpha2, omega2) now.
     pub fn plant_state(&mut self) -> Result<Vec<f64>, String> {
         let plant = self.topology.plant;
-        let vrs = rustfmu::systems::STATE
+        let vrs = crate::STATE
             .iter()
             .map(|v| self.vr(plant, v))
             .collect::<Result<Vec<_>, _>>()?;

@@ -6,9 +6,9 @@
 use crate::{Fmu, SWING_START};
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::fmi2::schema::Causality;
-use rustfmu::fmi2::model::CoSimModel;
-use rustfmu::fmi2::variables::Value;
-use rustfmu::fmus::pendulum::Pendulum;
+use pendulum_fmu::Pendulum;
+use rustfmu::Value;
+use rustfmu::{CoSimulation, Context, Model, Variables};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -26,9 +26,11 @@ impl Default for Direct {
 
 impl Direct {
     pub fn new() -> Direct {
-        let mut model = Pendulum::new();
-        (model.v.alpha1, model.v.alpha2) = (SWING_START[0].1, SWING_START[1].1);
-        model.initialize(0.0, None).expect("the paper's parameters are valid");
+        let mut model = Pendulum::start();
+        (model.alpha1, model.alpha2) = (SWING_START[0].1, SWING_START[1].1);
+        model
+            .initialize(&Context::standalone(0.0, None))
+            .expect("the paper's parameters are valid");
         Direct {
             fresh: model.clone(),
             model,
@@ -41,16 +43,18 @@ impl Direct {
 
     #[inline]
     pub fn step(&mut self, t: f64, h: f64) {
-        self.model.do_step(t, h).expect("the swing integrates");
+        self.model
+            .do_step(t, h, &Context::standalone(0.0, None))
+            .expect("the swing integrates");
     }
 
     /// What a master does around a step, without the FMI layer: set the two torques, step, read
     /// the four states.
     #[inline]
     pub fn round_trip(&mut self, t: f64, h: f64, u: [f64; 2]) -> [f64; 4] {
-        (self.model.v.M1, self.model.v.M2) = (u[0], u[1]);
+        (self.model.M1, self.model.M2) = (u[0], u[1]);
         self.step(t, h);
-        let v = &self.model.v;
+        let v = &self.model;
         [v.alpha1, v.omega1, v.alpha2, v.omega2]
     }
 }

@@ -12,7 +12,7 @@
 //! which reads this table from `composed-loop --topology-json`, and runs the SSP file of the same
 //! system in fmpy.ssp and libcosim) run the same loop.
 
-use rustfmu::fmi2::variables::Value;
+use rustfmu::Value;
 use rustfmu::systems::{self, System};
 
 /// `instance.variable`

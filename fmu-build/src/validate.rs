@@ -4,7 +4,7 @@
 
 use quick_xml::Reader;
 use quick_xml::events::Event;
-use rustfmu::fmi2::abi::*;
+use rustfmu::__private::abi::*;
 use std::ffi::{CStr, CString, c_char};
 use std::io::Read;
 use std::path::Path;
@@ -106,6 +106,11 @@ fn read_description(xml: &str) -> Result<Description, String> {
     Ok(d)
 }
 
+/// Problems with an FMU file (an empty list: valid). The smoke run happens in a child process
+/// (this program run as `__smoke-run`), so an FMU that crashes is reported, not shared.
+/// Model descriptions larger than this are refused.
+const MAX_DESCRIPTION: u64 = 64 << 20;
+
 pub fn validate(fmu: &Path) -> Vec<String> {
     match validate_inner(fmu) {
         Ok(problems) => problems,
@@ -132,31 +137,28 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     let mut xml = String::new();
     zip.by_name("modelDescription.xml")
         .map_err(|_| "no modelDescription.xml at the archive's root".to_string())?
+        .take(MAX_DESCRIPTION)
         .read_to_string(&mut xml)
         .map_err(|e| format!("modelDescription.xml: {e}"))?;
     let d = read_description(&xml)?;
-    match rustfmu::fmus::ALL
-        .iter()
-        .find(|e| e.info.identifier == d.model_identifier)
-    {
-        Some(entry) => match (entry.model_description)() {
-            Ok(generated) if generated == xml => {}
-            Ok(_) => problems
-                .push("modelDescription.xml differs from what the declarations generate (stale package?)".into()),
-            Err(e) => problems.push(format!("the declarations are invalid: {e}")),
-        },
-        None => problems.push(format!(
-            "modelIdentifier '{}' is not an FMU of this workspace",
-            d.model_identifier
-        )),
-    }
-    let (folder, ext) = crate::package::platform()?;
+    let (folder, ext) = crate::bundle::platform()?;
     let bin_name = format!("binaries/{folder}/{}.{ext}", d.model_identifier);
     let mut binary = Vec::new();
     zip.by_name(&bin_name)
         .map_err(|_| format!("no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix)"))?
+        .take(MAX_BINARY)
         .read_to_end(&mut binary)
         .map_err(|e| format!("{bin_name}: {e}"))?;
+    // A binary made by rustfmu describes itself: the packaged description must be what it says.
+    if let Ok(me) = crate::bundle::read_library(&binary) {
+        match crate::xml::fmi2(&me.description, me.interfaces, &me.guid) {
+            Ok(generated) if generated == xml => {}
+            Ok(_) => problems.push(format!(
+                "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
+            )),
+            Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
+        }
+    }
     let dir = std::env::temp_dir().join(format!(
         "fmu-build-validate-{}-{}",
         std::process::id(),
@@ -165,7 +167,7 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let so = dir.join(format!("{}.{ext}", d.model_identifier));
     std::fs::write(&so, &binary).map_err(|e| format!("{}: {e}", so.display()))?;
-    problems.extend(smoke_run(&so, &d));
+    problems.extend(smoke_run_in_child(&so, &d));
     let _ = std::fs::remove_dir_all(&dir);
     Ok(problems)
 }
@@ -203,7 +205,50 @@ unsafe extern "C" fn collect_log(
     }
 }
 
-fn smoke_run(so: &Path, d: &Description) -> Vec<String> {
+/// Binaries larger than this are refused rather than read into memory.
+const MAX_BINARY: u64 = 512 << 20;
+
+fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
+    let vrs: Vec<String> = d.real_vrs.iter().map(|v| v.to_string()).collect();
+    let exe = match std::env::current_exe() {
+        Ok(e) if e.file_stem().is_some_and(|s| s == "cargo-fmu" || s == "fmu-build") => e,
+        // Called from elsewhere (tests): run in this process.
+        _ => return smoke_run(so, &d.guid, &d.real_vrs),
+    };
+    match std::process::Command::new(&exe)
+        .arg("__smoke-run")
+        .arg(so)
+        .arg(&d.guid)
+        .arg(vrs.join(","))
+        .output()
+    {
+        Ok(out) if out.status.success() => vec![],
+        Ok(out) => {
+            let said = String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .map(str::to_string)
+                .collect::<Vec<_>>();
+            if said.is_empty() {
+                let err = String::from_utf8_lossy(&out.stderr);
+                let tail: Vec<&str> = err
+                    .lines()
+                    .rev()
+                    .take(5)
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .rev()
+                    .collect();
+                vec![format!("the smoke run crashed ({}): {}", out.status, tail.join(" | "))]
+            } else {
+                said
+            }
+        }
+        Err(e) => vec![format!("cannot start the smoke run ({}): {e}", exe.display())],
+    }
+}
+
+/// Loads the binary, checks its exports, and runs 0.1 s from the start values.
+pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
     let mut problems = Vec::new();
     // SAFETY: loading our own freshly built FMU binary; its initializers are Rust std's only.
     let lib = match unsafe { libloading::Library::new(so) } {
@@ -270,7 +315,7 @@ fn smoke_run(so: &Path, d: &Description) -> Vec<String> {
             componentEnvironment: &mut log as *mut Log as fmi2ComponentEnvironment,
         };
         let name = CString::new("fmu-build-validate").unwrap();
-        let guid = CString::new(d.guid.as_str()).unwrap_or_default();
+        let guid = CString::new(guid).unwrap_or_default();
         let c = instantiate(
             name.as_ptr(),
             fmi2CoSimulation,
@@ -291,8 +336,8 @@ fn smoke_run(so: &Path, d: &Description) -> Vec<String> {
         for i in 0..10 {
             status = status.max(do_step(c, i as f64 * 0.01, 0.01, fmi2True));
         }
-        let mut values = vec![0.0; d.real_vrs.len()];
-        status = status.max(get_real(c, d.real_vrs.as_ptr(), d.real_vrs.len(), values.as_mut_ptr()));
+        let mut values = vec![0.0; real_vrs.len()];
+        status = status.max(get_real(c, real_vrs.as_ptr(), real_vrs.len(), values.as_mut_ptr()));
         status = status.max(unary(b"fmi2Terminate")(c));
         free(c);
         if status != fmi2OK {
@@ -304,7 +349,7 @@ fn smoke_run(so: &Path, d: &Description) -> Vec<String> {
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
             problems.push(format!(
                 "Real value reference {} is {} after the run",
-                d.real_vrs[i], values[i]
+                real_vrs[i], values[i]
             ));
         }
     }
@@ -328,4 +373,118 @@ pub fn fmpy_validate(python: &Path, fmu: &Path) -> Vec<String> {
         )],
         Err(e) => vec![format!("cannot run {}: {e}", python.display())],
     }
+}
+
+/// `cargo fmu info`: what an FMU file offers, from its archive and description.
+pub fn info(fmu: &Path) -> Result<String, String> {
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", fmu.display());
+    let file = std::fs::File::open(fmu).map_err(|e| at(&e))?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| at(&format!("not a zip archive: {e}")))?;
+    let mut platforms = std::collections::BTreeSet::new();
+    for name in zip.file_names() {
+        let Ok(name) = name else { continue };
+        let parts: Vec<&str> = name.split('/').collect();
+        if parts.len() == 3 && parts[0] == "binaries" && !parts[2].is_empty() {
+            platforms.insert(format!("{} ({})", parts[1], parts[2]));
+        }
+    }
+    let mut xml = String::new();
+    zip.by_name("modelDescription.xml")
+        .map_err(|_| at(&"no modelDescription.xml at the archive's root"))?
+        .take(MAX_DESCRIPTION)
+        .read_to_string(&mut xml)
+        .map_err(|e| at(&e))?;
+    let mut reader = Reader::from_str(&xml);
+    let mut out = String::new();
+    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    let mut interfaces = Vec::new();
+    let mut variables = Vec::new();
+    let mut current: Option<(String, String, String)> = None;
+    loop {
+        match reader.read_event() {
+            Err(e) => {
+                return Err(at(&format!(
+                    "modelDescription.xml is not well-formed at byte {}: {e}",
+                    reader.error_position()
+                )));
+            }
+            Ok(Event::Eof) => break,
+            Ok(Event::Start(e) | Event::Empty(e)) => {
+                let attr = |name: &[u8]| -> String {
+                    e.attributes()
+                        .flatten()
+                        .find(|a| a.key.as_ref() == name)
+                        .and_then(|a| a.unescape_value().ok())
+                        .map(|v| v.into_owned())
+                        .unwrap_or_default()
+                };
+                match e.name().as_ref() {
+                    b"fmiModelDescription" => {
+                        out.push_str(&format!(
+                            "{}: FMI {}, model '{}', version '{}'\n  GUID/token {}\n  generated by {}\n  {}\n",
+                            fmu.display(),
+                            attr(b"fmiVersion"),
+                            attr(b"modelName"),
+                            attr(b"version"),
+                            attr(b"guid"),
+                            attr(b"generationTool"),
+                            attr(b"description")
+                        ));
+                    }
+                    b"CoSimulation" | b"ModelExchange" => interfaces.push(format!(
+                        "{} ({})",
+                        String::from_utf8_lossy(e.name().as_ref()),
+                        attr(b"modelIdentifier")
+                    )),
+                    b"DefaultExperiment" => out.push_str(&format!(
+                        "  default experiment: start {} stop {} step {} tolerance {}\n",
+                        attr(b"startTime"),
+                        attr(b"stopTime"),
+                        attr(b"stepSize"),
+                        attr(b"tolerance")
+                    )),
+                    b"ScalarVariable" => {
+                        let causality = match attr(b"causality") {
+                            c if c.is_empty() => "local".to_string(),
+                            c => c,
+                        };
+                        *counts.entry(causality.clone()).or_default() += 1;
+                        current = Some((attr(b"name"), causality, attr(b"valueReference")));
+                    }
+                    b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration" => {
+                        if let Some((name, causality, vr)) = current.take() {
+                            let unit = attr(b"unit");
+                            variables.push(format!(
+                                "    {vr:>5} {name} ({causality}, {}{})",
+                                String::from_utf8_lossy(e.name().as_ref()),
+                                if unit.is_empty() {
+                                    String::new()
+                                } else {
+                                    format!(", {unit}")
+                                }
+                            ));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            Ok(_) => {}
+        }
+    }
+    out.push_str(&format!("  interfaces: {}\n", interfaces.join(", ")));
+    out.push_str(&format!(
+        "  platforms: {}\n",
+        if platforms.is_empty() {
+            "none".to_string()
+        } else {
+            platforms.into_iter().collect::<Vec<_>>().join(", ")
+        }
+    ));
+    let counts: Vec<String> = counts.iter().map(|(k, v)| format!("{v} {k}")).collect();
+    out.push_str(&format!("  variables: {} ({})\n", variables.len(), counts.join(", ")));
+    for v in variables {
+        out.push_str(&v);
+        out.push('\n');
+    }
+    Ok(out)
 }

@@ -1,5 +1,5 @@
 //! The C boundary: every `fmi2*` function, generic over the model. The export macro
-//! ([`export_fmi2_cosimulation!`](crate::export_fmi2_cosimulation)) forwards the `#[no_mangle]`
+//! ([`export_fmi2!`](crate::export_fmi2)) forwards the `#[no_mangle]`
 //! symbols of an FMU crate here. This is the one module with `unsafe`: pointers from the importer
 //! are checked for NULL and turned into slices and references, and every call runs under
 //! `catch_unwind`, so no panic crosses into the host.
@@ -8,8 +8,8 @@
 use super::abi::*;
 use super::instance::{Call, Instance, State};
 use super::logging::Logger;
-use super::model::CoSimModel;
-use super::variables::FmiValue;
+use crate::model::CoSimulation;
+use crate::value::FmiType;
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
@@ -26,7 +26,7 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Runs `f` on the instance behind `c`, after the state check for `call`.
 /// A NULL instance cannot be logged to: the answer is fmi2Error.
-unsafe fn with_instance<M: CoSimModel>(
+unsafe fn with_instance<M: CoSimulation>(
     c: fmi2Component,
     call: Call,
     function: &str,
@@ -97,7 +97,9 @@ pub fn get_version() -> fmi2String {
     VERSION.as_ptr()
 }
 
-pub unsafe fn instantiate<M: CoSimModel>(
+pub unsafe fn instantiate<M: CoSimulation>(
+    own_guid: &'static str,
+    description: &'static [u8],
     instance_name: fmi2String,
     fmu_type: fmi2Type,
     guid: fmi2String,
@@ -114,7 +116,15 @@ pub unsafe fn instantiate<M: CoSimModel>(
         let callbacks = unsafe { *functions };
         // SAFETY: NUL-terminated strings from the importer, or NULL.
         let (name, guid, resources) = unsafe { (text(instance_name), text(guid), text(resource_location)) };
-        let Some(logger) = Logger::new(&callbacks, name.as_deref().unwrap_or(""), logging_on != fmi2False) else {
+        // The embedded description stays in the binary for `cargo fmu` to read: this use keeps
+        // the linker from discarding it.
+        std::hint::black_box(description.len());
+        let Some(logger) = Logger::new(
+            &callbacks,
+            name.as_deref().unwrap_or(""),
+            logging_on != fmi2False,
+            M::DESCRIPTION.log_categories,
+        ) else {
             return ptr::null_mut();
         };
         let refuse = |why: String| {
@@ -138,20 +148,16 @@ pub unsafe fn instantiate<M: CoSimModel>(
                 } else {
                     ""
                 },
-                M::INFO.identifier
+                M::DESCRIPTION.model_identifier
             ));
         }
-        let own_guid = match super::xml::guid::<M>() {
-            Ok(g) => g,
-            Err(e) => return refuse(format!("the model's declarations are invalid: {e}")),
-        };
         match guid.as_deref() {
             None => return refuse(format!("GUID is NULL; expected {own_guid}")),
             Some(g) if g != own_guid => {
                 return refuse(format!(
                     "GUID '{g}' does not match this binary's {own_guid}: modelDescription.xml and \
                      binaries/ come from different builds of {}",
-                    M::INFO.identifier
+                    M::DESCRIPTION.model_identifier
                 ));
             }
             Some(_) => {}
@@ -167,7 +173,7 @@ pub unsafe fn instantiate<M: CoSimModel>(
     made.unwrap_or(ptr::null_mut())
 }
 
-pub unsafe fn free_instance<M: CoSimModel>(c: fmi2Component) {
+pub unsafe fn free_instance<M: CoSimulation>(c: fmi2Component) {
     if c.is_null() {
         return;
     }
@@ -177,7 +183,7 @@ pub unsafe fn free_instance<M: CoSimModel>(c: fmi2Component) {
     }));
 }
 
-pub unsafe fn set_debug_logging<M: CoSimModel>(
+pub unsafe fn set_debug_logging<M: CoSimulation>(
     c: fmi2Component,
     logging_on: fmi2Boolean,
     n: usize,
@@ -202,7 +208,7 @@ pub unsafe fn set_debug_logging<M: CoSimModel>(
     }
 }
 
-pub unsafe fn setup_experiment<M: CoSimModel>(
+pub unsafe fn setup_experiment<M: CoSimulation>(
     c: fmi2Component,
     tolerance_defined: fmi2Boolean,
     tolerance: fmi2Real,
@@ -229,7 +235,7 @@ pub unsafe fn setup_experiment<M: CoSimModel>(
 
 macro_rules! simple_call {
     ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
-        pub unsafe fn $fn_name<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
             unsafe {
                 with_instance::<M>(c, Call::$call, $c_name, |inst| {
                     inst.trace(|| concat!($c_name, "()").to_string());
@@ -255,7 +261,7 @@ simple_call!(
 simple_call!(terminate, Terminate, "fmi2Terminate", terminate);
 simple_call!(reset, Reset, "fmi2Reset", reset);
 
-pub unsafe fn get<M: CoSimModel, T: FmiValue>(
+pub unsafe fn get<M: CoSimulation, T: FmiType + Copy>(
     c: fmi2Component,
     function: &'static str,
     vr: *const fmi2ValueReference,
@@ -272,7 +278,7 @@ pub unsafe fn get<M: CoSimModel, T: FmiValue>(
     }
 }
 
-pub unsafe fn set<M: CoSimModel, T: FmiValue>(
+pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
     c: fmi2Component,
     function: &'static str,
     vr: *const fmi2ValueReference,
@@ -290,7 +296,7 @@ pub unsafe fn set<M: CoSimModel, T: FmiValue>(
 }
 
 /// Booleans cross the ABI as `fmi2Boolean` (int): converted to and from `bool` here.
-pub unsafe fn get_boolean<M: CoSimModel>(
+pub unsafe fn get_boolean<M: CoSimulation>(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
@@ -318,7 +324,7 @@ pub unsafe fn get_boolean<M: CoSimModel>(
     }
 }
 
-pub unsafe fn set_boolean<M: CoSimModel>(
+pub unsafe fn set_boolean<M: CoSimulation>(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
@@ -337,8 +343,7 @@ pub unsafe fn set_boolean<M: CoSimModel>(
     }
 }
 
-/// No model here has String variables: every value reference is unknown, nvr = 0 is fine.
-pub unsafe fn get_string<M: CoSimModel>(
+pub unsafe fn get_string<M: CoSimulation>(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
@@ -347,18 +352,14 @@ pub unsafe fn get_string<M: CoSimModel>(
     unsafe {
         with_instance::<M>(c, Call::GetValues, "fmi2GetString", |inst| {
             match (slice(vr, nvr), slice_mut(value, nvr)) {
-                (Some([]), _) => fmi2OK,
-                (Some([first, ..]), Some(_)) => inst.error(&format!(
-                    "fmi2GetString: value reference {first} is not a String variable of {} (it has none)",
-                    M::INFO.identifier
-                )),
+                (Some(vrs), Some(out)) => inst.get_strings(vrs, out),
                 _ => inst.error(&format!("fmi2GetString: vr or value is NULL with nvr = {nvr}")),
             }
         })
     }
 }
 
-pub unsafe fn set_string<M: CoSimModel>(
+pub unsafe fn set_string<M: CoSimulation>(
     c: fmi2Component,
     vr: *const fmi2ValueReference,
     nvr: usize,
@@ -367,18 +368,23 @@ pub unsafe fn set_string<M: CoSimModel>(
     unsafe {
         with_instance::<M>(c, Call::SetValues, "fmi2SetString", |inst| {
             match (slice(vr, nvr), slice(value, nvr)) {
-                (Some([]), _) => fmi2OK,
-                (Some([first, ..]), Some(_)) => inst.error(&format!(
-                    "fmi2SetString: value reference {first} is not a String variable of {} (it has none)",
-                    M::INFO.identifier
-                )),
+                (Some(vrs), Some(values)) => {
+                    let mut texts = Vec::with_capacity(values.len());
+                    for (i, p) in values.iter().enumerate() {
+                        match text(*p) {
+                            Some(t) => texts.push(t.into_owned()),
+                            None => return inst.error(&format!("fmi2SetString: value[{i}] is NULL")),
+                        }
+                    }
+                    inst.set_strings(vrs, &texts)
+                }
                 _ => inst.error(&format!("fmi2SetString: vr or value is NULL with nvr = {nvr}")),
             }
         })
     }
 }
 
-pub unsafe fn get_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+pub unsafe fn get_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::FmuState, "fmi2GetFMUstate", |inst| {
             if state.is_null() {
@@ -396,7 +402,7 @@ pub unsafe fn get_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FMU
     }
 }
 
-pub unsafe fn set_fmu_state<M: CoSimModel>(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::FmuState, "fmi2SetFMUstate", |inst| {
             if state.is_null() {
@@ -409,7 +415,7 @@ pub unsafe fn set_fmu_state<M: CoSimModel>(c: fmi2Component, state: fmi2FMUstate
     }
 }
 
-pub unsafe fn free_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+pub unsafe fn free_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |_inst| {
             if !state.is_null() && !(*state).is_null() {
@@ -422,7 +428,7 @@ pub unsafe fn free_fmu_state<M: CoSimModel>(c: fmi2Component, state: *mut fmi2FM
     }
 }
 
-pub unsafe fn serialized_fmu_state_size<M: CoSimModel>(
+pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
     c: fmi2Component,
     state: fmi2FMUstate,
     size: *mut usize,
@@ -443,7 +449,7 @@ pub unsafe fn serialized_fmu_state_size<M: CoSimModel>(
     }
 }
 
-pub unsafe fn serialize_fmu_state<M: CoSimModel>(
+pub unsafe fn serialize_fmu_state<M: CoSimulation>(
     c: fmi2Component,
     state: fmi2FMUstate,
     bytes: *mut fmi2Byte,
@@ -470,7 +476,7 @@ pub unsafe fn serialize_fmu_state<M: CoSimModel>(
     }
 }
 
-pub unsafe fn deserialize_fmu_state<M: CoSimModel>(
+pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
     c: fmi2Component,
     bytes: *const fmi2Byte,
     size: usize,
@@ -502,7 +508,7 @@ pub unsafe fn deserialize_fmu_state<M: CoSimModel>(
     }
 }
 
-pub unsafe fn get_directional_derivative<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+pub unsafe fn get_directional_derivative<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
     unsafe {
         with_instance::<M>(
             c,
@@ -513,7 +519,7 @@ pub unsafe fn get_directional_derivative<M: CoSimModel>(c: fmi2Component) -> fmi
     }
 }
 
-pub unsafe fn set_real_input_derivatives<M: CoSimModel>(c: fmi2Component, nvr: usize) -> fmi2Status {
+pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
     unsafe {
         with_instance::<M>(
             c,
@@ -529,7 +535,7 @@ pub unsafe fn set_real_input_derivatives<M: CoSimModel>(c: fmi2Component, nvr: u
     }
 }
 
-pub unsafe fn get_real_output_derivatives<M: CoSimModel>(c: fmi2Component, nvr: usize) -> fmi2Status {
+pub unsafe fn get_real_output_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
     unsafe {
         with_instance::<M>(
             c,
@@ -545,7 +551,7 @@ pub unsafe fn get_real_output_derivatives<M: CoSimModel>(c: fmi2Component, nvr: 
     }
 }
 
-pub unsafe fn do_step<M: CoSimModel>(
+pub unsafe fn do_step<M: CoSimulation>(
     c: fmi2Component,
     current_communication_point: fmi2Real,
     communication_step_size: fmi2Real,
@@ -558,7 +564,7 @@ pub unsafe fn do_step<M: CoSimModel>(
     }
 }
 
-pub unsafe fn cancel_step<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
+pub unsafe fn cancel_step<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::CancelStep, "fmi2CancelStep", |_| {
             unreachable!("CancelStep is allowed in no state of a synchronous FMU")
@@ -566,7 +572,11 @@ pub unsafe fn cancel_step<M: CoSimModel>(c: fmi2Component) -> fmi2Status {
     }
 }
 
-pub unsafe fn get_status<M: CoSimModel>(c: fmi2Component, kind: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
+pub unsafe fn get_status<M: CoSimulation>(
+    c: fmi2Component,
+    kind: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::GetStatus, "fmi2GetStatus", |inst| {
             if value.is_null() {
@@ -577,7 +587,7 @@ pub unsafe fn get_status<M: CoSimModel>(c: fmi2Component, kind: fmi2StatusKind, 
     }
 }
 
-pub unsafe fn get_real_status<M: CoSimModel>(
+pub unsafe fn get_real_status<M: CoSimulation>(
     c: fmi2Component,
     kind: fmi2StatusKind,
     value: *mut fmi2Real,
@@ -590,7 +600,7 @@ pub unsafe fn get_real_status<M: CoSimModel>(
     }
 }
 
-pub unsafe fn get_integer_status<M: CoSimModel>(
+pub unsafe fn get_integer_status<M: CoSimulation>(
     c: fmi2Component,
     kind: fmi2StatusKind,
     value: *mut fmi2Integer,
@@ -605,7 +615,7 @@ pub unsafe fn get_integer_status<M: CoSimModel>(
     }
 }
 
-pub unsafe fn get_boolean_status<M: CoSimModel>(
+pub unsafe fn get_boolean_status<M: CoSimulation>(
     c: fmi2Component,
     kind: fmi2StatusKind,
     value: *mut fmi2Boolean,
@@ -620,7 +630,7 @@ pub unsafe fn get_boolean_status<M: CoSimModel>(
     }
 }
 
-pub unsafe fn get_string_status<M: CoSimModel>(
+pub unsafe fn get_string_status<M: CoSimulation>(
     c: fmi2Component,
     kind: fmi2StatusKind,
     value: *mut fmi2String,
@@ -636,7 +646,7 @@ pub unsafe fn get_string_status<M: CoSimModel>(
 }
 
 /// The state an instance is in, for tests written against the runtime in Rust.
-pub unsafe fn state_of<M: CoSimModel>(c: fmi2Component) -> Option<State> {
+pub unsafe fn state_of<M: CoSimulation>(c: fmi2Component) -> Option<State> {
     // SAFETY: as in `with_instance`.
     unsafe { (c as *const Instance<M>).as_ref().map(|i| i.state()) }
 }

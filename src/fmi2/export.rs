@@ -1,16 +1,35 @@
-//! `export_fmi2_cosimulation!(Model)`: the one line an FMU crate needs. It defines every
-//! function of the FMI 2.0 co-simulation interface as an unmangled `extern "C"` symbol with the
-//! standard's exact signature and forwards it to [`crate::fmi2::api`].
+//! `export_fmi2!(Model)`: the one line an FMU crate needs.
 
+/// Exports `Model` as an FMI 2.0 co-simulation FMU: defines every function of the interface as
+/// an unmangled `extern "C"` symbol with the standard's exact signature (forwarded to the
+/// runtime), and embeds the model's encoded description in the library, where `cargo fmu`
+/// reads it. The GUID is computed here, at compile time, from that description.
+///
+/// ```ignore
+/// rustfmu::export_fmi2!(Lag);
+/// ```
 #[macro_export]
-macro_rules! export_fmi2_cosimulation {
+macro_rules! export_fmi2 {
     ($model:ty) => {
         #[allow(non_snake_case, clippy::missing_safety_doc)]
-        mod fmi2_exports {
+        #[doc(hidden)]
+        pub mod __rustfmu_fmi2_exports {
             use super::*;
-            use $crate::fmi2::abi::*;
-            use $crate::fmi2::api;
+            use $crate::__private::abi::*;
+            use $crate::__private::api;
             type M = $model;
+
+            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::CO_SIMULATION;
+            const LEN: usize = $crate::description::encoded_len(&<M as $crate::Variables>::DESCRIPTION, INTERFACES);
+            const ENCODED: [u8; LEN] = $crate::description::encode(&<M as $crate::Variables>::DESCRIPTION, INTERFACES);
+            const GUID_TEXT: [u8; 38] = $crate::description::guid(&ENCODED);
+            pub const GUID: &str = match ::core::str::from_utf8(&GUID_TEXT) {
+                Ok(s) => s,
+                Err(_) => panic!("the GUID is ASCII"),
+            };
+            /// The description, where `cargo fmu` finds it (see `rustfmu::description::find_encoded`).
+            #[used]
+            static DESCRIPTION: [u8; LEN] = ENCODED;
 
             #[unsafe(no_mangle)]
             pub extern "C" fn fmi2GetTypesPlatform() -> fmi2String {
@@ -41,6 +60,8 @@ macro_rules! export_fmi2_cosimulation {
             ) -> fmi2Component {
                 unsafe {
                     api::instantiate::<M>(
+                        GUID,
+                        &DESCRIPTION,
                         instanceName,
                         fmuType,
                         fmuGUID,
@@ -294,6 +315,6 @@ macro_rules! export_fmi2_cosimulation {
                 unsafe { api::get_string_status::<M>(c, s, value) }
             }
         }
-        pub use fmi2_exports::*;
+        pub use __rustfmu_fmi2_exports::*;
     };
 }

@@ -4,9 +4,11 @@
 
 use super::abi::*;
 use super::logging::{Category, Logger};
-use super::model::CoSimModel;
-use super::variables::{Causality, FmiValue, Initial, Value, VarDecl, VarType, Variability, VariableSet};
+use crate::description::{Causality, Initial, VarType, Variability, Variable};
+use crate::model::{CoSimulation, Context};
+use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
+use std::ffi::CString;
 
 /// States of the FMI 2.0 co-simulation state machine (section 4.2.4). `StepInProgress` does not
 /// occur: every step here is synchronous.
@@ -122,11 +124,11 @@ pub struct Sim<M> {
     pub init_dirty: bool,
 }
 
-impl<M: CoSimModel> Sim<M> {
+impl<M: CoSimulation> Sim<M> {
     pub fn new() -> Self {
         Sim {
             state: State::Instantiated,
-            model: M::new(),
+            model: M::start(),
             start_time: 0.0,
             stop_time: None,
             tolerance: None,
@@ -138,26 +140,29 @@ impl<M: CoSimModel> Sim<M> {
     }
 }
 
-impl<M: CoSimModel> Default for Sim<M> {
+impl<M: CoSimulation> Default for Sim<M> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-pub struct Instance<M: CoSimModel> {
+pub struct Instance<M: CoSimulation> {
     pub logger: Logger,
-    pub guid: String,
+    pub guid: &'static str,
     pub sim: Sim<M>,
+    /// What fmi2GetString last returned: valid until the next call, as the standard allows.
+    strings: Vec<CString>,
 }
 
 type Outcome = Result<(), fmi2Status>;
 
-impl<M: CoSimModel> Instance<M> {
-    pub fn new(logger: Logger, guid: String) -> Self {
+impl<M: CoSimulation> Instance<M> {
+    pub fn new(logger: Logger, guid: &'static str) -> Self {
         Instance {
             logger,
             guid,
             sim: Sim::new(),
+            strings: Vec::new(),
         }
     }
 
@@ -212,16 +217,12 @@ impl<M: CoSimModel> Instance<M> {
     pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[String]) -> fmi2Status {
         let mut known = Vec::with_capacity(categories.len());
         for name in categories {
-            match Category::from_name(name) {
+            match self.logger.category_index(name) {
                 Some(c) => known.push(c),
                 None => {
                     return self.error(&format!(
                         "fmi2SetDebugLogging: unknown log category '{name}' (declared: {})",
-                        super::logging::CATEGORIES
-                            .iter()
-                            .map(|c| c.0)
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        self.logger.category_names().join(", ")
                     ));
                 }
             }
@@ -270,7 +271,12 @@ impl<M: CoSimModel> Instance<M> {
             return Ok(());
         }
         let before = self.sim.model.clone();
-        match self.sim.model.initialize(self.sim.start_time, self.sim.tolerance) {
+        let ctx = Context {
+            start_time: self.sim.start_time,
+            tolerance: self.sim.tolerance,
+            logger: Some(&self.logger),
+        };
+        match self.sim.model.initialize(&ctx) {
             Ok(()) => {
                 self.sim.init_dirty = false;
                 Ok(())
@@ -305,14 +311,31 @@ impl<M: CoSimModel> Instance<M> {
         fmi2OK
     }
 
-    pub fn get_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
+    /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal.
+    fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, fmi2Status> {
+        if let Some(v) = M::DESCRIPTION.variable(vr, ty) {
+            return Ok(v);
+        }
+        Err(
+            match M::DESCRIPTION.variables.iter().find(|v| v.value_reference == vr) {
+                Some(other) => self.error(&format!(
+                    "{function}: value reference {vr} ('{}') is a {:?} variable, not a {ty:?}",
+                    other.name, other.var_type
+                )),
+                None => self.error(&format!(
+                    "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
+                    M::DESCRIPTION.model_identifier
+                )),
+            },
+        )
+    }
+
+    pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
         // Every reference is checked before anything is computed: a refused get changes nothing
         // (it used to run the initialization first, then refuse an unknown reference).
         for vr in vrs {
-            match M::Vars::decl(*vr) {
-                Some(d) if d.var_type == T::TYPE => {}
-                Some(d) => return self.type_mismatch(function, *vr, d.var_type, T::TYPE),
-                None => return self.unknown_vr(function, *vr, T::TYPE),
+            if let Err(status) = self.lookup(function, *vr, T::TYPE) {
+                return status;
             }
         }
         if self.sim.state == State::InitializationMode
@@ -320,35 +343,59 @@ impl<M: CoSimModel> Instance<M> {
         {
             return status;
         }
-        let vars = self.sim.model.vars();
         for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-            match vars.get(*vr) {
-                Some(value) => match T::from_value(value) {
-                    Some(v) => *slot = v,
-                    None => return self.type_mismatch(function, *vr, value.var_type(), T::TYPE),
-                },
-                None => return self.unknown_vr(function, *vr, T::TYPE),
+            match self.sim.model.get(*vr).and_then(T::from_value) {
+                Some(v) => *slot = v,
+                None => return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE)),
             }
         }
         fmi2OK
     }
 
-    fn unknown_vr(&self, function: &str, vr: u32, ty: VarType) -> fmi2Status {
-        self.error(&format!(
-            "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
-            M::INFO.identifier
-        ))
+    /// fmi2GetString: the returned pointers stay valid until the next call on this instance.
+    pub fn get_strings(&mut self, vrs: &[u32], out: &mut [fmi2String]) -> fmi2Status {
+        for vr in vrs {
+            if let Err(status) = self.lookup("fmi2GetString", *vr, VarType::String) {
+                return status;
+            }
+        }
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model("fmi2GetString", false)
+        {
+            return status;
+        }
+        self.strings.clear();
+        for vr in vrs {
+            let text = self.sim.model.get_string(*vr).unwrap_or_default();
+            self.strings.push(super::logging::to_cstring(text));
+        }
+        for (slot, s) in out.iter_mut().zip(&self.strings) {
+            *slot = s.as_ptr();
+        }
+        fmi2OK
     }
 
-    fn type_mismatch(&self, function: &str, vr: u32, is: VarType, asked: VarType) -> fmi2Status {
-        let name = M::Vars::decl(vr).map_or("?", |d| d.name);
-        self.error(&format!(
-            "{function}: value reference {vr} ('{name}') is a {is:?} variable, not a {asked:?}"
-        ))
+    pub fn set_strings(&mut self, vrs: &[u32], values: &[String]) -> fmi2Status {
+        let mut parameter_changed = false;
+        for vr in vrs {
+            let decl = match self.lookup("fmi2SetString", *vr, VarType::String) {
+                Ok(d) => d,
+                Err(status) => return status,
+            };
+            if let Err(status) = self.check_settable("fmi2SetString", decl) {
+                return status;
+            }
+            parameter_changed |= decl.causality == Causality::Parameter;
+        }
+        let previous = (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.clone());
+        for (vr, v) in vrs.iter().zip(values) {
+            self.sim.model.set_string(*vr, v);
+        }
+        self.after_set("fmi2SetString", previous)
     }
 
     /// Whether the standard lets this variable be set in the current state (FMI 2.0, 4.2.4).
-    fn settable(&self, decl: &VarDecl) -> bool {
+    fn settable(&self, decl: &Variable) -> bool {
         let initial_exact_or_approx = matches!(decl.effective_initial(), Some(Initial::Exact | Initial::Approx));
         if decl.variability == Variability::Constant {
             return false;
@@ -366,19 +413,19 @@ impl<M: CoSimModel> Instance<M> {
         }
     }
 
-    fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static VarDecl, fmi2Status> {
-        let Some(decl) = M::Vars::decl(vr) else {
-            return Err(self.unknown_vr(function, vr, value.var_type()));
-        };
-        if decl.var_type != value.var_type() {
-            return Err(self.type_mismatch(function, vr, decl.var_type, value.var_type()));
+    fn check_settable(&self, function: &str, decl: &Variable) -> Outcome {
+        if self.settable(decl) {
+            return Ok(());
         }
-        if !self.settable(decl) {
-            return Err(self.error(&format!(
-                "{function}: '{}' (vr {vr}, causality {:?}, variability {:?}) cannot be set in state {:?}",
-                decl.name, decl.causality, decl.variability, self.sim.state
-            )));
-        }
+        Err(self.error(&format!(
+            "{function}: '{}' (vr {}, causality {:?}, variability {:?}) cannot be set in state {:?}",
+            decl.name, decl.value_reference, decl.causality, decl.variability, self.sim.state
+        )))
+    }
+
+    fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static Variable, fmi2Status> {
+        let decl = self.lookup(function, vr, value.api_type())?;
+        self.check_settable(function, decl)?;
         if let Value::Real(x) = value
             && !x.is_finite()
         {
@@ -387,19 +434,24 @@ impl<M: CoSimModel> Instance<M> {
                 decl.name
             )));
         }
-        let number = match value {
-            Value::Real(x) => Some(x),
-            Value::Integer(n) => Some(n as f64),
-            Value::Boolean(_) => None,
-        };
-        if let Some(x) = number
-            && (decl.min.is_some_and(|min| x < min) || decl.max.is_some_and(|max| x > max))
+        if let Some(x) = value.as_f64()
+            && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
         {
             return Err(self.error(&format!(
-                "{function}: {x} for '{}' (vr {vr}) is outside [{}, {}]; refused, value unchanged",
+                "{function}: {x} for '{}' (vr {vr}) is outside {}; refused, value unchanged",
                 decl.name,
-                decl.min.map_or("-inf".into(), |v| v.to_string()),
-                decl.max.map_or("inf".into(), |v| v.to_string())
+                range_text(decl)
+            )));
+        }
+        if let (Some(e), Value::Integer(code)) = (decl.enumeration, value)
+            && e.item(code).is_none()
+        {
+            let items: Vec<String> = e.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
+            return Err(self.error(&format!(
+                "{function}: {code} for '{}' (vr {vr}) is no item of the enumeration {} ({}); refused, value unchanged",
+                decl.name,
+                e.name,
+                items.join(", ")
             )));
         }
         if let Err(why) = self.sim.model.check(decl, value) {
@@ -412,27 +464,40 @@ impl<M: CoSimModel> Instance<M> {
     }
 
     /// Sets all values or none: each is checked before any is stored.
-    pub fn set_values<T: FmiValue>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> fmi2Status {
+    pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> fmi2Status {
         let mut parameter_changed = false;
         for (vr, v) in vrs.iter().zip(values) {
-            match self.check_one(function, *vr, v.into_value()) {
+            let Some(value) = v.to_value() else {
+                return self.error(&format!("{function}: value reference {vr}: not a numeric value"));
+            };
+            match self.check_one(function, *vr, value) {
                 Ok(decl) => parameter_changed |= decl.causality == Causality::Parameter,
                 Err(status) => return status,
             }
         }
-        let previous =
-            (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.vars().clone());
-        let vars = self.sim.model.vars_mut();
+        let previous = (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.clone());
         for (vr, v) in vrs.iter().zip(values) {
-            vars.set(*vr, v.into_value());
+            if let Some(value) = v.to_value() {
+                self.sim.model.set(*vr, value);
+            }
         }
+        self.after_set(function, previous)
+    }
+
+    /// After values were stored: stale calculated variables in initialization mode; between
+    /// steps, a tunable parameter change the model may still refuse (then nothing changes).
+    fn after_set(&mut self, function: &str, previous: Option<M>) -> fmi2Status {
         if self.sim.state == State::InitializationMode {
             self.sim.init_dirty = true;
         }
         if let Some(previous) = previous {
-            if let Err(why) = self.sim.model.parameters_changed() {
-                *self.sim.model.vars_mut() = previous;
-                let _ = self.sim.model.parameters_changed();
+            let ctx = Context {
+                start_time: self.sim.start_time,
+                tolerance: self.sim.tolerance,
+                logger: Some(&self.logger),
+            };
+            if let Err(why) = self.sim.model.parameters_changed(&ctx) {
+                self.sim.model = previous;
                 return self.error(&format!(
                     "{function}: parameter change refused: {why}; values unchanged"
                 ));
@@ -480,7 +545,12 @@ impl<M: CoSimModel> Instance<M> {
             ));
         }
         self.trace(|| format!("fmi2DoStep(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
-        match self.sim.model.do_step(t, h) {
+        let ctx = Context {
+            start_time: self.sim.start_time,
+            tolerance: self.sim.tolerance,
+            logger: Some(&self.logger),
+        };
+        match self.sim.model.do_step(t, h, &ctx) {
             Ok(()) => {
                 self.sim.time = end;
                 self.sim.last_successful_time = end;
@@ -540,4 +610,17 @@ impl<M: CoSimModel> Instance<M> {
         );
         fmi2Discard
     }
+}
+
+/// `[min, max]` with exclusive ends as `(`/`)`, for messages.
+fn range_text(v: &Variable) -> String {
+    let lo = match v.min {
+        Some(b) => format!("{}{}", if b.exclusive { "(" } else { "[" }, b.value),
+        None => "(-inf".into(),
+    };
+    let hi = match v.max {
+        Some(b) => format!("{}{}", b.value, if b.exclusive { ")" } else { "]" }),
+        None => "inf)".into(),
+    };
+    format!("{lo}, {hi}")
 }

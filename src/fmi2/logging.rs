@@ -2,9 +2,11 @@
 #![allow(non_upper_case_globals)]
 
 use super::abi::*;
+use crate::description::{LogCategory, RUNTIME_LOG_CATEGORIES};
 use std::ffi::{CStr, CString};
 
-/// Log categories declared in `<LogCategories>`; every message is logged under one of them.
+/// The runtime's own categories, in [`RUNTIME_LOG_CATEGORIES`] order; a model's declared
+/// categories follow them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Category {
@@ -17,30 +19,7 @@ pub enum Category {
     All = 6,
 }
 
-/// (name, description) of each category, in [`Category`] order.
-pub const CATEGORIES: &[(&str, &str)] = &[
-    (
-        "logEvents",
-        "Initialization, steps that change the solver's course, parameter changes",
-    ),
-    ("logStatusWarning", "Messages that come with fmi2Warning"),
-    (
-        "logStatusDiscard",
-        "Messages that come with fmi2Discard: a step that could not be completed",
-    ),
-    (
-        "logStatusError",
-        "Messages that come with fmi2Error: a refused call or argument",
-    ),
-    (
-        "logStatusFatal",
-        "Messages that come with fmi2Fatal: the instance cannot be used any more",
-    ),
-    ("logCalls", "Every call of an fmi2 function, with its arguments"),
-    ("logAll", "All of the above"),
-];
-
-const CATEGORY_NAMES: [&CStr; 7] = [
+const RUNTIME_NAMES: [&CStr; 7] = [
     c"logEvents",
     c"logStatusWarning",
     c"logStatusDiscard",
@@ -49,6 +28,8 @@ const CATEGORY_NAMES: [&CStr; 7] = [
     c"logCalls",
     c"logAll",
 ];
+
+const _: () = assert!(RUNTIME_NAMES.len() == RUNTIME_LOG_CATEGORIES.len());
 
 impl Category {
     pub fn for_status(status: fmi2Status) -> Category {
@@ -60,22 +41,6 @@ impl Category {
             _ => Category::Events,
         }
     }
-
-    pub fn from_name(name: &str) -> Option<Category> {
-        CATEGORIES.iter().position(|(n, _)| *n == name).map(|i| match i {
-            0 => Category::Events,
-            1 => Category::StatusWarning,
-            2 => Category::StatusDiscard,
-            3 => Category::StatusError,
-            4 => Category::StatusFatal,
-            5 => Category::Calls,
-            _ => Category::All,
-        })
-    }
-
-    fn bit(self) -> u32 {
-        1 << (self as u8)
-    }
 }
 
 /// The callback with what it needs: environment pointer, instance name, logging switches.
@@ -85,20 +50,26 @@ pub struct Logger {
     environment: fmi2ComponentEnvironment,
     instance_name: CString,
     logging_on: bool,
-    enabled: u32,
+    /// Bit i: category i of runtime ++ model categories is enabled.
+    enabled: u64,
+    model_categories: &'static [LogCategory],
 }
-
-const ALL_CATEGORIES: u32 = (1 << CATEGORIES.len()) - 1;
 
 impl Logger {
     /// `None` when the importer gave no logger: the standard then asks for a NULL instance.
-    pub fn new(callbacks: &fmi2CallbackFunctions, instance_name: &str, logging_on: bool) -> Option<Logger> {
+    pub fn new(
+        callbacks: &fmi2CallbackFunctions,
+        instance_name: &str,
+        logging_on: bool,
+        model_categories: &'static [LogCategory],
+    ) -> Option<Logger> {
         Some(Logger {
             callback: callbacks.logger?,
             environment: callbacks.componentEnvironment,
             instance_name: to_cstring(instance_name),
             logging_on,
-            enabled: ALL_CATEGORIES,
+            enabled: u64::MAX,
+            model_categories,
         })
     }
 
@@ -106,28 +77,70 @@ impl Logger {
         self.instance_name.to_str().unwrap_or("")
     }
 
+    /// Index of a category by name: runtime categories first, then the model's.
+    pub fn category_index(&self, name: &str) -> Option<usize> {
+        RUNTIME_LOG_CATEGORIES
+            .iter()
+            .chain(self.model_categories)
+            .position(|c| c.name == name)
+    }
+
+    pub fn category_names(&self) -> Vec<&'static str> {
+        RUNTIME_LOG_CATEGORIES
+            .iter()
+            .chain(self.model_categories)
+            .map(|c| c.name)
+            .collect()
+    }
+
     /// `fmi2SetDebugLogging`: no categories means all of them.
-    pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[Category]) {
+    pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[usize]) {
         self.logging_on = logging_on;
-        if categories.is_empty() || categories.contains(&Category::All) {
-            self.enabled = ALL_CATEGORIES;
+        if categories.is_empty() || categories.contains(&(Category::All as usize)) {
+            self.enabled = u64::MAX;
         } else {
-            self.enabled = categories.iter().fold(0, |m, c| m | c.bit());
+            self.enabled = categories.iter().fold(0, |m, c| m | (1u64 << (*c as u32 % 64)));
         }
+    }
+
+    fn enabled_index(&self, status: fmi2Status, index: usize) -> bool {
+        status != fmi2OK || (self.logging_on && self.enabled & (1u64 << (index as u32 % 64)) != 0)
     }
 
     /// Whether a message of this category reaches the importer. Messages that explain a
     /// non-OK status are always passed on: the standard asks for a reason with every one.
     pub fn wants(&self, status: fmi2Status, category: Category) -> bool {
-        status != fmi2OK || (self.logging_on && self.enabled & (category.bit() | Category::All.bit()) != 0)
+        self.enabled_index(status, category as usize)
     }
 
     pub fn log(&self, status: fmi2Status, category: Category, message: &str) {
-        if !self.wants(status, category) {
-            return;
+        if self.wants(status, category) {
+            self.emit(status, RUNTIME_NAMES[category as usize], message);
         }
+    }
+
+    /// For models: whether an OK message under the named category would reach the importer.
+    pub fn wants_named(&self, name: &str) -> bool {
+        let index = self.category_index(name).unwrap_or(Category::Events as usize);
+        self.enabled_index(fmi2OK, index)
+    }
+
+    /// For models: an OK message under a category given by name (see [`crate::Context::log`]).
+    pub fn log_named(&self, name: &str, message: &str) {
+        match self.category_index(name) {
+            Some(i) if self.enabled_index(fmi2OK, i) => self.emit(fmi2OK, &to_cstring(name), message),
+            Some(_) => {}
+            None => {
+                if self.wants(fmi2OK, Category::Events) {
+                    let text = format!("[undeclared log category '{name}'] {message}");
+                    self.emit(fmi2OK, RUNTIME_NAMES[0], &text);
+                }
+            }
+        }
+    }
+
+    fn emit(&self, status: fmi2Status, category: &CStr, message: &str) {
         let text = to_cstring(message);
-        let category_name = CATEGORY_NAMES[category as usize];
         // SAFETY: the callback came from the importer's fmi2CallbackFunctions; its message is a
         // printf format, so the text goes as the argument of a literal "%s".
         unsafe {
@@ -135,7 +148,7 @@ impl Logger {
                 self.environment,
                 self.instance_name.as_ptr(),
                 status,
-                category_name.as_ptr(),
+                category.as_ptr(),
                 c"%s".as_ptr(),
                 text.as_ptr(),
             )

@@ -5,13 +5,13 @@
 //! payload (postcard encoding of [`Sim`]) | CRC-32 of everything before it, u32.
 
 use super::instance::Sim;
-use super::model::CoSimModel;
+use crate::model::CoSimulation;
 
 pub const MAGIC: &[u8; 8] = b"RFMUSTAT";
 /// Bump whenever [`Sim`] or a model's serialized fields change shape.
 pub const FORMAT_VERSION: u32 = 1;
 
-pub fn serialize<M: CoSimModel>(guid: &str, sim: &Sim<M>) -> Result<Vec<u8>, String> {
+pub fn serialize<M: CoSimulation>(guid: &str, sim: &Sim<M>) -> Result<Vec<u8>, String> {
     let payload = postcard::to_allocvec(sim).map_err(|e| format!("cannot encode the state: {e}"))?;
     let guid = guid.as_bytes();
     let mut out = Vec::with_capacity(8 + 4 + 2 + guid.len() + 4 + payload.len() + 4);
@@ -57,7 +57,7 @@ impl<'a> Reader<'a> {
 }
 
 /// Decodes a state written by [`serialize`] for the same model (same GUID) and format.
-pub fn deserialize<M: CoSimModel>(guid: &str, bytes: &[u8]) -> Result<Sim<M>, String> {
+pub fn deserialize<M: CoSimulation>(guid: &str, bytes: &[u8]) -> Result<Sim<M>, String> {
     let mut r = Reader { bytes, at: 0 };
     if r.take(8, "the header")? != MAGIC {
         return Err("not a serialized state of this exporter (wrong magic bytes)".into());

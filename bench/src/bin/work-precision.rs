@@ -7,11 +7,11 @@
 //!         --x0 0.5,0,-0.3,0 --t-end 1 --reference A1,W1,A2,W2 --tols 1e-3,1e-6,1e-9
 
 use clap::Parser;
+use holonomic::models::pendulum::PendulumParams;
+use holonomic::numerics::ode::{Dopri5, Tolerances};
 use nalgebra::{Vector2, Vector4};
-use rustfmu::fmi2::model::CoSimModel;
-use rustfmu::fmus::pendulum::Pendulum;
-use rustfmu::models::pendulum::PendulumParams;
-use rustfmu::numerics::ode::{Dopri5, Tolerances};
+use pendulum_fmu::Pendulum;
+use rustfmu::{CoSimulation, Context, Model, Variables};
 use rustfmu_bench::rk4;
 use std::hint::black_box;
 use std::time::Instant;
@@ -98,12 +98,13 @@ fn run() -> Result<(), String> {
         let h = 1e-3;
         let n = (t_end / h).round() as usize;
         let fmu_run = || {
-            let mut m = Pendulum::new();
-            (m.v.alpha1, m.v.omega1, m.v.alpha2, m.v.omega2) = (x0[0], x0[1], x0[2], x0[3]);
-            (m.v.rtol, m.v.atol) = (tol, tol);
-            m.initialize(0.0, None)?;
+            let mut m = Pendulum::start();
+            (m.alpha1, m.omega1, m.alpha2, m.omega2) = (x0[0], x0[1], x0[2], x0[3]);
+            (m.rtol, m.atol) = (tol, tol);
+            m.initialize(&Context::standalone(0.0, None))?;
             for k in 0..n {
-                m.do_step(k as f64 * h, h).map_err(|e| e.message)?;
+                m.do_step(k as f64 * h, h, &Context::standalone(0.0, None))
+                    .map_err(|e| e.message)?;
             }
             Ok::<_, String>((m.state(), m.ode.stats))
         };

@@ -1,0 +1,932 @@
+//! `#[derive(Model)]`: parses the declarations, checks them against the standard's rules, and
+//! generates the typed description, the start values and the get/set dispatch.
+
+use crate::units::{self, Base};
+use proc_macro2::{Span, TokenStream};
+use quote::{quote, quote_spanned};
+use std::collections::BTreeMap;
+use syn::parse::{Parse, ParseStream};
+use syn::spanned::Spanned;
+use syn::{Data, DeriveInput, Error, Expr, Fields, Ident, LitStr, Token, Type};
+
+type Result<T> = std::result::Result<T, Error>;
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Kind {
+    Real,
+    Integer,
+    Boolean,
+    Str,
+    Enum,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Causality {
+    Parameter,
+    CalculatedParameter,
+    Input,
+    Output,
+    Local,
+    Independent,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Variability {
+    Constant,
+    Fixed,
+    Tunable,
+    Discrete,
+    Continuous,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Initial {
+    Exact,
+    Approx,
+    Calculated,
+}
+
+/// One `#[variable(...)]` and the field it sits on.
+struct Var {
+    field: Ident,
+    ty: Type,
+    kind: Kind,
+    span: Span,
+    name: String,
+    vr: u32,
+    causality: Causality,
+    variability: Variability,
+    initial: Option<Initial>,
+    start: Option<Expr>,
+    unit: Option<LitStr>,
+    min: Option<(Expr, bool)>,
+    max: Option<(Expr, bool)>,
+    nominal: Option<Expr>,
+    depends: Option<Vec<(String, Span)>>,
+    derivative_of: Option<(String, Span)>,
+    description: String,
+}
+
+/// What `#[variable(...)]` says, before defaults are filled in.
+#[derive(Default)]
+struct VarAttr {
+    vr: Option<u32>,
+    name: Option<String>,
+    causality: Option<(Causality, Span)>,
+    variability: Option<(Variability, Span)>,
+    initial: Option<(Initial, Span)>,
+    start: Option<Expr>,
+    unit: Option<LitStr>,
+    min: Option<(Expr, bool)>,
+    max: Option<(Expr, bool)>,
+    nominal: Option<Expr>,
+    depends: Option<Vec<(String, Span)>>,
+    derivative_of: Option<(String, Span)>,
+}
+
+fn name_or_ident(input: ParseStream) -> Result<(String, Span)> {
+    if input.peek(LitStr) {
+        let s: LitStr = input.parse()?;
+        Ok((s.value(), s.span()))
+    } else {
+        let i: Ident = input.parse()?;
+        Ok((i.to_string(), i.span()))
+    }
+}
+
+impl Parse for VarAttr {
+    fn parse(input: ParseStream) -> Result<Self> {
+        let mut a = VarAttr::default();
+        while !input.is_empty() {
+            let key: Ident = input.call(syn::ext::IdentExt::parse_any)?;
+            let k = key.to_string();
+            let once = |taken: bool| -> Result<()> {
+                if taken {
+                    Err(Error::new(key.span(), format!("`{k}` is given twice")))
+                } else {
+                    Ok(())
+                }
+            };
+            let set_c = |a: &mut VarAttr, c: Causality| -> Result<()> {
+                if let Some((prev, _)) = a.causality {
+                    return Err(Error::new(
+                        key.span(),
+                        format!("two causalities: {prev:?} and {c:?}; a variable has one"),
+                    ));
+                }
+                a.causality = Some((c, key.span()));
+                Ok(())
+            };
+            let set_v = |a: &mut VarAttr, v: Variability| -> Result<()> {
+                if let Some((prev, _)) = a.variability {
+                    return Err(Error::new(
+                        key.span(),
+                        format!("two variabilities: {prev:?} and {v:?}; a variable has one"),
+                    ));
+                }
+                a.variability = Some((v, key.span()));
+                Ok(())
+            };
+            match k.as_str() {
+                "parameter" => set_c(&mut a, Causality::Parameter)?,
+                "calculated_parameter" => set_c(&mut a, Causality::CalculatedParameter)?,
+                "input" => set_c(&mut a, Causality::Input)?,
+                "output" => set_c(&mut a, Causality::Output)?,
+                "local" => set_c(&mut a, Causality::Local)?,
+                "independent" => set_c(&mut a, Causality::Independent)?,
+                "constant" => set_v(&mut a, Variability::Constant)?,
+                "fixed" => set_v(&mut a, Variability::Fixed)?,
+                "tunable" => set_v(&mut a, Variability::Tunable)?,
+                "discrete" => set_v(&mut a, Variability::Discrete)?,
+                "continuous" => set_v(&mut a, Variability::Continuous)?,
+                "vr" => {
+                    once(a.vr.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    let lit: syn::LitInt = input.parse()?;
+                    a.vr = Some(lit.base10_parse()?);
+                }
+                "name" => {
+                    once(a.name.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    let s: LitStr = input.parse()?;
+                    if s.value().is_empty() {
+                        return Err(Error::new(s.span(), "a variable name cannot be empty"));
+                    }
+                    a.name = Some(s.value());
+                }
+                "initial" => {
+                    once(a.initial.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    let i: Ident = input.parse()?;
+                    let v = match i.to_string().as_str() {
+                        "exact" => Initial::Exact,
+                        "approx" => Initial::Approx,
+                        "calculated" => Initial::Calculated,
+                        other => {
+                            return Err(Error::new(
+                                i.span(),
+                                format!("initial = {other}: expected exact, approx or calculated"),
+                            ));
+                        }
+                    };
+                    a.initial = Some((v, i.span()));
+                }
+                "start" => {
+                    once(a.start.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.start = Some(input.parse()?);
+                }
+                "unit" => {
+                    once(a.unit.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.unit = Some(input.parse()?);
+                }
+                "nominal" => {
+                    once(a.nominal.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.nominal = Some(input.parse()?);
+                }
+                "min" => {
+                    once(a.min.is_some())?;
+                    let exclusive = if input.peek(Token![>=]) {
+                        input.parse::<Token![>=]>()?;
+                        false
+                    } else if input.peek(Token![>]) {
+                        input.parse::<Token![>]>()?;
+                        true
+                    } else {
+                        input.parse::<Token![=]>().map_err(|e| {
+                            Error::new(
+                                e.span(),
+                                "expected `min = x` (x is legal), `min >= x` or `min > x` (x is not)",
+                            )
+                        })?;
+                        false
+                    };
+                    a.min = Some((input.parse()?, exclusive));
+                }
+                "max" => {
+                    once(a.max.is_some())?;
+                    let exclusive = if input.peek(Token![<=]) {
+                        input.parse::<Token![<=]>()?;
+                        false
+                    } else if input.peek(Token![<]) {
+                        input.parse::<Token![<]>()?;
+                        true
+                    } else {
+                        input.parse::<Token![=]>().map_err(|e| {
+                            Error::new(
+                                e.span(),
+                                "expected `max = x` (x is legal), `max <= x` or `max < x` (x is not)",
+                            )
+                        })?;
+                        false
+                    };
+                    a.max = Some((input.parse()?, exclusive));
+                }
+                "depends" => {
+                    once(a.depends.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    let content;
+                    syn::bracketed!(content in input);
+                    let list = content.parse_terminated(name_or_ident, Token![,])?;
+                    a.depends = Some(list.into_iter().collect());
+                }
+                "derivative_of" => {
+                    once(a.derivative_of.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.derivative_of = Some(name_or_ident(input)?);
+                }
+                other => {
+                    return Err(Error::new(
+                        key.span(),
+                        format!(
+                            "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
+                             calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
+                             continuous, initial, start, unit, min, max, nominal, depends, derivative_of"
+                        ),
+                    ));
+                }
+            }
+            if input.is_empty() {
+                break;
+            }
+            input.parse::<Token![,]>()?;
+        }
+        Ok(a)
+    }
+}
+
+fn kind_of(ty: &Type) -> Result<Kind> {
+    let Type::Path(p) = ty else {
+        return Err(Error::new(
+            ty.span(),
+            "a variable's type is f64, i32, bool, String or a #[derive(FmuEnum)] enum",
+        ));
+    };
+    let last = p.path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
+    Ok(match last.as_str() {
+        "f64" => Kind::Real,
+        "i32" => Kind::Integer,
+        "bool" => Kind::Boolean,
+        "String" => Kind::Str,
+        "f32" | "i8" | "i16" | "i64" | "i128" | "u8" | "u16" | "u32" | "u64" | "u128" | "isize" | "usize" | "str"
+        | "char" => {
+            return Err(Error::new(
+                ty.span(),
+                format!(
+                    "{last} is not an FMI 2.0 type: use f64 (Real), i32 (Integer), bool (Boolean), String, \
+                     or a #[derive(FmuEnum)] enum (Enumeration)"
+                ),
+            ));
+        }
+        _ => Kind::Enum,
+    })
+}
+
+fn legal_variability(c: Causality, v: Variability) -> bool {
+    use Causality as C;
+    use Variability as V;
+    match c {
+        C::Parameter | C::CalculatedParameter => matches!(v, V::Fixed | V::Tunable),
+        C::Input => matches!(v, V::Discrete | V::Continuous),
+        C::Output => matches!(v, V::Constant | V::Discrete | V::Continuous),
+        C::Local => true,
+        C::Independent => v == V::Continuous,
+    }
+}
+
+fn legal_initial(c: Causality, v: Variability, i: Initial) -> bool {
+    use Causality as C;
+    use Variability as V;
+    match (c, v) {
+        (C::Input | C::Independent, _) => false,
+        (C::Parameter, _) | (_, V::Constant) => i == Initial::Exact,
+        (C::CalculatedParameter, _) => i != Initial::Exact,
+        (C::Local, V::Fixed | V::Tunable) => i != Initial::Exact,
+        (C::Output | C::Local, _) => true,
+    }
+}
+
+/// The standard's default `initial` (FMI 2.0, 2.2.7).
+fn effective_initial(v: &Var) -> Option<Initial> {
+    if v.initial.is_some() {
+        return v.initial;
+    }
+    match (v.causality, v.variability) {
+        (Causality::Input | Causality::Independent, _) => None,
+        (_, Variability::Constant) | (Causality::Parameter, _) => Some(Initial::Exact),
+        _ => Some(Initial::Calculated),
+    }
+}
+
+fn has_start(v: &Var) -> bool {
+    v.causality == Causality::Input || matches!(effective_initial(v), Some(Initial::Exact | Initial::Approx))
+}
+
+fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
+    let ident = field.ident.clone().expect("named field");
+    let a: VarAttr = attr.parse_args()?;
+    let kind = kind_of(&field.ty)?;
+    let span = ident.span();
+    let vr =
+        a.vr.ok_or_else(|| Error::new(attr.span(), "every variable needs a value reference: `vr = N`"))?;
+    let (causality, _) = a.causality.ok_or_else(|| {
+        Error::new(
+            attr.span(),
+            "every variable needs a causality: input, output, parameter, calculated_parameter, local or independent",
+        )
+    })?;
+    let variability = match a.variability {
+        Some((v, s)) => {
+            if !legal_variability(causality, v) {
+                return Err(Error::new(
+                    s,
+                    format!("causality {causality:?} with variability {v:?} is not allowed (FMI 2.0, section 2.2.7)"),
+                ));
+            }
+            if v == Variability::Continuous && kind != Kind::Real {
+                return Err(Error::new(
+                    s,
+                    "only Real (f64) variables may be continuous; Integer, Boolean, String and Enumeration variables are discrete",
+                ));
+            }
+            v
+        }
+        None => match causality {
+            Causality::Parameter | Causality::CalculatedParameter => Variability::Fixed,
+            _ if kind == Kind::Real => Variability::Continuous,
+            Causality::Independent => Variability::Continuous,
+            _ => Variability::Discrete,
+        },
+    };
+    if causality == Causality::Independent && kind != Kind::Real {
+        return Err(Error::new(span, "the independent variable (time) is a Real (f64)"));
+    }
+    if let Some((i, s)) = a.initial
+        && !legal_initial(causality, variability, i)
+    {
+        return Err(Error::new(
+            s,
+            format!(
+                "initial = {} is not allowed with causality {causality:?} and variability {variability:?} (FMI 2.0, section 2.2.7)",
+                format!("{i:?}").to_lowercase()
+            ),
+        ));
+    }
+    if kind == Kind::Enum && a.start.is_none() {
+        return Err(Error::new(
+            span,
+            "an Enumeration variable needs `start = Enum::Item` (its value before initialization)",
+        ));
+    }
+    if (a.min.is_some() || a.max.is_some()) && matches!(kind, Kind::Boolean | Kind::Str) {
+        return Err(Error::new(
+            span,
+            "min and max are for Real, Integer and Enumeration variables",
+        ));
+    }
+    if a.unit.is_some() && kind != Kind::Real {
+        return Err(Error::new(span, "only Real (f64) variables have a unit"));
+    }
+    let var = Var {
+        name: a.name.unwrap_or_else(|| ident.to_string()),
+        field: ident,
+        ty: field.ty.clone(),
+        kind,
+        span,
+        vr,
+        causality,
+        variability,
+        initial: a.initial.map(|(i, _)| i),
+        start: a.start,
+        unit: a.unit,
+        min: a.min,
+        max: a.max,
+        nominal: a.nominal,
+        depends: a.depends,
+        derivative_of: a.derivative_of,
+        description: crate::doc_text(&field.attrs),
+    };
+    if var.start.is_some() && !has_start(&var) {
+        let why = if causality == Causality::Independent {
+            "the independent variable has no start value".to_string()
+        } else {
+            format!(
+                "a {causality:?} variable with initial = calculated has no start value (FMI 2.0, section 2.2.7); \
+                 declare initial = exact or approx to give one"
+            )
+        };
+        return Err(Error::new(var.start.as_ref().expect("checked").span(), why));
+    }
+    Ok(var)
+}
+
+/// `#[fmu(...)]` on the struct.
+#[derive(Default)]
+struct ModelAttr {
+    identifier: Option<LitStr>,
+    description: Option<String>,
+    units: Vec<(String, Base, Span)>,
+    categories: Vec<(String, String, Span)>,
+}
+
+fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
+    let mut m = ModelAttr::default();
+    for attr in attrs.iter().filter(|a| a.path().is_ident("fmu")) {
+        attr.parse_nested_meta(|meta| {
+            if meta.path.is_ident("identifier") {
+                let s: LitStr = meta.value()?.parse()?;
+                let v = s.value();
+                let ok = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                    && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+                if !ok {
+                    return Err(Error::new(
+                        s.span(),
+                        "the model identifier names the binary and the C symbols' prefix: letters, digits and _ only, not starting with a digit",
+                    ));
+                }
+                m.identifier = Some(s);
+            } else if meta.path.is_ident("description") {
+                let s: LitStr = meta.value()?.parse()?;
+                m.description = Some(s.value());
+            } else if meta.path.is_ident("unit") {
+                let span = meta.path.span();
+                let mut name = None;
+                let mut base = Base {
+                    exps: [0; 8],
+                    factor: 1.0,
+                    offset: 0.0,
+                };
+                meta.parse_nested_meta(|u| {
+                    let key = u.path.get_ident().map(|i| i.to_string()).unwrap_or_default();
+                    if key == "name" {
+                        name = Some(u.value()?.parse::<LitStr>()?.value());
+                    } else if key == "factor" || key == "offset" {
+                        let e: Expr = u.value()?.parse()?;
+                        let x = number(&e)?;
+                        if key == "factor" {
+                            base.factor = x;
+                        } else {
+                            base.offset = x;
+                        }
+                    } else if let Some(i) = units::EXPONENT_NAMES.iter().position(|n| *n == key) {
+                        let e: Expr = u.value()?.parse()?;
+                        let x = number(&e)?;
+                        if x.fract() != 0.0 {
+                            return Err(Error::new(e.span(), "a base-unit exponent is an integer"));
+                        }
+                        base.exps[i] = x as i32;
+                    } else {
+                        return Err(u.error(format!(
+                            "unknown unit attribute `{key}`; known: name, {}, factor, offset",
+                            units::EXPONENT_NAMES.join(", ")
+                        )));
+                    }
+                    Ok(())
+                })?;
+                let name = name.ok_or_else(|| Error::new(span, "a unit needs `name = \"...\"`"))?;
+                if m.units.iter().any(|(n, _, _)| *n == name) {
+                    return Err(Error::new(span, format!("unit '{name}' is declared twice")));
+                }
+                m.units.push((name, base, span));
+            } else if meta.path.is_ident("log_category") {
+                let span = meta.path.span();
+                let (mut name, mut description) = (None, String::new());
+                meta.parse_nested_meta(|c| {
+                    if c.path.is_ident("name") {
+                        name = Some(c.value()?.parse::<LitStr>()?.value());
+                    } else if c.path.is_ident("description") {
+                        description = c.value()?.parse::<LitStr>()?.value();
+                    } else {
+                        return Err(c.error("a log category has `name` and `description`"));
+                    }
+                    Ok(())
+                })?;
+                let name = name.ok_or_else(|| Error::new(span, "a log category needs `name = \"...\"`"))?;
+                if RUNTIME_CATEGORIES.contains(&name.as_str()) || m.categories.iter().any(|(n, _, _)| *n == name) {
+                    return Err(Error::new(span, format!("log category '{name}' is declared twice (the runtime declares {})", RUNTIME_CATEGORIES.join(", "))));
+                }
+                m.categories.push((name, description, span));
+            } else {
+                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, unit(..), log_category(..)"));
+            }
+            Ok(())
+        })?;
+    }
+    Ok(m)
+}
+
+/// The runtime's categories (`rustfmu::description::RUNTIME_LOG_CATEGORIES`).
+const RUNTIME_CATEGORIES: &[&str] = &[
+    "logEvents",
+    "logStatusWarning",
+    "logStatusDiscard",
+    "logStatusError",
+    "logStatusFatal",
+    "logCalls",
+    "logAll",
+];
+
+/// A numeric literal, possibly negated.
+fn number(e: &Expr) -> Result<f64> {
+    match e {
+        Expr::Lit(syn::ExprLit {
+            lit: syn::Lit::Float(f),
+            ..
+        }) => f.base10_parse(),
+        Expr::Lit(syn::ExprLit {
+            lit: syn::Lit::Int(i), ..
+        }) => i.base10_parse::<i64>().map(|n| n as f64),
+        Expr::Unary(syn::ExprUnary {
+            op: syn::UnOp::Neg(_),
+            expr,
+            ..
+        }) => number(expr).map(|x| -x),
+        _ => Err(Error::new(e.span(), "expected a number")),
+    }
+}
+
+fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
+    let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
+    let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
+    for v in vars {
+        if let Some(first) = names.insert(&v.name, v) {
+            return Err(Error::new(
+                v.span,
+                format!(
+                    "the name '{}' is declared twice (first on field `{}`)",
+                    v.name, first.field
+                ),
+            ));
+        }
+        if let Some(first) = vrs.insert(v.vr, v) {
+            return Err(Error::new(
+                v.span,
+                format!(
+                    "value reference {} is used twice (first by '{}'); value references are unique in a model",
+                    v.vr, first.name
+                ),
+            ));
+        }
+    }
+    if vars.iter().filter(|v| v.causality == Causality::Independent).count() > 1 {
+        return Err(Error::new(vars[1].span, "a model has at most one independent variable"));
+    }
+    let by_name = |n: &str| vars.iter().find(|v| v.name == n || v.field == n);
+    for v in vars {
+        if let Some(deps) = &v.depends {
+            if v.causality != Causality::Output && v.derivative_of.is_none() {
+                return Err(Error::new(
+                    v.span,
+                    "only outputs (and derivatives) declare `depends`: it becomes their `dependencies` in ModelStructure",
+                ));
+            }
+            for (d, span) in deps {
+                match by_name(d) {
+                    Some(dep) if dep.causality == Causality::Input => {}
+                    Some(dep) => {
+                        return Err(Error::new(
+                            *span,
+                            format!(
+                                "'{}' depends on '{d}', which is not an input (it is a {:?}); `depends` lists the inputs with direct feedthrough",
+                                v.name, dep.causality
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(Error::new(
+                            *span,
+                            format!("'{}' depends on '{d}', which is not declared", v.name),
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some((d, span)) = &v.derivative_of {
+            match by_name(d) {
+                Some(state) if state.kind == Kind::Real && state.variability == Variability::Continuous => {}
+                Some(_) => {
+                    return Err(Error::new(
+                        *span,
+                        format!("'{d}' is not a continuous Real variable: it cannot have a derivative"),
+                    ));
+                }
+                None => {
+                    return Err(Error::new(
+                        *span,
+                        format!("derivative_of = {d}: no variable of that name"),
+                    ));
+                }
+            }
+            if v.kind != Kind::Real || v.variability != Variability::Continuous {
+                return Err(Error::new(v.span, "a derivative is a continuous Real variable"));
+            }
+        }
+        if let Some(unit) = &v.unit {
+            let u = unit.value();
+            if units::default_unit(&u).is_none() && !model.units.iter().any(|(n, _, _)| *n == u) {
+                return Err(Error::new(
+                    unit.span(),
+                    format!(
+                        "unit '{u}' is not declared: declare it on the struct with #[fmu(unit(name = \"{u}\", m = .., s = ..))] \
+                         or use one of the runtime's units ({})",
+                        units::DEFAULT_UNITS
+                            .iter()
+                            .map(|(n, _)| *n)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn variant(rt: &TokenStream, ty: &str, v: &str) -> TokenStream {
+    let ty = Ident::new(ty, Span::call_site());
+    let v = Ident::new(v, Span::call_site());
+    quote!(#rt::description::#ty::#v)
+}
+
+fn opt_f64(x: Option<f64>) -> TokenStream {
+    match x {
+        Some(x) => quote!(::core::option::Option::Some(#x)),
+        None => quote!(::core::option::Option::None),
+    }
+}
+
+fn variable_tokens(rt: &TokenStream, v: &Var) -> TokenStream {
+    let name = &v.name;
+    let vr = v.vr;
+    let ty = &v.ty;
+    let causality = variant(rt, "Causality", &format!("{:?}", v.causality));
+    let variability = variant(rt, "Variability", &format!("{:?}", v.variability));
+    let initial = match v.initial {
+        Some(i) => {
+            let i = variant(rt, "Initial", &format!("{i:?}"));
+            quote!(::core::option::Option::Some(#i))
+        }
+        None => quote!(::core::option::Option::None),
+    };
+    let start = if !has_start(v) {
+        quote!(#rt::description::Start::None)
+    } else {
+        match (v.kind, &v.start) {
+            (Kind::Real, Some(e)) => quote!(#rt::description::Start::Real(#e)),
+            (Kind::Real, None) => quote!(#rt::description::Start::Real(0.0)),
+            (Kind::Integer, Some(e)) => quote!(#rt::description::Start::Integer(#e)),
+            (Kind::Integer, None) => quote!(#rt::description::Start::Integer(0)),
+            (Kind::Boolean, Some(e)) => quote!(#rt::description::Start::Boolean(#e)),
+            (Kind::Boolean, None) => quote!(#rt::description::Start::Boolean(false)),
+            (Kind::Str, Some(e)) => quote!(#rt::description::Start::String(#e)),
+            (Kind::Str, None) => quote!(#rt::description::Start::String("")),
+            (Kind::Enum, Some(e)) => quote!(#rt::description::Start::Integer((#e) as i32)),
+            (Kind::Enum, None) => unreachable!("checked: enumerations have a start"),
+        }
+    };
+    let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
+    let description = &v.description;
+    let bound = |b: &Option<(Expr, bool)>| match b {
+        Some((e, exclusive)) => quote!(::core::option::Option::Some(#rt::description::Bound {
+            value: (#e) as f64,
+            exclusive: #exclusive,
+        })),
+        None => quote!(::core::option::Option::None),
+    };
+    let (min, max) = (bound(&v.min), bound(&v.max));
+    let nominal = match &v.nominal {
+        Some(e) => quote!(::core::option::Option::Some((#e) as f64)),
+        None => quote!(::core::option::Option::None),
+    };
+    let depends = match &v.depends {
+        Some(deps) => {
+            // By variable name (a field named in `depends` may carry another FMI name).
+            let names: Vec<String> = deps.iter().map(|(d, _)| d.clone()).collect();
+            quote!(::core::option::Option::Some(&[#(#names),*]))
+        }
+        None => quote!(::core::option::Option::None),
+    };
+    let derivative_of = match &v.derivative_of {
+        Some((d, _)) => quote!(::core::option::Option::Some(#d)),
+        None => quote!(::core::option::Option::None),
+    };
+    quote! {
+        #rt::description::Variable {
+            name: #name,
+            value_reference: #vr,
+            var_type: <#ty as #rt::FmiType>::TYPE,
+            causality: #causality,
+            variability: #variability,
+            initial: #initial,
+            start: #start,
+            unit: #unit,
+            description: #description,
+            min: #min,
+            max: #max,
+            nominal: #nominal,
+            depends_on: #depends,
+            derivative_of: #derivative_of,
+            enumeration: <#ty as #rt::FmiType>::ENUMERATION,
+        }
+    }
+}
+
+pub fn expand(input: DeriveInput) -> Result<TokenStream> {
+    let rt = crate::runtime_path();
+    let Data::Struct(data) = &input.data else {
+        return Err(Error::new(input.ident.span(), "#[derive(Model)] is for structs"));
+    };
+    let Fields::Named(fields) = &data.fields else {
+        return Err(Error::new(
+            input.ident.span(),
+            "#[derive(Model)] needs a struct with named fields",
+        ));
+    };
+    if !input.generics.params.is_empty() {
+        return Err(Error::new(
+            input.generics.span(),
+            "a model struct cannot be generic: an FMU is one concrete model",
+        ));
+    }
+    let model = parse_model_attr(&input.attrs)?;
+    let mut vars = Vec::new();
+    let mut others = Vec::new();
+    for f in &fields.named {
+        let attrs: Vec<_> = f.attrs.iter().filter(|a| a.path().is_ident("variable")).collect();
+        match attrs.as_slice() {
+            [] => others.push(f.ident.clone().expect("named")),
+            [a] => vars.push(parse_var(f, a)?),
+            [_, second, ..] => return Err(Error::new(second.span(), "one #[variable(...)] per field")),
+        }
+    }
+    if vars.is_empty() {
+        return Err(Error::new(
+            input.ident.span(),
+            "a model declares at least one #[variable(...)]",
+        ));
+    }
+    check_declarations(&vars, &model)?;
+    let meta = crate::metadata::read().map_err(|e| Error::new(input.ident.span(), e))?;
+
+    let ident = &input.ident;
+    let identifier = model
+        .identifier
+        .as_ref()
+        .map(|s| s.value())
+        .unwrap_or_else(|| ident.to_string());
+    let description = model.description.clone().unwrap_or_else(|| {
+        let doc = crate::doc_text(&input.attrs);
+        if doc.is_empty() { meta.description.clone() } else { doc }
+    });
+    let (author, version, copyright, license) = (&meta.author, &meta.version, &meta.copyright, &meta.license);
+    let generation_tool = format!("rustfmu {}", env!("CARGO_PKG_VERSION"));
+    let default_experiment = match meta.default_experiment {
+        Some([start, stop, tol, step]) => {
+            let (start, stop, tol, step) = (opt_f64(start), opt_f64(stop), opt_f64(tol), opt_f64(step));
+            quote!(::core::option::Option::Some(#rt::description::DefaultExperiment {
+                start_time: #start, stop_time: #stop, tolerance: #tol, step_size: #step,
+            }))
+        }
+        None => quote!(::core::option::Option::None),
+    };
+    // Every unit the variables use, in order of first use, with its base units.
+    let mut used: Vec<(String, Base)> = Vec::new();
+    for v in &vars {
+        if let Some(u) = &v.unit {
+            let name = u.value();
+            if used.iter().any(|(n, _)| *n == name) {
+                continue;
+            }
+            let base = model
+                .units
+                .iter()
+                .find(|(n, _, _)| *n == name)
+                .map(|(_, b, _)| *b)
+                .or_else(|| units::default_unit(&name))
+                .expect("checked");
+            used.push((name, base));
+        }
+    }
+    let unit_tokens = used.iter().map(|(name, b)| {
+        let [kg, m, s, a, k, mol, cd, rad] = b.exps;
+        let (factor, offset) = (b.factor, b.offset);
+        quote!(#rt::description::Unit {
+            name: #name,
+            base: #rt::description::BaseUnit { kg: #kg, m: #m, s: #s, a: #a, k: #k, mol: #mol, cd: #cd, rad: #rad, factor: #factor, offset: #offset },
+        })
+    });
+    let category_tokens = model
+        .categories
+        .iter()
+        .map(|(n, d, _)| quote!(#rt::description::LogCategory { name: #n, description: #d }));
+    let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v)).collect();
+
+    let start_fields = vars.iter().map(|v| {
+        let f = &v.field;
+        let value = match (v.kind, &v.start) {
+            (Kind::Str, Some(e)) => quote!(::std::string::String::from(#e)),
+            (Kind::Str, None) => quote!(::std::string::String::new()),
+            (_, Some(e)) => quote!(#e),
+            (Kind::Real, None) => quote!(0.0),
+            (Kind::Integer, None) => quote!(0),
+            (Kind::Boolean, None) => quote!(false),
+            (Kind::Enum, None) => unreachable!("checked"),
+        };
+        quote!(#f: #value)
+    });
+    let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
+    let numeric: Vec<&Var> = vars.iter().filter(|v| v.kind != Kind::Str).collect();
+    let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
+    let get_arms = numeric.iter().map(|v| {
+        let (f, vr) = (&v.field, v.vr);
+        quote!(#vr => #rt::FmiType::to_value(&self.#f))
+    });
+    let set_arms = numeric.iter().map(|v| {
+        let (f, vr, ty) = (&v.field, v.vr, &v.ty);
+        quote!(#vr => match <#ty as #rt::FmiType>::from_value(value) {
+            ::core::option::Option::Some(v) => { self.#f = v; true }
+            ::core::option::Option::None => false,
+        })
+    });
+    let get_str_arms = strings.iter().map(|v| {
+        let (f, vr) = (&v.field, v.vr);
+        quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
+    });
+    let set_str_arms = strings.iter().map(|v| {
+        let (f, vr) = (&v.field, v.vr);
+        quote!(#vr => { self.#f = ::std::string::String::from(value); true })
+    });
+    // Checks that need the values of the declarations (start within bounds, integral bounds
+    // for Integers), evaluated at compile time and reported at the field.
+    let value_checks = vars.iter().enumerate().map(|(i, v)| {
+        let span = v.span;
+        quote_spanned! {span=>
+            const _: () = #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]);
+        }
+    });
+    let manifest = meta.manifest.as_ref().map(|p| {
+        let p = p.display().to_string();
+        quote!(
+            const _: &[u8] = include_bytes!(#p);
+        )
+    });
+
+    Ok(quote! {
+        impl #rt::Variables for #ident {
+            const DESCRIPTION: #rt::description::ModelDescription = #rt::description::ModelDescription {
+                model_identifier: #identifier,
+                description: #description,
+                author: #author,
+                version: #version,
+                copyright: #copyright,
+                license: #license,
+                generation_tool: #generation_tool,
+                default_experiment: #default_experiment,
+                units: &[#(#unit_tokens),*],
+                log_categories: &[#(#category_tokens),*],
+                variables: &[#(#variable_tokens),*],
+            };
+
+            fn start() -> Self {
+                Self { #(#start_fields,)* #(#other_fields,)* }
+            }
+
+            #[inline]
+            fn get(&self, vr: u32) -> ::core::option::Option<#rt::Value> {
+                match vr {
+                    #(#get_arms,)*
+                    _ => ::core::option::Option::None,
+                }
+            }
+
+            #[inline]
+            fn set(&mut self, vr: u32, value: #rt::Value) -> bool {
+                let _ = &value;
+                match vr {
+                    #(#set_arms,)*
+                    _ => false,
+                }
+            }
+
+            fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {
+                match vr {
+                    #(#get_str_arms,)*
+                    _ => ::core::option::Option::None,
+                }
+            }
+
+            fn set_string(&mut self, vr: u32, value: &str) -> bool {
+                let _ = value;
+                match vr {
+                    #(#set_str_arms,)*
+                    _ => false,
+                }
+            }
+        }
+
+        #(#value_checks)*
+        #manifest
+    })
+}

@@ -1,0 +1,15 @@
+//! `cargo fmu` and `fmu-build`: build any crate whose cdylib exports a rustfmu model into an
+//! FMU, package it, validate and inspect FMU files, run the conformance suite on them, and write
+//! SSP files of composed systems.
+//!
+//! The packager needs no knowledge of a model's Rust types: it reads the typed description
+//! that the built library carries (`rustfmu::description`) and writes `modelDescription.xml`
+//! from it.
+
+pub mod bundle;
+pub mod cargo;
+pub mod cli;
+pub mod docs;
+pub mod new;
+pub mod validate;
+pub mod xml;

@@ -1,0 +1,270 @@
+//! The `Controller` FMU: the paper's LQR (equation (14)) and PID (equation (16)) as a sampled
+//! controller, with torque outputs for the plant and voltage outputs for the DC motors.
+
+#![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
+
+use holonomic::models::controller::{Command, ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
+use holonomic::models::dc_motor::DcMotorParams;
+use holonomic::models::pendulum::PendulumParams;
+use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The control law (`mode`).
+#[derive(FmuEnum, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ControlMode {
+    /// Full-state feedback M = -K (x - x_ref), eq. (14)
+    #[fmu(name = "LQR")]
+    Lqr = 1,
+    /// A PID per joint, eq. (16)
+    #[fmu(name = "PID")]
+    Pid = 2,
+    /// LQR and PID added
+    #[fmu(name = "LQR_PID")]
+    LqrPid = 3,
+}
+
+/// Sampled LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
+/// holonomic system', eqs. (14), (16)); torque and motor-voltage outputs
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct Controller {
+    /// Measured angle alpha1 of link 1 from the upward vertical (connect to Pendulum.alpha1)
+    #[variable(vr = 0, input, continuous, start = 0.0, unit = "rad")]
+    pub alpha1: f64,
+    /// Measured angular velocity omega1 of link 1 (connect to Pendulum.omega1)
+    #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
+    pub omega1: f64,
+    /// Measured absolute angle alpha2 of link 2 (connect to Pendulum.alpha2)
+    #[variable(vr = 2, input, continuous, start = 0.0, unit = "rad")]
+    pub alpha2: f64,
+    /// Measured angular velocity omega2 of link 2 (connect to Pendulum.omega2)
+    #[variable(vr = 3, input, continuous, start = 0.0, unit = "rad/s")]
+    pub omega2: f64,
+    /// Reference for alpha1 (0 = upright)
+    #[variable(vr = 4, input, continuous, start = 0.0, unit = "rad")]
+    pub alpha1_ref: f64,
+    /// Reference for alpha2 (0 = upright)
+    #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
+    pub alpha2_ref: f64,
+    /// Torque demand M1 for joint 1, limited to +-M_max; computed from the inputs of the previous communication point (sampled, no direct feedthrough)
+    #[variable(vr = 10, output, discrete, unit = "N.m", depends = [])]
+    pub M1: f64,
+    /// Torque demand M2 for joint 2, limited to +-M_max; sampled like M1
+    #[variable(vr = 11, output, discrete, unit = "N.m", depends = [])]
+    pub M2: f64,
+    /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; sampled like M1
+    #[variable(vr = 12, output, discrete, unit = "V", depends = [])]
+    pub U1: f64,
+    /// Voltage command U2 for the motor of joint 2, as U1; sampled like M1
+    #[variable(vr = 13, output, discrete, unit = "V", depends = [])]
+    pub U2: f64,
+    /// Control law: LQR (M = -K (x - x_ref)), PID per joint, or LQR + PID
+    #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
+    pub mode: ControlMode,
+    /// PID proportional gain of joint 1
+    #[variable(vr = 21, parameter, tunable, start = DEFAULT_PID[0].kp, unit = "N.m/rad")]
+    pub Kp1: f64,
+    /// PID integral gain of joint 1
+    #[variable(vr = 22, parameter, tunable, start = DEFAULT_PID[0].ki, unit = "N.m/(rad.s)")]
+    pub Ki1: f64,
+    /// PID derivative gain of joint 1 (acts on the filtered measured speed)
+    #[variable(vr = 23, parameter, tunable, start = DEFAULT_PID[0].kd, unit = "N.m.s/rad")]
+    pub Kd1: f64,
+    /// PID proportional gain of joint 2
+    #[variable(vr = 24, parameter, tunable, start = DEFAULT_PID[1].kp, unit = "N.m/rad")]
+    pub Kp2: f64,
+    /// PID integral gain of joint 2
+    #[variable(vr = 25, parameter, tunable, start = DEFAULT_PID[1].ki, unit = "N.m/(rad.s)")]
+    pub Ki2: f64,
+    /// PID derivative gain of joint 2 (acts on the filtered measured speed)
+    #[variable(vr = 26, parameter, tunable, start = DEFAULT_PID[1].kd, unit = "N.m.s/rad")]
+    pub Kd2: f64,
+    /// Time constant Tf of the derivative filter Kd s/(Tf s + 1); 0 = no filter
+    #[variable(vr = 27, parameter, tunable, start = 0.01, unit = "s", min = 0.0)]
+    pub Tf: f64,
+    /// Torque limit M_max of M1, M2 (anti-windup: the integrators stop growing into it)
+    #[variable(vr = 28, parameter, tunable, start = 20.0, unit = "N.m", min > 0.0)]
+    pub M_max: f64,
+    /// True when U1, U2 drive the plant through motors: the voltage limit then also stops the integrators
+    #[variable(vr = 29, parameter, fixed, start = false)]
+    pub drives_motors: bool,
+    /// Mass m1 of link 1 of the plant the LQR gain is designed for
+    #[variable(vr = 40, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
+    pub m1: f64,
+    /// Mass m2 of link 2 of the plant the LQR gain is designed for
+    #[variable(vr = 41, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
+    pub m2: f64,
+    /// Length l1 of link 1 of the plant the LQR gain is designed for
+    #[variable(vr = 42, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
+    pub l1: f64,
+    /// Length l2 of link 2 of the plant the LQR gain is designed for
+    #[variable(vr = 43, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
+    pub l2: f64,
+    /// Gravitational acceleration g of the plant the LQR gain is designed for
+    #[variable(vr = 44, parameter, fixed, start = 9.81, unit = "m/s2")]
+    pub g: f64,
+    /// LQR state weight Q(1,1) on alpha1 (Q is diagonal; the paper's Q = C'C gives 1, 0, 1, 0)
+    #[variable(vr = 50, parameter, fixed, start = 1.0, min = 0.0)]
+    pub Q11: f64,
+    /// LQR state weight Q(2,2) on omega1
+    #[variable(vr = 51, parameter, fixed, start = 0.0, min = 0.0)]
+    pub Q22: f64,
+    /// LQR state weight Q(3,3) on alpha2
+    #[variable(vr = 52, parameter, fixed, start = 1.0, min = 0.0)]
+    pub Q33: f64,
+    /// LQR state weight Q(4,4) on omega2
+    #[variable(vr = 53, parameter, fixed, start = 0.0, min = 0.0)]
+    pub Q44: f64,
+    /// LQR input weight R(1,1) on M1 (R is diagonal; the paper's R = I)
+    #[variable(vr = 54, parameter, fixed, start = 1.0, min > 0.0)]
+    pub R11: f64,
+    /// LQR input weight R(2,2) on M2
+    #[variable(vr = 55, parameter, fixed, start = 1.0, min > 0.0)]
+    pub R22: f64,
+    /// Armature resistance R of the motors the voltages are computed for
+    #[variable(vr = 60, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
+    pub motor_R: f64,
+    /// Torque constant km of the motors
+    #[variable(vr = 61, parameter, fixed, start = 0.00449, unit = "N.m/A")]
+    pub motor_km: f64,
+    /// Back-EMF constant kb of the motors
+    #[variable(vr = 62, parameter, fixed, start = 0.00448, unit = "V.s/rad")]
+    pub motor_kb: f64,
+    /// Viscous friction B of the motors, at the rotor (compensated in U)
+    #[variable(vr = 63, parameter, fixed, start = 9.0946, unit = "N.m.s/rad")]
+    pub motor_B: f64,
+    /// Gear ratio n of the motors (rotor speed / joint speed)
+    #[variable(vr = 64, parameter, fixed, start = 1.0, min > 0.0)]
+    pub gear_ratio: f64,
+    /// Supply voltage: U1, U2 are limited to +-U_max
+    #[variable(vr = 65, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
+    pub U_max: f64,
+    /// LQR gain K(1,1), computed at initialization by solving the Riccati equation for the plant linearized upright (paper eq. (14): 14.0666)
+    #[variable(vr = 70, calculated_parameter, fixed, unit = "N.m/rad")]
+    pub K11: f64,
+    /// LQR gain K(1,2) (paper: 2.8816)
+    #[variable(vr = 71, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    pub K12: f64,
+    /// LQR gain K(1,3) (paper: 1.1348)
+    #[variable(vr = 72, calculated_parameter, fixed, unit = "N.m/rad")]
+    pub K13: f64,
+    /// LQR gain K(1,4) (paper: 1.0010)
+    #[variable(vr = 73, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    pub K14: f64,
+    /// LQR gain K(2,1) (paper: -3.1814)
+    #[variable(vr = 74, calculated_parameter, fixed, unit = "N.m/rad")]
+    pub K21: f64,
+    /// LQR gain K(2,2) (paper: 0.1161)
+    #[variable(vr = 75, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    pub K22: f64,
+    /// LQR gain K(2,3) (paper: 4.8456)
+    #[variable(vr = 76, calculated_parameter, fixed, unit = "N.m/rad")]
+    pub K23: f64,
+    /// LQR gain K(2,4) (paper: 0.9957)
+    #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    pub K24: f64,
+    /// The sampled controller's memory: PID integrals and derivative filters.
+    pub state: ControllerState,
+}
+
+impl Controller {
+    fn plant(&self) -> PendulumParams {
+        let v = self;
+        PendulumParams {
+            m1: v.m1,
+            m2: v.m2,
+            l1: v.l1,
+            l2: v.l2,
+            g: v.g,
+        }
+    }
+
+    fn k(&self) -> SMatrix<f64, 2, 4> {
+        let v = self;
+        SMatrix::<f64, 2, 4>::new(v.K11, v.K12, v.K13, v.K14, v.K21, v.K22, v.K23, v.K24)
+    }
+
+    fn law(&self) -> Result<ControlLaw, String> {
+        let v = self;
+        let law = ControlLaw {
+            mode: Mode::from_code(v.mode as i32)?,
+            k: self.k(),
+            pid: [
+                PidGains {
+                    kp: v.Kp1,
+                    ki: v.Ki1,
+                    kd: v.Kd1,
+                },
+                PidGains {
+                    kp: v.Kp2,
+                    ki: v.Ki2,
+                    kd: v.Kd2,
+                },
+            ],
+            tf: v.Tf,
+            m_max: v.M_max,
+            motor: DcMotorParams {
+                r: v.motor_R,
+                km: v.motor_km,
+                kb: v.motor_kb,
+                b: v.motor_B,
+                gear_ratio: v.gear_ratio,
+                u_max: v.U_max,
+                ..DcMotorParams::default()
+            },
+            drives_motors: v.drives_motors,
+        };
+        law.validate()?;
+        Ok(law)
+    }
+
+    fn measurement(&self) -> (Vector4<f64>, Vector2<f64>) {
+        let v = self;
+        (
+            Vector4::new(v.alpha1, v.omega1, v.alpha2, v.omega2),
+            Vector2::new(v.alpha1_ref, v.alpha2_ref),
+        )
+    }
+
+    fn set_outputs(&mut self, c: &Command) {
+        (self.M1, self.M2, self.U1, self.U2) = (c.m[0], c.m[1], c.u[0], c.u[1]);
+    }
+}
+
+impl Model for Controller {
+    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+        let v = &*self;
+        let q = Matrix4::from_diagonal(&Vector4::new(v.Q11, v.Q22, v.Q33, v.Q44));
+        let r = Matrix2::from_diagonal(&Vector2::new(v.R11, v.R22));
+        let k = lqr_gain(&self.plant(), &q, &r)?;
+        (self.K11, self.K12, self.K13, self.K14) = (k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]);
+        (self.K21, self.K22, self.K23, self.K24) = (k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]);
+        let law = self.law()?;
+        let (x, reference) = self.measurement();
+        self.state = law.initial_state(&x);
+        let c = law.command(&self.state, &x, &reference);
+        self.set_outputs(&c);
+        Ok(())
+    }
+
+    fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
+        self.law().map(|_| ())
+    }
+}
+
+impl CoSimulation for Controller {
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+        let law = self.law().map_err(|message| StepFailure {
+            reached_time: t,
+            message,
+        })?;
+        let (x, reference) = self.measurement();
+        let now = law.command(&self.state, &x, &reference);
+        self.state = law.advance(&self.state, &x, &reference, &now, h);
+        let next = law.command(&self.state, &x, &reference);
+        self.set_outputs(&next);
+        Ok(())
+    }
+}
+
+rustfmu::export_fmi2!(Controller);

@@ -1,0 +1,117 @@
+//! The `DCMotor` FMU: the paper's DC motor (equation (17)) with a gearbox and a supply-voltage
+//! limit; joint speed in, joint torque out.
+
+#![allow(non_snake_case)] // the paper's symbols: U, L, R, J, B
+
+use holonomic::models::dc_motor::{DcMotorParams, DcMotorState};
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Permanent-magnet DC motor with gearbox and supply-voltage limit (Liptak et al., 'The control
+/// of holonomic system', eq. (17)); joint speed in, joint torque out
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+#[fmu(identifier = "DCMotor")]
+pub struct DcMotor {
+    /// Terminal voltage command U; the supply limits it to +-U_max (connect to Controller.U1 or U2)
+    #[variable(vr = 0, input, continuous, start = 0.0, unit = "V")]
+    pub U: f64,
+    /// Speed of the driven joint, the generalized velocity conjugate to the torque output (connect to Pendulum.omega1 or omega2); ignored when coupled = false
+    #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
+    pub omega: f64,
+    /// Torque on the joint, tau = n (km i - B omega_m) (connect to Pendulum.M1 or M2); 0 when coupled = false (unloaded)
+    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [])]
+    pub tau: f64,
+    /// Armature current i; the start value is the initial state
+    #[variable(vr = 11, output, continuous, initial = exact, start = 0.0, unit = "A", depends = [])]
+    pub i: f64,
+    /// Rotor speed omega_m (= n omega when coupled); the start value is the initial state
+    #[variable(vr = 12, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [])]
+    pub omega_m: f64,
+    /// Voltage actually applied: U limited to +-U_max
+    #[variable(vr = 13, output, continuous, unit = "V", depends = [])]
+    pub U_applied: f64,
+    /// Armature inductance L
+    #[variable(vr = 20, parameter, fixed, start = 0.000121, unit = "H", min > 0.0)]
+    pub L: f64,
+    /// Armature resistance R
+    #[variable(vr = 21, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
+    pub R: f64,
+    /// Torque constant km
+    #[variable(vr = 22, parameter, fixed, start = 0.00449, unit = "N.m/A", min = 0.0)]
+    pub km: f64,
+    /// Back-EMF constant kb
+    #[variable(vr = 23, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
+    pub kb: f64,
+    /// Rotor inertia J (used when coupled = false; coupled, the rotor follows the joint rigidly)
+    #[variable(vr = 24, parameter, fixed, start = 2.18e-5, unit = "kg.m2", min > 0.0)]
+    pub J: f64,
+    /// Viscous friction B at the rotor (the paper's 9.0946 is about six orders of magnitude above small DC motors)
+    #[variable(vr = 25, parameter, fixed, start = 9.0946, unit = "N.m.s/rad", min = 0.0)]
+    pub B: f64,
+    /// Gear ratio n = rotor speed / joint speed
+    #[variable(vr = 26, parameter, fixed, start = 1.0, min > 0.0)]
+    pub gear_ratio: f64,
+    /// Supply voltage: |U| is limited to U_max
+    #[variable(vr = 27, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
+    pub U_max: f64,
+    /// True: the rotor drives a joint through the gear (omega in, tau out); false: the motor runs unloaded and omega_m follows eq. (17)
+    #[variable(vr = 28, parameter, fixed, start = true)]
+    pub coupled: bool,
+}
+
+impl DcMotor {
+    pub fn params(&self) -> DcMotorParams {
+        DcMotorParams {
+            l: self.L,
+            r: self.R,
+            km: self.km,
+            kb: self.kb,
+            j: self.J,
+            b: self.B,
+            gear_ratio: self.gear_ratio,
+            u_max: self.U_max,
+        }
+    }
+
+    fn set_state(&mut self, p: &DcMotorParams, s: &DcMotorState) {
+        self.i = s.i;
+        self.omega_m = s.omega_m;
+        self.tau = if self.coupled { p.joint_torque(s) } else { 0.0 };
+        self.U_applied = p.applied_voltage(self.U);
+    }
+}
+
+impl Model for DcMotor {
+    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+        let p = self.params();
+        p.validate()?;
+        let mut s = DcMotorState {
+            i: self.i,
+            omega_m: self.omega_m,
+        };
+        if self.coupled {
+            s.omega_m = p.gear_ratio * self.omega;
+        }
+        self.set_state(&p, &s);
+        Ok(())
+    }
+}
+
+impl CoSimulation for DcMotor {
+    fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+        let p = self.params();
+        let s = DcMotorState {
+            i: self.i,
+            omega_m: self.omega_m,
+        };
+        let next = if self.coupled {
+            p.step_coupled(&s, self.U, self.omega, h)
+        } else {
+            p.step_free(&s, self.U, h)
+        };
+        self.set_state(&p, &next);
+        Ok(())
+    }
+}
+
+rustfmu::export_fmi2!(DcMotor);

@@ -1,0 +1,921 @@
+//! The typed description of a model: what `#[derive(Model)]` declares, fixed at compile time.
+//!
+//! One description feeds every output: the runtime dispatches and checks values with it, the
+//! export macro encodes it into the binary (so the built library describes itself), and
+//! `cargo fmu` decodes it from the binary and writes `modelDescription.xml` (FMI 2.0, later 3.0)
+//! and the SSP files from it. The GUID is a name-based (SHA-1) UUID of the encoded description,
+//! computed at compile time: the binary carries no XML writer and no hashing code.
+//!
+//! Every item here is `const`-constructible: the derive macro writes a `ModelDescription`
+//! literal, and [`encode`] runs in const evaluation.
+
+/// FMI base types. FMI 3.0's `Float64`, `Int32` are `Real`, `Integer` here; more 3.0 types
+/// join this list when the declarations grow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum VarType {
+    Real = 0,
+    Integer = 1,
+    Boolean = 2,
+    String = 3,
+    Enumeration = 4,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Causality {
+    Parameter = 0,
+    CalculatedParameter = 1,
+    Input = 2,
+    Output = 3,
+    Local = 4,
+    Independent = 5,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Variability {
+    Constant = 0,
+    Fixed = 1,
+    Tunable = 2,
+    Discrete = 3,
+    Continuous = 4,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Initial {
+    Exact = 0,
+    Approx = 1,
+    Calculated = 2,
+}
+
+/// A declared start value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Start {
+    /// No start value (only where the standard forbids one: `initial = calculated`).
+    None,
+    Real(f64),
+    /// Integer and Enumeration variables.
+    Integer(i32),
+    Boolean(bool),
+    String(&'static str),
+}
+
+/// A bound of a variable's legal range: `value` itself is legal unless `exclusive`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bound {
+    pub value: f64,
+    pub exclusive: bool,
+}
+
+impl Bound {
+    /// Whether `x` lies on the legal side of this bound taken as a minimum.
+    pub fn admits_above(&self, x: f64) -> bool {
+        if self.exclusive {
+            x > self.value
+        } else {
+            x >= self.value
+        }
+    }
+    /// Whether `x` lies on the legal side of this bound taken as a maximum.
+    pub fn admits_below(&self, x: f64) -> bool {
+        if self.exclusive {
+            x < self.value
+        } else {
+            x <= self.value
+        }
+    }
+}
+
+/// One item of an enumeration type.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnumItem {
+    pub name: &'static str,
+    pub value: i32,
+    pub description: &'static str,
+}
+
+/// An enumeration type (`<TypeDefinitions><SimpleType><Enumeration>` in FMI 2.0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnumType {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub items: &'static [EnumItem],
+}
+
+impl EnumType {
+    pub fn item(&self, value: i32) -> Option<&'static EnumItem> {
+        self.items.iter().find(|i| i.value == value)
+    }
+}
+
+/// SI base-unit exponents, factor and offset, as in `<BaseUnit kg=".." m=".." factor=".."/>`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseUnit {
+    pub kg: i32,
+    pub m: i32,
+    pub s: i32,
+    pub a: i32,
+    pub k: i32,
+    pub mol: i32,
+    pub cd: i32,
+    pub rad: i32,
+    pub factor: f64,
+    pub offset: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unit {
+    pub name: &'static str,
+    pub base: BaseUnit,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogCategory {
+    pub name: &'static str,
+    pub description: &'static str,
+}
+
+/// `<DefaultExperiment>`: every attribute optional.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DefaultExperiment {
+    pub start_time: Option<f64>,
+    pub stop_time: Option<f64>,
+    pub tolerance: Option<f64>,
+    pub step_size: Option<f64>,
+}
+
+/// One model variable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Variable {
+    pub name: &'static str,
+    pub value_reference: u32,
+    pub var_type: VarType,
+    pub causality: Causality,
+    pub variability: Variability,
+    /// `None`: the standard's default for this causality and variability.
+    pub initial: Option<Initial>,
+    pub start: Start,
+    /// Unit name, declared in [`ModelDescription::units`]; empty for none.
+    pub unit: &'static str,
+    pub description: &'static str,
+    pub min: Option<Bound>,
+    pub max: Option<Bound>,
+    /// Nominal value (FMI `nominal`), for states and scaling.
+    pub nominal: Option<f64>,
+    /// For outputs (and, with Model Exchange, derivatives): the inputs this variable depends on
+    /// directly, by name. `Some(&[])`: none; `None`: every input (the attribute is left out).
+    pub depends_on: Option<&'static [&'static str]>,
+    /// For a derivative: the name of the state variable it is the derivative of.
+    pub derivative_of: Option<&'static str>,
+    pub enumeration: Option<&'static EnumType>,
+}
+
+impl Variable {
+    /// The `initial` in force: the declared one, or the standard's default (FMI 2.0, 2.2.7).
+    pub fn effective_initial(&self) -> Option<Initial> {
+        if self.initial.is_some() {
+            return self.initial;
+        }
+        match (self.causality, self.variability) {
+            (Causality::Input, _) | (Causality::Independent, _) => None,
+            (_, Variability::Constant) => Some(Initial::Exact),
+            (Causality::Parameter, _) => Some(Initial::Exact),
+            (Causality::CalculatedParameter, _) => Some(Initial::Calculated),
+            (Causality::Output | Causality::Local, _) => Some(Initial::Calculated),
+        }
+    }
+
+    /// Whether the description carries a `start` value (required for inputs and exact/approx,
+    /// forbidden for calculated and the independent variable).
+    pub fn has_start(&self) -> bool {
+        self.causality == Causality::Input || matches!(self.effective_initial(), Some(Initial::Exact | Initial::Approx))
+    }
+}
+
+/// What an FMU offers besides its variables; set by the export macro.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Interfaces {
+    pub co_simulation: bool,
+    pub model_exchange: bool,
+}
+
+impl Interfaces {
+    pub const CO_SIMULATION: Interfaces = Interfaces {
+        co_simulation: true,
+        model_exchange: false,
+    };
+}
+
+/// Everything the model description says, as declared.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelDescription {
+    /// `modelName`, and `modelIdentifier`: the binary is `<identifier>.so` / `.dll`.
+    pub model_identifier: &'static str,
+    pub description: &'static str,
+    pub author: &'static str,
+    pub version: &'static str,
+    pub copyright: &'static str,
+    pub license: &'static str,
+    pub generation_tool: &'static str,
+    pub default_experiment: Option<DefaultExperiment>,
+    /// Every unit the variables use, with its base units.
+    pub units: &'static [Unit],
+    /// The model's own log categories; the runtime's ([`RUNTIME_LOG_CATEGORIES`]) come first.
+    pub log_categories: &'static [LogCategory],
+    /// In `ModelVariables` order.
+    pub variables: &'static [Variable],
+}
+
+impl ModelDescription {
+    pub fn variable(&self, vr: u32, ty: VarType) -> Option<&'static Variable> {
+        self.variables
+            .iter()
+            .find(|v| v.value_reference == vr && same_api_type(v.var_type, ty))
+    }
+
+    pub fn by_name(&self, name: &str) -> Option<&'static Variable> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+
+    /// Every declared enumeration type, once each, in the order the variables first use them.
+    pub fn enumerations(&self) -> Vec<&'static EnumType> {
+        let mut out: Vec<&'static EnumType> = Vec::new();
+        for v in self.variables {
+            if let Some(e) = v.enumeration
+                && !out.iter().any(|o| o.name == e.name)
+            {
+                out.push(e);
+            }
+        }
+        out
+    }
+
+    /// Runtime categories first, then the model's own.
+    pub fn all_log_categories(&self) -> impl Iterator<Item = &'static LogCategory> {
+        RUNTIME_LOG_CATEGORIES.iter().chain(self.log_categories.iter())
+    }
+}
+
+/// Enumerations travel through `fmi2GetInteger`/`fmi2SetInteger`.
+pub fn same_api_type(declared: VarType, asked: VarType) -> bool {
+    declared == asked || (declared == VarType::Enumeration && asked == VarType::Integer)
+}
+
+/// The categories every FMU of this runtime logs under, in the runtime's order.
+pub const RUNTIME_LOG_CATEGORIES: &[LogCategory] = &[
+    LogCategory {
+        name: "logEvents",
+        description: "Initialization, steps that change the solver's course, parameter changes",
+    },
+    LogCategory {
+        name: "logStatusWarning",
+        description: "Messages that come with fmi2Warning",
+    },
+    LogCategory {
+        name: "logStatusDiscard",
+        description: "Messages that come with fmi2Discard: a step that could not be completed",
+    },
+    LogCategory {
+        name: "logStatusError",
+        description: "Messages that come with fmi2Error: a refused call or argument",
+    },
+    LogCategory {
+        name: "logStatusFatal",
+        description: "Messages that come with fmi2Fatal: the instance cannot be used any more",
+    },
+    LogCategory {
+        name: "logCalls",
+        description: "Every call of an fmi2 function, with its arguments",
+    },
+    LogCategory {
+        name: "logAll",
+        description: "All of the above",
+    },
+];
+
+// ---- encoding ---------------------------------------------------------------------------------
+
+/// Marks the encoded description inside a built library, where `cargo fmu` finds it.
+pub const MAGIC: &[u8; 24] = b"\0RUSTFMU-DESCRIPTION-V1\0";
+/// Bump when the encoding changes shape.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// A const-evaluable byte writer; with an empty buffer it only counts.
+struct Enc<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+}
+
+impl Enc<'_> {
+    const fn u8(&mut self, b: u8) {
+        if self.pos < self.buf.len() {
+            self.buf[self.pos] = b;
+        }
+        self.pos += 1;
+    }
+    const fn bytes(&mut self, b: &[u8]) {
+        let mut i = 0;
+        while i < b.len() {
+            self.u8(b[i]);
+            i += 1;
+        }
+    }
+    const fn u32(&mut self, x: u32) {
+        self.bytes(&x.to_le_bytes());
+    }
+    const fn i32(&mut self, x: i32) {
+        self.bytes(&x.to_le_bytes());
+    }
+    const fn f64(&mut self, x: f64) {
+        self.bytes(&x.to_bits().to_le_bytes());
+    }
+    const fn str(&mut self, s: &str) {
+        self.u32(s.len() as u32);
+        self.bytes(s.as_bytes());
+    }
+    const fn opt_f64(&mut self, x: Option<f64>) {
+        match x {
+            None => self.u8(0),
+            Some(x) => {
+                self.u8(1);
+                self.f64(x);
+            }
+        }
+    }
+    const fn opt_str(&mut self, x: Option<&str>) {
+        match x {
+            None => self.u8(0),
+            Some(s) => {
+                self.u8(1);
+                self.str(s);
+            }
+        }
+    }
+    const fn bound(&mut self, b: Option<Bound>) {
+        match b {
+            None => self.u8(0),
+            Some(b) => {
+                self.u8(if b.exclusive { 2 } else { 1 });
+                self.f64(b.value);
+            }
+        }
+    }
+    const fn enum_type(&mut self, e: &EnumType) {
+        self.str(e.name);
+        self.str(e.description);
+        self.u32(e.items.len() as u32);
+        let mut i = 0;
+        while i < e.items.len() {
+            self.str(e.items[i].name);
+            self.i32(e.items[i].value);
+            self.str(e.items[i].description);
+            i += 1;
+        }
+    }
+    const fn variable(&mut self, v: &Variable) {
+        self.str(v.name);
+        self.u32(v.value_reference);
+        self.u8(v.var_type as u8);
+        self.u8(v.causality as u8);
+        self.u8(v.variability as u8);
+        match v.initial {
+            None => self.u8(255),
+            Some(i) => self.u8(i as u8),
+        }
+        match v.start {
+            Start::None => self.u8(0),
+            Start::Real(x) => {
+                self.u8(1);
+                self.f64(x);
+            }
+            Start::Integer(x) => {
+                self.u8(2);
+                self.i32(x);
+            }
+            Start::Boolean(x) => {
+                self.u8(3);
+                self.u8(x as u8);
+            }
+            Start::String(s) => {
+                self.u8(4);
+                self.str(s);
+            }
+        }
+        self.str(v.unit);
+        self.str(v.description);
+        self.bound(v.min);
+        self.bound(v.max);
+        self.opt_f64(v.nominal);
+        match v.depends_on {
+            None => self.u8(0),
+            Some(deps) => {
+                self.u8(1);
+                self.u32(deps.len() as u32);
+                let mut i = 0;
+                while i < deps.len() {
+                    self.str(deps[i]);
+                    i += 1;
+                }
+            }
+        }
+        self.opt_str(v.derivative_of);
+        match v.enumeration {
+            None => self.u8(0),
+            Some(e) => {
+                self.u8(1);
+                self.enum_type(e);
+            }
+        }
+    }
+    const fn description(&mut self, d: &ModelDescription, interfaces: Interfaces) {
+        self.str(d.model_identifier);
+        self.str(d.description);
+        self.str(d.author);
+        self.str(d.version);
+        self.str(d.copyright);
+        self.str(d.license);
+        self.str(d.generation_tool);
+        self.u8(interfaces.co_simulation as u8);
+        self.u8(interfaces.model_exchange as u8);
+        match d.default_experiment {
+            None => self.u8(0),
+            Some(e) => {
+                self.u8(1);
+                self.opt_f64(e.start_time);
+                self.opt_f64(e.stop_time);
+                self.opt_f64(e.tolerance);
+                self.opt_f64(e.step_size);
+            }
+        }
+        self.u32(d.units.len() as u32);
+        let mut i = 0;
+        while i < d.units.len() {
+            let u = &d.units[i];
+            self.str(u.name);
+            let b = u.base;
+            self.i32(b.kg);
+            self.i32(b.m);
+            self.i32(b.s);
+            self.i32(b.a);
+            self.i32(b.k);
+            self.i32(b.mol);
+            self.i32(b.cd);
+            self.i32(b.rad);
+            self.f64(b.factor);
+            self.f64(b.offset);
+            i += 1;
+        }
+        self.u32(d.log_categories.len() as u32);
+        let mut i = 0;
+        while i < d.log_categories.len() {
+            self.str(d.log_categories[i].name);
+            self.str(d.log_categories[i].description);
+            i += 1;
+        }
+        self.u32(d.variables.len() as u32);
+        let mut i = 0;
+        while i < d.variables.len() {
+            self.variable(&d.variables[i]);
+            i += 1;
+        }
+    }
+}
+
+const HEADER: usize = MAGIC.len() + 4 + 4;
+
+const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
+    let mut body = Enc { buf, pos: 0 };
+    body.bytes(MAGIC);
+    body.u32(FORMAT_VERSION);
+    body.u32(0); // payload length, filled in below
+    body.description(d, interfaces);
+    let total = body.pos;
+    let len = ((total - HEADER) as u32).to_le_bytes();
+    if body.buf.len() >= HEADER {
+        let mut i = 0;
+        while i < 4 {
+            body.buf[MAGIC.len() + 4 + i] = len[i];
+            i += 1;
+        }
+    }
+    total
+}
+
+/// Length of [`encode`]'s output, for the array it is written into.
+pub const fn encoded_len(d: &ModelDescription, interfaces: Interfaces) -> usize {
+    write(d, interfaces, &mut [])
+}
+
+/// The description as bytes: [`MAGIC`], format version, payload length, payload.
+/// `N` must be [`encoded_len`] of the same arguments.
+pub const fn encode<const N: usize>(d: &ModelDescription, interfaces: Interfaces) -> [u8; N] {
+    let mut out = [0u8; N];
+    let n = write(d, interfaces, &mut out);
+    assert!(n == N, "encode: N is not encoded_len of the same description");
+    out
+}
+
+/// [`encode`] at run time, for tools and tests.
+pub fn encode_to_vec(d: &ModelDescription, interfaces: Interfaces) -> Vec<u8> {
+    let mut out = vec![0u8; encoded_len(d, interfaces)];
+    write(d, interfaces, &mut out);
+    out
+}
+
+/// `{xxxxxxxx-xxxx-5xxx-yxxx-xxxxxxxxxxxx}`: a name-based SHA-1 UUID (RFC 4122, version 5) of
+/// the encoded description; [`MAGIC`] at its start plays the namespace's part.
+pub const fn guid(encoded: &[u8]) -> [u8; 38] {
+    let digest = const_sha1::sha1(encoded).as_bytes();
+    let mut b = [0u8; 16];
+    let mut i = 0;
+    while i < 16 {
+        b[i] = digest[i];
+        i += 1;
+    }
+    b[6] = (b[6] & 0x0f) | 0x50;
+    b[8] = (b[8] & 0x3f) | 0x80;
+    const HEX: &[u8; 16] = b"0123456789abcdef";
+    let mut out = [0u8; 38];
+    out[0] = b'{';
+    let mut at = 1;
+    let mut i = 0;
+    while i < 16 {
+        if i == 4 || i == 6 || i == 8 || i == 10 {
+            out[at] = b'-';
+            at += 1;
+        }
+        out[at] = HEX[(b[i] >> 4) as usize];
+        out[at + 1] = HEX[(b[i] & 0xf) as usize];
+        at += 2;
+        i += 1;
+    }
+    out[37] = b'}';
+    out
+}
+
+/// [`guid`] as text.
+pub fn guid_string(encoded: &[u8]) -> String {
+    String::from_utf8_lossy(&guid(encoded)).into_owned()
+}
+
+// ---- decoding (for cargo fmu; the FMU itself never decodes) ---------------------------------
+
+/// Finds the encoded description in a built library (ELF, PE or Mach-O alike: it looks for
+/// [`MAGIC`]) and returns exactly its bytes.
+pub fn find_encoded(binary: &[u8]) -> Result<&[u8], String> {
+    let at = binary
+        .windows(MAGIC.len())
+        .position(|w| w == MAGIC)
+        .ok_or("the library carries no rustfmu description (is it a cdylib that calls rustfmu::export_fmi2!?)")?;
+    let rest = &binary[at..];
+    if rest.len() < HEADER {
+        return Err("the embedded description is truncated".into());
+    }
+    let version = u32::from_le_bytes(rest[MAGIC.len()..MAGIC.len() + 4].try_into().expect("4 bytes"));
+    if version != FORMAT_VERSION {
+        return Err(format!(
+            "the embedded description has format version {version}; this cargo-fmu reads version {FORMAT_VERSION} (use the cargo-fmu of the same rustfmu release)"
+        ));
+    }
+    let len = u32::from_le_bytes(rest[MAGIC.len() + 4..HEADER].try_into().expect("4 bytes")) as usize;
+    rest.get(..HEADER + len)
+        .ok_or_else(|| "the embedded description is truncated".to_string())
+}
+
+struct Dec<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+fn leak(s: String) -> &'static str {
+    Box::leak(s.into_boxed_str())
+}
+
+fn leak_slice<T>(v: Vec<T>) -> &'static [T] {
+    Box::leak(v.into_boxed_slice())
+}
+
+impl Dec<'_> {
+    fn take(&mut self, n: usize) -> Result<&[u8], String> {
+        let end = self.at.checked_add(n).filter(|e| *e <= self.b.len()).ok_or_else(|| {
+            format!(
+                "the embedded description ends early (wanted {n} bytes at offset {})",
+                self.at
+            )
+        })?;
+        let s = &self.b[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    fn u8(&mut self) -> Result<u8, String> {
+        Ok(self.take(1)?[0])
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+    }
+    fn i32(&mut self) -> Result<i32, String> {
+        Ok(i32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_bits(u64::from_le_bytes(
+            self.take(8)?.try_into().expect("8 bytes"),
+        )))
+    }
+    fn str(&mut self) -> Result<&'static str, String> {
+        let n = self.u32()? as usize;
+        let bytes = self.take(n)?.to_vec();
+        String::from_utf8(bytes)
+            .map(leak)
+            .map_err(|_| "a text in the embedded description is not UTF-8".to_string())
+    }
+    fn opt_f64(&mut self) -> Result<Option<f64>, String> {
+        Ok(if self.u8()? == 0 { None } else { Some(self.f64()?) })
+    }
+    fn bound(&mut self) -> Result<Option<Bound>, String> {
+        Ok(match self.u8()? {
+            0 => None,
+            tag => Some(Bound {
+                value: self.f64()?,
+                exclusive: tag == 2,
+            }),
+        })
+    }
+    fn count(&mut self) -> Result<usize, String> {
+        let n = self.u32()? as usize;
+        // Every element takes at least one byte: a larger count is corrupt, not a huge model.
+        if n > self.b.len() - self.at {
+            return Err(format!(
+                "the embedded description claims {n} elements at offset {}",
+                self.at
+            ));
+        }
+        Ok(n)
+    }
+    fn variable(&mut self) -> Result<Variable, String> {
+        let name = self.str()?;
+        let value_reference = self.u32()?;
+        let var_type = match self.u8()? {
+            0 => VarType::Real,
+            1 => VarType::Integer,
+            2 => VarType::Boolean,
+            3 => VarType::String,
+            4 => VarType::Enumeration,
+            t => return Err(format!("'{name}': unknown type code {t}")),
+        };
+        let causality = match self.u8()? {
+            0 => Causality::Parameter,
+            1 => Causality::CalculatedParameter,
+            2 => Causality::Input,
+            3 => Causality::Output,
+            4 => Causality::Local,
+            5 => Causality::Independent,
+            t => return Err(format!("'{name}': unknown causality code {t}")),
+        };
+        let variability = match self.u8()? {
+            0 => Variability::Constant,
+            1 => Variability::Fixed,
+            2 => Variability::Tunable,
+            3 => Variability::Discrete,
+            4 => Variability::Continuous,
+            t => return Err(format!("'{name}': unknown variability code {t}")),
+        };
+        let initial = match self.u8()? {
+            255 => None,
+            0 => Some(Initial::Exact),
+            1 => Some(Initial::Approx),
+            2 => Some(Initial::Calculated),
+            t => return Err(format!("'{name}': unknown initial code {t}")),
+        };
+        let start = match self.u8()? {
+            0 => Start::None,
+            1 => Start::Real(self.f64()?),
+            2 => Start::Integer(self.i32()?),
+            3 => Start::Boolean(self.u8()? != 0),
+            4 => Start::String(self.str()?),
+            t => return Err(format!("'{name}': unknown start code {t}")),
+        };
+        let unit = self.str()?;
+        let description = self.str()?;
+        let min = self.bound()?;
+        let max = self.bound()?;
+        let nominal = self.opt_f64()?;
+        let depends_on = match self.u8()? {
+            0 => None,
+            _ => {
+                let n = self.count()?;
+                let deps = (0..n).map(|_| self.str()).collect::<Result<Vec<_>, _>>()?;
+                Some(leak_slice(deps))
+            }
+        };
+        let derivative_of = if self.u8()? == 0 { None } else { Some(self.str()?) };
+        let enumeration = if self.u8()? == 0 {
+            None
+        } else {
+            let name = self.str()?;
+            let description = self.str()?;
+            let n = self.count()?;
+            let mut items = Vec::with_capacity(n);
+            for _ in 0..n {
+                items.push(EnumItem {
+                    name: self.str()?,
+                    value: self.i32()?,
+                    description: self.str()?,
+                });
+            }
+            Some(&*Box::leak(Box::new(EnumType {
+                name,
+                description,
+                items: leak_slice(items),
+            })))
+        };
+        Ok(Variable {
+            name,
+            value_reference,
+            var_type,
+            causality,
+            variability,
+            initial,
+            start,
+            unit,
+            description,
+            min,
+            max,
+            nominal,
+            depends_on,
+            derivative_of,
+            enumeration,
+        })
+    }
+}
+
+/// Decodes what [`encode`] wrote (as [`find_encoded`] returns it). The texts are leaked: this is
+/// for short-lived tools such as `cargo fmu`, never for the FMU itself.
+pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> {
+    if encoded.len() < HEADER || &encoded[..MAGIC.len()] != MAGIC {
+        return Err("not an encoded rustfmu description".into());
+    }
+    let mut d = Dec {
+        b: &encoded[HEADER..],
+        at: 0,
+    };
+    let model_identifier = d.str()?;
+    let description = d.str()?;
+    let author = d.str()?;
+    let version = d.str()?;
+    let copyright = d.str()?;
+    let license = d.str()?;
+    let generation_tool = d.str()?;
+    let interfaces = Interfaces {
+        co_simulation: d.u8()? != 0,
+        model_exchange: d.u8()? != 0,
+    };
+    let default_experiment = if d.u8()? == 0 {
+        None
+    } else {
+        Some(DefaultExperiment {
+            start_time: d.opt_f64()?,
+            stop_time: d.opt_f64()?,
+            tolerance: d.opt_f64()?,
+            step_size: d.opt_f64()?,
+        })
+    };
+    let n = d.count()?;
+    let mut units = Vec::with_capacity(n);
+    for _ in 0..n {
+        units.push(Unit {
+            name: d.str()?,
+            base: BaseUnit {
+                kg: d.i32()?,
+                m: d.i32()?,
+                s: d.i32()?,
+                a: d.i32()?,
+                k: d.i32()?,
+                mol: d.i32()?,
+                cd: d.i32()?,
+                rad: d.i32()?,
+                factor: d.f64()?,
+                offset: d.f64()?,
+            },
+        });
+    }
+    let n = d.count()?;
+    let mut log_categories = Vec::with_capacity(n);
+    for _ in 0..n {
+        log_categories.push(LogCategory {
+            name: d.str()?,
+            description: d.str()?,
+        });
+    }
+    let n = d.count()?;
+    let mut variables = Vec::with_capacity(n);
+    for _ in 0..n {
+        variables.push(d.variable()?);
+    }
+    if d.at != d.b.len() {
+        return Err(format!(
+            "{} unexpected bytes after the embedded description",
+            d.b.len() - d.at
+        ));
+    }
+    Ok((
+        ModelDescription {
+            model_identifier,
+            description,
+            author,
+            version,
+            copyright,
+            license,
+            generation_tool,
+            default_experiment,
+            units: leak_slice(units),
+            log_categories: leak_slice(log_categories),
+            variables: leak_slice(variables),
+        },
+        interfaces,
+    ))
+}
+
+// ---- checks at compile time ---------------------------------------------------------------
+
+/// Checks of a declaration that need its values; `#[derive(Model)]` evaluates this for every
+/// variable at compile time, so a violation is a compile error at the field.
+pub const fn check_values(v: &Variable) {
+    let lo = match v.min {
+        Some(b) => {
+            assert!(
+                b.value == b.value && b.value > f64::NEG_INFINITY && b.value < f64::INFINITY,
+                "min is not a finite number"
+            );
+            Some(b)
+        }
+        None => None,
+    };
+    let hi = match v.max {
+        Some(b) => {
+            assert!(
+                b.value == b.value && b.value > f64::NEG_INFINITY && b.value < f64::INFINITY,
+                "max is not a finite number"
+            );
+            Some(b)
+        }
+        None => None,
+    };
+    if let (Some(l), Some(h)) = (lo, hi) {
+        assert!(l.value <= h.value, "min is above max");
+    }
+    if matches!(v.var_type, VarType::Integer | VarType::Enumeration) {
+        if let Some(l) = lo {
+            assert!(
+                l.value == (l.value as i32) as f64,
+                "an Integer's min must be an integer within i32"
+            );
+        }
+        if let Some(h) = hi {
+            assert!(
+                h.value == (h.value as i32) as f64,
+                "an Integer's max must be an integer within i32"
+            );
+        }
+    }
+    let x = match v.start {
+        Start::Real(x) => {
+            assert!(
+                x == x && x > f64::NEG_INFINITY && x < f64::INFINITY,
+                "the start value is not a finite number"
+            );
+            Some(x)
+        }
+        Start::Integer(n) => Some(n as f64),
+        _ => None,
+    };
+    if let Some(x) = x {
+        if let Some(l) = lo {
+            assert!(
+                if l.exclusive { x > l.value } else { x >= l.value },
+                "the start value is below min"
+            );
+        }
+        if let Some(h) = hi {
+            assert!(
+                if h.exclusive { x < h.value } else { x <= h.value },
+                "the start value is above max"
+            );
+        }
+    }
+    if let Some(n) = v.nominal {
+        assert!(n == n && n > 0.0 && n < f64::INFINITY, "nominal must be finite and > 0");
+    }
+    if let (Some(e), Start::Integer(code)) = (v.enumeration, v.start) {
+        let mut i = 0;
+        let mut found = false;
+        while i < e.items.len() {
+            if e.items[i].value == code {
+                found = true;
+            }
+            i += 1;
+        }
+        assert!(found, "the start value is no item of the enumeration");
+    }
+}

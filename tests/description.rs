@@ -1,0 +1,201 @@
+//! The typed description: what the derive writes, how it is encoded into a binary at compile
+//! time, and the GUID that follows its content.
+
+use rustfmu::Variables;
+use rustfmu::description::{self, Bound, Causality, Initial, Interfaces, Start, VarType, Variability};
+use rustfmu::prelude::*;
+
+/// A small model.
+#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
+#[fmu(log_category(name = "logSolver", description = "what the solver does"))]
+pub struct Small {
+    /// input, with a description
+    /// over two lines
+    #[variable(vr = 0, input, start = 0.0, unit = "furlong/fortnight")]
+    pub u: f64,
+    /// output
+    #[variable(vr = 1, output, depends = [u])]
+    pub y: f64,
+    /// a positive gain
+    #[variable(vr = 2, parameter, tunable, start = 2.0, min > 0.0, max = 10.0)]
+    pub k: f64,
+    /// a mode
+    #[variable(vr = 3, parameter, start = Mode::Fast)]
+    pub mode: Mode,
+    /// a label
+    #[variable(vr = 4, parameter, start = "hello")]
+    pub label: String,
+    /// a counter
+    #[variable(vr = 5, output, initial = exact, start = 0, min = 0)]
+    pub n: i32,
+    /// not a variable: internal state
+    pub memory: Vec<f64>,
+}
+
+/// How fast.
+#[derive(FmuEnum, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Mode {
+    /// slowly
+    Slow = 1,
+    /// quickly
+    #[fmu(name = "FAST")]
+    Fast,
+}
+
+/// The same model with another start value of `u`.
+#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
+#[fmu(log_category(name = "logSolver", description = "what the solver does"))]
+pub struct SmallOtherStart {
+    /// input, with a description
+    /// over two lines
+    #[variable(vr = 0, input, start = 1.0, unit = "furlong/fortnight")]
+    pub u: f64,
+    /// output
+    #[variable(vr = 1, output, depends = [u])]
+    pub y: f64,
+    /// a positive gain
+    #[variable(vr = 2, parameter, tunable, start = 2.0, min > 0.0, max = 10.0)]
+    pub k: f64,
+    /// a mode
+    #[variable(vr = 3, parameter, start = Mode::Fast)]
+    pub mode: Mode,
+    /// a label
+    #[variable(vr = 4, parameter, start = "hello")]
+    pub label: String,
+    /// a counter
+    #[variable(vr = 5, output, initial = exact, start = 0, min = 0)]
+    pub n: i32,
+    /// not a variable: internal state
+    pub memory: Vec<f64>,
+}
+
+const CS: Interfaces = Interfaces::CO_SIMULATION;
+
+fn encoded<M: Variables>() -> Vec<u8> {
+    description::encode_to_vec(&M::DESCRIPTION, CS)
+}
+
+#[test]
+fn the_const_encoder_and_the_run_time_one_agree() {
+    const D: description::ModelDescription = Small::DESCRIPTION;
+    const N: usize = description::encoded_len(&D, CS);
+    const BYTES: [u8; N] = description::encode(&D, CS);
+    assert_eq!(&BYTES[..], &encoded::<Small>()[..]);
+}
+
+#[test]
+fn the_derive_describes_every_declaration() {
+    let d = Small::DESCRIPTION;
+    assert_eq!(d.model_identifier, "Small");
+    assert_eq!(d.description, "A small model.");
+    assert_eq!(d.variables.len(), 6, "the field without #[variable] is no variable");
+    let u = d.by_name("u").unwrap();
+    assert_eq!(
+        (u.causality, u.variability, u.var_type),
+        (Causality::Input, Variability::Continuous, VarType::Real)
+    );
+    assert_eq!(u.description, "input, with a description over two lines");
+    assert_eq!(u.unit, "furlong/fortnight");
+    let y = d.by_name("y").unwrap();
+    assert_eq!(y.depends_on, Some(&["u"][..]));
+    assert_eq!(y.start, Start::None, "a calculated output has no start value");
+    let k = d.by_name("k").unwrap();
+    assert_eq!(k.variability, Variability::Tunable);
+    assert_eq!(
+        k.min,
+        Some(Bound {
+            value: 0.0,
+            exclusive: true
+        })
+    );
+    assert_eq!(
+        k.max,
+        Some(Bound {
+            value: 10.0,
+            exclusive: false
+        })
+    );
+    let mode = d.by_name("mode").unwrap();
+    assert_eq!(
+        (mode.var_type, mode.variability, mode.start),
+        (VarType::Enumeration, Variability::Fixed, Start::Integer(2))
+    );
+    let e = mode.enumeration.unwrap();
+    assert_eq!((e.name, e.description), ("Mode", "How fast."));
+    let items: Vec<_> = e.items.iter().map(|i| (i.name, i.value, i.description)).collect();
+    assert_eq!(items, [("Slow", 1, "slowly"), ("FAST", 2, "quickly")]);
+    let label = d.by_name("label").unwrap();
+    assert_eq!((label.var_type, label.start), (VarType::String, Start::String("hello")));
+    let n = d.by_name("n").unwrap();
+    assert_eq!(
+        (n.var_type, n.variability, n.initial),
+        (VarType::Integer, Variability::Discrete, Some(Initial::Exact))
+    );
+    assert_eq!(d.units.len(), 1);
+    assert_eq!(d.units[0].base.factor, 1.663e-4);
+    assert_eq!(d.log_categories[0].name, "logSolver");
+    let names: Vec<_> = d.all_log_categories().map(|c| c.name).collect();
+    assert_eq!(names.first(), Some(&"logEvents"));
+    assert_eq!(names.last(), Some(&"logSolver"));
+}
+
+#[test]
+fn start_values_get_and_set_follow_the_declarations() {
+    let mut m = Small::start();
+    assert_eq!(
+        (m.u, m.k, m.mode, m.label.as_str(), m.n),
+        (0.0, 2.0, Mode::Fast, "hello", 0)
+    );
+    assert!(m.memory.is_empty());
+    assert_eq!(m.get(2), Some(Value::Real(2.0)));
+    assert_eq!(
+        m.get(3),
+        Some(Value::Integer(2)),
+        "an Enumeration reads as its item's value"
+    );
+    assert!(m.set(3, Value::Integer(1)));
+    assert_eq!(m.mode, Mode::Slow);
+    assert!(!m.set(3, Value::Integer(7)), "no item has value 7");
+    assert!(!m.set(2, Value::Integer(1)), "k is a Real");
+    assert_eq!(m.get(4), None, "Strings are read with get_string");
+    assert_eq!(m.get_string(4), Some("hello"));
+    assert!(m.set_string(4, "bye"));
+    assert_eq!(m.label, "bye");
+    assert_eq!(m.get(99), None);
+}
+
+#[test]
+fn encoding_round_trips_and_is_found_inside_a_binary() {
+    let bytes = encoded::<Small>();
+    let (d, interfaces) = description::decode(&bytes).unwrap();
+    assert_eq!(d, Small::DESCRIPTION);
+    assert_eq!(interfaces, CS);
+    let mut binary = vec![0x7f, b'E', b'L', b'F'];
+    binary.extend(std::iter::repeat_n(0xAB, 1000));
+    binary.extend(&bytes);
+    binary.extend(std::iter::repeat_n(0xCD, 1000));
+    assert_eq!(description::find_encoded(&binary).unwrap(), &bytes[..]);
+}
+
+#[test]
+fn a_damaged_encoding_is_refused_with_a_message() {
+    let bytes = encoded::<Small>();
+    for cut in [10, 40, bytes.len() - 1] {
+        let e = description::decode(&bytes[..cut]).unwrap_err();
+        assert!(!e.is_empty());
+    }
+    let e = description::find_encoded(b"no description here").unwrap_err();
+    assert!(e.contains("export_fmi2"), "{e}");
+}
+
+#[test]
+fn the_guid_follows_the_content() {
+    let a = description::guid_string(&encoded::<Small>());
+    let b = description::guid_string(&encoded::<SmallOtherStart>());
+    assert_ne!(a, b, "another start value must give another GUID");
+    assert_eq!(a, description::guid_string(&encoded::<Small>()));
+    assert_eq!(a.len(), 38);
+    assert_eq!(&a[15..16], "5", "a version-5 (name-based, SHA-1) UUID: {a}");
+}
