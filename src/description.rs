@@ -839,83 +839,118 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
 
 // ---- checks at compile time ---------------------------------------------------------------
 
+/// What [`check_values`] finds wrong.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValueError {
+    /// min is not a finite number
+    MinNotFinite,
+    /// max is not a finite number
+    MaxNotFinite,
+    /// min is above max
+    MinAboveMax,
+    /// an Integer's min must be an integer within i32
+    IntegerMin,
+    /// an Integer's max must be an integer within i32
+    IntegerMax,
+    /// the start value is not a finite number
+    StartNotFinite,
+    /// the start value is below min
+    StartBelowMin,
+    /// the start value is above max
+    StartAboveMax,
+    /// nominal must be finite and > 0
+    Nominal,
+    /// the start value is no item of the enumeration
+    StartNotAnItem,
+}
+
+impl ValueError {
+    /// The same words as the compile error of `#[derive(Model)]`.
+    pub const fn message(self) -> &'static str {
+        match self {
+            ValueError::MinNotFinite => "min is not a finite number",
+            ValueError::MaxNotFinite => "max is not a finite number",
+            ValueError::MinAboveMax => "min is above max",
+            ValueError::IntegerMin => "an Integer's min must be an integer within i32",
+            ValueError::IntegerMax => "an Integer's max must be an integer within i32",
+            ValueError::StartNotFinite => "the start value is not a finite number",
+            ValueError::StartBelowMin => "the start value is below min",
+            ValueError::StartAboveMax => "the start value is above max",
+            ValueError::Nominal => "nominal must be finite and > 0",
+            ValueError::StartNotAnItem => "the start value is no item of the enumeration",
+        }
+    }
+}
+
 /// Checks of a declaration that need its values; `#[derive(Model)]` evaluates this for every
-/// variable at compile time, so a violation is a compile error at the field.
-pub const fn check_values(v: &Variable) {
-    let lo = match v.min {
-        Some(b) => {
-            assert!(
-                b.value == b.value && b.value > f64::NEG_INFINITY && b.value < f64::INFINITY,
-                "min is not a finite number"
-            );
-            Some(b)
-        }
-        None => None,
-    };
-    let hi = match v.max {
-        Some(b) => {
-            assert!(
-                b.value == b.value && b.value > f64::NEG_INFINITY && b.value < f64::INFINITY,
-                "max is not a finite number"
-            );
-            Some(b)
-        }
-        None => None,
-    };
-    if let (Some(l), Some(h)) = (lo, hi) {
-        assert!(l.value <= h.value, "min is above max");
+/// variable at compile time, so a violation is a compile error naming the variable.
+pub const fn check_values(v: &Variable) -> Result<(), ValueError> {
+    const fn finite(x: f64) -> bool {
+        x == x && x > f64::NEG_INFINITY && x < f64::INFINITY
+    }
+    if let Some(b) = v.min
+        && !finite(b.value)
+    {
+        return Err(ValueError::MinNotFinite);
+    }
+    if let Some(b) = v.max
+        && !finite(b.value)
+    {
+        return Err(ValueError::MaxNotFinite);
+    }
+    if let (Some(l), Some(h)) = (v.min, v.max)
+        && l.value > h.value
+    {
+        return Err(ValueError::MinAboveMax);
     }
     if matches!(v.var_type, VarType::Integer | VarType::Enumeration) {
-        if let Some(l) = lo {
-            assert!(
-                l.value == (l.value as i32) as f64,
-                "an Integer's min must be an integer within i32"
-            );
+        if let Some(l) = v.min
+            && l.value != (l.value as i32) as f64
+        {
+            return Err(ValueError::IntegerMin);
         }
-        if let Some(h) = hi {
-            assert!(
-                h.value == (h.value as i32) as f64,
-                "an Integer's max must be an integer within i32"
-            );
+        if let Some(h) = v.max
+            && h.value != (h.value as i32) as f64
+        {
+            return Err(ValueError::IntegerMax);
         }
     }
     let x = match v.start {
         Start::Real(x) => {
-            assert!(
-                x == x && x > f64::NEG_INFINITY && x < f64::INFINITY,
-                "the start value is not a finite number"
-            );
+            if !finite(x) {
+                return Err(ValueError::StartNotFinite);
+            }
             Some(x)
         }
         Start::Integer(n) => Some(n as f64),
         _ => None,
     };
     if let Some(x) = x {
-        if let Some(l) = lo {
-            assert!(
-                if l.exclusive { x > l.value } else { x >= l.value },
-                "the start value is below min"
-            );
+        if let Some(l) = v.min
+            && !(if l.exclusive { x > l.value } else { x >= l.value })
+        {
+            return Err(ValueError::StartBelowMin);
         }
-        if let Some(h) = hi {
-            assert!(
-                if h.exclusive { x < h.value } else { x <= h.value },
-                "the start value is above max"
-            );
+        if let Some(h) = v.max
+            && !(if h.exclusive { x < h.value } else { x <= h.value })
+        {
+            return Err(ValueError::StartAboveMax);
         }
     }
-    if let Some(n) = v.nominal {
-        assert!(n == n && n > 0.0 && n < f64::INFINITY, "nominal must be finite and > 0");
+    if let Some(n) = v.nominal
+        && !(finite(n) && n > 0.0)
+    {
+        return Err(ValueError::Nominal);
     }
     if let (Some(e), Start::Integer(code)) = (v.enumeration, v.start) {
         let mut i = 0;
-        let mut found = false;
         while i < e.items.len() {
             if e.items[i].value == code {
-                found = true;
+                return Ok(());
             }
             i += 1;
         }
-        assert!(found, "the start value is no item of the enumeration");
+        return Err(ValueError::StartNotAnItem);
     }
+    Ok(())
 }

@@ -413,8 +413,13 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
             "the independent variable has no start value".to_string()
         } else {
             format!(
-                "a {causality:?} variable with initial = calculated has no start value (FMI 2.0, section 2.2.7); \
-                 declare initial = exact or approx to give one"
+                "{} with initial = calculated has no start value (FMI 2.0, section 2.2.7); \
+                 declare initial = exact or approx to give one",
+                match causality {
+                    Causality::Output => "an output",
+                    Causality::Local => "a local variable",
+                    _ => "a calculated parameter",
+                }
             )
         };
         return Err(Error::new(var.start.as_ref().expect("checked").span(), why));
@@ -862,8 +867,21 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
     // for Integers), evaluated at compile time and reported at the field.
     let value_checks = vars.iter().enumerate().map(|(i, v)| {
         let span = v.span;
+        let prefix = format!("variable '{}' (field `{}`): ", v.name, v.field);
         quote_spanned! {span=>
-            const _: () = #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]);
+            const _: () = match #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]) {
+                ::core::result::Result::Ok(()) => (),
+                ::core::result::Result::Err(#rt::description::ValueError::MinNotFinite) => panic!(concat!(#prefix, "min is not a finite number")),
+                ::core::result::Result::Err(#rt::description::ValueError::MaxNotFinite) => panic!(concat!(#prefix, "max is not a finite number")),
+                ::core::result::Result::Err(#rt::description::ValueError::MinAboveMax) => panic!(concat!(#prefix, "min is above max")),
+                ::core::result::Result::Err(#rt::description::ValueError::IntegerMin) => panic!(concat!(#prefix, "an Integer's min must be an integer within i32")),
+                ::core::result::Result::Err(#rt::description::ValueError::IntegerMax) => panic!(concat!(#prefix, "an Integer's max must be an integer within i32")),
+                ::core::result::Result::Err(#rt::description::ValueError::StartNotFinite) => panic!(concat!(#prefix, "the start value is not a finite number")),
+                ::core::result::Result::Err(#rt::description::ValueError::StartBelowMin) => panic!(concat!(#prefix, "the start value is below min")),
+                ::core::result::Result::Err(#rt::description::ValueError::StartAboveMax) => panic!(concat!(#prefix, "the start value is above max")),
+                ::core::result::Result::Err(#rt::description::ValueError::Nominal) => panic!(concat!(#prefix, "nominal must be finite and > 0")),
+                ::core::result::Result::Err(#rt::description::ValueError::StartNotAnItem) => panic!(concat!(#prefix, "the start value is no item of the enumeration")),
+            };
         }
     });
     let manifest = meta.manifest.as_ref().map(|p| {

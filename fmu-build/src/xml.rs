@@ -27,6 +27,7 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
         if !seen_vrs.insert(v.value_reference) {
             return Err(format!("{at}: the value reference is used twice"));
         }
+        rustfmu::description::check_values(v).map_err(|e| format!("{at}: {}", e.message()))?;
         if v.var_type != VarType::Real && v.variability == Variability::Continuous {
             return Err(format!("{at}: only Real variables may be continuous"));
         }

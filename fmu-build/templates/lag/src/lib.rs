@@ -14,9 +14,8 @@ pub struct {{Model}} {
     #[variable(vr = 1, output, initial = exact, start = 0.0, depends = [])]
     pub y: f64,
     /// Time constant T
-    #[variable(vr = 2, parameter, tunable, start = 0.1, unit = "s", min > 0.0)]
-    #[allow(non_snake_case)]
-    pub T: f64,
+    #[variable(vr = 2, name = "T", parameter, tunable, start = 0.1, unit = "s", min > 0.0)]
+    pub time_constant: f64,
 }
 
 impl Model for {{Model}} {}
@@ -24,7 +23,7 @@ impl Model for {{Model}} {}
 impl CoSimulation for {{Model}} {
     /// The exact solution for an input held over the step: y(t + h) = u + (y(t) - u) e^(-h/T).
     fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
-        self.y = self.u + (self.y - self.u) * (-h / self.T).exp();
+        self.y = self.u + (self.y - self.u) * (-h / self.time_constant).exp();
         Ok(())
     }
 }

@@ -1,0 +1,13 @@
+use rustfmu::prelude::*;
+
+#[derive(Model, Clone, serde::Serialize, serde::Deserialize)]
+pub struct M {
+    /// a
+    #[variable(vr = 1, input)]
+    pub a: f64,
+    /// b, named like a
+    #[variable(vr = 2, output, name = "a")]
+    pub b: f64,
+}
+
+fn main() {}
