@@ -165,6 +165,14 @@ class Loop:
             slave.setReal([v.valueReference], [float(value)])
         elif v.type == "Integer":
             slave.setInteger([v.valueReference], [int(value)])
+        elif v.type == "Enumeration":
+            # An item's value, or its name ("LQR").
+            if isinstance(value, str):
+                items = {item.name: int(item.value) for item in v.declaredType.items}
+                if value not in items:
+                    raise ValueError(f"{qualified}: '{value}' is no item of {v.declaredType.name} ({', '.join(items)})")
+                value = items[value]
+            slave.setInteger([v.valueReference], [int(value)])
         elif v.type == "Boolean":
             slave.setBoolean([v.valueReference], [bool(value)])
         else:
@@ -175,7 +183,7 @@ class Loop:
         slave = self.slaves[component]
         if v.type == "Real":
             return slave.getReal([v.valueReference])[0]
-        if v.type == "Integer":
+        if v.type in ("Integer", "Enumeration"):
             return slave.getInteger([v.valueReference])[0]
         return slave.getBoolean([v.valueReference])[0]
 

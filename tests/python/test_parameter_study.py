@@ -99,7 +99,7 @@ def test_failed_run_is_recorded_with_its_reason_and_the_study_goes_on(dask_run):
     bad = df.loc[runner.run_id(runner.make_spec("torque", BAD_MASS, STOP, STEP))]
     assert bad["status"] == "failed" and not bad["stabilized"], bad.to_dict()
     assert bad["fmi_status"] == "Error" and bad["fmi_function"] == "fmi2SetReal", bad.to_dict()
-    assert "mass must be > 0, not -0.5" in bad["error"], f"error text: {bad['error']!r}"
+    assert "-0.5 for 'm1' (vr 20) is outside (0, inf)" in bad["error"], f"error text: {bad['error']!r}"
     fell = df.loc[runner.run_id(runner.make_spec("torque", FALLS, STOP, STEP))]
     assert (fell["status"], fell["outcome"]) == ("ok", "fell") and fell["t_end"] < STOP, fell.to_dict()
     slow = df.loc[runner.run_id(runner.make_spec("torque", SLOW, STOP, STEP))]
