@@ -4,13 +4,21 @@
 # Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tests/setup-env.sh
-cargo run --release -p fmu-build -- build --python .venv/bin/python
+bash tests/setup-env.sh --python-only
+cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
 mkdir -p out
-cargo run --release --example paper_numbers | tee out/paper_numbers.txt
+cargo run --release -p holonomic --example paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
 .venv/bin/python examples/composed_demo.py --out out
 # Parameter studies on a Dask LocalCluster, small grids (the full ones: docs/parameter-studies.md).
 rm -f out/study/roa.csv out/study/robust.csv
 .venv/bin/python examples/parameter_study.py roa --out out/study --n 15 --no-progress
 .venv/bin/python examples/parameter_study.py robust --out out/study --samples 40 --no-progress
+
+echo
+echo "== Made"
+echo "FMUs (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
+echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
+echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
+echo "demo (controller -> 2 motors -> pendulum through fmpy), the Dask studies (out/study):"
+(cd out && find . -type f | sort | sed 's|^\./|  out/|')

@@ -1,26 +1,85 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine: installs what they need, checks format and
-# lints, builds and packages every FMU (validated by fmu-build and by fmpy), then runs the Rust
-# tests and the Python tests that use the packaged FMUs as importers do.
+# lints, builds and packages every FMU (validated by fmu-build and by fmpy), runs the
+# conformance suite on every FMU with `cargo fmu check`, the Rust tests, the Python tests that use
+# the packaged FMUs as importers do, and the benchmarks in quick mode; ends with the pass/fail
+# count of every suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 bash tests/setup-env.sh
 export PATH="$PWD/.venv/bin:$PATH"
+logs=$(mktemp -d)
+summary=()
+failed=0
+total_pass=0
+total_fail=0
 
-echo "== cargo fmt --check"
-cargo fmt --all --check
-echo "== cargo clippy -D warnings"
-cargo clippy --workspace --all-targets --release -- -D warnings
-echo "== fmu-build (build, package, validate with fmpy)"
-cargo run --release -p fmu-build -- build --python .venv/bin/python
+# record NAME PASSED FAILED
+record() {
+  summary+=("$(printf '%-34s %5d passed, %d failed' "$1" "$2" "$3")")
+  total_pass=$((total_pass + $2))
+  total_fail=$((total_fail + $3))
+  if [ "$3" -ne 0 ]; then failed=1; fi
+}
+
+# step NAME COMMAND...: a check that passes or fails as a whole.
+step() {
+  local name=$1
+  shift
+  echo "== $name"
+  if "$@"; then record "$name" 1 0; else record "$name" 0 1; fi
+}
+
+step "cargo fmt --check" cargo fmt --all --check
+step "cargo clippy -D warnings" cargo clippy --workspace --all-targets --release -- -D warnings
+echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
+cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
+cargo build --release -p fmu-build --bins
+record "fmu-build (package + validate)" "$(ls target/fmu/*.fmu | wc -l)" 0
+# The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.
+step "modelDescription/ is up to date" git diff --exit-code --stat -- modelDescription
+n=0
 echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU"
-for fmu in target/fmu/*.fmu; do fmutool -input "$fmu" -check; done
-echo "== modelDescription/ is up to date"
-cargo run --release -p fmu-build -- xml --check
-echo "== Rust tests (with the FMI 2.0 conformance suite, tests/conformance, on every FMU in target/fmu)"
-cargo test --workspace --release
+for fmu in target/fmu/*.fmu; do fmutool -input "$fmu" -check && n=$((n + 1)) || record "fmutool -check $fmu" 0 1; done
+record "fmutool -check" "$n" 0
+
+echo "== cargo fmu check (black-box conformance suite) on every FMU"
+for fmu in target/fmu/*.fmu; do
+  out="$logs/check-$(basename "$fmu").log"
+  target/release/cargo-fmu fmu check "$fmu" | tee "$out" || true
+  line=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$out" | tail -n 1)
+  p=$(echo "$line" | sed -E 's/^([0-9]+) passed.*/\1/')
+  f=$(echo "$line" | sed -E 's/^[0-9]+ passed, ([0-9]+) failed.*/\1/')
+  [ -n "$line" ] || { p=0; f=1; }
+  record "cargo fmu check $(basename "$fmu")" "$p" "$f"
+done
+
+echo "== Rust tests (cargo test --workspace)"
+set +e
+cargo test --workspace --release 2>&1 | tee "$logs/cargo-test.log"
+rust_status=${PIPESTATUS[0]}
+set -e
+p=$(grep -E '^test result:' "$logs/cargo-test.log" | sed -E 's/.* ([0-9]+) passed.*/\1/' | awk '{s+=$1} END {print s+0}')
+f=$(grep -E '^test result:' "$logs/cargo-test.log" | sed -E 's/.* ([0-9]+) failed.*/\1/' | awk '{s+=$1} END {print s+0}')
+[ "$rust_status" -eq 0 ] || f=$((f > 0 ? f : 1))
+record "Rust tests" "${p:-0}" "${f:-1}"
+
 echo "== Python tests"
-python -m pytest tests/python -q -p no:cacheprovider
-echo "== Benchmarks still run (quick mode, no timing asserted)"
-bash bench/quick.sh
+set +e
+python -m pytest tests/python -q -p no:cacheprovider 2>&1 | tee "$logs/pytest.log"
+py_status=${PIPESTATUS[0]}
+set -e
+line=$(tail -n 1 "$logs/pytest.log")
+p=$(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0)
+f=$(echo "$line" | grep -oE '[0-9]+ (failed|error|errors)' | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}')
+[ "$py_status" -eq 0 ] || f=$(( ${f:-0} > 0 ? f : 1 ))
+record "Python tests" "${p:-0}" "${f:-0}"
+
+step "benchmarks still run (quick mode)" bash bench/quick.sh
+
+echo
+echo "== Summary"
+for s in "${summary[@]}"; do echo "$s"; done
+echo "total: $total_pass passed, $total_fail failed"
+exit "$failed"

@@ -1,11 +1,17 @@
 #!/usr/bin/env bash
 # Installs what the tests and examples need, on a fresh machine: Debian's libclang-dev (fmi-sys
-# runs bindgen at build time) and valgrind, and a Python venv at .venv with tests/python/requirements.txt.
+# runs bindgen when the tests build) and valgrind, and a Python venv at .venv with
+# tests/python/requirements.txt. `--python-only` (the main job) installs the venv alone: building
+# the FMUs needs only the Rust toolchain, no libclang and no root.
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+python_only=false
+[ "${1:-}" = "--python-only" ] && python_only=true
+
 need=()
+if ! $python_only; then
 dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 command -v valgrind >/dev/null 2>&1 || need+=(valgrind)
 command -v nm >/dev/null 2>&1 || need+=(binutils)
@@ -15,6 +21,7 @@ if ((${#need[@]})); then
   [ "$(id -u)" = 0 ] || sudo="sudo"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" >/dev/null
+fi
 fi
 
 if [ ! -x .venv/bin/python ]; then
