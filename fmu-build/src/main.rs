@@ -1,13 +1,14 @@
 //! `fmu-build`: builds every FMU of the workspace in release mode, writes its
 //! modelDescription.xml (also into `modelDescription/`, for review), packages
-//! `target/fmu/<modelIdentifier>.fmu`, and validates what it packaged.
+//! `target/fmu/<modelIdentifier>.fmu`, and validates what it packaged; then writes the SSP
+//! files of the systems the workspace's systems files describe (`fmu_build::ssp`).
 
 mod docs;
 mod package;
-mod ssp;
 mod validate;
 
 use clap::{Parser, Subcommand};
+use fmu_build::{ssp, systems};
 use rustfmu::fmi2::FmuEntry;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -36,8 +37,16 @@ enum Cmd {
         #[arg(long)]
         check: bool,
     },
-    /// Write target/fmu/<system>.ssp for the composed systems (needs the packaged FMUs).
-    Ssp,
+    /// Write <fmu-dir>/<system>.ssp for the composed systems (needs the packaged FMUs).
+    Ssp {
+        /// Systems file; default: those the workspace's Cargo.toml names in
+        /// `[workspace.metadata.fmu] systems`.
+        #[arg(long)]
+        systems: Option<PathBuf>,
+        /// Where the packaged FMUs are, and the SSP files go; default: target/fmu.
+        #[arg(long)]
+        fmu_dir: Option<PathBuf>,
+    },
     /// Validate packaged FMUs: archive layout, description, binary symbols, a smoke run.
     Validate {
         /// FMU files; all of target/fmu when none is given.
@@ -146,14 +155,24 @@ fn build(names: &[String], python: Option<&Path>) -> Result<(), String> {
     }
     validate_all(&built, python)?;
     if names.is_empty() {
-        write_ssp()?;
+        write_ssp(None, None)?;
     }
     Ok(())
 }
 
-fn write_ssp() -> Result<(), String> {
-    for path in ssp::write_all(&fmu_dir())? {
-        eprintln!("fmu-build: wrote {}", path.display());
+/// Writes the SSP files of the systems in `systems_file` (default: the workspace's systems
+/// files) from the FMUs packaged in `fmu_dir` (default: target/fmu), into the same folder.
+fn write_ssp(systems_file: Option<&Path>, fmu_dir: Option<&Path>) -> Result<(), String> {
+    let files = match systems_file {
+        Some(f) => vec![f.to_path_buf()],
+        None => systems::workspace_files(&workspace_root())?,
+    };
+    let dir = fmu_dir.map_or_else(self::fmu_dir, Path::to_path_buf);
+    for file in files {
+        let systems = systems::Systems::load(&file)?;
+        for path in ssp::write_all(&systems, &dir, &dir)? {
+            eprintln!("fmu-build: wrote {}", path.display());
+        }
     }
     Ok(())
 }
@@ -191,7 +210,7 @@ fn main() -> ExitCode {
     }) {
         Cmd::Build { names, python } => build(&names, python.as_deref()),
         Cmd::Xml { check } => write_xml(check),
-        Cmd::Ssp => write_ssp(),
+        Cmd::Ssp { systems, fmu_dir } => write_ssp(systems.as_deref(), fmu_dir.as_deref()),
         Cmd::Validate { fmus, python } => {
             let fmus = if fmus.is_empty() {
                 rustfmu::fmus::ALL
