@@ -200,7 +200,7 @@ impl Master {
     /// The plant's state (alpha1, omega1, alpha2, omega2) now.
     pub fn plant_state(&mut self) -> Result<Vec<f64>, String> {
         let plant = self.topology.plant;
-        let vrs = rustfmu::systems::STATE
+        let vrs = crate::topology::STATE
             .iter()
             .map(|v| self.vr(plant, v))
             .collect::<Result<Vec<_>, _>>()?;
