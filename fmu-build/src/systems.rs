@@ -185,7 +185,7 @@ pub struct System {
     pub file: PathBuf,
     pub name: String,
     pub description: Option<String>,
-    /// Stop time of the SSP file's DefaultExperiment [s].
+    /// Stop time of the SSP file's DefaultExperiment, in seconds.
     pub stop_time: Option<f64>,
     pub connections: Vec<Connection>,
     pub components: Vec<Component>,
