@@ -97,7 +97,7 @@ impl Master {
         }
         for ((inst, var), value) in &topology.start_values {
             let (i, fmu) = fmu_of(inst)?;
-            let vr = fmu.typed_vr(var, value.var_type())?;
+            let vr = fmu.typed_vr(var, value.api_type())?;
             slaves[i].starts.push((vr, *value));
         }
         for s in &mut slaves {
@@ -200,7 +200,7 @@ impl Master {
     /// The plant's state (alpha1, omega1, alpha2, omega2) now.
     pub fn plant_state(&mut self) -> Result<Vec<f64>, String> {
         let plant = self.topology.plant;
-        let vrs = crate::STATE
+        let vrs = crate::topology::STATE
             .iter()
             .map(|v| self.vr(plant, v))
             .collect::<Result<Vec<_>, _>>()?;

@@ -8,7 +8,7 @@ use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::fmi2::schema::Causality;
 use pendulum_fmu::Pendulum;
 use rustfmu::Value;
-use rustfmu::{CoSimulation, Context, Model, Variables};
+use rustfmu::{CoSimulation as _, Context, Model, Variables};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -87,7 +87,7 @@ impl ViaFmi {
         let instance = fmu.instantiate("bench")?;
         let starts = starts
             .iter()
-            .map(|(n, v)| Ok((fmu.typed_vr(n, v.var_type())?, *v)))
+            .map(|(n, v)| Ok((fmu.typed_vr(n, v.api_type())?, *v)))
             .collect::<Result<_, String>>()?;
         let in_vrs = fmu.reals_of(Causality::Input).map(|v| v.vr).collect();
         let out_vrs: Vec<u32> = match outputs {

@@ -1,7 +1,8 @@
 //! The composed loops the benchmarks run, derived from the one description of the systems in
-//! [`rustfmu::systems`] (the same data `fmu-build` writes as `target/fmu/<system>.ssp`): the FMU
-//! instances, every parameter and start value (Real, Integer, Boolean), and the connections.
-//! Names are resolved against each FMU's modelDescription.xml when a master starts.
+//! `paper/systems.toml` (the file `fmu-build` writes as `target/fmu/<system>.ssp`), read and
+//! checked against the packaged FMUs by [`fmu_build::systems`]: the FMU instances, every
+//! parameter and start value (Real, Integer, Boolean; an Enumeration as its Integer), and the
+//! connections. Names are resolved against each FMU's modelDescription.xml when a master starts.
 //!
 //! | topology | system | FMUs |
 //! |---|---|---|
@@ -12,8 +13,27 @@
 //! which reads this table from `composed-loop --topology-json`, and runs the SSP file of the same
 //! system in fmpy.ssp and libcosim) run the same loop.
 
+use fmu_build::systems::{self as sys, System, Systems};
 use rustfmu::Value;
-use rustfmu::systems::{self, System};
+use std::sync::OnceLock;
+
+/// The systems file, relative to the workspace root.
+pub const SYSTEMS_FILE: &str = "paper/systems.toml";
+
+/// The plant's state, in the order of eq. (12).
+pub const STATE: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
+
+/// Name of the plant (the Pendulum FMU instance) in every system.
+pub const PLANT: &str = "pendulum";
+
+/// The systems of [`SYSTEMS_FILE`], read once per process (the topologies borrow their names).
+pub fn systems() -> Result<&'static Systems, String> {
+    static SYSTEMS: OnceLock<Result<Systems, String>> = OnceLock::new();
+    SYSTEMS
+        .get_or_init(|| Systems::load(&crate::workspace_root().join(SYSTEMS_FILE)))
+        .as_ref()
+        .map_err(Clone::clone)
+}
 
 /// `instance.variable`
 pub type Port = (&'static str, &'static str);
@@ -29,7 +49,7 @@ pub struct Slave {
 #[derive(Debug, Clone)]
 pub struct Topology {
     pub name: &'static str,
-    /// The system of [`rustfmu::systems`] this loop runs (and of its SSP file).
+    /// The system of [`SYSTEMS_FILE`] this loop runs (and of its SSP file).
     pub system: &'static str,
     pub description: &'static str,
     pub slaves: Vec<Slave>,
@@ -48,32 +68,52 @@ pub const TOPOLOGIES: [(&str, &str); 2] = [("controller-plant", "PendulumLQR"), 
 pub const DEFAULT: &str = "full";
 
 impl Topology {
-    /// The loop of `system`, after checking the system against the FMUs' declarations.
-    pub fn from_system(name: &'static str, system: System) -> Result<Topology, String> {
-        system.check()?;
+    /// The loop of `system`, after checking the system against the packaged FMUs' descriptions.
+    pub fn from_system(name: &'static str, system: &'static System) -> Result<Topology, String> {
+        let checked = system.check(&system.read_fmus(&crate::fmu_dir())?)?;
+        let mut start_values = Vec::new();
+        for (c, parameters) in system.components.iter().zip(&checked.parameters) {
+            for (var, value) in parameters {
+                let value = match value {
+                    sys::Value::Real(x) => Value::Real(*x),
+                    sys::Value::Integer(x) => Value::Integer(*x),
+                    sys::Value::Boolean(x) => Value::Boolean(*x),
+                    // FMI 2.0 sets an Enumeration through fmi2SetInteger.
+                    sys::Value::Enumeration { value, .. } => Value::Integer(*value),
+                    sys::Value::String(_) => {
+                        return Err(format!(
+                            "{}: {}.{var}: the native master sets no String",
+                            system.name, c.name
+                        ));
+                    }
+                };
+                start_values.push(((c.name.as_str(), *var), value));
+            }
+        }
         Ok(Topology {
             name,
-            system: system.name,
-            description: system.description,
+            system: &system.name,
+            description: system.description.as_deref().unwrap_or(""),
             slaves: system
                 .components
                 .iter()
                 .map(|c| Slave {
-                    instance: c.name,
-                    fmu: c.fmu,
+                    instance: &c.name,
+                    fmu: &c.fmu,
                 })
                 .collect(),
             connections: system
                 .connections
                 .iter()
-                .map(|&(from, out, to, inp)| ((from, out), (to, inp)))
+                .map(|c| {
+                    (
+                        (c.from.component.as_str(), c.from.variable.as_str()),
+                        (c.to.component.as_str(), c.to.variable.as_str()),
+                    )
+                })
                 .collect(),
-            start_values: system
-                .components
-                .iter()
-                .flat_map(|c| c.parameters.iter().map(|&(var, value)| ((c.name, var), value)))
-                .collect(),
-            plant: systems::PLANT,
+            start_values,
+            plant: PLANT,
         })
     }
 }
@@ -84,18 +124,18 @@ pub fn by_name(name: &str) -> Result<Topology, String> {
         let names: Vec<&str> = TOPOLOGIES.iter().map(|(n, _)| *n).collect();
         format!("unknown topology '{name}' (there are: {})", names.join(", "))
     })?;
-    Topology::from_system(name, systems::system(system)?)
+    Topology::from_system(name, systems()?.get(system)?)
 }
 
 /// Pendulum FMU + Controller FMU (LQR), the controller's torques straight into the plant.
 pub fn controller_plant() -> Topology {
-    by_name("controller-plant").expect("rustfmu::systems has PendulumLQR and it checks")
+    by_name("controller-plant").unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The paper's loop: Controller (LQR + PID) -> voltages -> two geared DC motors -> torques ->
 /// plant -> angles and speeds.
 pub fn full() -> Topology {
-    by_name("full").expect("rustfmu::systems has PendulumMotors and it checks")
+    by_name("full").unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn json_str(s: &str) -> String {
@@ -155,7 +195,7 @@ impl Topology {
             json_str(self.description),
             json_str(&ssp.display().to_string()),
             json_str(self.plant),
-            systems::STATE.map(json_str).join(", "),
+            STATE.map(json_str).join(", "),
             slaves.join(", "),
             connections.join(", "),
             starts.join(", ")

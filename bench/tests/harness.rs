@@ -3,7 +3,7 @@
 //! type in a loop is reported. Needs the packaged FMUs (tests/run.sh builds them before the Rust
 //! tests).
 
-use rustfmu::fmi2::variables::Value;
+use rustfmu::Value;
 use rustfmu_bench::master::Master;
 use rustfmu_bench::single::{Direct, ViaFmi};
 use rustfmu_bench::topology::{self, Slave, Topology};
@@ -30,7 +30,7 @@ fn direct_and_c_api_steps_compute_the_same_swing() {
 }
 
 /// The composed loop the benchmarks time is the real one: Controller, two DC motors and the
-/// plant, with the parameters of `rustfmu::systems`, stand the pendulum up.
+/// plant, with the parameters of `paper/systems.toml`, stand the pendulum up.
 #[test]
 fn full_loop_stands_the_pendulum_up_in_the_native_master() {
     let mut master = Master::new(topology::full()).unwrap_or_else(|e| panic!("{e}"));
@@ -60,7 +60,7 @@ fn controller_plant_loop_brings_the_pendulum_upright_at_rest() {
 #[test]
 fn every_parameter_of_the_system_reaches_the_loop() {
     let topo = topology::full();
-    let system = rustfmu::systems::system(topo.system).unwrap();
+    let system = topology::systems().unwrap().get(topo.system).unwrap();
     let n: usize = system.components.iter().map(|c| c.parameters.len()).sum();
     assert_eq!(
         topo.start_values.len(),

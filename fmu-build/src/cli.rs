@@ -64,6 +64,18 @@ enum Cmd {
         #[arg(long)]
         manifest_path: Option<PathBuf>,
     },
+    /// Write target/fmu/<system>.ssp for the composed systems of a systems file (default: the
+    /// files in `[workspace.metadata.fmu] systems`), from the packaged FMUs.
+    Ssp {
+        /// A systems file (TOML); default: those the workspace names.
+        #[arg(long)]
+        systems: Option<PathBuf>,
+        /// Where the FMUs are and the SSP files go (default: target/fmu).
+        #[arg(long)]
+        fmu_dir: Option<PathBuf>,
+        #[arg(long)]
+        manifest_path: Option<PathBuf>,
+    },
     /// Internal: the smoke run of `validate`, in a child process.
     #[command(hide = true, name = "__smoke-run")]
     SmokeRun {
@@ -102,6 +114,14 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
         Cmd::Xml { write, manifest_path } => {
             let ws = cargo::workspace(manifest_path.as_deref())?;
             committed_descriptions(&ws, !write)
+        }
+        Cmd::Ssp {
+            systems,
+            fmu_dir,
+            manifest_path,
+        } => {
+            let ws = cargo::workspace(manifest_path.as_deref())?;
+            write_ssp(&ws, systems.as_deref(), fmu_dir.as_deref())
         }
         Cmd::SmokeRun { library, guid, vrs } => {
             let vrs: Vec<u32> = vrs
@@ -142,8 +162,25 @@ pub fn build(
     validate_all(&built, python)?;
     if all && packages.is_empty() {
         committed_descriptions(&ws, false)?;
+        write_ssp(&ws, None, None)?;
     }
     Ok(built)
+}
+
+/// The SSP files of a systems file, or of those the workspace names.
+fn write_ssp(ws: &Workspace, systems_file: Option<&Path>, fmu_dir: Option<&Path>) -> Result<(), String> {
+    let files = match systems_file {
+        Some(f) => vec![f.to_path_buf()],
+        None => crate::systems::workspace_files(&ws.root)?,
+    };
+    let dir = fmu_dir.map_or_else(|| ws.fmu_dir(), Path::to_path_buf);
+    for file in files {
+        let systems = crate::systems::Systems::load(&file)?;
+        for path in crate::ssp::write_all(&systems, &dir, &dir)? {
+            eprintln!("fmu: wrote {}", path.display());
+        }
+    }
+    Ok(())
 }
 
 /// The committed copy of every packaged description, if the workspace keeps one.

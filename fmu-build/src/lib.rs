@@ -11,5 +11,7 @@ pub mod cargo;
 pub mod cli;
 pub mod docs;
 pub mod new;
+pub mod ssp;
+pub mod systems;
 pub mod validate;
 pub mod xml;

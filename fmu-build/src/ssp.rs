@@ -1,16 +1,28 @@
-//! SSP 1.0 archives of the paper's composed systems: `target/fmu/<system>.ssp` holding
-//! `SystemStructure.ssd` and the FMUs under `resources/`.
+//! SSP 1.0 archives of composed systems: `<out_dir>/<system>.ssp` holding
+//! `SystemStructure.ssd` and the system's FMUs under `resources/`.
 //!
-//! The systems are described once, as data, in the library ([`rustfmu::systems`], which the
-//! benchmarks run too); the SSD is generated from that description after
-//! [`System::check`] has checked it against the FMUs' own variable declarations (every
-//! connection goes from an output to an input of the same type, every parameter exists and has
-//! the right type).
-//! Every connection names its `startElement` and `endElement` (libcosim's SSP reader needs both;
-//! no system-level connectors are used).
+//! A system comes from a systems file ([`crate::systems`]); the SSD is generated from it after
+//! [`System::check`] has checked it against the packaged FMUs' modelDescription.xml (every
+//! connection goes from an output to an input of the same type, every parameter exists, takes
+//! a start value and has a value of its type). Only the packaged FMUs are read, as any
+//! importer reads them.
+//!
+//! What the importers this project runs (fmpy.ssp, libcosim) need:
+//! - every connection names its `startElement` and `endElement` (libcosim's SSP reader needs
+//!   both; no system-level connectors are used);
+//! - parameter values are inline `ssd:ParameterValues`, one `ssv:ParameterSet` per component
+//!   named after it (libcosim applies a component's first set by default);
+//! - an Enumeration parameter is written as `ssv:Integer` with the item's value. SSP's own
+//!   form, `ssv:Enumeration value="<item name>"`, makes libcosim (libcosimpy 0.0.6) abort the
+//!   process while parsing the SSD (its parser panics on `ssv:Enumeration`) and fmpy 0.3
+//!   (`simulate_ssp`) fail with `int('<item name>')`; fmpy applies `ssv:Integer` to an
+//!   Enumeration variable through fmi2SetInteger. (libcosim ignores FMI 2.0 Enumeration
+//!   variables altogether, so no form reaches them there.)
+//! - a connection of Enumerations has `ssc:Enumeration` connectors naming a type of the SSD's
+//!   `ssd:Enumerations`, as SSP defines it (fmpy accepts it; libcosim has no Enumeration
+//!   connectors and aborts on them).
 
-use rustfmu::fmi2::variables::{Value, VarType};
-use rustfmu::systems::{System, systems};
+use crate::systems::{Checked, Enumeration, Fmus, System, Systems, Value};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -20,36 +32,49 @@ fn escape(s: &str) -> String {
     quick_xml::escape::escape(s).into_owned()
 }
 
-fn type_element(t: VarType) -> &'static str {
-    match t {
-        VarType::Real => "Real",
-        VarType::Integer => "Integer",
-        VarType::Boolean => "Boolean",
-    }
-}
-
-fn value_text(v: Value) -> String {
+/// The SSV element and value text of a parameter value.
+fn ssv_value(v: &Value) -> (&'static str, String) {
     match v {
-        Value::Real(x) => format!("{x:?}"),
-        Value::Integer(x) => x.to_string(),
-        Value::Boolean(x) => x.to_string(),
+        Value::Real(x) => ("Real", format!("{x:?}")),
+        Value::Integer(x) => ("Integer", x.to_string()),
+        Value::Boolean(x) => ("Boolean", x.to_string()),
+        Value::String(s) => ("String", escape(s)),
+        // See the module's documentation: the importers take an Enumeration as an Integer.
+        Value::Enumeration { value, .. } => ("Integer", value.to_string()),
     }
 }
 
-/// `SystemStructure.ssd` of a system, after checking it against the FMUs' declarations.
-pub fn ssd(system: &System) -> Result<String, String> {
-    system.check()?;
-    let mut connectors: Vec<Vec<(&str, &str, VarType)>> = vec![Vec::new(); system.components.len()];
-    for &(from, out, to, inp) in &system.connections {
-        let (_, o) = system.decl(from, out)?;
-        for (comp, var, kind) in [(from, out, "output"), (to, inp, "input")] {
+/// `SystemStructure.ssd` of a system, after checking it against its FMUs' descriptions.
+pub fn ssd(system: &System, fmus: &Fmus) -> Result<String, String> {
+    Ok(ssd_of_checked(&system.check(fmus)?))
+}
+
+/// `SystemStructure.ssd` of a checked system.
+pub fn ssd_of_checked(checked: &Checked) -> String {
+    let system = checked.system;
+    // Each component's connectors, in the order the connections first name them.
+    let mut connectors: Vec<Vec<(&str, &str, String)>> = vec![Vec::new(); system.components.len()];
+    // The Enumeration types the connections carry, by name.
+    let mut enumerations: Vec<&Enumeration> = Vec::new();
+    for tc in &checked.connections {
+        let c = tc.connection;
+        let type_element = match &tc.enumeration {
+            Some(e) => {
+                if !enumerations.iter().any(|d| d.name == e.name) {
+                    enumerations.push(e);
+                }
+                format!(r#"<ssc:Enumeration name="{}"/>"#, escape(&e.name))
+            }
+            None => format!("<ssc:{}/>", tc.var_type.name()),
+        };
+        for (port, kind) in [(&c.from, "output"), (&c.to, "input")] {
             let k = system
                 .components
                 .iter()
-                .position(|c| c.name == comp)
+                .position(|comp| comp.name == port.component)
                 .expect("checked by System::check");
-            if !connectors[k].iter().any(|(n, _, _)| *n == var) {
-                connectors[k].push((var, kind, o.var_type));
+            if !connectors[k].iter().any(|(n, _, _)| *n == port.variable) {
+                connectors[k].push((&port.variable, kind, type_element.clone()));
             }
         }
     }
@@ -59,33 +84,32 @@ pub fn ssd(system: &System) -> Result<String, String> {
     let _ = writeln!(
         w,
         r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" version="1.0" name="{}" generationTool="rustfmu fmu-build">"#,
-        escape(system.name)
+        escape(&system.name)
     );
-    let _ = writeln!(
-        w,
-        r#"  <ssd:System name="{}" description="{}">"#,
-        escape(system.name),
-        escape(system.description)
-    );
+    let description = match &system.description {
+        Some(d) => format!(r#" description="{}""#, escape(d)),
+        None => String::new(),
+    };
+    let _ = writeln!(w, r#"  <ssd:System name="{}"{description}>"#, escape(&system.name));
     let _ = writeln!(w, "    <ssd:Elements>");
     for (k, c) in system.components.iter().enumerate() {
         let _ = writeln!(
             w,
             r#"      <ssd:Component name="{}" type="application/x-fmu-sharedlibrary" source="resources/{}.fmu">"#,
-            escape(c.name),
-            escape(c.fmu)
+            escape(&c.name),
+            escape(&c.fmu)
         );
         let _ = writeln!(w, "        <ssd:Connectors>");
-        for (var, kind, t) in &connectors[k] {
+        for (var, kind, type_element) in &connectors[k] {
             let _ = writeln!(
                 w,
-                r#"          <ssd:Connector name="{}" kind="{kind}"><ssc:{}/></ssd:Connector>"#,
-                escape(var),
-                type_element(*t)
+                r#"          <ssd:Connector name="{}" kind="{kind}">{type_element}</ssd:Connector>"#,
+                escape(var)
             );
         }
         let _ = writeln!(w, "        </ssd:Connectors>");
-        if !c.parameters.is_empty() {
+        let parameters = &checked.parameters[k];
+        if !parameters.is_empty() {
             let _ = writeln!(
                 w,
                 "        <ssd:ParameterBindings>\n          <ssd:ParameterBinding>\n            <ssd:ParameterValues>"
@@ -93,17 +117,15 @@ pub fn ssd(system: &System) -> Result<String, String> {
             let _ = writeln!(
                 w,
                 r#"              <ssv:ParameterSet version="1.0" name="{}">"#,
-                escape(c.name)
+                escape(&c.name)
             );
             let _ = writeln!(w, "                <ssv:Parameters>");
-            for (name, value) in &c.parameters {
-                let (_, d) = system.decl(c.name, name)?;
+            for (name, value) in parameters {
+                let (element, text) = ssv_value(value);
                 let _ = writeln!(
                     w,
-                    r#"                  <ssv:Parameter name="{}"><ssv:{} value="{}"/></ssv:Parameter>"#,
-                    escape(name),
-                    type_element(d.var_type),
-                    value_text(*value)
+                    r#"                  <ssv:Parameter name="{}"><ssv:{element} value="{text}"/></ssv:Parameter>"#,
+                    escape(name)
                 );
             }
             let _ = writeln!(
@@ -118,87 +140,272 @@ pub fn ssd(system: &System) -> Result<String, String> {
         let _ = writeln!(w, "      </ssd:Component>");
     }
     let _ = writeln!(w, "    </ssd:Elements>\n    <ssd:Connections>");
-    for (from, out, to, inp) in &system.connections {
+    for tc in &checked.connections {
+        let c = tc.connection;
         let _ = writeln!(
             w,
-            r#"      <ssd:Connection startElement="{from}" startConnector="{out}" endElement="{to}" endConnector="{inp}"/>"#
+            r#"      <ssd:Connection startElement="{}" startConnector="{}" endElement="{}" endConnector="{}"/>"#,
+            escape(&c.from.component),
+            escape(&c.from.variable),
+            escape(&c.to.component),
+            escape(&c.to.variable)
         );
     }
     let _ = writeln!(w, "    </ssd:Connections>\n  </ssd:System>");
-    let _ = writeln!(
-        w,
-        r#"  <ssd:DefaultExperiment startTime="0.0" stopTime="{:?}"/>"#,
-        system.stop_time
-    );
+    if !enumerations.is_empty() {
+        let _ = writeln!(w, "  <ssd:Enumerations>");
+        for e in &enumerations {
+            let _ = writeln!(w, r#"    <ssc:Enumeration name="{}">"#, escape(&e.name));
+            for (item, value) in &e.items {
+                let _ = writeln!(w, r#"      <ssc:Item name="{}" value="{value}"/>"#, escape(item));
+            }
+            let _ = writeln!(w, "    </ssc:Enumeration>");
+        }
+        let _ = writeln!(w, "  </ssd:Enumerations>");
+    }
+    match system.stop_time {
+        Some(t) => {
+            let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0" stopTime="{t:?}"/>"#);
+        }
+        None => {
+            let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0"/>"#);
+        }
+    }
     let _ = writeln!(w, "</ssd:SystemStructureDescription>");
-    Ok(x)
+    x
 }
 
-/// Writes `<fmu_dir>/<system>.ssp` for every system; the FMUs must be packaged in `fmu_dir`.
-pub fn write_all(fmu_dir: &Path) -> Result<Vec<PathBuf>, String> {
-    let mut written = Vec::new();
-    for system in systems() {
-        let ssd = ssd(&system)?;
-        let out = fmu_dir.join(format!("{}.ssp", system.name));
-        let tmp = out.with_extension("ssp.partial");
-        let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-        let mut zip = zip::ZipWriter::new(file);
-        let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
-        let zip_err = |e: &dyn std::fmt::Display| format!("{}: {e}", tmp.display());
-        zip.start_file("SystemStructure.ssd", options)
-            .map_err(|e| zip_err(&e))?;
-        zip.write_all(ssd.as_bytes()).map_err(|e| zip_err(&e))?;
-        let mut fmus: Vec<&str> = system.components.iter().map(|c| c.fmu).collect();
-        fmus.sort_unstable();
-        fmus.dedup();
-        for id in fmus {
-            let path = fmu_dir.join(format!("{id}.fmu"));
-            let bytes = std::fs::read(&path).map_err(|e| {
-                format!(
-                    "{}: {e} (package the FMUs first: `cargo run --release -p fmu-build`)",
-                    path.display()
-                )
-            })?;
-            // Stored, not deflated: an .fmu is already compressed.
-            zip.start_file(
-                format!("resources/{id}.fmu"),
-                SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored),
+/// Writes `<out_dir>/<system>.ssp`: the SSD and the system's FMUs, read from
+/// `<fmu_dir>/<fmu>.fmu` (packaged before).
+pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf, String> {
+    let fmus = system.read_fmus(fmu_dir)?;
+    let ssd = ssd(system, &fmus)?;
+    let out = out_dir.join(format!("{}.ssp", system.name));
+    // Written aside and renamed, so an interrupted build never leaves a half-written .ssp.
+    let tmp = out.with_extension("ssp.partial");
+    let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let zip_err = |e: &dyn std::fmt::Display| format!("{}: {e}", tmp.display());
+    zip.start_file("SystemStructure.ssd", options)
+        .map_err(|e| zip_err(&e))?;
+    zip.write_all(ssd.as_bytes()).map_err(|e| zip_err(&e))?;
+    // Fmus is ordered by name: each FMU once, sorted.
+    for id in fmus.keys() {
+        let path = fmu_dir.join(format!("{id}.fmu"));
+        let bytes = std::fs::read(&path).map_err(|e| {
+            format!(
+                "{}: {e} (package the FMUs first: `cargo run --release -p fmu-build`)",
+                path.display()
             )
-            .map_err(|e| zip_err(&e))?;
-            zip.write_all(&bytes).map_err(|e| zip_err(&e))?;
-        }
-        zip.finish().map_err(|e| zip_err(&e))?;
-        std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
-        written.push(out);
+        })?;
+        // Stored, not deflated: an .fmu is already compressed.
+        zip.start_file(
+            format!("resources/{id}.fmu"),
+            SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored),
+        )
+        .map_err(|e| zip_err(&e))?;
+        zip.write_all(&bytes).map_err(|e| zip_err(&e))?;
     }
-    Ok(written)
+    zip.finish().map_err(|e| zip_err(&e))?;
+    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(out)
+}
+
+/// Writes `<out_dir>/<system>.ssp` for every system of a file.
+pub fn write_all(systems: &Systems, fmu_dir: &Path, out_dir: &Path) -> Result<Vec<PathBuf>, String> {
+    systems.systems.iter().map(|s| write(s, fmu_dir, out_dir)).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::systems::FmuDescription;
+    use crate::systems::testing::*;
+    use std::io::Read as _;
 
+    fn fixture(name: &str) -> String {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/fixtures/{name}.ssd"));
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    /// The fixtures are the SSDs the writer made from `rustfmu::systems` before the systems
+    /// became a file: the systems file reproduces them to the byte.
+    #[test]
+    fn the_ssd_of_each_paper_system_is_the_reference() {
+        let systems = paper_systems();
+        for name in ["PendulumLQR", "PendulumMotors"] {
+            let text = ssd(systems.get(name).unwrap(), &fmus()).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                text == fixture(name),
+                "{name}: the SSD differs from tests/fixtures/{name}.ssd:\n{text}"
+            );
+        }
+    }
+
+    /// libcosim's SSP reader needs both ends of every connection.
     #[test]
     fn every_connection_names_both_ends() {
-        for s in systems() {
-            let text = ssd(&s).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+        let systems = paper_systems();
+        for s in &systems.systems {
+            let text = ssd(s, &fmus()).unwrap_or_else(|e| panic!("{}: {e}", s.name));
             assert_eq!(
                 text.matches("<ssd:Connection ").count(),
                 text.matches("endElement=").count(),
                 "{}: every connection needs an endElement",
                 s.name
             );
+            assert_eq!(text.matches("<ssd:Connection ").count(), s.connections.len());
         }
     }
 
     #[test]
     fn a_system_that_fails_its_check_is_not_written() {
-        let mut s = rustfmu::systems::system("PendulumLQR").unwrap();
-        s.connections.push(("controller", "M1", "pendulum", "alpha1"));
-        let e = ssd(&s).unwrap_err();
+        let systems = paper_systems();
+        let mut s = systems.get("PendulumLQR").unwrap().clone();
+        s.connections.push("controller.M1 -> pendulum.alpha1".parse().unwrap());
+        let e = ssd(&s, &fmus()).unwrap_err();
         assert!(
             e.contains("controller.M1 -> pendulum.alpha1"),
             "expected the bad connection named, got: {e}"
         );
+    }
+
+    /// When the Controller's `mode` becomes an Enumeration, the SSD stays what it is: an
+    /// Enumeration parameter is written as ssv:Integer with the item's value (what fmpy.ssp
+    /// applies; ssv:Enumeration aborts libcosim), whether the file gives the value or the name.
+    #[test]
+    fn an_enumeration_parameter_is_written_as_the_integer_of_its_item() {
+        let fmus = fmus_with_enumeration_mode();
+        let systems = paper_systems();
+        let lqr = systems.get("PendulumLQR").unwrap();
+        assert_eq!(ssd(lqr, &fmus).unwrap(), fixture("PendulumLQR"));
+        let mut named = systems.get("PendulumMotors").unwrap().clone();
+        let controller = named.components.iter_mut().find(|c| c.name == "controller").unwrap();
+        let mode = controller.parameters.iter_mut().find(|p| p.name == "mode").unwrap();
+        mode.value = crate::systems::Literal::String("LQR_PID".into());
+        assert_eq!(ssd(&named, &fmus).unwrap(), fixture("PendulumMotors"));
+        // With the Integer declaration an item name is refused.
+        assert!(ssd(&named, &crate::systems::testing::fmus()).is_err());
+    }
+
+    /// A small FMU description: one Enumeration variable `m` of type `Mode` with `items`.
+    fn enumeration_fmu(id: &str, causality: &str, items: &str) -> FmuDescription {
+        let start = if causality == "input" { r#" start="1""# } else { "" };
+        let initial = if causality == "output" {
+            r#" initial="calculated""#
+        } else {
+            ""
+        };
+        FmuDescription::parse(&format!(
+            r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName="{id}" guid="{{0}}">
+  <CoSimulation modelIdentifier="{id}"/>
+  <TypeDefinitions>
+    <SimpleType name="Mode"><Enumeration>{items}</Enumeration></SimpleType>
+  </TypeDefinitions>
+  <ModelVariables>
+    <ScalarVariable name="m" valueReference="0" causality="{causality}" variability="discrete"{initial}>
+      <Enumeration declaredType="Mode"{start}/>
+    </ScalarVariable>
+  </ModelVariables>
+  <ModelStructure/>
+</fmiModelDescription>
+"#
+        ))
+        .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn an_enumeration_connection_declares_its_type() {
+        let items = r#"<Item name="A" value="1"/><Item name="B" value="2"/>"#;
+        let system = one_system(
+            "[[system]]\nname = \"E\"\nconnections = [\"src.m -> dst.m\"]\n\
+             [[system.component]]\nname = \"src\"\nfmu = \"Source\"\n\
+             [[system.component]]\nname = \"dst\"\nfmu = \"Sink\"\n",
+        );
+        let mut fmus = Fmus::new();
+        fmus.insert("Source".into(), enumeration_fmu("Source", "output", items));
+        fmus.insert("Sink".into(), enumeration_fmu("Sink", "input", items));
+        let text = ssd(&system, &fmus).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            text.matches(r#"<ssc:Enumeration name="Mode"/></ssd:Connector>"#)
+                .count(),
+            2,
+            "{text}"
+        );
+        assert!(
+            text.contains(
+                "  </ssd:System>\n  <ssd:Enumerations>\n    <ssc:Enumeration name=\"Mode\">\n      \
+                 <ssc:Item name=\"A\" value=\"1\"/>\n      <ssc:Item name=\"B\" value=\"2\"/>\n    \
+                 </ssc:Enumeration>\n  </ssd:Enumerations>\n  <ssd:DefaultExperiment startTime=\"0.0\"/>\n"
+            ),
+            "the type follows the System, before the DefaultExperiment (stopTime omitted when the \
+             file gives none):\n{text}"
+        );
+        assert!(
+            !text.contains("description="),
+            "no description given, none written: {text}"
+        );
+        // Enumerations of different items do not connect.
+        fmus.insert(
+            "Sink".into(),
+            enumeration_fmu(
+                "Sink",
+                "input",
+                r#"<Item name="A" value="1"/><Item name="C" value="3"/>"#,
+            ),
+        );
+        let e = ssd(&system, &fmus).unwrap_err();
+        assert!(e.contains("src.m -> dst.m") && e.contains("Mode (A = 1, C = 3)"), "{e}");
+    }
+
+    /// The archive: the SSD, then each FMU once under resources/, stored as it was packaged.
+    #[test]
+    fn the_archive_holds_the_ssd_and_each_fmu_once() {
+        let dir = std::env::temp_dir().join(format!("fmu-build-ssp-test-{}", std::process::id()));
+        let (fmu_dir, out_dir) = (dir.join("fmus"), dir.join("out"));
+        std::fs::create_dir_all(&fmu_dir).unwrap();
+        std::fs::create_dir_all(&out_dir).unwrap();
+        for id in ["Pendulum", "Controller", "DCMotor"] {
+            let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join(format!("{id}.fmu"))).unwrap());
+            zip.start_file("modelDescription.xml", SimpleFileOptions::default())
+                .unwrap();
+            zip.write_all(xml(id).as_bytes()).unwrap();
+            zip.finish().unwrap();
+        }
+        let systems = paper_systems();
+        let written = write_all(&systems, &fmu_dir, &out_dir).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            written,
+            [out_dir.join("PendulumLQR.ssp"), out_dir.join("PendulumMotors.ssp")]
+        );
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&written[1]).unwrap()).unwrap();
+        let names: Vec<String> = (0..zip.len())
+            .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "SystemStructure.ssd",
+                "resources/Controller.fmu",
+                "resources/DCMotor.fmu",
+                "resources/Pendulum.fmu"
+            ]
+        );
+        let mut text = String::new();
+        zip.by_name("SystemStructure.ssd")
+            .unwrap()
+            .read_to_string(&mut text)
+            .unwrap();
+        assert_eq!(text, fixture("PendulumMotors"));
+        let motor = zip.by_name("resources/DCMotor.fmu").unwrap();
+        assert_eq!(motor.compression(), zip::CompressionMethod::Stored);
+        drop(motor);
+        assert_eq!(
+            std::fs::read(fmu_dir.join("DCMotor.fmu")).unwrap().len() as u64,
+            zip.by_name("resources/DCMotor.fmu").unwrap().size()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -11,7 +11,7 @@ use holonomic::models::pendulum::PendulumParams;
 use holonomic::numerics::ode::{Dopri5, Tolerances};
 use nalgebra::{Vector2, Vector4};
 use pendulum_fmu::Pendulum;
-use rustfmu::{CoSimulation, Context, Model, Variables};
+use rustfmu::{CoSimulation as _, Context, Model, Variables};
 use rustfmu_bench::rk4;
 use std::hint::black_box;
 use std::time::Instant;

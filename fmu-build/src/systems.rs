@@ -1,0 +1,1224 @@
+//! Composed systems as data: a TOML file of systems, each a list of FMU instances
+//! (components) with their parameter and start values, and connections from outputs to
+//! inputs. A system is checked against the packaged FMUs it names, through their
+//! `modelDescription.xml` as any importer reads it ([`FmuDescription`]); [`crate::ssp`] writes
+//! a checked system as an SSP file. Nothing here knows the Rust types of the models.
+//!
+//! # The systems file
+//!
+//! ```toml
+//! [[system]]
+//! name = "PendulumLQR"        # the system's name, and its SSP file's: PendulumLQR.ssp
+//! description = "..."         # optional
+//! stop-time = 5.0             # optional: stopTime of the SSD's DefaultExperiment [s]
+//! connections = [             # output -> input, of the same type
+//!     "pendulum.alpha1 -> controller.alpha1",
+//!     "controller.M1 -> pendulum.M1",
+//! ]
+//!
+//! [[system.component]]        # one FMU instance of the system above; in order
+//! name = "pendulum"           # unique in the system, without '.'
+//! fmu = "Pendulum"            # the FMU's file: <fmu-dir>/Pendulum.fmu
+//! parameters = { alpha1 = 0.1, alpha2 = -0.05 }   # optional; in order
+//! ```
+//!
+//! In a connection the component is what precedes the first `.` of each end; the rest is the
+//! variable's name (it may contain dots). A parameter names a variable that takes a start
+//! value (not an input: an input's value comes from its connection; not a constant), and its
+//! value is typed by the FMU's declaration: a Real takes a number (`200` or `200.0`), an
+//! Integer an integer, a Boolean `true` or `false`, a String a string, an Enumeration an
+//! integer that is one of its items' values or the name of one of its items (`"LQR"`).
+//!
+//! A workspace names its systems files in its `Cargo.toml` ([`workspace_files`]):
+//!
+//! ```toml
+//! [workspace.metadata.fmu]
+//! systems = ["paper/systems.toml"]
+//! ```
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, MapAccess, Visitor};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// A value as the systems file writes it, before an FMU's declaration gives it a type.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Literal {
+    Float(f64),
+    Integer(i64),
+    Boolean(bool),
+    String(String),
+}
+
+impl fmt::Display for Literal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Literal::Float(x) => write!(f, "{x:?}"),
+            Literal::Integer(x) => write!(f, "{x}"),
+            Literal::Boolean(x) => write!(f, "{x}"),
+            Literal::String(s) => write!(f, "{s:?}"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Literal {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = Literal;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number, true or false, or a string")
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<Literal, E> {
+                Ok(Literal::Float(x))
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<Literal, E> {
+                Ok(Literal::Integer(x))
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> Result<Literal, E> {
+                i64::try_from(x)
+                    .map(Literal::Integer)
+                    .map_err(|_| E::custom(format!("{x} is too large")))
+            }
+            fn visit_bool<E: de::Error>(self, x: bool) -> Result<Literal, E> {
+                Ok(Literal::Boolean(x))
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<Literal, E> {
+                Ok(Literal::String(s.to_owned()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A parameter or start value of a component: `variable = value`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    pub name: String,
+    pub value: Literal,
+}
+
+/// The `parameters` table, in the order the file lists it.
+fn ordered_parameters<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Parameter>, D::Error> {
+    struct V;
+    impl<'de> Visitor<'de> for V {
+        type Value = Vec<Parameter>;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a table of variable = value")
+        }
+        fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<Vec<Parameter>, M::Error> {
+            let mut out = Vec::new();
+            while let Some((name, value)) = map.next_entry::<String, Literal>()? {
+                out.push(Parameter { name, value });
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(V)
+}
+
+/// One end of a connection: `component.variable`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Port {
+    pub component: String,
+    pub variable: String,
+}
+
+impl fmt::Display for Port {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.component, self.variable)
+    }
+}
+
+/// `from -> to`: the output `from` drives the input `to`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Connection {
+    pub from: Port,
+    pub to: Port,
+}
+
+impl fmt::Display for Connection {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} -> {}", self.from, self.to)
+    }
+}
+
+impl std::str::FromStr for Connection {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Connection, String> {
+        let bad = || format!("connection '{s}' must read 'component.output -> component.input'");
+        let port = |p: &str| -> Option<Port> {
+            let (component, variable) = p.trim().split_once('.')?;
+            (!component.is_empty() && !variable.is_empty()).then(|| Port {
+                component: component.to_owned(),
+                variable: variable.to_owned(),
+            })
+        };
+        let (from, to) = s
+            .split_once("->")
+            .filter(|(_, to)| !to.contains("->"))
+            .ok_or_else(bad)?;
+        Ok(Connection {
+            from: port(from).ok_or_else(bad)?,
+            to: port(to).ok_or_else(bad)?,
+        })
+    }
+}
+
+/// One FMU instance of a system, with the parameter and start values it gets.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Component {
+    pub name: String,
+    /// The FMU's file name without `.fmu` (its modelIdentifier, for the FMUs fmu-build packages).
+    pub fmu: String,
+    #[serde(default, deserialize_with = "ordered_parameters")]
+    pub parameters: Vec<Parameter>,
+}
+
+/// A composed system: components, and connections from outputs to inputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct System {
+    /// The systems file it was read from (named in every error).
+    pub file: PathBuf,
+    pub name: String,
+    pub description: Option<String>,
+    /// Stop time of the SSP file's DefaultExperiment, in seconds.
+    pub stop_time: Option<f64>,
+    pub connections: Vec<Connection>,
+    pub components: Vec<Component>,
+}
+
+/// A `[[system]]` table as the file writes it: its connections still text, with their place.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+struct SystemTable {
+    name: String,
+    #[serde(default)]
+    description: Option<String>,
+    #[serde(default)]
+    stop_time: Option<f64>,
+    #[serde(default)]
+    connections: Vec<toml::Spanned<String>>,
+    #[serde(default)]
+    component: Vec<Component>,
+}
+
+/// The systems of one file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Systems {
+    pub file: PathBuf,
+    pub systems: Vec<System>,
+}
+
+/// `file:line:column` of the byte `offset` of `text`.
+fn place(file: &Path, text: &str, offset: usize) -> String {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.chars().rev().take_while(|c| *c != '\n').count() + 1;
+    format!("{}:{line}:{column}", file.display())
+}
+
+/// `file:line:column: message` of a TOML error.
+fn toml_error(file: &Path, text: &str, e: &toml::de::Error) -> String {
+    match e.span() {
+        Some(span) => format!("{}: {}", place(file, text, span.start), e.message().trim()),
+        None => format!("{}: {}", file.display(), e.message().trim()),
+    }
+}
+
+impl Systems {
+    /// Reads and parses a systems file.
+    pub fn load(file: &Path) -> Result<Systems, String> {
+        let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+        Systems::parse(&text, file)
+    }
+
+    /// Parses the text of a systems file (`file` names it in the errors). Checks what needs no
+    /// FMU: names are unique, components have no '.' in their names, connections name
+    /// components of their system.
+    pub fn parse(text: &str, file: &Path) -> Result<Systems, String> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct File {
+            #[serde(default)]
+            system: Vec<SystemTable>,
+        }
+        let parsed: File = toml::from_str(text).map_err(|e| toml_error(file, text, &e))?;
+        let mut systems = Vec::new();
+        for t in parsed.system {
+            let connections = t
+                .connections
+                .iter()
+                .map(|c| {
+                    c.get_ref()
+                        .parse()
+                        .map_err(|e| format!("{}: {e}", place(file, text, c.span().start)))
+                })
+                .collect::<Result<_, _>>()?;
+            systems.push(System {
+                file: file.to_path_buf(),
+                name: t.name,
+                description: t.description,
+                stop_time: t.stop_time,
+                connections,
+                components: t.component,
+            });
+        }
+        for (i, s) in systems.iter().enumerate() {
+            let at = format!("{}: system '{}'", file.display(), s.name);
+            if s.name.is_empty() {
+                return Err(format!("{}: system {} has an empty name", file.display(), i + 1));
+            }
+            for (k, c) in s.components.iter().enumerate() {
+                if c.name.is_empty() || c.name.contains('.') {
+                    return Err(format!(
+                        "{at}: component name '{}' must be non-empty and without '.'",
+                        c.name
+                    ));
+                }
+                if s.components[..k].iter().any(|o| o.name == c.name) {
+                    return Err(format!("{at}: two components are named '{}'", c.name));
+                }
+            }
+            for c in &s.connections {
+                for p in [&c.from, &c.to] {
+                    if s.component(&p.component).is_none() {
+                        return Err(format!(
+                            "{at}: connection {c} names no component of the system: '{}' (there are: {})",
+                            p.component,
+                            s.component_names().join(", ")
+                        ));
+                    }
+                }
+            }
+        }
+        for (i, s) in systems.iter().enumerate() {
+            if systems[..i].iter().any(|o| o.name == s.name) {
+                return Err(format!("{}: two systems are named '{}'", file.display(), s.name));
+            }
+        }
+        Ok(Systems {
+            file: file.to_path_buf(),
+            systems,
+        })
+    }
+
+    /// The system called `name`; the error lists the systems there are.
+    pub fn get(&self, name: &str) -> Result<&System, String> {
+        self.systems.iter().find(|s| s.name == name).ok_or_else(|| {
+            format!(
+                "{}: no system named '{name}' (there are: {})",
+                self.file.display(),
+                self.names().join(", ")
+            )
+        })
+    }
+
+    pub fn names(&self) -> Vec<&str> {
+        self.systems.iter().map(|s| s.name.as_str()).collect()
+    }
+}
+
+/// The systems files a workspace names in its `Cargo.toml` (`[workspace.metadata.fmu]
+/// systems = [...]`, paths relative to the workspace root); none when it names none.
+pub fn workspace_files(workspace_root: &Path) -> Result<Vec<PathBuf>, String> {
+    let manifest = workspace_root.join("Cargo.toml");
+    let text = std::fs::read_to_string(&manifest).map_err(|e| format!("{}: {e}", manifest.display()))?;
+    let table: toml::Table = toml::from_str(&text).map_err(|e| toml_error(&manifest, &text, &e))?;
+    let root = toml::Value::Table(table);
+    let Some(list) = ["workspace", "metadata", "fmu", "systems"]
+        .iter()
+        .try_fold(&root, |v, key| v.get(key))
+    else {
+        return Ok(vec![]);
+    };
+    let bad = || {
+        format!(
+            "{}: [workspace.metadata.fmu] systems must be a list of paths",
+            manifest.display()
+        )
+    };
+    list.as_array()
+        .ok_or_else(bad)?
+        .iter()
+        .map(|p| p.as_str().map(|p| workspace_root.join(p)).ok_or_else(bad))
+        .collect()
+}
+
+/// Base type of an FMI 2.0 variable: the element under its `ScalarVariable`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VarType {
+    Real,
+    Integer,
+    Boolean,
+    String,
+    Enumeration,
+}
+
+impl VarType {
+    /// Its element name, in modelDescription.xml as in SSP (`ssc:Real`, `ssv:Real`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            VarType::Real => "Real",
+            VarType::Integer => "Integer",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+            VarType::Enumeration => "Enumeration",
+        }
+    }
+
+    fn from_element(name: &[u8]) -> Option<VarType> {
+        Some(match name {
+            b"Real" => VarType::Real,
+            b"Integer" => VarType::Integer,
+            b"Boolean" => VarType::Boolean,
+            b"String" => VarType::String,
+            b"Enumeration" => VarType::Enumeration,
+            _ => return None,
+        })
+    }
+}
+
+impl fmt::Display for VarType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    Parameter,
+    CalculatedParameter,
+    Input,
+    Output,
+    Local,
+    Independent,
+}
+
+impl Causality {
+    fn parse(s: &str) -> Option<Causality> {
+        Some(match s {
+            "parameter" => Causality::Parameter,
+            "calculatedParameter" => Causality::CalculatedParameter,
+            "input" => Causality::Input,
+            "output" => Causality::Output,
+            "local" => Causality::Local,
+            "independent" => Causality::Independent,
+            _ => return None,
+        })
+    }
+
+    /// As modelDescription.xml writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::CalculatedParameter => "calculatedParameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Local => "local",
+            Causality::Independent => "independent",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variability {
+    Constant,
+    Fixed,
+    Tunable,
+    Discrete,
+    Continuous,
+}
+
+impl Variability {
+    fn parse(s: &str) -> Option<Variability> {
+        Some(match s {
+            "constant" => Variability::Constant,
+            "fixed" => Variability::Fixed,
+            "tunable" => Variability::Tunable,
+            "discrete" => Variability::Discrete,
+            "continuous" => Variability::Continuous,
+            _ => return None,
+        })
+    }
+}
+
+/// A `ScalarVariable` of a modelDescription.xml.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    pub name: String,
+    pub value_reference: u32,
+    pub causality: Causality,
+    pub variability: Variability,
+    pub var_type: VarType,
+    /// `declaredType`: for an Enumeration, the name of its type in `TypeDefinitions`.
+    pub declared_type: Option<String>,
+    /// The `start` attribute, as written.
+    pub start: Option<String>,
+}
+
+impl Variable {
+    /// Whether an importer may give it a start or parameter value: it declares a start value,
+    /// is not an input (whose value comes from its connection) and not a constant.
+    pub fn takes_start_value(&self) -> bool {
+        self.start.is_some() && self.causality != Causality::Input && self.variability != Variability::Constant
+    }
+}
+
+/// An enumeration type of `TypeDefinitions`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Enumeration {
+    pub name: String,
+    /// (item name, value), in order.
+    pub items: Vec<(String, i32)>,
+}
+
+impl Enumeration {
+    /// `Mode (LQR = 1, PID = 2)`
+    fn describe(&self) -> String {
+        let items: Vec<String> = self.items.iter().map(|(n, v)| format!("{n} = {v}")).collect();
+        format!("{} ({})", self.name, items.join(", "))
+    }
+}
+
+/// What a system needs to know of an FMU, read from its modelDescription.xml.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FmuDescription {
+    /// modelIdentifier of its CoSimulation (else ModelExchange) element.
+    pub model_identifier: String,
+    pub variables: Vec<Variable>,
+    pub enumerations: Vec<Enumeration>,
+}
+
+impl FmuDescription {
+    /// Parses a modelDescription.xml (FMI 2.0).
+    pub fn parse(xml: &str) -> Result<FmuDescription, String> {
+        use quick_xml::Reader;
+        use quick_xml::events::Event;
+        let mut reader = Reader::from_str(xml);
+        let mut d = FmuDescription {
+            model_identifier: String::new(),
+            variables: vec![],
+            enumerations: vec![],
+        };
+        // The ScalarVariable being read: its attributes, until its type element comes.
+        let mut var: Option<Variable> = None;
+        // Inside <SimpleType>: the enumeration type being read, if it is one.
+        let mut simple_type: Option<String> = None;
+        let mut enumeration: Option<Enumeration> = None;
+        let mut fmi_version = None;
+        loop {
+            let event = reader.read_event().map_err(|e| {
+                format!(
+                    "modelDescription.xml is not well-formed at byte {}: {e}",
+                    reader.error_position()
+                )
+            })?;
+            let (e, empty) = match &event {
+                Event::Eof => break,
+                Event::Start(e) => (e, false),
+                Event::Empty(e) => (e, true),
+                Event::End(e) => {
+                    match e.name().as_ref() {
+                        b"ScalarVariable" => {
+                            if let Some(v) = var.take() {
+                                return Err(format!("variable '{}' has no type element", v.name));
+                            }
+                        }
+                        b"SimpleType" => {
+                            simple_type = None;
+                            d.enumerations.extend(enumeration.take());
+                        }
+                        _ => {}
+                    }
+                    continue;
+                }
+                _ => continue,
+            };
+            let mut attrs = BTreeMap::new();
+            for a in e.attributes() {
+                let a = a.map_err(|err| format!("modelDescription.xml: bad attribute: {err}"))?;
+                let value = a
+                    .unescape_value()
+                    .map_err(|err| format!("modelDescription.xml: bad attribute value: {err}"))?;
+                attrs.insert(a.key.as_ref().to_vec(), value.into_owned());
+            }
+            let attr = |k: &str| attrs.get(k.as_bytes()).cloned();
+            match e.name().as_ref() {
+                b"fmiModelDescription" => fmi_version = attr("fmiVersion"),
+                b"CoSimulation" => d.model_identifier = attr("modelIdentifier").unwrap_or_default(),
+                b"ModelExchange" if d.model_identifier.is_empty() => {
+                    d.model_identifier = attr("modelIdentifier").unwrap_or_default()
+                }
+                b"SimpleType" if !empty => simple_type = attr("name"),
+                b"Enumeration" if simple_type.is_some() && var.is_none() => {
+                    enumeration = Some(Enumeration {
+                        name: simple_type.clone().unwrap_or_default(),
+                        items: vec![],
+                    })
+                }
+                b"Item" => {
+                    if let Some(en) = &mut enumeration {
+                        let name = attr("name").unwrap_or_default();
+                        let value = attr("value")
+                            .and_then(|v| v.trim().parse().ok())
+                            .ok_or_else(|| format!("enumeration {}: item '{name}' has no integer value", en.name))?;
+                        en.items.push((name, value));
+                    }
+                }
+                b"ScalarVariable" => {
+                    let name = attr("name").ok_or("a ScalarVariable has no name")?;
+                    let value_reference = attr("valueReference")
+                        .and_then(|v| v.trim().parse().ok())
+                        .ok_or_else(|| format!("variable '{name}' has no valueReference"))?;
+                    let causality = attr("causality").unwrap_or_else(|| "local".into());
+                    let causality = Causality::parse(&causality)
+                        .ok_or_else(|| format!("variable '{name}': unknown causality '{causality}'"))?;
+                    let variability = attr("variability").unwrap_or_else(|| "continuous".into());
+                    let variability = Variability::parse(&variability)
+                        .ok_or_else(|| format!("variable '{name}': unknown variability '{variability}'"))?;
+                    var = Some(Variable {
+                        name,
+                        value_reference,
+                        causality,
+                        variability,
+                        var_type: VarType::Real,
+                        declared_type: None,
+                        start: None,
+                    });
+                }
+                tag => {
+                    if let (Some(mut v), Some(t)) = (var.take(), VarType::from_element(tag)) {
+                        v.var_type = t;
+                        v.declared_type = attr("declaredType");
+                        v.start = attr("start");
+                        d.variables.push(v);
+                    }
+                }
+            }
+        }
+        if fmi_version.as_deref() != Some("2.0") {
+            return Err(format!(
+                "fmiVersion is {}, expected \"2.0\"",
+                fmi_version.map_or("missing".into(), |v| format!("\"{v}\""))
+            ));
+        }
+        for v in &d.variables {
+            if v.var_type == VarType::Enumeration && d.enumeration_of(v).is_none() {
+                return Err(format!(
+                    "Enumeration variable '{}' has no declaredType of TypeDefinitions",
+                    v.name
+                ));
+            }
+        }
+        Ok(d)
+    }
+
+    /// Reads `modelDescription.xml` from an `.fmu` archive.
+    pub fn read(fmu: &Path) -> Result<FmuDescription, String> {
+        let err = |e: &dyn fmt::Display| format!("{}: {e}", fmu.display());
+        let file = std::fs::File::open(fmu).map_err(|e| {
+            format!(
+                "{}: {e} (package the FMUs first: `cargo run --release -p fmu-build`)",
+                fmu.display()
+            )
+        })?;
+        let mut zip = zip::ZipArchive::new(file).map_err(|e| err(&e))?;
+        let mut xml = String::new();
+        zip.by_name("modelDescription.xml")
+            .map_err(|_| err(&"no modelDescription.xml at the archive's root"))?
+            .read_to_string(&mut xml)
+            .map_err(|e| err(&e))?;
+        FmuDescription::parse(&xml).map_err(|e| err(&e))
+    }
+
+    pub fn variable(&self, name: &str) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+
+    /// The enumeration type of an Enumeration variable.
+    pub fn enumeration_of(&self, v: &Variable) -> Option<&Enumeration> {
+        let t = v.declared_type.as_deref()?;
+        self.enumerations.iter().find(|e| e.name == t)
+    }
+}
+
+/// The FMUs of a system, by the name its components give them (`fmu`).
+pub type Fmus = BTreeMap<String, FmuDescription>;
+
+/// A parameter or start value, typed by the variable it sets.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Real(f64),
+    Integer(i32),
+    Boolean(bool),
+    String(String),
+    /// An item of an Enumeration: its value (what fmi2SetInteger sets) and its name.
+    Enumeration {
+        value: i32,
+        item: String,
+    },
+}
+
+impl Value {
+    pub fn var_type(&self) -> VarType {
+        match self {
+            Value::Real(_) => VarType::Real,
+            Value::Integer(_) => VarType::Integer,
+            Value::Boolean(_) => VarType::Boolean,
+            Value::String(_) => VarType::String,
+            Value::Enumeration { .. } => VarType::Enumeration,
+        }
+    }
+}
+
+/// A connection, with the type both its ends have.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypedConnection<'a> {
+    pub connection: &'a Connection,
+    pub var_type: VarType,
+    /// For an Enumeration: its type (the same items at both ends).
+    pub enumeration: Option<Enumeration>,
+}
+
+/// A system that has passed [`System::check`], its values typed by the FMUs' declarations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked<'a> {
+    pub system: &'a System,
+    /// For each component, in order: its parameters, in order, with their typed values.
+    pub parameters: Vec<Vec<(&'a str, Value)>>,
+    /// Every connection, in order.
+    pub connections: Vec<TypedConnection<'a>>,
+}
+
+impl System {
+    pub fn component(&self, name: &str) -> Option<&Component> {
+        self.components.iter().find(|c| c.name == name)
+    }
+
+    fn component_names(&self) -> Vec<&str> {
+        self.components.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// `file: system 'name'`, the start of every error about the system.
+    fn at(&self) -> String {
+        format!("{}: system '{}'", self.file.display(), self.name)
+    }
+
+    /// Reads the description of every FMU the system names from `<fmu_dir>/<fmu>.fmu`.
+    pub fn read_fmus(&self, fmu_dir: &Path) -> Result<Fmus, String> {
+        let mut fmus = Fmus::new();
+        for c in &self.components {
+            if !fmus.contains_key(&c.fmu) {
+                let path = fmu_dir.join(format!("{}.fmu", c.fmu));
+                let d =
+                    FmuDescription::read(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
+                fmus.insert(c.fmu.clone(), d);
+            }
+        }
+        Ok(fmus)
+    }
+
+    /// The FMU of `component` and its declaration of `variable`.
+    fn lookup<'f>(&self, fmus: &'f Fmus, port: &Port) -> Result<(&'f FmuDescription, &'f Variable), String> {
+        let c = self
+            .component(&port.component)
+            .ok_or_else(|| format!("{}: no component '{}'", self.at(), port.component))?;
+        let fmu = fmus
+            .get(&c.fmu)
+            .ok_or_else(|| format!("{}: the description of {}.fmu was not read", self.at(), c.fmu))?;
+        let v = fmu.variable(&port.variable).ok_or_else(|| {
+            let names: Vec<&str> = fmu.variables.iter().map(|v| v.name.as_str()).collect();
+            format!(
+                "{}: {port}: {}.fmu has no variable '{}' (it has: {})",
+                self.at(),
+                c.fmu,
+                port.variable,
+                names.join(", ")
+            )
+        })?;
+        Ok((fmu, v))
+    }
+
+    /// Checks the system against the descriptions of its FMUs: every connection goes from an
+    /// output to an input of the same type (for an Enumeration, of the same items), no input
+    /// is driven twice, and every parameter names a variable that takes a start value
+    /// ([`Variable::takes_start_value`]) and has a value of its type.
+    pub fn check<'a>(&'a self, fmus: &Fmus) -> Result<Checked<'a>, String> {
+        let mut connections = Vec::new();
+        for (i, c) in self.connections.iter().enumerate() {
+            let (ofmu, o) = self.lookup(fmus, &c.from)?;
+            let (ifmu, inp) = self.lookup(fmus, &c.to)?;
+            let (oe, ie) = (ofmu.enumeration_of(o), ifmu.enumeration_of(inp));
+            let same_items = o.var_type != VarType::Enumeration || oe.map(|e| &e.items) == ie.map(|e| &e.items);
+            if o.causality != Causality::Output
+                || inp.causality != Causality::Input
+                || o.var_type != inp.var_type
+                || !same_items
+            {
+                let describe = |v: &Variable, e: Option<&Enumeration>| match e {
+                    Some(e) if v.var_type == VarType::Enumeration => {
+                        format!("{} Enumeration {}", v.causality.name(), e.describe())
+                    }
+                    _ => format!("{} {}", v.causality.name(), v.var_type),
+                };
+                return Err(format!(
+                    "{}: connection {c} must go from an output to an input of the same type: {} is {}, {} is {}",
+                    self.at(),
+                    c.from,
+                    describe(o, oe),
+                    c.to,
+                    describe(inp, ie)
+                ));
+            }
+            if let Some(first) = self.connections[..i].iter().find(|d| d.to == c.to) {
+                return Err(format!(
+                    "{}: input {} is driven twice: by {} and by {}",
+                    self.at(),
+                    c.to,
+                    first.from,
+                    c.from
+                ));
+            }
+            connections.push(TypedConnection {
+                connection: c,
+                var_type: o.var_type,
+                enumeration: oe.filter(|_| o.var_type == VarType::Enumeration).cloned(),
+            });
+        }
+        let mut parameters = Vec::new();
+        for c in &self.components {
+            let mut typed = Vec::new();
+            for p in &c.parameters {
+                let port = Port {
+                    component: c.name.clone(),
+                    variable: p.name.clone(),
+                };
+                let (fmu, v) = self.lookup(fmus, &port)?;
+                if !v.takes_start_value() {
+                    let why = if v.causality == Causality::Input {
+                        "it is an input (its value comes from its connection)"
+                    } else if v.variability == Variability::Constant {
+                        "it is a constant"
+                    } else {
+                        "it declares no start value"
+                    };
+                    return Err(format!(
+                        "{}: parameter {port}: {}.fmu's '{}' cannot be given a value: {why}",
+                        self.at(),
+                        c.fmu,
+                        v.name
+                    ));
+                }
+                let value = typed_value(&p.value, v, fmu).map_err(|why| {
+                    format!(
+                        "{}: parameter {port} = {}: {}.fmu declares '{}' {why}",
+                        self.at(),
+                        p.value,
+                        c.fmu,
+                        v.name
+                    )
+                })?;
+                typed.push((p.name.as_str(), value));
+            }
+            parameters.push(typed);
+        }
+        Ok(Checked {
+            system: self,
+            parameters,
+            connections,
+        })
+    }
+}
+
+/// `literal` as a value of `v`'s type; the error completes "declares 'v' ...".
+fn typed_value(literal: &Literal, v: &Variable, fmu: &FmuDescription) -> Result<Value, String> {
+    let mismatch = |want: &str| format!("{}, which takes {want}", v.var_type);
+    match (v.var_type, literal) {
+        (VarType::Real, Literal::Float(x)) => Ok(Value::Real(*x)),
+        (VarType::Real, Literal::Integer(x)) => Ok(Value::Real(*x as f64)),
+        (VarType::Real, _) => Err(mismatch("a number")),
+        (VarType::Integer, Literal::Integer(x)) => i32::try_from(*x)
+            .map(Value::Integer)
+            .map_err(|_| format!("Integer, a 32-bit integer: {x} is out of range")),
+        (VarType::Integer, _) => Err(mismatch("an integer")),
+        (VarType::Boolean, Literal::Boolean(x)) => Ok(Value::Boolean(*x)),
+        (VarType::Boolean, _) => Err(mismatch("true or false")),
+        (VarType::String, Literal::String(s)) => Ok(Value::String(s.clone())),
+        (VarType::String, _) => Err(mismatch("a string")),
+        (VarType::Enumeration, Literal::Integer(_) | Literal::String(_)) => {
+            let e = fmu
+                .enumeration_of(v)
+                .expect("FmuDescription::parse checks every declaredType");
+            let item = e.items.iter().find(|(name, value)| match literal {
+                Literal::Integer(x) => i64::from(*value) == *x,
+                Literal::String(s) => name == s,
+                _ => false,
+            });
+            item.map(|(name, value)| Value::Enumeration {
+                value: *value,
+                item: name.clone(),
+            })
+            .ok_or_else(|| format!("Enumeration {}, which has no item {literal}", e.describe()))
+        }
+        (VarType::Enumeration, _) => {
+            let e = fmu
+                .enumeration_of(v)
+                .expect("FmuDescription::parse checks every declaredType");
+            Err(format!(
+                "Enumeration {}, which takes an item's value or name",
+                e.describe()
+            ))
+        }
+    }
+}
+
+/// What the tests of this crate share: the workspace's systems file and the descriptions of
+/// its FMUs, from the committed `modelDescription/*.xml` (what fmu-build packages; no build
+/// needed).
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::*;
+
+    pub fn workspace_root() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    }
+
+    pub fn paper_systems() -> Systems {
+        Systems::load(&workspace_root().join("paper/systems.toml")).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    pub fn xml(id: &str) -> String {
+        let path = workspace_root().join("modelDescription").join(format!("{id}.xml"));
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    pub fn description(id: &str) -> FmuDescription {
+        FmuDescription::parse(&xml(id)).unwrap_or_else(|e| panic!("{id}: {e}"))
+    }
+
+    pub fn fmus() -> Fmus {
+        ["Pendulum", "Controller", "DCMotor"]
+            .into_iter()
+            .map(|id| (id.to_owned(), description(id)))
+            .collect()
+    }
+
+    /// Controller's description with `mode` an Enumeration (LQR = 1, PID = 2, LQR_PID = 3), as
+    /// it is about to become.
+    pub fn enumeration_controller_xml() -> String {
+        let xml = xml("Controller").replacen(
+            "  <LogCategories>",
+            "  <TypeDefinitions>\n    <SimpleType name=\"Mode\">\n      <Enumeration>\n        \
+             <Item name=\"LQR\" value=\"1\"/>\n        <Item name=\"PID\" value=\"2\"/>\n        \
+             <Item name=\"LQR_PID\" value=\"3\"/>\n      </Enumeration>\n    </SimpleType>\n  \
+             </TypeDefinitions>\n  <LogCategories>",
+            1,
+        );
+        let integer = r#"<Integer min="1" max="3" start="1"/>"#;
+        assert_eq!(
+            xml.matches(integer).count(),
+            1,
+            "Controller.xml declares mode as expected"
+        );
+        xml.replace(integer, r#"<Enumeration declaredType="Mode" start="1"/>"#)
+    }
+
+    pub fn fmus_with_enumeration_mode() -> Fmus {
+        let mut fmus = fmus();
+        fmus.insert(
+            "Controller".into(),
+            FmuDescription::parse(&enumeration_controller_xml()).unwrap_or_else(|e| panic!("{e}")),
+        );
+        fmus
+    }
+
+    /// `text` parsed as the systems file `test.toml`; its only system.
+    pub fn one_system(text: &str) -> System {
+        let s = Systems::parse(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.systems.len(), 1);
+        s.systems.into_iter().next().unwrap()
+    }
+
+    /// A system of one Controller whose parameters are `parameters` (TOML inline table body).
+    pub fn controller_with(parameters: &str) -> System {
+        one_system(&format!(
+            "[[system]]\nname = \"S\"\n[[system.component]]\nname = \"controller\"\nfmu = \"Controller\"\n\
+             parameters = {{ {parameters} }}\n"
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::testing::*;
+    use super::*;
+
+    #[test]
+    fn the_paper_systems_check_against_their_fmus() {
+        let systems = paper_systems();
+        assert_eq!(systems.names(), ["PendulumLQR", "PendulumMotors"]);
+        for s in &systems.systems {
+            s.check(&fmus()).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+
+    #[test]
+    fn the_paper_systems_hold_the_values_of_the_paper() {
+        let systems = paper_systems();
+        let motors = systems.get("PendulumMotors").unwrap();
+        assert_eq!(motors.stop_time, Some(5.0));
+        let checked = motors.check(&fmus()).unwrap();
+        let controller = motors.components.iter().position(|c| c.name == "controller").unwrap();
+        assert_eq!(
+            checked.parameters[controller],
+            [
+                ("mode", Value::Integer(3)),
+                ("gear_ratio", Value::Real(200.0)),
+                ("motor_B", Value::Real(1e-6)),
+                ("drives_motors", Value::Boolean(true)),
+            ],
+            "values typed by the declarations, in the file's order (not sorted)"
+        );
+        let pendulum = &checked.parameters[0];
+        assert_eq!(
+            pendulum,
+            &[("alpha1", Value::Real(0.1)), ("alpha2", Value::Real(-0.05))]
+        );
+        assert_eq!(motors.connections.len(), 10);
+        assert_eq!(motors.connections[4].to_string(), "controller.U1 -> motor1.U");
+    }
+
+    #[test]
+    fn a_connection_between_two_outputs_is_refused() {
+        let systems = paper_systems();
+        let mut s = systems.get("PendulumLQR").unwrap().clone();
+        s.connections.push("controller.M1 -> pendulum.alpha1".parse().unwrap());
+        let e = s.check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("connection controller.M1 -> pendulum.alpha1")
+                && e.contains("paper/systems.toml")
+                && e.contains("'PendulumLQR'")
+                && e.contains("pendulum.alpha1 is output Real"),
+            "expected the file, the system and the bad connection named, got: {e}"
+        );
+    }
+
+    #[test]
+    fn a_connection_of_two_types_is_refused() {
+        let systems = paper_systems();
+        let mut s = systems.get("PendulumMotors").unwrap().clone();
+        s.connections.retain(|c| c.to.to_string() != "pendulum.M1");
+        s.connections
+            .push("motor1.tau -> controller.drives_motors".parse().unwrap());
+        let e = s.check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("motor1.tau -> controller.drives_motors") && e.contains("parameter Boolean"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_input_driven_twice_is_refused() {
+        let systems = paper_systems();
+        let mut s = systems.get("PendulumLQR").unwrap().clone();
+        s.connections
+            .push("pendulum.alpha2 -> controller.alpha1".parse().unwrap());
+        let e = s.check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("input controller.alpha1 is driven twice") && e.contains("pendulum.alpha2"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_parameter_of_the_wrong_type_is_refused() {
+        for (value, takes) in [("1.5", "an integer"), ("true", "an integer"), ("\"LQR\"", "an integer")] {
+            let e = controller_with(&format!("mode = {value}")).check(&fmus()).unwrap_err();
+            assert!(
+                e.starts_with("test.toml: system 'S': parameter controller.mode = ")
+                    && e.contains("'mode' Integer")
+                    && e.contains(takes),
+                "expected file, system, component and variable named with the declared type, got: {e}"
+            );
+        }
+        let e = controller_with("drives_motors = 1").check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("controller.drives_motors = 1") && e.contains("Boolean"),
+            "{e}"
+        );
+        let e = controller_with("gear_ratio = \"200\"").check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("controller.gear_ratio") && e.contains("Real, which takes a number"),
+            "{e}"
+        );
+        let e = controller_with("mode = 4294967296").check(&fmus()).unwrap_err();
+        assert!(e.contains("out of range"), "{e}");
+    }
+
+    #[test]
+    fn an_integer_sets_a_real() {
+        let s = controller_with("gear_ratio = 200");
+        let checked = s.check(&fmus()).unwrap();
+        assert_eq!(checked.parameters[0], [("gear_ratio", Value::Real(200.0))]);
+    }
+
+    #[test]
+    fn an_input_an_unknown_variable_and_a_calculated_value_take_no_value() {
+        let e = controller_with("alpha1 = 0.1").check(&fmus()).unwrap_err();
+        assert!(e.contains("controller.alpha1") && e.contains("it is an input"), "{e}");
+        let e = controller_with("torque = 1.0").check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("controller.torque")
+                && e.contains("Controller.fmu has no variable 'torque'")
+                && e.contains("gear_ratio"),
+            "expected the variables there are listed: {e}"
+        );
+        // K11 is a calculatedParameter: no start value to give.
+        let e = controller_with("K11 = 1.0").check(&fmus()).unwrap_err();
+        assert!(
+            e.contains("controller.K11") && e.contains("declares no start value"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_enumeration_takes_an_item_value_or_name() {
+        let fmus = fmus_with_enumeration_mode();
+        let lqr_pid = Value::Enumeration {
+            value: 3,
+            item: "LQR_PID".into(),
+        };
+        for literal in ["3", "\"LQR_PID\""] {
+            let s = controller_with(&format!("mode = {literal}"));
+            let checked = s.check(&fmus).unwrap();
+            assert_eq!(checked.parameters[0], [("mode", lqr_pid.clone())]);
+        }
+        for (literal, why) in [
+            ("4", "has no item 4"),
+            ("\"MPC\"", "has no item \"MPC\""),
+            ("1.0", "takes an item's value or name"),
+        ] {
+            let e = controller_with(&format!("mode = {literal}")).check(&fmus).unwrap_err();
+            assert!(
+                e.contains("controller.mode")
+                    && e.contains("Enumeration Mode (LQR = 1, PID = 2, LQR_PID = 3)")
+                    && e.contains(why),
+                "expected the items listed: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_description_with_an_enumeration_is_read() {
+        let d = FmuDescription::parse(&enumeration_controller_xml()).unwrap();
+        assert_eq!(d.model_identifier, "Controller");
+        let mode = d.variable("mode").unwrap();
+        assert_eq!(
+            (
+                mode.var_type,
+                mode.causality,
+                mode.value_reference,
+                mode.start.as_deref()
+            ),
+            (VarType::Enumeration, Causality::Parameter, 20, Some("1"))
+        );
+        assert_eq!(
+            d.enumeration_of(mode).unwrap().items,
+            [("LQR".into(), 1), ("PID".into(), 2), ("LQR_PID".into(), 3)]
+        );
+        // The Real after it is still read as a Real.
+        assert_eq!(d.variable("gear_ratio").unwrap().var_type, VarType::Real);
+        assert_eq!(d.variables.len(), description("Controller").variables.len());
+    }
+
+    #[test]
+    fn an_unknown_system_is_reported_with_the_names_there_are() {
+        let e = paper_systems().get("Nope").unwrap_err();
+        assert!(
+            e.contains("'Nope'") && e.contains("PendulumLQR, PendulumMotors") && e.contains("paper/systems.toml"),
+            "expected the unknown name and the list of systems, got: {e}"
+        );
+    }
+
+    #[test]
+    fn malformed_toml_reports_file_and_line() {
+        let text =
+            "[[system]]\nname = \"S\"\nstop-time = 5.0\n\n[[system.component]]\nname = \"c\"\nfmu = Controller\n";
+        let e = Systems::parse(text, Path::new("dir/bad.toml")).unwrap_err();
+        assert!(
+            e.starts_with("dir/bad.toml:7:7: "),
+            "expected file:line:column, got: {e}"
+        );
+        let e = Systems::parse("[[system]]\nname = \"S\"\nstoptime = 5\n", Path::new("bad.toml")).unwrap_err();
+        assert!(
+            e.starts_with("bad.toml:3:") && e.contains("stoptime") && e.contains("stop-time"),
+            "an unknown key is an error with its line: {e}"
+        );
+        let e = Systems::parse(
+            "[[system]]\nname = \"S\"\nconnections = [\n  \"a.x -> b.y\",\n  \"a.x => b.y\",\n]\n",
+            Path::new("bad.toml"),
+        )
+        .unwrap_err();
+        assert!(
+            e.starts_with("bad.toml:5:") && e.contains("'a.x => b.y' must read 'component.output -> component.input'"),
+            "a malformed connection is reported with its line: {e}"
+        );
+        let e = Systems::load(Path::new("/nonexistent/systems.toml")).unwrap_err();
+        assert!(e.starts_with("/nonexistent/systems.toml: "), "{e}");
+    }
+
+    #[test]
+    fn names_are_checked_when_the_file_is_read() {
+        let parse = |t: &str| Systems::parse(t, Path::new("t.toml")).unwrap_err();
+        let e = parse(
+            "[[system]]\nname = \"S\"\nconnections = [\"a.x -> b.y\"]\n[[system.component]]\nname = \"a\"\nfmu = \"A\"\n",
+        );
+        assert!(
+            e.contains("system 'S'") && e.contains("a.x -> b.y") && e.contains("'b' (there are: a)"),
+            "{e}"
+        );
+        let e = parse("[[system]]\nname = \"S\"\n[[system]]\nname = \"S\"\n");
+        assert!(e.contains("two systems are named 'S'"), "{e}");
+        let e = parse("[[system]]\nname = \"S\"\n[[system.component]]\nname = \"a.b\"\nfmu = \"A\"\n");
+        assert!(e.contains("'a.b' must be non-empty and without '.'"), "{e}");
+        let e = parse(
+            "[[system]]\nname = \"S\"\n[[system.component]]\nname = \"a\"\nfmu = \"A\"\n[[system.component]]\nname = \"a\"\nfmu = \"B\"\n",
+        );
+        assert!(e.contains("two components are named 'a'"), "{e}");
+    }
+
+    #[test]
+    fn a_connection_is_split_at_the_first_dot_of_each_end() {
+        let c: Connection = " plant.body.x -> ctl.in.x ".parse().unwrap();
+        assert_eq!(
+            (c.from.component.as_str(), c.from.variable.as_str()),
+            ("plant", "body.x")
+        );
+        assert_eq!((c.to.component.as_str(), c.to.variable.as_str()), ("ctl", "in.x"));
+        for bad in ["a.x", "a -> b.y", "a.x -> .y", "a.x -> b.y -> c.z"] {
+            assert!(bad.parse::<Connection>().is_err(), "'{bad}' must be refused");
+        }
+    }
+
+    #[test]
+    fn the_workspace_names_its_systems_file() {
+        let root = workspace_root();
+        assert_eq!(workspace_files(&root).unwrap(), [root.join("paper/systems.toml")]);
+    }
+
+    #[test]
+    fn a_missing_fmu_is_reported_with_the_command_that_packages_it() {
+        let s = paper_systems().get("PendulumLQR").unwrap().clone();
+        let e = s.read_fmus(Path::new("/nonexistent")).unwrap_err();
+        assert!(
+            e.contains("component 'pendulum'")
+                && e.contains("/nonexistent/Pendulum.fmu")
+                && e.contains("cargo run --release -p fmu-build"),
+            "{e}"
+        );
+    }
+}
