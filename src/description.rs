@@ -226,6 +226,9 @@ pub struct ModelDescription {
     pub log_categories: &'static [LogCategory],
     /// In `ModelVariables` order.
     pub variables: &'static [Variable],
+    /// The model's other fields (`name: Type; ...`): part of the FMU state, so part of the GUID
+    /// (a changed internal state changes the GUID, and old serialized states are refused).
+    pub internal_state: &'static str,
 }
 
 impl ModelDescription {
@@ -480,6 +483,7 @@ impl Enc<'_> {
             self.variable(&d.variables[i]);
             i += 1;
         }
+        self.str(d.internal_state);
     }
 }
 
@@ -813,6 +817,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     for _ in 0..n {
         variables.push(d.variable()?);
     }
+    let internal_state = d.str()?;
     if d.at != d.b.len() {
         return Err(format!(
             "{} unexpected bytes after the embedded description",
@@ -832,6 +837,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             units: leak_slice(units),
             log_categories: leak_slice(log_categories),
             variables: leak_slice(variables),
+            internal_state,
         },
         interfaces,
     ))

@@ -43,6 +43,25 @@ pub enum Mode {
     Fast,
 }
 
+/// Field names and FMI names: `depends` may name either; the description holds FMI names.
+#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Renamed {
+    /// input
+    #[variable(vr = 0, name = "u.in", input)]
+    pub u_in: f64,
+    /// output
+    #[variable(vr = 1, name = "y.out", output, depends = [u_in])]
+    pub y_out: f64,
+}
+
+#[test]
+fn depends_holds_fmi_names_whether_a_field_or_a_name_is_written() {
+    assert_eq!(
+        Renamed::DESCRIPTION.by_name("y.out").unwrap().depends_on,
+        Some(&["u.in"][..])
+    );
+}
+
 /// The same model with another start value of `u`.
 #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
@@ -136,6 +155,10 @@ fn the_derive_describes_every_declaration() {
     assert_eq!(d.units.len(), 1);
     assert_eq!(d.units[0].base.factor, 1.663e-4);
     assert_eq!(d.log_categories[0].name, "logSolver");
+    assert_eq!(
+        d.internal_state, "memory: Vec<f64>",
+        "the other fields are part of the FMU state"
+    );
     let names: Vec<_> = d.all_log_categories().map(|c| c.name).collect();
     assert_eq!(names.first(), Some(&"logEvents"));
     assert_eq!(names.last(), Some(&"logSolver"));

@@ -49,6 +49,28 @@ pub fn read() -> Result<Metadata, String> {
         return Ok(m);
     };
     let at = |key: &str| format!("{}: [package.metadata.fmu] {key}", path.display());
+    // Read here: what goes into the description. Read by cargo fmu: documentation, resources.
+    const KNOWN: [&str; 8] = [
+        "author",
+        "version",
+        "copyright",
+        "license",
+        "description",
+        "default-experiment",
+        "documentation",
+        "resources",
+    ];
+    if let Some(table) = fmu.as_table() {
+        for key in table.keys() {
+            if !KNOWN.contains(&key.as_str()) {
+                return Err(format!(
+                    "{}: [package.metadata.fmu] has no key '{key}' (known: {})",
+                    path.display(),
+                    KNOWN.join(", ")
+                ));
+            }
+        }
+    }
     let text_of = |key: &str, into: &mut String| -> Result<(), String> {
         match fmu.get(key) {
             None => Ok(()),

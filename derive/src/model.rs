@@ -389,6 +389,9 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
     if a.unit.is_some() && kind != Kind::Real {
         return Err(Error::new(span, "only Real (f64) variables have a unit"));
     }
+    if a.nominal.is_some() && kind != Kind::Real {
+        return Err(Error::new(span, "only Real (f64) variables have a nominal value"));
+    }
     let var = Var {
         name: a.name.unwrap_or_else(|| ident.to_string()),
         field: ident,
@@ -450,7 +453,7 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 if !ok {
                     return Err(Error::new(
                         s.span(),
-                        "the model identifier names the binary and the C symbols' prefix: letters, digits and _ only, not starting with a digit",
+                        "the model identifier names the binary (<identifier>.so, .dll): letters, digits and _ only, not starting with a digit",
                     ));
                 }
                 m.identifier = Some(s);
@@ -580,7 +583,11 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     if vars.iter().filter(|v| v.causality == Causality::Independent).count() > 1 {
         return Err(Error::new(vars[1].span, "a model has at most one independent variable"));
     }
-    let by_name = |n: &str| vars.iter().find(|v| v.name == n || v.field == n);
+    let by_name = |n: &str| {
+        vars.iter()
+            .find(|v| v.name == n)
+            .or_else(|| vars.iter().find(|v| v.field == n))
+    };
     for v in vars {
         if let Some(deps) = &v.depends {
             if v.causality != Causality::Output && v.derivative_of.is_none() {
@@ -664,7 +671,15 @@ fn opt_f64(x: Option<f64>) -> TokenStream {
     }
 }
 
-fn variable_tokens(rt: &TokenStream, v: &Var) -> TokenStream {
+/// The FMI name of the variable `n` refers to, by its FMI name or its field (checked to exist).
+fn fmi_name(vars: &[Var], n: &str) -> String {
+    vars.iter()
+        .find(|v| v.name == n)
+        .or_else(|| vars.iter().find(|v| v.field == n))
+        .map_or_else(|| n.to_string(), |v| v.name.clone())
+}
+
+fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
     let name = &v.name;
     let vr = v.vr;
     let ty = &v.ty;
@@ -709,14 +724,17 @@ fn variable_tokens(rt: &TokenStream, v: &Var) -> TokenStream {
     };
     let depends = match &v.depends {
         Some(deps) => {
-            // By variable name (a field named in `depends` may carry another FMI name).
-            let names: Vec<String> = deps.iter().map(|(d, _)| d.clone()).collect();
+            // The FMI names of the variables named (by FMI name or by field).
+            let names: Vec<String> = deps.iter().map(|(d, _)| fmi_name(vars, d)).collect();
             quote!(::core::option::Option::Some(&[#(#names),*]))
         }
         None => quote!(::core::option::Option::None),
     };
     let derivative_of = match &v.derivative_of {
-        Some((d, _)) => quote!(::core::option::Option::Some(#d)),
+        Some((d, _)) => {
+            let d = fmi_name(vars, d);
+            quote!(::core::option::Option::Some(#d))
+        }
         None => quote!(::core::option::Option::None),
     };
     quote! {
@@ -760,10 +778,19 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
     let model = parse_model_attr(&input.attrs)?;
     let mut vars = Vec::new();
     let mut others = Vec::new();
+    let mut internal = Vec::new();
     for f in &fields.named {
         let attrs: Vec<_> = f.attrs.iter().filter(|a| a.path().is_ident("variable")).collect();
         match attrs.as_slice() {
-            [] => others.push(f.ident.clone().expect("named")),
+            [] => {
+                let ty = &f.ty;
+                internal.push(format!(
+                    "{}: {}",
+                    f.ident.as_ref().expect("named"),
+                    quote!(#ty).to_string().replace(' ', "")
+                ));
+                others.push(f.ident.clone().expect("named"))
+            }
             [a] => vars.push(parse_var(f, a)?),
             [_, second, ..] => return Err(Error::new(second.span(), "one #[variable(...)] per field")),
         }
@@ -777,6 +804,7 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
     check_declarations(&vars, &model)?;
     let meta = crate::metadata::read().map_err(|e| Error::new(input.ident.span(), e))?;
 
+    let internal_state = internal.join("; ");
     let ident = &input.ident;
     let identifier = model
         .identifier
@@ -828,7 +856,7 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
         .categories
         .iter()
         .map(|(n, d, _)| quote!(#rt::description::LogCategory { name: #n, description: #d }));
-    let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v)).collect();
+    let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v, &vars)).collect();
 
     let start_fields = vars.iter().map(|v| {
         let f = &v.field;
@@ -886,6 +914,20 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
             };
         }
     });
+    // A type the derive does not know by name is taken for a #[derive(FmuEnum)] enum; make sure it
+    // is one (a type alias such as `type Real = f64` would otherwise get an Integer start).
+    let enum_checks = vars.iter().filter(|v| v.kind == Kind::Enum).map(|v| {
+        let (ty, span) = (&v.ty, v.ty.span());
+        let message = format!(
+            "variable '{}': its type is read as a #[derive(FmuEnum)] enumeration; write f64, i32, bool or String by name (no alias)",
+            v.name
+        );
+        quote_spanned! {span=>
+            const _: () = if !matches!(<#ty as #rt::FmiType>::TYPE, #rt::description::VarType::Enumeration) {
+                panic!(#message)
+            };
+        }
+    });
     let manifest = meta.manifest.as_ref().map(|p| {
         let p = p.display().to_string();
         quote!(
@@ -907,6 +949,7 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
                 units: &[#(#unit_tokens),*],
                 log_categories: &[#(#category_tokens),*],
                 variables: &[#(#variable_tokens),*],
+                internal_state: #internal_state,
             };
 
             fn start() -> Self {
@@ -947,6 +990,7 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
         }
 
         #(#value_checks)*
+        #(#enum_checks)*
         #manifest
     })
 }

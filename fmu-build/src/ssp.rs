@@ -285,8 +285,11 @@ mod tests {
         let mode = controller.parameters.iter_mut().find(|p| p.name == "mode").unwrap();
         mode.value = crate::systems::Literal::String("LQR_PID".into());
         assert_eq!(ssd(&named, &fmus).unwrap(), fixture("PendulumMotors"));
-        // With the Integer declaration an item name is refused.
-        assert!(ssd(&named, &crate::systems::testing::fmus()).is_err());
+        // A name that is no item is refused.
+        let controller = named.components.iter_mut().find(|c| c.name == "controller").unwrap();
+        let mode = controller.parameters.iter_mut().find(|p| p.name == "mode").unwrap();
+        mode.value = crate::systems::Literal::String("LQR_PLUS".into());
+        assert!(ssd(&named, &fmus).is_err());
     }
 
     /// A small FMU description: one Enumeration variable `m` of type `Mode` with `items`.

@@ -907,10 +907,13 @@ pub(crate) mod testing {
             .collect()
     }
 
-    /// Controller's description with `mode` an Enumeration (LQR = 1, PID = 2, LQR_PID = 3), as
-    /// it is about to become.
+    /// Controller's description, whose `mode` is an Enumeration (LQR = 1, PID = 2, LQR_PID = 3).
     pub fn enumeration_controller_xml() -> String {
-        let xml = xml("Controller").replacen(
+        let committed = xml("Controller");
+        if committed.contains(r#"<Enumeration declaredType="ControlMode""#) {
+            return committed.replace("ControlMode", "Mode");
+        }
+        let xml = committed.replacen(
             "  <LogCategories>",
             "  <TypeDefinitions>\n    <SimpleType name=\"Mode\">\n      <Enumeration>\n        \
              <Item name=\"LQR\" value=\"1\"/>\n        <Item name=\"PID\" value=\"2\"/>\n        \
@@ -976,7 +979,13 @@ mod tests {
         assert_eq!(
             checked.parameters[controller],
             [
-                ("mode", Value::Integer(3)),
+                (
+                    "mode",
+                    Value::Enumeration {
+                        value: 3,
+                        item: "LQR_PID".into()
+                    }
+                ),
                 ("gear_ratio", Value::Real(200.0)),
                 ("motor_B", Value::Real(1e-6)),
                 ("drives_motors", Value::Boolean(true)),
@@ -1036,11 +1045,11 @@ mod tests {
 
     #[test]
     fn a_parameter_of_the_wrong_type_is_refused() {
-        for (value, takes) in [("1.5", "an integer"), ("true", "an integer"), ("\"LQR\"", "an integer")] {
+        for (value, takes) in [("1.5", "an item's value or name"), ("true", "an item's value or name")] {
             let e = controller_with(&format!("mode = {value}")).check(&fmus()).unwrap_err();
             assert!(
                 e.starts_with("test.toml: system 'S': parameter controller.mode = ")
-                    && e.contains("'mode' Integer")
+                    && e.contains("'mode' Enumeration")
                     && e.contains(takes),
                 "expected file, system, component and variable named with the declared type, got: {e}"
             );
@@ -1056,7 +1065,7 @@ mod tests {
             "{e}"
         );
         let e = controller_with("mode = 4294967296").check(&fmus()).unwrap_err();
-        assert!(e.contains("out of range"), "{e}");
+        assert!(e.contains("has no item 4294967296"), "{e}");
     }
 
     #[test]

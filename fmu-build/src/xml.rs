@@ -316,7 +316,11 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         };
         // An Integer's bounds are written as integers ("1", not "1.0": the XSD type is xs:int).
         let bound_text = |b: Bound, is_min: bool| match v.var_type {
-            VarType::Integer | VarType::Enumeration => (bound_value(b, is_min).ceil() as i64).to_string(),
+            // An exclusive integer bound moves to the next integer inside the range.
+            VarType::Integer | VarType::Enumeration => {
+                let x = bound_value(b, is_min);
+                (if is_min { x.ceil() } else { x.floor() } as i64).to_string()
+            }
             _ => real_text(bound_value(b, is_min)),
         };
         let min = v.min.map(|b| bound_text(b, true));
@@ -417,4 +421,118 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
 /// A flat name has no structure (`der(x)`, `a.b`, `a[1]` ask for "structured").
 fn is_flat_name(name: &str) -> bool {
     !name.contains(['.', '[', '('])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rustfmu::description::{Start, Variable};
+
+    const fn var(name: &'static str, vr: u32, min: Option<Bound>, max: Option<Bound>) -> Variable {
+        Variable {
+            name,
+            value_reference: vr,
+            var_type: VarType::Integer,
+            causality: Causality::Parameter,
+            variability: Variability::Fixed,
+            initial: None,
+            start: Start::Integer(5),
+            unit: "",
+            description: "",
+            min,
+            max,
+            nominal: None,
+            depends_on: None,
+            derivative_of: None,
+            enumeration: None,
+        }
+    }
+
+    const VARS: &[Variable] = &[
+        var(
+            "inclusive",
+            0,
+            Some(Bound {
+                value: 1.0,
+                exclusive: false,
+            }),
+            Some(Bound {
+                value: 9.0,
+                exclusive: false,
+            }),
+        ),
+        var(
+            "exclusive",
+            1,
+            Some(Bound {
+                value: 0.0,
+                exclusive: true,
+            }),
+            Some(Bound {
+                value: 10.0,
+                exclusive: true,
+            }),
+        ),
+    ];
+
+    const D: ModelDescription = ModelDescription {
+        model_identifier: "Bounds",
+        description: "",
+        author: "",
+        version: "0",
+        copyright: "",
+        license: "",
+        generation_tool: "test",
+        default_experiment: None,
+        units: &[],
+        log_categories: &[],
+        variables: VARS,
+        internal_state: "",
+    };
+
+    #[test]
+    fn integer_bounds_are_written_as_the_integers_inside_the_range() {
+        let xml = fmi2(&D, Interfaces::CO_SIMULATION, "{guid}").unwrap();
+        assert!(xml.contains(r#"<Integer min="1" max="9" start="5"/>"#), "{xml}");
+        // > 0 and < 10: 1 ..= 9 (not 0 and 10, which the runtime refuses).
+        let exclusive = xml.split("name=\"exclusive\"").nth(1).unwrap();
+        assert!(
+            exclusive.contains(r#"<Integer min="1" max="9" start="5"/>"#),
+            "{exclusive}"
+        );
+    }
+
+    #[test]
+    fn an_exclusive_real_bound_is_written_as_the_nearest_legal_value() {
+        assert_eq!(
+            bound_value(
+                Bound {
+                    value: 0.0,
+                    exclusive: true
+                },
+                true
+            ),
+            5e-324
+        );
+        assert_eq!(
+            bound_value(
+                Bound {
+                    value: 1.0,
+                    exclusive: true
+                },
+                false
+            ),
+            1.0f64.next_down()
+        );
+        assert_eq!(
+            bound_value(
+                Bound {
+                    value: 1.0,
+                    exclusive: false
+                },
+                false
+            ),
+            1.0
+        );
+    }
 }

@@ -17,11 +17,13 @@ macro_rules! export_fmi2 {
             use super::*;
             use $crate::__private::abi::*;
             use $crate::__private::api;
-            type M = $model;
+            type __RustfmuModel = $model;
 
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::CO_SIMULATION;
-            const LEN: usize = $crate::description::encoded_len(&<M as $crate::Variables>::DESCRIPTION, INTERFACES);
-            const ENCODED: [u8; LEN] = $crate::description::encode(&<M as $crate::Variables>::DESCRIPTION, INTERFACES);
+            const LEN: usize =
+                $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
+            const ENCODED: [u8; LEN] =
+                $crate::description::encode(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
             const GUID_TEXT: [u8; 38] = $crate::description::guid(&ENCODED);
             pub const GUID: &str = match ::core::str::from_utf8(&GUID_TEXT) {
                 Ok(s) => s,
@@ -46,7 +48,7 @@ macro_rules! export_fmi2 {
                 nCategories: usize,
                 categories: *const fmi2String,
             ) -> fmi2Status {
-                unsafe { api::set_debug_logging::<M>(c, loggingOn, nCategories, categories) }
+                unsafe { api::set_debug_logging::<__RustfmuModel>(c, loggingOn, nCategories, categories) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Instantiate(
@@ -59,7 +61,7 @@ macro_rules! export_fmi2 {
                 loggingOn: fmi2Boolean,
             ) -> fmi2Component {
                 unsafe {
-                    api::instantiate::<M>(
+                    api::instantiate::<__RustfmuModel>(
                         GUID,
                         &DESCRIPTION,
                         instanceName,
@@ -74,7 +76,7 @@ macro_rules! export_fmi2 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-                unsafe { api::free_instance::<M>(c) }
+                unsafe { api::free_instance::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetupExperiment(
@@ -86,7 +88,7 @@ macro_rules! export_fmi2 {
                 stopTime: fmi2Real,
             ) -> fmi2Status {
                 unsafe {
-                    api::setup_experiment::<M>(
+                    api::setup_experiment::<__RustfmuModel>(
                         c,
                         toleranceDefined,
                         tolerance,
@@ -98,19 +100,19 @@ macro_rules! export_fmi2 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::enter_initialization_mode::<M>(c) }
+                unsafe { api::enter_initialization_mode::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::exit_initialization_mode::<M>(c) }
+                unsafe { api::exit_initialization_mode::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-                unsafe { api::terminate::<M>(c) }
+                unsafe { api::terminate::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-                unsafe { api::reset::<M>(c) }
+                unsafe { api::reset::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetReal(
@@ -119,7 +121,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *mut fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::get::<M, f64>(c, "fmi2GetReal", vr, nvr, value) }
+                unsafe { api::get::<__RustfmuModel, f64>(c, "fmi2GetReal", vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetInteger(
@@ -128,7 +130,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *mut fmi2Integer,
             ) -> fmi2Status {
-                unsafe { api::get::<M, i32>(c, "fmi2GetInteger", vr, nvr, value) }
+                unsafe { api::get::<__RustfmuModel, i32>(c, "fmi2GetInteger", vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetBoolean(
@@ -137,7 +139,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *mut fmi2Boolean,
             ) -> fmi2Status {
-                unsafe { api::get_boolean::<M>(c, vr, nvr, value) }
+                unsafe { api::get_boolean::<__RustfmuModel>(c, vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetString(
@@ -146,7 +148,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *mut fmi2String,
             ) -> fmi2Status {
-                unsafe { api::get_string::<M>(c, vr, nvr, value) }
+                unsafe { api::get_string::<__RustfmuModel>(c, vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetReal(
@@ -155,7 +157,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *const fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::set::<M, f64>(c, "fmi2SetReal", vr, nvr, value) }
+                unsafe { api::set::<__RustfmuModel, f64>(c, "fmi2SetReal", vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetInteger(
@@ -164,7 +166,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *const fmi2Integer,
             ) -> fmi2Status {
-                unsafe { api::set::<M, i32>(c, "fmi2SetInteger", vr, nvr, value) }
+                unsafe { api::set::<__RustfmuModel, i32>(c, "fmi2SetInteger", vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetBoolean(
@@ -173,7 +175,7 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *const fmi2Boolean,
             ) -> fmi2Status {
-                unsafe { api::set_boolean::<M>(c, vr, nvr, value) }
+                unsafe { api::set_boolean::<__RustfmuModel>(c, vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetString(
@@ -182,19 +184,19 @@ macro_rules! export_fmi2 {
                 nvr: usize,
                 value: *const fmi2String,
             ) -> fmi2Status {
-                unsafe { api::set_string::<M>(c, vr, nvr, value) }
+                unsafe { api::set_string::<__RustfmuModel>(c, vr, nvr, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { api::get_fmu_state::<M>(c, FMUstate) }
+                unsafe { api::get_fmu_state::<__RustfmuModel>(c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-                unsafe { api::set_fmu_state::<M>(c, FMUstate) }
+                unsafe { api::set_fmu_state::<__RustfmuModel>(c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { api::free_fmu_state::<M>(c, FMUstate) }
+                unsafe { api::free_fmu_state::<__RustfmuModel>(c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
@@ -202,7 +204,7 @@ macro_rules! export_fmi2 {
                 FMUstate: fmi2FMUstate,
                 size: *mut usize,
             ) -> fmi2Status {
-                unsafe { api::serialized_fmu_state_size::<M>(c, FMUstate, size) }
+                unsafe { api::serialized_fmu_state_size::<__RustfmuModel>(c, FMUstate, size) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SerializeFMUstate(
@@ -211,7 +213,7 @@ macro_rules! export_fmi2 {
                 serializedState: *mut fmi2Byte,
                 size: usize,
             ) -> fmi2Status {
-                unsafe { api::serialize_fmu_state::<M>(c, FMUstate, serializedState, size) }
+                unsafe { api::serialize_fmu_state::<__RustfmuModel>(c, FMUstate, serializedState, size) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
@@ -220,7 +222,7 @@ macro_rules! export_fmi2 {
                 size: usize,
                 FMUstate: *mut fmi2FMUstate,
             ) -> fmi2Status {
-                unsafe { api::deserialize_fmu_state::<M>(c, serializedState, size, FMUstate) }
+                unsafe { api::deserialize_fmu_state::<__RustfmuModel>(c, serializedState, size, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
@@ -232,7 +234,7 @@ macro_rules! export_fmi2 {
                 _dvKnown: *const fmi2Real,
                 _dvUnknown: *mut fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::get_directional_derivative::<M>(c) }
+                unsafe { api::get_directional_derivative::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
@@ -242,7 +244,7 @@ macro_rules! export_fmi2 {
                 _order: *const fmi2Integer,
                 _value: *const fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::set_real_input_derivatives::<M>(c, nvr) }
+                unsafe { api::set_real_input_derivatives::<__RustfmuModel>(c, nvr) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
@@ -252,7 +254,7 @@ macro_rules! export_fmi2 {
                 _order: *const fmi2Integer,
                 _value: *mut fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::get_real_output_derivatives::<M>(c, nvr) }
+                unsafe { api::get_real_output_derivatives::<__RustfmuModel>(c, nvr) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2DoStep(
@@ -262,7 +264,7 @@ macro_rules! export_fmi2 {
                 noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
             ) -> fmi2Status {
                 unsafe {
-                    api::do_step::<M>(
+                    api::do_step::<__RustfmuModel>(
                         c,
                         currentCommunicationPoint,
                         communicationStepSize,
@@ -272,7 +274,7 @@ macro_rules! export_fmi2 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-                unsafe { api::cancel_step::<M>(c) }
+                unsafe { api::cancel_step::<__RustfmuModel>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetStatus(
@@ -280,7 +282,7 @@ macro_rules! export_fmi2 {
                 s: fmi2StatusKind,
                 value: *mut fmi2Status,
             ) -> fmi2Status {
-                unsafe { api::get_status::<M>(c, s, value) }
+                unsafe { api::get_status::<__RustfmuModel>(c, s, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetRealStatus(
@@ -288,7 +290,7 @@ macro_rules! export_fmi2 {
                 s: fmi2StatusKind,
                 value: *mut fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::get_real_status::<M>(c, s, value) }
+                unsafe { api::get_real_status::<__RustfmuModel>(c, s, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetIntegerStatus(
@@ -296,7 +298,7 @@ macro_rules! export_fmi2 {
                 s: fmi2StatusKind,
                 value: *mut fmi2Integer,
             ) -> fmi2Status {
-                unsafe { api::get_integer_status::<M>(c, s, value) }
+                unsafe { api::get_integer_status::<__RustfmuModel>(c, s, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetBooleanStatus(
@@ -304,7 +306,7 @@ macro_rules! export_fmi2 {
                 s: fmi2StatusKind,
                 value: *mut fmi2Boolean,
             ) -> fmi2Status {
-                unsafe { api::get_boolean_status::<M>(c, s, value) }
+                unsafe { api::get_boolean_status::<__RustfmuModel>(c, s, value) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetStringStatus(
@@ -312,7 +314,7 @@ macro_rules! export_fmi2 {
                 s: fmi2StatusKind,
                 value: *mut fmi2String,
             ) -> fmi2Status {
-                unsafe { api::get_string_status::<M>(c, s, value) }
+                unsafe { api::get_string_status::<__RustfmuModel>(c, s, value) }
             }
         }
         pub use __rustfmu_fmi2_exports::*;
