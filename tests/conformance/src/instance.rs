@@ -1,13 +1,15 @@
 //! One FMU instance driven through the C API, with its log recorded.
 //!
 //! Every message the FMU logs is checked as it is read ([`Instance::log`]) and when the instance
-//! is dropped: it must come back with this instance's componentEnvironment and name, under a
-//! category declared in `<LogCategories>`, with the format `"%s"`.
+//! is dropped: it must come back with this instance's componentEnvironment and name, and (this
+//! exporter's conventions) under a category declared in `<LogCategories>`, with the format
+//! `"%s"`.
 
+use crate::fmi2::*;
 use crate::logger::{LogEntry, LogSink, callbacks};
+use crate::outcome::{convention, limitation};
+use crate::standard::State;
 use crate::{Fmu, Type, state};
-use rustfmu::fmi2::abi::*;
-use rustfmu::fmi2::instance::State;
 use std::ffi::CString;
 use std::ptr;
 
@@ -48,8 +50,8 @@ impl Args {
     }
 }
 
-pub struct Instance {
-    pub fmu: &'static Fmu,
+pub struct Instance<'a> {
+    pub fmu: &'a Fmu,
     pub c: fmi2Component,
     pub name: String,
     sink: Box<LogSink>,
@@ -60,21 +62,21 @@ pub struct Instance {
 
 // SAFETY: an instance is used by one thread at a time (the standard's rule); the FMU has no
 // thread affinity, and the sink is a Mutex.
-unsafe impl Send for Instance {}
+unsafe impl Send for Instance<'_> {}
 
 fn cstr(s: &Option<String>) -> Option<CString> {
     s.as_ref()
         .map(|s| CString::new(s.as_str()).expect("no NUL in test strings"))
 }
 
-impl Instance {
+impl<'a> Instance<'a> {
     /// A co-simulation instance with valid arguments; panics with the FMU's log if refused.
-    pub fn new(fmu: &'static Fmu) -> Instance {
+    pub fn new(fmu: &'a Fmu) -> Instance<'a> {
         Instance::with(fmu, &Args::valid(fmu))
             .unwrap_or_else(|log| panic!("{}: fmi2Instantiate refused: {log:#?}", fmu.id))
     }
 
-    pub fn with(fmu: &'static Fmu, args: &Args) -> Result<Instance, Vec<LogEntry>> {
+    pub fn with(fmu: &'a Fmu, args: &Args) -> Result<Instance<'a>, Vec<LogEntry>> {
         let sink = Box::<LogSink>::default();
         let cb = Box::new(callbacks(sink.env()));
         let (name, guid, res) = (cstr(&args.name), cstr(&args.guid), cstr(&args.resources));
@@ -121,20 +123,39 @@ impl Instance {
                 "{}: message under another instance name: {e:?}",
                 self.fmu.id
             );
-            assert!(
-                self.fmu.md.log_categories.contains(&e.category),
-                "{}: message under category '{}', which <LogCategories> does not declare ({:?}): {e:?}",
-                self.fmu.id,
-                e.category,
-                self.fmu.md.log_categories
-            );
-            assert_eq!(
-                e.format, "%s",
-                "{}: the message format must be \"%s\": {e:?}",
-                self.fmu.id
-            );
+            if !self.fmu.md.log_categories.contains(&e.category)
+                && convention(self.fmu, "every message under a category that <LogCategories> declares")
+            {
+                panic!(
+                    "{}: message under category '{}', which <LogCategories> does not declare ({:?}): {e:?}",
+                    self.fmu.id, e.category, self.fmu.md.log_categories
+                );
+            }
+            if e.format != "%s" {
+                if convention(self.fmu, "the message format \"%s\" with the text as its argument") {
+                    panic!("{}: the message format must be \"%s\": {e:?}", self.fmu.id);
+                }
+                if e.format.contains('%') {
+                    limitation(
+                        "messages with printf directives are recorded unformatted (their arguments cannot be read)",
+                    );
+                }
+            }
         }
         entries
+    }
+
+    /// Whether a message of the log with that status contains every one of `words` (how this
+    /// exporter's FMUs say what is wrong). For another exporter's FMU the wording is its own:
+    /// then any message with that status will do (recorded as a limitation).
+    pub fn says(&self, log: &[LogEntry], status: Status, words: &[&str]) -> bool {
+        let worded = log
+            .iter()
+            .any(|e| e.status == status && words.iter().all(|w| e.text.contains(w)));
+        worded
+            || (!words.is_empty()
+                && !convention(self.fmu, "the wording of messages (which words name what is wrong)")
+                && log.iter().any(|e| e.status == status))
     }
 
     /// The log as one text, for failure messages and `contains` checks.
@@ -367,8 +388,27 @@ impl Instance {
         assert_eq!(self.free_state(&mut s), fmi2OK);
     }
 
-    /// The state-machine state, read from a serialized FMU state.
+    /// The serialized FMU state for before/after comparisons, when the FMU declares it can
+    /// give one (else `None`, recorded as a limitation: the comparison then proves nothing).
+    pub fn fingerprint(&mut self) -> Option<Vec<u8>> {
+        if self.fmu.can_snapshot() {
+            Some(self.snapshot())
+        } else {
+            limitation(
+                "the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate: that a refused call changes nothing is not checked",
+            );
+            None
+        }
+    }
+
+    /// The state-machine state, read from a serialized FMU state (only of this exporter's FMUs:
+    /// [`Fmu::own_state_format`]).
     pub fn machine_state(&mut self) -> State {
+        assert!(
+            self.fmu.own_state_format(),
+            "{}: the state machine can be read only from this exporter's serialized states",
+            self.fmu.id
+        );
         let bytes = self.snapshot();
         state::machine_state(&bytes).unwrap_or_else(|e| panic!("{}: {e}", self.fmu.id))
     }
@@ -376,6 +416,11 @@ impl Instance {
     /// Puts the instance into `target` by restoring a forged copy of its own state (see
     /// [`crate::state`]). The instance must be in a state where fmi2SetFMUstate is allowed.
     pub fn force_state(&mut self, target: State) {
+        assert!(
+            self.fmu.own_state_format(),
+            "{}: only this exporter's FMUs can be forced into a state",
+            self.fmu.id
+        );
         let bytes = state::forge(&self.snapshot(), target);
         // A helper instance makes and frees the FMU state, so that this works for Fatal too.
         let mut helper = Instance::new(self.fmu);
@@ -422,7 +467,7 @@ impl Instance {
     }
 }
 
-impl Drop for Instance {
+impl Drop for Instance<'_> {
     fn drop(&mut self) {
         // SAFETY: freed once; the callbacks outlive the call.
         unsafe { (self.fmu.api.free_instance)(self.c) };
@@ -460,7 +505,7 @@ pub fn excite(v: &crate::Variable) -> f64 {
 
 /// A fresh instance, excited, initialized at t = 0, run for `steps` steps of `h`: the
 /// observations after initialization and after every step.
-pub fn run(fmu: &'static Fmu, steps: usize, h: f64) -> Vec<Vec<u64>> {
+pub fn run(fmu: &Fmu, steps: usize, h: f64) -> Vec<Vec<u64>> {
     let mut inst = Instance::new(fmu);
     run_on(&mut inst, steps, h)
 }
