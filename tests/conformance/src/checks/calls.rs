@@ -380,6 +380,47 @@ fn far(v: &crate::Variable) -> f64 {
     }
 }
 
+/// Another value for an input than the one [`excitation`] gives it, within [min, max]: the
+/// input steps there between two steps.
+fn stepped(v: &crate::Variable) -> f64 {
+    let x = excite(v);
+    let clamp = |y: f64| {
+        let y = v.max.map_or(y, |m| y.min(m));
+        v.min.map_or(y, |m| y.max(m))
+    };
+    [x * 2.0, x + 1.0, x - 1.0, v.start_real().unwrap_or(0.0)]
+        .into_iter()
+        .map(clamp)
+        .find(|y| *y != x)
+        .unwrap_or(x)
+}
+
+/// Sets a tunable parameter to another value than its start value; the model may refuse one
+/// (an integer mode has a few legal values): then the next is tried. Whether one was accepted.
+fn retune(inst: &mut Instance, p: &crate::Variable) -> bool {
+    let start_i = p.start_integer().unwrap_or(0);
+    for attempt in 0..2 {
+        let s = match p.ty {
+            Type::Real if attempt == 0 => inst.set_real(&[p.vr], &[far(p)]),
+            Type::Integer => inst.set_integer(&[p.vr], &[[start_i + 1, start_i - 1][attempt]]),
+            Type::Boolean if attempt == 0 => inst.set_boolean(&[p.vr], &[!p.start_boolean().unwrap_or(false)]),
+            _ => continue,
+        };
+        inst.log();
+        if s == fmi2OK {
+            return true;
+        }
+        assert_eq!(s, fmi2Error, "{}: setting '{}'", inst.fmu.id, p.name);
+    }
+    false
+}
+
+/// A tunable parameter set between steps changes the trajectory from the next step on, and
+/// not before. "Changes" is tried first from the excited run as it goes on; a parameter that
+/// cannot matter there (a time constant of a lag at its steady state: the excitation sets the
+/// input and the initial state alike) is tried again with the inputs stepped to other values
+/// at the same step, compared with a run whose inputs step there too and whose parameter
+/// stays. At least one tunable parameter must change something.
 pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: &Fmu) {
     let tunables: Vec<_> = fmu
         .md
@@ -393,12 +434,18 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
         .iter()
         .flat_map(|t| fmu.md.vrs_of_type(*t))
         .collect();
+    let inputs: Vec<(u32, f64)> = fmu
+        .md
+        .of_type(Type::Real)
+        .filter(|v| v.causality == "input" && v.variability != "constant")
+        .map(|v| (v.vr, stepped(v)))
+        .collect();
     // Steps long enough for a solver tolerance to matter (within 1 ms it rarely does).
     let h = 0.1;
     let (k, n) = (5, 10);
-    let reference = run(fmu, n, h);
-    let mut effective = vec![];
-    for p in &tunables {
+    // An excited run of n steps; before step k, the inputs step (`step_inputs`) and the
+    // parameter is set (`p`). Whether the parameter was accepted, and the observations.
+    let trajectory = |p: Option<&crate::Variable>, step_inputs: bool| -> (bool, Vec<Vec<u64>>) {
         let mut inst = Instance::new(fmu);
         let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
         assert_eq!(inst.set_real(&vrs, &vals), fmi2OK);
@@ -407,29 +454,29 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
         let mut accepted = false;
         for step in 0..n {
             if step == k {
-                // Another value than the start value; the model may refuse one (an integer
-                // mode has a few legal values): then the next is tried.
-                let start_i = p.start_integer().unwrap_or(0);
-                for attempt in 0..2 {
-                    let s = match p.ty {
-                        Type::Real if attempt == 0 => inst.set_real(&[p.vr], &[far(p)]),
-                        Type::Integer => inst.set_integer(&[p.vr], &[[start_i + 1, start_i - 1][attempt]]),
-                        Type::Boolean if attempt == 0 => {
-                            inst.set_boolean(&[p.vr], &[!p.start_boolean().unwrap_or(false)])
-                        }
-                        _ => continue,
-                    };
-                    inst.log();
-                    if s == fmi2OK {
-                        accepted = true;
-                        break;
-                    }
-                    assert_eq!(s, fmi2Error, "{}: setting '{}'", fmu.id, p.name);
+                if step_inputs {
+                    let (vrs, vals): (Vec<u32>, Vec<f64>) = inputs.iter().copied().unzip();
+                    assert_eq!(
+                        inst.set_real(&vrs, &vals),
+                        fmi2OK,
+                        "{}: stepping the inputs: {}",
+                        fmu.id,
+                        inst.log_text()
+                    );
+                }
+                if let Some(p) = p {
+                    accepted = retune(&mut inst, p);
                 }
             }
             assert_eq!(inst.step(h), fmi2OK, "{}: {}", fmu.id, inst.log_text());
             out.push(inst.observe());
         }
+        (accepted, out)
+    };
+    let reference = run(fmu, n, h);
+    let stepped_reference = (!inputs.is_empty()).then(|| trajectory(None, true).1);
+    let mut effective = vec![];
+    for p in &tunables {
         // Identical up to the change (only the parameter's own value differs), different after.
         let pi = observed.iter().position(|vr| *vr == p.vr).unwrap();
         let strip = |o: &Vec<u64>| {
@@ -437,24 +484,35 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
             o.remove(pi);
             o
         };
-        for step in 0..=k {
-            assert_eq!(
-                strip(&out[step]),
-                strip(&reference[step]),
-                "{}: '{}' acted before it was set",
-                fmu.id,
-                p.name
-            );
-        }
-        if accepted && (k + 1..=n).any(|s| strip(&out[s]) != strip(&reference[s])) {
+        let differs = |out: &[Vec<u64>], reference: &[Vec<u64>]| {
+            for step in 0..=k {
+                assert_eq!(
+                    strip(&out[step]),
+                    strip(&reference[step]),
+                    "{}: '{}' acted before it was set",
+                    fmu.id,
+                    p.name
+                );
+            }
+            (k + 1..=n).any(|s| strip(&out[s]) != strip(&reference[s]))
+        };
+        let (accepted, out) = trajectory(Some(p), false);
+        if accepted && differs(&out, &reference) {
             effective.push(p.name.clone());
+        } else if accepted && let Some(stepped_reference) = &stepped_reference {
+            let (_, out) = trajectory(Some(p), true);
+            if differs(&out, stepped_reference) {
+                effective.push(p.name.clone());
+            }
         }
     }
     assert!(
         tunables.is_empty() || !effective.is_empty(),
-        "{}: none of the tunable parameters {:?} changed anything after it was set between steps",
+        "{}: none of the tunable parameters {:?} changed anything after it was set between steps \
+         (neither in the excited run nor with the inputs {:?} stepped at the same step)",
         fmu.id,
-        tunables.iter().map(|p| &p.name).collect::<Vec<_>>()
+        tunables.iter().map(|p| &p.name).collect::<Vec<_>>(),
+        inputs
     );
 }
 
