@@ -335,23 +335,13 @@ fn extract_entry(
         .mode(0o600)
         .open(&dest)
         .map_err(|e| format!("entry '{shown}': {e}"))?;
-    // Counted as written: the header's size is only a claim.
-    let mut written = 0u64;
-    let mut buf = vec![0u8; 64 * 1024];
-    loop {
-        let k = entry.read(&mut buf).map_err(|e| format!("entry '{shown}': {e}"))?;
-        if k == 0 {
-            break;
-        }
-        written += k as u64;
-        if written > remaining {
-            return Err(format!(
-                "entry '{shown}' unpacks to more than the {} bytes allowed in all (its header says {declared}): refused as a zip bomb",
-                limits.max_total_bytes
-            ));
-        }
-        out.write_all(&buf[..k]).map_err(|e| format!("entry '{shown}': {e}"))?;
-    }
+    let written = copy_bounded(&mut entry, &mut out, remaining).map_err(|e| match e {
+        Copy::TooLong => format!(
+            "entry '{shown}' unpacks to more than the {} bytes allowed in all (its header says {declared}): refused as a zip bomb",
+            limits.max_total_bytes
+        ),
+        Copy::Io(e) => format!("entry '{shown}': {e}"),
+    })?;
     if written != declared {
         return Err(format!(
             "entry '{shown}': {written} bytes unpacked, its header says {declared}"
@@ -359,4 +349,57 @@ fn extract_entry(
     }
     *total += written;
     Ok(())
+}
+
+enum Copy {
+    TooLong,
+    Io(std::io::Error),
+}
+
+/// Copies at most `limit` bytes, counted as they are written (a header's size is only a
+/// claim); more is an error, and the copy stops there.
+fn copy_bounded(from: &mut impl Read, to: &mut impl Write, limit: u64) -> Result<u64, Copy> {
+    let mut written = 0u64;
+    let mut buf = vec![0u8; 64 * 1024];
+    loop {
+        let k = from.read(&mut buf).map_err(Copy::Io)?;
+        if k == 0 {
+            return Ok(written);
+        }
+        written += k as u64;
+        if written > limit {
+            return Err(Copy::TooLong);
+        }
+        to.write_all(&buf[..k]).map_err(Copy::Io)?;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An endless stream of zeros: what a decompressor of a zip bomb produces.
+    struct Zeros;
+    impl Read for Zeros {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            buf.fill(0);
+            Ok(buf.len())
+        }
+    }
+
+    #[test]
+    fn the_copy_stops_at_the_limit_of_bytes_actually_written() {
+        let mut out = vec![];
+        assert!(matches!(
+            copy_bounded(&mut Zeros, &mut out, 1 << 20),
+            Err(Copy::TooLong)
+        ));
+        assert!(out.len() <= 1 << 20, "wrote {} bytes past a limit of 1 MiB", out.len());
+        let mut out = vec![];
+        assert!(matches!(copy_bounded(&mut &[1u8; 1000][..], &mut out, 1000), Ok(1000)));
+        assert!(matches!(
+            copy_bounded(&mut &[1u8; 1001][..], &mut vec![], 1000),
+            Err(Copy::TooLong)
+        ));
+    }
 }

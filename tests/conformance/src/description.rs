@@ -85,6 +85,9 @@ pub struct Description {
     pub can_serialize_fmu_state: bool,
     pub provides_directional_derivative: bool,
     pub can_handle_variable_step: bool,
+    pub can_interpolate_inputs: bool,
+    pub max_output_derivative_order: u32,
+    pub can_run_asynchronuously: bool,
     /// Whether the description has a `<ModelExchange>` element too (the FMU then accepts
     /// `fmi2ModelExchange` in fmi2Instantiate).
     pub model_exchange: bool,
@@ -107,6 +110,9 @@ impl Description {
             can_serialize_fmu_state: false,
             provides_directional_derivative: false,
             can_handle_variable_step: false,
+            can_interpolate_inputs: false,
+            max_output_derivative_order: 0,
+            can_run_asynchronuously: false,
             model_exchange: false,
             generation_tool: String::new(),
             log_categories: vec![],
@@ -143,6 +149,11 @@ impl Description {
                             d.can_serialize_fmu_state = flag(b"canSerializeFMUstate");
                             d.provides_directional_derivative = flag(b"providesDirectionalDerivative");
                             d.can_handle_variable_step = flag(b"canHandleVariableCommunicationStepSize");
+                            d.can_interpolate_inputs = flag(b"canInterpolateInputs");
+                            d.max_output_derivative_order = attr(b"maxOutputDerivativeOrder")
+                                .and_then(|v| v.parse().ok())
+                                .unwrap_or(0);
+                            d.can_run_asynchronuously = flag(b"canRunAsynchronuously");
                         }
                         b"ModelExchange" => d.model_exchange = true,
                         b"Category" => d.log_categories.push(attr(b"name").unwrap_or_default()),

@@ -91,15 +91,26 @@ impl CheckReport {
                 self.limitations.len()
             ),
             Outcome::Pass => format!("PASS  {} / {}  {took}", self.group, self.name),
-            Outcome::Fail(m) => format!(
-                "FAIL  {} / {}  {took}  {}",
-                self.group,
-                self.name,
-                m.lines().next().unwrap_or("")
-            ),
+            Outcome::Fail(m) => format!("FAIL  {} / {}  {took}  {}", self.group, self.name, summary(m)),
             Outcome::Skip(why) => format!("SKIP  {} / {}: {why}", self.group, self.name),
         }
     }
+}
+
+/// A failure message on one line: its first lines (an `assert_eq!` says what came and what was
+/// expected on the two after the first), at most 300 characters.
+fn summary(message: &str) -> String {
+    let lines: Vec<&str> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("(check failed at"))
+        .take(3)
+        .collect();
+    let mut s = lines.join(" | ");
+    if s.chars().count() > 300 {
+        s = s.chars().take(297).collect::<String>() + "...";
+    }
+    s
 }
 
 /// What [`run`] found.
@@ -248,8 +259,16 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
     };
     // Loaded once in a worker: a binary that does not load (or crashes on load) fails here.
     let probe = run_worker(opts, run_dir.path(), &["probe".into(), fmu_path.display().to_string()]);
-    match probe.result {
-        Some(r) if probe.crash.is_none() && r.outcome == Outcome::Pass => report.about.extend(r.info),
+    match probe.result.clone() {
+        Some(r) if r.outcome == Outcome::Pass => {
+            report.about.extend(r.info);
+            if let Some(crash) = &probe.crash {
+                // It loads, but its process dies on the way out: every check will say so.
+                report
+                    .about
+                    .push(format!("after loading it, the worker process {crash}"));
+            }
+        }
         Some(Parsed {
             outcome: Outcome::Fail(m) | Outcome::Skip(m),
             ..

@@ -29,7 +29,14 @@ fn cycle(fmu: &Fmu, full: bool) {
             let bytes = inst.snapshot();
             inst.restore(&bytes);
         }
-        assert_eq!(inst.do_step(-1.0, -1.0), fmi2Error);
+        let s = inst.do_step(-1.0, -1.0);
+        assert_eq!(
+            s,
+            fmi2Error,
+            "{}: a step of h = -1 (made so that the FMU logs a refusal) answered {}",
+            fmu.id,
+            crate::instance::status_name(s)
+        );
         inst.log();
         assert_eq!(inst.terminate(), fmi2OK);
     }
