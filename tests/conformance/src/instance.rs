@@ -7,7 +7,7 @@
 
 use crate::fmi2::*;
 use crate::logger::{LogEntry, LogSink, callbacks};
-use crate::outcome::{convention, limitation};
+use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
 use crate::standard::State;
 use crate::{Fmu, Type, state};
 use std::ffi::CString;
@@ -69,6 +69,13 @@ fn cstr(s: &Option<String>) -> Option<CString> {
         .map(|s| CString::new(s.as_str()).expect("no NUL in test strings"))
 }
 
+/// Records the call about to be made (see [`crate::outcome::breadcrumb`]).
+fn crumb(function: &str, args: impl FnOnce() -> String) {
+    if breadcrumbs_on() {
+        breadcrumb(&format!("{function}({})", args()));
+    }
+}
+
 impl<'a> Instance<'a> {
     /// A co-simulation instance with valid arguments; panics with the FMU's log if refused.
     pub fn new(fmu: &'a Fmu) -> Instance<'a> {
@@ -81,6 +88,7 @@ impl<'a> Instance<'a> {
         let cb = Box::new(callbacks(sink.env()));
         let (name, guid, res) = (cstr(&args.name), cstr(&args.guid), cstr(&args.resources));
         let p = |s: &Option<CString>| s.as_ref().map_or(ptr::null(), |s| s.as_ptr());
+        crumb("fmi2Instantiate", || format!("{args:?}"));
         // SAFETY: valid (or NULL) strings and callbacks that outlive the instance.
         let c = unsafe {
             (fmu.api.instantiate)(
@@ -170,6 +178,7 @@ impl<'a> Instance<'a> {
     // ---- lifecycle -------------------------------------------------------------------------
 
     pub fn setup(&mut self, start: f64, stop: Option<f64>) -> Status {
+        crumb("fmi2SetupExperiment", || format!("start {start}, stop {stop:?}"));
         // SAFETY: a live instance.
         let s = unsafe {
             (self.fmu.api.setup_experiment)(
@@ -188,21 +197,25 @@ impl<'a> Instance<'a> {
     }
 
     pub fn enter_init(&mut self) -> Status {
+        crumb("fmi2EnterInitializationMode", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.enter_initialization_mode)(self.c) }
     }
 
     pub fn exit_init(&mut self) -> Status {
+        crumb("fmi2ExitInitializationMode", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.exit_initialization_mode)(self.c) }
     }
 
     pub fn terminate(&mut self) -> Status {
+        crumb("fmi2Terminate", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.terminate)(self.c) }
     }
 
     pub fn reset(&mut self) -> Status {
+        crumb("fmi2Reset", String::new);
         // SAFETY: a live instance.
         let s = unsafe { (self.fmu.api.reset)(self.c) };
         if s == fmi2OK {
@@ -225,6 +238,7 @@ impl<'a> Instance<'a> {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
+        crumb("fmi2DoStep", || format!("t {t}, h {h}"));
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.do_step)(self.c, t, h, fmi2False) }
     }
@@ -241,6 +255,7 @@ impl<'a> Instance<'a> {
     // ---- values ----------------------------------------------------------------------------
 
     pub fn get_real(&self, vrs: &[u32]) -> (Status, Vec<f64>) {
+        crumb("fmi2GetReal", || format!("vrs {vrs:?}"));
         let mut v = vec![0.0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -248,6 +263,7 @@ impl<'a> Instance<'a> {
     }
 
     pub fn get_integer(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
+        crumb("fmi2GetInteger", || format!("vrs {vrs:?}"));
         let mut v = vec![0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_integer)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -255,6 +271,7 @@ impl<'a> Instance<'a> {
     }
 
     pub fn get_boolean(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
+        crumb("fmi2GetBoolean", || format!("vrs {vrs:?}"));
         let mut v = vec![0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -262,18 +279,21 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        crumb("fmi2SetReal", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         // SAFETY: arrays of nvr elements.
         unsafe { (self.fmu.api.set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        crumb("fmi2SetInteger", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         // SAFETY: arrays of nvr elements.
         unsafe { (self.fmu.api.set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+        crumb("fmi2SetBoolean", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let v: Vec<fmi2Boolean> = values.iter().map(|b| *b as fmi2Boolean).collect();
         // SAFETY: arrays of nvr elements.
@@ -303,6 +323,7 @@ impl<'a> Instance<'a> {
     // ---- FMU state -------------------------------------------------------------------------
 
     pub fn get_state(&mut self) -> (Status, fmi2FMUstate) {
+        crumb("fmi2GetFMUstate", String::new);
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: a live instance and a valid out pointer.
         let st = unsafe { (self.fmu.api.get_fmu_state)(self.c, &mut s) };
@@ -313,6 +334,7 @@ impl<'a> Instance<'a> {
     // is the FMU's job, which is what the tests test.
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn set_state(&mut self, s: fmi2FMUstate) -> Status {
+        crumb("fmi2SetFMUstate", || format!("{s:?}"));
         // SAFETY: a state of this FMU (or NULL, which the FMU must refuse).
         unsafe { (self.fmu.api.set_fmu_state)(self.c, s) }
     }
@@ -346,6 +368,7 @@ impl<'a> Instance<'a> {
 
     /// `fmi2DeSerializeFMUstate` into a new state (NULL on entry).
     pub fn deserialize(&mut self, bytes: &[u8]) -> (Status, fmi2FMUstate) {
+        crumb("fmi2DeSerializeFMUstate", || format!("{} bytes", bytes.len()));
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
         let st = unsafe {
@@ -459,6 +482,7 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Status {
+        crumb("fmi2SetDebugLogging", || format!("{on}, {categories:?}"));
         let owned: Vec<CString> = categories.iter().map(|c| CString::new(*c).unwrap()).collect();
         let ptrs: Vec<fmi2String> = owned.iter().map(|c| c.as_ptr()).collect();
         let p = if ptrs.is_empty() { ptr::null() } else { ptrs.as_ptr() };

@@ -15,6 +15,7 @@ use crate::Fmu;
 use std::any::Any;
 use std::cell::RefCell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Mutex;
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Outcome {
@@ -71,6 +72,51 @@ pub fn convention(fmu: &Fmu, what: &str) -> bool {
         limitation(format!("not required of another exporter's FMU: {what}"));
         false
     }
+}
+
+static BREADCRUMB: Mutex<Option<std::fs::File>> = Mutex::new(None);
+static BREADCRUMBS_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+const BREADCRUMB_BYTES: usize = 1024;
+
+/// Where [`breadcrumb`] writes (a worker's file, which the runner reads if the worker dies).
+pub fn set_breadcrumb_file(path: &std::path::Path) -> std::io::Result<()> {
+    let f = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(true)
+        .write(true)
+        .open(path)?;
+    *BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner()) = Some(f);
+    BREADCRUMBS_ON.store(true, std::sync::atomic::Ordering::Relaxed);
+    Ok(())
+}
+
+/// Whether breadcrumbs are recorded (to skip formatting them when not).
+pub fn breadcrumbs_on() -> bool {
+    BREADCRUMBS_ON.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Records what the check is about to do, so that a crash inside the FMU can say where it
+/// happened (one write of a fixed-size record; nothing without a breadcrumb file).
+pub fn breadcrumb(text: &str) {
+    use std::os::unix::fs::FileExt;
+    if !breadcrumbs_on() {
+        return;
+    }
+    let guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(f) = guard.as_ref() {
+        let mut record = [0u8; BREADCRUMB_BYTES];
+        let n = text.len().min(BREADCRUMB_BYTES);
+        record[..n].copy_from_slice(&text.as_bytes()[..n]);
+        let _ = f.write_all_at(&record, 0);
+    }
+}
+
+/// The last breadcrumb in a breadcrumb file, if any.
+pub fn read_breadcrumb(path: &std::path::Path) -> Option<String> {
+    let bytes = std::fs::read(path).ok()?;
+    let end = bytes.iter().position(|b| *b == 0).unwrap_or(bytes.len());
+    let text = String::from_utf8_lossy(&bytes[..end]).trim().to_string();
+    (!text.is_empty()).then_some(text)
 }
 
 /// Installs a panic hook that remembers where a check failed (for the report) and then does

@@ -359,6 +359,8 @@ struct Parsed {
 
 struct WorkerRun {
     result: Option<Parsed>,
+    /// The last thing the worker said it was about to do ([`outcome::breadcrumb`]).
+    breadcrumb: Option<String>,
     /// How the process ended, when not with exit code 0.
     crash: Option<String>,
     stderr: String,
@@ -367,7 +369,10 @@ struct WorkerRun {
 
 impl WorkerRun {
     fn describe_crash(&self) -> String {
-        let how = self.crash.clone().unwrap_or_else(|| "wrote no result".into());
+        let mut how = self.crash.clone().unwrap_or_else(|| "wrote no result".into());
+        if let Some(b) = &self.breadcrumb {
+            how.push_str(&format!(" while doing: {b}"));
+        }
         let tail = tail(&self.stderr, 25, 3000);
         if tail.is_empty() {
             format!("{how}; its stderr is empty")
@@ -441,6 +446,7 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let result_file = run_dir.join(format!("result-{n}.txt"));
+    let crumb_file = run_dir.join(format!("breadcrumb-{n}"));
     let clock = Instant::now();
     let mut cmd = Command::new(&opts.worker_exe);
     cmd.args(&opts.worker_args_prefix)
@@ -449,6 +455,8 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
         .arg(run_dir)
         .arg("--result")
         .arg(&result_file)
+        .arg("--breadcrumb")
+        .arg(&crumb_file)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -459,6 +467,7 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
         Err(e) => {
             return WorkerRun {
                 result: None,
+                breadcrumb: None,
                 crash: Some(format!("could not be started ({}: {e})", opts.worker_exe.display())),
                 stderr: String::new(),
                 duration: clock.elapsed(),
@@ -509,8 +518,11 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
         .ok()
         .and_then(|t| parse_result(&t));
     let _ = std::fs::remove_file(&result_file);
+    let breadcrumb = outcome::read_breadcrumb(&crumb_file);
+    let _ = std::fs::remove_file(&crumb_file);
     WorkerRun {
         result,
+        breadcrumb,
         crash,
         stderr,
         duration,
@@ -593,7 +605,8 @@ fn parse_result(text: &str) -> Option<Parsed> {
 ///   print the re-serialized state (hex) and the observations after each step (for the check
 ///   of restoring a state in another process).
 ///
-/// The result goes to the result file; the exit code is 0 whenever a result was written
+/// `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
+/// when the worker dies). The result goes to the result file; the exit code is 0 whenever a result was written
 /// (whatever it says), 2 for a usage error.
 pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
     let mut positional = vec![];
@@ -621,6 +634,12 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
             }
             "--self" => self_exe = Some(PathBuf::from(value("--self"))),
             "--self-arg" => self_args.push(value("--self-arg")),
+            "--breadcrumb" => {
+                let path = value("--breadcrumb");
+                if let Err(e) = outcome::set_breadcrumb_file(Path::new(&path)) {
+                    eprintln!("worker: {path}: {e}");
+                }
+            }
             _ => positional.push(a),
         }
     }

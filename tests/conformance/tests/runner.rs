@@ -79,6 +79,7 @@ fn a_segfault_fails_its_check_with_the_signal_and_the_run_goes_on() {
     assert_eq!(report.checks.len(), 5, "{report}");
     let m = failure(&report, "terminate_twice_is_refused_with_a_message");
     assert!(m.contains("killed by signal 11 (SIGSEGV)"), "{m}");
+    assert!(m.contains("while doing: fmi2Instantiate("), "no breadcrumb: {m}");
     // The checks that do not instantiate still ran, in their own processes, and passed.
     let passed: Vec<&str> = report
         .checks

@@ -24,7 +24,7 @@
 
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, status_name};
-use crate::outcome::{info, limitation};
+use crate::outcome::{breadcrumb, info, limitation};
 use crate::standard::allowed_states;
 use crate::state::State;
 use crate::{Fmu, Type, state};
@@ -643,6 +643,10 @@ fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op]) -> Result<(), TestC
                 op
             );
         }
+        breadcrumb(&format!(
+            "random call {i} of a sequence: {op:?} in state {:?}",
+            sh.state
+        ));
         let clock = Instant::now();
         let (status, expect, next) = call(inst, sh, op);
         let took = clock.elapsed();
