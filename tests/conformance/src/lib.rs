@@ -64,6 +64,13 @@ impl Fmu {
         let mut zip = archive::open(path)?;
         let xml = archive::read_model_description(&mut zip)?;
         let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+        if md.fmi_version != "2.0" {
+            return Err(format!(
+                "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+                path.display(),
+                md.fmi_version
+            ));
+        }
         let id = md.model_identifier.clone();
         let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
             && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
@@ -130,6 +137,9 @@ impl Fmu {
     }
 
     fn detect_state_format(&self) -> Result<(), String> {
+        if AS_FOREIGN.load(Ordering::Relaxed) {
+            return Err("treated as another exporter's FMU on request".into());
+        }
         if !self.can_snapshot() {
             return Err("the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate".into());
         }
@@ -249,6 +259,14 @@ pub struct Worker {
 
 static WORKER: Mutex<Option<Worker>> = Mutex::new(None);
 static RANDOM_SEQUENCES: AtomicU32 = AtomicU32::new(0);
+static AS_FOREIGN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Treats every FMU loaded from now on as another exporter's: the checks then test only what
+/// an importer can reach, as they do on a foreign FMU. For testing the checks themselves (a
+/// conformant FMU must pass them that way too).
+pub fn set_as_foreign(on: bool) {
+    AS_FOREIGN.store(on, Ordering::Relaxed);
+}
 
 /// Sets how checks start a worker process of their own.
 pub fn set_worker(worker: Worker) {

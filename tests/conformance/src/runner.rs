@@ -39,6 +39,8 @@ pub struct RunOptions {
     pub random_sequences: u32,
     /// Where the run's private folder goes (default: the system's temp folder).
     pub temp_dir: Option<PathBuf>,
+    /// Check even this exporter's FMUs as another exporter's ([`crate::set_as_foreign`]).
+    pub as_foreign: bool,
 }
 
 impl RunOptions {
@@ -51,6 +53,7 @@ impl RunOptions {
             filter: None,
             random_sequences: 0,
             temp_dir: None,
+            as_foreign: false,
         }
     }
 
@@ -331,6 +334,13 @@ fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
     let mut a = archive::open(fmu_path)?;
     let xml = archive::read_model_description(&mut a)?;
     let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
+    if md.fmi_version != "2.0" {
+        return Err(format!(
+            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+            fmu_path.display(),
+            md.fmi_version
+        ));
+    }
     let so = format!("binaries/linux64/{}.so", md.model_identifier);
     if !a.has_entry(&so) {
         return Err(format!(
@@ -449,9 +459,11 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
     let crumb_file = run_dir.join(format!("breadcrumb-{n}"));
     let clock = Instant::now();
     let mut cmd = Command::new(&opts.worker_exe);
-    cmd.args(&opts.worker_args_prefix)
-        .args(args)
-        .arg("--tmp")
+    cmd.args(&opts.worker_args_prefix).args(args);
+    if opts.as_foreign {
+        cmd.arg("--as-foreign");
+    }
+    cmd.arg("--tmp")
         .arg(run_dir)
         .arg("--result")
         .arg(&result_file)
@@ -605,7 +617,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
 ///   print the re-serialized state (hex) and the observations after each step (for the check
 ///   of restoring a state in another process).
 ///
-/// `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
+/// `--as-foreign`: [`crate::set_as_foreign`]. `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
 /// when the worker dies). The result goes to the result file; the exit code is 0 whenever a result was written
 /// (whatever it says), 2 for a usage error.
 pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
@@ -634,6 +646,7 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
             }
             "--self" => self_exe = Some(PathBuf::from(value("--self"))),
             "--self-arg" => self_args.push(value("--self-arg")),
+            "--as-foreign" => crate::set_as_foreign(true),
             "--breadcrumb" => {
                 let path = value("--breadcrumb");
                 if let Err(e) = outcome::set_breadcrumb_file(Path::new(&path)) {

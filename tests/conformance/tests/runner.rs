@@ -190,3 +190,24 @@ fn fmu_check_reports_a_packaged_fmu_and_exits_with_the_verdict() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The checks' paths for another exporter's FMU, on a conformant FMU: every check passes
+/// (partly), none fails or is skipped. The first packaged FMU, 200 random sequences.
+#[test]
+fn every_check_passes_on_a_packaged_fmu_checked_as_another_exporters() {
+    let fmu = &fmi2_conformance::all().first().expect("a packaged FMU").archive;
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let mut opts = options(dir.path(), "");
+    opts.filter = None;
+    opts.as_foreign = true;
+    opts.random_sequences = 200;
+    let report = run(fmu, &opts);
+    assert_eq!((report.failed(), report.skipped()), (0, 0), "{report}");
+    assert_eq!(report.checks.len(), fmi2_conformance::checks::all_checks().len());
+    assert!(report.partial() > 0, "{report}");
+    assert!(
+        report.about.iter().any(|l| l.contains("another exporter's FMU")),
+        "{report}"
+    );
+    assert_cleaned(dir.path());
+}

@@ -1,6 +1,7 @@
 //! `fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N]`: checks an FMI
 //! 2.0 co-simulation FMU with every check of the suite, each in a child process, and prints a
-//! report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks.
+//! report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
+//! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks).
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi2_conformance::runner::worker_main`]).
 
@@ -10,7 +11,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] | --list";
+const USAGE: &str =
+    "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] | --list";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -18,6 +20,7 @@ struct Args {
     timeout: Option<Duration>,
     random_sequences: u32,
     list: bool,
+    as_foreign: bool,
 }
 
 fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -27,6 +30,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         timeout: None,
         random_sequences: 0,
         list: false,
+        as_foreign: false,
     };
     let mut it = args;
     while let Some(arg) = it.next() {
@@ -46,6 +50,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
                     .map_err(|e| format!("--random-sequences: {e}"))?
             }
             "--list" => a.list = true,
+            "--as-foreign" => a.as_foreign = true,
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
@@ -91,6 +96,7 @@ fn main() -> ExitCode {
     let mut opts = RunOptions::new(exe, vec!["__worker".into()]);
     opts.filter = a.filter;
     opts.random_sequences = a.random_sequences;
+    opts.as_foreign = a.as_foreign;
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }
