@@ -16,6 +16,15 @@ use crate::state::{STATES, State, name};
 use crate::{Fmu, Type};
 use std::ptr;
 
+/// `(name, status)` of a raw call of the C API, with a breadcrumb naming it first (so that a
+/// crash in it is reported with the call).
+macro_rules! raw {
+    ($name:literal, $call:expr) => {{
+        crate::outcome::breadcrumb(concat!($name, ": ", stringify!($call)));
+        ($name, $call)
+    }};
+}
+
 fn refused(inst: &Instance, what: &str, status: fmi2Status, must_say: &[&str]) {
     let log = inst.log();
     assert_eq!(
@@ -223,33 +232,56 @@ pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_ref
     // SAFETY: nvr = 0 with NULL arrays is valid; with nvr = 1 the FMU must check for NULL.
     unsafe {
         let empty = [
-            (api.get_real)(c, ptr::null(), 0, ptr::null_mut()),
-            (api.get_integer)(c, ptr::null(), 0, ptr::null_mut()),
-            (api.get_boolean)(c, ptr::null(), 0, ptr::null_mut()),
-            (api.get_string)(c, ptr::null(), 0, ptr::null_mut()),
-            (api.set_real)(c, ptr::null(), 0, ptr::null()),
-            (api.set_integer)(c, ptr::null(), 0, ptr::null()),
-            (api.set_boolean)(c, ptr::null(), 0, ptr::null()),
-            (api.set_string)(c, ptr::null(), 0, ptr::null()),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.get_real)(c, ptr::null(), 0, ptr::null_mut())
+            ),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.get_integer)(c, ptr::null(), 0, ptr::null_mut())
+            ),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.get_boolean)(c, ptr::null(), 0, ptr::null_mut())
+            ),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.get_string)(c, ptr::null(), 0, ptr::null_mut())
+            ),
+            raw!("nvr = 0, NULL arrays", (api.set_real)(c, ptr::null(), 0, ptr::null())),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.set_integer)(c, ptr::null(), 0, ptr::null())
+            ),
+            raw!(
+                "nvr = 0, NULL arrays",
+                (api.set_boolean)(c, ptr::null(), 0, ptr::null())
+            ),
+            raw!("nvr = 0, NULL arrays", (api.set_string)(c, ptr::null(), 0, ptr::null())),
         ];
-        assert_eq!(empty, [fmi2OK; 8], "{}: nvr = 0 with NULL arrays", fmu.id);
+        assert_eq!(
+            empty.map(|(_, s)| s),
+            [fmi2OK; 8],
+            "{}: nvr = 0 with NULL arrays",
+            fmu.id
+        );
         let null_cases = [
-            ("fmi2GetReal", (api.get_real)(c, ptr::null(), 1, r.as_mut_ptr())),
-            ("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            ("fmi2GetInteger", (api.get_integer)(c, ptr::null(), 1, i.as_mut_ptr())),
-            ("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            ("fmi2GetBoolean", (api.get_boolean)(c, ptr::null(), 1, i.as_mut_ptr())),
-            ("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            ("fmi2GetString", (api.get_string)(c, ptr::null(), 1, st.as_mut_ptr())),
-            ("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            ("fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
-            ("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),
-            ("fmi2SetInteger", (api.set_integer)(c, ptr::null(), 1, i.as_ptr())),
-            ("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, ptr::null())),
-            ("fmi2SetBoolean", (api.set_boolean)(c, ptr::null(), 1, i.as_ptr())),
-            ("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, ptr::null())),
-            ("fmi2SetString", (api.set_string)(c, ptr::null(), 1, st.as_ptr())),
-            ("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!("fmi2GetReal", (api.get_real)(c, ptr::null(), 1, r.as_mut_ptr())),
+            raw!("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!("fmi2GetInteger", (api.get_integer)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!("fmi2GetBoolean", (api.get_boolean)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!("fmi2GetString", (api.get_string)(c, ptr::null(), 1, st.as_mut_ptr())),
+            raw!("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!("fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
+            raw!("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!("fmi2SetInteger", (api.set_integer)(c, ptr::null(), 1, i.as_ptr())),
+            raw!("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!("fmi2SetBoolean", (api.set_boolean)(c, ptr::null(), 1, i.as_ptr())),
+            raw!("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!("fmi2SetString", (api.set_string)(c, ptr::null(), 1, st.as_ptr())),
+            raw!("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, ptr::null())),
         ];
         let log = inst.log();
         for (f, s) in null_cases {

@@ -18,6 +18,15 @@ use crate::state::{STATES, State, forge, name};
 use crate::{Fmu, Type};
 use std::ptr;
 
+/// `(name, status)` of a raw call of the C API, with a breadcrumb naming it first (so that a
+/// crash in it is reported with the call).
+macro_rules! raw {
+    ($name:literal, $call:expr) => {{
+        crate::outcome::breadcrumb(concat!($name, ": ", stringify!($call)));
+        ($name, $call)
+    }};
+}
+
 /// FMU states owned by a donor instance, one per state-machine state, to pass to the
 /// functions that take an FMUstate. Of another exporter's FMU: taken in the reachable states
 /// (NULL for the others, which are not tried), when the FMU can get and serialize its state.
@@ -607,23 +616,23 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
     // SAFETY: every function must check the component before touching anything.
     let answers = unsafe {
         [
-            ("fmi2SetDebugLogging", (api.set_debug_logging)(c, 1, 0, ptr::null())),
-            ("fmi2SetupExperiment", (api.setup_experiment)(c, 0, 0.0, 0.0, 0, 0.0)),
-            ("fmi2EnterInitializationMode", (api.enter_initialization_mode)(c)),
-            ("fmi2ExitInitializationMode", (api.exit_initialization_mode)(c)),
-            ("fmi2Terminate", (api.terminate)(c)),
-            ("fmi2Reset", (api.reset)(c)),
-            ("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, real.as_mut_ptr())),
-            ("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
-            ("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
-            ("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, &mut string)),
-            ("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, real.as_ptr())),
-            ("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, int.as_ptr())),
-            ("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, int.as_ptr())),
-            ("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, &string)),
-            ("fmi2GetFMUstate", (api.get_fmu_state)(c, &mut st)),
-            ("fmi2SetFMUstate", (api.set_fmu_state)(c, st)),
-            ("fmi2FreeFMUstate", (api.free_fmu_state)(c, &mut st)),
+            raw!("fmi2SetDebugLogging", (api.set_debug_logging)(c, 1, 0, ptr::null())),
+            raw!("fmi2SetupExperiment", (api.setup_experiment)(c, 0, 0.0, 0.0, 0, 0.0)),
+            raw!("fmi2EnterInitializationMode", (api.enter_initialization_mode)(c)),
+            raw!("fmi2ExitInitializationMode", (api.exit_initialization_mode)(c)),
+            raw!("fmi2Terminate", (api.terminate)(c)),
+            raw!("fmi2Reset", (api.reset)(c)),
+            raw!("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, real.as_mut_ptr())),
+            raw!("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
+            raw!("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
+            raw!("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, &mut string)),
+            raw!("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, real.as_ptr())),
+            raw!("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, int.as_ptr())),
+            raw!("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, int.as_ptr())),
+            raw!("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, &string)),
+            raw!("fmi2GetFMUstate", (api.get_fmu_state)(c, &mut st)),
+            raw!("fmi2SetFMUstate", (api.set_fmu_state)(c, st)),
+            raw!("fmi2FreeFMUstate", (api.free_fmu_state)(c, &mut st)),
             (
                 "fmi2SerializedFMUstateSize",
                 (api.serialized_fmu_state_size)(c, st, &mut size),
@@ -648,13 +657,13 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
                 "fmi2GetRealOutputDerivatives",
                 (api.get_real_output_derivatives)(c, ptr::null(), 0, ptr::null(), ptr::null_mut()),
             ),
-            ("fmi2DoStep", (api.do_step)(c, 0.0, 0.1, 0)),
-            ("fmi2CancelStep", (api.cancel_step)(c)),
-            ("fmi2GetStatus", (api.get_status)(c, 0, &mut status)),
-            ("fmi2GetRealStatus", (api.get_real_status)(c, 2, real.as_mut_ptr())),
-            ("fmi2GetIntegerStatus", (api.get_integer_status)(c, 0, int.as_mut_ptr())),
-            ("fmi2GetBooleanStatus", (api.get_boolean_status)(c, 3, int.as_mut_ptr())),
-            ("fmi2GetStringStatus", (api.get_string_status)(c, 0, &mut string)),
+            raw!("fmi2DoStep", (api.do_step)(c, 0.0, 0.1, 0)),
+            raw!("fmi2CancelStep", (api.cancel_step)(c)),
+            raw!("fmi2GetStatus", (api.get_status)(c, 0, &mut status)),
+            raw!("fmi2GetRealStatus", (api.get_real_status)(c, 2, real.as_mut_ptr())),
+            raw!("fmi2GetIntegerStatus", (api.get_integer_status)(c, 0, int.as_mut_ptr())),
+            raw!("fmi2GetBooleanStatus", (api.get_boolean_status)(c, 3, int.as_mut_ptr())),
+            raw!("fmi2GetStringStatus", (api.get_string_status)(c, 0, &mut string)),
         ]
     };
     for (f, s) in answers {
