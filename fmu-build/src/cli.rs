@@ -55,6 +55,25 @@ enum Cmd {
     },
     /// Describe an FMU file: version, interfaces, platforms, variables.
     Info { fmu: PathBuf },
+    /// Run the black-box FMI 2.0 co-simulation conformance suite on an FMU file (ours or any
+    /// other exporter's): every call in every state, bad arguments, FMU state, instances and
+    /// threads, memory, random call sequences, a C host; each check in a child process, so an
+    /// FMU that crashes or hangs is reported, not shared. Ends with `N passed, N failed, N skipped`.
+    Check {
+        fmu: Option<PathBuf>,
+        /// Only checks whose name or group contains this text.
+        #[arg(long)]
+        filter: Option<String>,
+        /// Longest a check may take, in seconds (default 600).
+        #[arg(long)]
+        timeout: Option<f64>,
+        /// Random call sequences per FMU (default 2000).
+        #[arg(long, default_value_t = 0)]
+        random_sequences: u32,
+        /// List the checks and exit.
+        #[arg(long)]
+        list: bool,
+    },
     /// Compare (or with --write, refresh) the committed model descriptions of the workspace
     /// (`[workspace.metadata.fmu] model-descriptions`) with the packaged FMUs.
     Xml {
@@ -107,6 +126,13 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             python,
         } => build(manifest_path.as_deref(), &packages, workspace, python.as_deref()).map(|_| ()),
         Cmd::Validate { fmus, python } => validate_all(&fmus, python.as_deref()),
+        Cmd::Check {
+            fmu,
+            filter,
+            timeout,
+            random_sequences,
+            list,
+        } => check(fmu.as_deref(), filter, timeout, random_sequences, list),
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
             Ok(())
@@ -141,6 +167,43 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
         }
     }
 }
+
+fn check(
+    fmu: Option<&Path>,
+    filter: Option<String>,
+    timeout: Option<f64>,
+    random_sequences: u32,
+    list: bool,
+) -> Result<(), String> {
+    use fmi2_conformance::runner::{RunOptions, run_with};
+    if list {
+        for c in fmi2_conformance::checks::all_checks() {
+            println!("{} / {}", c.group, c.name);
+        }
+        return Ok(());
+    }
+    let fmu = fmu.ok_or("which FMU? `cargo fmu check X.fmu`")?;
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find my own executable: {e}"))?;
+    let mut opts = RunOptions::new(exe, vec![CHECK_WORKER.into()]);
+    opts.filter = filter;
+    opts.random_sequences = random_sequences;
+    if let Some(t) = timeout {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(format!("--timeout {t}: seconds > 0"));
+        }
+        opts.timeout = std::time::Duration::from_secs_f64(t);
+    }
+    if opts.selected().is_empty() {
+        return Err("no check matches the filter (`cargo fmu check --list` shows them)".into());
+    }
+    // Progress on stderr while it runs; the report on stdout.
+    let report = run_with(fmu, &opts, &mut |c| eprintln!("{}", c.line()));
+    println!("{report}");
+    if report.success() { Ok(()) } else { Err(String::new()) }
+}
+
+/// The hidden subcommand a `check` child runs (fmi2_conformance::runner::worker_main).
+const CHECK_WORKER: &str = "__check-worker";
 
 /// Builds and packages the selected crates; for a whole workspace also refreshes the committed
 /// descriptions named in `[workspace.metadata.fmu]`. Returns the packaged files.
@@ -254,6 +317,11 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>) -> Result<(), String> {
 
 /// Entry point of both binaries; `tool` is how the messages name the program.
 pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
+    if args.get(1).is_some_and(|a| a == CHECK_WORKER) {
+        return fmi2_conformance::runner::worker_main(
+            args.into_iter().skip(2).map(|a| a.to_string_lossy().into_owned()),
+        );
+    }
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) => {

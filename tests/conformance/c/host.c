@@ -8,7 +8,8 @@
  *   resets and checks a rerun repeats bit for bit; makes refused calls whose messages contain
  *   '%' (the logger formats with vsnprintf, as C hosts do); frees everything and dlcloses.
  * Prints "final <hex bit patterns of the last values>" and "messages <n>"; exits 1 with a
- * reason on stderr on any failure. */
+ * reason on stderr on any failure. With HOST_FOREIGN set (another exporter's FMU), the checks
+ * of this exporter's conventions are left out. */
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -113,9 +114,13 @@ int main(int argc, char **argv) {
     if (!c) { fprintf(stderr, "fmi2Instantiate returned NULL: %s\n", last); return 1; }
 
     /* '%' in messages: a category name and a bad step; with "%s" as the format they are text. */
+    /* (Not for another exporter's FMU, HOST_FOREIGN set: refusing an unknown category with a
+     * message that names it is this exporter's convention.) */
     const char *bad[] = {"log%s%n%s%n"};
-    if (debug_logging(c, 1, 1, bad) != fmi2Error) { fprintf(stderr, "unknown category accepted\n"); return 1; }
-    if (!strstr(last, "log%s%n%s%n")) { fprintf(stderr, "the '%%' message arrived as: %s\n", last); return 1; }
+    if (!getenv("HOST_FOREIGN")) {
+        if (debug_logging(c, 1, 1, bad) != fmi2Error) { fprintf(stderr, "unknown category accepted\n"); return 1; }
+        if (!strstr(last, "log%s%n%s%n")) { fprintf(stderr, "the '%%' message arrived as: %s\n", last); return 1; }
+    }
 
     for (int run = 0; run < 2; run++) {
         for (int i = 7; i < argc; i++) {

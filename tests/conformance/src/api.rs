@@ -1,7 +1,7 @@
 //! The 34 functions of the FMI 2.0 co-simulation interface, looked up in a loaded `.so` the way an
 //! importer does (`dlopen` + `dlsym`), with the standard's C signatures.
 
-use rustfmu::fmi2::abi::*;
+use crate::fmi2::*;
 use std::path::Path;
 
 pub type Unary = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
@@ -99,8 +99,17 @@ macro_rules! load {
 impl Api {
     /// `dlopen`s the binary and looks up every function; an error names the first one missing.
     pub fn load(so: &Path) -> Result<Api, String> {
-        // SAFETY: an FMU binary of this workspace; its initializers are Rust std's only.
-        let lib = unsafe { libloading::Library::new(so) }.map_err(|e| format!("{}: {e}", so.display()))?;
+        // SAFETY: loading runs the binary's initializers: an FMU is trusted to run here (the
+        // runner keeps each check in a child process, so a crash there fails only that check).
+        // RTLD_NOW: a symbol the binary needs but no library provides fails here, by name.
+        let lib: libloading::Library = unsafe {
+            libloading::os::unix::Library::open(
+                Some(so),
+                libloading::os::unix::RTLD_NOW | libloading::os::unix::RTLD_LOCAL,
+            )
+        }
+        .map_err(|e| format!("{}: {e}", so.display()))?
+        .into();
         Ok(load!(lib;
             get_types_platform = b"fmi2GetTypesPlatform",
             get_version = b"fmi2GetVersion",

@@ -85,6 +85,14 @@ pub struct Description {
     pub can_serialize_fmu_state: bool,
     pub provides_directional_derivative: bool,
     pub can_handle_variable_step: bool,
+    pub can_interpolate_inputs: bool,
+    pub max_output_derivative_order: u32,
+    pub can_run_asynchronuously: bool,
+    /// Whether the description has a `<ModelExchange>` element too (the FMU then accepts
+    /// `fmi2ModelExchange` in fmi2Instantiate).
+    pub model_exchange: bool,
+    /// `generationTool` of `<fmiModelDescription>`, for the report.
+    pub generation_tool: String,
     pub log_categories: Vec<String>,
     /// startTime, stopTime, stepSize of `<DefaultExperiment>`.
     pub default_experiment: (Option<f64>, Option<f64>, Option<f64>),
@@ -102,15 +110,21 @@ impl Description {
             can_serialize_fmu_state: false,
             provides_directional_derivative: false,
             can_handle_variable_step: false,
+            can_interpolate_inputs: false,
+            max_output_derivative_order: 0,
+            can_run_asynchronuously: false,
+            model_exchange: false,
+            generation_tool: String::new(),
             log_categories: vec![],
             default_experiment: (None, None, None),
             variables: vec![],
         };
         let mut current: Option<Variable> = None;
         loop {
-            let event = reader
-                .read_event()
-                .map_err(|e| format!("modelDescription.xml at byte {}: {e}", reader.error_position()))?;
+            let event = reader.read_event().map_err(|e| {
+                let (line, col) = crate::archive::line_column(xml, reader.error_position() as usize);
+                format!("modelDescription.xml:{line}:{col}: {e}")
+            })?;
             match event {
                 Event::Eof => break,
                 Event::Start(e) | Event::Empty(e) => {
@@ -127,6 +141,7 @@ impl Description {
                         b"fmiModelDescription" => {
                             d.fmi_version = attr(b"fmiVersion").unwrap_or_default();
                             d.guid = attr(b"guid").unwrap_or_default();
+                            d.generation_tool = attr(b"generationTool").unwrap_or_default();
                         }
                         b"CoSimulation" => {
                             d.model_identifier = attr(b"modelIdentifier").unwrap_or_default();
@@ -134,26 +149,33 @@ impl Description {
                             d.can_serialize_fmu_state = flag(b"canSerializeFMUstate");
                             d.provides_directional_derivative = flag(b"providesDirectionalDerivative");
                             d.can_handle_variable_step = flag(b"canHandleVariableCommunicationStepSize");
+                            d.can_interpolate_inputs = flag(b"canInterpolateInputs");
+                            d.max_output_derivative_order = attr(b"maxOutputDerivativeOrder")
+                                .and_then(|v| v.parse().ok())
+                                .unwrap_or(0);
+                            d.can_run_asynchronuously = flag(b"canRunAsynchronuously");
                         }
+                        b"ModelExchange" => d.model_exchange = true,
                         b"Category" => d.log_categories.push(attr(b"name").unwrap_or_default()),
                         b"DefaultExperiment" => {
                             d.default_experiment = (real(b"startTime"), real(b"stopTime"), real(b"stepSize"))
                         }
-                        b"ScalarVariable" => {
-                            current = Some(Variable {
-                                name: attr(b"name").unwrap_or_default(),
-                                vr: attr(b"valueReference")
-                                    .and_then(|v| v.parse().ok())
-                                    .ok_or("a ScalarVariable without a valid valueReference")?,
-                                ty: Type::Real,
-                                causality: attr(b"causality").unwrap_or_else(|| "local".into()),
-                                variability: attr(b"variability").unwrap_or_else(|| "continuous".into()),
-                                initial_attr: attr(b"initial"),
-                                start: None,
-                                min: None,
-                                max: None,
-                            })
-                        }
+                        b"ScalarVariable" => current = Some(Variable {
+                            name: attr(b"name").unwrap_or_default(),
+                            vr: attr(b"valueReference").and_then(|v| v.parse().ok()).ok_or_else(|| {
+                                let (line, col) = crate::archive::line_column(xml, reader.buffer_position() as usize);
+                                format!(
+                                    "modelDescription.xml:{line}:{col}: a ScalarVariable without a valid valueReference"
+                                )
+                            })?,
+                            ty: Type::Real,
+                            causality: attr(b"causality").unwrap_or_else(|| "local".into()),
+                            variability: attr(b"variability").unwrap_or_else(|| "continuous".into()),
+                            initial_attr: attr(b"initial"),
+                            start: None,
+                            min: None,
+                            max: None,
+                        }),
                         tag @ (b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration") => {
                             if let Some(mut v) = current.take() {
                                 v.ty = match tag {
@@ -176,7 +198,7 @@ impl Description {
             }
         }
         if d.model_identifier.is_empty() {
-            return Err("no <CoSimulation modelIdentifier=...>".into());
+            return Err("modelDescription.xml: no <CoSimulation modelIdentifier=...>: not a co-simulation FMU".into());
         }
         Ok(d)
     }

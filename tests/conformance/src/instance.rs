@@ -1,13 +1,15 @@
 //! One FMU instance driven through the C API, with its log recorded.
 //!
 //! Every message the FMU logs is checked as it is read ([`Instance::log`]) and when the instance
-//! is dropped: it must come back with this instance's componentEnvironment and name, under a
-//! category declared in `<LogCategories>`, with the format `"%s"`.
+//! is dropped: it must come back with this instance's componentEnvironment and name, and (this
+//! exporter's conventions) under a category declared in `<LogCategories>`, with the format
+//! `"%s"`.
 
+use crate::fmi2::*;
 use crate::logger::{LogEntry, LogSink, callbacks};
+use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
+use crate::standard::State;
 use crate::{Fmu, Type, state};
-use rustfmu::fmi2::abi::*;
-use rustfmu::fmi2::instance::State;
 use std::ffi::CString;
 use std::ptr;
 
@@ -48,8 +50,8 @@ impl Args {
     }
 }
 
-pub struct Instance {
-    pub fmu: &'static Fmu,
+pub struct Instance<'a> {
+    pub fmu: &'a Fmu,
     pub c: fmi2Component,
     pub name: String,
     sink: Box<LogSink>,
@@ -60,25 +62,33 @@ pub struct Instance {
 
 // SAFETY: an instance is used by one thread at a time (the standard's rule); the FMU has no
 // thread affinity, and the sink is a Mutex.
-unsafe impl Send for Instance {}
+unsafe impl Send for Instance<'_> {}
 
 fn cstr(s: &Option<String>) -> Option<CString> {
     s.as_ref()
         .map(|s| CString::new(s.as_str()).expect("no NUL in test strings"))
 }
 
-impl Instance {
+/// Records the call about to be made (see [`crate::outcome::breadcrumb`]).
+fn crumb(function: &str, args: impl FnOnce() -> String) {
+    if breadcrumbs_on() {
+        breadcrumb(&format!("{function}({})", args()));
+    }
+}
+
+impl<'a> Instance<'a> {
     /// A co-simulation instance with valid arguments; panics with the FMU's log if refused.
-    pub fn new(fmu: &'static Fmu) -> Instance {
+    pub fn new(fmu: &'a Fmu) -> Instance<'a> {
         Instance::with(fmu, &Args::valid(fmu))
             .unwrap_or_else(|log| panic!("{}: fmi2Instantiate refused: {log:#?}", fmu.id))
     }
 
-    pub fn with(fmu: &'static Fmu, args: &Args) -> Result<Instance, Vec<LogEntry>> {
+    pub fn with(fmu: &'a Fmu, args: &Args) -> Result<Instance<'a>, Vec<LogEntry>> {
         let sink = Box::<LogSink>::default();
         let cb = Box::new(callbacks(sink.env()));
         let (name, guid, res) = (cstr(&args.name), cstr(&args.guid), cstr(&args.resources));
         let p = |s: &Option<CString>| s.as_ref().map_or(ptr::null(), |s| s.as_ptr());
+        crumb("fmi2Instantiate", || format!("{args:?}"));
         // SAFETY: valid (or NULL) strings and callbacks that outlive the instance.
         let c = unsafe {
             (fmu.api.instantiate)(
@@ -121,20 +131,39 @@ impl Instance {
                 "{}: message under another instance name: {e:?}",
                 self.fmu.id
             );
-            assert!(
-                self.fmu.md.log_categories.contains(&e.category),
-                "{}: message under category '{}', which <LogCategories> does not declare ({:?}): {e:?}",
-                self.fmu.id,
-                e.category,
-                self.fmu.md.log_categories
-            );
-            assert_eq!(
-                e.format, "%s",
-                "{}: the message format must be \"%s\": {e:?}",
-                self.fmu.id
-            );
+            if !self.fmu.md.log_categories.contains(&e.category)
+                && convention(self.fmu, "every message under a category that <LogCategories> declares")
+            {
+                panic!(
+                    "{}: message under category '{}', which <LogCategories> does not declare ({:?}): {e:?}",
+                    self.fmu.id, e.category, self.fmu.md.log_categories
+                );
+            }
+            if e.format != "%s" {
+                if convention(self.fmu, "the message format \"%s\" with the text as its argument") {
+                    panic!("{}: the message format must be \"%s\": {e:?}", self.fmu.id);
+                }
+                if e.format.contains('%') {
+                    limitation(
+                        "messages with printf directives are recorded unformatted (their arguments cannot be read)",
+                    );
+                }
+            }
         }
         entries
+    }
+
+    /// Whether a message of the log with that status contains every one of `words` (how this
+    /// exporter's FMUs say what is wrong). For another exporter's FMU the wording is its own:
+    /// then any message with that status will do (recorded as a limitation).
+    pub fn says(&self, log: &[LogEntry], status: Status, words: &[&str]) -> bool {
+        let worded = log
+            .iter()
+            .any(|e| e.status == status && words.iter().all(|w| e.text.contains(w)));
+        worded
+            || (!words.is_empty()
+                && !convention(self.fmu, "the wording of messages (which words name what is wrong)")
+                && log.iter().any(|e| e.status == status))
     }
 
     /// The log as one text, for failure messages and `contains` checks.
@@ -149,6 +178,7 @@ impl Instance {
     // ---- lifecycle -------------------------------------------------------------------------
 
     pub fn setup(&mut self, start: f64, stop: Option<f64>) -> Status {
+        crumb("fmi2SetupExperiment", || format!("start {start}, stop {stop:?}"));
         // SAFETY: a live instance.
         let s = unsafe {
             (self.fmu.api.setup_experiment)(
@@ -167,21 +197,25 @@ impl Instance {
     }
 
     pub fn enter_init(&mut self) -> Status {
+        crumb("fmi2EnterInitializationMode", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.enter_initialization_mode)(self.c) }
     }
 
     pub fn exit_init(&mut self) -> Status {
+        crumb("fmi2ExitInitializationMode", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.exit_initialization_mode)(self.c) }
     }
 
     pub fn terminate(&mut self) -> Status {
+        crumb("fmi2Terminate", String::new);
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.terminate)(self.c) }
     }
 
     pub fn reset(&mut self) -> Status {
+        crumb("fmi2Reset", String::new);
         // SAFETY: a live instance.
         let s = unsafe { (self.fmu.api.reset)(self.c) };
         if s == fmi2OK {
@@ -204,6 +238,7 @@ impl Instance {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
+        crumb("fmi2DoStep", || format!("t {t}, h {h}"));
         // SAFETY: a live instance.
         unsafe { (self.fmu.api.do_step)(self.c, t, h, fmi2False) }
     }
@@ -220,6 +255,7 @@ impl Instance {
     // ---- values ----------------------------------------------------------------------------
 
     pub fn get_real(&self, vrs: &[u32]) -> (Status, Vec<f64>) {
+        crumb("fmi2GetReal", || format!("vrs {vrs:?}"));
         let mut v = vec![0.0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -227,6 +263,7 @@ impl Instance {
     }
 
     pub fn get_integer(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
+        crumb("fmi2GetInteger", || format!("vrs {vrs:?}"));
         let mut v = vec![0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_integer)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -234,6 +271,7 @@ impl Instance {
     }
 
     pub fn get_boolean(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
+        crumb("fmi2GetBoolean", || format!("vrs {vrs:?}"));
         let mut v = vec![0; vrs.len()];
         // SAFETY: arrays of nvr elements.
         let s = unsafe { (self.fmu.api.get_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
@@ -241,18 +279,21 @@ impl Instance {
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
+        crumb("fmi2SetReal", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         // SAFETY: arrays of nvr elements.
         unsafe { (self.fmu.api.set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
+        crumb("fmi2SetInteger", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         // SAFETY: arrays of nvr elements.
         unsafe { (self.fmu.api.set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
+        crumb("fmi2SetBoolean", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let v: Vec<fmi2Boolean> = values.iter().map(|b| *b as fmi2Boolean).collect();
         // SAFETY: arrays of nvr elements.
@@ -282,6 +323,7 @@ impl Instance {
     // ---- FMU state -------------------------------------------------------------------------
 
     pub fn get_state(&mut self) -> (Status, fmi2FMUstate) {
+        crumb("fmi2GetFMUstate", String::new);
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: a live instance and a valid out pointer.
         let st = unsafe { (self.fmu.api.get_fmu_state)(self.c, &mut s) };
@@ -292,6 +334,7 @@ impl Instance {
     // is the FMU's job, which is what the tests test.
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn set_state(&mut self, s: fmi2FMUstate) -> Status {
+        crumb("fmi2SetFMUstate", || format!("{s:?}"));
         // SAFETY: a state of this FMU (or NULL, which the FMU must refuse).
         unsafe { (self.fmu.api.set_fmu_state)(self.c, s) }
     }
@@ -325,6 +368,7 @@ impl Instance {
 
     /// `fmi2DeSerializeFMUstate` into a new state (NULL on entry).
     pub fn deserialize(&mut self, bytes: &[u8]) -> (Status, fmi2FMUstate) {
+        crumb("fmi2DeSerializeFMUstate", || format!("{} bytes", bytes.len()));
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
         let st = unsafe {
@@ -367,8 +411,27 @@ impl Instance {
         assert_eq!(self.free_state(&mut s), fmi2OK);
     }
 
-    /// The state-machine state, read from a serialized FMU state.
+    /// The serialized FMU state for before/after comparisons, when the FMU declares it can
+    /// give one (else `None`, recorded as a limitation: the comparison then proves nothing).
+    pub fn fingerprint(&mut self) -> Option<Vec<u8>> {
+        if self.fmu.can_snapshot() {
+            Some(self.snapshot())
+        } else {
+            limitation(
+                "the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate: that a refused call changes nothing is not checked",
+            );
+            None
+        }
+    }
+
+    /// The state-machine state, read from a serialized FMU state (only of this exporter's FMUs:
+    /// [`Fmu::own_state_format`]).
     pub fn machine_state(&mut self) -> State {
+        assert!(
+            self.fmu.own_state_format(),
+            "{}: the state machine can be read only from this exporter's serialized states",
+            self.fmu.id
+        );
         let bytes = self.snapshot();
         state::machine_state(&bytes).unwrap_or_else(|e| panic!("{}: {e}", self.fmu.id))
     }
@@ -376,6 +439,11 @@ impl Instance {
     /// Puts the instance into `target` by restoring a forged copy of its own state (see
     /// [`crate::state`]). The instance must be in a state where fmi2SetFMUstate is allowed.
     pub fn force_state(&mut self, target: State) {
+        assert!(
+            self.fmu.own_state_format(),
+            "{}: only this exporter's FMUs can be forced into a state",
+            self.fmu.id
+        );
         let bytes = state::forge(&self.snapshot(), target);
         // A helper instance makes and frees the FMU state, so that this works for Fatal too.
         let mut helper = Instance::new(self.fmu);
@@ -414,6 +482,7 @@ impl Instance {
     }
 
     pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Status {
+        crumb("fmi2SetDebugLogging", || format!("{on}, {categories:?}"));
         let owned: Vec<CString> = categories.iter().map(|c| CString::new(*c).unwrap()).collect();
         let ptrs: Vec<fmi2String> = owned.iter().map(|c| c.as_ptr()).collect();
         let p = if ptrs.is_empty() { ptr::null() } else { ptrs.as_ptr() };
@@ -422,7 +491,7 @@ impl Instance {
     }
 }
 
-impl Drop for Instance {
+impl Drop for Instance<'_> {
     fn drop(&mut self) {
         // SAFETY: freed once; the callbacks outlive the call.
         unsafe { (self.fmu.api.free_instance)(self.c) };
@@ -460,7 +529,7 @@ pub fn excite(v: &crate::Variable) -> f64 {
 
 /// A fresh instance, excited, initialized at t = 0, run for `steps` steps of `h`: the
 /// observations after initialization and after every step.
-pub fn run(fmu: &'static Fmu, steps: usize, h: f64) -> Vec<Vec<u64>> {
+pub fn run(fmu: &Fmu, steps: usize, h: f64) -> Vec<Vec<u64>> {
     let mut inst = Instance::new(fmu);
     run_on(&mut inst, steps, h)
 }

@@ -1,18 +1,30 @@
-//! The conformance suite's harness: it finds every packaged FMU (`target/fmu/*.fmu`), unpacks
-//! it, reads its `modelDescription.xml` and loads its binary the way an importer does, and gives
-//! the tests an instance wrapper that records every message the FMU logs.
+//! A black-box FMI 2.0 co-simulation checker: it loads an `.fmu` the way an importer does
+//! (unpacks it, reads its `modelDescription.xml`, `dlopen`s its binary) and drives its C API
+//! through named checks ([`checks::all_checks`]).
+//!
+//! - [`runner::run`] checks one FMU file, each check in a child process of its own, so that an
+//!   FMU that crashes or hangs fails that check and nothing else; [`runner::worker_main`] is the
+//!   child's side. The `fmu-check` binary of this crate uses both; `cargo fmu check` too.
+//! - [`archive`] is the one way an (untrusted) FMU file is opened and unpacked.
+//! - The workspace's own test run (`cargo test -p fmi2-conformance`) runs every check on every
+//!   packaged FMU of `target/fmu` ([`all`]), strictly: there, a limitation or a skip fails.
 //!
 //! Nothing here knows a particular FMU: value references, types, causalities and variabilities
-//! come from each FMU's model description, so every FMU added to `rustfmu::fmus::ALL` and
-//! packaged by `fmu-build` is covered without a change.
-//!
-//! The FMU binaries are loaded once per test process (like an importer that keeps an FMU
-//! loaded); the tests of unloading load their own copy.
+//! come from each FMU's model description. Nothing depends on the exporter either: the C types
+//! are declared from the standard ([`fmi2`]). Where a check can do more on an FMU of this
+//! exporter (whose serialized FMU state it can read and rewrite, see [`state`]), it finds out
+//! with [`Fmu::own_state_format`] and, on another exporter's FMU, tests what an importer can
+//! reach and reports the rest as a limitation.
 
 pub mod api;
+pub mod archive;
+pub mod checks;
 pub mod description;
+pub mod fmi2;
 pub mod instance;
 pub mod logger;
+pub mod outcome;
+pub mod runner;
 pub mod standard;
 pub mod state;
 
@@ -21,11 +33,13 @@ pub use description::{Description, Type, Variable};
 pub use instance::Instance;
 pub use logger::LogEntry;
 
-use std::io::Read;
+use archive::PrivateDir;
+use fmi2::*;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Mutex, OnceLock};
 
-/// One packaged FMU, unpacked and loaded.
+/// One FMU, unpacked into a private folder and loaded.
 pub struct Fmu {
     pub id: String,
     /// The `.fmu` archive.
@@ -34,14 +48,142 @@ pub struct Fmu {
     pub dir: PathBuf,
     /// `binaries/linux64/<modelIdentifier>.so` inside `dir`.
     pub so: PathBuf,
+    /// A private folder for the suite's own files (compiled hosts, state files, copies).
+    pub scratch: PathBuf,
     pub md: Description,
     pub api: Api,
+    own: OnceLock<Result<(), String>>,
+    /// Last: removed after the library is unloaded.
+    _dirs: (PrivateDir, PrivateDir),
 }
 
 impl Fmu {
+    /// Unpacks the archive (through [`archive::extract_private`]) into a new private folder
+    /// under `parent` and loads its binary. The folders are removed when this is dropped.
+    pub fn load(path: &Path, parent: &Path) -> Result<Fmu, String> {
+        let mut zip = archive::open(path)?;
+        let xml = archive::read_model_description(&mut zip)?;
+        let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+        if md.fmi_version != "2.0" {
+            return Err(format!(
+                "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+                path.display(),
+                md.fmi_version
+            ));
+        }
+        let id = md.model_identifier.clone();
+        let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !c_name {
+            return Err(format!(
+                "{}: modelIdentifier '{}' is not a C identifier",
+                path.display(),
+                id.escape_debug()
+            ));
+        }
+        let so_entry = format!("binaries/linux64/{id}.so");
+        if !zip.has_entry(&so_entry) {
+            let binaries: Vec<String> = zip
+                .entry_names()
+                .into_iter()
+                .filter(|n| n.starts_with("binaries/") && !n.ends_with('/'))
+                .collect();
+            return Err(format!(
+                "{}: no {so_entry}: no binary for this platform (binaries in the archive: {binaries:?})",
+                path.display()
+            ));
+        }
+        let unpacked = archive::extract_private(&mut zip, parent, &archive::Limits::default())?;
+        let scratch = PrivateDir::new_in(parent)?;
+        let dir = unpacked.path().to_path_buf();
+        std::fs::create_dir_all(dir.join("resources")).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let so = dir.join(&so_entry);
+        let api = Api::load(&so)?;
+        Ok(Fmu {
+            id,
+            archive: path.to_path_buf(),
+            dir,
+            so,
+            scratch: scratch.path().to_path_buf(),
+            md,
+            api,
+            own: OnceLock::new(),
+            _dirs: (unpacked, scratch),
+        })
+    }
+
     /// `file:///...` URI of the unpacked `resources/` folder.
     pub fn resource_uri(&self) -> String {
         format!("file://{}/resources", self.dir.display())
+    }
+
+    /// Whether this FMU serializes its state in this exporter's format (magic `RFMUSTAT`, its
+    /// own GUID, a valid checksum): then it was made by this exporter, and the checks may read
+    /// and rewrite its state-machine state ([`state`]) and hold it to the exporter's conventions
+    /// ([`outcome::convention`]). Found out once, by instantiating it and serializing its state.
+    pub fn own_state_format(&self) -> bool {
+        self.state_format().is_ok()
+    }
+
+    /// Ok for this exporter's state format, else why not.
+    pub fn state_format(&self) -> &Result<(), String> {
+        self.own.get_or_init(|| self.detect_state_format())
+    }
+
+    /// Whether the FMU declares that its state can be taken and serialized, so that the checks
+    /// can compare the whole state before and after a call.
+    pub fn can_snapshot(&self) -> bool {
+        self.md.can_get_and_set_fmu_state && self.md.can_serialize_fmu_state
+    }
+
+    fn detect_state_format(&self) -> Result<(), String> {
+        if AS_FOREIGN.load(Ordering::Relaxed) {
+            return Err("treated as another exporter's FMU on request".into());
+        }
+        if !self.can_snapshot() {
+            return Err("the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate".into());
+        }
+        let sink = logger::LogSink::default();
+        let callbacks = logger::callbacks(sink.env());
+        let guid = std::ffi::CString::new(self.md.guid.as_str()).map_err(|e| e.to_string())?;
+        let res = std::ffi::CString::new(self.resource_uri()).map_err(|e| e.to_string())?;
+        // SAFETY: the standard's calls with valid arguments on an instance made here.
+        unsafe {
+            let api = &self.api;
+            let c = (api.instantiate)(
+                c"probe".as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                res.as_ptr(),
+                &callbacks,
+                fmi2False,
+                fmi2False,
+            );
+            if c.is_null() {
+                return Err("fmi2Instantiate returned NULL".into());
+            }
+            let mut s: fmi2FMUstate = std::ptr::null_mut();
+            let mut bytes = vec![];
+            let mut status = (api.get_fmu_state)(c, &mut s);
+            if status == fmi2OK {
+                let mut size = 0usize;
+                status = (api.serialized_fmu_state_size)(c, s, &mut size);
+                if status == fmi2OK && size <= 1 << 30 {
+                    bytes = vec![0u8; size];
+                    status = (api.serialize_fmu_state)(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size);
+                }
+                (api.free_fmu_state)(c, &mut s);
+            }
+            (api.free_instance)(c);
+            if status != fmi2OK {
+                return Err(format!("serializing the state of a new instance answered {status}"));
+            }
+            let l = state::parse(&bytes)?;
+            if &bytes[l.guid_at..l.guid_at + l.guid_len] != self.md.guid.as_bytes() {
+                return Err("the serialized state holds another GUID".into());
+            }
+            Ok(())
+        }
     }
 }
 
@@ -53,9 +195,9 @@ pub fn fmu_dir() -> PathBuf {
     }
 }
 
-/// Every packaged FMU of the workspace, loaded. Panics (failing the calling test with the
-/// reason) when an FMU of `rustfmu::fmus::ALL` is not packaged or its package is stale: the
-/// suite must never pass by testing fewer FMUs than the workspace has, or old binaries.
+/// Every packaged FMU of the workspace (`*.fmu` in [`fmu_dir`]), loaded. Panics (failing the
+/// calling test with the reason) when there is none: the suite must never pass by testing
+/// nothing.
 pub fn all() -> &'static [Fmu] {
     static ALL: OnceLock<Vec<Fmu>> = OnceLock::new();
     ALL.get_or_init(|| load_all().unwrap_or_else(|e| panic!("{e}")))
@@ -78,32 +220,11 @@ fn load_all() -> Result<Vec<Fmu>, String> {
         .filter(|p| p.extension().is_some_and(|x| x == "fmu"))
         .collect();
     archives.sort();
-    let unpack_root = unpack_root()?;
-    let mut fmus = Vec::new();
-    for archive in archives {
-        fmus.push(unpack(&archive, &unpack_root)?);
-    }
-    for entry in rustfmu::fmus::ALL {
-        let id = entry.info.identifier;
-        let Some(fmu) = fmus.iter().find(|f| f.id == id) else {
-            return Err(format!(
-                "{id} (in rustfmu::fmus::ALL) has no {id}.fmu in {}: {hint}",
-                dir.display()
-            ));
-        };
-        let expected = (entry.model_description)()?;
-        let packaged = std::fs::read_to_string(fmu.dir.join("modelDescription.xml")).map_err(|e| e.to_string())?;
-        if packaged != expected {
-            return Err(format!(
-                "{} is stale: its modelDescription.xml differs from what the declarations generate; {hint}",
-                fmu.archive.display()
-            ));
-        }
-    }
-    if fmus.is_empty() {
+    if archives.is_empty() {
         return Err(format!("no .fmu in {}: {hint}", dir.display()));
     }
-    Ok(fmus)
+    let root = unpack_root()?;
+    archives.iter().map(|a| Fmu::load(a, &root)).collect()
 }
 
 /// A folder of this process under the system temp dir; folders of processes that are gone
@@ -123,33 +244,51 @@ fn unpack_root() -> Result<PathBuf, String> {
     Ok(root)
 }
 
-fn unpack(archive: &Path, root: &Path) -> Result<Fmu, String> {
-    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", archive.display());
-    let file = std::fs::File::open(archive).map_err(|e| at(&e))?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| at(&e))?;
-    let mut xml = String::new();
-    zip.by_name("modelDescription.xml")
-        .map_err(|e| at(&e))?
-        .read_to_string(&mut xml)
-        .map_err(|e| at(&e))?;
-    let md = Description::parse(&xml).map_err(|e| at(&e))?;
-    let dir = root.join(&md.model_identifier);
-    let _ = std::fs::remove_dir_all(&dir);
-    zip.extract(&dir).map_err(|e| at(&e))?;
-    std::fs::create_dir_all(dir.join("resources")).map_err(|e| at(&e))?;
-    let so = dir.join(format!("binaries/linux64/{}.so", md.model_identifier));
-    let api = Api::load(&so)?;
-    Ok(Fmu {
-        id: md.model_identifier.clone(),
-        archive: archive.to_path_buf(),
-        dir,
-        so,
-        md,
-        api,
-    })
-}
-
 /// Bit patterns of floats, so that "identical" means bit-identical (and NaN equals NaN).
 pub fn bits(values: &[f64]) -> Vec<u64> {
     values.iter().map(|v| v.to_bits()).collect()
+}
+
+/// How to start a worker process: the executable and the arguments before the worker's own
+/// (see [`runner::worker_main`]). The check of restoring a state in another process needs it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Worker {
+    pub exe: PathBuf,
+    pub args_prefix: Vec<String>,
+}
+
+static WORKER: Mutex<Option<Worker>> = Mutex::new(None);
+static RANDOM_SEQUENCES: AtomicU32 = AtomicU32::new(0);
+static AS_FOREIGN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Treats every FMU loaded from now on as another exporter's: the checks then test only what
+/// an importer can reach, as they do on a foreign FMU. For testing the checks themselves (a
+/// conformant FMU must pass them that way too).
+pub fn set_as_foreign(on: bool) {
+    AS_FOREIGN.store(on, Ordering::Relaxed);
+}
+
+/// Sets how checks start a worker process of their own.
+pub fn set_worker(worker: Worker) {
+    *WORKER.lock().unwrap_or_else(|e| e.into_inner()) = Some(worker);
+}
+
+pub fn worker() -> Option<Worker> {
+    WORKER.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Sets the number of random call sequences per FMU (0: the default).
+pub fn set_random_sequences(n: u32) {
+    RANDOM_SEQUENCES.store(n, Ordering::Relaxed);
+}
+
+/// Random call sequences per FMU: as set, else `$PROPTEST_CASES`, else 2000.
+pub fn random_sequences() -> u32 {
+    match RANDOM_SEQUENCES.load(Ordering::Relaxed) {
+        0 => std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(2000),
+        n => n,
+    }
 }

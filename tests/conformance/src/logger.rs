@@ -4,11 +4,12 @@
 //! variadic function, but under the x86-64 and AArch64 C calling conventions a callee that
 //! declares the fixed arguments plus one pointer reads the first variadic pointer argument
 //! correctly (fmpy's ctypes logger relies on the same convention; `fmu-build`'s validator does
-//! the same). The runtime always passes the format `"%s"` with the text as that argument; the
-//! recorded [`LogEntry::format`] lets tests check exactly that, so that a printf-style logger
-//! in a C host can never misread a `%` in a message.
+//! the same). This exporter's runtime always passes the format `"%s"` with the text as that
+//! argument; the recorded [`LogEntry::format`] lets the checks require exactly that of it, so
+//! that a printf-style logger in a C host can never misread a `%` in a message. Another
+//! exporter's messages with other formats are recorded as their format, unformatted.
 
-use rustfmu::fmi2::abi::*;
+use crate::fmi2::*;
 use std::ffi::{CStr, c_char};
 use std::sync::Mutex;
 
@@ -58,8 +59,8 @@ unsafe extern "C" fn record(
         }
     };
     let format = text(message);
-    // Only the format "%s" has an argument to read; any other format is recorded as is (and a
-    // test then fails on it, since the runtime must always use "%s").
+    // Only the format "%s" has an argument to read; any other format is recorded as is (a check
+    // of this exporter's FMUs then fails on it, since its runtime must always use "%s").
     let applied = if format == "%s" { text(arg) } else { format.clone() };
     let entry = LogEntry {
         env: env as usize,

@@ -1,8 +1,39 @@
-//! The states of the FMI 2.0 co-simulation state machine in which the standard allows each
-//! function (section 4.2.4; the Reference FMUs encode the same masks). Written from the
-//! standard, independently of the runtime's own table, which the suite checks against it.
+//! The states of the FMI 2.0 co-simulation state machine and the states in which the standard
+//! allows each function (section 4.2.4; the Reference FMUs encode the same masks). Written from
+//! the standard, independently of any exporter's own table.
 
-use rustfmu::fmi2::instance::State::{self, *};
+use State::*;
+
+/// A state of the co-simulation state machine. The discriminants are also the numbering of the
+/// state byte in this exporter's serialized FMU state (see [`crate::state`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum State {
+    Instantiated = 0,
+    InitializationMode = 1,
+    StepComplete = 2,
+    StepFailed = 3,
+    StepCanceled = 4,
+    Terminated = 5,
+    Error = 6,
+    Fatal = 7,
+}
+
+/// Every state, indexed by its discriminant.
+pub const STATES: [State; 8] = [
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+    Fatal,
+];
+
+/// The states an importer reaches on any FMU by the standard's calls alone. StepFailed needs a
+/// step the model cannot do, StepCanceled an asynchronous step, Error and Fatal an FMU that
+/// failed: only an FMU whose serialized state the suite can rewrite is put there on purpose.
+pub const REACHABLE: [State; 4] = [Instantiated, InitializationMode, StepComplete, Terminated];
 
 pub const ALL_BUT_FATAL: &[State] = &[
     Instantiated,

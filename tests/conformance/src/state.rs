@@ -1,27 +1,22 @@
-//! Reading and forging serialized FMU states.
+//! Reading and forging serialized FMU states of FMUs made by this exporter (rustfmu).
 //!
-//! The runtime's format (documented in `rustfmu::fmi2::state`): magic | version u32 | GUID
-//! length u16 | GUID | payload length u32 | payload | CRC-32, little-endian, and the payload is
-//! the postcard encoding of `Sim`, whose first field is the state-machine state (one byte, the
-//! variant index of `rustfmu::fmi2::instance::State`). The suite reads that byte to observe
-//! the state machine from outside, and writes it to put an instance in a state that its model
+//! The runtime's format: magic `RFMUSTAT` | version u32 | GUID length u16 | GUID | payload
+//! length u32 | payload | CRC-32, little-endian, and the payload's first byte is the
+//! state-machine state (the numbering of [`State`]). The suite reads that byte to observe the
+//! state machine from outside, and writes it to put an instance in a state that its model
 //! cannot reach on its own (StepFailed of an FMU whose steps never fail, StepCanceled, Error,
 //! Fatal). [`parse`] checks every field, so a change of the format fails the suite loudly.
+//!
+//! Nothing of this applies to another exporter's FMU: its serialized state is opaque. The
+//! checks find out with [`crate::Fmu::own_state_format`] and test such an FMU only in the states
+//! an importer can reach ([`crate::standard::REACHABLE`]).
 
-use rustfmu::fmi2::instance::State;
-use rustfmu::fmi2::state::{FORMAT_VERSION, MAGIC};
+pub use crate::standard::{STATES, State};
 
-/// Every state of `State`, indexed by its discriminant.
-pub const STATES: [State; 8] = [
-    State::Instantiated,
-    State::InitializationMode,
-    State::StepComplete,
-    State::StepFailed,
-    State::StepCanceled,
-    State::Terminated,
-    State::Error,
-    State::Fatal,
-];
+/// The magic bytes that start this exporter's serialized FMU states.
+pub const MAGIC: &[u8; 8] = b"RFMUSTAT";
+/// The format version this suite reads.
+pub const FORMAT_VERSION: u32 = 1;
 
 pub fn name(s: State) -> String {
     format!("{s:?}")
@@ -64,6 +59,9 @@ pub fn parse(bytes: &[u8]) -> Result<Layout, String> {
     }
     if crc32fast::hash(&bytes[..crc_at]) as usize != u32_at(crc_at).unwrap_or(usize::MAX) {
         return Err("serialized state's CRC does not match".into());
+    }
+    if payload_len == 0 {
+        return Err("serialized state has an empty payload".into());
     }
     Ok(Layout {
         version_at: 8,

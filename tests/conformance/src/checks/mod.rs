@@ -1,0 +1,180 @@
+//! The named checks, by group. Each is a `fn(&Fmu)` that returns when the FMU passed and
+//! panics with what was expected and what came instead when it did not (see [`crate::outcome`]
+//! for skips and limitations).
+
+pub mod calls;
+pub mod fmu_state;
+pub mod instances;
+pub mod memory;
+pub mod native;
+pub mod random_sequences;
+pub mod state_machine;
+
+use crate::Fmu;
+use crate::outcome::{Findings, Outcome, capture};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Group {
+    Calls,
+    StateMachine,
+    FmuState,
+    Instances,
+    Memory,
+    RandomSequences,
+    Native,
+}
+
+impl Group {
+    pub const ALL: [Group; 7] = [
+        Group::Calls,
+        Group::StateMachine,
+        Group::FmuState,
+        Group::Instances,
+        Group::Memory,
+        Group::RandomSequences,
+        Group::Native,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Group::Calls => "calls",
+            Group::StateMachine => "state machine",
+            Group::FmuState => "FMU state",
+            Group::Instances => "instances/threads",
+            Group::Memory => "memory",
+            Group::RandomSequences => "random sequences",
+            Group::Native => "native C host/valgrind",
+        }
+    }
+}
+
+impl std::fmt::Display for Group {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A named check.
+#[derive(Clone, Copy)]
+pub struct Check {
+    pub name: &'static str,
+    pub group: Group,
+    pub run: fn(&Fmu),
+}
+
+impl std::fmt::Debug for Check {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({})", self.name, self.group)
+    }
+}
+
+impl Check {
+    /// Runs the check on `fmu` in this process (panics are caught).
+    pub fn run_on(&self, fmu: &Fmu) -> (Outcome, Findings) {
+        capture(|| (self.run)(fmu))
+    }
+
+    /// Whether a filter selects this check: a substring of its name or of its group's name.
+    pub fn matches(&self, filter: &str) -> bool {
+        self.name.contains(filter) || self.group.name().contains(filter)
+    }
+}
+
+macro_rules! registry {
+    ($($group:ident: $module:ident::{$($name:ident),* $(,)?};)*) => {
+        /// Every check, in report order.
+        pub fn all_checks() -> &'static [Check] {
+            &[$($(Check { name: stringify!($name), group: Group::$group, run: $module::$name },)*)*]
+        }
+    };
+}
+
+registry! {
+    Calls: calls::{
+        instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message,
+        instantiate_refuses_a_null_or_empty_instance_name_with_a_message,
+        instantiate_refuses_model_exchange_and_unknown_types_with_a_message,
+        instantiate_without_callbacks_or_logger_returns_null_without_crashing,
+        instantiate_accepts_every_resource_location_form_and_a_missing_folder,
+        unknown_value_references_are_refused_with_a_message_naming_them,
+        zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_refused,
+        each_variable_can_be_set_exactly_where_the_standard_allows_it,
+        nan_and_infinite_values_are_refused_with_a_message_and_change_nothing,
+        a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step,
+        do_step_refuses_a_step_size_that_is_not_finite_and_positive,
+        do_step_compares_the_communication_point_with_a_relative_tolerance,
+        do_step_beyond_the_stop_time_is_refused,
+        a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_truth,
+        status_functions_report_the_last_successful_time_and_no_termination_request,
+        reset_from_every_state_then_a_rerun_is_bit_identical,
+        the_log_categories_importers_look_for_are_declared,
+        debug_logging_follows_logging_on_and_set_debug_logging,
+        set_debug_logging_refuses_unknown_categories_and_null_arrays,
+        a_percent_sign_in_a_message_reaches_the_logger_verbatim,
+        each_instance_logs_to_its_own_component_environment,
+    };
+    StateMachine: state_machine::{
+        every_function_in_every_state_answers_as_the_standard_says,
+        a_null_component_is_refused_by_every_function,
+        version_and_platform_are_the_standards,
+        directional_derivative_flag_is_false_as_the_runtime_does_not_provide_them,
+        terminate_twice_is_refused_with_a_message,
+    };
+    FmuState: fmu_state::{
+        every_fmu_declares_it_can_get_set_and_serialize_its_state,
+        get_set_free_round_trip_continues_bit_identically,
+        a_saved_state_is_a_complete_copy_independent_of_the_instance,
+        serialize_deserialize_round_trip_continues_bit_identically,
+        the_serialized_state_holds_no_pointers_and_is_versioned,
+        damaged_serialized_states_are_refused_with_a_message,
+        a_state_serialized_here_restores_in_another_process_and_continues_identically,
+    };
+    Instances: instances::{
+        interleaved_instances_do_not_affect_each_other,
+        instances_on_their_own_threads_match_sequential_runs_bit_for_bit,
+        the_library_can_be_unloaded_after_the_last_free_and_loaded_again,
+    };
+    Memory: memory::{
+        ten_thousand_instantiate_free_cycles_leave_memory_flat,
+    };
+    RandomSequences: random_sequences::{
+        random_call_sequences_keep_every_fmu_conformant,
+        regressions_found_by_random_sequences,
+    };
+    Native: native::{
+        a_c_host_runs_every_fmu_with_the_same_results_as_the_rust_importer,
+        a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck,
+        the_binary_exports_only_fmi2_functions,
+        the_binary_needs_only_the_c_runtime,
+    };
+}
+
+/// The check of that name.
+pub fn find(name: &str) -> Option<&'static Check> {
+    all_checks().iter().find(|c| c.name == name)
+}
+
+/// Runs the check of that name on every packaged FMU ([`crate::all`]), strictly, for the
+/// workspace's `#[test]`s: every FMU there is this exporter's, so a skip or a limitation is a
+/// failure too. Panics with every FMU's failure; prints the checks' info lines.
+pub fn on_every_fmu(name: &str) {
+    let check = find(name).unwrap_or_else(|| panic!("no check named {name} in all_checks()"));
+    let mut failures = vec![];
+    for fmu in crate::all() {
+        let (outcome, findings) = check.run_on(fmu);
+        for line in &findings.info {
+            println!("{}: {line}", fmu.id);
+        }
+        match outcome {
+            Outcome::Pass if findings.limitations.is_empty() => {}
+            Outcome::Pass => failures.push(format!(
+                "{}: {name} tested only partly: {}",
+                fmu.id,
+                findings.limitations.join("; ")
+            )),
+            Outcome::Skip(why) => failures.push(format!("{}: {name} skipped: {why}", fmu.id)),
+            Outcome::Fail(message) => failures.push(message),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}

@@ -1,0 +1,163 @@
+//! What a check found. A check is a function that returns when the FMU passed and panics (an
+//! `assert!` message: what was expected, what came instead) when it failed. While it runs it
+//! may record:
+//!
+//! - a **limitation** ([`limitation`], [`convention`]): a part it could not test on this FMU,
+//!   such as the states only this exporter's FMUs can be forced into. A pass with limitations
+//!   is reported as a partial pass, never as a plain one;
+//! - **info** ([`info`]): figures for the report (cases run, memory measured);
+//! - a **skip** ([`skip`]): nothing of the check applies (a tool is missing, the FMU does not
+//!   declare the capability the check is about).
+//!
+//! [`capture`] runs a check and turns all of that into an [`Outcome`] and [`Findings`].
+
+use crate::Fmu;
+use std::any::Any;
+use std::cell::RefCell;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Mutex;
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    Pass,
+    /// The failure message.
+    Fail(String),
+    /// Why the check does not apply.
+    Skip(String),
+}
+
+/// What a check recorded besides its outcome.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Findings {
+    pub limitations: Vec<String>,
+    pub info: Vec<String>,
+}
+
+thread_local! {
+    static FINDINGS: RefCell<Findings> = RefCell::new(Findings::default());
+    static PANIC_AT: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// The payload of [`skip`].
+struct Skipped(String);
+
+/// Ends the check as skipped: nothing of it applies to this FMU or on this machine.
+pub fn skip(reason: impl Into<String>) -> ! {
+    std::panic::resume_unwind(Box::new(Skipped(reason.into())))
+}
+
+/// Records a part of the check that could not be tested on this FMU (once per text).
+pub fn limitation(text: impl Into<String>) {
+    let text = text.into();
+    FINDINGS.with(|f| {
+        let mut f = f.borrow_mut();
+        if !f.limitations.contains(&text) {
+            f.limitations.push(text);
+        }
+    });
+}
+
+/// Records a line for the report.
+pub fn info(text: impl Into<String>) {
+    FINDINGS.with(|f| f.borrow_mut().info.push(text.into()));
+}
+
+/// Whether to require `what`, a convention of this exporter's runtime that the standard does
+/// not demand (the wording of its messages, its log categories, the features it leaves out).
+/// Yes for this exporter's FMUs; for another's, no, and that is recorded as a limitation.
+pub fn convention(fmu: &Fmu, what: &str) -> bool {
+    if fmu.own_state_format() {
+        true
+    } else {
+        limitation(format!("not required of another exporter's FMU: {what}"));
+        false
+    }
+}
+
+static BREADCRUMB: Mutex<Option<std::fs::File>> = Mutex::new(None);
+static BREADCRUMBS_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+const BREADCRUMB_BYTES: usize = 1024;
+
+/// Where [`breadcrumb`] writes (a worker's file, which the runner reads if the worker dies).
+pub fn set_breadcrumb_file(path: &std::path::Path) -> std::io::Result<()> {
+    let f = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(true)
+        .write(true)
+        .open(path)?;
+    *BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner()) = Some(f);
+    BREADCRUMBS_ON.store(true, std::sync::atomic::Ordering::Relaxed);
+    Ok(())
+}
+
+/// Whether breadcrumbs are recorded (to skip formatting them when not).
+pub fn breadcrumbs_on() -> bool {
+    BREADCRUMBS_ON.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Records what the check is about to do, so that a crash inside the FMU can say where it
+/// happened (one write of a fixed-size record; nothing without a breadcrumb file).
+pub fn breadcrumb(text: &str) {
+    use std::os::unix::fs::FileExt;
+    if !breadcrumbs_on() {
+        return;
+    }
+    let guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(f) = guard.as_ref() {
+        let mut record = [0u8; BREADCRUMB_BYTES];
+        let n = text.len().min(BREADCRUMB_BYTES);
+        record[..n].copy_from_slice(&text.as_bytes()[..n]);
+        let _ = f.write_all_at(&record, 0);
+    }
+}
+
+/// The last breadcrumb in a breadcrumb file, if any.
+pub fn read_breadcrumb(path: &std::path::Path) -> Option<String> {
+    let bytes = std::fs::read(path).ok()?;
+    let end = bytes.iter().position(|b| *b == 0).unwrap_or(bytes.len());
+    let text = String::from_utf8_lossy(&bytes[..end]).trim().to_string();
+    (!text.is_empty()).then_some(text)
+}
+
+/// Installs a panic hook that remembers where a check failed (for the report) and then does
+/// what the previous hook did. For processes that run checks through [`capture`].
+pub fn remember_panic_locations() {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if let Some(l) = info.location() {
+            PANIC_AT.with(|p| *p.borrow_mut() = Some(format!("{}:{}", l.file(), l.line())));
+        }
+        previous(info);
+    }));
+}
+
+/// Runs `f` (a check on one FMU) and returns its outcome and findings.
+pub fn capture(f: impl FnOnce()) -> (Outcome, Findings) {
+    FINDINGS.with(|x| *x.borrow_mut() = Findings::default());
+    PANIC_AT.with(|p| *p.borrow_mut() = None);
+    let result = catch_unwind(AssertUnwindSafe(f));
+    let findings = FINDINGS.with(|x| std::mem::take(&mut *x.borrow_mut()));
+    let outcome = match result {
+        Ok(()) => Outcome::Pass,
+        Err(payload) => from_payload(payload),
+    };
+    (outcome, findings)
+}
+
+fn from_payload(payload: Box<dyn Any + Send>) -> Outcome {
+    let payload = match payload.downcast::<Skipped>() {
+        Ok(s) => return Outcome::Skip(s.0),
+        Err(p) => p,
+    };
+    let mut message = if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else {
+        "the check panicked with a payload that is no message".to_string()
+    };
+    if let Some(at) = PANIC_AT.with(|p| p.borrow_mut().take()) {
+        message.push_str(&format!("\n(check failed at {at})"));
+    }
+    Outcome::Fail(message)
+}
