@@ -6,7 +6,6 @@ use quick_xml::Reader;
 use quick_xml::events::Event;
 use rustfmu::__private::abi::*;
 use std::ffi::{CStr, CString, c_char};
-use std::io::Read;
 use std::path::Path;
 
 /// Every function of the FMI 2.0 co-simulation interface.
@@ -108,9 +107,6 @@ fn read_description(xml: &str) -> Result<Description, String> {
 
 /// Problems with an FMU file (an empty list: valid). The smoke run happens in a child process
 /// (this program run as `__smoke-run`), so an FMU that crashes is reported, not shared.
-/// Model descriptions larger than this are refused.
-const MAX_DESCRIPTION: u64 = 64 << 20;
-
 pub fn validate(fmu: &Path) -> Vec<String> {
     match validate_inner(fmu) {
         Ok(problems) => problems,
@@ -119,36 +115,32 @@ pub fn validate(fmu: &Path) -> Vec<String> {
 }
 
 fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
+    use fmi2_conformance::archive;
+    // The file is untrusted: opened, read and unpacked only through the conformance suite's
+    // archive module (no `..`, absolute names, backslashes, links; bounded sizes; the XML's
+    // errors with line and column), into a private folder removed afterwards.
     let mut problems = Vec::new();
-    let file = std::fs::File::open(fmu).map_err(|e| format!("cannot open: {e}"))?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| format!("not a zip archive: {e}"))?;
-    let names: Vec<String> = zip
-        .file_names()
-        .map(|n| n.map(|s| s.into_owned()))
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("unreadable archive entry name: {e}"))?;
-    for name in names {
-        if name.contains('\\') || name.starts_with('/') || name.starts_with("./") {
-            problems.push(format!(
-                "archive entry '{name}' must use forward slashes and no leading '/' or './'"
-            ));
+    let mut zip = archive::open(fmu)?;
+    for name in zip.entry_names() {
+        if let Err(e) = archive::check_entry_name(name.as_bytes()) {
+            problems.push(format!("archive entry '{name}': {e}"));
+        }
+        if name.starts_with("./") {
+            problems.push(format!("archive entry '{name}' must not start with './'"));
         }
     }
-    let mut xml = String::new();
-    zip.by_name("modelDescription.xml")
-        .map_err(|_| "no modelDescription.xml at the archive's root".to_string())?
-        .take(MAX_DESCRIPTION)
-        .read_to_string(&mut xml)
-        .map_err(|e| format!("modelDescription.xml: {e}"))?;
+    let xml = archive::read_model_description(&mut zip)?;
     let d = read_description(&xml)?;
     let (folder, ext) = crate::bundle::platform()?;
     let bin_name = format!("binaries/{folder}/{}.{ext}", d.model_identifier);
-    let mut binary = Vec::new();
-    zip.by_name(&bin_name)
-        .map_err(|_| format!("no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix)"))?
-        .take(MAX_BINARY)
-        .read_to_end(&mut binary)
-        .map_err(|e| format!("{bin_name}: {e}"))?;
+    if !zip.has_entry(&bin_name) {
+        return Err(format!(
+            "no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix)"
+        ));
+    }
+    let dir = archive::extract_private(&mut zip, &std::env::temp_dir(), &archive::Limits::default())?;
+    let so = dir.path().join(&bin_name);
+    let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
     // A binary made by rustfmu describes itself: the packaged description must be what it says.
     if let Ok(me) = crate::bundle::read_library(&binary) {
         match crate::xml::fmi2(&me.description, me.interfaces, &me.guid) {
@@ -159,16 +151,8 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
             Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
         }
     }
-    let dir = std::env::temp_dir().join(format!(
-        "fmu-build-validate-{}-{}",
-        std::process::id(),
-        d.model_identifier
-    ));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let so = dir.join(format!("{}.{ext}", d.model_identifier));
-    std::fs::write(&so, &binary).map_err(|e| format!("{}: {e}", so.display()))?;
     problems.extend(smoke_run_in_child(&so, &d));
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(dir);
     Ok(problems)
 }
 
@@ -204,9 +188,6 @@ unsafe extern "C" fn collect_log(
         log.0.push(format!("[status {status}, {cat}] {text}"));
     }
 }
-
-/// Binaries larger than this are refused rather than read into memory.
-const MAX_BINARY: u64 = 512 << 20;
 
 fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
     let vrs: Vec<String> = d.real_vrs.iter().map(|v| v.to_string()).collect();
@@ -378,22 +359,15 @@ pub fn fmpy_validate(python: &Path, fmu: &Path) -> Vec<String> {
 /// `cargo fmu info`: what an FMU file offers, from its archive and description.
 pub fn info(fmu: &Path) -> Result<String, String> {
     let at = |e: &dyn std::fmt::Display| format!("{}: {e}", fmu.display());
-    let file = std::fs::File::open(fmu).map_err(|e| at(&e))?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| at(&format!("not a zip archive: {e}")))?;
+    let mut zip = fmi2_conformance::archive::open(fmu)?;
     let mut platforms = std::collections::BTreeSet::new();
-    for name in zip.file_names() {
-        let Ok(name) = name else { continue };
+    for name in zip.entry_names() {
         let parts: Vec<&str> = name.split('/').collect();
         if parts.len() == 3 && parts[0] == "binaries" && !parts[2].is_empty() {
             platforms.insert(format!("{} ({})", parts[1], parts[2]));
         }
     }
-    let mut xml = String::new();
-    zip.by_name("modelDescription.xml")
-        .map_err(|_| at(&"no modelDescription.xml at the archive's root"))?
-        .take(MAX_DESCRIPTION)
-        .read_to_string(&mut xml)
-        .map_err(|e| at(&e))?;
+    let xml = fmi2_conformance::archive::read_model_description(&mut zip)?;
     let mut reader = Reader::from_str(&xml);
     let mut out = String::new();
     let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
@@ -436,13 +410,21 @@ pub fn info(fmu: &Path) -> Result<String, String> {
                         String::from_utf8_lossy(e.name().as_ref()),
                         attr(b"modelIdentifier")
                     )),
-                    b"DefaultExperiment" => out.push_str(&format!(
-                        "  default experiment: start {} stop {} step {} tolerance {}\n",
-                        attr(b"startTime"),
-                        attr(b"stopTime"),
-                        attr(b"stepSize"),
-                        attr(b"tolerance")
-                    )),
+                    b"DefaultExperiment" => {
+                        let parts: Vec<String> = [
+                            ("start", b"startTime".as_slice()),
+                            ("stop", b"stopTime"),
+                            ("step", b"stepSize"),
+                            ("tolerance", b"tolerance"),
+                        ]
+                        .iter()
+                        .filter_map(|(label, key)| {
+                            let v = attr(key);
+                            (!v.is_empty()).then(|| format!("{label} {v}"))
+                        })
+                        .collect();
+                        out.push_str(&format!("  default experiment: {}\n", parts.join(", ")));
+                    }
                     b"ScalarVariable" => {
                         let causality = match attr(b"causality") {
                             c if c.is_empty() => "local".to_string(),
