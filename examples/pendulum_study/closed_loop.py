@@ -41,7 +41,7 @@ from cosim.master import Fmu, Loop, System
 from cosim.systems import read_ssp, ssp_path
 
 #: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
-#: (`src/systems.rs` describes them: components, parameter values, connections).
+#: (`paper/systems.toml` describes them: components, parameter values, connections).
 SSP_SYSTEMS = {"torque": "PendulumLQR", "motors": "PendulumMotors"}
 
 
