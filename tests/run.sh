@@ -48,7 +48,7 @@ echo "== cargo fmu check (black-box conformance suite) on every FMU"
 for fmu in target/fmu/*.fmu; do
   out="$logs/check-$(basename "$fmu").log"
   target/release/cargo-fmu fmu check "$fmu" | tee "$out" || true
-  line=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$out" | tail -n 1)
+  line=$( (grep -E '^[0-9]+ passed, [0-9]+ failed' "$out" || true) | tail -n 1)
   p=$(echo "$line" | sed -E 's/^([0-9]+) passed.*/\1/')
   f=$(echo "$line" | sed -E 's/^[0-9]+ passed, ([0-9]+) failed.*/\1/')
   [ -n "$line" ] || { p=0; f=1; }
@@ -60,8 +60,8 @@ set +e
 cargo test --workspace --release 2>&1 | tee "$logs/cargo-test.log"
 rust_status=${PIPESTATUS[0]}
 set -e
-p=$(grep -E '^test result:' "$logs/cargo-test.log" | sed -E 's/.* ([0-9]+) passed.*/\1/' | awk '{s+=$1} END {print s+0}')
-f=$(grep -E '^test result:' "$logs/cargo-test.log" | sed -E 's/.* ([0-9]+) failed.*/\1/' | awk '{s+=$1} END {print s+0}')
+p=$( (grep -E '^test result:' "$logs/cargo-test.log" || true) | sed -E 's/.* ([0-9]+) passed.*/\1/' | awk '{s+=$1} END {print s+0}')
+f=$( (grep -E '^test result:' "$logs/cargo-test.log" || true) | sed -E 's/.* ([0-9]+) failed.*/\1/' | awk '{s+=$1} END {print s+0}')
 [ "$rust_status" -eq 0 ] || f=$((f > 0 ? f : 1))
 record "Rust tests" "${p:-0}" "${f:-1}"
 
@@ -71,8 +71,8 @@ python -m pytest tests/python -q -p no:cacheprovider 2>&1 | tee "$logs/pytest.lo
 py_status=${PIPESTATUS[0]}
 set -e
 line=$(tail -n 1 "$logs/pytest.log")
-p=$(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0)
-f=$(echo "$line" | grep -oE '[0-9]+ (failed|error|errors)' | grep -oE '[0-9]+' | awk '{s+=$1} END {print s+0}')
+p=$( (echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+') || echo 0)
+f=$( (echo "$line" | grep -oE '[0-9]+ (failed|error|errors)' | grep -oE '[0-9]+' || true) | awk '{s+=$1} END {print s+0}')
 [ "$py_status" -eq 0 ] || f=$(( ${f:-0} > 0 ? f : 1 ))
 record "Python tests" "${p:-0}" "${f:-0}"
 
