@@ -30,6 +30,7 @@ pub struct Context<'a> {
     pub(crate) start_time: f64,
     pub(crate) tolerance: Option<f64>,
     pub(crate) logger: Option<&'a crate::fmi2::logging::Logger>,
+    pub(crate) resources: Option<&'a std::path::Path>,
 }
 
 impl Context<'_> {
@@ -40,7 +41,14 @@ impl Context<'_> {
             start_time,
             tolerance,
             logger: None,
+            resources: None,
         }
+    }
+
+    /// The FMU's unpacked `resources/` folder (what `[package.metadata.fmu] resources` packaged),
+    /// when the importer gave a `file:` URI for it that exists.
+    pub fn resource_dir(&self) -> Option<&std::path::Path> {
+        self.resources
     }
 
     /// `startTime` of `fmi2SetupExperiment` (0 when the importer did not call it).

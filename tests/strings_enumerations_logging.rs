@@ -34,6 +34,13 @@ mod model {
 
     impl Model for Greeter {
         fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
+            // A greeting file among the resources, if the FMU was given its resources folder.
+            if let Some(name) = ctx
+                .resource_dir()
+                .and_then(|d| std::fs::read_to_string(d.join("name.txt")).ok())
+            {
+                self.name = name.trim().to_string();
+            }
             self.greet(ctx);
             Ok(())
         }
@@ -78,6 +85,10 @@ unsafe extern "C" fn collect(
 }
 
 fn instance(logging_on: bool) -> fmi2Component {
+    instance_with_resources(logging_on, None)
+}
+
+fn instance_with_resources(logging_on: bool, resources: Option<&std::path::Path>) -> fmi2Component {
     let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
         // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
         logger: Some(unsafe {
@@ -99,13 +110,14 @@ fn instance(logging_on: bool) -> fmi2Component {
         componentEnvironment: std::ptr::null_mut(),
     }));
     let guid = CString::new(model::__rustfmu_fmi2_exports::GUID).unwrap();
+    let uri = resources.map(|d| CString::new(format!("file://{}", d.display())).unwrap());
     // SAFETY: valid strings and callbacks that outlive the instance (leaked).
     let c = unsafe {
         fmi2Instantiate(
             c"greeter".as_ptr(),
             fmi2CoSimulation,
             guid.as_ptr(),
-            std::ptr::null(),
+            uri.as_ref().map_or(std::ptr::null(), |u| u.as_ptr()),
             callbacks,
             fmi2False,
             if logging_on { fmi2True } else { fmi2False },
@@ -185,4 +197,20 @@ fn a_model_logs_under_its_own_declared_category() {
             .any(|(_, text)| text.contains("unknown log category 'logNothing'") && text.contains("logGreetings")),
         "the refusal names the declared categories: {log:?}"
     );
+}
+
+#[test]
+fn a_model_reads_its_resources_from_the_folder_the_importer_names() {
+    let dir = std::env::temp_dir().join(format!("rustfmu-resources-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("name.txt"), "Grace\n").unwrap();
+    let c = instance_with_resources(false, Some(&dir));
+    // SAFETY: c is a live instance.
+    unsafe {
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
+        assert_eq!(get_string(c, 1), "hello, Grace");
+        fmi2FreeInstance(c);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -163,10 +163,19 @@ pub unsafe fn instantiate<M: CoSimulation>(
             Some(_) => {}
         }
         let inst = Instance::<M>::new(logger, own_guid);
+        let mut inst = inst;
+        inst.resources = resources
+            .as_deref()
+            .and_then(super::resources::resource_dir)
+            .filter(|d| d.is_dir());
         inst.event(|| match resources.as_deref().map(super::resources::resource_dir) {
-            Some(Some(dir)) => format!("resourceLocation resolves to {} (no resources needed)", dir.display()),
-            Some(None) => format!("resourceLocation {resources:?} is not a file URI; no resources are needed"),
-            None => "resourceLocation is NULL; no resources are needed".into(),
+            Some(Some(dir)) if dir.is_dir() => format!("resourceLocation resolves to {}", dir.display()),
+            Some(Some(dir)) => format!(
+                "resourceLocation resolves to {}, which does not exist (the model sees no resources)",
+                dir.display()
+            ),
+            Some(None) => format!("resourceLocation {resources:?} is not a file URI (the model sees no resources)"),
+            None => "resourceLocation is NULL (the model sees no resources)".into(),
         });
         Box::into_raw(Box::new(inst)) as fmi2Component
     }));

@@ -152,6 +152,8 @@ pub struct Instance<M: CoSimulation> {
     pub sim: Sim<M>,
     /// What fmi2GetString last returned: valid until the next call, as the standard allows.
     strings: Vec<CString>,
+    /// The unpacked `resources/` folder, from `fmuResourceLocation` (not part of the FMU state).
+    pub resources: Option<std::path::PathBuf>,
 }
 
 type Outcome = Result<(), fmi2Status>;
@@ -163,6 +165,7 @@ impl<M: CoSimulation> Instance<M> {
             guid,
             sim: Sim::new(),
             strings: Vec::new(),
+            resources: None,
         }
     }
 
@@ -275,6 +278,7 @@ impl<M: CoSimulation> Instance<M> {
             start_time: self.sim.start_time,
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
+            resources: self.resources.as_deref(),
         };
         match self.sim.model.initialize(&ctx) {
             Ok(()) => {
@@ -495,6 +499,7 @@ impl<M: CoSimulation> Instance<M> {
                 start_time: self.sim.start_time,
                 tolerance: self.sim.tolerance,
                 logger: Some(&self.logger),
+                resources: self.resources.as_deref(),
             };
             if let Err(why) = self.sim.model.parameters_changed(&ctx) {
                 self.sim.model = previous;
@@ -549,6 +554,7 @@ impl<M: CoSimulation> Instance<M> {
             start_time: self.sim.start_time,
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
+            resources: self.resources.as_deref(),
         };
         match self.sim.model.do_step(t, h, &ctx) {
             Ok(()) => {
