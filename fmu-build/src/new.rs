@@ -1,10 +1,12 @@
 //! `cargo fmu new NAME`: a crate that builds into a valid FMU unchanged (a first-order lag with
-//! an input, an output, a tunable time constant and a test).
+//! an input, an output, a tunable time constant and a test). The template files end in `.in`, so
+//! that cargo does not take the template folder for a package of its own (which `cargo package`
+//! would leave out).
 
 use std::path::{Path, PathBuf};
 
-const CARGO_TOML: &str = include_str!("../templates/lag/Cargo.toml");
-const LIB_RS: &str = include_str!("../templates/lag/src/lib.rs");
+const CARGO_TOML: &str = include_str!("../templates/lag/Cargo.toml.in");
+const LIB_RS: &str = include_str!("../templates/lag/lib.rs.in");
 
 /// `my-lag` → `MyLag`: the model struct and the model identifier.
 pub fn model_name(crate_name: &str) -> String {
