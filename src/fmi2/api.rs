@@ -138,6 +138,13 @@ pub unsafe fn instantiate<M: CoSimulation>(
         match name.as_deref() {
             None => return refuse("instanceName is NULL; an instance needs a name".into()),
             Some("") => return refuse("instanceName is empty; an instance needs a name".into()),
+            // FMI 2.0, 2.1.5: "a non-empty string ... at least one non-white-space character".
+            Some(n) if n.trim().is_empty() => {
+                return refuse(format!(
+                    "instanceName {n:?} is only white space; an instance needs a name with at least one \
+                     non-white-space character (FMI 2.0, 2.1.5)"
+                ));
+            }
             Some(_) => {}
         }
         if fmu_type != fmi2CoSimulation {

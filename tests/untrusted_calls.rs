@@ -1,0 +1,150 @@
+//! What the runtime refuses, through the C API of a model exported into this test binary: calls
+//! and arguments no importer should make, and results no model should return. Each refusal is
+//! an error status with a logged message, and the instance stays as it was.
+
+use rustfmu::__private::abi::*;
+use std::ffi::{CStr, CString, c_char};
+use std::sync::Mutex;
+
+mod probe {
+    use rustfmu::prelude::*;
+
+    /// Integrates its input.
+    #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+    pub struct Probe {
+        /// Input u
+        #[variable(vr = 0, input, start = 0.0)]
+        pub u: f64,
+        /// y = gain atan(acc): finite whatever acc is
+        #[variable(vr = 1, output, depends = [])]
+        pub y: f64,
+        /// u squared, computed at initialization and after every step: overflows for |u| > 1.3e154
+        #[variable(vr = 2, output, depends = [])]
+        pub power: f64,
+        /// Gain
+        #[variable(vr = 3, parameter, tunable, start = 1.0, min > 0.0, max = 10.0)]
+        pub gain: f64,
+        /// A count with bounds
+        #[variable(vr = 4, parameter, fixed, start = 2, min = 1, max = 5)]
+        pub count: i32,
+        /// Internal state: the integral of u, not a variable
+        pub acc: f64,
+    }
+
+    impl Probe {
+        fn outputs(&mut self) {
+            self.y = self.gain * self.acc.atan();
+            self.power = self.u * self.u;
+        }
+    }
+
+    impl Model for Probe {
+        fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+            self.outputs();
+            Ok(())
+        }
+    }
+
+    impl CoSimulation for Probe {
+        fn do_step(&mut self, _t: f64, h: f64, ctx: &Context) -> Result<(), StepFailure> {
+            ctx.log("logEvents", "stepping");
+            self.acc += self.u * h;
+            self.outputs();
+            Ok(())
+        }
+    }
+
+    rustfmu::export_fmi2!(Probe);
+}
+use probe::*;
+
+/// One instance's log, reached through its componentEnvironment.
+#[derive(Default)]
+struct Log {
+    entries: Mutex<Vec<(fmi2Status, String)>>,
+}
+
+impl Log {
+    fn take(&self) -> Vec<(fmi2Status, String)> {
+        std::mem::take(&mut *self.entries.lock().unwrap())
+    }
+}
+
+unsafe extern "C" fn collect(
+    env: fmi2ComponentEnvironment,
+    _name: fmi2String,
+    status: fmi2Status,
+    _category: fmi2String,
+    _message: fmi2String,
+    text: *const c_char,
+) {
+    // SAFETY: env is the &'static Log given at instantiation; the runtime always logs "%s" with
+    // one NUL-terminated argument.
+    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
+    log.entries
+        .lock()
+        .unwrap()
+        .push((status, text.to_string_lossy().into_owned()));
+}
+
+type Collector =
+    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, *const c_char);
+
+fn callbacks(logger: Collector, env: *mut std::ffi::c_void) -> &'static fmi2CallbackFunctions {
+    Box::leak(Box::new(fmi2CallbackFunctions {
+        // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
+        logger: Some(unsafe {
+            std::mem::transmute::<
+                Collector,
+                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
+            >(logger)
+        }),
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: env,
+    }))
+}
+
+/// An instance named `name` and its log; NULL when refused.
+fn instantiate(name: &CStr) -> (fmi2Component, &'static Log) {
+    let log: &'static Log = Box::leak(Box::default());
+    let cb = callbacks(collect, log as *const Log as *mut _);
+    let guid = CString::new(probe::__rustfmu_fmi2_exports::GUID).unwrap();
+    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    let c = unsafe {
+        fmi2Instantiate(
+            name.as_ptr(),
+            fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            cb,
+            fmi2False,
+            fmi2False,
+        )
+    };
+    (c, log)
+}
+
+fn assert_logged(log: &Log, status: fmi2Status, words: &[&str]) {
+    let entries = log.take();
+    assert!(
+        entries
+            .iter()
+            .any(|(s, text)| *s == status && words.iter().all(|w| text.contains(w))),
+        "expected a message with status {status} saying {words:?}, got {entries:?}"
+    );
+}
+
+#[test]
+fn an_instance_name_of_only_white_space_is_refused() {
+    for name in [c"   ", c"\t", c" \n\r "] {
+        let (c, log) = instantiate(name);
+        assert!(c.is_null(), "instance name {name:?} was accepted");
+        assert_logged(log, fmi2Error, &["fmi2Instantiate", "instanceName"]);
+    }
+    let (c, _) = instantiate(c" a ");
+    assert!(!c.is_null(), "a name with one non-white-space character is legal");
+    // SAFETY: c came from fmi2Instantiate and is freed once.
+    unsafe { fmi2FreeInstance(c) };
+}
