@@ -886,7 +886,7 @@ impl ValueError {
 /// variable at compile time, so a violation is a compile error naming the variable.
 pub const fn check_values(v: &Variable) -> Result<(), ValueError> {
     const fn finite(x: f64) -> bool {
-        x == x && x > f64::NEG_INFINITY && x < f64::INFINITY
+        x.is_finite()
     }
     if let Some(b) = v.min
         && !finite(b.value)

@@ -408,7 +408,9 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         derivative_of: a.derivative_of,
         description: crate::doc_text(&field.attrs),
     };
-    if var.start.is_some() && !has_start(&var) {
+    if let Some(start) = &var.start
+        && !has_start(&var)
+    {
         let why = if causality == Causality::Independent {
             "the independent variable has no start value".to_string()
         } else {
@@ -422,7 +424,7 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
                 }
             )
         };
-        return Err(Error::new(var.start.as_ref().expect("checked").span(), why));
+        return Err(Error::new(start.span(), why));
     }
     Ok(var)
 }

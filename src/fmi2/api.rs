@@ -445,7 +445,7 @@ pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
             if state.is_null() || size.is_null() {
                 return inst.error("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
             }
-            match super::state::serialize(&inst.guid, &*(state as *const super::instance::Sim<M>)) {
+            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
                 Ok(bytes) => {
                     *size = bytes.len();
                     fmi2OK
@@ -467,7 +467,7 @@ pub unsafe fn serialize_fmu_state<M: CoSimulation>(
             if state.is_null() || bytes.is_null() {
                 return inst.error("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
             }
-            match super::state::serialize(&inst.guid, &*(state as *const super::instance::Sim<M>)) {
+            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
                 Ok(data) if data.len() == size => {
                     ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
                     fmi2OK
@@ -499,7 +499,7 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
                     "fmi2DeSerializeFMUstate: serializedState is NULL with size = {size}"
                 ));
             };
-            match super::state::deserialize::<M>(&inst.guid, data) {
+            match super::state::deserialize::<M>(inst.guid, data) {
                 Ok(sim) => {
                     let existing = *state as *mut super::instance::Sim<M>;
                     if existing.is_null() {
