@@ -176,47 +176,52 @@ impl Dopri5 {
         (100.0 * h0).min(h1).min(span)
     }
 
-    /// Integrates `x' = f(t, x)` from `t0` to `t_end` in place. On error, `x` holds the state at
-    /// the time the error names, which the integrator reached with full accuracy.
+    /// Integrates `x' = f(t, x)` over `span` from `t0` in place. On error, `x` holds the state
+    /// at the time the error names, which the integrator reached with full accuracy.
+    ///
+    /// The integrator runs on the time `s` since `t0` (from 0 to `span`); `f` is called with
+    /// `t0 + s`. So the steps it takes, and the result, do not depend on where time starts: at
+    /// `t0` = 1.7e9 s (a Unix time stamp) a step of 1e-6 s is as fine as at 0, and a master's
+    /// rounded communication points (`t0 + n h`) do not leak into the state through `t_end - t0`.
     pub fn integrate<const N: usize, F>(
         &mut self,
         mut f: F,
         t0: f64,
+        span: f64,
         x: &mut SVector<f64, N>,
-        t_end: f64,
         tol: Tolerances,
     ) -> Result<(), OdeError>
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
-        let mut t = t0;
-        let mut k1 = f(t, x);
+        let mut s = 0.0;
+        let mut k1 = f(t0, x);
         self.stats.rhs_evaluations += 1;
         if !k1.iter().all(|v| v.is_finite()) {
-            return Err(OdeError::NonFinite { t });
+            return Err(OdeError::NonFinite { t: t0 });
         }
-        let span = t_end - t0;
         if self.h_next <= 0.0 {
-            self.h_next = self.initial_step(&mut f, t, x, &k1, tol, span);
+            self.h_next = self.initial_step(&mut f, t0, x, &k1, tol, span);
         }
         let mut steps = 0u64;
         let mut reject = false;
-        while t < t_end {
+        while s < span {
             if steps >= self.max_steps {
-                return Err(OdeError::TooManySteps { t, steps });
+                return Err(OdeError::TooManySteps { t: t0 + s, steps });
             }
             steps += 1;
             let mut h_proposed = self.h_next;
             if self.h_max > 0.0 {
                 h_proposed = h_proposed.min(self.h_max);
             }
-            // Land exactly on t_end; a step that would end within a hair of it is stretched.
-            let remaining = t_end - t;
+            // Land exactly on span; a step that would end within a hair of it is stretched.
+            let remaining = span - s;
             let last = h_proposed >= remaining * (1.0 - 1e-12);
             let h = if last { remaining } else { h_proposed };
-            if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
-                return Err(OdeError::StepSizeTooSmall { t, h });
+            if too_small(h, s) {
+                return Err(OdeError::StepSizeTooSmall { t: t0 + s, h });
             }
+            let t = t0 + s;
 
             let x2 = *x + h * (A21 * k1);
             let k2 = f(t + C2 * h, &x2);
@@ -239,7 +244,7 @@ impl Dopri5 {
                 self.stats.rejected_steps += 1;
                 self.h_next = h * FAC_MIN;
                 reject = true;
-                if self.h_next <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
+                if too_small(self.h_next, s) {
                     return Err(OdeError::NonFinite { t });
                 }
                 continue;
@@ -255,10 +260,10 @@ impl Dopri5 {
                 }
                 self.err_old = err.max(1e-4);
                 self.stats.accepted_steps += 1;
-                t = if last { t_end } else { t + h };
+                s = if last { span } else { s + h };
                 *x = x_new;
                 k1 = k7;
-                // A step cut short to land on t_end says nothing about the next step size:
+                // A step cut short to land on span says nothing about the next step size:
                 // keep the larger proposal.
                 self.h_next = if last { h_new.max(h_proposed) } else { h_new };
                 reject = false;
@@ -271,6 +276,12 @@ impl Dopri5 {
         }
         Ok(())
     }
+}
+
+/// A step `h` at time `s` (since the start of the span) that time resolution cannot resolve:
+/// relative to the local time, never to the absolute one.
+fn too_small(h: f64, s: f64) -> bool {
+    h.abs() <= 16.0 * f64::EPSILON * s.abs().max(1e-300)
 }
 
 #[cfg(test)]
@@ -288,18 +299,31 @@ mod tests {
         let mut x = Vector2::new(1.0, 0.0);
         let mut t = 0.0;
         for _ in 0..1000 {
-            ode.integrate(
-                |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]),
-                t,
-                &mut x,
-                t + 0.01,
-                tol,
-            )
-            .unwrap();
+            ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), t, 0.01, &mut x, tol)
+                .unwrap();
             t += 0.01;
         }
         let exact = Vector2::new(t.cos(), -t.sin());
         assert!((x - exact).norm() < 1e-8, "error {} after 10 s", (x - exact).norm());
+    }
+
+    #[test]
+    fn the_steps_do_not_depend_on_the_absolute_start_time() {
+        let tol = Tolerances {
+            rtol: 1e-10,
+            atol: 1e-10,
+        };
+        let run = |t0: f64| {
+            let mut ode = Dopri5::default();
+            let mut x = Vector2::new(0.0, 0.0);
+            // From rest with a constant push: Hairer's starting step is 1e-6, finer than the
+            // time stamps' resolution at t0 = 1.7e9 s.
+            ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], 1.0), t0, 1e-3, &mut x, tol)
+                .map(|()| (x, ode.stats))
+        };
+        let at_zero = run(0.0).unwrap();
+        let at_unix_time = run(1.7e9).unwrap_or_else(|e| panic!("t0 = 1.7e9: {e}"));
+        assert_eq!(at_zero, at_unix_time, "the same 1 ms from t0 = 0 and from t0 = 1.7e9");
     }
 
     #[test]
@@ -313,7 +337,7 @@ mod tests {
             atol: 1e-12,
         };
         let mut x = Vector2::new(1.0, 0.0);
-        let e = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), 0.0, &mut x, 1e6, tol);
+        let e = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), 0.0, 1e6, &mut x, tol);
         assert!(matches!(e, Err(OdeError::TooManySteps { .. })), "{e:?}");
     }
 
@@ -323,7 +347,7 @@ mod tests {
         let tol = Tolerances { rtol: 1e-8, atol: 1e-8 };
         let mut x = SVector::<f64, 1>::new(1.0);
         // x' = x², x(0) = 1 blows up at t = 1.
-        let e = ode.integrate(|_, x: &SVector<f64, 1>| x.map(|v| v * v), 0.0, &mut x, 2.0, tol);
+        let e = ode.integrate(|_, x: &SVector<f64, 1>| x.map(|v| v * v), 0.0, 2.0, &mut x, tol);
         assert!(e.is_err(), "integrated through a singularity: {x:?}");
     }
 }

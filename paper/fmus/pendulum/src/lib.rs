@@ -124,7 +124,7 @@ impl CoSimulation for Pendulum {
         let tol = self.tolerances();
         let result = self
             .ode
-            .integrate(|_, x: &Vector4<f64>| p.derivative(x, &u), t, &mut x, t + h, tol);
+            .integrate(|_, x: &Vector4<f64>| p.derivative(x, &u), t, h, &mut x, tol);
         self.set_state(&x);
         result.map_err(|e| StepFailure {
             reached_time: e.time(),

@@ -1,0 +1,161 @@
+//! The Pendulum FMU through its C API (linked into this test binary) where the issue "nothing
+//! wrong ever leaves an FMU with fmi2OK" found it wanting: absolute start times, tolerances at
+//! the ends of their ranges, non-finite results of finite inputs, doctored serialized states.
+
+use pendulum_fmu::Pendulum;
+use pendulum_fmu::*;
+use rustfmu::__private::abi::*;
+use rustfmu::Variables;
+use std::ffi::{CStr, CString, c_char};
+use std::sync::Mutex;
+
+/// One instance's log, reached through its componentEnvironment.
+#[derive(Default)]
+struct Log(Mutex<Vec<(fmi2Status, String)>>);
+
+unsafe extern "C" fn collect(
+    env: fmi2ComponentEnvironment,
+    _name: fmi2String,
+    status: fmi2Status,
+    _category: fmi2String,
+    _message: fmi2String,
+    text: *const c_char,
+) {
+    // SAFETY: env is the leaked Log of the instance; the runtime logs "%s" with one argument.
+    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
+    log.0
+        .lock()
+        .unwrap()
+        .push((status, text.to_string_lossy().into_owned()));
+}
+
+fn vr(name: &str) -> u32 {
+    Pendulum::DESCRIPTION
+        .by_name(name)
+        .unwrap_or_else(|| panic!("the Pendulum has no variable '{name}'"))
+        .value_reference
+}
+
+struct Fmu {
+    c: fmi2Component,
+    log: &'static Log,
+    time: f64,
+}
+
+impl Fmu {
+    /// Instantiated, fmi2SetupExperiment(startTime = t0), in initialization mode.
+    fn new(t0: f64) -> Fmu {
+        let log: &'static Log = Box::leak(Box::default());
+        let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
+            // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
+            logger: Some(unsafe {
+                std::mem::transmute::<
+                    unsafe extern "C" fn(
+                        fmi2ComponentEnvironment,
+                        fmi2String,
+                        fmi2Status,
+                        fmi2String,
+                        fmi2String,
+                        *const c_char,
+                    ),
+                    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
+                >(collect)
+            }),
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: log as *const Log as *mut _,
+        }));
+        let guid = CString::new(pendulum_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
+        // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+        unsafe {
+            let c = fmi2Instantiate(
+                c"robustness".as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                std::ptr::null(),
+                callbacks,
+                fmi2False,
+                fmi2False,
+            );
+            assert!(!c.is_null());
+            assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+            Fmu { c, log, time: t0 }
+        }
+    }
+
+    fn set(&self, values: &[(&str, f64)]) -> fmi2Status {
+        let (vrs, xs): (Vec<u32>, Vec<f64>) = values.iter().map(|(n, x)| (vr(n), *x)).unzip();
+        // SAFETY: as many references as values.
+        unsafe { fmi2SetReal(self.c, vrs.as_ptr(), vrs.len(), xs.as_ptr()) }
+    }
+
+    fn get(&self, names: &[&str]) -> Vec<f64> {
+        let vrs: Vec<u32> = names.iter().map(|n| vr(n)).collect();
+        let mut out = vec![0.0; vrs.len()];
+        // SAFETY: as many references as slots.
+        let s = unsafe { fmi2GetReal(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) };
+        assert_eq!(s, fmi2OK, "fmi2GetReal: {:?}", self.messages());
+        out
+    }
+
+    fn exit_init(&self) -> fmi2Status {
+        // SAFETY: a live instance.
+        unsafe { fmi2ExitInitializationMode(self.c) }
+    }
+
+    fn step(&mut self, h: f64) -> fmi2Status {
+        // SAFETY: a live instance.
+        let s = unsafe { fmi2DoStep(self.c, self.time, h, fmi2True) };
+        if s == fmi2OK {
+            self.time += h;
+        }
+        s
+    }
+
+    fn messages(&self) -> Vec<(fmi2Status, String)> {
+        std::mem::take(&mut *self.log.0.lock().unwrap())
+    }
+}
+
+impl Drop for Fmu {
+    fn drop(&mut self) {
+        // SAFETY: from fmi2Instantiate, freed once.
+        unsafe { fmi2FreeInstance(self.c) };
+    }
+}
+
+const STATE: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
+
+#[test]
+fn a_unix_time_stamp_as_start_time_does_not_discard_the_first_step_from_rest() {
+    let mut p = Fmu::new(1.7e9);
+    assert_eq!(p.exit_init(), fmi2OK);
+    let s = p.step(1e-3);
+    assert_eq!(s, fmi2OK, "first 1 ms step from rest at t0 = 1.7e9: {:?}", p.messages());
+}
+
+#[test]
+fn the_trajectory_does_not_depend_on_the_start_time() {
+    let run = |t0: f64| {
+        let mut p = Fmu::new(t0);
+        assert_eq!(
+            p.set(&[("alpha1", 2.5), ("alpha2", -1.0), ("rtol", 1e-10), ("atol", 1e-10)]),
+            fmi2OK
+        );
+        assert_eq!(p.exit_init(), fmi2OK);
+        let h = 1e-3;
+        for k in 0..2000 {
+            // The importer's time stamps: t0 + k h, as fmpy computes them.
+            p.time = t0 + k as f64 * h;
+            assert_eq!(p.step(h), fmi2OK, "t0 = {t0}, step {k}: {:?}", p.messages());
+        }
+        p.get(&STATE)
+    };
+    let (from_zero, from_1e6) = (run(0.0), run(1e6));
+    assert_eq!(
+        from_zero, from_1e6,
+        "2 s from t0 = 0 and from t0 = 1e6 (the same steps of 1 ms) must give the same state"
+    );
+}
