@@ -140,6 +140,26 @@ fn error_norm<const N: usize>(
 }
 
 impl Dopri5 {
+    /// Refuses a memory the integrator cannot run on (one restored from outside, say), naming
+    /// the field.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [("h_next", self.h_next), ("h_max", self.h_max)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("the integrator's {name} = {v} must be finite and >= 0"));
+            }
+        }
+        if !(self.err_old.is_finite() && self.err_old > 0.0) {
+            return Err(format!(
+                "the integrator's error history {} must be finite and > 0",
+                self.err_old
+            ));
+        }
+        if self.max_steps == 0 {
+            return Err("the integrator's max_steps must be at least 1".into());
+        }
+        Ok(())
+    }
+
     /// Forgets the step-size history (after a discontinuous change of the state or of a
     /// parameter).
     pub fn restart(&mut self) {
@@ -254,7 +274,10 @@ impl Dopri5 {
                 // PI controller on accepted steps.
                 let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
                 let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                let mut h_new = h_proposed / fac;
+                // From the step just taken: a last step cut short to land on span supports
+                // only its own size times the factor (scaling the longer proposal instead
+                // grew it tenfold on every communication step, to infinity).
+                let mut h_new = h / fac;
                 if reject {
                     h_new = h_new.min(h_proposed);
                 }
@@ -324,6 +347,24 @@ mod tests {
         let at_zero = run(0.0).unwrap();
         let at_unix_time = run(1.7e9).unwrap_or_else(|e| panic!("t0 = 1.7e9: {e}"));
         assert_eq!(at_zero, at_unix_time, "the same 1 ms from t0 = 0 and from t0 = 1.7e9");
+    }
+
+    #[test]
+    fn the_proposed_step_stays_bounded_over_many_short_spans() {
+        // Every span is one step cut short to land on its end: the proposal must grow from
+        // what those steps support, not tenfold per span (it reached infinity after ~300).
+        let mut ode = Dopri5::default();
+        let tol = Tolerances { rtol: 1e-6, atol: 1e-6 };
+        let mut x = Vector2::new(1.0, 0.0);
+        for k in 0..1000 {
+            let f = |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]);
+            ode.integrate(f, k as f64 * 1e-3, 1e-3, &mut x, tol).unwrap();
+            assert!(
+                ode.h_next.is_finite() && ode.h_next <= 1.0,
+                "after span {k}: proposed step {} s for spans of 1 ms",
+                ode.h_next
+            );
+        }
     }
 
     #[test]
