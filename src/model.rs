@@ -99,6 +99,15 @@ pub trait Model: Variables + Clone + Serialize + DeserializeOwned + Send + 'stat
     fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
         Ok(())
     }
+
+    /// Checks what the model keeps besides its variables (integrator memory, filter states):
+    /// `Err` names what is not finite or otherwise unusable. The runtime checks every Real
+    /// variable itself; it calls this after initialization, after every step and parameter
+    /// change, and on every deserialized state, and no value leaves under fmi2OK unless both
+    /// checks pass.
+    fn check_internal_state(&self) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// A model that advances itself over a communication step (FMI Co-Simulation).

@@ -43,6 +43,14 @@ mod probe {
             self.outputs();
             Ok(())
         }
+
+        fn check_internal_state(&self) -> Result<(), String> {
+            if self.acc.is_finite() {
+                Ok(())
+            } else {
+                Err(format!("the integral acc = {} is not finite", self.acc))
+            }
+        }
     }
 
     impl CoSimulation for Probe {
@@ -147,4 +155,87 @@ fn an_instance_name_of_only_white_space_is_refused() {
     assert!(!c.is_null(), "a name with one non-white-space character is legal");
     // SAFETY: c came from fmi2Instantiate and is freed once.
     unsafe { fmi2FreeInstance(c) };
+}
+
+/// An initialized Probe with the given input.
+fn initialized(u: f64) -> (fmi2Component, &'static Log) {
+    let (c, log) = instantiate(c"probe");
+    assert!(!c.is_null());
+    // SAFETY: c is a live instance; arrays of one.
+    unsafe {
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        assert_eq!(fmi2SetReal(c, &0, 1, &u), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take());
+    }
+    (c, log)
+}
+
+fn get_reals(c: fmi2Component, vrs: &[u32]) -> (fmi2Status, Vec<f64>) {
+    let mut out = vec![f64::NAN; vrs.len()];
+    // SAFETY: as many references as slots.
+    let s = unsafe { fmi2GetReal(c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) };
+    (s, out)
+}
+
+fn last_successful_time(c: fmi2Component) -> f64 {
+    let mut t = f64::NAN;
+    // SAFETY: a live instance, one slot.
+    assert_eq!(unsafe { fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &mut t) }, fmi2OK);
+    t
+}
+
+#[test]
+fn a_step_whose_output_is_not_finite_is_discarded_and_the_model_keeps_its_last_good_state() {
+    let (c, log) = initialized(1.0);
+    // SAFETY: c is a live instance; arrays of one.
+    unsafe {
+        assert_eq!(fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
+        let good = get_reals(c, &[1, 2]).1;
+        // Finite, and accepted: but u² overflows.
+        assert_eq!(fmi2SetReal(c, &0, 1, &1e200), fmi2OK);
+        let s = fmi2DoStep(c, 0.5, 0.5, fmi2True);
+        assert_eq!(s, fmi2Discard, "a step to power = inf must not return {s}");
+        assert_logged(log, fmi2Discard, &["fmi2DoStep", "'power' (vr 2) = inf"]);
+        let (s, after) = get_reals(c, &[1, 2]);
+        assert_eq!(s, fmi2OK);
+        assert_eq!(after, good, "y and power must be as they were at t = 0.5");
+        assert_eq!(last_successful_time(c), 0.5);
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn a_step_whose_internal_state_is_not_finite_is_discarded() {
+    let (c, log) = initialized(1e150);
+    // SAFETY: c is a live instance.
+    unsafe {
+        // acc = u h overflows while every variable stays finite (y = gain atan(acc)): only the
+        // model's own check of its internal state sees it.
+        let s = fmi2DoStep(c, 0.0, 1e160, fmi2True);
+        assert_eq!(s, fmi2Discard, "a step to acc = inf must not return {s}");
+        assert_logged(log, fmi2Discard, &["internal state", "acc = inf"]);
+        assert_eq!(last_successful_time(c), 0.0);
+        assert_eq!(get_reals(c, &[1]).1, [0.0], "y is back at its value at t = 0");
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn an_initialization_that_computes_a_non_finite_value_is_an_error_naming_it() {
+    let (c, log) = instantiate(c"probe");
+    // SAFETY: c is a live instance; arrays of one.
+    unsafe {
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        assert_eq!(fmi2SetReal(c, &0, 1, &1e200), fmi2OK);
+        let (s, _) = get_reals(c, &[2]);
+        assert_eq!(s, fmi2Error, "fmi2GetReal of power = inf in initialization mode");
+        assert_logged(log, fmi2Error, &["'power' (vr 2) = inf"]);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2Error);
+        assert_logged(log, fmi2Error, &["fmi2ExitInitializationMode", "'power' (vr 2) = inf"]);
+        // Nothing changed: still in initialization mode, and a good input initializes it.
+        assert_eq!(fmi2SetReal(c, &0, 1, &3.0), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take());
+        assert_eq!(get_reals(c, &[2]).1, [9.0]);
+        fmi2FreeInstance(c);
+    }
 }

@@ -150,8 +150,33 @@ pub struct Instance<M: CoSimulation> {
     pub logger: Logger,
     pub guid: &'static str,
     pub sim: Sim<M>,
+    /// The model as it was before the step in progress, to go back to when the step leaves
+    /// something that is not finite. Kept here so that a step does not allocate a copy.
+    before_step: M,
     /// What fmi2GetString last returned: valid until the next call, as the standard allows.
     strings: Vec<CString>,
+}
+
+/// The first Real variable, or the first part of the internal state, of `model` that is not
+/// finite, described for a message. The one check every value computed by a model passes
+/// before it may leave under fmi2OK: after initialization, after every step and parameter
+/// change, and on every deserialized state.
+pub fn non_finite<M: CoSimulation>(model: &M) -> Option<String> {
+    for v in M::DESCRIPTION.variables {
+        if v.var_type == VarType::Real
+            && let Some(Value::Real(x)) = model.get(v.value_reference)
+            && !x.is_finite()
+        {
+            return Some(format!(
+                "'{}' (vr {}) = {x} is not a finite number",
+                v.name, v.value_reference
+            ));
+        }
+    }
+    model
+        .check_internal_state()
+        .err()
+        .map(|why| format!("the model's internal state is unusable: {why}"))
 }
 
 type Outcome = Result<(), fmi2Status>;
@@ -162,6 +187,7 @@ impl<M: CoSimulation> Instance<M> {
             logger,
             guid,
             sim: Sim::new(),
+            before_step: M::start(),
             strings: Vec::new(),
         }
     }
@@ -276,7 +302,15 @@ impl<M: CoSimulation> Instance<M> {
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
         };
-        match self.sim.model.initialize(&ctx) {
+        let outcome = self
+            .sim
+            .model
+            .initialize(&ctx)
+            .and_then(|()| match non_finite(&self.sim.model) {
+                None => Ok(()),
+                Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
+            });
+        match outcome {
             Ok(()) => {
                 self.sim.init_dirty = false;
                 Ok(())
@@ -496,7 +530,12 @@ impl<M: CoSimulation> Instance<M> {
                 tolerance: self.sim.tolerance,
                 logger: Some(&self.logger),
             };
-            if let Err(why) = self.sim.model.parameters_changed(&ctx) {
+            let outcome = self
+                .sim
+                .model
+                .parameters_changed(&ctx)
+                .and_then(|()| non_finite(&self.sim.model).map_or(Ok(()), Err));
+            if let Err(why) = outcome {
                 self.sim.model = previous;
                 return self.error(&format!(
                     "{function}: parameter change refused: {why}; values unchanged"
@@ -550,27 +589,49 @@ impl<M: CoSimulation> Instance<M> {
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
         };
-        match self.sim.model.do_step(t, h, &ctx) {
-            Ok(()) => {
+        self.before_step.clone_from(&self.sim.model);
+        let outcome = self.sim.model.do_step(t, h, &ctx);
+        match (outcome, non_finite(&self.sim.model)) {
+            (Ok(()), None) => {
                 self.sim.time = end;
                 self.sim.last_successful_time = end;
                 fmi2OK
             }
-            Err(failure) => {
-                self.sim.time = failure.reached_time;
-                self.sim.last_successful_time = failure.reached_time;
-                self.sim.state = State::StepFailed;
-                self.logger.log(
-                    fmi2Discard,
-                    Category::StatusDiscard,
-                    &format!(
-                        "fmi2DoStep from t = {t} by h = {h} discarded at t = {}: {}",
-                        failure.reached_time, failure.message
-                    ),
-                );
-                fmi2Discard
+            (Err(failure), None) => {
+                // A model's claim outside the step is no time it reached.
+                let reached = if failure.reached_time.is_finite() {
+                    failure.reached_time.clamp(t, end)
+                } else {
+                    t
+                };
+                self.discard_step(t, h, reached, &failure.message)
+            }
+            (outcome, Some(what)) => {
+                std::mem::swap(&mut self.sim.model, &mut self.before_step);
+                let model_said = match outcome {
+                    Ok(()) => String::new(),
+                    Err(failure) => format!(" (the model reported: {})", failure.message),
+                };
+                self.discard_step(
+                    t,
+                    h,
+                    t,
+                    &format!("{what}{model_said}; every variable is back at its value at t = {t}"),
+                )
             }
         }
+    }
+
+    fn discard_step(&mut self, t: f64, h: f64, reached: f64, why: &str) -> fmi2Status {
+        self.sim.time = reached;
+        self.sim.last_successful_time = reached;
+        self.sim.state = State::StepFailed;
+        self.logger.log(
+            fmi2Discard,
+            Category::StatusDiscard,
+            &format!("fmi2DoStep from t = {t} by h = {h} discarded at t = {reached}: {why}"),
+        );
+        fmi2Discard
     }
 
     pub fn real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {

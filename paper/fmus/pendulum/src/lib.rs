@@ -114,6 +114,16 @@ impl Model for Pendulum {
         self.set_state(&x);
         Ok(())
     }
+
+    fn check_internal_state(&self) -> Result<(), String> {
+        self.ode.validate()?;
+        match self.importer_tolerance {
+            Some(t) if !(t.is_finite() && t > 0.0) => {
+                Err(format!("the importer's tolerance {t} must be finite and > 0"))
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 impl CoSimulation for Pendulum {

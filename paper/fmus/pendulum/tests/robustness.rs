@@ -117,6 +117,16 @@ impl Fmu {
     fn messages(&self) -> Vec<(fmi2Status, String)> {
         std::mem::take(&mut *self.log.0.lock().unwrap())
     }
+
+    fn assert_logged(&self, status: fmi2Status, words: &[&str]) {
+        let entries = self.messages();
+        assert!(
+            entries
+                .iter()
+                .any(|(s, text)| *s == status && words.iter().all(|w| text.contains(w))),
+            "expected a message with status {status} saying {words:?}, got {entries:?}"
+        );
+    }
 }
 
 impl Drop for Fmu {
@@ -158,4 +168,21 @@ fn the_trajectory_does_not_depend_on_the_start_time() {
         from_zero, from_1e6,
         "2 s from t0 = 0 and from t0 = 1e6 (the same steps of 1 ms) must give the same state"
     );
+}
+
+#[test]
+fn an_initialization_to_a_non_finite_energy_is_an_error_naming_it() {
+    for start in [&[("omega1", 1e200)][..], &[("l1", 1e300), ("omega1", 1.0)]] {
+        let p = Fmu::new(0.0);
+        assert_eq!(p.set(start), fmi2OK, "{start:?} are finite and legal");
+        let s = p.exit_init();
+        assert_eq!(
+            s, fmi2Error,
+            "{start:?}: fmi2ExitInitializationMode must not return {s}"
+        );
+        p.assert_logged(
+            fmi2Error,
+            &["fmi2ExitInitializationMode", "'energy' (vr 6)", "not a finite number"],
+        );
+    }
 }
