@@ -250,6 +250,16 @@ impl Model for Controller {
     fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
         self.law().map(|_| ())
     }
+
+    fn check_internal_state(&self) -> Result<(), String> {
+        let s = &self.state;
+        for (what, v) in [("integral", s.integral), ("rate filter", s.rate_filter)] {
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(format!("the PID {what} {v:?} is not finite"));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl CoSimulation for Controller {
