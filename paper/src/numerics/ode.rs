@@ -180,14 +180,17 @@ impl Dopri5 {
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
+        // Scaled norms, capped at f64::MAX: with atol = 5e-324 and x = 0 they overflow, and
+        // an infinite one would make the starting step 0 instead of merely tiny.
         let sc = x.map(|xi| tol.atol + tol.rtol * xi.abs());
-        let d0 = (x.component_div(&sc).norm_squared() / N as f64).sqrt();
-        let d1 = (k1.component_div(&sc).norm_squared() / N as f64).sqrt();
+        let scaled = |v: SVector<f64, N>| (v.component_div(&sc).norm_squared() / N as f64).sqrt().min(f64::MAX);
+        let d0 = scaled(*x);
+        let d1 = scaled(*k1);
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 }.min(span);
         let x1 = x + k1 * h0;
         let k2 = f(t + h0, &x1);
         self.stats.rhs_evaluations += 1;
-        let d2 = ((k2 - k1).component_div(&sc).norm_squared() / N as f64).sqrt() / h0;
+        let d2 = (scaled(k2 - k1) / h0).min(f64::MAX);
         let h1 = if d1.max(d2) <= 1e-15 {
             (h0 * 1e-3).max(1e-6)
         } else {
@@ -259,7 +262,8 @@ impl Dopri5 {
             let err_vec = h * (E1 * k1 + E3 * k3 + E4 * k4 + E5 * k5 + E6 * k6 + E7 * k7);
             let err = error_norm(&err_vec, x, &x_new, tol);
 
-            if !err.is_finite() || !x_new.iter().all(|v| v.is_finite()) {
+            // An infinite error of a finite step (a tiny atol) is an ordinary rejection below.
+            if err.is_nan() || !x_new.iter().all(|v| v.is_finite()) {
                 // Shrink hard and retry: a finite error may come with a smaller step.
                 self.stats.rejected_steps += 1;
                 self.h_next = h * FAC_MIN;
@@ -365,6 +369,21 @@ mod tests {
                 ode.h_next
             );
         }
+    }
+
+    #[test]
+    fn the_smallest_absolute_tolerance_starts_from_zero() {
+        // atol = 5e-324 at x = 0 with x' != 0: the scaled norms overflow; the start must still
+        // be a (tiny) step, and the error control relative from there on.
+        let tol = Tolerances {
+            rtol: 1e-8,
+            atol: 5e-324,
+        };
+        let mut ode = Dopri5::default();
+        let mut x = Vector2::new(0.0, 0.0);
+        let r = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], 1.0), 0.0, 1e-3, &mut x, tol);
+        assert_eq!(r, Ok(()), "after {:?}", ode.stats);
+        assert!((x[0] - 0.5e-6).abs() < 1e-14 && (x[1] - 1e-3).abs() < 1e-14, "x = {x}");
     }
 
     #[test]

@@ -186,3 +186,37 @@ fn an_initialization_to_a_non_finite_energy_is_an_error_naming_it() {
         );
     }
 }
+
+#[test]
+fn the_absolute_tolerance_is_declared_positive_and_any_positive_value_works() {
+    // atol = 0 would make the error norm 0/0 at rest (every state component is exactly 0 at the
+    // default start): it is outside the declared domain and refused, naming it.
+    let p = Fmu::new(0.0);
+    assert_eq!(p.set(&[("atol", 0.0)]), fmi2Error, "atol = 0 must be refused");
+    p.assert_logged(fmi2Error, &["'atol'", "outside (0, 1]"]);
+    // The smallest positive ones give pure relative error control wherever the state is not 0.
+    for atol in [5e-324, 1e-300, 1e-20] {
+        for start in [&[("M1", 1.0)][..], &[], &[("alpha1", 2.5), ("alpha2", -1.0)]] {
+            let mut p = Fmu::new(0.0);
+            assert_eq!(p.set(&[("atol", atol), ("rtol", 1e-8)]), fmi2OK);
+            assert_eq!(p.set(start), fmi2OK);
+            assert_eq!(p.exit_init(), fmi2OK);
+            for k in 0..100 {
+                let s = p.step(1e-3);
+                assert_eq!(s, fmi2OK, "atol = {atol:e}, {start:?}, step {k}: {:?}", p.messages());
+            }
+        }
+    }
+}
+
+#[test]
+fn masses_and_lengths_outside_their_declared_domain_are_refused_naming_them() {
+    for var in ["m1", "m2", "l1", "l2"] {
+        for bad in [0.0, -1.0, -5e-324] {
+            let p = Fmu::new(0.0);
+            assert_eq!(p.set(&[(var, bad)]), fmi2Error, "{var} = {bad} must be refused");
+            p.assert_logged(fmi2Error, &[&format!("for '{var}'"), "outside (0, inf)"]);
+            assert_eq!(p.exit_init(), fmi2OK, "the refusal changed nothing");
+        }
+    }
+}
