@@ -89,7 +89,10 @@ impl DcMotorParams {
                 return Err(format!("{name} = {v} must be a finite number > 0"));
             }
         }
-        for (name, v) in [("km", self.km), ("kb", self.kb), ("B", self.b)] {
+        if !(self.km.is_finite() && self.km > 0.0) {
+            return Err(format!("km = {} must be a finite number > 0", self.km));
+        }
+        for (name, v) in [("kb", self.kb), ("B", self.b)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} = {v} must be a finite number >= 0"));
             }
@@ -123,13 +126,26 @@ impl DcMotorParams {
     }
 
     /// Coupled to a joint turning at `omega_joint` [rad/s] (held over the step): the rotor turns
-    /// at n ω_joint and the current relaxes exactly towards (U − kb ω_m)/R.
+    /// at n ω_joint and the current relaxes exactly towards (U − kb ω_m)/R:
+    /// i(h) = i e^(−x) + (U − kb ω_m) (1 − e^(−x))/R with x = R h/L.
+    ///
+    /// (1 − e^(−x))/R is computed as −expm1(−x)/R, and for x ≤ 1 as (h/L)·(−expm1(−x)/x): the
+    /// closed form i_steady + (i − i_steady) e^(−x) cancels to exactly 0 when x is below the
+    /// rounding of 1 (R = 1e-20 Ω: 0 A where (U − kb ω_m) h/L = 742.69 A after 15 ms), and
+    /// (U − kb ω_m)/R overflows for a subnormal R.
     pub fn step_coupled(&self, s: &DcMotorState, u: f64, omega_joint: f64, h: f64) -> DcMotorState {
         let omega_m = self.gear_ratio * omega_joint;
-        let i_steady = (self.applied_voltage(u) - self.kb * omega_m) / self.r;
-        let decay = (-self.r * h / self.l).exp();
+        let drive = self.applied_voltage(u) - self.kb * omega_m;
+        let x = self.r * h / self.l;
+        let gain = if x > 1.0 {
+            -(-x).exp_m1() / self.r
+        } else if x > 0.0 {
+            h / self.l * (-(-x).exp_m1() / x)
+        } else {
+            h / self.l
+        };
         DcMotorState {
-            i: i_steady + (s.i - i_steady) * decay,
+            i: s.i * (-x).exp() + drive * gain,
             omega_m,
         }
     }
@@ -232,6 +248,29 @@ mod tests {
             let want = i_steady * (1.0 - (-p.r * 0.01 / p.l).exp());
             assert!((s.i - want).abs() < 1e-12, "h = {h}: expected i = {want}, got {}", s.i);
         }
+    }
+
+    #[test]
+    fn a_tiny_resistance_gives_the_inductive_current_not_zero() {
+        // R → 0: L di/dt = U − kb ω_m, so i(h) = (U − kb ω_m) h/L to first order in R h/L.
+        let p = DcMotorParams {
+            r: 1e-20,
+            ..DcMotorParams::default()
+        };
+        let mut s = DcMotorState::default();
+        for _ in 0..15 {
+            s = p.step_coupled(&s, 6.0, 2.0, 1e-3);
+        }
+        let want = (6.0 - p.kb * 2.0) * 0.015 / p.l;
+        assert!(
+            (s.i - want).abs() < 1e-9 * want,
+            "R = 1e-20 Ohm: after 15 ms expected i = {want} A (742.69), got {} A",
+            s.i
+        );
+        // And a subnormal R does not overflow.
+        let p = DcMotorParams { r: 5e-324, ..p };
+        let s = p.step_coupled(&DcMotorState::default(), 6.0, 2.0, 0.015);
+        assert!((s.i - want).abs() < 1e-9 * want, "R = 5e-324: {} A", s.i);
     }
 
     #[test]

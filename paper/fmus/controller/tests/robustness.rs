@@ -199,3 +199,30 @@ fn the_pid_integrators_do_not_wind_up_on_huge_inputs() {
         );
     }
 }
+
+#[test]
+fn motor_and_gain_parameters_outside_their_declared_domains_are_refused() {
+    // motor_km = 0 made U = R/(n km) (...) = NaN at rest; negative friction, back-EMF and gains
+    // have no meaning (and would turn the anti-windup around).
+    let cases = [
+        ("motor_km", 0.0, "outside (0, inf)"),
+        ("motor_km", -1e-3, "outside (0, inf)"),
+        ("motor_kb", -1e-3, "outside [0, inf)"),
+        ("motor_B", -1.0, "outside [0, inf)"),
+        ("Kp1", -1.0, "outside [0, inf)"),
+        ("Ki2", -1.0, "outside [0, inf)"),
+        ("Kd1", -5e-324, "outside [0, inf)"),
+    ];
+    for (name, bad, why) in cases {
+        let c = Fmu::new();
+        assert_eq!(c.set(&[(name, bad)]), fmi2Error, "{name} = {bad} must be refused");
+        let log = c.messages();
+        assert!(
+            log.iter()
+                .any(|(s, t)| *s == fmi2Error && t.contains(&format!("'{name}'")) && t.contains(why)),
+            "{name} = {bad}: expected a refusal saying {why}: {log:?}"
+        );
+        assert_eq!(c.exit_init(), fmi2OK, "the refusal changed nothing");
+        assert_limited(&c, "at the defaults");
+    }
+}
