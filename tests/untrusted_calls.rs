@@ -239,3 +239,89 @@ fn an_initialization_that_computes_a_non_finite_value_is_an_error_naming_it() {
         fmi2FreeInstance(c);
     }
 }
+
+/// The serialized form of c's current state.
+fn serialized(c: fmi2Component) -> Vec<u8> {
+    // SAFETY: c is a live instance; the buffers are as large as passed.
+    unsafe {
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2GetFMUstate(c, &mut s), fmi2OK);
+        let mut n = 0;
+        assert_eq!(fmi2SerializedFMUstateSize(c, s, &mut n), fmi2OK);
+        let mut bytes = vec![0u8; n];
+        assert_eq!(
+            fmi2SerializeFMUstate(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, n),
+            fmi2OK
+        );
+        assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2OK);
+        bytes
+    }
+}
+
+/// `bytes` decoded, changed by `doctor`, and encoded again with a correct header and checksum.
+fn doctored(bytes: &[u8], doctor: impl FnOnce(&mut rustfmu::fmi2::instance::Sim<Probe>)) -> Vec<u8> {
+    use rustfmu::fmi2::state;
+    let guid = probe::__rustfmu_fmi2_exports::GUID;
+    let mut sim = state::deserialize::<Probe>(guid, bytes).expect("the runtime reads its own state");
+    doctor(&mut sim);
+    state::serialize(guid, &sim).unwrap()
+}
+
+#[test]
+fn a_deserialized_state_is_checked_like_values_set_through_the_api() {
+    let (c, log) = initialized(1.0);
+    let good = serialized(c);
+    type Doctor = fn(&mut rustfmu::fmi2::instance::Sim<Probe>);
+    let cases: [(&str, Doctor, &[&str]); 7] = [
+        (
+            "a NaN input",
+            |s| s.model.u = f64::NAN,
+            &["NaN for 'u' (vr 0) is not a finite number"],
+        ),
+        (
+            "an infinite output",
+            |s| s.model.power = f64::INFINITY,
+            &["inf for 'power'"],
+        ),
+        (
+            "gain = -1",
+            |s| s.model.gain = -1.0,
+            &["-1 for 'gain' (vr 3) is outside (0, 10]"],
+        ),
+        (
+            "count = 9",
+            |s| s.model.count = 9,
+            &["9 for 'count' (vr 4) is outside [1, 5]"],
+        ),
+        (
+            "an infinite internal state",
+            |s| s.model.acc = f64::INFINITY,
+            &["internal state", "acc = inf"],
+        ),
+        ("a NaN time", |s| s.time = f64::NAN, &["time = NaN"]),
+        ("tolerance = -1", |s| s.tolerance = Some(-1.0), &["tolerance = -1"]),
+    ];
+    for (what, doctor, words) in cases {
+        let bytes = doctored(&good, doctor);
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: bytes.len() readable bytes; s is an FMUstate slot.
+        let status = unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s) };
+        assert_eq!(status, fmi2Error, "a state with {what} (correct checksum) was accepted");
+        assert!(s.is_null(), "{what}: a refused state was handed out");
+        let mut words = words.to_vec();
+        words.push("fmi2DeSerializeFMUstate");
+        assert_logged(log, fmi2Error, &words);
+    }
+    // The undoctored state still restores.
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    // SAFETY: as above.
+    unsafe {
+        assert_eq!(
+            fmi2DeSerializeFMUstate(c, good.as_ptr() as *const fmi2Byte, good.len(), &mut s),
+            fmi2OK
+        );
+        assert_eq!(fmi2SetFMUstate(c, s), fmi2OK);
+        assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2OK);
+        fmi2FreeInstance(c);
+    }
+}

@@ -499,7 +499,9 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
                     "fmi2DeSerializeFMUstate: serializedState is NULL with size = {size}"
                 ));
             };
-            match super::state::deserialize::<M>(inst.guid, data) {
+            let restored = super::state::deserialize::<M>(inst.guid, data)
+                .and_then(|sim| super::instance::check_restored(&sim).map(|()| sim));
+            match restored {
                 Ok(sim) => {
                     let existing = *state as *mut super::instance::Sim<M>;
                     if existing.is_null() {

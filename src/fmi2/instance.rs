@@ -460,41 +460,11 @@ impl<M: CoSimulation> Instance<M> {
     fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static Variable, fmi2Status> {
         let decl = self.lookup(function, vr, value.api_type())?;
         self.check_settable(function, decl)?;
-        if let Value::Real(x) = value
-            && !x.is_finite()
-        {
-            return Err(self.error(&format!(
-                "{function}: {x} for '{}' (vr {vr}) is not a finite number; refused, value unchanged",
-                decl.name
-            )));
+        match refusal(&self.sim.model, decl, value) {
+            None => Ok(decl),
+            Some(Refusal::Rule(why)) => Err(self.error(&format!("{function}: {why}; refused, value unchanged"))),
+            Some(Refusal::Model(why)) => Err(self.error(&format!("{function}: {why}"))),
         }
-        if let Some(x) = value.as_f64()
-            && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
-        {
-            return Err(self.error(&format!(
-                "{function}: {x} for '{}' (vr {vr}) is outside {}; refused, value unchanged",
-                decl.name,
-                range_text(decl)
-            )));
-        }
-        if let (Some(e), Value::Integer(code)) = (decl.enumeration, value)
-            && e.item(code).is_none()
-        {
-            let items: Vec<String> = e.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
-            return Err(self.error(&format!(
-                "{function}: {code} for '{}' (vr {vr}) is no item of the enumeration {} ({}); refused, value unchanged",
-                decl.name,
-                e.name,
-                items.join(", ")
-            )));
-        }
-        if let Err(why) = self.sim.model.check(decl, value) {
-            return Err(self.error(&format!(
-                "{function}: {value:?} for '{}' (vr {vr}) refused: {why}",
-                decl.name
-            )));
-        }
-        Ok(decl)
     }
 
     /// Sets all values or none: each is checked before any is stored.
@@ -671,6 +641,93 @@ impl<M: CoSimulation> Instance<M> {
         );
         fmi2Discard
     }
+}
+
+/// Why a value may not be stored, as a message: "<value> for '<name>' (vr <n>) <reason>".
+enum Refusal {
+    /// A rule of the runtime: finite, within the declared bounds, an item of the enumeration.
+    Rule(String),
+    /// The model's own check refused it.
+    Model(String),
+}
+
+/// The rules every value passes before it is stored, whether set through the API or restored
+/// from a serialized state: a finite number, within the declared bounds, an item of its
+/// enumeration, accepted by the model's own check (with the other values of `model`).
+fn refusal<M: CoSimulation>(model: &M, decl: &Variable, value: Value) -> Option<Refusal> {
+    let (name, vr) = (decl.name, decl.value_reference);
+    if let Value::Real(x) = value
+        && !x.is_finite()
+    {
+        return Some(Refusal::Rule(format!(
+            "{x} for '{name}' (vr {vr}) is not a finite number"
+        )));
+    }
+    if let Some(x) = value.as_f64()
+        && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
+    {
+        return Some(Refusal::Rule(format!(
+            "{x} for '{name}' (vr {vr}) is outside {}",
+            range_text(decl)
+        )));
+    }
+    if let (Some(e), Value::Integer(code)) = (decl.enumeration, value)
+        && e.item(code).is_none()
+    {
+        let items: Vec<String> = e.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
+        return Some(Refusal::Rule(format!(
+            "{code} for '{name}' (vr {vr}) is no item of the enumeration {} ({})",
+            e.name,
+            items.join(", ")
+        )));
+    }
+    if let Err(why) = model.check(decl, value) {
+        return Some(Refusal::Model(format!(
+            "{value:?} for '{name}' (vr {vr}) refused: {why}"
+        )));
+    }
+    None
+}
+
+/// What a deserialized state must be before it is accepted: every value as a setter would
+/// accept it, the model's internal state usable, and the runtime's own bookkeeping sound.
+/// (The serialized form's magic, GUID, length and checksum only say who wrote it and that it
+/// is intact, not that its content is one this FMU can run from.)
+pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
+    for decl in M::DESCRIPTION.variables {
+        if let Some(value) = sim.model.get(decl.value_reference)
+            && let Some(Refusal::Rule(why) | Refusal::Model(why)) = refusal(&sim.model, decl, value)
+        {
+            return Err(format!("the state's {why}"));
+        }
+    }
+    if let Some(what) = non_finite(&sim.model) {
+        return Err(format!("in the state, {what}"));
+    }
+    let times = [
+        ("startTime", sim.start_time),
+        ("time", sim.time),
+        ("last successful time", sim.last_successful_time),
+    ];
+    for (what, t) in times {
+        if !t.is_finite() {
+            return Err(format!("the state's {what} = {t} is not finite"));
+        }
+    }
+    if let Some(tol) = sim.tolerance
+        && !(tol.is_finite() && tol > 0.0)
+    {
+        return Err(format!("the state's tolerance = {tol} must be finite and > 0"));
+    }
+    if let Some(stop) = sim.stop_time
+        && !(stop.is_finite() && stop >= sim.start_time)
+    {
+        return Err(format!(
+            "the state's stopTime = {stop} must be finite and not before its startTime = {}",
+            sim.start_time
+        ));
+    }
+    Ok(())
 }
 
 /// `[min, max]` with exclusive ends as `(`/`)`, for messages.

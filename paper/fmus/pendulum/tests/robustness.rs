@@ -220,3 +220,57 @@ fn masses_and_lengths_outside_their_declared_domain_are_refused_naming_them() {
         }
     }
 }
+
+#[test]
+fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused() {
+    use rustfmu::fmi2::instance::Sim;
+    use rustfmu::fmi2::state;
+    let guid = pendulum_fmu::__rustfmu_fmi2_exports::GUID;
+    let mut p = Fmu::new(0.0);
+    assert_eq!(p.set(&[("alpha1", 0.3)]), fmi2OK);
+    assert_eq!(p.exit_init(), fmi2OK);
+    assert_eq!(p.step(1e-3), fmi2OK);
+    // SAFETY: p.c is a live instance; the buffers are as large as passed.
+    let good = unsafe {
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2GetFMUstate(p.c, &mut s), fmi2OK);
+        let mut n = 0;
+        assert_eq!(fmi2SerializedFMUstateSize(p.c, s, &mut n), fmi2OK);
+        let mut bytes = vec![0u8; n];
+        assert_eq!(
+            fmi2SerializeFMUstate(p.c, s, bytes.as_mut_ptr() as *mut fmi2Byte, n),
+            fmi2OK
+        );
+        assert_eq!(fmi2FreeFMUstate(p.c, &mut s), fmi2OK);
+        bytes
+    };
+    type Doctor = fn(&mut Sim<Pendulum>);
+    let cases: [(&str, Doctor, &str); 4] = [
+        ("alpha1 = NaN", |s| s.model.alpha1 = f64::NAN, "NaN for 'alpha1'"),
+        (
+            "m1 = -1",
+            |s| s.model.m1 = -1.0,
+            "-1 for 'm1' (vr 20) is outside (0, inf)",
+        ),
+        (
+            "rtol = -1",
+            |s| s.model.rtol = -1.0,
+            "-1 for 'rtol' (vr 30) is outside [0.00000000000001, 0.1]",
+        ),
+        ("h_next = NaN", |s| s.model.ode.h_next = f64::NAN, "h_next = NaN"),
+    ];
+    for (what, doctor, says) in cases {
+        let mut sim = state::deserialize::<Pendulum>(guid, &good).unwrap();
+        doctor(&mut sim);
+        let bytes = state::serialize(guid, &sim).unwrap();
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: bytes.len() readable bytes; s is an FMUstate slot.
+        let status = unsafe { fmi2DeSerializeFMUstate(p.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s) };
+        assert_eq!(
+            status, fmi2Error,
+            "a state with {what} and a correct checksum was accepted"
+        );
+        assert!(s.is_null());
+        p.assert_logged(fmi2Error, &["fmi2DeSerializeFMUstate", says]);
+    }
+}
