@@ -325,3 +325,164 @@ fn a_deserialized_state_is_checked_like_values_set_through_the_api() {
         fmi2FreeInstance(c);
     }
 }
+
+/// A second model in this binary, not exported (its symbols would clash with the Probe's):
+/// instantiated through the runtime's generic functions, with a GUID of its own.
+mod other {
+    use rustfmu::prelude::*;
+
+    /// Something else entirely.
+    #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+    pub struct Other {
+        /// A name
+        #[variable(vr = 0, parameter, fixed, start = "other")]
+        pub label: String,
+        /// A count
+        #[variable(vr = 1, output, depends = [])]
+        pub n: i32,
+    }
+
+    impl Model for Other {}
+    impl CoSimulation for Other {
+        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+            self.n += 1;
+            Ok(())
+        }
+    }
+
+    pub const GUID: &str = "{00000000-0000-5000-8000-000000000000}";
+}
+
+/// An FMU state made by the Other model, and its instance.
+fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
+    use rustfmu::__private::api;
+    let log: &'static Log = Box::leak(Box::default());
+    let cb = callbacks(collect, log as *const Log as *mut _);
+    let guid = CString::new(other::GUID).unwrap();
+    // SAFETY: valid strings and callbacks that outlive the instance; the generic functions are
+    // what an export of Other would call.
+    unsafe {
+        let c = api::instantiate::<other::Other>(
+            other::GUID,
+            &[],
+            c"other".as_ptr(),
+            fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            cb,
+            fmi2False,
+            fmi2False,
+        );
+        assert!(!c.is_null());
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(api::get_fmu_state::<other::Other>(c, &mut s), fmi2OK);
+        (c, s)
+    }
+}
+
+/// Every state function refuses `s` on `c` with a logged error and leaves c as it was.
+fn assert_every_state_function_refuses(c: fmi2Component, log: &Log, s: fmi2FMUstate, what: &str) {
+    let before = serialized(c);
+    // SAFETY: c is a live instance; s is passed only as the importer would pass it, and the
+    // runtime must not dereference it.
+    unsafe {
+        assert_eq!(fmi2SetFMUstate(c, s), fmi2Error, "fmi2SetFMUstate accepted {what}");
+        assert_logged(log, fmi2Error, &["fmi2SetFMUstate", "not a live state of this FMU"]);
+        let mut n = 0;
+        assert_eq!(fmi2SerializedFMUstateSize(c, s, &mut n), fmi2Error, "size of {what}");
+        assert_logged(log, fmi2Error, &["fmi2SerializedFMUstateSize"]);
+        let mut buf = [0u8; 64];
+        let status = fmi2SerializeFMUstate(c, s, buf.as_mut_ptr() as *mut fmi2Byte, buf.len());
+        assert_eq!(status, fmi2Error, "fmi2SerializeFMUstate of {what}");
+        assert_logged(log, fmi2Error, &["fmi2SerializeFMUstate"]);
+        let mut into = s;
+        assert_eq!(fmi2GetFMUstate(c, &mut into), fmi2Error, "fmi2GetFMUstate into {what}");
+        assert_logged(log, fmi2Error, &["fmi2GetFMUstate"]);
+        let good = serialized(c);
+        let status = fmi2DeSerializeFMUstate(c, good.as_ptr() as *const fmi2Byte, good.len(), &mut into);
+        assert_eq!(status, fmi2Error, "fmi2DeSerializeFMUstate into {what}");
+        assert_logged(log, fmi2Error, &["fmi2DeSerializeFMUstate"]);
+        let mut freed = s;
+        assert_eq!(fmi2FreeFMUstate(c, &mut freed), fmi2Error, "fmi2FreeFMUstate of {what}");
+        assert_logged(log, fmi2Error, &["fmi2FreeFMUstate", "not a live state of this FMU"]);
+        assert_eq!(
+            (into, freed),
+            (s, s),
+            "{what}: a refused call changed the importer's pointer"
+        );
+    }
+    assert_eq!(serialized(c), before, "{what}: a refused call changed the instance");
+    // And it still works.
+    // SAFETY: c is a live instance.
+    let mut t = f64::NAN;
+    unsafe {
+        assert_eq!(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &mut t), fmi2OK);
+        assert_eq!(fmi2DoStep(c, t, 0.1, fmi2True), fmi2OK, "{what}: {:?}", log.take());
+    }
+}
+
+#[test]
+fn a_state_of_another_model_is_refused_by_every_state_function() {
+    let (c, log) = initialized(1.0);
+    let (other, mut s) = state_of_another_model();
+    assert_every_state_function_refuses(c, log, s, "a state of another model and GUID");
+    // SAFETY: s is the Other instance's live state, freed once by it.
+    unsafe {
+        assert_eq!(
+            rustfmu::__private::api::free_fmu_state::<other::Other>(other, &mut s),
+            fmi2OK
+        );
+        rustfmu::__private::api::free_instance::<other::Other>(other);
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn garbage_and_made_up_pointers_are_refused_without_being_dereferenced() {
+    let (c, log) = initialized(1.0);
+    let garbage: &'static mut [u64; 64] = Box::leak(Box::new([0xdead_beef_dead_beef; 64]));
+    let copy = *garbage;
+    assert_every_state_function_refuses(c, log, garbage.as_mut_ptr() as fmi2FMUstate, "a pointer to garbage");
+    assert_eq!(*garbage, copy, "the runtime wrote to memory it does not own");
+    for made_up in [1usize, 0x1000, usize::MAX - 7] {
+        assert_every_state_function_refuses(c, log, made_up as fmi2FMUstate, &format!("pointer {made_up:#x}"));
+    }
+    // SAFETY: from fmi2Instantiate, freed once.
+    unsafe { fmi2FreeInstance(c) };
+}
+
+#[test]
+fn a_freed_state_is_refused_and_cannot_be_freed_twice() {
+    let (c, log) = initialized(1.0);
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    // SAFETY: c is a live instance.
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(c, &mut s), fmi2OK);
+        let freed = s;
+        assert_eq!(fmi2FreeFMUstate(c, &mut s), fmi2OK);
+        assert!(s.is_null(), "fmi2FreeFMUstate sets the pointer to NULL");
+        assert_every_state_function_refuses(c, log, freed, "a freed state");
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn a_state_of_another_instance_of_the_same_fmu_is_accepted() {
+    let (a, _) = initialized(1.0);
+    let (b, log_b) = initialized(2.0);
+    // SAFETY: live instances; s is a's state, freed once.
+    unsafe {
+        assert_eq!(fmi2DoStep(a, 0.0, 0.5, fmi2True), fmi2OK);
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2GetFMUstate(a, &mut s), fmi2OK);
+        assert_eq!(fmi2SetFMUstate(b, s), fmi2OK, "{:?}", log_b.take());
+        assert_eq!(serialized(b), serialized(a));
+        assert_eq!(
+            fmi2FreeFMUstate(b, &mut s),
+            fmi2OK,
+            "any instance of the FMU may free it"
+        );
+        fmi2FreeInstance(a);
+        fmi2FreeInstance(b);
+    }
+}

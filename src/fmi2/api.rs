@@ -8,6 +8,7 @@
 use super::abi::*;
 use super::instance::{Call, Instance, State};
 use super::logging::Logger;
+use super::snapshots;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
 use std::ffi::CStr;
@@ -397,14 +398,15 @@ pub unsafe fn get_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2F
             if state.is_null() {
                 return inst.error("fmi2GetFMUstate: FMUstate is NULL");
             }
-            let existing = *state as *mut super::instance::Sim<M>;
-            if existing.is_null() {
-                *state = Box::into_raw(Box::new(inst.sim.clone())) as fmi2FMUstate;
-            } else {
-                // SAFETY: a non-NULL *FMUstate is one this FMU handed out before (standard).
-                (*existing).clone_from(&inst.sim);
+            if (*state).is_null() {
+                *state = snapshots::adopt(inst.guid, inst.sim.clone());
+                return fmi2OK;
             }
-            fmi2OK
+            // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
+            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!("fmi2GetFMUstate: *FMUstate: {why}; refused, nothing changed")),
+            }
         })
     }
 }
@@ -415,22 +417,27 @@ pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUsta
             if state.is_null() {
                 return inst.error("fmi2SetFMUstate: FMUstate is NULL");
             }
-            // SAFETY: handed out by fmi2GetFMUstate or fmi2DeSerializeFMUstate of this FMU.
-            inst.sim.clone_from(&*(state as *const super::instance::Sim<M>));
-            fmi2OK
+            match snapshots::with::<M, _>(inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
+            }
         })
     }
 }
 
 pub unsafe fn free_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |_inst| {
-            if !state.is_null() && !(*state).is_null() {
-                // SAFETY: a Box<Sim<M>> handed out by this FMU, freed once.
-                drop(Box::from_raw(*state as *mut super::instance::Sim<M>));
-                *state = ptr::null_mut();
+        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |inst| {
+            if state.is_null() || (*state).is_null() {
+                return fmi2OK;
             }
-            fmi2OK
+            match snapshots::release::<M>(inst.guid, *state) {
+                Ok(()) => {
+                    *state = ptr::null_mut();
+                    fmi2OK
+                }
+                Err(why) => inst.error(&format!("fmi2FreeFMUstate: {why}; refused, nothing freed")),
+            }
         })
     }
 }
@@ -445,12 +452,12 @@ pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
             if state.is_null() || size.is_null() {
                 return inst.error("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
             }
-            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
-                Ok(bytes) => {
+            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
+                Ok(Ok(bytes)) => {
                     *size = bytes.len();
                     fmi2OK
                 }
-                Err(e) => inst.error(&format!("fmi2SerializedFMUstateSize: {e}")),
+                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializedFMUstateSize: {why}")),
             }
         })
     }
@@ -467,17 +474,17 @@ pub unsafe fn serialize_fmu_state<M: CoSimulation>(
             if state.is_null() || bytes.is_null() {
                 return inst.error("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
             }
-            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
-                Ok(data) if data.len() == size => {
+            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
+                Ok(Ok(data)) if data.len() == size => {
                     ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
                     fmi2OK
                 }
-                Ok(data) => inst.error(&format!(
+                Ok(Ok(data)) => inst.error(&format!(
                     "fmi2SerializeFMUstate: size = {size}, but the state takes {} bytes \
                      (ask fmi2SerializedFMUstateSize)",
                     data.len()
                 )),
-                Err(e) => inst.error(&format!("fmi2SerializeFMUstate: {e}")),
+                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializeFMUstate: {why}")),
             }
         })
     }
@@ -501,17 +508,19 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
             };
             let restored = super::state::deserialize::<M>(inst.guid, data)
                 .and_then(|sim| super::instance::check_restored(&sim).map(|()| sim));
-            match restored {
-                Ok(sim) => {
-                    let existing = *state as *mut super::instance::Sim<M>;
-                    if existing.is_null() {
-                        *state = Box::into_raw(Box::new(sim)) as fmi2FMUstate;
-                    } else {
-                        *existing = sim;
-                    }
-                    fmi2OK
-                }
-                Err(e) => inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
+            let sim = match restored {
+                Ok(sim) => sim,
+                Err(e) => return inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
+            };
+            if (*state).is_null() {
+                *state = snapshots::adopt(inst.guid, sim);
+                return fmi2OK;
+            }
+            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim = sim) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!(
+                    "fmi2DeSerializeFMUstate: *FMUstate: {why}; refused, nothing changed"
+                )),
             }
         })
     }
