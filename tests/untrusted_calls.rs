@@ -486,3 +486,103 @@ fn a_state_of_another_instance_of_the_same_fmu_is_accepted() {
         fmi2FreeInstance(b);
     }
 }
+
+/// A call an importer's callback makes on an instance.
+type Nested = fn(fmi2Component) -> fmi2Status;
+
+/// A logger that, when armed, calls back into the instance that is logging.
+#[derive(Default)]
+struct Reentrant {
+    log: Log,
+    component: std::sync::atomic::AtomicPtr<std::ffi::c_void>,
+    /// The nested call to make on the next message, once.
+    armed: Mutex<Option<Nested>>,
+    nested: Mutex<Vec<fmi2Status>>,
+}
+
+unsafe extern "C" fn reenter(
+    env: fmi2ComponentEnvironment,
+    name: fmi2String,
+    status: fmi2Status,
+    category: fmi2String,
+    message: fmi2String,
+    text: *const c_char,
+) {
+    // SAFETY: env is the leaked Reentrant of the instance; its Log is its first use.
+    let r = unsafe { &*(env as *const Reentrant) };
+    // SAFETY: as in `collect`.
+    unsafe { collect(&r.log as *const Log as *mut _, name, status, category, message, text) };
+    let call = r.armed.lock().unwrap().take();
+    if let Some(call) = call {
+        let c = r.component.load(std::sync::atomic::Ordering::SeqCst);
+        let s = call(c);
+        r.nested.lock().unwrap().push(s);
+    }
+}
+
+#[test]
+fn a_call_into_an_instance_from_inside_a_call_into_it_is_refused() {
+    let r: &'static Reentrant = Box::leak(Box::default());
+    let cb = callbacks(reenter, r as *const Reentrant as *mut _);
+    let guid = CString::new(probe::__rustfmu_fmi2_exports::GUID).unwrap();
+    // SAFETY: fmi2 calls on a live instance, with arrays of one; the nested ones are the point.
+    let nested_calls: [(&str, Nested); 6] = [
+        ("fmi2DoStep", |c| unsafe { fmi2DoStep(c, 0.0, 1e-3, fmi2True) }),
+        ("fmi2SetReal", |c| unsafe { fmi2SetReal(c, &0, 1, &5.0) }),
+        ("fmi2GetReal", |c| {
+            let mut y = 0.0;
+            unsafe { fmi2GetReal(c, &1, 1, &mut y) }
+        }),
+        ("fmi2GetFMUstate", |c| {
+            let mut s: fmi2FMUstate = std::ptr::null_mut();
+            unsafe { fmi2GetFMUstate(c, &mut s) }
+        }),
+        ("fmi2Reset", |c| unsafe { fmi2Reset(c) }),
+        // No status: the steps after it show that the instance was not freed.
+        ("fmi2FreeInstance", |c| {
+            unsafe { fmi2FreeInstance(c) };
+            fmi2Error
+        }),
+    ];
+    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    unsafe {
+        let c = fmi2Instantiate(
+            c"probe".as_ptr(),
+            fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            cb,
+            fmi2False,
+            fmi2True,
+        );
+        assert!(!c.is_null());
+        r.component.store(c, std::sync::atomic::Ordering::SeqCst);
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        assert_eq!(fmi2SetReal(c, &0, 1, &1.0), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
+        r.log.take();
+        let mut t = 0.0;
+        for (name, call) in nested_calls {
+            // The Probe logs "stepping" inside every fmi2DoStep: the logger then makes the call.
+            *r.armed.lock().unwrap() = Some(call);
+            assert_eq!(fmi2DoStep(c, t, 1e-3, fmi2True), fmi2OK, "the outer step itself");
+            t += 1e-3;
+            assert_eq!(
+                r.nested.lock().unwrap().pop(),
+                Some(fmi2Error),
+                "{name} from the logger, inside fmi2DoStep on the same instance"
+            );
+            assert_logged(
+                &r.log,
+                fmi2Error,
+                &[name, "while a call into this instance is still running"],
+            );
+            assert_eq!(last_successful_time(c), t, "after the step with a nested {name}");
+        }
+        // One step of 1 ms per outer call, with u = 1 throughout: acc = 6 ms, not more.
+        let acc = (0..6).fold(0.0f64, |acc, _| acc + 1.0 * 1e-3);
+        let (_, y) = get_reals(c, &[1]);
+        assert_eq!(y, [acc.atan()], "the nested calls changed the instance");
+        fmi2FreeInstance(c);
+    }
+}

@@ -7,13 +7,15 @@
 
 use super::abi::*;
 use super::instance::{Call, Instance, State};
-use super::logging::Logger;
+use super::logging::{Category, Logger};
 use super::snapshots;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
+use std::cell::UnsafeCell;
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -23,6 +25,20 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     } else {
         "panic".into()
     }
+}
+
+/// What fmi2Instantiate hands out as the `fmi2Component`: the instance, and what a call needs
+/// before it may touch it.
+pub struct Component<M: CoSimulation> {
+    /// Set while a call is inside the instance. A call that arrives meanwhile (made by the
+    /// importer's logger during that call, or from another thread) is refused: it would work on
+    /// an instance in the middle of a change (a nested fmi2DoStep advanced the model twice
+    /// while the clock said once).
+    busy: AtomicBool,
+    /// Logs those refusals. A copy taken at instantiation: error messages pass the logger
+    /// whatever its switches, so later fmi2SetDebugLogging calls do not matter to it.
+    refusals: Logger,
+    instance: UnsafeCell<Instance<M>>,
 }
 
 /// Runs `f` on the instance behind `c`, after the state check for `call`.
@@ -36,17 +52,32 @@ unsafe fn with_instance<M: CoSimulation>(
     if c.is_null() {
         return fmi2Error;
     }
-    let instance = c as *mut Instance<M>;
+    // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and that
+    // was not freed (the standard forbids any other). Only shared: a call already inside holds
+    // the instance, which is in the UnsafeCell.
+    let component = unsafe { &*(c as *const Component<M>) };
+    if component.busy.swap(true, Ordering::Acquire) {
+        component.refusals.log(
+            fmi2Error,
+            Category::StatusError,
+            &format!(
+                "{function}: called while a call into this instance is still running (from a \
+                 callback of that call, or from another thread); refused, nothing changed"
+            ),
+        );
+        return fmi2Error;
+    }
+    let instance = component.instance.get();
     let result = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and
-        // that was not freed (the standard forbids any other); calls on it are not concurrent.
+        // SAFETY: this call set `busy`, so no other reference to the instance exists until it
+        // clears it below.
         let inst = unsafe { &mut *instance };
         match inst.check_state(call, function) {
             Ok(()) => f(inst),
             Err(status) => status,
         }
     }));
-    match result {
+    let status = match result {
         Ok(status) => status,
         Err(payload) => {
             let what = panic_text(&*payload);
@@ -55,7 +86,9 @@ unsafe fn with_instance<M: CoSimulation>(
             let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
             fmi2Fatal
         }
-    }
+    };
+    component.busy.store(false, Ordering::Release);
+    status
 }
 
 /// An importer's array argument: NULL is fine only when it is empty.
@@ -129,11 +162,7 @@ pub unsafe fn instantiate<M: CoSimulation>(
             return ptr::null_mut();
         };
         let refuse = |why: String| {
-            logger.log(
-                fmi2Error,
-                super::logging::Category::StatusError,
-                &format!("fmi2Instantiate: {why}"),
-            );
+            logger.log(fmi2Error, Category::StatusError, &format!("fmi2Instantiate: {why}"));
             ptr::null_mut()
         };
         match name.as_deref() {
@@ -176,7 +205,11 @@ pub unsafe fn instantiate<M: CoSimulation>(
             Some(None) => format!("resourceLocation {resources:?} is not a file URI; no resources are needed"),
             None => "resourceLocation is NULL; no resources are needed".into(),
         });
-        Box::into_raw(Box::new(inst)) as fmi2Component
+        Box::into_raw(Box::new(Component {
+            busy: AtomicBool::new(false),
+            refusals: inst.logger.clone(),
+            instance: UnsafeCell::new(inst),
+        })) as fmi2Component
     }));
     made.unwrap_or(ptr::null_mut())
 }
@@ -186,8 +219,20 @@ pub unsafe fn free_instance<M: CoSimulation>(c: fmi2Component) {
         return;
     }
     let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: returned by fmi2Instantiate as a Box<Instance<M>>, freed once (standard).
-        drop(unsafe { Box::from_raw(c as *mut Instance<M>) });
+        // SAFETY: returned by fmi2Instantiate as a Box<Component<M>> and not freed (standard).
+        let component = unsafe { &*(c as *const Component<M>) };
+        if component.busy.swap(true, Ordering::Acquire) {
+            // Freeing it now would pull the instance from under the call that is running.
+            component.refusals.log(
+                fmi2Error,
+                Category::StatusError,
+                "fmi2FreeInstance: called while a call into this instance is still running; \
+                 the instance is not freed",
+            );
+            return;
+        }
+        // SAFETY: as above, and no call is inside: freed once.
+        drop(unsafe { Box::from_raw(c as *mut Component<M>) });
     }));
 }
 
@@ -663,8 +708,9 @@ pub unsafe fn get_string_status<M: CoSimulation>(
     }
 }
 
-/// The state an instance is in, for tests written against the runtime in Rust.
+/// The state an instance is in, for tests written against the runtime in Rust (not while a
+/// call is inside it).
 pub unsafe fn state_of<M: CoSimulation>(c: fmi2Component) -> Option<State> {
-    // SAFETY: as in `with_instance`.
-    unsafe { (c as *const Instance<M>).as_ref().map(|i| i.state()) }
+    // SAFETY: as in `with_instance`; no call is inside (the caller's promise).
+    unsafe { (c as *const Component<M>).as_ref().map(|c| (*c.instance.get()).state()) }
 }
