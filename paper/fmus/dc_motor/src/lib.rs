@@ -98,7 +98,7 @@ impl Model for DcMotor {
 }
 
 impl CoSimulation for DcMotor {
-    fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
         let p = self.params();
         let s = DcMotorState {
             i: self.i,
@@ -107,7 +107,10 @@ impl CoSimulation for DcMotor {
         let next = if self.coupled {
             p.step_coupled(&s, self.U, self.omega, h)
         } else {
-            p.step_free(&s, self.U, h)
+            p.step_free(&s, self.U, h).map_err(|message| StepFailure {
+                reached_time: t,
+                message,
+            })?
         };
         self.set_state(&p, &next);
         Ok(())
