@@ -643,7 +643,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 }
 
-/// Why a value may not be stored, as a message: "<value> for '<name>' (vr <n>) <reason>".
+/// Why a value may not be stored, as a message: `<value> for '<name>' (vr <n>) <reason>`.
 enum Refusal {
     /// A rule of the runtime: finite, within the declared bounds, an item of the enumeration.
     Rule(String),
