@@ -157,26 +157,33 @@ pub struct Instance<M: CoSimulation> {
     strings: Vec<CString>,
 }
 
-/// The first Real variable, or the first part of the internal state, of `model` that is not
-/// finite, described for a message. The one check every value computed by a model passes
-/// before it may leave under fmi2OK: after initialization, after every step and parameter
-/// change, and on every deserialized state.
+/// The first Real variable the model computes (output, local, calculated parameter), or the
+/// first part of its internal state, that is not finite, described for a message. The one
+/// check every value computed by a model passes before it may leave under fmi2OK: after
+/// initialization, after every step and parameter change, and on every deserialized state
+/// (inputs and parameters pass the setters' checks when they are set).
+#[inline]
 pub fn non_finite<M: CoSimulation>(model: &M) -> Option<String> {
-    for v in M::DESCRIPTION.variables {
-        if v.var_type == VarType::Real
-            && let Some(Value::Real(x)) = model.get(v.value_reference)
-            && !x.is_finite()
-        {
-            return Some(format!(
-                "'{}' (vr {}) = {x} is not a finite number",
-                v.name, v.value_reference
-            ));
-        }
+    match (model.non_finite_computed(), model.check_internal_state()) {
+        (None, Ok(())) => None,
+        (index, internal) => Some(describe_non_finite(model, index, internal)),
     }
-    model
-        .check_internal_state()
-        .err()
-        .map(|why| format!("the model's internal state is unusable: {why}"))
+}
+
+#[cold]
+fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, internal: Result<(), String>) -> String {
+    if let Some(i) = index {
+        let v = &M::DESCRIPTION.variables[i];
+        let x = model
+            .get(v.value_reference)
+            .and_then(|x| x.as_f64())
+            .unwrap_or(f64::NAN);
+        return format!("'{}' (vr {}) = {x} is not a finite number", v.name, v.value_reference);
+    }
+    format!(
+        "the model's internal state is unusable: {}",
+        internal.err().unwrap_or_default()
+    )
 }
 
 type Outcome = Result<(), fmi2Status>;

@@ -9,6 +9,7 @@
 
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
 
 /// Relative and absolute error tolerances, per component: err_i / (atol + rtol·|x_i|) ≤ 1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -142,7 +143,23 @@ fn error_norm<const N: usize>(
 impl Dopri5 {
     /// Refuses a memory the integrator cannot run on (one restored from outside, say), naming
     /// the field.
+    #[inline]
     pub fn validate(&self) -> Result<(), String> {
+        // The runtime asks after every step: the common answer first, without the loops.
+        let usable = |v: f64| v.is_finite() && v >= 0.0;
+        if usable(self.h_next)
+            && usable(self.h_max)
+            && self.err_old.is_finite()
+            && self.err_old > 0.0
+            && self.max_steps > 0
+        {
+            return Ok(());
+        }
+        self.unusable()
+    }
+
+    #[cold]
+    fn unusable(&self) -> Result<(), String> {
         for (name, v) in [("h_next", self.h_next), ("h_max", self.h_max)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("the integrator's {name} = {v} must be finite and >= 0"));
@@ -275,16 +292,23 @@ impl Dopri5 {
             }
 
             if err <= 1.0 {
-                // PI controller on accepted steps.
-                let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
-                let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                // From the step just taken: a last step cut short to land on span supports
-                // only its own size times the factor (scaling the longer proposal instead
-                // grew it tenfold on every communication step, to infinity).
-                let mut h_new = h / fac;
-                if reject {
-                    h_new = h_new.min(h_proposed);
-                }
+                // A last step keeps the larger proposal (below). When a lower bound of the
+                // controller's factor already shows that its growth cannot reach the proposal,
+                // its two powers cannot change the outcome and are not computed (they were a
+                // tenth of the Pendulum's time per step).
+                let keeps_proposal = last && keeps(h, h_proposed, err, self.err_old);
+                let h_new = if keeps_proposal {
+                    h_proposed
+                } else {
+                    // PI controller on accepted steps.
+                    let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
+                    let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                    // From the step just taken: a last step cut short to land on span supports
+                    // only its own size times the factor (scaling the longer proposal instead
+                    // grew it tenfold on every communication step, to infinity).
+                    let h_new = h / fac;
+                    if reject { h_new.min(h_proposed) } else { h_new }
+                };
                 self.err_old = err.max(1e-4);
                 self.stats.accepted_steps += 1;
                 s = if last { span } else { s + h };
@@ -305,10 +329,48 @@ impl Dopri5 {
     }
 }
 
+/// Whether the PI controller's proposal after a last step of `h` with error `err` (previous
+/// `err_old`) is sure to be below `h_proposed`, so that the step keeps `h_proposed`, decided
+/// without the controller's `powf` calls.
+///
+/// The controller computes fac = clamp((max(err, 1e-10)^α / err_old^β) / SAFETY, 1/FAC_MAX,
+/// 1/FAC_MIN) and proposes h / fac. With 2^n ≤ max(err, 1e-10) and err_old ≤ 2^m, powers being
+/// increasing, fac before the clamp is at least lo = (2^n)^α / (2^m)^β / SAFETY (tabulated),
+/// less a margin of 1e-9 that covers the rounding of pow (< 1 ulp) and of the quotients many
+/// times over; so fac ≥ clamp(lo) and, division rounding monotonically, h / fac ≤ h / clamp(lo).
+/// `tests::keeps_agrees_with_the_controller` checks it against the computed proposal.
+fn keeps(h: f64, h_proposed: f64, err: f64, err_old: f64) -> bool {
+    /// (2^-i)^α and (2^(1-i))^β.
+    struct Powers {
+        alpha: [f64; 35],
+        beta: [f64; 50],
+    }
+    static POWERS: OnceLock<Powers> = OnceLock::new();
+    let exponent = |x: f64| ((x.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+    let e = err.max(1e-10);
+    if !(e <= 1.0 && err_old.is_normal() && err_old > 0.0 && err_old <= 1.0) {
+        return false;
+    }
+    let (n, m) = (exponent(e), exponent(err_old) + 1);
+    if !(-34..=0).contains(&n) || !(-48..=1).contains(&m) {
+        return false;
+    }
+    let p = POWERS.get_or_init(|| Powers {
+        alpha: std::array::from_fn(|i| (2f64).powi(-(i as i32)).powf(ALPHA)),
+        beta: std::array::from_fn(|i| (2f64).powi(1 - i as i32).powf(BETA)),
+    });
+    let lo = p.alpha[(-n) as usize] / p.beta[(1 - m) as usize] / SAFETY * (1.0 - 1e-9);
+    h_proposed >= h / lo.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN)
+}
+
 /// A step `h` at time `s` (since the start of the span) that time resolution cannot resolve:
-/// relative to the local time, never to the absolute one.
+/// relative to the local time, never to the absolute one: |h| <= 16 eps max(|s|, 1e-300).
+/// Both sides are scaled by 2^64 (exactly), because near s = 0 the bound itself is subnormal
+/// (3.6e-315), and a subnormal product costs a microcode assist of some hundred cycles, at the
+/// start of every span.
 fn too_small(h: f64, s: f64) -> bool {
-    h.abs() <= 16.0 * f64::EPSILON * s.abs().max(1e-300)
+    const TWO_POW_64: f64 = 18_446_744_073_709_551_616.0;
+    h.abs() * TWO_POW_64 <= (16.0 * f64::EPSILON * TWO_POW_64) * s.abs().max(1e-300)
 }
 
 #[cfg(test)]
@@ -384,6 +446,46 @@ mod tests {
         let r = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], 1.0), 0.0, 1e-3, &mut x, tol);
         assert_eq!(r, Ok(()), "after {:?}", ode.stats);
         assert!((x[0] - 0.5e-6).abs() < 1e-14 && (x[1] - 1e-3).abs() < 1e-14, "x = {x}");
+    }
+
+    #[test]
+    fn keeps_agrees_with_the_controller() {
+        // Whenever `keeps` skips the controller, the controller's own proposal after a last
+        // step, max(h / fac, h_proposed) (min with h_proposed first after a rejection), is
+        // h_proposed to the bit. Random errors over their whole range, and proposals around
+        // the boundary.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut kept, mut cases) = (0, 0);
+        for _ in 0..200_000 {
+            let err = 10f64.powf(-12.0 * uniform());
+            let err_old = 10f64.powf(-5.0 * uniform()).max(1e-4);
+            let h = 10f64.powf(-6.0 * uniform());
+            let fac = (err.max(1e-10).powf(ALPHA) / err_old.powf(BETA)) / SAFETY;
+            let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+            let h_new = h / fac;
+            for scale in [0.999, 1.0, 1.0 + 1e-15, 1.001, 1.1, 2.0] {
+                let h_proposed = h_new * scale;
+                cases += 1;
+                if keeps(h, h_proposed, err, err_old) {
+                    kept += 1;
+                    for reject in [false, true] {
+                        let h_new = if reject { h_new.min(h_proposed) } else { h_new };
+                        assert_eq!(
+                            h_new.max(h_proposed).to_bits(),
+                            h_proposed.to_bits(),
+                            "err {err:e}, err_old {err_old:e}, h {h:e}: kept {h_proposed:e}, the controller gives {h_new:e}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(kept > cases / 3, "the shortcut should apply often: {kept} of {cases}");
     }
 
     #[test]
