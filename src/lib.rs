@@ -35,9 +35,12 @@
 //!
 //! What the runtime does for every model: the FMI 2.0 state machine; all-or-nothing argument
 //! checks (unknown value references, NULL arrays, NaN and infinite values, values outside the
-//! declared bounds, variables that cannot be set in the current state); logging through the
-//! importer's logger (always with `"%s"`); versioned, checked FMU state get/set/serialize;
-//! the GUID; `catch_unwind` at every entry point. The declaration attributes are documented in
+//! declared bounds, variables that cannot be set in the current state); no non-finite value
+//! under fmi2OK (every Real variable and [`Model::check_internal_state`] after initialization,
+//! every step and every parameter change); logging through the importer's logger (always with
+//! `"%s"`); versioned, checked FMU state get/set/serialize (only live states this FMU made are
+//! accepted, and deserialized content passes the setters' checks); refusal of a call into an
+//! instance while another call is inside it; the GUID; `catch_unwind` at every entry point. The declaration attributes are documented in
 //! `docs/declarations.md` and on [`macro@Model`].
 
 extern crate self as rustfmu;

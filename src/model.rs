@@ -23,6 +23,17 @@ pub trait Variables: Sized {
     fn set(&mut self, vr: u32, value: Value) -> bool;
     fn get_string(&self, vr: u32) -> Option<&str>;
     fn set_string(&mut self, vr: u32, value: &str) -> bool;
+    /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the first Real variable
+    /// the model computes (output, local, calculated parameter) whose value is not finite.
+    /// Generated as one test per such field: the runtime asks after every step.
+    fn non_finite_computed(&self) -> Option<usize> {
+        use crate::description::{Causality, VarType};
+        Self::DESCRIPTION.variables.iter().position(|v| {
+            v.var_type == VarType::Real
+                && !matches!(v.causality, Causality::Input | Causality::Parameter)
+                && matches!(self.get(v.value_reference), Some(Value::Real(x)) if !x.is_finite())
+        })
+    }
 }
 
 /// What the runtime tells a model, and how a model logs.
@@ -105,6 +116,15 @@ pub trait Model: Variables + Clone + Serialize + DeserializeOwned + Send + 'stat
 
     /// A tunable parameter was set between steps; recompute what depends on it.
     fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Checks what the model keeps besides its variables (integrator memory, filter states):
+    /// `Err` names what is not finite or otherwise unusable. The runtime checks every Real
+    /// variable itself; it calls this after initialization, after every step and parameter
+    /// change, and on every deserialized state, and no value leaves under fmi2OK unless both
+    /// checks pass.
+    fn check_internal_state(&self) -> Result<(), String> {
         Ok(())
     }
 }

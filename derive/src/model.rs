@@ -893,6 +893,25 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
         let (f, vr) = (&v.field, v.vr);
         quote!(#vr => { self.#f = ::std::string::String::from(value); true })
     });
+    // The Real variables the model computes (inputs and parameters are checked when set): the
+    // runtime asks after every step.
+    let computed: Vec<(usize, &Ident)> = vars
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| {
+            v.kind == Kind::Real
+                && matches!(
+                    v.causality,
+                    Causality::Output | Causality::Local | Causality::CalculatedParameter | Causality::Independent
+                )
+        })
+        .map(|(i, v)| (i, &v.field))
+        .collect();
+    let finite_checks = computed.iter().map(|(i, f)| {
+        quote!(if !::core::primitive::f64::is_finite(self.#f) {
+            return ::core::option::Option::Some(#i);
+        })
+    });
     // Checks that need the values of the declarations (start within bounds, integral bounds
     // for Integers), evaluated at compile time and reported at the field.
     let value_checks = vars.iter().enumerate().map(|(i, v)| {
@@ -971,6 +990,14 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
                     #(#set_arms,)*
                     _ => false,
                 }
+            }
+
+            #[inline]
+            fn non_finite_computed(&self) -> ::core::option::Option<usize> {
+                // One scalar test per field (an OR of them all, vectorized, read the fields the
+                // step had just written through wider loads and stalled store forwarding).
+                #(#finite_checks)*
+                ::core::option::Option::None
             }
 
             fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {

@@ -7,12 +7,15 @@
 
 use super::abi::*;
 use super::instance::{Call, Instance, State};
-use super::logging::Logger;
+use super::logging::{Category, Logger};
+use super::snapshots;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
+use std::cell::UnsafeCell;
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -22,6 +25,20 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     } else {
         "panic".into()
     }
+}
+
+/// What fmi2Instantiate hands out as the `fmi2Component`: the instance, and what a call needs
+/// before it may touch it.
+pub struct Component<M: CoSimulation> {
+    /// Set while a call is inside the instance. A call that arrives meanwhile (made by the
+    /// importer's logger during that call, or from another thread) is refused: it would work on
+    /// an instance in the middle of a change (a nested fmi2DoStep advanced the model twice
+    /// while the clock said once).
+    busy: AtomicBool,
+    /// Logs those refusals. A copy taken at instantiation: error messages pass the logger
+    /// whatever its switches, so later fmi2SetDebugLogging calls do not matter to it.
+    refusals: Logger,
+    instance: UnsafeCell<Instance<M>>,
 }
 
 /// Runs `f` on the instance behind `c`, after the state check for `call`.
@@ -35,17 +52,32 @@ unsafe fn with_instance<M: CoSimulation>(
     if c.is_null() {
         return fmi2Error;
     }
-    let instance = c as *mut Instance<M>;
+    // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and that
+    // was not freed (the standard forbids any other). Only shared: a call already inside holds
+    // the instance, which is in the UnsafeCell.
+    let component = unsafe { &*(c as *const Component<M>) };
+    if component.busy.swap(true, Ordering::Acquire) {
+        component.refusals.log(
+            fmi2Error,
+            Category::StatusError,
+            &format!(
+                "{function}: called while a call into this instance is still running (from a \
+                 callback of that call, or from another thread); refused, nothing changed"
+            ),
+        );
+        return fmi2Error;
+    }
+    let instance = component.instance.get();
     let result = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and
-        // that was not freed (the standard forbids any other); calls on it are not concurrent.
+        // SAFETY: this call set `busy`, so no other reference to the instance exists until it
+        // clears it below.
         let inst = unsafe { &mut *instance };
         match inst.check_state(call, function) {
             Ok(()) => f(inst),
             Err(status) => status,
         }
     }));
-    match result {
+    let status = match result {
         Ok(status) => status,
         Err(payload) => {
             let what = panic_text(&*payload);
@@ -54,7 +86,9 @@ unsafe fn with_instance<M: CoSimulation>(
             let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
             fmi2Fatal
         }
-    }
+    };
+    component.busy.store(false, Ordering::Release);
+    status
 }
 
 /// An importer's array argument: NULL is fine only when it is empty.
@@ -128,16 +162,19 @@ pub unsafe fn instantiate<M: CoSimulation>(
             return ptr::null_mut();
         };
         let refuse = |why: String| {
-            logger.log(
-                fmi2Error,
-                super::logging::Category::StatusError,
-                &format!("fmi2Instantiate: {why}"),
-            );
+            logger.log(fmi2Error, Category::StatusError, &format!("fmi2Instantiate: {why}"));
             ptr::null_mut()
         };
         match name.as_deref() {
             None => return refuse("instanceName is NULL; an instance needs a name".into()),
             Some("") => return refuse("instanceName is empty; an instance needs a name".into()),
+            // FMI 2.0, 2.1.5: "a non-empty string ... at least one non-white-space character".
+            Some(n) if n.trim().is_empty() => {
+                return refuse(format!(
+                    "instanceName {n:?} is only white space; an instance needs a name with at least one \
+                     non-white-space character (FMI 2.0, 2.1.5)"
+                ));
+            }
             Some(_) => {}
         }
         if fmu_type != fmi2CoSimulation {
@@ -177,7 +214,11 @@ pub unsafe fn instantiate<M: CoSimulation>(
             Some(None) => format!("resourceLocation {resources:?} is not a file URI (the model sees no resources)"),
             None => "resourceLocation is NULL (the model sees no resources)".into(),
         });
-        Box::into_raw(Box::new(inst)) as fmi2Component
+        Box::into_raw(Box::new(Component {
+            busy: AtomicBool::new(false),
+            refusals: inst.logger.clone(),
+            instance: UnsafeCell::new(inst),
+        })) as fmi2Component
     }));
     made.unwrap_or(ptr::null_mut())
 }
@@ -187,8 +228,20 @@ pub unsafe fn free_instance<M: CoSimulation>(c: fmi2Component) {
         return;
     }
     let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: returned by fmi2Instantiate as a Box<Instance<M>>, freed once (standard).
-        drop(unsafe { Box::from_raw(c as *mut Instance<M>) });
+        // SAFETY: returned by fmi2Instantiate as a Box<Component<M>> and not freed (standard).
+        let component = unsafe { &*(c as *const Component<M>) };
+        if component.busy.swap(true, Ordering::Acquire) {
+            // Freeing it now would pull the instance from under the call that is running.
+            component.refusals.log(
+                fmi2Error,
+                Category::StatusError,
+                "fmi2FreeInstance: called while a call into this instance is still running; \
+                 the instance is not freed",
+            );
+            return;
+        }
+        // SAFETY: as above, and no call is inside: freed once.
+        drop(unsafe { Box::from_raw(c as *mut Component<M>) });
     }));
 }
 
@@ -399,14 +452,15 @@ pub unsafe fn get_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2F
             if state.is_null() {
                 return inst.error("fmi2GetFMUstate: FMUstate is NULL");
             }
-            let existing = *state as *mut super::instance::Sim<M>;
-            if existing.is_null() {
-                *state = Box::into_raw(Box::new(inst.sim.clone())) as fmi2FMUstate;
-            } else {
-                // SAFETY: a non-NULL *FMUstate is one this FMU handed out before (standard).
-                (*existing).clone_from(&inst.sim);
+            if (*state).is_null() {
+                *state = snapshots::adopt(inst.guid, inst.sim.clone());
+                return fmi2OK;
             }
-            fmi2OK
+            // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
+            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!("fmi2GetFMUstate: *FMUstate: {why}; refused, nothing changed")),
+            }
         })
     }
 }
@@ -417,22 +471,27 @@ pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUsta
             if state.is_null() {
                 return inst.error("fmi2SetFMUstate: FMUstate is NULL");
             }
-            // SAFETY: handed out by fmi2GetFMUstate or fmi2DeSerializeFMUstate of this FMU.
-            inst.sim.clone_from(&*(state as *const super::instance::Sim<M>));
-            fmi2OK
+            match snapshots::with::<M, _>(inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
+            }
         })
     }
 }
 
 pub unsafe fn free_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
     unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |_inst| {
-            if !state.is_null() && !(*state).is_null() {
-                // SAFETY: a Box<Sim<M>> handed out by this FMU, freed once.
-                drop(Box::from_raw(*state as *mut super::instance::Sim<M>));
-                *state = ptr::null_mut();
+        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |inst| {
+            if state.is_null() || (*state).is_null() {
+                return fmi2OK;
             }
-            fmi2OK
+            match snapshots::release::<M>(inst.guid, *state) {
+                Ok(()) => {
+                    *state = ptr::null_mut();
+                    fmi2OK
+                }
+                Err(why) => inst.error(&format!("fmi2FreeFMUstate: {why}; refused, nothing freed")),
+            }
         })
     }
 }
@@ -447,12 +506,12 @@ pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
             if state.is_null() || size.is_null() {
                 return inst.error("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
             }
-            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
-                Ok(bytes) => {
+            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
+                Ok(Ok(bytes)) => {
                     *size = bytes.len();
                     fmi2OK
                 }
-                Err(e) => inst.error(&format!("fmi2SerializedFMUstateSize: {e}")),
+                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializedFMUstateSize: {why}")),
             }
         })
     }
@@ -469,17 +528,17 @@ pub unsafe fn serialize_fmu_state<M: CoSimulation>(
             if state.is_null() || bytes.is_null() {
                 return inst.error("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
             }
-            match super::state::serialize(inst.guid, &*(state as *const super::instance::Sim<M>)) {
-                Ok(data) if data.len() == size => {
+            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
+                Ok(Ok(data)) if data.len() == size => {
                     ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
                     fmi2OK
                 }
-                Ok(data) => inst.error(&format!(
+                Ok(Ok(data)) => inst.error(&format!(
                     "fmi2SerializeFMUstate: size = {size}, but the state takes {} bytes \
                      (ask fmi2SerializedFMUstateSize)",
                     data.len()
                 )),
-                Err(e) => inst.error(&format!("fmi2SerializeFMUstate: {e}")),
+                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializeFMUstate: {why}")),
             }
         })
     }
@@ -501,17 +560,21 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
                     "fmi2DeSerializeFMUstate: serializedState is NULL with size = {size}"
                 ));
             };
-            match super::state::deserialize::<M>(inst.guid, data) {
-                Ok(sim) => {
-                    let existing = *state as *mut super::instance::Sim<M>;
-                    if existing.is_null() {
-                        *state = Box::into_raw(Box::new(sim)) as fmi2FMUstate;
-                    } else {
-                        *existing = sim;
-                    }
-                    fmi2OK
-                }
-                Err(e) => inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
+            let restored = super::state::deserialize::<M>(inst.guid, data)
+                .and_then(|sim| super::instance::check_restored(&sim).map(|()| sim));
+            let sim = match restored {
+                Ok(sim) => sim,
+                Err(e) => return inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
+            };
+            if (*state).is_null() {
+                *state = snapshots::adopt(inst.guid, sim);
+                return fmi2OK;
+            }
+            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim = sim) {
+                Ok(()) => fmi2OK,
+                Err(why) => inst.error(&format!(
+                    "fmi2DeSerializeFMUstate: *FMUstate: {why}; refused, nothing changed"
+                )),
             }
         })
     }
@@ -654,8 +717,9 @@ pub unsafe fn get_string_status<M: CoSimulation>(
     }
 }
 
-/// The state an instance is in, for tests written against the runtime in Rust.
+/// The state an instance is in, for tests written against the runtime in Rust (not while a
+/// call is inside it).
 pub unsafe fn state_of<M: CoSimulation>(c: fmi2Component) -> Option<State> {
-    // SAFETY: as in `with_instance`.
-    unsafe { (c as *const Instance<M>).as_ref().map(|i| i.state()) }
+    // SAFETY: as in `with_instance`; no call is inside (the caller's promise).
+    unsafe { (c as *const Component<M>).as_ref().map(|c| (*c.instance.get()).state()) }
 }

@@ -150,10 +150,42 @@ pub struct Instance<M: CoSimulation> {
     pub logger: Logger,
     pub guid: &'static str,
     pub sim: Sim<M>,
+    /// The model as it was before the step in progress, to go back to when the step leaves
+    /// something that is not finite. Kept here so that a step does not allocate a copy.
+    before_step: M,
     /// What fmi2GetString last returned: valid until the next call, as the standard allows.
     strings: Vec<CString>,
     /// The unpacked `resources/` folder, from `fmuResourceLocation` (not part of the FMU state).
     pub resources: Option<std::path::PathBuf>,
+}
+
+/// The first Real variable the model computes (output, local, calculated parameter), or the
+/// first part of its internal state, that is not finite, described for a message. The one
+/// check every value computed by a model passes before it may leave under fmi2OK: after
+/// initialization, after every step and parameter change, and on every deserialized state
+/// (inputs and parameters pass the setters' checks when they are set).
+#[inline]
+pub fn non_finite<M: CoSimulation>(model: &M) -> Option<String> {
+    match (model.non_finite_computed(), model.check_internal_state()) {
+        (None, Ok(())) => None,
+        (index, internal) => Some(describe_non_finite(model, index, internal)),
+    }
+}
+
+#[cold]
+fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, internal: Result<(), String>) -> String {
+    if let Some(i) = index {
+        let v = &M::DESCRIPTION.variables[i];
+        let x = model
+            .get(v.value_reference)
+            .and_then(|x| x.as_f64())
+            .unwrap_or(f64::NAN);
+        return format!("'{}' (vr {}) = {x} is not a finite number", v.name, v.value_reference);
+    }
+    format!(
+        "the model's internal state is unusable: {}",
+        internal.err().unwrap_or_default()
+    )
 }
 
 type Outcome = Result<(), fmi2Status>;
@@ -164,6 +196,7 @@ impl<M: CoSimulation> Instance<M> {
             logger,
             guid,
             sim: Sim::new(),
+            before_step: M::start(),
             strings: Vec::new(),
             resources: None,
         }
@@ -280,7 +313,15 @@ impl<M: CoSimulation> Instance<M> {
             logger: Some(&self.logger),
             resources: self.resources.as_deref(),
         };
-        match self.sim.model.initialize(&ctx) {
+        let outcome = self
+            .sim
+            .model
+            .initialize(&ctx)
+            .and_then(|()| match non_finite(&self.sim.model) {
+                None => Ok(()),
+                Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
+            });
+        match outcome {
             Ok(()) => {
                 self.sim.init_dirty = false;
                 Ok(())
@@ -430,41 +471,11 @@ impl<M: CoSimulation> Instance<M> {
     fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static Variable, fmi2Status> {
         let decl = self.lookup(function, vr, value.api_type())?;
         self.check_settable(function, decl)?;
-        if let Value::Real(x) = value
-            && !x.is_finite()
-        {
-            return Err(self.error(&format!(
-                "{function}: {x} for '{}' (vr {vr}) is not a finite number; refused, value unchanged",
-                decl.name
-            )));
+        match refusal(&self.sim.model, decl, value) {
+            None => Ok(decl),
+            Some(Refusal::Rule(why)) => Err(self.error(&format!("{function}: {why}; refused, value unchanged"))),
+            Some(Refusal::Model(why)) => Err(self.error(&format!("{function}: {why}"))),
         }
-        if let Some(x) = value.as_f64()
-            && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
-        {
-            return Err(self.error(&format!(
-                "{function}: {x} for '{}' (vr {vr}) is outside {}; refused, value unchanged",
-                decl.name,
-                range_text(decl)
-            )));
-        }
-        if let (Some(e), Value::Integer(code)) = (decl.enumeration, value)
-            && e.item(code).is_none()
-        {
-            let items: Vec<String> = e.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
-            return Err(self.error(&format!(
-                "{function}: {code} for '{}' (vr {vr}) is no item of the enumeration {} ({}); refused, value unchanged",
-                decl.name,
-                e.name,
-                items.join(", ")
-            )));
-        }
-        if let Err(why) = self.sim.model.check(decl, value) {
-            return Err(self.error(&format!(
-                "{function}: {value:?} for '{}' (vr {vr}) refused: {why}",
-                decl.name
-            )));
-        }
-        Ok(decl)
     }
 
     /// Sets all values or none: each is checked before any is stored.
@@ -501,7 +512,12 @@ impl<M: CoSimulation> Instance<M> {
                 logger: Some(&self.logger),
                 resources: self.resources.as_deref(),
             };
-            if let Err(why) = self.sim.model.parameters_changed(&ctx) {
+            let outcome = self
+                .sim
+                .model
+                .parameters_changed(&ctx)
+                .and_then(|()| non_finite(&self.sim.model).map_or(Ok(()), Err));
+            if let Err(why) = outcome {
                 self.sim.model = previous;
                 return self.error(&format!(
                     "{function}: parameter change refused: {why}; values unchanged"
@@ -556,27 +572,49 @@ impl<M: CoSimulation> Instance<M> {
             logger: Some(&self.logger),
             resources: self.resources.as_deref(),
         };
-        match self.sim.model.do_step(t, h, &ctx) {
-            Ok(()) => {
+        self.before_step.clone_from(&self.sim.model);
+        let outcome = self.sim.model.do_step(t, h, &ctx);
+        match (outcome, non_finite(&self.sim.model)) {
+            (Ok(()), None) => {
                 self.sim.time = end;
                 self.sim.last_successful_time = end;
                 fmi2OK
             }
-            Err(failure) => {
-                self.sim.time = failure.reached_time;
-                self.sim.last_successful_time = failure.reached_time;
-                self.sim.state = State::StepFailed;
-                self.logger.log(
-                    fmi2Discard,
-                    Category::StatusDiscard,
-                    &format!(
-                        "fmi2DoStep from t = {t} by h = {h} discarded at t = {}: {}",
-                        failure.reached_time, failure.message
-                    ),
-                );
-                fmi2Discard
+            (Err(failure), None) => {
+                // A model's claim outside the step is no time it reached.
+                let reached = if failure.reached_time.is_finite() {
+                    failure.reached_time.clamp(t, end)
+                } else {
+                    t
+                };
+                self.discard_step(t, h, reached, &failure.message)
+            }
+            (outcome, Some(what)) => {
+                std::mem::swap(&mut self.sim.model, &mut self.before_step);
+                let model_said = match outcome {
+                    Ok(()) => String::new(),
+                    Err(failure) => format!(" (the model reported: {})", failure.message),
+                };
+                self.discard_step(
+                    t,
+                    h,
+                    t,
+                    &format!("{what}{model_said}; every variable is back at its value at t = {t}"),
+                )
             }
         }
+    }
+
+    fn discard_step(&mut self, t: f64, h: f64, reached: f64, why: &str) -> fmi2Status {
+        self.sim.time = reached;
+        self.sim.last_successful_time = reached;
+        self.sim.state = State::StepFailed;
+        self.logger.log(
+            fmi2Discard,
+            Category::StatusDiscard,
+            &format!("fmi2DoStep from t = {t} by h = {h} discarded at t = {reached}: {why}"),
+        );
+        fmi2Discard
     }
 
     pub fn real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {
@@ -616,6 +654,93 @@ impl<M: CoSimulation> Instance<M> {
         );
         fmi2Discard
     }
+}
+
+/// Why a value may not be stored, as a message: `<value> for '<name>' (vr <n>) <reason>`.
+enum Refusal {
+    /// A rule of the runtime: finite, within the declared bounds, an item of the enumeration.
+    Rule(String),
+    /// The model's own check refused it.
+    Model(String),
+}
+
+/// The rules every value passes before it is stored, whether set through the API or restored
+/// from a serialized state: a finite number, within the declared bounds, an item of its
+/// enumeration, accepted by the model's own check (with the other values of `model`).
+fn refusal<M: CoSimulation>(model: &M, decl: &Variable, value: Value) -> Option<Refusal> {
+    let (name, vr) = (decl.name, decl.value_reference);
+    if let Value::Real(x) = value
+        && !x.is_finite()
+    {
+        return Some(Refusal::Rule(format!(
+            "{x} for '{name}' (vr {vr}) is not a finite number"
+        )));
+    }
+    if let Some(x) = value.as_f64()
+        && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
+    {
+        return Some(Refusal::Rule(format!(
+            "{x} for '{name}' (vr {vr}) is outside {}",
+            range_text(decl)
+        )));
+    }
+    if let (Some(e), Value::Integer(code)) = (decl.enumeration, value)
+        && e.item(code).is_none()
+    {
+        let items: Vec<String> = e.items.iter().map(|i| format!("{} = {}", i.name, i.value)).collect();
+        return Some(Refusal::Rule(format!(
+            "{code} for '{name}' (vr {vr}) is no item of the enumeration {} ({})",
+            e.name,
+            items.join(", ")
+        )));
+    }
+    if let Err(why) = model.check(decl, value) {
+        return Some(Refusal::Model(format!(
+            "{value:?} for '{name}' (vr {vr}) refused: {why}"
+        )));
+    }
+    None
+}
+
+/// What a deserialized state must be before it is accepted: every value as a setter would
+/// accept it, the model's internal state usable, and the runtime's own bookkeeping sound.
+/// (The serialized form's magic, GUID, length and checksum only say who wrote it and that it
+/// is intact, not that its content is one this FMU can run from.)
+pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
+    for decl in M::DESCRIPTION.variables {
+        if let Some(value) = sim.model.get(decl.value_reference)
+            && let Some(Refusal::Rule(why) | Refusal::Model(why)) = refusal(&sim.model, decl, value)
+        {
+            return Err(format!("the state's {why}"));
+        }
+    }
+    if let Some(what) = non_finite(&sim.model) {
+        return Err(format!("in the state, {what}"));
+    }
+    let times = [
+        ("startTime", sim.start_time),
+        ("time", sim.time),
+        ("last successful time", sim.last_successful_time),
+    ];
+    for (what, t) in times {
+        if !t.is_finite() {
+            return Err(format!("the state's {what} = {t} is not finite"));
+        }
+    }
+    if let Some(tol) = sim.tolerance
+        && !(tol.is_finite() && tol > 0.0)
+    {
+        return Err(format!("the state's tolerance = {tol} must be finite and > 0"));
+    }
+    if let Some(stop) = sim.stop_time
+        && !(stop.is_finite() && stop >= sim.start_time)
+    {
+        return Err(format!(
+            "the state's stopTime = {stop} must be finite and not before its startTime = {}",
+            sim.start_time
+        ));
+    }
+    Ok(())
 }
 
 /// `[min, max]` with exclusive ends as `(`/`)`, for messages.

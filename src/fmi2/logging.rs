@@ -44,7 +44,7 @@ impl Category {
 }
 
 /// The callback with what it needs: environment pointer, instance name, logging switches.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Logger {
     callback: unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
     environment: fmi2ComponentEnvironment,

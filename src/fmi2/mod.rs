@@ -11,4 +11,5 @@ pub mod export;
 pub mod instance;
 pub mod logging;
 pub mod resources;
+pub mod snapshots;
 pub mod state;

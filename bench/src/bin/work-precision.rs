@@ -78,7 +78,7 @@ fn run() -> Result<(), String> {
         let one_call = || {
             let mut ode = Dopri5::default();
             let mut x = x0;
-            ode.integrate(|_, x: &Vector4<f64>| f(x), 0.0, &mut x, t_end, tol_pair)
+            ode.integrate(|_, x: &Vector4<f64>| f(x), 0.0, t_end, &mut x, tol_pair)
                 .map(|()| (x, ode.stats))
         };
         let (x, stats) = one_call().map_err(|e| format!("Dopri5 at tol {tol:e}: {e}"))?;

@@ -22,7 +22,13 @@
 //! ```
 //!
 //! Anti-windup by conditional integration: while M_i (or, driving motors, U_i) is at its limit, ∫e_i stops growing
-//! in the direction that pushes further into the limit.
+//! in the direction that pushes further into the limit; and it is clamped so that Ki_i ∫e_i never
+//! exceeds ±M_max on its own, so no input, however large or long, leaves it wound beyond what the
+//! actuator can use.
+//!
+//! Any finite measurement gives finite, limited commands: where the sums of (14) and (16)
+//! overflow `f64` (α1 = 1.7e308), they are computed again with a wider exponent ([`Wide`]) and
+//! then limited.
 //!
 //! Sampling: the controller reads its inputs at a communication point t_k, and its outputs
 //! change only at communication points. During the step to t_k + h the integral advances by
@@ -31,6 +37,7 @@
 use super::dc_motor::DcMotorParams;
 use super::pendulum::PendulumParams;
 use crate::numerics::lqr::lqr;
+use crate::numerics::wide::Wide;
 use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
 use serde::{Deserialize, Serialize};
 
@@ -179,14 +186,47 @@ impl ControlLaw {
         let p = &self.motor;
         let n = p.gear_ratio;
         for i in 0..2 {
+            if !m[i].is_finite() {
+                m[i] = self.wide_demand(i, s, x, reference).to_f64();
+            }
             let limited = m[i].clamp(-self.m_max, self.m_max);
             let omega = x[RATE[i]];
-            let volts = p.r / (n * p.km) * (limited + n * n * p.b * omega) + n * p.kb * omega;
+            let mut volts = p.r / (n * p.km) * (limited + n * n * p.b * omega) + n * p.kb * omega;
+            if !volts.is_finite() {
+                volts = self.wide_voltage(limited, omega).to_f64();
+            }
             u[i] = p.applied_voltage(volts);
             saturated[i] = limited != m[i] || (self.drives_motors && u[i] != volts);
             m[i] = limited;
         }
         Command { m, u, saturated }
+    }
+
+    /// The demand of joint i, before the limit, as `command` computes it, where that overflows.
+    fn wide_demand(&self, i: usize, s: &ControllerState, x: &Vector4<f64>, reference: &Vector2<f64>) -> Wide {
+        let w = Wide::from;
+        let mut m = Wide::ZERO;
+        if self.mode.lqr() {
+            let x_ref = [reference[0], 0.0, reference[1], 0.0];
+            for j in 0..4 {
+                m = m - w(self.k[(i, j)]) * (w(x[j]) - w(x_ref[j]));
+            }
+        }
+        if self.mode.pid() {
+            let e = w(reference[i]) - w(x[ANGLE[i]]);
+            let g = self.pid[i];
+            m = m + w(g.kp) * e + w(g.ki) * w(s.integral[i]) - w(g.kd) * w(s.rate_filter[i]);
+        }
+        m
+    }
+
+    /// The voltage for torque `limited` at joint speed `omega`, as `command` computes it,
+    /// where that overflows.
+    fn wide_voltage(&self, limited: f64, omega: f64) -> Wide {
+        let w = Wide::from;
+        let p = &self.motor;
+        let n = w(p.gear_ratio);
+        w(p.r) / (n * w(p.km)) * (w(limited) + n * n * w(p.b) * w(omega)) + n * w(p.kb) * w(omega)
     }
 
     /// The memory after a step of `h` [s] from a sample with measurement `x` and command `c`.
@@ -205,11 +245,15 @@ impl ControlLaw {
             // which limit; integrating e > 0 raises the command when Ki > 0.
             let into_limit = c.saturated[i] && e * c.m[i] > 0.0;
             if self.mode.pid() && !into_limit {
-                next.integral[i] += e * h;
+                // Ki ∫e alone never beyond ±M_max (and never infinite, even with Ki = 0).
+                let bound = (self.m_max / self.pid[i].ki.abs()).min(f64::MAX);
+                next.integral[i] = (next.integral[i] + e * h).clamp(-bound, bound);
             }
             let omega = x[RATE[i]];
+            // Exactly ω + (ω_f − ω) e^(−h/Tf), as a weighted mean that cannot overflow.
             next.rate_filter[i] = if self.tf > 0.0 {
-                omega + (s.rate_filter[i] - omega) * (-h / self.tf).exp()
+                let decay = -h / self.tf;
+                s.rate_filter[i] * decay.exp() - omega * decay.exp_m1()
             } else {
                 omega
             };
@@ -323,6 +367,44 @@ mod tests {
             s.integral[0], 0.0,
             "the integral of joint 1 wound up to {}",
             s.integral[0]
+        );
+    }
+
+    #[test]
+    fn integral_stays_bounded_while_the_lqr_part_holds_the_limit() {
+        // The LQR part (ω1 = -1e12) holds M1 at +M_max while e1 = -1e10 rad pulls away from it:
+        // conditional integration lets the integral grow, the clamp keeps Ki ∫e1 within M_max.
+        let mut l = law(Mode::LqrPid);
+        l.m_max = 20.0;
+        let x = Vector4::new(1e10, -1e12, 0.0, 0.0);
+        let mut s = l.initial_state(&x);
+        for _ in 0..1000 {
+            let c = l.command(&s, &x, &Vector2::zeros());
+            s = l.advance(&s, &x, &Vector2::zeros(), &c, 1e-3);
+        }
+        let contribution = l.pid[0].ki * s.integral[0];
+        assert!(
+            contribution.abs() <= l.m_max,
+            "Ki ∫e1 = {contribution} N.m after 1 s, beyond M_max = {}",
+            l.m_max
+        );
+    }
+
+    #[test]
+    fn the_rate_filter_stays_finite_between_opposite_extremes() {
+        let l = law(Mode::Pid);
+        let s = ControllerState {
+            integral: [0.0; 2],
+            rate_filter: [f64::MAX, -f64::MAX],
+        };
+        let x = Vector4::new(0.0, -f64::MAX, 0.0, f64::MAX);
+        let c = l.command(&s, &x, &Vector2::zeros());
+        let next = l.advance(&s, &x, &Vector2::zeros(), &c, 1e-3);
+        assert!(
+            next.rate_filter.iter().all(|w| w.is_finite()),
+            "filter {:?} from {:?} towards ω = (-MAX, MAX)",
+            next.rate_filter,
+            s.rate_filter
         );
     }
 

@@ -89,7 +89,10 @@ impl DcMotorParams {
                 return Err(format!("{name} = {v} must be a finite number > 0"));
             }
         }
-        for (name, v) in [("km", self.km), ("kb", self.kb), ("B", self.b)] {
+        if !(self.km.is_finite() && self.km > 0.0) {
+            return Err(format!("km = {} must be a finite number > 0", self.km));
+        }
+        for (name, v) in [("kb", self.kb), ("B", self.b)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} = {v} must be a finite number >= 0"));
             }
@@ -123,20 +126,34 @@ impl DcMotorParams {
     }
 
     /// Coupled to a joint turning at `omega_joint` [rad/s] (held over the step): the rotor turns
-    /// at n ω_joint and the current relaxes exactly towards (U − kb ω_m)/R.
+    /// at n ω_joint and the current relaxes exactly towards (U − kb ω_m)/R:
+    /// i(h) = i e^(−x) + (U − kb ω_m) (1 − e^(−x))/R with x = R h/L.
+    ///
+    /// (1 − e^(−x))/R is computed as −expm1(−x)/R, and for x ≤ 1 as (h/L)·(−expm1(−x)/x): the
+    /// closed form i_steady + (i − i_steady) e^(−x) cancels to exactly 0 when x is below the
+    /// rounding of 1 (R = 1e-20 Ω: 0 A where (U − kb ω_m) h/L = 742.69 A after 15 ms), and
+    /// (U − kb ω_m)/R overflows for a subnormal R.
     pub fn step_coupled(&self, s: &DcMotorState, u: f64, omega_joint: f64, h: f64) -> DcMotorState {
         let omega_m = self.gear_ratio * omega_joint;
-        let i_steady = (self.applied_voltage(u) - self.kb * omega_m) / self.r;
-        let decay = (-self.r * h / self.l).exp();
+        let drive = self.applied_voltage(u) - self.kb * omega_m;
+        let x = self.r * h / self.l;
+        let gain = if x > 1.0 {
+            -(-x).exp_m1() / self.r
+        } else if x > 0.0 {
+            h / self.l * (-(-x).exp_m1() / x)
+        } else {
+            h / self.l
+        };
         DcMotorState {
-            i: i_steady + (s.i - i_steady) * decay,
+            i: s.i * (-x).exp() + drive * gain,
             omega_m,
         }
     }
 
     /// Unloaded: x = (i, ω_m), ẋ = F x + g U with U held; x(t+h) = Φ x + Γ U from the matrix
-    /// exponential of [F g; 0 0]·h (Van Loan), which is exact for this linear system.
-    pub fn step_free(&self, s: &DcMotorState, u: f64, h: f64) -> DcMotorState {
+    /// exponential of [F g; 0 0]·h (Van Loan), which is exact for this linear system. An error
+    /// when that exponential is beyond `f64` (parameters and step such as L = 5e-324 H).
+    pub fn step_free(&self, s: &DcMotorState, u: f64, h: f64) -> Result<DcMotorState, String> {
         let (l, r, km, kb, j, b) = (self.l, self.r, self.km, self.kb, self.j, self.b);
         #[rustfmt::skip]
         let augmented = Matrix3::new(
@@ -144,11 +161,41 @@ impl DcMotorParams {
             km / j, -b / j,  0.0,
             0.0,    0.0,     0.0,
         ) * h;
-        let e = augmented.exp();
+        let e = expm(&augmented).ok_or_else(|| {
+            format!("the unloaded motor's transition matrix over h = {h} s is beyond f64 (F h = {augmented})")
+        })?;
         let x = e.fixed_view::<2, 2>(0, 0) * Vector2::new(s.i, s.omega_m)
             + e.fixed_view::<2, 1>(0, 2) * self.applied_voltage(u);
-        DcMotorState { i: x[0], omega_m: x[1] }
+        Ok(DcMotorState { i: x[0], omega_m: x[1] })
     }
+}
+
+/// e^A, or `None` when A or e^A is not finite.
+///
+/// nalgebra's `exp` picks its number of squarings from norms of A⁴ … A¹⁰: beyond |A| ≈ 1e30
+/// they overflow, and an infinite estimate makes it square 2⁶⁴ times (it hung). Such an A is
+/// scaled by a power of two to norm ≤ 1 first and squared back as often (at most ~1030 times).
+/// Smaller ones go to nalgebra unchanged, so their results are as before.
+fn expm(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let finite = |m: &Matrix3<f64>| m.iter().all(|x| x.is_finite());
+    if !finite(a) {
+        return None;
+    }
+    let largest = a.amax();
+    let e = if largest <= 1e29 {
+        a.exp()
+    } else {
+        // |A| ≤ 3 max|a_ij| ≤ 2^(s), s ≤ 1026; scaled in two exact halves.
+        let s = largest.log2().ceil() as i32 + 2;
+        let half = 2f64.powi(-(s / 2));
+        let rest = 2f64.powi(-(s - s / 2));
+        let mut e = (a * half * rest).exp();
+        for _ in 0..s {
+            e = e * e;
+        }
+        e
+    };
+    finite(&e).then_some(e)
 }
 
 #[cfg(test)]
@@ -202,7 +249,7 @@ mod tests {
                 let n = (0.02 / h).round() as usize;
                 let scale = p.km * 6.0 / p.speed_transfer_denominator()[2];
                 for k in 1..=n {
-                    s = p.step_free(&s, 6.0, h);
+                    s = p.step_free(&s, 6.0, h).unwrap();
                     let t = k as f64 * h;
                     let want = eq17_step(&p, 6.0, t);
                     assert!(
@@ -231,6 +278,77 @@ mod tests {
             let i_steady = (3.0 - p.kb * 200.0 * 0.5) / p.r;
             let want = i_steady * (1.0 - (-p.r * 0.01 / p.l).exp());
             assert!((s.i - want).abs() < 1e-12, "h = {h}: expected i = {want}, got {}", s.i);
+        }
+    }
+
+    #[test]
+    fn a_tiny_resistance_gives_the_inductive_current_not_zero() {
+        // R → 0: L di/dt = U − kb ω_m, so i(h) = (U − kb ω_m) h/L to first order in R h/L.
+        let p = DcMotorParams {
+            r: 1e-20,
+            ..DcMotorParams::default()
+        };
+        let mut s = DcMotorState::default();
+        for _ in 0..15 {
+            s = p.step_coupled(&s, 6.0, 2.0, 1e-3);
+        }
+        let want = (6.0 - p.kb * 2.0) * 0.015 / p.l;
+        assert!(
+            (s.i - want).abs() < 1e-9 * want,
+            "R = 1e-20 Ohm: after 15 ms expected i = {want} A (742.69), got {} A",
+            s.i
+        );
+        // And a subnormal R does not overflow.
+        let p = DcMotorParams { r: 5e-324, ..p };
+        let s = p.step_coupled(&DcMotorState::default(), 6.0, 2.0, 0.015);
+        assert!((s.i - want).abs() < 1e-9 * want, "R = 5e-324: {} A", s.i);
+    }
+
+    #[test]
+    fn the_unloaded_step_returns_for_any_parameters_and_step() {
+        // Parameters and steps that overflow F h or its powers.
+        let cases = [
+            (
+                DcMotorParams {
+                    l: 5e-324,
+                    ..realistic()
+                },
+                1e-3,
+            ),
+            (
+                DcMotorParams {
+                    j: 1e-310,
+                    ..realistic()
+                },
+                1e-3,
+            ),
+            (realistic(), 1e300),
+            (
+                DcMotorParams {
+                    r: 1e300,
+                    ..realistic()
+                },
+                10.0,
+            ),
+        ];
+        for (p, h) in cases {
+            match p.step_free(&DcMotorState::default(), 6.0, h) {
+                Ok(s) => assert!(s.i.is_finite() && s.omega_m.is_finite(), "L = {}, h = {h}: {s:?}", p.l),
+                Err(e) => assert!(e.contains("beyond f64"), "{e}"),
+            }
+        }
+        // Far beyond every time constant the unloaded motor is at its steady state. The paper's
+        // motor over 1e35 ... 1e45 s hung nalgebra's exp; the demo's over 1e50 s and more gave NaN.
+        for (p, h) in [(DcMotorParams::default(), 1e40), (realistic(), 1e60)] {
+            let s = p.step_free(&DcMotorState::default(), 6.0, h).unwrap();
+            let [_, _, c] = p.speed_transfer_denominator();
+            let speed = p.km * 6.0 / c;
+            assert!(
+                (s.omega_m - speed).abs() < 1e-6 * speed,
+                "B = {}, after {h:e} s: {} rad/s, steady {speed}",
+                p.b,
+                s.omega_m
+            );
         }
     }
 

@@ -67,6 +67,10 @@ fn gain(b: &DMatrix<f64>, r: &DMatrix<f64>, x: &DMatrix<f64>) -> Result<DMatrix<
     Ok(chol.solve(&(b.transpose() * x)))
 }
 
+/// Most iterations of an eigenvalue or SVD decomposition (a few dozen suffice for the
+/// converging ones here).
+const MAX_ITERATIONS: usize = 10_000;
+
 /// The stabilizing solution X = Xᵀ ≥ 0 of the CARE, or why there is none.
 pub fn care(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<DMatrix<f64>, LqrError> {
     let n = a.nrows();
@@ -87,7 +91,12 @@ pub fn care(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
     if !symmetric(q) {
         return err("Q must be symmetric");
     }
-    if q.symmetric_eigenvalues().min() < -1e-12 * (1.0 + q.amax()) {
+    // nalgebra's eigenvalue and SVD iterations run without a limit by default: with
+    // intermediates that overflow they may never stop, so every one here has one.
+    let Some(q_eigen) = q.clone().try_symmetric_eigen(f64::EPSILON, MAX_ITERATIONS) else {
+        return err("Q: the eigenvalue iteration did not converge (values out of range?)");
+    };
+    if q_eigen.eigenvalues.min() < -1e-12 * (1.0 + q.amax()) {
         return err("Q must be positive semidefinite");
     }
     let Some(r_chol) = r.clone().cholesky() else {
@@ -114,10 +123,10 @@ pub fn care(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
     rhs.view_mut((0, 0), (n, n))
         .copy_from(&(-(w.view((0, 0), (n, n)) + &identity)));
     rhs.view_mut((n, 0), (n, n)).copy_from(&(-w.view((n, 0), (n, n))));
-    let x = lhs
-        .svd(true, true)
-        .solve(&rhs, 1e-14)
-        .map_err(|e| LqrError(format!("CARE: {e}")))?;
+    let Some(svd) = lhs.try_svd(true, true, f64::EPSILON, MAX_ITERATIONS) else {
+        return err("CARE: the SVD did not converge (values out of range?)");
+    };
+    let x = svd.solve(&rhs, 1e-14).map_err(|e| LqrError(format!("CARE: {e}")))?;
     let mut x = (&x + x.transpose()) * 0.5;
 
     // Newton–Kleinman: X ← solution of (A − G X)ᵀ X' + X' (A − G X) = −(Q + X G X).
@@ -139,7 +148,10 @@ pub fn care(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
         ));
     }
     let closed_loop = a - &g * &x;
-    let worst = closed_loop
+    let Some(schur) = closed_loop.try_schur(f64::EPSILON, MAX_ITERATIONS) else {
+        return err("CARE: the closed loop's eigenvalue iteration did not converge (values out of range?)");
+    };
+    let worst = schur
         .complex_eigenvalues()
         .iter()
         .map(|l| l.re)

@@ -9,6 +9,7 @@
 
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
+use std::sync::OnceLock;
 
 /// Relative and absolute error tolerances, per component: err_i / (atol + rtol·|x_i|) ≤ 1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -140,6 +141,42 @@ fn error_norm<const N: usize>(
 }
 
 impl Dopri5 {
+    /// Refuses a memory the integrator cannot run on (one restored from outside, say), naming
+    /// the field.
+    #[inline]
+    pub fn validate(&self) -> Result<(), String> {
+        // The runtime asks after every step: the common answer first, without the loops.
+        let usable = |v: f64| v.is_finite() && v >= 0.0;
+        if usable(self.h_next)
+            && usable(self.h_max)
+            && self.err_old.is_finite()
+            && self.err_old > 0.0
+            && self.max_steps > 0
+        {
+            return Ok(());
+        }
+        self.unusable()
+    }
+
+    #[cold]
+    fn unusable(&self) -> Result<(), String> {
+        for (name, v) in [("h_next", self.h_next), ("h_max", self.h_max)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("the integrator's {name} = {v} must be finite and >= 0"));
+            }
+        }
+        if !(self.err_old.is_finite() && self.err_old > 0.0) {
+            return Err(format!(
+                "the integrator's error history {} must be finite and > 0",
+                self.err_old
+            ));
+        }
+        if self.max_steps == 0 {
+            return Err("the integrator's max_steps must be at least 1".into());
+        }
+        Ok(())
+    }
+
     /// Forgets the step-size history (after a discontinuous change of the state or of a
     /// parameter).
     pub fn restart(&mut self) {
@@ -160,14 +197,17 @@ impl Dopri5 {
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
+        // Scaled norms, capped at f64::MAX: with atol = 5e-324 and x = 0 they overflow, and
+        // an infinite one would make the starting step 0 instead of merely tiny.
         let sc = x.map(|xi| tol.atol + tol.rtol * xi.abs());
-        let d0 = (x.component_div(&sc).norm_squared() / N as f64).sqrt();
-        let d1 = (k1.component_div(&sc).norm_squared() / N as f64).sqrt();
+        let scaled = |v: SVector<f64, N>| (v.component_div(&sc).norm_squared() / N as f64).sqrt().min(f64::MAX);
+        let d0 = scaled(*x);
+        let d1 = scaled(*k1);
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 }.min(span);
         let x1 = x + k1 * h0;
         let k2 = f(t + h0, &x1);
         self.stats.rhs_evaluations += 1;
-        let d2 = ((k2 - k1).component_div(&sc).norm_squared() / N as f64).sqrt() / h0;
+        let d2 = (scaled(k2 - k1) / h0).min(f64::MAX);
         let h1 = if d1.max(d2) <= 1e-15 {
             (h0 * 1e-3).max(1e-6)
         } else {
@@ -176,47 +216,52 @@ impl Dopri5 {
         (100.0 * h0).min(h1).min(span)
     }
 
-    /// Integrates `x' = f(t, x)` from `t0` to `t_end` in place. On error, `x` holds the state at
-    /// the time the error names, which the integrator reached with full accuracy.
+    /// Integrates `x' = f(t, x)` over `span` from `t0` in place. On error, `x` holds the state
+    /// at the time the error names, which the integrator reached with full accuracy.
+    ///
+    /// The integrator runs on the time `s` since `t0` (from 0 to `span`); `f` is called with
+    /// `t0 + s`. So the steps it takes, and the result, do not depend on where time starts: at
+    /// `t0` = 1.7e9 s (a Unix time stamp) a step of 1e-6 s is as fine as at 0, and a master's
+    /// rounded communication points (`t0 + n h`) do not leak into the state through `t_end - t0`.
     pub fn integrate<const N: usize, F>(
         &mut self,
         mut f: F,
         t0: f64,
+        span: f64,
         x: &mut SVector<f64, N>,
-        t_end: f64,
         tol: Tolerances,
     ) -> Result<(), OdeError>
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
-        let mut t = t0;
-        let mut k1 = f(t, x);
+        let mut s = 0.0;
+        let mut k1 = f(t0, x);
         self.stats.rhs_evaluations += 1;
         if !k1.iter().all(|v| v.is_finite()) {
-            return Err(OdeError::NonFinite { t });
+            return Err(OdeError::NonFinite { t: t0 });
         }
-        let span = t_end - t0;
         if self.h_next <= 0.0 {
-            self.h_next = self.initial_step(&mut f, t, x, &k1, tol, span);
+            self.h_next = self.initial_step(&mut f, t0, x, &k1, tol, span);
         }
         let mut steps = 0u64;
         let mut reject = false;
-        while t < t_end {
+        while s < span {
             if steps >= self.max_steps {
-                return Err(OdeError::TooManySteps { t, steps });
+                return Err(OdeError::TooManySteps { t: t0 + s, steps });
             }
             steps += 1;
             let mut h_proposed = self.h_next;
             if self.h_max > 0.0 {
                 h_proposed = h_proposed.min(self.h_max);
             }
-            // Land exactly on t_end; a step that would end within a hair of it is stretched.
-            let remaining = t_end - t;
+            // Land exactly on span; a step that would end within a hair of it is stretched.
+            let remaining = span - s;
             let last = h_proposed >= remaining * (1.0 - 1e-12);
             let h = if last { remaining } else { h_proposed };
-            if h.abs() <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
-                return Err(OdeError::StepSizeTooSmall { t, h });
+            if too_small(h, s) {
+                return Err(OdeError::StepSizeTooSmall { t: t0 + s, h });
             }
+            let t = t0 + s;
 
             let x2 = *x + h * (A21 * k1);
             let k2 = f(t + C2 * h, &x2);
@@ -234,31 +279,42 @@ impl Dopri5 {
             let err_vec = h * (E1 * k1 + E3 * k3 + E4 * k4 + E5 * k5 + E6 * k6 + E7 * k7);
             let err = error_norm(&err_vec, x, &x_new, tol);
 
-            if !err.is_finite() || !x_new.iter().all(|v| v.is_finite()) {
+            // An infinite error of a finite step (a tiny atol) is an ordinary rejection below.
+            if err.is_nan() || !x_new.iter().all(|v| v.is_finite()) {
                 // Shrink hard and retry: a finite error may come with a smaller step.
                 self.stats.rejected_steps += 1;
                 self.h_next = h * FAC_MIN;
                 reject = true;
-                if self.h_next <= 16.0 * f64::EPSILON * t.abs().max(1e-300) {
+                if too_small(self.h_next, s) {
                     return Err(OdeError::NonFinite { t });
                 }
                 continue;
             }
 
             if err <= 1.0 {
-                // PI controller on accepted steps.
-                let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
-                let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                let mut h_new = h_proposed / fac;
-                if reject {
-                    h_new = h_new.min(h_proposed);
-                }
+                // A last step keeps the larger proposal (below). When a lower bound of the
+                // controller's factor already shows that its growth cannot reach the proposal,
+                // its two powers cannot change the outcome and are not computed (they were a
+                // tenth of the Pendulum's time per step).
+                let keeps_proposal = last && keeps(h, h_proposed, err, self.err_old);
+                let h_new = if keeps_proposal {
+                    h_proposed
+                } else {
+                    // PI controller on accepted steps.
+                    let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
+                    let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                    // From the step just taken: a last step cut short to land on span supports
+                    // only its own size times the factor (scaling the longer proposal instead
+                    // grew it tenfold on every communication step, to infinity).
+                    let h_new = h / fac;
+                    if reject { h_new.min(h_proposed) } else { h_new }
+                };
                 self.err_old = err.max(1e-4);
                 self.stats.accepted_steps += 1;
-                t = if last { t_end } else { t + h };
+                s = if last { span } else { s + h };
                 *x = x_new;
                 k1 = k7;
-                // A step cut short to land on t_end says nothing about the next step size:
+                // A step cut short to land on span says nothing about the next step size:
                 // keep the larger proposal.
                 self.h_next = if last { h_new.max(h_proposed) } else { h_new };
                 reject = false;
@@ -271,6 +327,50 @@ impl Dopri5 {
         }
         Ok(())
     }
+}
+
+/// Whether the PI controller's proposal after a last step of `h` with error `err` (previous
+/// `err_old`) is sure to be below `h_proposed`, so that the step keeps `h_proposed`, decided
+/// without the controller's `powf` calls.
+///
+/// The controller computes fac = clamp((max(err, 1e-10)^α / err_old^β) / SAFETY, 1/FAC_MAX,
+/// 1/FAC_MIN) and proposes h / fac. With 2^n ≤ max(err, 1e-10) and err_old ≤ 2^m, powers being
+/// increasing, fac before the clamp is at least lo = (2^n)^α / (2^m)^β / SAFETY (tabulated),
+/// less a margin of 1e-9 that covers the rounding of pow (< 1 ulp) and of the quotients many
+/// times over; so fac ≥ clamp(lo) and, division rounding monotonically, h / fac ≤ h / clamp(lo).
+/// `tests::keeps_agrees_with_the_controller` checks it against the computed proposal.
+fn keeps(h: f64, h_proposed: f64, err: f64, err_old: f64) -> bool {
+    /// (2^-i)^α and (2^(1-i))^β.
+    struct Powers {
+        alpha: [f64; 35],
+        beta: [f64; 50],
+    }
+    static POWERS: OnceLock<Powers> = OnceLock::new();
+    let exponent = |x: f64| ((x.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+    let e = err.max(1e-10);
+    if !(e <= 1.0 && err_old.is_normal() && err_old > 0.0 && err_old <= 1.0) {
+        return false;
+    }
+    let (n, m) = (exponent(e), exponent(err_old) + 1);
+    if !(-34..=0).contains(&n) || !(-48..=1).contains(&m) {
+        return false;
+    }
+    let p = POWERS.get_or_init(|| Powers {
+        alpha: std::array::from_fn(|i| (2f64).powi(-(i as i32)).powf(ALPHA)),
+        beta: std::array::from_fn(|i| (2f64).powi(1 - i as i32).powf(BETA)),
+    });
+    let lo = p.alpha[(-n) as usize] / p.beta[(1 - m) as usize] / SAFETY * (1.0 - 1e-9);
+    h_proposed >= h / lo.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN)
+}
+
+/// A step `h` at time `s` (since the start of the span) that time resolution cannot resolve:
+/// relative to the local time, never to the absolute one: |h| <= 16 eps max(|s|, 1e-300).
+/// Both sides are scaled by 2^64 (exactly), because near s = 0 the bound itself is subnormal
+/// (3.6e-315), and a subnormal product costs a microcode assist of some hundred cycles, at the
+/// start of every span.
+fn too_small(h: f64, s: f64) -> bool {
+    const TWO_POW_64: f64 = 18_446_744_073_709_551_616.0;
+    h.abs() * TWO_POW_64 <= (16.0 * f64::EPSILON * TWO_POW_64) * s.abs().max(1e-300)
 }
 
 #[cfg(test)]
@@ -288,18 +388,104 @@ mod tests {
         let mut x = Vector2::new(1.0, 0.0);
         let mut t = 0.0;
         for _ in 0..1000 {
-            ode.integrate(
-                |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]),
-                t,
-                &mut x,
-                t + 0.01,
-                tol,
-            )
-            .unwrap();
+            ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), t, 0.01, &mut x, tol)
+                .unwrap();
             t += 0.01;
         }
         let exact = Vector2::new(t.cos(), -t.sin());
         assert!((x - exact).norm() < 1e-8, "error {} after 10 s", (x - exact).norm());
+    }
+
+    #[test]
+    fn the_steps_do_not_depend_on_the_absolute_start_time() {
+        let tol = Tolerances {
+            rtol: 1e-10,
+            atol: 1e-10,
+        };
+        let run = |t0: f64| {
+            let mut ode = Dopri5::default();
+            let mut x = Vector2::new(0.0, 0.0);
+            // From rest with a constant push: Hairer's starting step is 1e-6, finer than the
+            // time stamps' resolution at t0 = 1.7e9 s.
+            ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], 1.0), t0, 1e-3, &mut x, tol)
+                .map(|()| (x, ode.stats))
+        };
+        let at_zero = run(0.0).unwrap();
+        let at_unix_time = run(1.7e9).unwrap_or_else(|e| panic!("t0 = 1.7e9: {e}"));
+        assert_eq!(at_zero, at_unix_time, "the same 1 ms from t0 = 0 and from t0 = 1.7e9");
+    }
+
+    #[test]
+    fn the_proposed_step_stays_bounded_over_many_short_spans() {
+        // Every span is one step cut short to land on its end: the proposal must grow from
+        // what those steps support, not tenfold per span (it reached infinity after ~300).
+        let mut ode = Dopri5::default();
+        let tol = Tolerances { rtol: 1e-6, atol: 1e-6 };
+        let mut x = Vector2::new(1.0, 0.0);
+        for k in 0..1000 {
+            let f = |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]);
+            ode.integrate(f, k as f64 * 1e-3, 1e-3, &mut x, tol).unwrap();
+            assert!(
+                ode.h_next.is_finite() && ode.h_next <= 1.0,
+                "after span {k}: proposed step {} s for spans of 1 ms",
+                ode.h_next
+            );
+        }
+    }
+
+    #[test]
+    fn the_smallest_absolute_tolerance_starts_from_zero() {
+        // atol = 5e-324 at x = 0 with x' != 0: the scaled norms overflow; the start must still
+        // be a (tiny) step, and the error control relative from there on.
+        let tol = Tolerances {
+            rtol: 1e-8,
+            atol: 5e-324,
+        };
+        let mut ode = Dopri5::default();
+        let mut x = Vector2::new(0.0, 0.0);
+        let r = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], 1.0), 0.0, 1e-3, &mut x, tol);
+        assert_eq!(r, Ok(()), "after {:?}", ode.stats);
+        assert!((x[0] - 0.5e-6).abs() < 1e-14 && (x[1] - 1e-3).abs() < 1e-14, "x = {x}");
+    }
+
+    #[test]
+    fn keeps_agrees_with_the_controller() {
+        // Whenever `keeps` skips the controller, the controller's own proposal after a last
+        // step, max(h / fac, h_proposed) (min with h_proposed first after a rejection), is
+        // h_proposed to the bit. Random errors over their whole range, and proposals around
+        // the boundary.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut kept, mut cases) = (0, 0);
+        for _ in 0..200_000 {
+            let err = 10f64.powf(-12.0 * uniform());
+            let err_old = 10f64.powf(-5.0 * uniform()).max(1e-4);
+            let h = 10f64.powf(-6.0 * uniform());
+            let fac = (err.max(1e-10).powf(ALPHA) / err_old.powf(BETA)) / SAFETY;
+            let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+            let h_new = h / fac;
+            for scale in [0.999, 1.0, 1.0 + 1e-15, 1.001, 1.1, 2.0] {
+                let h_proposed = h_new * scale;
+                cases += 1;
+                if keeps(h, h_proposed, err, err_old) {
+                    kept += 1;
+                    for reject in [false, true] {
+                        let h_new = if reject { h_new.min(h_proposed) } else { h_new };
+                        assert_eq!(
+                            h_new.max(h_proposed).to_bits(),
+                            h_proposed.to_bits(),
+                            "err {err:e}, err_old {err_old:e}, h {h:e}: kept {h_proposed:e}, the controller gives {h_new:e}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(kept > cases / 3, "the shortcut should apply often: {kept} of {cases}");
     }
 
     #[test]
@@ -313,7 +499,7 @@ mod tests {
             atol: 1e-12,
         };
         let mut x = Vector2::new(1.0, 0.0);
-        let e = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), 0.0, &mut x, 1e6, tol);
+        let e = ode.integrate(|_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]), 0.0, 1e6, &mut x, tol);
         assert!(matches!(e, Err(OdeError::TooManySteps { .. })), "{e:?}");
     }
 
@@ -323,7 +509,7 @@ mod tests {
         let tol = Tolerances { rtol: 1e-8, atol: 1e-8 };
         let mut x = SVector::<f64, 1>::new(1.0);
         // x' = x², x(0) = 1 blows up at t = 1.
-        let e = ode.integrate(|_, x: &SVector<f64, 1>| x.map(|v| v * v), 0.0, &mut x, 2.0, tol);
+        let e = ode.integrate(|_, x: &SVector<f64, 1>| x.map(|v| v * v), 0.0, 2.0, &mut x, tol);
         assert!(e.is_err(), "integrated through a singularity: {x:?}");
     }
 }

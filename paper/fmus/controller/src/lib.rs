@@ -62,22 +62,22 @@ pub struct Controller {
     #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
     pub mode: ControlMode,
     /// PID proportional gain of joint 1
-    #[variable(vr = 21, parameter, tunable, start = DEFAULT_PID[0].kp, unit = "N.m/rad")]
+    #[variable(vr = 21, parameter, tunable, start = DEFAULT_PID[0].kp, unit = "N.m/rad", min = 0.0)]
     pub Kp1: f64,
     /// PID integral gain of joint 1
-    #[variable(vr = 22, parameter, tunable, start = DEFAULT_PID[0].ki, unit = "N.m/(rad.s)")]
+    #[variable(vr = 22, parameter, tunable, start = DEFAULT_PID[0].ki, unit = "N.m/(rad.s)", min = 0.0)]
     pub Ki1: f64,
     /// PID derivative gain of joint 1 (acts on the filtered measured speed)
-    #[variable(vr = 23, parameter, tunable, start = DEFAULT_PID[0].kd, unit = "N.m.s/rad")]
+    #[variable(vr = 23, parameter, tunable, start = DEFAULT_PID[0].kd, unit = "N.m.s/rad", min = 0.0)]
     pub Kd1: f64,
     /// PID proportional gain of joint 2
-    #[variable(vr = 24, parameter, tunable, start = DEFAULT_PID[1].kp, unit = "N.m/rad")]
+    #[variable(vr = 24, parameter, tunable, start = DEFAULT_PID[1].kp, unit = "N.m/rad", min = 0.0)]
     pub Kp2: f64,
     /// PID integral gain of joint 2
-    #[variable(vr = 25, parameter, tunable, start = DEFAULT_PID[1].ki, unit = "N.m/(rad.s)")]
+    #[variable(vr = 25, parameter, tunable, start = DEFAULT_PID[1].ki, unit = "N.m/(rad.s)", min = 0.0)]
     pub Ki2: f64,
     /// PID derivative gain of joint 2 (acts on the filtered measured speed)
-    #[variable(vr = 26, parameter, tunable, start = DEFAULT_PID[1].kd, unit = "N.m.s/rad")]
+    #[variable(vr = 26, parameter, tunable, start = DEFAULT_PID[1].kd, unit = "N.m.s/rad", min = 0.0)]
     pub Kd2: f64,
     /// Time constant Tf of the derivative filter Kd s/(Tf s + 1); 0 = no filter
     #[variable(vr = 27, parameter, tunable, start = 0.01, unit = "s", min = 0.0)]
@@ -100,7 +100,7 @@ pub struct Controller {
     /// Length l2 of link 2 of the plant the LQR gain is designed for
     #[variable(vr = 43, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
     pub l2: f64,
-    /// Gravitational acceleration g of the plant the LQR gain is designed for
+    /// Gravitational acceleration g of the plant the LQR gain is designed for (any finite value)
     #[variable(vr = 44, parameter, fixed, start = 9.81, unit = "m/s2")]
     pub g: f64,
     /// LQR state weight Q(1,1) on alpha1 (Q is diagonal; the paper's Q = C'C gives 1, 0, 1, 0)
@@ -124,14 +124,14 @@ pub struct Controller {
     /// Armature resistance R of the motors the voltages are computed for
     #[variable(vr = 60, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
     pub motor_R: f64,
-    /// Torque constant km of the motors
-    #[variable(vr = 61, parameter, fixed, start = 0.00449, unit = "N.m/A")]
+    /// Torque constant km of the motors (> 0: U divides by it)
+    #[variable(vr = 61, parameter, fixed, start = 0.00449, unit = "N.m/A", min > 0.0)]
     pub motor_km: f64,
     /// Back-EMF constant kb of the motors
-    #[variable(vr = 62, parameter, fixed, start = 0.00448, unit = "V.s/rad")]
+    #[variable(vr = 62, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
     pub motor_kb: f64,
     /// Viscous friction B of the motors, at the rotor (compensated in U)
-    #[variable(vr = 63, parameter, fixed, start = 9.0946, unit = "N.m.s/rad")]
+    #[variable(vr = 63, parameter, fixed, start = 9.0946, unit = "N.m.s/rad", min = 0.0)]
     pub motor_B: f64,
     /// Gear ratio n of the motors (rotor speed / joint speed)
     #[variable(vr = 64, parameter, fixed, start = 1.0, min > 0.0)]
@@ -184,10 +184,16 @@ impl Controller {
         SMatrix::<f64, 2, 4>::new(v.K11, v.K12, v.K13, v.K14, v.K21, v.K22, v.K23, v.K24)
     }
 
-    fn law(&self) -> Result<ControlLaw, String> {
+    /// The control law of the parameters. Their domains are declared and enforced by the
+    /// runtime, so every parameter set that reaches here is one the law can use.
+    fn law(&self) -> ControlLaw {
         let v = self;
-        let law = ControlLaw {
-            mode: Mode::from_code(v.mode as i32)?,
+        ControlLaw {
+            mode: match v.mode {
+                ControlMode::Lqr => Mode::Lqr,
+                ControlMode::Pid => Mode::Pid,
+                ControlMode::LqrPid => Mode::LqrPid,
+            },
             k: self.k(),
             pid: [
                 PidGains {
@@ -213,9 +219,7 @@ impl Controller {
                 ..DcMotorParams::default()
             },
             drives_motors: v.drives_motors,
-        };
-        law.validate()?;
-        Ok(law)
+        }
     }
 
     fn measurement(&self) -> (Vector4<f64>, Vector2<f64>) {
@@ -239,7 +243,7 @@ impl Model for Controller {
         let k = lqr_gain(&self.plant(), &q, &r)?;
         (self.K11, self.K12, self.K13, self.K14) = (k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]);
         (self.K21, self.K22, self.K23, self.K24) = (k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]);
-        let law = self.law()?;
+        let law = self.law();
         let (x, reference) = self.measurement();
         self.state = law.initial_state(&x);
         let c = law.command(&self.state, &x, &reference);
@@ -247,17 +251,20 @@ impl Model for Controller {
         Ok(())
     }
 
-    fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
-        self.law().map(|_| ())
+    fn check_internal_state(&self) -> Result<(), String> {
+        let s = &self.state;
+        for (what, v) in [("integral", s.integral), ("rate filter", s.rate_filter)] {
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(format!("the PID {what} {v:?} is not finite"));
+            }
+        }
+        Ok(())
     }
 }
 
 impl CoSimulation for Controller {
-    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
-        let law = self.law().map_err(|message| StepFailure {
-            reached_time: t,
-            message,
-        })?;
+    fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+        let law = self.law();
         let (x, reference) = self.measurement();
         let now = law.command(&self.state, &x, &reference);
         self.state = law.advance(&self.state, &x, &reference, &now, h);

@@ -36,8 +36,8 @@ pub struct DcMotor {
     /// Armature resistance R
     #[variable(vr = 21, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
     pub R: f64,
-    /// Torque constant km
-    #[variable(vr = 22, parameter, fixed, start = 0.00449, unit = "N.m/A", min = 0.0)]
+    /// Torque constant km (> 0: a motor without one gives no torque, and the Controller's voltage R/(n km) is undefined)
+    #[variable(vr = 22, parameter, fixed, start = 0.00449, unit = "N.m/A", min > 0.0)]
     pub km: f64,
     /// Back-EMF constant kb
     #[variable(vr = 23, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
@@ -82,9 +82,9 @@ impl DcMotor {
 }
 
 impl Model for DcMotor {
+    // Every parameter's domain is declared and enforced by the runtime: nothing to check here.
     fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
         let p = self.params();
-        p.validate()?;
         let mut s = DcMotorState {
             i: self.i,
             omega_m: self.omega_m,
@@ -98,7 +98,7 @@ impl Model for DcMotor {
 }
 
 impl CoSimulation for DcMotor {
-    fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
         let p = self.params();
         let s = DcMotorState {
             i: self.i,
@@ -107,7 +107,10 @@ impl CoSimulation for DcMotor {
         let next = if self.coupled {
             p.step_coupled(&s, self.U, self.omega, h)
         } else {
-            p.step_free(&s, self.U, h)
+            p.step_free(&s, self.U, h).map_err(|message| StepFailure {
+                reached_time: t,
+                message,
+            })?
         };
         self.set_state(&p, &next);
         Ok(())

@@ -58,14 +58,14 @@ pub struct Pendulum {
     /// Length l2 of link 2
     #[variable(vr = 23, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
     pub l2: f64,
-    /// Gravitational acceleration g
+    /// Gravitational acceleration g (any finite value: 0 without gravity, < 0 pulls upwards)
     #[variable(vr = 24, parameter, fixed, start = 9.81, unit = "m/s2")]
     pub g: f64,
     /// Relative error tolerance of the integrator (Dormand-Prince 5(4)) inside fmi2DoStep
     #[variable(vr = 30, parameter, tunable, start = 1e-10, min = 1e-14, max = 0.1)]
     pub rtol: f64,
-    /// Absolute error tolerance of the integrator inside fmi2DoStep (angles in rad, rates in rad/s)
-    #[variable(vr = 31, parameter, tunable, start = 1e-10, min = 0.0, max = 1.0)]
+    /// Absolute error tolerance of the integrator inside fmi2DoStep (angles in rad, rates in rad/s); > 0: the states are exactly 0 at rest, where a purely relative error is undefined (a tiny atol gives relative control elsewhere)
+    #[variable(vr = 31, parameter, tunable, start = 1e-10, min > 0.0, max = 1.0)]
     pub atol: f64,
     /// The integrator's memory between steps (step size, error history).
     pub ode: Dopri5,
@@ -106,13 +106,24 @@ impl Pendulum {
 }
 
 impl Model for Pendulum {
+    // The parameters' domains are declared (m1, m2, l1, l2 > 0; g any finite value) and the
+    // runtime enforces them: nothing to check here.
     fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
-        self.params().validate()?;
         self.importer_tolerance = ctx.tolerance();
         self.ode.restart();
         let x = self.state();
         self.set_state(&x);
         Ok(())
+    }
+
+    fn check_internal_state(&self) -> Result<(), String> {
+        self.ode.validate()?;
+        match self.importer_tolerance {
+            Some(t) if !(t.is_finite() && t > 0.0) => {
+                Err(format!("the importer's tolerance {t} must be finite and > 0"))
+            }
+            _ => Ok(()),
+        }
     }
 }
 
@@ -124,7 +135,7 @@ impl CoSimulation for Pendulum {
         let tol = self.tolerances();
         let result = self
             .ode
-            .integrate(|_, x: &Vector4<f64>| p.derivative(x, &u), t, &mut x, t + h, tol);
+            .integrate(|_, x: &Vector4<f64>| p.derivative(x, &u), t, h, &mut x, tol);
         self.set_state(&x);
         result.map_err(|e| StepFailure {
             reached_time: e.time(),

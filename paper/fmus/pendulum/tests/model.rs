@@ -47,7 +47,8 @@ fn result_does_not_depend_on_the_communication_step() {
 }
 
 #[test]
-fn masses_and_lengths_are_declared_positive_and_initialization_refuses_others() {
+fn masses_and_lengths_are_declared_positive() {
+    // The runtime refuses other values (tests/robustness.rs); the model does not check them again.
     for var in ["m1", "m2", "l1", "l2"] {
         let decl = Pendulum::DESCRIPTION.by_name(var).unwrap();
         assert_eq!(
@@ -58,17 +59,6 @@ fn masses_and_lengths_are_declared_positive_and_initialization_refuses_others() 
             }),
             "{var} is declared > 0"
         );
-        for bad in [0.0, -1.0] {
-            let mut p = Pendulum::start();
-            match var {
-                "m1" => p.m1 = bad,
-                "m2" => p.m2 = bad,
-                "l1" => p.l1 = bad,
-                _ => p.l2 = bad,
-            }
-            let e = p.initialize(&ctx()).expect_err("accepted a nonsense parameter");
-            assert!(e.contains(var), "message '{e}' should name {var}");
-        }
     }
 }
 

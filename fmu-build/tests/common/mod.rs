@@ -1,0 +1,210 @@
+//! Packaged FMUs from `target/fmu`, loaded into this process as a master loads them (for the
+//! tests that put several FMUs in one process). Needs `target/fmu/<name>.fmu`
+//! (`cargo run --release -p fmu-build -- build --workspace`).
+#![allow(dead_code)] // each test binary uses a part
+
+use rustfmu::__private::abi::*;
+use rustfmu::description::{ModelDescription, decode, find_encoded};
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::io::Read;
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+type Instantiate = unsafe extern "C" fn(
+    fmi2String,
+    fmi2Type,
+    fmi2String,
+    fmi2String,
+    *const fmi2CallbackFunctions,
+    fmi2Boolean,
+    fmi2Boolean,
+) -> fmi2Component;
+type Unary = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
+type Setup = unsafe extern "C" fn(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> fmi2Status;
+type DoStep = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
+type GetState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+type SetState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
+type StateSize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
+type Serialize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
+type Deserialize = unsafe extern "C" fn(fmi2Component, *const fmi2Byte, usize, *mut fmi2FMUstate) -> fmi2Status;
+type GetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut fmi2Real) -> fmi2Status;
+type SetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
+type SetInteger =
+    unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Integer) -> fmi2Status;
+type RealStatus = unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut fmi2Real) -> fmi2Status;
+
+/// One FMU's binary, loaded, its description, and the functions the tests call.
+pub struct Fmu {
+    pub name: &'static str,
+    pub guid: CString,
+    pub md: ModelDescription,
+    pub instantiate: Instantiate,
+    pub free_instance: unsafe extern "C" fn(fmi2Component),
+    pub setup: Setup,
+    pub enter_init: Unary,
+    pub exit_init: Unary,
+    pub terminate: Unary,
+    pub reset: Unary,
+    pub do_step: DoStep,
+    pub get_real: GetReal,
+    pub set_real: SetReal,
+    pub set_integer: SetInteger,
+    pub set_boolean: SetInteger,
+    pub real_status: RealStatus,
+    pub get_state: GetState,
+    pub set_state: SetState,
+    pub free_state: GetState,
+    pub state_size: StateSize,
+    pub serialize: Serialize,
+    pub deserialize: Deserialize,
+    _lib: libloading::Library,
+}
+
+fn fmu_dir() -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"))
+        .join("fmu")
+}
+
+impl Fmu {
+    /// Unpacks `target/fmu/<name>.fmu`'s linux64 binary and loads it.
+    pub fn load(name: &'static str) -> Fmu {
+        let path = fmu_dir().join(format!("{name}.fmu"));
+        let file = std::fs::File::open(&path).unwrap_or_else(|e| {
+            panic!(
+                "{}: {e}: run `cargo run --release -p fmu-build -- build --workspace` first",
+                path.display()
+            )
+        });
+        let mut zip = zip::ZipArchive::new(file).expect("an FMU is a zip archive");
+        let mut binary = Vec::new();
+        zip.by_name(&format!("binaries/linux64/{name}.so"))
+            .unwrap_or_else(|e| panic!("{name}.fmu: {e}"))
+            .read_to_end(&mut binary)
+            .unwrap();
+        let (md, _) = find_encoded(&binary)
+            .and_then(decode)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let encoded = find_encoded(&binary).unwrap();
+        let guid = rustfmu::description::guid_string(encoded);
+        let so = std::env::temp_dir().join(format!("rustfmu-test-{}-{name}.so", std::process::id()));
+        std::fs::write(&so, &binary).unwrap();
+        // SAFETY: an FMU's binary; loading runs no initializers beyond Rust's own.
+        let lib = unsafe { libloading::Library::new(&so) }.unwrap_or_else(|e| panic!("{name}: {e}"));
+        let _ = std::fs::remove_file(&so);
+        // SAFETY: the FMI 2.0 functions have these signatures (tests/abi_matches_fmi_sys.rs).
+        unsafe {
+            macro_rules! f {
+                ($sym:literal) => {
+                    *lib.get($sym).unwrap_or_else(|e| panic!("{name}: {e}"))
+                };
+            }
+            Fmu {
+                name,
+                guid: CString::new(guid).unwrap(),
+                md,
+                instantiate: f!(b"fmi2Instantiate"),
+                free_instance: f!(b"fmi2FreeInstance"),
+                setup: f!(b"fmi2SetupExperiment"),
+                enter_init: f!(b"fmi2EnterInitializationMode"),
+                exit_init: f!(b"fmi2ExitInitializationMode"),
+                terminate: f!(b"fmi2Terminate"),
+                reset: f!(b"fmi2Reset"),
+                do_step: f!(b"fmi2DoStep"),
+                get_real: f!(b"fmi2GetReal"),
+                set_real: f!(b"fmi2SetReal"),
+                set_integer: f!(b"fmi2SetInteger"),
+                set_boolean: f!(b"fmi2SetBoolean"),
+                real_status: f!(b"fmi2GetRealStatus"),
+                get_state: f!(b"fmi2GetFMUstate"),
+                set_state: f!(b"fmi2SetFMUstate"),
+                free_state: f!(b"fmi2FreeFMUstate"),
+                state_size: f!(b"fmi2SerializedFMUstateSize"),
+                serialize: f!(b"fmi2SerializeFMUstate"),
+                deserialize: f!(b"fmi2DeSerializeFMUstate"),
+                _lib: lib,
+            }
+        }
+    }
+
+    /// A new instance and its log (leaked: the tests make a bounded number).
+    pub fn instance(&self, logging_on: bool) -> (fmi2Component, &'static Log) {
+        let log: &'static Log = Box::leak(Box::default());
+        let callbacks: &'static fmi2CallbackFunctions = Box::leak(Box::new(fmi2CallbackFunctions {
+            // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
+            logger: Some(unsafe {
+                std::mem::transmute::<
+                    unsafe extern "C" fn(
+                        fmi2ComponentEnvironment,
+                        fmi2String,
+                        fmi2Status,
+                        fmi2String,
+                        fmi2String,
+                        *const c_char,
+                    ),
+                    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
+                >(collect)
+            }),
+            allocateMemory: None,
+            freeMemory: None,
+            stepFinished: None,
+            componentEnvironment: log as *const Log as *mut c_void,
+        }));
+        // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+        let c = unsafe {
+            (self.instantiate)(
+                c"test".as_ptr(),
+                fmi2CoSimulation,
+                self.guid.as_ptr(),
+                std::ptr::null(),
+                callbacks,
+                fmi2False,
+                logging_on as fmi2Boolean,
+            )
+        };
+        assert!(!c.is_null(), "{}: fmi2Instantiate: {:?}", self.name, log.take());
+        (c, log)
+    }
+
+    /// The serialized form of c's current state.
+    pub fn serialized(&self, c: fmi2Component) -> Vec<u8> {
+        // SAFETY: c is a live instance of this FMU; the buffers are as large as passed.
+        unsafe {
+            let mut s: fmi2FMUstate = std::ptr::null_mut();
+            assert_eq!((self.get_state)(c, &mut s), fmi2OK);
+            let mut n = 0;
+            assert_eq!((self.state_size)(c, s, &mut n), fmi2OK);
+            let mut bytes = vec![0u8; n];
+            assert_eq!((self.serialize)(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, n), fmi2OK);
+            assert_eq!((self.free_state)(c, &mut s), fmi2OK);
+            bytes
+        }
+    }
+}
+
+/// One instance's log, reached through its componentEnvironment.
+#[derive(Default)]
+pub struct Log(pub Mutex<Vec<(fmi2Status, String)>>);
+
+impl Log {
+    pub fn take(&self) -> Vec<(fmi2Status, String)> {
+        std::mem::take(&mut *self.0.lock().unwrap())
+    }
+}
+
+unsafe extern "C" fn collect(
+    env: fmi2ComponentEnvironment,
+    _name: fmi2String,
+    status: fmi2Status,
+    _category: fmi2String,
+    _message: fmi2String,
+    text: *const c_char,
+) {
+    // SAFETY: env is the leaked Log of the instance; the FMUs log "%s" with one argument.
+    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
+    log.0
+        .lock()
+        .unwrap()
+        .push((status, text.to_string_lossy().into_owned()));
+}

@@ -1,0 +1,147 @@
+//! The DCMotor FMU through its C API (linked into this test binary): declared parameter
+//! domains, and formulas that stay accurate at their ends.
+
+use dc_motor_fmu::DcMotor;
+use dc_motor_fmu::*;
+use rustfmu::__private::abi::*;
+use rustfmu::Variables;
+use std::ffi::{CStr, CString, c_char};
+use std::sync::Mutex;
+
+#[derive(Default)]
+struct Log(Mutex<Vec<(fmi2Status, String)>>);
+
+unsafe extern "C" fn collect(
+    env: fmi2ComponentEnvironment,
+    _name: fmi2String,
+    status: fmi2Status,
+    _category: fmi2String,
+    _message: fmi2String,
+    text: *const c_char,
+) {
+    // SAFETY: env is the leaked Log of the instance; the runtime logs "%s" with one argument.
+    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
+    log.0
+        .lock()
+        .unwrap()
+        .push((status, text.to_string_lossy().into_owned()));
+}
+
+fn vr(name: &str) -> u32 {
+    DcMotor::DESCRIPTION.by_name(name).unwrap().value_reference
+}
+
+/// An instance in initialization mode, and its log.
+fn instance() -> (fmi2Component, &'static Log) {
+    let log: &'static Log = Box::leak(Box::default());
+    let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
+        // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
+        logger: Some(unsafe {
+            std::mem::transmute::<
+                unsafe extern "C" fn(
+                    fmi2ComponentEnvironment,
+                    fmi2String,
+                    fmi2Status,
+                    fmi2String,
+                    fmi2String,
+                    *const c_char,
+                ),
+                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
+            >(collect)
+        }),
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: log as *const Log as *mut _,
+    }));
+    let guid = CString::new(dc_motor_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
+    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    unsafe {
+        let c = fmi2Instantiate(
+            c"robustness".as_ptr(),
+            fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            callbacks,
+            fmi2False,
+            fmi2False,
+        );
+        assert!(!c.is_null());
+        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
+        (c, log)
+    }
+}
+
+fn set(c: fmi2Component, name: &str, x: f64) -> fmi2Status {
+    // SAFETY: one reference, one value.
+    unsafe { fmi2SetReal(c, &vr(name), 1, &x) }
+}
+
+#[test]
+fn a_zero_torque_constant_is_outside_the_declared_domain() {
+    let (c, log) = instance();
+    assert_eq!(set(c, "km", 0.0), fmi2Error, "km = 0 must be refused");
+    let entries = std::mem::take(&mut *log.0.lock().unwrap());
+    assert!(
+        entries
+            .iter()
+            .any(|(s, t)| *s == fmi2Error && t.contains("'km'") && t.contains("outside (0, inf)")),
+        "expected a refusal naming km: {entries:?}"
+    );
+    // SAFETY: from fmi2Instantiate, freed once.
+    unsafe { fmi2FreeInstance(c) };
+}
+
+#[test]
+fn a_tiny_resistance_gives_the_right_current() {
+    let (c, log) = instance();
+    // SAFETY: c is a live instance; arrays of one.
+    unsafe {
+        assert_eq!(set(c, "R", 1e-20), fmi2OK, "R = 1e-20 is > 0");
+        assert_eq!(set(c, "U", 6.0), fmi2OK);
+        assert_eq!(set(c, "omega", 2.0), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.0.lock().unwrap());
+        for k in 0..15 {
+            assert_eq!(fmi2DoStep(c, k as f64 * 1e-3, 1e-3, fmi2True), fmi2OK);
+        }
+        let mut i = 0.0;
+        assert_eq!(fmi2GetReal(c, &vr("i"), 1, &mut i), fmi2OK);
+        // R -> 0: L di/dt = U - kb omega_m, i = (6 - 0.00448 * 2) * 0.015 / 0.000121.
+        assert!(
+            (i - 742.6909090909).abs() < 1e-6,
+            "after 15 ms at 6 V and 2 rad/s with R = 1e-20 Ohm: expected 742.69 A, got {i} A"
+        );
+        fmi2FreeInstance(c);
+    }
+}
+
+#[test]
+fn an_unloaded_step_of_any_length_returns() {
+    // The paper's motor, unloaded, one step of 1e40 s: nalgebra's exp squared 2^64 times (a
+    // hang); now the steady state. With L = 5e-324 H the transition matrix is beyond f64: Discard.
+    for (l, h, want) in [(0.000121, 1e40, fmi2OK), (5e-324, 1e-3, fmi2Discard)] {
+        let (c, log) = instance();
+        // SAFETY: c is a live instance; arrays of one.
+        unsafe {
+            assert_eq!(fmi2SetBoolean(c, &vr("coupled"), 1, &fmi2False), fmi2OK);
+            assert_eq!(set(c, "L", l), fmi2OK);
+            assert_eq!(set(c, "U", 6.0), fmi2OK);
+            assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
+            let s = fmi2DoStep(c, 0.0, h, fmi2True);
+            let entries = std::mem::take(&mut *log.0.lock().unwrap());
+            assert_eq!(s, want, "L = {l}, h = {h}: {entries:?}");
+            if want == fmi2Discard {
+                assert!(
+                    entries
+                        .iter()
+                        .any(|(s, t)| *s == fmi2Discard && t.contains("beyond f64")),
+                    "{entries:?}"
+                );
+            }
+            let mut w = f64::NAN;
+            assert_eq!(fmi2GetReal(c, &vr("omega_m"), 1, &mut w), fmi2OK);
+            assert!(w.is_finite(), "omega_m = {w}");
+            fmi2FreeInstance(c);
+        }
+    }
+}
