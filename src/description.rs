@@ -206,6 +206,11 @@ impl Interfaces {
         co_simulation: true,
         model_exchange: false,
     };
+    /// Model exchange and co-simulation in one binary: what `export_fmi2!` exports.
+    pub const BOTH: Interfaces = Interfaces {
+        co_simulation: true,
+        model_exchange: true,
+    };
 }
 
 /// Everything the model description says, as declared.

@@ -24,7 +24,7 @@
 //!
 //! impl Model for Lag {}
 //! impl CoSimulation for Lag {
-//!     fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+//!     fn do_step(&mut self, _t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
 //!         self.y = self.u + (self.y - self.u) * (-h / self.T).exp();
 //!         Ok(())
 //!     }
@@ -47,9 +47,11 @@ extern crate self as rustfmu;
 
 pub mod description;
 mod model;
+pub mod solver;
 mod value;
 
-pub use model::{CoSimulation, Context, Model, StepFailure, Variables};
+pub use model::{CoSimulation, Context, Model, Real, Standalone, StateVector, StepFailure, Variables};
+pub use num_dual;
 pub use rustfmu_derive::{FmuEnum, Model};
 pub use value::{FmiType, FmuEnum, Value};
 
@@ -59,7 +61,7 @@ pub mod fmi2;
 /// Everything a model file needs.
 pub mod prelude {
     pub use crate::description::Variable;
-    pub use crate::{CoSimulation, Context, FmuEnum, Model, StepFailure, Value};
+    pub use crate::{CoSimulation, Context, FmuEnum, Model, Real, StepFailure, Value};
 }
 
 /// What the macros expand to; not part of the API.

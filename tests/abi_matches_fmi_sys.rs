@@ -21,7 +21,7 @@ mod model {
 
     impl Model for Probe {}
     impl CoSimulation for Probe {
-        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
             Ok(())
         }
     }

@@ -57,7 +57,7 @@ mod model {
     }
 
     impl CoSimulation for Greeter {
-        fn do_step(&mut self, _t: f64, _h: f64, ctx: &Context) -> Result<(), StepFailure> {
+        fn do_step(&mut self, _t: f64, _h: f64, ctx: &mut Context) -> Result<(), StepFailure> {
             self.greet(ctx);
             Ok(())
         }

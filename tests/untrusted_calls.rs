@@ -54,7 +54,7 @@ mod probe {
     }
 
     impl CoSimulation for Probe {
-        fn do_step(&mut self, _t: f64, h: f64, ctx: &Context) -> Result<(), StepFailure> {
+        fn do_step(&mut self, _t: f64, h: f64, ctx: &mut Context) -> Result<(), StepFailure> {
             ctx.log("logEvents", "stepping");
             self.acc += self.u * h;
             self.outputs();
@@ -344,7 +344,7 @@ mod other {
 
     impl Model for Other {}
     impl CoSimulation for Other {
-        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+        fn do_step(&mut self, _t: f64, _h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
             self.n += 1;
             Ok(())
         }

@@ -8,14 +8,14 @@ use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi::fmi2::schema::Causality;
 use pendulum_fmu::Pendulum;
 use rustfmu::Value;
-use rustfmu::{CoSimulation as _, Context, Model, Variables};
+use rustfmu::{Standalone, Variables};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 /// The plant's step without the FMI layer.
 pub struct Direct {
-    fresh: Pendulum,
-    pub model: Pendulum,
+    fresh: Standalone<Pendulum>,
+    pub sim: Standalone<Pendulum>,
 }
 
 impl Default for Direct {
@@ -28,33 +28,31 @@ impl Direct {
     pub fn new() -> Direct {
         let mut model = Pendulum::start();
         (model.alpha1, model.alpha2) = (SWING_START[0].1, SWING_START[1].1);
-        model
-            .initialize(&Context::standalone(0.0, None))
-            .expect("the paper's parameters are valid");
+        let mut sim = Standalone::new(model, 0.0, None);
+        sim.initialize().expect("the paper's parameters are valid");
         Direct {
-            fresh: model.clone(),
-            model,
+            fresh: sim.clone(),
+            sim,
         }
     }
 
     pub fn restart(&mut self) {
-        self.model.clone_from(&self.fresh);
+        self.sim.clone_from(&self.fresh);
     }
 
     #[inline]
     pub fn step(&mut self, t: f64, h: f64) {
-        self.model
-            .do_step(t, h, &Context::standalone(0.0, None))
-            .expect("the swing integrates");
+        self.sim.time = t;
+        self.sim.do_step(h).expect("the swing integrates");
     }
 
     /// What a master does around a step, without the FMI layer: set the two torques, step, read
     /// the four states.
     #[inline]
     pub fn round_trip(&mut self, t: f64, h: f64, u: [f64; 2]) -> [f64; 4] {
-        (self.model.M1, self.model.M2) = (u[0], u[1]);
+        (self.sim.model.M1, self.sim.model.M2) = (u[0], u[1]);
         self.step(t, h);
-        let v = &self.model;
+        let v = &self.sim.model;
         [v.alpha1, v.omega1, v.alpha2, v.omega2]
     }
 }

@@ -71,9 +71,11 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
                 "{at}: a start value must be given exactly where the standard asks for one"
             ));
         }
+        // The knowns of ModelStructure: inputs and continuous states.
+        let is_state = |name: &str| decls.iter().any(|d| d.derivative_of == Some(name));
         for dep in v.depends_on.unwrap_or(&[]) {
-            if !decls.iter().any(|o| o.name == *dep && o.causality == C::Input) {
-                return Err(format!("{at}: depends on '{dep}', which is not an input"));
+            if !decls.iter().any(|o| o.name == *dep && (o.causality == C::Input || is_state(o.name))) {
+                return Err(format!("{at}: depends on '{dep}', which is neither an input nor a continuous state"));
             }
         }
         if let Some(state) = v.derivative_of
@@ -177,7 +179,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
                 ("canNotUseMemoryManagementFunctions", "true"),
                 ("canGetAndSetFMUstate", "true"),
                 ("canSerializeFMUstate", "true"),
-                ("providesDirectionalDerivative", "false"),
+                ("providesDirectionalDerivative", "true"),
             ],
         )?;
     }
@@ -196,7 +198,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
                 ("canNotUseMemoryManagementFunctions", "true"),
                 ("canGetAndSetFMUstate", "true"),
                 ("canSerializeFMUstate", "true"),
-                ("providesDirectionalDerivative", "false"),
+                ("providesDirectionalDerivative", "true"),
             ],
         )?;
     }
@@ -394,11 +396,12 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         }
         close(&mut w, "Derivatives")?;
     }
+    let is_state = |v: &Variable| decls.iter().any(|d| d.derivative_of == Some(v.name));
     let initial_unknowns: Vec<usize> = decls
         .iter()
         .enumerate()
         .filter(|(_, d)| {
-            ((d.causality == Causality::Output || d.derivative_of.is_some())
+            ((d.causality == Causality::Output || d.derivative_of.is_some() || is_state(d))
                 && matches!(d.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
                 || d.causality == Causality::CalculatedParameter
         })

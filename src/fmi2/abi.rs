@@ -68,6 +68,18 @@ pub struct fmi2CallbackFunctions {
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
+/// What fmi2NewDiscreteStates reports (model exchange).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct fmi2EventInfo {
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    pub terminateSimulation: fmi2Boolean,
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    pub nextEventTimeDefined: fmi2Boolean,
+    pub nextEventTime: fmi2Real,
+}
+
 /// `fmi2TypesPlatform` and `fmi2Version` as NUL-terminated C strings.
 pub const TYPES_PLATFORM: &std::ffi::CStr = c"default";
 pub const VERSION: &std::ffi::CStr = c"2.0";

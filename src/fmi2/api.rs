@@ -177,15 +177,9 @@ pub unsafe fn instantiate<M: CoSimulation>(
             }
             Some(_) => {}
         }
-        if fmu_type != fmi2CoSimulation {
+        if fmu_type != fmi2CoSimulation && fmu_type != fmi2ModelExchange {
             return refuse(format!(
-                "fmuType = {fmu_type}{}: {} is a co-simulation FMU only (fmuType must be fmi2CoSimulation = 1)",
-                if fmu_type == fmi2ModelExchange {
-                    " (fmi2ModelExchange)"
-                } else {
-                    ""
-                },
-                M::DESCRIPTION.model_identifier
+                "fmuType = {fmu_type} is neither fmi2ModelExchange (0) nor fmi2CoSimulation (1)"
             ));
         }
         match guid.as_deref() {
@@ -199,7 +193,7 @@ pub unsafe fn instantiate<M: CoSimulation>(
             }
             Some(_) => {}
         }
-        let inst = Instance::<M>::new(logger, own_guid);
+        let inst = Instance::<M>::new(logger, own_guid, fmu_type == fmi2ModelExchange);
         let mut inst = inst;
         inst.resources = resources
             .as_deref()
@@ -471,8 +465,23 @@ pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUsta
             if state.is_null() {
                 return inst.error("fmi2SetFMUstate: FMUstate is NULL");
             }
+            let fits = |s: &mut snapshots::Snapshot<M>| s.sim.state;
+            match snapshots::with::<M, _>(inst.guid, state, fits) {
+                Ok(s) if !inst.state_fits(s) => {
+                    return inst.error(&format!(
+                        "fmi2SetFMUstate: the state was saved in {s:?}, a state of the other interface \
+                         (this instance is {}); refused, nothing changed",
+                        if inst.model_exchange { "model exchange" } else { "co-simulation" }
+                    ));
+                }
+                Ok(_) => {}
+                Err(why) => return inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
+            }
             match snapshots::with::<M, _>(inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
-                Ok(()) => fmi2OK,
+                Ok(()) => {
+                    inst.restored();
+                    fmi2OK
+                }
                 Err(why) => inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
             }
         })
@@ -580,16 +589,129 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
     }
 }
 
-pub unsafe fn get_directional_derivative<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
+pub unsafe fn get_directional_derivative<M: CoSimulation>(
+    c: fmi2Component,
+    unknown_refs: *const fmi2ValueReference,
+    n_unknown: usize,
+    known_refs: *const fmi2ValueReference,
+    n_known: usize,
+    dv_known: *const fmi2Real,
+    dv_unknown: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetDirectionalDerivative";
     unsafe {
-        with_instance::<M>(
-            c,
-            Call::GetDirectionalDerivative,
-            "fmi2GetDirectionalDerivative",
-            |inst| inst.error("fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative=\"false\")"),
-        )
+        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
+            let (Some(unknowns), Some(knowns), Some(dv), Some(out)) = (
+                slice(unknown_refs, n_unknown),
+                slice(known_refs, n_known),
+                slice(dv_known, n_known),
+                slice_mut(dv_unknown, n_unknown),
+            ) else {
+                return inst.error(&format!(
+                    "{F}: vUnknown_ref, vKnown_ref, dvKnown or dvUnknown is NULL (nUnknown = {n_unknown}, nKnown = {n_known})"
+                ));
+            };
+            inst.directional_derivative(unknowns, knowns, dv, out)
+        })
     }
 }
+
+/// The model-exchange functions without arguments besides the instance.
+macro_rules! me_transition {
+    ($fn_name:ident, $call:ident, $name:literal, $method:ident) => {
+        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
+            unsafe { with_instance::<M>(c, Call::$call, $name, |inst| inst.$method()) }
+        }
+    };
+}
+me_transition!(enter_event_mode, EnterEventMode, "fmi2EnterEventMode", enter_event_mode);
+me_transition!(
+    enter_continuous_time_mode,
+    EnterContinuousTimeMode,
+    "fmi2EnterContinuousTimeMode",
+    enter_continuous_time_mode
+);
+
+pub unsafe fn new_discrete_states<M: CoSimulation>(c: fmi2Component, info: *mut fmi2EventInfo) -> fmi2Status {
+    unsafe {
+        with_instance::<M>(c, Call::NewDiscreteStates, "fmi2NewDiscreteStates", |inst| {
+            if info.is_null() {
+                return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
+            }
+            let mut e = super::instance::EventInfo::default();
+            let status = inst.new_discrete_states(&mut e);
+            let b = |v: bool| if v { fmi2True } else { fmi2False };
+            *info = fmi2EventInfo {
+                newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
+                terminateSimulation: b(e.terminate_simulation),
+                nominalsOfContinuousStatesChanged: b(e.nominals_changed),
+                valuesOfContinuousStatesChanged: b(e.values_changed),
+                nextEventTimeDefined: b(e.next_event_time.is_some()),
+                nextEventTime: e.next_event_time.unwrap_or(0.0),
+            };
+            status
+        })
+    }
+}
+
+pub unsafe fn completed_integrator_step<M: CoSimulation>(
+    c: fmi2Component,
+    _no_set_fmu_state_prior: fmi2Boolean,
+    enter_event_mode: *mut fmi2Boolean,
+    terminate_simulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    const F: &str = "fmi2CompletedIntegratorStep";
+    unsafe {
+        with_instance::<M>(c, Call::CompletedIntegratorStep, F, |inst| {
+            if enter_event_mode.is_null() || terminate_simulation.is_null() {
+                return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
+            }
+            let (status, event, terminate) = inst.completed_integrator_step();
+            *enter_event_mode = if event { fmi2True } else { fmi2False };
+            *terminate_simulation = if terminate { fmi2True } else { fmi2False };
+            status
+        })
+    }
+}
+
+pub unsafe fn set_time<M: CoSimulation>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    unsafe { with_instance::<M>(c, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time)) }
+}
+
+pub unsafe fn set_continuous_states<M: CoSimulation>(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
+    const F: &str = "fmi2SetContinuousStates";
+    unsafe {
+        with_instance::<M>(c, Call::SetContinuousStates, F, |inst| match slice(x, nx) {
+            Some(x) => inst.set_continuous_states(x),
+            None => inst.error(&format!("{F}: x is NULL with nx = {nx}")),
+        })
+    }
+}
+
+/// fmi2GetContinuousStates, fmi2GetDerivatives, fmi2GetNominalsOfContinuousStates,
+/// fmi2GetEventIndicators: an output array of the instance's size.
+macro_rules! me_vector {
+    ($fn_name:ident, $call:ident, $name:literal, $arg:literal, $method:ident) => {
+        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component, out: *mut fmi2Real, n: usize) -> fmi2Status {
+            unsafe {
+                with_instance::<M>(c, Call::$call, $name, |inst| match slice_mut(out, n) {
+                    Some(out) => inst.$method(out),
+                    None => inst.error(&format!(concat!($name, ": ", $arg, " is NULL with n = {}"), n)),
+                })
+            }
+        }
+    };
+}
+me_vector!(get_continuous_states, GetContinuousStates, "fmi2GetContinuousStates", "x", get_continuous_states);
+me_vector!(get_derivatives, GetDerivatives, "fmi2GetDerivatives", "derivatives", get_derivatives);
+me_vector!(
+    get_nominals_of_continuous_states,
+    GetNominalsOfContinuousStates,
+    "fmi2GetNominalsOfContinuousStates",
+    "x_nominal",
+    get_nominals
+);
+me_vector!(get_event_indicators, GetEventIndicators, "fmi2GetEventIndicators", "eventIndicators", get_event_indicators_mut);
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
     unsafe {

@@ -1,8 +1,8 @@
 //! `export_fmi2!(Model)`: the one line an FMU crate needs.
 
-/// Exports `Model` as an FMI 2.0 co-simulation FMU: defines every function of the interface as
-/// an unmangled `extern "C"` symbol with the standard's exact signature (forwarded to the
-/// runtime), and embeds the model's encoded description in the library, where `cargo fmu`
+/// Exports `Model` as an FMI 2.0 FMU for model exchange and co-simulation in one binary:
+/// defines every function of both interfaces as an unmangled `extern "C"` symbol with the
+/// standard's exact signature (forwarded to the runtime), and embeds the model's encoded description in the library, where `cargo fmu`
 /// reads it. The GUID is computed here, at compile time, from that description.
 ///
 /// ```ignore
@@ -19,7 +19,7 @@ macro_rules! export_fmi2 {
             use $crate::__private::api;
             type __RustfmuModel = $model;
 
-            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::CO_SIMULATION;
+            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::BOTH;
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
             const ENCODED: [u8; LEN] =
@@ -227,14 +227,99 @@ macro_rules! export_fmi2 {
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
                 c: fmi2Component,
-                _vUnknown_ref: *const fmi2ValueReference,
-                _nUnknown: usize,
-                _vKnown_ref: *const fmi2ValueReference,
-                _nKnown: usize,
-                _dvKnown: *const fmi2Real,
-                _dvUnknown: *mut fmi2Real,
+                vUnknown_ref: *const fmi2ValueReference,
+                nUnknown: usize,
+                vKnown_ref: *const fmi2ValueReference,
+                nKnown: usize,
+                dvKnown: *const fmi2Real,
+                dvUnknown: *mut fmi2Real,
             ) -> fmi2Status {
-                unsafe { api::get_directional_derivative::<__RustfmuModel>(c) }
+                unsafe {
+                    api::get_directional_derivative::<__RustfmuModel>(
+                        c,
+                        vUnknown_ref,
+                        nUnknown,
+                        vKnown_ref,
+                        nKnown,
+                        dvKnown,
+                        dvUnknown,
+                    )
+                }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+                unsafe { api::enter_event_mode::<__RustfmuModel>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2NewDiscreteStates(
+                c: fmi2Component,
+                fmi2eventInfo: *mut fmi2EventInfo,
+            ) -> fmi2Status {
+                unsafe { api::new_discrete_states::<__RustfmuModel>(c, fmi2eventInfo) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+                unsafe { api::enter_continuous_time_mode::<__RustfmuModel>(c) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+                c: fmi2Component,
+                noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+                enterEventMode: *mut fmi2Boolean,
+                terminateSimulation: *mut fmi2Boolean,
+            ) -> fmi2Status {
+                unsafe {
+                    api::completed_integrator_step::<__RustfmuModel>(
+                        c,
+                        noSetFMUStatePriorToCurrentPoint,
+                        enterEventMode,
+                        terminateSimulation,
+                    )
+                }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+                unsafe { api::set_time::<__RustfmuModel>(c, time) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2SetContinuousStates(
+                c: fmi2Component,
+                x: *const fmi2Real,
+                nx: usize,
+            ) -> fmi2Status {
+                unsafe { api::set_continuous_states::<__RustfmuModel>(c, x, nx) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetDerivatives(
+                c: fmi2Component,
+                derivatives: *mut fmi2Real,
+                nx: usize,
+            ) -> fmi2Status {
+                unsafe { api::get_derivatives::<__RustfmuModel>(c, derivatives, nx) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetEventIndicators(
+                c: fmi2Component,
+                eventIndicators: *mut fmi2Real,
+                ni: usize,
+            ) -> fmi2Status {
+                unsafe { api::get_event_indicators::<__RustfmuModel>(c, eventIndicators, ni) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetContinuousStates(
+                c: fmi2Component,
+                x: *mut fmi2Real,
+                nx: usize,
+            ) -> fmi2Status {
+                unsafe { api::get_continuous_states::<__RustfmuModel>(c, x, nx) }
+            }
+            #[unsafe(no_mangle)]
+            pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+                c: fmi2Component,
+                x_nominal: *mut fmi2Real,
+                nx: usize,
+            ) -> fmi2Status {
+                unsafe { api::get_nominals_of_continuous_states::<__RustfmuModel>(c, x_nominal, nx) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(

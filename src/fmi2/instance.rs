@@ -5,13 +5,16 @@
 use super::abi::*;
 use super::logging::{Category, Logger};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
-use crate::model::{CoSimulation, Context};
+use crate::model::{CoSimulation, Context, StateVector};
+use crate::solver::Dopri5;
 use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
 
-/// States of the FMI 2.0 co-simulation state machine (section 4.2.4). `StepInProgress` does not
-/// occur: every step here is synchronous.
+/// States of the FMI 2.0 state machines: co-simulation (section 4.2.4) and model exchange
+/// (section 3.2.3; `EventMode`, `ContinuousTimeMode`). An instance is in the states of the
+/// interface it was instantiated for. `StepInProgress` does not occur: every step here is
+/// synchronous.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[repr(u8)]
 pub enum State {
@@ -23,6 +26,8 @@ pub enum State {
     Terminated = 5,
     Error = 6,
     Fatal = 7,
+    EventMode = 8,
+    ContinuousTimeMode = 9,
 }
 
 const fn bit(s: State) -> u16 {
@@ -36,10 +41,15 @@ const STEP_CANCELED: u16 = bit(State::StepCanceled);
 const TERMINATED: u16 = bit(State::Terminated);
 const ERROR: u16 = bit(State::Error);
 const FATAL: u16 = bit(State::Fatal);
-const ANY_BUT_FATAL: u16 = INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR;
+const EVENT: u16 = bit(State::EventMode);
+const CONTINUOUS: u16 = bit(State::ContinuousTimeMode);
+const ANY_BUT_FATAL: u16 =
+    INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS;
 
 /// The functions whose legality depends on the state, with the states each is allowed in,
-/// from the standard's table in section 4.2.4 (as the Reference-FMUs encode it).
+/// from the standard's tables in sections 3.2.3 and 4.2.4 (as the Reference-FMUs encode them).
+/// The co-simulation functions are allowed in co-simulation states only, the model-exchange
+/// ones in model-exchange states only, so each interface refuses the other's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Call {
     SetDebugLogging,
@@ -58,6 +68,16 @@ pub enum Call {
     DoStep,
     CancelStep,
     GetStatus,
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetEventIndicators,
+    GetContinuousStates,
+    GetDerivatives,
+    GetNominalsOfContinuousStates,
 }
 
 impl Call {
@@ -70,25 +90,36 @@ impl Call {
             Call::ExitInitializationMode => INIT,
             // Not from StepCanceled: after fmi2CancelStep only fmi2Reset and fmi2FreeInstance
             // are meant to follow (the Reference FMUs' mask is StepComplete | StepFailed too).
-            Call::Terminate => STEP_COMPLETE | STEP_FAILED,
+            Call::Terminate => STEP_COMPLETE | STEP_FAILED | EVENT | CONTINUOUS,
             Call::Reset => ANY_BUT_FATAL,
-            Call::GetValues => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
-            Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE,
+            Call::GetValues | Call::GetDirectionalDerivative => {
+                INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS
+            }
+            // Which variables may be set in which of these states: `Instance::settable`.
+            Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT | CONTINUOUS,
             Call::FmuState => ANY_BUT_FATAL,
-            Call::GetDirectionalDerivative => INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
             Call::SetRealInputDerivatives => INSTANTIATED | INIT | STEP_COMPLETE,
             Call::GetRealOutputDerivatives => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
             Call::DoStep => STEP_COMPLETE,
             Call::CancelStep => 0,
             Call::GetStatus => STEP_COMPLETE | STEP_FAILED | TERMINATED,
+            Call::EnterEventMode => EVENT | CONTINUOUS,
+            Call::NewDiscreteStates | Call::EnterContinuousTimeMode => EVENT,
+            Call::CompletedIntegratorStep | Call::SetContinuousStates => CONTINUOUS,
+            Call::SetTime => EVENT | CONTINUOUS,
+            Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
         }
     }
 }
 
 fn state_names(mask: u16) -> String {
-    const ALL: [State; 8] = [
+    const ALL: [State; 10] = [
         State::Instantiated,
         State::InitializationMode,
+        State::EventMode,
+        State::ContinuousTimeMode,
         State::StepComplete,
         State::StepFailed,
         State::StepCanceled,
@@ -122,6 +153,20 @@ pub struct Sim<M> {
     pub terminate_requested: bool,
     /// Calculated variables are stale in initialization mode after a set.
     pub init_dirty: bool,
+    /// The co-simulation integrator's memory (step size, error history).
+    pub solver: Dopri5,
+    /// Something the derivatives depend on (a state, an input, time, a parameter) changed
+    /// since they were computed. A cache flag, not part of the serialized state (a restored
+    /// state recomputes on demand).
+    #[serde(skip, default = "stale")]
+    pub stale_derivatives: bool,
+    /// ... and the outputs and locals the equations compute.
+    #[serde(skip, default = "stale")]
+    pub stale_outputs: bool,
+}
+
+fn stale() -> bool {
+    true
 }
 
 impl<M: CoSimulation> Sim<M> {
@@ -136,6 +181,9 @@ impl<M: CoSimulation> Sim<M> {
             last_successful_time: 0.0,
             terminate_requested: false,
             init_dirty: true,
+            solver: Dopri5::default(),
+            stale_derivatives: true,
+            stale_outputs: true,
         }
     }
 }
@@ -150,6 +198,8 @@ pub struct Instance<M: CoSimulation> {
     pub logger: Logger,
     pub guid: &'static str,
     pub sim: Sim<M>,
+    /// Instantiated as fmi2ModelExchange (else fmi2CoSimulation).
+    pub model_exchange: bool,
     /// The model as it was before the step in progress, to go back to when the step leaves
     /// something that is not finite. Kept here so that a step does not allocate a copy.
     before_step: M,
@@ -191,11 +241,12 @@ fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, interna
 type Outcome = Result<(), fmi2Status>;
 
 impl<M: CoSimulation> Instance<M> {
-    pub fn new(logger: Logger, guid: &'static str) -> Self {
+    pub fn new(logger: Logger, guid: &'static str, model_exchange: bool) -> Self {
         Instance {
             logger,
             guid,
             sim: Sim::new(),
+            model_exchange,
             before_step: M::start(),
             strings: Vec::new(),
             resources: None,
@@ -312,11 +363,14 @@ impl<M: CoSimulation> Instance<M> {
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
             resources: self.resources.as_deref(),
+            solver: None,
+            refreshed: false,
         };
         let outcome = self
             .sim
             .model
             .initialize(&ctx)
+            .map(|()| evaluate(&mut self.sim.model, self.sim.start_time))
             .and_then(|()| match non_finite(&self.sim.model) {
                 None => Ok(()),
                 Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
@@ -324,6 +378,8 @@ impl<M: CoSimulation> Instance<M> {
         match outcome {
             Ok(()) => {
                 self.sim.init_dirty = false;
+                self.sim.stale_derivatives = false;
+                self.sim.stale_outputs = false;
                 Ok(())
             }
             Err(message) => {
@@ -337,9 +393,14 @@ impl<M: CoSimulation> Instance<M> {
         if let Err(status) = self.initialize_model("fmi2ExitInitializationMode", true) {
             return status;
         }
-        self.sim.state = State::StepComplete;
+        self.sim.state = if self.model_exchange {
+            State::EventMode
+        } else {
+            State::StepComplete
+        };
         self.sim.time = self.sim.start_time;
         self.sim.last_successful_time = self.sim.start_time;
+        self.sim.solver.restart();
         self.event(|| format!("initialized at t = {}", self.sim.start_time));
         fmi2OK
     }
@@ -383,9 +444,7 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(function, false)
-        {
+        if let Err(status) = self.up_to_date(function) {
             return status;
         }
         for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
@@ -404,9 +463,7 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model("fmi2GetString", false)
-        {
+        if let Err(status) = self.up_to_date("fmi2GetString") {
             return status;
         }
         self.strings.clear();
@@ -432,7 +489,7 @@ impl<M: CoSimulation> Instance<M> {
             }
             parameter_changed |= decl.causality == Causality::Parameter;
         }
-        let previous = (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.clone());
+        let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
         for (vr, v) in vrs.iter().zip(values) {
             self.sim.model.set_string(*vr, v);
         }
@@ -450,9 +507,14 @@ impl<M: CoSimulation> Instance<M> {
             State::InitializationMode => {
                 decl.causality == Causality::Input || decl.effective_initial() == Some(Initial::Exact)
             }
-            State::StepComplete => {
+            State::StepComplete | State::EventMode => {
                 decl.causality == Causality::Input
                     || (decl.causality == Causality::Parameter && decl.variability == Variability::Tunable)
+            }
+            // Model exchange between events: continuous inputs only (states through
+            // fmi2SetContinuousStates).
+            State::ContinuousTimeMode => {
+                decl.causality == Causality::Input && decl.variability == Variability::Continuous
             }
             _ => false,
         }
@@ -490,7 +552,7 @@ impl<M: CoSimulation> Instance<M> {
                 Err(status) => return status,
             }
         }
-        let previous = (parameter_changed && self.sim.state == State::StepComplete).then(|| self.sim.model.clone());
+        let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
         for (vr, v) in vrs.iter().zip(values) {
             if let Some(value) = v.to_value() {
                 self.sim.model.set(*vr, value);
@@ -505,12 +567,16 @@ impl<M: CoSimulation> Instance<M> {
         if self.sim.state == State::InitializationMode {
             self.sim.init_dirty = true;
         }
+        self.sim.stale_derivatives = true;
+        self.sim.stale_outputs = true;
         if let Some(previous) = previous {
             let ctx = Context {
                 start_time: self.sim.start_time,
                 tolerance: self.sim.tolerance,
                 logger: Some(&self.logger),
                 resources: self.resources.as_deref(),
+                solver: None,
+                refreshed: false,
             };
             let outcome = self
                 .sim
@@ -523,6 +589,7 @@ impl<M: CoSimulation> Instance<M> {
                     "{function}: parameter change refused: {why}; values unchanged"
                 ));
             }
+            self.sim.solver.restart();
             self.event(|| format!("{function}: tunable parameters changed at t = {}", self.sim.time));
         }
         fmi2OK
@@ -566,14 +633,35 @@ impl<M: CoSimulation> Instance<M> {
             ));
         }
         self.trace(|| format!("fmi2DoStep(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
-        let ctx = Context {
+        self.before_step.clone_from(&self.sim.model);
+        let before_solver = self.sim.solver;
+        let mut ctx = Context {
             start_time: self.sim.start_time,
             tolerance: self.sim.tolerance,
             logger: Some(&self.logger),
             resources: self.resources.as_deref(),
+            solver: Some(&mut self.sim.solver),
+            refreshed: false,
         };
-        self.before_step.clone_from(&self.sim.model);
-        let outcome = self.sim.model.do_step(t, h, &ctx);
+        let mut outcome = self.sim.model.do_step(t, h, &mut ctx);
+        if !ctx.refreshed {
+            // The model's own step advanced the states: its outputs follow from them.
+            let reached = match &outcome {
+                Ok(()) => end,
+                Err(failure) => failure.reached_time,
+            };
+            evaluate(&mut self.sim.model, reached);
+        }
+        self.sim.stale_derivatives = false;
+        self.sim.stale_outputs = false;
+        if outcome.is_ok() && self.sim.solver.validate().is_err() {
+            outcome = Err(crate::model::StepFailure {
+                reached_time: t,
+                message: format!("the integrator's memory became unusable: {}", self.sim.solver.validate().err().unwrap_or_default()),
+            });
+            self.sim.solver = before_solver;
+            self.sim.solver.restart();
+        }
         match (outcome, non_finite(&self.sim.model)) {
             (Ok(()), None) => {
                 self.sim.time = end;
@@ -591,6 +679,7 @@ impl<M: CoSimulation> Instance<M> {
             }
             (outcome, Some(what)) => {
                 std::mem::swap(&mut self.sim.model, &mut self.before_step);
+                self.sim.solver = before_solver;
                 let model_said = match outcome {
                     Ok(()) => String::new(),
                     Err(failure) => format!(" (the model reported: {})", failure.message),
@@ -717,6 +806,7 @@ pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
     if let Some(what) = non_finite(&sim.model) {
         return Err(format!("in the state, {what}"));
     }
+    sim.solver.validate().map_err(|e| format!("in the state, {e}"))?;
     let times = [
         ("startTime", sim.start_time),
         ("time", sim.time),
@@ -754,4 +844,281 @@ fn range_text(v: &Variable) -> String {
         None => "inf)".into(),
     };
     format!("{lo}, {hi}")
+}
+
+/// Runs the model's equations on `f64` at time `t`: derivatives, then outputs, and stores what
+/// they computed. The caller checks the result ([`non_finite`]).
+#[inline]
+pub fn evaluate<M: CoSimulation>(model: &mut M, t: f64) {
+    let mut c = model.continuous::<f64>();
+    model.derivatives(t, &mut c);
+    model.outputs(t, &mut c);
+    model.store_continuous(&c);
+}
+
+/// What fmi2NewDiscreteStates reports (fmi2EventInfo's fields).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EventInfo {
+    pub new_discrete_states_needed: bool,
+    pub terminate_simulation: bool,
+    pub nominals_changed: bool,
+    pub values_changed: bool,
+    pub next_event_time: Option<f64>,
+}
+
+impl<M: CoSimulation> Instance<M> {
+    /// Where a tunable parameter may change: between co-simulation steps, or at an event.
+    fn between_steps(&self) -> bool {
+        matches!(self.sim.state, State::StepComplete | State::EventMode)
+    }
+
+    /// Whether `state` belongs to the interface this instance was made for (an FMU state of a
+    /// model-exchange instance restored into a co-simulation one would leave it in a state
+    /// its interface does not have).
+    pub fn state_fits(&self, state: State) -> bool {
+        let me_only = matches!(state, State::EventMode | State::ContinuousTimeMode);
+        let cs_only = matches!(state, State::StepComplete | State::StepFailed | State::StepCanceled);
+        if self.model_exchange { !cs_only } else { !me_only }
+    }
+
+    /// After an FMU state was restored: what the equations computed is recomputed on demand.
+    pub fn restored(&mut self) {
+        self.sim.stale_derivatives = true;
+        self.sim.stale_outputs = true;
+    }
+
+    /// Brings every computed variable up to date before values leave: the initialization in
+    /// initialization mode, else the equations if something they depend on changed. A result
+    /// that is not finite leaves nothing changed and is refused: fmi2Discard in model exchange
+    /// (the standard's answer for "outside the model's domain, try a smaller step"), fmi2Error
+    /// in co-simulation.
+    fn up_to_date(&mut self, function: &str) -> Outcome {
+        if self.sim.state == State::InitializationMode {
+            return self.initialize_model(function, false);
+        }
+        if !self.sim.stale_outputs || self.sim.state == State::Instantiated {
+            return Ok(());
+        }
+        let before = self.sim.model.continuous::<f64>();
+        evaluate(&mut self.sim.model, self.sim.time);
+        if let Some(what) = non_finite(&self.sim.model) {
+            self.sim.model.store_continuous(&before);
+            return Err(self.not_finite(function, &what));
+        }
+        self.sim.stale_derivatives = false;
+        self.sim.stale_outputs = false;
+        Ok(())
+    }
+
+    fn not_finite(&self, function: &str, what: &str) -> fmi2Status {
+        let message = format!(
+            "{function}: at t = {}, {what} (computed from the current states, inputs and parameters); nothing returned",
+            self.sim.time
+        );
+        if self.model_exchange {
+            self.logger.log(fmi2Discard, Category::StatusDiscard, &message);
+            fmi2Discard
+        } else {
+            self.error(&message)
+        }
+    }
+
+    pub fn enter_event_mode(&mut self) -> fmi2Status {
+        self.sim.state = State::EventMode;
+        self.trace(|| format!("fmi2EnterEventMode at t = {}", self.sim.time));
+        fmi2OK
+    }
+
+    /// No model here has discrete states or time events yet: one call settles the event.
+    pub fn new_discrete_states(&mut self, info: &mut EventInfo) -> fmi2Status {
+        *info = EventInfo::default();
+        self.sim.last_successful_time = self.sim.time;
+        fmi2OK
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> fmi2Status {
+        self.sim.state = State::ContinuousTimeMode;
+        fmi2OK
+    }
+
+    /// Returns (enterEventMode, terminateSimulation): neither, for models without step events.
+    pub fn completed_integrator_step(&mut self) -> (fmi2Status, bool, bool) {
+        self.sim.last_successful_time = self.sim.time;
+        (fmi2OK, false, false)
+    }
+
+    pub fn set_time(&mut self, t: f64) -> fmi2Status {
+        if !t.is_finite() {
+            return self.error(&format!("fmi2SetTime: time = {t} is not finite; time stays {}", self.sim.time));
+        }
+        self.sim.time = t;
+        self.sim.stale_derivatives = true;
+        self.sim.stale_outputs = true;
+        fmi2OK
+    }
+
+    fn check_states_len(&self, function: &str, n: usize) -> Outcome {
+        let expected = <M::States as StateVector>::LEN;
+        if n == expected {
+            return Ok(());
+        }
+        Err(self.error(&format!(
+            "{function}: nx = {n}, but {} has {expected} continuous states (numberOfContinuousStates)",
+            M::DESCRIPTION.model_identifier
+        )))
+    }
+
+    fn state_name(i: usize) -> &'static str {
+        let vr = M::STATES[i];
+        M::DESCRIPTION
+            .variables
+            .iter()
+            .find(|v| v.value_reference == vr)
+            .map_or("?", |v| v.name)
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> fmi2Status {
+        if let Err(status) = self.check_states_len("fmi2SetContinuousStates", x.len()) {
+            return status;
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return self.error(&format!(
+                "fmi2SetContinuousStates: x[{i}] ('{}') = {} is not a finite number; refused, states unchanged",
+                Self::state_name(i),
+                x[i]
+            ));
+        }
+        let mut states = <M::States as StateVector>::zeros();
+        states.as_mut_slice().copy_from_slice(x);
+        self.sim.model.set_states(&states);
+        self.sim.stale_derivatives = true;
+        self.sim.stale_outputs = true;
+        fmi2OK
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> fmi2Status {
+        if let Err(status) = self.check_states_len("fmi2GetContinuousStates", x.len()) {
+            return status;
+        }
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model("fmi2GetContinuousStates", false)
+        {
+            return status;
+        }
+        x.copy_from_slice(self.sim.model.states().as_slice());
+        fmi2OK
+    }
+
+    pub fn get_nominals(&mut self, x: &mut [f64]) -> fmi2Status {
+        if let Err(status) = self.check_states_len("fmi2GetNominalsOfContinuousStates", x.len()) {
+            return status;
+        }
+        x.copy_from_slice(M::NOMINALS);
+        fmi2OK
+    }
+
+    pub fn get_event_indicators_mut(&mut self, z: &mut [f64]) -> fmi2Status {
+        if !z.is_empty() {
+            return self.error(&format!(
+                "fmi2GetEventIndicators: ni = {}, but {} has no event indicators (numberOfEventIndicators = 0)",
+                z.len(),
+                M::DESCRIPTION.model_identifier
+            ));
+        }
+        fmi2OK
+    }
+
+    /// fmi2GetDerivatives: the right-hand side only (the outputs stay for when they are read).
+    #[inline]
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> fmi2Status {
+        if let Err(status) = self.check_states_len("fmi2GetDerivatives", dx.len()) {
+            return status;
+        }
+        if self.sim.stale_derivatives {
+            let mut c = self.sim.model.continuous::<f64>();
+            self.sim.model.derivatives(self.sim.time, &mut c);
+            let d = M::derivatives_of(&c);
+            if let Some(i) = d.as_slice().iter().position(|v| !v.is_finite()) {
+                let what = format!("the derivative of '{}' is {}", Self::state_name(i), d.as_slice()[i]);
+                return self.not_finite("fmi2GetDerivatives", &what);
+            }
+            self.sim.model.store_continuous(&c);
+            self.sim.stale_derivatives = false;
+            dx.copy_from_slice(d.as_slice());
+            return fmi2OK;
+        }
+        let c = self.sim.model.continuous::<f64>();
+        dx.copy_from_slice(M::derivatives_of(&c).as_slice());
+        fmi2OK
+    }
+
+    /// fmi2GetDirectionalDerivative: dv_unknown = (d unknowns / d knowns) dv_known, exact, by
+    /// running the equations once on dual numbers seeded with dv_known. Knowns: the
+    /// continuous states (model exchange) and the Real inputs; unknowns: what the equations
+    /// compute (derivatives, outputs, locals), or a known itself.
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        dv_known: &[f64],
+        dv_unknown: &mut [f64],
+    ) -> fmi2Status {
+        const F: &str = "fmi2GetDirectionalDerivative";
+        use num_dual::Dual64;
+        let probe = self.sim.model.continuous::<f64>();
+        let mut probe = probe;
+        for (vr, dv) in knowns.iter().zip(dv_known) {
+            let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
+                return self.error(&format!("{F}: known value reference {vr} is not a Real variable of {}", M::DESCRIPTION.model_identifier));
+            };
+            let is_state = M::STATES.contains(vr);
+            let allowed = decl.causality == Causality::Input && decl.variability == Variability::Continuous
+                || (is_state && self.model_exchange);
+            if !allowed || M::continuous_slot(&mut probe, *vr).is_none() {
+                return self.error(&format!(
+                    "{F}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}",
+                    decl.name,
+                    if self.model_exchange { "model exchange" } else { "co-simulation" },
+                    if self.model_exchange { " and the continuous states" } else { "" }
+                ));
+            }
+            if !dv.is_finite() {
+                return self.error(&format!("{F}: dvKnown for '{}' (vr {vr}) = {dv} is not finite", decl.name));
+            }
+        }
+        for vr in unknowns {
+            let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
+                return self.error(&format!("{F}: unknown value reference {vr} is not a Real variable of {}", M::DESCRIPTION.model_identifier));
+            };
+            if M::continuous_slot(&mut probe, *vr).is_none() {
+                return self.error(&format!(
+                    "{F}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
+                    decl.name
+                ));
+            }
+        }
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model(F, false)
+        {
+            return status;
+        }
+        let mut c = self.sim.model.continuous::<Dual64>();
+        for (vr, dv) in knowns.iter().zip(dv_known) {
+            if let Some(slot) = M::continuous_slot(&mut c, *vr) {
+                slot.eps += *dv;
+            }
+        }
+        let t = Dual64::from(self.sim.time);
+        self.sim.model.derivatives(t, &mut c);
+        self.sim.model.outputs(t, &mut c);
+        for (i, vr) in unknowns.iter().enumerate() {
+            let d = M::continuous_slot(&mut c, *vr).map_or(0.0, |d| d.eps);
+            if !d.is_finite() {
+                let name = M::DESCRIPTION.variable(*vr, VarType::Real).map_or("?", |v| v.name);
+                return self.not_finite(F, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
+            }
+            dv_unknown[i] = d;
+        }
+        fmi2OK
+    }
 }

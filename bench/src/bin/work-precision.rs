@@ -8,10 +8,10 @@
 
 use clap::Parser;
 use holonomic::models::pendulum::PendulumParams;
-use holonomic::numerics::ode::{Dopri5, Tolerances};
+use rustfmu::solver::{Dopri5, Tolerances};
 use nalgebra::{Vector2, Vector4};
 use pendulum_fmu::Pendulum;
-use rustfmu::{CoSimulation as _, Context, Model, Variables};
+use rustfmu::{Standalone, Variables};
 use rustfmu_bench::rk4;
 use std::hint::black_box;
 use std::time::Instant;
@@ -101,12 +101,12 @@ fn run() -> Result<(), String> {
             let mut m = Pendulum::start();
             (m.alpha1, m.omega1, m.alpha2, m.omega2) = (x0[0], x0[1], x0[2], x0[3]);
             (m.rtol, m.atol) = (tol, tol);
-            m.initialize(&Context::standalone(0.0, None))?;
-            for k in 0..n {
-                m.do_step(k as f64 * h, h, &Context::standalone(0.0, None))
-                    .map_err(|e| e.message)?;
+            let mut sim = Standalone::new(m, 0.0, None);
+            sim.initialize()?;
+            for _ in 0..n {
+                sim.do_step(h).map_err(|e| e.message)?;
             }
-            Ok::<_, String>((m.state(), m.ode.stats))
+            Ok::<_, String>((sim.model.state(), sim.solver.stats))
         };
         let (x, stats) = fmu_run().map_err(|e| format!("Pendulum model at tol {tol:e}: {e}"))?;
         let seconds = median_seconds(|| {

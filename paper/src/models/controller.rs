@@ -30,15 +30,22 @@
 //! overflow `f64` (α1 = 1.7e308), they are computed again with a wider exponent ([`Wide`]) and
 //! then limited.
 //!
-//! Sampling: the controller reads its inputs at a communication point t_k, and its outputs
-//! change only at communication points. During the step to t_k + h the integral advances by
-//! e_i(t_k)·h and the filter exactly (ω held): both follow the actual step size h.
+//! Two ways in time, from the same command ([`ControlLaw::command_of`], generic over dual numbers
+//! so that its exact derivatives come from it too):
+//! - sampled (co-simulation): the memory advances at communication points: during the step to
+//!   t_k + h the integral by e_i(t_k)·h and the filter exactly (ω held), both following the
+//!   actual step size h ([`ControlLaw::advance`]);
+//! - continuous (model exchange): the integrals and filters are continuous states with
+//!   d∫e_i/dt = e_i (0 into a limit) and Tf dω_f/dt = ω − ω_f ([`ControlLaw::rates_of`]).
+//!
+//! With Tf = 0 the derivative term uses ω itself (no filter).
 
 use super::dc_motor::DcMotorParams;
 use super::pendulum::PendulumParams;
 use crate::numerics::lqr::lqr;
 use crate::numerics::wide::Wide;
 use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
+use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 /// Which feedback the controller applies.
@@ -169,37 +176,116 @@ impl ControlLaw {
 
     /// The outputs for measurement `x`, references `reference` and memory `s`.
     pub fn command(&self, s: &ControllerState, x: &Vector4<f64>, reference: &Vector2<f64>) -> Command {
-        let mut m = Vector2::zeros();
+        let (m, u, saturated) = self.command_of(
+            s.integral,
+            s.rate_filter,
+            [x[0], x[1], x[2], x[3]],
+            [reference[0], reference[1]],
+        );
+        Command {
+            m: Vector2::from(m),
+            u: Vector2::from(u),
+            saturated,
+        }
+    }
+
+    /// [`command`](Self::command) in any number type: (M, U, whether joint i is at a limit that
+    /// stops its integrator). On `f64` the operations are those of eqs. (14), (16) in the order
+    /// written; the limits are taken on the value (a limited command does not depend on the
+    /// inputs), and where a sum overflows it is recomputed wide (value only).
+    pub fn command_of<D: DualNum<Primitive = f64> + Copy>(
+        &self,
+        integral: [D; 2],
+        rate_filter: [D; 2],
+        x: [D; 4],
+        reference: [D; 2],
+    ) -> ([D; 2], [D; 2], [bool; 2]) {
+        let zero = D::from(0.0);
+        let mut m = [zero; 2];
         if self.mode.lqr() {
-            let x_ref = Vector4::new(reference[0], 0.0, reference[1], 0.0);
-            m -= self.k * (x - x_ref);
+            let x_ref = [reference[0], zero, reference[1], zero];
+            for (i, mi) in m.iter_mut().enumerate() {
+                // −K (x − x_ref), row i, summed over the columns in order (as nalgebra does).
+                let mut sum = (x[0] - x_ref[0]) * self.k[(i, 0)];
+                for j in 1..4 {
+                    sum += (x[j] - x_ref[j]) * self.k[(i, j)];
+                }
+                *mi = *mi - sum;
+            }
         }
         if self.mode.pid() {
             for i in 0..2 {
                 let e = reference[i] - x[ANGLE[i]];
                 let g = self.pid[i];
-                m[i] += g.kp * e + g.ki * s.integral[i] - g.kd * s.rate_filter[i];
+                let rate = if self.tf > 0.0 { rate_filter[i] } else { x[RATE[i]] };
+                m[i] += e * g.kp + integral[i] * g.ki - rate * g.kd;
             }
         }
+        let re = |v: &[D]| v.iter().map(|d| d.re()).collect::<Vec<f64>>();
+        let limit = |v: D, bound: f64| {
+            if v.re() > bound {
+                D::from(bound)
+            } else if v.re() < -bound {
+                D::from(-bound)
+            } else {
+                v
+            }
+        };
         let mut saturated = [false; 2];
-        let mut u = Vector2::zeros();
+        let mut u = [zero; 2];
         let p = &self.motor;
         let n = p.gear_ratio;
         for i in 0..2 {
-            if !m[i].is_finite() {
-                m[i] = self.wide_demand(i, s, x, reference).to_f64();
+            if !m[i].re().is_finite() {
+                let state = ControllerState {
+                    integral: [integral[0].re(), integral[1].re()],
+                    rate_filter: [rate_filter[0].re(), rate_filter[1].re()],
+                };
+                let xs = re(&x);
+                let x = Vector4::new(xs[0], xs[1], xs[2], xs[3]);
+                let r = Vector2::new(reference[0].re(), reference[1].re());
+                m[i] = D::from(self.wide_demand(i, &state, &x, &r).to_f64());
             }
-            let limited = m[i].clamp(-self.m_max, self.m_max);
+            let limited = limit(m[i], self.m_max);
             let omega = x[RATE[i]];
-            let mut volts = p.r / (n * p.km) * (limited + n * n * p.b * omega) + n * p.kb * omega;
-            if !volts.is_finite() {
-                volts = self.wide_voltage(limited, omega).to_f64();
+            let mut volts = (limited + omega * (n * n * p.b)) * (p.r / (n * p.km)) + omega * (n * p.kb);
+            if !volts.re().is_finite() {
+                volts = D::from(self.wide_voltage(limited.re(), omega.re()).to_f64());
             }
-            u[i] = p.applied_voltage(volts);
-            saturated[i] = limited != m[i] || (self.drives_motors && u[i] != volts);
+            u[i] = limit(volts, p.u_max);
+            saturated[i] = limited.re() != m[i].re() || (self.drives_motors && u[i].re() != volts.re());
             m[i] = limited;
         }
-        Command { m, u, saturated }
+        (m, u, saturated)
+    }
+
+    /// The continuous-time memory's rates: (d∫e_i/dt, dω_f,i/dt). Conditional integration: no
+    /// growth into a limit, nor beyond the bound that keeps Ki ∫e within ±M_max.
+    pub fn rates_of<D: DualNum<Primitive = f64> + Copy>(
+        &self,
+        integral: [D; 2],
+        rate_filter: [D; 2],
+        x: [D; 4],
+        reference: [D; 2],
+    ) -> ([D; 2], [D; 2]) {
+        let (m, _, saturated) = self.command_of(integral, rate_filter, x, reference);
+        let zero = D::from(0.0);
+        let (mut d_integral, mut d_filter) = ([zero; 2], [zero; 2]);
+        for i in 0..2 {
+            let e = reference[i] - x[ANGLE[i]];
+            let into_limit = saturated[i] && e.re() * m[i].re() > 0.0;
+            let bound = (self.m_max / self.pid[i].ki.abs()).min(f64::MAX);
+            let at_bound = (integral[i].re() >= bound && e.re() > 0.0) || (integral[i].re() <= -bound && e.re() < 0.0);
+            // Rates beyond f64 (a measurement near ±f64::MAX) are limited to ±f64::MAX: the
+            // memory is bounded anyway, and a rate must not be infinite.
+            if self.mode.pid() && !into_limit && !at_bound {
+                d_integral[i] = within_f64(e);
+            }
+            if self.tf > 0.0 {
+                d_filter[i] = within_f64((x[RATE[i]] - rate_filter[i]) / self.tf);
+            }
+        }
+        (d_integral, d_filter)
     }
 
     /// The demand of joint i, before the limit, as `command` computes it, where that overflows.
@@ -259,6 +345,20 @@ impl ControlLaw {
             };
         }
         next
+    }
+}
+
+/// `v`, or ±f64::MAX (without derivative) where its value overflowed.
+fn within_f64<D: DualNum<Primitive = f64> + Copy>(v: D) -> D {
+    let re = v.re();
+    if re.is_finite() {
+        v
+    } else if re > 0.0 {
+        D::from(f64::MAX)
+    } else if re < 0.0 {
+        D::from(-f64::MAX)
+    } else {
+        D::from(0.0)
     }
 }
 

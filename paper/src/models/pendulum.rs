@@ -99,21 +99,32 @@ impl PendulumParams {
 
     /// Total energy, equations (2)–(5) [J]: E = Ek1 + Ek2 + Ep1 + Ep2. Conserved when M1 = M2 = 0.
     pub fn energy(&self, x: &Vector4<f64>) -> f64 {
-        let (a1, w1, a2, w2) = (x[ALPHA1], x[OMEGA1], x[ALPHA2], x[OMEGA2]);
+        self.energy_of([x[ALPHA1], x[OMEGA1], x[ALPHA2], x[OMEGA2]])
+    }
+
+    /// [`energy`](Self::energy), generic over dual numbers. Products are formed in the order
+    /// of the formulas (parameters first), so that on `f64` the result is the same to the bit.
+    pub fn energy_of<D: DualNum<Primitive = f64> + Copy>(&self, x: [D; 4]) -> D {
+        let [a1, w1, a2, w2] = x;
         let (m1, m2, l1, l2, g) = (self.m1, self.m2, self.l1, self.l2, self.g);
-        let ek1 = m1 * l1 * l1 * w1 * w1 / 6.0; // (2)
-        let ek2 = m2 * l1 * l1 * w1 * w1 / 6.0
-            + m2 * l2 * l2 * w2 * w2 / 6.0
-            + m2 * l1 * l2 * w1 * w2 * (a1 - a2).cos() / 3.0; // (3)
-        let ep1 = m1 * g * l1 / 2.0 * a1.cos(); // (4)
-        let ep2 = m2 * g * (l1 * a1.cos() + l2 / 2.0 * a2.cos()); // (5)
+        let ek1 = w1 * (m1 * l1 * l1) * w1 / 6.0; // (2)
+        let ek2 = w1 * (m2 * l1 * l1) * w1 / 6.0
+            + w2 * (m2 * l2 * l2) * w2 / 6.0
+            + w1 * (m2 * l1 * l2) * w2 * (a1 - a2).cos() / 3.0; // (3)
+        let ep1 = a1.cos() * (m1 * g * l1 / 2.0); // (4)
+        let ep2 = (a1.cos() * l1 + a2.cos() * (l2 / 2.0)) * (m2 * g); // (5)
         ek1 + ek2 + ep1 + ep2
     }
 
     /// Joint 2 (tip of link 1) and tip of link 2, (x, y) [m], pivot at the origin, y up.
     pub fn positions(&self, x: &Vector4<f64>) -> [(f64, f64); 2] {
-        let joint = (self.l1 * x[ALPHA1].sin(), self.l1 * x[ALPHA1].cos());
-        let tip = (joint.0 + self.l2 * x[ALPHA2].sin(), joint.1 + self.l2 * x[ALPHA2].cos());
+        self.positions_of([x[ALPHA1], x[OMEGA1], x[ALPHA2], x[OMEGA2]])
+    }
+
+    /// [`positions`](Self::positions), generic over dual numbers.
+    pub fn positions_of<D: DualNum<Primitive = f64> + Copy>(&self, x: [D; 4]) -> [(D, D); 2] {
+        let joint = (x[ALPHA1].sin() * self.l1, x[ALPHA1].cos() * self.l1);
+        let tip = (joint.0 + x[ALPHA2].sin() * self.l2, joint.1 + x[ALPHA2].cos() * self.l2);
         [joint, tip]
     }
 

@@ -3,5 +3,4 @@
 
 pub mod lqr;
 pub mod lti;
-pub mod ode;
 pub mod wide;

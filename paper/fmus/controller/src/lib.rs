@@ -1,9 +1,12 @@
-//! The `Controller` FMU: the paper's LQR (equation (14)) and PID (equation (16)) as a sampled
-//! controller, with torque outputs for the plant and voltage outputs for the DC motors.
+//! The `Controller` FMU: the paper's LQR (equation (14)) and PID (equation (16)), with torque
+//! outputs for the plant and voltage outputs for the DC motors. In co-simulation the PID memory
+//! (integrals, derivative filters) advances at communication points (a sampled controller); in
+//! model exchange it is four continuous states. Both compute the outputs from the inputs and
+//! that memory through the same law.
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
-use holonomic::models::controller::{Command, ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
+use holonomic::models::controller::{ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
 use holonomic::models::dc_motor::DcMotorParams;
 use holonomic::models::pendulum::PendulumParams;
 use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
@@ -46,18 +49,42 @@ pub struct Controller {
     /// Reference for alpha2 (0 = upright)
     #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
     pub alpha2_ref: f64,
-    /// Torque demand M1 for joint 1, limited to +-M_max; computed from the inputs of the previous communication point (sampled, no direct feedthrough)
-    #[variable(vr = 10, output, discrete, unit = "N.m", depends = [])]
+    /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (a master that reads it before setting new inputs gets the law of the previous communication point's inputs)
+    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
     pub M1: f64,
-    /// Torque demand M2 for joint 2, limited to +-M_max; sampled like M1
-    #[variable(vr = 11, output, discrete, unit = "N.m", depends = [])]
+    /// Torque demand M2 for joint 2, limited to +-M_max; as M1
+    #[variable(vr = 11, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
     pub M2: f64,
-    /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; sampled like M1
-    #[variable(vr = 12, output, discrete, unit = "V", depends = [])]
+    /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; computed like M1
+    #[variable(vr = 12, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
     pub U1: f64,
-    /// Voltage command U2 for the motor of joint 2, as U1; sampled like M1
-    #[variable(vr = 13, output, discrete, unit = "V", depends = [])]
+    /// Voltage command U2 for the motor of joint 2, as U1
+    #[variable(vr = 13, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
     pub U2: f64,
+    /// PID memory of joint 1: the integral of the control error e1 = alpha1_ref - alpha1 (a continuous state in model exchange; advanced at communication points in co-simulation)
+    #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
+    pub integral1: f64,
+    /// PID memory of joint 2: the integral of e2 = alpha2_ref - alpha2
+    #[variable(vr = 15, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
+    pub integral2: f64,
+    /// Filtered speed of joint 1, Tf d(rate_filter1)/dt = omega1 - rate_filter1, starting at the measured omega1 (the derivative term's input; unused when Tf = 0)
+    #[variable(vr = 16, local, continuous, initial = calculated, unit = "rad/s")]
+    pub rate_filter1: f64,
+    /// Filtered speed of joint 2, as rate_filter1
+    #[variable(vr = 17, local, continuous, initial = calculated, unit = "rad/s")]
+    pub rate_filter2: f64,
+    /// d(integral1)/dt = e1, 0 while the command is at a limit in the direction of e1 (anti-windup)
+    #[variable(vr = 80, name = "der(integral1)", local, continuous, unit = "rad", derivative_of = integral1, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    pub der_integral1: f64,
+    /// d(integral2)/dt = e2, as der(integral1)
+    #[variable(vr = 81, name = "der(integral2)", local, continuous, unit = "rad", derivative_of = integral2, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    pub der_integral2: f64,
+    /// d(rate_filter1)/dt = (omega1 - rate_filter1)/Tf (0 when Tf = 0)
+    #[variable(vr = 82, name = "der(rate_filter1)", local, continuous, unit = "rad/s2", derivative_of = rate_filter1, depends = [omega1, rate_filter1])]
+    pub der_rate_filter1: f64,
+    /// d(rate_filter2)/dt = (omega2 - rate_filter2)/Tf (0 when Tf = 0)
+    #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2])]
+    pub der_rate_filter2: f64,
     /// Control law: LQR (M = -K (x - x_ref)), PID per joint, or LQR + PID
     #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
     pub mode: ControlMode,
@@ -163,8 +190,6 @@ pub struct Controller {
     /// LQR gain K(2,4) (paper: 0.9957)
     #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad")]
     pub K24: f64,
-    /// The sampled controller's memory: PID integrals and derivative filters.
-    pub state: ControllerState,
 }
 
 impl Controller {
@@ -230,9 +255,27 @@ impl Controller {
         )
     }
 
-    fn set_outputs(&mut self, c: &Command) {
-        (self.M1, self.M2, self.U1, self.U2) = (c.m[0], c.m[1], c.u[0], c.u[1]);
+    fn memory(&self) -> ControllerState {
+        ControllerState {
+            integral: [self.integral1, self.integral2],
+            rate_filter: [self.rate_filter1, self.rate_filter2],
+        }
     }
+
+    fn set_memory(&mut self, s: &ControllerState) {
+        [self.integral1, self.integral2] = s.integral;
+        [self.rate_filter1, self.rate_filter2] = s.rate_filter;
+    }
+}
+
+/// The equations' view of the law: (integrals, filters, measurement, references).
+fn knowns<D: Copy>(v: &ControllerContinuous<D>) -> ([D; 2], [D; 2], [D; 4], [D; 2]) {
+    (
+        [v.integral1, v.integral2],
+        [v.rate_filter1, v.rate_filter2],
+        [v.alpha1, v.omega1, v.alpha2, v.omega2],
+        [v.alpha1_ref, v.alpha2_ref],
+    )
 }
 
 impl Model for Controller {
@@ -243,33 +286,40 @@ impl Model for Controller {
         let k = lqr_gain(&self.plant(), &q, &r)?;
         (self.K11, self.K12, self.K13, self.K14) = (k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]);
         (self.K21, self.K22, self.K23, self.K24) = (k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]);
-        let law = self.law();
-        let (x, reference) = self.measurement();
-        self.state = law.initial_state(&x);
-        let c = law.command(&self.state, &x, &reference);
-        self.set_outputs(&c);
+        // The filters start at the measured speeds (no derivative kick); the integrals at
+        // their start values.
+        let (x, _) = self.measurement();
+        let start = self.law().initial_state(&x);
+        [self.rate_filter1, self.rate_filter2] = start.rate_filter;
         Ok(())
     }
 
-    fn check_internal_state(&self) -> Result<(), String> {
-        let s = &self.state;
-        for (what, v) in [("integral", s.integral), ("rate filter", s.rate_filter)] {
-            if !v.iter().all(|x| x.is_finite()) {
-                return Err(format!("the PID {what} {v:?} is not finite"));
-            }
-        }
-        Ok(())
+    /// The PID memory in continuous time (model exchange).
+    fn derivatives<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
+        let (integral, filter, x, reference) = knowns(v);
+        let (d_integral, d_filter) = self.law().rates_of(integral, filter, x, reference);
+        [v.der_integral1, v.der_integral2] = d_integral;
+        [v.der_rate_filter1, v.der_rate_filter2] = d_filter;
+    }
+
+    /// M and U from the inputs and the memory: eqs. (14), (16), limited.
+    fn outputs<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
+        let (integral, filter, x, reference) = knowns(v);
+        let (m, u, _) = self.law().command_of(integral, filter, x, reference);
+        [v.M1, v.M2] = m;
+        [v.U1, v.U2] = u;
     }
 }
 
 impl CoSimulation for Controller {
-    fn do_step(&mut self, _t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+    /// The sampled controller: the memory advances over the step with the inputs of its start
+    /// (the integral by e h, the filter exactly); the runtime then computes the outputs.
+    fn do_step(&mut self, _t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
         let law = self.law();
         let (x, reference) = self.measurement();
-        let now = law.command(&self.state, &x, &reference);
-        self.state = law.advance(&self.state, &x, &reference, &now, h);
-        let next = law.command(&self.state, &x, &reference);
-        self.set_outputs(&next);
+        let s = self.memory();
+        let now = law.command(&s, &x, &reference);
+        self.set_memory(&law.advance(&s, &x, &reference, &now, h));
         Ok(())
     }
 }

@@ -1,5 +1,6 @@
 //! The `DCMotor` FMU: the paper's DC motor (equation (17)) with a gearbox and a supply-voltage
-//! limit; joint speed in, joint torque out.
+//! limit; joint speed in, joint torque out. Model exchange integrates its equations; the
+//! co-simulation step is their exact zero-order-hold discretization.
 
 #![allow(non_snake_case)] // the paper's symbols: U, L, R, J, B
 
@@ -19,17 +20,26 @@ pub struct DcMotor {
     #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
     pub omega: f64,
     /// Torque on the joint, tau = n (km i - B omega_m) (connect to Pendulum.M1 or M2); 0 when coupled = false (unloaded)
-    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [])]
+    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [omega, i])]
     pub tau: f64,
-    /// Armature current i; the start value is the initial state
-    #[variable(vr = 11, output, continuous, initial = exact, start = 0.0, unit = "A", depends = [])]
+    /// Armature current i, L di/dt = U_applied - R i - kb omega_m; the start value is the initial state
+    #[variable(vr = 11, output, continuous, initial = exact, start = 0.0, unit = "A", depends = [i])]
     pub i: f64,
-    /// Rotor speed omega_m (= n omega when coupled); the start value is the initial state
-    #[variable(vr = 12, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [])]
+    /// Rotor speed omega_m: n omega when coupled, else the state omega_r of eq. (17)
+    #[variable(vr = 12, output, continuous, unit = "rad/s", depends = [omega, omega_r])]
     pub omega_m: f64,
     /// Voltage actually applied: U limited to +-U_max
-    #[variable(vr = 13, output, continuous, unit = "V", depends = [])]
+    #[variable(vr = 13, output, continuous, unit = "V", depends = [U])]
     pub U_applied: f64,
+    /// Rotor speed of the unloaded motor (coupled = false), J d(omega_r)/dt = km i - B omega_r; the start value is the initial speed. Coupled, the rotor follows the joint (omega_m = n omega) and omega_r keeps its start value
+    #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad/s")]
+    pub omega_r: f64,
+    /// d(i)/dt
+    #[variable(vr = 15, name = "der(i)", local, continuous, unit = "A/s", derivative_of = i, depends = [U, omega, i, omega_r])]
+    pub der_i: f64,
+    /// d(omega_r)/dt (0 when coupled)
+    #[variable(vr = 16, name = "der(omega_r)", local, continuous, unit = "rad/s2", derivative_of = omega_r, depends = [i, omega_r])]
+    pub der_omega_r: f64,
     /// Armature inductance L
     #[variable(vr = 20, parameter, fixed, start = 0.000121, unit = "H", min > 0.0)]
     pub L: f64,
@@ -73,46 +83,71 @@ impl DcMotor {
         }
     }
 
-    fn set_state(&mut self, p: &DcMotorParams, s: &DcMotorState) {
-        self.i = s.i;
-        self.omega_m = s.omega_m;
-        self.tau = if self.coupled { p.joint_torque(s) } else { 0.0 };
-        self.U_applied = p.applied_voltage(self.U);
+    /// The rotor speed: n omega coupled, the state omega_r unloaded.
+    fn rotor_speed<D: Real>(&self, v: &DcMotorContinuous<D>) -> D {
+        if self.coupled { v.omega * self.gear_ratio } else { v.omega_r }
+    }
+
+    /// U limited to +-U_max (on the value: a limited voltage does not depend on U).
+    fn applied<D: Real>(&self, u: D) -> D {
+        if u.re() > self.U_max {
+            D::from(self.U_max)
+        } else if u.re() < -self.U_max {
+            D::from(-self.U_max)
+        } else {
+            u
+        }
     }
 }
 
 impl Model for DcMotor {
     // Every parameter's domain is declared and enforced by the runtime: nothing to check here.
-    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
-        let p = self.params();
-        let mut s = DcMotorState {
-            i: self.i,
-            omega_m: self.omega_m,
+
+    /// Eq. (17)'s armature circuit and, unloaded, the rotor.
+    fn derivatives<D: Real>(&self, _t: D, v: &mut DcMotorContinuous<D>) {
+        let omega_m = self.rotor_speed(v);
+        v.der_i = (self.applied(v.U) - v.i * self.R - omega_m * self.kb) / self.L;
+        v.der_omega_r = if self.coupled {
+            D::from(0.0)
+        } else {
+            (v.i * self.km - v.omega_r * self.B) / self.J
         };
-        if self.coupled {
-            s.omega_m = p.gear_ratio * self.omega;
-        }
-        self.set_state(&p, &s);
-        Ok(())
+    }
+
+    /// The joint torque n (km i - B omega_m), the rotor speed and the applied voltage.
+    fn outputs<D: Real>(&self, _t: D, v: &mut DcMotorContinuous<D>) {
+        let omega_m = self.rotor_speed(v);
+        v.omega_m = omega_m;
+        v.tau = if self.coupled {
+            (v.i * self.km - omega_m * self.B) * self.gear_ratio
+        } else {
+            D::from(0.0)
+        };
+        v.U_applied = self.applied(v.U);
     }
 }
 
 impl CoSimulation for DcMotor {
-    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
+    /// The exact zero-order-hold step of the linear equations (U and omega held).
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
         let p = self.params();
-        let s = DcMotorState {
-            i: self.i,
-            omega_m: self.omega_m,
-        };
-        let next = if self.coupled {
-            p.step_coupled(&s, self.U, self.omega, h)
+        if self.coupled {
+            let s = DcMotorState {
+                i: self.i,
+                omega_m: p.gear_ratio * self.omega,
+            };
+            self.i = p.step_coupled(&s, self.U, self.omega, h).i;
         } else {
-            p.step_free(&s, self.U, h).map_err(|message| StepFailure {
+            let s = DcMotorState {
+                i: self.i,
+                omega_m: self.omega_r,
+            };
+            let next = p.step_free(&s, self.U, h).map_err(|message| StepFailure {
                 reached_time: t,
                 message,
-            })?
-        };
-        self.set_state(&p, &next);
+            })?;
+            (self.i, self.omega_r) = (next.i, next.omega_m);
+        }
         Ok(())
     }
 }

@@ -1,12 +1,14 @@
-//! The `Pendulum` FMU: the paper's nonlinear plant, equations (6)–(7), integrated with error
-//! control inside each communication step. `binaries/<platform>/Pendulum.so`.
+//! The `Pendulum` FMU: the paper's nonlinear plant, equations (6)–(7). Model exchange gives the
+//! importer's integrator the right-hand side; co-simulation integrates it with the runtime's
+//! error-controlled Dormand-Prince 5(4) inside each communication step.
+//! `binaries/<platform>/Pendulum.so`.
 
 #![allow(non_snake_case)] // the paper's symbols: M1, M2
 
 use holonomic::models::pendulum::PendulumParams;
-use holonomic::numerics::ode::{Dopri5, Tolerances};
-use nalgebra::{Vector2, Vector4};
+use nalgebra::Vector4;
 use rustfmu::prelude::*;
+use rustfmu::solver::Tolerances;
 use serde::{Deserialize, Serialize};
 
 /// Double inverted pendulum with actuators at both joints: the nonlinear Lagrangian model of
@@ -20,32 +22,44 @@ pub struct Pendulum {
     #[variable(vr = 1, input, continuous, start = 0.0, unit = "N.m")]
     pub M2: f64,
     /// Angle alpha1 of link 1 from the upward vertical; the start value is the initial state
-    #[variable(vr = 2, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [])]
+    #[variable(vr = 2, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [alpha1])]
     pub alpha1: f64,
     /// Angular velocity of link 1, d(alpha1)/dt; the start value is the initial state
-    #[variable(vr = 3, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [])]
+    #[variable(vr = 3, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [omega1])]
     pub omega1: f64,
     /// Angle alpha2 of link 2 from the upward vertical (absolute, not relative to link 1); the start value is the initial state
-    #[variable(vr = 4, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [])]
+    #[variable(vr = 4, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [alpha2])]
     pub alpha2: f64,
     /// Angular velocity of link 2, d(alpha2)/dt; the start value is the initial state
-    #[variable(vr = 5, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [])]
+    #[variable(vr = 5, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [omega2])]
     pub omega2: f64,
     /// Total energy E = Ek1 + Ek2 + Ep1 + Ep2, eqs. (2)-(5); constant when M1 = M2 = 0
-    #[variable(vr = 6, output, continuous, unit = "J", depends = [])]
+    #[variable(vr = 6, output, continuous, unit = "J", depends = [alpha1, omega1, alpha2, omega2])]
     pub energy: f64,
     /// Horizontal position of joint 2 (end of link 1), pivot at the origin
-    #[variable(vr = 7, output, continuous, unit = "m", depends = [])]
+    #[variable(vr = 7, output, continuous, unit = "m", depends = [alpha1])]
     pub x1: f64,
     /// Height of joint 2 (end of link 1) above the pivot
-    #[variable(vr = 8, output, continuous, unit = "m", depends = [])]
+    #[variable(vr = 8, output, continuous, unit = "m", depends = [alpha1])]
     pub y1: f64,
     /// Horizontal position of the tip of link 2
-    #[variable(vr = 9, output, continuous, unit = "m", depends = [])]
+    #[variable(vr = 9, output, continuous, unit = "m", depends = [alpha1, alpha2])]
     pub x2: f64,
     /// Height of the tip of link 2 above the pivot
-    #[variable(vr = 10, output, continuous, unit = "m", depends = [])]
+    #[variable(vr = 10, output, continuous, unit = "m", depends = [alpha1, alpha2])]
     pub y2: f64,
+    /// d(alpha1)/dt = omega1
+    #[variable(vr = 12, name = "der(alpha1)", local, continuous, unit = "rad/s", derivative_of = alpha1, depends = [omega1])]
+    pub der_alpha1: f64,
+    /// d(omega1)/dt: the angular acceleration of link 1, eqs. (6)-(7) solved for it
+    #[variable(vr = 13, name = "der(omega1)", local, continuous, unit = "rad/s2", derivative_of = omega1, depends = [M1, M2, alpha1, omega1, alpha2, omega2])]
+    pub der_omega1: f64,
+    /// d(alpha2)/dt = omega2
+    #[variable(vr = 14, name = "der(alpha2)", local, continuous, unit = "rad/s", derivative_of = alpha2, depends = [omega2])]
+    pub der_alpha2: f64,
+    /// d(omega2)/dt: the angular acceleration of link 2, eqs. (6)-(7) solved for it
+    #[variable(vr = 15, name = "der(omega2)", local, continuous, unit = "rad/s2", derivative_of = omega2, depends = [M1, M2, alpha1, omega1, alpha2, omega2])]
+    pub der_omega2: f64,
     /// Mass m1 of link 1 (uniform rod)
     #[variable(vr = 20, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
     pub m1: f64,
@@ -61,16 +75,12 @@ pub struct Pendulum {
     /// Gravitational acceleration g (any finite value: 0 without gravity, < 0 pulls upwards)
     #[variable(vr = 24, parameter, fixed, start = 9.81, unit = "m/s2")]
     pub g: f64,
-    /// Relative error tolerance of the integrator (Dormand-Prince 5(4)) inside fmi2DoStep
+    /// Relative error tolerance of the integrator (Dormand-Prince 5(4)) inside fmi2DoStep (co-simulation; in model exchange the importer integrates)
     #[variable(vr = 30, parameter, tunable, start = 1e-10, min = 1e-14, max = 0.1)]
     pub rtol: f64,
     /// Absolute error tolerance of the integrator inside fmi2DoStep (angles in rad, rates in rad/s); > 0: the states are exactly 0 at rest, where a purely relative error is undefined (a tiny atol gives relative control elsewhere)
     #[variable(vr = 31, parameter, tunable, start = 1e-10, min > 0.0, max = 1.0)]
     pub atol: f64,
-    /// The integrator's memory between steps (step size, error history).
-    pub ode: Dopri5,
-    /// Relative tolerance the importer asked for in fmi2SetupExperiment, if any.
-    pub importer_tolerance: Option<f64>,
 }
 
 impl Pendulum {
@@ -87,60 +97,36 @@ impl Pendulum {
     pub fn state(&self) -> Vector4<f64> {
         Vector4::new(self.alpha1, self.omega1, self.alpha2, self.omega2)
     }
-
-    /// Tolerances in force: the parameters, tightened (never loosened) by the importer's.
-    pub fn tolerances(&self) -> Tolerances {
-        let rtol = self
-            .importer_tolerance
-            .map_or(self.rtol, |t| t.min(self.rtol).max(1e-14));
-        Tolerances { rtol, atol: self.atol }
-    }
-
-    fn set_state(&mut self, x: &Vector4<f64>) {
-        let p = self.params();
-        (self.alpha1, self.omega1, self.alpha2, self.omega2) = (x[0], x[1], x[2], x[3]);
-        self.energy = p.energy(x);
-        let [(x1, y1), (x2, y2)] = p.positions(x);
-        (self.x1, self.y1, self.x2, self.y2) = (x1, y1, x2, y2);
-    }
 }
 
 impl Model for Pendulum {
     // The parameters' domains are declared (m1, m2, l1, l2 > 0; g any finite value) and the
-    // runtime enforces them: nothing to check here.
-    fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
-        self.importer_tolerance = ctx.tolerance();
-        self.ode.restart();
-        let x = self.state();
-        self.set_state(&x);
-        Ok(())
+    // runtime enforces them: nothing to check, and nothing to initialize.
+
+    /// Equations (6)-(7) solved for the accelerations.
+    fn derivatives<D: Real>(&self, _t: D, v: &mut PendulumContinuous<D>) {
+        let [da1, dw1, da2, dw2] = self.params().rhs([v.alpha1, v.omega1, v.alpha2, v.omega2], [v.M1, v.M2]);
+        (v.der_alpha1, v.der_omega1, v.der_alpha2, v.der_omega2) = (da1, dw1, da2, dw2);
     }
 
-    fn check_internal_state(&self) -> Result<(), String> {
-        self.ode.validate()?;
-        match self.importer_tolerance {
-            Some(t) if !(t.is_finite() && t > 0.0) => {
-                Err(format!("the importer's tolerance {t} must be finite and > 0"))
-            }
-            _ => Ok(()),
-        }
+    /// Energy, eqs. (2)-(5), and the positions of the joint and the tip.
+    fn outputs<D: Real>(&self, _t: D, v: &mut PendulumContinuous<D>) {
+        let p = self.params();
+        let x = [v.alpha1, v.omega1, v.alpha2, v.omega2];
+        v.energy = p.energy_of(x);
+        let [(x1, y1), (x2, y2)] = p.positions_of(x);
+        (v.x1, v.y1, v.x2, v.y2) = (x1, y1, x2, y2);
     }
 }
 
 impl CoSimulation for Pendulum {
-    fn do_step(&mut self, t: f64, h: f64, _ctx: &Context) -> Result<(), StepFailure> {
-        let p = self.params();
-        let u = Vector2::new(self.M1, self.M2);
-        let mut x = self.state();
-        let tol = self.tolerances();
-        let result = self
-            .ode
-            .integrate(|_, x: &Vector4<f64>| p.derivative(x, &u), t, h, &mut x, tol);
-        self.set_state(&x);
-        result.map_err(|e| StepFailure {
-            reached_time: e.time(),
-            message: e.to_string(),
-        })
+    // The step: the runtime's Dormand-Prince 5(4) on `derivatives`, at these tolerances.
+
+    /// The parameters rtol and atol, the relative one tightened (never loosened) by the
+    /// importer's tolerance from fmi2SetupExperiment.
+    fn tolerances(&self, ctx: &Context) -> Tolerances {
+        let rtol = ctx.tolerance().map_or(self.rtol, |t| t.min(self.rtol).max(1e-14));
+        Tolerances { rtol, atol: self.atol }
     }
 }
 

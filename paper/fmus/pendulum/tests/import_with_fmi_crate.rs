@@ -5,7 +5,7 @@
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::{CoSimulation, Common};
 use pendulum_fmu::Pendulum;
-use rustfmu::{CoSimulation as _, Context, Model, Variables};
+use rustfmu::{Standalone, Variables};
 
 fn vr(name: &str) -> u32 {
     Pendulum::DESCRIPTION.by_name(name).unwrap().value_reference
@@ -36,18 +36,19 @@ fn fmi_crate_simulates_the_packaged_fmu_like_the_model_in_process() {
     inst.set_real(&[vr("M1")], &[0.2]).unwrap();
     inst.exit_initialization_mode().unwrap();
 
-    let mut model = Pendulum::start();
-    (model.alpha1, model.alpha2, model.M1) = (0.1, -0.05, 0.2);
-    let ctx = Context::standalone(0.0, None);
-    model.initialize(&ctx).unwrap();
+    let mut start = Pendulum::start();
+    (start.alpha1, start.alpha2, start.M1) = (0.1, -0.05, 0.2);
+    let mut sim = Standalone::new(start, 0.0, None);
+    sim.initialize().unwrap();
 
     let outputs = [vr("alpha1"), vr("omega1"), vr("alpha2"), vr("omega2"), vr("energy")];
     let h = 1e-3;
     for n in 0..1000 {
         let t = n as f64 * h;
         inst.do_step(t, h, true).expect("fmi2DoStep");
-        model.do_step(t, h, &ctx).unwrap();
+        sim.do_step(h).unwrap();
     }
+    let model = &sim.model;
     let mut got = [0.0; 5];
     inst.get_real(&outputs, &mut got).unwrap();
     let want = [model.alpha1, model.omega1, model.alpha2, model.omega2, model.energy];

@@ -257,7 +257,7 @@ fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused()
             |s| s.model.rtol = -1.0,
             "-1 for 'rtol' (vr 30) is outside [0.00000000000001, 0.1]",
         ),
-        ("h_next = NaN", |s| s.model.ode.h_next = f64::NAN, "h_next = NaN"),
+        ("h_next = NaN", |s| s.solver.h_next = f64::NAN, "h_next = NaN"),
     ];
     for (what, doctor, says) in cases {
         let mut sim = state::deserialize::<Pendulum>(guid, &good).unwrap();

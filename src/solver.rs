@@ -1,5 +1,7 @@
-//! Adaptive explicit Runge–Kutta: Dormand–Prince 5(4) with PI step-size control
-//! (Hairer, Nørsett & Wanner, "Solving ODEs I", II.4 and II.5; the DOPRI5 code).
+//! The integrator of the co-simulation interface: adaptive explicit Runge–Kutta,
+//! Dormand–Prince 5(4) with PI step-size control (Hairer, Nørsett & Wanner, "Solving ODEs I",
+//! II.4 and II.5; the DOPRI5 code). [`crate::Context::integrate`] runs a model's
+//! [`crate::Model::derivatives`] with it; its memory ([`Dopri5`]) is part of the FMU state.
 //!
 //! Written here rather than taken from a crate because an FMU step has needs the ODE crates on
 //! crates.io (ode_solvers, diffsol) do not meet together: integrate over one communication step
