@@ -6,7 +6,11 @@
 //!   (alpha1, omega1, alpha2, omega2) a master makes around each step;
 //! - fmi2DoStep/<id>/h=1ms: every other packaged FMU (Controller, DCMotor, ...) with its
 //!   parameters of the `full` loop, inputs set and outputs read as a master does;
-//! - composed_loop/10s_at_1ms/{controller-plant,full}: the whole loop in the native master.
+//! - composed_loop/10s_at_1ms/{controller-plant,full}: the whole loop in the native master;
+//! - pendulum_derivatives/{direct_rhs,fmi2SetContinuousStates+fmi2GetDerivatives}: one
+//!   evaluation of the plant's right-hand side at a new state, called in Rust against the same
+//!   through the packaged `.so`'s model-exchange C API (what an importer's integrator does per
+//!   stage).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use rustfmu::Value;
@@ -111,5 +115,46 @@ fn composed_loop(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, pendulum_step, other_fmus, composed_loop);
+fn pendulum_derivatives(c: &mut Criterion) {
+    use fmi::fmi2::instance::{Common, ModelExchange};
+    use holonomic::models::pendulum::PendulumParams;
+    let mut g = c.benchmark_group("pendulum_derivatives");
+    // States along a swing, so that nothing is computed once for all iterations.
+    let states: Vec<[f64; 4]> = (0..1024)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            [0.1 * t.cos(), -0.1 * t.sin(), 0.15 * (2.0 * t).cos(), -0.3 * (2.0 * t).sin()]
+        })
+        .collect();
+    let p = PendulumParams::default();
+    g.bench_function("direct_rhs", |b| {
+        let mut k = 0;
+        b.iter(|| {
+            k = (k + 1) & 1023;
+            black_box(p.rhs(black_box(states[k]), black_box([0.0, 0.0])))
+        })
+    });
+    let fmu = rustfmu_bench::Fmu::load("Pendulum").unwrap_or_else(|e| panic!("{e}"));
+    let mut me = fmu
+        .import
+        .instantiate_me("bench-me", false, false)
+        .unwrap_or_else(|e| panic!("fmi2Instantiate(ModelExchange): {e}"));
+    me.setup_experiment(None, 0.0, None).expect("fmi2SetupExperiment");
+    me.enter_initialization_mode().expect("fmi2EnterInitializationMode");
+    me.exit_initialization_mode().expect("fmi2ExitInitializationMode");
+    me.enter_continuous_time_mode().expect("fmi2EnterContinuousTimeMode");
+    let mut dx = [0.0; 4];
+    g.bench_function("fmi2SetContinuousStates+fmi2GetDerivatives", |b| {
+        let mut k = 0;
+        b.iter(|| {
+            k = (k + 1) & 1023;
+            me.set_continuous_states(black_box(&states[k])).expect("fmi2SetContinuousStates");
+            me.get_derivatives(&mut dx).expect("fmi2GetDerivatives");
+            black_box(dx)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, pendulum_step, other_fmus, composed_loop, pendulum_derivatives);
 criterion_main!(benches);

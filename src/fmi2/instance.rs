@@ -200,6 +200,10 @@ pub struct Instance<M: CoSimulation> {
     pub sim: Sim<M>,
     /// Instantiated as fmi2ModelExchange (else fmi2CoSimulation).
     pub model_exchange: bool,
+    /// The derivatives fmi2GetDerivatives computed last (valid while `!sim.stale_derivatives`):
+    /// it computes only those, and leaves the model's `der(..)` variables to the next full
+    /// evaluation.
+    derivatives: M::States,
     /// The model as it was before the step in progress, to go back to when the step leaves
     /// something that is not finite. Kept here so that a step does not allocate a copy.
     before_step: M,
@@ -247,6 +251,7 @@ impl<M: CoSimulation> Instance<M> {
             guid,
             sim: Sim::new(),
             model_exchange,
+            derivatives: <M::States as StateVector>::zeros(),
             before_step: M::start(),
             strings: Vec::new(),
             resources: None,
@@ -1042,13 +1047,14 @@ impl<M: CoSimulation> Instance<M> {
                 let what = format!("the derivative of '{}' is {}", Self::state_name(i), d.as_slice()[i]);
                 return self.not_finite("fmi2GetDerivatives", &what);
             }
-            self.sim.model.store_continuous(&c);
+            self.derivatives = d;
             self.sim.stale_derivatives = false;
-            dx.copy_from_slice(d.as_slice());
-            return fmi2OK;
+        } else if !self.sim.stale_outputs {
+            // Computed with everything else: the model's own der(..) variables hold them.
+            let c = self.sim.model.continuous::<f64>();
+            self.derivatives = M::derivatives_of(&c);
         }
-        let c = self.sim.model.continuous::<f64>();
-        dx.copy_from_slice(M::derivatives_of(&c).as_slice());
+        dx.copy_from_slice(self.derivatives.as_slice());
         fmi2OK
     }
 
