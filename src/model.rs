@@ -198,7 +198,11 @@ impl Context<'_> {
         );
         // The last right-hand side evaluated is, after a successful integration, the one at the
         // final state (Dormand-Prince's last stage): its derivatives are already in `c`.
-        let fresh = M::states_of(&c).as_slice().iter().zip(x.as_slice()).all(|(a, b)| a.to_bits() == b.to_bits());
+        let fresh = M::states_of(&c)
+            .as_slice()
+            .iter()
+            .zip(x.as_slice())
+            .all(|(a, b)| a.to_bits() == b.to_bits());
         M::set_states_of(&mut c, &x);
         let reached = match &result {
             Ok(()) => t + h,
@@ -318,7 +322,10 @@ pub trait CoSimulation: Model {
     /// times it.
     fn tolerances(&self, ctx: &Context) -> Tolerances {
         let rtol = ctx.tolerance().unwrap_or(1e-6);
-        Tolerances { rtol, atol: rtol * 1e-3 }
+        Tolerances {
+            rtol,
+            atol: rtol * 1e-3,
+        }
     }
 }
 

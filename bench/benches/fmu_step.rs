@@ -123,7 +123,12 @@ fn pendulum_derivatives(c: &mut Criterion) {
     let states: Vec<[f64; 4]> = (0..1024)
         .map(|k| {
             let t = k as f64 * 1e-3;
-            [0.1 * t.cos(), -0.1 * t.sin(), 0.15 * (2.0 * t).cos(), -0.3 * (2.0 * t).sin()]
+            [
+                0.1 * t.cos(),
+                -0.1 * t.sin(),
+                0.15 * (2.0 * t).cos(),
+                -0.3 * (2.0 * t).sin(),
+            ]
         })
         .collect();
     let p = PendulumParams::default();
@@ -148,7 +153,8 @@ fn pendulum_derivatives(c: &mut Criterion) {
         let mut k = 0;
         b.iter(|| {
             k = (k + 1) & 1023;
-            me.set_continuous_states(black_box(&states[k])).expect("fmi2SetContinuousStates");
+            me.set_continuous_states(black_box(&states[k]))
+                .expect("fmi2SetContinuousStates");
             me.get_derivatives(&mut dx).expect("fmi2GetDerivatives");
             black_box(dx)
         })

@@ -619,11 +619,11 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
             }
         }
         if let Some((d, span)) = &v.derivative_of {
-            if let Some(other) = vars
-                .iter()
-                .take_while(|o| !std::ptr::eq(*o, v))
-                .find(|o| o.derivative_of.as_ref().is_some_and(|(o, _)| by_name(o).map(|s| &s.name) == by_name(d).map(|s| &s.name)))
-            {
+            if let Some(other) = vars.iter().take_while(|o| !std::ptr::eq(*o, v)).find(|o| {
+                o.derivative_of
+                    .as_ref()
+                    .is_some_and(|(o, _)| by_name(o).map(|s| &s.name) == by_name(d).map(|s| &s.name))
+            }) {
                 return Err(Error::new(
                     *span,
                     format!("'{d}' already has a derivative: '{}'", other.name),
@@ -631,7 +631,13 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
             }
             match by_name(d) {
                 Some(state)
-                    if matches!(state.causality, Causality::Input | Causality::Parameter | Causality::CalculatedParameter | Causality::Independent) =>
+                    if matches!(
+                        state.causality,
+                        Causality::Input
+                            | Causality::Parameter
+                            | Causality::CalculatedParameter
+                            | Causality::Independent
+                    ) =>
                 {
                     return Err(Error::new(
                         *span,
@@ -685,7 +691,7 @@ fn is_state(vars: &[Var], v: &Var) -> bool {
     vars.iter().any(|d| {
         d.derivative_of
             .as_ref()
-            .is_some_and(|(n, _)| *n == v.name || *n == v.field.to_string())
+            .is_some_and(|(n, _)| *n == v.name || v.field == n)
     })
 }
 

@@ -471,7 +471,11 @@ pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUsta
                     return inst.error(&format!(
                         "fmi2SetFMUstate: the state was saved in {s:?}, a state of the other interface \
                          (this instance is {}); refused, nothing changed",
-                        if inst.model_exchange { "model exchange" } else { "co-simulation" }
+                        if inst.model_exchange {
+                            "model exchange"
+                        } else {
+                            "co-simulation"
+                        }
                     ));
                 }
                 Ok(_) => {}
@@ -702,8 +706,20 @@ macro_rules! me_vector {
         }
     };
 }
-me_vector!(get_continuous_states, GetContinuousStates, "fmi2GetContinuousStates", "x", get_continuous_states);
-me_vector!(get_derivatives, GetDerivatives, "fmi2GetDerivatives", "derivatives", get_derivatives);
+me_vector!(
+    get_continuous_states,
+    GetContinuousStates,
+    "fmi2GetContinuousStates",
+    "x",
+    get_continuous_states
+);
+me_vector!(
+    get_derivatives,
+    GetDerivatives,
+    "fmi2GetDerivatives",
+    "derivatives",
+    get_derivatives
+);
 me_vector!(
     get_nominals_of_continuous_states,
     GetNominalsOfContinuousStates,
@@ -711,7 +727,13 @@ me_vector!(
     "x_nominal",
     get_nominals
 );
-me_vector!(get_event_indicators, GetEventIndicators, "fmi2GetEventIndicators", "eventIndicators", get_event_indicators_mut);
+me_vector!(
+    get_event_indicators,
+    GetEventIndicators,
+    "fmi2GetEventIndicators",
+    "eventIndicators",
+    get_event_indicators_mut
+);
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
     unsafe {

@@ -662,7 +662,10 @@ impl<M: CoSimulation> Instance<M> {
         if outcome.is_ok() && self.sim.solver.validate().is_err() {
             outcome = Err(crate::model::StepFailure {
                 reached_time: t,
-                message: format!("the integrator's memory became unusable: {}", self.sim.solver.validate().err().unwrap_or_default()),
+                message: format!(
+                    "the integrator's memory became unusable: {}",
+                    self.sim.solver.validate().err().unwrap_or_default()
+                ),
             });
             self.sim.solver = before_solver;
             self.sim.solver.restart();
@@ -954,7 +957,10 @@ impl<M: CoSimulation> Instance<M> {
 
     pub fn set_time(&mut self, t: f64) -> fmi2Status {
         if !t.is_finite() {
-            return self.error(&format!("fmi2SetTime: time = {t} is not finite; time stays {}", self.sim.time));
+            return self.error(&format!(
+                "fmi2SetTime: time = {t} is not finite; time stays {}",
+                self.sim.time
+            ));
         }
         self.sim.time = t;
         self.sim.stale_derivatives = true;
@@ -1075,7 +1081,10 @@ impl<M: CoSimulation> Instance<M> {
         let mut probe = probe;
         for (vr, dv) in knowns.iter().zip(dv_known) {
             let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
-                return self.error(&format!("{F}: known value reference {vr} is not a Real variable of {}", M::DESCRIPTION.model_identifier));
+                return self.error(&format!(
+                    "{F}: known value reference {vr} is not a Real variable of {}",
+                    M::DESCRIPTION.model_identifier
+                ));
             };
             let is_state = M::STATES.contains(vr);
             let allowed = decl.causality == Causality::Input && decl.variability == Variability::Continuous
@@ -1089,12 +1098,18 @@ impl<M: CoSimulation> Instance<M> {
                 ));
             }
             if !dv.is_finite() {
-                return self.error(&format!("{F}: dvKnown for '{}' (vr {vr}) = {dv} is not finite", decl.name));
+                return self.error(&format!(
+                    "{F}: dvKnown for '{}' (vr {vr}) = {dv} is not finite",
+                    decl.name
+                ));
             }
         }
         for vr in unknowns {
             let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
-                return self.error(&format!("{F}: unknown value reference {vr} is not a Real variable of {}", M::DESCRIPTION.model_identifier));
+                return self.error(&format!(
+                    "{F}: unknown value reference {vr} is not a Real variable of {}",
+                    M::DESCRIPTION.model_identifier
+                ));
             };
             if M::continuous_slot(&mut probe, *vr).is_none() {
                 return self.error(&format!(

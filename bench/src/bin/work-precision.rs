@@ -8,9 +8,9 @@
 
 use clap::Parser;
 use holonomic::models::pendulum::PendulumParams;
-use rustfmu::solver::{Dopri5, Tolerances};
 use nalgebra::{Vector2, Vector4};
 use pendulum_fmu::Pendulum;
+use rustfmu::solver::{Dopri5, Tolerances};
 use rustfmu::{Standalone, Variables};
 use rustfmu_bench::rk4;
 use std::hint::black_box;

@@ -210,7 +210,7 @@ impl ControlLaw {
                 for j in 1..4 {
                     sum += (x[j] - x_ref[j]) * self.k[(i, j)];
                 }
-                *mi = *mi - sum;
+                *mi -= sum;
             }
         }
         if self.mode.pid() {

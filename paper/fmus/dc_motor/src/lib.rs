@@ -85,7 +85,11 @@ impl DcMotor {
 
     /// The rotor speed: n omega coupled, the state omega_r unloaded.
     fn rotor_speed<D: Real>(&self, v: &DcMotorContinuous<D>) -> D {
-        if self.coupled { v.omega * self.gear_ratio } else { v.omega_r }
+        if self.coupled {
+            v.omega * self.gear_ratio
+        } else {
+            v.omega_r
+        }
     }
 
     /// U limited to +-U_max (on the value: a limited voltage does not depend on U).

@@ -150,7 +150,9 @@ fn an_inductance_whose_current_rate_is_beyond_f64_is_refused_at_initialization()
         let entries = std::mem::take(&mut *log.0.lock().unwrap());
         assert_eq!(s, fmi2Error, "{entries:?}");
         assert!(
-            entries.iter().any(|(s, t)| *s == fmi2Error && t.contains("'der(i)'") && t.contains("not a finite number")),
+            entries
+                .iter()
+                .any(|(s, t)| *s == fmi2Error && t.contains("'der(i)'") && t.contains("not a finite number")),
             "{entries:?}"
         );
         fmi2FreeInstance(c);

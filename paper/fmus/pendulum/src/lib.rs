@@ -105,7 +105,9 @@ impl Model for Pendulum {
 
     /// Equations (6)-(7) solved for the accelerations.
     fn derivatives<D: Real>(&self, _t: D, v: &mut PendulumContinuous<D>) {
-        let [da1, dw1, da2, dw2] = self.params().rhs([v.alpha1, v.omega1, v.alpha2, v.omega2], [v.M1, v.M2]);
+        let [da1, dw1, da2, dw2] = self
+            .params()
+            .rhs([v.alpha1, v.omega1, v.alpha2, v.omega2], [v.M1, v.M2]);
         (v.der_alpha1, v.der_omega1, v.der_alpha2, v.der_omega2) = (da1, dw1, da2, dw2);
     }
 
