@@ -341,8 +341,13 @@ pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
     nvr: usize,
     value: *const T,
 ) -> fmi2Status {
+    let call = if T::TYPE == crate::description::VarType::Real {
+        Call::SetValues
+    } else {
+        Call::SetDiscreteValues
+    };
     unsafe {
-        with_instance::<M>(c, Call::SetValues, function, |inst| {
+        with_instance::<M>(c, call, function, |inst| {
             match (slice(vr, nvr), slice(value, nvr)) {
                 (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
                 _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
@@ -387,7 +392,7 @@ pub unsafe fn set_boolean<M: CoSimulation>(
     value: *const fmi2Boolean,
 ) -> fmi2Status {
     unsafe {
-        with_instance::<M>(c, Call::SetValues, "fmi2SetBoolean", |inst| {
+        with_instance::<M>(c, Call::SetDiscreteValues, "fmi2SetBoolean", |inst| {
             match (slice(vr, nvr), slice(value, nvr)) {
                 (Some(vrs), Some(values)) => {
                     let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
@@ -422,7 +427,7 @@ pub unsafe fn set_string<M: CoSimulation>(
     value: *const fmi2String,
 ) -> fmi2Status {
     unsafe {
-        with_instance::<M>(c, Call::SetValues, "fmi2SetString", |inst| {
+        with_instance::<M>(c, Call::SetDiscreteValues, "fmi2SetString", |inst| {
             match (slice(vr, nvr), slice(value, nvr)) {
                 (Some(vrs), Some(values)) => {
                     let mut texts = Vec::with_capacity(values.len());

@@ -60,7 +60,10 @@ pub enum Call {
     Terminate,
     Reset,
     GetValues,
+    /// fmi2SetReal.
     SetValues,
+    /// fmi2SetInteger, fmi2SetBoolean, fmi2SetString: not in continuous-time mode.
+    SetDiscreteValues,
     FmuState,
     GetDirectionalDerivative,
     SetRealInputDerivatives,
@@ -97,6 +100,7 @@ impl Call {
             }
             // Which variables may be set in which of these states: `Instance::settable`.
             Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT | CONTINUOUS,
+            Call::SetDiscreteValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT,
             Call::FmuState => ANY_BUT_FATAL,
             Call::SetRealInputDerivatives => INSTANTIATED | INIT | STEP_COMPLETE,
             Call::GetRealOutputDerivatives => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
@@ -110,6 +114,32 @@ impl Call {
             Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
+        }
+    }
+}
+
+impl Call {
+    /// `Some(true)`: a model-exchange function; `Some(false)`: a co-simulation one; `None`:
+    /// common to both. The states of the two machines overlap (instantiated, initialization,
+    /// terminated, error), so the interface is checked besides the state.
+    pub const fn interface(self) -> Option<bool> {
+        match self {
+            Call::EnterEventMode
+            | Call::NewDiscreteStates
+            | Call::EnterContinuousTimeMode
+            | Call::CompletedIntegratorStep
+            | Call::SetTime
+            | Call::SetContinuousStates
+            | Call::GetEventIndicators
+            | Call::GetContinuousStates
+            | Call::GetDerivatives
+            | Call::GetNominalsOfContinuousStates => Some(true),
+            Call::SetRealInputDerivatives
+            | Call::GetRealOutputDerivatives
+            | Call::DoStep
+            | Call::CancelStep
+            | Call::GetStatus => Some(false),
+            _ => None,
         }
     }
 }
@@ -295,6 +325,15 @@ impl<M: CoSimulation> Instance<M> {
 
     /// The one place where the state machine is enforced.
     pub fn check_state(&self, call: Call, function: &str) -> Outcome {
+        if let Some(model_exchange) = call.interface()
+            && model_exchange != self.model_exchange
+        {
+            return Err(self.error(&format!(
+                "{function} is a {} function; this instance was instantiated for {}",
+                if model_exchange { "model-exchange" } else { "co-simulation" },
+                if self.model_exchange { "model exchange" } else { "co-simulation" }
+            )));
+        }
         let allowed = call.allowed_in();
         if allowed & bit(self.sim.state) != 0 {
             return Ok(());
