@@ -160,6 +160,13 @@ registry! {
     ModelExchange: model_exchange::{
         model_exchange_every_function_in_every_state_answers_as_the_standard_says,
         a_co_simulation_instance_refuses_every_model_exchange_function,
+        model_exchange_functions_refuse_a_null_component,
+        model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing,
+        model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows_it,
+        model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic,
+        model_exchange_new_discrete_states_fills_the_event_info_sensibly,
+        model_exchange_an_explicit_euler_run_gives_finite_outputs,
+        model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_identically,
     };
     DirectionalDerivatives: directional_derivatives::{
         co_simulation_directional_derivatives_match_finite_differences,

@@ -16,12 +16,12 @@
 #![allow(non_upper_case_globals)] // fmi2OK etc. are the standard's names, matched on
 
 use crate::fmi2::*;
-use crate::instance::{Args, Instance, status_name};
-use crate::me::{self, ME_REACHABLE, ME_STATES, MeState, MeState::*, needs_me};
+use crate::instance::{Args, Instance, excitation, status_name};
+use crate::me::{self, Euler, ME_REACHABLE, ME_STATES, MeState, MeState::*, Rng, needs_me};
 use crate::outcome::{convention, info, limitation, skip_not_declared};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State};
-use crate::{Fmu, LogEntry, Type};
+use crate::{Fmu, LogEntry, Type, bits};
 use std::ptr;
 
 /// FMU states of a donor model-exchange instance, one per model-exchange state, for the
@@ -741,5 +741,690 @@ fn one_me_call(inst: &mut Instance, k: usize) -> (&'static str, fmi2Status) {
         7 => ("fmi2GetEventIndicators", inst.get_event_indicators().0),
         8 => ("fmi2GetContinuousStates", inst.get_continuous_states().0),
         _ => ("fmi2GetNominalsOfContinuousStates", inst.get_nominals().0),
+    }
+}
+
+/// Fails unless the last call was refused with fmi2Error and a logged message (naming the
+/// function, on this exporter's FMUs).
+fn refused(inst: &Instance, function: &str, what: &str, status: fmi2Status) {
+    let log = inst.log();
+    assert_eq!(
+        status,
+        fmi2Error,
+        "{}: {function} with {what}: expected fmi2Error, got {}; log {log:?}",
+        inst.fmu.id,
+        status_name(status)
+    );
+    assert!(
+        refusal_logged(inst, &log, function),
+        "{}: {function} with {what}: refused without an fmi2Error message naming the function: {log:?}",
+        inst.fmu.id
+    );
+}
+
+/// What a model-exchange instance shows of itself: states, derivatives, event indicators and
+/// every variable, as bit patterns.
+fn me_observe(inst: &Instance) -> Vec<u64> {
+    let (s1, x) = inst.get_continuous_states();
+    let (s2, dx) = inst.get_derivatives();
+    let (s3, z) = inst.get_event_indicators();
+    assert_eq!([s1, s2, s3], [fmi2OK; 3], "{}: {}", inst.fmu.id, inst.log_text());
+    let mut out = bits(&x);
+    out.extend(bits(&dx));
+    out.extend(bits(&z));
+    out.extend(inst.observe());
+    out
+}
+
+/// A model-exchange instance in ContinuousTimeMode after `steps` explicit-Euler steps of 1e-4 s.
+fn advanced(fmu: &Fmu, steps: usize) -> (Instance<'_>, Euler) {
+    let mut inst = Instance::new_me(fmu);
+    let info = inst.me_initialize();
+    let mut euler = Euler::new(&inst, 1e-4, &info);
+    for _ in 0..steps {
+        euler.step(&mut inst);
+    }
+    inst.log();
+    (inst, euler)
+}
+
+pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fmu) {
+    let me = needs_me(fmu);
+    let (mut inst, _) = advanced(fmu, 10);
+    let (nx, ni) = (inst.nx(), inst.ni());
+    let c = inst.c;
+    type Vector = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
+    let getters: [(&str, Vector, usize); 4] = [
+        ("fmi2GetContinuousStates", me.get_continuous_states, nx),
+        ("fmi2GetDerivatives", me.get_derivatives, nx),
+        (
+            "fmi2GetNominalsOfContinuousStates",
+            me.get_nominals_of_continuous_states,
+            nx,
+        ),
+        ("fmi2GetEventIndicators", me.get_event_indicators, ni),
+    ];
+    let reference = me_observe(&inst);
+    let check_unchanged = |inst: &mut Instance, what: &str, before: &Option<Vec<u8>>| {
+        assert_eq!(
+            &inst.fingerprint(),
+            before,
+            "{}: {what}: refused, but the FMU state changed",
+            fmu.id
+        );
+        assert_eq!(
+            me_observe(inst),
+            reference,
+            "{}: after the refused {what}, the instance shows other values",
+            fmu.id
+        );
+    };
+    let mut sizes: Vec<usize> = vec![];
+    for (function, f, n) in getters {
+        // Wrong lengths, with a buffer of that length; NULL with the right length.
+        sizes.clear();
+        sizes.extend([n + 1, n + 7]);
+        if n > 0 {
+            sizes.push(n - 1);
+        }
+        for m in sizes.iter().copied() {
+            let before = inst.fingerprint();
+            let mut buf = vec![0.0; m];
+            // SAFETY: a buffer of m elements.
+            let s = unsafe { f(c, buf.as_mut_ptr(), m) };
+            let what = format!("n = {m} (the FMU has {n})");
+            refused(&inst, function, &what, s);
+            check_unchanged(&mut inst, &format!("{function}({what})"), &before);
+        }
+        let before = inst.fingerprint();
+        let m = n.max(1);
+        // SAFETY: NULL with n > 0, which the FMU must refuse.
+        let s = unsafe { f(c, ptr::null_mut(), m) };
+        refused(&inst, function, &format!("NULL and n = {m}"), s);
+        check_unchanged(&mut inst, &format!("{function}(NULL, {m})"), &before);
+    }
+    // fmi2SetContinuousStates: lengths, NULL, non-finite values (each position).
+    let (_, x) = inst.get_continuous_states();
+    let mut bad_states: Vec<(String, Vec<f64>, bool)> = vec![
+        (
+            format!("n = {} (the FMU has {nx})", nx + 1),
+            [&x[..], &[0.0]].concat(),
+            false,
+        ),
+        (format!("NULL and n = {}", nx.max(1)), vec![], true),
+    ];
+    if nx > 0 {
+        bad_states.push((
+            format!("n = {} (the FMU has {nx})", nx - 1),
+            x[..nx - 1].to_vec(),
+            false,
+        ));
+    }
+    for j in 0..nx {
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut y = x.clone();
+            y[j] = v;
+            bad_states.push((format!("x[{j}] = {v}"), y, false));
+        }
+    }
+    for (what, y, null) in bad_states {
+        let before = inst.fingerprint();
+        let (p, n) = if null {
+            (ptr::null(), nx.max(1))
+        } else {
+            (y.as_ptr(), y.len())
+        };
+        // SAFETY: an array of n elements, or NULL on purpose.
+        let s = unsafe { (me.set_continuous_states)(c, p, n) };
+        refused(&inst, "fmi2SetContinuousStates", &what, s);
+        check_unchanged(&mut inst, &format!("fmi2SetContinuousStates({what})"), &before);
+    }
+    // fmi2SetTime: not finite.
+    let t = inst.time;
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let before = inst.fingerprint();
+        let s = inst.set_time(v);
+        refused(&inst, "fmi2SetTime", &format!("time = {v}"), s);
+        check_unchanged(&mut inst, &format!("fmi2SetTime({v})"), &before);
+    }
+    inst.time = t;
+    // fmi2CompletedIntegratorStep: NULL out pointers.
+    let (mut a, mut b) = (0, 0);
+    for (what, pa, pb) in [
+        ("enterEventMode NULL", ptr::null_mut(), &mut b as *mut fmi2Boolean),
+        ("terminateSimulation NULL", &mut a as *mut fmi2Boolean, ptr::null_mut()),
+    ] {
+        let before = inst.fingerprint();
+        // SAFETY: NULL on purpose, a valid pointer otherwise.
+        let s = unsafe { (me.completed_integrator_step)(c, fmi2False, pa, pb) };
+        refused(&inst, "fmi2CompletedIntegratorStep", what, s);
+        check_unchanged(&mut inst, &format!("fmi2CompletedIntegratorStep({what})"), &before);
+    }
+    // fmi2NewDiscreteStates(NULL), in EventMode.
+    assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
+    inst.log();
+    let before = inst.fingerprint();
+    // What the valid call answers without the refused one before it: on a twin instance.
+    let (mut twin, _) = advanced(fmu, 10);
+    assert_eq!(twin.enter_event_mode(), fmi2OK, "{}", twin.log_text());
+    let (s_ref, info_ref) = twin.new_discrete_states();
+    // SAFETY: NULL on purpose.
+    let s = unsafe { (me.new_discrete_states)(c, ptr::null_mut()) };
+    refused(&inst, "fmi2NewDiscreteStates", "eventInfo NULL", s);
+    assert_eq!(
+        inst.fingerprint(),
+        before,
+        "{}: fmi2NewDiscreteStates(NULL) changed the FMU state",
+        fmu.id
+    );
+    let (s, info) = inst.new_discrete_states();
+    assert_eq!(
+        (s, info),
+        (s_ref, info_ref),
+        "{}: fmi2NewDiscreteStates after the refused one answers otherwise",
+        fmu.id
+    );
+    if before.is_none() {
+        limitation(
+            "<ModelExchange> does not declare canGetAndSetFMUstate and canSerializeFMUstate: the FMU state is not compared",
+        );
+    }
+}
+
+pub fn model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu) {
+    needs_me(fmu);
+    let mut failures = vec![];
+    for state in [Instantiated, InitializationMode, EventMode, ContinuousTimeMode] {
+        for v in fmu.md.variables.iter().filter(|v| v.ty != Type::String) {
+            let mut inst = me::instance_in(fmu, state);
+            let before = inst.fingerprint();
+            let s = match v.ty {
+                Type::Real => inst.set_real(&[v.vr], &[v.start_real().unwrap_or(0.0)]),
+                Type::Integer | Type::Enumeration => inst.set_integer(&[v.vr], &[v.start_integer().unwrap_or(0)]),
+                Type::Boolean => inst.set_boolean(&[v.vr], &[v.start_boolean().unwrap_or(false)]),
+                Type::String => unreachable!(),
+            };
+            let log = inst.log();
+            let want = v.settable_in_me(&format!("{state:?}"));
+            let at = format!(
+                "{}: set '{}' ({:?} {} {}, initial {:?}) in model-exchange state {state:?}",
+                fmu.id,
+                v.name,
+                v.ty,
+                v.causality,
+                v.variability,
+                v.initial()
+            );
+            if want && s != fmi2OK {
+                failures.push(format!(
+                    "{at}: allowed by the standard, got {}: {log:?}",
+                    status_name(s)
+                ));
+            }
+            if !want {
+                let function_allowed = me::allowed_states(set_function(v.ty)).contains(&state);
+                if s != fmi2Error {
+                    failures.push(format!("{at}: not allowed, got {}", status_name(s)));
+                } else if function_allowed && !inst.says(&log, fmi2Error, &[&format!("'{}'", v.name)]) {
+                    failures.push(format!("{at}: the refusal does not name the variable: {log:?}"));
+                } else if !log.iter().any(|e| e.status == fmi2Error) {
+                    failures.push(format!("{at}: refused without a message"));
+                }
+                if inst.fingerprint() != before {
+                    failures.push(format!("{at}: refused, but the FMU state changed"));
+                }
+            }
+            // A settable Real refuses NaN and infinities.
+            if want && v.ty == Type::Real {
+                for bad in [f64::NAN, f64::INFINITY] {
+                    let before = inst.fingerprint();
+                    let s = inst.set_real(&[v.vr], &[bad]);
+                    let log = inst.log();
+                    if s != fmi2Error || !log.iter().any(|e| e.status == fmi2Error) {
+                        failures.push(format!(
+                            "{at}: = {bad}: expected fmi2Error with a message, got {}",
+                            status_name(s)
+                        ));
+                    }
+                    if inst.fingerprint() != before {
+                        failures.push(format!("{at}: = {bad} refused, but the FMU state changed"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+pub fn model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic(fmu: &Fmu) {
+    needs_me(fmu);
+    let md = &fmu.md;
+    let states = md
+        .continuous_states()
+        .unwrap_or_else(|e| panic!("{}: <ModelStructure><Derivatives>: {e}", fmu.id));
+    let nx = states.len();
+    for (i, (x, _)) in states.iter().enumerate() {
+        assert!(
+            !states[..i].iter().any(|(y, _)| y.vr == x.vr),
+            "{}: '{}' is the state of two derivatives",
+            fmu.id,
+            x.name
+        );
+    }
+    for u in md.model_structure.outputs.iter() {
+        let v = md
+            .by_index(u.index)
+            .unwrap_or_else(|| panic!("{}: <Outputs> lists index {}, which is no variable", fmu.id, u.index));
+        assert_eq!(
+            v.causality, "output",
+            "{}: <Outputs> lists '{}', no output",
+            fmu.id, v.name
+        );
+    }
+    let state_vrs: Vec<u32> = states.iter().map(|(x, _)| x.vr).collect();
+    let der_vrs: Vec<u32> = states.iter().map(|(_, d)| d.vr).collect();
+    // Nominals are there before initialization too.
+    let fresh = Instance::new_me(fmu);
+    let (s, nominals) = fresh.get_nominals();
+    assert_eq!(
+        s,
+        fmi2OK,
+        "{}: fmi2GetNominalsOfContinuousStates in Instantiated: {}",
+        fmu.id,
+        fresh.log_text()
+    );
+    drop(fresh);
+    let (mut inst, mut euler) = advanced(fmu, 0);
+    let (s, nominals_ct) = inst.get_nominals();
+    assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
+    for (j, n) in nominals.iter().chain(&nominals_ct).enumerate() {
+        assert!(
+            n.is_finite() && *n > 0.0,
+            "{}: the nominal of state '{}' is {n} (not finite and > 0)",
+            fmu.id,
+            states[j % nx.max(1)].0.name
+        );
+    }
+    let mut rng = Rng::new(0x57a7e5);
+    for round in 0..20 {
+        // The state vector is the declared variables, in <Derivatives> order; so are the
+        // derivatives.
+        let (s1, x) = inst.get_continuous_states();
+        let (s2, dx) = inst.get_derivatives();
+        assert_eq!([s1, s2], [fmi2OK; 2], "{}: {}", fmu.id, inst.log_text());
+        let at = format!("{}: round {round}, t = {}", fmu.id, inst.time);
+        assert_eq!(x.len(), nx);
+        assert_eq!(
+            bits(&x),
+            bits(&inst.get_real(&state_vrs).1),
+            "{at}: fmi2GetContinuousStates differs from fmi2GetReal of the state variables {state_vrs:?}"
+        );
+        assert_eq!(
+            bits(&dx),
+            bits(&inst.get_real(&der_vrs).1),
+            "{at}: fmi2GetDerivatives differs from fmi2GetReal of the derivative variables {der_vrs:?}"
+        );
+        assert!(dx.iter().all(|d| d.is_finite()), "{at}: derivatives not finite: {dx:?}");
+        assert_eq!(
+            bits(&inst.get_derivatives().1),
+            bits(&dx),
+            "{at}: fmi2GetDerivatives twice differs"
+        );
+        // Random states: set, read back bit-identically, derivatives finite and a function of
+        // the states alone (the same after going elsewhere and back).
+        let y: Vec<f64> = states
+            .iter()
+            .map(|(v, _)| {
+                let r = rng.uniform(-0.5, 0.5);
+                let r = v.max.map_or(r, |m| r.min(m));
+                v.min.map_or(r, |m| r.max(m))
+            })
+            .collect();
+        assert_eq!(inst.set_continuous_states(&y), fmi2OK, "{at}: {}", inst.log_text());
+        let (s, back) = inst.get_continuous_states();
+        assert_eq!(s, fmi2OK);
+        assert_eq!(
+            bits(&back),
+            bits(&y),
+            "{at}: fmi2GetContinuousStates after fmi2SetContinuousStates({y:?})"
+        );
+        assert_eq!(
+            bits(&inst.get_real(&state_vrs).1),
+            bits(&y),
+            "{at}: fmi2GetReal of the states after fmi2SetContinuousStates"
+        );
+        let (s, dy) = inst.get_derivatives();
+        assert_eq!(s, fmi2OK);
+        assert!(
+            dy.iter().all(|d| d.is_finite()),
+            "{at}: derivatives at {y:?} not finite: {dy:?}"
+        );
+        let elsewhere: Vec<f64> = y.iter().map(|v| v * 0.5 + 0.125).collect();
+        assert_eq!(inst.set_continuous_states(&elsewhere), fmi2OK);
+        inst.get_derivatives();
+        assert_eq!(inst.set_continuous_states(&y), fmi2OK);
+        assert_eq!(
+            bits(&inst.get_derivatives().1),
+            bits(&dy),
+            "{at}: the derivatives at {y:?} differ after the states went elsewhere and back"
+        );
+        // Back where the integration was, one step on.
+        assert_eq!(inst.set_continuous_states(&x), fmi2OK);
+        euler.step(&mut inst);
+    }
+    info(format!(
+        "{nx} continuous states, {} event indicators",
+        fmu.md.number_of_event_indicators
+    ));
+}
+
+pub fn model_exchange_new_discrete_states_fills_the_event_info_sensibly(fmu: &Fmu) {
+    needs_me(fmu);
+    let mut inst = Instance::new_me(fmu);
+    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
+    assert_eq!(inst.set_real(&vrs, &vals), fmi2OK, "{}", inst.log_text());
+    inst.me_to_event_mode();
+    let mut first = true;
+    let mut events = 0;
+    // At the initial event and at the next three events (time events where the FMU defines
+    // them, else an event the importer asks for 10 ms later).
+    while events < 4 {
+        let now = inst.time;
+        let (_, x_before) = inst.get_continuous_states();
+        let mut calls = 0;
+        let info = loop {
+            let (s, info) = inst.new_discrete_states();
+            assert_eq!(
+                s,
+                fmi2OK,
+                "{}: fmi2NewDiscreteStates at t = {now}: {}",
+                fmu.id,
+                inst.log_text()
+            );
+            me::check_event_info(fmu, &info, now);
+            calls += 1;
+            if info.newDiscreteStatesNeeded == fmi2False || calls == 100 {
+                break info;
+            }
+        };
+        assert_eq!(
+            info.newDiscreteStatesNeeded, fmi2False,
+            "{}: still newDiscreteStatesNeeded after 100 calls at t = {now}",
+            fmu.id
+        );
+        if calls > 1 && convention(fmu, "one fmi2NewDiscreteStates call settles the discrete states") {
+            panic!(
+                "{}: at t = {now}, {calls} fmi2NewDiscreteStates calls were needed",
+                fmu.id
+            );
+        }
+        let (_, x_after) = inst.get_continuous_states();
+        if info.valuesOfContinuousStatesChanged == fmi2False {
+            assert_eq!(
+                bits(&x_after),
+                bits(&x_before),
+                "{}: at t = {now}: valuesOfContinuousStatesChanged = false, but the continuous states changed",
+                fmu.id
+            );
+        }
+        // Once settled, another call changes nothing and says the same.
+        let (s, again) = inst.new_discrete_states();
+        assert_eq!(s, fmi2OK, "{}", inst.log_text());
+        assert_eq!(
+            (
+                again.newDiscreteStatesNeeded,
+                again.nextEventTimeDefined,
+                again.terminateSimulation
+            ),
+            (fmi2False, info.nextEventTimeDefined, fmi2False),
+            "{}: at t = {now}: a second fmi2NewDiscreteStates once settled answers {again:?} after {info:?}",
+            fmu.id
+        );
+        if info.nextEventTimeDefined == fmi2True {
+            assert_eq!(
+                again.nextEventTime.to_bits(),
+                info.nextEventTime.to_bits(),
+                "{}: at t = {now}: the next event time moved from {} to {} without time passing",
+                fmu.id,
+                info.nextEventTime,
+                again.nextEventTime
+            );
+        }
+        if first {
+            crate::outcome::info(format!("the initial event info: {info:?}"));
+            first = false;
+        }
+        events += 1;
+        assert_eq!(inst.enter_continuous_time_mode(), fmi2OK, "{}", inst.log_text());
+        let target = if info.nextEventTimeDefined == fmi2True {
+            info.nextEventTime
+        } else {
+            now + 0.01
+        };
+        // Integrate up to the event (no state events expected before: checked by Euler).
+        let mut euler = Euler::new(&inst, 1e-4, &info);
+        euler.next_event = None;
+        while inst.time + 1e-4 < target {
+            euler.step(&mut inst);
+            assert_eq!(euler.events, 0, "{}: an event before t = {target}", fmu.id);
+        }
+        assert_eq!(inst.set_time(target), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+        assert_eq!(inst.enter_event_mode(), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+    }
+}
+
+pub fn model_exchange_an_explicit_euler_run_gives_finite_outputs(fmu: &Fmu) {
+    needs_me(fmu);
+    // 1 s at 1e-4 s (or at the default experiment's step, where that is finer: a stiff model).
+    let h = crate::instance::step_size(fmu).min(1e-4);
+    let steps = (1.0 / h).round() as usize;
+    let (mut inst, mut euler) = {
+        let mut inst = Instance::new_me(fmu);
+        let info = inst.me_initialize();
+        let euler = Euler::new(&inst, h, &info);
+        (inst, euler)
+    };
+    let reals = fmu.md.vrs_of_type(Type::Real);
+    for n in 0..steps {
+        euler.step(&mut inst);
+        if n % 100 == 99 || n + 1 == steps {
+            let (s, y) = inst.get_real(&reals);
+            assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
+            if let Some(i) = y.iter().position(|v| !v.is_finite()) {
+                panic!(
+                    "{}: at t = {}: '{}' = {}",
+                    fmu.id,
+                    inst.time,
+                    fmu.md.of_type(Type::Real).nth(i).unwrap().name,
+                    y[i]
+                );
+            }
+        }
+    }
+    assert!(
+        (inst.time - 1.0).abs() < 1e-9,
+        "{}: the run ended at t = {}",
+        fmu.id,
+        inst.time
+    );
+    assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
+    assert_eq!(inst.terminate(), fmi2OK, "{}", inst.log_text());
+    info(format!("{steps} steps of {h} s, {} events", euler.events));
+}
+
+/// The calls that continue a run from a saved state: in EventMode the event iteration first.
+fn continue_from(inst: &mut Instance, euler: &Euler, event_mode: bool, steps: usize) -> Vec<Vec<u64>> {
+    let mut euler = euler.clone();
+    let mut out = vec![];
+    if event_mode {
+        let info = inst.event_iteration();
+        assert_eq!(inst.enter_continuous_time_mode(), fmi2OK, "{}", inst.log_text());
+        euler.next_event = (info.nextEventTimeDefined == fmi2True).then_some(info.nextEventTime);
+        out.push(me_observe(inst));
+    }
+    for _ in 0..steps {
+        euler.step(inst);
+        out.push(me_observe(inst));
+    }
+    out
+}
+
+pub fn model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_identically(fmu: &Fmu) {
+    needs_me(fmu);
+    if !me::can_snapshot_me(fmu) {
+        skip_not_declared("canGetAndSetFMUstate and canSerializeFMUstate in <ModelExchange>");
+    }
+    let observed = fmu.me_state_codes().is_ok();
+    if !observed {
+        limitation("the state machine's state after restoring is not observed");
+    }
+    for mode in [ContinuousTimeMode, EventMode] {
+        let (mut inst, euler) = advanced(fmu, 20);
+        if mode == EventMode {
+            assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
+        }
+        let t = inst.time;
+        let (st, mut saved) = inst.get_state();
+        assert_eq!(
+            st,
+            fmi2OK,
+            "{}: fmi2GetFMUstate in {mode:?}: {}",
+            fmu.id,
+            inst.log_text()
+        );
+        let bytes = inst
+            .serialize(saved)
+            .unwrap_or_else(|s| panic!("{}: serializing in {mode:?}: {s}: {}", fmu.id, inst.log_text()));
+        let first = continue_from(&mut inst, &euler, mode == EventMode, 30);
+        // Back twice (the state is not consumed), once from Terminated.
+        for round in 0..3 {
+            if round == 2 {
+                assert_eq!(inst.enter_event_mode(), fmi2OK);
+                assert_eq!(inst.terminate(), fmi2OK, "{}", inst.log_text());
+            }
+            assert_eq!(
+                inst.set_state(saved),
+                fmi2OK,
+                "{}: fmi2SetFMUstate: {}",
+                fmu.id,
+                inst.log_text()
+            );
+            inst.time = t;
+            if observed {
+                assert_eq!(
+                    inst.me_state(),
+                    mode,
+                    "{}: the state after restoring a state of {mode:?}",
+                    fmu.id
+                );
+            }
+            let now = inst.snapshot();
+            if now != bytes {
+                let at = now.iter().zip(&bytes).position(|(a, b)| a != b);
+                panic!(
+                    "{}: restored a state of {mode:?} (round {round}): serialized again it differs (lengths {} and {}, first difference at byte {at:?})",
+                    fmu.id,
+                    now.len(),
+                    bytes.len()
+                );
+            }
+            let again = continue_from(&mut inst, &euler, mode == EventMode, 30);
+            assert!(
+                again == first,
+                "{}: after fmi2SetFMUstate (round {round}) of a state taken in {mode:?}, the run differs at call {:?}",
+                fmu.id,
+                again.iter().zip(&first).position(|(a, b)| a != b)
+            );
+        }
+        assert_eq!(inst.free_state(&mut saved), fmi2OK);
+        // Deserialized, in another instance.
+        let mut other = Instance::new_me(fmu);
+        other.restore(&bytes);
+        other.time = t;
+        let now = other.snapshot();
+        assert!(
+            now == bytes,
+            "{}: a state of {mode:?} deserialized into another instance: serialized again it differs (first difference at byte {:?})",
+            fmu.id,
+            now.iter().zip(&bytes).position(|(a, b)| a != b)
+        );
+        // And into this one, after going on from it.
+        continue_from(&mut inst, &euler, false, 3);
+        inst.restore(&bytes);
+        let now = inst.snapshot();
+        assert!(
+            now == bytes,
+            "{}: a state of {mode:?} deserialized into the instance that made it, after going on: serialized again it differs (first difference at byte {:?})",
+            fmu.id,
+            now.iter().zip(&bytes).position(|(a, b)| a != b)
+        );
+        if observed {
+            assert_eq!(other.me_state(), mode, "{}: a deserialized state of {mode:?}", fmu.id);
+        }
+        let again = continue_from(&mut other, &euler, mode == EventMode, 30);
+        assert!(
+            again == first,
+            "{}: a state of {mode:?} serialized, deserialized in another instance: the run differs at call {:?}",
+            fmu.id,
+            again.iter().zip(&first).position(|(a, b)| a != b)
+        );
+    }
+}
+
+pub fn model_exchange_functions_refuse_a_null_component(fmu: &Fmu) {
+    let Ok(me) = &fmu.api.me else {
+        if fmu.md.model_exchange {
+            needs_me(fmu);
+        }
+        skip_not_declared("<ModelExchange>, and the binary does not export the model-exchange functions")
+    };
+    let c: fmi2Component = ptr::null_mut();
+    let mut v = [0.0; 4];
+    let mut info = fmi2EventInfo {
+        newDiscreteStatesNeeded: 0,
+        terminateSimulation: 0,
+        nominalsOfContinuousStatesChanged: 0,
+        valuesOfContinuousStatesChanged: 0,
+        nextEventTimeDefined: 0,
+        nextEventTime: 0.0,
+    };
+    let (mut a, mut b) = (0, 0);
+    let n = fmu.md.number_of_continuous_states().min(4);
+    let ni = fmu.md.number_of_event_indicators.min(4);
+    crate::outcome::breadcrumb("model-exchange functions with a NULL component");
+    // SAFETY: every function must check the component before touching anything.
+    let answers = unsafe {
+        [
+            ("fmi2EnterEventMode", (me.enter_event_mode)(c)),
+            ("fmi2NewDiscreteStates", (me.new_discrete_states)(c, &mut info)),
+            ("fmi2EnterContinuousTimeMode", (me.enter_continuous_time_mode)(c)),
+            (
+                "fmi2CompletedIntegratorStep",
+                (me.completed_integrator_step)(c, 0, &mut a, &mut b),
+            ),
+            ("fmi2SetTime", (me.set_time)(c, 0.0)),
+            ("fmi2SetContinuousStates", (me.set_continuous_states)(c, v.as_ptr(), n)),
+            ("fmi2GetDerivatives", (me.get_derivatives)(c, v.as_mut_ptr(), n)),
+            (
+                "fmi2GetEventIndicators",
+                (me.get_event_indicators)(c, v.as_mut_ptr(), ni),
+            ),
+            (
+                "fmi2GetContinuousStates",
+                (me.get_continuous_states)(c, v.as_mut_ptr(), n),
+            ),
+            (
+                "fmi2GetNominalsOfContinuousStates",
+                (me.get_nominals_of_continuous_states)(c, v.as_mut_ptr(), n),
+            ),
+        ]
+    };
+    for (f, s) in answers {
+        assert_eq!(s, fmi2Error, "{}: {f}(NULL, ...) answered {}", fmu.id, status_name(s));
     }
 }
