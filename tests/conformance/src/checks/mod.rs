@@ -149,6 +149,7 @@ registry! {
     };
     RandomSequences: random_sequences::{
         random_call_sequences_keep_every_fmu_conformant,
+        random_model_exchange_call_sequences_keep_every_fmu_conformant,
         regressions_found_by_random_sequences,
     };
     Native: native::{
