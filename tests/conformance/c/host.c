@@ -9,7 +9,11 @@
  *   '%' (the logger formats with vsnprintf, as C hosts do); frees everything and dlcloses.
  * Prints "final <hex bit patterns of the last values>" and "messages <n>"; exits 1 with a
  * reason on stderr on any failure. With HOST_FOREIGN set (another exporter's FMU), the checks
- * of this exporter's conventions are left out. */
+ * of this exporter's conventions are left out.
+ * With HOST_ME="<nx>,<ni>,<steps>,<h>" it also runs the FMU through Model Exchange: a new
+ * instance, the same Real values set, initialization and the event iteration, then <steps>
+ * explicit-Euler steps of <h> (time, state and step events handled as an importer must), and
+ * prints "me-final <hex bit patterns of the listed values>". */
 #include <dlfcn.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -75,6 +79,27 @@ typedef fmi2Status (*StateSize)(fmi2Component, fmi2FMUstate, size_t *);
 typedef fmi2Status (*Serialize)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
 typedef fmi2Status (*Deserialize)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
 typedef fmi2Status (*DebugLogging)(fmi2Component, fmi2Boolean, size_t, const fmi2String *);
+typedef struct {
+    fmi2Boolean newDiscreteStatesNeeded, terminateSimulation, nominalsOfContinuousStatesChanged,
+        valuesOfContinuousStatesChanged, nextEventTimeDefined;
+    double nextEventTime;
+} fmi2EventInfo;
+typedef fmi2Status (*NewDiscreteStates)(fmi2Component, fmi2EventInfo *);
+typedef fmi2Status (*Completed)(fmi2Component, fmi2Boolean, fmi2Boolean *, fmi2Boolean *);
+typedef fmi2Status (*SetTime)(fmi2Component, double);
+typedef fmi2Status (*SetVector)(fmi2Component, const double *, size_t);
+typedef fmi2Status (*GetVector)(fmi2Component, double *, size_t);
+
+/* The event iteration: fmi2NewDiscreteStates until no new discrete states are needed. */
+static int event_iteration(NewDiscreteStates nds, fmi2Component c, fmi2EventInfo *info) {
+    for (int k = 0; k < 100; k++) {
+        if (nds(c, info) != fmi2OK) { fprintf(stderr, "fmi2NewDiscreteStates failed: %s\n", last); return 1; }
+        if (info->terminateSimulation) { fprintf(stderr, "terminateSimulation\n"); return 1; }
+        if (!info->newDiscreteStatesNeeded) return 0;
+    }
+    fprintf(stderr, "the event iteration does not end\n");
+    return 1;
+}
 
 int main(int argc, char **argv) {
     if (argc < 7) {
@@ -172,6 +197,75 @@ int main(int argc, char **argv) {
     }
     free_instance(c);
     free_instance(NULL);
+
+    const char *me = getenv("HOST_ME");
+    double *me_values = NULL;
+    if (me) {
+        int nx = 0, ni = 0, me_steps = 0;
+        double me_h = 0;
+        if (sscanf(me, "%d,%d,%d,%lf", &nx, &ni, &me_steps, &me_h) != 4) { fprintf(stderr, "HOST_ME: %s\n", me); return 2; }
+        LOAD(Unary, enter_event_mode, "fmi2EnterEventMode");
+        LOAD(NewDiscreteStates, new_discrete_states, "fmi2NewDiscreteStates");
+        LOAD(Unary, enter_ct_mode, "fmi2EnterContinuousTimeMode");
+        LOAD(Completed, completed, "fmi2CompletedIntegratorStep");
+        LOAD(SetTime, set_time, "fmi2SetTime");
+        LOAD(SetVector, set_states, "fmi2SetContinuousStates");
+        LOAD(GetVector, get_states, "fmi2GetContinuousStates");
+        LOAD(GetVector, get_derivatives, "fmi2GetDerivatives");
+        LOAD(GetVector, get_indicators, "fmi2GetEventIndicators");
+        double *x = calloc((size_t)nx + 1, sizeof(double)), *dx = calloc((size_t)nx + 1, sizeof(double));
+        double *z = calloc((size_t)ni + 1, sizeof(double)), *z1 = calloc((size_t)ni + 1, sizeof(double));
+        me_values = calloc(nvr + 1, sizeof(double));
+        fmi2Component m = instantiate("c-host-me", fmi2ModelExchange, argv[2], argv[3], &cb, 0, 1);
+        if (!m) { fprintf(stderr, "fmi2Instantiate(fmi2ModelExchange) returned NULL: %s\n", last); return 1; }
+        for (int i = 7; i < argc; i++) {
+            fmi2ValueReference vr = (fmi2ValueReference)atoi(argv[i]);
+            double v = atof(strchr(argv[i], '=') + 1);
+            CHECK(set_real(m, &vr, 1, &v));
+        }
+        CHECK(setup(m, 0, 0.0, 0.0, 0, 0.0));
+        CHECK(enter(m));
+        CHECK(exit_init(m));
+        fmi2EventInfo info;
+        if (event_iteration(new_discrete_states, m, &info)) return 1;
+        CHECK(enter_ct_mode(m));
+        int time_events = info.nextEventTimeDefined;
+        double next_event = info.nextEventTime, t = 0.0;
+        CHECK(get_indicators(m, z, (size_t)ni));
+        for (int n = 0; n < me_steps; n++) {
+            CHECK(get_states(m, x, (size_t)nx));
+            CHECK(get_derivatives(m, dx, (size_t)nx));
+            double t1 = t + me_h;
+            int time_event = time_events && next_event <= t1;
+            if (time_event) t1 = next_event > t ? next_event : t;
+            for (int i = 0; i < nx; i++) x[i] = x[i] + (t1 - t) * dx[i];
+            CHECK(set_time(m, t1));
+            t = t1;
+            CHECK(set_states(m, x, (size_t)nx));
+            fmi2Boolean enter_event = 0, terminate_simulation = 0;
+            CHECK(completed(m, 0, &enter_event, &terminate_simulation));
+            if (terminate_simulation) { fprintf(stderr, "terminateSimulation at t = %g\n", t); return 1; }
+            CHECK(get_indicators(m, z1, (size_t)ni));
+            int state_event = 0;
+            for (int i = 0; i < ni; i++) state_event |= (z1[i] > 0) != (z[i] > 0);
+            memcpy(z, z1, (size_t)ni * sizeof(double));
+            if (time_event || state_event || enter_event) {
+                CHECK(enter_event_mode(m));
+                if (event_iteration(new_discrete_states, m, &info)) return 1;
+                CHECK(enter_ct_mode(m));
+                time_events = info.nextEventTimeDefined;
+                next_event = info.nextEventTime;
+                CHECK(get_indicators(m, z, (size_t)ni));
+            }
+        }
+        CHECK(get_real(m, vrs, nvr, me_values));
+        CHECK(terminate(m));
+        free_instance(m);
+        free(x);
+        free(dx);
+        free(z);
+        free(z1);
+    }
     if (dlclose(lib)) { fprintf(stderr, "dlclose: %s\n", dlerror()); return 1; }
 
     printf("final");
@@ -181,6 +275,16 @@ int main(int argc, char **argv) {
         printf(" %llx", (unsigned long long)b);
     }
     printf("\nmessages %d\n", messages);
+    if (me_values) {
+        printf("me-final");
+        for (size_t i = 0; i < nvr; i++) {
+            uint64_t b;
+            memcpy(&b, &me_values[i], sizeof b);
+            printf(" %llx", (unsigned long long)b);
+        }
+        printf("\n");
+        free(me_values);
+    }
     free(values);
     free(trace);
     return 0;

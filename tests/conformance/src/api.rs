@@ -1,4 +1,4 @@
-//! The 34 functions of the FMI 2.0 co-simulation interface, looked up in a loaded `.so` the way an
+//! The 34 functions of the FMI 2.0 co-simulation interface (and the 10 of model exchange, when exported), looked up in a loaded `.so` the way an
 //! importer does (`dlopen` + `dlsym`), with the standard's C signatures.
 
 use crate::fmi2::*;
@@ -79,13 +79,79 @@ pub struct Api {
     pub get_integer_status: unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut fmi2Integer) -> fmi2Status,
     pub get_boolean_status: unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut fmi2Boolean) -> fmi2Status,
     pub get_string_status: unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut fmi2String) -> fmi2Status,
+    /// The 10 functions of the model-exchange interface, or which are not exported (a
+    /// co-simulation-only FMU need not export them).
+    pub me: Result<MeApi, String>,
     /// Last, so that the pointers above are never used after the library is gone.
     library: libloading::Library,
+}
+
+/// The functions only the model-exchange interface has (FMI 2.0 section 3.2.1), with the
+/// standard's C signatures.
+pub struct MeApi {
+    pub enter_event_mode: Unary,
+    pub new_discrete_states: unsafe extern "C" fn(fmi2Component, *mut fmi2EventInfo) -> fmi2Status,
+    pub enter_continuous_time_mode: Unary,
+    pub completed_integrator_step:
+        unsafe extern "C" fn(fmi2Component, fmi2Boolean, *mut fmi2Boolean, *mut fmi2Boolean) -> fmi2Status,
+    pub set_time: unsafe extern "C" fn(fmi2Component, fmi2Real) -> fmi2Status,
+    pub set_continuous_states: unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status,
+    pub get_derivatives: unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status,
+    pub get_event_indicators: unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status,
+    pub get_continuous_states: unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status,
+    pub get_nominals_of_continuous_states: unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status,
+}
+
+/// The names of the model-exchange functions, as exported.
+pub const ME_FUNCTIONS: [&str; 10] = [
+    "fmi2EnterEventMode",
+    "fmi2NewDiscreteStates",
+    "fmi2EnterContinuousTimeMode",
+    "fmi2CompletedIntegratorStep",
+    "fmi2SetTime",
+    "fmi2SetContinuousStates",
+    "fmi2GetDerivatives",
+    "fmi2GetEventIndicators",
+    "fmi2GetContinuousStates",
+    "fmi2GetNominalsOfContinuousStates",
+];
+
+impl MeApi {
+    fn load(lib: &libloading::Library) -> Result<MeApi, String> {
+        let missing: Vec<&str> = ME_FUNCTIONS
+            .iter()
+            .copied()
+            // SAFETY: only looked up, not called.
+            .filter(|name| unsafe { lib.get::<*const ()>(name.as_bytes()) }.is_err())
+            .collect();
+        if !missing.is_empty() {
+            return Err(format!("not exported: {}", missing.join(", ")));
+        }
+        macro_rules! sym {
+            ($name:literal) => {
+                // SAFETY: the field's type is the standard's signature of this function.
+                *unsafe { lib.get($name) }.map_err(|e| format!("{}: {e}", String::from_utf8_lossy($name)))?
+            };
+        }
+        Ok(MeApi {
+            enter_event_mode: sym!(b"fmi2EnterEventMode"),
+            new_discrete_states: sym!(b"fmi2NewDiscreteStates"),
+            enter_continuous_time_mode: sym!(b"fmi2EnterContinuousTimeMode"),
+            completed_integrator_step: sym!(b"fmi2CompletedIntegratorStep"),
+            set_time: sym!(b"fmi2SetTime"),
+            set_continuous_states: sym!(b"fmi2SetContinuousStates"),
+            get_derivatives: sym!(b"fmi2GetDerivatives"),
+            get_event_indicators: sym!(b"fmi2GetEventIndicators"),
+            get_continuous_states: sym!(b"fmi2GetContinuousStates"),
+            get_nominals_of_continuous_states: sym!(b"fmi2GetNominalsOfContinuousStates"),
+        })
+    }
 }
 
 macro_rules! load {
     ($lib:ident; $($field:ident = $symbol:literal),* $(,)?) => {
         Api {
+            me: MeApi::load(&$lib),
             $(
                 // SAFETY: the field's type is the standard's signature of this function.
                 $field: *unsafe { $lib.get($symbol) }

@@ -25,6 +25,9 @@ pub struct Variable {
     pub start: Option<String>,
     pub min: Option<f64>,
     pub max: Option<f64>,
+    /// `derivative` of a Real: the 1-based index (in `<ModelVariables>`) of the variable this
+    /// one is the time derivative of.
+    pub derivative: Option<usize>,
 }
 
 impl Variable {
@@ -40,6 +43,20 @@ impl Variable {
             ("parameter", _) => Some("exact"),
             ("calculatedParameter" | "output" | "local", _) => Some("calculated"),
             _ => None,
+        }
+    }
+
+    /// Whether FMI 2.0 (section 3.2.3, the conditions on fmi2SetXXX in the model-exchange state
+    /// table) lets an importer set this variable in that model-exchange state. Instantiated and
+    /// InitializationMode are as in co-simulation; EventMode as StepComplete; in
+    /// ContinuousTimeMode only continuous Real inputs.
+    pub fn settable_in_me(&self, state: &str) -> bool {
+        match state {
+            "EventMode" => self.settable_in("StepComplete"),
+            "ContinuousTimeMode" => {
+                self.ty == Type::Real && self.causality == "input" && self.variability == "continuous"
+            }
+            other => self.settable_in(other),
         }
     }
 
@@ -76,6 +93,36 @@ impl Variable {
     }
 }
 
+/// The `<ModelExchange>` element.
+#[derive(Debug, Clone, Default)]
+pub struct ModelExchange {
+    pub model_identifier: String,
+    pub can_get_and_set_fmu_state: bool,
+    pub can_serialize_fmu_state: bool,
+    pub provides_directional_derivative: bool,
+    pub completed_integrator_step_not_needed: bool,
+}
+
+/// One `<Unknown>` of `<ModelStructure>`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unknown {
+    /// 1-based index of the variable in `<ModelVariables>`.
+    pub index: usize,
+    /// The 1-based indices it depends on; `None` when the attribute is missing (then it may
+    /// depend on every known).
+    pub dependencies: Option<Vec<usize>>,
+}
+
+/// `<ModelStructure>`. A list that does not parse (an index that is no number) is kept as
+/// the error, for the checks to report.
+#[derive(Debug, Clone, Default)]
+pub struct ModelStructure {
+    pub outputs: Vec<Unknown>,
+    pub derivatives: Vec<Unknown>,
+    pub initial_unknowns: Vec<Unknown>,
+    pub errors: Vec<String>,
+}
+
 #[derive(Debug, Clone)]
 pub struct Description {
     pub model_identifier: String,
@@ -91,6 +138,11 @@ pub struct Description {
     /// Whether the description has a `<ModelExchange>` element too (the FMU then accepts
     /// `fmi2ModelExchange` in fmi2Instantiate).
     pub model_exchange: bool,
+    /// The `<ModelExchange>` element, if there is one.
+    pub me: Option<ModelExchange>,
+    /// `numberOfEventIndicators` of `<fmiModelDescription>` (0 when missing).
+    pub number_of_event_indicators: usize,
+    pub model_structure: ModelStructure,
     /// `generationTool` of `<fmiModelDescription>`, for the report.
     pub generation_tool: String,
     pub log_categories: Vec<String>,
@@ -114,17 +166,23 @@ impl Description {
             max_output_derivative_order: 0,
             can_run_asynchronuously: false,
             model_exchange: false,
+            me: None,
+            number_of_event_indicators: 0,
+            model_structure: ModelStructure::default(),
             generation_tool: String::new(),
             log_categories: vec![],
             default_experiment: (None, None, None),
             variables: vec![],
         };
         let mut current: Option<Variable> = None;
+        // Which list of <ModelStructure> the <Unknown>s belong to.
+        let mut section: Option<Vec<u8>> = None;
         loop {
             let event = reader.read_event().map_err(|e| {
                 let (line, col) = crate::archive::line_column(xml, reader.error_position() as usize);
                 format!("modelDescription.xml:{line}:{col}: {e}")
             })?;
+            let is_start = matches!(event, Event::Start(_));
             match event {
                 Event::Eof => break,
                 Event::Start(e) | Event::Empty(e) => {
@@ -142,6 +200,9 @@ impl Description {
                             d.fmi_version = attr(b"fmiVersion").unwrap_or_default();
                             d.guid = attr(b"guid").unwrap_or_default();
                             d.generation_tool = attr(b"generationTool").unwrap_or_default();
+                            d.number_of_event_indicators = attr(b"numberOfEventIndicators")
+                                .and_then(|v| v.parse().ok())
+                                .unwrap_or(0);
                         }
                         b"CoSimulation" => {
                             d.model_identifier = attr(b"modelIdentifier").unwrap_or_default();
@@ -155,7 +216,48 @@ impl Description {
                                 .unwrap_or(0);
                             d.can_run_asynchronuously = flag(b"canRunAsynchronuously");
                         }
-                        b"ModelExchange" => d.model_exchange = true,
+                        b"ModelExchange" => {
+                            d.model_exchange = true;
+                            d.me = Some(ModelExchange {
+                                model_identifier: attr(b"modelIdentifier").unwrap_or_default(),
+                                can_get_and_set_fmu_state: flag(b"canGetAndSetFMUstate"),
+                                can_serialize_fmu_state: flag(b"canSerializeFMUstate"),
+                                provides_directional_derivative: flag(b"providesDirectionalDerivative"),
+                                completed_integrator_step_not_needed: flag(b"completedIntegratorStepNotNeeded"),
+                            });
+                        }
+                        tag @ (b"Outputs" | b"Derivatives" | b"InitialUnknowns") if is_start => {
+                            section = Some(tag.to_vec());
+                        }
+                        b"Unknown" => {
+                            let (line, col) = crate::archive::line_column(xml, reader.buffer_position() as usize);
+                            let at = format!("modelDescription.xml:{line}:{col}");
+                            let index = attr(b"index").and_then(|v| v.trim().parse::<usize>().ok());
+                            let dependencies = attr(b"dependencies").map(|v| {
+                                v.split_whitespace()
+                                    .map(|x| x.parse::<usize>())
+                                    .collect::<Result<Vec<_>, _>>()
+                            });
+                            let ms = &mut d.model_structure;
+                            match (index, dependencies) {
+                                (None, _) => ms.errors.push(format!("{at}: an <Unknown> without a valid index")),
+                                (_, Some(Err(e))) => ms.errors.push(format!("{at}: dependencies: {e}")),
+                                (Some(index), deps) => {
+                                    let u = Unknown {
+                                        index,
+                                        dependencies: deps.map(|r| r.unwrap_or_default()),
+                                    };
+                                    match section.as_deref() {
+                                        Some(b"Outputs") => ms.outputs.push(u),
+                                        Some(b"Derivatives") => ms.derivatives.push(u),
+                                        Some(b"InitialUnknowns") => ms.initial_unknowns.push(u),
+                                        _ => ms.errors.push(format!(
+                                            "{at}: an <Unknown> outside Outputs, Derivatives and InitialUnknowns"
+                                        )),
+                                    }
+                                }
+                            }
+                        }
                         b"Category" => d.log_categories.push(attr(b"name").unwrap_or_default()),
                         b"DefaultExperiment" => {
                             d.default_experiment = (real(b"startTime"), real(b"stopTime"), real(b"stepSize"))
@@ -175,6 +277,7 @@ impl Description {
                             start: None,
                             min: None,
                             max: None,
+                            derivative: None,
                         }),
                         tag @ (b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration") => {
                             if let Some(mut v) = current.take() {
@@ -188,10 +291,16 @@ impl Description {
                                 v.start = attr(b"start");
                                 v.min = real(b"min");
                                 v.max = real(b"max");
+                                v.derivative = attr(b"derivative").and_then(|x| x.parse().ok());
                                 d.variables.push(v);
                             }
                         }
                         _ => {}
+                    }
+                }
+                Event::End(e) => {
+                    if matches!(e.name().as_ref(), b"Outputs" | b"Derivatives" | b"InitialUnknowns") {
+                        section = None;
                     }
                 }
                 _ => {}
@@ -216,6 +325,55 @@ impl Description {
             .iter()
             .find(|v| v.name == name)
             .unwrap_or_else(|| panic!("{} has no variable '{name}'", self.model_identifier))
+    }
+
+    /// The variable of a 1-based `<ModelVariables>` index (as `<ModelStructure>` and
+    /// `derivative` give them).
+    pub fn by_index(&self, index: usize) -> Option<&Variable> {
+        index.checked_sub(1).and_then(|i| self.variables.get(i))
+    }
+
+    /// The continuous states, in the order of `<ModelStructure><Derivatives>` (the order of the
+    /// state vector of fmi2GetContinuousStates), each as (state, its derivative): the variable
+    /// each derivative's `derivative` attribute points to. An error says what is wrong with the
+    /// declaration.
+    pub fn continuous_states(&self) -> Result<Vec<(&Variable, &Variable)>, String> {
+        let ms = &self.model_structure;
+        if !ms.errors.is_empty() {
+            return Err(ms.errors.join("; "));
+        }
+        ms.derivatives
+            .iter()
+            .map(|u| {
+                let der = self
+                    .by_index(u.index)
+                    .ok_or_else(|| format!("<Derivatives> lists index {}, which is no variable", u.index))?;
+                if der.ty != Type::Real {
+                    return Err(format!("<Derivatives> lists '{}', which is no Real", der.name));
+                }
+                let Some(of) = der.derivative else {
+                    return Err(format!(
+                        "<Derivatives> lists '{}', which has no derivative attribute",
+                        der.name
+                    ));
+                };
+                let state = self
+                    .by_index(of)
+                    .ok_or_else(|| format!("'{}' has derivative=\"{of}\", which is no variable", der.name))?;
+                if state.ty != Type::Real || state.variability != "continuous" {
+                    return Err(format!(
+                        "'{}' has derivative=\"{of}\": '{}' is no continuous Real ({:?}, {})",
+                        der.name, state.name, state.ty, state.variability
+                    ));
+                }
+                Ok((state, der))
+            })
+            .collect()
+    }
+
+    /// The number of continuous states: the number of `<Derivatives>` unknowns.
+    pub fn number_of_continuous_states(&self) -> usize {
+        self.model_structure.derivatives.len()
     }
 
     /// A value reference that names no variable of any type.

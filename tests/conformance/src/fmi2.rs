@@ -1,4 +1,4 @@
-//! The C types of the FMI 2.0 co-simulation ABI (`fmi2TypesPlatform.h`, `fmi2FunctionTypes.h`),
+//! The C types of the FMI 2.0 ABI (co-simulation and model exchange) (`fmi2TypesPlatform.h`, `fmi2FunctionTypes.h`),
 //! as an importer declares them. The suite is an importer: it takes nothing from an exporter's
 //! crate, only the standard's definitions.
 #![allow(non_camel_case_types, non_upper_case_globals, non_snake_case)]
@@ -62,4 +62,16 @@ pub struct fmi2CallbackFunctions {
     pub freeMemory: fmi2CallbackFreeMemory,
     pub stepFinished: fmi2StepFinished,
     pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+/// `fmi2EventInfo` (model exchange), filled by fmi2NewDiscreteStates.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct fmi2EventInfo {
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    pub terminateSimulation: fmi2Boolean,
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    pub nextEventTimeDefined: fmi2Boolean,
+    pub nextEventTime: fmi2Real,
 }

@@ -1,4 +1,4 @@
-//! A black-box FMI 2.0 co-simulation checker: it loads an `.fmu` the way an importer does
+//! A black-box FMI 2.0 checker (co-simulation, and model exchange where the FMU declares it): it loads an `.fmu` the way an importer does
 //! (unpacks it, reads its `modelDescription.xml`, `dlopen`s its binary) and drives its C API
 //! through named checks ([`checks::all_checks`]).
 //!
@@ -23,6 +23,7 @@ pub mod description;
 pub mod fmi2;
 pub mod instance;
 pub mod logger;
+pub mod me;
 pub mod outcome;
 pub mod runner;
 pub mod standard;
@@ -53,6 +54,8 @@ pub struct Fmu {
     pub md: Description,
     pub api: Api,
     own: OnceLock<Result<(), String>>,
+    /// The state bytes of the model-exchange states (see [`me::StateCodes`]).
+    me_codes: OnceLock<Result<me::StateCodes, String>>,
     /// Last: removed after the library is unloaded.
     _dirs: (PrivateDir, PrivateDir),
 }
@@ -108,6 +111,7 @@ impl Fmu {
             md,
             api,
             own: OnceLock::new(),
+            me_codes: OnceLock::new(),
             _dirs: (unpacked, scratch),
         })
     }

@@ -46,6 +46,16 @@ pub fn skip(reason: impl Into<String>) -> ! {
     std::panic::resume_unwind(Box::new(Skipped(reason.into())))
 }
 
+/// How the reason of a skip starts when the FMU does not declare the optional interface or
+/// capability the check is about (Model Exchange, directional derivatives): such a skip is
+/// the FMU's choice, not a gap of the suite, and the workspace's strict runs accept it.
+pub const NOT_DECLARED: &str = "not declared by the FMU: ";
+
+/// Ends the check as skipped because the FMU does not declare `what` (see [`NOT_DECLARED`]).
+pub fn skip_not_declared(what: impl std::fmt::Display) -> ! {
+    skip(format!("{NOT_DECLARED}{what}"))
+}
+
 /// Records a part of the check that could not be tested on this FMU (once per text).
 pub fn limitation(text: impl Into<String>) {
     let text = text.into();

@@ -83,6 +83,22 @@ pub fn machine_state(bytes: &[u8]) -> Result<State, String> {
         .ok_or_else(|| format!("state byte {b} is no State"))
 }
 
+/// The raw state byte (the state machine's state as the runtime numbers it), for the
+/// model-exchange states, whose numbers the suite learns from the FMU ([`crate::me`]).
+pub fn state_byte(bytes: &[u8]) -> Result<u8, String> {
+    let l = parse(bytes)?;
+    Ok(bytes[l.payload_at])
+}
+
+/// The same serialized state with another raw state byte, correctly sealed.
+pub fn forge_byte(bytes: &[u8], byte: u8) -> Vec<u8> {
+    let l = parse(bytes).unwrap_or_else(|e| panic!("{e}"));
+    let mut out = bytes.to_vec();
+    out[l.payload_at] = byte;
+    reseal(&mut out, &l);
+    out
+}
+
 /// Recomputes the trailing CRC after an edit.
 pub fn reseal(bytes: &mut [u8], l: &Layout) {
     let crc = crc32fast::hash(&bytes[..l.crc_at]);

@@ -16,3 +16,8 @@ fn random_call_sequences_keep_every_fmu_conformant() {
 fn regressions_found_by_random_sequences() {
     on_every_fmu("regressions_found_by_random_sequences");
 }
+
+#[test]
+fn random_model_exchange_call_sequences_keep_every_fmu_conformant() {
+    on_every_fmu("random_model_exchange_call_sequences_keep_every_fmu_conformant");
+}

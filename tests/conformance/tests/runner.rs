@@ -202,7 +202,16 @@ fn every_check_passes_on_a_packaged_fmu_checked_as_another_exporters() {
     opts.as_foreign = true;
     opts.random_sequences = 200;
     let report = run(fmu, &opts);
-    assert_eq!((report.failed(), report.skipped()), (0, 0), "{report}");
+    // Skipped only where the FMU does not declare what the check is about (Model Exchange,
+    // directional derivatives).
+    let skipped = report
+        .checks
+        .iter()
+        .filter(
+            |c| matches!(&c.outcome, Outcome::Skip(why) if !why.starts_with(fmi2_conformance::outcome::NOT_DECLARED)),
+        )
+        .count();
+    assert_eq!((report.failed(), skipped), (0, 0), "{report}");
     assert_eq!(report.checks.len(), fmi2_conformance::checks::all_checks().len());
     assert!(report.partial() > 0, "{report}");
     assert!(

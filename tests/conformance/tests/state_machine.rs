@@ -22,8 +22,8 @@ fn version_and_platform_are_the_standards() {
 }
 
 #[test]
-fn directional_derivative_flag_is_false_as_the_runtime_does_not_provide_them() {
-    on_every_fmu("directional_derivative_flag_is_false_as_the_runtime_does_not_provide_them");
+fn directional_derivative_flag_is_either_value_and_false_means_refused() {
+    on_every_fmu("directional_derivative_flag_is_either_value_and_false_means_refused");
 }
 
 #[test]

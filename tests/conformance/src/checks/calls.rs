@@ -77,10 +77,22 @@ pub fn instantiate_refuses_a_null_or_empty_instance_name_with_a_message(fmu: &Fm
     }
 }
 
+/// fmi2ModelExchange is refused unless the FMU declares `<ModelExchange>` (then it is
+/// accepted); an unknown fmuType always.
 pub fn instantiate_refuses_model_exchange_and_unknown_types_with_a_message(fmu: &Fmu) {
     for (ty, word) in [(fmi2ModelExchange, "fmi2ModelExchange"), (7, "fmuType")] {
         if ty == fmi2ModelExchange && fmu.md.model_exchange {
-            limitation("the FMU declares Model Exchange too: that fmi2ModelExchange is refused does not apply");
+            // Declared: fmi2ModelExchange must be accepted (the model-exchange checks go on).
+            let args = Args {
+                fmu_type: ty,
+                ..Args::valid(fmu)
+            };
+            if let Err(log) = Instance::with(fmu, &args) {
+                panic!(
+                    "{}: the FMU declares <ModelExchange>, but fmi2Instantiate(fmi2ModelExchange) refused: {log:?}",
+                    fmu.id
+                );
+            }
             continue;
         }
         let args = Args {

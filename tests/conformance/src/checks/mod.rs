@@ -3,9 +3,11 @@
 //! for skips and limitations).
 
 pub mod calls;
+pub mod directional_derivatives;
 pub mod fmu_state;
 pub mod instances;
 pub mod memory;
+pub mod model_exchange;
 pub mod native;
 pub mod random_sequences;
 pub mod state_machine;
@@ -22,10 +24,12 @@ pub enum Group {
     Memory,
     RandomSequences,
     Native,
+    ModelExchange,
+    DirectionalDerivatives,
 }
 
 impl Group {
-    pub const ALL: [Group; 7] = [
+    pub const ALL: [Group; 9] = [
         Group::Calls,
         Group::StateMachine,
         Group::FmuState,
@@ -33,6 +37,8 @@ impl Group {
         Group::Memory,
         Group::RandomSequences,
         Group::Native,
+        Group::ModelExchange,
+        Group::DirectionalDerivatives,
     ];
 
     pub fn name(self) -> &'static str {
@@ -44,6 +50,8 @@ impl Group {
             Group::Memory => "memory",
             Group::RandomSequences => "random sequences",
             Group::Native => "native C host/valgrind",
+            Group::ModelExchange => "model exchange",
+            Group::DirectionalDerivatives => "directional derivatives",
         }
     }
 }
@@ -117,8 +125,10 @@ registry! {
         every_function_in_every_state_answers_as_the_standard_says,
         a_null_component_is_refused_by_every_function,
         version_and_platform_are_the_standards,
-        directional_derivative_flag_is_false_as_the_runtime_does_not_provide_them,
         terminate_twice_is_refused_with_a_message,
+    };
+    StateMachine: directional_derivatives::{
+        directional_derivative_flag_is_either_value_and_false_means_refused,
     };
     FmuState: fmu_state::{
         every_fmu_declares_it_can_get_set_and_serialize_its_state,
@@ -139,6 +149,7 @@ registry! {
     };
     RandomSequences: random_sequences::{
         random_call_sequences_keep_every_fmu_conformant,
+        random_model_exchange_call_sequences_keep_every_fmu_conformant,
         regressions_found_by_random_sequences,
     };
     Native: native::{
@@ -146,6 +157,22 @@ registry! {
         a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck,
         the_binary_exports_only_fmi2_functions,
         the_binary_needs_only_the_c_runtime,
+    };
+    ModelExchange: model_exchange::{
+        model_exchange_every_function_in_every_state_answers_as_the_standard_says,
+        a_co_simulation_instance_refuses_every_model_exchange_function,
+        model_exchange_functions_refuse_a_null_component,
+        model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing,
+        model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows_it,
+        model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic,
+        model_exchange_new_discrete_states_fills_the_event_info_sensibly,
+        model_exchange_an_explicit_euler_run_gives_finite_outputs,
+        model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_identically,
+    };
+    DirectionalDerivatives: directional_derivatives::{
+        co_simulation_directional_derivatives_match_finite_differences,
+        model_exchange_directional_derivatives_match_finite_differences,
+        directional_derivatives_refuse_unknown_references_and_null_arrays,
     };
 }
 
@@ -156,7 +183,8 @@ pub fn find(name: &str) -> Option<&'static Check> {
 
 /// Runs the check of that name on every packaged FMU ([`crate::all`]), strictly, for the
 /// workspace's `#[test]`s: every FMU there is this exporter's, so a skip or a limitation is a
-/// failure too. Panics with every FMU's failure; prints the checks' info lines.
+/// failure too (but for a skip because the FMU does not declare what the check is about,
+/// [`crate::outcome::NOT_DECLARED`]). Panics with every FMU's failure; prints the checks' info lines.
 pub fn on_every_fmu(name: &str) {
     let check = find(name).unwrap_or_else(|| panic!("no check named {name} in all_checks()"));
     let mut failures = vec![];
@@ -172,6 +200,10 @@ pub fn on_every_fmu(name: &str) {
                 fmu.id,
                 findings.limitations.join("; ")
             )),
+            // The FMU does not declare the optional interface the check is about.
+            Outcome::Skip(why) if why.starts_with(crate::outcome::NOT_DECLARED) => {
+                println!("{}: {name} skipped: {why}", fmu.id)
+            }
             Outcome::Skip(why) => failures.push(format!("{}: {name} skipped: {why}", fmu.id)),
             Outcome::Fail(message) => failures.push(message),
         }
