@@ -347,11 +347,9 @@ pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
         Call::SetDiscreteValues
     };
     unsafe {
-        with_instance::<M>(c, call, function, |inst| {
-            match (slice(vr, nvr), slice(value, nvr)) {
-                (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
-                _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
-            }
+        with_instance::<M>(c, call, function, |inst| match (slice(vr, nvr), slice(value, nvr)) {
+            (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
+            _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
         })
     }
 }

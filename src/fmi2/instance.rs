@@ -330,8 +330,16 @@ impl<M: CoSimulation> Instance<M> {
         {
             return Err(self.error(&format!(
                 "{function} is a {} function; this instance was instantiated for {}",
-                if model_exchange { "model-exchange" } else { "co-simulation" },
-                if self.model_exchange { "model exchange" } else { "co-simulation" }
+                if model_exchange {
+                    "model-exchange"
+                } else {
+                    "co-simulation"
+                },
+                if self.model_exchange {
+                    "model exchange"
+                } else {
+                    "co-simulation"
+                }
             )));
         }
         let allowed = call.allowed_in();
