@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Instructions per step of the plant's step, called directly and through the packaged .so's C API,
 # counted by callgrind (independent of the machine's load, unlike wall time). Each variant runs
-# 1000 and 2000 steps; the difference / 1000 is the cost of one step without the setup.
+# 1000 and 2000 steps; the difference / 1000 is the cost of one step without the setup. The
+# last pair is one evaluation of the right-hand side, in Rust and through model exchange's C API.
 # Needs valgrind, the packaged Pendulum FMU and `cargo build --release -p rustfmu-bench`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +13,7 @@ count() {
         sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
 }
 declare -A per_step
-for v in direct-1ms fmi-1ms direct-round-trip-1ms fmi-round-trip-1ms; do
+for v in direct-1ms fmi-1ms direct-round-trip-1ms fmi-round-trip-1ms direct-rhs fmi-derivatives; do
     a=$(count "$v" 1000)
     b=$(count "$v" 2000)
     per_step[$v]=$(((b - a) / 1000))
@@ -23,4 +24,7 @@ for pair in "1ms" "round-trip-1ms"; do
     f=${per_step[fmi-$pair]}
     echo "overhead $pair: $((f - d)) instructions, $(awk "BEGIN { printf \"%+.1f\", ($f / $d - 1) * 100 }") %"
 done
+d=${per_step[direct-rhs]}
+f=${per_step[fmi-derivatives]}
+echo "overhead of fmi2SetContinuousStates + fmi2GetDerivatives over one right-hand side: $((f - d)) instructions"
 echo "profiles (callgrind_annotate FILE): $out"

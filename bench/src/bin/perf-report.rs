@@ -22,6 +22,17 @@ const STATES: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
 struct Subjects {
     direct: Direct,
     fmi: ViaFmi,
+    me: fmi::fmi2::instance::InstanceME,
+}
+
+/// States along a swing, for evaluating the right-hand side at a new state each time.
+fn swing_states() -> Vec<[f64; 4]> {
+    (0..1024)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            [0.1 * t.cos(), -0.1 * t.sin(), 0.15 * (2.0 * t).cos(), -0.3 * (2.0 * t).sin()]
+        })
+        .collect()
 }
 
 /// Runs `steps` steps of `variant` from the start of the swing; returns seconds per step.
@@ -29,8 +40,27 @@ fn run(s: &mut Subjects, variant: &str, steps: usize) -> Result<f64, String> {
     let h = if variant.ends_with("10ms") { 1e-2 } else { 1e-3 };
     s.direct.restart();
     s.fmi.restart()?;
+    let states = swing_states();
+    let p = holonomic::models::pendulum::PendulumParams::default();
     let start = Instant::now();
     match variant {
+        // One evaluation of the right-hand side at a new state: in Rust, and as a model-exchange
+        // importer's integrator makes it through the C API.
+        "direct-rhs" => {
+            for k in 0..steps {
+                black_box(p.rhs(black_box(states[k & 1023]), black_box([0.0, 0.0])));
+            }
+        }
+        "fmi-derivatives" => {
+            use fmi::fmi2::instance::ModelExchange;
+            let mut dx = [0.0; 4];
+            for k in 0..steps {
+                s.me.set_continuous_states(black_box(&states[k & 1023]))
+                    .map_err(|e| format!("fmi2SetContinuousStates: {e:?}"))?;
+                s.me.get_derivatives(&mut dx).map_err(|e| format!("fmi2GetDerivatives: {e:?}"))?;
+                black_box(dx);
+            }
+        }
         "direct-1ms" | "direct-10ms" => {
             for k in 0..steps {
                 s.direct.step(k as f64 * h, h);
@@ -93,9 +123,23 @@ struct Args {
 
 fn report() -> Result<(), String> {
     let args = Args::parse();
+    let fmu = rustfmu_bench::Fmu::load("Pendulum")?;
+    let mut me = fmu
+        .import
+        .instantiate_me("perf-report-me", false, false)
+        .map_err(|e| format!("fmi2Instantiate(ModelExchange): {e}"))?;
+    {
+        use fmi::fmi2::instance::{Common, ModelExchange};
+        let e = |what: &'static str| move |err| format!("{what}: {err:?}");
+        me.setup_experiment(None, 0.0, None).map_err(e("fmi2SetupExperiment"))?;
+        me.enter_initialization_mode().map_err(e("fmi2EnterInitializationMode"))?;
+        me.exit_initialization_mode().map_err(e("fmi2ExitInitializationMode"))?;
+        me.enter_continuous_time_mode().map_err(e("fmi2EnterContinuousTimeMode"))?;
+    }
     let mut s = Subjects {
         direct: Direct::new(),
         fmi: ViaFmi::new("Pendulum", Some(&STATES))?,
+        me,
     };
     if let Some(variant) = args.only {
         let steps = args.steps;
