@@ -30,7 +30,12 @@ fn swing_states() -> Vec<[f64; 4]> {
     (0..1024)
         .map(|k| {
             let t = k as f64 * 1e-3;
-            [0.1 * t.cos(), -0.1 * t.sin(), 0.15 * (2.0 * t).cos(), -0.3 * (2.0 * t).sin()]
+            [
+                0.1 * t.cos(),
+                -0.1 * t.sin(),
+                0.15 * (2.0 * t).cos(),
+                -0.3 * (2.0 * t).sin(),
+            ]
         })
         .collect()
 }
@@ -57,7 +62,8 @@ fn run(s: &mut Subjects, variant: &str, steps: usize) -> Result<f64, String> {
             for k in 0..steps {
                 s.me.set_continuous_states(black_box(&states[k & 1023]))
                     .map_err(|e| format!("fmi2SetContinuousStates: {e:?}"))?;
-                s.me.get_derivatives(&mut dx).map_err(|e| format!("fmi2GetDerivatives: {e:?}"))?;
+                s.me.get_derivatives(&mut dx)
+                    .map_err(|e| format!("fmi2GetDerivatives: {e:?}"))?;
                 black_box(dx);
             }
         }
@@ -132,9 +138,11 @@ fn report() -> Result<(), String> {
         use fmi::fmi2::instance::{Common, ModelExchange};
         let e = |what: &'static str| move |err| format!("{what}: {err:?}");
         me.setup_experiment(None, 0.0, None).map_err(e("fmi2SetupExperiment"))?;
-        me.enter_initialization_mode().map_err(e("fmi2EnterInitializationMode"))?;
+        me.enter_initialization_mode()
+            .map_err(e("fmi2EnterInitializationMode"))?;
         me.exit_initialization_mode().map_err(e("fmi2ExitInitializationMode"))?;
-        me.enter_continuous_time_mode().map_err(e("fmi2EnterContinuousTimeMode"))?;
+        me.enter_continuous_time_mode()
+            .map_err(e("fmi2EnterContinuousTimeMode"))?;
     }
     let mut s = Subjects {
         direct: Direct::new(),
