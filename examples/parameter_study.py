@@ -78,8 +78,9 @@ def main(argv=None) -> int:
     if args.stop_time is None:
         args.stop_time = 10.0 if args.study == "roa" else 5.0
     if args.step is None:
-        # Through the motors the sampled PID limit-cycles on the voltage limit at 10 ms sampling
-        # (measured: settles at 1 ms); the torque-driven loop settles at 10 ms.
+        # Through the motors the PID limit-cycles on the voltage limit at 10 ms (the motors' step
+        # of delay and the 10 ms derivative filter; docs/composition.md), settles at 5 ms and
+        # below; the torque-driven loop settles at 10 ms.
         args.step = 0.01 if args.study == "roa" and args.system == "torque" else 0.001
     run = dict(fmu_paths=paths, scheduler=args.scheduler, threads_per_worker=args.threads, progress=not args.no_progress, retry_failed=args.retry_failed)
 

@@ -141,6 +141,8 @@ pub struct Context<'a> {
     pub(crate) solver: Option<&'a mut Dopri5>,
     /// Set by [`Context::integrate`]: the derivatives and outputs are up to date.
     pub(crate) refreshed: bool,
+    /// Instantiated as fmi2ModelExchange.
+    pub(crate) model_exchange: bool,
 }
 
 impl Context<'_> {
@@ -154,6 +156,7 @@ impl Context<'_> {
             resources: None,
             solver: None,
             refreshed: false,
+            model_exchange: false,
         }
     }
 
@@ -167,6 +170,7 @@ impl Context<'_> {
             resources: None,
             solver: Some(solver),
             refreshed: false,
+            model_exchange: false,
         }
     }
 
@@ -225,6 +229,12 @@ impl Context<'_> {
     /// when the importer gave a `file:` URI for it that exists.
     pub fn resource_dir(&self) -> Option<&std::path::Path> {
         self.resources
+    }
+
+    /// Whether the importer instantiated the FMU for Model Exchange (the importer integrates,
+    /// and there are no communication points); false in co-simulation and standalone.
+    pub fn model_exchange(&self) -> bool {
+        self.model_exchange
     }
 
     /// `startTime` of `fmi2SetupExperiment` (0 when the importer did not call it).

@@ -6,9 +6,10 @@ The loop (FMU instances, parameter and start values of every type, connections) 
 Rust table, `cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json`, which
 derives it from the systems of `paper/systems.toml`, the same description `fmu-build` writes as
 `target/fmu/<system>.ssp`. Masters, all fixed step h = 1 ms, Jacobi (outputs at t read, inputs
-set, every FMU steps):
+set, every FMU steps), the order fmpy.ssp and libcosim use, so that all make the same calls:
 
-- native: the Rust master on the `fmi` crate (bench/src/master.rs);
+- native: the Rust master on the `fmi` crate (bench/src/master.rs), run with `--jacobi` (its
+  default is the dependency order, docs/composition.md);
 - fmpy loop: a hand-written master loop over fmpy's FMU2Slave, with the same call sequence as the
   native master and the project's fmpy master (examples/cosim/master.py): start values after
   instantiation, connections propagated once per instance in initialization mode;
@@ -270,7 +271,7 @@ def main():
     print(f"loop: {topo['name']} (system {topo['system']}, {pathlib.Path(topo['ssp']).name}): {topo['description']}")
     print(f"{seconds:g} s at h = {H * 1e3:g} ms ({n} steps)\n")
 
-    native = json.loads(cargo_bin(*sel, "--seconds", str(seconds), "--repeat", "5"))
+    native = json.loads(cargo_bin(*sel, "--seconds", str(seconds), "--repeat", "5", "--jacobi"))
     # The FMUs' own time: the native master's fastest of 5 runs (least disturbed by other load).
     t_fmu = native["wall_best_s"]
     rows = [dict(master="native Rust (fmi crate), fastest of 5", wall=t_fmu, share=1.0, measured_share=None,

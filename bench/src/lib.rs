@@ -81,6 +81,10 @@ pub struct Fmu {
     pub reals: Vec<RealVar>,
     /// Every Real, Integer and Boolean variable: (name, value reference, type).
     pub scalars: Vec<(String, u32, VarType)>,
+    /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
+    /// `dependencies`). The `fmi` crate reads an absent attribute as an empty list; the
+    /// project's FMUs always write it.
+    pub feedthrough: Vec<u32>,
 }
 
 impl Fmu {
@@ -126,11 +130,25 @@ impl Fmu {
                 Some((v.name.clone(), v.value_reference, t))
             })
             .collect();
+        let md = import.model_description();
+        let variables = &md.model_variables.variables;
+        let mut feedthrough: Vec<u32> = Vec::new();
+        for output in &md.model_structure.outputs.unknowns {
+            for dep in &output.dependencies {
+                let v = variables
+                    .get((*dep as usize).wrapping_sub(1))
+                    .ok_or_else(|| format!("{id}: ModelStructure names variable index {dep}, which does not exist"))?;
+                if v.causality == Causality::Input && !feedthrough.contains(&v.value_reference) {
+                    feedthrough.push(v.value_reference);
+                }
+            }
+        }
         Ok(Fmu {
             id: id.to_owned(),
             import,
             reals,
             scalars,
+            feedthrough,
         })
     }
 

@@ -1,12 +1,17 @@
-//! A native co-simulation master on the `fmi` crate's importer: fixed communication step,
-//! Jacobi scheme (all outputs at t are read, all inputs set, then every FMU steps from t to t+h,
-//! as fmpy.ssp and libcosim's fixed-step algorithm do). All buffers are made when the master is
+//! A native co-simulation master on the `fmi` crate's importer, with a fixed communication step.
+//! A communication point is evaluated in dependency order (Gauss-Seidel along the connections,
+//! [`Scheme::GaussSeidel`], the default): every instance comes after those whose outputs reach an
+//! input it feeds through to an output (ModelStructure `dependencies`), its inputs are set from
+//! the outputs just read, then its outputs are read; inputs from instances later in that order
+//! (which do not feed through) are set last. For the paper's loops: plant outputs -> controller ->
+//! motors -> plant inputs. Then every FMU steps from t to t+h. [`Scheme::Jacobi`] reads all
+//! outputs first, then sets all inputs (as fmpy.ssp and libcosim's fixed-step algorithm do), which
+//! makes each feedthrough in a loop a one-step delay. All buffers are made when the master is
 //! built, so a step allocates nothing and the time measured is the FMUs' and the wrapper's.
 //!
-//! Its call sequence is that of the project's fmpy master (`examples/cosim/master.py`) and of
-//! libcosim: parameter and start values after fmi2Instantiate, then in initialization mode the
-//! connections are propagated once per instance (so the controller's first sample sees the
-//! initial state), then the Jacobi steps. The three therefore end in the same state up to
+//! Its call sequence is that of the project's fmpy master (`examples/cosim/master.py`): parameter
+//! and start values after fmi2Instantiate, then in initialization mode the connections are
+//! propagated once per instance, then the steps. The two therefore end in the same state up to
 //! round-off.
 
 use crate::Fmu;
@@ -33,10 +38,26 @@ struct Link {
     to: (usize, usize),
 }
 
+/// How a communication point is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// In dependency order: each instance's inputs from the outputs read just before (the default).
+    GaussSeidel,
+    /// Every output read, then every input set: a one-step delay at each feedthrough in a loop.
+    Jacobi,
+}
+
 pub struct Master {
     pub topology: Topology,
+    /// How [`Master::step`] evaluates a communication point (default [`Scheme::GaussSeidel`]).
+    pub scheme: Scheme,
     slaves: Vec<Slave>,
     links: Vec<Link>,
+    /// The instances in dependency order, each with the links set before its outputs are read.
+    order: Vec<(usize, Vec<Link>)>,
+    /// Links from an instance later in the order (set after every output was read), and the
+    /// instances they set.
+    late: (Vec<Link>, Vec<usize>),
     /// Kept alive for the instances (they hold the libraries these unzipped).
     _fmus: Vec<Fmu>,
     pub time: f64,
@@ -104,8 +125,62 @@ impl Master {
             s.out_values = vec![0.0; s.out_vrs.len()];
             s.in_values = vec![0.0; s.in_vrs.len()];
         }
+        // i must follow j when a link from j reaches an input of i that feeds through.
+        let fmu_at = |i: usize| {
+            fmus.iter()
+                .find(|f| f.id == topology.slaves[i].fmu)
+                .expect("loaded above")
+        };
+        let follows = |i: usize, j: usize| {
+            links
+                .iter()
+                .any(|l| l.from.0 == j && l.to.0 == i && fmu_at(i).feedthrough.contains(&slaves[i].in_vrs[l.to.1]))
+        };
+        let mut sorted: Vec<usize> = Vec::new();
+        while sorted.len() < slaves.len() {
+            let ready = (0..slaves.len())
+                .find(|&i| {
+                    !sorted.contains(&i) && (0..slaves.len()).all(|j| j == i || sorted.contains(&j) || !follows(i, j))
+                })
+                .ok_or_else(|| {
+                    let left: Vec<&str> = (0..slaves.len())
+                        .filter(|i| !sorted.contains(i))
+                        .map(|i| slaves[i].name)
+                        .collect();
+                    format!(
+                        "topology '{}': algebraic loop (direct feedthrough in a cycle) among {left:?}",
+                        topology.name
+                    )
+                })?;
+            sorted.push(ready);
+        }
+        let position = |i: usize| sorted.iter().position(|&s| s == i).expect("sorted");
+        let order = sorted
+            .iter()
+            .map(|&i| {
+                (
+                    i,
+                    links
+                        .iter()
+                        .copied()
+                        .filter(|l| l.to.0 == i && position(l.from.0) < position(i))
+                        .collect(),
+                )
+            })
+            .collect();
+        let late_links: Vec<Link> = links
+            .iter()
+            .copied()
+            .filter(|l| position(l.from.0) >= position(l.to.0))
+            .collect();
+        let mut late_targets: Vec<usize> = late_links.iter().map(|l| l.to.0).collect();
+        late_targets.sort_unstable();
+        late_targets.dedup();
         Ok(Master {
             topology,
+            scheme: Scheme::GaussSeidel,
+            order,
+            late: (late_links, late_targets),
             slaves,
             links,
             _fmus: fmus,
@@ -151,8 +226,44 @@ impl Master {
         Ok(())
     }
 
-    /// Reads every connected output and sets every connected input. Allocates nothing.
+    /// Sets every connected input from its output, as [`Master::scheme`] says. Allocates nothing.
     fn exchange(&mut self, t: f64) -> Result<(), String> {
+        if self.scheme == Scheme::Jacobi {
+            return self.exchange_jacobi(t);
+        }
+        for (i, before) in &self.order {
+            for l in before {
+                let v = self.slaves[l.from.0].out_values[l.from.1];
+                self.slaves[l.to.0].in_values[l.to.1] = v;
+            }
+            let s = &mut self.slaves[*i];
+            if !before.is_empty() {
+                s.instance
+                    .set_real(&s.in_vrs, &s.in_values)
+                    .map_err(|err| format!("{}: fmi2SetReal at t = {t} failed: {err:?}", s.name))?;
+            }
+            if !s.out_vrs.is_empty() {
+                s.instance
+                    .get_real(&s.out_vrs, &mut s.out_values)
+                    .map_err(|err| format!("{}: fmi2GetReal at t = {t} failed: {err:?}", s.name))?;
+            }
+        }
+        let (late, targets) = &self.late;
+        for l in late {
+            let v = self.slaves[l.from.0].out_values[l.from.1];
+            self.slaves[l.to.0].in_values[l.to.1] = v;
+        }
+        for &i in targets {
+            let s = &mut self.slaves[i];
+            s.instance
+                .set_real(&s.in_vrs, &s.in_values)
+                .map_err(|err| format!("{}: fmi2SetReal at t = {t} failed: {err:?}", s.name))?;
+        }
+        Ok(())
+    }
+
+    /// Reads every connected output, then sets every connected input.
+    fn exchange_jacobi(&mut self, t: f64) -> Result<(), String> {
         for s in &mut self.slaves {
             if !s.out_vrs.is_empty() {
                 s.instance
@@ -195,6 +306,11 @@ impl Master {
             self.step(h)?;
         }
         Ok(())
+    }
+
+    /// The instances in the order [`Scheme::GaussSeidel`] evaluates them.
+    pub fn evaluation_order(&self) -> Vec<&'static str> {
+        self.order.iter().map(|(i, _)| self.slaves[*i].name).collect()
     }
 
     /// The plant's state (alpha1, omega1, alpha2, omega2) now.

@@ -4,7 +4,7 @@
 //! tests).
 
 use rustfmu::Value;
-use rustfmu_bench::master::Master;
+use rustfmu_bench::master::{Master, Scheme};
 use rustfmu_bench::single::{Direct, ViaFmi};
 use rustfmu_bench::topology::{self, Slave, Topology};
 
@@ -54,6 +54,46 @@ fn controller_plant_loop_brings_the_pendulum_upright_at_rest() {
         x.iter().all(|v| v.abs() < 1e-6),
         "from alpha1 = 0.1, alpha2 = -0.05 rad the Controller FMU's LQR should be upright at rest after 10 s, \
          got {x:?}"
+    );
+}
+
+#[test]
+fn the_full_loop_is_evaluated_plant_controller_motors() {
+    let master = Master::new(topology::full()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        master.evaluation_order(),
+        ["pendulum", "controller", "motor1", "motor2"],
+        "the Controller feeds through from the plant's outputs, the motors from the Controller's"
+    );
+}
+
+/// The plant's state after 2 s of the controller-plant loop at h = 2 ms.
+fn lqr_state_after_2s(scheme: Scheme, sampled: bool) -> Vec<f64> {
+    let mut topo = topology::controller_plant();
+    topo.start_values
+        .push((("controller", "sampled"), Value::Boolean(sampled)));
+    let mut master = Master::new(topo).unwrap_or_else(|e| panic!("{e}"));
+    master.scheme = scheme;
+    master.initialize(2.0).unwrap_or_else(|e| panic!("{e}"));
+    master.run(1000, 2e-3).unwrap_or_else(|e| panic!("{e}"));
+    master.plant_state().unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Gauss-Seidel with a sampled controller is the old Jacobi loop with a feedthrough one, to the
+/// bit: both give the controller the state of the previous communication point. Without
+/// `sampled`, Gauss-Seidel removes that delay.
+#[test]
+fn gauss_seidel_with_a_sampled_controller_is_the_jacobi_loop() {
+    let jacobi = lqr_state_after_2s(Scheme::Jacobi, false);
+    let sampled = lqr_state_after_2s(Scheme::GaussSeidel, true);
+    assert_eq!(
+        sampled, jacobi,
+        "Gauss-Seidel + sampled vs Jacobi + feedthrough after 2 s"
+    );
+    let feedthrough = lqr_state_after_2s(Scheme::GaussSeidel, false);
+    assert_ne!(
+        feedthrough, jacobi,
+        "Gauss-Seidel + feedthrough should differ from the delayed loop"
     );
 }
 

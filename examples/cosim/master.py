@@ -1,10 +1,15 @@
 """A fixed-step co-simulation master for FMI 2.0 co-simulation FMUs, on fmpy's FMU2Slave.
 
-Every FMU of this project has outputs that do not depend directly on its inputs at the same
-instant (ModelStructure dependencies=""), so a Jacobi master is exact about causality: at each
-communication point read every output, write every connected input, then step every FMU over the
-same interval. In initialization mode the connections are propagated once per component, so that
-outputs computed from inputs (the controller's first sample) see the initial state.
+A communication point is evaluated in dependency order (Gauss-Seidel along the connections):
+the components are sorted so that every component whose outputs depend directly on a connected
+input (ModelStructure `dependencies`; the Controller's M, U on the measured state) comes after
+the components feeding it; each component's inputs are set from the freshly read outputs of the
+components before it, then its outputs are read; inputs from components later in the order
+(which, by the sort, do not feed through) are set last. For the paper's loops that is plant
+outputs -> controller -> motors -> plant inputs; then every FMU steps over the same interval. A
+cycle of direct feedthrough (an algebraic loop) is refused. `order="jacobi"` keeps the old
+scheme (read every output, then set every input), which makes every feedthrough a one-step delay.
+In initialization mode the connections are propagated once per component.
 
 `Loop` is the one master loop of the project's Python side: `simulate` runs it once on fresh
 instances; the parameter study (`examples/pendulum_study/closed_loop.py`) keeps loops alive and
@@ -98,8 +103,13 @@ class Loop:
     None extracts the system's FMU files here, removed again by `close`. `callbacks`: fmpy
     fmi2CallbackFunctions for every instance (None: fmpy's defaults)."""
 
-    def __init__(self, system: System, fmus: dict[str, Fmu] | None = None, callbacks=None):
+    ORDERS = ("gauss-seidel", "jacobi")
+
+    def __init__(self, system: System, fmus: dict[str, Fmu] | None = None, callbacks=None, order: str = "gauss-seidel"):
+        if order not in self.ORDERS:
+            raise ValueError(f"order = {order!r}: one of {self.ORDERS}")
         self.system = system
+        self.order = order
         self.runs = 0
         self._own = {}
         if fmus is None:
@@ -134,27 +144,76 @@ class Loop:
         """A RealPort on Real variables `names` of `component`."""
         return RealPort(self.slaves[component], [self.var(component, v).valueReference for v in names])
 
+    def feeds_through(self, component: str, inputs) -> bool:
+        """Whether an output of `component` depends directly on one of `inputs` (its
+        ModelStructure; an output without a `dependencies` attribute depends on every input)."""
+        inputs = set(inputs)
+        for unknown in self.fmus[component].md.outputs:
+            if unknown.dependencies is None or inputs & {d.name for d in unknown.dependencies}:
+                return True
+        return False
+
+    def evaluation_order(self) -> list[str]:
+        """The components, each after those whose outputs it feeds through (a topological sort
+        of the direct-feedthrough graph, stable in the system's order); ValueError on a cycle."""
+        names = [c.name for c in self.system.components]
+        feeds: dict[str, set[str]] = {n: set() for n in names}  # target -> sources it must follow
+        by_pair: dict[tuple[str, str], list[str]] = {}
+        for k in self.system.connections:
+            by_pair.setdefault((k.target, k.source), []).append(k.target_var)
+        for (target, source), inputs in by_pair.items():
+            if self.feeds_through(target, inputs):
+                feeds[target].add(source)
+        order: list[str] = []
+        while len(order) < len(names):
+            ready = [n for n in names if n not in order and feeds[n] <= set(order)]
+            if not ready:
+                left = sorted(n for n in names if n not in order)
+                raise ValueError(f"{self.system.name}: algebraic loop (direct feedthrough in a cycle) among {left}")
+            order.append(ready[0])
+        return order
+
     def _build_ports(self) -> None:
         """Groups the connections so that each communication point reads each source once and
-        writes each target once. Every connection of these systems carries a Real."""
+        writes each (target, source) pair once. Every connection of these systems carries a Real."""
         sources: dict[str, list[str]] = {}
-        targets: dict[str, list[tuple[str, str, str]]] = {}
+        pairs: dict[tuple[str, str], list[tuple[str, str]]] = {}
         for k in self.system.connections:
             for c, v in ((k.source, k.source_var), (k.target, k.target_var)):
                 if self.var(c, v).type != "Real":
                     raise TypeError(f"{self.system.name}: connection {k.source}.{k.source_var} -> {k.target}.{k.target_var}: {c}.{v} is not Real")
             if k.source_var not in sources.setdefault(k.source, []):
                 sources[k.source].append(k.source_var)
-            targets.setdefault(k.target, []).append((k.target_var, k.source, k.source_var))
+            pairs.setdefault((k.target, k.source), []).append((k.target_var, k.source_var))
         self._reads = {c: self.port(c, vs) for c, vs in sources.items()}
         index = {(c, v): i for c, vs in sources.items() for i, v in enumerate(vs)}
-        self._writes = [(self.port(c, [inp for inp, _, _ in conns]), [(src, index[(src, out)]) for _, src, out in conns]) for c, conns in targets.items()]
+        writes = {pair: (self.port(pair[0], [i for i, _ in conns]), pair[1], [index[(pair[1], o)] for _, o in conns]) for pair, conns in pairs.items()}
+        self._all_writes = list(writes.values())
+        # Gauss-Seidel: before reading component c, set its inputs from the components read
+        # before it; after all reads, the inputs from components later in the order.
+        self._order = self.evaluation_order()
+        position = {c: i for i, c in enumerate(self._order)}
+        self._steps = [(c, [w for (t, src), w in writes.items() if t == c and position[src] < position[c]]) for c in self._order]
+        self._late = [w for (t, src), w in writes.items() if position[src] >= position[t]]
 
     def propagate(self) -> None:
-        """Copies every connected output to its input."""
-        values = {c: list(port.get()) for c, port in self._reads.items()}
-        for port, sources in self._writes:
-            port.set([values[src][i] for src, i in sources])
+        """Sets every connected input from its output: in dependency order (Gauss-Seidel), or
+        with `order="jacobi"` every output read first."""
+        values: dict[str, list[float]] = {}
+        if self.order == "jacobi":
+            values = {c: list(port.get()) for c, port in self._reads.items()}
+            writes = self._all_writes
+        else:
+            for c, before in self._steps:
+                for port, src, idx in before:
+                    v = values[src]
+                    port.set([v[i] for i in idx])
+                if c in self._reads:
+                    values[c] = list(self._reads[c].get())
+            writes = self._late
+        for port, src, idx in writes:
+            v = values[src]
+            port.set([v[i] for i in idx])
 
     def set(self, qualified: str, value) -> None:
         """Sets "component.variable" to `value`, converted to the variable's type."""
@@ -231,8 +290,9 @@ class Loop:
             fmu.close()
 
 
-def simulate(system: System, stop_time: float, step: float, record: dict[str, list[str]]) -> dict:
-    """Runs `system` (fresh instances) from t = 0 to `stop_time` with communication step `step`.
+def simulate(system: System, stop_time: float, step: float, record: dict[str, list[str]], order: str = "gauss-seidel") -> dict:
+    """Runs `system` (fresh instances) from t = 0 to `stop_time` with communication step `step`,
+    each communication point evaluated in `order` (see `Loop`).
 
     `record` names, per component, the variables to record at every communication point.
     Returns {"time": array, "<component>.<variable>": array, ...}.
@@ -240,7 +300,7 @@ def simulate(system: System, stop_time: float, step: float, record: dict[str, li
     n = int(round(stop_time / step))
     keys = [(c, v) for c, vs in record.items() for v in vs]
     data = np.empty((n + 1, len(keys)))
-    loop = Loop(system)
+    loop = Loop(system, order=order)
     try:
 
         def observe(k, _t):

@@ -14,10 +14,11 @@ Two systems, the project's composed systems as `fmu-build` writes them to SSP fi
 
 Every run starts from the SSD's parameter values; the experiment's own values are set on top.
 
-The master is `cosim.master.Loop`, the one fixed-step Jacobi master of the project's Python side:
-at each communication point every connected output is copied to its input, then every FMU steps
-over the same interval. No output of these FMUs depends directly on an input (ModelStructure
-dependencies=""), so there is no algebraic loop.
+The master is `cosim.master.Loop`, the one fixed-step master of the project's Python side: at
+each communication point the connections are evaluated in dependency order (plant outputs ->
+controller -> motors -> plant inputs; the Controller's outputs depend directly on its inputs),
+then every FMU steps over the same interval. The plant's outputs are states, so there is no
+algebraic loop.
 
 The experiment's parameters are set only on the components they name: a perturbed plant is
 ``pendulum.m1`` etc.; the Controller keeps its nominal plant model and nominal motor model

@@ -417,6 +417,7 @@ impl<M: CoSimulation> Instance<M> {
             resources: self.resources.as_deref(),
             solver: None,
             refreshed: false,
+            model_exchange: self.model_exchange,
         };
         let outcome = self
             .sim
@@ -629,6 +630,7 @@ impl<M: CoSimulation> Instance<M> {
                 resources: self.resources.as_deref(),
                 solver: None,
                 refreshed: false,
+                model_exchange: self.model_exchange,
             };
             let outcome = self
                 .sim
@@ -694,6 +696,7 @@ impl<M: CoSimulation> Instance<M> {
             resources: self.resources.as_deref(),
             solver: Some(&mut self.sim.solver),
             refreshed: false,
+            model_exchange: self.model_exchange,
         };
         let mut outcome = self.sim.model.do_step(t, h, &mut ctx);
         if !ctx.refreshed {

@@ -69,8 +69,9 @@ def test_lqr_loop_settles_upright(lqr_run):
 
 
 def test_lqr_loop_converges_to_linear_closed_loop_as_step_shrinks():
-    """Near the equilibrium the nonlinear plant is its linearization (12); the sampled controller
-    adds one step of delay and a zero-order hold, so the co-simulation must approach
+    """Near the equilibrium the nonlinear plant is its linearization (12); the master evaluates
+    the controller at the state of the same point, so only the zero-order hold remains and the
+    co-simulation must approach
     x(t) = exp((A - BK) t) x0 at first order in the communication step."""
     x0 = np.array([1e-3, 0.0, -5e-4, 0.0])
     errors = []
@@ -127,14 +128,17 @@ def motor_run_default_mode():
     """The motor loop with the Controller's mode at its default (LQR): what libcosim runs, since
     it ignores FMI 2.0 Enumeration variables ("variable with name mode will be ignored") and so
     cannot apply the SSP file's mode = LQR_PID."""
-    return simulate(motor_system(mode=1), 5.0, 1e-3, {"pendulum": ["alpha1", "alpha2"]})
+    return simulate(motor_system(mode=1), 5.0, 1e-3, {"pendulum": ["alpha1", "alpha2"]}, order="jacobi")
 
 
 @pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
-def test_fmpy_ssp_and_libcosim_agree_with_master_loop(name, lqr_run, motor_run, motor_run_default_mode):
+def test_fmpy_ssp_and_libcosim_agree_with_master_loop(name, motor_run_default_mode):
+    """fmpy.ssp and libcosim's fixed-step algorithm are Jacobi masters (every output read before
+    any input is set), so they are compared with the master loop run in that order."""
     path = ssp(name)
-    master = lqr_run if name == "PendulumLQR" else motor_run
-    as_libcosim_runs_it = lqr_run if name == "PendulumLQR" else motor_run_default_mode
+    system = lqr_system() if name == "PendulumLQR" else motor_system()
+    master = simulate(system, 5.0, 1e-3, {"pendulum": ["alpha1", "alpha2"]}, order="jacobi")
+    as_libcosim_runs_it = master if name == "PendulumLQR" else motor_run_default_mode
     a = simulate_fmpy_ssp(path, 5.0, 1e-3, ANGLES)
     b = simulate_libcosim(path, 5.0, 1e-3, ANGLES, {"pendulum.alpha1": 0.1, "pendulum.alpha2": -0.05})
     for v in ANGLES:

@@ -1,13 +1,13 @@
 //! Runs the composed loop once in the native master and prints wall time and real-time factor.
 //!
-//!     cargo run --release -p rustfmu-bench --bin composed-loop -- [--topology NAME] [--seconds 10] [--step 1e-3] [--repeat 5]
+//!     cargo run --release -p rustfmu-bench --bin composed-loop -- [--topology NAME] [--seconds 10] [--step 1e-3] [--repeat 5] [--jacobi]
 //!     cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json
 //!
 //! Topologies (`bench/src/topology.rs`, from the systems of `paper/systems.toml`): `full` (the
 //! default: Controller, two DC motors, Pendulum) and `controller-plant` (Controller, Pendulum).
 
 use clap::Parser;
-use rustfmu_bench::master::Master;
+use rustfmu_bench::master::{Master, Scheme};
 use rustfmu_bench::topology;
 use std::time::Instant;
 
@@ -29,6 +29,10 @@ struct Args {
     /// Runs; the fastest and the median are reported.
     #[arg(long, default_value_t = 5)]
     repeat: usize,
+    /// Evaluate each communication point in the Jacobi order (every output read, then every input
+    /// set; what fmpy.ssp and libcosim do) instead of the dependency order.
+    #[arg(long)]
+    jacobi: bool,
 }
 
 fn main() {
@@ -48,6 +52,9 @@ fn run() -> Result<(), String> {
     let (seconds, h, repeat) = (args.seconds, args.step, args.repeat);
     let n = (seconds / h).round() as usize;
     let mut master = Master::new(topo)?;
+    if args.jacobi {
+        master.scheme = Scheme::Jacobi;
+    }
     let mut walls = Vec::new();
     for _ in 0..repeat.max(1) {
         master.initialize(seconds)?;

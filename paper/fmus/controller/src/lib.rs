@@ -2,7 +2,9 @@
 //! outputs for the plant and voltage outputs for the DC motors. In co-simulation the PID memory
 //! (integrals, derivative filters) advances at communication points (a sampled controller); in
 //! model exchange it is four continuous states. Both compute the outputs from the inputs and
-//! that memory through the same law.
+//! that memory through the same law: from the inputs as they are (direct feedthrough, the
+//! default), or, with `sampled = true` (co-simulation only), from the inputs held at the last
+//! communication point, a digital controller with one step of computation delay.
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
@@ -27,7 +29,7 @@ pub enum ControlMode {
     LqrPid = 3,
 }
 
-/// Sampled LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
+/// LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
 /// holonomic system', eqs. (14), (16)); torque and motor-voltage outputs
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
 pub struct Controller {
@@ -49,7 +51,7 @@ pub struct Controller {
     /// Reference for alpha2 (0 = upright)
     #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
     pub alpha2_ref: f64,
-    /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (a master that reads it before setting new inputs gets the law of the previous communication point's inputs)
+    /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (with sampled = true, from the inputs held at the last communication point)
     #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
     pub M1: f64,
     /// Torque demand M2 for joint 2, limited to +-M_max; as M1
@@ -85,6 +87,27 @@ pub struct Controller {
     /// d(rate_filter2)/dt = (omega2 - rate_filter2)/Tf (0 when Tf = 0)
     #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2])]
     pub der_rate_filter2: f64,
+    /// The measurement alpha1 the Controller held at the last communication point (the inputs at the start of the last fmi2DoStep; before the first step, at initialization): with sampled = true the outputs use these
+    #[variable(vr = 90, local, discrete, unit = "rad")]
+    pub alpha1_sample: f64,
+    /// omega1 held at the last communication point, as alpha1_sample
+    #[variable(vr = 91, local, discrete, unit = "rad/s")]
+    pub omega1_sample: f64,
+    /// alpha2 held at the last communication point, as alpha1_sample
+    #[variable(vr = 92, local, discrete, unit = "rad")]
+    pub alpha2_sample: f64,
+    /// omega2 held at the last communication point, as alpha1_sample
+    #[variable(vr = 93, local, discrete, unit = "rad/s")]
+    pub omega2_sample: f64,
+    /// alpha1_ref held at the last communication point, as alpha1_sample
+    #[variable(vr = 94, local, discrete, unit = "rad")]
+    pub alpha1_ref_sample: f64,
+    /// alpha2_ref held at the last communication point, as alpha1_sample
+    #[variable(vr = 95, local, discrete, unit = "rad")]
+    pub alpha2_ref_sample: f64,
+    /// false (default): M, U follow the inputs as they are set (direct feedthrough, the paper's continuous state feedback). true: a digital controller with one communication step of computation delay: M, U at a communication point come from the inputs held at the previous one (alpha1_sample, ...). Co-simulation only: refused at initialization in model exchange, which has no communication points
+    #[variable(vr = 30, parameter, fixed, start = false)]
+    pub sampled: bool,
     /// Control law: LQR (M = -K (x - x_ref)), PID per joint, or LQR + PID
     #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
     pub mode: ControlMode,
@@ -255,6 +278,18 @@ impl Controller {
         )
     }
 
+    /// Holds the measurement as it is now (the sample for `sampled`).
+    fn hold(&mut self) {
+        let (x, reference) = self.measurement();
+        (
+            self.alpha1_sample,
+            self.omega1_sample,
+            self.alpha2_sample,
+            self.omega2_sample,
+        ) = (x[0], x[1], x[2], x[3]);
+        (self.alpha1_ref_sample, self.alpha2_ref_sample) = (reference[0], reference[1]);
+    }
+
     fn memory(&self) -> ControllerState {
         ControllerState {
             integral: [self.integral1, self.integral2],
@@ -279,7 +314,16 @@ fn knowns<D: Copy>(v: &ControllerContinuous<D>) -> ([D; 2], [D; 2], [D; 4], [D; 
 }
 
 impl Model for Controller {
-    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+    fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
+        if self.sampled && ctx.model_exchange() {
+            return Err(
+                "sampled = true delays the outputs by one communication step, and model exchange has no \
+                        communication points: set sampled = false (outputs follow the inputs) or instantiate for \
+                        co-simulation"
+                    .into(),
+            );
+        }
+        self.hold();
         let v = &*self;
         let q = Matrix4::from_diagonal(&Vector4::new(v.Q11, v.Q22, v.Q33, v.Q44));
         let r = Matrix2::from_diagonal(&Vector2::new(v.R11, v.R22));
@@ -302,9 +346,20 @@ impl Model for Controller {
         [v.der_rate_filter1, v.der_rate_filter2] = d_filter;
     }
 
-    /// M and U from the inputs and the memory: eqs. (14), (16), limited.
+    /// M and U from the inputs (sampled: from the inputs held at the last communication point)
+    /// and the memory: eqs. (14), (16), limited.
     fn outputs<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
-        let (integral, filter, x, reference) = knowns(v);
+        let (integral, filter, mut x, mut reference) = knowns(v);
+        if self.sampled {
+            x = [
+                self.alpha1_sample,
+                self.omega1_sample,
+                self.alpha2_sample,
+                self.omega2_sample,
+            ]
+            .map(D::from);
+            reference = [self.alpha1_ref_sample, self.alpha2_ref_sample].map(D::from);
+        }
         let (m, u, _) = self.law().command_of(integral, filter, x, reference);
         [v.M1, v.M2] = m;
         [v.U1, v.U2] = u;
@@ -312,14 +367,16 @@ impl Model for Controller {
 }
 
 impl CoSimulation for Controller {
-    /// The sampled controller: the memory advances over the step with the inputs of its start
-    /// (the integral by e h, the filter exactly); the runtime then computes the outputs.
+    /// The memory advances over the step with the inputs of its start (the integral by e h, the
+    /// filter exactly), and those inputs are held as the sample; the runtime then computes the
+    /// outputs.
     fn do_step(&mut self, _t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
         let law = self.law();
         let (x, reference) = self.measurement();
         let s = self.memory();
         let now = law.command(&s, &x, &reference);
         self.set_memory(&law.advance(&s, &x, &reference, &now, h));
+        self.hold();
         Ok(())
     }
 }
