@@ -64,8 +64,8 @@ pub struct DcMotor {
     /// Supply voltage: |U| is limited to U_max
     #[variable(vr = 27, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
     pub U_max: f64,
-    /// True: the rotor drives a joint through the gear (omega in, tau out); false: the motor runs unloaded and omega_m follows eq. (17)
-    #[variable(vr = 28, parameter, fixed, start = true)]
+    /// False (default): the motor runs unloaded and omega_m answers U as eq. (17) says; true: the rotor drives a joint through the gear (omega in, tau out), as the composed systems select
+    #[variable(vr = 28, parameter, fixed, start = false)]
     pub coupled: bool,
 }
 
