@@ -8,9 +8,11 @@ import fmpy
 import numpy as np
 import pytest
 import scipy.linalg
+from fmpy.fmi1 import FMICallException
 
 import paper_model
 from conftest import fmu
+from fmi_harness import LoggedSlave
 
 STATE = ["alpha1", "omega1", "alpha2", "omega2"]
 X0 = (0.1, 0.5, -0.05, -0.3)  # moving: the rotors' kinetic energy is not 0 at the start
@@ -101,3 +103,19 @@ def test_controller_designs_its_lqr_for_the_plant_with_rotors():
     assert np.abs(k - paper).max() > 1.0, f"K = {k} is still the paper's gain {paper}"
     poles = np.linalg.eigvals(a - b @ k)
     assert poles.real.max() < 0, f"A - BK of the plant with rotors has poles {poles}"
+
+
+@pytest.mark.parametrize("name", ["Pendulum", "Controller"])
+@pytest.mark.parametrize("var,value", [("J1", -1e-3), ("J2", float("nan")), ("J1", float("inf"))])
+def test_a_negative_or_non_finite_inertia_is_refused_naming_it(name, var, value):
+    s = LoggedSlave(fmu(name))
+    try:
+        s.fmu.setupExperiment(startTime=0.0)
+        with pytest.raises(FMICallException):
+            s.set(**{var: value})
+        assert any(f"'{var}'" in text for _, _, text in s.errors()), s.messages
+        s.fmu.enterInitializationMode()
+        s.fmu.exitInitializationMode()
+        assert s.get(var)[0] == 0.0, f"{name}.{var}: the refused value was stored"
+    finally:
+        s.close()
