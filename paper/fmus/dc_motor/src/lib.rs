@@ -52,7 +52,7 @@ pub struct DcMotor {
     /// Back-EMF constant kb
     #[variable(vr = 23, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
     pub kb: f64,
-    /// Rotor inertia J (used when coupled = false; coupled, the rotor follows the joint rigidly)
+    /// Rotor inertia J (used when coupled = false; coupled, the rotor follows the joint rigidly and its n^2 J belongs to the plant: Pendulum.J1 or J2)
     #[variable(vr = 24, parameter, fixed, start = 2.18e-5, unit = "kg.m2", min > 0.0)]
     pub J: f64,
     /// Viscous friction B at the rotor (the paper's 9.0946 is about six orders of magnitude above small DC motors)
