@@ -989,13 +989,26 @@ mod tests {
                 ("gear_ratio", Value::Real(200.0)),
                 ("motor_B", Value::Real(1e-6)),
                 ("drives_motors", Value::Boolean(true)),
+                ("J1", Value::Real(0.872)),
+                ("J2", Value::Real(0.872)),
             ],
             "values typed by the declarations, in the file's order (not sorted)"
         );
         let pendulum = &checked.parameters[0];
         assert_eq!(
             pendulum,
-            &[("alpha1", Value::Real(0.1)), ("alpha2", Value::Real(-0.05))]
+            &[
+                ("alpha1", Value::Real(0.1)),
+                ("alpha2", Value::Real(-0.05)),
+                ("J1", Value::Real(0.872)),
+                ("J2", Value::Real(0.872))
+            ]
+        );
+        let motor1 = motors.components.iter().position(|c| c.name == "motor1").unwrap();
+        assert_eq!(
+            checked.parameters[motor1][0],
+            ("coupled", Value::Boolean(true)),
+            "the loop selects the coupled motor (the default is the unloaded one)"
         );
         assert_eq!(motors.connections.len(), 10);
         assert_eq!(motors.connections[4].to_string(), "controller.U1 -> motor1.U");

@@ -53,6 +53,19 @@ def test_unloaded_speed_step_response_matches_eq17(B, h):
     assert err < 1e-6 * scale, f"B = {B}, h = {h}: max |omega_m - eq.(17)| = {err} (scale {scale})"
 
 
+def test_motor_at_its_defaults_turns_as_eq17_says():
+    # Nothing set but the 6 V: the defaults are the paper's unloaded motor (coupled = false), whose
+    # speed answers the voltage with eq. (17). Poles -1.83e4 and -4.17e5 /s: settled in 0.3 ms.
+    h = 1e-5
+    r = simulate_fmu(fmu("DCMotor"), stop_time=2e-3, step_size=h, output_interval=h, start_values={"U": 6.0},
+                     output=["omega_m", "tau", "i"])
+    want = eq17_step(PAPER_MOTOR, 6.0, r["time"])
+    err = np.abs(r["omega_m"] - want).max()
+    assert err < 1e-6 * want.max(), f"max |omega_m - eq.(17)| = {err} rad/s (steady speed {want[-1]} rad/s)"
+    assert np.all(r["tau"] == 0.0), f"the unloaded motor gives no joint torque, got up to {np.abs(r['tau']).max()} N.m"
+    assert r["i"][-1] == pytest.approx(PAPER_MOTOR["B"] * want[-1] / PAPER_MOTOR["km"], rel=1e-6), "i = B omega / km"
+
+
 def test_paper_motor_dc_gain_uses_20_19_not_27_19():
     r = simulate_fmu(
         fmu("DCMotor"), stop_time=0.01, step_size=1e-3, start_values={"coupled": False, "U": 6.0}, output=["omega_m"]
@@ -63,7 +76,7 @@ def test_paper_motor_dc_gain_uses_20_19_not_27_19():
 
 
 def test_supply_limits_voltage_and_gear_multiplies_torque():
-    start = {"U": 100.0, "gear_ratio": 200.0, "B": 1e-6, "omega": 0.0}
+    start = {"coupled": True, "U": 100.0, "gear_ratio": 200.0, "B": 1e-6, "omega": 0.0}
     r = simulate_fmu(fmu("DCMotor"), stop_time=0.01, step_size=1e-3, start_values=start, output=["tau", "U_applied"])
     assert r["U_applied"][-1] == 6.0
     stall = 200 * 0.00449 * 6.0 / 2.22

@@ -55,7 +55,7 @@ ME_RUNS = {
     "pendulum": ("Pendulum", {"alpha1": 0.1}, 1e-3),
     "controller": ("Controller", dict(CONTROLLER_INPUTS, mode=3), 1e-3),
     "motor-unloaded": ("DCMotor", {"coupled": False, "U": 6.0}, 1e-6),
-    "motor-coupled": ("DCMotor", {"U": 6.0, "omega": 0.3}, 1e-6),
+    "motor-coupled": ("DCMotor", {"coupled": True, "U": 6.0, "omega": 0.3}, 1e-6),
 }
 
 

@@ -368,11 +368,15 @@ mod tests {
     use nalgebra::SMatrix;
 
     fn law(mode: Mode) -> ControlLaw {
-        let plant = PendulumParams::default();
+        law_for(&PendulumParams::default(), mode)
+    }
+
+    /// The paper's weights Q = CᵀC, R = I, the gain designed for `plant`.
+    fn law_for(plant: &PendulumParams, mode: Mode) -> ControlLaw {
         let c = PendulumParams::output_matrix();
         ControlLaw {
             mode,
-            k: lqr_gain(&plant, &(c.transpose() * c), &Matrix2::identity()).unwrap(),
+            k: lqr_gain(plant, &(c.transpose() * c), &Matrix2::identity()).unwrap(),
             pid: DEFAULT_PID,
             tf: 0.01,
             m_max: 1e3,
@@ -384,7 +388,12 @@ mod tests {
     /// The linearized loop: plant (12) + controller with the integrals and filters as states,
     /// z = (x, ∫e1, ∫e2, ω_f1, ω_f2), continuous time.
     fn closed_loop(l: &ControlLaw) -> SMatrix<f64, 8, 8> {
-        let (a, b) = PendulumParams::default().linearize(&Vector4::zeros(), &Vector2::zeros());
+        closed_loop_of(&PendulumParams::default(), l)
+    }
+
+    /// As [`closed_loop`], around `plant`.
+    fn closed_loop_of(plant: &PendulumParams, l: &ControlLaw) -> SMatrix<f64, 8, 8> {
+        let (a, b) = plant.linearize(&Vector4::zeros(), &Vector2::zeros());
         let mut f = SMatrix::<f64, 8, 8>::zeros();
         f.fixed_view_mut::<4, 4>(0, 0).copy_from(&a);
         let mut gain = SMatrix::<f64, 2, 8>::zeros();
@@ -418,6 +427,36 @@ mod tests {
                 "{mode:?}: slowest eigenvalue should decay faster than -0.45/s: {eig}"
             );
             assert!(damping > 0.5, "{mode:?}: damping ratio should exceed 0.5: {eig}");
+        }
+    }
+
+    #[test]
+    fn the_gain_designed_for_the_plant_with_rotors_stabilizes_it() {
+        // The full loop's plant: n² J = 200² · 2.18e-5 = 0.872 kg·m² at each joint. The gain
+        // designed for it (the Controller with J1 = J2 = 0.872) stabilizes it, alone and with
+        // the default PID; the slowest eigenvalues are printed for docs/composition.md.
+        let heavy = PendulumParams {
+            j1: 0.872,
+            j2: 0.872,
+            ..PendulumParams::default()
+        };
+        for mode in [Mode::Lqr, Mode::LqrPid] {
+            for (name, designed_for) in [("rotors", heavy), ("paper", PendulumParams::default())] {
+                let l = law_for(&designed_for, mode);
+                let eig = closed_loop_of(&heavy, &l).complex_eigenvalues();
+                // In LQR mode the PID states are decoupled integrators (eigenvalue 0): left out.
+                let eig: Vec<_> = eig.iter().filter(|l| l.norm() > 1e-9).map(|l| (l.re, l.im)).collect();
+                let slowest = eig.iter().map(|l| l.0).fold(f64::NEG_INFINITY, f64::max);
+                println!(
+                    "{mode:?}, K for the {name} plant, around the plant with rotors: slowest Re = {slowest:.4}, {eig:.3?}"
+                );
+                if name == "rotors" {
+                    assert!(
+                        slowest < -0.1,
+                        "{mode:?}: the loop around the plant with rotors should be stable: {eig:?}"
+                    );
+                }
+            }
         }
     }
 

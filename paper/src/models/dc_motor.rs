@@ -18,8 +18,9 @@
 //! the joint speed as input and gives the joint torque τ = n (km i − B ω_m). The rotor inertia
 //! then acts on the joint as n² J, and an acceleration-dependent torque cannot be computed from
 //! a speed input without differentiating it (which, coupled explicitly, is unstable as soon as
-//! n² J exceeds the link's inertia), so in coupled mode J is not part of the motor's dynamics;
-//! see docs/composition.md for what this means for the demo parameters.
+//! n² J exceeds the link's inertia), so in coupled mode J is not part of the motor's dynamics:
+//! the plant carries it (the Pendulum's J1, J2 = n² J, on the diagonal of its mass matrix);
+//! see docs/composition.md.
 //!
 //! Numerics: the electrical time constant L/R is 55 µs with the paper's values, far below any
 //! useful communication step, and with the paper's B the mechanical one is 2.4 µs. Both modes are

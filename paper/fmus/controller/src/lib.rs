@@ -153,6 +153,12 @@ pub struct Controller {
     /// Gravitational acceleration g of the plant the LQR gain is designed for (any finite value)
     #[variable(vr = 44, parameter, fixed, start = 9.81, unit = "m/s2")]
     pub g: f64,
+    /// Extra inertia J1 at joint 1 of the plant the LQR gain is designed for (the Pendulum's J1: n^2 J of the motor geared to joint 1)
+    #[variable(vr = 45, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
+    pub J1: f64,
+    /// Extra inertia J2 at joint 2 of the plant the LQR gain is designed for (the Pendulum's J2)
+    #[variable(vr = 46, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
+    pub J2: f64,
     /// LQR state weight Q(1,1) on alpha1 (Q is diagonal; the paper's Q = C'C gives 1, 0, 1, 0)
     #[variable(vr = 50, parameter, fixed, start = 1.0, min = 0.0)]
     pub Q11: f64,
@@ -224,6 +230,8 @@ impl Controller {
             l1: v.l1,
             l2: v.l2,
             g: v.g,
+            j1: v.J1,
+            j2: v.J2,
         }
     }
 

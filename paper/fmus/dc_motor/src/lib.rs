@@ -52,7 +52,7 @@ pub struct DcMotor {
     /// Back-EMF constant kb
     #[variable(vr = 23, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
     pub kb: f64,
-    /// Rotor inertia J (used when coupled = false; coupled, the rotor follows the joint rigidly)
+    /// Rotor inertia J (used when coupled = false; coupled, the rotor follows the joint rigidly and its n^2 J belongs to the plant: Pendulum.J1 or J2)
     #[variable(vr = 24, parameter, fixed, start = 2.18e-5, unit = "kg.m2", min > 0.0)]
     pub J: f64,
     /// Viscous friction B at the rotor (the paper's 9.0946 is about six orders of magnitude above small DC motors)
@@ -64,8 +64,8 @@ pub struct DcMotor {
     /// Supply voltage: |U| is limited to U_max
     #[variable(vr = 27, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
     pub U_max: f64,
-    /// True: the rotor drives a joint through the gear (omega in, tau out); false: the motor runs unloaded and omega_m follows eq. (17)
-    #[variable(vr = 28, parameter, fixed, start = true)]
+    /// False (default): the motor runs unloaded and omega_m answers U as eq. (17) says; true: the rotor drives a joint through the gear (omega in, tau out), as the composed systems select
+    #[variable(vr = 28, parameter, fixed, start = false)]
     pub coupled: bool,
 }
 

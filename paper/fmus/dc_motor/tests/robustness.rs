@@ -97,6 +97,8 @@ fn a_tiny_resistance_gives_the_right_current() {
     let (c, log) = instance();
     // SAFETY: c is a live instance; arrays of one.
     unsafe {
+        // Coupled: the rotor turns at the joint's 2 rad/s (n = 1) whatever the current.
+        assert_eq!(fmi2SetBoolean(c, &vr("coupled"), 1, &fmi2True), fmi2OK);
         assert_eq!(set(c, "R", 1e-20), fmi2OK, "R = 1e-20 is > 0");
         assert_eq!(set(c, "U", 6.0), fmi2OK);
         assert_eq!(set(c, "omega", 2.0), fmi2OK);

@@ -75,6 +75,12 @@ pub struct Pendulum {
     /// Gravitational acceleration g (any finite value: 0 without gravity, < 0 pulls upwards)
     #[variable(vr = 24, parameter, fixed, start = 9.81, unit = "m/s2")]
     pub g: f64,
+    /// Extra inertia J1 at joint 1, added to the (1,1) entry of the mass matrix of eqs. (6)-(7): a rotor geared to alpha1 (n^2 J of a motor with gear ratio n and rotor inertia J; 0 in the paper). The kinetic energy gains J1 omega1^2/2
+    #[variable(vr = 25, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
+    pub J1: f64,
+    /// Extra inertia J2 at joint 2, added to the (2,2) entry of the mass matrix: a rotor geared to the absolute angle alpha2 (0 in the paper). The kinetic energy gains J2 omega2^2/2
+    #[variable(vr = 26, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
+    pub J2: f64,
     /// Relative error tolerance of the integrator (Dormand-Prince 5(4)) inside fmi2DoStep (co-simulation; in model exchange the importer integrates)
     #[variable(vr = 30, parameter, tunable, start = 1e-10, min = 1e-14, max = 0.1)]
     pub rtol: f64,
@@ -91,6 +97,8 @@ impl Pendulum {
             l1: self.l1,
             l2: self.l2,
             g: self.g,
+            j1: self.J1,
+            j2: self.J2,
         }
     }
 
