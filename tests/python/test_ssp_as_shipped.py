@@ -10,6 +10,8 @@ files carry its annotations (fmu-build's ssp tests check them)."""
 
 import pathlib
 import sys
+import xml.etree.ElementTree as ET
+import zipfile
 
 import numpy as np
 import pytest
@@ -53,6 +55,30 @@ def assert_settles(importer: str, name: str, t, angles: dict):
         late = np.abs(x[t >= STOP - 0.5]).max()
         assert late < SETTLED, f"{importer}, {name}.ssp: |{a}| over the last 0.5 s should be < {SETTLED} rad, was up to {late}"
         assert np.abs(x).max() < 0.5, f"{importer}, {name}.ssp: {a} should stay near upright, reached {np.abs(x).max()} rad"
+
+
+# OMSimulator (not run here) ------------------------------------------------------------------
+
+OMS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+       "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd"}
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_the_file_is_valid_ssp_and_carries_omsimulators_master_and_result_file(name):
+    """fmpy's read_ssd validates the SSD against the SSP 1.0 schema (the annotations are legal
+    there); OMSimulator reads its fixed-step master from ssd:System and its result file from
+    ssd:DefaultExperiment, in the form it exports them itself."""
+    from fmpy.ssp.ssd import read_ssd
+
+    read_ssd(ssp(name), validate=True)
+    with zipfile.ZipFile(ssp(name)) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    where = "ssc:Annotation[@type='org.openmodelica']/oms:Annotations/oms:SimulationInformation"
+    master = root.find(f"ssd:System/ssd:Annotations/{where}/oms:FixedStepMaster", OMS)
+    assert master is not None and float(master.get("stepSize")) == STEP, f"{name}.ssp: no oms:FixedStepMaster at {STEP} s"
+    info = root.find(f"ssd:DefaultExperiment/ssd:Annotations/{where}", OMS)
+    assert info is not None and info.get("resultFile") == f"{name}_res.mat", f"{name}.ssp: no result file for OMSimulator"
 
 
 # libcosim -------------------------------------------------------------------------------------
