@@ -1167,6 +1167,20 @@ mod tests {
     }
 
     #[test]
+    fn a_step_size_that_is_not_positive_and_finite_is_refused() {
+        for bad in ["0.0", "-1e-3", "inf", "nan"] {
+            let text = format!("[[system]]\nname = \"S\"\nstep-size = {bad}\n");
+            let e = Systems::parse(&text, Path::new("bad.toml")).unwrap_err();
+            assert!(
+                e.contains("system 'S'") && e.contains("step-size") && e.contains("finite and > 0"),
+                "step-size = {bad}: {e}"
+            );
+        }
+        let ok = Systems::parse("[[system]]\nname = \"S\"\nstep-size = 1e-3\n", Path::new("ok.toml")).unwrap();
+        assert_eq!(ok.systems[0].step_size, Some(1e-3));
+    }
+
+    #[test]
     fn malformed_toml_reports_file_and_line() {
         let text =
             "[[system]]\nname = \"S\"\nstop-time = 5.0\n\n[[system.component]]\nname = \"c\"\nfmu = Controller\n";
