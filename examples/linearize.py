@@ -53,7 +53,8 @@ def linearize(path):
         model.instantiate()
         model.setupExperiment(startTime=0.0)
         model.enterInitializationMode()
-        model.setReal([vr[n] for n in STATES + INPUTS], [0.0] * 6)  # the upright rest position
+        initial = [f"{n}_0" for n in STATES]  # the initial state is the parameters alpha1_0..omega2_0
+        model.setReal([vr[n] for n in initial + INPUTS], [0.0] * 6)  # the upright rest position
         model.exitInitializationMode()
         # No discrete states: one event iteration, then continuous time.
         while model.newDiscreteStates()[0]:

@@ -15,6 +15,8 @@ if ! $python_only; then
 dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 command -v valgrind >/dev/null 2>&1 || need+=(valgrind)
 command -v nm >/dev/null 2>&1 || need+=(binutils)
+# ecospy's libecosc.so (the Ecos SSP tests, tests/python/test_ssp_as_shipped.py) links libtbb.so.12.
+dpkg -s libtbb12 >/dev/null 2>&1 || need+=(libtbb12)
 if ((${#need[@]})); then
   echo "setup-env: apt-get install ${need[*]}"
   sudo=""
@@ -35,3 +37,5 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   .venv/bin/pip install -q --disable-pip-version-check -r tests/python/requirements.txt
   echo "$want" >"$stamp"
 fi
+# ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
+chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true

@@ -222,9 +222,9 @@ def run_fmpy_ssp(loop, n):
 
 def run_libcosim(loop, n):
     """libcosim's fixed-step algorithm on the system's SSP file, in one simulate_until call.
-    libcosim applies the SSD's parameter values only to parameters and inputs (not to the
-    Pendulum's initial state, the start of its outputs alpha1..omega2), so every start value is
-    also given through *_initial_value."""
+    libcosim applies the SSD's parameter values itself (the Pendulum's initial state is its
+    parameters alpha1_0..omega2_0); every start value is given again through *_initial_value,
+    the same values, so that the run does not depend on which bindings libcosim applies."""
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
     from libcosimpy.CosimObserver import CosimObserver

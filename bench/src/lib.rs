@@ -209,7 +209,7 @@ impl Fmu {
 /// The swing every single-FMU benchmark runs: the plant released from rest at α1 = 0.1 rad,
 /// α2 = 0.15 rad with no torque, so it falls and swings; the integrator's work per step is that
 /// of a moving pendulum, not of one resting at its equilibrium.
-pub const SWING_START: [(&str, f64); 2] = [("alpha1", 0.1), ("alpha2", 0.15)];
+pub const SWING_START: [(&str, f64); 2] = [("alpha1_0", 0.1), ("alpha2_0", 0.15)];
 
 pub mod single;
 

@@ -27,7 +27,7 @@ impl Default for Direct {
 impl Direct {
     pub fn new() -> Direct {
         let mut model = Pendulum::start();
-        (model.alpha1, model.alpha2) = (SWING_START[0].1, SWING_START[1].1);
+        (model.alpha1_0, model.alpha2_0) = (SWING_START[0].1, SWING_START[1].1);
         let mut sim = Standalone::new(model, 0.0, None);
         sim.initialize().expect("the paper's parameters are valid");
         Direct {

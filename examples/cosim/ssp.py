@@ -44,9 +44,9 @@ def simulate_fmpy_ssp(ssp_path: str, stop_time: float, step: float, variables: l
 
 
 def simulate_libcosim(ssp_path: str, stop_time: float, step: float, variables: list[str], start: dict) -> dict:
-    """libcosim's fixed-step algorithm on the .ssp file. libcosim ignores SSP parameter values of
-    outputs (the Pendulum's initial state is the start value of its outputs alpha1..omega2), so
-    `start` ({"component.variable": value}) is applied through real_initial_value as well."""
+    """libcosim's fixed-step algorithm on the .ssp file, which it applies itself (the Pendulum's
+    initial state is the parameters alpha1_0..omega2_0); `start` ({"component.variable": value})
+    overrides Real values through real_initial_value."""
     from libcosimpy.CosimEnums import CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level

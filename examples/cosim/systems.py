@@ -97,7 +97,7 @@ def plant_and_controller(pendulum_fmu: str, controller_fmu: str, alpha1=None, al
     return bind(
         read_ssp(ssp or ssp_path("PendulumLQR", pendulum_fmu)),
         {"Pendulum": pendulum_fmu, "Controller": controller_fmu},
-        {"pendulum.alpha1": alpha1, "pendulum.alpha2": alpha2, "controller.mode": mode},
+        {"pendulum.alpha1_0": alpha1, "pendulum.alpha2_0": alpha2, "controller.mode": mode},
     )
 
 
@@ -109,7 +109,7 @@ def plant_motors_controller(
     return bind(
         read_ssp(ssp or ssp_path("PendulumMotors", pendulum_fmu)),
         {"Pendulum": pendulum_fmu, "Controller": controller_fmu, "DCMotor": motor_fmu},
-        {"pendulum.alpha1": alpha1, "pendulum.alpha2": alpha2, "controller.mode": mode},
+        {"pendulum.alpha1_0": alpha1, "pendulum.alpha2_0": alpha2, "controller.mode": mode},
     )
 
 

@@ -114,7 +114,7 @@ class ClosedLoop:
     def run(self, start: dict, stop_time: float, step: float, criteria: Criteria = Criteria()) -> dict:
         """One experiment: fmi2Reset (from the second run on), the system's start values and the
         run's own on top (`start` maps "component.variable" to a value,
-        e.g. "pendulum.alpha1", "pendulum.m1", "controller.mode"), initialization, then
+        e.g. "pendulum.alpha1_0", "pendulum.m1", "controller.mode"), initialization, then
         `stop_time / step` communication steps. Returns the run's metrics; a failure (an FMU
         refusing a value or a step) is returned as status "failed" with the reason, not raised."""
         self.log.clear()

@@ -24,13 +24,13 @@ def region_of_attraction(df: pd.DataFrame, path) -> None:
     vmax = ok["settling_time"].max() if len(ok) else 1.0
     fig, axes = plt.subplots(1, len(modes), figsize=(5.2 * len(modes) + 1, 5.2), sharex=True, sharey=True, squeeze=False)
     axes = axes[0]
-    step = np.diff(np.unique(df["pendulum.alpha1"]))
+    step = np.diff(np.unique(df["pendulum.alpha1_0"]))
     size = (step.min() if len(step) else 0.1) * 0.95
     mesh = None
     for ax, mode in zip(axes, modes):
         d = df[df["controller.mode"] == mode]
         s = d[d["stabilized"]]
-        mesh = ax.scatter(s["pendulum.alpha1"], s["pendulum.alpha2"], c=s["settling_time"], cmap="viridis", vmin=0, vmax=vmax, marker="s", s=_marker_area(ax, fig, size, d), linewidths=0)
+        mesh = ax.scatter(s["pendulum.alpha1_0"], s["pendulum.alpha2_0"], c=s["settling_time"], cmap="viridis", vmin=0, vmax=vmax, marker="s", s=_marker_area(ax, fig, size, d), linewidths=0)
         for outcome, marker, colour, label in (
             ("not_stabilized", "o", "tab:orange", "not settled in horizon"),
             ("fell", "x", "tab:red", "fell (|α| > π/2)"),
@@ -38,7 +38,7 @@ def region_of_attraction(df: pd.DataFrame, path) -> None:
         ):
             e = d[d["outcome"] == outcome]
             if len(e):
-                ax.scatter(e["pendulum.alpha1"], e["pendulum.alpha2"], marker=marker, c=colour, s=18, label=f"{label} ({len(e)})")
+                ax.scatter(e["pendulum.alpha1_0"], e["pendulum.alpha2_0"], marker=marker, c=colour, s=18, label=f"{label} ({len(e)})")
         n_ok, n = len(s), len(d)
         ax.set_title(f"{MODES.get(int(mode), mode)} (mode {int(mode)}): {n_ok}/{n} stabilized")
         ax.set_xlabel("initial α1 [rad]")
@@ -57,7 +57,7 @@ def region_of_attraction(df: pd.DataFrame, path) -> None:
 
 def _marker_area(ax, fig, size, d) -> float:
     """Marker area (points^2) of a square about `size` data units wide on this grid."""
-    span = d["pendulum.alpha1"].max() - d["pendulum.alpha1"].min() + size
+    span = d["pendulum.alpha1_0"].max() - d["pendulum.alpha1_0"].min() + size
     width_pt = ax.get_position().width * fig.get_figwidth() * 72
     return max(4.0, (width_pt * size / span) ** 2 * 0.8)
 

@@ -50,7 +50,7 @@ def region_of_attraction(
     return [
         make_spec(
             system,
-            {"controller.mode": int(mode), "pendulum.alpha1": float(a1), "pendulum.alpha2": float(a2)},
+            {"controller.mode": int(mode), "pendulum.alpha1_0": float(a1), "pendulum.alpha2_0": float(a2)},
             stop_time,
             step,
             criteria,
@@ -84,6 +84,6 @@ def robustness(
         factors = rng.uniform(1 - spread, 1 + spread, size=len(base))
         drawn = {k: float(v * f) for (k, v), f in zip(base.items(), factors)}
         for mode in modes:
-            start = {"controller.mode": int(mode), "pendulum.alpha1": alpha0[0], "pendulum.alpha2": alpha0[1], **drawn}
+            start = {"controller.mode": int(mode), "pendulum.alpha1_0": alpha0[0], "pendulum.alpha2_0": alpha0[1], **drawn}
             specs.append(make_spec(system, start, stop_time, step, criteria))
     return specs

@@ -7,11 +7,16 @@
 //! a start value and has a value of its type). Only the packaged FMUs are read, as any
 //! importer reads them.
 //!
-//! What the importers this project runs (fmpy.ssp, libcosim) need:
+//! What the importers this project runs (fmpy.ssp, libcosim, Ecos, OMSimulator) need:
 //! - every connection names its `startElement` and `endElement` (libcosim's SSP reader needs
 //!   both; no system-level connectors are used);
-//! - parameter values are inline `ssd:ParameterValues`, one `ssv:ParameterSet` per component
-//!   named after it (libcosim applies a component's first set by default);
+//! - parameter values are inline `ssd:ParameterValues`, one `ssv:ParameterSet` per component,
+//!   every one named after the system: libcosim applies a component's first set by default,
+//!   Ecos merges the sets of one name into one and applies one set, by name, per run
+//!   (`init(parameter_set="<system>")`), so one name gives it every component's values;
+//! - OMSimulator's own annotation, `oms:SimulationInformation`, in `ssd:System` (a fixed-step
+//!   master at the system's step size) and in `ssd:DefaultExperiment` (its result file): its
+//!   command line stops with "internal error" without them;
 //! - an Enumeration parameter is written as `ssv:Integer` with the item's value. SSP's own
 //!   form, `ssv:Enumeration value="<item name>"`, makes libcosim (libcosimpy 0.0.6) abort the
 //!   process while parsing the SSD (its parser panics on `ssv:Enumeration`) and fmpy 0.3
@@ -27,6 +32,9 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use zip::write::SimpleFileOptions;
+
+/// OMSimulator's namespace (of its `oms:SimulationInformation` annotations).
+const OMS_NS: &str = "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd";
 
 fn escape(s: &str) -> String {
     quick_xml::escape::escape(s).into_owned()
@@ -83,7 +91,7 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
     let _ = writeln!(
         w,
-        r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" version="1.0" name="{}" generationTool="rustfmu fmu-build">"#,
+        r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" xmlns:oms="{OMS_NS}" version="1.0" name="{}" generationTool="rustfmu fmu-build">"#,
         escape(&system.name)
     );
     let description = match &system.description {
@@ -117,7 +125,7 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
             let _ = writeln!(
                 w,
                 r#"              <ssv:ParameterSet version="1.0" name="{}">"#,
-                escape(&c.name)
+                escape(&system.name)
             );
             let _ = writeln!(w, "                <ssv:Parameters>");
             for (name, value) in parameters {
@@ -151,7 +159,22 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
             escape(&c.to.variable)
         );
     }
-    let _ = writeln!(w, "    </ssd:Connections>\n  </ssd:System>");
+    let _ = writeln!(w, "    </ssd:Connections>");
+    if let Some(h) = system.step_size {
+        let _ = writeln!(
+            w,
+            r#"    <ssd:Annotations>
+      <ssc:Annotation type="org.openmodelica">
+        <oms:Annotations>
+          <oms:SimulationInformation>
+            <oms:FixedStepMaster description="oms-ma" stepSize="{h:?}"/>
+          </oms:SimulationInformation>
+        </oms:Annotations>
+      </ssc:Annotation>
+    </ssd:Annotations>"#
+        );
+    }
+    let _ = writeln!(w, "  </ssd:System>");
     if !enumerations.is_empty() {
         let _ = writeln!(w, "  <ssd:Enumerations>");
         for e in &enumerations {
@@ -163,13 +186,26 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
         }
         let _ = writeln!(w, "  </ssd:Enumerations>");
     }
-    match system.stop_time {
-        Some(t) => {
-            let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0" stopTime="{t:?}"/>"#);
-        }
-        None => {
-            let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0"/>"#);
-        }
+    let stop = match system.stop_time {
+        Some(t) => format!(r#" stopTime="{t:?}""#),
+        None => String::new(),
+    };
+    if system.step_size.is_some() {
+        let _ = writeln!(
+            w,
+            r#"  <ssd:DefaultExperiment startTime="0.0"{stop}>
+    <ssd:Annotations>
+      <ssc:Annotation type="org.openmodelica">
+        <oms:Annotations>
+          <oms:SimulationInformation resultFile="{}_res.mat" loggingInterval="0.0" bufferSize="10"/>
+        </oms:Annotations>
+      </ssc:Annotation>
+    </ssd:Annotations>
+  </ssd:DefaultExperiment>"#,
+            escape(&system.name)
+        );
+    } else {
+        let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0"{stop}/>"#);
     }
     let _ = writeln!(w, "</ssd:SystemStructureDescription>");
     x
@@ -229,8 +265,8 @@ mod tests {
         std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
     }
 
-    /// The fixtures are the SSDs the writer made from `rustfmu::systems` before the systems
-    /// became a file: the systems file reproduces them to the byte.
+    /// The fixtures are the SSDs of the paper's systems file, reviewed by hand: any change to
+    /// the writer or to paper/systems.toml shows here first.
     #[test]
     fn the_ssd_of_each_paper_system_is_the_reference() {
         let systems = paper_systems();
@@ -256,6 +292,51 @@ mod tests {
                 s.name
             );
             assert_eq!(text.matches("<ssd:Connection ").count(), s.connections.len());
+        }
+    }
+
+    /// Ecos applies one parameter set per run, by name, merging the components' sets of that
+    /// name: every component's set is named after the system, so one name applies them all.
+    /// OMSimulator needs its master and result file in its own annotations.
+    #[test]
+    fn one_parameter_set_name_and_the_omsimulator_annotations() {
+        let systems = paper_systems();
+        for s in &systems.systems {
+            let text = ssd(s, &fmus()).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+            let named = format!(r#"<ssv:ParameterSet version="1.0" name="{}">"#, s.name);
+            assert_eq!(
+                text.matches("<ssv:ParameterSet ").count(),
+                text.matches(&named).count(),
+                "{}: every parameter set should be named {:?}:\n{text}",
+                s.name,
+                s.name
+            );
+            assert_eq!(
+                text.matches(&named).count(),
+                s.components.len(),
+                "{}: one set per component",
+                s.name
+            );
+            let master = r#"<oms:FixedStepMaster description="oms-ma" stepSize="0.001"/>"#;
+            let (system_end, experiment) = (
+                text.find("</ssd:System>").unwrap(),
+                text.find("<ssd:DefaultExperiment").unwrap(),
+            );
+            assert!(
+                text.find(master)
+                    .is_some_and(|i| i > text.find("</ssd:Connections>").unwrap() && i < system_end),
+                "{}: the fixed-step master belongs in ssd:System's Annotations, after its Connections:\n{text}",
+                s.name
+            );
+            let result = format!(r#"<oms:SimulationInformation resultFile="{}_res.mat""#, s.name);
+            assert!(
+                text.find(&result).is_some_and(|i| i > experiment),
+                "{}: the DefaultExperiment should carry OMSimulator's result file:\n{text}",
+                s.name
+            );
+            assert!(text.contains(
+                r#"xmlns:oms="https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd""#
+            ));
         }
     }
 

@@ -11,6 +11,7 @@
 //! name = "PendulumLQR"        # the system's name, and its SSP file's: PendulumLQR.ssp
 //! description = "..."         # optional
 //! stop-time = 5.0             # optional: stopTime of the SSD's DefaultExperiment [s]
+//! step-size = 1e-3            # optional: the communication step the system is made for [s]
 //! connections = [             # output -> input, of the same type
 //!     "pendulum.alpha1 -> controller.alpha1",
 //!     "controller.M1 -> pendulum.M1",
@@ -19,7 +20,7 @@
 //! [[system.component]]        # one FMU instance of the system above; in order
 //! name = "pendulum"           # unique in the system, without '.'
 //! fmu = "Pendulum"            # the FMU's file: <fmu-dir>/Pendulum.fmu
-//! parameters = { alpha1 = 0.1, alpha2 = -0.05 }   # optional; in order
+//! parameters = { alpha1_0 = 0.1, alpha2_0 = -0.05 }   # optional; in order
 //! ```
 //!
 //! In a connection the component is what precedes the first `.` of each end; the rest is the
@@ -187,6 +188,9 @@ pub struct System {
     pub description: Option<String>,
     /// Stop time of the SSP file's DefaultExperiment, in seconds.
     pub stop_time: Option<f64>,
+    /// The communication step the system is made for, in seconds (the fixed-step master of
+    /// OMSimulator's annotation in the SSP file).
+    pub step_size: Option<f64>,
     pub connections: Vec<Connection>,
     pub components: Vec<Component>,
 }
@@ -200,6 +204,8 @@ struct SystemTable {
     description: Option<String>,
     #[serde(default)]
     stop_time: Option<f64>,
+    #[serde(default)]
+    step_size: Option<f64>,
     #[serde(default)]
     connections: Vec<toml::Spanned<String>>,
     #[serde(default)]
@@ -263,6 +269,7 @@ impl Systems {
                 name: t.name,
                 description: t.description,
                 stop_time: t.stop_time,
+                step_size: t.step_size,
                 connections,
                 components: t.component,
             });
@@ -271,6 +278,11 @@ impl Systems {
             let at = format!("{}: system '{}'", file.display(), s.name);
             if s.name.is_empty() {
                 return Err(format!("{}: system {} has an empty name", file.display(), i + 1));
+            }
+            if let Some(h) = s.step_size
+                && !(h.is_finite() && h > 0.0)
+            {
+                return Err(format!("{at}: step-size = {h} must be finite and > 0"));
             }
             for (k, c) in s.components.iter().enumerate() {
                 if c.name.is_empty() || c.name.contains('.') {
@@ -974,6 +986,7 @@ mod tests {
         let systems = paper_systems();
         let motors = systems.get("PendulumMotors").unwrap();
         assert_eq!(motors.stop_time, Some(5.0));
+        assert_eq!(motors.step_size, Some(1e-3));
         let checked = motors.check(&fmus()).unwrap();
         let controller = motors.components.iter().position(|c| c.name == "controller").unwrap();
         assert_eq!(
@@ -998,8 +1011,8 @@ mod tests {
         assert_eq!(
             pendulum,
             &[
-                ("alpha1", Value::Real(0.1)),
-                ("alpha2", Value::Real(-0.05)),
+                ("alpha1_0", Value::Real(0.1)),
+                ("alpha2_0", Value::Real(-0.05)),
                 ("J1", Value::Real(0.872)),
                 ("J2", Value::Real(0.872))
             ]
@@ -1164,6 +1177,20 @@ mod tests {
             e.contains("'Nope'") && e.contains("PendulumLQR, PendulumMotors") && e.contains("paper/systems.toml"),
             "expected the unknown name and the list of systems, got: {e}"
         );
+    }
+
+    #[test]
+    fn a_step_size_that_is_not_positive_and_finite_is_refused() {
+        for bad in ["0.0", "-1e-3", "inf", "nan"] {
+            let text = format!("[[system]]\nname = \"S\"\nstep-size = {bad}\n");
+            let e = Systems::parse(&text, Path::new("bad.toml")).unwrap_err();
+            assert!(
+                e.contains("system 'S'") && e.contains("step-size") && e.contains("finite and > 0"),
+                "step-size = {bad}: {e}"
+            );
+        }
+        let ok = Systems::parse("[[system]]\nname = \"S\"\nstep-size = 1e-3\n", Path::new("ok.toml")).unwrap();
+        assert_eq!(ok.systems[0].step_size, Some(1e-3));
     }
 
     #[test]

@@ -52,7 +52,7 @@ K_NAMES = [f"K{i}{j}" for i in (1, 2) for j in (1, 2, 3, 4)]
 # paper motor has poles -1.83e4 and -4.17e5 /s (Euler stable below 4.8e-6 s), so the motor runs
 # 0.02 s with h = 1e-6 under Euler (2 s would be 2e6 fmpy steps); CVode (BDF) runs every case 2 s.
 ME_RUNS = {
-    "pendulum": ("Pendulum", {"alpha1": 0.1}, 1e-3),
+    "pendulum": ("Pendulum", {"alpha1_0": 0.1}, 1e-3),
     "controller": ("Controller", dict(CONTROLLER_INPUTS, mode=3), 1e-3),
     "motor-unloaded": ("DCMotor", {"coupled": False, "U": 6.0}, 1e-6),
     "motor-coupled": ("DCMotor", {"coupled": True, "U": 6.0, "omega": 0.3}, 1e-6),
@@ -127,7 +127,7 @@ def test_me_simulation_runs_and_ends_where_the_equations_say(case, solver):
 @pytest.fixture(scope="module")
 def pendulum_cs_2s():
     return fmpy.simulate_fmu(fmu("Pendulum"), fmi_type="CoSimulation", stop_time=2.0, output_interval=1e-3,
-                             start_values={"alpha1": 0.1}, output=STATE)
+                             start_values={"alpha1_0": 0.1}, output=STATE)
 
 
 # Measured over 2 s from alpha1 = 0.1 (the pendulum falls, alpha2 reaches -11 rad, |omega2| 19 rad/s;
@@ -139,7 +139,7 @@ def pendulum_cs_2s():
 # integration error on an unstable trajectory, not a model difference. Bounds: ~10x the measurement.
 @pytest.mark.parametrize("rtol,bound", [(1e-10, 6e-5), (1e-12, 1e-6)])
 def test_pendulum_me_cvode_matches_cosimulation_and_reference(pendulum_cs_2s, rtol, bound):
-    me = simulate_me(fmu("Pendulum"), "CVode", 2.0, {"alpha1": 0.1}, h=1e-3, relative_tolerance=rtol, output=STATE)
+    me = simulate_me(fmu("Pendulum"), "CVode", 2.0, {"alpha1_0": 0.1}, h=1e-3, relative_tolerance=rtol, output=STATE)
     cs = pendulum_cs_2s
     assert np.array_equal(me["time"], cs["time"]), "ME and CS output grids differ"
     ref = paper_model.reference(X0, me["time"])
@@ -152,7 +152,7 @@ def test_pendulum_me_cvode_matches_cosimulation_and_reference(pendulum_cs_2s, rt
 
 
 def euler_run(h, stop=2.0):
-    r = simulate_me(fmu("Pendulum"), "Euler", stop, {"alpha1": 0.1}, h=h, output=STATE)
+    r = simulate_me(fmu("Pendulum"), "Euler", stop, {"alpha1_0": 0.1}, h=h, output=STATE)
     assert len(r) == round(stop / h) + 1, f"h = {h}: {len(r)} points, expected one per Euler step"
     return r
 
@@ -314,10 +314,13 @@ def _points(case, kind):
             inst = Instance(fmu(name), "ME", params)
             z = rng.uniform(-scale, scale, len(inst.knowns))
         else:
-            # Random start states (initial="exact" outputs/locals), random inputs, three steps.
+            # Random start states (initial="exact" outputs/locals, and the initial-state parameters
+            # <output>_0 of the Pendulum), random inputs, three steps.
             md = fmpy.read_model_description(fmu(name))
-            exact = [v.name for v in md.modelVariables if v.initial == "exact" and v.causality in ("output", "local")
-                     and v.type == "Real"]
+            outputs = {v.name for v in md.modelVariables if v.causality == "output"}
+            exact = [v.name for v in md.modelVariables if v.type == "Real" and (
+                (v.initial == "exact" and v.causality in ("output", "local"))
+                or (v.causality == "parameter" and v.name.endswith("_0") and v.name[:-2] in outputs))]
             inst = Instance(fmu(name), "CS", params, start={n: rng.uniform(-scale, scale) for n in exact})
             z = rng.uniform(-scale, scale, len(inst.knowns))
             inst.evaluate(z)

@@ -17,11 +17,11 @@ from pendulum_study import plots, runner, studies  # noqa: E402
 STOP, STEP = 3.0, 0.01  # short horizon, 10 ms communication steps: each run takes milliseconds
 
 #: A negative mass: the Pendulum FMU refuses it in fmi2SetReal.
-BAD_MASS = {"controller.mode": 1, "pendulum.alpha1": 0.1, "pendulum.m1": -0.5}
+BAD_MASS = {"controller.mode": 1, "pendulum.alpha1_0": 0.1, "pendulum.m1": -0.5}
 #: Both links started near horizontal on the same side: the LQR cannot catch them.
-FALLS = {"controller.mode": 1, "pendulum.alpha1": 1.4, "pendulum.alpha2": 1.4}
+FALLS = {"controller.mode": 1, "pendulum.alpha1_0": 1.4, "pendulum.alpha2_0": 1.4}
 #: The PID settles this one in about 4 s: not within a 3 s horizon.
-SLOW = {"controller.mode": 2, "pendulum.alpha1": 0.0, "pendulum.alpha2": 0.5}
+SLOW = {"controller.mode": 2, "pendulum.alpha1_0": 0.0, "pendulum.alpha2_0": 0.5}
 
 
 def small_study() -> list[dict]:
@@ -30,7 +30,7 @@ def small_study() -> list[dict]:
     grid = studies.region_of_attraction(modes=(1, 2), n=3, amax=0.2, stop_time=STOP, step=STEP)
     odd = [runner.make_spec("torque", s, STOP, STEP) for s in (BAD_MASS, FALLS, SLOW)]
     motors = [
-        runner.make_spec("motors", {"controller.mode": 1, "pendulum.alpha1": 0.1, "pendulum.alpha2": -0.05, "pendulum.m2": m2, "motor1.R": 2.0}, STOP, STEP)
+        runner.make_spec("motors", {"controller.mode": 1, "pendulum.alpha1_0": 0.1, "pendulum.alpha2_0": -0.05, "pendulum.m2": m2, "motor1.R": 2.0}, STOP, STEP)
         for m2 in (0.45, 0.55)
     ]
     return grid[:9] + odd + grid[9:15] + motors
@@ -148,7 +148,7 @@ def test_study_file_of_other_fmus_is_refused(reference, tmp_path):
 def test_pictures_are_written(dask_run, tmp_path):
     _, out = dask_run
     df = pd.read_csv(out)
-    torque = df[df["system"] == "torque"].dropna(subset=["pendulum.alpha2"])
+    torque = df[df["system"] == "torque"].dropna(subset=["pendulum.alpha2_0"])
     plots.region_of_attraction(torque, tmp_path / "roa.png")
     plots.robustness(df[df["system"] == "motors"], tmp_path / "robust.png", 0.2)
     for name in ("roa.png", "robust.png"):
@@ -174,7 +174,7 @@ def test_study_runs_match_the_composition_master_loop(system):
     fmus = FmuSet(p)
     try:
         loop = fmus.checkout(system)
-        start = {"controller.mode": 2 if system == "torque" else 3, "pendulum.alpha1": 0.1, "pendulum.alpha2": -0.05}
+        start = {"controller.mode": 2 if system == "torque" else 3, "pendulum.alpha1_0": 0.1, "pendulum.alpha2_0": -0.05}
         loop.run({**start, "pendulum.m1": 0.6}, stop, step)  # a different run first: reset must undo it
         row = loop.run(start, stop, step)
     finally:
@@ -190,8 +190,8 @@ def test_each_loop_keeps_its_own_fmu_messages_when_loops_are_pooled():
     # first, the motors loop after it, then the torque loop's controller refuses a value: its
     # message must reach the torque run's error text, and no motors run's.
     specs = [
-        runner.make_spec("torque", {"pendulum.alpha1": 0.05}, 0.2, STEP),
-        runner.make_spec("motors", {"pendulum.alpha1": 0.05}, 0.2, STEP),
+        runner.make_spec("torque", {"pendulum.alpha1_0": 0.05}, 0.2, STEP),
+        runner.make_spec("motors", {"pendulum.alpha1_0": 0.05}, 0.2, STEP),
         runner.make_spec("torque", {"controller.mode": 7}, 0.2, STEP),
         runner.make_spec("motors", {"pendulum.m1": -1.0}, 0.2, STEP),
     ]

@@ -24,7 +24,7 @@ STATE = ["alpha1", "omega1", "alpha2", "omega2"]
 
 
 def simulate(path, x0=(0.0, 0.0, 0.0, 0.0), stop=1.0, h=1e-3, M1=0.0, M2=0.0, **kwargs):
-    start = dict(zip(STATE, x0))
+    start = {f"{s}_0": v for s, v in zip(STATE, x0)}  # the initial state: parameters alpha1_0..omega2_0
     inputs = np.array([(0.0, M1, M2)], dtype=[("time", float), ("M1", float), ("M2", float)])
     return fmpy.simulate_fmu(
         path, stop_time=stop, output_interval=h, step_size=h, start_values=start, input=inputs, **kwargs
@@ -93,7 +93,7 @@ def test_fmpy_command_line_simulates(pendulum_fmu, tmp_path):
     fmpy_cli = pathlib.Path(sys.executable).with_name("fmpy")
     run = subprocess.run(
         [str(fmpy_cli), "simulate", pendulum_fmu, "--stop-time", "0.5", "--output-interval", "0.01",
-         "--start-values", "alpha1", "0.1", "--output-file", str(out)],
+         "--start-values", "alpha1_0", "0.1", "--output-file", str(out)],
         capture_output=True, text=True,
     )
     assert run.returncode == 0, run.stdout + run.stderr

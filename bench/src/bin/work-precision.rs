@@ -99,7 +99,7 @@ fn run() -> Result<(), String> {
         let n = (t_end / h).round() as usize;
         let fmu_run = || {
             let mut m = Pendulum::start();
-            (m.alpha1, m.omega1, m.alpha2, m.omega2) = (x0[0], x0[1], x0[2], x0[3]);
+            (m.alpha1_0, m.omega1_0, m.alpha2_0, m.omega2_0) = (x0[0], x0[1], x0[2], x0[3]);
             (m.rtol, m.atol) = (tol, tol);
             let mut sim = Standalone::new(m, 0.0, None);
             sim.initialize()?;

@@ -66,7 +66,8 @@ fn run(steps: usize) -> (f64, [f64; 4]) {
         assert!(!c.is_null());
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
-        assert_eq!(fmi2SetReal(c, state.as_ptr(), 4, start().as_ptr()), fmi2OK);
+        let initial = ["alpha1_0", "omega1_0", "alpha2_0", "omega2_0"].map(vr);
+        assert_eq!(fmi2SetReal(c, initial.as_ptr(), 4, start().as_ptr()), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
         let h = 1e-3;
         let started = Instant::now();

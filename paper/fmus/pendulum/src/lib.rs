@@ -21,17 +21,17 @@ pub struct Pendulum {
     /// Generalized torque M2 at joint 2 (between the links), eq. (7)
     #[variable(vr = 1, input, continuous, start = 0.0, unit = "N.m")]
     pub M2: f64,
-    /// Angle alpha1 of link 1 from the upward vertical; the start value is the initial state
-    #[variable(vr = 2, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [alpha1])]
+    /// Angle alpha1 of link 1 from the upward vertical; starts at alpha1_0
+    #[variable(vr = 2, output, continuous, initial = calculated, unit = "rad", depends = [alpha1])]
     pub alpha1: f64,
-    /// Angular velocity of link 1, d(alpha1)/dt; the start value is the initial state
-    #[variable(vr = 3, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [omega1])]
+    /// Angular velocity of link 1, d(alpha1)/dt; starts at omega1_0
+    #[variable(vr = 3, output, continuous, initial = calculated, unit = "rad/s", depends = [omega1])]
     pub omega1: f64,
-    /// Angle alpha2 of link 2 from the upward vertical (absolute, not relative to link 1); the start value is the initial state
-    #[variable(vr = 4, output, continuous, initial = exact, start = 0.0, unit = "rad", depends = [alpha2])]
+    /// Angle alpha2 of link 2 from the upward vertical (absolute, not relative to link 1); starts at alpha2_0
+    #[variable(vr = 4, output, continuous, initial = calculated, unit = "rad", depends = [alpha2])]
     pub alpha2: f64,
-    /// Angular velocity of link 2, d(alpha2)/dt; the start value is the initial state
-    #[variable(vr = 5, output, continuous, initial = exact, start = 0.0, unit = "rad/s", depends = [omega2])]
+    /// Angular velocity of link 2, d(alpha2)/dt; starts at omega2_0
+    #[variable(vr = 5, output, continuous, initial = calculated, unit = "rad/s", depends = [omega2])]
     pub omega2: f64,
     /// Total energy E = Ek1 + Ek2 + Ep1 + Ep2, eqs. (2)-(5); constant when M1 = M2 = 0
     #[variable(vr = 6, output, continuous, unit = "J", depends = [alpha1, omega1, alpha2, omega2])]
@@ -87,6 +87,19 @@ pub struct Pendulum {
     /// Absolute error tolerance of the integrator inside fmi2DoStep (angles in rad, rates in rad/s); > 0: the states are exactly 0 at rest, where a purely relative error is undefined (a tiny atol gives relative control elsewhere)
     #[variable(vr = 31, parameter, tunable, start = 1e-10, min > 0.0, max = 1.0)]
     pub atol: f64,
+    /// Initial value of alpha1 (at the start time): a parameter, so that importers that apply
+    /// parameters only (libcosim, fmpy.ssp, Ecos) set the initial state from an SSP file
+    #[variable(vr = 40, parameter, fixed, start = 0.0, unit = "rad")]
+    pub alpha1_0: f64,
+    /// Initial value of omega1
+    #[variable(vr = 41, parameter, fixed, start = 0.0, unit = "rad/s")]
+    pub omega1_0: f64,
+    /// Initial value of alpha2
+    #[variable(vr = 42, parameter, fixed, start = 0.0, unit = "rad")]
+    pub alpha2_0: f64,
+    /// Initial value of omega2
+    #[variable(vr = 43, parameter, fixed, start = 0.0, unit = "rad/s")]
+    pub omega2_0: f64,
 }
 
 impl Pendulum {
@@ -109,7 +122,14 @@ impl Pendulum {
 
 impl Model for Pendulum {
     // The parameters' domains are declared (m1, m2, l1, l2 > 0; g any finite value) and the
-    // runtime enforces them: nothing to check, and nothing to initialize.
+    // runtime enforces them: nothing to check.
+
+    /// The initial state is the parameters alpha1_0..omega2_0.
+    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+        (self.alpha1, self.omega1, self.alpha2, self.omega2) =
+            (self.alpha1_0, self.omega1_0, self.alpha2_0, self.omega2_0);
+        Ok(())
+    }
 
     /// Equations (6)-(7) solved for the accelerations.
     fn derivatives<D: Real>(&self, _t: D, v: &mut PendulumContinuous<D>) {

@@ -98,7 +98,7 @@ fn swinging_pendulum(callbacks: &fmi2CallbackFunctions) -> fmi2Component {
         assert!(!c.is_null(), "fmi2Instantiate returned NULL");
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
-        let (vrs, start) = ([vr("alpha1"), vr("alpha2")], [0.1, 0.15]);
+        let (vrs, start) = ([vr("alpha1_0"), vr("alpha2_0")], [0.1, 0.15]);
         assert_eq!(fmi2SetReal(c, vrs.as_ptr(), 2, start.as_ptr()), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
         c

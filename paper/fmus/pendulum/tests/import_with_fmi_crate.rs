@@ -31,13 +31,13 @@ fn fmi_crate_simulates_the_packaged_fmu_like_the_model_in_process() {
         .instantiate_cs("pendulum-via-fmi-crate", false, true)
         .expect("instantiate");
     inst.setup_experiment(None, 0.0, Some(1.0)).unwrap();
-    inst.set_real(&[vr("alpha1"), vr("alpha2")], &[0.1, -0.05]).unwrap();
+    inst.set_real(&[vr("alpha1_0"), vr("alpha2_0")], &[0.1, -0.05]).unwrap();
     inst.enter_initialization_mode().unwrap();
     inst.set_real(&[vr("M1")], &[0.2]).unwrap();
     inst.exit_initialization_mode().unwrap();
 
     let mut start = Pendulum::start();
-    (start.alpha1, start.alpha2, start.M1) = (0.1, -0.05, 0.2);
+    (start.alpha1_0, start.alpha2_0, start.M1) = (0.1, -0.05, 0.2);
     let mut sim = Standalone::new(start, 0.0, None);
     sim.initialize().unwrap();
 

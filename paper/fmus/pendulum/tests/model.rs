@@ -23,7 +23,7 @@ impl P {
 
 fn pendulum(alpha1: f64, omega1: f64, alpha2: f64, omega2: f64) -> P {
     let mut p = Pendulum::start();
-    (p.alpha1, p.omega1, p.alpha2, p.omega2) = (alpha1, omega1, alpha2, omega2);
+    (p.alpha1_0, p.omega1_0, p.alpha2_0, p.omega2_0) = (alpha1, omega1, alpha2, omega2);
     let mut sim = Standalone::new(p, 0.0, None);
     sim.initialize().unwrap();
     P(sim)

@@ -151,7 +151,7 @@ fn the_trajectory_does_not_depend_on_the_start_time() {
     let run = |t0: f64| {
         let mut p = Fmu::new(t0);
         assert_eq!(
-            p.set(&[("alpha1", 2.5), ("alpha2", -1.0), ("rtol", 1e-10), ("atol", 1e-10)]),
+            p.set(&[("alpha1_0", 2.5), ("alpha2_0", -1.0), ("rtol", 1e-10), ("atol", 1e-10)]),
             fmi2OK
         );
         assert_eq!(p.exit_init(), fmi2OK);
@@ -172,7 +172,7 @@ fn the_trajectory_does_not_depend_on_the_start_time() {
 
 #[test]
 fn an_initialization_to_a_non_finite_energy_is_an_error_naming_it() {
-    for start in [&[("omega1", 1e200)][..], &[("l1", 1e300), ("omega1", 1.0)]] {
+    for start in [&[("omega1_0", 1e200)][..], &[("l1", 1e300), ("omega1_0", 1.0)]] {
         let p = Fmu::new(0.0);
         assert_eq!(p.set(start), fmi2OK, "{start:?} are finite and legal");
         let s = p.exit_init();
@@ -196,7 +196,7 @@ fn the_absolute_tolerance_is_declared_positive_and_any_positive_value_works() {
     p.assert_logged(fmi2Error, &["'atol'", "outside (0, 1]"]);
     // The smallest positive ones give pure relative error control wherever the state is not 0.
     for atol in [5e-324, 1e-300, 1e-20] {
-        for start in [&[("M1", 1.0)][..], &[], &[("alpha1", 2.5), ("alpha2", -1.0)]] {
+        for start in [&[("M1", 1.0)][..], &[], &[("alpha1_0", 2.5), ("alpha2_0", -1.0)]] {
             let mut p = Fmu::new(0.0);
             assert_eq!(p.set(&[("atol", atol), ("rtol", 1e-8)]), fmi2OK);
             assert_eq!(p.set(start), fmi2OK);
@@ -227,7 +227,7 @@ fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused()
     use rustfmu::fmi2::state;
     let guid = pendulum_fmu::__rustfmu_fmi2_exports::GUID;
     let mut p = Fmu::new(0.0);
-    assert_eq!(p.set(&[("alpha1", 0.3)]), fmi2OK);
+    assert_eq!(p.set(&[("alpha1_0", 0.3)]), fmi2OK);
     assert_eq!(p.exit_init(), fmi2OK);
     assert_eq!(p.step(1e-3), fmi2OK);
     // SAFETY: p.c is a live instance; the buffers are as large as passed.
@@ -273,4 +273,28 @@ fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused()
         assert!(s.is_null());
         p.assert_logged(fmi2Error, &["fmi2DeSerializeFMUstate", says]);
     }
+}
+
+/// The initial state is the parameters alpha1_0..omega2_0 (what SSP importers apply); the states
+/// are calculated from them, so setting a state itself is refused, naming it.
+#[test]
+fn the_initial_state_is_the_parameters_and_a_state_takes_no_value() {
+    let p = Fmu::new(0.0);
+    assert_eq!(
+        p.set(&[("alpha1", 0.3)]),
+        fmi2Error,
+        "alpha1 is calculated: it takes no value"
+    );
+    p.assert_logged(fmi2Error, &["'alpha1'"]);
+    let start = [0.3, -0.2, 0.1, 0.4];
+    let names = ["alpha1_0", "omega1_0", "alpha2_0", "omega2_0"];
+    let values: Vec<(&str, f64)> = names.iter().copied().zip(start).collect();
+    assert_eq!(p.set(&values), fmi2OK);
+    assert_eq!(
+        p.get(&STATE),
+        start,
+        "in initialization mode the states already follow the parameters"
+    );
+    assert_eq!(p.exit_init(), fmi2OK);
+    assert_eq!(p.get(&STATE), start, "the states start at alpha1_0..omega2_0");
 }
