@@ -51,4 +51,6 @@ def test_figure8_shows_the_supply_limit_and_differs_visibly_from_figure7(figures
     stall = fig8["motor1.tau"][(t > 0.002) & (t < 0.015)]
     assert np.all(np.abs(stall) < np.abs(fig7["controller.M1"][(t > 0.002) & (t < 0.015)])), "at the supply limit the motor delivers less than Fig. 7's torque"
     diff = max(np.abs(fig8[f"pendulum.{n}"] - fig7[f"pendulum.{n}"]).max() for n in ("alpha1", "alpha2"))
-    assert 1e-3 < diff < 1e-2, f"Figure 8 vs Figure 7: largest angle difference {diff} rad (measured 3.7e-3)"
+    # Through the motors the plant carries the rotors' n² J = 0.872 kg.m2 per joint (and the LQR
+    # is designed for it): measured 3.5e-2 rad (3.7e-3 before the rotors were in the loop).
+    assert 1e-2 < diff < 0.1, f"Figure 8 vs Figure 7: largest angle difference {diff} rad (measured 3.5e-2)"

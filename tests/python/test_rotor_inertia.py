@@ -37,7 +37,7 @@ BOUND = {"CoSimulation": 1e-8, "ModelExchange": 1e-5}
 
 
 def run(kind, j1, j2, m1, m2):
-    start = dict(zip(STATE, X0), J1=j1, J2=j2)
+    start = dict(zip([f"{n}_0" for n in STATE], X0), J1=j1, J2=j2)
     inputs = np.array([(0.0, m1, m2)], dtype=[("time", float), ("M1", float), ("M2", float)])
     extra = {"step_size": 1e-2} if kind == "CoSimulation" else {"solver": "CVode", "relative_tolerance": 1e-10}
     return fmpy.simulate_fmu(fmu("Pendulum"), fmi_type=kind, stop_time=STOP, output_interval=1e-2,
