@@ -194,22 +194,49 @@ impl Variable {
     }
 }
 
+/// The FMI version a binary implements: one binary is one version (its symbols are `fmi2*` or
+/// `fmi3*`), and the same model builds as either (`rustfmu::export_fmu!`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum FmiVersion {
+    V2,
+    V3,
+}
+
+impl FmiVersion {
+    /// `fmiVersion` of the model description.
+    pub const fn text(self) -> &'static str {
+        match self {
+            FmiVersion::V2 => "2.0",
+            FmiVersion::V3 => "3.0",
+        }
+    }
+}
+
 /// What an FMU offers besides its variables; set by the export macro.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Interfaces {
     pub co_simulation: bool,
     pub model_exchange: bool,
+    pub version: FmiVersion,
 }
 
 impl Interfaces {
     pub const CO_SIMULATION: Interfaces = Interfaces {
         co_simulation: true,
         model_exchange: false,
+        version: FmiVersion::V2,
     };
     /// Model exchange and co-simulation in one binary: what `export_fmi2!` exports.
     pub const BOTH: Interfaces = Interfaces {
         co_simulation: true,
         model_exchange: true,
+        version: FmiVersion::V2,
+    };
+    /// ... and what `export_fmi3!` exports.
+    pub const BOTH_FMI3: Interfaces = Interfaces {
+        co_simulation: true,
+        model_exchange: true,
+        version: FmiVersion::V3,
     };
 }
 
@@ -258,6 +285,26 @@ impl ModelDescription {
             }
         }
         out
+    }
+
+    /// FMI 3.0 requires the independent variable among the variables: a declared
+    /// `independent` one, or else `time` with the value reference one above the highest
+    /// declared (the runtime answers it with the current time). Its value reference.
+    pub fn time_value_reference(&self) -> u32 {
+        match self.variables.iter().find(|v| v.causality == Causality::Independent) {
+            Some(v) => v.value_reference,
+            None => self
+                .variables
+                .iter()
+                .map(|v| v.value_reference.saturating_add(1))
+                .max()
+                .unwrap_or(0),
+        }
+    }
+
+    /// Whether the model declares its independent variable itself (else FMI 3.0 adds `time`).
+    pub fn declares_independent(&self) -> bool {
+        self.variables.iter().any(|v| v.causality == Causality::Independent)
     }
 
     /// Runtime categories first, then the model's own.
@@ -489,6 +536,11 @@ impl Enc<'_> {
             i += 1;
         }
         self.str(d.internal_state);
+        // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
+        // those of the releases before FMI 3.0 existed.
+        if let FmiVersion::V3 = interfaces.version {
+            self.u8(3);
+        }
     }
 }
 
@@ -776,9 +828,10 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     let copyright = d.str()?;
     let license = d.str()?;
     let generation_tool = d.str()?;
-    let interfaces = Interfaces {
+    let mut interfaces = Interfaces {
         co_simulation: d.u8()? != 0,
         model_exchange: d.u8()? != 0,
+        version: FmiVersion::V2,
     };
     let default_experiment = if d.u8()? == 0 {
         None
@@ -823,6 +876,12 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         variables.push(d.variable()?);
     }
     let internal_state = d.str()?;
+    if d.at + 1 == d.b.len() {
+        match d.u8()? {
+            3 => interfaces.version = FmiVersion::V3,
+            other => return Err(format!("unknown FMI version tag {other} after the embedded description")),
+        }
+    }
     if d.at != d.b.len() {
         return Err(format!(
             "{} unexpected bytes after the embedded description",

@@ -57,6 +57,30 @@ pub use value::{FmiType, FmuEnum, Value};
 
 #[doc(hidden)]
 pub mod fmi2;
+#[doc(hidden)]
+pub mod fmi3;
+
+/// Exports `Model` as an FMU: the FMI 2.0 functions ([`export_fmi2!`]) by default, the FMI 3.0
+/// ones ([`export_fmi3!`]) when rustfmu's feature `fmi3` is on. `cargo fmu build` builds the
+/// crate both ways and packages each binary into its own `.fmu`: one model, one line, both
+/// versions. A binary holds one version only (its symbols are all `fmi2*` or all `fmi3*`).
+#[cfg(not(feature = "fmi3"))]
+#[macro_export]
+macro_rules! export_fmu {
+    ($model:ty) => {
+        $crate::export_fmi2!($model);
+    };
+}
+
+/// Exports `Model` as an FMU: the FMI 2.0 functions ([`export_fmi2!`]) by default, the FMI 3.0
+/// ones ([`export_fmi3!`]) when rustfmu's feature `fmi3` is on.
+#[cfg(feature = "fmi3")]
+#[macro_export]
+macro_rules! export_fmu {
+    ($model:ty) => {
+        $crate::export_fmi3!($model);
+    };
+}
 
 /// Everything a model file needs.
 pub mod prelude {

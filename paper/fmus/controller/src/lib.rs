@@ -389,4 +389,4 @@ impl CoSimulation for Controller {
     }
 }
 
-rustfmu::export_fmi2!(Controller);
+rustfmu::export_fmu!(Controller);

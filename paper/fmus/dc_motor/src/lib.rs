@@ -156,4 +156,4 @@ impl CoSimulation for DcMotor {
     }
 }
 
-rustfmu::export_fmi2!(DcMotor);
+rustfmu::export_fmu!(DcMotor);

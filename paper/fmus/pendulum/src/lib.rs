@@ -160,4 +160,4 @@ impl CoSimulation for Pendulum {
     }
 }
 
-rustfmu::export_fmi2!(Pendulum);
+rustfmu::export_fmu!(Pendulum);
