@@ -1,4 +1,5 @@
-"""Collecting the FMUs' log messages per instance group, through fmpy's native logger proxy.
+"""Collecting the FMUs' log messages per instance group, through fmpy's native logger proxy
+(FMI 2.0) or fmpy's fmi3LogMessageCallback (FMI 3.0).
 
 The FMUs log printf-style (format "%s", the text as argument); fmpy's `addLoggerProxy` formats
 the message in C before calling Python. But the proxy keeps ONE Python target per process: the
@@ -37,7 +38,11 @@ _LOGGER = fmi2CallbackLoggerTYPE(_dispatch)
 
 class LogRoute:
     """fmi2CallbackFunctions (`.callbacks`, to pass to FMU2Slave.instantiate) whose messages go to
-    `sink(instance, status, category, text)`. Call `close()` when its instances are freed."""
+    `sink(instance, status, category, text)`. Call `close()` when its instances are freed.
+
+    FMI 3.0 needs no proxy (fmi3LogMessageCallback takes the message itself, not a format):
+    `fmi3_logger(instance)` is a logMessage for FMU3Slave.instantiate that calls the same sink,
+    with the instance's name (the 3.0 callback does not pass one)."""
 
     def __init__(self, sink):
         with _lock:
@@ -49,6 +54,19 @@ class LogRoute:
         self.callbacks.freeMemory = defaultCallbacks.freeMemory
         self.callbacks.componentEnvironment = ctypes.c_void_p(self.key)
         addLoggerProxy(ctypes.byref(self.callbacks))
+
+    def fmi3_logger(self, instance: str):
+        def log_message(_environment, status, category, message):
+            sink = _sinks.get(self.key)
+            if sink is not None:
+                sink(
+                    instance,
+                    status,
+                    category.decode(errors="replace") if category else "",
+                    message.decode(errors="replace") if message else "",
+                )
+
+        return log_message
 
     def close(self):
         with _lock:

@@ -1,4 +1,5 @@
-"""A fixed-step co-simulation master for FMI 2.0 co-simulation FMUs, on fmpy's FMU2Slave.
+"""A fixed-step co-simulation master for FMI 2.0 and FMI 3.0 co-simulation FMUs, on fmpy's
+FMU2Slave and FMU3Slave.
 
 A communication point is evaluated in dependency order (Gauss-Seidel along the connections):
 the components are sorted so that every component whose outputs depend directly on a connected
@@ -14,6 +15,13 @@ In initialization mode the connections are propagated once per component.
 `Loop` is the one master loop of the project's Python side: `simulate` runs it once on fresh
 instances; the parameter study (`examples/pendulum_study/closed_loop.py`) keeps loops alive and
 runs many experiments on each (fmi2Reset between them).
+
+The FMI version is each FMU's own (its modelDescription's fmiVersion): a 2.0 FMU runs on
+FMU2Slave (fmi2SetupExperiment, then fmi2EnterInitializationMode; Real, Integer, Enumeration
+through fmi2SetInteger), a 3.0 FMU on FMU3Slave (fmi3EnterInitializationMode with the same start
+and stop time and no tolerance, as the 2.0 loop gives none; Float64, Int32, Enumeration through
+fmi3SetInt64). The algorithm is the same call for call, so a loop of the 3.0 FMUs gives the
+numbers of the loop of their 2.0 twins (docs/fmi3.md), and one loop may mix the versions.
 """
 
 from __future__ import annotations
@@ -26,6 +34,10 @@ import tempfile
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+
+#: The FMI types of a Real (FMI 2.0) and a Float64 (FMI 3.0) variable: what a connection carries.
+FLOAT = ("Real", "Float64")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,6 +73,11 @@ class Fmu:
     def __init__(self, path: str, workdir: str | None = None):
         self.path = path
         self.md = read_model_description(path)
+        if self.md.coSimulation is None:
+            raise ValueError(f"{path}: the FMU has no co-simulation interface")
+        if self.md.fmiVersion not in ("2.0",) and not self.md.fmiVersion.startswith("3."):
+            raise ValueError(f"{path}: FMI {self.md.fmiVersion}: the master runs FMI 2.0 and 3.0 FMUs")
+        self.fmi3 = self.md.fmiVersion.startswith("3.")
         self.dir = extract(path, unzipdir=tempfile.mkdtemp(prefix=self.md.coSimulation.modelIdentifier + "-", dir=workdir))
         self.vars = {v.name: v for v in self.md.modelVariables}
 
@@ -75,24 +92,32 @@ class Fmu:
 
 
 class RealPort:
-    """A fixed list of Real value references of one instance, read or written through ctypes
-    arrays built once. fmpy's getReal builds both arrays on every call: 10 us per call against
-    4 us here (measured, 4 values), and a run makes about ten such calls per communication point."""
+    """A fixed list of Real (FMI 2.0) or Float64 (FMI 3.0) value references of one instance, read
+    or written through ctypes arrays built once. fmpy's getReal builds both arrays on every call:
+    10 us per call against 4 us here (measured, 4 values), and a run makes about ten such calls
+    per communication point."""
 
-    def __init__(self, slave: FMU2Slave, vrs: list[int]):
+    def __init__(self, slave: FMU2Slave | FMU3Slave, vrs: list[int]):
         self.slave = slave
+        self.fmi3 = isinstance(slave, FMU3Slave)
         self.n = len(vrs)
         self.vr = (ctypes.c_uint * self.n)(*vrs)
         self.buf = (ctypes.c_double * self.n)()
 
     def get(self):
-        self.slave.fmi2GetReal(self.slave.component, self.vr, self.n, self.buf)
+        if self.fmi3:
+            self.slave.fmi3GetFloat64(self.slave.component, self.vr, self.n, self.buf, self.n)
+        else:
+            self.slave.fmi2GetReal(self.slave.component, self.vr, self.n, self.buf)
         return self.buf
 
     def set(self, values) -> None:
         for i, x in enumerate(values):
             self.buf[i] = x
-        self.slave.fmi2SetReal(self.slave.component, self.vr, self.n, self.buf)
+        if self.fmi3:
+            self.slave.fmi3SetFloat64(self.slave.component, self.vr, self.n, self.buf, self.n)
+        else:
+            self.slave.fmi2SetReal(self.slave.component, self.vr, self.n, self.buf)
 
 
 class Loop:
@@ -100,8 +125,9 @@ class Loop:
     every run after the first starts with fmi2Reset, so one loop can run many experiments.
 
     `fmus` maps each component's `fmu` to an extracted `Fmu` (shared, e.g. by a pool of loops);
-    None extracts the system's FMU files here, removed again by `close`. `callbacks`: fmpy
-    fmi2CallbackFunctions for every instance (None: fmpy's defaults)."""
+    None extracts the system's FMU files here, removed again by `close`. `callbacks`: where the
+    instances log: a `cosim.fmu_log.LogRoute` (FMI 2.0 and 3.0 instances), or fmpy
+    fmi2CallbackFunctions (FMI 2.0 instances only); None: fmpy's defaults (print)."""
 
     ORDERS = ("gauss-seidel", "jacobi")
 
@@ -119,16 +145,20 @@ class Loop:
             fmus = self._own
         self.fmus = {c.name: fmus[c.fmu] for c in system.components}
         self.start = {f"{c.name}.{k}": v for c in system.components for k, v in c.start.items()}
-        self.slaves: dict[str, FMU2Slave] = {}
+        self.slaves: dict[str, FMU2Slave | FMU3Slave] = {}
         try:
             for name, fmu in self.fmus.items():
-                slave = FMU2Slave(
+                cls = FMU3Slave if fmu.fmi3 else FMU2Slave
+                slave = cls(
                     guid=fmu.md.guid,
                     unzipDirectory=fmu.dir,
                     modelIdentifier=fmu.md.coSimulation.modelIdentifier,
                     instanceName=name,
                 )
-                slave.instantiate(callbacks=callbacks, loggingOn=False)
+                if fmu.fmi3:
+                    slave.instantiate(loggingOn=False, logMessage=_fmi3_logger(callbacks, name))
+                else:
+                    slave.instantiate(callbacks=getattr(callbacks, "callbacks", callbacks), loggingOn=False)
                 self.slaves[name] = slave
             self._build_ports()
         except BaseException:
@@ -140,8 +170,12 @@ class Loop:
             raise KeyError(f"'{component}.{name}': system {self.system.name} has no component '{component}' (has {sorted(self.fmus)})")
         return self.fmus[component].var(name)
 
+    def fmi_version(self, component: str) -> str:
+        """The FMI version of `component`'s FMU ("2.0", "3.0")."""
+        return self.fmus[component].md.fmiVersion
+
     def port(self, component: str, names) -> RealPort:
-        """A RealPort on Real variables `names` of `component`."""
+        """A RealPort on Real (Float64) variables `names` of `component`."""
         return RealPort(self.slaves[component], [self.var(component, v).valueReference for v in names])
 
     def feeds_through(self, component: str, inputs) -> bool:
@@ -175,13 +209,14 @@ class Loop:
 
     def _build_ports(self) -> None:
         """Groups the connections so that each communication point reads each source once and
-        writes each (target, source) pair once. Every connection of these systems carries a Real."""
+        writes each (target, source) pair once. Every connection of these systems carries a Real
+        (FMI 2.0) or Float64 (FMI 3.0)."""
         sources: dict[str, list[str]] = {}
         pairs: dict[tuple[str, str], list[tuple[str, str]]] = {}
         for k in self.system.connections:
             for c, v in ((k.source, k.source_var), (k.target, k.target_var)):
-                if self.var(c, v).type != "Real":
-                    raise TypeError(f"{self.system.name}: connection {k.source}.{k.source_var} -> {k.target}.{k.target_var}: {c}.{v} is not Real")
+                if self.var(c, v).type not in FLOAT:
+                    raise TypeError(f"{self.system.name}: connection {k.source}.{k.source_var} -> {k.target}.{k.target_var}: {c}.{v} is not Real (Float64)")
             if k.source_var not in sources.setdefault(k.source, []):
                 sources[k.source].append(k.source_var)
             pairs.setdefault((k.target, k.source), []).append((k.target_var, k.source_var))
@@ -220,10 +255,15 @@ class Loop:
         component, _, name = qualified.partition(".")
         v = self.var(component, name)
         slave = self.slaves[component]
+        fmi3 = self.fmus[component].fmi3
         if v.type == "Real":
             slave.setReal([v.valueReference], [float(value)])
+        elif v.type == "Float64":
+            slave.setFloat64([v.valueReference], [float(value)])
         elif v.type == "Integer":
             slave.setInteger([v.valueReference], [int(value)])
+        elif v.type == "Int32":
+            slave.setInt32([v.valueReference], [int(value)])
         elif v.type == "Enumeration":
             # An item's value, or its name ("LQR").
             if isinstance(value, str):
@@ -231,7 +271,8 @@ class Loop:
                 if value not in items:
                     raise ValueError(f"{qualified}: '{value}' is no item of {v.declaredType.name} ({', '.join(items)})")
                 value = items[value]
-            slave.setInteger([v.valueReference], [int(value)])
+            # FMI 2.0: fmi2SetInteger; FMI 3.0: fmi3SetInt64.
+            (slave.setInt64 if fmi3 else slave.setInteger)([v.valueReference], [int(value)])
         elif v.type == "Boolean":
             slave.setBoolean([v.valueReference], [bool(value)])
         else:
@@ -242,9 +283,17 @@ class Loop:
         slave = self.slaves[component]
         if v.type == "Real":
             return slave.getReal([v.valueReference])[0]
-        if v.type in ("Integer", "Enumeration"):
+        if v.type == "Float64":
+            return slave.getFloat64([v.valueReference])[0]
+        if v.type == "Integer":
             return slave.getInteger([v.valueReference])[0]
-        return slave.getBoolean([v.valueReference])[0]
+        if v.type == "Int32":
+            return slave.getInt32([v.valueReference])[0]
+        if v.type == "Enumeration":
+            return (slave.getInt64 if self.fmus[component].fmi3 else slave.getInteger)([v.valueReference])[0]
+        if v.type == "Boolean":
+            return slave.getBoolean([v.valueReference])[0]
+        raise TypeError(f"{component}.{name}: unsupported type {v.type}")
 
     def run(self, stop_time: float, step: float, start: dict, observe) -> None:
         """One experiment from t = 0 over round(stop_time / step) steps of `step`: fmi2Reset (from
@@ -253,7 +302,9 @@ class Loop:
         outputs computed from inputs, the controller's first sample, see the initial state), then
         at every communication point k (t = k step): propagate, `observe(k, t)`, step every FMU.
         A False from `observe` ends the run early. Ends with fmi2Terminate; an FMU call that is
-        not fmi2OK raises fmpy's FMICallException."""
+        not fmi2OK raises fmpy's FMICallException. FMI 3.0 instances get the same calls in their
+        3.0 form (fmi3EnterInitializationMode with the start and stop time, fmi3Reset, ...); a
+        3.0 fmi3DoStep that asks to terminate or returns early raises RuntimeError."""
         n = int(round(stop_time / step))
         if self.runs:
             for slave in self.slaves.values():
@@ -261,10 +312,15 @@ class Loop:
         self.runs += 1
         for qualified, value in {**self.start, **start}.items():
             self.set(qualified, value)
-        for slave in self.slaves.values():
-            slave.setupExperiment(startTime=0.0, stopTime=n * step)
-        for slave in self.slaves.values():
-            slave.enterInitializationMode()
+        for name, slave in self.slaves.items():
+            if not self.fmus[name].fmi3:
+                slave.setupExperiment(startTime=0.0, stopTime=n * step)
+        for name, slave in self.slaves.items():
+            if self.fmus[name].fmi3:
+                # FMI 3.0 has no fmi3SetupExperiment: the experiment comes with this call.
+                slave.enterInitializationMode(startTime=0.0, stopTime=n * step)
+            else:
+                slave.enterInitializationMode()
         for _ in self.slaves:
             self.propagate()
         for slave in self.slaves.values():
@@ -274,8 +330,10 @@ class Loop:
             self.propagate()
             if not observe(k, t) or k == n:
                 break
-            for slave in self.slaves.values():
-                slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+            for name, slave in self.slaves.items():
+                done = slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
+                if self.fmus[name].fmi3:
+                    _check_fmi3_step(name, t, step, done)
         for slave in self.slaves.values():
             slave.terminate()
 
@@ -288,6 +346,25 @@ class Loop:
         self.slaves.clear()
         for fmu in self._own.values():
             fmu.close()
+
+
+def _fmi3_logger(callbacks, instance: str):
+    """FMU3Slave's logMessage for `instance` from the loop's `callbacks` (None: fmpy's default)."""
+    if callbacks is None:
+        return None
+    if not hasattr(callbacks, "fmi3_logger"):
+        raise TypeError(f"{instance}: an FMI 3.0 instance logs through a cosim.fmu_log.LogRoute, not {type(callbacks).__name__}")
+    return callbacks.fmi3_logger(instance)
+
+
+def _check_fmi3_step(instance: str, t: float, step: float, result) -> None:
+    """fmpy's FMU3Slave.doStep returns (eventHandlingNeeded, terminateSimulation, earlyReturn,
+    lastSuccessfulTime); the master uses neither event mode nor early return."""
+    _event, terminate, early_return, last = result
+    if terminate:
+        raise RuntimeError(f"{instance}: fmi3DoStep({t}, {step}) asked to terminate the simulation at t = {last}")
+    if early_return:
+        raise RuntimeError(f"{instance}: fmi3DoStep({t}, {step}) returned early at t = {last} (early return was not allowed)")
 
 
 def simulate(system: System, stop_time: float, step: float, record: dict[str, list[str]], order: str = "gauss-seidel") -> dict:

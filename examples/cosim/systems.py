@@ -38,8 +38,15 @@ _VALUE = {
 
 
 def ssp_path(name: str, fmu: str | pathlib.Path) -> pathlib.Path:
-    """Where fmu-build writes system `name`: next to the FMUs (target/fmu/<name>.ssp)."""
-    return pathlib.Path(fmu).resolve().parent / f"{name}.ssp"
+    """Where fmu-build writes system `name`: next to the FMUs (target/fmu/<name>.ssp). For an FMI
+    3.0 FMU (target/fmu/fmi3/<id>.fmu) without an SSP file beside it, the one of the 2.0 FMUs in
+    the folder above: the system (components, start values, connections) is the same for both
+    versions, and `bind` puts the given FMU files in it."""
+    here = pathlib.Path(fmu).resolve().parent
+    path = here / f"{name}.ssp"
+    if not path.exists() and here.name == "fmi3":
+        return here.parent / f"{name}.ssp"
+    return path
 
 
 def read_ssp(path: str | pathlib.Path) -> System:
