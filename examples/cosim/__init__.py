@@ -1,6 +1,6 @@
 """Co-simulation of the project's FMUs as an importer sees them: a fixed-step master loop on
-fmpy's FMU2Slave, the two composed systems of the paper (read from the SSP files fmu-build
-writes), and their linear reference.
+fmpy's FMU2Slave (FMI 2.0) and FMU3Slave (FMI 3.0), the two composed systems of the paper (read
+from the SSP files fmu-build writes), and their linear reference.
 
 Used by the examples (`examples/composed_demo.py`, `examples/paper_figures.py`) and by the tests
 (`tests/python/test_composition.py`), which put `examples/` on sys.path.
