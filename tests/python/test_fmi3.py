@@ -201,8 +201,9 @@ def test_one_loop_may_mix_fmi2_and_fmi3_fmus():
 
 
 def test_master_reads_fmi3_variables_of_every_type_and_routes_their_messages():
-    """Enumeration (Int64), Boolean, Float64 through the master's set/get on 3.0 instances, and an
-    error of a 3.0 instance reaches the loop's LogRoute with the instance's name."""
+    """Enumeration (Int64), Boolean, Float64 through the master's set/get on 3.0 instances, the
+    added `time` variable, and an error of a 3.0 instance reaches the loop's LogRoute with the
+    instance's name."""
     messages = []
     route = LogRoute(lambda instance, status, category, text: messages.append((instance, status, text)))
     loop = Loop(motor_system(fmu3), callbacks=route)
@@ -213,9 +214,12 @@ def test_master_reads_fmi3_variables_of_every_type_and_routes_their_messages():
         assert any(instance == "pendulum" and status >= 3 and "'l1'" in text for instance, status, text in messages), messages
         seen = {}
 
-        def observe(k, _t):
+        def observe(k, t):
             seen[k] = (loop.get("controller", "mode"), loop.get("motor1", "coupled"), loop.get("motor2", "coupled"),
                        loop.get("pendulum", "m1"), loop.get("pendulum", "alpha1"))
+            # The added independent variable: every instance's current time.
+            for c in ("pendulum", "controller", "motor1"):
+                assert loop.get(c, "time") == pytest.approx(t, abs=1e-15), (c, k, loop.get(c, "time"))
             return True
 
         loop.run(0.01, 1e-3, {"controller.mode": "PID", "motor1.coupled": False, "pendulum.m1": 0.75}, observe)
