@@ -879,7 +879,11 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     if d.at + 1 == d.b.len() {
         match d.u8()? {
             3 => interfaces.version = FmiVersion::V3,
-            other => return Err(format!("unknown FMI version tag {other} after the embedded description")),
+            other => {
+                return Err(format!(
+                    "unknown FMI version tag {other} after the embedded description"
+                ));
+            }
         }
     }
     if d.at != d.b.len() {

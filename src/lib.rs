@@ -92,5 +92,6 @@ pub mod prelude {
 #[doc(hidden)]
 pub mod __private {
     pub use crate::fmi2::{abi, api};
+    pub use crate::fmi3::{abi as abi3, api as api3};
     pub use serde;
 }

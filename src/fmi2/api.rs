@@ -17,7 +17,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
         format!("panic: {s}")
     } else if let Some(s) = payload.downcast_ref::<String>() {
@@ -34,16 +34,16 @@ pub struct Component<M: CoSimulation> {
     /// importer's logger during that call, or from another thread) is refused: it would work on
     /// an instance in the middle of a change (a nested fmi2DoStep advanced the model twice
     /// while the clock said once).
-    busy: AtomicBool,
+    pub(crate) busy: AtomicBool,
     /// Logs those refusals. A copy taken at instantiation: error messages pass the logger
     /// whatever its switches, so later fmi2SetDebugLogging calls do not matter to it.
-    refusals: Logger,
-    instance: UnsafeCell<Instance<M>>,
+    pub(crate) refusals: Logger,
+    pub(crate) instance: UnsafeCell<Instance<M>>,
 }
 
 /// Runs `f` on the instance behind `c`, after the state check for `call`.
 /// A NULL instance cannot be logged to: the answer is fmi2Error.
-unsafe fn with_instance<M: CoSimulation>(
+pub(crate) unsafe fn with_instance<M: CoSimulation>(
     c: fmi2Component,
     call: Call,
     function: &str,
@@ -92,7 +92,7 @@ unsafe fn with_instance<M: CoSimulation>(
 }
 
 /// An importer's array argument: NULL is fine only when it is empty.
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
+pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         Some(&[])
     } else if p.is_null() {
@@ -103,7 +103,7 @@ unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     }
 }
 
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
+pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
     } else if p.is_null() {
@@ -114,7 +114,7 @@ unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     }
 }
 
-unsafe fn text<'a>(s: fmi2String) -> Option<std::borrow::Cow<'a, str>> {
+pub(crate) unsafe fn text<'a>(s: fmi2String) -> Option<std::borrow::Cow<'a, str>> {
     if s.is_null() {
         None
     } else {

@@ -81,6 +81,12 @@ pub enum Call {
     GetContinuousStates,
     GetDerivatives,
     GetNominalsOfContinuousStates,
+    /// FMI 3.0 only: fmi3GetNumberOfContinuousStates, fmi3GetNumberOfEventIndicators.
+    GetNumberOf,
+    /// FMI 3.0 only: fmi3EvaluateDiscreteStates.
+    EvaluateDiscreteStates,
+    /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode, which no FMU here has).
+    EnterStepMode,
 }
 
 impl Call {
@@ -114,6 +120,29 @@ impl Call {
             Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNumberOf | Call::EvaluateDiscreteStates | Call::EnterStepMode => 0,
+        }
+    }
+
+    /// The FMI 3.0 table (sections 3.2 and 4.2 of FMI 3.0, as the Reference-FMUs encode it) for
+    /// the FMUs this runtime makes: no event mode in co-simulation, no clocks, no configuration
+    /// mode. `StepComplete` is 3.0's Step Mode, `StepFailed` its Step Discarded. Where 3.0 differs
+    /// from 2.0: fmi3EnterEventMode only from Continuous-Time Mode; the model-exchange
+    /// evaluations also in Initialization Mode; the nominals not before initialization.
+    pub const fn allowed_in3(self) -> u16 {
+        match self {
+            Call::EnterEventMode => CONTINUOUS,
+            Call::GetDerivatives | Call::GetEventIndicators | Call::GetContinuousStates => {
+                INIT | EVENT | CONTINUOUS | TERMINATED | ERROR
+            }
+            Call::GetNominalsOfContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNumberOf => ANY_BUT_FATAL,
+            Call::EvaluateDiscreteStates => EVENT,
+            Call::EnterStepMode => 0,
+            // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
+            // fmi3GetStatus in FMI 3.0.
+            Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,
+            _ => self.allowed_in(),
         }
     }
 }
@@ -133,12 +162,15 @@ impl Call {
             | Call::GetEventIndicators
             | Call::GetContinuousStates
             | Call::GetDerivatives
-            | Call::GetNominalsOfContinuousStates => Some(true),
+            | Call::GetNominalsOfContinuousStates
+            | Call::GetNumberOf
+            | Call::EvaluateDiscreteStates => Some(true),
             Call::SetRealInputDerivatives
             | Call::GetRealOutputDerivatives
             | Call::DoStep
             | Call::CancelStep
-            | Call::GetStatus => Some(false),
+            | Call::GetStatus
+            | Call::EnterStepMode => Some(false),
             _ => None,
         }
     }
@@ -241,6 +273,8 @@ pub struct Instance<M: CoSimulation> {
     strings: Vec<CString>,
     /// The unpacked `resources/` folder, from `fmuResourceLocation` (not part of the FMU state).
     pub resources: Option<std::path::PathBuf>,
+    /// Instantiated through the FMI 3.0 functions: the 3.0 state table applies.
+    pub fmi3: bool,
 }
 
 /// The first Real variable the model computes (output, local, calculated parameter), or the
@@ -285,6 +319,7 @@ impl<M: CoSimulation> Instance<M> {
             before_step: M::start(),
             strings: Vec::new(),
             resources: None,
+            fmi3: false,
         }
     }
 
@@ -342,7 +377,11 @@ impl<M: CoSimulation> Instance<M> {
                 }
             )));
         }
-        let allowed = call.allowed_in();
+        let allowed = if self.fmi3 {
+            call.allowed_in3()
+        } else {
+            call.allowed_in()
+        };
         if allowed & bit(self.sim.state) != 0 {
             return Ok(());
         }
@@ -1093,6 +1132,11 @@ impl<M: CoSimulation> Instance<M> {
     #[inline]
     pub fn get_derivatives(&mut self, dx: &mut [f64]) -> fmi2Status {
         if let Err(status) = self.check_states_len("fmi2GetDerivatives", dx.len()) {
+            return status;
+        }
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model("fmi2GetDerivatives", false)
+        {
             return status;
         }
         if self.sim.stale_derivatives {

@@ -43,10 +43,19 @@ impl Category {
     }
 }
 
+/// The importer's callback, of either version.
+#[derive(Debug, Clone, Copy)]
+enum Callback {
+    /// `fmi2CallbackLogger`: a printf-style function with the instance name.
+    Fmi2(unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...)),
+    /// `fmi3LogMessageCallback`: a finished message; NULL is allowed (nothing is logged).
+    Fmi3(crate::fmi3::abi::fmi3LogMessageCallback),
+}
+
 /// The callback with what it needs: environment pointer, instance name, logging switches.
 #[derive(Debug, Clone)]
 pub struct Logger {
-    callback: unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
+    callback: Callback,
     environment: fmi2ComponentEnvironment,
     instance_name: CString,
     logging_on: bool,
@@ -64,13 +73,36 @@ impl Logger {
         model_categories: &'static [LogCategory],
     ) -> Option<Logger> {
         Some(Logger {
-            callback: callbacks.logger?,
+            callback: Callback::Fmi2(callbacks.logger?),
             environment: callbacks.componentEnvironment,
             instance_name: to_cstring(instance_name),
             logging_on,
             enabled: u64::MAX,
             model_categories,
         })
+    }
+
+    /// The FMI 3.0 logger: `logMessage` may be NULL (then nothing reaches the importer).
+    pub fn new_fmi3(
+        callback: crate::fmi3::abi::fmi3LogMessageCallback,
+        environment: crate::fmi3::abi::fmi3InstanceEnvironment,
+        instance_name: &str,
+        logging_on: bool,
+        model_categories: &'static [LogCategory],
+    ) -> Logger {
+        Logger {
+            callback: Callback::Fmi3(callback),
+            environment,
+            instance_name: to_cstring(instance_name),
+            logging_on,
+            enabled: u64::MAX,
+            model_categories,
+        }
+    }
+
+    /// Whether this is an FMI 3.0 instance's logger.
+    pub fn is_fmi3(&self) -> bool {
+        matches!(self.callback, Callback::Fmi3(_))
     }
 
     pub fn instance_name(&self) -> &str {
@@ -140,20 +172,85 @@ impl Logger {
     }
 
     fn emit(&self, status: fmi2Status, category: &CStr, message: &str) {
-        let text = to_cstring(message);
-        // SAFETY: the callback came from the importer's fmi2CallbackFunctions; its message is a
-        // printf format, so the text goes as the argument of a literal "%s".
-        unsafe {
-            (self.callback)(
-                self.environment,
-                self.instance_name.as_ptr(),
-                status,
-                category.as_ptr(),
-                c"%s".as_ptr(),
-                text.as_ptr(),
-            )
+        match self.callback {
+            Callback::Fmi2(callback) => {
+                let text = to_cstring(message);
+                // SAFETY: the callback came from the importer's fmi2CallbackFunctions; its
+                // message is a printf format, so the text goes as the argument of a literal "%s".
+                unsafe {
+                    callback(
+                        self.environment,
+                        self.instance_name.as_ptr(),
+                        status,
+                        category.as_ptr(),
+                        c"%s".as_ptr(),
+                        text.as_ptr(),
+                    )
+                }
+            }
+            Callback::Fmi3(None) => {}
+            Callback::Fmi3(Some(callback)) => {
+                // FMI 3.0 has no instance name in the callback: the message starts with it.
+                let text = to_cstring(&format!("[{}] {}", self.instance_name(), in_fmi3_terms(message)));
+                // SAFETY: the importer's fmi3LogMessageCallback; the message is plain text.
+                unsafe { callback(self.environment, status, category.as_ptr(), text.as_ptr()) }
+            }
         }
     }
+}
+
+/// The instance core ([`super::instance`]) words its messages in FMI 2.0's names; an FMI 3.0
+/// instance's logger says them in FMI 3.0's: the renamed functions, the other `fmi2*` names
+/// with their `fmi3` prefix, the co-simulation states' 3.0 names.
+pub fn in_fmi3_terms(message: &str) -> String {
+    const RENAMED: [(&str, &str); 14] = [
+        ("fmi2GetReal", "fmi3GetFloat64"),
+        ("fmi2SetReal", "fmi3SetFloat64"),
+        ("fmi2GetInteger", "fmi3GetInt32"),
+        ("fmi2SetInteger", "fmi3SetInt32"),
+        ("fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"),
+        ("fmi2NewDiscreteStates", "fmi3UpdateDiscreteStates"),
+        ("fmi2SetupExperiment", "fmi3EnterInitializationMode"),
+        ("fmi2GetFMUstate", "fmi3GetFMUState"),
+        ("fmi2SetFMUstate", "fmi3SetFMUState"),
+        ("fmi2FreeFMUstate", "fmi3FreeFMUState"),
+        ("fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize"),
+        ("fmi2SerializeFMUstate", "fmi3SerializeFMUState"),
+        ("fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"),
+        ("fmi2GetRealOutputDerivatives", "fmi3GetOutputDerivatives"),
+    ];
+    const STATES: [(&str, &str); 3] = [
+        ("StepComplete", "StepMode"),
+        ("StepFailed", "StepDiscarded"),
+        ("GUID", "instantiationToken"),
+    ];
+    if !message.contains("fmi2") && !STATES.iter().any(|(a, _)| message.contains(a)) {
+        return message.to_string();
+    }
+    let mut out = String::with_capacity(message.len() + 16);
+    let mut rest = message;
+    while let Some(at) = rest.find("fmi2") {
+        out.push_str(&rest[..at]);
+        let word_len = rest[at..]
+            .find(|c: char| !c.is_ascii_alphanumeric())
+            .unwrap_or(rest.len() - at);
+        let word = &rest[at..at + word_len];
+        match RENAMED.iter().find(|(a, _)| *a == word) {
+            Some((_, b)) => out.push_str(b),
+            None => {
+                out.push_str("fmi3");
+                out.push_str(&word[4..]);
+            }
+        }
+        rest = &rest[at + word_len..];
+    }
+    out.push_str(rest);
+    for (a, b) in STATES {
+        if out.contains(a) {
+            out = out.replace(a, b);
+        }
+    }
+    out
 }
 
 /// A C string from any Rust text: interior NULs become '?' rather than cutting the message.

@@ -1,0 +1,975 @@
+//! The C boundary of FMI 3.0: every `fmi3*` function, generic over the model. The export macro
+//! ([`export_fmi3!`](crate::export_fmi3)) forwards the `#[no_mangle]` symbols here. The
+//! instance core and the guard around every call (NULL checks, the re-entrancy refusal,
+//! `catch_unwind`) are FMI 2.0's ([`crate::fmi2::api`]); what differs in 3.0 is here: the
+//! instantiation functions and their callback, typed getters and setters with `nValues`, the
+//! independent variable `time`, Int64 enumerations, C `bool` booleans, the output arguments of
+//! fmi3DoStep and fmi3UpdateDiscreteStates, and the adjoint derivative.
+#![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
+
+use super::abi::*;
+use crate::description::VarType;
+use crate::fmi2::abi::{fmi2False, fmi2True};
+use crate::fmi2::api::{Component, slice, slice_mut, text, with_instance};
+use crate::fmi2::instance::{Call, Instance};
+use crate::fmi2::logging::{Category, Logger};
+use crate::model::CoSimulation;
+use std::cell::UnsafeCell;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::ptr;
+use std::sync::atomic::AtomicBool;
+
+pub fn get_version() -> *const std::os::raw::c_char {
+    VERSION.as_ptr()
+}
+
+/// `resourcePath`: a native absolute path of the unpacked `resources/` folder (FMI 3.0 2.2.4),
+/// usually with a trailing separator.
+fn resource_dir(path: &str) -> Option<std::path::PathBuf> {
+    let p = std::path::PathBuf::from(path);
+    p.is_absolute().then_some(p)
+}
+
+/// Both instantiation functions: checks, then the instance.
+unsafe fn instantiate<M: CoSimulation>(
+    function: &str,
+    own_token: &'static str,
+    description: &'static [u8],
+    instance_name: fmi3String,
+    token: fmi3String,
+    resource_path: fmi3String,
+    logging_on: bool,
+    environment: fmi3InstanceEnvironment,
+    log_message: fmi3LogMessageCallback,
+    model_exchange: bool,
+    refusal: Option<String>,
+) -> fmi3Instance {
+    let made = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: NUL-terminated strings from the importer, or NULL.
+        let (name, token, resources) = unsafe { (text(instance_name), text(token), text(resource_path)) };
+        // The embedded description stays in the binary for `cargo fmu` to read.
+        std::hint::black_box(description.len());
+        let logger = Logger::new_fmi3(
+            log_message,
+            environment,
+            name.as_deref().unwrap_or(""),
+            logging_on,
+            M::DESCRIPTION.log_categories,
+        );
+        let refuse = |why: String| {
+            logger.log(fmi3Error, Category::StatusError, &format!("{function}: {why}"));
+            ptr::null_mut()
+        };
+        if let Some(why) = refusal {
+            return refuse(why);
+        }
+        match name.as_deref() {
+            None => return refuse("instanceName is NULL; an instance needs a name".into()),
+            Some(n) if n.trim().is_empty() => {
+                return refuse(format!(
+                    "instanceName {n:?} is empty or only white space; an instance needs a name"
+                ));
+            }
+            Some(_) => {}
+        }
+        match token.as_deref() {
+            None => return refuse(format!("instantiationToken is NULL; expected {own_token}")),
+            Some(t) if t != own_token => {
+                return refuse(format!(
+                    "instantiationToken '{t}' does not match this binary's {own_token}: \
+                     modelDescription.xml and binaries/ come from different builds of {}",
+                    M::DESCRIPTION.model_identifier
+                ));
+            }
+            Some(_) => {}
+        }
+        let mut inst = Instance::<M>::new(logger, own_token, model_exchange);
+        inst.fmi3 = true;
+        inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
+        inst.event(|| match resources.as_deref().map(|r| (r, resource_dir(r))) {
+            Some((_, Some(dir))) if dir.is_dir() => format!("resourcePath is {}", dir.display()),
+            Some((r, _)) => format!("resourcePath {r:?} is no folder here (the model sees no resources)"),
+            None => "resourcePath is NULL (the model sees no resources)".into(),
+        });
+        Box::into_raw(Box::new(Component {
+            busy: AtomicBool::new(false),
+            refusals: inst.logger.clone(),
+            instance: UnsafeCell::new(inst),
+        })) as fmi3Instance
+    }));
+    made.unwrap_or(ptr::null_mut())
+}
+
+pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
+    own_token: &'static str,
+    description: &'static [u8],
+    instance_name: fmi3String,
+    token: fmi3String,
+    resource_path: fmi3String,
+    _visible: fmi3Boolean,
+    logging_on: fmi3Boolean,
+    environment: fmi3InstanceEnvironment,
+    log_message: fmi3LogMessageCallback,
+) -> fmi3Instance {
+    unsafe {
+        instantiate::<M>(
+            "fmi3InstantiateModelExchange",
+            own_token,
+            description,
+            instance_name,
+            token,
+            resource_path,
+            logging_on,
+            environment,
+            log_message,
+            true,
+            None,
+        )
+    }
+}
+
+pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
+    own_token: &'static str,
+    description: &'static [u8],
+    instance_name: fmi3String,
+    token: fmi3String,
+    resource_path: fmi3String,
+    _visible: fmi3Boolean,
+    logging_on: fmi3Boolean,
+    event_mode_used: fmi3Boolean,
+    _early_return_allowed: fmi3Boolean,
+    _required_intermediate_variables: *const fmi3ValueReference,
+    _n_required_intermediate_variables: usize,
+    environment: fmi3InstanceEnvironment,
+    log_message: fmi3LogMessageCallback,
+    _intermediate_update: fmi3IntermediateUpdateCallback,
+) -> fmi3Instance {
+    // This FMU provides no intermediate update (providesIntermediateUpdate="false"), so the
+    // required intermediate variables and the callback are never used; it never returns early.
+    let refusal = event_mode_used.then(|| {
+        "eventModeUsed = true, but this FMU has no event mode in co-simulation (hasEventMode=\"false\")".to_string()
+    });
+    unsafe {
+        instantiate::<M>(
+            "fmi3InstantiateCoSimulation",
+            own_token,
+            description,
+            instance_name,
+            token,
+            resource_path,
+            logging_on,
+            environment,
+            log_message,
+            false,
+            refusal,
+        )
+    }
+}
+
+/// Scheduled execution is not offered (no `<ScheduledExecution>` element): NULL, with the
+/// reason through the importer's logger when it gave one.
+pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
+    instance_name: fmi3String,
+    environment: fmi3InstanceEnvironment,
+    log_message: fmi3LogMessageCallback,
+) -> fmi3Instance {
+    let _ = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: a NUL-terminated string from the importer, or NULL.
+        let name = unsafe { text(instance_name) };
+        let logger = Logger::new_fmi3(
+            log_message,
+            environment,
+            name.as_deref().unwrap_or(""),
+            true,
+            M::DESCRIPTION.log_categories,
+        );
+        logger.log(
+            fmi3Error,
+            Category::StatusError,
+            &format!(
+                "fmi3InstantiateScheduledExecution: {} offers model exchange and co-simulation, not scheduled execution",
+                M::DESCRIPTION.model_identifier
+            ),
+        );
+    }));
+    ptr::null_mut()
+}
+
+pub unsafe fn set_debug_logging<M: CoSimulation>(
+    c: fmi3Instance,
+    logging_on: fmi3Boolean,
+    n: usize,
+    categories: *const fmi3String,
+) -> fmi3Status {
+    let on = if logging_on { fmi2True } else { fmi2False };
+    unsafe { crate::fmi2::api::set_debug_logging::<M>(c, on, n, categories) }
+}
+
+pub unsafe fn enter_initialization_mode<M: CoSimulation>(
+    c: fmi3Instance,
+    tolerance_defined: fmi3Boolean,
+    tolerance: fmi3Float64,
+    start_time: fmi3Float64,
+    stop_time_defined: fmi3Boolean,
+    stop_time: fmi3Float64,
+) -> fmi3Status {
+    const F: &str = "fmi3EnterInitializationMode";
+    unsafe {
+        with_instance::<M>(c, Call::EnterInitializationMode, F, |inst| {
+            inst.trace(|| {
+                format!(
+                    "{F}(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, \
+                     stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
+                )
+            });
+            let status = inst.setup_experiment(
+                tolerance_defined.then_some(tolerance),
+                start_time,
+                stop_time_defined.then_some(stop_time),
+            );
+            if status != fmi3OK {
+                return status;
+            }
+            inst.enter_initialization_mode()
+        })
+    }
+}
+
+macro_rules! simple_call {
+    ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
+        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
+            unsafe {
+                with_instance::<M>(c, Call::$call, $c_name, |inst| {
+                    inst.trace(|| concat!($c_name, "()").to_string());
+                    inst.$method()
+                })
+            }
+        }
+    };
+}
+simple_call!(
+    exit_initialization_mode,
+    ExitInitializationMode,
+    "fmi3ExitInitializationMode",
+    exit_initialization_mode
+);
+simple_call!(terminate, Terminate, "fmi3Terminate", terminate);
+simple_call!(reset, Reset, "fmi3Reset", reset);
+simple_call!(enter_event_mode, EnterEventMode, "fmi3EnterEventMode", enter_event_mode);
+simple_call!(
+    enter_continuous_time_mode,
+    EnterContinuousTimeMode,
+    "fmi3EnterContinuousTimeMode",
+    enter_continuous_time_mode
+);
+
+/// The value reference FMI 3.0's added `time` variable has, if the model does not declare its
+/// own independent variable.
+fn added_time_vr<M: CoSimulation>() -> Option<u32> {
+    (!M::DESCRIPTION.declares_independent()).then(|| M::DESCRIPTION.time_value_reference())
+}
+
+/// The checks every 3.0 getter and setter makes of its arrays first.
+fn arrays<'a, T>(
+    inst: &Instance<impl CoSimulation>,
+    function: &str,
+    vrs: Option<&'a [u32]>,
+    n_values: usize,
+    values: Option<T>,
+) -> Result<(&'a [u32], T), fmi3Status> {
+    match (vrs, values) {
+        (Some(vrs), Some(values)) if n_values == vrs.len() => Ok((vrs, values)),
+        (Some(vrs), Some(_)) => Err(inst.error(&format!(
+            "{function}: nValues = {n_values}, but nValueReferences = {} (every variable of this FMU is a scalar)",
+            vrs.len()
+        ))),
+        _ => Err(inst.error(&format!(
+            "{function}: valueReferences or values is NULL with nValueReferences = {}, nValues = {n_values}",
+            vrs.map_or(0, |v| v.len())
+        ))),
+    }
+}
+
+/// Refuses a value reference whose variable is declared with another 3.0 type: Int32 is
+/// `Integer`, Int64 the enumerations (2.0 reads both as fmi2Integer).
+fn check_declared<M: CoSimulation>(
+    inst: &Instance<M>,
+    function: &str,
+    vrs: &[u32],
+    want: VarType,
+) -> Result<(), fmi3Status> {
+    for vr in vrs {
+        if let Some(v) = M::DESCRIPTION.variables.iter().find(|v| v.value_reference == *vr)
+            && v.var_type != want
+            && crate::description::same_api_type(v.var_type, want)
+        {
+            return Err(inst.error(&format!(
+                "{function}: value reference {vr} ('{}') is {}, read and written with {}",
+                v.name,
+                fmi3_type_name(v.var_type),
+                accessor(v.var_type)
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn fmi3_type_name(t: VarType) -> &'static str {
+    match t {
+        VarType::Real => "a Float64 variable",
+        VarType::Integer => "an Int32 variable",
+        VarType::Boolean => "a Boolean variable",
+        VarType::String => "a String variable",
+        VarType::Enumeration => "an Enumeration variable",
+    }
+}
+
+fn accessor(t: VarType) -> &'static str {
+    match t {
+        VarType::Real => "fmi3GetFloat64/fmi3SetFloat64",
+        VarType::Integer => "fmi3GetInt32/fmi3SetInt32",
+        VarType::Boolean => "fmi3GetBoolean/fmi3SetBoolean",
+        VarType::String => "fmi3GetString/fmi3SetString",
+        VarType::Enumeration => "fmi3GetInt64/fmi3SetInt64",
+    }
+}
+
+pub unsafe fn get_float64<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut fmi3Float64,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetFloat64";
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, F, |inst| {
+            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            match added_time_vr::<M>() {
+                Some(time) if vrs.contains(&time) => {
+                    let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
+                    let mut got = vec![0.0; others.len()];
+                    let status = inst.get_values(F, &others, &mut got);
+                    if status != fmi3OK {
+                        return status;
+                    }
+                    let mut got = got.into_iter();
+                    for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                        *slot = if *vr == time {
+                            inst.sim.time
+                        } else {
+                            got.next().unwrap_or(f64::NAN)
+                        };
+                    }
+                    fmi3OK
+                }
+                _ => inst.get_values(F, vrs, out),
+            }
+        })
+    }
+}
+
+pub unsafe fn set_float64<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const fmi3Float64,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetFloat64";
+    unsafe {
+        with_instance::<M>(c, Call::SetValues, F, |inst| {
+            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            if let Some(time) = added_time_vr::<M>()
+                && vrs.contains(&time)
+            {
+                return inst.error(&format!(
+                    "{F}: value reference {time} is 'time', the independent variable: it cannot be set \
+                     (fmi3EnterInitializationMode sets the start time, fmi3SetTime the time in model exchange); nothing set"
+                ));
+            }
+            inst.set_values(F, vrs, values)
+        })
+    }
+}
+
+pub unsafe fn get_int32<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut fmi3Int32,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetInt32";
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, F, |inst| {
+            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
+                return status;
+            }
+            inst.get_values(F, vrs, out)
+        })
+    }
+}
+
+pub unsafe fn set_int32<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const fmi3Int32,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetInt32";
+    unsafe {
+        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
+            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
+                return status;
+            }
+            inst.set_values(F, vrs, values)
+        })
+    }
+}
+
+/// Enumerations: fmi3GetInt64 (their 3.0 type's accessor); the values are the items' `value`s.
+pub unsafe fn get_int64<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut fmi3Int64,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetInt64";
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, F, |inst| {
+            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            if let Err(status) = only_enumerations(inst, F, vrs) {
+                return status;
+            }
+            let mut got = vec![0i32; vrs.len()];
+            let status = inst.get_values(F, vrs, &mut got);
+            if status == fmi3OK {
+                for (o, v) in out.iter_mut().zip(got) {
+                    *o = i64::from(v);
+                }
+            }
+            status
+        })
+    }
+}
+
+pub unsafe fn set_int64<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const fmi3Int64,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetInt64";
+    unsafe {
+        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
+            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            if let Err(status) = only_enumerations(inst, F, vrs) {
+                return status;
+            }
+            let mut narrow = Vec::with_capacity(values.len());
+            for (vr, v) in vrs.iter().zip(values) {
+                match i32::try_from(*v) {
+                    Ok(x) => narrow.push(x),
+                    Err(_) => {
+                        return inst.error(&format!(
+                            "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
+                        ));
+                    }
+                }
+            }
+            inst.set_values(F, vrs, &narrow)
+        })
+    }
+}
+
+/// Int64 reaches the enumerations only (this FMU declares no Int64 variable).
+fn only_enumerations<M: CoSimulation>(inst: &Instance<M>, function: &str, vrs: &[u32]) -> Result<(), fmi3Status> {
+    for vr in vrs {
+        match M::DESCRIPTION.variables.iter().find(|v| v.value_reference == *vr) {
+            Some(v) if v.var_type == VarType::Enumeration => {}
+            Some(v) => {
+                return Err(inst.error(&format!(
+                    "{function}: value reference {vr} ('{}') is {}, read and written with {}",
+                    v.name,
+                    fmi3_type_name(v.var_type),
+                    accessor(v.var_type)
+                )));
+            }
+            None => {
+                return Err(inst.error(&format!(
+                    "{function}: value reference {vr} is not an Enumeration variable of {} (see modelDescription.xml)",
+                    M::DESCRIPTION.model_identifier
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+pub unsafe fn get_boolean<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut fmi3Boolean,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetBoolean";
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, F, |inst| {
+            // Written as bytes 0 and 1: the importer's array is C `bool`.
+            let (vrs, out) = match arrays(
+                inst,
+                F,
+                slice(vr, nvr),
+                n_values,
+                slice_mut(values as *mut u8, n_values),
+            ) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            let mut got = vec![false; vrs.len()];
+            let status = inst.get_values(F, vrs, &mut got);
+            if status == fmi3OK {
+                for (o, v) in out.iter_mut().zip(got) {
+                    *o = u8::from(v);
+                }
+            }
+            status
+        })
+    }
+}
+
+pub unsafe fn set_boolean<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const fmi3Boolean,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetBoolean";
+    unsafe {
+        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
+            // Read as bytes: any non-zero byte is true (a C caller may pass other values).
+            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values as *const u8, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            let values: Vec<bool> = values.iter().map(|b| *b != 0).collect();
+            inst.set_values(F, vrs, &values)
+        })
+    }
+}
+
+pub unsafe fn get_string<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut fmi3String,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetString";
+    unsafe {
+        with_instance::<M>(c, Call::GetValues, F, |inst| {
+            match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
+                Ok((vrs, out)) => inst.get_strings(vrs, out),
+                Err(status) => status,
+            }
+        })
+    }
+}
+
+pub unsafe fn set_string<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const fmi3String,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetString";
+    unsafe {
+        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
+            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            let mut texts = Vec::with_capacity(values.len());
+            for (i, p) in values.iter().enumerate() {
+                match text(*p) {
+                    Some(t) => texts.push(t.into_owned()),
+                    None => return inst.error(&format!("{F}: values[{i}] is NULL; nothing set")),
+                }
+            }
+            inst.set_strings(vrs, &texts)
+        })
+    }
+}
+
+/// A getter of a type no variable of this FMU has (Float32, Int8, ..., UInt64, Binary):
+/// nothing to return, every value reference refused.
+pub unsafe fn get_none<M: CoSimulation>(
+    c: fmi3Instance,
+    function: &'static str,
+    type_name: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values_null: bool,
+    n_values: usize,
+) -> fmi3Status {
+    unsafe { none::<M>(c, Call::GetValues, function, type_name, vr, nvr, values_null, n_values) }
+}
+
+pub unsafe fn set_none<M: CoSimulation>(
+    c: fmi3Instance,
+    function: &'static str,
+    type_name: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values_null: bool,
+    n_values: usize,
+) -> fmi3Status {
+    unsafe {
+        none::<M>(
+            c,
+            Call::SetDiscreteValues,
+            function,
+            type_name,
+            vr,
+            nvr,
+            values_null,
+            n_values,
+        )
+    }
+}
+
+unsafe fn none<M: CoSimulation>(
+    c: fmi3Instance,
+    call: Call,
+    function: &'static str,
+    type_name: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values_null: bool,
+    n_values: usize,
+) -> fmi3Status {
+    unsafe {
+        with_instance::<M>(c, call, function, |inst| {
+            let values = (!values_null || n_values == 0).then_some(());
+            let (vrs, ()) = match arrays(inst, function, slice(vr, nvr), n_values, values) {
+                Ok(a) => a,
+                Err(status) => return status,
+            };
+            match vrs.first() {
+                None => fmi3OK,
+                Some(vr) => inst.error(&format!(
+                    "{function}: value reference {vr} is not a {type_name} variable: {} has no {type_name} variables{}",
+                    M::DESCRIPTION.model_identifier,
+                    M::DESCRIPTION
+                        .variables
+                        .iter()
+                        .find(|v| v.value_reference == *vr)
+                        .map(|v| format!(
+                            " ('{}' is {}, read and written with {})",
+                            v.name,
+                            fmi3_type_name(v.var_type),
+                            accessor(v.var_type)
+                        ))
+                        .unwrap_or_default()
+                )),
+            }
+        })
+    }
+}
+
+/// A function of a feature this FMU does not have (clocks, configuration mode, variable
+/// dependencies at run time): fmi3Error with the reason, in any state.
+pub unsafe fn not_provided<M: CoSimulation>(c: fmi3Instance, function: &'static str, why: &'static str) -> fmi3Status {
+    unsafe {
+        with_instance::<M>(c, Call::SetDebugLogging, function, |inst| {
+            inst.error(&format!("{function}: {why}"))
+        })
+    }
+}
+
+pub unsafe fn evaluate_discrete_states<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
+    // No discrete states, no clocks: nothing to evaluate.
+    unsafe {
+        with_instance::<M>(c, Call::EvaluateDiscreteStates, "fmi3EvaluateDiscreteStates", |_| {
+            fmi3OK
+        })
+    }
+}
+
+pub unsafe fn enter_step_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
+    unsafe {
+        with_instance::<M>(c, Call::EnterStepMode, "fmi3EnterStepMode", |_| {
+            unreachable!("EnterStepMode is allowed in no state of an FMU without event mode")
+        })
+    }
+}
+
+pub unsafe fn update_discrete_states<M: CoSimulation>(
+    c: fmi3Instance,
+    discrete_states_need_update: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+    nominals_changed: *mut fmi3Boolean,
+    values_changed: *mut fmi3Boolean,
+    next_event_time_defined: *mut fmi3Boolean,
+    next_event_time: *mut fmi3Float64,
+) -> fmi3Status {
+    const F: &str = "fmi3UpdateDiscreteStates";
+    unsafe {
+        with_instance::<M>(c, Call::NewDiscreteStates, F, |inst| {
+            if discrete_states_need_update.is_null()
+                || terminate_simulation.is_null()
+                || nominals_changed.is_null()
+                || values_changed.is_null()
+                || next_event_time_defined.is_null()
+                || next_event_time.is_null()
+            {
+                return inst.error(&format!("{F}: an output argument is NULL"));
+            }
+            let mut e = crate::fmi2::instance::EventInfo::default();
+            let status = inst.new_discrete_states(&mut e);
+            *discrete_states_need_update = e.new_discrete_states_needed;
+            *terminate_simulation = e.terminate_simulation;
+            *nominals_changed = e.nominals_changed;
+            *values_changed = e.values_changed;
+            *next_event_time_defined = e.next_event_time.is_some();
+            *next_event_time = e.next_event_time.unwrap_or(0.0);
+            status
+        })
+    }
+}
+
+pub unsafe fn completed_integrator_step<M: CoSimulation>(
+    c: fmi3Instance,
+    _no_set_fmu_state_prior: fmi3Boolean,
+    enter_event_mode: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+) -> fmi3Status {
+    const F: &str = "fmi3CompletedIntegratorStep";
+    unsafe {
+        with_instance::<M>(c, Call::CompletedIntegratorStep, F, |inst| {
+            if enter_event_mode.is_null() || terminate_simulation.is_null() {
+                return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
+            }
+            let (status, event, terminate) = inst.completed_integrator_step();
+            *enter_event_mode = event;
+            *terminate_simulation = terminate;
+            status
+        })
+    }
+}
+
+pub unsafe fn set_time<M: CoSimulation>(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
+    unsafe { with_instance::<M>(c, Call::SetTime, "fmi3SetTime", |inst| inst.set_time(time)) }
+}
+
+pub unsafe fn set_continuous_states<M: CoSimulation>(c: fmi3Instance, x: *const fmi3Float64, nx: usize) -> fmi3Status {
+    unsafe { crate::fmi2::api::set_continuous_states::<M>(c, x, nx) }
+}
+
+pub unsafe fn get_number_of_continuous_states<M: CoSimulation>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
+    const F: &str = "fmi3GetNumberOfContinuousStates";
+    unsafe {
+        with_instance::<M>(c, Call::GetNumberOf, F, |inst| match n.as_mut() {
+            Some(n) => {
+                *n = <M::States as crate::StateVector>::LEN;
+                fmi3OK
+            }
+            None => inst.error(&format!("{F}: nContinuousStates is NULL")),
+        })
+    }
+}
+
+pub unsafe fn get_number_of_event_indicators<M: CoSimulation>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
+    const F: &str = "fmi3GetNumberOfEventIndicators";
+    unsafe {
+        with_instance::<M>(c, Call::GetNumberOf, F, |inst| match n.as_mut() {
+            Some(n) => {
+                *n = 0;
+                fmi3OK
+            }
+            None => inst.error(&format!("{F}: nEventIndicators is NULL")),
+        })
+    }
+}
+
+pub unsafe fn get_output_derivatives<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    orders: *const fmi3Int32,
+    values: *mut fmi3Float64,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetOutputDerivatives";
+    unsafe {
+        with_instance::<M>(c, Call::GetRealOutputDerivatives, F, |inst| {
+            if nvr == 0 && n_values == 0 {
+                return fmi3OK;
+            }
+            let _ = (vr, orders, values);
+            inst.error(&format!(
+                "{F}: not provided (maxOutputDerivativeOrder = 0: this FMU computes no output derivatives)"
+            ))
+        })
+    }
+}
+
+pub unsafe fn do_step<M: CoSimulation>(
+    c: fmi3Instance,
+    current_communication_point: fmi3Float64,
+    communication_step_size: fmi3Float64,
+    _no_set_fmu_state_prior_to_current_point: fmi3Boolean,
+    event_handling_needed: *mut fmi3Boolean,
+    terminate_simulation: *mut fmi3Boolean,
+    early_return: *mut fmi3Boolean,
+    last_successful_time: *mut fmi3Float64,
+) -> fmi3Status {
+    const F: &str = "fmi3DoStep";
+    unsafe {
+        with_instance::<M>(c, Call::DoStep, F, |inst| {
+            if event_handling_needed.is_null()
+                || terminate_simulation.is_null()
+                || early_return.is_null()
+                || last_successful_time.is_null()
+            {
+                return inst.error(&format!(
+                    "{F}: eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime is NULL; no step"
+                ));
+            }
+            let status = inst.do_step(current_communication_point, communication_step_size);
+            // No event mode, no intermediate update: never an event to handle, never early.
+            *event_handling_needed = false;
+            *terminate_simulation = inst.sim.terminate_requested;
+            *early_return = false;
+            *last_successful_time = inst.sim.last_successful_time;
+            status
+        })
+    }
+}
+
+pub unsafe fn get_directional_derivative<M: CoSimulation>(
+    c: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const fmi3Float64,
+    n_seed: usize,
+    sensitivity: *mut fmi3Float64,
+    n_sensitivity: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetDirectionalDerivative";
+    unsafe {
+        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
+            if n_seed != n_knowns || n_sensitivity != n_unknowns {
+                return inst.error(&format!(
+                    "{F}: nSeed = {n_seed} must equal nKnowns = {n_knowns} and nSensitivity = {n_sensitivity} \
+                     nUnknowns = {n_unknowns} (every variable is a scalar)"
+                ));
+            }
+            let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (
+                slice(unknowns, n_unknowns),
+                slice(knowns, n_knowns),
+                slice(seed, n_seed),
+                slice_mut(sensitivity, n_sensitivity),
+            ) else {
+                return inst.error(&format!(
+                    "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
+                ));
+            };
+            let mut got = vec![0.0; unknowns.len()];
+            let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
+            if status == fmi3OK {
+                out.copy_from_slice(&got);
+            }
+            status
+        })
+    }
+}
+
+/// fmi3GetAdjointDerivative: sensitivity = Jᵀ seed, J = d unknowns / d knowns, exact: each
+/// column of J from one run of the equations on dual numbers (one per known).
+pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
+    c: fmi3Instance,
+    unknowns: *const fmi3ValueReference,
+    n_unknowns: usize,
+    knowns: *const fmi3ValueReference,
+    n_knowns: usize,
+    seed: *const fmi3Float64,
+    n_seed: usize,
+    sensitivity: *mut fmi3Float64,
+    n_sensitivity: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetAdjointDerivative";
+    unsafe {
+        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
+            if n_seed != n_unknowns || n_sensitivity != n_knowns {
+                return inst.error(&format!(
+                    "{F}: nSeed = {n_seed} must equal nUnknowns = {n_unknowns} and nSensitivity = {n_sensitivity} \
+                     nKnowns = {n_knowns} (every variable is a scalar)"
+                ));
+            }
+            let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (
+                slice(unknowns, n_unknowns),
+                slice(knowns, n_knowns),
+                slice(seed, n_seed),
+                slice_mut(sensitivity, n_sensitivity),
+            ) else {
+                return inst.error(&format!(
+                    "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
+                ));
+            };
+            if let Some((i, s)) = seed.iter().enumerate().find(|(_, s)| !s.is_finite()) {
+                return inst.error(&format!("{F}: seed[{i}] = {s} is not finite"));
+            }
+            let mut result = vec![0.0; knowns.len()];
+            let mut unit = vec![0.0; knowns.len()];
+            let mut column = vec![0.0; unknowns.len()];
+            // Checks the references even when there is no known (no column is computed then).
+            if knowns.is_empty() {
+                let status = inst.directional_derivative(unknowns, knowns, &[], &mut column);
+                if status != fmi3OK {
+                    return status;
+                }
+            }
+            for j in 0..knowns.len() {
+                unit.fill(0.0);
+                unit[j] = 1.0;
+                let status = inst.directional_derivative(unknowns, knowns, &unit, &mut column);
+                if status != fmi3OK {
+                    return status;
+                }
+                result[j] = column.iter().zip(seed).map(|(d, s)| d * s).sum();
+            }
+            out.copy_from_slice(&result);
+            fmi3OK
+        })
+    }
+}
