@@ -56,6 +56,7 @@ registry! {
         fmi3_co_simulation_every_function_in_every_state_answers_as_the_standard_says,
         fmi3_model_exchange_every_function_in_every_state_answers_as_the_standard_says,
         fmi3_reset_from_every_state_then_a_rerun_is_bit_identical,
+        fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state,
     };
     ModelExchange: {
         fmi3_model_exchange_states_and_derivatives_are_consistent,
@@ -760,8 +761,11 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
             fmu.id,
             t.name
         );
+        // On an instance of its own: after fmi3Error the FMU is Terminated.
+        let mut other = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        assert_eq!(other.enter_init(0.25), fmi3OK);
         refused(
-            &i,
+            &other,
             &format!("fmi3SetFloat64 of the independent variable '{}'", t.name),
             |c| unsafe { (api.set_float64)(c, &t.vr, 1, &1.0, 1) },
         );
@@ -967,6 +971,17 @@ fn me_vec(s: State, me: bool) -> Expect {
     }
 }
 
+/// fmi3GetNumberOf*: the allowed calls of Instantiated and Event Mode list them (Model
+/// Exchange only), those of Initialization Mode and Terminated do not; Continuous-Time Mode:
+/// open here.
+fn number_of(s: State, me: bool) -> Expect {
+    match (me, s) {
+        (false, _) => Expect::Error,
+        (true, ContinuousTimeMode) => Expect::Either,
+        (true, _) => ok_in(&[Instantiated, EventMode], s),
+    }
+}
+
 fn first_of(fmu: &Fmu3, ty: &str) -> Option<u32> {
     fmu.md
         .of_type(ty)
@@ -1049,11 +1064,14 @@ fn rows() -> Vec<Row> {
             |i: &Inst| i.call(stringify!($f), |c| unsafe { (i.api().$f)(c) })
         };
     }
-    let getters = |s: State, _me: bool| {
-        ok_in(
+    // Instantiated: the state's table of equations names fmi3Get{VariableType} ("get start
+    // values") but its list of allowed calls does not: open.
+    let getters = |s: State, _me: bool| match s {
+        Instantiated => Expect::Either,
+        _ => ok_in(
             &[InitializationMode, EventMode, ContinuousTimeMode, StepMode, Terminated],
             s,
-        )
+        ),
     };
     let setters_f64 = |s: State, _me: bool| {
         ok_in(
@@ -1477,15 +1495,17 @@ fn rows() -> Vec<Row> {
         Row {
             name: "fmi3SetTime",
             call: |i| i.call("fmi3SetTime", |c| unsafe { (i.api().set_time)(c, 0.0) }),
+            // Continuous-Time Mode only: Event Mode's list of allowed calls has no fmi3SetTime.
             rule: |s, me| {
                 if me {
-                    ok_in(&[EventMode, ContinuousTimeMode], s)
+                    ok_in(&[ContinuousTimeMode], s)
                 } else {
                     Expect::Error
                 }
             },
         },
-        // FMI 3.0.2 also allows EventMode (after the event iteration changed states): open.
+        // Event Mode: not in the 3.0 list of allowed calls, but the 3.0.2 maintenance release
+        // allows setting continuous states in more states: open.
         Row {
             name: "fmi3SetContinuousStates",
             call: |i| {
@@ -1533,7 +1553,6 @@ fn rows() -> Vec<Row> {
             },
             rule: me_vec,
         },
-        // Nominals: also after instantiation in the standard's table: open there.
         Row {
             name: "fmi3GetNominalsOfContinuousStates",
             call: |i| {
@@ -1544,13 +1563,7 @@ fn rows() -> Vec<Row> {
                 )
                 .0
             },
-            rule: |s, me| {
-                if me && s == Instantiated {
-                    Expect::Either
-                } else {
-                    me_vec(s, me)
-                }
-            },
+            rule: me_vec,
         },
         Row {
             name: "fmi3GetNumberOfEventIndicators",
@@ -1558,7 +1571,7 @@ fn rows() -> Vec<Row> {
                 let mut n = 0;
                 i.call("n", |c| unsafe { (i.api().get_number_of_event_indicators)(c, &mut n) })
             },
-            rule: |_, me| if me { Expect::Ok } else { Expect::Either },
+            rule: number_of,
         },
         Row {
             name: "fmi3GetNumberOfContinuousStates",
@@ -1566,7 +1579,7 @@ fn rows() -> Vec<Row> {
                 let mut n = 0;
                 i.call("n", |c| unsafe { (i.api().get_number_of_continuous_states)(c, &mut n) })
             },
-            rule: |_, me| if me { Expect::Ok } else { Expect::Either },
+            rule: number_of,
         },
         // Only from EventMode of a CS instance with event mode: never here.
         Row {
@@ -1718,6 +1731,92 @@ pub fn fmi3_reset_from_every_state_then_a_rerun_is_bit_identical(fmu: &Fmu3) {
             );
         }
     }
+}
+
+/// FMI 3.0 section 2.3.1 (super state FMU State Setable): "If any function called in super
+/// state FMU State Setable returns fmi3Error, the FMU enters state Terminated." So after a
+/// refused call, only what Terminated allows is allowed (getters; fmi3Reset, FMU state
+/// functions, fmi3FreeInstance); fmi3DoStep / fmi3EnterEventMode / fmi3Terminate are not.
+/// fmi3Reset and fmi3SetFMUState bring the instance back.
+pub fn fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state(fmu: &Fmu3) {
+    let h = fmu.step_size();
+    let api = &fmu.api;
+    let mut failures = vec![];
+    for me in [false, true] {
+        if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
+            continue;
+        }
+        let what = if me { "ME" } else { "CS" };
+        let running = if me { ContinuousTimeMode } else { StepMode };
+        // A refused call: an unknown value reference.
+        let mut i = in_state(fmu, me, running);
+        let saved = fmu.can_snapshot(me).then(|| i.snapshot());
+        let bad = fmu.md.unknown_vr();
+        assert_eq!(
+            i.set_f64(&[bad], &[1.0]),
+            fmi3Error,
+            "{}: setting an unknown vr",
+            fmu.id
+        );
+        let (s, _) = i.get_f64(&fmu.md.vrs_of_type("Float64"));
+        if s != fmi3OK {
+            failures.push(format!(
+                "{what}: fmi3GetFloat64 after an fmi3Error (Terminated allows getters): {}",
+                status_name(s)
+            ));
+        }
+        let s = if me {
+            i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) })
+        } else {
+            i.do_step(h).0
+        };
+        if s != fmi3Error {
+            failures.push(format!(
+                "{what}: {} after an fmi3Error in {running:?} answered {}: the FMU is Terminated then and must refuse it",
+                if me { "fmi3EnterEventMode" } else { "fmi3DoStep" },
+                status_name(s)
+            ));
+        }
+        let s = i.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) });
+        if s != fmi3Error {
+            failures.push(format!(
+                "{what}: fmi3Terminate after an fmi3Error answered {}: the FMU is Terminated then",
+                status_name(s)
+            ));
+        }
+        // Back: fmi3SetFMUState of a state taken before, then steps.
+        if let Some(bytes) = saved {
+            let mut j = in_state(fmu, me, running);
+            let _ = j.set_f64(&[bad], &[1.0]);
+            let s = j.restore(&bytes);
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{}: {what}: restoring a state after an fmi3Error: {}",
+                fmu.id,
+                j.log_text()
+            );
+            j.step(h);
+        }
+        // Back: fmi3Reset, then a whole run.
+        let s = i.call("fmi3Reset", |c| unsafe { (api.reset)(c) });
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{}: {what}: fmi3Reset after an fmi3Error: {}",
+            fmu.id,
+            i.log_text()
+        );
+        i.time = 0.0;
+        i.initialize();
+        i.step(h);
+    }
+    assert!(
+        failures.is_empty(),
+        "{}: after fmi3Error:\n{}",
+        fmu.id,
+        failures.join("\n")
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -2502,7 +2601,37 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
         let mut saved: Option<(Vec<u8>, State, f64)> = None;
         let inputs = float_inputs(fmu);
         let h = fmu.step_size();
+        // After an fmi3Error the standard puts the FMU in Terminated (checked on its own by
+        // fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state):
+        // until fmi3Reset or fmi3SetFMUState, calls are only required not to crash nor answer
+        // fmi3Fatal.
+        let mut errored = false;
         for (k, op) in ops.iter().enumerate() {
+            if errored && !matches!(op, Op::Reset | Op::RestoreState) {
+                let s = match op {
+                    Op::GetAll => inst.get_f64(&fmu.md.vrs_of_type("Float64")).0,
+                    Op::EnterInit => inst.enter_init(0.0),
+                    Op::ExitInit => inst.exit_init(),
+                    Op::Step if me => inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
+                        (api.completed_integrator_step)(c, true, &mut 0, &mut 0)
+                    }),
+                    Op::Step => inst.do_step(h).0,
+                    Op::EnterEventMode => inst.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) }),
+                    Op::EnterCtm => inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
+                        (api.enter_continuous_time_mode)(c)
+                    }),
+                    Op::Terminate => inst.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) }),
+                    _ => fmi3Error,
+                };
+                prop_assert!(
+                    s != fmi3Fatal,
+                    "{}: ops {:?}: fmi3Fatal after an fmi3Error: {}",
+                    fmu.id,
+                    &ops[..=k],
+                    inst.log_text()
+                );
+                continue;
+            }
             let expected = model(state, me, *op);
             let s = match op {
                 Op::EnterInit => inst.enter_init(0.0),
@@ -2559,6 +2688,7 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
                         );
                         state = *st;
                         inst.time = *t;
+                        errored = false;
                         continue;
                     }
                     None => continue,
@@ -2574,6 +2704,7 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
                         k,
                         state
                     );
+                    errored = true;
                     continue;
                 }
             };
@@ -2600,8 +2731,12 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
                         inst.log_text()
                     );
                     state = next;
+                    if matches!(op, Op::Reset) {
+                        errored = false;
+                    }
                 }
                 None => {
+                    errored = true;
                     prop_assert_eq!(
                         s,
                         fmi3Error,

@@ -311,10 +311,13 @@ impl<'a> Inst<'a> {
         let before = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
         let s = f(self.c);
         if s != fmi3OK {
-            let after = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
+            // FMI 3.0 section 2.3.1 (logMessage): "If a function does not return fmi3OK, it
+            // must provide the reason by calling logMessage at least once with this status."
+            let entries = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner());
+            let new = &entries[before.min(entries.len())..];
             assert!(
-                after > before,
-                "{}: {what} returned {} without logging a message",
+                new.iter().any(|e| e.status == s),
+                "{}: {what} returned {} without logging a message with that status (logged: {new:?})",
                 self.fmu.id,
                 status_name(s)
             );
@@ -323,10 +326,13 @@ impl<'a> Inst<'a> {
     }
 
     pub fn enter_init(&mut self, start: f64) -> fmi3Status {
-        self.time = start;
-        self.call("fmi3EnterInitializationMode", |c| unsafe {
+        let s = self.call("fmi3EnterInitializationMode", |c| unsafe {
             (self.fmu.api.enter_initialization_mode)(c, false, 0.0, start, false, 0.0)
-        })
+        });
+        if s == fmi3OK {
+            self.time = start;
+        }
+        s
     }
     pub fn exit_init(&self) -> fmi3Status {
         self.call("fmi3ExitInitializationMode", |c| unsafe {
