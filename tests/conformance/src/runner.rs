@@ -360,7 +360,7 @@ fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
     let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
     if md.fmi_version != "2.0" {
         return Err(format!(
-            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
             fmu_path.display(),
             md.fmi_version
         ));

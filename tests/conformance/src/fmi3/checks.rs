@@ -452,7 +452,14 @@ fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) 
 }
 
 pub fn fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fmu3) {
-    let me = fmu.md.cs.is_none();
+    for me in [false, true] {
+        if (me && fmu.md.me.is_some()) || (!me && fmu.md.cs.is_some()) {
+            bad_arguments(fmu, me);
+        }
+    }
+}
+
+fn bad_arguments(fmu: &Fmu3, me: bool) {
     let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
     excite(&inst);
     inst.initialize();
@@ -2064,18 +2071,25 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         info("providesAdjointDerivatives is false: the adjoint is not compared");
     }
     // Finite differences: perturb each known, read the unknowns.
+    // The unknowns: derivatives through fmi3GetContinuousStateDerivatives (ME), the rest
+    // through fmi3GetFloat64.
     let read = |inst: &Inst| -> Vec<f64> {
+        let (s, mut all) = inst.get_f64(&u);
+        assert_eq!(s, fmi3OK, "{}: reading the unknowns: {}", fmu.id, inst.log_text());
         if me {
-            let (s, dx) = inst.vector("dx", api.get_continuous_state_derivatives, states.len());
+            let (s, dx) = inst.vector(
+                "fmi3GetContinuousStateDerivatives",
+                api.get_continuous_state_derivatives,
+                states.len(),
+            );
             assert_eq!(s, fmi3OK);
-            let (_, outs) = inst.get_f64(&u[states.len().min(nu)..]);
-            let _ = &dx;
-            let (_, all) = inst.get_f64(&u);
-            let _ = outs;
-            all
-        } else {
-            inst.get_f64(&u).1
+            for (r, vr) in u.iter().enumerate() {
+                if let Some(si) = states.iter().position(|p| p.1 == *vr) {
+                    all[r] = dx[si];
+                }
+            }
         }
+        all
     };
     let (_, base_x) = if me {
         inst.vector("x", api.get_continuous_states, states.len())
@@ -2298,6 +2312,31 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             fmu.id,
             if me { "ME" } else { "CS" }
         );
+        // Another instance of the same FMU continues from that state like the first (as FMI 2.0
+        // importers use it: a state is a copy of the FMU's state, not of one instance).
+        let mut other = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        assert_eq!(
+            other.call("fmi3SetFMUState (of another instance)", |c| unsafe {
+                (api.set_fmu_state)(c, st)
+            }),
+            fmi3OK,
+            "{}: fmi3SetFMUState with a state of another instance of the same FMU: {}",
+            fmu.id,
+            other.log_text()
+        );
+        other.time = t_saved;
+        let from_other: Vec<Vec<u64>> = (0..10)
+            .map(|_| {
+                other.step(h);
+                other.observe()
+            })
+            .collect();
+        assert!(
+            from_other == reference,
+            "{}: another instance set to the state continues differently",
+            fmu.id
+        );
+        drop(other);
         // Overwriting a state with fmi3GetFMUState on the same pointer.
         assert_eq!(
             a.call("fmi3GetFMUState (update)", |c| unsafe {
@@ -2822,6 +2861,23 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
         "{}: the C host's co-simulation run differs from this importer's",
         fmu.id
     );
+    if fmu.md.me.is_some() {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with("me-final "))
+            .unwrap_or_else(|| panic!("no me-final line: {stdout}"));
+        let got: Vec<u64> = line
+            .split_whitespace()
+            .skip(1)
+            .map(|x| u64::from_str_radix(x, 16).unwrap())
+            .collect();
+        let want = run(fmu, true, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+        assert_eq!(
+            got, want,
+            "{}: the C host's explicit-Euler ME run differs from this importer's",
+            fmu.id
+        );
+    }
     if std::process::Command::new("valgrind")
         .arg("--version")
         .output()
