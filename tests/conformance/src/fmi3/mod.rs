@@ -190,6 +190,11 @@ impl LogSink {
 }
 
 /// The importer's fmi3LogMessageCallback: records into the [`LogSink`] the environment points to.
+///
+/// # Safety
+///
+/// `env` is NULL or points to a live [`LogSink`]; `category` and `message` are NULL or
+/// NUL-terminated strings (what an FMU passes).
 pub unsafe extern "C" fn log_message(
     env: fmi3InstanceEnvironment,
     status: fmi3Status,
@@ -310,6 +315,23 @@ impl<'a> Inst<'a> {
         crate::outcome::breadcrumb(what);
         let before = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
         let s = f(self.c);
+        {
+            // logMessage's category: one of <LogCategories>, NULL if there are none.
+            let entries = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner());
+            let cats = &self.fmu.md.log_categories;
+            for e in &entries[before.min(entries.len())..] {
+                let ok = if cats.is_empty() {
+                    e.category == "<NULL>"
+                } else {
+                    cats.contains(&e.category)
+                };
+                assert!(
+                    ok,
+                    "{}: {what} logged with the category '{}', which <LogCategories> does not declare ({cats:?})",
+                    self.fmu.id, e.category
+                );
+            }
+        }
         if s != fmi3OK {
             // FMI 3.0 section 2.3.1 (logMessage): "If a function does not return fmi3OK, it
             // must provide the reason by calling logMessage at least once with this status."
