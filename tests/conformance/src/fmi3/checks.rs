@@ -868,6 +868,56 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
         status_name(s)
     );
     let _ = k.time;
+    // A huge step: completed (lastSuccessfulTime = t + h) or discarded (fmi3Discard with a
+    // message, t <= lastSuccessfulTime < t + h); then the outputs are readable and the
+    // instance can be terminated (FMI 3.0 fmi3DoStep, "fmi3Discard").
+    let mut big = Inst::cs(fmu);
+    excite(&big);
+    big.initialize();
+    let huge = 1e3 * fmu.md.default_experiment.1.unwrap_or(1.0).max(1.0);
+    let (s, flags, last) = big.do_step(huge);
+    if s == fmi3OK {
+        assert_eq!(
+            last, huge,
+            "{}: a completed step of {huge}: lastSuccessfulTime {last}",
+            fmu.id
+        );
+    } else if s == fmi3Discard {
+        assert!(
+            (0.0..huge).contains(&last),
+            "{}: a discarded step of {huge} from 0: lastSuccessfulTime {last}",
+            fmu.id
+        );
+        info(format!("a step of {huge} s: fmi3Discard at lastSuccessfulTime {last}"));
+    } else {
+        panic!(
+            "{}: a step of {huge} s answered {}: expected fmi3OK or fmi3Discard",
+            fmu.id,
+            status_name(s)
+        );
+    }
+    assert!(
+        flags[1] <= 1 && flags[0] == 0 && flags[2] == 0,
+        "{}: flags {flags:?} after a huge step",
+        fmu.id
+    );
+    let (g, _) = big.get_f64(&fmu.md.vrs_of_type("Float64"));
+    assert_eq!(
+        g,
+        fmi3OK,
+        "{}: fmi3GetFloat64 after the huge step: {}",
+        fmu.id,
+        big.log_text()
+    );
+    let t = big.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) });
+    assert_eq!(
+        t,
+        fmi3OK,
+        "{}: fmi3Terminate after the huge step ({}): {}",
+        fmu.id,
+        status_name(s),
+        big.log_text()
+    );
 }
 
 pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
