@@ -290,21 +290,33 @@ impl ModelDescription {
     /// FMI 3.0 requires the independent variable among the variables: a declared
     /// `independent` one, or else `time` with the value reference one above the highest
     /// declared (the runtime answers it with the current time). Its value reference.
-    pub fn time_value_reference(&self) -> u32 {
-        match self.variables.iter().find(|v| v.causality == Causality::Independent) {
-            Some(v) => v.value_reference,
-            None => self
-                .variables
-                .iter()
-                .map(|v| v.value_reference.saturating_add(1))
-                .max()
-                .unwrap_or(0),
+    /// (`const`: the runtime evaluates it at compile time.)
+    pub const fn time_value_reference(&self) -> u32 {
+        let mut next = 0u32;
+        let mut i = 0;
+        while i < self.variables.len() {
+            let v = &self.variables[i];
+            if let Causality::Independent = v.causality {
+                return v.value_reference;
+            }
+            if v.value_reference.saturating_add(1) > next {
+                next = v.value_reference.saturating_add(1);
+            }
+            i += 1;
         }
+        next
     }
 
     /// Whether the model declares its independent variable itself (else FMI 3.0 adds `time`).
-    pub fn declares_independent(&self) -> bool {
-        self.variables.iter().any(|v| v.causality == Causality::Independent)
+    pub const fn declares_independent(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if let Causality::Independent = self.variables[i].causality {
+                return true;
+            }
+            i += 1;
+        }
+        false
     }
 
     /// Runtime categories first, then the model's own.

@@ -36,23 +36,27 @@ step "cargo clippy -D warnings" cargo clippy --workspace --all-targets --release
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
 cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
 cargo build --release -p fmu-build --bins
-record "fmu-build (package + validate)" "$(ls target/fmu/*.fmu | wc -l)" 0
+# FMI 2.0 in target/fmu/, FMI 3.0 (the same crates built with rustfmu's feature fmi3) in target/fmu/fmi3/.
+fmus=(target/fmu/*.fmu target/fmu/fmi3/*.fmu)
+record "fmu-build (package + validate)" "${#fmus[@]}" 0
 # The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.
 step "modelDescription/ is up to date" git diff --exit-code --stat -- modelDescription
 n=0
-echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU"
-for fmu in target/fmu/*.fmu; do fmutool -input "$fmu" -check && n=$((n + 1)) || record "fmutool -check $fmu" 0 1; done
+echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU, FMI 2.0 and 3.0"
+# fmu-manipulation-toolbox 2.0 checks FMI 3.0 descriptions too (its XSD and rules for 2.0 and 3.0).
+for fmu in "${fmus[@]}"; do fmutool -input "$fmu" -check && n=$((n + 1)) || record "fmutool -check $fmu" 0 1; done
 record "fmutool -check" "$n" 0
 
-echo "== cargo fmu check (black-box conformance suite) on every FMU"
-for fmu in target/fmu/*.fmu; do
-  out="$logs/check-$(basename "$fmu").log"
+echo "== cargo fmu check (black-box conformance suite) on every FMU, FMI 2.0 and 3.0"
+for fmu in "${fmus[@]}"; do
+  name=${fmu#target/fmu/}
+  out="$logs/check-${name//\//-}.log"
   target/release/cargo-fmu fmu check "$fmu" | tee "$out" || true
   line=$( (grep -E '^[0-9]+ passed, [0-9]+ failed' "$out" || true) | tail -n 1)
   p=$(echo "$line" | sed -E 's/^([0-9]+) passed.*/\1/')
   f=$(echo "$line" | sed -E 's/^[0-9]+ passed, ([0-9]+) failed.*/\1/')
   [ -n "$line" ] || { p=0; f=1; }
-  record "cargo fmu check $(basename "$fmu")" "$p" "$f"
+  record "cargo fmu check $name" "$p" "$f"
 done
 
 echo "== Rust tests (cargo test --workspace)"

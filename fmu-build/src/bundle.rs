@@ -1,20 +1,60 @@
 //! The `.fmu` archive: a zip with `modelDescription.xml` at the root,
 //! `binaries/<platform>/<modelIdentifier>.<ext>`, `documentation/index.html` and `resources/`.
+//! An FMI 2.0 binary goes to `target/fmu/<id>.fmu` (`binaries/linux64/`), an FMI 3.0 one to
+//! `target/fmu/fmi3/<id>.fmu` (`binaries/x86_64-linux/`, the FMI 3.0 platform tuple).
 
 use crate::cargo::FmuCrate;
-use rustfmu::description::{self, Interfaces, ModelDescription};
+use rustfmu::description::{self, FmiVersion, Interfaces, ModelDescription};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use zip::write::SimpleFileOptions;
 
 /// The platform folder of `binaries/` (FMI 2.0 names) for the machine fmu-build runs on.
 pub fn platform() -> Result<(&'static str, &'static str), String> {
-    match (std::env::consts::OS, std::env::consts::ARCH) {
-        ("linux", "x86_64") => Ok(("linux64", "so")),
-        ("linux", "x86") => Ok(("linux32", "so")),
-        ("windows", "x86_64") => Ok(("win64", "dll")),
-        ("macos", "x86_64" | "aarch64") => Ok(("darwin64", "dylib")),
-        (os, arch) => Err(format!("FMI 2.0 names no binaries folder for {os}/{arch}")),
+    platform_of(FmiVersion::V2)
+}
+
+/// The platform folder of `binaries/` for the machine fmu-build runs on, in the names of an FMI
+/// version (2.0: `linux64`, ...; 3.0: the platform tuple `x86_64-linux`, ...), and the
+/// extension of a shared library.
+pub fn platform_of(version: FmiVersion) -> Result<(&'static str, &'static str), String> {
+    let (os, arch) = (std::env::consts::OS, std::env::consts::ARCH);
+    let found = match version {
+        FmiVersion::V2 => match (os, arch) {
+            ("linux", "x86_64") => Some(("linux64", "so")),
+            ("linux", "x86") => Some(("linux32", "so")),
+            ("windows", "x86_64") => Some(("win64", "dll")),
+            ("macos", "x86_64" | "aarch64") => Some(("darwin64", "dylib")),
+            _ => None,
+        },
+        FmiVersion::V3 => match (os, arch) {
+            ("linux", "x86_64") => Some(("x86_64-linux", "so")),
+            ("linux", "x86") => Some(("x86-linux", "so")),
+            ("linux", "aarch64") => Some(("aarch64-linux", "so")),
+            ("windows", "x86_64") => Some(("x86_64-windows", "dll")),
+            ("windows", "x86") => Some(("x86-windows", "dll")),
+            ("macos", "x86_64") => Some(("x86_64-darwin", "dylib")),
+            ("macos", "aarch64") => Some(("aarch64-darwin", "dylib")),
+            _ => None,
+        },
+    };
+    found.ok_or_else(|| format!("FMI {} names no binaries folder for {os}/{arch}", version.text()))
+}
+
+/// Where the package of a model goes: `<fmu_dir>/<id>.fmu` for FMI 2.0,
+/// `<fmu_dir>/fmi3/<id>.fmu` for FMI 3.0.
+pub fn fmu_path(fmu_dir: &Path, version: FmiVersion, model_identifier: &str) -> PathBuf {
+    match version {
+        FmiVersion::V2 => fmu_dir.join(format!("{model_identifier}.fmu")),
+        FmiVersion::V3 => fmu_dir.join("fmi3").join(format!("{model_identifier}.fmu")),
+    }
+}
+
+/// `modelDescription.xml` of a built library, in the version the library implements.
+pub fn model_description(me: &SelfDescription) -> Result<String, String> {
+    match me.interfaces.version {
+        FmiVersion::V2 => crate::xml::fmi2(&me.description, me.interfaces, &me.guid),
+        FmiVersion::V3 => crate::xml::fmi3(&me.description, me.interfaces, &me.guid),
     }
 }
 
@@ -39,6 +79,7 @@ pub fn read_library(binary: &[u8]) -> Result<SelfDescription, String> {
 /// What was packaged.
 pub struct Packaged {
     pub fmu: PathBuf,
+    pub version: FmiVersion,
     pub model_identifier: String,
     pub model_description: String,
 }
@@ -74,6 +115,8 @@ fn files_below(dir: &Path) -> Result<Vec<(String, PathBuf)>, String> {
     Ok(out)
 }
 
+/// Packages a built library into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI
+/// 3.0), whichever version the library says it implements.
 pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packaged, String> {
     let binary = std::fs::read(library).map_err(|e| {
         format!(
@@ -84,7 +127,8 @@ pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packa
     })?;
     let me = read_library(&binary).map_err(|e| format!("{}: {}: {e}", krate.package, library.display()))?;
     let id = me.description.model_identifier;
-    let xml = crate::xml::fmi2(&me.description, me.interfaces, &me.guid).map_err(|e| format!("{id}: {e}"))?;
+    let version = me.interfaces.version;
+    let xml = model_description(&me).map_err(|e| format!("{id}: {e}"))?;
     let fragment = match &krate.documentation {
         Some(p) => std::fs::read_to_string(p).map_err(|e| {
             format!(
@@ -95,15 +139,16 @@ pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packa
         })?,
         None => String::new(),
     };
-    let docs = crate::docs::index_html(&me.description, &fragment);
+    let docs = crate::docs::index_html(&me.description, &fragment, version);
     let resources = match &krate.resources {
         Some(dir) => files_below(dir)?,
         None => vec![],
     };
-    let (folder, ext) = platform()?;
+    let (folder, ext) = platform_of(version)?;
 
-    std::fs::create_dir_all(out_dir).map_err(|e| format!("{}: {e}", out_dir.display()))?;
-    let out = out_dir.join(format!("{id}.fmu"));
+    let out = fmu_path(out_dir, version, id);
+    let dir = out.parent().expect("a folder");
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let tmp = out.with_extension("fmu.partial");
     let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
     let mut zip = zip::ZipWriter::new(file);
@@ -132,6 +177,7 @@ pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packa
     std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
     Ok(Packaged {
         fmu: out,
+        version,
         model_identifier: id.to_string(),
         model_description: xml,
     })

@@ -3,11 +3,14 @@
 //! An FMU crate is any package with a `cdylib` library that depends on `rustfmu` (under any
 //! name in its Cargo.toml). Its `[package.metadata.fmu]` may name `documentation` (an HTML
 //! fragment for documentation/index.html) and `resources` (a folder copied to resources/;
-//! default `resources` when it exists). The workspace's `[workspace.metadata.fmu]` may name
+//! default `resources` when it exists) and `fmi-versions` (which FMI versions `cargo fmu build`
+//! makes of it: `["2.0", "3.0"]`, the default, or one of them). The workspace's `[workspace.metadata.fmu]` may name
 //! `model-descriptions` (a folder that keeps a committed copy of every description) and
 //! `systems` (files of composed systems to write as SSP).
 
 use cargo_metadata::{Metadata, MetadataCommand, Package};
+use rustfmu::description::FmiVersion;
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -20,6 +23,41 @@ pub struct FmuCrate {
     pub lib_name: String,
     pub documentation: Option<PathBuf>,
     pub resources: Option<PathBuf>,
+    /// `[package.metadata.fmu] fmi-versions`: `None` when not given (both versions), else the
+    /// versions named, or what is wrong with the entry.
+    pub fmi_versions: Option<Result<BTreeSet<FmiVersion>, String>>,
+    /// The name under which the crate depends on rustfmu (`rustfmu`, or its rename): the
+    /// prefix of `--features <it>/fmi3`.
+    pub rustfmu_dependency: String,
+}
+
+/// `"2.0"`, `"3.0"` (also `"2"`, `"3"`) as an FMI version.
+pub fn parse_fmi_version(text: &str) -> Result<FmiVersion, String> {
+    match text.trim() {
+        "2" | "2.0" => Ok(FmiVersion::V2),
+        "3" | "3.0" => Ok(FmiVersion::V3),
+        other => Err(format!(
+            "'{other}' is no FMI version this tool builds (\"2.0\" or \"3.0\")"
+        )),
+    }
+}
+
+/// `fmi-versions = ["2.0", "3.0"]` of `[package.metadata.fmu]`.
+pub fn parse_fmi_versions(value: &serde_json::Value) -> Result<BTreeSet<FmiVersion>, String> {
+    let items = value
+        .as_array()
+        .ok_or("fmi-versions must be a list such as [\"2.0\", \"3.0\"]")?;
+    let mut out = BTreeSet::new();
+    for item in items {
+        let text = item
+            .as_str()
+            .ok_or_else(|| format!("fmi-versions: {item} is not a text such as \"3.0\""))?;
+        out.insert(parse_fmi_version(text).map_err(|e| format!("fmi-versions: {e}"))?);
+    }
+    if out.is_empty() {
+        return Err("fmi-versions is empty: name at least one of \"2.0\", \"3.0\"".into());
+    }
+    Ok(out)
 }
 
 /// What `cargo metadata` says about the workspace.
@@ -59,12 +97,20 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         .iter()
         .find(|t| t.crate_types.iter().any(|c| c.to_string() == "cdylib"))
         .expect("checked by is_fmu_crate");
+    let rustfmu_dependency = p
+        .dependencies
+        .iter()
+        .find(|d| d.name == "rustfmu")
+        .map(|d| d.rename.clone().unwrap_or_else(|| d.name.clone()))
+        .unwrap_or_else(|| "rustfmu".into());
     FmuCrate {
         package: p.name.to_string(),
         manifest_dir: dir.clone(),
         lib_name: lib.name.replace('-', "_"),
         documentation: path_of("documentation"),
         resources,
+        fmi_versions: meta.and_then(|m| m.get("fmi-versions")).map(parse_fmi_versions),
+        rustfmu_dependency,
     }
 }
 
@@ -156,6 +202,18 @@ impl Workspace {
         self.target_dir.join("fmu")
     }
 
+    /// Where `cargo fmu build` keeps a copy of each built library, per FMI version: cargo's own
+    /// `target/release/lib<name>.so` is overwritten by the build of the other version.
+    pub fn built_library(&self, c: &FmuCrate, version: FmiVersion) -> PathBuf {
+        let file = self.library(c);
+        let name = file.file_name().expect("a file name").to_owned();
+        let folder = match version {
+            FmiVersion::V2 => "fmi2",
+            FmiVersion::V3 => "fmi3",
+        };
+        self.target_dir.join("fmu-build").join(folder).join(name)
+    }
+
     /// The built library of a crate (release profile, host target).
     pub fn library(&self, c: &FmuCrate) -> PathBuf {
         let (prefix, ext) = match std::env::consts::OS {
@@ -169,26 +227,68 @@ impl Workspace {
     }
 }
 
-/// `cargo build --release -p ...` in the workspace.
-pub fn build(ws: &Workspace, crates: &[FmuCrate]) -> Result<(), String> {
+/// `cargo build --release -p ...` in the workspace: the FMI 2.0 libraries (rustfmu without
+/// features), or with `version` 3.0 the FMI 3.0 one of a single crate (`--features
+/// <rustfmu>/fmi3`).
+pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(&cargo);
-    cmd.current_dir(&ws.root).args(["build", "--release"]);
+    let mut args: Vec<String> = vec!["build".into(), "--release".into()];
     for c in crates {
-        cmd.args(["-p", &c.package]);
+        args.extend(["-p".into(), c.package.clone()]);
     }
-    eprintln!(
-        "fmu: {cargo} build --release {}",
-        crates
+    if version == FmiVersion::V3 {
+        let features: BTreeSet<String> = crates
             .iter()
-            .map(|c| format!("-p {}", c.package))
-            .collect::<Vec<_>>()
-            .join(" ")
-    );
-    let status = cmd.status().map_err(|e| format!("cannot run {cargo}: {e}"))?;
+            .map(|c| format!("{}/fmi3", c.rustfmu_dependency))
+            .collect();
+        args.extend(["--features".into(), features.into_iter().collect::<Vec<_>>().join(",")]);
+    }
+    eprintln!("fmu: {cargo} {}", args.join(" "));
+    let status = Command::new(&cargo)
+        .current_dir(&ws.root)
+        .args(&args)
+        .status()
+        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
     if status.success() {
         Ok(())
     } else {
         Err(format!("cargo build failed ({status})"))
+    }
+}
+
+/// Copies the library cargo just built (`target/release/lib<name>.so`) to
+/// [`Workspace::built_library`] before the next build overwrites it. Removed first and copied,
+/// never written through: cargo's file is a hard link to its own artifact.
+pub fn keep_library(ws: &Workspace, c: &FmuCrate, version: FmiVersion) -> Result<PathBuf, String> {
+    let from = ws.library(c);
+    let to = ws.built_library(c, version);
+    let dir = to.parent().expect("a folder");
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&to);
+    std::fs::copy(&from, &to).map_err(|e| format!("{} -> {}: {e}", from.display(), to.display()))?;
+    Ok(to)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fmi_versions_are_read_from_the_metadata() {
+        let both = parse_fmi_versions(&serde_json::json!(["2.0", "3.0"])).unwrap();
+        assert_eq!(
+            both.into_iter().collect::<Vec<_>>(),
+            vec![FmiVersion::V2, FmiVersion::V3]
+        );
+        let three = parse_fmi_versions(&serde_json::json!(["3.0"])).unwrap();
+        assert_eq!(three.into_iter().collect::<Vec<_>>(), vec![FmiVersion::V3]);
+        for bad in [
+            serde_json::json!("3.0"),
+            serde_json::json!([]),
+            serde_json::json!(["1.0"]),
+            serde_json::json!([3]),
+        ] {
+            assert!(parse_fmi_versions(&bad).is_err(), "{bad} was accepted");
+        }
     }
 }

@@ -1,7 +1,9 @@
 //! The command line shared by `cargo fmu` and `fmu-build`.
 
-use crate::cargo::{self, Workspace};
+use crate::cargo::{self, FmuCrate, Workspace};
 use clap::{Parser, Subcommand};
+use rustfmu::description::FmiVersion;
+use std::collections::BTreeSet;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -31,7 +33,8 @@ enum Cmd {
         #[arg(long)]
         rustfmu_path: Option<PathBuf>,
     },
-    /// Build FMU crates (release) and package target/fmu/<modelIdentifier>.fmu, then validate.
+    /// Build FMU crates (release) and package target/fmu/<modelIdentifier>.fmu (FMI 2.0) and
+    /// target/fmu/fmi3/<modelIdentifier>.fmu (FMI 3.0), then validate.
     Build {
         /// Cargo.toml of the crate or workspace (default: the one cargo finds from here).
         #[arg(long)]
@@ -45,6 +48,10 @@ enum Cmd {
         /// Also run fmpy's validator with this Python (needs `fmpy` installed there).
         #[arg(long)]
         python: Option<PathBuf>,
+        /// Which FMI versions to make: 2, 3 or both (repeatable, or a comma list; default: both,
+        /// or what a crate's `[package.metadata.fmu] fmi-versions` names).
+        #[arg(long = "fmi-version", value_delimiter = ',', value_name = "2|3|both")]
+        fmi_versions: Vec<String>,
     },
     /// Validate FMU files: archive layout, description, binary, a smoke run in a child process.
     Validate {
@@ -101,6 +108,8 @@ enum Cmd {
         library: PathBuf,
         guid: String,
         vrs: String,
+        #[arg(long = "fmi-version", default_value = "2.0")]
+        fmi_version: String,
     },
 }
 
@@ -124,7 +133,18 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             packages,
             workspace,
             python,
-        } => build(manifest_path.as_deref(), &packages, workspace, python.as_deref()).map(|_| ()),
+            fmi_versions,
+        } => {
+            let versions = parse_version_choice(&fmi_versions)?;
+            build_versions(
+                manifest_path.as_deref(),
+                &packages,
+                workspace,
+                python.as_deref(),
+                versions.as_ref(),
+            )
+            .map(|_| ())
+        }
         Cmd::Validate { fmus, python } => validate_all(&fmus, python.as_deref()),
         Cmd::Check {
             fmu,
@@ -139,7 +159,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
         }
         Cmd::Xml { write, manifest_path } => {
             let ws = cargo::workspace(manifest_path.as_deref())?;
-            committed_descriptions(&ws, !write)
+            committed_descriptions(&ws, !write, None)
         }
         Cmd::Ssp {
             systems,
@@ -149,13 +169,19 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             let ws = cargo::workspace(manifest_path.as_deref())?;
             write_ssp(&ws, systems.as_deref(), fmu_dir.as_deref())
         }
-        Cmd::SmokeRun { library, guid, vrs } => {
+        Cmd::SmokeRun {
+            library,
+            guid,
+            vrs,
+            fmi_version,
+        } => {
+            let version = cargo::parse_fmi_version(&fmi_version)?;
             let vrs: Vec<u32> = vrs
                 .split(',')
                 .filter(|s| !s.is_empty())
                 .filter_map(|s| s.parse().ok())
                 .collect();
-            let problems = crate::validate::smoke_run(&library, &guid, &vrs);
+            let problems = crate::validate::smoke_run_version(version, &library, &guid, &vrs);
             for p in &problems {
                 println!("{p}");
             }
@@ -208,29 +234,158 @@ fn check(
 /// The hidden subcommand a `check` child runs (fmi2_conformance::runner::worker_main).
 const CHECK_WORKER: &str = "__check-worker";
 
-/// Builds and packages the selected crates; for a whole workspace also refreshes the committed
-/// descriptions named in `[workspace.metadata.fmu]`. Returns the packaged files.
+/// `--fmi-version 2,3` / `--fmi-version both` ...: `None` when not given.
+pub fn parse_version_choice(args: &[String]) -> Result<Option<BTreeSet<FmiVersion>>, String> {
+    if args.is_empty() {
+        return Ok(None);
+    }
+    let mut out = BTreeSet::new();
+    for a in args {
+        match a.trim() {
+            "both" | "all" => out.extend([FmiVersion::V2, FmiVersion::V3]),
+            v => {
+                out.insert(cargo::parse_fmi_version(v).map_err(|e| format!("--fmi-version: {e}, or both"))?);
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+/// The versions to build of a crate: what `--fmi-version` asks for among those the crate's
+/// `fmi-versions` names (default: both).
+fn versions_of(c: &FmuCrate, asked: Option<&BTreeSet<FmiVersion>>) -> Result<BTreeSet<FmiVersion>, String> {
+    let both = BTreeSet::from([FmiVersion::V2, FmiVersion::V3]);
+    let own = match &c.fmi_versions {
+        None => both,
+        Some(Ok(v)) => v.clone(),
+        Some(Err(e)) => return Err(format!("{}: [package.metadata.fmu] {e}", c.package)),
+    };
+    Ok(match asked {
+        None => own,
+        Some(asked) => own.intersection(asked).copied().collect(),
+    })
+}
+
+fn version_list(v: &BTreeSet<FmiVersion>) -> String {
+    v.iter().map(|v| v.text()).collect::<Vec<_>>().join(" and ")
+}
+
+/// Builds and packages the selected crates in both FMI versions; for a whole workspace also
+/// refreshes the committed descriptions named in `[workspace.metadata.fmu]`. Returns the
+/// packaged files.
 pub fn build(
     manifest_path: Option<&Path>,
     packages: &[String],
     all: bool,
     python: Option<&Path>,
 ) -> Result<Vec<PathBuf>, String> {
+    build_versions(manifest_path, packages, all, python, None)
+}
+
+/// [`build`] of the FMI versions asked for (`None`: both, or what each crate names).
+///
+/// For each version: `cargo build --release` (FMI 3.0: `--features rustfmu/fmi3`, one crate at a
+/// time), each library copied aside right after its build (the next build overwrites cargo's
+/// file), its version checked against the one asked for, and packaged: FMI 2.0 as
+/// `target/fmu/<id>.fmu`, FMI 3.0 as `target/fmu/fmi3/<id>.fmu`.
+pub fn build_versions(
+    manifest_path: Option<&Path>,
+    packages: &[String],
+    all: bool,
+    python: Option<&Path>,
+    asked: Option<&BTreeSet<FmiVersion>>,
+) -> Result<Vec<PathBuf>, String> {
     let ws = cargo::workspace(manifest_path)?;
     let crates = ws.select(packages, all)?;
-    cargo::build(&ws, &crates)?;
+    let mut plan: Vec<(FmuCrate, BTreeSet<FmiVersion>)> = Vec::new();
+    for c in crates {
+        let versions = versions_of(&c, asked)?;
+        if versions.is_empty() {
+            let own = match &c.fmi_versions {
+                Some(Ok(v)) => version_list(v),
+                _ => "2.0 and 3.0".into(),
+            };
+            eprintln!(
+                "fmu: warning: {} is skipped: it is built as FMI {own} ([package.metadata.fmu] fmi-versions), --fmi-version asks for FMI {}",
+                c.package,
+                version_list(asked.expect("empty only by the choice"))
+            );
+            continue;
+        }
+        plan.push((c, versions));
+    }
+    if plan.is_empty() {
+        return Err("nothing to build for the FMI versions asked for".into());
+    }
+    let v2: Vec<FmuCrate> = plan
+        .iter()
+        .filter(|(_, v)| v.contains(&FmiVersion::V2))
+        .map(|(c, _)| c.clone())
+        .collect();
+    let v3: Vec<FmuCrate> = plan
+        .iter()
+        .filter(|(_, v)| v.contains(&FmiVersion::V3))
+        .map(|(c, _)| c.clone())
+        .collect();
+    let mut libraries: Vec<(FmuCrate, FmiVersion, PathBuf)> = Vec::new();
+    if !v2.is_empty() {
+        cargo::build(&ws, &v2, FmiVersion::V2)?;
+        for c in &v2 {
+            libraries.push((c.clone(), FmiVersion::V2, cargo::keep_library(&ws, c, FmiVersion::V2)?));
+        }
+    }
+    for c in &v3 {
+        cargo::build(&ws, std::slice::from_ref(c), FmiVersion::V3)?;
+        libraries.push((c.clone(), FmiVersion::V3, cargo::keep_library(&ws, c, FmiVersion::V3)?));
+    }
+    if !v2.is_empty() && !v3.is_empty() {
+        // Leaves target/release/lib<name>.so the FMI 2.0 library, as before FMI 3.0 existed
+        // (cargo finds everything fresh and links its FMI 2.0 artifact there again).
+        cargo::build(&ws, &v2, FmiVersion::V2)?;
+    }
     let mut built = Vec::new();
-    for c in &crates {
-        let p = crate::bundle::package(c, &ws.library(c), &ws.fmu_dir())?;
-        eprintln!("fmu: packaged {}", p.fmu.display());
+    for (c, version, library) in &libraries {
+        check_built_version(c, *version, library)?;
+        let p = crate::bundle::package(c, library, &ws.fmu_dir())?;
+        eprintln!("fmu: packaged {} (FMI {})", p.fmu.display(), p.version.text());
         built.push(p.fmu);
     }
     validate_all(&built, python)?;
     if all && packages.is_empty() {
-        committed_descriptions(&ws, false)?;
+        let libs: Vec<PathBuf> = libraries.iter().map(|(_, _, l)| l.clone()).collect();
+        committed_descriptions(&ws, false, Some(&libs))?;
         write_ssp(&ws, None, None)?;
     }
     Ok(built)
+}
+
+/// The library of a build for `version` must implement that version: a crate that calls
+/// `export_fmi2!` (or `export_fmi3!`) itself gives the same version whatever the feature.
+fn check_built_version(c: &FmuCrate, version: FmiVersion, library: &Path) -> Result<(), String> {
+    let binary = std::fs::read(library).map_err(|e| format!("{}: {e}", library.display()))?;
+    let me = crate::bundle::read_library(&binary).map_err(|e| format!("{}: {}: {e}", c.package, library.display()))?;
+    let got = me.interfaces.version;
+    if got == version {
+        return Ok(());
+    }
+    let (called, other) = match got {
+        FmiVersion::V2 => ("rustfmu::export_fmi2!", "2.0"),
+        FmiVersion::V3 => ("rustfmu::export_fmi3!", "3.0"),
+    };
+    let how = match version {
+        FmiVersion::V3 => "cargo build --release --features rustfmu/fmi3".to_string(),
+        FmiVersion::V2 => "cargo build --release (without rustfmu's feature fmi3)".to_string(),
+    };
+    Err(format!(
+        "{}: the FMI {} build ({how}) gave an FMI {} library: the crate calls `{called}` itself. \
+         Call `rustfmu::export_fmu!(YourModel)` instead (FMI 2.0 by default, FMI 3.0 with the feature: \
+         both versions from one line), or build FMI {other} only: `fmi-versions = [\"{other}\"]` in \
+         [package.metadata.fmu] of its Cargo.toml, or `cargo fmu build --fmi-version {}`",
+        c.package,
+        version.text(),
+        got.text(),
+        &other[..1],
+    ))
 }
 
 /// The SSP files of a systems file, or of those the workspace names.
@@ -249,8 +404,10 @@ fn write_ssp(ws: &Workspace, systems_file: Option<&Path>, fmu_dir: Option<&Path>
     Ok(())
 }
 
-/// The committed copy of every packaged description, if the workspace keeps one.
-fn committed_descriptions(ws: &Workspace, check: bool) -> Result<(), String> {
+/// The committed copy of every packaged description, if the workspace keeps one: FMI 2.0 as
+/// `<folder>/<id>.xml`, FMI 3.0 as `<folder>/fmi3/<id>.xml`. `libraries`: the libraries just
+/// built; `None`: the copies the last `cargo fmu build` kept (else cargo's own library).
+fn committed_descriptions(ws: &Workspace, check: bool, libraries: Option<&[PathBuf]>) -> Result<(), String> {
     let Some(dir) = ws.metadata_path("model-descriptions") else {
         return if check {
             Err("the workspace names no [workspace.metadata.fmu] model-descriptions folder".into())
@@ -258,18 +415,37 @@ fn committed_descriptions(ws: &Workspace, check: bool) -> Result<(), String> {
             Ok(())
         };
     };
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let libraries: Vec<PathBuf> = match libraries {
+        Some(l) => l.to_vec(),
+        None => ws
+            .crates
+            .iter()
+            .flat_map(|c| {
+                let kept: Vec<PathBuf> = [FmiVersion::V2, FmiVersion::V3]
+                    .into_iter()
+                    .map(|v| ws.built_library(c, v))
+                    .filter(|p| p.is_file())
+                    .collect();
+                if kept.is_empty() { vec![ws.library(c)] } else { kept }
+            })
+            .collect(),
+    };
     let mut stale = Vec::new();
-    for c in &ws.crates {
-        let binary = std::fs::read(ws.library(c)).map_err(|e| {
+    for library in &libraries {
+        let binary = std::fs::read(library).map_err(|e| {
             format!(
                 "{}: {e} (build first: cargo run --release -p fmu-build)",
-                ws.library(c).display()
+                library.display()
             )
         })?;
         let me = crate::bundle::read_library(&binary)?;
-        let xml = crate::xml::fmi2(&me.description, me.interfaces, &me.guid)?;
-        let path = dir.join(format!("{}.xml", me.description.model_identifier));
+        let xml = crate::bundle::model_description(&me)?;
+        let folder = match me.interfaces.version {
+            FmiVersion::V2 => dir.clone(),
+            FmiVersion::V3 => dir.join("fmi3"),
+        };
+        std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+        let path = folder.join(format!("{}.xml", me.description.model_identifier));
         let old = std::fs::read_to_string(&path).unwrap_or_default();
         if old != xml {
             if check {
@@ -341,6 +517,7 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
         packages: vec![],
         workspace: true,
         python: None,
+        fmi_versions: vec![],
     });
     match run(cmd, tool) {
         Ok(()) => ExitCode::SUCCESS,

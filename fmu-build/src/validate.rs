@@ -5,7 +5,9 @@
 use quick_xml::Reader;
 use quick_xml::events::Event;
 use rustfmu::__private::abi::*;
-use std::ffi::{CStr, CString, c_char};
+use rustfmu::description::FmiVersion;
+use std::collections::BTreeSet;
+use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::Path;
 
 /// Every function of the FMI 2.0 co-simulation interface.
@@ -46,8 +48,140 @@ pub const FMI2_CS_FUNCTIONS: &[&str] = &[
     "fmi2GetStringStatus",
 ];
 
+/// Every function of the FMI 2.0 standard (model exchange and co-simulation), as
+/// `fmi2Functions.h` declares them: an FMI 3.0 binary exports none of them.
+pub const FMI2_FUNCTIONS: &[&str] = &[
+    "fmi2GetTypesPlatform",
+    "fmi2GetVersion",
+    "fmi2SetDebugLogging",
+    "fmi2Instantiate",
+    "fmi2FreeInstance",
+    "fmi2SetupExperiment",
+    "fmi2EnterInitializationMode",
+    "fmi2ExitInitializationMode",
+    "fmi2Terminate",
+    "fmi2Reset",
+    "fmi2GetReal",
+    "fmi2GetInteger",
+    "fmi2GetBoolean",
+    "fmi2GetString",
+    "fmi2SetReal",
+    "fmi2SetInteger",
+    "fmi2SetBoolean",
+    "fmi2SetString",
+    "fmi2GetFMUstate",
+    "fmi2SetFMUstate",
+    "fmi2FreeFMUstate",
+    "fmi2SerializedFMUstateSize",
+    "fmi2SerializeFMUstate",
+    "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative",
+    "fmi2EnterEventMode",
+    "fmi2NewDiscreteStates",
+    "fmi2EnterContinuousTimeMode",
+    "fmi2CompletedIntegratorStep",
+    "fmi2SetTime",
+    "fmi2SetContinuousStates",
+    "fmi2GetDerivatives",
+    "fmi2GetEventIndicators",
+    "fmi2GetContinuousStates",
+    "fmi2GetNominalsOfContinuousStates",
+    "fmi2SetRealInputDerivatives",
+    "fmi2GetRealOutputDerivatives",
+    "fmi2DoStep",
+    "fmi2CancelStep",
+    "fmi2GetStatus",
+    "fmi2GetRealStatus",
+    "fmi2GetIntegerStatus",
+    "fmi2GetBooleanStatus",
+    "fmi2GetStringStatus",
+];
+
+/// Every function of the FMI 3.0 standard, as `fmi3Functions.h` declares them (75): an FMI 3.0
+/// binary exports all of them (those it does not support refuse with fmi3Error), an FMI 2.0
+/// binary none.
+pub const FMI3_FUNCTIONS: &[&str] = &[
+    "fmi3GetVersion",
+    "fmi3SetDebugLogging",
+    "fmi3InstantiateModelExchange",
+    "fmi3InstantiateCoSimulation",
+    "fmi3InstantiateScheduledExecution",
+    "fmi3FreeInstance",
+    "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode",
+    "fmi3EnterEventMode",
+    "fmi3Terminate",
+    "fmi3Reset",
+    "fmi3GetFloat32",
+    "fmi3GetFloat64",
+    "fmi3GetInt8",
+    "fmi3GetUInt8",
+    "fmi3GetInt16",
+    "fmi3GetUInt16",
+    "fmi3GetInt32",
+    "fmi3GetUInt32",
+    "fmi3GetInt64",
+    "fmi3GetUInt64",
+    "fmi3GetBoolean",
+    "fmi3GetString",
+    "fmi3GetBinary",
+    "fmi3GetClock",
+    "fmi3SetFloat32",
+    "fmi3SetFloat64",
+    "fmi3SetInt8",
+    "fmi3SetUInt8",
+    "fmi3SetInt16",
+    "fmi3SetUInt16",
+    "fmi3SetInt32",
+    "fmi3SetUInt32",
+    "fmi3SetInt64",
+    "fmi3SetUInt64",
+    "fmi3SetBoolean",
+    "fmi3SetString",
+    "fmi3SetBinary",
+    "fmi3SetClock",
+    "fmi3GetNumberOfVariableDependencies",
+    "fmi3GetVariableDependencies",
+    "fmi3GetFMUState",
+    "fmi3SetFMUState",
+    "fmi3FreeFMUState",
+    "fmi3SerializedFMUStateSize",
+    "fmi3SerializeFMUState",
+    "fmi3DeserializeFMUState",
+    "fmi3GetDirectionalDerivative",
+    "fmi3GetAdjointDerivative",
+    "fmi3EnterConfigurationMode",
+    "fmi3ExitConfigurationMode",
+    "fmi3GetIntervalDecimal",
+    "fmi3GetIntervalFraction",
+    "fmi3GetShiftDecimal",
+    "fmi3GetShiftFraction",
+    "fmi3SetIntervalDecimal",
+    "fmi3SetIntervalFraction",
+    "fmi3SetShiftDecimal",
+    "fmi3SetShiftFraction",
+    "fmi3EvaluateDiscreteStates",
+    "fmi3UpdateDiscreteStates",
+    "fmi3EnterContinuousTimeMode",
+    "fmi3CompletedIntegratorStep",
+    "fmi3SetTime",
+    "fmi3SetContinuousStates",
+    "fmi3GetContinuousStateDerivatives",
+    "fmi3GetEventIndicators",
+    "fmi3GetContinuousStates",
+    "fmi3GetNominalsOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators",
+    "fmi3GetNumberOfContinuousStates",
+    "fmi3EnterStepMode",
+    "fmi3GetOutputDerivatives",
+    "fmi3DoStep",
+    "fmi3ActivateModelPartition",
+];
+
 struct Description {
+    version: FmiVersion,
     model_identifier: String,
+    /// The GUID (FMI 2.0) or instantiationToken (FMI 3.0).
     guid: String,
     real_vrs: Vec<u32>,
 }
@@ -55,12 +189,14 @@ struct Description {
 fn read_description(xml: &str) -> Result<Description, String> {
     let mut reader = Reader::from_str(xml);
     let mut d = Description {
+        version: FmiVersion::V2,
         model_identifier: String::new(),
         guid: String::new(),
         real_vrs: vec![],
     };
     let mut fmi_version = String::new();
     let mut in_var: Option<u32> = None;
+    let mut in_variables = false;
     loop {
         match reader.read_event() {
             Err(e) => {
@@ -70,6 +206,7 @@ fn read_description(xml: &str) -> Result<Description, String> {
                 ));
             }
             Ok(Event::Eof) => break,
+            Ok(Event::End(e)) if e.name().as_ref() == b"ModelVariables" => in_variables = false,
             Ok(Event::Start(e) | Event::Empty(e)) => {
                 let attr = |name: &[u8]| -> Option<String> {
                     e.attributes()
@@ -81,12 +218,23 @@ fn read_description(xml: &str) -> Result<Description, String> {
                 match e.name().as_ref() {
                     b"fmiModelDescription" => {
                         fmi_version = attr(b"fmiVersion").unwrap_or_default();
-                        d.guid = attr(b"guid").unwrap_or_default();
+                        d.guid = if fmi_version == "3.0" {
+                            attr(b"instantiationToken").unwrap_or_default()
+                        } else {
+                            attr(b"guid").unwrap_or_default()
+                        };
                     }
                     b"CoSimulation" => d.model_identifier = attr(b"modelIdentifier").unwrap_or_default(),
+                    b"ModelVariables" => in_variables = true,
                     b"ScalarVariable" => in_var = attr(b"valueReference").and_then(|v| v.parse().ok()),
                     b"Real" => {
                         if let Some(vr) = in_var.take() {
+                            d.real_vrs.push(vr);
+                        }
+                    }
+                    // FMI 3.0: the variable's element carries its value reference.
+                    b"Float64" if in_variables => {
+                        if let Some(vr) = attr(b"valueReference").and_then(|v| v.parse().ok()) {
                             d.real_vrs.push(vr);
                         }
                     }
@@ -96,9 +244,11 @@ fn read_description(xml: &str) -> Result<Description, String> {
             Ok(_) => {}
         }
     }
-    if fmi_version != "2.0" {
-        return Err(format!("fmiVersion is '{fmi_version}', expected '2.0'"));
-    }
+    d.version = match fmi_version.as_str() {
+        "2.0" => FmiVersion::V2,
+        "3.0" => FmiVersion::V3,
+        other => return Err(format!("fmiVersion is '{other}', expected '2.0' or '3.0'")),
+    };
     if d.model_identifier.is_empty() {
         return Err("no <CoSimulation modelIdentifier=...>".into());
     }
@@ -131,11 +281,28 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     }
     let xml = archive::read_model_description(&mut zip)?;
     let d = read_description(&xml)?;
-    let (folder, ext) = crate::bundle::platform()?;
+    let (folder, ext) = crate::bundle::platform_of(d.version)?;
     let bin_name = format!("binaries/{folder}/{}.{ext}", d.model_identifier);
     if !zip.has_entry(&bin_name) {
         return Err(format!(
-            "no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix)"
+            "no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix, in the FMI {} platform folder)",
+            d.version.text()
+        ));
+    }
+    let other_version = match d.version {
+        FmiVersion::V2 => FmiVersion::V3,
+        FmiVersion::V3 => FmiVersion::V2,
+    };
+    if let Ok((other, _)) = crate::bundle::platform_of(other_version)
+        && zip
+            .entry_names()
+            .iter()
+            .any(|n| n.starts_with(&format!("binaries/{other}/")))
+    {
+        problems.push(format!(
+            "binaries/{other}/ is the FMI {} name of this platform; an FMI {} FMU has its binary in binaries/{folder}/",
+            other_version.text(),
+            d.version.text()
         ));
     }
     let dir = archive::extract_private(&mut zip, &std::env::temp_dir(), &archive::Limits::default())?;
@@ -143,17 +310,130 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
     // A binary made by rustfmu describes itself: the packaged description must be what it says.
     if let Ok(me) = crate::bundle::read_library(&binary) {
-        match crate::xml::fmi2(&me.description, me.interfaces, &me.guid) {
-            Ok(generated) if generated == xml => {}
-            Ok(_) => problems.push(format!(
-                "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
-            )),
-            Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
+        if me.interfaces.version != d.version {
+            problems.push(format!(
+                "modelDescription.xml says FMI {}, {bin_name} implements FMI {}",
+                d.version.text(),
+                me.interfaces.version.text()
+            ));
+        } else if me.guid != d.guid {
+            problems.push(format!(
+                "the {} in modelDescription.xml is {}, {bin_name} expects {}",
+                match d.version {
+                    FmiVersion::V2 => "guid",
+                    FmiVersion::V3 => "instantiationToken",
+                },
+                d.guid,
+                me.guid
+            ));
+        } else {
+            match crate::bundle::model_description(&me) {
+                Ok(generated) if generated == xml => {}
+                Ok(_) => problems.push(format!(
+                    "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
+                )),
+                Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
+            }
         }
     }
+    problems.extend(export_problems(&binary, d.version, &bin_name));
     problems.extend(smoke_run_in_child(&so, &d));
     drop(dir);
     Ok(problems)
+}
+
+/// The names an ELF shared library exports (defined global or weak symbols of `.dynsym`);
+/// `None` for another format (PE, Mach-O) or a file this reader does not understand.
+pub fn elf_exports(bin: &[u8]) -> Option<Vec<String>> {
+    let u16_at = |o: usize| Some(u16::from_le_bytes(bin.get(o..o + 2)?.try_into().ok()?));
+    let u32_at = |o: usize| Some(u32::from_le_bytes(bin.get(o..o + 4)?.try_into().ok()?));
+    let u64_at = |o: usize| Some(u64::from_le_bytes(bin.get(o..o + 8)?.try_into().ok()?) as usize);
+    // ELF, 64-bit, little-endian.
+    if bin.get(..6)? != b"\x7fELF\x02\x01" {
+        return None;
+    }
+    let (shoff, shentsize, shnum) = (u64_at(0x28)?, u16_at(0x3a)? as usize, u16_at(0x3c)? as usize);
+    let section = |i: usize| shoff.checked_add(i.checked_mul(shentsize)?);
+    let mut out = Vec::new();
+    for i in 0..shnum {
+        let sh = section(i)?;
+        if u32_at(sh + 4)? != 11 {
+            continue; // not SHT_DYNSYM
+        }
+        let (off, size, link, entsize) = (
+            u64_at(sh + 0x18)?,
+            u64_at(sh + 0x20)?,
+            u32_at(sh + 0x28)? as usize,
+            u64_at(sh + 0x38)?,
+        );
+        let strtab = section(link)?;
+        let (str_off, str_size) = (u64_at(strtab + 0x18)?, u64_at(strtab + 0x20)?);
+        let strings = bin.get(str_off..str_off.checked_add(str_size)?)?;
+        if entsize < 24 {
+            return None;
+        }
+        for k in 0..size / entsize {
+            let sym = off.checked_add(k * entsize)?;
+            let (name, info, shndx) = (u32_at(sym)? as usize, *bin.get(sym + 4)?, u16_at(sym + 6)?);
+            let binding = info >> 4;
+            if shndx == 0 || !(binding == 1 || binding == 2) {
+                continue; // undefined, or local
+            }
+            let rest = strings.get(name..)?;
+            let end = rest.iter().position(|b| *b == 0)?;
+            out.push(String::from_utf8_lossy(&rest[..end]).into_owned());
+        }
+    }
+    Some(out)
+}
+
+/// What a binary exports against what its FMI version asks: every function of the standard of
+/// its version, no function of the other version's, no other `fmi2`/`fmi3` name. (ELF only;
+/// the smoke run looks every function of the standard up on any platform.)
+pub fn export_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<String> {
+    let Some(exports) = elf_exports(binary) else {
+        return vec![];
+    };
+    let (own, own_prefix, other, other_prefix) = match version {
+        FmiVersion::V2 => (FMI2_FUNCTIONS, "fmi2", FMI3_FUNCTIONS, "fmi3"),
+        FmiVersion::V3 => (FMI3_FUNCTIONS, "fmi3", FMI2_FUNCTIONS, "fmi2"),
+    };
+    let mut problems = Vec::new();
+    let exported: BTreeSet<&str> = exports.iter().map(String::as_str).collect();
+    // FMI 2.0: the co-simulation functions are required (model exchange ones where offered).
+    let required: &[&str] = match version {
+        FmiVersion::V2 => FMI2_CS_FUNCTIONS,
+        FmiVersion::V3 => FMI3_FUNCTIONS,
+    };
+    let missing: Vec<&str> = required.iter().copied().filter(|f| !exported.contains(f)).collect();
+    if !missing.is_empty() {
+        problems.push(format!("{bin_name} does not export {}", missing.join(", ")));
+    }
+    let foreign: Vec<&str> = exported
+        .iter()
+        .copied()
+        .filter(|n| n.starts_with(other_prefix) || other.contains(n))
+        .collect();
+    if !foreign.is_empty() {
+        problems.push(format!(
+            "{bin_name} is an FMI {} binary but exports {}: one binary implements one FMI version",
+            version.text(),
+            foreign.join(", ")
+        ));
+    }
+    let unknown: Vec<&str> = exported
+        .iter()
+        .copied()
+        .filter(|n| n.starts_with(own_prefix) && !own.contains(n))
+        .collect();
+    if !unknown.is_empty() {
+        problems.push(format!(
+            "{bin_name} exports {}, which the FMI {} standard does not define",
+            unknown.join(", "),
+            version.text()
+        ));
+    }
+    problems
 }
 
 /// Messages the FMU logged during the smoke run, collected through the logger's environment.
@@ -194,13 +474,15 @@ fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
     let exe = match std::env::current_exe() {
         Ok(e) if e.file_stem().is_some_and(|s| s == "cargo-fmu" || s == "fmu-build") => e,
         // Called from elsewhere (tests): run in this process.
-        _ => return smoke_run(so, &d.guid, &d.real_vrs),
+        _ => return smoke_run_version(d.version, so, &d.guid, &d.real_vrs),
     };
     match std::process::Command::new(&exe)
         .arg("__smoke-run")
         .arg(so)
         .arg(&d.guid)
         .arg(vrs.join(","))
+        .arg("--fmi-version")
+        .arg(d.version.text())
         .output()
     {
         Ok(out) if out.status.success() => vec![],
@@ -228,6 +510,166 @@ fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
     }
 }
 
+/// [`smoke_run`] (FMI 2.0) or [`smoke_run3`] (FMI 3.0).
+pub fn smoke_run_version(version: FmiVersion, so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
+    match version {
+        FmiVersion::V2 => smoke_run(so, guid, real_vrs),
+        FmiVersion::V3 => smoke_run3(so, guid, real_vrs),
+    }
+}
+
+/// The importer's logger of FMI 3.0 (not variadic: the message comes formatted).
+unsafe extern "C" fn collect_log3(env: *mut c_void, status: i32, category: *const c_char, message: *const c_char) {
+    // SAFETY: env is the &mut Log given to fmi3InstantiateCoSimulation; strings are
+    // NUL-terminated or NULL.
+    unsafe {
+        let log = &mut *(env as *mut Log);
+        let text = |p: *const c_char| {
+            if p.is_null() {
+                String::new()
+            } else {
+                CStr::from_ptr(p).to_string_lossy().into_owned()
+            }
+        };
+        log.0
+            .push(format!("[status {status}, {}] {}", text(category), text(message)));
+    }
+}
+
+/// FMI 3.0: loads the binary, checks that it exports every fmi3 function of the standard and no
+/// fmi2 one, and runs 0.1 s of co-simulation from the start values.
+pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32]) -> Vec<String> {
+    type Instance = *mut c_void;
+    type LogMessage = unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char);
+    // fmi3InstantiateCoSimulationTYPE: instanceName, instantiationToken, resourcePath, visible,
+    // loggingOn, eventModeUsed, earlyReturnAllowed, requiredIntermediateVariables, their number,
+    // instanceEnvironment, logMessage, intermediateUpdate.
+    type InstantiateCoSimulation = unsafe extern "C" fn(
+        *const c_char,
+        *const c_char,
+        *const c_char,
+        bool,
+        bool,
+        bool,
+        bool,
+        *const u32,
+        usize,
+        *mut c_void,
+        Option<LogMessage>,
+        *const c_void,
+    ) -> Instance;
+    let mut problems = Vec::new();
+    // SAFETY: loading our own freshly built FMU binary; its initializers are Rust std's only.
+    let lib = match unsafe { libloading::Library::new(so) } {
+        Ok(l) => l,
+        Err(e) => return vec![format!("the binary does not load: {e}")],
+    };
+    for f in FMI3_FUNCTIONS {
+        // SAFETY: only the symbol's presence is checked.
+        if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_err() {
+            problems.push(format!("the binary does not export {f}"));
+        }
+    }
+    for f in FMI2_FUNCTIONS {
+        // SAFETY: only the symbol's presence is checked.
+        if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_ok() {
+            problems.push(format!("the FMI 3.0 binary exports {f}"));
+        }
+    }
+    if !problems.is_empty() {
+        return problems;
+    }
+    // SAFETY: the signatures are those of fmi3FunctionTypes.h (fmi3Boolean is C bool,
+    // fmi3Status an int, fmi3ValueReference uint32_t).
+    unsafe {
+        let version: libloading::Symbol<unsafe extern "C" fn() -> *const c_char> = lib.get(b"fmi3GetVersion").unwrap();
+        let v = CStr::from_ptr(version()).to_string_lossy().into_owned();
+        if v != "3.0" {
+            problems.push(format!("fmi3GetVersion returns '{v}', not '3.0'"));
+        }
+        let instantiate: libloading::Symbol<InstantiateCoSimulation> = lib.get(b"fmi3InstantiateCoSimulation").unwrap();
+        let enter_init: libloading::Symbol<unsafe extern "C" fn(Instance, bool, f64, f64, bool, f64) -> i32> =
+            lib.get(b"fmi3EnterInitializationMode").unwrap();
+        let unary =
+            |name: &[u8]| -> libloading::Symbol<unsafe extern "C" fn(Instance) -> i32> { lib.get(name).unwrap() };
+        let do_step: libloading::Symbol<
+            unsafe extern "C" fn(Instance, f64, f64, bool, *mut bool, *mut bool, *mut bool, *mut f64) -> i32,
+        > = lib.get(b"fmi3DoStep").unwrap();
+        let get_float64: libloading::Symbol<unsafe extern "C" fn(Instance, *const u32, usize, *mut f64, usize) -> i32> =
+            lib.get(b"fmi3GetFloat64").unwrap();
+        let free: libloading::Symbol<unsafe extern "C" fn(Instance)> = lib.get(b"fmi3FreeInstance").unwrap();
+
+        let mut log = Log(Vec::new());
+        let name = CString::new("fmu-build-validate").unwrap();
+        let token = CString::new(token).unwrap_or_default();
+        let c = instantiate(
+            name.as_ptr(),
+            token.as_ptr(),
+            std::ptr::null(),
+            false,
+            false,
+            false,
+            false,
+            std::ptr::null(),
+            0,
+            &mut log as *mut Log as *mut c_void,
+            Some(collect_log3),
+            std::ptr::null(),
+        );
+        if c.is_null() {
+            problems.push(format!(
+                "fmi3InstantiateCoSimulation returned NULL: {}",
+                log.0.join("; ")
+            ));
+            return problems;
+        }
+        let mut status = enter_init(c, false, 0.0, 0.0, true, 1.0);
+        status = status.max(unary(b"fmi3ExitInitializationMode")(c));
+        let mut flags = [false; 3];
+        let mut reached = 0.0;
+        for i in 0..10 {
+            let t = i as f64 * 0.01;
+            let [event, terminate, early] = &mut flags;
+            status = status.max(do_step(c, t, 0.01, true, event, terminate, early, &mut reached));
+            if status == 0 && (reached - (t + 0.01)).abs() > 1e-12 {
+                problems.push(format!(
+                    "fmi3DoStep from {t} by 0.01 returned fmi3OK with lastSuccessfulTime {reached}"
+                ));
+                break;
+            }
+            if flags.iter().any(|f| *f) {
+                problems.push(format!(
+                    "fmi3DoStep from {t}: eventHandlingNeeded, terminateSimulation, earlyReturn = {flags:?} (this FMU has no events and no early return)"
+                ));
+                break;
+            }
+        }
+        let mut values = vec![0.0; real_vrs.len()];
+        status = status.max(get_float64(
+            c,
+            real_vrs.as_ptr(),
+            real_vrs.len(),
+            values.as_mut_ptr(),
+            values.len(),
+        ));
+        status = status.max(unary(b"fmi3Terminate")(c));
+        free(c);
+        if status != 0 {
+            problems.push(format!(
+                "a 0.1 s run from the start values did not return fmi3OK (worst status {status}): {}",
+                log.0.join("; ")
+            ));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            problems.push(format!(
+                "Float64 value reference {} is {} after the run",
+                real_vrs[i], values[i]
+            ));
+        }
+    }
+    problems
+}
+
 /// Loads the binary, checks its exports, and runs 0.1 s from the start values.
 pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
     let mut problems = Vec::new();
@@ -240,6 +682,12 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
         // SAFETY: only the symbol's presence is checked.
         if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_err() {
             problems.push(format!("the binary does not export {f}"));
+        }
+    }
+    for f in FMI3_FUNCTIONS {
+        // SAFETY: only the symbol's presence is checked.
+        if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_ok() {
+            problems.push(format!("the FMI 2.0 binary exports {f}"));
         }
     }
     if !problems.is_empty() {
@@ -374,6 +822,7 @@ pub fn info(fmu: &Path) -> Result<String, String> {
     let mut interfaces = Vec::new();
     let mut variables = Vec::new();
     let mut current: Option<(String, String, String)> = None;
+    let (mut fmi3, mut in_variables) = (false, false);
     loop {
         match reader.read_event() {
             Err(e) => {
@@ -383,6 +832,7 @@ pub fn info(fmu: &Path) -> Result<String, String> {
                 )));
             }
             Ok(Event::Eof) => break,
+            Ok(Event::End(e)) if e.name().as_ref() == b"ModelVariables" => in_variables = false,
             Ok(Event::Start(e) | Event::Empty(e)) => {
                 let attr = |name: &[u8]| -> String {
                     e.attributes()
@@ -393,14 +843,19 @@ pub fn info(fmu: &Path) -> Result<String, String> {
                         .unwrap_or_default()
                 };
                 match e.name().as_ref() {
+                    b"ModelVariables" => in_variables = true,
                     b"fmiModelDescription" => {
+                        fmi3 = attr(b"fmiVersion").starts_with('3');
                         out.push_str(&format!(
                             "{}: FMI {}, model '{}', version '{}'\n  GUID/token {}\n  generated by {}\n  {}\n",
                             fmu.display(),
                             attr(b"fmiVersion"),
                             attr(b"modelName"),
                             attr(b"version"),
-                            attr(b"guid"),
+                            match attr(b"guid") {
+                                g if g.is_empty() => attr(b"instantiationToken"),
+                                g => g,
+                            },
                             attr(b"generationTool"),
                             attr(b"description")
                         ));
@@ -432,6 +887,29 @@ pub fn info(fmu: &Path) -> Result<String, String> {
                         };
                         *counts.entry(causality.clone()).or_default() += 1;
                         current = Some((attr(b"name"), causality, attr(b"valueReference")));
+                    }
+                    // FMI 3.0: one element per variable, named after its type.
+                    b"Float32" | b"Float64" | b"Int8" | b"UInt8" | b"Int16" | b"UInt16" | b"Int32" | b"UInt32"
+                    | b"Int64" | b"UInt64" | b"Boolean" | b"String" | b"Binary" | b"Enumeration" | b"Clock"
+                        if in_variables && fmi3 =>
+                    {
+                        let causality = match attr(b"causality") {
+                            c if c.is_empty() => "local".to_string(),
+                            c => c,
+                        };
+                        *counts.entry(causality.clone()).or_default() += 1;
+                        let unit = attr(b"unit");
+                        variables.push(format!(
+                            "    {:>5} {} ({causality}, {}{})",
+                            attr(b"valueReference"),
+                            attr(b"name"),
+                            String::from_utf8_lossy(e.name().as_ref()),
+                            if unit.is_empty() {
+                                String::new()
+                            } else {
+                                format!(", {unit}")
+                            }
+                        ));
                     }
                     b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration" => {
                         if let Some((name, causality, vr)) = current.take() {

@@ -1,10 +1,12 @@
-//! `modelDescription.xml` (FMI 2.0), written with quick-xml from the typed description that
-//! the built library carries, in the element order of the XSD.
+//! `modelDescription.xml`, FMI 2.0 ([`fmi2`]) and FMI 3.0 ([`fmi3`]), written with quick-xml from
+//! the typed description that the built library carries, each in the element order of its XSD.
+//! Both come from the same decoded `ModelDescription`; only the encoding of the XML differs.
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use rustfmu::description::{
-    Bound, Causality, Initial, Interfaces, ModelDescription, Start, VarType, Variability, Variable,
+    Bound, Causality, FmiVersion, Initial, Interfaces, ModelDescription, RUNTIME_LOG_CATEGORIES, Start, VarType,
+    Variability, Variable,
 };
 use std::collections::BTreeSet;
 
@@ -137,8 +139,93 @@ fn bound_value(b: Bound, is_min: bool) -> f64 {
     }
 }
 
+/// `<UnitDefinitions>` (the same in FMI 2.0 and 3.0): the units the variables use, in name order.
+fn unit_definitions(w: &mut Xml, d: &ModelDescription) -> Result<(), String> {
+    let decls = d.variables;
+    // Units in name order, as before (the derive lists them in order of first use).
+    let mut units: Vec<_> = d
+        .units
+        .iter()
+        .filter(|u| decls.iter().any(|v| v.unit == u.name))
+        .collect();
+    units.sort_by(|a, b| a.name.cmp(b.name));
+    if !units.is_empty() {
+        open(w, "UnitDefinitions", &[])?;
+        for unit in &units {
+            let b = unit.base;
+            open(w, "Unit", &[("name", unit.name)])?;
+            let exps = [
+                ("kg", b.kg),
+                ("m", b.m),
+                ("s", b.s),
+                ("A", b.a),
+                ("K", b.k),
+                ("mol", b.mol),
+                ("cd", b.cd),
+                ("rad", b.rad),
+            ];
+            let mut texts: Vec<(&str, String)> = exps
+                .iter()
+                .filter(|(_, e)| *e != 0)
+                .map(|(k, e)| (*k, e.to_string()))
+                .collect();
+            if b.factor != 1.0 {
+                texts.push(("factor", real_text(b.factor)));
+            }
+            if b.offset != 0.0 {
+                texts.push(("offset", real_text(b.offset)));
+            }
+            let attrs: Vec<(&str, &str)> = texts.iter().map(|(k, v)| (*k, v.as_str())).collect();
+            empty(w, "BaseUnit", &attrs)?;
+            close(w, "Unit")?;
+        }
+        close(w, "UnitDefinitions")?;
+    }
+
+    Ok(())
+}
+
+/// `<LogCategories>`: the runtime's, then the model's. The runtime's say which status they come
+/// with, in the names of the version the binary implements.
+fn log_categories(w: &mut Xml, d: &ModelDescription, version: FmiVersion) -> Result<(), String> {
+    open(w, "LogCategories", &[])?;
+    for (i, c) in d.all_log_categories().enumerate() {
+        let description = match version {
+            FmiVersion::V3 if i < RUNTIME_LOG_CATEGORIES.len() => c.description.replace("fmi2", "fmi3"),
+            _ => c.description.to_string(),
+        };
+        empty(w, "Category", &[("name", c.name), ("description", &description)])?;
+    }
+    close(w, "LogCategories")
+}
+
+/// `<DefaultExperiment>` (the same in FMI 2.0 and 3.0), if the model declares one.
+fn default_experiment(w: &mut Xml, d: &ModelDescription) -> Result<(), String> {
+    if let Some(e) = d.default_experiment {
+        let texts: Vec<(&str, String)> = [
+            ("startTime", e.start_time),
+            ("stopTime", e.stop_time),
+            ("tolerance", e.tolerance),
+            ("stepSize", e.step_size),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.map(|v| (k, real_text(v))))
+        .collect();
+        let attrs: Vec<(&str, &str)> = texts.iter().map(|(k, v)| (*k, v.as_str())).collect();
+        empty(w, "DefaultExperiment", &attrs)?;
+    }
+    Ok(())
+}
+
 /// `modelDescription.xml` (FMI 2.0) of a description, in the element order of the XSD.
 pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<String, String> {
+    if interfaces.version != FmiVersion::V2 {
+        return Err(format!(
+            "{}: the binary implements FMI {}, not 2.0 (its functions are not fmi2*)",
+            d.model_identifier,
+            interfaces.version.text()
+        ));
+    }
     check_description(d)?;
     let decls = d.variables;
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
@@ -208,45 +295,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         )?;
     }
 
-    // Units in name order, as before (the derive lists them in order of first use).
-    let mut units: Vec<_> = d
-        .units
-        .iter()
-        .filter(|u| decls.iter().any(|v| v.unit == u.name))
-        .collect();
-    units.sort_by(|a, b| a.name.cmp(b.name));
-    if !units.is_empty() {
-        open(&mut w, "UnitDefinitions", &[])?;
-        for unit in &units {
-            let b = unit.base;
-            open(&mut w, "Unit", &[("name", unit.name)])?;
-            let exps = [
-                ("kg", b.kg),
-                ("m", b.m),
-                ("s", b.s),
-                ("A", b.a),
-                ("K", b.k),
-                ("mol", b.mol),
-                ("cd", b.cd),
-                ("rad", b.rad),
-            ];
-            let mut texts: Vec<(&str, String)> = exps
-                .iter()
-                .filter(|(_, e)| *e != 0)
-                .map(|(k, e)| (*k, e.to_string()))
-                .collect();
-            if b.factor != 1.0 {
-                texts.push(("factor", real_text(b.factor)));
-            }
-            if b.offset != 0.0 {
-                texts.push(("offset", real_text(b.offset)));
-            }
-            let attrs: Vec<(&str, &str)> = texts.iter().map(|(k, v)| (*k, v.as_str())).collect();
-            empty(&mut w, "BaseUnit", &attrs)?;
-            close(&mut w, "Unit")?;
-        }
-        close(&mut w, "UnitDefinitions")?;
-    }
+    unit_definitions(&mut w, d)?;
 
     let enums = d.enumerations();
     if !enums.is_empty() {
@@ -272,25 +321,8 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         close(&mut w, "TypeDefinitions")?;
     }
 
-    open(&mut w, "LogCategories", &[])?;
-    for c in d.all_log_categories() {
-        empty(&mut w, "Category", &[("name", c.name), ("description", c.description)])?;
-    }
-    close(&mut w, "LogCategories")?;
-
-    if let Some(e) = d.default_experiment {
-        let texts: Vec<(&str, String)> = [
-            ("startTime", e.start_time),
-            ("stopTime", e.stop_time),
-            ("tolerance", e.tolerance),
-            ("stepSize", e.step_size),
-        ]
-        .into_iter()
-        .filter_map(|(k, v)| v.map(|v| (k, real_text(v))))
-        .collect();
-        let attrs: Vec<(&str, &str)> = texts.iter().map(|(k, v)| (*k, v.as_str())).collect();
-        empty(&mut w, "DefaultExperiment", &attrs)?;
-    }
+    log_categories(&mut w, d, FmiVersion::V2)?;
+    default_experiment(&mut w, d)?;
 
     open(&mut w, "ModelVariables", &[])?;
     for (i, v) in decls.iter().enumerate() {
@@ -401,15 +433,10 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         }
         close(&mut w, "Derivatives")?;
     }
-    let is_state = |v: &Variable| decls.iter().any(|d| d.derivative_of == Some(v.name));
     let initial_unknowns: Vec<usize> = decls
         .iter()
         .enumerate()
-        .filter(|(_, d)| {
-            ((d.causality == Causality::Output || d.derivative_of.is_some() || is_state(d))
-                && matches!(d.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
-                || d.causality == Causality::CalculatedParameter
-        })
+        .filter(|(_, v)| is_initial_unknown(decls, v))
         .map(|(i, _)| i + 1)
         .collect();
     if !initial_unknowns.is_empty() {
@@ -418,6 +445,270 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
             empty(&mut w, "Unknown", &[("index", &i.to_string())])?;
         }
         close(&mut w, "InitialUnknowns")?;
+    }
+    close(&mut w, "ModelStructure")?;
+    close(&mut w, "fmiModelDescription")?;
+    let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
+    text.push('\n');
+    Ok(text)
+}
+
+/// The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0 `InitialUnknown`, the
+/// same rule in both): outputs, continuous states and their derivatives whose `initial` is
+/// approx or calculated, and every calculated parameter.
+fn is_initial_unknown(decls: &[Variable], v: &Variable) -> bool {
+    let is_state = decls.iter().any(|d| d.derivative_of == Some(v.name));
+    ((v.causality == Causality::Output || v.derivative_of.is_some() || is_state)
+        && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
+        || v.causality == Causality::CalculatedParameter
+}
+
+/// The FMI 3.0 element of a variable type (`Real` is `Float64`, `Integer` is `Int32`).
+fn fmi3_type_name(t: VarType) -> &'static str {
+    match t {
+        VarType::Real => "Float64",
+        VarType::Integer => "Int32",
+        VarType::Boolean => "Boolean",
+        VarType::String => "String",
+        VarType::Enumeration => "Enumeration",
+    }
+}
+
+/// `modelDescription.xml` (FMI 3.0) of a description, in the element order of the FMI 3.0 XSD
+/// (`fmi3ModelDescription.xsd`). `token` is the `instantiationToken`: the GUID of the FMI 3.0
+/// binary's encoding. Variables are referred to by value reference throughout (`derivative`,
+/// `ModelStructure`); the independent variable `time` is listed first unless the model declares
+/// its own.
+pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result<String, String> {
+    if interfaces.version != FmiVersion::V3 {
+        return Err(format!(
+            "{}: the binary implements FMI {}, not 3.0 (its functions are not fmi3*)",
+            d.model_identifier,
+            interfaces.version.text()
+        ));
+    }
+    check_description(d)?;
+    let decls = d.variables;
+    let time_vr = d.time_value_reference();
+    if !d.declares_independent() && decls.iter().any(|v| v.value_reference == time_vr) {
+        return Err(format!(
+            "{}: value reference {time_vr} of the independent variable 'time' is taken",
+            d.model_identifier
+        ));
+    }
+    if !d.declares_independent() && decls.iter().any(|v| v.name == "time") {
+        return Err(format!(
+            "{}: a variable named 'time' that is not the independent variable",
+            d.model_identifier
+        ));
+    }
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .map_err(io)?;
+    let mut root = vec![
+        ("fmiVersion", "3.0"),
+        ("modelName", d.model_identifier),
+        ("instantiationToken", token),
+        ("description", d.description),
+        ("author", d.author),
+        ("version", d.version),
+    ];
+    if !d.copyright.is_empty() {
+        root.push(("copyright", d.copyright));
+    }
+    if !d.license.is_empty() {
+        root.push(("license", d.license));
+    }
+    root.extend([
+        ("generationTool", d.generation_tool),
+        (
+            "variableNamingConvention",
+            if decls.iter().any(|v| !is_flat_name(v.name)) {
+                "structured"
+            } else {
+                "flat"
+            },
+        ),
+    ]);
+    open(&mut w, "fmiModelDescription", &root)?;
+    if interfaces.model_exchange {
+        empty(
+            &mut w,
+            "ModelExchange",
+            &[
+                ("modelIdentifier", d.model_identifier),
+                ("canGetAndSetFMUState", "true"),
+                ("canSerializeFMUState", "true"),
+                ("providesDirectionalDerivatives", "true"),
+                ("providesAdjointDerivatives", "true"),
+            ],
+        )?;
+    }
+    if interfaces.co_simulation {
+        empty(
+            &mut w,
+            "CoSimulation",
+            &[
+                ("modelIdentifier", d.model_identifier),
+                ("canHandleVariableCommunicationStepSize", "true"),
+                ("canGetAndSetFMUState", "true"),
+                ("canSerializeFMUState", "true"),
+                ("providesDirectionalDerivatives", "true"),
+                ("providesAdjointDerivatives", "true"),
+                ("hasEventMode", "false"),
+            ],
+        )?;
+    }
+    unit_definitions(&mut w, d)?;
+
+    let enums = d.enumerations();
+    if !enums.is_empty() {
+        open(&mut w, "TypeDefinitions", &[])?;
+        for e in &enums {
+            let mut attrs = vec![("name", e.name)];
+            if !e.description.is_empty() {
+                attrs.push(("description", e.description));
+            }
+            open(&mut w, "EnumerationType", &attrs)?;
+            for item in e.items {
+                let value = item.value.to_string();
+                let mut attrs = vec![("name", item.name), ("value", value.as_str())];
+                if !item.description.is_empty() {
+                    attrs.push(("description", item.description));
+                }
+                empty(&mut w, "Item", &attrs)?;
+            }
+            close(&mut w, "EnumerationType")?;
+        }
+        close(&mut w, "TypeDefinitions")?;
+    }
+
+    log_categories(&mut w, d, FmiVersion::V3)?;
+    default_experiment(&mut w, d)?;
+
+    open(&mut w, "ModelVariables", &[])?;
+    if !d.declares_independent() {
+        let vr = time_vr.to_string();
+        empty(
+            &mut w,
+            "Float64",
+            &[
+                ("name", "time"),
+                ("valueReference", &vr),
+                ("description", "Simulation time"),
+                ("causality", "independent"),
+                ("variability", "continuous"),
+            ],
+        )?;
+    }
+    let vr_of = |name: &str| decls.iter().find(|o| o.name == name).map(|o| o.value_reference);
+    for v in decls {
+        let vr = v.value_reference.to_string();
+        let causality = lower_camel(v.causality);
+        let variability = lower_camel(v.variability);
+        let mut attrs = vec![("name", v.name), ("valueReference", vr.as_str())];
+        if !v.description.trim().is_empty() {
+            attrs.push(("description", v.description.trim()));
+        }
+        attrs.extend([("causality", causality.as_str()), ("variability", variability.as_str())]);
+        if let Some(e) = v.enumeration {
+            attrs.push(("declaredType", e.name));
+        }
+        let initial = v.initial.map(lower_camel);
+        if let Some(initial) = &initial {
+            attrs.push(("initial", initial));
+        }
+        // Integer and Enumeration bounds are integers (xs:int, xs:long); an exclusive one moves
+        // to the next integer inside the range.
+        let bound_text = |b: Bound, is_min: bool| match v.var_type {
+            VarType::Integer | VarType::Enumeration => {
+                let x = bound_value(b, is_min);
+                (if is_min { x.ceil() } else { x.floor() } as i64).to_string()
+            }
+            _ => real_text(bound_value(b, is_min)),
+        };
+        let min = v.min.map(|b| bound_text(b, true));
+        let max = v.max.map(|b| bound_text(b, false));
+        let nominal = v.nominal.map(real_text);
+        let start = match v.start {
+            Start::Real(x) => Some(real_text(x)),
+            Start::Integer(x) => Some(x.to_string()),
+            Start::Boolean(x) => Some(x.to_string()),
+            // A String's start is a child element.
+            Start::String(_) | Start::None => None,
+        };
+        // In FMI 3.0 `derivative` is the value reference of the state, not an index.
+        let derivative = match v.derivative_of {
+            Some(state) => Some(
+                vr_of(state)
+                    .ok_or_else(|| format!("variable '{}': derivative of '{state}', which is not declared", v.name))?
+                    .to_string(),
+            ),
+            None => None,
+        };
+        if v.var_type == VarType::Real && !v.unit.is_empty() {
+            attrs.push(("unit", v.unit));
+        }
+        if v.var_type != VarType::Boolean && v.var_type != VarType::String {
+            if let Some(min) = &min {
+                attrs.push(("min", min));
+            }
+            if let Some(max) = &max {
+                attrs.push(("max", max));
+            }
+        }
+        if v.var_type == VarType::Real
+            && let Some(nominal) = &nominal
+        {
+            attrs.push(("nominal", nominal));
+        }
+        if v.has_start()
+            && let Some(start) = &start
+        {
+            attrs.push(("start", start));
+        }
+        if let Some(derivative) = &derivative {
+            attrs.push(("derivative", derivative));
+        }
+        let element = fmi3_type_name(v.var_type);
+        match v.start {
+            Start::String(s) if v.has_start() => {
+                open(&mut w, element, &attrs)?;
+                empty(&mut w, "Start", &[("value", s)])?;
+                close(&mut w, element)?;
+            }
+            _ => empty(&mut w, element, &attrs)?,
+        }
+    }
+    close(&mut w, "ModelVariables")?;
+
+    // dependencies: value references of the knowns (inputs and continuous states), in
+    // ascending order; dependenciesKind "dependent" for each (no particular structure claimed).
+    let unknown = |w: &mut Xml, element: &str, v: &Variable| -> Result<(), String> {
+        let vr = v.value_reference.to_string();
+        let deps = v.depends_on.map(|deps| {
+            let set: BTreeSet<u32> = deps.iter().filter_map(|n| vr_of(n)).collect();
+            set.into_iter().map(|vr| vr.to_string()).collect::<Vec<_>>()
+        });
+        let dep_text = deps.as_ref().map(|d| d.join(" "));
+        let kind_text = deps.as_ref().map(|d| vec!["dependent"; d.len()].join(" "));
+        let mut attrs = vec![("valueReference", vr.as_str())];
+        if let (Some(deps), Some(kinds)) = (&dep_text, &kind_text) {
+            attrs.push(("dependencies", deps));
+            attrs.push(("dependenciesKind", kinds));
+        }
+        empty(w, element, &attrs)
+    };
+    open(&mut w, "ModelStructure", &[])?;
+    for v in decls.iter().filter(|v| v.causality == Causality::Output) {
+        unknown(&mut w, "Output", v)?;
+    }
+    for v in decls.iter().filter(|v| v.derivative_of.is_some()) {
+        unknown(&mut w, "ContinuousStateDerivative", v)?;
+    }
+    for v in decls.iter().filter(|v| is_initial_unknown(decls, v)) {
+        let vr = v.value_reference.to_string();
+        empty(&mut w, "InitialUnknown", &[("valueReference", &vr)])?;
     }
     close(&mut w, "ModelStructure")?;
     close(&mut w, "fmiModelDescription")?;
@@ -542,5 +833,294 @@ mod tests {
             ),
             1.0
         );
+    }
+
+    // ---- FMI 3.0 ------------------------------------------------------------------------
+
+    use rustfmu::description::{BaseUnit, DefaultExperiment, EnumItem, EnumType, Unit};
+
+    const MODE: EnumType = EnumType {
+        name: "Mode",
+        description: "How it runs",
+        items: &[
+            EnumItem {
+                name: "off",
+                value: 0,
+                description: "Off",
+            },
+            EnumItem {
+                name: "on",
+                value: 1,
+                description: "",
+            },
+        ],
+    };
+
+    const fn v3(
+        name: &'static str,
+        vr: u32,
+        var_type: VarType,
+        causality: Causality,
+        variability: Variability,
+    ) -> Variable {
+        Variable {
+            name,
+            value_reference: vr,
+            var_type,
+            causality,
+            variability,
+            initial: None,
+            start: Start::None,
+            unit: "",
+            description: "",
+            min: None,
+            max: None,
+            nominal: None,
+            depends_on: None,
+            derivative_of: None,
+            enumeration: None,
+        }
+    }
+
+    const LAG_VARS: &[Variable] = &[
+        Variable {
+            start: Start::Real(0.5),
+            unit: "s",
+            description: "Input u",
+            ..v3("u", 0, VarType::Real, Causality::Input, Variability::Continuous)
+        },
+        Variable {
+            initial: Some(Initial::Exact),
+            start: Start::Real(1.0),
+            nominal: Some(2.0),
+            depends_on: Some(&["y"]),
+            ..v3("y", 7, VarType::Real, Causality::Output, Variability::Continuous)
+        },
+        Variable {
+            depends_on: Some(&["y", "u"]),
+            derivative_of: Some("y"),
+            ..v3("der(y)", 3, VarType::Real, Causality::Local, Variability::Continuous)
+        },
+        Variable {
+            depends_on: Some(&[]),
+            ..v3("z", 9, VarType::Real, Causality::Output, Variability::Continuous)
+        },
+        Variable {
+            start: Start::String("a <b> & \"c\""),
+            ..v3("label", 4, VarType::String, Causality::Parameter, Variability::Fixed)
+        },
+        Variable {
+            start: Start::Boolean(true),
+            ..v3("flag", 5, VarType::Boolean, Causality::Parameter, Variability::Tunable)
+        },
+        Variable {
+            start: Start::Integer(1),
+            enumeration: Some(&MODE),
+            ..v3(
+                "mode",
+                6,
+                VarType::Enumeration,
+                Causality::Parameter,
+                Variability::Fixed,
+            )
+        },
+        Variable {
+            start: Start::Integer(3),
+            min: Some(Bound {
+                value: 0.0,
+                exclusive: true,
+            }),
+            max: Some(Bound {
+                value: 10.0,
+                exclusive: false,
+            }),
+            ..v3("n", 2, VarType::Integer, Causality::Parameter, Variability::Fixed)
+        },
+        v3(
+            "k",
+            8,
+            VarType::Real,
+            Causality::CalculatedParameter,
+            Variability::Fixed,
+        ),
+    ];
+
+    const LAG: ModelDescription = ModelDescription {
+        model_identifier: "Lag",
+        description: "A lag",
+        author: "me",
+        version: "1.0",
+        copyright: "",
+        license: "MIT",
+        generation_tool: "test",
+        default_experiment: Some(DefaultExperiment {
+            start_time: Some(0.0),
+            stop_time: Some(1.0),
+            tolerance: None,
+            step_size: Some(0.01),
+        }),
+        units: &[Unit {
+            name: "s",
+            base: BaseUnit {
+                kg: 0,
+                m: 0,
+                s: 1,
+                a: 0,
+                k: 0,
+                mol: 0,
+                cd: 0,
+                rad: 0,
+                factor: 1.0,
+                offset: 0.0,
+            },
+        }],
+        log_categories: &[],
+        variables: LAG_VARS,
+        internal_state: "",
+    };
+
+    fn lag3() -> String {
+        fmi3(&LAG, Interfaces::BOTH_FMI3, "{token}").unwrap()
+    }
+
+    /// The text of the element that has `name="<name>"`.
+    fn element<'a>(xml: &'a str, name: &str) -> &'a str {
+        let at = xml
+            .find(&format!("name=\"{name}\""))
+            .unwrap_or_else(|| panic!("no {name} in {xml}"));
+        let start = xml[..at].rfind('<').unwrap();
+        let end = at + xml[at..].find("/>").unwrap() + 2;
+        &xml[start..end]
+    }
+
+    #[test]
+    fn fmi3_root_interfaces_and_the_order_of_the_schema() {
+        let xml = lag3();
+        assert!(xml.starts_with("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<fmiModelDescription fmiVersion=\"3.0\" modelName=\"Lag\" instantiationToken=\"{token}\" description=\"A lag\" author=\"me\" version=\"1.0\" license=\"MIT\" generationTool=\"test\" variableNamingConvention=\"structured\">"), "{xml}");
+        assert!(
+            !xml.contains("guid=") && !xml.contains("numberOfEventIndicators"),
+            "{xml}"
+        );
+        assert!(xml.contains(r#"<ModelExchange modelIdentifier="Lag" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true"/>"#), "{xml}");
+        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" hasEventMode="false"/>"#), "{xml}");
+        let order = [
+            "<ModelExchange ",
+            "<CoSimulation ",
+            "<UnitDefinitions>",
+            "<TypeDefinitions>",
+            "<LogCategories>",
+            "<DefaultExperiment ",
+            "<ModelVariables>",
+            "<ModelStructure>",
+        ];
+        let at: Vec<usize> = order
+            .iter()
+            .map(|e| xml.find(e).unwrap_or_else(|| panic!("no {e}")))
+            .collect();
+        assert!(at.windows(2).all(|w| w[0] < w[1]), "{xml}");
+        assert!(xml.contains("Messages that come with fmi3Error"), "{xml}");
+        assert!(!xml.contains("fmi2"), "{xml}");
+        assert!(
+            xml.contains(r#"<DefaultExperiment startTime="0.0" stopTime="1.0" stepSize="0.01"/>"#),
+            "{xml}"
+        );
+    }
+
+    #[test]
+    fn fmi3_variables_time_first_derivative_by_value_reference_string_start_child() {
+        let xml = lag3();
+        let vars = &xml[xml.find("<ModelVariables>").unwrap()..xml.find("</ModelVariables>").unwrap()];
+        // time: one above the highest declared value reference (9), listed first.
+        let first = vars.lines().nth(1).unwrap().trim();
+        assert_eq!(
+            first,
+            r#"<Float64 name="time" valueReference="10" description="Simulation time" causality="independent" variability="continuous"/>"#
+        );
+        assert_eq!(
+            element(vars, "u"),
+            r#"<Float64 name="u" valueReference="0" description="Input u" causality="input" variability="continuous" unit="s" start="0.5"/>"#
+        );
+        assert_eq!(
+            element(vars, "y"),
+            r#"<Float64 name="y" valueReference="7" causality="output" variability="continuous" initial="exact" nominal="2.0" start="1.0"/>"#
+        );
+        // derivative names the state's value reference (7), not its index.
+        assert_eq!(
+            element(vars, "der(y)"),
+            r#"<Float64 name="der(y)" valueReference="3" causality="local" variability="continuous" derivative="7"/>"#
+        );
+        assert!(
+            vars.contains("<String name=\"label\" valueReference=\"4\" causality=\"parameter\" variability=\"fixed\">\n      <Start value=\"a &lt;b&gt; &amp; &quot;c&quot;\"/>\n    </String>"),
+            "{vars}"
+        );
+        assert_eq!(
+            element(vars, "flag"),
+            r#"<Boolean name="flag" valueReference="5" causality="parameter" variability="tunable" start="true"/>"#
+        );
+        assert_eq!(
+            element(vars, "mode"),
+            r#"<Enumeration name="mode" valueReference="6" causality="parameter" variability="fixed" declaredType="Mode" start="1"/>"#
+        );
+        // > 0 and <= 10: 1 ..= 10, as integers.
+        assert_eq!(
+            element(vars, "n"),
+            r#"<Int32 name="n" valueReference="2" causality="parameter" variability="fixed" min="1" max="10" start="3"/>"#
+        );
+        assert_eq!(
+            element(vars, "k"),
+            r#"<Float64 name="k" valueReference="8" causality="calculatedParameter" variability="fixed"/>"#
+        );
+        assert!(xml.contains("<TypeDefinitions>\n    <EnumerationType name=\"Mode\" description=\"How it runs\">\n      <Item name=\"off\" value=\"0\" description=\"Off\"/>\n      <Item name=\"on\" value=\"1\"/>\n    </EnumerationType>\n  </TypeDefinitions>"), "{xml}");
+    }
+
+    #[test]
+    fn fmi3_model_structure_by_value_reference() {
+        let xml = lag3();
+        let ms = &xml[xml.find("<ModelStructure>").unwrap()..];
+        let expected = r#"<ModelStructure>
+    <Output valueReference="7" dependencies="7" dependenciesKind="dependent"/>
+    <Output valueReference="9" dependencies="" dependenciesKind=""/>
+    <ContinuousStateDerivative valueReference="3" dependencies="0 7" dependenciesKind="dependent dependent"/>
+    <InitialUnknown valueReference="3"/>
+    <InitialUnknown valueReference="9"/>
+    <InitialUnknown valueReference="8"/>
+  </ModelStructure>
+</fmiModelDescription>
+"#;
+        assert_eq!(ms, expected);
+    }
+
+    #[test]
+    fn a_declared_independent_variable_replaces_time() {
+        const VARS: &[Variable] = &[
+            v3("t", 0, VarType::Real, Causality::Independent, Variability::Continuous),
+            Variable {
+                start: Start::Real(1.0),
+                ..v3("p", 1, VarType::Real, Causality::Parameter, Variability::Fixed)
+            },
+        ];
+        let d = ModelDescription { variables: VARS, ..LAG };
+        let xml = fmi3(&d, Interfaces::BOTH_FMI3, "{token}").unwrap();
+        assert!(!xml.contains("name=\"time\""), "{xml}");
+        assert!(
+            xml.contains(r#"<Float64 name="t" valueReference="0" causality="independent" variability="continuous"/>"#),
+            "{xml}"
+        );
+        assert!(xml.contains("variableNamingConvention=\"flat\""), "{xml}");
+    }
+
+    #[test]
+    fn each_writer_takes_only_a_binary_of_its_version() {
+        let e = fmi3(&LAG, Interfaces::BOTH, "{guid}").unwrap_err();
+        assert!(e.contains("FMI 2.0, not 3.0"), "{e}");
+        let e = fmi2(&LAG, Interfaces::BOTH_FMI3, "{guid}").unwrap_err();
+        assert!(e.contains("FMI 3.0, not 2.0"), "{e}");
+        // The same description in FMI 2.0: indices, no time.
+        let xml2 = fmi2(&LAG, Interfaces::BOTH, "{guid}").unwrap();
+        assert!(
+            xml2.contains("derivative=\"2\"") && !xml2.contains("name=\"time\""),
+            "{xml2}"
+        );
+        assert!(xml2.contains("Messages that come with fmi2Error"), "{xml2}");
     }
 }

@@ -265,8 +265,15 @@ simple_call!(
 
 /// The value reference FMI 3.0's added `time` variable has, if the model does not declare its
 /// own independent variable.
+#[inline]
 fn added_time_vr<M: CoSimulation>() -> Option<u32> {
-    (!M::DESCRIPTION.declares_independent()).then(|| M::DESCRIPTION.time_value_reference())
+    const {
+        if M::DESCRIPTION.declares_independent() {
+            None
+        } else {
+            Some(M::DESCRIPTION.time_value_reference())
+        }
+    }
 }
 
 /// The checks every 3.0 getter and setter makes of its arrays first.

@@ -59,8 +59,15 @@ def user_crate(tmp_path_factory):
     build = run(["cargo", "fmu", "build"], crate, env)
     fmu = crate / "target" / "fmu" / "GainLag.fmu"
     assert fmu.exists(), build.stderr
+    assert (crate / "target" / "fmu" / "fmi3" / "GainLag.fmu").exists(), build.stderr
     yield crate, fmu, env
     shutil.rmtree(where, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def user_fmu3(user_crate):
+    crate, _, env = user_crate
+    return crate, crate / "target" / "fmu" / "fmi3" / "GainLag.fmu", env
 
 
 def test_the_new_crate_packages_a_valid_fmu(user_crate):
@@ -114,3 +121,73 @@ def test_cargo_fmu_check_passes_on_it(user_crate):
     crate, fmu, env = user_crate
     out = run(["cargo", "fmu", "check", str(fmu)], crate, env)
     assert " 0 failed" in out.stdout, out.stdout
+
+
+# ---- FMI 3.0: the same crate, built again with rustfmu's feature fmi3 by the same `cargo fmu build`
+
+def test_the_new_crate_packages_a_valid_fmi3_fmu(user_fmu3):
+    _, fmu, _ = user_fmu3
+    assert fmpy.validation.validate_fmu(str(fmu)) == []
+    md = fmpy.read_model_description(str(fmu))
+    assert md.fmiVersion == "3.0"
+    assert md.coSimulation.modelIdentifier == "GainLag" and md.modelExchange.modelIdentifier == "GainLag"
+    names = {v.name: v for v in md.modelVariables}
+    assert set(names) == {"time", "u", "y", "der(y)", "T", "K"}
+    assert names["time"].causality == "independent"
+    assert [d.variable.name for d in md.derivatives] == ["der(y)"]
+    assert names["der(y)"].derivative is names["y"]
+    import zipfile
+    with zipfile.ZipFile(fmu) as z:
+        files = set(z.namelist())
+        xml = z.read("modelDescription.xml").decode()
+    assert "binaries/x86_64-linux/GainLag.so" in files and not any(f.startswith("binaries/linux64/") for f in files), files
+    assert 'fmiVersion="3.0"' in xml and "instantiationToken=" in xml
+
+
+def test_the_fmi3_fmu_simulates_the_analytic_step_response(user_fmu3):
+    _, fmu, _ = user_fmu3
+    K, T = 3.0, 0.2
+    for fmi_type in ["CoSimulation", "ModelExchange"]:
+        r = fmpy.simulate_fmu(str(fmu), fmi_type=fmi_type, start_values={"u": 1.0, "K": K, "T": T},
+                              stop_time=1.0, output_interval=0.01, relative_tolerance=1e-10)
+        worst = max(abs(y - K * (1.0 - math.exp(-t / T))) for t, y in zip(r["time"], r["y"]))
+        assert worst < (1e-12 if fmi_type == "CoSimulation" else 1e-6), f"{fmi_type}: largest deviation {worst}"
+
+
+def test_cargo_fmu_info_and_validate_describe_the_fmi3_fmu(user_fmu3):
+    crate, fmu, env = user_fmu3
+    info = run(["cargo", "fmu", "info", str(fmu)], crate, env).stdout
+    assert "FMI 3.0" in info and "x86_64-linux" in info and "GainLag" in info, info
+    run(["cargo", "fmu", "validate", str(fmu)], crate, env)
+
+
+def test_cargo_fmu_build_makes_the_versions_asked_for(user_crate):
+    crate, _, env = user_crate
+    fmu2, fmu3 = crate / "target" / "fmu" / "GainLag.fmu", crate / "target" / "fmu" / "fmi3" / "GainLag.fmu"
+    try:
+        fmu2.unlink()
+        fmu3.unlink()
+        run(["cargo", "fmu", "build", "--fmi-version", "3"], crate, env)
+        assert fmu3.exists() and not fmu2.exists()
+        bad = subprocess.run(["cargo", "fmu", "build", "--fmi-version", "4"], cwd=crate, env=env,
+                             capture_output=True, text=True, timeout=900)
+        assert bad.returncode != 0 and "--fmi-version" in bad.stderr, bad.stderr
+    finally:
+        run(["cargo", "fmu", "build"], crate, env)
+    assert fmu2.exists() and fmu3.exists()
+
+
+def test_a_crate_that_calls_export_fmi2_is_told_to_call_export_fmu(user_crate):
+    crate, _, env = user_crate
+    lib = crate / "src" / "lib.rs"
+    src = lib.read_text()
+    assert "rustfmu::export_fmu!(GainLag);" in src, src
+    try:
+        lib.write_text(src.replace("rustfmu::export_fmu!(GainLag);", "rustfmu::export_fmi2!(GainLag);"))
+        bad = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+        assert bad.returncode != 0 and "export_fmu!" in bad.stderr and "export_fmi2!" in bad.stderr, bad.stderr
+        # Only FMI 2.0 asked for: it builds.
+        run(["cargo", "fmu", "build", "--fmi-version", "2"], crate, env)
+    finally:
+        lib.write_text(src)
+        run(["cargo", "fmu", "build"], crate, env)
