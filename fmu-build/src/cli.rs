@@ -62,7 +62,7 @@ enum Cmd {
     },
     /// Describe an FMU file: version, interfaces, platforms, variables.
     Info { fmu: PathBuf },
-    /// Run the black-box FMI 2.0 co-simulation conformance suite on an FMU file (ours or any
+    /// Run the black-box FMI 2.0 / FMI 3.0 conformance suite (by the file's fmiVersion) on an FMU file (ours or any
     /// other exporter's): every call in every state, bad arguments, FMU state, instances and
     /// threads, memory, random call sequences, a C host; each check in a child process, so an
     /// FMU that crashes or hangs is reported, not shared. Ends with `N passed, N failed, N skipped`.
@@ -206,6 +206,9 @@ fn check(
         for c in fmi2_conformance::checks::all_checks() {
             println!("{} / {}", c.group, c.name);
         }
+        for c in fmi2_conformance::fmi3::checks::all_checks() {
+            println!("FMI 3.0: {} / {}", c.group, c.name);
+        }
         return Ok(());
     }
     let fmu = fmu.ok_or("which FMU? `cargo fmu check X.fmu`")?;
@@ -219,7 +222,7 @@ fn check(
         }
         opts.timeout = std::time::Duration::from_secs_f64(t);
     }
-    if opts.selected().is_empty() {
+    if opts.selected().is_empty() && opts.selected_fmi3().is_empty() {
         return Err("no check matches the filter (`cargo fmu check --list` shows them)".into());
     }
     // Progress on stderr while it runs; the report on stdout.

@@ -21,6 +21,7 @@ pub mod archive;
 pub mod checks;
 pub mod description;
 pub mod fmi2;
+pub mod fmi3;
 pub mod instance;
 pub mod logger;
 pub mod me;
@@ -233,7 +234,7 @@ fn load_all() -> Result<Vec<Fmu>, String> {
 
 /// A folder of this process under the system temp dir; folders of processes that are gone
 /// (an interrupted run) are removed.
-fn unpack_root() -> Result<PathBuf, String> {
+pub(crate) fn unpack_root() -> Result<PathBuf, String> {
     let base = std::env::temp_dir().join("rustfmu-conformance");
     if let Ok(entries) = std::fs::read_dir(&base) {
         for e in entries.flatten() {

@@ -15,6 +15,7 @@
 
 use crate::archive::{self, PrivateDir};
 use crate::checks::{Check, Group, all_checks, find};
+use crate::fmi3::checks::Check3;
 use crate::outcome::{self, Findings, Outcome};
 use crate::{Description, Fmu, Worker};
 use std::fmt::Write as _;
@@ -57,12 +58,29 @@ impl RunOptions {
         }
     }
 
-    /// The checks the filter selects, in report order.
+    /// The FMI 2.0 checks the filter selects, in report order.
     pub fn selected(&self) -> Vec<&'static Check> {
         all_checks()
             .iter()
             .filter(|c| self.filter.as_deref().is_none_or(|f| c.matches(f)))
             .collect()
+    }
+
+    /// The FMI 3.0 checks the filter selects, in report order.
+    pub fn selected_fmi3(&self) -> Vec<&'static Check3> {
+        crate::fmi3::checks::all_checks()
+            .iter()
+            .filter(|c| self.filter.as_deref().is_none_or(|f| c.matches(f)))
+            .collect()
+    }
+
+    /// (name, group) of the checks selected for an FMU of that `fmiVersion`.
+    fn selected_for(&self, fmi3: bool) -> Vec<(&'static str, Group)> {
+        if fmi3 {
+            self.selected_fmi3().iter().map(|c| (c.name, c.group)).collect()
+        } else {
+            self.selected().iter().map(|c| (c.name, c.group)).collect()
+        }
     }
 }
 
@@ -222,7 +240,9 @@ pub fn run(fmu_path: &Path, opts: &RunOptions) -> Report {
 
 /// As [`run`], calling `progress` with each check's report as soon as it is done.
 pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&CheckReport)) -> Report {
-    let selected = opts.selected();
+    // FMI 3.0 files get the FMI 3.0 checks; everything else the FMI 2.0 ones.
+    let fmi3 = crate::fmi3::fmi_version(fmu_path).is_ok_and(|v| crate::fmi3::is_fmi3(&v));
+    let selected = opts.selected_for(fmi3);
     let mut report = Report {
         fmu: fmu_path.to_path_buf(),
         about: vec![],
@@ -232,9 +252,9 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
     let skip_all = |report: &mut Report, why: &str| {
         report.checks = selected
             .iter()
-            .map(|c| CheckReport {
-                name: c.name.to_string(),
-                group: c.group,
+            .map(|(name, group)| CheckReport {
+                name: name.to_string(),
+                group: *group,
                 outcome: Outcome::Skip(why.to_string()),
                 limitations: vec![],
                 info: vec![],
@@ -243,7 +263,11 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             .collect();
     };
     // What the archive says, read here (no FMU code runs in this process).
-    match describe(fmu_path) {
+    match if fmi3 {
+        crate::fmi3::describe(fmu_path)
+    } else {
+        describe(fmu_path)
+    } {
         Ok(about) => report.about = about,
         Err(e) => {
             report.load_error = Some(e);
@@ -282,11 +306,11 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         skip_all(&mut report, "the FMU cannot be checked");
         return report;
     }
-    for check in selected {
+    for (name, group) in selected {
         let mut args = vec![
             "check".to_string(),
             fmu_path.display().to_string(),
-            check.name.to_string(),
+            name.to_string(),
             "--random-sequences".into(),
             opts.random_sequences.to_string(),
             "--self".into(),
@@ -297,8 +321,8 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         }
         let w = run_worker(opts, run_dir.path(), &args);
         let mut c = CheckReport {
-            name: check.name.to_string(),
-            group: check.group,
+            name: name.to_string(),
+            group,
             outcome: Outcome::Pass,
             limitations: vec![],
             info: vec![],
@@ -336,7 +360,7 @@ fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
     let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
     if md.fmi_version != "2.0" {
         return Err(format!(
-            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
             fmu_path.display(),
             md.fmi_version
         ));
@@ -684,6 +708,43 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
         ExitCode::SUCCESS
     };
     match positional.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+        ["probe", fmu] if is_fmi3_file(fmu) => match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
+            Ok(f) => {
+                let about = format!(
+                    "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",
+                    crate::fmi3::api::FUNCTIONS.len()
+                );
+                drop(f);
+                write(
+                    Outcome::Pass,
+                    Findings {
+                        limitations: vec![],
+                        info: vec![about],
+                    },
+                )
+            }
+            Err(e) => write(Outcome::Fail(e), Findings::default()),
+        },
+        ["check", fmu, name] if is_fmi3_file(fmu) => {
+            let Some(check) = crate::fmi3::checks::find(name) else {
+                eprintln!("worker: no FMI 3.0 check named {name}");
+                return ExitCode::from(2);
+            };
+            outcome::remember_panic_locations();
+            let fmu = match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
+                Ok(f) => f,
+                Err(e) => {
+                    return write(
+                        Outcome::Fail(format!("the FMU does not load: {e}")),
+                        Findings::default(),
+                    );
+                }
+            };
+            let (outcome, findings) = check.run_on(&fmu);
+            let code = write(outcome, findings);
+            drop(fmu);
+            code
+        }
         ["probe", fmu] => {
             let fmu = match Fmu::load(Path::new(fmu), &tmp) {
                 Ok(f) => f,
@@ -734,6 +795,11 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
         },
         _ => usage(),
     }
+}
+
+/// Whether the file at `path` is an FMI 3.0 FMU (by its model description's fmiVersion).
+fn is_fmi3_file(path: &str) -> bool {
+    crate::fmi3::fmi_version(Path::new(path)).is_ok_and(|v| crate::fmi3::is_fmi3(&v))
 }
 
 fn hex(values: impl IntoIterator<Item = u64>) -> String {

@@ -1,6 +1,6 @@
 //! `fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N]`: checks an FMI
-//! 2.0 co-simulation FMU with every check of the suite, each in a child process, and prints a
-//! report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
+//! 2.0 FMU with the FMI 2.0 checks, an FMI 3.0 FMU with the FMI 3.0 ones (by the fmiVersion of
+//! its model description), each in a child process, and prints a report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
 //! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks).
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi2_conformance::runner::worker_main`]).
@@ -80,6 +80,9 @@ fn main() -> ExitCode {
         for c in all_checks() {
             println!("{} / {}", c.group, c.name);
         }
+        for c in fmi2_conformance::fmi3::checks::all_checks() {
+            println!("FMI 3.0: {} / {}", c.group, c.name);
+        }
         return ExitCode::SUCCESS;
     }
     let Some(fmu) = a.fmu else {
@@ -100,7 +103,7 @@ fn main() -> ExitCode {
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }
-    if opts.selected().is_empty() {
+    if opts.selected().is_empty() && opts.selected_fmi3().is_empty() {
         eprintln!("fmu-check: no check matches the filter (fmu-check --list shows them)");
         return ExitCode::from(2);
     }

@@ -1,0 +1,204 @@
+/* A minimal FMI 3.0 host in plain C: loads an FMU binary with dlopen, runs it through
+ * Co-Simulation (and Model Exchange where it has continuous states to integrate), frees it and
+ * dlcloses, so that valgrind memcheck sees a whole run.
+ *
+ * Usage: host3 <binary.so> <instantiationToken> <resourcePath> <steps> <h> <nStates|-1> <vr,vr,...> [vr=value ...]
+ *   CS: instantiate, set the given Float64 values, initialize at t = 0, <steps> fmi3DoStep of
+ *   <h> (checking lastSuccessfulTime and the flags), read the listed Float64s, terminate, free.
+ *   ME (nStates >= 0): instantiate, set the values, initialize, event iteration, then <steps>
+ *   explicit-Euler steps of <h> through fmi3GetContinuousStates / Derivatives / SetTime /
+ *   SetContinuousStates / CompletedIntegratorStep, terminate, free.
+ * Prints "final <hex bit patterns>" (CS) and "me-final <hex bit patterns>" (ME). Exits 1 with a
+ * reason on stderr on any failure. */
+#include <dlfcn.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef void *fmi3Instance;
+typedef uint32_t fmi3ValueReference;
+typedef enum { fmi3OK, fmi3Warning, fmi3Discard, fmi3Error, fmi3Fatal } fmi3Status;
+typedef void (*fmi3LogMessageCallback)(void *, fmi3Status, const char *, const char *);
+
+static int messages = 0;
+static char last[1024];
+
+static void logger(void *env, fmi3Status status, const char *category, const char *message) {
+    if (env != (void *)&messages) {
+        fprintf(stderr, "logger: wrong instanceEnvironment %p\n", env);
+        exit(1);
+    }
+    snprintf(last, sizeof last, "%s", message ? message : "(null)");
+    messages++;
+    if (getenv("HOST_VERBOSE")) fprintf(stderr, "[%d %s] %s\n", status, category ? category : "(null)", last);
+}
+
+#define LOAD(type, var, name)                                          \
+    type var = (type)dlsym(lib, name);                                 \
+    if (!var) { fprintf(stderr, "missing %s\n", name); return 1; }
+#define CHECK(call)                                                    \
+    do {                                                               \
+        fmi3Status s_ = (call);                                        \
+        if (s_ != fmi3OK) {                                            \
+            fprintf(stderr, "%s -> %d: %s\n", #call, s_, last);        \
+            return 1;                                                  \
+        }                                                              \
+    } while (0)
+
+typedef fmi3Instance (*InstantiateCS)(const char *, const char *, const char *, bool, bool, bool, bool,
+                                      const fmi3ValueReference *, size_t, void *, fmi3LogMessageCallback, void *);
+typedef fmi3Instance (*InstantiateME)(const char *, const char *, const char *, bool, bool, void *,
+                                      fmi3LogMessageCallback);
+typedef void (*FreeInstance)(fmi3Instance);
+typedef fmi3Status (*EnterInit)(fmi3Instance, bool, double, double, bool, double);
+typedef fmi3Status (*Unary)(fmi3Instance);
+typedef fmi3Status (*GetF64)(fmi3Instance, const fmi3ValueReference *, size_t, double *, size_t);
+typedef fmi3Status (*SetF64)(fmi3Instance, const fmi3ValueReference *, size_t, const double *, size_t);
+typedef fmi3Status (*DoStep)(fmi3Instance, double, double, bool, bool *, bool *, bool *, double *);
+typedef fmi3Status (*Update)(fmi3Instance, bool *, bool *, bool *, bool *, bool *, double *);
+typedef fmi3Status (*Vector)(fmi3Instance, double *, size_t);
+typedef fmi3Status (*SetVector)(fmi3Instance, const double *, size_t);
+typedef fmi3Status (*SetTime)(fmi3Instance, double);
+typedef fmi3Status (*Completed)(fmi3Instance, bool, bool *, bool *);
+typedef fmi3Status (*Count)(fmi3Instance, size_t *);
+
+static size_t parse_vrs(const char *list, fmi3ValueReference **out) {
+    size_t n = 0, cap = 16;
+    *out = malloc(cap * sizeof **out);
+    const char *p = list;
+    while (*p) {
+        char *end;
+        unsigned long v = strtoul(p, &end, 10);
+        if (end == p) break;
+        if (n == cap) *out = realloc(*out, (cap *= 2) * sizeof **out);
+        (*out)[n++] = (fmi3ValueReference)v;
+        p = *end == ',' ? end + 1 : end;
+    }
+    return n;
+}
+
+static void print_bits(const char *tag, const double *v, size_t n) {
+    printf("%s", tag);
+    for (size_t i = 0; i < n; i++) {
+        uint64_t b;
+        memcpy(&b, &v[i], sizeof b);
+        printf(" %llx", (unsigned long long)b);
+    }
+    printf("\n");
+}
+
+int main(int argc, char **argv) {
+    if (argc < 8) {
+        fprintf(stderr, "usage: host3 <so> <token> <resourcePath> <steps> <h> <nStates|-1> <vrs> [vr=value...]\n");
+        return 2;
+    }
+    const char *token = argv[2], *res = argv[3];
+    int steps = atoi(argv[4]);
+    double h = atof(argv[5]);
+    long nx = atol(argv[6]);
+    fmi3ValueReference *vrs;
+    size_t nv = parse_vrs(argv[7], &vrs);
+    double *values = calloc(nv ? nv : 1, sizeof *values);
+    int nset = argc - 8;
+    fmi3ValueReference *set_vrs = calloc(nset ? nset : 1, sizeof *set_vrs);
+    double *set_vals = calloc(nset ? nset : 1, sizeof *set_vals);
+    for (int i = 0; i < nset; i++) {
+        char *eq = strchr(argv[8 + i], '=');
+        if (!eq) { fprintf(stderr, "bad vr=value: %s\n", argv[8 + i]); return 2; }
+        set_vrs[i] = (fmi3ValueReference)strtoul(argv[8 + i], NULL, 10);
+        set_vals[i] = atof(eq + 1);
+    }
+    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
+    if (dlsym(lib, "fmi2Instantiate")) { fprintf(stderr, "an FMI 3.0 binary exports fmi2Instantiate\n"); return 1; }
+    LOAD(InstantiateCS, instantiate_cs, "fmi3InstantiateCoSimulation");
+    LOAD(InstantiateME, instantiate_me, "fmi3InstantiateModelExchange");
+    LOAD(FreeInstance, free_instance, "fmi3FreeInstance");
+    LOAD(EnterInit, enter_init, "fmi3EnterInitializationMode");
+    LOAD(Unary, exit_init, "fmi3ExitInitializationMode");
+    LOAD(Unary, terminate, "fmi3Terminate");
+    LOAD(GetF64, get_f64, "fmi3GetFloat64");
+    LOAD(SetF64, set_f64, "fmi3SetFloat64");
+    LOAD(DoStep, do_step, "fmi3DoStep");
+    LOAD(Update, update, "fmi3UpdateDiscreteStates");
+    LOAD(Unary, enter_ctm, "fmi3EnterContinuousTimeMode");
+    LOAD(Unary, enter_event_mode, "fmi3EnterEventMode");
+    LOAD(Vector, get_x, "fmi3GetContinuousStates");
+    LOAD(Vector, get_dx, "fmi3GetContinuousStateDerivatives");
+    LOAD(SetVector, set_x, "fmi3SetContinuousStates");
+    LOAD(SetTime, set_time, "fmi3SetTime");
+    LOAD(Completed, completed, "fmi3CompletedIntegratorStep");
+    LOAD(Count, n_states, "fmi3GetNumberOfContinuousStates");
+
+    /* Co-Simulation */
+    fmi3Instance c = instantiate_cs("host3", token, res, false, false, false, false, NULL, 0, &messages, logger, NULL);
+    if (!c) { fprintf(stderr, "fmi3InstantiateCoSimulation returned NULL: %s\n", last); return 1; }
+    CHECK(set_f64(c, set_vrs, nset, set_vals, nset));
+    CHECK(enter_init(c, false, 0.0, 0.0, false, 0.0));
+    CHECK(exit_init(c));
+    double t = 0.0;
+    for (int i = 0; i < steps; i++) {
+        bool event = true, term = true, early = true;
+        double reached = -1.0;
+        CHECK(do_step(c, t, h, true, &event, &term, &early, &reached));
+        if (event || term || early || reached != t + h) {
+            fprintf(stderr, "fmi3DoStep at %g: event %d terminate %d early %d lastSuccessfulTime %g\n", t, event, term, early, reached);
+            return 1;
+        }
+        t += h;
+        CHECK(get_f64(c, vrs, nv, values, nv));
+    }
+    print_bits("final", values, nv);
+    CHECK(terminate(c));
+    free_instance(c);
+
+    /* Model Exchange: explicit Euler */
+    if (nx >= 0) {
+        fmi3Instance m = instantiate_me("host3me", token, res, false, false, &messages, logger);
+        if (!m) { fprintf(stderr, "fmi3InstantiateModelExchange returned NULL: %s\n", last); return 1; }
+        size_t n = 0;
+        CHECK(n_states(m, &n));
+        if ((long)n != nx) { fprintf(stderr, "fmi3GetNumberOfContinuousStates: %zu, expected %ld\n", n, nx); return 1; }
+        double *x = calloc(n ? n : 1, sizeof *x), *dx = calloc(n ? n : 1, sizeof *dx);
+        CHECK(set_f64(m, set_vrs, nset, set_vals, nset));
+        CHECK(enter_init(m, false, 0.0, 0.0, false, 0.0));
+        CHECK(exit_init(m));
+        bool need = true, term = false, nom = false, vals = false, next_defined = false;
+        double next = 0.0;
+        for (int k = 0; need && k < 100; k++) CHECK(update(m, &need, &term, &nom, &vals, &next_defined, &next));
+        CHECK(enter_ctm(m));
+        t = 0.0;
+        for (int i = 0; i < steps; i++) {
+            CHECK(get_x(m, x, n));
+            CHECK(get_dx(m, dx, n));
+            for (size_t j = 0; j < n; j++) x[j] += h * dx[j];
+            t += h;
+            CHECK(set_time(m, t));
+            CHECK(set_x(m, x, n));
+            bool enter = false, stop = false;
+            CHECK(completed(m, true, &enter, &stop));
+            if (stop) { fprintf(stderr, "terminateSimulation at %g\n", t); return 1; }
+            if (enter) {
+                CHECK(enter_event_mode(m));
+                need = true;
+                for (int k = 0; need && k < 100; k++) CHECK(update(m, &need, &term, &nom, &vals, &next_defined, &next));
+                CHECK(enter_ctm(m));
+            }
+        }
+        CHECK(get_f64(m, vrs, nv, values, nv));
+        print_bits("me-final", values, nv);
+        CHECK(terminate(m));
+        free_instance(m);
+        free(x);
+        free(dx);
+    }
+    printf("messages %d\n", messages);
+    free(vrs);
+    free(values);
+    free(set_vrs);
+    free(set_vals);
+    if (dlclose(lib) != 0) { fprintf(stderr, "dlclose: %s\n", dlerror()); return 1; }
+    return 0;
+}
