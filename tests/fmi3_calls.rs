@@ -218,6 +218,8 @@ fn time_cannot_be_set_and_a_wrong_n_values_is_refused_with_nothing_changed() {
     unsafe {
         assert_eq!(fmi3SetFloat64(c, vr.as_ptr(), 1, [3.0].as_ptr(), 1), fmi3Error);
         logged(log, fmi3Error, &["fmi3SetFloat64", "'time'", "independent"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
+        init(c);
         let vrs = [0u32];
         assert_eq!(fmi3SetFloat64(c, vrs.as_ptr(), 1, [1.0, 2.0].as_ptr(), 2), fmi3Error);
         logged(log, fmi3Error, &["nValues = 2", "nValueReferences = 1"]);
@@ -232,15 +234,42 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
     // SAFETY: arrays of the given lengths, in Instantiated (parameters settable).
     unsafe {
         let mode = [5u32];
-        assert_eq!(fmi3SetInt64(c, mode.as_ptr(), 1, [2i64].as_ptr(), 1), fmi3OK);
-        assert_eq!(fmi3SetInt64(c, mode.as_ptr(), 1, [7i64].as_ptr(), 1), fmi3Error);
-        logged(log, fmi3Error, &["no item of the enumeration"]);
-        assert_eq!(fmi3SetInt64(c, mode.as_ptr(), 1, [1i64 << 40].as_ptr(), 1), fmi3Error);
-        assert_eq!(fmi3SetInt32(c, mode.as_ptr(), 1, [1].as_ptr(), 1), fmi3Error);
-        logged(log, fmi3Error, &["'mode'", "Enumeration", "fmi3GetInt64/fmi3SetInt64"]);
         let count = [6u32];
+        // Each refusal is an fmi3Error, after which the FMU is Terminated until fmi3Reset.
+        let refusals: [(&str, &dyn Fn() -> fmi3Status, &[&str]); 5] = [
+            (
+                "item",
+                &|| fmi3SetInt64(c, mode.as_ptr(), 1, [7i64].as_ptr(), 1),
+                &["no item of the enumeration"],
+            ),
+            (
+                "range",
+                &|| fmi3SetInt64(c, mode.as_ptr(), 1, [1i64 << 40].as_ptr(), 1),
+                &["no item of its enumeration"],
+            ),
+            (
+                "Int32 of an enumeration",
+                &|| fmi3SetInt32(c, mode.as_ptr(), 1, [1].as_ptr(), 1),
+                &["'mode'", "Enumeration", "fmi3GetInt64/fmi3SetInt64"],
+            ),
+            (
+                "Int64 of an Int32",
+                &|| fmi3SetInt64(c, count.as_ptr(), 1, [4].as_ptr(), 1),
+                &["'count'", "Int32"],
+            ),
+            (
+                "Float32",
+                &|| fmi3SetFloat32(c, count.as_ptr(), 1, [1.0f32].as_ptr(), 1),
+                &["fmi3SetFloat32", "no Float32 variables"],
+            ),
+        ];
+        for (what, call, words) in refusals {
+            assert_eq!(call(), fmi3Error, "{what}");
+            logged(log, fmi3Error, words);
+            assert_eq!(fmi3Reset(c), fmi3OK);
+        }
+        assert_eq!(fmi3SetInt64(c, mode.as_ptr(), 1, [2i64].as_ptr(), 1), fmi3OK);
         assert_eq!(fmi3SetInt32(c, count.as_ptr(), 1, [4].as_ptr(), 1), fmi3OK);
-        assert_eq!(fmi3SetInt64(c, count.as_ptr(), 1, [4].as_ptr(), 1), fmi3Error);
         let switch = [7u32];
         assert_eq!(fmi3SetBoolean(c, switch.as_ptr(), 1, [true].as_ptr(), 1), fmi3OK);
         let label = [8u32];
@@ -248,8 +277,6 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
             fmi3SetString(c, label.as_ptr(), 1, [c"fast".as_ptr()].as_ptr(), 1),
             fmi3OK
         );
-        assert_eq!(fmi3SetFloat32(c, count.as_ptr(), 1, [1.0f32].as_ptr(), 1), fmi3Error);
-        logged(log, fmi3Error, &["fmi3SetFloat32", "no Float32 variables"]);
         assert_eq!(fmi3SetUInt8(c, null(), 0, null(), 0), fmi3OK);
 
         init(c);
@@ -288,15 +315,26 @@ fn the_state_table_is_fmi_3() {
             fmi3Error,
             &["fmi3ExitInitializationMode", "not allowed in state Instantiated"],
         );
+        // FMI 3.0, 2.3.1: after fmi3Error the FMU is Terminated until fmi3Reset.
+        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3Error);
+        logged(log, fmi3Error, &["not allowed in state Terminated"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
         assert_eq!(fmi3EnterConfigurationMode(c), fmi3Error);
         logged(log, fmi3Error, &["no structural parameters"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
         init(c);
         assert_eq!(fmi3EnterEventMode(c), fmi3Error);
         logged(log, fmi3Error, &["fmi3EnterEventMode", "model-exchange function"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
+        init(c);
         assert_eq!(fmi3EnterStepMode(c), fmi3Error);
+        assert_eq!(fmi3Reset(c), fmi3OK);
+        init(c);
         let mut dx = [0.0];
         assert_eq!(fmi3GetContinuousStateDerivatives(c, dx.as_mut_ptr(), 1), fmi3Error);
         logged(log, fmi3Error, &["fmi3GetContinuousStateDerivatives"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
+        init(c);
         assert_eq!(fmi3Terminate(c), fmi3OK);
         assert_eq!(step(c, 0.0, 0.1).status, fmi3Error);
         logged(
@@ -444,21 +482,6 @@ fn model_exchange_integrates_and_adjoint_is_the_transpose_of_directional() {
             let expected = jac[0][j] * w[0] + jac[1][j] * w[1];
             assert!((adj[j] - expected).abs() < 1e-15, "{adj:?}");
         }
-        // Wrong sizes are refused (nSeed = nUnknowns for the adjoint).
-        assert_eq!(
-            fmi3GetAdjointDerivative(
-                c,
-                unknowns.as_ptr(),
-                2,
-                knowns.as_ptr(),
-                1,
-                w.as_ptr(),
-                2,
-                adj.as_mut_ptr(),
-                2
-            ),
-            fmi3Error
-        );
         // Explicit Euler: x' = (u - x)/T.
         let (mut x, h) = (0.5, 1e-3);
         let mut t = 0.0;
@@ -476,7 +499,23 @@ fn model_exchange_integrates_and_adjoint_is_the_transpose_of_directional() {
         assert!((x - exact).abs() < 1e-3, "{x} vs {exact}");
         assert!((get(c, &[TIME_VR]).1[0] - 1.0).abs() < 1e-12);
         assert_eq!(fmi3EnterEventMode(c), fmi3OK);
-        assert_eq!(fmi3Terminate(c), fmi3OK);
+        // Wrong sizes are refused (nSeed = nUnknowns for the adjoint).
+        assert_eq!(
+            fmi3GetAdjointDerivative(
+                c,
+                unknowns.as_ptr(),
+                2,
+                knowns.as_ptr(),
+                1,
+                w.as_ptr(),
+                2,
+                adj.as_mut_ptr(),
+                2
+            ),
+            fmi3Error
+        );
+        // ... and the FMU is Terminated (FMI 3.0, 2.3.1).
+        assert_eq!(fmi3Terminate(c), fmi3Error);
         fmi3FreeInstance(c);
     }
 }
@@ -520,11 +559,13 @@ fn messages_speak_fmi_3() {
             fmi3Error
         );
         logged(log, fmi3Error, &["fmi3SetDebugLogging", "unknown log category"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
         assert_eq!(
             fmi3EnterInitializationMode(c, false, 0.0, f64::NAN, false, 0.0),
             fmi3Error
         );
         logged(log, fmi3Error, &["fmi3EnterInitializationMode", "startTime = NaN"]);
+        assert_eq!(fmi3Reset(c), fmi3OK);
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
         assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
         assert_eq!(fmi3EnterContinuousTimeMode(c), fmi3OK);

@@ -49,8 +49,9 @@ pub fn read() -> Result<Metadata, String> {
         return Ok(m);
     };
     let at = |key: &str| format!("{}: [package.metadata.fmu] {key}", path.display());
-    // Read here: what goes into the description. Read by cargo fmu: documentation, resources.
-    const KNOWN: [&str; 8] = [
+    // Read here: what goes into the description. Read by cargo fmu: documentation, resources,
+    // fmi-versions (which FMI versions `cargo fmu build` makes).
+    const KNOWN: [&str; 9] = [
         "author",
         "version",
         "copyright",
@@ -59,6 +60,7 @@ pub fn read() -> Result<Metadata, String> {
         "default-experiment",
         "documentation",
         "resources",
+        "fmi-versions",
     ];
     if let Some(table) = fmu.as_table() {
         for key in table.keys() {

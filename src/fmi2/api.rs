@@ -72,10 +72,17 @@ pub(crate) unsafe fn with_instance<M: CoSimulation>(
         // SAFETY: this call set `busy`, so no other reference to the instance exists until it
         // clears it below.
         let inst = unsafe { &mut *instance };
-        match inst.check_state(call, function) {
+        let status = match inst.check_state(call, function) {
             Ok(()) => f(inst),
             Err(status) => status,
+        };
+        // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
+        // fmi3Error, the FMU enters state Terminated" (from there fmi3Reset or fmi3SetFMUState
+        // lead back). FMI 2.0 has no such rule: its instances stay where they were.
+        if inst.fmi3 && status == fmi2Error && inst.sim.state != State::Fatal {
+            inst.sim.state = State::Terminated;
         }
+        status
     }));
     let status = match result {
         Ok(status) => status,

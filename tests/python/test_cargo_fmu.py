@@ -191,3 +191,24 @@ def test_a_crate_that_calls_export_fmi2_is_told_to_call_export_fmu(user_crate):
     finally:
         lib.write_text(src)
         run(["cargo", "fmu", "build"], crate, env)
+
+
+def test_the_crates_metadata_chooses_its_fmi_versions(user_crate):
+    crate, _, env = user_crate
+    manifest = crate / "Cargo.toml"
+    text = manifest.read_text()
+    assert "[package.metadata.fmu]" in text, text
+    fmu2, fmu3 = crate / "target" / "fmu" / "GainLag.fmu", crate / "target" / "fmu" / "fmi3" / "GainLag.fmu"
+    try:
+        manifest.write_text(text.replace("[package.metadata.fmu]", '[package.metadata.fmu]\nfmi-versions = ["3.0"]', 1))
+        fmu2.unlink()
+        fmu3.unlink()
+        run(["cargo", "fmu", "build"], crate, env)
+        assert fmu3.exists() and not fmu2.exists()
+        manifest.write_text(text.replace("[package.metadata.fmu]", '[package.metadata.fmu]\nfmi-versions = ["4.0"]', 1))
+        bad = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+        assert bad.returncode != 0 and "fmi-versions" in bad.stderr, bad.stderr
+    finally:
+        manifest.write_text(text)
+        run(["cargo", "fmu", "build"], crate, env)
+    assert fmu2.exists() and fmu3.exists()
