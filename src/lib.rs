@@ -1,4 +1,4 @@
-//! # rustfmu: FMI 2.0 FMUs from plain Rust models
+//! # rustfmu: FMI 2.0 and FMI 3.0 FMUs from plain Rust models
 //!
 //! A model is a Rust struct. Its variables are declared on its fields with
 //! `#[derive(Model)]`; it implements [`Model`] (initialization, checks) and [`CoSimulation`]
