@@ -2,7 +2,8 @@
 //!
 //! A model is a Rust struct. Its variables are declared on its fields with
 //! `#[derive(Model)]`; it implements [`Model`] (initialization, checks) and [`CoSimulation`]
-//! (a communication step); one line, [`export_fmi2!`], makes the crate's `cdylib` an FMU.
+//! (a communication step); one line, [`export_fmu!`], makes the crate's `cdylib` an FMU (FMI 2.0,
+//! or FMI 3.0 with the feature `fmi3`).
 //! `cargo fmu build` (from the `fmu-build` package) packages it.
 //!
 //! ```ignore
@@ -30,7 +31,7 @@
 //!     }
 //! }
 //!
-//! rustfmu::export_fmi2!(Lag);
+//! rustfmu::export_fmu!(Lag);
 //! ```
 //!
 //! What the runtime does for every model: the FMI 2.0 state machine; all-or-nothing argument
