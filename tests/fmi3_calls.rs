@@ -236,7 +236,9 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
         let mode = [5u32];
         let count = [6u32];
         // Each refusal is an fmi3Error, after which the FMU is Terminated until fmi3Reset.
-        let refusals: [(&str, &dyn Fn() -> fmi3Status, &[&str]); 5] = [
+        // (what, the refused call, words its message must contain)
+        type Refusal<'a> = (&'a str, &'a dyn Fn() -> fmi3Status, &'a [&'a str]);
+        let refusals: [Refusal; 5] = [
             (
                 "item",
                 &|| fmi3SetInt64(c, mode.as_ptr(), 1, [7i64].as_ptr(), 1),

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs what the tests and examples need, on a fresh machine: Debian's libclang-dev (fmi-sys
 # runs bindgen when the tests build) and valgrind, and a Python venv at .venv with
-# tests/python/requirements.txt. `--python-only` (the main job) installs the venv alone: building
-# the FMUs needs only the Rust toolchain, no libclang and no root.
+# tests/python/requirements.txt; and what the Windows binaries of the FMUs need: the Rust target
+# x86_64-pc-windows-gnu (rustup target add), Debian's MinGW linker (gcc-mingw-w64-x86-64), and
+# for the tests wine, which runs them. `--python-only` (the main job) installs the venv and the
+# cross-compilation pieces (target and linker), no libclang, valgrind or wine.
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,19 +13,28 @@ python_only=false
 [ "${1:-}" = "--python-only" ] && python_only=true
 
 need=()
+# Cross compilation (every FMU of this project carries a linux64 and a win64 binary).
+windows=x86_64-pc-windows-gnu
+if ! rustc --print sysroot >/dev/null 2>&1 || [ ! -d "$(rustc --print sysroot)/lib/rustlib/$windows/lib" ]; then
+  echo "setup-env: rustup target add $windows"
+  rustup target add "$windows"
+fi
+command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 || need+=(gcc-mingw-w64-x86-64)
 if ! $python_only; then
+command -v wine >/dev/null 2>&1 || need+=(wine)
+command -v gcc >/dev/null 2>&1 || need+=(gcc)
 dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 command -v valgrind >/dev/null 2>&1 || need+=(valgrind)
 command -v nm >/dev/null 2>&1 || need+=(binutils)
 # ecospy's libecosc.so (the Ecos SSP tests, tests/python/test_ssp_as_shipped.py) links libtbb.so.12.
 dpkg -s libtbb12 >/dev/null 2>&1 || need+=(libtbb12)
+fi
 if ((${#need[@]})); then
   echo "setup-env: apt-get install ${need[*]}"
   sudo=""
   [ "$(id -u)" = 0 ] || sudo="sudo"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" >/dev/null
-fi
 fi
 
 if [ ! -x .venv/bin/python ]; then

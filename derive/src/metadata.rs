@@ -50,8 +50,9 @@ pub fn read() -> Result<Metadata, String> {
     };
     let at = |key: &str| format!("{}: [package.metadata.fmu] {key}", path.display());
     // Read here: what goes into the description. Read by cargo fmu: documentation, resources,
-    // fmi-versions (which FMI versions `cargo fmu build` makes).
-    const KNOWN: [&str; 9] = [
+    // fmi-versions (which FMI versions `cargo fmu build` makes), targets (the Rust target
+    // triples whose binaries go into the FMU).
+    const KNOWN: [&str; 10] = [
         "author",
         "version",
         "copyright",
@@ -61,6 +62,7 @@ pub fn read() -> Result<Metadata, String> {
         "documentation",
         "resources",
         "fmi-versions",
+        "targets",
     ];
     if let Some(table) = fmu.as_table() {
         for key in table.keys() {

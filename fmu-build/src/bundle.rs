@@ -1,7 +1,9 @@
 //! The `.fmu` archive: a zip with `modelDescription.xml` at the root,
 //! `binaries/<platform>/<modelIdentifier>.<ext>`, `documentation/index.html` and `resources/`.
 //! An FMI 2.0 binary goes to `target/fmu/<id>.fmu` (`binaries/linux64/`), an FMI 3.0 one to
-//! `target/fmu/fmi3/<id>.fmu` (`binaries/x86_64-linux/`, the FMI 3.0 platform tuple).
+//! `target/fmu/fmi3/<id>.fmu` (`binaries/x86_64-linux/`, the FMI 3.0 platform tuple). One FMU
+//! holds the binaries of every target it was built for (`binaries/win64/<id>.dll`,
+//! `binaries/x86_64-windows/<id>.dll`, ...: [`crate::target`]), all carrying the same description.
 
 use crate::cargo::FmuCrate;
 use rustfmu::description::{self, FmiVersion, Interfaces, ModelDescription};
@@ -115,17 +117,48 @@ fn files_below(dir: &Path) -> Result<Vec<(String, PathBuf)>, String> {
     Ok(out)
 }
 
-/// Packages a built library into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI
-/// 3.0), whichever version the library says it implements.
-pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packaged, String> {
-    let binary = std::fs::read(library).map_err(|e| {
-        format!(
-            "{}: cannot read the built library {}: {e}",
-            krate.package,
-            library.display()
-        )
-    })?;
-    let me = read_library(&binary).map_err(|e| format!("{}: {}: {e}", krate.package, library.display()))?;
+/// Packages built libraries of one crate and one FMI version (one per target: `(triple,
+/// library)`) into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI 3.0), whichever
+/// version the libraries say they implement. Every library must carry the same description.
+pub fn package(krate: &FmuCrate, libraries: &[(String, PathBuf)], out_dir: &Path) -> Result<Packaged, String> {
+    let mut binaries: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut first: Option<SelfDescription> = None;
+    for (triple, library) in libraries {
+        let binary = std::fs::read(library).map_err(|e| {
+            format!(
+                "{}: cannot read the built library {}: {e}",
+                krate.package,
+                library.display()
+            )
+        })?;
+        let me = read_library(&binary).map_err(|e| format!("{}: {}: {e}", krate.package, library.display()))?;
+        let platform = crate::target::platform(triple)?;
+        let folder = platform
+            .folder(me.interfaces.version)
+            .map_err(|e| format!("{}: target {triple}: {e}", krate.package))?;
+        let name = format!(
+            "binaries/{folder}/{}.{}",
+            me.description.model_identifier,
+            platform.extension()
+        );
+        match &first {
+            None => first = Some(me),
+            Some(f) if f.guid != me.guid || f.interfaces.version != me.interfaces.version => {
+                return Err(format!(
+                    "{}: {} (target {triple}) describes itself differently from the library of target {} \
+                     (GUID {} against {}): the targets were built from different sources",
+                    krate.package,
+                    library.display(),
+                    libraries[0].0,
+                    me.guid,
+                    f.guid
+                ));
+            }
+            Some(_) => {}
+        }
+        binaries.push((name, binary));
+    }
+    let me = first.ok_or_else(|| format!("{}: no library to package", krate.package))?;
     let id = me.description.model_identifier;
     let version = me.interfaces.version;
     let xml = model_description(&me).map_err(|e| format!("{id}: {e}"))?;
@@ -144,7 +177,6 @@ pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packa
         Some(dir) => files_below(dir)?,
         None => vec![],
     };
-    let (folder, ext) = platform_of(version)?;
 
     let out = fmu_path(out_dir, version, id);
     let dir = out.parent().expect("a folder");
@@ -153,11 +185,9 @@ pub fn package(krate: &FmuCrate, library: &Path, out_dir: &Path) -> Result<Packa
     let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
     let mut zip = zip::ZipWriter::new(file);
     let deflate = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
-    let mut files: Vec<(String, Vec<u8>)> = vec![
-        ("modelDescription.xml".into(), xml.clone().into_bytes()),
-        (format!("binaries/{folder}/{id}.{ext}"), binary),
-        ("documentation/index.html".into(), docs.into_bytes()),
-    ];
+    let mut files: Vec<(String, Vec<u8>)> = vec![("modelDescription.xml".into(), xml.clone().into_bytes())];
+    files.extend(binaries);
+    files.push(("documentation/index.html".into(), docs.into_bytes()));
     for (name, path) in resources {
         let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         files.push((format!("resources/{name}"), bytes));

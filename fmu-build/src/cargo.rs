@@ -4,7 +4,8 @@
 //! name in its Cargo.toml). Its `[package.metadata.fmu]` may name `documentation` (an HTML
 //! fragment for documentation/index.html) and `resources` (a folder copied to resources/;
 //! default `resources` when it exists) and `fmi-versions` (which FMI versions `cargo fmu build`
-//! makes of it: `["2.0", "3.0"]`, the default, or one of them). The workspace's `[workspace.metadata.fmu]` may name
+//! makes of it: `["2.0", "3.0"]`, the default, or one of them) and `targets` (the Rust target
+//! triples whose binaries go into each FMU; default: the host's only). The workspace's `[workspace.metadata.fmu]` may name
 //! `model-descriptions` (a folder that keeps a committed copy of every description) and
 //! `systems` (files of composed systems to write as SSP).
 
@@ -26,6 +27,9 @@ pub struct FmuCrate {
     /// `[package.metadata.fmu] fmi-versions`: `None` when not given (both versions), else the
     /// versions named, or what is wrong with the entry.
     pub fmi_versions: Option<Result<BTreeSet<FmiVersion>, String>>,
+    /// `[package.metadata.fmu] targets`: `None` when not given (the host only), else the
+    /// triples named, or what is wrong with the entry.
+    pub targets: Option<Result<Vec<String>, String>>,
     /// The name under which the crate depends on rustfmu (`rustfmu`, or its rename): the
     /// prefix of `--features <it>/fmi3`.
     pub rustfmu_dependency: String,
@@ -110,6 +114,7 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         documentation: path_of("documentation"),
         resources,
         fmi_versions: meta.and_then(|m| m.get("fmi-versions")).map(parse_fmi_versions),
+        targets: meta.and_then(|m| m.get("targets")).map(crate::target::parse_targets),
         rustfmu_dependency,
     }
 }
@@ -202,16 +207,36 @@ impl Workspace {
         self.target_dir.join("fmu")
     }
 
-    /// Where `cargo fmu build` keeps a copy of each built library, per FMI version: cargo's own
-    /// `target/release/lib<name>.so` is overwritten by the build of the other version.
+    /// Where `cargo fmu build` keeps a copy of each built library of the host, per FMI version:
+    /// cargo's own `target/release/lib<name>.so` is overwritten by the build of the other version.
     pub fn built_library(&self, c: &FmuCrate, version: FmiVersion) -> PathBuf {
         let file = self.library(c);
         let name = file.file_name().expect("a file name").to_owned();
-        let folder = match version {
-            FmiVersion::V2 => "fmi2",
-            FmiVersion::V3 => "fmi3",
-        };
-        self.target_dir.join("fmu-build").join(folder).join(name)
+        self.target_dir
+            .join("fmu-build")
+            .join(version_folder(version))
+            .join(name)
+    }
+
+    /// [`Workspace::built_library`] of any target: the host's where it always was, another
+    /// target's in `target/fmu-build/fmi{2,3}/<triple>/`.
+    pub fn built_library_for(
+        &self,
+        c: &FmuCrate,
+        version: FmiVersion,
+        triple: &str,
+        host: &str,
+    ) -> Result<PathBuf, String> {
+        if triple == host {
+            return Ok(self.built_library(c, version));
+        }
+        let file = crate::target::platform(triple)?.cdylib_file(&c.lib_name);
+        Ok(self
+            .target_dir
+            .join("fmu-build")
+            .join(version_folder(version))
+            .join(triple)
+            .join(file))
     }
 
     /// The built library of a crate (release profile, host target).
@@ -225,14 +250,37 @@ impl Workspace {
             .join("release")
             .join(format!("{prefix}{}.{ext}", c.lib_name))
     }
+
+    /// The library cargo builds of a crate for a target: the host's in `target/release/`,
+    /// another's (`cargo build --target <triple>`) in `target/<triple>/release/`.
+    pub fn library_for(&self, c: &FmuCrate, triple: &str, host: &str) -> Result<PathBuf, String> {
+        if triple == host {
+            return Ok(self.library(c));
+        }
+        let file = crate::target::platform(triple)?.cdylib_file(&c.lib_name);
+        Ok(self.target_dir.join(triple).join("release").join(file))
+    }
+}
+
+fn version_folder(version: FmiVersion) -> &'static str {
+    match version {
+        FmiVersion::V2 => "fmi2",
+        FmiVersion::V3 => "fmi3",
+    }
 }
 
 /// `cargo build --release -p ...` in the workspace: the FMI 2.0 libraries (rustfmu without
 /// features), or with `version` 3.0 the FMI 3.0 one of a single crate (`--features
-/// <rustfmu>/fmi3`).
-pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion) -> Result<(), String> {
+/// <rustfmu>/fmi3`). `target`: a triple other than the host's (`--target <triple>`, with the
+/// linker [`crate::target::build_env`] names), or `None` for the host.
+pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion, target: Option<&str>) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut args: Vec<String> = vec!["build".into(), "--release".into()];
+    let mut env = Vec::new();
+    if let Some(t) = target {
+        args.extend(["--target".into(), t.to_string()]);
+        env = crate::target::build_env(t);
+    }
     for c in crates {
         args.extend(["-p".into(), c.package.clone()]);
     }
@@ -247,6 +295,7 @@ pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion) -> Result
     let status = Command::new(&cargo)
         .current_dir(&ws.root)
         .args(&args)
+        .envs(env)
         .status()
         .map_err(|e| format!("cannot run {cargo}: {e}"))?;
     if status.success() {
@@ -259,9 +308,15 @@ pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion) -> Result
 /// Copies the library cargo just built (`target/release/lib<name>.so`) to
 /// [`Workspace::built_library`] before the next build overwrites it. Removed first and copied,
 /// never written through: cargo's file is a hard link to its own artifact.
-pub fn keep_library(ws: &Workspace, c: &FmuCrate, version: FmiVersion) -> Result<PathBuf, String> {
-    let from = ws.library(c);
-    let to = ws.built_library(c, version);
+pub fn keep_library(
+    ws: &Workspace,
+    c: &FmuCrate,
+    version: FmiVersion,
+    triple: &str,
+    host: &str,
+) -> Result<PathBuf, String> {
+    let from = ws.library_for(c, triple, host)?;
+    let to = ws.built_library_for(c, version, triple, host)?;
     let dir = to.parent().expect("a folder");
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let _ = std::fs::remove_file(&to);

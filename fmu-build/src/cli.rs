@@ -52,6 +52,11 @@ enum Cmd {
         /// or what a crate's `[package.metadata.fmu] fmi-versions` names).
         #[arg(long = "fmi-version", value_delimiter = ',', value_name = "2|3|both")]
         fmi_versions: Vec<String>,
+        /// A Rust target triple whose binary goes into each FMU (repeatable, or a comma list;
+        /// default: a crate's `[package.metadata.fmu] targets`, else the host only), e.g.
+        /// `--target x86_64-unknown-linux-gnu --target x86_64-pc-windows-gnu`.
+        #[arg(long = "target", value_delimiter = ',', value_name = "TRIPLE")]
+        targets: Vec<String>,
     },
     /// Validate FMU files: archive layout, description, binary, a smoke run in a child process.
     Validate {
@@ -134,6 +139,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             workspace,
             python,
             fmi_versions,
+            targets,
         } => {
             let versions = parse_version_choice(&fmi_versions)?;
             build_versions(
@@ -142,6 +148,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 workspace,
                 python.as_deref(),
                 versions.as_ref(),
+                &targets,
             )
             .map(|_| ())
         }
@@ -279,14 +286,41 @@ pub fn build(
     all: bool,
     python: Option<&Path>,
 ) -> Result<Vec<PathBuf>, String> {
-    build_versions(manifest_path, packages, all, python, None)
+    build_versions(manifest_path, packages, all, python, None, &[])
 }
 
-/// [`build`] of the FMI versions asked for (`None`: both, or what each crate names).
+/// The targets of a crate: `--target` if given, else its `[package.metadata.fmu] targets`,
+/// else the host; the host first when it is among them.
+fn targets_of(c: &FmuCrate, asked: &[String], host: &str) -> Result<Vec<String>, String> {
+    let mut t: Vec<String> = if !asked.is_empty() {
+        let mut out: Vec<String> = Vec::new();
+        for a in asked {
+            crate::target::platform(a).map_err(|e| format!("--target: {e}"))?;
+            if !out.contains(a) {
+                out.push(a.clone());
+            }
+        }
+        out
+    } else {
+        match &c.targets {
+            None => vec![host.to_string()],
+            Some(Ok(t)) => t.clone(),
+            Some(Err(e)) => return Err(format!("{}: [package.metadata.fmu] {e}", c.package)),
+        }
+    };
+    t.sort_by_key(|x| x != host);
+    Ok(t)
+}
+
+/// [`build`] of the FMI versions asked for (`None`: both, or what each crate names) and the
+/// targets asked for (empty: what each crate names, else the host).
 ///
-/// For each version: `cargo build --release` (FMI 3.0: `--features rustfmu/fmi3`, one crate at a
-/// time), each library copied aside right after its build (the next build overwrites cargo's
-/// file), its version checked against the one asked for, and packaged: FMI 2.0 as
+/// First every target is checked ([`crate::target::preflight`]: its standard library and
+/// linker), so that a missing piece stops the build before anything is built. Then for each
+/// target and version: `cargo build --release [--target T]` (FMI 3.0: `--features
+/// rustfmu/fmi3`, one crate at a time), each library copied aside right after its build (the
+/// next build overwrites cargo's file), its version checked against the one asked for; and each
+/// crate and version packaged with the binaries of all its targets: FMI 2.0 as
 /// `target/fmu/<id>.fmu`, FMI 3.0 as `target/fmu/fmi3/<id>.fmu`.
 pub fn build_versions(
     manifest_path: Option<&Path>,
@@ -294,10 +328,12 @@ pub fn build_versions(
     all: bool,
     python: Option<&Path>,
     asked: Option<&BTreeSet<FmiVersion>>,
+    asked_targets: &[String],
 ) -> Result<Vec<PathBuf>, String> {
     let ws = cargo::workspace(manifest_path)?;
     let crates = ws.select(packages, all)?;
-    let mut plan: Vec<(FmuCrate, BTreeSet<FmiVersion>)> = Vec::new();
+    let host = crate::target::host_triple()?;
+    let mut plan: Vec<(FmuCrate, BTreeSet<FmiVersion>, Vec<String>)> = Vec::new();
     for c in crates {
         let versions = versions_of(&c, asked)?;
         if versions.is_empty() {
@@ -312,47 +348,100 @@ pub fn build_versions(
             );
             continue;
         }
-        plan.push((c, versions));
+        let targets = targets_of(&c, asked_targets, &host)?;
+        for t in &targets {
+            let p = crate::target::platform(t)?;
+            for v in &versions {
+                p.folder(*v).map_err(|e| format!("{}: target {t}: {e}", c.package))?;
+            }
+        }
+        plan.push((c, versions, targets));
     }
     if plan.is_empty() {
         return Err("nothing to build for the FMI versions asked for".into());
     }
-    let v2: Vec<FmuCrate> = plan
-        .iter()
-        .filter(|(_, v)| v.contains(&FmiVersion::V2))
-        .map(|(c, _)| c.clone())
-        .collect();
-    let v3: Vec<FmuCrate> = plan
-        .iter()
-        .filter(|(_, v)| v.contains(&FmiVersion::V3))
-        .map(|(c, _)| c.clone())
-        .collect();
-    let mut libraries: Vec<(FmuCrate, FmiVersion, PathBuf)> = Vec::new();
-    if !v2.is_empty() {
-        cargo::build(&ws, &v2, FmiVersion::V2)?;
-        for c in &v2 {
-            libraries.push((c.clone(), FmiVersion::V2, cargo::keep_library(&ws, c, FmiVersion::V2)?));
+    let mut all_targets: Vec<String> = Vec::new();
+    for (_, _, ts) in &plan {
+        for t in ts {
+            if !all_targets.contains(t) {
+                all_targets.push(t.clone());
+            }
         }
     }
-    for c in &v3 {
-        cargo::build(&ws, std::slice::from_ref(c), FmiVersion::V3)?;
-        libraries.push((c.clone(), FmiVersion::V3, cargo::keep_library(&ws, c, FmiVersion::V3)?));
+    all_targets.sort_by_key(|x| *x != host);
+    let missing: Vec<String> = all_targets
+        .iter()
+        .filter_map(|t| crate::target::preflight(t, &host).err())
+        .collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "this machine cannot build every target asked for; nothing was built:\n  {}",
+            missing.join("\n  ")
+        ));
     }
-    if !v2.is_empty() && !v3.is_empty() {
+    let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
+    let mut host_v2: Vec<FmuCrate> = Vec::new();
+    let mut any_host_v3 = false;
+    for t in &all_targets {
+        let cross = (*t != host).then_some(t.as_str());
+        let with = |v: FmiVersion| -> Vec<FmuCrate> {
+            plan.iter()
+                .filter(|(_, vs, ts)| vs.contains(&v) && ts.contains(t))
+                .map(|(c, _, _)| c.clone())
+                .collect()
+        };
+        let v2 = with(FmiVersion::V2);
+        let v3 = with(FmiVersion::V3);
+        let started = std::time::Instant::now();
+        if !v2.is_empty() {
+            cargo::build(&ws, &v2, FmiVersion::V2, cross)?;
+            for c in &v2 {
+                let kept = cargo::keep_library(&ws, c, FmiVersion::V2, t, &host)?;
+                libraries.push((c.clone(), FmiVersion::V2, t.clone(), kept));
+            }
+        }
+        for c in &v3 {
+            cargo::build(&ws, std::slice::from_ref(c), FmiVersion::V3, cross)?;
+            let kept = cargo::keep_library(&ws, c, FmiVersion::V3, t, &host)?;
+            libraries.push((c.clone(), FmiVersion::V3, t.clone(), kept));
+        }
+        eprintln!("fmu: built target {t} in {:.1} s", started.elapsed().as_secs_f64());
+        if cross.is_none() {
+            host_v2 = v2;
+            any_host_v3 = !v3.is_empty();
+        }
+    }
+    if !host_v2.is_empty() && any_host_v3 {
         // Leaves target/release/lib<name>.so the FMI 2.0 library, as before FMI 3.0 existed
         // (cargo finds everything fresh and links its FMI 2.0 artifact there again).
-        cargo::build(&ws, &v2, FmiVersion::V2)?;
+        cargo::build(&ws, &host_v2, FmiVersion::V2, None)?;
     }
     let mut built = Vec::new();
-    for (c, version, library) in &libraries {
-        check_built_version(c, *version, library)?;
-        let p = crate::bundle::package(c, library, &ws.fmu_dir())?;
-        eprintln!("fmu: packaged {} (FMI {})", p.fmu.display(), p.version.text());
-        built.push(p.fmu);
+    for (c, versions, _) in &plan {
+        for version in versions {
+            let mut mine: Vec<(String, PathBuf)> = Vec::new();
+            for (lc, lv, t, library) in &libraries {
+                if lc.package == c.package && lv == version {
+                    check_built_version(c, *version, library)?;
+                    mine.push((t.clone(), library.clone()));
+                }
+            }
+            let p = crate::bundle::package(c, &mine, &ws.fmu_dir())?;
+            let platforms: Vec<&str> = mine.iter().map(|(t, _)| t.as_str()).collect();
+            eprintln!(
+                "fmu: packaged {} (FMI {}; {})",
+                p.fmu.display(),
+                p.version.text(),
+                platforms.join(", ")
+            );
+            built.push(p.fmu);
+        }
     }
     validate_all(&built, python)?;
     if all && packages.is_empty() {
-        let libs: Vec<PathBuf> = libraries.iter().map(|(_, _, l)| l.clone()).collect();
+        // Every target's library carries the same description (bundle::package checked it):
+        // the second of a crate and version finds its file already written.
+        let libs: Vec<PathBuf> = libraries.iter().map(|(_, _, _, l)| l.clone()).collect();
         committed_descriptions(&ws, false, Some(&libs))?;
         write_ssp(&ws, None, None)?;
     }
@@ -518,6 +607,7 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
         workspace: true,
         python: None,
         fmi_versions: vec![],
+        targets: vec![],
     });
     match run(cmd, tool) {
         Ok(()) => ExitCode::SUCCESS,

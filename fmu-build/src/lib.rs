@@ -13,5 +13,6 @@ pub mod docs;
 pub mod new;
 pub mod ssp;
 pub mod systems;
+pub mod target;
 pub mod validate;
 pub mod xml;

@@ -281,65 +281,198 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     }
     let xml = archive::read_model_description(&mut zip)?;
     let d = read_description(&xml)?;
-    let (folder, ext) = crate::bundle::platform_of(d.version)?;
-    let bin_name = format!("binaries/{folder}/{}.{ext}", d.model_identifier);
-    if !zip.has_entry(&bin_name) {
+    // Every binary of a platform this FMI version names: `binaries/<folder>/<id>.<ext>`.
+    let names = zip.entry_names();
+    let binaries: Vec<(String, String)> = crate::target::known_folders(d.version)
+        .into_iter()
+        .map(|(folder, ext)| {
+            (
+                folder.clone(),
+                format!("binaries/{folder}/{}.{ext}", d.model_identifier),
+            )
+        })
+        .filter(|(_, name)| zip.has_entry(name))
+        .collect();
+    let here = crate::target::this_machine().and_then(|p| p.folder(d.version).ok());
+    if binaries.is_empty() {
+        let found: Vec<&String> = names
+            .iter()
+            .filter(|n| n.starts_with("binaries/") && !n.ends_with('/'))
+            .collect();
         return Err(format!(
-            "no {bin_name} (the binary is named after modelIdentifier, without a 'lib' prefix, in the FMI {} platform folder)",
+            "no binary binaries/<platform>/{}.<so|dll|dylib> in a platform folder of FMI {} (named after modelIdentifier, \
+             without a 'lib' prefix; found {found:?})",
+            d.model_identifier,
             d.version.text()
         ));
     }
+    // A folder of the other version's names (linux64 in an FMI 3.0 FMU, x86_64-linux in 2.0).
     let other_version = match d.version {
         FmiVersion::V2 => FmiVersion::V3,
         FmiVersion::V3 => FmiVersion::V2,
     };
-    if let Ok((other, _)) = crate::bundle::platform_of(other_version)
-        && zip
-            .entry_names()
-            .iter()
-            .any(|n| n.starts_with(&format!("binaries/{other}/")))
-    {
-        problems.push(format!(
-            "binaries/{other}/ is the FMI {} name of this platform; an FMI {} FMU has its binary in binaries/{folder}/",
-            other_version.text(),
-            d.version.text()
-        ));
-    }
-    let dir = archive::extract_private(&mut zip, &std::env::temp_dir(), &archive::Limits::default())?;
-    let so = dir.path().join(&bin_name);
-    let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
-    // A binary made by rustfmu describes itself: the packaged description must be what it says.
-    if let Ok(me) = crate::bundle::read_library(&binary) {
-        if me.interfaces.version != d.version {
+    let own: BTreeSet<String> = crate::target::known_folders(d.version)
+        .into_iter()
+        .map(|(f, _)| f)
+        .collect();
+    for (other, _) in crate::target::known_folders(other_version) {
+        if !own.contains(&other) && names.iter().any(|n| n.starts_with(&format!("binaries/{other}/"))) {
             problems.push(format!(
-                "modelDescription.xml says FMI {}, {bin_name} implements FMI {}",
+                "binaries/{other}/ is a folder name of FMI {}; an FMI {} FMU names its platforms {}",
+                other_version.text(),
                 d.version.text(),
-                me.interfaces.version.text()
+                own.iter().cloned().collect::<Vec<_>>().join(", ")
             ));
-        } else if me.guid != d.guid {
-            problems.push(format!(
-                "the {} in modelDescription.xml is {}, {bin_name} expects {}",
-                match d.version {
-                    FmiVersion::V2 => "guid",
-                    FmiVersion::V3 => "instantiationToken",
-                },
-                d.guid,
-                me.guid
-            ));
-        } else {
-            match crate::bundle::model_description(&me) {
-                Ok(generated) if generated == xml => {}
-                Ok(_) => problems.push(format!(
-                    "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
-                )),
-                Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
-            }
         }
     }
-    problems.extend(export_problems(&binary, d.version, &bin_name));
-    problems.extend(smoke_run_in_child(&so, &d));
+    let dir = archive::extract_private(&mut zip, &std::env::temp_dir(), &archive::Limits::default())?;
+    for (folder, bin_name) in &binaries {
+        let so = dir.path().join(bin_name);
+        let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
+        // A binary made by rustfmu describes itself: the packaged description must be what it says.
+        if let Ok(me) = crate::bundle::read_library(&binary) {
+            if me.interfaces.version != d.version {
+                problems.push(format!(
+                    "modelDescription.xml says FMI {}, {bin_name} implements FMI {}",
+                    d.version.text(),
+                    me.interfaces.version.text()
+                ));
+            } else if me.guid != d.guid {
+                problems.push(format!(
+                    "the {} in modelDescription.xml is {}, {bin_name} expects {}",
+                    match d.version {
+                        FmiVersion::V2 => "guid",
+                        FmiVersion::V3 => "instantiationToken",
+                    },
+                    d.guid,
+                    me.guid
+                ));
+            } else {
+                match crate::bundle::model_description(&me) {
+                    Ok(generated) if generated == xml => {}
+                    Ok(_) => problems.push(format!(
+                        "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
+                    )),
+                    Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
+                }
+            }
+        }
+        problems.extend(export_problems(&binary, d.version, bin_name));
+        problems.extend(pe_problems(&binary, d.version, bin_name));
+        // The smoke run loads the binary of the machine this runs on; the others are loaded by
+        // their own hosts (tests/python/test_windows.py runs the Windows one under wine).
+        if here.as_deref() == Some(folder.as_str()) {
+            problems.extend(smoke_run_in_child(&so, &d));
+        }
+    }
     drop(dir);
     Ok(problems)
+}
+
+/// The DLLs of Windows itself that a Windows binary may import: every other DLL (MinGW's
+/// `libgcc_s_seh-1.dll`, `libwinpthread-1.dll`, `libstdc++-6.dll`, ...) would have to be shipped
+/// with the FMU, which it is not.
+const WINDOWS_SYSTEM_DLLS: &[&str] = &[
+    "kernel32.dll",
+    "ntdll.dll",
+    "msvcrt.dll",
+    "ucrtbase.dll",
+    "userenv.dll",
+    "ws2_32.dll",
+    "bcrypt.dll",
+    "bcryptprimitives.dll",
+    "advapi32.dll",
+    "user32.dll",
+    "shell32.dll",
+    "ole32.dll",
+    "oleaut32.dll",
+    "secur32.dll",
+    "crypt32.dll",
+    "dbghelp.dll",
+    "synchronization.dll",
+];
+
+/// What the export and import tables of a PE (Windows) binary say.
+#[derive(Debug, Clone)]
+pub struct PeTables {
+    /// The exported names.
+    pub exports: Vec<String>,
+    /// The DLLs it imports from, each once, sorted.
+    pub imports: Vec<String>,
+}
+
+/// The export and import tables of a PE (Windows) binary; `None` for another format.
+pub fn pe_tables(binary: &[u8]) -> Option<Result<PeTables, String>> {
+    use object::Object;
+    let kind = object::FileKind::parse(binary).ok()?;
+    if !matches!(kind, object::FileKind::Pe32 | object::FileKind::Pe64) {
+        return None;
+    }
+    let read = || -> Result<PeTables, String> {
+        let file = object::File::parse(binary).map_err(|e| format!("not a readable PE file: {e}"))?;
+        let exports = file
+            .exports()
+            .map_err(|e| format!("its export table: {e}"))?
+            .iter()
+            .map(|e| String::from_utf8_lossy(e.name()).into_owned())
+            .collect();
+        let mut imports: Vec<String> = file
+            .imports()
+            .map_err(|e| format!("its import table: {e}"))?
+            .iter()
+            .map(|i| String::from_utf8_lossy(i.library()).into_owned())
+            .collect();
+        imports.sort_by_key(|d| d.to_ascii_lowercase());
+        imports.dedup_by(|a, b| a.eq_ignore_ascii_case(b));
+        Ok(PeTables { exports, imports })
+    };
+    Some(read())
+}
+
+/// The DLLs of a list that are not part of Windows (an FMU would have to ship them).
+pub fn not_windows_dlls(dlls: &[String]) -> Vec<&str> {
+    dlls.iter()
+        .map(String::as_str)
+        .filter(|d| {
+            let l = d.to_ascii_lowercase();
+            !(WINDOWS_SYSTEM_DLLS.contains(&l.as_str()) || l.starts_with("api-ms-win-") || l.starts_with("ext-ms-win-"))
+        })
+        .collect()
+}
+
+/// What a Windows binary exports and imports: every function of its FMI version's standard,
+/// nothing but `fmi2*` (3.0: `fmi3*`) names of that standard, and DLLs of Windows only (the
+/// FMU ships no other DLL).
+pub fn pe_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<String> {
+    let PeTables { exports, imports } = match pe_tables(binary) {
+        None => return vec![],
+        Some(Err(e)) => return vec![format!("{bin_name}: {e}")],
+        Some(Ok(t)) => t,
+    };
+    let mut problems = check_exports(&exports, version, bin_name);
+    let (own, prefix) = match version {
+        FmiVersion::V2 => (FMI2_FUNCTIONS, "fmi2"),
+        FmiVersion::V3 => (FMI3_FUNCTIONS, "fmi3"),
+    };
+    let other: Vec<&str> = exports
+        .iter()
+        .map(String::as_str)
+        .filter(|n| !n.starts_with(prefix) && !own.contains(n))
+        .collect();
+    if !other.is_empty() {
+        problems.push(format!(
+            "{bin_name} exports {}: an FMU's binary exports the {prefix}* functions only",
+            other.join(", ")
+        ));
+    }
+    let foreign = not_windows_dlls(&imports);
+    if !foreign.is_empty() {
+        problems.push(format!(
+            "{bin_name} needs {}, which Windows does not have and the FMU does not ship (link the MinGW runtime statically)",
+            foreign.join(", ")
+        ));
+    }
+    problems
 }
 
 /// The names an ELF shared library exports (defined global or weak symbols of `.dynsym`);
@@ -388,12 +521,17 @@ pub fn elf_exports(bin: &[u8]) -> Option<Vec<String>> {
 }
 
 /// What a binary exports against what its FMI version asks: every function of the standard of
-/// its version, no function of the other version's, no other `fmi2`/`fmi3` name. (ELF only;
-/// the smoke run looks every function of the standard up on any platform.)
+/// its version, no function of the other version's, no other `fmi2`/`fmi3` name. (ELF here;
+/// PE in [`pe_problems`]; the smoke run looks every function up on this machine's binary.)
 pub fn export_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<String> {
     let Some(exports) = elf_exports(binary) else {
         return vec![];
     };
+    check_exports(&exports, version, bin_name)
+}
+
+/// [`export_problems`] of a list of exported names (of an ELF or a PE binary).
+pub fn check_exports(exports: &[String], version: FmiVersion, bin_name: &str) -> Vec<String> {
     let (own, own_prefix, other, other_prefix) = match version {
         FmiVersion::V2 => (FMI2_FUNCTIONS, "fmi2", FMI3_FUNCTIONS, "fmi3"),
         FmiVersion::V3 => (FMI3_FUNCTIONS, "fmi3", FMI2_FUNCTIONS, "fmi2"),

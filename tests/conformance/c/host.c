@@ -13,13 +13,40 @@
  * With HOST_ME="<nx>,<ni>,<steps>,<h>" it also runs the FMU through Model Exchange: a new
  * instance, the same Real values set, initialization and the event iteration, then <steps>
  * explicit-Euler steps of <h> (time, state and step events handled as an importer must), and
- * prints "me-final <hex bit patterns of the listed values>". */
-#include <dlfcn.h>
+ * prints "me-final <hex bit patterns of the listed values>".
+ * With HOST_TRACE set it also prints "trace <step> <hex bit patterns>" for every co-simulation
+ * step of the last run (the whole trajectory, to compare binaries of two platforms).
+ * Builds with any C compiler for Linux (dlopen) or, with MinGW, for Windows (LoadLibraryA). */
+#if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
+#define __USE_MINGW_ANSI_STDIO 1 /* C99 printf (%zu, %llx) from MinGW, not msvcrt's */
+#endif
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _WIN32
+/* Windows (MinGW, run under wine in the tests): the same host, dlopen & co. on LoadLibraryA. */
+#include <windows.h>
+#define RTLD_NOW 0
+#define RTLD_LOCAL 0
+static char dl_error[64];
+static void *dlopen(const char *path, int flags) {
+    (void)flags;
+    void *h = (void *)LoadLibraryA(path);
+    if (!h) snprintf(dl_error, sizeof dl_error, "LoadLibraryA failed, error %lu", (unsigned long)GetLastError());
+    return h;
+}
+static void *dlsym(void *lib, const char *name) { return (void *)GetProcAddress((HMODULE)lib, name); }
+static int dlclose(void *lib) {
+    if (FreeLibrary((HMODULE)lib)) return 0;
+    snprintf(dl_error, sizeof dl_error, "FreeLibrary failed, error %lu", (unsigned long)GetLastError());
+    return 1;
+}
+static const char *dlerror(void) { return dl_error; }
+#else
+#include <dlfcn.h>
+#endif
 
 typedef void *fmi2Component;
 typedef void *fmi2FMUstate;
@@ -275,6 +302,17 @@ int main(int argc, char **argv) {
         printf(" %llx", (unsigned long long)b);
     }
     printf("\nmessages %d\n", messages);
+    if (getenv("HOST_TRACE")) {
+        for (int n = 0; n < steps; n++) {
+            printf("trace %d", n);
+            for (size_t i = 0; i < nvr; i++) {
+                uint64_t b;
+                memcpy(&b, &trace[(size_t)n * nvr + i], sizeof b);
+                printf(" %llx", (unsigned long long)b);
+            }
+            printf("\n");
+        }
+    }
     if (me_values) {
         printf("me-final");
         for (size_t i = 0; i < nvr; i++) {

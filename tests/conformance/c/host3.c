@@ -9,13 +9,39 @@
  *   explicit-Euler steps of <h> through fmi3GetContinuousStates / Derivatives / SetTime /
  *   SetContinuousStates / CompletedIntegratorStep, terminate, free.
  * Prints "final <hex bit patterns>" (CS) and "me-final <hex bit patterns>" (ME). Exits 1 with a
- * reason on stderr on any failure. */
-#include <dlfcn.h>
+ * reason on stderr on any failure. With HOST_TRACE set, also "trace <step> <hex bit patterns>"
+ * after every co-simulation step. Builds for Linux (dlopen) or, with MinGW, for Windows
+ * (LoadLibraryA). */
+#if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
+#define __USE_MINGW_ANSI_STDIO 1 /* C99 printf (%zu, %llx) from MinGW, not msvcrt's */
+#endif
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef _WIN32
+/* Windows (MinGW, run under wine in the tests): the same host, dlopen & co. on LoadLibraryA. */
+#include <windows.h>
+#define RTLD_NOW 0
+#define RTLD_LOCAL 0
+static char dl_error[64];
+static void *dlopen(const char *path, int flags) {
+    (void)flags;
+    void *h = (void *)LoadLibraryA(path);
+    if (!h) snprintf(dl_error, sizeof dl_error, "LoadLibraryA failed, error %lu", (unsigned long)GetLastError());
+    return h;
+}
+static void *dlsym(void *lib, const char *name) { return (void *)GetProcAddress((HMODULE)lib, name); }
+static int dlclose(void *lib) {
+    if (FreeLibrary((HMODULE)lib)) return 0;
+    snprintf(dl_error, sizeof dl_error, "FreeLibrary failed, error %lu", (unsigned long)GetLastError());
+    return 1;
+}
+static const char *dlerror(void) { return dl_error; }
+#else
+#include <dlfcn.h>
+#endif
 
 typedef void *fmi3Instance;
 typedef uint32_t fmi3ValueReference;
@@ -139,6 +165,7 @@ int main(int argc, char **argv) {
     CHECK(enter_init(c, false, 0.0, 0.0, false, 0.0));
     CHECK(exit_init(c));
     double t = 0.0;
+    int trace = getenv("HOST_TRACE") != NULL;
     for (int i = 0; i < steps; i++) {
         bool event = true, term = true, early = true;
         double reached = -1.0;
@@ -149,6 +176,11 @@ int main(int argc, char **argv) {
         }
         t += h;
         CHECK(get_f64(c, vrs, nv, values, nv));
+        if (trace) {
+            char tag[32];
+            snprintf(tag, sizeof tag, "trace %d", i);
+            print_bits(tag, values, nv);
+        }
     }
     print_bits("final", values, nv);
     CHECK(terminate(c));

@@ -1,0 +1,331 @@
+//! Build targets: a Rust target triple (`x86_64-unknown-linux-gnu`, `x86_64-pc-windows-gnu`,
+//! `aarch64-unknown-linux-gnu`, ...), the folder of `binaries/` it goes to in each FMI version,
+//! the file cargo makes, and the check that this machine can build it (the target's standard
+//! library, the linker) before anything is built.
+//!
+//! Adding a platform is adding its triple to [`platform`]: macOS (`x86_64-apple-darwin`,
+//! `aarch64-apple-darwin`) is named there already, but cannot be linked on a Linux machine
+//! (there is no macOS SDK), so [`preflight`] refuses it with that reason.
+
+use rustfmu::description::FmiVersion;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Operating systems FMI names a binaries folder for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Os {
+    Linux,
+    Windows,
+    Darwin,
+}
+
+/// What a triple is, as far as an FMU cares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Platform {
+    pub os: Os,
+    /// `x86_64`, `x86` or `aarch64`.
+    pub arch: &'static str,
+}
+
+/// The platform of a Rust target triple, or why this tool does not build FMUs for it.
+pub fn platform(triple: &str) -> Result<Platform, String> {
+    let arch = match triple.split('-').next().unwrap_or("") {
+        "x86_64" => "x86_64",
+        "i686" | "i586" => "x86",
+        "aarch64" => "aarch64",
+        other => {
+            return Err(format!(
+                "target '{triple}': FMI names no binaries folder for the architecture '{other}'"
+            ));
+        }
+    };
+    let os = if triple.contains("-linux-") {
+        Os::Linux
+    } else if triple.contains("-windows-") {
+        Os::Windows
+    } else if triple.contains("-apple-darwin") {
+        Os::Darwin
+    } else {
+        return Err(format!(
+            "target '{triple}': FMI names binaries folders for Linux, Windows and macOS only"
+        ));
+    };
+    Ok(Platform { os, arch })
+}
+
+impl Platform {
+    /// The folder of `binaries/` in the names of an FMI version (2.0: `linux64`, `win64`,
+    /// `darwin64`, ...; 3.0: the platform tuple `x86_64-linux`, `x86_64-windows`, ...).
+    pub fn folder(self, version: FmiVersion) -> Result<String, String> {
+        match version {
+            FmiVersion::V2 => match (self.os, self.arch) {
+                (Os::Linux, "x86_64") => Ok("linux64".into()),
+                (Os::Linux, "x86") => Ok("linux32".into()),
+                (Os::Windows, "x86_64") => Ok("win64".into()),
+                (Os::Windows, "x86") => Ok("win32".into()),
+                (Os::Darwin, "x86_64") => Ok("darwin64".into()),
+                (os, arch) => Err(format!(
+                    "FMI 2.0 names no binaries folder for {arch} {os:?} (its folders: linux32, linux64, win32, win64, darwin32, darwin64); build it as FMI 3.0"
+                )),
+            },
+            FmiVersion::V3 => {
+                let os = match self.os {
+                    Os::Linux => "linux",
+                    Os::Windows => "windows",
+                    Os::Darwin => "darwin",
+                };
+                Ok(format!("{}-{os}", self.arch))
+            }
+        }
+    }
+
+    /// The extension of a shared library.
+    pub fn extension(self) -> &'static str {
+        match self.os {
+            Os::Linux => "so",
+            Os::Windows => "dll",
+            Os::Darwin => "dylib",
+        }
+    }
+
+    /// The file cargo makes of a cdylib named `lib_name`.
+    pub fn cdylib_file(self, lib_name: &str) -> String {
+        match self.os {
+            Os::Windows => format!("{lib_name}.dll"),
+            os => format!("lib{lib_name}.{}", if os == Os::Darwin { "dylib" } else { "so" }),
+        }
+    }
+}
+
+/// Every binaries folder of an FMI version this tool knows, with its file extension.
+pub fn known_folders(version: FmiVersion) -> Vec<(String, &'static str)> {
+    let mut out = Vec::new();
+    for os in [Os::Linux, Os::Windows, Os::Darwin] {
+        for arch in ["x86_64", "x86", "aarch64"] {
+            let p = Platform { os, arch };
+            if let Ok(f) = p.folder(version) {
+                out.push((f, p.extension()));
+            }
+        }
+    }
+    if version == FmiVersion::V2 {
+        out.push(("darwin32".into(), "dylib"));
+    }
+    out
+}
+
+/// The platform of the machine this program runs on (the one whose binary the smoke run loads).
+pub fn this_machine() -> Option<Platform> {
+    let os = match std::env::consts::OS {
+        "linux" => Os::Linux,
+        "windows" => Os::Windows,
+        "macos" => Os::Darwin,
+        _ => return None,
+    };
+    let arch = match std::env::consts::ARCH {
+        "x86_64" => "x86_64",
+        "x86" => "x86",
+        "aarch64" => "aarch64",
+        _ => return None,
+    };
+    Some(Platform { os, arch })
+}
+
+/// The host triple of the Rust toolchain (`rustc -vV`).
+pub fn host_triple() -> Result<String, String> {
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let out = Command::new(&rustc)
+        .arg("-vV")
+        .output()
+        .map_err(|e| format!("cannot run {rustc} -vV: {e}"))?;
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find_map(|l| l.strip_prefix("host: ").map(str::to_string))
+        .ok_or_else(|| format!("{rustc} -vV names no host"))
+}
+
+/// The environment variable cargo reads the linker of a target from.
+pub fn linker_variable(triple: &str) -> String {
+    format!("CARGO_TARGET_{}_LINKER", triple.replace(['-', '.'], "_").to_uppercase())
+}
+
+/// The linker of a cross target when cargo's configuration names none: rustc's default for
+/// `*-windows-gnu` is the MinGW gcc; for a Linux target of another architecture it is the
+/// host's `cc`, which cannot link it, so this tool names Debian's cross gcc.
+fn default_linker(triple: &str) -> Option<(&'static str, &'static str)> {
+    match triple {
+        "x86_64-pc-windows-gnu" => Some(("x86_64-w64-mingw32-gcc", "gcc-mingw-w64-x86-64")),
+        "i686-pc-windows-gnu" => Some(("i686-w64-mingw32-gcc", "gcc-mingw-w64-i686")),
+        "aarch64-unknown-linux-gnu" => Some(("aarch64-linux-gnu-gcc", "gcc-aarch64-linux-gnu")),
+        _ => None,
+    }
+}
+
+/// Whether a program is on `PATH` (or is a path to an executable file).
+fn on_path(program: &str) -> bool {
+    if program.contains('/') {
+        return Path::new(program).is_file();
+    }
+    std::env::var_os("PATH").is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file()))
+}
+
+/// What `cargo build --target <triple>` needs set in its environment (the linker of an
+/// aarch64 Linux target), after [`preflight`] said it is there.
+pub fn build_env(triple: &str) -> Vec<(String, String)> {
+    let var = linker_variable(triple);
+    match default_linker(triple) {
+        Some((linker, _)) if triple.contains("-linux-") && std::env::var_os(&var).is_none() => {
+            vec![(var, linker.to_string())]
+        }
+        _ => vec![],
+    }
+}
+
+/// Checks, before anything is built, that this machine can build `triple`: the platform has a
+/// binaries folder, the target's standard library is installed, the linker exists. The error
+/// says what to install.
+pub fn preflight(triple: &str, host: &str) -> Result<(), String> {
+    let p = platform(triple)?;
+    if triple == host {
+        return Ok(());
+    }
+    if p.os == Os::Darwin && !host.contains("-apple-darwin") {
+        return Err(format!(
+            "target '{triple}': macOS binaries cannot be linked on this machine (there is no macOS SDK here); \
+             run `cargo fmu build --target {triple}` on a Mac"
+        ));
+    }
+    if !std_installed(triple)? {
+        return Err(format!(
+            "target '{triple}': its Rust standard library is not installed; install it with `rustup target add {triple}` \
+             (this project: `bash tests/setup-env.sh`)"
+        ));
+    }
+    let var = linker_variable(triple);
+    if let Some(linker) = std::env::var_os(&var) {
+        let linker = linker.to_string_lossy().into_owned();
+        if !on_path(&linker) {
+            return Err(format!(
+                "target '{triple}': {var} names the linker '{linker}', which is not installed"
+            ));
+        }
+    } else if let Some((linker, package)) = default_linker(triple)
+        && !on_path(linker)
+    {
+        return Err(format!(
+            "target '{triple}': its linker {linker} is not installed; install it with `apt-get install {package}` \
+             (this project: `bash tests/setup-env.sh`)"
+        ));
+    }
+    Ok(())
+}
+
+/// Whether the standard library of `triple` is in the toolchain's sysroot.
+fn std_installed(triple: &str) -> Result<bool, String> {
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let out = Command::new(&rustc)
+        .args(["--print", "sysroot"])
+        .output()
+        .map_err(|e| format!("cannot run {rustc} --print sysroot: {e}"))?;
+    let sysroot = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    let lib = sysroot.join("lib/rustlib").join(triple).join("lib");
+    Ok(std::fs::read_dir(&lib).is_ok_and(|mut d| {
+        d.any(|e| {
+            e.is_ok_and(|e| {
+                let n = e.file_name();
+                let n = n.to_string_lossy();
+                n.starts_with("libstd-") && n.ends_with(".rlib")
+            })
+        })
+    }))
+}
+
+/// Reads `[package.metadata.fmu] targets = ["x86_64-unknown-linux-gnu", ...]`.
+pub fn parse_targets(value: &serde_json::Value) -> Result<Vec<String>, String> {
+    let items = value
+        .as_array()
+        .ok_or("targets must be a list of Rust target triples such as [\"x86_64-unknown-linux-gnu\", \"x86_64-pc-windows-gnu\"]")?;
+    let mut out: Vec<String> = Vec::new();
+    for item in items {
+        let t = item
+            .as_str()
+            .ok_or_else(|| format!("targets: {item} is not a text such as \"x86_64-pc-windows-gnu\""))?;
+        platform(t).map_err(|e| format!("targets: {e}"))?;
+        if !out.iter().any(|o| o == t) {
+            out.push(t.to_string());
+        }
+    }
+    if out.is_empty() {
+        return Err("targets is empty: name at least one Rust target triple".into());
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triples_map_to_the_folders_of_each_version() {
+        let cases = [
+            (
+                "x86_64-unknown-linux-gnu",
+                Some("linux64"),
+                "x86_64-linux",
+                "so",
+                "libm.so",
+            ),
+            ("x86_64-pc-windows-gnu", Some("win64"), "x86_64-windows", "dll", "m.dll"),
+            (
+                "x86_64-pc-windows-msvc",
+                Some("win64"),
+                "x86_64-windows",
+                "dll",
+                "m.dll",
+            ),
+            ("aarch64-unknown-linux-gnu", None, "aarch64-linux", "so", "libm.so"),
+            (
+                "x86_64-apple-darwin",
+                Some("darwin64"),
+                "x86_64-darwin",
+                "dylib",
+                "libm.dylib",
+            ),
+            ("aarch64-apple-darwin", None, "aarch64-darwin", "dylib", "libm.dylib"),
+        ];
+        for (triple, v2, v3, ext, file) in cases {
+            let p = platform(triple).unwrap();
+            assert_eq!(p.folder(FmiVersion::V2).ok().as_deref(), v2, "{triple}");
+            assert_eq!(p.folder(FmiVersion::V3).unwrap(), v3, "{triple}");
+            assert_eq!(p.extension(), ext);
+            assert_eq!(p.cdylib_file("m"), file);
+        }
+        assert!(platform("wasm32-unknown-unknown").is_err());
+        assert!(platform("riscv64gc-unknown-linux-gnu").is_err());
+    }
+
+    #[test]
+    fn targets_are_read_from_the_metadata() {
+        let t = parse_targets(&serde_json::json!([
+            "x86_64-unknown-linux-gnu",
+            "x86_64-pc-windows-gnu"
+        ]))
+        .unwrap();
+        assert_eq!(t, ["x86_64-unknown-linux-gnu", "x86_64-pc-windows-gnu"]);
+        for bad in [
+            serde_json::json!("x86_64-pc-windows-gnu"),
+            serde_json::json!([]),
+            serde_json::json!(["wasm32-unknown-unknown"]),
+            serde_json::json!([64]),
+        ] {
+            assert!(parse_targets(&bad).is_err(), "{bad} was accepted");
+        }
+    }
+
+    #[test]
+    fn macos_is_refused_with_the_reason() {
+        let e = preflight("aarch64-apple-darwin", "x86_64-unknown-linux-gnu").unwrap_err();
+        assert!(e.contains("no macOS SDK"), "{e}");
+        assert!(preflight("x86_64-unknown-linux-gnu", "x86_64-unknown-linux-gnu").is_ok());
+    }
+}

@@ -1,0 +1,109 @@
+//! The Windows binaries `cargo fmu build` puts next to the Linux ones in every FMU of the
+//! workspace: read from their PE export and import tables, each exports exactly the functions of
+//! its FMI version's standard and imports DLLs of Windows only (no MinGW runtime DLL).
+//! Needs `target/fmu/{,fmi3/}{Pendulum,Controller,DCMotor}.fmu`
+//! (`cargo run --release -p fmu-build -- build --workspace`). That they run: tests/python/test_windows.py.
+
+use fmu_build::validate::{FMI2_FUNCTIONS, FMI3_FUNCTIONS, not_windows_dlls, pe_problems, pe_tables};
+use rustfmu::description::FmiVersion;
+use std::collections::BTreeSet;
+use std::io::Read;
+use std::path::PathBuf;
+
+const MODELS: [&str; 3] = ["Pendulum", "Controller", "DCMotor"];
+
+fn fmu_dir() -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"));
+    target.join("fmu")
+}
+
+fn entry(fmu: &std::path::Path, name: &str) -> Vec<u8> {
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap()).unwrap();
+    let mut e = zip
+        .by_name(name)
+        .unwrap_or_else(|_| panic!("{}: no {name}", fmu.display()));
+    let mut out = Vec::new();
+    e.read_to_end(&mut out).unwrap();
+    out
+}
+
+#[test]
+fn every_fmu_has_a_linux_and_a_windows_binary_in_both_versions() {
+    for id in MODELS {
+        for (fmu, linux, windows) in [
+            (fmu_dir().join(format!("{id}.fmu")), "linux64", "win64"),
+            (
+                fmu_dir().join("fmi3").join(format!("{id}.fmu")),
+                "x86_64-linux",
+                "x86_64-windows",
+            ),
+        ] {
+            assert!(
+                fmu.is_file(),
+                "{} is missing: cargo run --release -p fmu-build",
+                fmu.display()
+            );
+            assert!(entry(&fmu, &format!("binaries/{linux}/{id}.so")).starts_with(b"\x7fELF"));
+            assert!(entry(&fmu, &format!("binaries/{windows}/{id}.dll")).starts_with(b"MZ"));
+        }
+    }
+}
+
+#[test]
+fn the_windows_binaries_export_their_standard_only_and_import_windows_dlls_only() {
+    for id in MODELS {
+        for (fmu, folder, version, functions) in [
+            (
+                fmu_dir().join(format!("{id}.fmu")),
+                "win64",
+                FmiVersion::V2,
+                FMI2_FUNCTIONS,
+            ),
+            (
+                fmu_dir().join("fmi3").join(format!("{id}.fmu")),
+                "x86_64-windows",
+                FmiVersion::V3,
+                FMI3_FUNCTIONS,
+            ),
+        ] {
+            let name = format!("binaries/{folder}/{id}.dll");
+            let dll = entry(&fmu, &name);
+            let tables = pe_tables(&dll).expect("a PE file").expect("readable tables");
+            let exported: BTreeSet<&str> = tables.exports.iter().map(String::as_str).collect();
+            let standard: BTreeSet<&str> = functions.iter().copied().collect();
+            assert_eq!(exported, standard, "{id} {name}");
+            assert_eq!(not_windows_dlls(&tables.imports), Vec::<&str>::new(), "{id} {name}");
+            for mingw in ["libgcc_s_seh-1.dll", "libwinpthread-1.dll", "libstdc++-6.dll"] {
+                assert!(
+                    !tables.imports.iter().any(|d| d.eq_ignore_ascii_case(mingw)),
+                    "{id} {name} imports {mingw}"
+                );
+            }
+            assert_eq!(pe_problems(&dll, version, &name), Vec::<String>::new());
+            // The other version's binary fails the check.
+            let other = match version {
+                FmiVersion::V2 => FmiVersion::V3,
+                FmiVersion::V3 => FmiVersion::V2,
+            };
+            assert!(!pe_problems(&dll, other, &name).is_empty());
+        }
+    }
+}
+
+#[test]
+fn mingw_runtime_dlls_are_not_windows_dlls() {
+    let dlls: Vec<String> = [
+        "KERNEL32.dll",
+        "msvcrt.dll",
+        "api-ms-win-core-synch-l1-2-0.dll",
+        "libgcc_s_seh-1.dll",
+        "libwinpthread-1.dll",
+    ]
+    .map(String::from)
+    .to_vec();
+    assert_eq!(not_windows_dlls(&dlls), ["libgcc_s_seh-1.dll", "libwinpthread-1.dll"]);
+    // An ELF file has no PE tables.
+    assert!(pe_tables(b"\x7fELF\x02\x01\x01\0").is_none());
+}

@@ -1,0 +1,176 @@
+"""The Windows binaries of the packaged FMUs, run where they will run: the project's C hosts
+(tests/conformance/c/host.c for FMI 2.0, host3.c for FMI 3.0) compiled for Windows with MinGW
+and run under wine load binaries/win64/<id>.dll (3.0: binaries/x86_64-windows/) from the unzipped
+FMU, make 1,000 co-simulation steps and free; the same hosts compiled for Linux run the linux64
+binary with the same inputs, and the two trajectories must agree to 1e-12.
+
+Needs wine and gcc-mingw-w64-x86-64 (tests/setup-env.sh installs them). The wine prefix is kept
+in target/wine-prefix (its first start takes ~15 s, later ones ~1 s). The largest differences and
+the times go to target/wine-test/report.txt.
+"""
+
+import os
+import pathlib
+import re
+import shutil
+import struct
+import subprocess
+import time
+import zipfile
+
+import pytest
+
+from conftest import FMU_DIR, ROOT
+
+NAMES = ["Pendulum", "Controller", "DCMotor"]
+STEPS = 1000
+H = 0.001
+WORK = FMU_DIR.parent / "wine-test"
+PREFIX = FMU_DIR.parent / "wine-prefix"
+NICE = ["nice", "-n", "19"]
+
+
+def run(cmd, **kw):
+    return subprocess.run(NICE + [str(c) for c in cmd], capture_output=True, text=True, timeout=600, **kw)
+
+
+@pytest.fixture(scope="session")
+def hosts():
+    """host, host3 (Linux) and host.exe, host3.exe, bcryptprimitives.dll (Windows) in WORK."""
+    for tool in ["gcc", "x86_64-w64-mingw32-gcc", "wine"]:
+        if not shutil.which(tool):
+            pytest.fail(f"{tool} is missing: run `bash tests/setup-env.sh` (it installs gcc-mingw-w64-x86-64 and wine)")
+    WORK.mkdir(parents=True, exist_ok=True)
+    c = ROOT / "tests" / "conformance" / "c"
+    started = time.monotonic()
+    for name in ["host", "host3"]:
+        out = run(["gcc", "-O2", "-Wall", "-Werror", "-o", WORK / name, c / f"{name}.c", "-ldl"])
+        assert out.returncode == 0, out.stderr
+        out = run(["x86_64-w64-mingw32-gcc", "-O2", "-Wall", "-Werror", "-o", WORK / f"{name}.exe", c / f"{name}.c"])
+        assert out.returncode == 0, out.stderr
+    # Wine 8 lacks bcryptprimitives.dll (Windows 10 and later have it): a stand-in next to the
+    # .exe, for the test hosts only (tests/wine/bcryptprimitives.c).
+    out = run(
+        [
+            "x86_64-w64-mingw32-gcc",
+            "-O2",
+            "-Wall",
+            "-shared",
+            "-o",
+            WORK / "bcryptprimitives.dll",
+            ROOT / "tests" / "wine" / "bcryptprimitives.c",
+            "-ladvapi32",
+        ]
+    )
+    assert out.returncode == 0, out.stderr
+    report(f"C hosts compiled (gcc and MinGW): {time.monotonic() - started:.1f} s")
+    return WORK
+
+
+def report(line: str):
+    WORK.mkdir(parents=True, exist_ok=True)
+    with open(WORK / "report.txt", "a") as f:
+        f.write(line + "\n")
+
+
+def wine_env():
+    env = dict(os.environ)
+    env.update(WINEPREFIX=str(PREFIX), WINEDEBUG="-all", HOST_TRACE="1")
+    return env
+
+
+def unpack(fmu: pathlib.Path, into: pathlib.Path) -> str:
+    if into.exists():
+        shutil.rmtree(into)
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(into)
+    return (into / "modelDescription.xml").read_text()
+
+
+def token(xml: str) -> str:
+    return re.search(r'(?:guid|instantiationToken)="([^"]*)"', xml).group(1)
+
+
+def float_outputs(xml: str, fmi3: bool) -> list[int]:
+    if fmi3:
+        found = re.findall(r"<Float64 ([^>]*)>", xml) + re.findall(r"<Float64 ([^>]*)/>", xml)
+    else:
+        found = [
+            attrs
+            for attrs, body in re.findall(r"<ScalarVariable ([^>]*)>(.*?)</ScalarVariable>", xml, re.S)
+            if "<Real" in body
+        ]
+    vrs = []
+    for attrs in found:
+        if 'causality="output"' in attrs:
+            vrs.append(int(re.search(r'valueReference="(\d+)"', attrs).group(1)))
+    return sorted(set(vrs))
+
+
+def trace(stdout: str) -> list[list[float]]:
+    rows = []
+    for line in stdout.splitlines():
+        if line.startswith("trace "):
+            bits = line.split()[2:]
+            rows.append([struct.unpack("<d", struct.pack("<Q", int(b, 16)))[0] for b in bits])
+    return rows
+
+
+def linux_and_windows(hosts: pathlib.Path, name: str, fmi3: bool, sets: list[str]):
+    """Runs the Linux host on the .so and the Windows host under wine on the .dll of an FMU;
+    returns both trajectories and the seconds wine took."""
+    fmu = FMU_DIR / ("fmi3" if fmi3 else "") / f"{name}.fmu"
+    assert fmu.exists(), f"{fmu} is missing: run `cargo run --release -p fmu-build` first"
+    folder = hosts / f"{name}-{'3' if fmi3 else '2'}"
+    xml = unpack(fmu, folder)
+    so = folder / "binaries" / ("x86_64-linux" if fmi3 else "linux64") / f"{name}.so"
+    dll = folder / "binaries" / ("x86_64-windows" if fmi3 else "win64") / f"{name}.dll"
+    assert so.exists() and dll.exists(), sorted(p.name for p in (folder / "binaries").iterdir())
+    vrs = ",".join(str(v) for v in float_outputs(xml, fmi3))
+    assert vrs, "no Float64 output"
+    host = "host3" if fmi3 else "host"
+    # FMI 2.0: a file URI of resources/; FMI 3.0: a native path with a trailing separator.
+    res_linux = f"{folder}/resources/" if fmi3 else f"file://{folder}/resources"
+    res_windows = f"Z:{folder}/resources/".replace("/", "\\") if fmi3 else f"file:///Z:{folder}/resources"
+    extra = ["-1"] if fmi3 else []
+    lin = run([hosts / host, so, token(xml), res_linux, STEPS, H, *extra, vrs, *sets], env=wine_env())
+    assert lin.returncode == 0, lin.stderr
+    started = time.monotonic()
+    dll_arg = "Z:" + str(dll).replace("/", "\\")
+    win = run(
+        ["wine", hosts / f"{host}.exe", dll_arg, token(xml), res_windows, STEPS, H, *extra, vrs, *sets],
+        env=wine_env(),
+        cwd=hosts,
+    )
+    seconds = time.monotonic() - started
+    assert win.returncode == 0, f"wine {host}.exe {name}: {win.stdout[-2000:]} {win.stderr[-2000:]}"
+    a, b = trace(lin.stdout), trace(win.stdout)
+    assert len(a) == len(b) == STEPS, (len(a), len(b))
+    return a, b, seconds
+
+
+def largest_difference(a, b) -> float:
+    return max(abs(x - y) for ra, rb in zip(a, b) for x, y in zip(ra, rb))
+
+
+@pytest.mark.parametrize("fmi3", [False, True], ids=["fmi2", "fmi3"])
+def test_the_pendulum_from_alpha1_0_1_gives_the_linux_trajectory_on_windows(hosts, fmi3):
+    # alpha1_0 (vr 40) = 0.1: the pendulum falls; 1,000 steps of 1 ms.
+    a, b, seconds = linux_and_windows(hosts, "Pendulum", fmi3, ["40=0.1"])
+    d = largest_difference(a, b)
+    report(
+        f"Pendulum FMI {'3.0' if fmi3 else '2.0'} from alpha1 = 0.1, {STEPS} steps: largest |linux - windows| = {d:.3g} "
+        f"(wine run {seconds:.1f} s)"
+    )
+    assert d <= 1e-12, d
+    assert a[-1] != a[0], "the pendulum did not move"
+
+
+@pytest.mark.parametrize("fmi3", [False, True], ids=["fmi2", "fmi3"])
+@pytest.mark.parametrize("name", NAMES[1:])
+def test_every_fmu_runs_on_windows_as_on_linux(hosts, name, fmi3):
+    a, b, seconds = linux_and_windows(hosts, name, fmi3, [])
+    d = largest_difference(a, b)
+    scale = max(1.0, max(abs(x) for row in a for x in row))
+    report(f"{name} FMI {'3.0' if fmi3 else '2.0'}, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
+    assert d <= 1e-12 * scale, d
