@@ -174,3 +174,64 @@ def test_every_fmu_runs_on_windows_as_on_linux(hosts, name, fmi3):
     scale = max(1.0, max(abs(x) for row in a for x in row))
     report(f"{name} FMI {'3.0' if fmi3 else '2.0'}, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
     assert d <= 1e-12 * scale, d
+
+
+# The conformance suite's black-box checks on the Windows binaries: the suite's fmu-check
+# cross-compiled for Windows and run under wine picks binaries/win64/<id>.dll (3.0:
+# binaries/x86_64-windows/). Every check runs except the group "native C host/valgrind", which
+# needs cc, nm, readelf and valgrind (Linux tools: those checks skip themselves, saying so);
+# the Windows C host is test_every_fmu_runs_on_windows_as_on_linux above, the PE tables
+# fmu-build/tests/windows_binaries.rs.
+RANDOM_SEQUENCES = 200
+NATIVE = "native C host/valgrind"
+
+
+@pytest.fixture(scope="session")
+def fmu_check_exe(hosts):
+    started = time.monotonic()
+    out = run(
+        ["cargo", "build", "--release", "--target", "x86_64-pc-windows-gnu", "-p", "fmi2-conformance", "--bin", "fmu-check"],
+        cwd=ROOT,
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    exe = FMU_DIR.parent / "x86_64-pc-windows-gnu" / "release" / "fmu-check.exe"
+    shutil.copy(exe, hosts / "fmu-check.exe")
+    report(f"fmu-check cross-compiled for x86_64-pc-windows-gnu: {time.monotonic() - started:.1f} s")
+    return hosts / "fmu-check.exe"
+
+
+# Found by this test, not fixed yet: under wine the Controller's run on a thread of its own
+# differs from the same run on the main thread ("instances on threads" check; FMI 2.0 and 3.0;
+# on Linux it is bit-identical). The Controller's DLL takes pow, exp, sin and cos from msvcrt;
+# a suspect is a result that depends on the thread's x87 control word. Strict: the test says so
+# when it passes.
+THREADS_DIFFER = pytest.mark.xfail(
+    strict=True,
+    reason="Controller under wine: a run on another thread differs from the main thread's (to be fixed)",
+)
+CONFORMANCE_CASES = [
+    pytest.param(name, fmi3, id=f"{name}-{'fmi3' if fmi3 else 'fmi2'}", marks=[THREADS_DIFFER] if name == "Controller" else [])
+    for name in NAMES
+    for fmi3 in [False, True]
+]
+
+
+@pytest.mark.parametrize("name,fmi3", CONFORMANCE_CASES)
+def test_the_conformance_suite_passes_on_the_windows_binaries_under_wine(fmu_check_exe, name, fmi3):
+    fmu = FMU_DIR / ("fmi3" if fmi3 else "") / f"{name}.fmu"
+    started = time.monotonic()
+    out = run(
+        ["wine", fmu_check_exe, "Z:" + str(fmu).replace("/", "\\"), "--random-sequences", RANDOM_SEQUENCES],
+        env=wine_env(),
+        cwd=fmu_check_exe.parent,
+    )
+    seconds = time.monotonic() - started
+    summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+    assert summary, out.stdout[-3000:] + out.stderr[-3000:]
+    passed, failed, skipped = map(int, re.findall(r"\d+", summary[-1])[:3])
+    report(f"fmu-check.exe under wine, {name} FMI {'3.0' if fmi3 else '2.0'}: {summary[-1]} ({seconds:.1f} s)")
+    assert out.returncode == 0 and failed == 0, out.stdout[-5000:]
+    assert "binaries\\" in out.stdout or passed > 0
+    others = [l for l in out.stdout.splitlines() if l.startswith("SKIP") and NATIVE not in l]
+    assert not others, others
+    assert passed >= (15 if fmi3 else 40), summary

@@ -162,20 +162,32 @@ macro_rules! load {
     };
 }
 
+/// Loads an FMU's binary: `dlopen` with RTLD_NOW | RTLD_LOCAL on Unix (a symbol the binary needs
+/// but no library provides fails here, by name), `LoadLibraryExW` on Windows.
+///
+/// # Safety
+/// Loading runs the binary's initializers.
+pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
+    #[cfg(unix)]
+    let lib = unsafe {
+        libloading::os::unix::Library::open(
+            Some(so),
+            libloading::os::unix::RTLD_NOW | libloading::os::unix::RTLD_LOCAL,
+        )
+    }
+    .map(libloading::Library::from);
+    #[cfg(not(unix))]
+    let lib = unsafe { libloading::Library::new(so) };
+    lib.map_err(|e| format!("{}: {e}", so.display()))
+}
+
 impl Api {
     /// `dlopen`s the binary and looks up every function; an error names the first one missing.
     pub fn load(so: &Path) -> Result<Api, String> {
         // SAFETY: loading runs the binary's initializers: an FMU is trusted to run here (the
         // runner keeps each check in a child process, so a crash there fails only that check).
         // RTLD_NOW: a symbol the binary needs but no library provides fails here, by name.
-        let lib: libloading::Library = unsafe {
-            libloading::os::unix::Library::open(
-                Some(so),
-                libloading::os::unix::RTLD_NOW | libloading::os::unix::RTLD_LOCAL,
-            )
-        }
-        .map_err(|e| format!("{}: {e}", so.display()))?
-        .into();
+        let lib: libloading::Library = unsafe { open_library(so) }?;
         Ok(load!(lib;
             get_types_platform = b"fmi2GetTypesPlatform",
             get_version = b"fmi2GetVersion",

@@ -19,7 +19,9 @@ use std::collections::HashSet;
 use std::ffi::OsStr;
 use std::fs::File;
 use std::io::{Read, Write};
+#[cfg(unix)]
 use std::os::unix::ffi::OsStrExt;
+#[cfg(unix)]
 use std::os::unix::fs::{DirBuilderExt, OpenOptionsExt};
 use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -196,7 +198,11 @@ impl PrivateDir {
         for _ in 0..100 {
             let n = COUNTER.fetch_add(1, Ordering::Relaxed);
             let path = parent.join(format!("fmi2-check-{}-{nanos:08x}-{n}", std::process::id()));
-            match std::fs::DirBuilder::new().mode(0o700).create(&path) {
+            #[cfg_attr(not(unix), allow(unused_mut))]
+            let mut builder = std::fs::DirBuilder::new();
+            #[cfg(unix)]
+            builder.mode(0o700);
+            match builder.create(&path) {
                 Ok(()) => return Ok(PrivateDir { path }),
                 Err(e) => last = format!("{}: {e}", path.display()),
             }
@@ -220,6 +226,17 @@ impl Drop for PrivateDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.path);
     }
+}
+
+/// A name's bytes as an OS string: any bytes on Unix, UTF-8 only elsewhere (Windows).
+#[cfg(unix)]
+fn os_str(bytes: &[u8]) -> Option<&OsStr> {
+    Some(OsStr::from_bytes(bytes))
+}
+
+#[cfg(not(unix))]
+fn os_str(bytes: &[u8]) -> Option<&OsStr> {
+    std::str::from_utf8(bytes).ok().map(OsStr::new)
 }
 
 /// The relative path an entry name stands for, or why the name is refused.
@@ -246,7 +263,7 @@ pub fn check_entry_name(raw: &[u8]) -> Result<PathBuf, String> {
         match part {
             b"" | b"." => {}
             b".." => return refuse("the name has a '..' component"),
-            p => rel.push(OsStr::from_bytes(p)),
+            p => rel.push(os_str(p).ok_or_else(|| format!("entry '{}': the name is not UTF-8", shown.escape_debug()))?),
         }
     }
     if rel.components().any(|c| !matches!(c, Component::Normal(_))) {
@@ -329,12 +346,11 @@ fn extract_entry(
             limits.max_total_bytes
         ));
     }
-    let mut out = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .mode(0o600)
-        .open(&dest)
-        .map_err(|e| format!("entry '{shown}': {e}"))?;
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true).create_new(true);
+    #[cfg(unix)]
+    options.mode(0o600);
+    let mut out = options.open(&dest).map_err(|e| format!("entry '{shown}': {e}"))?;
     let written = copy_bounded(&mut entry, &mut out, remaining).map_err(|e| match e {
         Copy::TooLong => format!(
             "entry '{shown}' unpacks to more than the {} bytes allowed in all (its header says {declared}): refused as a zip bomb",

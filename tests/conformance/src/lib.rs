@@ -36,6 +36,19 @@ pub use instance::Instance;
 pub use logger::LogEntry;
 
 use archive::PrivateDir;
+
+/// The FMI 2.0 binaries folder of the platform this checker runs on: it loads that binary.
+#[cfg(not(windows))]
+pub const PLATFORM2: &str = "linux64";
+/// The FMI 2.0 binaries folder of the platform this checker runs on: it loads that binary.
+#[cfg(windows)]
+pub const PLATFORM2: &str = "win64";
+/// The file extension of a shared library here.
+#[cfg(not(windows))]
+pub const LIBRARY_EXTENSION: &str = "so";
+/// The file extension of a shared library here.
+#[cfg(windows)]
+pub const LIBRARY_EXTENSION: &str = "dll";
 use fmi2::*;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -85,7 +98,7 @@ impl Fmu {
                 id.escape_debug()
             ));
         }
-        let so_entry = format!("binaries/linux64/{id}.so");
+        let so_entry = format!("binaries/{PLATFORM2}/{id}.{LIBRARY_EXTENSION}");
         if !zip.has_entry(&so_entry) {
             let binaries: Vec<String> = zip
                 .entry_names()
@@ -117,9 +130,16 @@ impl Fmu {
         })
     }
 
-    /// `file:///...` URI of the unpacked `resources/` folder.
+    /// `file:///...` URI of the unpacked `resources/` folder (on Windows `file:///C:/...`).
     pub fn resource_uri(&self) -> String {
-        format!("file://{}/resources", self.dir.display())
+        if cfg!(windows) {
+            format!(
+                "file:///{}/resources",
+                self.dir.display().to_string().replace('\\', "/")
+            )
+        } else {
+            format!("file://{}/resources", self.dir.display())
+        }
     }
 
     /// Whether this FMU serializes its state in this exporter's format (magic `RFMUSTAT`, its

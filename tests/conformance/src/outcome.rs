@@ -108,7 +108,10 @@ pub fn breadcrumbs_on() -> bool {
 /// Records what the check is about to do, so that a crash inside the FMU can say where it
 /// happened (one write of a fixed-size record; nothing without a breadcrumb file).
 pub fn breadcrumb(text: &str) {
+    #[cfg(unix)]
     use std::os::unix::fs::FileExt;
+    #[cfg(windows)]
+    use std::os::windows::fs::FileExt;
     if !breadcrumbs_on() {
         return;
     }
@@ -117,7 +120,10 @@ pub fn breadcrumb(text: &str) {
         let mut record = [0u8; BREADCRUMB_BYTES];
         let n = text.len().min(BREADCRUMB_BYTES);
         record[..n].copy_from_slice(&text.as_bytes()[..n]);
+        #[cfg(unix)]
         let _ = f.write_all_at(&record, 0);
+        #[cfg(windows)]
+        let _ = f.seek_write(&record, 0);
     }
 }
 

@@ -365,7 +365,12 @@ fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
             md.fmi_version
         ));
     }
-    let so = format!("binaries/linux64/{}.so", md.model_identifier);
+    let so = format!(
+        "binaries/{}/{}.{}",
+        crate::PLATFORM2,
+        md.model_identifier,
+        crate::LIBRARY_EXTENSION
+    );
     if !a.has_entry(&so) {
         return Err(format!(
             "{}: no {so}: the FMU has no binary for this platform",
@@ -427,11 +432,14 @@ fn tail(text: &str, lines: usize, chars: usize) -> String {
     t
 }
 
+#[cfg(unix)]
 unsafe extern "C" {
     fn kill(pid: i32, sig: i32) -> i32;
 }
+#[cfg(unix)]
 const SIGKILL: i32 = 9;
 
+#[cfg(unix)]
 fn signal_name(s: i32) -> &'static str {
     match s {
         1 => "SIGHUP",
@@ -476,6 +484,7 @@ fn drain(mut pipe: impl Read + Send + 'static) -> Arc<Mutex<(Vec<u8>, bool)>> {
 }
 
 fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
+    #[cfg(unix)]
     use std::os::unix::process::{CommandExt, ExitStatusExt};
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -495,9 +504,10 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
         .arg(&crumb_file)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        // A group of its own, so that a timeout kills whatever the worker started too.
-        .process_group(0);
+        .stderr(Stdio::piped());
+    // A group of its own, so that a timeout kills whatever the worker started too.
+    #[cfg(unix)]
+    cmd.process_group(0);
     let mut child = match cmd.spawn() {
         Ok(c) => c,
         Err(e) => {
@@ -516,9 +526,15 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
     loop {
         match child.try_wait() {
             Ok(Some(status)) => {
-                if let Some(sig) = status.signal() {
+                #[cfg(unix)]
+                let signal = status.signal().map(|sig| {
                     let core = if status.core_dumped() { ", core dumped" } else { "" };
-                    crash = Some(format!("was killed by signal {sig} ({}{core})", signal_name(sig)));
+                    format!("was killed by signal {sig} ({}{core})", signal_name(sig))
+                });
+                #[cfg(not(unix))]
+                let signal: Option<String> = None;
+                if let Some(s) = signal {
+                    crash = Some(s);
                 } else if status.code() != Some(0) {
                     crash = Some(format!("exited with code {}", status.code().unwrap_or(-1)));
                 }
@@ -527,7 +543,10 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
             Ok(None) if clock.elapsed() > opts.timeout => {
                 // SAFETY: kill(2) on the process group of a child not yet reaped (its id is
                 // still ours); SIGKILL ends the worker and whatever it started.
-                unsafe { kill(-(child.id() as i32), SIGKILL) };
+                #[cfg(unix)]
+                unsafe {
+                    kill(-(child.id() as i32), SIGKILL)
+                };
                 let _ = child.kill();
                 let _ = child.wait();
                 crash = Some(format!(

@@ -120,14 +120,30 @@ fn raw_run(api: &Api, md: &Description, resources: &str, steps: usize) -> Result
     Ok(out)
 }
 
+/// Whether the library at `path` is loaded in this process (Linux: mapped, in /proc/self/maps).
+#[cfg(not(windows))]
 fn mapped(path: &std::path::Path) -> bool {
     let maps = std::fs::read_to_string("/proc/self/maps").unwrap();
     maps.contains(&*path.to_string_lossy())
 }
 
+/// Whether the library at `path` is loaded in this process (Windows: GetModuleHandleW finds it).
+#[cfg(windows)]
+fn mapped(path: &std::path::Path) -> bool {
+    use std::os::windows::ffi::OsStrExt;
+    unsafe extern "system" {
+        fn GetModuleHandleW(name: *const u16) -> *mut std::ffi::c_void;
+    }
+    let wide: Vec<u16> = path.as_os_str().encode_wide().chain([0]).collect();
+    // SAFETY: a NUL-terminated UTF-16 path; the handle is only compared with NULL.
+    !unsafe { GetModuleHandleW(wide.as_ptr()) }.is_null()
+}
+
 pub fn the_library_can_be_unloaded_after_the_last_free_and_loaded_again(fmu: &Fmu) {
     // A copy of its own, so that the suite's loaded library does not keep it in memory.
-    let copy = fmu.scratch.join(format!("unload-{}.so", fmu.id));
+    let copy = fmu
+        .scratch
+        .join(format!("unload-{}.{}", fmu.id, crate::LIBRARY_EXTENSION));
     std::fs::copy(&fmu.so, &copy).unwrap();
     let resources = fmu.resource_uri();
     let api = Api::load(&copy).unwrap();

@@ -31,14 +31,7 @@ macro_rules! api {
             pub fn load(so: &Path) -> Result<Api, String> {
                 // SAFETY: loading runs the binary's initializers; the runner keeps each check in a
                 // child process, so a crash there fails only that check.
-                let lib: libloading::Library = unsafe {
-                    libloading::os::unix::Library::open(
-                        Some(so),
-                        libloading::os::unix::RTLD_NOW | libloading::os::unix::RTLD_LOCAL,
-                    )
-                }
-                .map_err(|e| format!("{}: {e}", so.display()))?
-                .into();
+                let lib: libloading::Library = unsafe { crate::api::open_library(so) }?;
                 let missing: Vec<&str> = FUNCTIONS
                     .iter()
                     .copied()

@@ -16,7 +16,11 @@ use std::sync::Mutex;
 use types::*;
 
 /// The FMI 3.0 platform tuple of this platform (FMI 3.0 section 2.5.1.1).
+#[cfg(not(windows))]
 pub const PLATFORM: &str = "x86_64-linux";
+/// The FMI 3.0 platform tuple of this platform (FMI 3.0 section 2.5.1.1).
+#[cfg(windows)]
+pub const PLATFORM: &str = "x86_64-windows";
 
 /// One FMI 3.0 FMU, unpacked into a private folder and loaded.
 pub struct Fmu3 {
@@ -66,7 +70,11 @@ pub fn describe(path: &Path) -> Result<Vec<String>, String> {
     let mut a = archive::open(path)?;
     let xml = archive::read_model_description(&mut a)?;
     let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
-    let so = format!("binaries/{PLATFORM}/{}.so", md.model_identifier());
+    let so = format!(
+        "binaries/{PLATFORM}/{}.{}",
+        md.model_identifier(),
+        crate::LIBRARY_EXTENSION
+    );
     if !a.has_entry(&so) {
         return Err(format!(
             "{}: no {so}: the FMU has no binary for this platform",
@@ -124,7 +132,7 @@ impl Fmu3 {
                 me.model_identifier
             ));
         }
-        let so_entry = format!("binaries/{PLATFORM}/{id}.so");
+        let so_entry = format!("binaries/{PLATFORM}/{id}.{}", crate::LIBRARY_EXTENSION);
         if !zip.has_entry(&so_entry) {
             return Err(format!(
                 "{}: no {so_entry}: no binary for this platform",
