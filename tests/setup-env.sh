@@ -3,7 +3,8 @@
 # runs bindgen when the tests build) and valgrind, and a Python venv at .venv with
 # tests/python/requirements.txt; and what the Windows binaries of the FMUs need: the Rust target
 # x86_64-pc-windows-gnu (rustup target add), Debian's MinGW linker (gcc-mingw-w64-x86-64), and
-# for the tests wine, which runs them. `--python-only` (the main job) installs the venv and the
+# for the tests wine, which runs them; the same for aarch64 Linux (FMI 3.0): the target, Debian's
+# gcc-aarch64-linux-gnu and, for the tests, qemu-user. `--python-only` (the main job) installs the venv and the
 # cross-compilation pieces (target and linker), no libclang, valgrind or wine.
 # Safe to run again: it only installs what is missing.
 set -euo pipefail
@@ -14,14 +15,18 @@ python_only=false
 
 need=()
 # Cross compilation (every FMU of this project carries a linux64 and a win64 binary).
-windows=x86_64-pc-windows-gnu
-if ! rustc --print sysroot >/dev/null 2>&1 || [ ! -d "$(rustc --print sysroot)/lib/rustlib/$windows/lib" ]; then
-  echo "setup-env: rustup target add $windows"
-  rustup target add "$windows"
-fi
+# (and aarch64 Linux in the FMI 3.0 FMUs).
+for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
+  if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
+    echo "setup-env: rustup target add $triple"
+    rustup target add "$triple"
+  fi
+done
 command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 || need+=(gcc-mingw-w64-x86-64)
+command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || need+=(gcc-aarch64-linux-gnu)
 if ! $python_only; then
 command -v wine >/dev/null 2>&1 || need+=(wine)
+command -v qemu-aarch64 >/dev/null 2>&1 || need+=(qemu-user)
 command -v gcc >/dev/null 2>&1 || need+=(gcc)
 dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
 command -v valgrind >/dev/null 2>&1 || need+=(valgrind)

@@ -312,6 +312,11 @@ fn targets_of(c: &FmuCrate, asked: &[String], host: &str) -> Result<Vec<String>,
     Ok(t)
 }
 
+/// Whether FMI `version` names a binaries folder for target `triple`.
+fn has_folder(triple: &str, version: FmiVersion) -> bool {
+    crate::target::platform(triple).is_ok_and(|p| p.folder(version).is_ok())
+}
+
 /// [`build`] of the FMI versions asked for (`None`: both, or what each crate names) and the
 /// targets asked for (empty: what each crate names, else the host).
 ///
@@ -349,10 +354,21 @@ pub fn build_versions(
             continue;
         }
         let targets = targets_of(&c, asked_targets, &host)?;
-        for t in &targets {
-            let p = crate::target::platform(t)?;
-            for v in &versions {
-                p.folder(*v).map_err(|e| format!("{}: target {t}: {e}", c.package))?;
+        // A target without a folder in a version (aarch64 Linux in FMI 2.0) is left out of that
+        // version's FMU; a version left with no target is an error.
+        for v in &versions {
+            let (with, without): (Vec<&String>, Vec<&String>) = targets.iter().partition(|t| has_folder(t, *v));
+            if with.is_empty() {
+                let e = crate::target::platform(without[0])?.folder(*v).expect_err("no folder");
+                return Err(format!("{}: target {}: {e}", c.package, without[0]));
+            }
+            for t in without {
+                eprintln!(
+                    "fmu: note: {}: the FMI {} FMU has no {t} binary (FMI {} names no folder for it)",
+                    c.package,
+                    v.text(),
+                    v.text()
+                );
             }
         }
         plan.push((c, versions, targets));
@@ -386,7 +402,7 @@ pub fn build_versions(
         let cross = (*t != host).then_some(t.as_str());
         let with = |v: FmiVersion| -> Vec<FmuCrate> {
             plan.iter()
-                .filter(|(_, vs, ts)| vs.contains(&v) && ts.contains(t))
+                .filter(|(_, vs, ts)| vs.contains(&v) && ts.contains(t) && has_folder(t, v))
                 .map(|(c, _, _)| c.clone())
                 .collect()
         };
