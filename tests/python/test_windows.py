@@ -202,9 +202,11 @@ def fmu_check_exe(hosts):
 
 # Found by this test, not fixed yet: under wine the Controller's run on a thread of its own
 # differs from the same run on the main thread ("instances on threads" check; FMI 2.0 and 3.0;
-# on Linux it is bit-identical). The Controller's DLL takes pow, exp, sin and cos from msvcrt;
-# a suspect is a result that depends on the thread's x87 control word. Strict: the test says so
-# when it passes.
+# on Linux it is bit-identical): the LQR gains K differ in their last bits (a few ulps). The
+# Controller's DLL takes pow, exp, sin and cos from msvcrt, and the x87 control word under wine
+# is 0x37f on the main thread and 0x27f on a new thread (measured with a MinGW probe); the
+# suspect is msvcrt's pow (paper/src/numerics/lqr.rs, `det.abs().powf(-1.0 / size)`).
+# Strict: the test says so when it passes.
 THREADS_DIFFER = pytest.mark.xfail(
     strict=True,
     reason="Controller under wine: a run on another thread differs from the main thread's (to be fixed)",
