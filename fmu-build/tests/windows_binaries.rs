@@ -4,7 +4,7 @@
 //! Needs `target/fmu/{,fmi3/}{Pendulum,Controller,DCMotor}.fmu`
 //! (`cargo run --release -p fmu-build -- build --workspace`). That they run: tests/python/test_windows.py.
 
-use fmu_build::validate::{FMI2_FUNCTIONS, FMI3_FUNCTIONS, not_windows_dlls, pe_problems, pe_tables};
+use fmu_build::validate::{FMI2_FUNCTIONS, FMI3_FUNCTIONS, info, not_windows_dlls, pe_problems, pe_tables};
 use rustfmu::description::FmiVersion;
 use std::collections::BTreeSet;
 use std::io::Read;
@@ -47,7 +47,23 @@ fn every_fmu_has_a_linux_and_a_windows_binary_in_both_versions() {
             );
             assert!(entry(&fmu, &format!("binaries/{linux}/{id}.so")).starts_with(b"\x7fELF"));
             assert!(entry(&fmu, &format!("binaries/{windows}/{id}.dll")).starts_with(b"MZ"));
+            // `cargo fmu info` lists them.
+            let text = info(&fmu).unwrap();
+            assert!(
+                text.contains(&format!("{linux} ({id}.so)")) && text.contains(&format!("{windows} ({id}.dll)")),
+                "{text}"
+            );
         }
+        // The FMI 3.0 file has aarch64 Linux too (FMI 2.0 names no folder for it).
+        let fmu3 = fmu_dir().join("fmi3").join(format!("{id}.fmu"));
+        let so = entry(&fmu3, &format!("binaries/aarch64-linux/{id}.so"));
+        assert_eq!(&so[..4], b"\x7fELF");
+        assert_eq!(
+            u16::from_le_bytes([so[18], so[19]]),
+            183,
+            "{id}: e_machine is not EM_AARCH64"
+        );
+        assert!(info(&fmu3).unwrap().contains(&format!("aarch64-linux ({id}.so)")));
     }
 }
 
