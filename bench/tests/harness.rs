@@ -140,9 +140,11 @@ fn a_start_value_of_the_wrong_type_is_reported() {
     topo.start_values.push((("controller", "mode"), Value::Real(1.0)));
     let err = Master::new(topo)
         .err()
-        .expect("a Real value for the Integer 'mode' must be refused");
+        .expect("a Real value for the Enumeration 'mode' must be refused");
     assert!(
-        err.contains("'mode' is Integer") && err.contains("not Real"),
+        // The runner names the declared type as modelDescription.xml has it (set through
+        // fmi2SetInteger, as an Integer value).
+        err.contains("'mode' is Enumeration") && err.contains("not Real"),
         "the error should say the declared and the given type: {err}"
     );
 }

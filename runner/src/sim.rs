@@ -120,6 +120,9 @@ impl From<Error> for Failure {
     }
 }
 
+/// (target, source) components -> [(input vr, output vr)] they connect.
+type Pairs = Vec<((usize, usize), Vec<(u32, u32)>)>;
+
 struct Slave {
     name: String,
     /// Index into `Simulation::fmus`.
@@ -409,7 +412,7 @@ impl Simulation {
         // Sources: each component's connected outputs, in the order the connections name them.
         let mut source_vars: Vec<Vec<u32>> = vec![Vec::new(); self.slaves.len()];
         // (target, source) -> [(input vr, source vr)], in order of first appearance.
-        let mut pairs: Vec<((usize, usize), Vec<(u32, u32)>)> = Vec::new();
+        let mut pairs: Pairs = Vec::new();
         for k in connections {
             let text = format!("{}.{} -> {}.{}", k.start.0, k.start.1, k.end.0, k.end.1);
             let from = self.resolve(&k.start.0, &k.start.1).map_err(|e| Error {

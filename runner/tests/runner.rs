@@ -2,6 +2,9 @@
 //! runs of the project's SSP files (tests/run.sh builds them before the Rust tests; the tests
 //! that need them say so when they are missing).
 
+// rustfmu_runner::Error is large (it carries the details of a failure), on the cold path only.
+#![allow(clippy::result_large_err)]
+
 use rustfmu_runner::ssp::{Connection, parse_ssd};
 use rustfmu_runner::{ErrorKind, Override, RunOptions, Simulation, Value};
 use std::io::Write;

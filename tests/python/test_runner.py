@@ -141,7 +141,7 @@ def test_an_ssp_it_cannot_run_is_refused_naming_component_and_connector(tmp_path
 
 def cli(*args):
     if not CLI.exists():
-        pytest.fail(f"{CLI} is missing: build it with `cargo build --release -p rustfmu-runner`")
+        subprocess.run(["cargo", "build", "--release", "-q", "-p", "rustfmu-runner", "--bin", "rustfmu-runner"], cwd=ROOT, check=True)
     return subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
@@ -204,16 +204,19 @@ LAG2_SSV = """<?xml version="1.0" encoding="UTF-8"?>
 
 @pytest.fixture(scope="module")
 def my_lag_fmu():
-    """MyLag.fmu of a crate made by `cargo fmu new my-lag` (unchanged), built in a target folder
-    of its own under this workspace's target/ (kept, so a second test run builds nothing)."""
+    """MyLag.fmu of a crate made by `cargo fmu new my-lag` (unchanged), outside this workspace,
+    built into a target folder of its own under this workspace's target/ (kept, so that a second
+    test run builds nothing)."""
+    import tempfile
+
     cargo_fmu = TARGET / "release" / "cargo-fmu"
     if not cargo_fmu.exists():
         pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
-    where = TARGET / "runner-test-crate"
+    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-runner-test-{os.getuid()}"
     where.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
     env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
-    env.pop("CARGO_TARGET_DIR", None)
+    env["CARGO_TARGET_DIR"] = str(TARGET / "runner-test-crate")
     crate = where / "my-lag"
     if not (crate / "Cargo.toml").exists():
         shutil.rmtree(crate, ignore_errors=True)
@@ -221,7 +224,7 @@ def my_lag_fmu():
         assert out.returncode == 0, out.stderr
     out = subprocess.run(["nice", "-n", "10", "cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr
-    path = crate / "target" / "fmu" / "MyLag.fmu"
+    path = TARGET / "runner-test-crate" / "fmu" / "MyLag.fmu"
     assert path.exists(), out.stderr
     return path
 

@@ -14,6 +14,9 @@
 //! (an FMI call that failed: attributes `component`, `variable`, `function`, `status`, `time`,
 //! and `partial`, the arrays recorded up to the failure); all derive from `RunnerError`.
 
+// runner::Error is large (it carries the details of a failure), on the cold path only.
+#![allow(clippy::result_large_err)]
+
 use numpy::PyArray1;
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
