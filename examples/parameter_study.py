@@ -8,7 +8,8 @@ and a throughput benchmark.
 Every run is one task on a Dask LocalCluster (--workers, --threads); --scheduler tcp://host:8786
 runs the same study on an existing cluster. --master native (the default) runs each closed loop
 in-process in the native SSP runner (the rustfmu_runner module, tests/setup-env.sh builds it);
---master fmpy in the fmpy master, the reference: both give the same rows. Rows go to <out>/<study>.csv as runs finish; running
+--master fmpy in the fmpy master, the reference: both give the same rows.
+Rows go to <out>/<study>.csv as runs finish; running
 the same command again skips the runs already there (resume). The PNG is drawn at the end.
 FMUs come from target/fmu (build them with `cargo run --release -p fmu-build`).
 """
