@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: build and package every FMU (and the SSP files of the composed systems), print the
+# The main job: build and package every FMU, FMI 2.0 and 3.0 (and the SSP files of the composed systems), print the
 # paper's numbers as computed, draw Figures 6-8, and run the full composed demo (4 FMUs) through fmpy.
 # Results go to out/.
 set -euo pipefail
@@ -22,7 +22,8 @@ rm -f out/study/roa.csv out/study/robust.csv
 
 echo
 echo "== Made"
-echo "FMUs (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
+echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
+echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
 echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
