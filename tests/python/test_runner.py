@@ -207,12 +207,16 @@ def my_lag_fmu():
     """MyLag.fmu of a crate made by `cargo fmu new my-lag` (unchanged), outside this workspace,
     built into a target folder of its own under this workspace's target/ (kept, so that a second
     test run builds nothing)."""
-    import tempfile
-
     cargo_fmu = TARGET / "release" / "cargo-fmu"
     if not cargo_fmu.exists():
         pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
-    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-runner-test-{os.getuid()}"
+    import hashlib
+    import tempfile
+
+    # Outside the workspace (else cargo takes it for a member), and one per checkout: a crate kept
+    # from another checkout would build against that checkout's rustfmu (its path dependency).
+    checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
+    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-runner-test-{os.getuid()}-{checkout}"
     where.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
     env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
