@@ -14,3 +14,4 @@ cargo run --release -q -p rustfmu-bench --bin perf-report -- --rounds 1
 cargo run --release -q -p rustfmu-bench --bin composed-loop -- --seconds 0.1 --repeat 1
 "$PY" bench/python/work_precision.py --quick
 "$PY" bench/python/composed_loop.py --quick
+"$PY" bench/python/study_throughput.py --quick

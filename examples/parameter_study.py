@@ -6,7 +6,10 @@ and a throughput benchmark.
     python examples/parameter_study.py bench  --out out/study [--runs 64 --workers 1 2]
 
 Every run is one task on a Dask LocalCluster (--workers, --threads); --scheduler tcp://host:8786
-runs the same study on an existing cluster. Rows go to <out>/<study>.csv as runs finish; running
+runs the same study on an existing cluster. --master native (the default) runs each closed loop
+in-process in the native SSP runner (the rustfmu_runner module, tests/setup-env.sh builds it);
+--master fmpy in the fmpy master, the reference: both give the same rows.
+Rows go to <out>/<study>.csv as runs finish; running
 the same command again skips the runs already there (resume). The PNG is drawn at the end.
 FMUs come from target/fmu (build them with `cargo run --release -p fmu-build`).
 """
@@ -38,6 +41,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--band", type=float, default=Criteria.band, help="settled when |alpha1|, |alpha2| stay within this, rad")
     p.add_argument("--hold", type=float, default=Criteria.hold, help="stabilized when settled at least this long before the end, s")
     p.add_argument("--retry-failed", action="store_true", help="on resume, run again the runs that failed")
+    p.add_argument("--master", choices=("native", "fmpy"), default="native", help="native: the SSP runner in-process (default); fmpy: the fmpy master (the reference)")
     p.add_argument("--no-progress", action="store_true")
 
 
@@ -82,7 +86,7 @@ def main(argv=None) -> int:
         # of delay and the 10 ms derivative filter; docs/composition.md), settles at 5 ms and
         # below; the torque-driven loop settles at 10 ms.
         args.step = 0.01 if args.study == "roa" and args.system == "torque" else 0.001
-    run = dict(fmu_paths=paths, scheduler=args.scheduler, threads_per_worker=args.threads, progress=not args.no_progress, retry_failed=args.retry_failed)
+    run = dict(fmu_paths=paths, scheduler=args.scheduler, threads_per_worker=args.threads, progress=not args.no_progress, retry_failed=args.retry_failed, master=args.master)
 
     if args.study == "roa":
         specs = studies.region_of_attraction(args.modes, args.n, args.amax, args.system, args.stop_time, args.step, criteria)
@@ -100,9 +104,9 @@ def main(argv=None) -> int:
         # The same runs for every worker count, each into a fresh file (nothing to skip), and
         # once one after another in this process without Dask, for the overhead.
         specs = studies.robustness(paths, args.runs, 0.2, 1, (1,), args.system, stop_time=args.stop_time, step=args.step, criteria=criteria)
-        print(f"{len(specs)} runs of the {args.system} system, horizon {args.stop_time:g} s, step {args.step:g} s, on {os.cpu_count()} cores")
+        print(f"{len(specs)} runs of the {args.system} system, horizon {args.stop_time:g} s, step {args.step:g} s, {args.master} master, on {os.cpu_count()} cores")
         t0, load0 = time.perf_counter(), os.getloadavg()[0]
-        run_sequential(specs, paths)
+        run_sequential(specs, paths, master=args.master)
         seq = len(specs) / (time.perf_counter() - t0)
         print(f"  no Dask, one after another: {seq:.2f} runs/s (load average {load0:.2f} -> {os.getloadavg()[0]:.2f})")
         results = {}

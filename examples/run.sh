@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job: build and package every FMU (and the SSP files of the composed systems), print the
+# The main job: build and package every FMU, FMI 2.0 and 3.0 (and the SSP files of the composed systems), print the
 # paper's numbers as computed, draw Figures 6-8, and run the full composed demo (4 FMUs) through fmpy.
 # Results go to out/.
 set -euo pipefail
@@ -10,15 +10,22 @@ mkdir -p out
 cargo run --release -p holonomic --example paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
 .venv/bin/python examples/composed_demo.py --out out
-# Parameter studies on a Dask LocalCluster, small grids (the full ones: docs/parameter-studies.md).
+# The full loop from the command line of the native SSP runner (runner/).
+cargo run --release -q -p rustfmu-runner -- run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
+  --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
+  --record motor2.tau --output out/runner_motors.csv --no-progress
+# Parameter studies on a Dask LocalCluster, small grids (the full ones: docs/parameter-studies.md),
+# each closed loop run in-process by the native runner (the rustfmu_runner module).
 rm -f out/study/roa.csv out/study/robust.csv
-.venv/bin/python examples/parameter_study.py roa --out out/study --n 15 --no-progress
-.venv/bin/python examples/parameter_study.py robust --out out/study --samples 40 --no-progress
+.venv/bin/python examples/parameter_study.py roa --out out/study --n 15 --no-progress --master native
+.venv/bin/python examples/parameter_study.py robust --out out/study --samples 40 --no-progress --master native
 
 echo
 echo "== Made"
-echo "FMUs (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
+echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
+echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
-echo "demo (controller -> 2 motors -> pendulum through fmpy), the Dask studies (out/study):"
+echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
+echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"
 (cd out && find . -type f | sort | sed 's|^\./|  out/|')

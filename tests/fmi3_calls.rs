@@ -74,6 +74,9 @@ use model::__rustfmu_fmi3_exports::*;
 
 const TIME_VR: u32 = 9;
 
+/// A refused call: what it is, the call, words its message must contain.
+type Refusal<'a> = (&'a str, &'a dyn Fn() -> fmi3Status, &'a [&'a str]);
+
 #[derive(Default)]
 struct Log {
     entries: Mutex<Vec<(fmi3Status, String, String)>>,
@@ -236,8 +239,6 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
         let mode = [5u32];
         let count = [6u32];
         // Each refusal is an fmi3Error, after which the FMU is Terminated until fmi3Reset.
-        // (what, the refused call, words its message must contain)
-        type Refusal<'a> = (&'a str, &'a dyn Fn() -> fmi3Status, &'a [&'a str]);
         let refusals: [Refusal; 5] = [
             (
                 "item",

@@ -53,5 +53,14 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   .venv/bin/pip install -q --disable-pip-version-check -r tests/python/requirements.txt
   echo "$want" >"$stamp"
 fi
+# The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
+# into .venv (pyo3's extension-module feature on, release profile, this workspace's target/);
+# built again only when a source of it (or of a crate it uses) changed.
+runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
+if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
+  echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
+  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
+  echo "$runner_sha" >.venv/.runner.sha
+fi
 # ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
 chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true

@@ -14,7 +14,12 @@ Two systems, the project's composed systems as `fmu-build` writes them to SSP fi
 
 Every run starts from the SSD's parameter values; the experiment's own values are set on top.
 
-The master is `cosim.master.Loop`, the one fixed-step master of the project's Python side: at
+Two masters run the same algorithm on the same systems: `NativeClosedLoop` (the default of the
+studies) runs the SSP file in-process in the native runner (`rustfmu_runner`, built from
+`runner/python` into the venv by tests/setup-env.sh), `ClosedLoop` in the fmpy master below;
+the same run gives the same row in both (docs/parameter-studies.md).
+
+The fmpy master is `cosim.master.Loop`, the one fixed-step master of the project's Python side: at
 each communication point the connections are evaluated in dependency order (plant outputs ->
 controller -> motors -> plant inputs; the Controller's outputs depend directly on its inputs),
 then every FMU steps over the same interval. The plant's outputs are states, so there is no
@@ -36,10 +41,15 @@ import threading
 import time
 from collections import deque
 
+import numpy as np
+
 from fmpy.fmi1 import FMICallException
 from cosim.fmu_log import LogRoute
 from cosim.master import Fmu, Loop, System
 from cosim.systems import read_ssp, ssp_path
+
+#: The masters a study can run on: the native runner (default) and the fmpy master (the reference).
+MASTERS = ("native", "fmpy")
 
 #: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
 #: (`paper/systems.toml` describes them: components, parameter values, connections).
@@ -146,6 +156,72 @@ class ClosedLoop:
         self._route.close()
 
 
+class NativeClosedLoop:
+    """The runs of `ClosedLoop` on the native runner: `rustfmu_runner.System` on the system's SSP
+    file, instantiated once, fmi2Reset between runs, the whole run in Rust with the GIL released.
+    It records the plant's angles, the torques and voltages at every communication point and
+    stops where the pendulum falls (|alpha| > fall); the metrics are computed from those arrays
+    exactly as `_Metrics` computes them one point at a time, so a run gives the row of
+    `ClosedLoop`. An FMU failure is returned as a row with the FMI status and function, the
+    FMUs' messages in the error text, as there."""
+
+    def __init__(self, system: str, ssp: str):
+        import rustfmu_runner
+
+        self._rf = rustfmu_runner
+        self.system = system
+        self.id = next(ClosedLoop._ids)
+        self.broken = False
+        self.runs = 0
+        self.sim = rustfmu_runner.System(str(ssp))
+        motors = [name for name, ident in self.sim.components if ident == "DCMotor"]
+        if motors:
+            self._torque = [f"{m}.tau" for m in motors]
+            self._voltage = ["controller.U1", "controller.U2"]
+        else:
+            self._torque = ["controller.M1", "controller.M2"]
+            self._voltage = []
+        self._record = ["pendulum.alpha1", "pendulum.alpha2", *self._torque, *self._voltage]
+
+    def run(self, start: dict, stop_time: float, step: float, criteria: Criteria = Criteria()) -> dict:
+        """As `ClosedLoop.run`."""
+        t0, cpu0 = time.perf_counter(), time.thread_time()
+        m = _Metrics(criteria, step, has_voltage=bool(self._voltage))
+        self.runs += 1
+        stop = {"pendulum.alpha1": criteria.fall, "pendulum.alpha2": criteria.fall}
+        try:
+            r = self.sim.run(stop_time, step, start=start, record=self._record, stop_when=stop)
+        except self._rf.FmuError as e:
+            self.broken = self.broken or e.status == "Fatal"
+            self._feed(m, e.partial)
+            return m.failed(m.t, str(e), e.status or "", e.function or "", _times(t0, cpu0))
+        except Exception as e:  # a bad study specification (unknown variable, wrong type)
+            return m.failed(m.t, f"{type(e).__name__}: {e}", "", "", _times(t0, cpu0))
+        self._feed(m, r)
+        return m.result(int(round(stop_time / step)) * step, _times(t0, cpu0))
+
+    def _feed(self, m: "_Metrics", r: dict | None) -> None:
+        """`m` as if `_Metrics.sample` had seen every recorded point of `r`."""
+        if not r or len(r["time"]) == 0:
+            return
+        t, a1, a2 = r["time"], r["pendulum.alpha1"], r["pendulum.alpha2"]
+        m.t = float(t[-1])
+        m.final = (float(a1[-1]), float(a2[-1]))
+        m.peak_alpha1 = max(0.0, float(np.abs(a1).max()))
+        m.peak_alpha2 = max(0.0, float(np.abs(a2).max()))
+        m.peak_torque = max(0.0, float(np.abs(np.stack([r[k] for k in self._torque])).max()))
+        if self._voltage:
+            m.peak_voltage = max(0.0, float(np.abs(np.stack([r[k] for k in self._voltage])).max()))
+        c = m.c
+        outside = np.flatnonzero((np.abs(a1) > c.band) | (np.abs(a2) > c.band))
+        m.last_outside = float(t[outside[-1]]) if len(outside) else None
+        fell = np.flatnonzero((np.abs(a1) > c.fall) | (np.abs(a2) > c.fall))
+        m.fell_at = float(t[fell[0]]) if len(fell) else None
+
+    def close(self) -> None:
+        self.sim = None
+
+
 def _times(t0: float, cpu0: float) -> dict:
     """Wall time and this thread's CPU time since t0, cpu0, s."""
     return {"elapsed": time.perf_counter() - t0, "cpu": time.thread_time() - cpu0}
@@ -228,30 +304,38 @@ class _Metrics:
 
 
 class FmuSet:
-    """The FMU files of a study, each extracted once into `workdir`, and a pool of `ClosedLoop`s
-    per system: a loop is taken for a run and given back after it, so each thread of a worker
-    instantiates each FMU once and later runs reuse it with fmi2Reset."""
+    """The FMU files of a study and a pool of closed loops per system: a loop is taken for a run
+    and given back after it, so each thread of a worker instantiates each FMU once and later
+    runs reuse it with fmi2Reset. `master`: "native" (`NativeClosedLoop` on the SSP files next
+    to the Pendulum FMU, the default) or "fmpy" (`ClosedLoop`; each FMU file extracted once into
+    `workdir`)."""
 
-    def __init__(self, paths: dict[str, str], workdir: str | None = None, systems: dict[str, System] | None = None):
+    def __init__(self, paths: dict[str, str], workdir: str | None = None, systems: dict[str, System] | None = None, master: str = "native"):
         """`systems`: the study's systems as `study_systems` reads them (default: from the SSP
         files next to `paths["Pendulum"]`); Dask workers get them read by the client."""
+        if master not in MASTERS:
+            raise ValueError(f"master = {master!r}: one of {MASTERS}")
+        self.master = master
+        self.paths = dict(paths)
         self.systems = systems if systems is not None else study_systems(paths)
         self._own_workdir = workdir is None
         self.workdir = workdir or tempfile.mkdtemp(prefix="pendulum-study-")
-        self.fmus = {ident: Fmu(path, self.workdir) for ident, path in paths.items()}
-        self._free: dict[str, list[ClosedLoop]] = {}
+        self.fmus = {ident: Fmu(path, self.workdir) for ident, path in paths.items()} if master == "fmpy" else {}
+        self._free: dict[str, list] = {}
         self._lock = threading.Lock()
 
-    def checkout(self, system: str) -> ClosedLoop:
+    def checkout(self, system: str):
         with self._lock:
             free = self._free.setdefault(system, [])
             if free:
                 return free.pop()
         if system not in self.systems:
             raise ValueError(f"unknown system '{system}', expected one of {sorted(self.systems)}")
+        if self.master == "native":
+            return NativeClosedLoop(system, str(ssp_path(SSP_SYSTEMS[system], self.paths["Pendulum"])))
         return ClosedLoop(system, self.systems[system], self.fmus)
 
-    def checkin(self, loop: ClosedLoop) -> None:
+    def checkin(self, loop) -> None:
         if loop.broken:
             loop.close()
             return

@@ -33,7 +33,9 @@ import zipfile
 from distributed import Client, LocalCluster, as_completed, get_worker
 from distributed.diagnostics.plugin import WorkerPlugin
 
-from .closed_loop import Criteria, FmuSet, study_systems
+from cosim.systems import ssp_path
+
+from .closed_loop import SSP_SYSTEMS, Criteria, FmuSet, study_systems
 
 PLUGIN_NAME = "pendulum-study-fmus"
 
@@ -58,10 +60,11 @@ RESULT_COLUMNS = [
     "loop_id",
     "loop_runs",
     "fmus",
+    "master",
 ]
 
 #: Columns that describe where and how fast a run ran, not what it computed.
-BOOKKEEPING_COLUMNS = ["elapsed", "cpu", "worker", "loop_id", "loop_runs", "fmus"]
+BOOKKEEPING_COLUMNS = ["elapsed", "cpu", "worker", "loop_id", "loop_runs", "fmus", "master"]
 
 
 def fmu_digest(paths: dict[str, str]) -> str:
@@ -95,7 +98,7 @@ def execute(spec: dict, fmus: FmuSet) -> dict:
         result = loop.run(spec["start"], spec["stop_time"], spec["step"], Criteria(**spec["criteria"]))
     finally:
         fmus.checkin(loop)
-    return {**result, "loop_id": loop.id, "loop_runs": loop.runs}
+    return {**result, "loop_id": loop.id, "loop_runs": loop.runs, "master": fmus.master}
 
 
 class FmuPlugin(WorkerPlugin):
@@ -105,9 +108,12 @@ class FmuPlugin(WorkerPlugin):
 
     name = PLUGIN_NAME
 
-    def __init__(self, paths: dict[str, str]):
+    def __init__(self, paths: dict[str, str], master: str = "native"):
         self.files = {ident: pathlib.Path(path).read_bytes() for ident, path in paths.items()}
+        # The SSP files (the native runner runs them), written next to the FMUs on the worker.
+        self.ssp_files = {name: ssp_path(name, paths["Pendulum"]).read_bytes() for name in SSP_SYSTEMS.values()}
         self.systems = study_systems(paths)
+        self.master = master
         self.fmus: FmuSet | None = None
 
     def setup(self, worker):
@@ -119,7 +125,9 @@ class FmuPlugin(WorkerPlugin):
             path = workdir / f"{ident}.fmu"
             path.write_bytes(data)
             paths[ident] = str(path)
-        self.fmus = FmuSet(paths, str(workdir), self.systems)
+        for name, data in self.ssp_files.items():
+            (workdir / f"{name}.ssp").write_bytes(data)
+        self.fmus = FmuSet(paths, str(workdir), self.systems, master=self.master)
 
     def teardown(self, worker):
         if self.fmus is not None:
@@ -270,11 +278,13 @@ def run_study(
     processes: bool = True,
     progress: bool = True,
     retry_failed: bool = False,
+    master: str = "native",
 ) -> StudyReport:
     """Runs every spec not yet in `out` as one Dask task and appends its row to `out`.
 
     `scheduler`: address of an existing Dask scheduler ("tcp://host:8786"); None starts a
     LocalCluster of `n_workers` workers with `threads_per_worker` threads (processes or threads).
+    `master`: "native" (the SSP runner in-process, the default) or "fmpy" (the reference).
     """
     from tqdm import tqdm
 
@@ -303,7 +313,7 @@ def run_study(
             # The workers of an existing cluster may not have this package: send it.
             tmp = stack.enter_context(tempfile.TemporaryDirectory())
             client.upload_file(_package_zip(tmp))
-        client.register_plugin(FmuPlugin(fmu_paths))
+        client.register_plugin(FmuPlugin(fmu_paths, master))
         workers = client.scheduler_info()["workers"].values()
         report.workers, report.threads = len(workers), sum(w["nthreads"] for w in workers)
         report.setup_time = time.perf_counter() - t0
@@ -329,20 +339,20 @@ def run_study(
     return report
 
 
-def run_sequential(specs: list[dict], fmu_paths: dict[str, str], fresh: bool = False, out=None) -> list[dict]:
+def run_sequential(specs: list[dict], fmu_paths: dict[str, str], fresh: bool = False, out=None, master: str = "native") -> list[dict]:
     """The same runs one after another in this process, without Dask. `fresh`: a new instance
     of every FMU for every run (no fmi2Reset), the reference the pooled runs are checked against."""
     specs = unique_specs(specs)
     rows = RowFile(out, columns_of(specs), fmu_digest(fmu_paths)) if out is not None else None
     result = []
-    fmus = FmuSet(fmu_paths)
+    fmus = FmuSet(fmu_paths, master=master)
     try:
         for spec in specs:
             if fresh:
                 loop = fmus.checkout(spec["system"])  # pool is empty: a new loop
                 try:
                     row = loop.run(spec["start"], spec["stop_time"], spec["step"], Criteria(**spec["criteria"]))
-                    row = {**row, "loop_id": loop.id, "loop_runs": loop.runs}
+                    row = {**row, "loop_id": loop.id, "loop_runs": loop.runs, "master": master}
                 finally:
                     loop.close()
             else:

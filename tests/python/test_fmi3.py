@@ -212,6 +212,12 @@ def test_master_reads_fmi3_variables_of_every_type_and_routes_their_messages():
         with pytest.raises(FMICallException):
             loop.set("pendulum.l1", -1.0)
         assert any(instance == "pendulum" and status >= 3 and "'l1'" in text for instance, status, text in messages), messages
+    finally:
+        loop.close()
+    # After an fmi3Error the instance is Terminated until fmi3Reset (FMI 3.0, 2.3.1): the run gets
+    # new instances.
+    loop = Loop(motor_system(fmu3), callbacks=route)
+    try:
         seen = {}
 
         def observe(k, t):

@@ -115,3 +115,24 @@ fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent() {
 fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind() {
     on_every_fmu3("fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind");
 }
+
+/// The runner picks the FMI 3.0 checks for an FMI 3.0 file by its fmiVersion (what `cargo fmu
+/// check X.fmu` and `fmu-check X.fmu` do), each in a worker process.
+#[test]
+fn the_runner_checks_a_3_0_file_with_the_3_0_checks() {
+    use fmi2_conformance::outcome::Outcome;
+    use fmi2_conformance::runner::{RunOptions, run};
+    let fmu = fmi2_conformance::fmi3::all3()
+        .first()
+        .expect("an FMI 3.0 FMU")
+        .archive
+        .clone();
+    let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+    o.filter = Some("fmi3_get_version".into());
+    let report = run(&fmu, &o);
+    assert!(report.load_error.is_none(), "{report}");
+    assert_eq!(report.checks.len(), 1, "{report}");
+    assert_eq!(report.checks[0].name, "fmi3_get_version_is_3_0", "{report}");
+    assert_eq!(report.checks[0].outcome, Outcome::Pass, "{report}");
+    assert!(report.about.iter().any(|l| l.contains("FMI 3.0")), "{report}");
+}

@@ -1,0 +1,230 @@
+//! `rustfmu_runner`: the SSP co-simulation runner ([`runner::Simulation`]) as a Python
+//! module. A `System` loads an SSP file once (its FMUs instantiated once); every `run` after the
+//! first starts with fmi2Reset, runs with the GIL released and returns numpy arrays:
+//!
+//! ```python
+//! import rustfmu_runner
+//! s = rustfmu_runner.System("target/fmu/PendulumMotors.ssp")
+//! r = s.run(10.0, 1e-3, start={"pendulum.alpha1_0": 0.2}, record=["pendulum.alpha1"])
+//! r["time"], r["pendulum.alpha1"]          # numpy float64 arrays, one value per communication point
+//! ```
+//!
+//! Errors are exceptions, never panics: `SspError` (an SSP or FMU the runner cannot read or run),
+//! `VariableError` (an unknown component or variable, a value of the wrong type), `FmuError`
+//! (an FMI call that failed: attributes `component`, `variable`, `function`, `status`, `time`,
+//! and `partial`, the arrays recorded up to the failure); all derive from `RunnerError`.
+
+// runner::Error is large (it carries the details of a failure), on the cold path only.
+#![allow(clippy::result_large_err)]
+
+use numpy::PyArray1;
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
+use runner::sim::Failure;
+use runner::{Error, ErrorKind, Override, RunOptions, RunResult, Scheme, Simulation};
+use std::sync::Mutex;
+
+create_exception!(rustfmu_runner, RunnerError, PyException, "Any error of the runner.");
+create_exception!(
+    rustfmu_runner,
+    SspError,
+    RunnerError,
+    "An SSP file or FMU the runner cannot read or run."
+);
+create_exception!(
+    rustfmu_runner,
+    VariableError,
+    RunnerError,
+    "An unknown component or variable, or a value of the wrong type."
+);
+create_exception!(
+    rustfmu_runner,
+    FmuError,
+    RunnerError,
+    "An FMI call that failed during a run."
+);
+
+/// The simulation, used by one thread at a time (behind the `Mutex`).
+struct Sim(Simulation);
+
+// SAFETY: the FMU instances (raw pointers into the FMUs' libraries) are only ever called with
+// the Mutex held, so by one thread at a time; FMI 2.0 requires no more than that of an instance.
+unsafe impl Send for Sim {}
+
+fn to_pyerr(py: Python<'_>, e: &Error, partial: Option<&RunResult>) -> PyErr {
+    let err = match e.kind {
+        ErrorKind::Io | ErrorKind::Unsupported => SspError::new_err(e.message.clone()),
+        ErrorKind::Variable | ErrorKind::Usage => VariableError::new_err(e.message.clone()),
+        ErrorKind::Fmi => FmuError::new_err(e.message.clone()),
+    };
+    let value = err.value(py);
+    let set = |name: &str, v: Option<String>| {
+        let _ = value.setattr(name, v);
+    };
+    set("component", e.component.clone());
+    set("variable", e.variable.clone());
+    set("function", e.function.clone());
+    set("status", e.status.clone());
+    let _ = value.setattr("time", e.time);
+    let _ = value.setattr("partial", partial.and_then(|r| arrays(py, r).ok()));
+    err
+}
+
+/// {"time": array, name: array, ...}
+fn arrays<'py>(py: Python<'py>, r: &RunResult) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("time", PyArray1::from_slice(py, &r.time))?;
+    for (i, name) in r.names.iter().enumerate() {
+        d.set_item(name, PyArray1::from_vec(py, r.column(i)))?;
+    }
+    Ok(d)
+}
+
+fn to_override(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Override> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(Override::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return Ok(Override::Real(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return Ok(Override::Integer(v.extract()?));
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(Override::Text(v.extract()?));
+    }
+    // numpy scalars and other numbers
+    if let Ok(x) = v.extract::<i64>() {
+        return Ok(Override::Integer(x));
+    }
+    if let Ok(x) = v.extract::<f64>() {
+        return Ok(Override::Real(x));
+    }
+    Err(VariableError::new_err(format!(
+        "{key} = {v}: a start value must be a bool, int, float or str"
+    )))
+}
+
+/// An SSP system of FMI 2.0 co-simulation FMUs, loaded once; `run` runs it.
+#[pyclass(name = "System", module = "rustfmu_runner")]
+struct PySystem {
+    inner: Mutex<Sim>,
+    #[pyo3(get)]
+    path: String,
+    #[pyo3(get)]
+    name: String,
+    /// The components in the order a communication point evaluates them.
+    #[pyo3(get)]
+    evaluation_order: Vec<String>,
+    /// [(instance name, model identifier)]
+    #[pyo3(get)]
+    components: Vec<(String, String)>,
+    /// Every output, "component.variable" (what `run` records by default).
+    #[pyo3(get)]
+    outputs: Vec<String>,
+    /// The system's parameter bindings, "component.variable".
+    #[pyo3(get)]
+    parameters: Vec<String>,
+}
+
+#[pymethods]
+impl PySystem {
+    /// Loads the SSP file `path` (`order`: "gauss-seidel", the default, or "jacobi").
+    #[new]
+    #[pyo3(signature = (path, order = "gauss-seidel"))]
+    fn new(py: Python<'_>, path: std::path::PathBuf, order: &str) -> PyResult<PySystem> {
+        let scheme = match order {
+            "gauss-seidel" => Scheme::GaussSeidel,
+            "jacobi" => Scheme::Jacobi,
+            other => {
+                return Err(VariableError::new_err(format!(
+                    "order = '{other}': one of 'gauss-seidel', 'jacobi'"
+                )));
+            }
+        };
+        let shown = path.display().to_string();
+        let mut sim = py
+            .detach(move || Simulation::from_ssp(&path).map(Sim))
+            .map_err(|e| to_pyerr(py, &e, None))?;
+        sim.0.scheme = scheme;
+        Ok(PySystem {
+            path: shown,
+            name: sim.0.name.clone(),
+            evaluation_order: sim.0.evaluation_order().iter().map(|s| s.to_string()).collect(),
+            components: sim
+                .0
+                .components()
+                .iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect(),
+            outputs: sim.0.outputs(),
+            parameters: sim.0.parameters().iter().map(|s| s.to_string()).collect(),
+            inner: Mutex::new(sim),
+        })
+    }
+
+    /// One run from t = 0 over round(stop_time / step) steps of `step` (s): fmi2Reset (from the
+    /// second run on), the SSP's parameter bindings and `start` ({"component.variable": value})
+    /// on top, initialization, then at each communication point the connections in dependency
+    /// order, the `record`ed variables read (default: every output), every FMU stepped.
+    /// `stop_when` ({"component.variable": limit}, recorded variables) ends the run after the
+    /// first point where |value| > limit. Returns {"time": array, name: array, ...}.
+    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        stop_time: f64,
+        step: f64,
+        start: Option<&Bound<'py, PyDict>>,
+        record: Option<Vec<String>>,
+        stop_when: Option<&Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let mut opts = RunOptions::new(stop_time, step);
+        if let Some(start) = start {
+            for (k, v) in start.iter() {
+                let key: String = k.extract()?;
+                let value = to_override(&key, &v)?;
+                opts.overrides.push((key, value));
+            }
+        }
+        opts.record = record.unwrap_or_else(|| self.outputs.clone());
+        if let Some(stop) = stop_when {
+            for (k, v) in stop.iter() {
+                opts.stop_when_above.push((k.extract()?, v.extract()?));
+            }
+        }
+        let inner = &self.inner;
+        let result: Result<RunResult, Failure> = py.detach(|| match inner.lock() {
+            Ok(mut sim) => sim.0.run(&opts, &mut |_, _| {}),
+            Err(_) => Err(Failure::from(Error::usage(
+                "the system is unusable: an earlier run panicked while holding it",
+            ))),
+        });
+        match result {
+            Ok(r) => arrays(py, &r),
+            Err(f) => Err(to_pyerr(py, &f.error, Some(&f.partial))),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "rustfmu_runner.System({:?}: {})",
+            self.path,
+            self.evaluation_order.join(" -> ")
+        )
+    }
+}
+
+#[pymodule]
+fn rustfmu_runner(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<PySystem>()?;
+    m.add("RunnerError", py.get_type::<RunnerError>())?;
+    m.add("SspError", py.get_type::<SspError>())?;
+    m.add("VariableError", py.get_type::<VariableError>())?;
+    m.add("FmuError", py.get_type::<FmuError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

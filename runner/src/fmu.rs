@@ -1,0 +1,156 @@
+//! One FMU, loaded through the `fmi` crate's importer (which unzips it into a temporary
+//! directory it removes again), with its variables by name.
+
+use crate::Error;
+use fmi::fmi2::import::Fmi2Import;
+use fmi::fmi2::instance::InstanceCS;
+use fmi2_conformance::{Description, Type, Variable};
+use std::io::{Cursor, Read};
+
+pub use fmi2_conformance::Type as VarType;
+
+pub struct Fmu {
+    /// Where it came from ("resources/Pendulum.fmu" of an SSP file, or a path).
+    pub label: String,
+    pub description: Description,
+    pub import: Fmi2Import,
+    /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
+    /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
+    pub feedthrough: Vec<u32>,
+}
+
+/// The `fmiVersion` attribute of a modelDescription.xml.
+fn fmi_version(xml: &str) -> Option<String> {
+    let at = xml.find("fmiVersion")?;
+    let rest = &xml[at + "fmiVersion".len()..];
+    let rest = rest.trim_start().strip_prefix('=')?.trim_start();
+    let quote = rest.chars().next()?;
+    let rest = &rest[1..];
+    Some(rest[..rest.find(quote)?].to_owned())
+}
+
+impl Fmu {
+    /// Loads the FMU archive `bytes`; `component` names it in errors.
+    pub fn from_bytes(component: &str, label: &str, bytes: Vec<u8>) -> Result<Fmu, Error> {
+        let fail = |what: String| Error {
+            component: Some(component.to_owned()),
+            ..Error::io(format!("component '{component}' ({label}): {what}"))
+        };
+        let mut zip =
+            zip::ZipArchive::new(Cursor::new(&bytes)).map_err(|e| fail(format!("not an FMU (zip) archive: {e}")))?;
+        let mut xml = String::new();
+        zip.by_name("modelDescription.xml")
+            .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
+            .read_to_string(&mut xml)
+            .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
+        let version = fmi_version(&xml).unwrap_or_default();
+        if !version.starts_with("2.") {
+            return Err(Error::unsupported(
+                Some(component),
+                None,
+                format!(
+                    "component '{component}' ({label}): an FMI {version} FMU; the runner runs FMI 2.0 co-simulation FMUs only"
+                ),
+            ));
+        }
+        let description = Description::parse(&xml).map_err(|e| {
+            if e.contains("not a co-simulation FMU") {
+                Error::unsupported(Some(component), None, format!(
+                    "component '{component}' ({label}): not a co-simulation FMU (no <CoSimulation> in modelDescription.xml)"
+                ))
+            } else {
+                fail(e)
+            }
+        })?;
+        let import: Fmi2Import =
+            fmi::import::new(Cursor::new(bytes)).map_err(|e| fail(format!("cannot import: {e}")))?;
+        let mut feedthrough = Vec::new();
+        let inputs: Vec<&Variable> = description
+            .variables
+            .iter()
+            .filter(|v| v.causality == "input")
+            .collect();
+        for output in &description.model_structure.outputs {
+            match &output.dependencies {
+                None => feedthrough.extend(inputs.iter().map(|v| v.vr)),
+                Some(deps) => {
+                    for d in deps {
+                        let v = description.by_index(*d).ok_or_else(|| {
+                            fail(format!("ModelStructure names variable index {d}, which does not exist"))
+                        })?;
+                        if v.causality == "input" {
+                            feedthrough.push(v.vr);
+                        }
+                    }
+                }
+            }
+        }
+        feedthrough.sort_unstable();
+        feedthrough.dedup();
+        Ok(Fmu {
+            label: label.to_owned(),
+            description,
+            import,
+            feedthrough,
+        })
+    }
+
+    /// Loads the FMU file at `path`.
+    pub fn from_path(component: &str, path: &std::path::Path) -> Result<Fmu, Error> {
+        let bytes = std::fs::read(path).map_err(|e| Error {
+            component: Some(component.to_owned()),
+            ..Error::io(format!("component '{component}': cannot read {}: {e}", path.display()))
+        })?;
+        Fmu::from_bytes(component, &path.display().to_string(), bytes)
+    }
+
+    pub fn model_identifier(&self) -> &str {
+        &self.description.model_identifier
+    }
+
+    /// The variable `name`; the error names the component and lists the variables there are.
+    pub fn variable(&self, component: &str, name: &str) -> Result<&Variable, Error> {
+        self.description
+            .variables
+            .iter()
+            .find(|v| v.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.description.variables.iter().map(|v| v.name.as_str()).collect();
+                Error::variable(
+                    component,
+                    name,
+                    format!(
+                        "component '{component}' ({}): no variable '{name}' in its modelDescription.xml; it has: {}",
+                        self.model_identifier(),
+                        names.join(", ")
+                    ),
+                )
+            })
+    }
+
+    /// A co-simulation instance.
+    pub fn instantiate(&self, component: &str) -> Result<InstanceCS, Error> {
+        self.import.instantiate_cs(component, false, false).map_err(|e| Error {
+            component: Some(component.to_owned()),
+            function: Some("fmi2Instantiate".into()),
+            ..Error::new(
+                crate::ErrorKind::Fmi,
+                format!(
+                    "component '{component}' ({}): fmi2Instantiate failed: {e}",
+                    self.model_identifier()
+                ),
+            )
+        })
+    }
+}
+
+/// The FMI 2.0 name of a variable type.
+pub fn type_name(t: Type) -> &'static str {
+    match t {
+        Type::Real => "Real",
+        Type::Integer => "Integer",
+        Type::Boolean => "Boolean",
+        Type::String => "String",
+        Type::Enumeration => "Enumeration",
+    }
+}

@@ -1,0 +1,163 @@
+//! `rustfmu-runner`: a fixed-step co-simulation runner for SSP 1.0 systems of FMI 2.0
+//! co-simulation FMUs — this project's FMUs and any other exporter's.
+//!
+//! - [`ssp`] reads an SSP archive's `SystemStructure.ssd`: components (`source="resources/X.fmu"`),
+//!   connections, parameter bindings (inline `ssv:ParameterSet` or a `.ssv` file in the archive),
+//!   and refuses what it cannot run (system-level connectors, nested systems, transformations,
+//!   unit conversions, FMI 3.0 FMUs, model-exchange-only FMUs), naming component and connector.
+//! - [`fmu`] loads one FMU through the `fmi` crate's importer.
+//! - [`sim`] is the master: parameter and start values after fmi2Instantiate, initialization
+//!   with the connections propagated once per instance, then at every communication point
+//!   t = k·h the connections evaluated in dependency order (Gauss-Seidel along the connections
+//!   by ModelStructure feedthrough, the order of `examples/cosim/master.py`) and every FMU
+//!   stepped; chosen variables recorded; parameters and start values overridden per run.
+//!
+//! The command line is `rustfmu-runner run SYSTEM.ssp --stop-time 10 --step 1e-3
+//! --set pendulum.alpha1_0=0.2 --output out.csv`; the Python module (`runner/python`) runs the
+//! same [`sim::Simulation`] in-process and returns numpy arrays.
+
+// An Error carries component, variable, function, status and time for the caller (the Python
+// exceptions, a study's row): 144 bytes, on the cold path only.
+#![allow(clippy::result_large_err)]
+
+pub mod fmu;
+pub mod fmu_log;
+pub mod sim;
+pub mod ssp;
+
+pub use sim::{Override, RunOptions, RunResult, Scheme, Simulation};
+
+use std::fmt;
+
+/// What kind of problem an [`Error`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// A file that cannot be read, or an SSD/SSV/modelDescription.xml that cannot be parsed.
+    Io,
+    /// An SSP feature or FMU kind the runner does not run (it says which).
+    Unsupported,
+    /// A name that does not resolve (component, variable) or a value of the wrong type.
+    Variable,
+    /// An FMI call that did not return fmi2OK / fmi2Warning.
+    Fmi,
+    /// A request that makes no sense (a step <= 0, ...).
+    Usage,
+}
+
+/// An error of the runner: always a message naming the component (and variable or function)
+/// concerned; for a failed FMI call also the function, the status and the time.
+#[derive(Debug, Clone)]
+pub struct Error {
+    pub kind: ErrorKind,
+    pub component: Option<String>,
+    pub variable: Option<String>,
+    /// The FMI function that failed ("fmi2DoStep", ...).
+    pub function: Option<String>,
+    /// Its status: "Discard", "Error" or "Fatal".
+    pub status: Option<String>,
+    /// The communication point at which it failed, s.
+    pub time: Option<f64>,
+    pub message: String,
+}
+
+impl Error {
+    pub fn new(kind: ErrorKind, message: impl Into<String>) -> Error {
+        Error {
+            kind,
+            component: None,
+            variable: None,
+            function: None,
+            status: None,
+            time: None,
+            message: message.into(),
+        }
+    }
+
+    pub fn io(message: impl Into<String>) -> Error {
+        Error::new(ErrorKind::Io, message)
+    }
+
+    pub fn usage(message: impl Into<String>) -> Error {
+        Error::new(ErrorKind::Usage, message)
+    }
+
+    /// Something the runner does not run, at `component` (and `connector`, if any).
+    pub fn unsupported(component: Option<&str>, connector: Option<&str>, message: impl Into<String>) -> Error {
+        Error {
+            component: component.map(str::to_owned),
+            variable: connector.map(str::to_owned),
+            ..Error::new(ErrorKind::Unsupported, message)
+        }
+    }
+
+    pub fn variable(component: &str, variable: &str, message: impl Into<String>) -> Error {
+        Error {
+            component: Some(component.to_owned()),
+            variable: Some(variable.to_owned()),
+            ..Error::new(ErrorKind::Variable, message)
+        }
+    }
+
+    /// A failed FMI call of `component`.
+    pub fn fmi(component: &str, function: &str, err: &fmi::fmi2::Fmi2Error, time: Option<f64>, what: &str) -> Error {
+        let status = match err {
+            fmi::fmi2::Fmi2Error::Discard => "Discard".to_owned(),
+            fmi::fmi2::Fmi2Error::Error => "Error".to_owned(),
+            fmi::fmi2::Fmi2Error::Fatal => "Fatal".to_owned(),
+            other => format!("{other}"),
+        };
+        let at = time.map(|t| format!(" at t = {t} s")).unwrap_or_default();
+        let what = if what.is_empty() {
+            String::new()
+        } else {
+            format!(" ({what})")
+        };
+        Error {
+            component: Some(component.to_owned()),
+            function: Some(function.to_owned()),
+            status: Some(status.clone()),
+            time,
+            ..Error::new(
+                ErrorKind::Fmi,
+                format!("component '{component}': {function}{what} returned fmi2{status}{at}"),
+            )
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Error {}
+
+impl From<Error> for String {
+    fn from(e: Error) -> String {
+        e.message
+    }
+}
+
+/// A typed parameter or start value, as an SSV file or a systems table writes it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Real(f64),
+    Integer(i64),
+    Boolean(bool),
+    String(String),
+    /// `ssv:Enumeration value="<item name>"`: set through fmi2SetInteger once resolved.
+    Enumeration(String),
+}
+
+impl Value {
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Real(_) => "Real",
+            Value::Integer(_) => "Integer",
+            Value::Boolean(_) => "Boolean",
+            Value::String(_) => "String",
+            Value::Enumeration(_) => "Enumeration",
+        }
+    }
+}

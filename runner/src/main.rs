@@ -1,0 +1,163 @@
+//! `rustfmu-runner`: runs an SSP system of FMI 2.0 co-simulation FMUs from the command line.
+//!
+//! ```sh
+//! rustfmu-runner run SYSTEM.ssp --stop-time 10 --step 1e-3 --set pendulum.alpha1_0=0.2 --output out.csv
+//! rustfmu-runner info SYSTEM.ssp
+//! ```
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rustfmu_runner::{Override, RunOptions, Scheme, Simulation};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "rustfmu-runner",
+    version,
+    about = "Fixed-step co-simulation of SSP 1.0 systems of FMI 2.0 co-simulation FMUs"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Runs the system from t = 0 and writes the recorded variables as CSV.
+    Run {
+        /// The SSP file.
+        ssp: PathBuf,
+        /// End of the run, s (default: the SSD's DefaultExperiment stopTime).
+        #[arg(long)]
+        stop_time: Option<f64>,
+        /// Communication step, s.
+        #[arg(long)]
+        step: f64,
+        /// component.variable=value on top of the SSP's parameter bindings (repeatable).
+        #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
+        set: Vec<String>,
+        /// component.variable to record (repeatable; default: every output of every component).
+        #[arg(long = "record", value_name = "COMPONENT.VARIABLE")]
+        record: Vec<String>,
+        /// CSV file to write (default: standard output).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        /// How a communication point is evaluated.
+        #[arg(long, default_value = "gauss-seidel", value_parser = ["gauss-seidel", "jacobi"])]
+        order: String,
+        /// No progress bar (it is drawn on standard error when that is a terminal).
+        #[arg(long)]
+        no_progress: bool,
+    },
+    /// Prints the system: components, evaluation order, parameters, outputs.
+    Info { ssp: PathBuf },
+}
+
+fn main() {
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("rustfmu-runner: error: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn parse_set(text: &str) -> Result<(String, Override), String> {
+    let (key, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("--set '{text}': expected COMPONENT.VARIABLE=VALUE"))?;
+    if !key.contains('.') {
+        return Err(format!("--set '{text}': expected COMPONENT.VARIABLE=VALUE"));
+    }
+    Ok((key.trim().to_owned(), Override::Text(value.trim().to_owned())))
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Info { ssp } => {
+            let sim = Simulation::from_ssp(&ssp)?;
+            println!("system {}", sim.name);
+            for (c, id) in sim.components() {
+                println!("  component {c}: {id}");
+            }
+            println!("evaluation order: {}", sim.evaluation_order().join(" -> "));
+            println!("parameters: {}", sim.parameters().join(", "));
+            println!("outputs: {}", sim.outputs().join(", "));
+            Ok(())
+        }
+        Command::Run {
+            ssp,
+            stop_time,
+            step,
+            set,
+            record,
+            output,
+            order,
+            no_progress,
+        } => {
+            let stop_time = match stop_time {
+                Some(t) => t,
+                None => rustfmu_runner::ssp::Archive::open(&ssp)?
+                    .ssd
+                    .stop_time
+                    .ok_or("no --stop-time given and the SSD has no DefaultExperiment stopTime")?,
+            };
+            let mut sim = Simulation::from_ssp(&ssp)?;
+            if order == "jacobi" {
+                sim.scheme = Scheme::Jacobi;
+            }
+            let mut opts = RunOptions::new(stop_time, step);
+            opts.overrides = set.iter().map(|s| parse_set(s)).collect::<Result<_, _>>()?;
+            opts.record = if record.is_empty() { sim.outputs() } else { record };
+            let n = (stop_time / step).round() as u64;
+            let bar = if no_progress {
+                ProgressBar::hidden()
+            } else {
+                ProgressBar::with_draw_target(Some(n + 1), ProgressDrawTarget::stderr())
+            };
+            bar.set_style(
+                ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} steps ({per_sec}, ETA {eta})")
+                    .map_err(|e| e.to_string())?
+                    .progress_chars("=> "),
+            );
+            let every = (n / 200).max(1) as usize;
+            let result = sim.run(&opts, &mut |k, _| {
+                if k % every == 0 {
+                    bar.set_position(k as u64 + 1);
+                }
+            });
+            bar.finish_and_clear();
+            let result = result.map_err(|f| f.error.message)?;
+            let mut out: Box<dyn Write> = match &output {
+                Some(p) => Box::new(std::io::BufWriter::new(
+                    std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?,
+                )),
+                None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+            };
+            let w = |e: std::io::Error| e.to_string();
+            write!(out, "time").map_err(w)?;
+            for name in &result.names {
+                write!(out, ",{name}").map_err(w)?;
+            }
+            writeln!(out).map_err(w)?;
+            let m = result.names.len();
+            for (k, t) in result.time.iter().enumerate() {
+                write!(out, "{t:?}").map_err(w)?;
+                for x in &result.values[k * m..(k + 1) * m] {
+                    write!(out, ",{x:?}").map_err(w)?;
+                }
+                writeln!(out).map_err(w)?;
+            }
+            out.flush().map_err(w)?;
+            if let Some(p) = output {
+                eprintln!(
+                    "rustfmu-runner: {} rows x {} variables of {} to {}",
+                    result.time.len(),
+                    m,
+                    sim.name,
+                    p.display()
+                );
+            }
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,436 @@
+//! Reading an SSP 1.0 archive: `SystemStructure.ssd` and the files it names.
+//!
+//! What is read: the root `ssd:System` with its `ssd:Elements/ssd:Component`s (each an FMU,
+//! `source="resources/X.fmu"` inside the archive), `ssd:Connections/ssd:Connection`
+//! (`startElement.startConnector -> endElement.endConnector`), each component's
+//! `ssd:ParameterBindings/ssd:ParameterBinding` with inline `ssd:ParameterValues/ssv:ParameterSet`
+//! or `source="X.ssv"` (a file of the archive), the connectors' units and the
+//! `ssd:DefaultExperiment`.
+//!
+//! What is refused, with the component and connector it concerns: connections to or from the
+//! system's own connectors (no `startElement` / `endElement`), nested systems, connection
+//! transformations (`ssc:LinearTransformation`, mapping transformations), connections between
+//! connectors of different units (a unit conversion), parameter mappings and prefixes,
+//! parameter bindings of the system itself, signal dictionaries, components that are not FMUs
+//! or are to be run as model exchange, and sources outside the archive.
+
+use crate::{Error, ErrorKind, Value};
+use quick_xml::Reader;
+use quick_xml::events::{BytesStart, Event};
+use std::io::{Read, Seek};
+
+/// One component of the system: an FMU instance.
+#[derive(Debug, Clone)]
+pub struct Component {
+    pub name: String,
+    /// `source`, e.g. "resources/Pendulum.fmu".
+    pub source: String,
+    /// Parameter and start values of its parameter bindings, in the order written.
+    pub parameters: Vec<(String, Value)>,
+    /// Connectors: (name, kind, unit).
+    pub connectors: Vec<(String, String, Option<String>)>,
+}
+
+/// `start.0.start.1 -> end.0.end.1`: (component, connector).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Connection {
+    pub start: (String, String),
+    pub end: (String, String),
+}
+
+/// The system of an SSD.
+#[derive(Debug, Clone)]
+pub struct Ssd {
+    pub name: String,
+    pub components: Vec<Component>,
+    pub connections: Vec<Connection>,
+    /// `ssd:DefaultExperiment` startTime, stopTime, s.
+    pub start_time: Option<f64>,
+    pub stop_time: Option<f64>,
+}
+
+fn local(e: &BytesStart) -> String {
+    String::from_utf8_lossy(e.local_name().as_ref()).into_owned()
+}
+
+fn attr(e: &BytesStart, name: &str) -> Option<String> {
+    e.attributes()
+        .flatten()
+        .find(|a| a.key.local_name().as_ref() == name.as_bytes())
+        .and_then(|a| a.unescape_value().ok())
+        .map(|v| v.into_owned())
+}
+
+fn xml_error(file: &str, reader: &Reader<&[u8]>, e: impl std::fmt::Display) -> Error {
+    Error::io(format!("{file}: XML error at byte {}: {e}", reader.error_position()))
+}
+
+/// The typed value of `<ssv:Real value=..>` etc.
+fn typed_value(file: &str, param: &str, kind: &str, value: Option<String>) -> Result<Value, Error> {
+    let text = value.ok_or_else(|| Error::io(format!("{file}: parameter '{param}': ssv:{kind} without a value")))?;
+    let bad = |what: &str| Error::io(format!("{file}: parameter '{param}': '{text}' is not {what}"));
+    Ok(match kind {
+        "Real" => Value::Real(text.trim().parse().map_err(|_| bad("a Real"))?),
+        "Integer" => Value::Integer(text.trim().parse().map_err(|_| bad("an Integer"))?),
+        "Boolean" => Value::Boolean(match text.trim() {
+            "true" | "1" => true,
+            "false" | "0" => false,
+            _ => return Err(bad("a Boolean (true or false)")),
+        }),
+        "String" => Value::String(text.clone()),
+        "Enumeration" => Value::Enumeration(text.clone()),
+        _ => unreachable!("called for the five SSV types"),
+    })
+}
+
+const SSV_TYPES: [&str; 5] = ["Real", "Integer", "Boolean", "String", "Enumeration"];
+
+/// The parameters of an SSV document (`ssv:ParameterSet`), in order.
+pub fn parse_ssv(file: &str, xml: &str) -> Result<Vec<(String, Value)>, Error> {
+    let mut reader = Reader::from_str(xml);
+    let mut out = Vec::new();
+    let mut param: Option<String> = None;
+    loop {
+        match reader.read_event().map_err(|e| xml_error(file, &reader, e))? {
+            Event::Eof => break,
+            Event::Start(e) | Event::Empty(e) => {
+                let tag = local(&e);
+                if tag == "Parameter" {
+                    param = Some(
+                        attr(&e, "name").ok_or_else(|| Error::io(format!("{file}: ssv:Parameter without a name")))?,
+                    );
+                } else if let (Some(p), true) = (&param, SSV_TYPES.contains(&tag.as_str())) {
+                    out.push((p.clone(), typed_value(file, p, &tag, attr(&e, "value"))?));
+                } else if tag == "Binary" || tag == "Unit" && param.is_some() {
+                    return Err(Error::unsupported(
+                        None,
+                        param.as_deref(),
+                        format!(
+                            "{file}: parameter '{}': ssv:{tag} values are not supported",
+                            param.as_deref().unwrap_or("")
+                        ),
+                    ));
+                }
+            }
+            Event::End(e) if e.local_name().as_ref() == b"Parameter" => param = None,
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
+/// Parses `SystemStructure.ssd`; `read` returns another file of the archive (a `.ssv`).
+pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>) -> Result<Ssd, Error> {
+    const FILE: &str = "SystemStructure.ssd";
+    let mut reader = Reader::from_str(xml);
+    let mut ssd = Ssd {
+        name: String::new(),
+        components: Vec::new(),
+        connections: Vec::new(),
+        start_time: None,
+        stop_time: None,
+    };
+    // The open elements' local names.
+    let mut stack: Vec<String> = Vec::new();
+    let mut systems = 0usize;
+    let mut param: Option<String> = None;
+    let mut connector: Option<usize> = None;
+    let mut connection: Option<String> = None;
+    loop {
+        let event = reader.read_event().map_err(|e| xml_error(FILE, &reader, e))?;
+        let (e, empty) = match event {
+            Event::Eof => break,
+            Event::End(e) => {
+                let tag = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                match tag.as_str() {
+                    "Parameter" => param = None,
+                    "Connector" => connector = None,
+                    "Connection" => connection = None,
+                    _ => {}
+                }
+                stack.pop();
+                continue;
+            }
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            _ => continue,
+        };
+        let tag = local(&e);
+        let parent = stack.last().map(String::as_str).unwrap_or("");
+        let in_component = stack.iter().any(|t| t == "Component");
+        let component = ssd.components.last().map(|c| c.name.clone());
+        match tag.as_str() {
+            "System" => {
+                systems += 1;
+                if systems > 1 {
+                    return Err(Error::unsupported(
+                        attr(&e, "name").as_deref(),
+                        None,
+                        format!(
+                            "{FILE}: system '{}' contains the subsystem '{}': nested systems are not supported",
+                            ssd.name,
+                            attr(&e, "name").unwrap_or_default()
+                        ),
+                    ));
+                }
+                ssd.name = attr(&e, "name").unwrap_or_default();
+            }
+            "Component" => {
+                let name =
+                    attr(&e, "name").ok_or_else(|| Error::io(format!("{FILE}: a ssd:Component without a name")))?;
+                let source =
+                    attr(&e, "source").ok_or_else(|| Error::io(format!("{FILE}: component '{name}' has no source")))?;
+                if let Some(t) = attr(&e, "type")
+                    && t != "application/x-fmu-sharedlibrary"
+                {
+                    return Err(Error::unsupported(
+                        Some(&name),
+                        None,
+                        format!(
+                            "component '{name}': type '{t}' is not supported (only FMUs, application/x-fmu-sharedlibrary)"
+                        ),
+                    ));
+                }
+                if attr(&e, "implementation").as_deref() == Some("ModelExchange") {
+                    return Err(Error::unsupported(
+                        Some(&name),
+                        None,
+                        format!(
+                            "component '{name}': implementation=\"ModelExchange\" is not supported (the runner is a co-simulation master)"
+                        ),
+                    ));
+                }
+                ssd.components.push(Component {
+                    name,
+                    source,
+                    parameters: Vec::new(),
+                    connectors: Vec::new(),
+                });
+            }
+            "SignalDictionary" | "SignalDictionaryReference" => {
+                return Err(Error::unsupported(
+                    component.as_deref(),
+                    None,
+                    format!(
+                        "{FILE}: ssd:{tag} is not supported{}",
+                        component
+                            .as_deref()
+                            .map(|c| format!(" (component '{c}')"))
+                            .unwrap_or_default()
+                    ),
+                ));
+            }
+            "Connector" if parent == "Connectors" => {
+                let name = attr(&e, "name").unwrap_or_default();
+                let kind = attr(&e, "kind").unwrap_or_default();
+                if in_component {
+                    let c = ssd.components.last_mut().expect("inside a component");
+                    c.connectors.push((name, kind, None));
+                    connector = Some(c.connectors.len() - 1);
+                }
+                // The system's own connectors are refused when a connection uses them.
+            }
+            "Real" | "Integer" | "Boolean" | "String" | "Enumeration" if connector.is_some() && param.is_none() => {
+                if let Some(unit) = attr(&e, "unit") {
+                    let c = ssd.components.last_mut().expect("inside a component");
+                    c.connectors[connector.expect("checked")].2 = Some(unit);
+                }
+            }
+            "ParameterBinding" => {
+                let Some(c) = component.as_deref().filter(|_| in_component) else {
+                    return Err(Error::unsupported(
+                        None,
+                        None,
+                        format!(
+                            "{FILE}: system '{}' has parameter bindings of its own (of the system's connectors): not supported, only those of components",
+                            ssd.name
+                        ),
+                    ));
+                };
+                if attr(&e, "prefix").is_some_and(|p| !p.is_empty()) {
+                    return Err(Error::unsupported(
+                        Some(c),
+                        None,
+                        format!("component '{c}': a ParameterBinding with a prefix is not supported"),
+                    ));
+                }
+                if let Some(src) = attr(&e, "source") {
+                    if src.contains("://") || src.starts_with('/') {
+                        return Err(Error::unsupported(
+                            Some(c),
+                            None,
+                            format!(
+                                "component '{c}': parameter binding source '{src}' lies outside the archive: not supported"
+                            ),
+                        ));
+                    }
+                    let text = read(&src)?;
+                    let values = parse_ssv(&src, &text)?;
+                    ssd.components.last_mut().expect("inside").parameters.extend(values);
+                }
+            }
+            "ParameterMapping" => {
+                return Err(Error::unsupported(
+                    component.as_deref(),
+                    None,
+                    format!(
+                        "component '{}': ssd:ParameterMapping is not supported",
+                        component.as_deref().unwrap_or("")
+                    ),
+                ));
+            }
+            "Parameter" if in_component && stack.iter().any(|t| t == "ParameterBinding") => {
+                param =
+                    Some(attr(&e, "name").ok_or_else(|| Error::io(format!("{FILE}: ssv:Parameter without a name")))?);
+            }
+            t if param.is_some() && SSV_TYPES.contains(&t) => {
+                let p = param.clone().expect("checked");
+                let v = typed_value(FILE, &p, t, attr(&e, "value"))?;
+                ssd.components.last_mut().expect("inside").parameters.push((p, v));
+            }
+            "Connection" => {
+                let start = (attr(&e, "startElement"), attr(&e, "startConnector").unwrap_or_default());
+                let end = (attr(&e, "endElement"), attr(&e, "endConnector").unwrap_or_default());
+                let text = format!(
+                    "{}.{} -> {}.{}",
+                    start.0.as_deref().unwrap_or("<system>"),
+                    start.1,
+                    end.0.as_deref().unwrap_or("<system>"),
+                    end.1
+                );
+                let (Some(se), Some(ee)) = (start.0.clone(), end.0.clone()) else {
+                    let (c, k) = if start.0.is_none() {
+                        (None, &start.1)
+                    } else {
+                        (end.0.as_deref(), &end.1)
+                    };
+                    return Err(Error::unsupported(
+                        c,
+                        Some(k),
+                        format!(
+                            "connection {text}: connections to the system's own connector '{k}' are not supported (connect components directly)"
+                        ),
+                    ));
+                };
+                ssd.connections.push(Connection {
+                    start: (se, start.1),
+                    end: (ee, end.1),
+                });
+                connection = Some(text);
+            }
+            "LinearTransformation"
+            | "BooleanMappingTransformation"
+            | "IntegerMappingTransformation"
+            | "EnumerationMappingTransformation"
+                if connection.is_some() =>
+            {
+                let k = ssd.connections.last().expect("inside a connection");
+                return Err(Error::unsupported(
+                    Some(&k.end.0),
+                    Some(&k.end.1),
+                    format!(
+                        "connection {}: ssc:{tag} is not supported",
+                        connection.as_deref().unwrap_or("")
+                    ),
+                ));
+            }
+            "DefaultExperiment" if systems <= 1 => {
+                ssd.start_time = attr(&e, "startTime").and_then(|v| v.trim().parse().ok());
+                ssd.stop_time = attr(&e, "stopTime").and_then(|v| v.trim().parse().ok());
+            }
+            _ => {}
+        }
+        if !empty {
+            stack.push(tag);
+        }
+    }
+    if systems == 0 {
+        return Err(Error::io(format!("{FILE}: no ssd:System")));
+    }
+    // Unit conversions: both ends declare a unit and they differ.
+    for k in &ssd.connections {
+        let unit = |(c, v): &(String, String)| {
+            ssd.components
+                .iter()
+                .find(|x| &x.name == c)
+                .and_then(|x| x.connectors.iter().find(|(n, _, _)| n == v))
+                .and_then(|(_, _, u)| u.clone())
+        };
+        if let (Some(a), Some(b)) = (unit(&k.start), unit(&k.end))
+            && a != b
+        {
+            return Err(Error::unsupported(
+                Some(&k.end.0),
+                Some(&k.end.1),
+                format!(
+                    "connection {}.{} -> {}.{}: unit conversion from '{a}' to '{b}' is not supported",
+                    k.start.0, k.start.1, k.end.0, k.end.1
+                ),
+            ));
+        }
+    }
+    Ok(ssd)
+}
+
+/// An SSP archive, opened: its system and its files.
+pub struct Archive {
+    pub path: String,
+    pub ssd: Ssd,
+    zip: zip::ZipArchive<std::fs::File>,
+}
+
+fn read_entry<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, archive: &str, name: &str) -> Result<Vec<u8>, Error> {
+    let name = name.trim_start_matches("./");
+    let mut f = zip
+        .by_name(name)
+        .map_err(|e| Error::io(format!("{archive}: no file '{name}' in the archive ({e})")))?;
+    let mut out = Vec::new();
+    f.read_to_end(&mut out)
+        .map_err(|e| Error::io(format!("{archive}: reading '{name}': {e}")))?;
+    Ok(out)
+}
+
+impl Archive {
+    pub fn open(path: &std::path::Path) -> Result<Archive, Error> {
+        let shown = path.display().to_string();
+        let file = std::fs::File::open(path).map_err(|e| Error::io(format!("{shown}: cannot open: {e}")))?;
+        let mut zip =
+            zip::ZipArchive::new(file).map_err(|e| Error::io(format!("{shown}: not an SSP (zip) archive: {e}")))?;
+        let text = |bytes: Vec<u8>, name: &str| {
+            String::from_utf8(bytes).map_err(|_| Error::io(format!("{shown}: {name} is not UTF-8")))
+        };
+        let ssd_text = text(
+            read_entry(&mut zip, &shown, "SystemStructure.ssd")?,
+            "SystemStructure.ssd",
+        )?;
+        let mut read = |name: &str| -> Result<String, Error> { text(read_entry(&mut zip, &shown, name)?, name) };
+        let ssd = parse_ssd(&ssd_text, &mut read).map_err(|e| Error {
+            message: format!("{shown}: {}", e.message),
+            ..e
+        })?;
+        Ok(Archive { path: shown, ssd, zip })
+    }
+
+    /// The bytes of a component's FMU (its `source`, inside the archive).
+    pub fn fmu_bytes(&mut self, component: &str) -> Result<Vec<u8>, Error> {
+        let c = self
+            .ssd
+            .components
+            .iter()
+            .find(|c| c.name == component)
+            .ok_or_else(|| Error::new(ErrorKind::Variable, format!("no component '{component}'")))?;
+        let source = c.source.clone();
+        if source.contains("://") || source.starts_with('/') {
+            return Err(Error::unsupported(
+                Some(component),
+                None,
+                format!("component '{component}': source '{source}' lies outside the archive: not supported"),
+            ));
+        }
+        read_entry(&mut self.zip, &self.path, &source).map_err(|e| Error {
+            component: Some(component.to_owned()),
+            message: format!("component '{component}': {}", e.message),
+            ..e
+        })
+    }
+}

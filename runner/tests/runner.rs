@@ -1,0 +1,337 @@
+//! The SSP runner: what it reads, what it refuses (with the component and connector named), and
+//! runs of the project's SSP files (tests/run.sh builds them before the Rust tests; the tests
+//! that need them say so when they are missing).
+
+// rustfmu_runner::Error is large (it carries the details of a failure), on the cold path only.
+#![allow(clippy::result_large_err)]
+
+use rustfmu_runner::ssp::{Connection, parse_ssd};
+use rustfmu_runner::{ErrorKind, Override, RunOptions, Simulation, Value};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+const SSD_HEAD: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+  xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"
+  xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" version="1.0" name="T">"#;
+
+fn ssd(body: &str) -> String {
+    format!(
+        "{SSD_HEAD}<ssd:System name=\"Sys\">{body}</ssd:System><ssd:DefaultExperiment startTime=\"0\" stopTime=\"2.5\"/></ssd:SystemStructureDescription>"
+    )
+}
+
+const TWO_LAGS: &str = r#"<ssd:Elements>
+  <ssd:Component name="a" source="resources/Lag.fmu" type="application/x-fmu-sharedlibrary">
+    <ssd:Connectors><ssd:Connector name="y" kind="output"><ssc:Real unit="m"/></ssd:Connector></ssd:Connectors>
+    <ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="p"><ssv:Parameters>
+      <ssv:Parameter name="T"><ssv:Real value="0.25"/></ssv:Parameter>
+      <ssv:Parameter name="n"><ssv:Integer value="3"/></ssv:Parameter>
+      <ssv:Parameter name="on"><ssv:Boolean value="true"/></ssv:Parameter>
+    </ssv:Parameters></ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings>
+  </ssd:Component>
+  <ssd:Component name="b" source="resources/Lag.fmu">
+    <ssd:Connectors><ssd:Connector name="u" kind="input"><ssc:Real unit="m"/></ssd:Connector></ssd:Connectors>
+    <ssd:ParameterBindings><ssd:ParameterBinding source="b.ssv"/></ssd:ParameterBindings>
+  </ssd:Component>
+</ssd:Elements>"#;
+
+#[test]
+fn an_ssd_with_inline_and_file_parameter_sets_is_read() {
+    let xml = ssd(&format!(
+        r#"{TWO_LAGS}<ssd:Connections><ssd:Connection startElement="a" startConnector="y" endElement="b" endConnector="u"/></ssd:Connections>"#
+    ));
+    let ssv = r#"<ssv:ParameterSet xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" version="1.0" name="b">
+        <ssv:Parameters><ssv:Parameter name="T"><ssv:Real value="1e-2"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet>"#;
+    let mut read = |name: &str| {
+        assert_eq!(name, "b.ssv");
+        Ok(ssv.to_owned())
+    };
+    let s = parse_ssd(&xml, &mut read).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.name, "Sys");
+    assert_eq!(s.stop_time, Some(2.5));
+    assert_eq!(s.components.len(), 2);
+    assert_eq!(s.components[0].source, "resources/Lag.fmu");
+    assert_eq!(
+        s.components[0].parameters,
+        vec![
+            ("T".to_owned(), Value::Real(0.25)),
+            ("n".to_owned(), Value::Integer(3)),
+            ("on".to_owned(), Value::Boolean(true))
+        ]
+    );
+    assert_eq!(s.components[1].parameters, vec![("T".to_owned(), Value::Real(1e-2))]);
+    assert_eq!(
+        s.connections,
+        vec![Connection {
+            start: ("a".into(), "y".into()),
+            end: ("b".into(), "u".into())
+        }]
+    );
+}
+
+fn refused(body: &str) -> rustfmu_runner::Error {
+    let mut read = |_: &str| Ok("<ssv:ParameterSet xmlns:ssv=\"x\"/>".to_owned());
+    parse_ssd(&ssd(body), &mut read).expect_err("the runner must refuse this SSD")
+}
+
+#[test]
+fn a_connection_to_the_systems_own_connector_is_refused_naming_it() {
+    let e = refused(&format!(
+        r#"<ssd:Connectors><ssd:Connector name="cmd" kind="input"/></ssd:Connectors>{TWO_LAGS}
+        <ssd:Connections><ssd:Connection startConnector="cmd" endElement="b" endConnector="u"/></ssd:Connections>"#
+    ));
+    assert_eq!(e.kind, ErrorKind::Unsupported);
+    assert!(
+        e.message.contains("<system>.cmd -> b.u") && e.message.contains("system's own connector 'cmd'"),
+        "{e}"
+    );
+}
+
+#[test]
+fn transformations_unit_conversions_and_nested_systems_are_refused() {
+    let e = refused(&format!(
+        r#"{TWO_LAGS}<ssd:Connections><ssd:Connection startElement="a" startConnector="y" endElement="b" endConnector="u">
+        <ssc:LinearTransformation factor="2"/></ssd:Connection></ssd:Connections>"#
+    ));
+    assert!(
+        e.message.contains("a.y -> b.u") && e.message.contains("LinearTransformation"),
+        "{e}"
+    );
+    assert_eq!((e.component.as_deref(), e.variable.as_deref()), (Some("b"), Some("u")));
+
+    let body = TWO_LAGS.replacen(
+        r#"<ssc:Real unit="m"/></ssd:Connector></ssd:Connectors>
+    <ssd:ParameterBindings><ssd:ParameterBinding source"#,
+        r#"<ssc:Real unit="mm"/></ssd:Connector></ssd:Connectors>
+    <ssd:ParameterBindings><ssd:ParameterBinding source"#,
+        1,
+    );
+    let e = refused(&format!(
+        r#"{body}<ssd:Connections><ssd:Connection startElement="a" startConnector="y" endElement="b" endConnector="u"/></ssd:Connections>"#
+    ));
+    assert!(
+        e.message.contains("unit conversion from 'm' to 'mm'") && e.message.contains("a.y -> b.u"),
+        "{e}"
+    );
+
+    let e = refused(r#"<ssd:Elements><ssd:System name="Inner"/></ssd:Elements>"#);
+    assert!(e.message.contains("subsystem 'Inner'"), "{e}");
+
+    let e = refused(
+        r#"<ssd:Elements><ssd:Component name="m" source="resources/M.fmu" implementation="ModelExchange"/></ssd:Elements>"#,
+    );
+    assert!(
+        e.message.contains("component 'm'") && e.message.contains("ModelExchange"),
+        "{e}"
+    );
+}
+
+/// An SSP archive with one component whose FMU's modelDescription.xml is `md`.
+fn archive_with(md: &str, dir: &Path) -> PathBuf {
+    let mut fmu = Vec::new();
+    {
+        let mut z = zip::ZipWriter::new(std::io::Cursor::new(&mut fmu));
+        z.start_file("modelDescription.xml", zip::write::SimpleFileOptions::default())
+            .unwrap();
+        z.write_all(md.as_bytes()).unwrap();
+        z.finish().unwrap();
+    }
+    let path = dir.join("one.ssp");
+    let mut z = zip::ZipWriter::new(std::fs::File::create(&path).unwrap());
+    let opts = zip::write::SimpleFileOptions::default();
+    z.start_file("SystemStructure.ssd", opts).unwrap();
+    z.write_all(
+        ssd(r#"<ssd:Elements><ssd:Component name="plant3" source="resources/M3.fmu"/></ssd:Elements>"#).as_bytes(),
+    )
+    .unwrap();
+    z.start_file("resources/M3.fmu", opts).unwrap();
+    z.write_all(&fmu).unwrap();
+    z.finish().unwrap();
+    path
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rustfmu-runner-test-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn an_fmi3_fmu_is_refused_naming_the_component() {
+    let dir = tmpdir("fmi3");
+    let path = archive_with(
+        r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="3.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/></fmiModelDescription>"#,
+        &dir,
+    );
+    let e = Simulation::from_ssp(&path)
+        .err()
+        .expect("an FMI 3.0 FMU must be refused");
+    assert_eq!(e.kind, ErrorKind::Unsupported);
+    assert!(
+        e.message.contains("component 'plant3'")
+            && e.message.contains("FMI 3.0")
+            && e.message.contains("FMI 2.0 co-simulation"),
+        "{e}"
+    );
+    let e = match Simulation::from_ssp(&dir.join("missing.ssp")) {
+        Err(e) => e,
+        Ok(_) => panic!("a missing file must be refused"),
+    };
+    assert!(
+        e.message.contains("missing.ssp") && e.message.contains("cannot open"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `target/fmu/<name>.ssp` (honours CARGO_TARGET_DIR).
+fn packaged(name: &str) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf();
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map_or(root.join("target"), |t| if t.is_absolute() { t } else { root.join(t) });
+    let p = target.join("fmu").join(format!("{name}.ssp"));
+    assert!(
+        p.exists(),
+        "{} is missing: run `cargo run --release -p fmu-build` first",
+        p.display()
+    );
+    p
+}
+
+fn motors() -> Simulation {
+    Simulation::from_ssp(&packaged("PendulumMotors")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn the_motor_loop_is_evaluated_plant_controller_motors_and_holds_the_pendulum() {
+    let mut sim = motors();
+    assert_eq!(sim.evaluation_order(), ["pendulum", "controller", "motor1", "motor2"]);
+    let mut opts = RunOptions::new(10.0, 1e-3);
+    opts.record = vec![
+        "pendulum.alpha1".into(),
+        "pendulum.alpha2".into(),
+        "controller.mode".into(),
+    ];
+    let mut points = 0;
+    let r = sim
+        .run(&opts, &mut |_, _| points += 1)
+        .unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(points, 10_001);
+    assert_eq!(r.time.len(), 10_001);
+    assert_eq!(r.time[10_000], 10.0);
+    let a1 = r.column(0);
+    assert_eq!(a1[0], 0.1, "the SSD's alpha1_0 = 0.1 rad");
+    assert!(
+        a1[10_000].abs() < 1e-3,
+        "held within 1e-3 rad after 10 s: {}",
+        a1[10_000]
+    );
+    assert_eq!(
+        r.column(2)[0],
+        3.0,
+        "the SSD's mode = 3 (LQR + PID), an Integer recorded"
+    );
+    // A second run on the same instances (fmi2Reset) computes the same numbers.
+    let again = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(again.values, r.values);
+}
+
+#[test]
+fn overrides_apply_per_run_and_a_stop_condition_ends_it() {
+    let mut sim = motors();
+    let mut opts = RunOptions::new(5.0, 1e-3);
+    opts.record = vec!["pendulum.alpha1".into()];
+    opts.overrides = vec![("pendulum.alpha1_0".into(), Override::Text("0.2".into()))];
+    let r = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(r.values[0], 0.2);
+    // Far out, PID only: the pendulum falls and the run stops where |alpha1| > pi/2.
+    opts.overrides = vec![
+        ("pendulum.alpha1_0".into(), Override::Real(1.2)),
+        ("controller.mode".into(), Override::Integer(2)),
+    ];
+    opts.stop_when_above = vec![("pendulum.alpha1".into(), std::f64::consts::FRAC_PI_2)];
+    let r = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert!(r.stopped && r.time.len() < 5001, "expected a fall before 5 s");
+    assert!(r.values.last().unwrap().abs() > std::f64::consts::FRAC_PI_2);
+    // The next run is the nominal one again: overrides do not stick.
+    opts.overrides.clear();
+    opts.stop_when_above.clear();
+    let r = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(r.values[0], 0.1);
+}
+
+#[test]
+fn an_unknown_variable_or_component_is_named_with_what_exists() {
+    let mut sim = motors();
+    let mut opts = RunOptions::new(0.01, 1e-3);
+    opts.overrides = vec![("pendulum.alpha9_0".into(), Override::Real(0.2))];
+    let f = sim
+        .run(&opts, &mut |_, _| {})
+        .expect_err("an unknown variable must be refused");
+    assert_eq!(f.error.kind, ErrorKind::Variable);
+    assert!(
+        f.error
+            .message
+            .contains("component 'pendulum' (Pendulum): no variable 'alpha9_0'")
+            && f.error.message.contains("alpha1_0"),
+        "{f}"
+    );
+    opts.overrides = vec![("pendulun.alpha1_0".into(), Override::Real(0.2))];
+    let f = sim
+        .run(&opts, &mut |_, _| {})
+        .expect_err("an unknown component must be refused");
+    assert!(
+        f.error.message.contains("no component 'pendulun'") && f.error.message.contains("motor1"),
+        "{f}"
+    );
+    opts.overrides = vec![("controller.mode".into(), Override::Text("LQR".into()))];
+    let f = sim
+        .run(&opts, &mut |_, _| {})
+        .expect_err("an item name is not an integer");
+    assert!(
+        f.error.message.contains("controller.mode") && f.error.message.contains("item's value"),
+        "{f}"
+    );
+}
+
+#[test]
+fn an_fmu_refusing_a_value_fails_the_run_naming_component_variable_and_function() {
+    let mut sim = motors();
+    let mut opts = RunOptions::new(0.1, 1e-3);
+    opts.record = vec!["pendulum.alpha1".into()];
+    opts.overrides = vec![("pendulum.m1".into(), Override::Real(-1.0))];
+    let f = sim
+        .run(&opts, &mut |_, _| {})
+        .expect_err("m1 = -1 kg must be refused by the FMU");
+    assert_eq!(f.error.kind, ErrorKind::Fmi);
+    assert_eq!(f.error.component.as_deref(), Some("pendulum"));
+    assert_eq!(f.error.variable.as_deref(), Some("m1"));
+    assert_eq!(f.error.function.as_deref(), Some("fmi2SetReal"));
+    assert!(
+        f.error.message.contains("component 'pendulum'") && f.error.message.contains("m1 = -1"),
+        "{f}"
+    );
+    assert!(f.partial.time.is_empty());
+    // The simulation is usable again after the failure.
+    opts.overrides.clear();
+    let r = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(r.time.len(), 101);
+}
+
+#[test]
+fn gauss_seidel_and_jacobi_differ_on_the_controller_loop() {
+    let mut sim = Simulation::from_ssp(&packaged("PendulumLQR")).unwrap_or_else(|e| panic!("{e}"));
+    let mut opts = RunOptions::new(1.0, 2e-3);
+    opts.record = vec!["pendulum.alpha1".into()];
+    let gs = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    sim.scheme = rustfmu_runner::Scheme::Jacobi;
+    let j = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(
+        gs.values[..2],
+        j.values[..2],
+        "the same up to the first step of the delayed controller"
+    );
+    assert_ne!(gs.values.last(), j.values.last());
+}
