@@ -8,6 +8,10 @@
 //! without allocating (ode_solvers pushes every step into Vecs), keep the step-size controller's
 //! memory across calls so the next communication step starts with a good step, and be a plain
 //! `Clone + Serialize` value so it is part of the FMU state.
+//!
+//! The step-size control's powers are `libm::pow`, not `f64::powf`: the C library's pow differs
+//! between glibc and msvcrt, and under wine between threads (x87 precision control), and a
+//! different last bit there is a different step sequence.
 
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
@@ -213,7 +217,7 @@ impl Dopri5 {
         let h1 = if d1.max(d2) <= 1e-15 {
             (h0 * 1e-3).max(1e-6)
         } else {
-            (0.01 / d1.max(d2)).powf(0.2)
+            libm::pow(0.01 / d1.max(d2), 0.2)
         };
         (100.0 * h0).min(h1).min(span)
     }
@@ -303,7 +307,7 @@ impl Dopri5 {
                     h_proposed
                 } else {
                     // PI controller on accepted steps.
-                    let fac = (err.max(1e-10).powf(ALPHA) / self.err_old.powf(BETA)) / SAFETY;
+                    let fac = (libm::pow(err.max(1e-10), ALPHA) / libm::pow(self.err_old, BETA)) / SAFETY;
                     let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
                     // From the step just taken: a last step cut short to land on span supports
                     // only its own size times the factor (scaling the longer proposal instead
@@ -321,7 +325,7 @@ impl Dopri5 {
                 self.h_next = if last { h_new.max(h_proposed) } else { h_new };
                 reject = false;
             } else {
-                let fac = (err.powf(ALPHA) / SAFETY).min(1.0 / FAC_MIN);
+                let fac = (libm::pow(err, ALPHA) / SAFETY).min(1.0 / FAC_MIN);
                 self.h_next = h / fac;
                 self.stats.rejected_steps += 1;
                 reject = true;
@@ -333,7 +337,7 @@ impl Dopri5 {
 
 /// Whether the PI controller's proposal after a last step of `h` with error `err` (previous
 /// `err_old`) is sure to be below `h_proposed`, so that the step keeps `h_proposed`, decided
-/// without the controller's `powf` calls.
+/// without the controller's `pow` calls.
 ///
 /// The controller computes fac = clamp((max(err, 1e-10)^α / err_old^β) / SAFETY, 1/FAC_MAX,
 /// 1/FAC_MIN) and proposes h / fac. With 2^n ≤ max(err, 1e-10) and err_old ≤ 2^m, powers being
@@ -358,8 +362,8 @@ fn keeps(h: f64, h_proposed: f64, err: f64, err_old: f64) -> bool {
         return false;
     }
     let p = POWERS.get_or_init(|| Powers {
-        alpha: std::array::from_fn(|i| (2f64).powi(-(i as i32)).powf(ALPHA)),
-        beta: std::array::from_fn(|i| (2f64).powi(1 - i as i32).powf(BETA)),
+        alpha: std::array::from_fn(|i| libm::pow(libm::scalbn(1.0, -(i as i32)), ALPHA)),
+        beta: std::array::from_fn(|i| libm::pow(libm::scalbn(1.0, 1 - i as i32), BETA)),
     });
     let lo = p.alpha[(-n) as usize] / p.beta[(1 - m) as usize] / SAFETY * (1.0 - 1e-9);
     h_proposed >= h / lo.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN)
@@ -468,7 +472,7 @@ mod tests {
             let err = 10f64.powf(-12.0 * uniform());
             let err_old = 10f64.powf(-5.0 * uniform()).max(1e-4);
             let h = 10f64.powf(-6.0 * uniform());
-            let fac = (err.max(1e-10).powf(ALPHA) / err_old.powf(BETA)) / SAFETY;
+            let fac = (libm::pow(err.max(1e-10), ALPHA) / libm::pow(err_old, BETA)) / SAFETY;
             let fac = fac.clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
             let h_new = h / fac;
             for scale in [0.999, 1.0, 1.0 + 1e-15, 1.001, 1.1, 2.0] {

@@ -336,10 +336,11 @@ impl ControlLaw {
                 next.integral[i] = (next.integral[i] + e * h).clamp(-bound, bound);
             }
             let omega = x[RATE[i]];
-            // Exactly ω + (ω_f − ω) e^(−h/Tf), as a weighted mean that cannot overflow.
+            // Exactly ω + (ω_f − ω) e^(−h/Tf), as a weighted mean that cannot overflow. exp and
+            // expm1 from `libm`: the same bits on every platform and thread (Cargo.toml says why).
             next.rate_filter[i] = if self.tf > 0.0 {
                 let decay = -h / self.tf;
-                s.rate_filter[i] * decay.exp() - omega * decay.exp_m1()
+                s.rate_filter[i] * libm::exp(decay) - omega * libm::expm1(decay)
             } else {
                 omega
             };

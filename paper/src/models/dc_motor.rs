@@ -133,20 +133,21 @@ impl DcMotorParams {
     /// (1 − e^(−x))/R is computed as −expm1(−x)/R, and for x ≤ 1 as (h/L)·(−expm1(−x)/x): the
     /// closed form i_steady + (i − i_steady) e^(−x) cancels to exactly 0 when x is below the
     /// rounding of 1 (R = 1e-20 Ω: 0 A where (U − kb ω_m) h/L = 742.69 A after 15 ms), and
-    /// (U − kb ω_m)/R overflows for a subnormal R.
+    /// (U − kb ω_m)/R overflows for a subnormal R. exp and expm1 come from `libm`: the same bits on
+    /// every platform and thread (the workspace Cargo.toml says why).
     pub fn step_coupled(&self, s: &DcMotorState, u: f64, omega_joint: f64, h: f64) -> DcMotorState {
         let omega_m = self.gear_ratio * omega_joint;
         let drive = self.applied_voltage(u) - self.kb * omega_m;
         let x = self.r * h / self.l;
         let gain = if x > 1.0 {
-            -(-x).exp_m1() / self.r
+            -libm::expm1(-x) / self.r
         } else if x > 0.0 {
-            h / self.l * (-(-x).exp_m1() / x)
+            h / self.l * (-libm::expm1(-x) / x)
         } else {
             h / self.l
         };
         DcMotorState {
-            i: s.i * (-x).exp() + drive * gain,
+            i: s.i * libm::exp(-x) + drive * gain,
             omega_m,
         }
     }
@@ -188,8 +189,8 @@ fn expm(a: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     } else {
         // |A| ≤ 3 max|a_ij| ≤ 2^(s), s ≤ 1026; scaled in two exact halves.
         let s = largest.log2().ceil() as i32 + 2;
-        let half = 2f64.powi(-(s / 2));
-        let rest = 2f64.powi(-(s - s / 2));
+        let half = libm::scalbn(1.0, -(s / 2));
+        let rest = libm::scalbn(1.0, -(s - s / 2));
         let mut e = (a * half * rest).exp();
         for _ in 0..s {
             e = e * e;

@@ -177,7 +177,9 @@ fn matrix_sign(mut z: DMatrix<f64>) -> Result<DMatrix<f64>, LqrError> {
         let Some(inv) = z.clone().try_inverse().filter(|_| det != 0.0 && det.is_finite()) else {
             return err("CARE: the Hamiltonian has eigenvalues on the imaginary axis (no stabilizing solution)");
         };
-        let c = det.abs().powf(-1.0 / size);
+        // libm's pow: the same gains on every platform and thread (msvcrt's pow under wine
+        // depends on the calling thread's x87 precision control).
+        let c = libm::pow(det.abs(), -1.0 / size);
         let next = (&z * c + inv / c) * 0.5;
         let change = (&next - &z).norm() / next.norm();
         z = next;
