@@ -116,10 +116,11 @@ def trace(stdout: str) -> list[list[float]]:
     return rows
 
 
-def linux_and_windows(hosts: pathlib.Path, name: str, fmi3: bool, sets: list[str]):
-    """Runs the Linux host on the .so and the Windows host under wine on the .dll of an FMU;
-    returns both trajectories and the seconds wine took."""
-    fmu = FMU_DIR / ("fmi3" if fmi3 else "") / f"{name}.fmu"
+def linux_and_windows(hosts: pathlib.Path, name: str, fmi3: bool, sets: list[str], fmu: pathlib.Path | None = None):
+    """Runs the Linux host on the .so and the Windows host under wine on the .dll of an FMU
+    (default: this project's target/fmu/[fmi3/]<name>.fmu); returns both trajectories and the
+    seconds wine took."""
+    fmu = fmu or FMU_DIR / ("fmi3" if fmi3 else "") / f"{name}.fmu"
     assert fmu.exists(), f"{fmu} is missing: run `cargo run --release -p fmu-build` first"
     folder = hosts / f"{name}-{'3' if fmi3 else '2'}"
     xml = unpack(fmu, folder)
@@ -174,6 +175,73 @@ def test_every_fmu_runs_on_windows_as_on_linux(hosts, name, fmi3):
     scale = max(1.0, max(abs(x) for row in a for x in row))
     report(f"{name} FMI {'3.0' if fmi3 else '2.0'}, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
     assert d <= 1e-12 * scale, d
+
+
+# -- A crate of a user's, outside this workspace, asking for Linux and Windows in its Cargo.toml --
+
+TARGETS = '["x86_64-unknown-linux-gnu", "x86_64-pc-windows-gnu"]'
+
+
+@pytest.fixture(scope="session")
+def user_crate_fmus():
+    """WinLag.fmu (FMI 2.0 and 3.0) of a crate made by `cargo fmu new win-lag` outside this
+    workspace, whose `[package.metadata.fmu]` names the Linux and the Windows target; built with
+    plain `cargo fmu build` into a target folder under this workspace's target/ (kept: a second
+    run builds nothing)."""
+    target = FMU_DIR.parent
+    cargo_fmu = target / "release" / "cargo-fmu"
+    if not cargo_fmu.exists():
+        pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
+    import hashlib
+    import tempfile
+
+    # Outside the workspace (else cargo takes it for a member), one per checkout (its path
+    # dependency on rustfmu is this checkout's).
+    checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
+    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-windows-test-{os.getuid()}-{checkout}"
+    where.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ)
+    env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
+    env["CARGO_TARGET_DIR"] = str(target / "windows-test-crate")
+    crate = where / "win-lag"
+    if not (crate / "Cargo.toml").exists():
+        shutil.rmtree(crate, ignore_errors=True)
+        out = run(["cargo", "fmu", "new", "win-lag"], cwd=where, env=env)
+        assert out.returncode == 0, out.stderr
+    manifest = crate / "Cargo.toml"
+    text = manifest.read_text()
+    if not re.search(r"^targets =", text, re.M):
+        assert "[package.metadata.fmu]\n" in text, text
+        text = text.replace("[package.metadata.fmu]\n", f"[package.metadata.fmu]\ntargets = {TARGETS}\n")
+        manifest.write_text(text)
+    started = time.monotonic()
+    out = subprocess.run(NICE + ["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-5000:]
+    report(f"cargo fmu build of a `cargo fmu new` crate for Linux and Windows, FMI 2.0 and 3.0: {time.monotonic() - started:.1f} s")
+    fmus = target / "windows-test-crate" / "fmu"
+    return {False: fmus / "WinLag.fmu", True: fmus / "fmi3" / "WinLag.fmu"}
+
+
+@pytest.mark.parametrize("fmi3", [False, True], ids=["fmi2", "fmi3"])
+def test_a_users_crate_gets_the_windows_binary_its_cargo_toml_asks_for(hosts, user_crate_fmus, fmi3):
+    fmu = user_crate_fmus[fmi3]
+    with zipfile.ZipFile(fmu) as z:
+        names = set(z.namelist())
+    folders = ("x86_64-linux", "x86_64-windows") if fmi3 else ("linux64", "win64")
+    assert {f"binaries/{folders[0]}/WinLag.so", f"binaries/{folders[1]}/WinLag.dll"} <= names, sorted(names)
+    import fmpy.validation
+
+    assert fmpy.validation.validate_fmu(str(fmu)) == []
+    # u (vr 0) = 1 from rest: y = 1 - e^(-t/T), T = 0.1 s.
+    a, b, seconds = linux_and_windows(hosts, "WinLag", fmi3, ["0=1.0"], fmu=fmu)
+    d = largest_difference(a, b)
+    report(f"WinLag (cargo fmu new) FMI {'3.0' if fmi3 else '2.0'}, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
+    assert d <= 1e-12, d
+    import math
+
+    for k in [0, 99, STEPS - 1]:
+        t = (k + 1) * H
+        assert abs(b[k][0] - (1.0 - math.exp(-t / 0.1))) <= 1e-9, (k, b[k])
 
 
 # The conformance suite's black-box checks on the Windows binaries: the suite's fmu-check
