@@ -1,7 +1,11 @@
 """Shared fixtures: where the packaged FMUs are. tests/run.sh builds them before pytest runs."""
 
+import hashlib
 import os
 import pathlib
+import shutil
+import subprocess
+import tempfile
 
 import pytest
 
@@ -29,3 +33,29 @@ def fmu3(name: str) -> str:
 @pytest.fixture(scope="session")
 def pendulum_fmu() -> str:
     return fmu("Pendulum")
+
+
+def outside_crate(name: str, target: str) -> tuple[pathlib.Path, dict]:
+    """A crate made by `cargo fmu new <name>` (this workspace's target/release/cargo-fmu) outside
+    this workspace, as a user's crate is, built into target/<target> of this workspace (kept, so
+    that a second test run builds nothing). Returns the crate's folder and the environment that
+    runs `cargo fmu` on it.
+
+    The crate is outside the workspace (else cargo takes it for a member) and one per checkout: a
+    crate kept from another checkout would build against that checkout's rustfmu (its path
+    dependency)."""
+    cargo_fmu = FMU_DIR.parent / "release" / "cargo-fmu"
+    if not cargo_fmu.exists():
+        pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
+    checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
+    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-{target}-{os.getuid()}-{checkout}"
+    where.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ)
+    env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
+    env["CARGO_TARGET_DIR"] = str(FMU_DIR.parent / target)
+    crate = where / name
+    if not (crate / "Cargo.toml").exists():
+        shutil.rmtree(crate, ignore_errors=True)
+        out = subprocess.run(["cargo", "fmu", "new", name], cwd=where, env=env, capture_output=True, text=True, timeout=600)
+        assert out.returncode == 0, out.stderr
+    return crate, env

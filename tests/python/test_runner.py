@@ -6,14 +6,13 @@ back; errors that name component and variable; a failed run recorded while the s
 import os
 import pathlib
 import re
-import shutil
 import subprocess
 import sys
 import zipfile
 
 import numpy as np
 import pytest
-from conftest import FMU_DIR, ROOT, fmu
+from conftest import FMU_DIR, ROOT, fmu, outside_crate
 
 sys.path.insert(0, str(ROOT / "examples"))
 import rustfmu_runner  # noqa: E402
@@ -207,25 +206,7 @@ def my_lag_fmu():
     """MyLag.fmu of a crate made by `cargo fmu new my-lag` (unchanged), outside this workspace,
     built into a target folder of its own under this workspace's target/ (kept, so that a second
     test run builds nothing)."""
-    cargo_fmu = TARGET / "release" / "cargo-fmu"
-    if not cargo_fmu.exists():
-        pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
-    import hashlib
-    import tempfile
-
-    # Outside the workspace (else cargo takes it for a member), and one per checkout: a crate kept
-    # from another checkout would build against that checkout's rustfmu (its path dependency).
-    checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
-    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-runner-test-{os.getuid()}-{checkout}"
-    where.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ)
-    env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
-    env["CARGO_TARGET_DIR"] = str(TARGET / "runner-test-crate")
-    crate = where / "my-lag"
-    if not (crate / "Cargo.toml").exists():
-        shutil.rmtree(crate, ignore_errors=True)
-        out = subprocess.run(["cargo", "fmu", "new", "my-lag"], cwd=where, env=env, capture_output=True, text=True, timeout=600)
-        assert out.returncode == 0, out.stderr
+    crate, env = outside_crate("my-lag", "runner-test-crate")
     out = subprocess.run(["nice", "-n", "10", "cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr
     path = TARGET / "runner-test-crate" / "fmu" / "MyLag.fmu"

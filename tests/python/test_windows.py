@@ -20,7 +20,7 @@ import zipfile
 
 import pytest
 
-from conftest import FMU_DIR, ROOT
+from conftest import FMU_DIR, ROOT, outside_crate
 
 NAMES = ["Pendulum", "Controller", "DCMotor"]
 STEPS = 1000
@@ -189,25 +189,7 @@ def user_crate_fmus():
     plain `cargo fmu build` into a target folder under this workspace's target/ (kept: a second
     run builds nothing)."""
     target = FMU_DIR.parent
-    cargo_fmu = target / "release" / "cargo-fmu"
-    if not cargo_fmu.exists():
-        pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
-    import hashlib
-    import tempfile
-
-    # Outside the workspace (else cargo takes it for a member), one per checkout (its path
-    # dependency on rustfmu is this checkout's).
-    checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
-    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-windows-test-{os.getuid()}-{checkout}"
-    where.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ)
-    env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
-    env["CARGO_TARGET_DIR"] = str(target / "windows-test-crate")
-    crate = where / "win-lag"
-    if not (crate / "Cargo.toml").exists():
-        shutil.rmtree(crate, ignore_errors=True)
-        out = run(["cargo", "fmu", "new", "win-lag"], cwd=where, env=env)
-        assert out.returncode == 0, out.stderr
+    crate, env = outside_crate("win-lag", "windows-test-crate")
     manifest = crate / "Cargo.toml"
     text = manifest.read_text()
     if not re.search(r"^targets =", text, re.M):

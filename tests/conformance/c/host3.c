@@ -20,28 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _WIN32
-/* Windows (MinGW, run under wine in the tests): the same host, dlopen & co. on LoadLibraryA. */
-#include <windows.h>
-#define RTLD_NOW 0
-#define RTLD_LOCAL 0
-static char dl_error[64];
-static void *dlopen(const char *path, int flags) {
-    (void)flags;
-    void *h = (void *)LoadLibraryA(path);
-    if (!h) snprintf(dl_error, sizeof dl_error, "LoadLibraryA failed, error %lu", (unsigned long)GetLastError());
-    return h;
-}
-static void *dlsym(void *lib, const char *name) { return (void *)GetProcAddress((HMODULE)lib, name); }
-static int dlclose(void *lib) {
-    if (FreeLibrary((HMODULE)lib)) return 0;
-    snprintf(dl_error, sizeof dl_error, "FreeLibrary failed, error %lu", (unsigned long)GetLastError());
-    return 1;
-}
-static const char *dlerror(void) { return dl_error; }
-#else
-#include <dlfcn.h>
-#endif
+#include "dl.h" /* dlopen & co., on Linux and Windows */
 
 typedef void *fmi3Instance;
 typedef uint32_t fmi3ValueReference;

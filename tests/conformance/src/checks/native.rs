@@ -52,6 +52,8 @@ fn host(fmu: &Fmu) -> PathBuf {
     {
         let src = fmu.scratch.join("host.c");
         std::fs::write(&src, include_str!("../../c/host.c")).unwrap_or_else(|e| panic!("{}: {e}", src.display()));
+        let header = fmu.scratch.join("dl.h");
+        std::fs::write(&header, include_str!("../../c/dl.h")).unwrap_or_else(|e| panic!("{}: {e}", header.display()));
         let src = src.to_str().unwrap();
         let exe = fmu.scratch.join("c-host");
         tool(

@@ -2864,6 +2864,7 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
     cs_only(fmu);
     let src = fmu.scratch.join("host3.c");
     std::fs::write(&src, include_str!("../../c/host3.c")).unwrap();
+    std::fs::write(fmu.scratch.join("dl.h"), include_str!("../../c/dl.h")).unwrap();
     let exe = fmu.scratch.join("c-host3");
     let cc = std::process::Command::new("cc")
         .args(["-std=gnu11", "-O1", "-g", "-Wall", "-Wextra", "-Werror", "-o"])
