@@ -25,6 +25,9 @@ echo "== Made"
 echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
 echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
+# The platforms each FMU carries: its binaries/ folders (the same for every FMU of one version).
+platforms() { .venv/bin/python -c 'import sys, zipfile; print(" ".join(sorted({n.split("/")[1] for n in zipfile.ZipFile(sys.argv[1]).namelist() if n.startswith("binaries/") and n.count("/") > 1})))' "$1"; }
+echo "Platforms: FMI 2.0 $(platforms target/fmu/Pendulum.fmu); FMI 3.0 $(platforms target/fmu/fmi3/Pendulum.fmu)"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
 echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
 echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"
