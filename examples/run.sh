@@ -4,12 +4,21 @@
 # Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tests/setup-env.sh --python-only
+started=$SECONDS
+times=()
+# lap NAME: the time since the last lap, for the summary.
+lap_at=$SECONDS
+lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
+bash tests/setup-env.sh --main-job
+lap "setup (tests/setup-env.sh --main-job)"
 cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
+lap "FMUs and SSP files (cargo fmu build)"
 mkdir -p out
 cargo run --release -p holonomic --example paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
+lap "paper numbers, Figures 6-8"
 .venv/bin/python examples/composed_demo.py --out out
+lap "composed demo (fmpy)"
 # The full loop from the command line of the native SSP runner (runner/).
 cargo run --release -q -p rustfmu-runner -- run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
   --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
@@ -19,6 +28,7 @@ cargo run --release -q -p rustfmu-runner -- run target/fmu/PendulumMotors.ssp --
 rm -f out/study/roa.csv out/study/robust.csv
 .venv/bin/python examples/parameter_study.py roa --out out/study --n 15 --no-progress --master native
 .venv/bin/python examples/parameter_study.py robust --out out/study --samples 40 --no-progress --master native
+lap "runner command line, Dask studies"
 
 echo
 echo "== Made"
@@ -32,3 +42,5 @@ echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 
 echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
 echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"
 (cd out && find . -type f | sort | sed 's|^\./|  out/|')
+echo "Time: $((SECONDS - started)) s in all"
+for t in "${times[@]}"; do echo "  $t"; done

@@ -1,39 +1,66 @@
 #!/usr/bin/env bash
-# Installs what the tests and examples need, on a fresh machine: Debian's libclang-dev (fmi-sys
-# runs bindgen when the tests build) and valgrind, and a Python venv at .venv with
-# tests/python/requirements.txt; and what the Windows binaries of the FMUs need: the Rust target
-# x86_64-pc-windows-gnu (rustup target add), Debian's MinGW linker (gcc-mingw-w64-x86-64), and
-# for the tests wine, which runs them; the same for aarch64 Linux (FMI 3.0): the target, Debian's
-# gcc-aarch64-linux-gnu and, for the tests, qemu-user. `--python-only` (the main job) installs the venv and the
-# cross-compilation pieces (target and linker), no libclang, valgrind or wine.
-# Safe to run again: it only installs what is missing.
+# Installs what the main job or the tests need, on a fresh machine; safe to run again (it only
+# installs what is missing).
+#
+#   bash tests/setup-env.sh              everything the tests need (tests/run.sh)
+#   bash tests/setup-env.sh --main-job   what the main job's builds and scripts need (examples/run.sh;
+#                                        --python-only is the old name)
+#   bash tests/setup-env.sh [--main-job] --list
+#                                        print the Debian packages that mode ensures, one a line,
+#                                        installed or not, and exit (test_fresh_machine.py checks
+#                                        them against the dependency trees of what the main job builds)
+#
+# Main job: the Rust targets x86_64-pc-windows-gnu and aarch64-unknown-linux-gnu (rustup) and their
+# linkers (every FMU carries Linux and Windows binaries, the FMI 3.0 ones aarch64 Linux too);
+# gcc and libclang-dev: the runner (its `fmi` importer crate) compiles fmi-sys, whose build script
+# compiles C and runs bindgen; a venv at .venv with examples/requirements.txt and the runner's
+# Python module (maturin). The tests add wine and qemu-user (they run the Windows and aarch64
+# binaries), valgrind and binutils (the conformance suite's C host and symbol checks), libtbb12
+# (ecospy) and tests/python/requirements.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-python_only=false
-[ "${1:-}" = "--python-only" ] && python_only=true
+main_job=false
+list=false
+for arg in "$@"; do
+  case "$arg" in
+    --main-job | --python-only) main_job=true ;;
+    --list) list=true ;;
+    *) echo "setup-env: unknown argument '$arg' (--main-job, --list)" >&2; exit 2 ;;
+  esac
+done
 
-need=()
-# Cross compilation (every FMU of this project carries a linux64 and a win64 binary).
-# (and aarch64 Linux in the FMI 3.0 FMUs).
+# Debian packages: "package:command" (installed when the command is missing) or "package:"
+# (installed when dpkg does not know it).
+main_packages=(gcc-mingw-w64-x86-64:x86_64-w64-mingw32-gcc gcc-aarch64-linux-gnu:aarch64-linux-gnu-gcc
+  gcc:gcc libclang-dev:)
+test_packages=(wine:wine qemu-user:qemu-aarch64 valgrind:valgrind binutils:nm libtbb12:)
+packages=("${main_packages[@]}")
+$main_job || packages+=("${test_packages[@]}")
+
+if $list; then
+  for p in "${packages[@]}"; do echo "${p%%:*}"; done
+  exit 0
+fi
+
+started=$SECONDS
 for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
   if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
     echo "setup-env: rustup target add $triple"
     rustup target add "$triple"
   fi
 done
-command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 || need+=(gcc-mingw-w64-x86-64)
-command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || need+=(gcc-aarch64-linux-gnu)
-if ! $python_only; then
-command -v wine >/dev/null 2>&1 || need+=(wine)
-command -v qemu-aarch64 >/dev/null 2>&1 || need+=(qemu-user)
-command -v gcc >/dev/null 2>&1 || need+=(gcc)
-dpkg -s libclang-dev >/dev/null 2>&1 || need+=(libclang-dev)
-command -v valgrind >/dev/null 2>&1 || need+=(valgrind)
-command -v nm >/dev/null 2>&1 || need+=(binutils)
-# ecospy's libecosc.so (the Ecos SSP tests, tests/python/test_ssp_as_shipped.py) links libtbb.so.12.
-dpkg -s libtbb12 >/dev/null 2>&1 || need+=(libtbb12)
-fi
+
+need=()
+for p in "${packages[@]}"; do
+  name=${p%%:*}
+  cmd=${p#*:}
+  if [ -n "$cmd" ]; then
+    command -v "$cmd" >/dev/null 2>&1 || need+=("$name")
+  else
+    dpkg -s "$name" >/dev/null 2>&1 || need+=("$name")
+  fi
+done
 if ((${#need[@]})); then
   echo "setup-env: apt-get install ${need[*]}"
   sudo=""
@@ -46,11 +73,17 @@ if [ ! -x .venv/bin/python ]; then
   echo "setup-env: creating .venv"
   python3 -m venv .venv
 fi
+# examples/requirements.txt for the main job; the tests' file includes it.
+requirements=tests/python/requirements.txt
+$main_job && requirements=examples/requirements.txt
 stamp=.venv/.requirements.sha
-want=$(sha256sum tests/python/requirements.txt | cut -d' ' -f1)
-if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-  echo "setup-env: pip install -r tests/python/requirements.txt"
-  .venv/bin/pip install -q --disable-pip-version-check -r tests/python/requirements.txt
+want=$(cat "$requirements" examples/requirements.txt | sha256sum | cut -d' ' -f1)
+have=$(cat "$stamp" 2>/dev/null || true)
+# A venv made for the tests has the main job's packages too.
+full=$(cat tests/python/requirements.txt examples/requirements.txt | sha256sum | cut -d' ' -f1)
+if [ "$have" != "$want" ] && ! { $main_job && [ "$have" = "$full" ]; }; then
+  echo "setup-env: pip install -r $requirements"
+  .venv/bin/pip install -q --disable-pip-version-check -r "$requirements"
   echo "$want" >"$stamp"
 fi
 # The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
@@ -64,3 +97,4 @@ if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/py
 fi
 # ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
 chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true
+echo "setup-env: ready ($((SECONDS - started)) s)"
