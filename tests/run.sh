@@ -7,6 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+run_started=$SECONDS
 bash tests/setup-env.sh
 export PATH="$PWD/.venv/bin:$PATH"
 logs=$(mktemp -d)
@@ -15,9 +16,11 @@ failed=0
 total_pass=0
 total_fail=0
 
-# record NAME PASSED FAILED
+# record NAME PASSED FAILED: with the seconds since the last record (the suite's time).
+suite_started=$SECONDS
 record() {
-  summary+=("$(printf '%-34s %5d passed, %d failed' "$1" "$2" "$3")")
+  summary+=("$(printf '%-34s %5d passed, %d failed %6d s' "$1" "$2" "$3" $((SECONDS - suite_started)))")
+  suite_started=$SECONDS
   total_pass=$((total_pass + $2))
   total_fail=$((total_fail + $3))
   if [ "$3" -ne 0 ]; then failed=1; fi
@@ -31,6 +34,8 @@ step() {
   if "$@"; then record "$name" 1 0; else record "$name" 0 1; fi
 }
 
+echo "setup: $((SECONDS - run_started)) s"
+suite_started=$SECONDS
 step "cargo fmt --check" cargo fmt --all --check
 step "cargo clippy -D warnings" cargo clippy --workspace --all-targets --release -- -D warnings
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
@@ -103,5 +108,6 @@ step "benchmarks still run (quick mode)" bash bench/quick.sh
 echo
 echo "== Summary"
 for s in "${summary[@]}"; do echo "$s"; done
+echo "time: $((SECONDS - run_started)) s in all (the setup included)"
 echo "total: $total_pass passed, $total_fail failed"
 exit "$failed"
