@@ -117,6 +117,43 @@ fn files_below(dir: &Path) -> Result<Vec<(String, PathBuf)>, String> {
     Ok(out)
 }
 
+/// The crate an FMU file was made from is written beside it (`.<id>.fmu.crate`: its package name
+/// and folder), so that a crate sharing the target folder (`CARGO_TARGET_DIR`) whose model has the
+/// same identifier is refused instead of silently replacing the other crate's FMU. An FMU whose
+/// crate is gone (a deleted or moved folder) may be replaced; one with no such file (made before
+/// this check) too. Returns the file to write after packaging, and what to write in it.
+fn claim(krate: &FmuCrate, out: &Path, id: &str) -> Result<(PathBuf, String), String> {
+    let file_name = out.file_name().expect("a file name").to_string_lossy();
+    let owner = out.with_file_name(format!(".{file_name}.crate"));
+    let folder = std::fs::canonicalize(&krate.manifest_dir).unwrap_or_else(|_| krate.manifest_dir.clone());
+    let mine = format!("{}\n{}\n", krate.package, folder.display());
+    if !out.exists() {
+        return Ok((owner, mine));
+    }
+    let theirs = std::fs::read_to_string(&owner).unwrap_or_default();
+    let mut lines = theirs.lines();
+    let (package, their_folder) = (lines.next().unwrap_or(""), Path::new(lines.next().unwrap_or("")));
+    if theirs.is_empty() || theirs == mine {
+        return Ok((owner, mine));
+    }
+    if !their_folder.join("Cargo.toml").is_file() {
+        eprintln!(
+            "fmu: note: replacing {} of crate '{package}' ({}), whose folder is gone",
+            out.display(),
+            their_folder.display()
+        );
+        return Ok((owner, mine));
+    }
+    Err(format!(
+        "{}: {} is the FMU of crate '{package}' ({}), which shares this target folder and whose model has the \
+         same identifier '{id}'; nothing was written. Give one of the models another name, or build one of the \
+         crates into a target folder of its own (CARGO_TARGET_DIR)",
+        krate.package,
+        out.display(),
+        their_folder.display()
+    ))
+}
+
 /// Packages built libraries of one crate and one FMI version (one per target: `(triple,
 /// library)`) into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI 3.0), whichever
 /// version the libraries say they implement. Every library must carry the same description.
@@ -181,6 +218,7 @@ pub fn package(krate: &FmuCrate, libraries: &[(String, PathBuf)], out_dir: &Path
     let out = fmu_path(out_dir, version, id);
     let dir = out.parent().expect("a folder");
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let owner = claim(krate, &out, id)?;
     let tmp = out.with_extension("fmu.partial");
     let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
     let mut zip = zip::ZipWriter::new(file);
@@ -205,6 +243,7 @@ pub fn package(krate: &FmuCrate, libraries: &[(String, PathBuf)], out_dir: &Path
     zip.finish().map_err(|e| zip_err(&e))?;
     // Written aside and renamed, so an interrupted build never leaves a half-written .fmu.
     std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
+    std::fs::write(&owner.0, &owner.1).map_err(|e| format!("{}: {e}", owner.0.display()))?;
     Ok(Packaged {
         fmu: out,
         version,

@@ -270,7 +270,7 @@ fn version_folder(version: FmiVersion) -> &'static str {
 }
 
 /// `cargo build --release -p ...` in the workspace: the FMI 2.0 libraries (rustfmu without
-/// features), or with `version` 3.0 the FMI 3.0 one of a single crate (`--features
+/// features), or with `version` 3.0 the FMI 3.0 ones (`--features
 /// <rustfmu>/fmi3`). `target`: a triple other than the host's (`--target <triple>`, with the
 /// linker [`crate::target::build_env`] names), or `None` for the host.
 pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion, target: Option<&str>) -> Result<(), String> {

@@ -323,7 +323,7 @@ fn has_folder(triple: &str, version: FmiVersion) -> bool {
 /// First every target is checked ([`crate::target::preflight`]: its standard library and
 /// linker), so that a missing piece stops the build before anything is built. Then for each
 /// target and version: `cargo build --release [--target T]` (FMI 3.0: `--features
-/// rustfmu/fmi3`, one crate at a time), each library copied aside right after its build (the
+/// rustfmu/fmi3`, every crate in one build), each library copied aside right after its build (the
 /// next build overwrites cargo's file), its version checked against the one asked for; and each
 /// crate and version packaged with the binaries of all its targets: FMI 2.0 as
 /// `target/fmu/<id>.fmu`, FMI 3.0 as `target/fmu/fmi3/<id>.fmu`.
@@ -396,8 +396,6 @@ pub fn build_versions(
         ));
     }
     let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
-    let mut host_v2: Vec<FmuCrate> = Vec::new();
-    let mut any_host_v3 = false;
     for t in &all_targets {
         let cross = (*t != host).then_some(t.as_str());
         let with = |v: FmiVersion| -> Vec<FmuCrate> {
@@ -416,22 +414,30 @@ pub fn build_versions(
                 libraries.push((c.clone(), FmiVersion::V2, t.clone(), kept));
             }
         }
+        // One cargo build for the FMI 3.0 libraries of every crate that names rustfmu alike
+        // (`--features rustfmu/fmi3` reaches each selected crate's dependency).
+        let mut groups: Vec<Vec<FmuCrate>> = Vec::new();
         for c in &v3 {
-            cargo::build(&ws, std::slice::from_ref(c), FmiVersion::V3, cross)?;
-            let kept = cargo::keep_library(&ws, c, FmiVersion::V3, t, &host)?;
-            libraries.push((c.clone(), FmiVersion::V3, t.clone(), kept));
+            match groups
+                .iter_mut()
+                .find(|g| g[0].rustfmu_dependency == c.rustfmu_dependency)
+            {
+                Some(g) => g.push(c.clone()),
+                None => groups.push(vec![c.clone()]),
+            }
+        }
+        for group in &groups {
+            cargo::build(&ws, group, FmiVersion::V3, cross)?;
+            for c in group {
+                let kept = cargo::keep_library(&ws, c, FmiVersion::V3, t, &host)?;
+                libraries.push((c.clone(), FmiVersion::V3, t.clone(), kept));
+            }
         }
         eprintln!("fmu: built target {t} in {:.1} s", started.elapsed().as_secs_f64());
-        if cross.is_none() {
-            host_v2 = v2;
-            any_host_v3 = !v3.is_empty();
-        }
     }
-    if !host_v2.is_empty() && any_host_v3 {
-        // Leaves target/release/lib<name>.so the FMI 2.0 library, as before FMI 3.0 existed
-        // (cargo finds everything fresh and links its FMI 2.0 artifact there again).
-        cargo::build(&ws, &host_v2, FmiVersion::V2, None)?;
-    }
+    // Each (target, version) is built once. Cargo names a cdylib without a hash, so its own
+    // `target/release/lib<name>.so` is the library of the version built last; the FMUs, and the
+    // copies in target/fmu-build/fmi{2,3}/, hold the right one of each.
     let mut built = Vec::new();
     for (c, versions, _) in &plan {
         for version in versions {

@@ -35,11 +35,18 @@ def pendulum_fmu() -> str:
     return fmu("Pendulum")
 
 
-def outside_crate(name: str, target: str) -> tuple[pathlib.Path, dict]:
+# The target folder of every crate made by `cargo fmu new` in the tests (test_cargo_fmu,
+# test_runner, test_windows): one, shared as CARGO_TARGET_DIR, so that their dependencies are
+# built once (a user with several FMU crates does the same); kept, so that a second test run
+# builds only what changed.
+USER_TARGET = FMU_DIR.parent / "user-crates"
+
+
+def outside_crate(name: str, fresh: bool = False) -> tuple[pathlib.Path, dict]:
     """A crate made by `cargo fmu new <name>` (this workspace's target/release/cargo-fmu) outside
-    this workspace, as a user's crate is, built into target/<target> of this workspace (kept, so
-    that a second test run builds nothing). Returns the crate's folder and the environment that
-    runs `cargo fmu` on it.
+    this workspace, as a user's crate is, built into USER_TARGET. `fresh`: made anew even if it
+    exists (for tests that edit it). Returns the crate's folder and the environment that runs
+    `cargo fmu` on it.
 
     The crate is outside the workspace (else cargo takes it for a member) and one per checkout: a
     crate kept from another checkout would build against that checkout's rustfmu (its path
@@ -48,13 +55,13 @@ def outside_crate(name: str, target: str) -> tuple[pathlib.Path, dict]:
     if not cargo_fmu.exists():
         pytest.fail(f"{cargo_fmu} is missing: build it with `cargo build --release -p fmu-build --bins`")
     checkout = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
-    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-{target}-{os.getuid()}-{checkout}"
+    where = pathlib.Path(tempfile.gettempdir()) / f"rustfmu-crates-{os.getuid()}-{checkout}"
     where.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
     env["PATH"] = f"{cargo_fmu.parent}{os.pathsep}{env['PATH']}"
-    env["CARGO_TARGET_DIR"] = str(FMU_DIR.parent / target)
+    env["CARGO_TARGET_DIR"] = str(USER_TARGET)
     crate = where / name
-    if not (crate / "Cargo.toml").exists():
+    if fresh or not (crate / "Cargo.toml").exists():
         shutil.rmtree(crate, ignore_errors=True)
         out = subprocess.run(["cargo", "fmu", "new", name], cwd=where, env=env, capture_output=True, text=True, timeout=600)
         assert out.returncode == 0, out.stderr

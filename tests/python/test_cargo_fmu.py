@@ -3,29 +3,18 @@ workspace, with the `cargo fmu` this workspace builds (target/release/cargo-fmu 
 `cargo install --path fmu-build` gives): `cargo fmu new`, a change to the model, `cargo fmu
 build`, fmpy's validator, `fmpy.simulate_fmu` against the analytic answer, `cargo fmu check`."""
 
+import hashlib
 import math
-import os
-import pathlib
-import shutil
+import re
 import subprocess
 
 import fmpy
 import fmpy.validation
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-TARGET = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
-CARGO_FMU = TARGET / "release" / "cargo-fmu"
+from conftest import USER_TARGET, outside_crate
 
-
-def cargo_fmu_env():
-    if not CARGO_FMU.exists():
-        pytest.fail(f"{CARGO_FMU} is missing: build it with `cargo build --release -p fmu-build --bins`")
-    env = dict(os.environ)
-    env["PATH"] = f"{CARGO_FMU.parent}{os.pathsep}{env['PATH']}"
-    # The new crate has its own target folder, as a user's crate would.
-    env.pop("CARGO_TARGET_DIR", None)
-    return env
+FMUS = USER_TARGET / "fmu"
 
 
 def run(args, cwd, env):
@@ -41,11 +30,10 @@ GAIN_FIELD = '''    /// Gain K of the lag: T dy/dt = K u - y
 
 
 @pytest.fixture(scope="module")
-def user_crate(tmp_path_factory):
-    env = cargo_fmu_env()
-    where = tmp_path_factory.mktemp("outside")
-    run(["cargo", "fmu", "new", "gain-lag"], where, env)
-    crate = where / "gain-lag"
+def user_crate():
+    """A crate made anew by `cargo fmu new gain-lag` outside the workspace and changed as a user
+    would; built into the tests' shared target folder of such crates (CARGO_TARGET_DIR)."""
+    crate, env = outside_crate("gain-lag", fresh=True)
     lib = crate / "src" / "lib.rs"
     src = lib.read_text()
     # The user's change: a gain K (tunable, > 0), so that y follows K u.
@@ -57,17 +45,16 @@ def user_crate(tmp_path_factory):
     src = src.replace("v.der_y = (v.u - v.y) / self.time_constant;", "v.der_y = (v.u * self.gain - v.y) / self.time_constant;")
     lib.write_text(src)
     build = run(["cargo", "fmu", "build"], crate, env)
-    fmu = crate / "target" / "fmu" / "GainLag.fmu"
+    fmu = FMUS / "GainLag.fmu"
     assert fmu.exists(), build.stderr
-    assert (crate / "target" / "fmu" / "fmi3" / "GainLag.fmu").exists(), build.stderr
-    yield crate, fmu, env
-    shutil.rmtree(where, ignore_errors=True)
+    assert (FMUS / "fmi3" / "GainLag.fmu").exists(), build.stderr
+    return crate, fmu, env
 
 
 @pytest.fixture(scope="module")
 def user_fmu3(user_crate):
     crate, _, env = user_crate
-    return crate, crate / "target" / "fmu" / "fmi3" / "GainLag.fmu", env
+    return crate, FMUS / "fmi3" / "GainLag.fmu", env
 
 
 def test_the_new_crate_packages_a_valid_fmu(user_crate):
@@ -163,7 +150,7 @@ def test_cargo_fmu_info_and_validate_describe_the_fmi3_fmu(user_fmu3):
 
 def test_cargo_fmu_build_makes_the_versions_asked_for(user_crate):
     crate, _, env = user_crate
-    fmu2, fmu3 = crate / "target" / "fmu" / "GainLag.fmu", crate / "target" / "fmu" / "fmi3" / "GainLag.fmu"
+    fmu2, fmu3 = FMUS / "GainLag.fmu", FMUS / "fmi3" / "GainLag.fmu"
     try:
         fmu2.unlink()
         fmu3.unlink()
@@ -198,7 +185,7 @@ def test_the_crates_metadata_chooses_its_fmi_versions(user_crate):
     manifest = crate / "Cargo.toml"
     text = manifest.read_text()
     assert "[package.metadata.fmu]" in text, text
-    fmu2, fmu3 = crate / "target" / "fmu" / "GainLag.fmu", crate / "target" / "fmu" / "fmi3" / "GainLag.fmu"
+    fmu2, fmu3 = FMUS / "GainLag.fmu", FMUS / "fmi3" / "GainLag.fmu"
     try:
         manifest.write_text(text.replace("[package.metadata.fmu]", '[package.metadata.fmu]\nfmi-versions = ["3.0"]', 1))
         fmu2.unlink()
@@ -212,3 +199,31 @@ def test_the_crates_metadata_chooses_its_fmi_versions(user_crate):
         manifest.write_text(text)
         run(["cargo", "fmu", "build"], crate, env)
     assert fmu2.exists() and fmu3.exists()
+
+
+def test_each_target_and_fmi_version_is_built_once(user_crate):
+    """One cargo build per (target, FMI version): FMI 2.0, then FMI 3.0, nothing again."""
+    crate, _, env = user_crate
+    out = run(["cargo", "fmu", "build"], crate, env)
+    builds = re.findall(r"^fmu: \S*cargo build (.*)$", out.stderr, re.M)
+    assert builds == ["--release -p gain-lag", "--release -p gain-lag --features rustfmu/fmi3"], out.stderr
+
+
+def test_a_crate_sharing_the_target_folder_cannot_replace_another_crates_fmu(user_crate):
+    """Two crates built into one CARGO_TARGET_DIR whose models have the same identifier: the second
+    is refused with both crates named, and the first one's FMUs stay as they were."""
+    crate, fmu, env = user_crate
+    other, _ = outside_crate("other-lag", fresh=True)
+    lib = other / "src" / "lib.rs"
+    lib.write_text(lib.read_text().replace("OtherLag", "GainLag"))
+    fmu3 = FMUS / "fmi3" / "GainLag.fmu"
+    before = [hashlib.sha256(f.read_bytes()).hexdigest() for f in (fmu, fmu3)]
+    bad = subprocess.run(["cargo", "fmu", "build"], cwd=other, env=env, capture_output=True, text=True, timeout=900)
+    assert bad.returncode != 0, bad.stderr
+    assert "'gain-lag'" in bad.stderr and "other-lag" in bad.stderr and "same identifier 'GainLag'" in bad.stderr, bad.stderr
+    assert "nothing was written" in bad.stderr, bad.stderr
+    assert [hashlib.sha256(f.read_bytes()).hexdigest() for f in (fmu, fmu3)] == before
+    # Its own name: it builds beside the other.
+    lib.write_text(lib.read_text().replace("GainLag", "OtherLag"))
+    run(["cargo", "fmu", "build"], other, env)
+    assert (FMUS / "OtherLag.fmu").exists() and [hashlib.sha256(f.read_bytes()).hexdigest() for f in (fmu, fmu3)] == before

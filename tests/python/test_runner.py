@@ -12,7 +12,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from conftest import FMU_DIR, ROOT, fmu, outside_crate
+from conftest import FMU_DIR, ROOT, USER_TARGET, fmu, outside_crate
 
 sys.path.insert(0, str(ROOT / "examples"))
 import rustfmu_runner  # noqa: E402
@@ -204,12 +204,12 @@ LAG2_SSV = """<?xml version="1.0" encoding="UTF-8"?>
 @pytest.fixture(scope="module")
 def my_lag_fmu():
     """MyLag.fmu of a crate made by `cargo fmu new my-lag` (unchanged), outside this workspace,
-    built into a target folder of its own under this workspace's target/ (kept, so that a second
-    test run builds nothing)."""
-    crate, env = outside_crate("my-lag", "runner-test-crate")
+    built into the tests' shared target folder of such crates (kept, so that a second test run
+    builds nothing)."""
+    crate, env = outside_crate("my-lag")
     out = subprocess.run(["nice", "-n", "10", "cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr
-    path = TARGET / "runner-test-crate" / "fmu" / "MyLag.fmu"
+    path = USER_TARGET / "fmu" / "MyLag.fmu"
     assert path.exists(), out.stderr
     return path
 

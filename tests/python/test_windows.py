@@ -20,7 +20,7 @@ import zipfile
 
 import pytest
 
-from conftest import FMU_DIR, ROOT, outside_crate
+from conftest import FMU_DIR, ROOT, USER_TARGET, outside_crate
 
 NAMES = ["Pendulum", "Controller", "DCMotor"]
 STEPS = 1000
@@ -186,10 +186,9 @@ TARGETS = '["x86_64-unknown-linux-gnu", "x86_64-pc-windows-gnu"]'
 def user_crate_fmus():
     """WinLag.fmu (FMI 2.0 and 3.0) of a crate made by `cargo fmu new win-lag` outside this
     workspace, whose `[package.metadata.fmu]` names the Linux and the Windows target; built with
-    plain `cargo fmu build` into a target folder under this workspace's target/ (kept: a second
+    plain `cargo fmu build` into the tests' shared target folder of such crates (kept: a second
     run builds nothing)."""
-    target = FMU_DIR.parent
-    crate, env = outside_crate("win-lag", "windows-test-crate")
+    crate, env = outside_crate("win-lag")
     manifest = crate / "Cargo.toml"
     text = manifest.read_text()
     if not re.search(r"^targets =", text, re.M):
@@ -200,7 +199,7 @@ def user_crate_fmus():
     out = subprocess.run(NICE + ["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr[-5000:]
     report(f"cargo fmu build of a `cargo fmu new` crate for Linux and Windows, FMI 2.0 and 3.0: {time.monotonic() - started:.1f} s")
-    fmus = target / "windows-test-crate" / "fmu"
+    fmus = USER_TARGET / "fmu"
     return {False: fmus / "WinLag.fmu", True: fmus / "fmi3" / "WinLag.fmu"}
 
 
