@@ -6,12 +6,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
-# `cargo test --release` runs the criterion target once per benchmark (test mode) and shares the
-# release artifacts that `cargo test --workspace --release` already built; `cargo bench` would
-# rebuild everything under the bench profile (about 3 minutes on 2 cores).
-cargo test --release -p rustfmu-bench --bench fmu_step
-cargo run --release -q -p rustfmu-bench --bin perf-report -- --rounds 1
-cargo run --release -q -p rustfmu-bench --bin composed-loop -- --seconds 0.1 --repeat 1
+# `cargo test --release --workspace` runs the criterion target once per benchmark (test mode) and
+# shares the release artifacts that `cargo test --workspace --release` already built (cargo resolves
+# features per invocation: `-p rustfmu-bench` alone, or `cargo run`, would build the dependency tree
+# again with other features); `cargo bench` would rebuild everything under the bench profile
+# (about 3 minutes on 2 cores). The report binaries are the ones that build made.
+cargo test --release --workspace --no-run -q
+cargo test --release --workspace --bench fmu_step
+bin=$(cd "${CARGO_TARGET_DIR:-target}/release" && pwd)
+"$bin/perf-report" --rounds 1
+"$bin/composed-loop" --seconds 0.1 --repeat 1
 "$PY" bench/python/work_precision.py --quick
-"$PY" bench/python/composed_loop.py --quick
+RUSTFMU_COMPOSED_LOOP="$bin/composed-loop" "$PY" bench/python/composed_loop.py --quick
 "$PY" bench/python/study_throughput.py --quick

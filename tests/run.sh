@@ -38,12 +38,21 @@ echo "setup: $((SECONDS - run_started)) s"
 suite_started=$SECONDS
 step "cargo fmt --check" cargo fmt --all --check
 step "cargo clippy -D warnings" cargo clippy --workspace --all-targets --release -- -D warnings
+echo "== Rust build: every binary and test binary of the workspace, once"
+# One cargo invocation over the whole workspace builds everything the later steps run
+# (cargo-fmu, the runner, the benchmarks' binaries, every test binary). Cargo resolves features
+# per invocation: `cargo run -p fmu-build` or `cargo test -p X` would build the shared
+# dependencies again with other features (the whole dependency tree, minutes on 2 cores), so the
+# steps below run the binaries built here and `cargo test --workspace` only runs what is built.
+started=$SECONDS
+cargo test --workspace --release --no-run
+echo "Rust build: $((SECONDS - started)) s"
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
 started=$SECONDS
-# Every FMU crate for each of its targets (Linux x86-64, Windows x86-64, aarch64 Linux for 3.0), twice (FMI 2.0, 3.0).
-cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
+# Every FMU crate for each of its targets (Linux x86-64, Windows x86-64, aarch64 Linux for 3.0), FMI 2.0 and 3.0.
+# target/release/cargo-fmu without `fmu` is `fmu-build`, the same as `cargo run --release -p fmu-build`.
+target/release/cargo-fmu build --workspace --python .venv/bin/python
 echo "fmu-build (every target, FMI 2.0 and 3.0): $((SECONDS - started)) s"
-cargo build --release -p fmu-build --bins
 # FMI 2.0 in target/fmu/, FMI 3.0 (the same crates built with rustfmu's feature fmi3) in target/fmu/fmi3/.
 fmus=(target/fmu/*.fmu target/fmu/fmi3/*.fmu)
 record "fmu-build (package + validate)" "${#fmus[@]}" 0

@@ -32,6 +32,7 @@ import argparse
 import json
 import pathlib
 import shutil
+import os
 import subprocess
 import sys
 import time
@@ -44,7 +45,13 @@ H = 1e-3
 
 
 def cargo_bin(*args):
-    cmd = ["cargo", "run", "--release", "-q", "-p", "rustfmu-bench", "--bin", "composed-loop", "--", *args]
+    # bench/quick.sh names the binary its one workspace build made (a `cargo run -p` there would
+    # build the dependency tree again, with other features); run alone, cargo builds it.
+    built = os.environ.get("RUSTFMU_COMPOSED_LOOP")
+    if built:
+        cmd = [built, *args]
+    else:
+        cmd = ["cargo", "run", "--release", "-q", "-p", "rustfmu-bench", "--bin", "composed-loop", "--", *args]
     run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if run.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr}")

@@ -230,7 +230,7 @@ def test_a_users_crate_gets_the_windows_binary_its_cargo_toml_asks_for(hosts, us
 # binaries/x86_64-windows/). Every check runs except the group "native C host/valgrind", which
 # needs cc, nm, readelf and valgrind (Linux tools: those checks skip themselves, saying so);
 # the Windows C host is test_every_fmu_runs_on_windows_as_on_linux above, the PE tables
-# fmu-build/tests/windows_binaries.rs.
+# fmu-build/tests/packages/windows_binaries.rs.
 RANDOM_SEQUENCES = 200
 NATIVE = "native C host/valgrind"
 

@@ -16,11 +16,9 @@
 //!
 //! `RUSTFMU_FUZZ_SECONDS` (default 3) is the time box, `RUSTFMU_FUZZ_SEED` (64 hex digits) the
 //! seed of a run to repeat; the test prints both and the number of cases
-//! (`cargo test --release -p fmu-build --test fuzz_fmus -- --nocapture`).
+//! (`cargo test --release -p fmu-build --test packages fuzz_fmus -- --nocapture`).
 
-mod common;
-
-use common::{Fmu, Log};
+use crate::common::{Fmu, Log};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestError, TestRng, TestRunner};
 use rustfmu::__private::abi::*;

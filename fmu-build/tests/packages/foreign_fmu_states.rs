@@ -3,9 +3,7 @@
 //! and still works. Needs `target/fmu/{Pendulum,Controller,DCMotor}.fmu`
 //! (`cargo run --release -p fmu-build -- build --workspace`).
 
-mod common;
-
-use common::{Fmu, Log};
+use crate::common::{Fmu, Log};
 use rustfmu::__private::abi::*;
 
 /// An initialized instance of `fmu` after 10 steps of 1 ms, and its log.
