@@ -3,29 +3,11 @@
 //! Needs `target/fmu/{,fmi3/}{Pendulum,Controller,DCMotor}.fmu`
 //! (`cargo run --release -p fmu-build -- build --workspace`).
 
+use crate::common::{MODELS, entry, fmu_dir};
 use fmu_build::validate::{FMI2_FUNCTIONS, FMI3_FUNCTIONS, elf_exports, export_problems, validate};
 use rustfmu::description::FmiVersion;
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::PathBuf;
-
-const MODELS: [&str; 3] = ["Pendulum", "Controller", "DCMotor"];
-
-fn fmu_dir() -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"));
-    target.join("fmu")
-}
-
-fn entry(fmu: &std::path::Path, name: &str) -> Vec<u8> {
-    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap()).unwrap();
-    let mut e = zip
-        .by_name(name)
-        .unwrap_or_else(|_| panic!("{}: no {name}", fmu.display()));
-    let mut out = Vec::new();
-    e.read_to_end(&mut out).unwrap();
-    out
-}
 
 #[test]
 fn every_fmu_is_packaged_in_both_versions_and_valid() {

@@ -60,11 +60,26 @@ pub struct Fmu {
     _lib: libloading::Library,
 }
 
-fn fmu_dir() -> PathBuf {
+/// The FMU crates of the workspace, by model identifier.
+pub const MODELS: [&str; 3] = ["Pendulum", "Controller", "DCMotor"];
+
+/// `target/fmu` (`$CARGO_TARGET_DIR/fmu`): the FMI 2.0 FMUs, the 3.0 ones in `fmi3/`.
+pub fn fmu_dir() -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"))
         .join("fmu")
+}
+
+/// The bytes of the archive entry `name` of `fmu`.
+pub fn entry(fmu: &std::path::Path, name: &str) -> Vec<u8> {
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap()).unwrap();
+    let mut e = zip
+        .by_name(name)
+        .unwrap_or_else(|_| panic!("{}: no {name}", fmu.display()));
+    let mut out = Vec::new();
+    e.read_to_end(&mut out).unwrap();
+    out
 }
 
 impl Fmu {
