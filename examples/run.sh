@@ -11,16 +11,21 @@ lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
 bash tests/setup-env.sh --main-job
 lap "setup (tests/setup-env.sh --main-job)"
-cargo run --release -p fmu-build -- build --workspace --python .venv/bin/python
+# Every host program the main job runs, in one cargo invocation: cargo resolves features per
+# invocation, so `cargo run -p A` then `cargo run -p B` would build the shared dependencies twice.
+cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
+  -p rustfmu-runner --bin rustfmu-runner
+lap "cargo-fmu, paper_numbers, rustfmu-runner (cargo build)"
+target/release/cargo-fmu build --workspace --python .venv/bin/python
 lap "FMUs and SSP files (cargo fmu build)"
 mkdir -p out
-cargo run --release -p holonomic --example paper_numbers | tee out/paper_numbers.txt
+target/release/examples/paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
 lap "paper numbers, Figures 6-8"
 .venv/bin/python examples/composed_demo.py --out out
 lap "composed demo (fmpy)"
 # The full loop from the command line of the native SSP runner (runner/).
-cargo run --release -q -p rustfmu-runner -- run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
+target/release/rustfmu-runner run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
   --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
   --record motor2.tau --output out/runner_motors.csv --no-progress
 # Parameter studies on a Dask LocalCluster, small grids (the full ones: docs/parameter-studies.md),

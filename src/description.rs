@@ -194,8 +194,9 @@ impl Variable {
     }
 }
 
-/// The FMI version a binary implements: one binary is one version (its symbols are `fmi2*` or
-/// `fmi3*`), and the same model builds as either (`rustfmu::export_fmu!`).
+/// An FMI version. A binary made with `rustfmu::export_fmu!` implements both (its `fmi2*` and
+/// its `fmi3*` functions, and one encoded description per version); `export_fmi2!` or
+/// `export_fmi3!` alone gives a binary of one version.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum FmiVersion {
     V2,
@@ -635,13 +636,15 @@ pub fn guid_string(encoded: &[u8]) -> String {
 
 // ---- decoding (for cargo fmu; the FMU itself never decodes) ---------------------------------
 
-/// Finds the encoded description in a built library (ELF, PE or Mach-O alike: it looks for
-/// [`MAGIC`]) and returns exactly its bytes.
+/// Finds the first encoded description in a built library (ELF, PE or Mach-O alike: it looks
+/// for [`MAGIC`]) and returns exactly its bytes. A binary of both FMI versions carries two:
+/// [`find_all_encoded`], [`find_encoded_for`].
 pub fn find_encoded(binary: &[u8]) -> Result<&[u8], String> {
-    let at = binary
-        .windows(MAGIC.len())
-        .position(|w| w == MAGIC)
-        .ok_or("the library carries no rustfmu description (is it a cdylib that calls rustfmu::export_fmi2!?)")?;
+    Ok(find_all_encoded(binary)?[0])
+}
+
+/// The encoded description that starts at `at` (where [`MAGIC`] is).
+fn encoded_at(binary: &[u8], at: usize) -> Result<&[u8], String> {
     let rest = &binary[at..];
     if rest.len() < HEADER {
         return Err("the embedded description is truncated".into());
@@ -655,6 +658,56 @@ pub fn find_encoded(binary: &[u8]) -> Result<&[u8], String> {
     let len = u32::from_le_bytes(rest[MAGIC.len() + 4..HEADER].try_into().expect("4 bytes")) as usize;
     rest.get(..HEADER + len)
         .ok_or_else(|| "the embedded description is truncated".to_string())
+}
+
+/// Every encoded description in a built library, in the order they appear: one per FMI version
+/// it exports (two for `export_fmu!`). [`MAGIC`] can also occur as a constant of the code (a
+/// Windows DLL keeps rustfmu's own copy of it): an occurrence that does not decode is not a
+/// description. An error when there is none: the reason the first occurrence did not decode
+/// (an older format, a damaged file), or that there is no occurrence at all.
+pub fn find_all_encoded(binary: &[u8]) -> Result<Vec<&[u8]>, String> {
+    let mut out = Vec::new();
+    let mut first_error = None;
+    let mut from = 0;
+    while let Some(at) = binary[from..].windows(MAGIC.len()).position(|w| w == MAGIC) {
+        let at = from + at;
+        match encoded_at(binary, at).and_then(|e| decode(e).map(|_| e)) {
+            Ok(e) => {
+                out.push(e);
+                from = at + e.len();
+            }
+            Err(why) => {
+                first_error.get_or_insert(why);
+                from = at + 1;
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(first_error.unwrap_or_else(|| {
+            "the library carries no rustfmu description (is it a cdylib that calls rustfmu::export_fmu!, export_fmi2! or export_fmi3!?)".into()
+        }));
+    }
+    Ok(out)
+}
+
+/// The encoded description of FMI `version` in a built library, or why there is none.
+pub fn find_encoded_for(binary: &[u8], version: FmiVersion) -> Result<&[u8], String> {
+    let all = find_all_encoded(binary)?;
+    let mut has = Vec::new();
+    for e in all {
+        let (_, interfaces) = decode(e)?;
+        if interfaces.version == version {
+            return Ok(e);
+        }
+        has.push(interfaces.version.text());
+    }
+    Err(format!(
+        "the library implements FMI {} only, not FMI {} (it calls rustfmu::export_fmi{}! itself; \
+         rustfmu::export_fmu! exports both versions)",
+        has.join(" and "),
+        version.text(),
+        &has[0][..1]
+    ))
 }
 
 struct Dec<'a> {

@@ -2,8 +2,8 @@
 //!
 //! A model is a Rust struct. Its variables are declared on its fields with
 //! `#[derive(Model)]`; it implements [`Model`] (initialization, checks) and [`CoSimulation`]
-//! (a communication step); one line, [`export_fmu!`], makes the crate's `cdylib` an FMU (FMI 2.0,
-//! or FMI 3.0 with the feature `fmi3`).
+//! (a communication step); one line, [`export_fmu!`], makes the crate's `cdylib` an FMU (FMI 2.0
+//! and FMI 3.0 from one binary).
 //! `cargo fmu build` (from the `fmu-build` package) packages it.
 //!
 //! ```ignore
@@ -61,24 +61,16 @@ pub mod fmi2;
 #[doc(hidden)]
 pub mod fmi3;
 
-/// Exports `Model` as an FMU: the FMI 2.0 functions ([`export_fmi2!`]) by default, the FMI 3.0
-/// ones ([`export_fmi3!`]) when rustfmu's feature `fmi3` is on. `cargo fmu build` builds the
-/// crate both ways and packages each binary into its own `.fmu`: one model, one line, both
-/// versions. A binary holds one version only (its symbols are all `fmi2*` or all `fmi3*`).
-#[cfg(not(feature = "fmi3"))]
+/// Exports `Model` as an FMU of both FMI versions in one binary: the FMI 2.0 functions
+/// ([`export_fmi2!`]) and the FMI 3.0 ones ([`export_fmi3!`]), each with the description of its
+/// version embedded. `cargo fmu build` builds the crate once per target and packages that one
+/// binary twice, into the FMI 2.0 and the FMI 3.0 `.fmu`: one model, one line, both versions.
+/// An importer calls the functions of the version its `modelDescription.xml` names (the two sets
+/// share no symbol and no state: each instance belongs to the version that instantiated it).
 #[macro_export]
 macro_rules! export_fmu {
     ($model:ty) => {
         $crate::export_fmi2!($model);
-    };
-}
-
-/// Exports `Model` as an FMU: the FMI 2.0 functions ([`export_fmi2!`]) by default, the FMI 3.0
-/// ones ([`export_fmi3!`]) when rustfmu's feature `fmi3` is on.
-#[cfg(feature = "fmi3")]
-#[macro_export]
-macro_rules! export_fmu {
-    ($model:ty) => {
         $crate::export_fmi3!($model);
     };
 }

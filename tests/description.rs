@@ -2,7 +2,7 @@
 //! time, and the GUID that follows its content.
 
 use rustfmu::Variables;
-use rustfmu::description::{self, Bound, Causality, Initial, Interfaces, Start, VarType, Variability};
+use rustfmu::description::{self, Bound, Causality, FmiVersion, Initial, Interfaces, Start, VarType, Variability};
 use rustfmu::prelude::*;
 
 /// A small model.
@@ -200,6 +200,40 @@ fn encoding_round_trips_and_is_found_inside_a_binary() {
     binary.extend(&bytes);
     binary.extend(std::iter::repeat_n(0xCD, 1000));
     assert_eq!(description::find_encoded(&binary).unwrap(), &bytes[..]);
+}
+
+#[test]
+fn a_binary_of_both_versions_carries_one_description_of_each() {
+    // What `export_fmu!` embeds: the description marked FMI 2.0 and the one marked 3.0, with
+    // MAGIC alone in between (a Windows DLL keeps rustfmu's own copy of the constant).
+    let v2 = encoded::<Small>();
+    let three = Interfaces {
+        version: FmiVersion::V3,
+        ..CS
+    };
+    let v3 = description::encode_to_vec(&Small::DESCRIPTION, three);
+    let mut binary = vec![0xAB; 100];
+    binary.extend(&v2);
+    binary.extend(description::MAGIC);
+    binary.extend([0u8; 16]);
+    binary.extend(&v3);
+    binary.extend([0xCD; 100]);
+    let all = description::find_all_encoded(&binary).unwrap();
+    assert_eq!(all, [&v2[..], &v3[..]]);
+    assert_eq!(description::find_encoded_for(&binary, FmiVersion::V3).unwrap(), &v3[..]);
+    assert_eq!(description::find_encoded_for(&binary, FmiVersion::V2).unwrap(), &v2[..]);
+    assert_ne!(description::guid_string(&v2), description::guid_string(&v3));
+    // One version only (`export_fmi2!` alone): the other is refused with what the library has.
+    let e = description::find_encoded_for(&v2, FmiVersion::V3).unwrap_err();
+    assert!(
+        e.contains("implements FMI 2.0 only") && e.contains("export_fmu!"),
+        "{e}"
+    );
+    // MAGIC with nothing valid after it: the reason, not a description.
+    let mut stray = description::MAGIC.to_vec();
+    stray.extend([0u8; 16]);
+    let e = description::find_all_encoded(&stray).unwrap_err();
+    assert!(e.contains("format version 0"), "{e}");
 }
 
 #[test]

@@ -53,7 +53,7 @@ started=$SECONDS
 # target/release/cargo-fmu without `fmu` is `fmu-build`, the same as `cargo run --release -p fmu-build`.
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 echo "fmu-build (every target, FMI 2.0 and 3.0): $((SECONDS - started)) s"
-# FMI 2.0 in target/fmu/, FMI 3.0 (the same crates built with rustfmu's feature fmi3) in target/fmu/fmi3/.
+# FMI 2.0 in target/fmu/, FMI 3.0 (the same binaries, with the 3.0 description) in target/fmu/fmi3/.
 fmus=(target/fmu/*.fmu target/fmu/fmi3/*.fmu)
 record "fmu-build (package + validate)" "${#fmus[@]}" 0
 # The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.

@@ -67,9 +67,21 @@ pub struct SelfDescription {
     pub guid: String,
 }
 
-/// Reads the description a rustfmu library carries.
-pub fn read_library(binary: &[u8]) -> Result<SelfDescription, String> {
-    let encoded = description::find_encoded(binary)?;
+/// Reads the description of FMI `version` a rustfmu library carries.
+pub fn read_library(binary: &[u8], version: FmiVersion) -> Result<SelfDescription, String> {
+    self_description(description::find_encoded_for(binary, version)?)
+}
+
+/// Every description a rustfmu library carries: one per FMI version it implements (both for
+/// `export_fmu!`), in the order they appear.
+pub fn library_versions(binary: &[u8]) -> Result<Vec<SelfDescription>, String> {
+    description::find_all_encoded(binary)?
+        .into_iter()
+        .map(self_description)
+        .collect()
+}
+
+fn self_description(encoded: &[u8]) -> Result<SelfDescription, String> {
     let (d, interfaces) = description::decode(encoded)?;
     Ok(SelfDescription {
         description: d,
@@ -154,10 +166,15 @@ fn claim(krate: &FmuCrate, out: &Path, id: &str) -> Result<(PathBuf, String), St
     ))
 }
 
-/// Packages built libraries of one crate and one FMI version (one per target: `(triple,
-/// library)`) into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI 3.0), whichever
-/// version the libraries say they implement. Every library must carry the same description.
-pub fn package(krate: &FmuCrate, libraries: &[(String, PathBuf)], out_dir: &Path) -> Result<Packaged, String> {
+/// Packages built libraries of one crate (one per target: `(triple, library)`) as an FMU of FMI
+/// `version` into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI 3.0), with the
+/// description of that version the libraries carry. Every library must carry the same one.
+pub fn package(
+    krate: &FmuCrate,
+    version: FmiVersion,
+    libraries: &[(String, PathBuf)],
+    out_dir: &Path,
+) -> Result<Packaged, String> {
     let mut binaries: Vec<(String, Vec<u8>)> = Vec::new();
     let mut first: Option<SelfDescription> = None;
     for (triple, library) in libraries {
@@ -168,7 +185,8 @@ pub fn package(krate: &FmuCrate, libraries: &[(String, PathBuf)], out_dir: &Path
                 library.display()
             )
         })?;
-        let me = read_library(&binary).map_err(|e| format!("{}: {}: {e}", krate.package, library.display()))?;
+        let me =
+            read_library(&binary, version).map_err(|e| format!("{}: {}: {e}", krate.package, library.display()))?;
         let platform = crate::target::platform(triple)?;
         let folder = platform
             .folder(me.interfaces.version)

@@ -30,9 +30,6 @@ pub struct FmuCrate {
     /// `[package.metadata.fmu] targets`: `None` when not given (the host only), else the
     /// triples named, or what is wrong with the entry.
     pub targets: Option<Result<Vec<String>, String>>,
-    /// The name under which the crate depends on rustfmu (`rustfmu`, or its rename): the
-    /// prefix of `--features <it>/fmi3`.
-    pub rustfmu_dependency: String,
 }
 
 /// `"2.0"`, `"3.0"` (also `"2"`, `"3"`) as an FMI version.
@@ -101,12 +98,6 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         .iter()
         .find(|t| t.crate_types.iter().any(|c| c.to_string() == "cdylib"))
         .expect("checked by is_fmu_crate");
-    let rustfmu_dependency = p
-        .dependencies
-        .iter()
-        .find(|d| d.name == "rustfmu")
-        .map(|d| d.rename.clone().unwrap_or_else(|| d.name.clone()))
-        .unwrap_or_else(|| "rustfmu".into());
     FmuCrate {
         package: p.name.to_string(),
         manifest_dir: dir.clone(),
@@ -115,7 +106,6 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         resources,
         fmi_versions: meta.and_then(|m| m.get("fmi-versions")).map(parse_fmi_versions),
         targets: meta.and_then(|m| m.get("targets")).map(crate::target::parse_targets),
-        rustfmu_dependency,
     }
 }
 
@@ -269,11 +259,10 @@ fn version_folder(version: FmiVersion) -> &'static str {
     }
 }
 
-/// `cargo build --release -p ...` in the workspace: the FMI 2.0 libraries (rustfmu without
-/// features), or with `version` 3.0 the FMI 3.0 ones (`--features
-/// <rustfmu>/fmi3`). `target`: a triple other than the host's (`--target <triple>`, with the
-/// linker [`crate::target::build_env`] names), or `None` for the host.
-pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion, target: Option<&str>) -> Result<(), String> {
+/// `cargo build --release -p ...` in the workspace: the libraries of `crates`, each one binary of
+/// both FMI versions (`export_fmu!`). `target`: a triple other than the host's (`--target
+/// <triple>`, with the linker [`crate::target::build_env`] names), or `None` for the host.
+pub fn build(ws: &Workspace, crates: &[FmuCrate], target: Option<&str>) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut args: Vec<String> = vec!["build".into(), "--release".into()];
     let mut env = Vec::new();
@@ -283,13 +272,6 @@ pub fn build(ws: &Workspace, crates: &[FmuCrate], version: FmiVersion, target: O
     }
     for c in crates {
         args.extend(["-p".into(), c.package.clone()]);
-    }
-    if version == FmiVersion::V3 {
-        let features: BTreeSet<String> = crates
-            .iter()
-            .map(|c| format!("{}/fmi3", c.rustfmu_dependency))
-            .collect();
-        args.extend(["--features".into(), features.into_iter().collect::<Vec<_>>().join(",")]);
     }
     eprintln!("fmu: {cargo} {}", args.join(" "));
     let status = Command::new(&cargo)

@@ -322,9 +322,10 @@ fn has_folder(triple: &str, version: FmiVersion) -> bool {
 ///
 /// First every target is checked ([`crate::target::preflight`]: its standard library and
 /// linker), so that a missing piece stops the build before anything is built. Then for each
-/// target and version: `cargo build --release [--target T]` (FMI 3.0: `--features
-/// rustfmu/fmi3`, every crate in one build), each library copied aside right after its build (the
-/// next build overwrites cargo's file), its version checked against the one asked for; and each
+/// target: one `cargo build --release [--target T] -p ...` of every crate (one binary serves
+/// both FMI versions), each library copied aside right after its build (to
+/// `target/fmu-build/fmi{2,3}/`, one copy per version packaged), checked to implement each version
+/// asked for; and each
 /// crate and version packaged with the binaries of all its targets: FMI 2.0 as
 /// `target/fmu/<id>.fmu`, FMI 3.0 as `target/fmu/fmi3/<id>.fmu`.
 pub fn build_versions(
@@ -398,57 +399,47 @@ pub fn build_versions(
     let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
     for t in &all_targets {
         let cross = (*t != host).then_some(t.as_str());
-        let with = |v: FmiVersion| -> Vec<FmuCrate> {
-            plan.iter()
-                .filter(|(_, vs, ts)| vs.contains(&v) && ts.contains(t) && has_folder(t, v))
-                .map(|(c, _, _)| c.clone())
-                .collect()
-        };
-        let v2 = with(FmiVersion::V2);
-        let v3 = with(FmiVersion::V3);
+        // Every crate this target is for, in one cargo build: one binary per crate serves both
+        // FMI versions (`export_fmu!` exports the fmi2* and the fmi3* functions).
+        let mine: Vec<(FmuCrate, Vec<FmiVersion>)> = plan
+            .iter()
+            .filter(|(_, _, ts)| ts.contains(t))
+            .map(|(c, vs, _)| {
+                (
+                    c.clone(),
+                    vs.iter().copied().filter(|v| has_folder(t, *v)).collect::<Vec<_>>(),
+                )
+            })
+            .filter(|(_, vs)| !vs.is_empty())
+            .collect();
+        if mine.is_empty() {
+            continue;
+        }
         let started = std::time::Instant::now();
-        if !v2.is_empty() {
-            cargo::build(&ws, &v2, FmiVersion::V2, cross)?;
-            for c in &v2 {
-                let kept = cargo::keep_library(&ws, c, FmiVersion::V2, t, &host)?;
-                libraries.push((c.clone(), FmiVersion::V2, t.clone(), kept));
-            }
-        }
-        // One cargo build for the FMI 3.0 libraries of every crate that names rustfmu alike
-        // (`--features rustfmu/fmi3` reaches each selected crate's dependency).
-        let mut groups: Vec<Vec<FmuCrate>> = Vec::new();
-        for c in &v3 {
-            match groups
-                .iter_mut()
-                .find(|g| g[0].rustfmu_dependency == c.rustfmu_dependency)
-            {
-                Some(g) => g.push(c.clone()),
-                None => groups.push(vec![c.clone()]),
-            }
-        }
-        for group in &groups {
-            cargo::build(&ws, group, FmiVersion::V3, cross)?;
-            for c in group {
-                let kept = cargo::keep_library(&ws, c, FmiVersion::V3, t, &host)?;
-                libraries.push((c.clone(), FmiVersion::V3, t.clone(), kept));
+        let crates: Vec<FmuCrate> = mine.iter().map(|(c, _)| c.clone()).collect();
+        cargo::build(&ws, &crates, cross)?;
+        for (c, versions) in &mine {
+            for v in versions {
+                let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
+                check_built_version(c, *v, &kept)?;
+                libraries.push((c.clone(), *v, t.clone(), kept));
             }
         }
         eprintln!("fmu: built target {t} in {:.1} s", started.elapsed().as_secs_f64());
     }
-    // Each (target, version) is built once. Cargo names a cdylib without a hash, so its own
-    // `target/release/lib<name>.so` is the library of the version built last; the FMUs, and the
-    // copies in target/fmu-build/fmi{2,3}/, hold the right one of each.
+    // Each target is built once; its library is copied to target/fmu-build/fmi{2,3}/ for each
+    // version packaged (the same bytes in both), so that a later build of another crate set
+    // cannot change what was checked.
     let mut built = Vec::new();
     for (c, versions, _) in &plan {
         for version in versions {
             let mut mine: Vec<(String, PathBuf)> = Vec::new();
             for (lc, lv, t, library) in &libraries {
                 if lc.package == c.package && lv == version {
-                    check_built_version(c, *version, library)?;
                     mine.push((t.clone(), library.clone()));
                 }
             }
-            let p = crate::bundle::package(c, &mine, &ws.fmu_dir())?;
+            let p = crate::bundle::package(c, *version, &mine, &ws.fmu_dir())?;
             let platforms: Vec<&str> = mine.iter().map(|(t, _)| t.as_str()).collect();
             eprintln!(
                 "fmu: packaged {} (FMI {}; {})",
@@ -463,35 +454,33 @@ pub fn build_versions(
     if all && packages.is_empty() {
         // Every target's library carries the same description (bundle::package checked it):
         // the second of a crate and version finds its file already written.
-        let libs: Vec<PathBuf> = libraries.iter().map(|(_, _, _, l)| l.clone()).collect();
+        let libs: Vec<(PathBuf, Option<FmiVersion>)> =
+            libraries.iter().map(|(_, v, _, l)| (l.clone(), Some(*v))).collect();
         committed_descriptions(&ws, false, Some(&libs))?;
         write_ssp(&ws, None, None)?;
     }
     Ok(built)
 }
 
-/// The library of a build for `version` must implement that version: a crate that calls
-/// `export_fmi2!` (or `export_fmi3!`) itself gives the same version whatever the feature.
+/// The library built for `version` must implement that version: a crate that calls
+/// `export_fmi2!` (or `export_fmi3!`) itself instead of `export_fmu!` gives one version only.
 fn check_built_version(c: &FmuCrate, version: FmiVersion, library: &Path) -> Result<(), String> {
     let binary = std::fs::read(library).map_err(|e| format!("{}: {e}", library.display()))?;
-    let me = crate::bundle::read_library(&binary).map_err(|e| format!("{}: {}: {e}", c.package, library.display()))?;
-    let got = me.interfaces.version;
-    if got == version {
+    let has =
+        crate::bundle::library_versions(&binary).map_err(|e| format!("{}: {}: {e}", c.package, library.display()))?;
+    if has.iter().any(|me| me.interfaces.version == version) {
         return Ok(());
     }
+    let got = has[0].interfaces.version;
     let (called, other) = match got {
         FmiVersion::V2 => ("rustfmu::export_fmi2!", "2.0"),
         FmiVersion::V3 => ("rustfmu::export_fmi3!", "3.0"),
     };
-    let how = match version {
-        FmiVersion::V3 => "cargo build --release --features rustfmu/fmi3".to_string(),
-        FmiVersion::V2 => "cargo build --release (without rustfmu's feature fmi3)".to_string(),
-    };
     Err(format!(
-        "{}: the FMI {} build ({how}) gave an FMI {} library: the crate calls `{called}` itself. \
-         Call `rustfmu::export_fmu!(YourModel)` instead (FMI 2.0 by default, FMI 3.0 with the feature: \
-         both versions from one line), or build FMI {other} only: `fmi-versions = [\"{other}\"]` in \
-         [package.metadata.fmu] of its Cargo.toml, or `cargo fmu build --fmi-version {}`",
+        "{}: FMI {} was asked for, but the library implements FMI {} only: the crate calls `{called}` itself. \
+         Call `rustfmu::export_fmu!(YourModel)` instead (both versions from one line, in one binary), \
+         or build FMI {other} only: `fmi-versions = [\"{other}\"]` in [package.metadata.fmu] of its \
+         Cargo.toml, or `cargo fmu build --fmi-version {}`",
         c.package,
         version.text(),
         got.text(),
@@ -518,7 +507,11 @@ fn write_ssp(ws: &Workspace, systems_file: Option<&Path>, fmu_dir: Option<&Path>
 /// The committed copy of every packaged description, if the workspace keeps one: FMI 2.0 as
 /// `<folder>/<id>.xml`, FMI 3.0 as `<folder>/fmi3/<id>.xml`. `libraries`: the libraries just
 /// built; `None`: the copies the last `cargo fmu build` kept (else cargo's own library).
-fn committed_descriptions(ws: &Workspace, check: bool, libraries: Option<&[PathBuf]>) -> Result<(), String> {
+fn committed_descriptions(
+    ws: &Workspace,
+    check: bool,
+    libraries: Option<&[(PathBuf, Option<FmiVersion>)]>,
+) -> Result<(), String> {
     let Some(dir) = ws.metadata_path("model-descriptions") else {
         return if check {
             Err("the workspace names no [workspace.metadata.fmu] model-descriptions folder".into())
@@ -526,44 +519,50 @@ fn committed_descriptions(ws: &Workspace, check: bool, libraries: Option<&[PathB
             Ok(())
         };
     };
-    let libraries: Vec<PathBuf> = match libraries {
+    // (library, the version of it to describe; `None`: every version it implements).
+    let libraries: Vec<(PathBuf, Option<FmiVersion>)> = match libraries {
         Some(l) => l.to_vec(),
         None => ws
             .crates
             .iter()
             .flat_map(|c| {
-                let kept: Vec<PathBuf> = [FmiVersion::V2, FmiVersion::V3]
+                let kept: Vec<(PathBuf, Option<FmiVersion>)> = [FmiVersion::V2, FmiVersion::V3]
                     .into_iter()
-                    .map(|v| ws.built_library(c, v))
-                    .filter(|p| p.is_file())
+                    .map(|v| (ws.built_library(c, v), Some(v)))
+                    .filter(|(p, _)| p.is_file())
                     .collect();
-                if kept.is_empty() { vec![ws.library(c)] } else { kept }
+                if kept.is_empty() {
+                    vec![(ws.library(c), None)]
+                } else {
+                    kept
+                }
             })
             .collect(),
     };
     let mut stale = Vec::new();
-    for library in &libraries {
-        let binary = std::fs::read(library).map_err(|e| {
-            format!(
-                "{}: {e} (build first: cargo run --release -p fmu-build)",
-                library.display()
-            )
-        })?;
-        let me = crate::bundle::read_library(&binary)?;
-        let xml = crate::bundle::model_description(&me)?;
-        let folder = match me.interfaces.version {
-            FmiVersion::V2 => dir.clone(),
-            FmiVersion::V3 => dir.join("fmi3"),
-        };
-        std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
-        let path = folder.join(format!("{}.xml", me.description.model_identifier));
-        let old = std::fs::read_to_string(&path).unwrap_or_default();
-        if old != xml {
-            if check {
-                stale.push(path.display().to_string());
-            } else {
-                std::fs::write(&path, xml).map_err(|err| format!("{}: {err}", path.display()))?;
-                eprintln!("fmu: wrote {}", path.display());
+    for (library, version) in &libraries {
+        let binary = std::fs::read(library)
+            .map_err(|e| format!("{}: {e} (build first: cargo fmu build --workspace)", library.display()))?;
+        let all = crate::bundle::library_versions(&binary).map_err(|e| format!("{}: {e}", library.display()))?;
+        for me in all
+            .into_iter()
+            .filter(|me| version.is_none_or(|v| v == me.interfaces.version))
+        {
+            let xml = crate::bundle::model_description(&me)?;
+            let folder = match me.interfaces.version {
+                FmiVersion::V2 => dir.clone(),
+                FmiVersion::V3 => dir.join("fmi3"),
+            };
+            std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+            let path = folder.join(format!("{}.xml", me.description.model_identifier));
+            let old = std::fs::read_to_string(&path).unwrap_or_default();
+            if old != xml {
+                if check {
+                    stale.push(path.display().to_string());
+                } else {
+                    std::fs::write(&path, xml).map_err(|err| format!("{}: {err}", path.display()))?;
+                    eprintln!("fmu: wrote {}", path.display());
+                }
             }
         }
     }
@@ -571,7 +570,7 @@ fn committed_descriptions(ws: &Workspace, check: bool, libraries: Option<&[PathB
         Ok(())
     } else {
         Err(format!(
-            "these files differ from what the built libraries describe: {}; run `cargo run --release -p fmu-build` and commit them",
+            "these files differ from what the built libraries describe: {}; run `cargo fmu build --workspace` and commit them",
             stale.join(", ")
         ))
     }

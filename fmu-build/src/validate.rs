@@ -49,7 +49,8 @@ pub const FMI2_CS_FUNCTIONS: &[&str] = &[
 ];
 
 /// Every function of the FMI 2.0 standard (model exchange and co-simulation), as
-/// `fmi2Functions.h` declares them: an FMI 3.0 binary exports none of them.
+/// `fmi2Functions.h` declares them: an FMI 3.0 binary exports all of them (a binary of both
+/// versions) or none.
 pub const FMI2_FUNCTIONS: &[&str] = &[
     "fmi2GetTypesPlatform",
     "fmi2GetVersion",
@@ -99,7 +100,7 @@ pub const FMI2_FUNCTIONS: &[&str] = &[
 
 /// Every function of the FMI 3.0 standard, as `fmi3Functions.h` declares them (75): an FMI 3.0
 /// binary exports all of them (those it does not support refuse with fmi3Error), an FMI 2.0
-/// binary none.
+/// binary all of them (a binary of both versions) or none.
 pub const FMI3_FUNCTIONS: &[&str] = &[
     "fmi3GetVersion",
     "fmi3SetDebugLogging",
@@ -330,15 +331,18 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
         let so = dir.path().join(bin_name);
         let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
         // A binary made by rustfmu describes itself: the packaged description must be what it says.
-        if let Ok(me) = crate::bundle::read_library(&binary) {
-            if me.interfaces.version != d.version {
-                problems.push(format!(
-                    "modelDescription.xml says FMI {}, {bin_name} implements FMI {}",
+        if let Ok(all) = crate::bundle::library_versions(&binary) {
+            let of_version = all.iter().find(|me| me.interfaces.version == d.version);
+            match of_version {
+                None => problems.push(format!(
+                    "modelDescription.xml says FMI {}, {bin_name} implements FMI {} only",
                     d.version.text(),
-                    me.interfaces.version.text()
-                ));
-            } else if me.guid != d.guid {
-                problems.push(format!(
+                    all.iter()
+                        .map(|me| me.interfaces.version.text())
+                        .collect::<Vec<_>>()
+                        .join(" and ")
+                )),
+                Some(me) if me.guid != d.guid => problems.push(format!(
                     "the {} in modelDescription.xml is {}, {bin_name} expects {}",
                     match d.version {
                         FmiVersion::V2 => "guid",
@@ -346,15 +350,14 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
                     },
                     d.guid,
                     me.guid
-                ));
-            } else {
-                match crate::bundle::model_description(&me) {
+                )),
+                Some(me) => match crate::bundle::model_description(me) {
                     Ok(generated) if generated == xml => {}
                     Ok(_) => problems.push(format!(
                         "modelDescription.xml differs from the description {bin_name} carries (stale package?)"
                     )),
                     Err(e) => problems.push(format!("the description {bin_name} carries is invalid: {e}")),
-                }
+                },
             }
         }
         problems.extend(export_problems(&binary, d.version, bin_name));
@@ -441,8 +444,8 @@ pub fn not_windows_dlls(dlls: &[String]) -> Vec<&str> {
 }
 
 /// What a Windows binary exports and imports: every function of its FMI version's standard,
-/// nothing but `fmi2*` (3.0: `fmi3*`) names of that standard, and DLLs of Windows only (the
-/// FMU ships no other DLL).
+/// the other version's only whole ([`check_exports`]), nothing but FMI functions, and DLLs of
+/// Windows only (the FMU ships no other DLL).
 pub fn pe_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<String> {
     let PeTables { exports, imports } = match pe_tables(binary) {
         None => return vec![],
@@ -450,18 +453,15 @@ pub fn pe_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<St
         Some(Ok(t)) => t,
     };
     let mut problems = check_exports(&exports, version, bin_name);
-    let (own, prefix) = match version {
-        FmiVersion::V2 => (FMI2_FUNCTIONS, "fmi2"),
-        FmiVersion::V3 => (FMI3_FUNCTIONS, "fmi3"),
-    };
+    // check_exports judged the fmi2*/fmi3* names; nothing else may be exported.
     let other: Vec<&str> = exports
         .iter()
         .map(String::as_str)
-        .filter(|n| !n.starts_with(prefix) && !own.contains(n))
+        .filter(|n| !n.starts_with("fmi2") && !n.starts_with("fmi3"))
         .collect();
     if !other.is_empty() {
         problems.push(format!(
-            "{bin_name} exports {}: an FMU's binary exports the {prefix}* functions only",
+            "{bin_name} exports {}: an FMU's binary exports FMI functions only",
             other.join(", ")
         ));
     }
@@ -521,7 +521,8 @@ pub fn elf_exports(bin: &[u8]) -> Option<Vec<String>> {
 }
 
 /// What a binary exports against what its FMI version asks: every function of the standard of
-/// its version, no function of the other version's, no other `fmi2`/`fmi3` name. (ELF here;
+/// its version, the other version's functions only all of them (a binary of both versions), no
+/// other `fmi2`/`fmi3` name. (ELF here;
 /// PE in [`pe_problems`]; the smoke run looks every function up on this machine's binary.)
 pub fn export_problems(binary: &[u8], version: FmiVersion, bin_name: &str) -> Vec<String> {
     let Some(exports) = elf_exports(binary) else {
@@ -547,14 +548,22 @@ pub fn check_exports(exports: &[String], version: FmiVersion, bin_name: &str) ->
     if !missing.is_empty() {
         problems.push(format!("{bin_name} does not export {}", missing.join(", ")));
     }
+    // A binary may implement the other version too (`rustfmu::export_fmu!` exports both): then
+    // all of that version's required functions and no other name of its prefix.
     let foreign: Vec<&str> = exported
         .iter()
         .copied()
         .filter(|n| n.starts_with(other_prefix) || other.contains(n))
         .collect();
-    if !foreign.is_empty() {
+    let other_required: &[&str] = match version {
+        FmiVersion::V2 => FMI3_FUNCTIONS,
+        FmiVersion::V3 => FMI2_CS_FUNCTIONS,
+    };
+    let whole_other = other_required.iter().all(|f| exported.contains(f)) && foreign.iter().all(|n| other.contains(n));
+    if !foreign.is_empty() && !whole_other {
         problems.push(format!(
-            "{bin_name} is an FMI {} binary but exports {}: one binary implements one FMI version",
+            "{bin_name} is an FMI {} binary and exports {}: a binary may implement the other FMI version \
+             too, but then every function that version requires and no name its standard does not define",
             version.text(),
             foreign.join(", ")
         ));
@@ -708,12 +717,6 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32]) -> Vec<String> {
             problems.push(format!("the binary does not export {f}"));
         }
     }
-    for f in FMI2_FUNCTIONS {
-        // SAFETY: only the symbol's presence is checked.
-        if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_ok() {
-            problems.push(format!("the FMI 3.0 binary exports {f}"));
-        }
-    }
     if !problems.is_empty() {
         return problems;
     }
@@ -820,12 +823,6 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
         // SAFETY: only the symbol's presence is checked.
         if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_err() {
             problems.push(format!("the binary does not export {f}"));
-        }
-    }
-    for f in FMI3_FUNCTIONS {
-        // SAFETY: only the symbol's presence is checked.
-        if unsafe { lib.get::<*const ()>(f.as_bytes()) }.is_ok() {
-            problems.push(format!("the FMI 2.0 binary exports {f}"));
         }
     }
     if !problems.is_empty() {

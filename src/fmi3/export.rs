@@ -1,5 +1,5 @@
 //! `export_fmi3!(Model)`: the FMI 3.0 functions of a model (usually through
-//! [`export_fmu!`](crate::export_fmu) with rustfmu's feature `fmi3`).
+//! [`export_fmu!`](crate::export_fmu), which exports both versions).
 
 /// Exports `Model` as an FMI 3.0 FMU for model exchange and co-simulation in one binary:
 /// defines every function of the FMI 3.0 standard (`fmi3Functions.h`) as an unmangled

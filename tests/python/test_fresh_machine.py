@@ -71,9 +71,13 @@ def main_job_builds(metadata):
     script = (ROOT / "examples" / "run.sh").read_text()
     setup = (ROOT / "tests" / "setup-env.sh").read_text()
     assert "tests/setup-env.sh --main-job" in script, "the main job no longer calls its setup"
-    builds = {name: [] for name in re.findall(r"\bcargo (?:run|build)\b[^\n]*?-p (\S+)", script)}
+    # Each `cargo run/build` command with its continuation lines (not in comments or in the
+    # summary's labels); every `-p NAME` in it.
+    code = "\n".join(l for l in script.splitlines() if not l.strip().startswith(("#", "lap ")))
+    commands = re.findall(r"\bcargo (?:run|build)\b(?:[^\n]*\\\n)*[^\n]*", code)
+    builds = {name: [] for c in commands for name in re.findall(r"-p (\S+)", c)}
     assert builds, "found no `cargo run/build -p NAME` in examples/run.sh"
-    if re.search(r"-p fmu-build -- build --workspace", script):
+    if re.search(r"(-p fmu-build --|cargo-fmu) build --workspace", script):
         builds.update(fmu_crates(metadata))
     by_dir = {str(pathlib.Path(p["manifest_path"]).parent.relative_to(ROOT)): p["name"]
               for p in metadata["packages"] if p["id"] in set(metadata["workspace_members"])}

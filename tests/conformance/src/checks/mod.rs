@@ -155,7 +155,7 @@ registry! {
     Native: native::{
         a_c_host_runs_every_fmu_with_the_same_results_as_the_rust_importer,
         a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck,
-        the_binary_exports_only_fmi2_functions,
+        the_binary_exports_the_fmi2_functions_and_no_others,
         the_binary_needs_only_the_c_runtime,
     };
     ModelExchange: model_exchange::{

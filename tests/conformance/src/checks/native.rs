@@ -242,20 +242,36 @@ pub fn a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck(fmu: &Fmu) {
     compare_me(fmu, &stdout);
 }
 
-pub fn the_binary_exports_only_fmi2_functions(fmu: &Fmu) {
+/// Every fmi2 function of the interfaces the FMU offers; besides them, the binary may implement
+/// FMI 3.0 too (rustfmu's `export_fmu!` binaries serve both versions), then with all 75 fmi3
+/// functions and no other name; nothing else.
+pub fn the_binary_exports_the_fmi2_functions_and_no_others(fmu: &Fmu) {
     let so = fmu.so.to_str().unwrap();
     let defined = tool("nm", &["-D", "--defined-only", so]);
-    let foreign: Vec<&str> = defined
+    let names: Vec<&str> = defined
         .lines()
         .filter_map(|l| l.split_whitespace().nth(2))
-        .filter(|name| !name.starts_with("fmi2"))
         // What the linker defines in every shared object, not an export of the FMU's code.
         .filter(|name| !["_init", "_fini", "_edata", "_end", "__bss_start"].contains(name))
         .collect();
+    let foreign: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|name| !name.starts_with("fmi2") && !name.starts_with("fmi3"))
+        .collect();
     assert!(
         foreign.is_empty(),
-        "{}: exports symbols that are not fmi2*: {foreign:?}",
+        "{}: exports symbols that are not FMI functions: {foreign:?}",
         fmu.id
+    );
+    let fmi3: Vec<&str> = names.iter().copied().filter(|n| n.starts_with("fmi3")).collect();
+    let all3 = crate::fmi3::api::FUNCTIONS;
+    assert!(
+        fmi3.is_empty() || (fmi3.len() == all3.len() && all3.iter().all(|f| fmi3.contains(f))),
+        "{}: exports some fmi3 names but not FMI 3.0 whole (a binary of both versions exports all {} \
+         fmi3 functions and no other fmi3 name): {fmi3:?}",
+        fmu.id,
+        all3.len()
     );
     let n = defined.lines().filter(|l| l.contains(" fmi2")).count();
     // The co-simulation interface has 34 functions; with <ModelExchange>, its 10 more.

@@ -17,8 +17,8 @@ fn a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck() {
 }
 
 #[test]
-fn the_binary_exports_only_fmi2_functions() {
-    on_every_fmu("the_binary_exports_only_fmi2_functions");
+fn the_binary_exports_the_fmi2_functions_and_no_others() {
+    on_every_fmu("the_binary_exports_the_fmi2_functions_and_no_others");
 }
 
 #[test]
