@@ -5,6 +5,10 @@
 #   bash tests/setup-env.sh              everything the tests need (tests/run.sh)
 #   bash tests/setup-env.sh --main-job   what the main job's builds and scripts need (examples/run.sh;
 #                                        --python-only is the old name)
+#   bash tests/setup-env.sh [--main-job] --part system|python
+#                                        one half only: the Rust targets and Debian packages (what
+#                                        the cargo builds need), or the venv and the runner's Python
+#                                        module (examples/run.sh runs the second beside its builds)
 #   bash tests/setup-env.sh [--main-job] --list
 #                                        print the Debian packages that mode ensures, one a line,
 #                                        installed or not, and exit (test_fresh_machine.py checks
@@ -22,12 +26,19 @@ cd "$(dirname "$0")/.."
 
 main_job=false
 list=false
-for arg in "$@"; do
-  case "$arg" in
+part=both
+while (($#)); do
+  case "$1" in
     --main-job | --python-only) main_job=true ;;
     --list) list=true ;;
-    *) echo "setup-env: unknown argument '$arg' (--main-job, --list)" >&2; exit 2 ;;
+    --part)
+      part=${2:-}
+      shift
+      [[ "$part" == system || "$part" == python ]] || { echo "setup-env: --part system or --part python" >&2; exit 2; }
+      ;;
+    *) echo "setup-env: unknown argument '$1' (--main-job, --part system|python, --list)" >&2; exit 2 ;;
   esac
+  shift
 done
 
 # Debian packages: "package:command" (installed when the command is missing) or "package:"
@@ -44,6 +55,10 @@ if $list; then
 fi
 
 started=$SECONDS
+# step NAME: prints how long the step since the last one took.
+step_at=$SECONDS
+step() { echo "setup-env: $1 ($((SECONDS - step_at)) s)"; step_at=$SECONDS; }
+if [ "$part" != python ]; then
 for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
   if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
     echo "setup-env: rustup target add $triple"
@@ -68,6 +83,10 @@ if ((${#need[@]})); then
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}" >/dev/null
 fi
+step "Rust targets and Debian packages"
+fi
+
+if [ "$part" != system ]; then
 
 if [ ! -x .venv/bin/python ]; then
   echo "setup-env: creating .venv"
@@ -86,15 +105,21 @@ if [ "$have" != "$want" ] && ! { $main_job && [ "$have" = "$full" ]; }; then
   .venv/bin/pip install -q --disable-pip-version-check -r "$requirements"
   echo "$want" >"$stamp"
 fi
+step "venv and Python packages"
 # The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
-# into .venv (pyo3's extension-module feature on, release profile, this workspace's target/);
-# built again only when a source of it (or of a crate it uses) changed.
+# into .venv (pyo3's extension-module feature on, release profile); built again only when a
+# source of it (or of a crate it uses) changed. Its own target folder, target/python-module: it shares
+# no compiled crate with the other builds anyway (cargo resolves features for maturin's one
+# package, so serde, syn, nalgebra... come out with other features), and a folder of its own
+# holds no lock that the main job's cargo builds beside it would wait for.
 runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
   echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
-  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
+  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$PWD/../../target/python-module" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
   echo "$runner_sha" >.venv/.runner.sha
 fi
+step "the runner's Python module (maturin)"
 # ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
 chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true
+fi
 echo "setup-env: ready ($((SECONDS - started)) s)"
