@@ -11,28 +11,30 @@ lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
 bash tests/setup-env.sh --main-job --part system
 lap "setup: Rust targets, Debian packages"
-# The Python side of the setup (the venv, its packages, the runner's Python module) beside the
-# Rust builds: pip waits on the network and the builds leave a core idle at times (linking).
+# The venv and its Python packages beside the Rust build (pip waits on the network); the venv
+# itself first, as pyo3's build below asks its Python.
+[ -x .venv/bin/python ] || python3 -m venv .venv
 mkdir -p target
-bash tests/setup-env.sh --main-job --part python >target/setup-python.log 2>&1 &
+bash tests/setup-env.sh --main-job --part packages >target/setup-python.log 2>&1 &
 python_setup=$!
-# Every host program the main job runs, in one cargo invocation: cargo resolves features per
-# invocation, so `cargo run -p A` then `cargo run -p B` would build the shared dependencies twice.
+# Every host program the main job runs and the runner's Python module, in one cargo invocation:
+# cargo resolves features per invocation, so `cargo run -p A` then `cargo run -p B` would build
+# the shared dependencies twice. pyo3 is configured as maturin configures it (the venv's Python,
+# an extension module), so that maturin below finds it built.
+export PYO3_PYTHON="$PWD/.venv/bin/python" PYO3_BUILD_EXTENSION_MODULE=1
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
-  -p rustfmu-runner --bin rustfmu-runner
-lap "cargo-fmu, paper_numbers, rustfmu-runner (cargo build)"
-target/release/cargo-fmu build --workspace
-lap "FMUs and SSP files (cargo fmu build)"
+  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
+lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 if ! wait "$python_setup"; then
   cat target/setup-python.log >&2
   echo "main job: the Python setup failed (target/setup-python.log above)" >&2
   exit 1
 fi
 cat target/setup-python.log
-lap "setup: venv, Python packages, runner module (waited for)"
-# fmpy's validator too, now that the venv is there (cargo fmu build ran rustfmu's own checks).
-target/release/cargo-fmu validate --python .venv/bin/python target/fmu/*.fmu target/fmu/fmi3/*.fmu
-lap "fmpy's validator on the FMUs"
+bash tests/setup-env.sh --main-job --part module
+lap "setup: venv, Python packages, runner module"
+target/release/cargo-fmu build --workspace --python .venv/bin/python
+lap "FMUs and SSP files (cargo fmu build)"
 mkdir -p out
 target/release/examples/paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out

@@ -10,9 +10,10 @@ cd "$(dirname "$0")/.."
 run_started=$SECONDS
 bash tests/setup-env.sh --part system
 # The Python side of the setup (venv, packages, the runner's Python module) runs beside the lints
-# and the Rust build, which need none of it; the steps after the build wait for it.
+# and the Rust build, which need none of it (the module in a target folder of its own, so that
+# neither build waits for the other's lock); the steps after the build wait for it.
 mkdir -p target
-bash tests/setup-env.sh --part python >target/setup-python.log 2>&1 &
+RUSTFMU_MODULE_TARGET_DIR=target/python-module bash tests/setup-env.sh --part python >target/setup-python.log 2>&1 &
 python_setup=$!
 # pyo3's build script (the runner's Python module in the workspace build) asks this Python, not
 # the venv's that is being made meanwhile: the same answer on every run.

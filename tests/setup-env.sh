@@ -5,10 +5,12 @@
 #   bash tests/setup-env.sh              everything the tests need (tests/run.sh)
 #   bash tests/setup-env.sh --main-job   what the main job's builds and scripts need (examples/run.sh;
 #                                        --python-only is the old name)
-#   bash tests/setup-env.sh [--main-job] --part system|python
-#                                        one half only: the Rust targets and Debian packages (what
-#                                        the cargo builds need), or the venv and the runner's Python
-#                                        module (examples/run.sh runs the second beside its builds)
+#   bash tests/setup-env.sh [--main-job] --part system|packages|module|python
+#                                        one part only: the Rust targets and Debian packages (what
+#                                        the cargo builds need), the venv and its packages, the
+#                                        runner's Python module (maturin), or the last two
+#                                        (examples/run.sh and tests/run.sh install the packages
+#                                        beside their Rust builds)
 #   bash tests/setup-env.sh [--main-job] --list
 #                                        print the Debian packages that mode ensures, one a line,
 #                                        installed or not, and exit (test_fresh_machine.py checks
@@ -34,9 +36,12 @@ while (($#)); do
     --part)
       part=${2:-}
       shift
-      [[ "$part" == system || "$part" == python ]] || { echo "setup-env: --part system or --part python" >&2; exit 2; }
+      [[ "$part" =~ ^(system|packages|module|python)$ ]] || {
+        echo "setup-env: --part system, packages, module or python" >&2
+        exit 2
+      }
       ;;
-    *) echo "setup-env: unknown argument '$1' (--main-job, --part system|python, --list)" >&2; exit 2 ;;
+    *) echo "setup-env: unknown argument '$1' (--main-job, --part system|packages|module|python, --list)" >&2; exit 2 ;;
   esac
   shift
 done
@@ -58,7 +63,9 @@ started=$SECONDS
 # step NAME: prints how long the step since the last one took.
 step_at=$SECONDS
 step() { echo "setup-env: $1 ($((SECONDS - step_at)) s)"; step_at=$SECONDS; }
-if [ "$part" != python ]; then
+# wants PART: whether --part asks for PART.
+wants() { [ "$part" = both ] || [ "$part" = "$1" ] || { [ "$part" = python ] && [ "$1" != system ]; }; }
+if wants system; then
 for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
   if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
     echo "setup-env: rustup target add $triple"
@@ -86,8 +93,7 @@ fi
 step "Rust targets and Debian packages"
 fi
 
-if [ "$part" != system ]; then
-
+if wants packages; then
 if [ ! -x .venv/bin/python ]; then
   echo "setup-env: creating .venv"
   python3 -m venv .venv
@@ -106,20 +112,25 @@ if [ "$have" != "$want" ] && ! { $main_job && [ "$have" = "$full" ]; }; then
   echo "$want" >"$stamp"
 fi
 step "venv and Python packages"
+# ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
+chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true
+fi
+
+if wants module; then
 # The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
-# into .venv (pyo3's extension-module feature on, release profile); built again only when a
-# source of it (or of a crate it uses) changed. Its own target folder, target/python-module: it shares
-# no compiled crate with the other builds anyway (cargo resolves features for maturin's one
-# package, so serde, syn, nalgebra... come out with other features), and a folder of its own
-# holds no lock that the main job's cargo builds beside it would wait for.
+# into .venv (release profile, as an extension module: PYO3_BUILD_EXTENSION_MODULE, so that it
+# does not link libpython); built again only when a source of it (or of a crate it uses)
+# changed. In this workspace's target/ (RUSTFMU_MODULE_TARGET_DIR: another folder): after the
+# main job's `cargo build` it compiles only pyo3, numpy and itself, because runner/python's
+# Cargo.toml asks its shared dependencies for the features that build gives them
+# (tests/python/test_fresh_machine.py checks that they agree).
 runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
   echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
-  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$PWD/../../target/python-module" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
+  module_target=$(realpath -m "${RUSTFMU_MODULE_TARGET_DIR:-target}")
+  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$module_target" PYO3_BUILD_EXTENSION_MODULE=1 nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
   echo "$runner_sha" >.venv/.runner.sha
 fi
 step "the runner's Python module (maturin)"
-# ecospy's wheel ships its executables (ecos, proxyfmu) without the exec bit.
-chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev/null || true
 fi
 echo "setup-env: ready ($((SECONDS - started)) s)"
