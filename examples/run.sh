@@ -11,20 +11,15 @@ lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
 bash tests/setup-env.sh --main-job --part system
 lap "setup: Rust targets, Debian packages"
-# The venv and its Python packages beside the Rust build (pip waits on the network); the venv
-# itself first, as pyo3's build below asks its Python.
-[ -x .venv/bin/python ] || python3 -m venv .venv
+# The venv's Python packages beside the Rust build (pip waits on the network).
 mkdir -p target
 bash tests/setup-env.sh --main-job --part packages >target/setup-python.log 2>&1 &
 python_setup=$!
-# Every host program the main job runs and the runner's Python module, in one cargo invocation:
-# cargo resolves features per invocation, so `cargo run -p A` then `cargo run -p B` would build
-# the shared dependencies twice. pyo3 is configured as maturin configures it (the venv's Python,
-# an extension module), so that maturin below finds it built.
-export PYO3_PYTHON="$PWD/.venv/bin/python" PYO3_BUILD_EXTENSION_MODULE=1
+# Every host program the main job runs, in one cargo invocation: cargo resolves features per
+# invocation, so `cargo run -p A` then `cargo run -p B` would build the shared dependencies twice.
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
-  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
-lap "cargo build: cargo-fmu, paper_numbers, runner, module"
+  -p rustfmu-runner --bin rustfmu-runner
+lap "cargo build: cargo-fmu, paper_numbers, runner"
 if ! wait "$python_setup"; then
   cat target/setup-python.log >&2
   echo "main job: the Python setup failed (target/setup-python.log above)" >&2

@@ -118,17 +118,17 @@ fi
 
 if wants module; then
 # The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
-# into .venv (release profile, as an extension module: PYO3_BUILD_EXTENSION_MODULE, so that it
-# does not link libpython); built again only when a source of it (or of a crate it uses)
-# changed. In this workspace's target/ (RUSTFMU_MODULE_TARGET_DIR: another folder): after the
-# main job's `cargo build` it compiles only pyo3, numpy and itself, because runner/python's
-# Cargo.toml asks its shared dependencies for the features that build gives them
-# (tests/python/test_fresh_machine.py checks that they agree).
+# into .venv (release profile; maturin sets PYO3_BUILD_EXTENSION_MODULE, so that it does not link
+# libpython); built again only when a source of it (or of a crate it uses) changed. In this
+# workspace's target/, or RUSTFMU_MODULE_TARGET_DIR (tests/run.sh builds it beside its own
+# build, and a folder of its own holds no lock that build would wait for). It shares few compiled
+# crates with the other builds: cargo resolves features for maturin's one package, and maturin's
+# release units differ from `cargo build --release`'s (measured: 100-133 s cold either way).
 runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
   echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
   module_target=$(realpath -m "${RUSTFMU_MODULE_TARGET_DIR:-target}")
-  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$module_target" PYO3_BUILD_EXTENSION_MODULE=1 nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
+  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$module_target" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
   echo "$runner_sha" >.venv/.runner.sha
 fi
 step "the runner's Python module (maturin)"

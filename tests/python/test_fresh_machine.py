@@ -147,3 +147,4 @@ def test_the_main_job_needs_none_of_the_test_only_python_packages():
             m = re.match(r"\s*(?:import|from) (\w+)", line)
             if m and not line.startswith((" ", "\t")):
                 assert import_names.get(m.group(1)) not in test_only, f"{py}: {line.strip()} is a test-only package"
+
