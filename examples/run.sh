@@ -9,25 +9,15 @@ times=()
 # lap NAME: the time since the last lap, for the summary.
 lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
-bash tests/setup-env.sh --main-job --part system
-lap "setup: Rust targets, Debian packages"
-# The venv's Python packages beside the Rust build (pip waits on the network).
-mkdir -p target
-bash tests/setup-env.sh --main-job --part packages >target/setup-python.log 2>&1 &
-python_setup=$!
+bash tests/setup-env.sh --main-job
+lap "setup (tests/setup-env.sh --main-job)"
 # Every host program the main job runs, in one cargo invocation: cargo resolves features per
 # invocation, so `cargo run -p A` then `cargo run -p B` would build the shared dependencies twice.
+# (Setup and builds run one after the other: pip's install and maturin's build beside this build
+# made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
   -p rustfmu-runner --bin rustfmu-runner
 lap "cargo build: cargo-fmu, paper_numbers, runner"
-if ! wait "$python_setup"; then
-  cat target/setup-python.log >&2
-  echo "main job: the Python setup failed (target/setup-python.log above)" >&2
-  exit 1
-fi
-cat target/setup-python.log
-bash tests/setup-env.sh --main-job --part module
-lap "setup: venv, Python packages, runner module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 lap "FMUs and SSP files (cargo fmu build)"
 mkdir -p out

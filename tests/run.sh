@@ -8,17 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 run_started=$SECONDS
-bash tests/setup-env.sh --part system
-# The Python side of the setup (venv, packages, the runner's Python module) runs beside the lints
-# and the Rust build, which need none of it (the module in a target folder of its own, so that
-# neither build waits for the other's lock); the steps after the build wait for it.
-mkdir -p target
-RUSTFMU_MODULE_TARGET_DIR=target/python-module bash tests/setup-env.sh --part python >target/setup-python.log 2>&1 &
-python_setup=$!
-# pyo3's build script (the runner's Python module in the workspace build) asks this Python, not
-# the venv's that is being made meanwhile: the same answer on every run.
-PYO3_PYTHON=$(command -v python3)
-export PYO3_PYTHON
+bash tests/setup-env.sh
 export PATH="$PWD/.venv/bin:$PATH"
 logs=$(mktemp -d)
 summary=()
@@ -57,14 +47,6 @@ echo "== Rust build: every binary and test binary of the workspace, once"
 started=$SECONDS
 cargo test --workspace --release --no-run
 echo "Rust build: $((SECONDS - started)) s"
-started=$SECONDS
-if ! wait "$python_setup"; then
-  cat target/setup-python.log >&2
-  echo "tests: the Python setup failed (target/setup-python.log above)" >&2
-  exit 1
-fi
-cat target/setup-python.log
-echo "waited for the Python setup: $((SECONDS - started)) s"
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
 started=$SECONDS
 # Every FMU crate for each of its targets (Linux x86-64, Windows x86-64, aarch64 Linux for 3.0), FMI 2.0 and 3.0.

@@ -9,8 +9,6 @@
 #                                        one part only: the Rust targets and Debian packages (what
 #                                        the cargo builds need), the venv and its packages, the
 #                                        runner's Python module (maturin), or the last two
-#                                        (examples/run.sh and tests/run.sh install the packages
-#                                        beside their Rust builds)
 #   bash tests/setup-env.sh [--main-job] --list
 #                                        print the Debian packages that mode ensures, one a line,
 #                                        installed or not, and exit (test_fresh_machine.py checks
@@ -120,10 +118,9 @@ if wants module; then
 # The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
 # into .venv (release profile; maturin sets PYO3_BUILD_EXTENSION_MODULE, so that it does not link
 # libpython); built again only when a source of it (or of a crate it uses) changed. In this
-# workspace's target/, or RUSTFMU_MODULE_TARGET_DIR (tests/run.sh builds it beside its own
-# build, and a folder of its own holds no lock that build would wait for). It shares few compiled
-# crates with the other builds: cargo resolves features for maturin's one package, and maturin's
-# release units differ from `cargo build --release`'s (measured: 100-133 s cold either way).
+# workspace's target/, or RUSTFMU_MODULE_TARGET_DIR. It shares few compiled crates with the
+# other builds: cargo resolves features for maturin's one package, and maturin's release units
+# differ from `cargo build --release`'s even with the features aligned (56-133 s measured).
 runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
 if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
   echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
