@@ -508,7 +508,14 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
     // A group of its own, so that a timeout kills whatever the worker started too.
     #[cfg(unix)]
     cmd.process_group(0);
-    let mut child = match cmd.spawn() {
+    // Starting the worker can fail for reasons of the machine, not of the FMU (wine's
+    // CreateProcess answered "Internal error" (os error 1359) once in a few hundred starts in a CI
+    // run): one more try after a pause, and only then the start is reported as a failure.
+    let spawned = cmd.spawn().or_else(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        cmd.spawn()
+    });
+    let mut child = match spawned {
         Ok(c) => c,
         Err(e) => {
             return WorkerRun {
