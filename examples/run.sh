@@ -11,13 +11,16 @@ lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
 bash tests/setup-env.sh --main-job
 lap "setup (tests/setup-env.sh --main-job)"
-# Every host program the main job runs, in one cargo invocation: cargo resolves features per
-# invocation, so `cargo run -p A` then `cargo run -p B` would build the shared dependencies twice.
+# Every host program the main job runs, and the runner's Python module, in one cargo invocation:
+# cargo resolves features per invocation, so `cargo run -p A` then `cargo run -p B` (or maturin's
+# own build of the module) would build the shared dependencies twice.
 # (Setup and builds run one after the other: pip's install and maturin's build beside this build
 # made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
+source tests/pyo3-env.sh
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
-  -p rustfmu-runner --bin rustfmu-runner
-lap "cargo build: cargo-fmu, paper_numbers, runner"
+  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
+bash tests/setup-env.sh --main-job --part module
+lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 lap "FMUs and SSP files (cargo fmu build)"
 mkdir -p out

@@ -10,6 +10,8 @@ cd "$(dirname "$0")/.."
 run_started=$SECONDS
 bash tests/setup-env.sh
 export PATH="$PWD/.venv/bin:$PATH"
+# pyo3 (the runner's Python module) against the venv, as an extension module, in every cargo call.
+source tests/pyo3-env.sh
 logs=$(mktemp -d)
 summary=()
 failed=0
@@ -46,6 +48,9 @@ echo "== Rust build: every binary and test binary of the workspace, once"
 # steps below run the binaries built here and `cargo test --workspace` only runs what is built.
 started=$SECONDS
 cargo test --workspace --release --no-run
+# The runner's Python module (a cdylib; it has no tests of its own), for the Python tests.
+cargo build --release -p rustfmu-runner-python --lib
+bash tests/setup-env.sh --part module
 echo "Rust build: $((SECONDS - started)) s"
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
 started=$SECONDS

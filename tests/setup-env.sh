@@ -8,7 +8,8 @@
 #   bash tests/setup-env.sh [--main-job] --part system|packages|module|python
 #                                        one part only: the Rust targets and Debian packages (what
 #                                        the cargo builds need), the venv and its packages, the
-#                                        runner's Python module (maturin), or the last two
+#                                        runner's Python module (the cdylib of the last cargo build
+#                                        copied into .venv; built if there is none), or the last two
 #   bash tests/setup-env.sh [--main-job] --list
 #                                        print the Debian packages that mode ensures, one a line,
 #                                        installed or not, and exit (test_fresh_machine.py checks
@@ -17,8 +18,8 @@
 # Main job: the Rust targets x86_64-pc-windows-gnu and aarch64-unknown-linux-gnu (rustup) and their
 # linkers (every FMU carries Linux and Windows binaries, the FMI 3.0 ones aarch64 Linux too);
 # gcc and libclang-dev: the runner (its `fmi` importer crate) compiles fmi-sys, whose build script
-# compiles C and runs bindgen; a venv at .venv with examples/requirements.txt and the runner's
-# Python module (maturin). The tests add wine and qemu-user (they run the Windows and aarch64
+# compiles C and runs bindgen; a venv at .venv with examples/requirements.txt; after the caller's
+# cargo build, the runner's Python module (--part module). The tests add wine and qemu-user (they run the Windows and aarch64
 # binaries), valgrind and binutils (the conformance suite's C host and symbol checks), libtbb12
 # (ecospy) and tests/python/requirements.txt.
 set -euo pipefail
@@ -62,7 +63,9 @@ started=$SECONDS
 step_at=$SECONDS
 step() { echo "setup-env: $1 ($((SECONDS - step_at)) s)"; step_at=$SECONDS; }
 # wants PART: whether --part asks for PART.
-wants() { [ "$part" = both ] || [ "$part" = "$1" ] || { [ "$part" = python ] && [ "$1" != system ]; }; }
+# Without --part: the Rust targets, Debian packages and the venv; the module comes after the
+# caller's cargo build (--part module), which compiles it.
+wants() { { [ "$part" = both ] && [ "$1" != module ]; } || [ "$part" = "$1" ] || { [ "$part" = python ] && [ "$1" != system ]; }; }
 if wants system; then
 for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
   if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
@@ -115,19 +118,32 @@ chmod +x .venv/lib/python3*/site-packages/ecospy/binaries/{ecos,proxyfmu} 2>/dev
 fi
 
 if wants module; then
-# The native SSP runner's Python module (runner/python -> rustfmu_runner), built with maturin
-# into .venv (release profile; maturin sets PYO3_BUILD_EXTENSION_MODULE, so that it does not link
-# libpython); built again only when a source of it (or of a crate it uses) changed. In this
-# workspace's target/, or RUSTFMU_MODULE_TARGET_DIR. It shares few compiled crates with the
-# other builds: cargo resolves features for maturin's one package, and maturin's release units
-# differ from `cargo build --release`'s even with the features aligned (56-133 s measured).
-runner_sha=$(find runner tests/conformance/src -type f \( -name '*.rs' -o -name '*.toml' \) | sort | xargs cat Cargo.lock | sha256sum | cut -d' ' -f1)
-if [ "$(cat .venv/.runner.sha 2>/dev/null)" != "$runner_sha" ] || ! .venv/bin/python -c "import rustfmu_runner" 2>/dev/null; then
-  echo "setup-env: maturin develop --release (runner/python: the rustfmu_runner module)"
-  module_target=$(realpath -m "${RUSTFMU_MODULE_TARGET_DIR:-target}")
-  (cd runner/python && VIRTUAL_ENV="$PWD/../../.venv" CARGO_TARGET_DIR="$module_target" nice -n 10 ../../.venv/bin/maturin develop --release --quiet)
-  echo "$runner_sha" >.venv/.runner.sha
+# The native SSP runner's Python module (runner/python -> rustfmu_runner), into .venv. The cdylib
+# comes from the caller's one cargo build (examples/run.sh, tests/run.sh: `-p rustfmu-runner-python`
+# beside everything else, with PYO3_PYTHON and PYO3_BUILD_EXTENSION_MODULE from
+# tests/pyo3-env.sh), so that it shares every compiled crate of the runner's tree (the `fmi`
+# importer with fmi-sys's bindgen, zip with its codecs, clap) with the runner's command line.
+# `maturin develop --release` here built that tree a second time, in units of its own: 106-152 s
+# of the main job's and CI's setup (issue 21). What maturin does besides the build, for a module
+# of one extension and no Python files, is a copy under the interpreter's extension suffix; that
+# copy is all this part does. `pip install ./runner/python` (maturin) still works for anyone else.
+module_lib=target/release/librustfmu_runner.so
+[ -n "${CARGO_TARGET_DIR:-}" ] && module_lib=$CARGO_TARGET_DIR/release/librustfmu_runner.so
+if [ ! -f "$module_lib" ]; then
+  # Run alone: build it, with the same environment as the main build (the units stay shared).
+  echo "setup-env: cargo build --release -p rustfmu-runner-python (the rustfmu_runner module)"
+  (source tests/pyo3-env.sh && cargo build --release -p rustfmu-runner-python --lib)
 fi
-step "the runner's Python module (maturin)"
+site=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["platlib"])')
+suffix=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
+# A copy that maturin or pip installed before would shadow or duplicate this one.
+rm -rf "$site"/rustfmu_runner "$site"/rustfmu_runner-*.dist-info "$site"/rustfmu_runner.pth "$site"/rustfmu_runner.*.so
+cp "$module_lib" "$site/rustfmu_runner$suffix.tmp"
+mv "$site/rustfmu_runner$suffix.tmp" "$site/rustfmu_runner$suffix"
+.venv/bin/python -c 'import rustfmu_runner' || {
+  echo "setup-env: the rustfmu_runner module built at $module_lib does not import in .venv" >&2
+  exit 1
+}
+step "the runner's Python module (copied from $module_lib)"
 fi
 echo "setup-env: ready ($((SECONDS - started)) s)"

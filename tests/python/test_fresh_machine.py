@@ -6,7 +6,7 @@ libclang, and only the tests' setup installed it).
 
 What the main job builds is read from examples/run.sh (every `cargo ... -p NAME`, and `build
 --workspace`: every FMU crate, for the targets its Cargo.toml names) and from tests/setup-env.sh
-(the crate maturin builds). What a crate needs from Debian is a table below, keyed by the native
+(the module it builds). What a crate needs from Debian is a table below, keyed by the native
 library a crate declares (`links` in its Cargo.toml): a crate of the tree with a `links` key the
 table does not know fails the test, so a new native dependency cannot slip in unseen."""
 
