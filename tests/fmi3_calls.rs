@@ -307,6 +307,56 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
     }
 }
 
+/// FMI 3.0.2 lets an importer read start values in Instantiated (fmi-standard #2174): every
+/// variable with a start value answers it (or the value set since), in both interfaces and after
+/// fmi3Reset; a calculated one and `time` have none yet and are refused, naming the variable.
+#[test]
+fn start_values_are_readable_in_instantiated_and_calculated_values_are_not() {
+    for (c, log) in [cs(), me()] {
+        // SAFETY: arrays of the given lengths on a live instance.
+        unsafe {
+            // u (input, start 0), x (output, initial exact, start 0.5), T (parameter, start 0.5).
+            assert_eq!(get(c, &[0, 1, 4]), (fmi3OK, vec![0.0, 0.5, 0.5]));
+            let mut e = [0i64];
+            assert_eq!(fmi3GetInt64(c, [5u32].as_ptr(), 1, e.as_mut_ptr(), 1), fmi3OK);
+            assert_eq!(e, [1]);
+            let mut n = [0i32];
+            assert_eq!(fmi3GetInt32(c, [6u32].as_ptr(), 1, n.as_mut_ptr(), 1), fmi3OK);
+            assert_eq!(n, [3]);
+            let mut b = [true];
+            assert_eq!(fmi3GetBoolean(c, [7u32].as_ptr(), 1, b.as_mut_ptr(), 1), fmi3OK);
+            assert_eq!(b, [false]);
+            let mut text = [null::<c_char>()];
+            assert_eq!(fmi3GetString(c, [8u32].as_ptr(), 1, text.as_mut_ptr(), 1), fmi3OK);
+            assert_eq!(CStr::from_ptr(text[0]).to_str().unwrap(), "lag");
+            // A value set in Instantiated is what a get answers there.
+            assert_eq!(fmi3SetFloat64(c, [4u32].as_ptr(), 1, [0.25].as_ptr(), 1), fmi3OK);
+            assert_eq!(get(c, &[4]), (fmi3OK, vec![0.25]));
+            assert!(log.take().iter().all(|(s, _, _)| *s == fmi3OK));
+
+            // y is calculated: no value before initialization. Refused whole (nothing written).
+            let (s, v) = get(c, &[0, 3]);
+            assert_eq!(s, fmi3Error);
+            assert!(v.iter().all(|x| x.is_nan()), "a refused get wrote {v:?}");
+            logged(
+                log,
+                fmi3Error,
+                &["fmi3GetFloat64", "'y'", "no value before initialization"],
+            );
+            assert_eq!(fmi3Reset(c), fmi3OK);
+            assert_eq!(get(c, &[TIME_VR]).0, fmi3Error);
+            logged(log, fmi3Error, &["'time'", "no start value"]);
+            // After fmi3Reset: the start values again, not the value set before.
+            assert_eq!(fmi3Reset(c), fmi3OK);
+            assert_eq!(get(c, &[4]), (fmi3OK, vec![0.5]));
+            // Once initialized, every variable reads.
+            assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
+            assert_eq!(get(c, &[3, TIME_VR]), (fmi3OK, vec![0.25, 0.0]));
+            fmi3FreeInstance(c);
+        }
+    }
+}
+
 #[test]
 fn the_state_table_is_fmi_3() {
     let (c, log) = cs();

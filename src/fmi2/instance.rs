@@ -128,9 +128,12 @@ impl Call {
     /// the FMUs this runtime makes: no event mode in co-simulation, no clocks, no configuration
     /// mode. `StepComplete` is 3.0's Step Mode, `StepFailed` its Step Discarded. Where 3.0 differs
     /// from 2.0: fmi3EnterEventMode only from Continuous-Time Mode; the model-exchange
-    /// evaluations also in Initialization Mode; the nominals not before initialization.
+    /// evaluations also in Initialization Mode; the nominals not before initialization; the
+    /// getters also in Instantiated (FMI 3.0.2: "get variable start values", fmi-standard #2174),
+    /// for the variables that have a start value (`Instance::get_values`).
     pub const fn allowed_in3(self) -> u16 {
         match self {
+            Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
             Call::EnterEventMode => CONTINUOUS,
             Call::GetDerivatives | Call::GetEventIndicators | Call::GetContinuousStates => {
                 INIT | EVENT | CONTINUOUS | TERMINATED | ERROR
@@ -532,7 +535,10 @@ impl<M: CoSimulation> Instance<M> {
         // Every reference is checked before anything is computed: a refused get changes nothing
         // (it used to run the initialization first, then refuse an unknown reference).
         for vr in vrs {
-            if let Err(status) = self.lookup(function, *vr, T::TYPE) {
+            if let Err(status) = self
+                .lookup(function, *vr, T::TYPE)
+                .and_then(|v| self.check_gettable(function, v))
+            {
                 return status;
             }
         }
@@ -551,7 +557,10 @@ impl<M: CoSimulation> Instance<M> {
     /// fmi2GetString: the returned pointers stay valid until the next call on this instance.
     pub fn get_strings(&mut self, vrs: &[u32], out: &mut [fmi2String]) -> fmi2Status {
         for vr in vrs {
-            if let Err(status) = self.lookup("fmi2GetString", *vr, VarType::String) {
+            if let Err(status) = self
+                .lookup("fmi2GetString", *vr, VarType::String)
+                .and_then(|v| self.check_gettable("fmi2GetString", v))
+            {
                 return status;
             }
         }
@@ -586,6 +595,21 @@ impl<M: CoSimulation> Instance<M> {
             self.sim.model.set_string(*vr, v);
         }
         self.after_set("fmi2SetString", previous)
+    }
+
+    /// Before initialization (FMI 3.0's Instantiated; FMI 2.0 allows no get there) a variable has
+    /// a value only if the description gives it a start value: an input, or initial exact or
+    /// approx. A calculated variable is computed from the start values during initialization,
+    /// so reading it here is refused rather than answered with a number that means nothing.
+    fn check_gettable(&self, function: &str, decl: &Variable) -> Outcome {
+        if self.sim.state != State::Instantiated || decl.has_start() {
+            return Ok(());
+        }
+        Err(self.error(&format!(
+            "{function}: '{}' (vr {}, causality {:?}, initial calculated) has no value before initialization: \
+             in state Instantiated only start values can be read (inputs, initial exact or approx)",
+            decl.name, decl.value_reference, decl.causality
+        )))
     }
 
     /// Whether the standard lets this variable be set in the current state (FMI 2.0, 4.2.4).

@@ -11,7 +11,7 @@ use super::abi::*;
 use crate::description::VarType;
 use crate::fmi2::abi::{fmi2False, fmi2True};
 use crate::fmi2::api::{Component, slice, slice_mut, text, with_instance};
-use crate::fmi2::instance::{Call, Instance};
+use crate::fmi2::instance::{Call, Instance, State};
 use crate::fmi2::logging::{Category, Logger};
 use crate::model::CoSimulation;
 use std::cell::UnsafeCell;
@@ -356,6 +356,10 @@ pub unsafe fn get_float64<M: CoSimulation>(
                 Err(status) => return status,
             };
             match added_time_vr::<M>() {
+                Some(time) if vrs.contains(&time) && inst.state() == State::Instantiated => inst.error(&format!(
+                    "{F}: value reference {time} is 'time', the independent variable: it has no start value and no \
+                     value before fmi3EnterInitializationMode sets the start time"
+                )),
                 Some(time) if vrs.contains(&time) => {
                     let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
                     let mut got = vec![0.0; others.len()];

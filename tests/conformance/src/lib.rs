@@ -293,6 +293,11 @@ pub fn set_as_foreign(on: bool) {
     AS_FOREIGN.store(on, Ordering::Relaxed);
 }
 
+/// Whether [`set_as_foreign`] is on (FMI 2.0 and 3.0 FMUs alike).
+pub fn as_foreign() -> bool {
+    AS_FOREIGN.load(Ordering::Relaxed)
+}
+
 /// Sets how checks start a worker process of their own.
 pub fn set_worker(worker: Worker) {
     *WORKER.lock().unwrap_or_else(|e| e.into_inner()) = Some(worker);

@@ -716,7 +716,7 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
     crate::set_random_sequences(random);
     let usage = || {
         eprintln!(
-            "usage: worker probe <fmu> | check <fmu> <check> | state-child <fmu> <state file> <steps> <h>  [--tmp DIR] [--result FILE]"
+            "usage: worker probe <fmu> | check <fmu> <check> | state-child <fmu> <state file> <steps> <h> [cs|me <time> (FMI 3.0)]  [--tmp DIR] [--result FILE]"
         );
         ExitCode::from(2)
     };
@@ -740,12 +740,19 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
                     "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",
                     crate::fmi3::api::FUNCTIONS.len()
                 );
+                let format = match f.state_format() {
+                    Ok(()) => "made by this exporter (rustfmu's serialized state format): every check runs in full"
+                        .to_string(),
+                    Err(why) => format!(
+                        "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
+                    ),
+                };
                 drop(f);
                 write(
                     Outcome::Pass,
                     Findings {
                         limitations: vec![],
-                        info: vec![about],
+                        info: vec![about, format],
                     },
                 )
             }
@@ -812,6 +819,15 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
             drop(fmu);
             code
         }
+        ["state-child", fmu, file, steps, h, interface, t] if is_fmi3_file(fmu) => {
+            match state_child3(Path::new(fmu), &tmp, file, steps, h, interface, t) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("state-child: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
         ["state-child", fmu, file, steps, h] => match state_child(Path::new(fmu), &tmp, file, steps, h) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -833,6 +849,53 @@ fn hex(values: impl IntoIterator<Item = u64>) -> String {
         let _ = write!(s, "{b:x} ");
         s
     })
+}
+
+/// The FMI 3.0 [`state_child`]: an instance of the interface `cs` or `me`, the state restored,
+/// its time `t` given by the parent (FMI 3.0 has no status function that tells it).
+fn state_child3(
+    fmu: &Path,
+    tmp: &Path,
+    file: &str,
+    steps: &str,
+    h: &str,
+    interface: &str,
+    t: &str,
+) -> Result<(), String> {
+    let steps: usize = steps.parse().map_err(|e| format!("steps: {e}"))?;
+    let h: f64 = h.parse().map_err(|e| format!("step size: {e}"))?;
+    let t: f64 = t.parse().map_err(|e| format!("time: {e}"))?;
+    let me = match interface {
+        "me" => true,
+        "cs" => false,
+        other => return Err(format!("interface '{other}': cs or me")),
+    };
+    let bytes = std::fs::read(file).map_err(|e| format!("{file}: {e}"))?;
+    let fmu = crate::fmi3::Fmu3::load(fmu, tmp)?;
+    let (outcome, _) = outcome::capture(|| {
+        let mut inst = if me {
+            crate::fmi3::Inst::me(&fmu)
+        } else {
+            crate::fmi3::Inst::cs(&fmu)
+        };
+        let s = inst.restore(&bytes);
+        assert_eq!(
+            s,
+            crate::fmi3::types::fmi3OK,
+            "restoring the state: {}",
+            inst.log_text()
+        );
+        inst.time = t;
+        println!("{}", hex(inst.snapshot().into_iter().map(u64::from)));
+        for _ in 0..steps {
+            inst.step(h);
+            println!("{}", hex(inst.observe()));
+        }
+    });
+    match outcome {
+        Outcome::Pass => Ok(()),
+        Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+    }
 }
 
 /// Loads the FMU afresh, restores the serialized state in `file`, prints the re-serialized

@@ -220,3 +220,34 @@ fn every_check_passes_on_a_packaged_fmu_checked_as_another_exporters() {
     );
     assert_cleaned(dir.path());
 }
+
+/// The same for an FMI 3.0 file: `--as-foreign` reaches the FMI 3.0 checks too (the damaged
+/// states' checksum-only damage becomes "refused or accepted, never a crash").
+#[test]
+fn every_fmi3_check_passes_on_a_packaged_fmi3_fmu_checked_as_another_exporters() {
+    let fmu = &fmi2_conformance::fmi3::all3()
+        .first()
+        .expect("a packaged FMI 3.0 FMU")
+        .archive;
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let mut opts = options(dir.path(), "");
+    opts.filter = None;
+    opts.as_foreign = true;
+    opts.random_sequences = 200;
+    let report = run(fmu, &opts);
+    let skipped = report
+        .checks
+        .iter()
+        .filter(
+            |c| matches!(&c.outcome, Outcome::Skip(why) if !why.starts_with(fmi2_conformance::outcome::NOT_DECLARED)),
+        )
+        .count();
+    assert_eq!((report.failed(), skipped), (0, 0), "{report}");
+    assert_eq!(report.checks.len(), fmi2_conformance::fmi3::checks::all_checks().len());
+    assert!(report.partial() > 0, "{report}");
+    assert!(
+        report.about.iter().any(|l| l.contains("another exporter's FMU")),
+        "{report}"
+    );
+    assert_cleaned(dir.path());
+}

@@ -32,6 +32,8 @@ pub struct Fmu3 {
     pub scratch: PathBuf,
     pub md: Description,
     pub api: api::Api,
+    /// Whether the serialized states are this exporter's format ([`Fmu3::state_format`]).
+    own: std::sync::OnceLock<Result<(), String>>,
     _dirs: (PrivateDir, PrivateDir),
 }
 
@@ -153,8 +155,37 @@ impl Fmu3 {
             scratch: scratch.path().to_path_buf(),
             md,
             api,
+            own: std::sync::OnceLock::new(),
             _dirs: (unpacked, scratch),
         })
+    }
+
+    /// Ok when the FMU's serialized states are this exporter's format (`crate::state`: magic,
+    /// version, the instantiation token, CRC-32), else why not: treated as another exporter's
+    /// FMU ([`crate::set_as_foreign`]), no serializable state, or other bytes. Checks that need
+    /// the format (damage only a checksum finds) are strict only where it is Ok.
+    pub fn state_format(&self) -> &Result<(), String> {
+        self.own.get_or_init(|| {
+            if crate::as_foreign() {
+                return Err("treated as another exporter's FMU on request".into());
+            }
+            let me = self.md.cs.is_none();
+            if !self.can_snapshot(me) {
+                return Err("the FMU does not declare canGetAndSetFMUState and canSerializeFMUState".into());
+            }
+            let inst = Inst::try_new(self, me, "probe")?;
+            let bytes = inst.try_snapshot()?;
+            drop(inst);
+            let l = crate::state::parse(&bytes)?;
+            if &bytes[l.guid_at..l.guid_at + l.guid_len] != self.md.token.as_bytes() {
+                return Err("the serialized state holds another instantiation token".into());
+            }
+            Ok(())
+        })
+    }
+
+    pub fn own_state_format(&self) -> bool {
+        self.state_format().is_ok()
     }
 
     /// The native path of the unpacked `resources/` folder, with a trailing separator (FMI 3.0
@@ -305,6 +336,18 @@ impl<'a> Inst<'a> {
         })
     }
 
+    /// No instance: every call passes NULL (the checks of a NULL instance). Nothing is logged
+    /// then (there is no logger), and nothing is freed.
+    pub fn null(fmu: &'a Fmu3, me: bool) -> Inst<'a> {
+        Inst {
+            fmu,
+            c: std::ptr::null_mut(),
+            me,
+            sink: Box::default(),
+            time: 0.0,
+        }
+    }
+
     pub fn api(&self) -> &'a api::Api {
         &self.fmu.api
     }
@@ -340,7 +383,7 @@ impl<'a> Inst<'a> {
                 );
             }
         }
-        if s != fmi3OK {
+        if s != fmi3OK && !self.c.is_null() {
             // FMI 3.0 section 2.3.1 (logMessage): "If a function does not return fmi3OK, it
             // must provide the reason by calling logMessage at least once with this status."
             let entries = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner());
@@ -513,6 +556,33 @@ impl<'a> Inst<'a> {
         crate::bits(&v)
     }
 
+    /// [`Inst::snapshot`] without panicking: the first call that was not fmi3OK, named.
+    pub fn try_snapshot(&self) -> Result<Vec<u8>, String> {
+        let api = self.api();
+        let mut st: fmi3FMUState = std::ptr::null_mut();
+        // SAFETY: the standard's calls with valid pointers on a live instance.
+        unsafe {
+            if (api.get_fmu_state)(self.c, &mut st) != fmi3OK {
+                return Err("fmi3GetFMUState of a new instance failed".into());
+            }
+            let mut size = 0usize;
+            let mut bytes = vec![];
+            let mut s = (api.serialized_fmu_state_size)(self.c, st, &mut size);
+            if s == fmi3OK && size <= 1 << 30 {
+                bytes = vec![0u8; size];
+                s = (api.serialize_fmu_state)(self.c, st, bytes.as_mut_ptr(), size);
+            }
+            (api.free_fmu_state)(self.c, &mut st);
+            if s != fmi3OK {
+                return Err(format!(
+                    "serializing the state of a new instance answered {}",
+                    status_name(s)
+                ));
+            }
+            Ok(bytes)
+        }
+    }
+
     /// Takes the FMU state and serializes it.
     pub fn snapshot(&self) -> Vec<u8> {
         let api = self.api();
@@ -570,6 +640,9 @@ impl<'a> Inst<'a> {
 
 impl Drop for Inst<'_> {
     fn drop(&mut self) {
+        if self.c.is_null() {
+            return;
+        }
         crate::outcome::breadcrumb("fmi3FreeInstance");
         // SAFETY: an instance made by this value, freed once.
         unsafe { (self.fmu.api.free_instance)(self.c) };

@@ -33,6 +33,11 @@ fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it() {
 }
 
 #[test]
+fn fmi3_start_values_are_readable_in_instantiated() {
+    on_every_fmu3("fmi3_start_values_are_readable_in_instantiated");
+}
+
+#[test]
 fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set() {
     on_every_fmu3("fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set");
 }
@@ -68,6 +73,11 @@ fn fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state
 }
 
 #[test]
+fn fmi3_a_null_instance_is_refused_by_every_function() {
+    on_every_fmu3("fmi3_a_null_instance_is_refused_by_every_function");
+}
+
+#[test]
 fn fmi3_model_exchange_states_and_derivatives_are_consistent() {
     on_every_fmu3("fmi3_model_exchange_states_and_derivatives_are_consistent");
 }
@@ -99,6 +109,16 @@ fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically() {
 #[test]
 fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused() {
     on_every_fmu3("fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused");
+}
+
+/// The other process is this crate's `fmu-check`, started as a worker.
+#[test]
+fn fmi3_a_state_serialized_here_restores_in_another_process_and_continues_identically() {
+    fmi2_conformance::set_worker(fmi2_conformance::Worker {
+        exe: env!("CARGO_BIN_EXE_fmu-check").into(),
+        args_prefix: vec!["__worker".into()],
+    });
+    on_every_fmu3("fmi3_a_state_serialized_here_restores_in_another_process_and_continues_identically");
 }
 
 #[test]
