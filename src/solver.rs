@@ -240,6 +240,12 @@ impl Dopri5 {
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
+        // No state (a model of outputs and parameters only, a sampled controller): nothing to
+        // integrate. Without this the error norm is 0/0 = NaN and every step was rejected as
+        // "the state became NaN or infinite" (issue 23).
+        if N == 0 {
+            return Ok(());
+        }
         let mut s = 0.0;
         let mut k1 = f(t0, x);
         self.stats.rhs_evaluations += 1;
@@ -383,6 +389,21 @@ fn too_small(h: f64, s: f64) -> bool {
 mod tests {
     use super::*;
     use nalgebra::Vector2;
+
+    #[test]
+    fn a_system_without_states_integrates_to_nothing_without_error() {
+        let mut ode = Dopri5::default();
+        let mut x = nalgebra::SVector::<f64, 0>::zeros();
+        let tol = Tolerances { rtol: 1e-6, atol: 1e-9 };
+        for k in 0..3 {
+            let t = k as f64 * 0.01;
+            assert_eq!(
+                ode.integrate(|_, x: &nalgebra::SVector<f64, 0>| *x, t, 0.01, &mut x, tol),
+                Ok(())
+            );
+        }
+        assert_eq!(ode.validate(), Ok(()));
+    }
 
     #[test]
     fn harmonic_oscillator_matches_the_exact_solution_to_tolerance() {

@@ -586,3 +586,84 @@ fn a_call_into_an_instance_from_inside_a_call_into_it_is_refused() {
         fmi2FreeInstance(c);
     }
 }
+
+/// A model of an input, a parameter and an output only: no continuous state, and the default
+/// co-simulation step (`impl CoSimulation for Gain {}`). Not exported (the Probe's symbols are);
+/// run through the runtime's generic functions, as an export of it would.
+mod stateless {
+    use rustfmu::prelude::*;
+
+    /// A static gain: y = k u
+    #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+    pub struct Gain {
+        /// Input u
+        #[variable(vr = 0, input, continuous, start = 0.0)]
+        pub u: f64,
+        /// Gain k
+        #[variable(vr = 1, parameter, fixed, start = 2.0)]
+        pub k: f64,
+        /// Output y = k u
+        #[variable(vr = 2, output, continuous, depends = [u])]
+        pub y: f64,
+    }
+
+    impl Model for Gain {
+        fn outputs<D: Real>(&self, _t: D, v: &mut GainContinuous<D>) {
+            v.y = v.u * self.k;
+        }
+    }
+
+    impl CoSimulation for Gain {}
+
+    pub const GUID: &str = "{00000000-0000-5000-8000-00000000000b}";
+}
+
+/// Issue 23: with no state, the default step's integrator divided 0 by 0 and every fmi2DoStep
+/// was discarded at t = 0 ("the state became NaN or infinite").
+#[test]
+fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
+    use rustfmu::__private::api;
+    use stateless::Gain;
+    let log: &'static Log = Box::leak(Box::default());
+    let cb = callbacks(collect, log as *const Log as *mut _);
+    let guid = CString::new(stateless::GUID).unwrap();
+    // SAFETY: valid strings, callbacks that outlive the instance, arrays of the lengths passed.
+    unsafe {
+        let c = api::instantiate::<Gain>(
+            stateless::GUID,
+            &[],
+            c"gain".as_ptr(),
+            fmi2CoSimulation,
+            guid.as_ptr(),
+            std::ptr::null(),
+            cb,
+            fmi2False,
+            fmi2False,
+        );
+        assert!(!c.is_null());
+        assert_eq!(
+            api::setup_experiment::<Gain>(c, fmi2False, 0.0, 0.0, fmi2False, 0.0),
+            fmi2OK
+        );
+        assert_eq!(api::enter_initialization_mode::<Gain>(c), fmi2OK);
+        assert_eq!(api::exit_initialization_mode::<Gain>(c), fmi2OK);
+        let mut t = 0.0;
+        for k in 0..100 {
+            let u = [k as f64 * 0.5];
+            assert_eq!(
+                api::set::<Gain, f64>(c, "fmi2SetReal", [0u32].as_ptr(), 1, u.as_ptr()),
+                fmi2OK
+            );
+            let s = api::do_step::<Gain>(c, t, 0.01, fmi2True);
+            assert_eq!(s, fmi2OK, "fmi2DoStep at t = {t}: {:?}", log.take());
+            t += 0.01;
+            let mut y = [f64::NAN];
+            assert_eq!(
+                api::get::<Gain, f64>(c, "fmi2GetReal", [2u32].as_ptr(), 1, y.as_mut_ptr()),
+                fmi2OK
+            );
+            assert_eq!(y, [2.0 * u[0]], "y after the step at t = {t}");
+        }
+        api::free_instance::<Gain>(c);
+    }
+}
