@@ -115,6 +115,9 @@ enum Cmd {
         vrs: String,
         #[arg(long = "fmi-version", default_value = "2.0")]
         fmi_version: String,
+        /// The unpacked FMU's resources/ folder.
+        #[arg(long)]
+        resources: PathBuf,
     },
 }
 
@@ -181,6 +184,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             guid,
             vrs,
             fmi_version,
+            resources,
         } => {
             let version = cargo::parse_fmi_version(&fmi_version)?;
             let vrs: Vec<u32> = vrs
@@ -188,7 +192,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 .filter(|s| !s.is_empty())
                 .filter_map(|s| s.parse().ok())
                 .collect();
-            let problems = crate::validate::smoke_run_version(version, &library, &guid, &vrs);
+            let problems = crate::validate::smoke_run_version(version, &library, &guid, &vrs, &resources);
             for p in &problems {
                 println!("{p}");
             }

@@ -365,7 +365,7 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
         // The smoke run loads the binary of the machine this runs on; the others are loaded by
         // their own hosts (tests/python/test_windows.py runs the Windows one under wine).
         if here.as_deref() == Some(folder.as_str()) {
-            problems.extend(smoke_run_in_child(&so, &d));
+            problems.extend(smoke_run_in_child(&so, &d, &dir.path().join("resources")));
         }
     }
     drop(dir);
@@ -616,12 +616,14 @@ unsafe extern "C" fn collect_log(
     }
 }
 
-fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
+/// `resources`: the unpacked archive's `resources/` folder, given to the instance as an importer
+/// gives it after unpacking (a model that reads its resources at instantiation must find them).
+fn smoke_run_in_child(so: &Path, d: &Description, resources: &Path) -> Vec<String> {
     let vrs: Vec<String> = d.real_vrs.iter().map(|v| v.to_string()).collect();
     let exe = match std::env::current_exe() {
         Ok(e) if e.file_stem().is_some_and(|s| s == "cargo-fmu" || s == "fmu-build") => e,
         // Called from elsewhere (tests): run in this process.
-        _ => return smoke_run_version(d.version, so, &d.guid, &d.real_vrs),
+        _ => return smoke_run_version(d.version, so, &d.guid, &d.real_vrs, resources),
     };
     match std::process::Command::new(&exe)
         .arg("__smoke-run")
@@ -630,6 +632,8 @@ fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
         .arg(vrs.join(","))
         .arg("--fmi-version")
         .arg(d.version.text())
+        .arg("--resources")
+        .arg(resources)
         .output()
     {
         Ok(out) if out.status.success() => vec![],
@@ -658,11 +662,32 @@ fn smoke_run_in_child(so: &Path, d: &Description) -> Vec<String> {
 }
 
 /// [`smoke_run`] (FMI 2.0) or [`smoke_run3`] (FMI 3.0).
-pub fn smoke_run_version(version: FmiVersion, so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
+pub fn smoke_run_version(
+    version: FmiVersion,
+    so: &Path,
+    guid: &str,
+    real_vrs: &[u32],
+    resources: &Path,
+) -> Vec<String> {
     match version {
-        FmiVersion::V2 => smoke_run(so, guid, real_vrs),
-        FmiVersion::V3 => smoke_run3(so, guid, real_vrs),
+        FmiVersion::V2 => smoke_run(so, guid, real_vrs, resources),
+        FmiVersion::V3 => smoke_run3(so, guid, real_vrs, resources),
     }
+}
+
+/// FMI 2.0's fmuResourceLocation of a folder: a `file:` URI of its absolute path, every byte
+/// but the unreserved ones and `/` percent-encoded (RFC 3986; a Windows path as `file:///C:/...`).
+pub fn file_uri(dir: &Path) -> String {
+    let abs = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let path = abs.to_string_lossy().replace('\\', "/");
+    let mut uri = String::from(if path.starts_with('/') { "file://" } else { "file:///" });
+    for b in path.bytes() {
+        match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' | b'/' | b':' => uri.push(b as char),
+            _ => uri.push_str(&format!("%{b:02X}")),
+        }
+    }
+    uri
 }
 
 /// The importer's logger of FMI 3.0 (not variadic: the message comes formatted).
@@ -685,7 +710,7 @@ unsafe extern "C" fn collect_log3(env: *mut c_void, status: i32, category: *cons
 
 /// FMI 3.0: loads the binary, checks that it exports every fmi3 function of the standard and no
 /// fmi2 one, and runs 0.1 s of co-simulation from the start values.
-pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32]) -> Vec<String> {
+pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) -> Vec<String> {
     type Instance = *mut c_void;
     type LogMessage = unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char);
     // fmi3InstantiateCoSimulationTYPE: instanceName, instantiationToken, resourcePath, visible,
@@ -743,10 +768,13 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32]) -> Vec<String> {
         let mut log = Log(Vec::new());
         let name = CString::new("fmu-build-validate").unwrap();
         let token = CString::new(token).unwrap_or_default();
+        // FMI 3.0's resourcePath: the native path of the folder, with a trailing separator.
+        let resource_path =
+            CString::new(format!("{}{}", resources.display(), std::path::MAIN_SEPARATOR)).unwrap_or_default();
         let c = instantiate(
             name.as_ptr(),
             token.as_ptr(),
-            std::ptr::null(),
+            resource_path.as_ptr(),
             false,
             false,
             false,
@@ -812,7 +840,7 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32]) -> Vec<String> {
 }
 
 /// Loads the binary, checks its exports, and runs 0.1 s from the start values.
-pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
+pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> Vec<String> {
     let mut problems = Vec::new();
     // SAFETY: loading our own freshly built FMU binary; its initializers are Rust std's only.
     let lib = match unsafe { libloading::Library::new(so) } {
@@ -880,11 +908,12 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32]) -> Vec<String> {
         };
         let name = CString::new("fmu-build-validate").unwrap();
         let guid = CString::new(guid).unwrap_or_default();
+        let location = CString::new(file_uri(resources)).unwrap_or_default();
         let c = instantiate(
             name.as_ptr(),
             fmi2CoSimulation,
             guid.as_ptr(),
-            c"file:///nonexistent/resources".as_ptr(),
+            location.as_ptr(),
             &callbacks,
             fmi2False,
             fmi2False,

@@ -233,3 +233,50 @@ def test_a_crate_sharing_the_target_folder_cannot_replace_another_crates_fmu(use
     lib.write_text(lib.read_text().replace("GainLag", "OtherLag"))
     run(["cargo", "fmu", "build"], other, env)
     assert (FMUS / "OtherLag.fmu").exists() and [hashlib.sha256(f.read_bytes()).hexdigest() for f in (fmu, fmu3)] == before
+
+
+TABLE_FIELD = '''    /// Gain K of the lag, read from resources/gain.txt at initialization: T dy/dt = K u - y
+    #[variable(vr = 4, name = "K", calculated_parameter)]
+    pub gain: f64,
+'''
+
+TABLE_INIT = '''
+    /// K from the FMU's own resources/gain.txt, as the importer unpacked it.
+    fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
+        let dir = ctx.resource_dir().ok_or("no resource folder: K is read from resources/gain.txt")?;
+        let text = std::fs::read_to_string(dir.join("gain.txt")).map_err(|e| format!("resources/gain.txt: {e}"))?;
+        self.gain = text.trim().parse().map_err(|e| format!("resources/gain.txt: {e}"))?;
+        Ok(())
+    }
+'''
+
+
+def test_a_model_that_reads_its_resources_builds_checks_and_simulates():
+    """Issue 23: a model that reads its packaged resources/ at initialization. `cargo fmu build`'s
+    smoke run and `cargo fmu check` give it the FMU's own unpacked resources/ folder, as an
+    importer does; fmpy then simulates the gain read from it."""
+    crate, env = outside_crate("table-lag", fresh=True)
+    lib = crate / "src" / "lib.rs"
+    src = lib.read_text()
+    src = src.replace("pub time_constant: f64,\n}", "pub time_constant: f64,\n" + TABLE_FIELD + "}")
+    src = src.replace("v.der_y = (v.u - v.y) / self.time_constant;\n    }",
+                      "v.der_y = (v.u * self.gain - v.y) / self.time_constant;\n    }" + TABLE_INIT)
+    src = src.replace("self.y = self.u + (self.y - self.u)", "self.y = self.gain * self.u + (self.y - self.gain * self.u)")
+    assert src.count("self.gain") == 4, src
+    # The template's unit test runs the model without resources: it reads no table.
+    src = src.split("#[cfg(test)]")[0]
+    lib.write_text(src)
+    (crate / "resources").mkdir(exist_ok=True)
+    (crate / "resources" / "gain.txt").write_text("2.5\n")
+    run(["cargo", "fmu", "build"], crate, env)
+    for fmu in (FMUS / "TableLag.fmu", FMUS / "fmi3" / "TableLag.fmu"):
+        with zipfile.ZipFile(fmu) as z:
+            assert z.read("resources/gain.txt") == b"2.5\n"
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                             timeout=900)
+        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+        result = fmpy.simulate_fmu(str(fmu), stop_time=1.0, output_interval=0.01, start_values={"u": 1.0},
+                                   output=["y", "K"])
+        assert result["K"][-1] == 2.5
+        assert abs(result["y"][-1] - 2.5 * (1.0 - math.exp(-1.0 / 0.1))) < 1e-6, result["y"][-1]

@@ -10,7 +10,7 @@
 
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, excitation, excite, run, run_on, status_name, step_size};
-use crate::outcome::{convention, limitation};
+use crate::outcome::{convention, info, limitation};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State, name};
 use crate::{Fmu, Type};
@@ -137,39 +137,86 @@ pub fn instantiate_without_callbacks_or_logger_returns_null_without_crashing(fmu
 }
 
 pub fn instantiate_accepts_every_resource_location_form_and_a_missing_folder(fmu: &Fmu) {
-    let dir = fmu.dir.join("resources with space%");
-    std::fs::create_dir_all(&dir).unwrap();
+    // The FMU's own unpacked resources/, and a copy of it under a name that needs encoding.
     let abs = fmu.dir.join("resources");
+    let dir = fmu.dir.join("resources with space%");
+    copy_tree(&abs, &dir).unwrap_or_else(|e| panic!("{}: copying resources/: {e}", fmu.id));
     let encoded = format!(
         "file://{}",
         dir.display().to_string().replace('%', "%25").replace(' ', "%20")
     );
     assert!(encoded.ends_with("resources%20with%20space%25"));
+    // (location, whether it holds the FMU's resources)
     let locations = [
-        Some(format!("file://{}", abs.display())),
-        Some(format!("file:{}", abs.display())),
-        Some(format!("file://localhost{}", abs.display())),
-        Some(encoded),
-        Some(format!("file://{}/no/such/folder", fmu.dir.display())),
-        Some("http://example.org/resources".into()),
-        Some(String::new()),
-        None,
+        (Some(format!("file://{}", abs.display())), true),
+        (Some(format!("file:{}", abs.display())), true),
+        (Some(format!("file://localhost{}", abs.display())), true),
+        (Some(encoded), true),
+        (Some(format!("file://{}/no/such/folder", fmu.dir.display())), false),
+        (Some("http://example.org/resources".into()), false),
+        (Some(String::new()), false),
+        (None, false),
     ];
-    for loc in locations {
+    let mut needs_them = vec![];
+    for (loc, has_files) in locations {
         let args = Args {
             resources: loc.clone(),
             ..Args::valid(fmu)
         };
         let mut inst = Instance::with(fmu, &args)
             .unwrap_or_else(|log| panic!("{}: resourceLocation {loc:?} refused: {log:?}", fmu.id));
-        inst.initialize();
-        assert_eq!(
-            inst.step(step_size(fmu)),
-            fmi2OK,
-            "{}: after resourceLocation {loc:?}",
-            fmu.id
-        );
+        if has_files {
+            inst.initialize();
+            assert_eq!(
+                inst.step(step_size(fmu)),
+                fmi2OK,
+                "{}: after resourceLocation {loc:?}",
+                fmu.id
+            );
+            continue;
+        }
+        // Without its files a model that reads them cannot initialize: an fmi2Error with a
+        // message is its right answer (the standard only says a missing folder is no reason
+        // to refuse the instance); anything else must run as usual.
+        let s = [inst.setup(0.0, None), inst.enter_init(), inst.exit_init()];
+        if s.iter().all(|s| *s == fmi2OK) {
+            assert_eq!(
+                inst.step(step_size(fmu)),
+                fmi2OK,
+                "{}: after resourceLocation {loc:?}",
+                fmu.id
+            );
+        } else {
+            let log = inst.log();
+            assert!(
+                s.iter().all(|s| *s == fmi2OK || *s == fmi2Error) && log.iter().any(|e| e.status == fmi2Error),
+                "{}: initialization with resourceLocation {loc:?} answered {s:?} with no fmi2Error message: {log:?}",
+                fmu.id
+            );
+            needs_them.push(format!("{loc:?}"));
+        }
     }
+    if !needs_them.is_empty() {
+        info(format!(
+            "initialization needs the FMU's resources: refused with a message for {}",
+            needs_them.join(", ")
+        ));
+    }
+}
+
+/// Copies the folder `from` (files and sub-folders) to `to`.
+fn copy_tree(from: &std::path::Path, to: &std::path::Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for e in std::fs::read_dir(from)? {
+        let e = e?;
+        let target = to.join(e.file_name());
+        if e.file_type()?.is_dir() {
+            copy_tree(&e.path(), &target)?;
+        } else {
+            std::fs::copy(e.path(), target)?;
+        }
+    }
+    Ok(())
 }
 
 // ---- get and set ---------------------------------------------------------------------------
