@@ -353,31 +353,39 @@ mod other {
     pub const GUID: &str = "{00000000-0000-5000-8000-000000000000}";
 }
 
-/// An FMU state made by the Other model, and its instance.
-fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
+/// A co-simulation instance of a model of this binary that is not exported, made through the
+/// runtime's generic functions (what an export of it would call), with a GUID of its own.
+fn generic_instance<M: rustfmu::CoSimulation>(guid: &'static str, name: &CStr) -> (fmi2Component, &'static Log) {
     use rustfmu::__private::api;
     let log: &'static Log = Box::leak(Box::default());
     let cb = callbacks(collect, log as *const Log as *mut _);
-    let guid = CString::new(other::GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance; the generic functions are
-    // what an export of Other would call.
-    unsafe {
-        let c = api::instantiate::<other::Other>(
-            other::GUID,
+    let guid_c = CString::new(guid).unwrap();
+    // SAFETY: valid strings and callbacks that outlive the instance.
+    let c = unsafe {
+        api::instantiate::<M>(
+            guid,
             &[],
-            c"other".as_ptr(),
+            name.as_ptr(),
             fmi2CoSimulation,
-            guid.as_ptr(),
+            guid_c.as_ptr(),
             std::ptr::null(),
             cb,
             fmi2False,
             fmi2False,
-        );
-        assert!(!c.is_null());
-        let mut s: fmi2FMUstate = std::ptr::null_mut();
-        assert_eq!(api::get_fmu_state::<other::Other>(c, &mut s), fmi2OK);
-        (c, s)
-    }
+        )
+    };
+    assert!(!c.is_null(), "{:?}", log.take());
+    (c, log)
+}
+
+/// An FMU state made by the Other model, and its instance.
+fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
+    use rustfmu::__private::api;
+    let (c, _) = generic_instance::<other::Other>(other::GUID, c"other");
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    // SAFETY: a live instance and a valid out pointer.
+    assert_eq!(unsafe { api::get_fmu_state::<other::Other>(c, &mut s) }, fmi2OK);
+    (c, s)
 }
 
 /// Every state function refuses `s` on `c` with a logged error and leaves c as it was.
@@ -624,23 +632,9 @@ mod stateless {
 fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
     use rustfmu::__private::api;
     use stateless::Gain;
-    let log: &'static Log = Box::leak(Box::default());
-    let cb = callbacks(collect, log as *const Log as *mut _);
-    let guid = CString::new(stateless::GUID).unwrap();
-    // SAFETY: valid strings, callbacks that outlive the instance, arrays of the lengths passed.
+    let (c, log) = generic_instance::<Gain>(stateless::GUID, c"gain");
+    // SAFETY: a live instance, arrays of the lengths passed.
     unsafe {
-        let c = api::instantiate::<Gain>(
-            stateless::GUID,
-            &[],
-            c"gain".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            cb,
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(
             api::setup_experiment::<Gain>(c, fmi2False, 0.0, 0.0, fmi2False, 0.0),
             fmi2OK

@@ -4,7 +4,7 @@
 #![allow(dead_code)] // each test binary uses a part
 
 use rustfmu::__private::abi::*;
-use rustfmu::description::{ModelDescription, decode, find_encoded};
+use rustfmu::description::{ModelDescription, decode, find_encoded_for};
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::io::Read;
 use std::path::PathBuf;
@@ -98,10 +98,11 @@ impl Fmu {
             .unwrap_or_else(|e| panic!("{name}.fmu: {e}"))
             .read_to_end(&mut binary)
             .unwrap();
-        let (md, _) = find_encoded(&binary)
-            .and_then(decode)
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
-        let encoded = find_encoded(&binary).unwrap();
+        // The FMI 2.0 description: the binary carries one per version, in whatever order the
+        // linker laid them out.
+        let encoded =
+            find_encoded_for(&binary, rustfmu::description::FmiVersion::V2).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let (md, _) = decode(encoded).unwrap_or_else(|e| panic!("{name}: {e}"));
         let guid = rustfmu::description::guid_string(encoded);
         let so = std::env::temp_dir().join(format!("rustfmu-test-{}-{name}.so", std::process::id()));
         std::fs::write(&so, &binary).unwrap();

@@ -807,46 +807,30 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
             );
             n += 1;
         }
-        for v in with_start(fmu, "Int32") {
-            let want: i32 = v
-                .start
-                .as_deref()
-                .unwrap()
-                .parse()
-                .unwrap_or_else(|e| panic!("{id}: start of {}: {e}", v.name));
-            let mut got = [0i32];
-            let s = inst.call("fmi3GetInt32", |c| unsafe {
-                (api.get_int32)(c, &v.vr, 1, got.as_mut_ptr(), 1)
-            });
-            assert_eq!(
-                (s, got[0]),
-                (fmi3OK, want),
-                "{id}: fmi3GetInt32 of '{}' in Instantiated: {}",
-                v.name,
-                inst.log_text()
-            );
-            n += 1;
+        // Int32 and Enumeration (read as Int64): the start attribute is the integer.
+        macro_rules! integers {
+            ($ty:literal, $get:ident, $t:ty, $name:literal) => {
+                for v in with_start(fmu, $ty) {
+                    let start = v.start.as_deref().unwrap_or_default();
+                    let want: $t = start
+                        .parse()
+                        .unwrap_or_else(|e| panic!("{id}: start '{start}' of {}: {e}", v.name));
+                    let mut got: [$t; 1] = [0];
+                    let s = inst.call($name, |c| unsafe { (api.$get)(c, &v.vr, 1, got.as_mut_ptr(), 1) });
+                    assert_eq!(
+                        (s, got[0]),
+                        (fmi3OK, want),
+                        "{id}: {} of '{}' in Instantiated: {}",
+                        $name,
+                        v.name,
+                        inst.log_text()
+                    );
+                    n += 1;
+                }
+            };
         }
-        for v in with_start(fmu, "Enumeration") {
-            let want: i64 = v
-                .start
-                .as_deref()
-                .unwrap()
-                .parse()
-                .unwrap_or_else(|e| panic!("{id}: start of {}: {e}", v.name));
-            let mut got = [0i64];
-            let s = inst.call("fmi3GetInt64", |c| unsafe {
-                (api.get_int64)(c, &v.vr, 1, got.as_mut_ptr(), 1)
-            });
-            assert_eq!(
-                (s, got[0]),
-                (fmi3OK, want),
-                "{id}: fmi3GetInt64 of '{}' in Instantiated: {}",
-                v.name,
-                inst.log_text()
-            );
-            n += 1;
-        }
+        integers!("Int32", get_int32, i32, "fmi3GetInt32");
+        integers!("Enumeration", get_int64, i64, "fmi3GetInt64");
         for v in with_start(fmu, "Boolean") {
             let want = matches!(v.start.as_deref(), Some("true" | "1"));
             let mut got = [2u8];
@@ -2903,18 +2887,6 @@ pub fn fmi3_a_state_serialized_here_restores_in_another_process_and_continues_id
     }
 }
 
-/// Resident set size in bytes (/proc/self/statm, field 2, in 4 KiB pages).
-fn rss() -> usize {
-    let statm = std::fs::read_to_string("/proc/self/statm")
-        .unwrap_or_else(|e| panic!("/proc/self/statm: {e}: the resident set cannot be measured here"));
-    let pages: usize = statm
-        .split_whitespace()
-        .nth(1)
-        .and_then(|p| p.parse().ok())
-        .unwrap_or_else(|| panic!("/proc/self/statm has no resident-set field: {statm:?}"));
-    pages * 4096
-}
-
 /// One cycle of what an importer does with an instance of each interface: instantiate and free;
 /// in full, also set the inputs, initialize, step, take, serialize and restore a state, and make
 /// a refused call (its message allocates).
@@ -2952,36 +2924,13 @@ fn cycle(fmu: &Fmu3, full: bool) {
 }
 
 /// 10,000 cycles of each kind leave the resident set flat (alone in its process: a worker of
-/// its own under the runner, a test binary of its own in the workspace).
+/// its own under the runner, a test binary of its own in the workspace); the measuring loop is
+/// the FMI 2.0 check's.
 pub fn fmi3_ten_thousand_instantiate_free_cycles_leave_memory_flat(fmu: &Fmu3) {
-    const CYCLES: usize = 10_000;
-    // Allowed growth over the 10,000 cycles: a leak of 32 bytes per cycle would exceed it.
-    const SLACK: usize = 320 * 1024;
     if !fmu.can_snapshot(fmu.md.cs.is_none()) {
         limitation("the FMU cannot serialize its state: the cycles take and restore no FMU state");
     }
-    for full in [false, true] {
-        for _ in 0..500 {
-            cycle(fmu, full);
-        }
-        let before = rss();
-        for _ in 0..CYCLES {
-            cycle(fmu, full);
-        }
-        let after = rss();
-        let what = if full {
-            "instantiate/run/state/free"
-        } else {
-            "instantiate/free"
-        };
-        info(format!("{CYCLES} {what} cycles: RSS {before} -> {after} bytes"));
-        assert!(
-            after <= before + SLACK,
-            "{}: RSS grew by {} bytes over {CYCLES} {what} cycles (allowed {SLACK})",
-            fmu.id,
-            after - before
-        );
-    }
+    crate::checks::memory::cycles_leave_memory_flat(&fmu.id, |full| cycle(fmu, full));
 }
 
 // ---------------------------------------------------------------------------------------------
