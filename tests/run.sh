@@ -46,10 +46,12 @@ echo "== Rust build: every binary and test binary of the workspace, once"
 # per invocation: `cargo run -p fmu-build` or `cargo test -p X` would build the shared
 # dependencies again with other features (the whole dependency tree, minutes on 2 cores), so the
 # steps below run the binaries built here and `cargo test --workspace` only runs what is built.
+# `cargo build --tests` builds what `cargo test --no-run` builds (test binaries, the criterion
+# bench in test mode, binaries, examples) and, in the same invocation, the libraries as such: the
+# runner's Python module (a cdylib without tests) among them. A second `cargo build -p` for the
+# module resolved other features and recompiled about 20 crates (50 s in CI).
 started=$SECONDS
-cargo test --workspace --release --no-run
-# The runner's Python module (a cdylib; it has no tests of its own), for the Python tests.
-cargo build --release -p rustfmu-runner-python --lib
+cargo build --workspace --release --lib --bins --tests --examples
 bash tests/setup-env.sh --part module
 echo "Rust build: $((SECONDS - started)) s"
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
@@ -61,6 +63,20 @@ echo "fmu-build (every target, FMI 2.0 and 3.0): $((SECONDS - started)) s"
 # FMI 2.0 in target/fmu/, FMI 3.0 (the same binaries, with the 3.0 description) in target/fmu/fmi3/.
 fmus=(target/fmu/*.fmu target/fmu/fmi3/*.fmu)
 record "fmu-build (package + validate)" "${#fmus[@]}" 0
+# The FMU build (`cargo build -p <FMU crates>`) must have reused the test build's units: if the two
+# selections resolve other dependency features, cargo compiles the FMU crates' tree twice and the
+# Rust tests below recompile the FMU crates and relink every test binary that links them (190 s in
+# CI before workspace-hack/). Nothing may compile here; if something does, its features go into
+# workspace-hack/Cargo.toml (compare `cargo tree -e features` of both selections).
+reuses_test_build() {
+  local out
+  out=$(cargo test --workspace --release --no-run 2>&1) || { echo "$out"; return 1; }
+  if echo "$out" | grep -E '^ *Compiling '; then
+    echo "the FMU build changed units of the test build (above): see workspace-hack/Cargo.toml"
+    return 1
+  fi
+}
+step "FMU build reused the test build" reuses_test_build
 # The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.
 step "modelDescription/ is up to date" git diff --exit-code --stat -- modelDescription
 n=0
@@ -93,7 +109,7 @@ record "Rust tests" "${p:-0}" "${f:-1}"
 
 echo "== Python tests"
 set +e
-python -m pytest tests/python -q -p no:cacheprovider --ignore=tests/python/test_windows.py --ignore=tests/python/test_aarch64.py 2>&1 | tee "$logs/pytest.log"
+python -m pytest tests/python -q -p no:cacheprovider --durations=15 --ignore=tests/python/test_windows.py --ignore=tests/python/test_aarch64.py 2>&1 | tee "$logs/pytest.log"
 py_status=${PIPESTATUS[0]}
 set -e
 line=$(tail -n 1 "$logs/pytest.log")
@@ -106,7 +122,7 @@ echo "== Windows binaries under wine (C hosts against Linux, the conformance sui
 rm -f target/wine-test/report.txt
 started=$SECONDS
 set +e
-python -m pytest tests/python/test_windows.py tests/python/test_aarch64.py -q -p no:cacheprovider 2>&1 | tee "$logs/pytest-windows.log"
+python -m pytest tests/python/test_windows.py tests/python/test_aarch64.py -q -p no:cacheprovider --durations=15 2>&1 | tee "$logs/pytest-windows.log"
 win_status=${PIPESTATUS[0]}
 set -e
 cat target/wine-test/report.txt 2>/dev/null || true

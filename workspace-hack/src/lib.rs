@@ -1,0 +1,1 @@
+//! No code. This crate only carries dependency features: see its Cargo.toml.
