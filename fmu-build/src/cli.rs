@@ -76,7 +76,8 @@ enum Cmd {
         /// Only checks whose name or group contains this text.
         #[arg(long)]
         filter: Option<String>,
-        /// Longest a check may take, in seconds (default 600).
+        /// Longest a check may take, in seconds (default 30); its process is then killed and the
+        /// check fails.
         #[arg(long)]
         timeout: Option<f64>,
         /// Random call sequences per FMU (default 2000).

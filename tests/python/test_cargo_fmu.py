@@ -280,3 +280,73 @@ def test_a_model_that_reads_its_resources_builds_checks_and_simulates():
                                    output=["y", "K"])
         assert result["K"][-1] == 2.5
         assert abs(result["y"][-1] - 2.5 * (1.0 - math.exp(-1.0 / 0.1))) < 1e-6, result["y"][-1]
+
+
+PI_CONTROL = '''//! A PI controller, u = kp (r - y) + x with Ti dx/dt = kp (r - y), as a user writes one.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A PI controller
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct PiControl {
+    /// Reference r
+    #[variable(vr = 0, input, start = 0.0)]
+    pub r: f64,
+    /// Measurement y
+    #[variable(vr = 1, input, start = 0.0)]
+    pub y: f64,
+    /// Integral part x, the continuous state
+    #[variable(vr = 2, output, initial = exact, start = 0.0, depends = [x])]
+    pub x: f64,
+    /// dx/dt = kp (r - y) / Ti
+    #[variable(vr = 3, name = "der(x)", local, derivative_of = x, depends = [r, y])]
+    pub der_x: f64,
+    /// Command u = kp (r - y) + x
+    #[variable(vr = 4, output, depends = [r, y, x])]
+    pub u: f64,
+    /// Proportional gain
+    #[variable(vr = 5, name = "kp", parameter, tunable, start = 2.0, min > 0.0)]
+    pub kp: f64,
+    /// Integral time
+    #[variable(vr = 6, name = "Ti", parameter, tunable, start = 0.5, unit = "s", min > 0.0)]
+    pub ti: f64,
+    /// Which loop this is
+    #[variable(vr = 7, parameter, start = "loop 1")]
+    pub tag: String,
+}
+
+impl Model for PiControl {
+    fn derivatives<D: Real>(&self, _t: D, v: &mut PiControlContinuous<D>) {
+        v.der_x = (v.r - v.y) * self.kp / self.ti;
+    }
+
+    fn outputs<D: Real>(&self, _t: D, v: &mut PiControlContinuous<D>) {
+        v.u = (v.r - v.y) * self.kp + v.x;
+    }
+}
+
+impl CoSimulation for PiControl {}
+
+rustfmu::export_fmu!(PiControl);
+'''
+
+
+def test_cargo_fmu_check_passes_on_a_pi_controller_with_positive_parameters_and_a_fixed_string():
+    """Issue 23: `cargo fmu check` failed a correct PI controller three times. It set the integral
+    time Ti (min > 0, no max) to its bound 5e-324, which makes dx/dt infinite; it excited the
+    reference and the measurement alike (r = y: the error is 0 and no gain can matter, "none of
+    the tunable parameters changed anything"); and it set the fixed String parameter after
+    initialization, where the standard does not allow it. Checked in FMI 2.0 and 3.0."""
+    crate, env = outside_crate("pi-control", fresh=True)
+    (crate / "src" / "lib.rs").write_text(PI_CONTROL)
+    run(["cargo", "fmu", "build"], crate, env)
+    for fmu in (FMUS / "PiControl.fmu", FMUS / "fmi3" / "PiControl.fmu"):
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                             timeout=900)
+        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    # The gains act: the tunable-parameter check found one that changes the trajectory.
+    result = fmpy.simulate_fmu(str(FMUS / "PiControl.fmu"), stop_time=1.0, output_interval=0.1,
+                               start_values={"r": 1.0, "y": 0.25}, output=["u", "x"])
+    assert abs(result["x"][-1] - 2.0 * 0.75 / 0.5) < 1e-9, result["x"][-1]
+    assert abs(result["u"][-1] - (2.0 * 0.75 + 3.0)) < 1e-9, result["u"][-1]

@@ -513,10 +513,17 @@ pub fn excitation(fmu: &Fmu) -> Vec<(u32, f64)> {
         .collect()
 }
 
-/// Another value than the start value, inside [min, max].
+/// Another value than the start value, inside [min, max]; variables with the same start value
+/// get different ones (spread by value reference): a controller's reference and measurement
+/// excited alike leave its error at 0, and nothing its gains do can be seen.
 pub fn excite(v: &crate::Variable) -> f64 {
     let start = v.start_real().unwrap_or(0.0);
-    let x = if start == 0.0 { 0.1 } else { start * 1.5 };
+    let spread = f64::from(v.vr % 8);
+    let x = if start == 0.0 {
+        0.1 * (1.0 + 0.5 * spread)
+    } else {
+        start * (1.5 + 0.0625 * spread)
+    };
     let x = v.max.map_or(x, |m| x.min(m));
     let x = v.min.map_or(x, |m| x.max(m));
     if x == start {

@@ -45,12 +45,13 @@ pub struct RunOptions {
 }
 
 impl RunOptions {
-    /// Defaults: a timeout of 10 minutes per check, every check, 2000 random sequences.
+    /// Defaults: a timeout of 30 s per check (the slowest check of this project's FMUs takes
+    /// 9 s natively; a hanging FMU should not cost minutes), every check, 2000 random sequences.
     pub fn new(worker_exe: impl Into<PathBuf>, worker_args_prefix: Vec<String>) -> RunOptions {
         RunOptions {
             worker_exe: worker_exe.into(),
             worker_args_prefix,
-            timeout: Duration::from_secs(600),
+            timeout: Duration::from_secs(DEFAULT_TIMEOUT_SECONDS),
             filter: None,
             random_sequences: 0,
             temp_dir: None,
@@ -118,21 +119,24 @@ impl CheckReport {
     }
 }
 
-/// A failure message on one line: its first lines (an `assert_eq!` says what came and what was
-/// expected on the two after the first), at most 300 characters.
+/// A failure message on one line: its first three lines whole (an `assert_eq!` says what came and
+/// what was expected on the two after the first), never cut; the whole message is under
+/// "Failures:" at the end of the report.
 fn summary(message: &str) -> String {
     let lines: Vec<&str> = message
         .lines()
         .map(str::trim)
         .filter(|l| !l.is_empty() && !l.starts_with("(check failed at"))
-        .take(3)
         .collect();
-    let mut s = lines.join(" | ");
-    if s.chars().count() > 300 {
-        s = s.chars().take(297).collect::<String>() + "...";
+    let mut s = lines.iter().take(3).copied().collect::<Vec<_>>().join(" | ");
+    if lines.len() > 3 {
+        s.push_str(&format!(" | ({} more lines under Failures)", lines.len() - 3));
     }
     s
 }
+
+/// The default longest time of one check, in seconds (`--timeout` changes it).
+pub const DEFAULT_TIMEOUT_SECONDS: u64 = 30;
 
 /// What [`run`] found.
 #[derive(Debug, Clone)]
@@ -557,7 +561,7 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
                 let _ = child.kill();
                 let _ = child.wait();
                 crash = Some(format!(
-                    "timed out after {:.0} s and was killed",
+                    "timed out after {} s and was killed (a slow model may need more: --timeout SECONDS)",
                     opts.timeout.as_secs_f64()
                 ));
                 break;
@@ -922,5 +926,32 @@ fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str) -> Resu
     match outcome {
         Outcome::Pass => Ok(()),
         Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 23: a failure's text was cut at 300 characters in the report's line for the check.
+    #[test]
+    fn a_failures_line_keeps_its_text_whole_and_points_to_the_rest() {
+        let long = format!("'T' = {}: the model refused it", "x".repeat(500));
+        let message = format!("{long}\n  left: 1\n right: 2\nmore\nand more\n(check failed at src/x.rs:1)");
+        let c = CheckReport {
+            name: "a_check".into(),
+            group: crate::checks::Group::Calls,
+            outcome: Outcome::Fail(message),
+            limitations: vec![],
+            info: vec![],
+            duration: Duration::from_millis(10),
+        };
+        let line = c.line();
+        assert!(line.contains(&long), "{line}");
+        assert!(
+            line.contains("left: 1 | right: 2 | (2 more lines under Failures)"),
+            "{line}"
+        );
+        assert!(!line.contains("..."), "{line}");
     }
 }

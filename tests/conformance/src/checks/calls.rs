@@ -459,16 +459,36 @@ pub fn nan_and_infinite_values_are_refused_with_a_message_and_change_nothing(fmu
     }
 }
 
-/// The value within [min, max] farthest from the start value that this picks: max, else min,
-/// else ten times the start value.
-fn far(v: &crate::Variable) -> f64 {
+/// Values to retune a Real parameter to, best first: other values than its start value, inside
+/// [min, max] and where a parameter can matter, halfway from the start value towards a declared
+/// bound, else twice and half the start value (1 and -1 for a start value of 0). Never a bound
+/// itself: a bound is a legal value, not a meaningful one (min = 5e-324, "positive", makes a
+/// time constant's derivative infinite), and a model is right to answer it with an error.
+fn retune_values(v: &crate::Variable) -> Vec<f64> {
     let start = v.start_real().unwrap_or(0.0);
-    match (v.min, v.max) {
-        (_, Some(max)) if max != start => max,
-        (Some(min), _) if min != start => min,
-        _ if start != 0.0 => start * 10.0,
-        _ => 1.0,
+    let (lo, hi) = (v.min.unwrap_or(f64::NEG_INFINITY), v.max.unwrap_or(f64::INFINITY));
+    let mut candidates = vec![];
+    if hi.is_finite() && hi > start {
+        candidates.push(start + (hi - start) / 2.0);
     }
+    if lo.is_finite() && lo < start {
+        candidates.push(start - (start - lo) / 2.0);
+    }
+    if start != 0.0 {
+        candidates.extend([start * 2.0, start / 2.0, -start]);
+    } else {
+        candidates.extend([1.0, -1.0, 0.5, -0.5]);
+    }
+    let mut values: Vec<f64> = vec![];
+    for x in candidates {
+        // Inside the bounds, not on them, not a denormal-sized value next to one.
+        let inside = x > lo && x < hi && x.is_finite() && x != start;
+        let meaningful = x == 0.0 || x.abs() > 1e-300;
+        if inside && meaningful && !values.contains(&x) {
+            values.push(x);
+        }
+    }
+    values
 }
 
 /// Another value for an input than the one [`excitation`] gives it, within [min, max]: the
@@ -486,24 +506,46 @@ fn stepped(v: &crate::Variable) -> f64 {
         .unwrap_or(x)
 }
 
-/// Sets a tunable parameter to another value than its start value; the model may refuse one
-/// (an integer mode has a few legal values): then the next is tried. Whether one was accepted.
-fn retune(inst: &mut Instance, p: &crate::Variable) -> bool {
-    let start_i = p.start_integer().unwrap_or(0);
-    for attempt in 0..2 {
-        let s = match p.ty {
-            Type::Real if attempt == 0 => inst.set_real(&[p.vr], &[far(p)]),
-            Type::Integer => inst.set_integer(&[p.vr], &[[start_i + 1, start_i - 1][attempt]]),
-            Type::Boolean if attempt == 0 => inst.set_boolean(&[p.vr], &[!p.start_boolean().unwrap_or(false)]),
-            _ => continue,
-        };
-        inst.log();
-        if s == fmi2OK {
-            return true;
+/// The values a tunable parameter is retuned to, one per attempt: Reals from
+/// [`retune_values`], Integers one above and one below the start value (an integer mode has a
+/// few legal values), a Boolean its negation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Retune {
+    Real(f64),
+    Integer(i32),
+    Boolean(bool),
+}
+
+fn retunes(p: &crate::Variable) -> Vec<Retune> {
+    match p.ty {
+        Type::Real => retune_values(p).into_iter().map(Retune::Real).collect(),
+        Type::Integer => {
+            let start = p.start_integer().unwrap_or(0);
+            [start.checked_add(1), start.checked_sub(1)]
+                .into_iter()
+                .flatten()
+                .filter(|x| p.min.is_none_or(|m| f64::from(*x) >= m) && p.max.is_none_or(|m| f64::from(*x) <= m))
+                .map(Retune::Integer)
+                .collect()
         }
-        assert_eq!(s, fmi2Error, "{}: setting '{}'", inst.fmu.id, p.name);
+        Type::Boolean => vec![Retune::Boolean(!p.start_boolean().unwrap_or(false))],
+        _ => vec![],
     }
-    false
+}
+
+/// Sets a tunable parameter to `value`: whether the model accepted it (a refusal is an
+/// fmi2Error; anything else but fmi2OK fails the check).
+fn retune(inst: &mut Instance, p: &crate::Variable, value: Retune) -> bool {
+    let s = match value {
+        Retune::Real(x) => inst.set_real(&[p.vr], &[x]),
+        Retune::Integer(x) => inst.set_integer(&[p.vr], &[x]),
+        Retune::Boolean(x) => inst.set_boolean(&[p.vr], &[x]),
+    };
+    inst.log();
+    if s != fmi2OK {
+        assert_eq!(s, fmi2Error, "{}: setting '{}' to {value:?}", inst.fmu.id, p.name);
+    }
+    s == fmi2OK
 }
 
 /// A tunable parameter set between steps changes the trajectory from the next step on, and
@@ -535,14 +577,15 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
     let h = 0.1;
     let (k, n) = (5, 10);
     // An excited run of n steps; before step k, the inputs step (`step_inputs`) and the
-    // parameter is set (`p`). Whether the parameter was accepted, and the observations.
-    let trajectory = |p: Option<&crate::Variable>, step_inputs: bool| -> (bool, Vec<Vec<u64>>) {
+    // parameter is set (`p`, to a value). The observations if the model took the value: it may
+    // refuse it when it is set (fmi2Error), or by failing a step after it (a value that makes the
+    // model's derivative non-finite is the model's to refuse; `None` either way).
+    let trajectory = |p: Option<(&crate::Variable, Retune)>, step_inputs: bool| -> Option<Vec<Vec<u64>>> {
         let mut inst = Instance::new(fmu);
         let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
         assert_eq!(inst.set_real(&vrs, &vals), fmi2OK);
         inst.initialize();
         let mut out = vec![inst.observe()];
-        let mut accepted = false;
         for step in 0..n {
             if step == k {
                 if step_inputs {
@@ -555,17 +598,34 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
                         inst.log_text()
                     );
                 }
-                if let Some(p) = p {
-                    accepted = retune(&mut inst, p);
+                if let Some((p, value)) = p
+                    && !retune(&mut inst, p, value)
+                {
+                    return None;
                 }
             }
-            assert_eq!(inst.step(h), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+            let s = inst.step(h);
+            if s != fmi2OK
+                && step >= k
+                && let Some((p, value)) = p
+            {
+                info(format!(
+                    "'{}' = {value:?} set at t = {:.1} s: the model answered the next steps with {} ({}); \
+                     taken as its refusal of that value",
+                    p.name,
+                    k as f64 * h,
+                    status_name(s),
+                    inst.log_text()
+                ));
+                return None;
+            }
+            assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
             out.push(inst.observe());
         }
-        (accepted, out)
+        Some(out)
     };
     let reference = run(fmu, n, h);
-    let stepped_reference = (!inputs.is_empty()).then(|| trajectory(None, true).1);
+    let stepped_reference = (!inputs.is_empty()).then(|| trajectory(None, true).expect("no parameter set"));
     let mut effective = vec![];
     for p in &tunables {
         // Identical up to the change (only the parameter's own value differs), different after.
@@ -587,14 +647,20 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
             }
             (k + 1..=n).any(|s| strip(&out[s]) != strip(&reference[s]))
         };
-        let (accepted, out) = trajectory(Some(p), false);
-        if accepted && differs(&out, &reference) {
-            effective.push(p.name.clone());
-        } else if accepted && let Some(stepped_reference) = &stepped_reference {
-            let (_, out) = trajectory(Some(p), true);
-            if differs(&out, stepped_reference) {
+        // The first value the model takes decides: it acts in the excited run, or else with the
+        // inputs stepped at the same step.
+        for value in retunes(p) {
+            let Some(out) = trajectory(Some((p, value)), false) else {
+                continue;
+            };
+            let acts = differs(&out, &reference)
+                || stepped_reference.as_ref().is_some_and(|stepped_reference| {
+                    trajectory(Some((p, value)), true).is_some_and(|out| differs(&out, stepped_reference))
+                });
+            if acts {
                 effective.push(p.name.clone());
             }
+            break;
         }
     }
     assert!(

@@ -210,3 +210,32 @@ pub fn on_every_fmu(name: &str) {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+/// The failures of a state-table check, one line per function and cause with every state it
+/// happened in and the log of the first: one cause (an instance that cannot initialize, say) is
+/// reported once, not once per state. `kind`: the states' kind ("model-exchange " or "").
+pub(crate) fn one_line_per_cause<S: std::fmt::Debug>(
+    fmu_id: &str,
+    kind: &str,
+    failures: Vec<(&str, String, S, String)>,
+) -> Vec<String> {
+    let mut grouped: Vec<(&str, String, Vec<S>, String)> = vec![];
+    for (function, what, s, log) in failures {
+        match grouped.iter_mut().find(|g| g.0 == function && g.1 == what) {
+            Some(g) => g.2.push(s),
+            None => grouped.push((function, what, vec![s], log)),
+        }
+    }
+    grouped
+        .iter()
+        .map(|(function, what, states, log)| {
+            let many = states.len() > 1;
+            format!(
+                "{fmu_id}: {function} in {kind}state{} {}: {what}; log{}: {log}",
+                if many { "s" } else { "" },
+                states.iter().map(|s| format!("{s:?}")).collect::<Vec<_>>().join(", "),
+                if many { " (in the first)" } else { "" }
+            )
+        })
+        .collect()
+}

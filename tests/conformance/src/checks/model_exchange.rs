@@ -256,9 +256,15 @@ fn cases() -> Vec<Case> {
             answers: &[fmi2OK],
             next: same,
             call: |i, _, s| {
-                let vrs: Vec<u32> = settable(i, Type::String, s).iter().map(|v| v.vr).collect();
-                let v: Vec<fmi2String> = vec![c"".as_ptr(); vrs.len()];
-                // SAFETY: arrays of nvr elements.
+                let vars = settable(i, Type::String, s);
+                let vrs: Vec<u32> = vars.iter().map(|v| v.vr).collect();
+                // Each to its start value (a model may refuse an empty file name, say).
+                let starts: Vec<std::ffi::CString> = vars
+                    .iter()
+                    .map(|v| std::ffi::CString::new(v.start.clone().unwrap_or_default()).unwrap_or_default())
+                    .collect();
+                let v: Vec<fmi2String> = starts.iter().map(|c| c.as_ptr()).collect();
+                // SAFETY: arrays of nvr elements; the strings outlive the call.
                 unsafe { (i.fmu.api.set_string)(i.c, vrs.as_ptr(), vrs.len(), v.as_ptr()) }
             },
         },
@@ -632,8 +638,7 @@ pub fn model_exchange_every_function_in_every_state_answers_as_the_standard_says
             let status = (case.call)(&mut inst, &mut donor, s);
             let log = inst.log();
             let allowed = me::allowed_states(case.function).contains(&s);
-            let at = format!("{}: {} in model-exchange state {s:?}", fmu.id, case.function);
-            let mut fail = |what: String| failures.push(format!("{at}: {what}; log: {log:?}"));
+            let mut fail = |what: String| failures.push((case.function, what, s, format!("{log:?}")));
             if allowed {
                 if !case.answers.contains(&status) {
                     fail(format!(
@@ -664,11 +669,12 @@ pub fn model_exchange_every_function_in_every_state_answers_as_the_standard_says
             }
         }
     }
+    let grouped = super::one_line_per_cause(&fmu.id, "model-exchange ", failures);
     assert!(
-        failures.is_empty(),
+        grouped.is_empty(),
         "{} failures:\n{}",
-        failures.len(),
-        failures.join("\n")
+        grouped.len(),
+        grouped.join("\n")
     );
 }
 
