@@ -845,346 +845,364 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
             "a model declares at least one #[variable(...)]",
         ));
     }
-    check_declarations(&vars, &model)?;
-    let meta = crate::metadata::read().map_err(|e| Error::new(input.ident.span(), e))?;
+    // A declaration the standard forbids is one compile error at the field. The code is still
+    // generated when it can be (the declarations parsed), so that the model's own impls and
+    // `export_fmu!` do not add "the trait bound `M: Variables` is not satisfied" errors after it
+    // (issue 23); a mistake the generator cannot get past (it panics on it) gives the error alone.
+    let problem = check_declarations(&vars, &model).err();
+    let generate = || -> Result<TokenStream> {
+        let meta = crate::metadata::read().map_err(|e| Error::new(input.ident.span(), e))?;
 
-    let internal_state = internal.join("; ");
-    let ident = &input.ident;
-    let identifier = model
-        .identifier
-        .as_ref()
-        .map(|s| s.value())
-        .unwrap_or_else(|| ident.to_string());
-    let description = model.description.clone().unwrap_or_else(|| {
-        let doc = crate::doc_text(&input.attrs);
-        if doc.is_empty() { meta.description.clone() } else { doc }
-    });
-    let (author, version, copyright, license) = (&meta.author, &meta.version, &meta.copyright, &meta.license);
-    let generation_tool = format!("rustfmu {}", env!("CARGO_PKG_VERSION"));
-    let default_experiment = match meta.default_experiment {
-        Some([start, stop, tol, step]) => {
-            let (start, stop, tol, step) = (opt_f64(start), opt_f64(stop), opt_f64(tol), opt_f64(step));
-            quote!(::core::option::Option::Some(#rt::description::DefaultExperiment {
-                start_time: #start, stop_time: #stop, tolerance: #tol, step_size: #step,
-            }))
-        }
-        None => quote!(::core::option::Option::None),
-    };
-    // Every unit the variables use, in order of first use, with its base units.
-    let mut used: Vec<(String, Base)> = Vec::new();
-    for v in &vars {
-        if let Some(u) = &v.unit {
-            let name = u.value();
-            if used.iter().any(|(n, _)| *n == name) {
-                continue;
+        let internal_state = internal.join("; ");
+        let ident = &input.ident;
+        let identifier = model
+            .identifier
+            .as_ref()
+            .map(|s| s.value())
+            .unwrap_or_else(|| ident.to_string());
+        let description = model.description.clone().unwrap_or_else(|| {
+            let doc = crate::doc_text(&input.attrs);
+            if doc.is_empty() { meta.description.clone() } else { doc }
+        });
+        let (author, version, copyright, license) = (&meta.author, &meta.version, &meta.copyright, &meta.license);
+        let generation_tool = format!("rustfmu {}", env!("CARGO_PKG_VERSION"));
+        let default_experiment = match meta.default_experiment {
+            Some([start, stop, tol, step]) => {
+                let (start, stop, tol, step) = (opt_f64(start), opt_f64(stop), opt_f64(tol), opt_f64(step));
+                quote!(::core::option::Option::Some(#rt::description::DefaultExperiment {
+                    start_time: #start, stop_time: #stop, tolerance: #tol, step_size: #step,
+                }))
             }
-            let base = model
-                .units
-                .iter()
-                .find(|(n, _, _)| *n == name)
-                .map(|(_, b, _)| *b)
-                .or_else(|| units::default_unit(&name))
-                .expect("checked");
-            used.push((name, base));
-        }
-    }
-    let unit_tokens = used.iter().map(|(name, b)| {
-        let [kg, m, s, a, k, mol, cd, rad] = b.exps;
-        let (factor, offset) = (b.factor, b.offset);
-        quote!(#rt::description::Unit {
-            name: #name,
-            base: #rt::description::BaseUnit { kg: #kg, m: #m, s: #s, a: #a, k: #k, mol: #mol, cd: #cd, rad: #rad, factor: #factor, offset: #offset },
-        })
-    });
-    let category_tokens = model
-        .categories
-        .iter()
-        .map(|(n, d, _)| quote!(#rt::description::LogCategory { name: #n, description: #d }));
-    let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v, &vars)).collect();
-
-    let start_fields = vars.iter().map(|v| {
-        let f = &v.field;
-        let value = match (v.kind, &v.start) {
-            (Kind::Str, Some(e)) => quote!(::std::string::String::from(#e)),
-            (Kind::Str, None) => quote!(::std::string::String::new()),
-            (_, Some(e)) => quote!(#e),
-            (Kind::Real, None) => quote!(0.0),
-            (Kind::Integer, None) => quote!(0),
-            (Kind::Boolean, None) => quote!(false),
-            (Kind::Enum, None) => unreachable!("checked"),
+            None => quote!(::core::option::Option::None),
         };
-        quote!(#f: #value)
-    });
-    let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
-    let numeric: Vec<&Var> = vars.iter().filter(|v| v.kind != Kind::Str).collect();
-    let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
-    let get_arms = numeric.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => #rt::FmiType::to_value(&self.#f))
-    });
-    let set_arms = numeric.iter().map(|v| {
-        let (f, vr, ty) = (&v.field, v.vr, &v.ty);
-        quote!(#vr => match <#ty as #rt::FmiType>::from_value(value) {
-            ::core::option::Option::Some(v) => { self.#f = v; true }
-            ::core::option::Option::None => false,
-        })
-    });
-    let get_str_arms = strings.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
-    });
-    let set_str_arms = strings.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => { self.#f = ::std::string::String::from(value); true })
-    });
-    // The Real variables the model computes (inputs and parameters are checked when set): the
-    // runtime asks after every step.
-    let computed: Vec<(usize, &Ident)> = vars
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| {
-            v.kind == Kind::Real
-                && matches!(
-                    v.causality,
-                    Causality::Output | Causality::Local | Causality::CalculatedParameter | Causality::Independent
-                )
-        })
-        .map(|(i, v)| (i, &v.field))
-        .collect();
-    let finite_checks = computed.iter().map(|(i, f)| {
-        quote!(if !::core::primitive::f64::is_finite(self.#f) {
-            return ::core::option::Option::Some(#i);
-        })
-    });
-    // Checks that need the values of the declarations (start within bounds, integral bounds
-    // for Integers), evaluated at compile time and reported at the field.
-    let value_checks = vars.iter().enumerate().map(|(i, v)| {
-        let span = v.span;
-        let prefix = format!("variable '{}' (field `{}`): ", v.name, v.field);
-        quote_spanned! {span=>
-            const _: () = match #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]) {
-                ::core::result::Result::Ok(()) => (),
-                ::core::result::Result::Err(#rt::description::ValueError::MinNotFinite) => panic!(concat!(#prefix, "min is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::MaxNotFinite) => panic!(concat!(#prefix, "max is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::MinAboveMax) => panic!(concat!(#prefix, "min is above max")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerMin) => panic!(concat!(#prefix, "an Integer's min must be an integer within i32")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerMax) => panic!(concat!(#prefix, "an Integer's max must be an integer within i32")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartNotFinite) => panic!(concat!(#prefix, "the start value is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartBelowMin) => panic!(concat!(#prefix, "the start value is below min")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartAboveMax) => panic!(concat!(#prefix, "the start value is above max")),
-                ::core::result::Result::Err(#rt::description::ValueError::Nominal) => panic!(concat!(#prefix, "nominal must be finite and > 0")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartNotAnItem) => panic!(concat!(#prefix, "the start value is no item of the enumeration")),
-            };
+        // Every unit the variables use, in order of first use, with its base units.
+        let mut used: Vec<(String, Base)> = Vec::new();
+        for v in &vars {
+            if let Some(u) = &v.unit {
+                let name = u.value();
+                if used.iter().any(|(n, _)| *n == name) {
+                    continue;
+                }
+                let base = model
+                    .units
+                    .iter()
+                    .find(|(n, _, _)| *n == name)
+                    .map(|(_, b, _)| *b)
+                    .or_else(|| units::default_unit(&name))
+                    .expect("checked");
+                used.push((name, base));
+            }
         }
-    });
-    // A type the derive does not know by name is taken for a #[derive(FmuEnum)] enum; make sure it
-    // is one (a type alias such as `type Real = f64` would otherwise get an Integer start).
-    let enum_checks = vars.iter().filter(|v| v.kind == Kind::Enum).map(|v| {
-        let (ty, span) = (&v.ty, v.ty.span());
-        let message = format!(
-            "variable '{}': its type is read as a #[derive(FmuEnum)] enumeration; write f64, i32, bool or String by name (no alias)",
-            v.name
+        let unit_tokens = used.iter().map(|(name, b)| {
+            let [kg, m, s, a, k, mol, cd, rad] = b.exps;
+            let (factor, offset) = (b.factor, b.offset);
+            quote!(#rt::description::Unit {
+                name: #name,
+                base: #rt::description::BaseUnit { kg: #kg, m: #m, s: #s, a: #a, k: #k, mol: #mol, cd: #cd, rad: #rad, factor: #factor, offset: #offset },
+            })
+        });
+        let category_tokens = model
+            .categories
+            .iter()
+            .map(|(n, d, _)| quote!(#rt::description::LogCategory { name: #n, description: #d }));
+        let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v, &vars)).collect();
+
+        let start_fields = vars.iter().map(|v| {
+            let f = &v.field;
+            let value = match (v.kind, &v.start) {
+                (Kind::Str, Some(e)) => quote!(::std::string::String::from(#e)),
+                (Kind::Str, None) => quote!(::std::string::String::new()),
+                (_, Some(e)) => quote!(#e),
+                (Kind::Real, None) => quote!(0.0),
+                (Kind::Integer, None) => quote!(0),
+                (Kind::Boolean, None) => quote!(false),
+                (Kind::Enum, None) => unreachable!("checked"),
+            };
+            quote!(#f: #value)
+        });
+        let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
+        let numeric: Vec<&Var> = vars.iter().filter(|v| v.kind != Kind::Str).collect();
+        let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
+        let get_arms = numeric.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => #rt::FmiType::to_value(&self.#f))
+        });
+        let set_arms = numeric.iter().map(|v| {
+            let (f, vr, ty) = (&v.field, v.vr, &v.ty);
+            quote!(#vr => match <#ty as #rt::FmiType>::from_value(value) {
+                ::core::option::Option::Some(v) => { self.#f = v; true }
+                ::core::option::Option::None => false,
+            })
+        });
+        let get_str_arms = strings.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
+        });
+        let set_str_arms = strings.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => { self.#f = ::std::string::String::from(value); true })
+        });
+        // The Real variables the model computes (inputs and parameters are checked when set): the
+        // runtime asks after every step.
+        let computed: Vec<(usize, &Ident)> = vars
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| {
+                v.kind == Kind::Real
+                    && matches!(
+                        v.causality,
+                        Causality::Output | Causality::Local | Causality::CalculatedParameter | Causality::Independent
+                    )
+            })
+            .map(|(i, v)| (i, &v.field))
+            .collect();
+        let finite_checks = computed.iter().map(|(i, f)| {
+            quote!(if !::core::primitive::f64::is_finite(self.#f) {
+                return ::core::option::Option::Some(#i);
+            })
+        });
+        // Checks that need the values of the declarations (start within bounds, integral bounds
+        // for Integers), evaluated at compile time and reported at the field.
+        let value_checks = vars.iter().enumerate().map(|(i, v)| {
+            let span = v.span;
+            let prefix = format!("variable '{}' (field `{}`): ", v.name, v.field);
+            quote_spanned! {span=>
+                const _: () = match #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]) {
+                    ::core::result::Result::Ok(()) => (),
+                    ::core::result::Result::Err(#rt::description::ValueError::MinNotFinite) => panic!(concat!(#prefix, "min is not a finite number")),
+                    ::core::result::Result::Err(#rt::description::ValueError::MaxNotFinite) => panic!(concat!(#prefix, "max is not a finite number")),
+                    ::core::result::Result::Err(#rt::description::ValueError::MinAboveMax) => panic!(concat!(#prefix, "min is above max")),
+                    ::core::result::Result::Err(#rt::description::ValueError::IntegerMin) => panic!(concat!(#prefix, "an Integer's min must be an integer within i32")),
+                    ::core::result::Result::Err(#rt::description::ValueError::IntegerMax) => panic!(concat!(#prefix, "an Integer's max must be an integer within i32")),
+                    ::core::result::Result::Err(#rt::description::ValueError::StartNotFinite) => panic!(concat!(#prefix, "the start value is not a finite number")),
+                    ::core::result::Result::Err(#rt::description::ValueError::StartBelowMin) => panic!(concat!(#prefix, "the start value is below min")),
+                    ::core::result::Result::Err(#rt::description::ValueError::StartAboveMax) => panic!(concat!(#prefix, "the start value is above max")),
+                    ::core::result::Result::Err(#rt::description::ValueError::Nominal) => panic!(concat!(#prefix, "nominal must be finite and > 0")),
+                    ::core::result::Result::Err(#rt::description::ValueError::StartNotAnItem) => panic!(concat!(#prefix, "the start value is no item of the enumeration")),
+                };
+            }
+        });
+        // A type the derive does not know by name is taken for a #[derive(FmuEnum)] enum; make sure it
+        // is one (a type alias such as `type Real = f64` would otherwise get an Integer start).
+        let enum_checks = vars.iter().filter(|v| v.kind == Kind::Enum).map(|v| {
+            let (ty, span) = (&v.ty, v.ty.span());
+            let message = format!(
+                "variable '{}': its type is read as a #[derive(FmuEnum)] enumeration; write f64, i32, bool or String by name (no alias)",
+                v.name
+            );
+            quote_spanned! {span=>
+                const _: () = if !matches!(<#ty as #rt::FmiType>::TYPE, #rt::description::VarType::Enumeration) {
+                    panic!(#message)
+                };
+            }
+        });
+        // The equations: every continuous Real that is not a parameter, as a struct generic over
+        // the number type; states in the order of their derivatives' declarations.
+        let vis = &input.vis;
+        let cont_ident = Ident::new(&format!("{ident}Continuous"), ident.span());
+        let cont: Vec<&Var> = vars.iter().filter(|v| in_equations(v)).collect();
+        let cont_fields = cont.iter().map(|v| {
+            let f = &v.field;
+            let doc = format!("'{}' (vr {})", v.name, v.vr);
+            quote!(#[doc = #doc] pub #f: D)
+        });
+        let cont_doc = format!(
+            "The continuous variables of [`{ident}`] in the number type `D` (generated by `#[derive(Model)]`): what its equations are given (inputs, states) and compute (derivatives, outputs, locals)."
         );
-        quote_spanned! {span=>
-            const _: () = if !matches!(<#ty as #rt::FmiType>::TYPE, #rt::description::VarType::Enumeration) {
-                panic!(#message)
-            };
-        }
-    });
-    // The equations: every continuous Real that is not a parameter, as a struct generic over
-    // the number type; states in the order of their derivatives' declarations.
-    let vis = &input.vis;
-    let cont_ident = Ident::new(&format!("{ident}Continuous"), ident.span());
-    let cont: Vec<&Var> = vars.iter().filter(|v| in_equations(v)).collect();
-    let cont_fields = cont.iter().map(|v| {
-        let f = &v.field;
-        let doc = format!("'{}' (vr {})", v.name, v.vr);
-        quote!(#[doc = #doc] pub #f: D)
-    });
-    let cont_doc = format!(
-        "The continuous variables of [`{ident}`] in the number type `D` (generated by `#[derive(Model)]`): what its equations are given (inputs, states) and compute (derivatives, outputs, locals)."
-    );
-    let derivs: Vec<&Var> = vars.iter().filter(|v| v.derivative_of.is_some()).collect();
-    let states: Vec<&Var> = derivs
-        .iter()
-        .map(|d| {
-            let n = &d.derivative_of.as_ref().expect("filtered").0;
-            vars.iter()
-                .find(|v| v.name == *n)
-                .or_else(|| vars.iter().find(|v| v.field == n))
-                .expect("checked")
+        let derivs: Vec<&Var> = vars.iter().filter(|v| v.derivative_of.is_some()).collect();
+        let states: Vec<&Var> = derivs
+            .iter()
+            .map(|d| {
+                let n = &d.derivative_of.as_ref().expect("filtered").0;
+                vars.iter()
+                    .find(|v| v.name == *n)
+                    .or_else(|| vars.iter().find(|v| v.field == n))
+                    .expect("checked")
+            })
+            .collect();
+        let n_states = states.len();
+        let state_vrs = states.iter().map(|v| v.vr);
+        let deriv_vrs = derivs.iter().map(|v| v.vr);
+        let nominals = states.iter().map(|v| match &v.nominal {
+            Some(e) => quote!((#e) as f64),
+            None => quote!(1.0),
+        });
+        let state_fields: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
+        let deriv_fields: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
+        let state_idx: Vec<usize> = (0..n_states).collect();
+        let known = |v: &Var| v.causality == Causality::Input || is_state(&vars, v);
+        let cont_gather = cont.iter().map(|v| {
+            let f = &v.field;
+            quote!(#f: <D as ::core::convert::From<f64>>::from(self.#f))
+        });
+        let cont_store = cont.iter().filter(|v| !known(v)).map(|v| {
+            let f = &v.field;
+            quote!(self.#f = c.#f;)
+        });
+        let cont_slots = cont.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(&mut c.#f))
+        });
+        let known_vrs: Vec<u32> = cont.iter().filter(|v| known(v)).map(|v| v.vr).collect();
+        let known_check = if known_vrs.is_empty() {
+            quote!(false)
+        } else {
+            quote!(matches!(vr, #(#known_vrs)|*))
+        };
+
+        let manifest = meta.manifest.as_ref().map(|p| {
+            let p = p.display().to_string();
+            quote!(
+                const _: &[u8] = include_bytes!(#p);
+            )
+        });
+
+        Ok(quote! {
+            #[doc = #cont_doc]
+            #[allow(non_snake_case)]
+            #[derive(Clone, Copy, Debug, PartialEq)]
+            #vis struct #cont_ident<D> {
+                #(#cont_fields,)*
+                #[doc(hidden)]
+                pub _number_type: ::core::marker::PhantomData<D>,
+            }
+
+            impl #rt::Variables for #ident {
+                type Continuous<D: ::core::marker::Copy> = #cont_ident<D>;
+                type States = [f64; #n_states];
+                const STATES: &'static [u32] = &[#(#state_vrs),*];
+                const DERIVATIVES: &'static [u32] = &[#(#deriv_vrs),*];
+                const NOMINALS: &'static [f64] = &[#(#nominals),*];
+
+                #[inline]
+                fn continuous<D: #rt::Real>(&self) -> #cont_ident<D> {
+                    #cont_ident { #(#cont_gather,)* _number_type: ::core::marker::PhantomData }
+                }
+
+                #[inline]
+                fn store_continuous(&mut self, c: &#cont_ident<f64>) {
+                    let _ = c;
+                    #(#cont_store)*
+                }
+
+                #[inline]
+                fn continuous_slot<D: ::core::marker::Copy>(c: &mut #cont_ident<D>, vr: u32) -> ::core::option::Option<&mut D> {
+                    let _ = &c;
+                    match vr {
+                        #(#cont_slots,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                #[inline]
+                fn is_known(vr: u32) -> bool {
+                    #known_check
+                }
+
+                #[inline]
+                fn states(&self) -> [f64; #n_states] {
+                    [#(self.#state_fields),*]
+                }
+
+                #[inline]
+                fn set_states(&mut self, x: &[f64; #n_states]) {
+                    let _ = x;
+                    #(self.#state_fields = x[#state_idx];)*
+                }
+
+                #[inline]
+                fn states_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
+                    let _ = c;
+                    [#(c.#state_fields),*]
+                }
+
+                #[inline]
+                fn set_states_of(c: &mut #cont_ident<f64>, x: &[f64; #n_states]) {
+                    let _ = (&c, x);
+                    #(c.#state_fields = x[#state_idx];)*
+                }
+
+                #[inline]
+                fn derivatives_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
+                    let _ = c;
+                    [#(c.#deriv_fields),*]
+                }
+
+                const DESCRIPTION: #rt::description::ModelDescription = #rt::description::ModelDescription {
+                    model_identifier: #identifier,
+                    description: #description,
+                    author: #author,
+                    version: #version,
+                    copyright: #copyright,
+                    license: #license,
+                    generation_tool: #generation_tool,
+                    default_experiment: #default_experiment,
+                    units: &[#(#unit_tokens),*],
+                    log_categories: &[#(#category_tokens),*],
+                    variables: &[#(#variable_tokens),*],
+                    internal_state: #internal_state,
+                };
+
+                fn start() -> Self {
+                    Self { #(#start_fields,)* #(#other_fields,)* }
+                }
+
+                #[inline]
+                fn get(&self, vr: u32) -> ::core::option::Option<#rt::Value> {
+                    match vr {
+                        #(#get_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                #[inline]
+                fn set(&mut self, vr: u32, value: #rt::Value) -> bool {
+                    let _ = &value;
+                    match vr {
+                        #(#set_arms,)*
+                        _ => false,
+                    }
+                }
+
+                #[inline]
+                fn non_finite_computed(&self) -> ::core::option::Option<usize> {
+                    // One scalar test per field (an OR of them all, vectorized, read the fields the
+                    // step had just written through wider loads and stalled store forwarding).
+                    #(#finite_checks)*
+                    ::core::option::Option::None
+                }
+
+                fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {
+                    match vr {
+                        #(#get_str_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                fn set_string(&mut self, vr: u32, value: &str) -> bool {
+                    let _ = value;
+                    match vr {
+                        #(#set_str_arms,)*
+                        _ => false,
+                    }
+                }
+            }
+
+            #(#value_checks)*
+            #(#enum_checks)*
+            #manifest
         })
-        .collect();
-    let n_states = states.len();
-    let state_vrs = states.iter().map(|v| v.vr);
-    let deriv_vrs = derivs.iter().map(|v| v.vr);
-    let nominals = states.iter().map(|v| match &v.nominal {
-        Some(e) => quote!((#e) as f64),
-        None => quote!(1.0),
-    });
-    let state_fields: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
-    let deriv_fields: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
-    let state_idx: Vec<usize> = (0..n_states).collect();
-    let known = |v: &Var| v.causality == Causality::Input || is_state(&vars, v);
-    let cont_gather = cont.iter().map(|v| {
-        let f = &v.field;
-        quote!(#f: <D as ::core::convert::From<f64>>::from(self.#f))
-    });
-    let cont_store = cont.iter().filter(|v| !known(v)).map(|v| {
-        let f = &v.field;
-        quote!(self.#f = c.#f;)
-    });
-    let cont_slots = cont.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(&mut c.#f))
-    });
-    let known_vrs: Vec<u32> = cont.iter().filter(|v| known(v)).map(|v| v.vr).collect();
-    let known_check = if known_vrs.is_empty() {
-        quote!(false)
-    } else {
-        quote!(matches!(vr, #(#known_vrs)|*))
     };
-
-    let manifest = meta.manifest.as_ref().map(|p| {
-        let p = p.display().to_string();
-        quote!(
-            const _: &[u8] = include_bytes!(#p);
-        )
-    });
-
-    Ok(quote! {
-        #[doc = #cont_doc]
-        #[allow(non_snake_case)]
-        #[derive(Clone, Copy, Debug, PartialEq)]
-        #vis struct #cont_ident<D> {
-            #(#cont_fields,)*
-            #[doc(hidden)]
-            pub _number_type: ::core::marker::PhantomData<D>,
+    match (
+        problem,
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(generate)),
+    ) {
+        (None, Ok(generated)) => generated,
+        (None, Err(panic)) => std::panic::resume_unwind(panic),
+        (Some(problem), Ok(Ok(generated))) => {
+            let error = problem.to_compile_error();
+            Ok(quote!(#generated #error))
         }
-
-        impl #rt::Variables for #ident {
-            type Continuous<D: ::core::marker::Copy> = #cont_ident<D>;
-            type States = [f64; #n_states];
-            const STATES: &'static [u32] = &[#(#state_vrs),*];
-            const DERIVATIVES: &'static [u32] = &[#(#deriv_vrs),*];
-            const NOMINALS: &'static [f64] = &[#(#nominals),*];
-
-            #[inline]
-            fn continuous<D: #rt::Real>(&self) -> #cont_ident<D> {
-                #cont_ident { #(#cont_gather,)* _number_type: ::core::marker::PhantomData }
-            }
-
-            #[inline]
-            fn store_continuous(&mut self, c: &#cont_ident<f64>) {
-                let _ = c;
-                #(#cont_store)*
-            }
-
-            #[inline]
-            fn continuous_slot<D: ::core::marker::Copy>(c: &mut #cont_ident<D>, vr: u32) -> ::core::option::Option<&mut D> {
-                let _ = &c;
-                match vr {
-                    #(#cont_slots,)*
-                    _ => ::core::option::Option::None,
-                }
-            }
-
-            #[inline]
-            fn is_known(vr: u32) -> bool {
-                #known_check
-            }
-
-            #[inline]
-            fn states(&self) -> [f64; #n_states] {
-                [#(self.#state_fields),*]
-            }
-
-            #[inline]
-            fn set_states(&mut self, x: &[f64; #n_states]) {
-                let _ = x;
-                #(self.#state_fields = x[#state_idx];)*
-            }
-
-            #[inline]
-            fn states_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
-                let _ = c;
-                [#(c.#state_fields),*]
-            }
-
-            #[inline]
-            fn set_states_of(c: &mut #cont_ident<f64>, x: &[f64; #n_states]) {
-                let _ = (&c, x);
-                #(c.#state_fields = x[#state_idx];)*
-            }
-
-            #[inline]
-            fn derivatives_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
-                let _ = c;
-                [#(c.#deriv_fields),*]
-            }
-
-            const DESCRIPTION: #rt::description::ModelDescription = #rt::description::ModelDescription {
-                model_identifier: #identifier,
-                description: #description,
-                author: #author,
-                version: #version,
-                copyright: #copyright,
-                license: #license,
-                generation_tool: #generation_tool,
-                default_experiment: #default_experiment,
-                units: &[#(#unit_tokens),*],
-                log_categories: &[#(#category_tokens),*],
-                variables: &[#(#variable_tokens),*],
-                internal_state: #internal_state,
-            };
-
-            fn start() -> Self {
-                Self { #(#start_fields,)* #(#other_fields,)* }
-            }
-
-            #[inline]
-            fn get(&self, vr: u32) -> ::core::option::Option<#rt::Value> {
-                match vr {
-                    #(#get_arms,)*
-                    _ => ::core::option::Option::None,
-                }
-            }
-
-            #[inline]
-            fn set(&mut self, vr: u32, value: #rt::Value) -> bool {
-                let _ = &value;
-                match vr {
-                    #(#set_arms,)*
-                    _ => false,
-                }
-            }
-
-            #[inline]
-            fn non_finite_computed(&self) -> ::core::option::Option<usize> {
-                // One scalar test per field (an OR of them all, vectorized, read the fields the
-                // step had just written through wider loads and stalled store forwarding).
-                #(#finite_checks)*
-                ::core::option::Option::None
-            }
-
-            fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {
-                match vr {
-                    #(#get_str_arms,)*
-                    _ => ::core::option::Option::None,
-                }
-            }
-
-            fn set_string(&mut self, vr: u32, value: &str) -> bool {
-                let _ = value;
-                match vr {
-                    #(#set_str_arms,)*
-                    _ => false,
-                }
-            }
-        }
-
-        #(#value_checks)*
-        #(#enum_checks)*
-        #manifest
-    })
+        (Some(problem), _) => Err(problem),
+    }
 }
