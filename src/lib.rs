@@ -49,6 +49,7 @@ extern crate self as rustfmu;
 pub mod description;
 mod model;
 pub mod solver;
+pub mod testing;
 mod value;
 
 pub use model::{CoSimulation, Context, Model, Real, Standalone, StateVector, StepFailure, Variables};

@@ -2,8 +2,7 @@
 //! model exported into this test binary.
 
 use rustfmu::__private::abi::*;
-use std::ffi::{CStr, CString, c_char};
-use std::sync::Mutex;
+use std::ffi::{CStr, CString};
 
 mod model {
     use rustfmu::prelude::*;
@@ -67,21 +66,10 @@ mod model {
 }
 use model::*;
 
-static LOG: Mutex<Vec<(String, String)>> = Mutex::new(Vec::new());
-
-unsafe extern "C" fn collect(
-    _env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    _status: fmi2Status,
-    category: fmi2String,
-    _message: fmi2String,
-    text: *const c_char,
-) {
-    // SAFETY: the runtime always logs "%s" with one NUL-terminated argument.
-    let (c, t) = unsafe { (CStr::from_ptr(category), CStr::from_ptr(text)) };
-    LOG.lock()
-        .unwrap()
-        .push((c.to_string_lossy().into_owned(), t.to_string_lossy().into_owned()));
+/// What every instance of this file logs (one log: the tests look for their own messages).
+fn log() -> &'static rustfmu::testing::Log {
+    static LOG: std::sync::OnceLock<&'static rustfmu::testing::Log> = std::sync::OnceLock::new();
+    LOG.get_or_init(rustfmu::testing::Log::leak)
 }
 
 fn instance(logging_on: bool) -> fmi2Component {
@@ -89,26 +77,7 @@ fn instance(logging_on: bool) -> fmi2Component {
 }
 
 fn instance_with_resources(logging_on: bool, resources: Option<&std::path::Path>) -> fmi2Component {
-    let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
-        // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
-        logger: Some(unsafe {
-            std::mem::transmute::<
-                unsafe extern "C" fn(
-                    fmi2ComponentEnvironment,
-                    fmi2String,
-                    fmi2Status,
-                    fmi2String,
-                    fmi2String,
-                    *const c_char,
-                ),
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-            >(collect)
-        }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
-    }));
+    let callbacks = rustfmu::testing::callbacks(log());
     let guid = CString::new(model::__rustfmu_fmi2_exports::GUID).unwrap();
     let uri = resources.map(|d| CString::new(format!("file://{}", d.display())).unwrap());
     // SAFETY: valid strings and callbacks that outlive the instance (leaked).
@@ -186,7 +155,7 @@ fn a_model_logs_under_its_own_declared_category() {
         assert_eq!(fmi2SetDebugLogging(c, fmi2True, 1, unknown.as_ptr()), fmi2Error);
         fmi2FreeInstance(c);
     }
-    let log = LOG.lock().unwrap();
+    let log: Vec<(String, String)> = log().entries().into_iter().map(|e| (e.category, e.text)).collect();
     assert!(
         log.iter()
             .any(|(cat, text)| cat == "logGreetings" && text == "hello, world"),

@@ -66,38 +66,13 @@ mod probe {
 }
 use probe::*;
 
-/// One instance's log, reached through its componentEnvironment.
-#[derive(Default)]
-struct Log {
-    entries: Mutex<Vec<(fmi2Status, String)>>,
-}
-
-impl Log {
-    fn take(&self) -> Vec<(fmi2Status, String)> {
-        std::mem::take(&mut *self.entries.lock().unwrap())
-    }
-}
-
-unsafe extern "C" fn collect(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-    text: *const c_char,
-) {
-    // SAFETY: env is the &'static Log given at instantiation; the runtime always logs "%s" with
-    // one NUL-terminated argument.
-    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
-    log.entries
-        .lock()
-        .unwrap()
-        .push((status, text.to_string_lossy().into_owned()));
-}
+use rustfmu::testing::Log;
 
 type Collector =
     unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, *const c_char);
 
+/// Callbacks with a logger of this file's own (one that calls back into the FMU); the
+/// recording ones are `rustfmu::testing::callbacks`.
 fn callbacks(logger: Collector, env: *mut std::ffi::c_void) -> &'static fmi2CallbackFunctions {
     Box::leak(Box::new(fmi2CallbackFunctions {
         // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
@@ -116,8 +91,8 @@ fn callbacks(logger: Collector, env: *mut std::ffi::c_void) -> &'static fmi2Call
 
 /// An instance named `name` and its log; NULL when refused.
 fn instantiate(name: &CStr) -> (fmi2Component, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    let cb = callbacks(collect, log as *const Log as *mut _);
+    let log = Log::leak();
+    let cb = rustfmu::testing::callbacks(log);
     let guid = CString::new(probe::__rustfmu_fmi2_exports::GUID).unwrap();
     // SAFETY: valid strings and callbacks that outlive the instance (leaked).
     let c = unsafe {
@@ -135,7 +110,7 @@ fn instantiate(name: &CStr) -> (fmi2Component, &'static Log) {
 }
 
 fn assert_logged(log: &Log, status: fmi2Status, words: &[&str]) {
-    let entries = log.take();
+    let entries = log.take_texts();
     assert!(
         entries
             .iter()
@@ -165,7 +140,7 @@ fn initialized(u: f64) -> (fmi2Component, &'static Log) {
     unsafe {
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2SetReal(c, &0, 1, &u), fmi2OK);
-        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take());
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take_texts());
     }
     (c, log)
 }
@@ -234,7 +209,7 @@ fn an_initialization_that_computes_a_non_finite_value_is_an_error_naming_it() {
         assert_logged(log, fmi2Error, &["fmi2ExitInitializationMode", "'power' (vr 2) = inf"]);
         // Nothing changed: still in initialization mode, and a good input initializes it.
         assert_eq!(fmi2SetReal(c, &0, 1, &3.0), fmi2OK);
-        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take());
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.take_texts());
         assert_eq!(get_reals(c, &[2]).1, [9.0]);
         fmi2FreeInstance(c);
     }
@@ -357,8 +332,8 @@ mod other {
 /// runtime's generic functions (what an export of it would call), with a GUID of its own.
 fn generic_instance<M: rustfmu::CoSimulation>(guid: &'static str, name: &CStr) -> (fmi2Component, &'static Log) {
     use rustfmu::__private::api;
-    let log: &'static Log = Box::leak(Box::default());
-    let cb = callbacks(collect, log as *const Log as *mut _);
+    let log = Log::leak();
+    let cb = rustfmu::testing::callbacks(log);
     let guid_c = CString::new(guid).unwrap();
     // SAFETY: valid strings and callbacks that outlive the instance.
     let c = unsafe {
@@ -374,7 +349,7 @@ fn generic_instance<M: rustfmu::CoSimulation>(guid: &'static str, name: &CStr) -
             fmi2False,
         )
     };
-    assert!(!c.is_null(), "{:?}", log.take());
+    assert!(!c.is_null(), "{:?}", log.take_texts());
     (c, log)
 }
 
@@ -425,7 +400,12 @@ fn assert_every_state_function_refuses(c: fmi2Component, log: &Log, s: fmi2FMUst
     let mut t = f64::NAN;
     unsafe {
         assert_eq!(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &mut t), fmi2OK);
-        assert_eq!(fmi2DoStep(c, t, 0.1, fmi2True), fmi2OK, "{what}: {:?}", log.take());
+        assert_eq!(
+            fmi2DoStep(c, t, 0.1, fmi2True),
+            fmi2OK,
+            "{what}: {:?}",
+            log.take_texts()
+        );
     }
 }
 
@@ -483,7 +463,7 @@ fn a_state_of_another_instance_of_the_same_fmu_is_accepted() {
         assert_eq!(fmi2DoStep(a, 0.0, 0.5, fmi2True), fmi2OK);
         let mut s: fmi2FMUstate = std::ptr::null_mut();
         assert_eq!(fmi2GetFMUstate(a, &mut s), fmi2OK);
-        assert_eq!(fmi2SetFMUstate(b, s), fmi2OK, "{:?}", log_b.take());
+        assert_eq!(fmi2SetFMUstate(b, s), fmi2OK, "{:?}", log_b.take_texts());
         assert_eq!(serialized(b), serialized(a));
         assert_eq!(
             fmi2FreeFMUstate(b, &mut s),
@@ -516,10 +496,14 @@ unsafe extern "C" fn reenter(
     message: fmi2String,
     text: *const c_char,
 ) {
-    // SAFETY: env is the leaked Reentrant of the instance; its Log is its first use.
-    let r = unsafe { &*(env as *const Reentrant) };
-    // SAFETY: as in `collect`.
-    unsafe { collect(&r.log as *const Log as *mut _, name, status, category, message, text) };
+    let _ = (name, category, message);
+    // SAFETY: env is the leaked Reentrant of the instance; the runtime logs "%s" with one string.
+    let (r, text) = unsafe { (&*(env as *const Reentrant), CStr::from_ptr(text)) };
+    r.log.push(rustfmu::testing::LogEntry {
+        status,
+        category: String::new(),
+        text: text.to_string_lossy().into_owned(),
+    });
     let call = r.armed.lock().unwrap().take();
     if let Some(call) = call {
         let c = r.component.load(std::sync::atomic::Ordering::SeqCst);
@@ -568,7 +552,7 @@ fn a_call_into_an_instance_from_inside_a_call_into_it_is_refused() {
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2SetReal(c, &0, 1, &1.0), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
-        r.log.take();
+        r.log.take_texts();
         let mut t = 0.0;
         for (name, call) in nested_calls {
             // The Probe logs "stepping" inside every fmi2DoStep: the logger then makes the call.
@@ -649,7 +633,7 @@ fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
                 fmi2OK
             );
             let s = api::do_step::<Gain>(c, t, 0.01, fmi2True);
-            assert_eq!(s, fmi2OK, "fmi2DoStep at t = {t}: {:?}", log.take());
+            assert_eq!(s, fmi2OK, "fmi2DoStep at t = {t}: {:?}", log.take_texts());
             t += 0.01;
             let mut y = [f64::NAN];
             assert_eq!(

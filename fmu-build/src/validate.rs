@@ -586,34 +586,13 @@ pub fn check_exports(exports: &[String], version: FmiVersion, bin_name: &str) ->
 /// Messages the FMU logged during the smoke run, collected through the logger's environment.
 struct Log(Vec<String>);
 
-/// The importer's logger. FMI declares it variadic; Rust cannot define variadic functions on
-/// stable, and under the x86-64 and AArch64 C calling conventions a callee with the fixed
-/// arguments only reads them correctly (fmpy's ctypes logger relies on the same). The message
-/// is always the format "%s" here, so the text is the first variadic argument: read it as such.
-unsafe extern "C" fn collect_log(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    category: fmi2String,
-    message: fmi2String,
-    arg: *const c_char,
-) {
-    // SAFETY: env is the &mut Log given to fmi2Instantiate; strings are NUL-terminated.
-    unsafe {
-        let log = &mut *(env as *mut Log);
-        let fmt = CStr::from_ptr(message).to_string_lossy();
-        let text = if fmt == "%s" && !arg.is_null() {
-            CStr::from_ptr(arg).to_string_lossy().into_owned()
-        } else {
-            fmt.into_owned()
-        };
-        let cat = if category.is_null() {
-            "".into()
-        } else {
-            CStr::from_ptr(category).to_string_lossy()
-        };
-        log.0.push(format!("[status {status}, {cat}] {text}"));
-    }
+/// The messages of a recording log as one line.
+fn joined(log: &rustfmu::testing::Log) -> String {
+    log.entries()
+        .iter()
+        .map(|e| format!("[status {}, {}] {}", e.status, e.category, e.text))
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// `resources`: the unpacked archive's `resources/` folder, given to the instance as an importer
@@ -888,24 +867,9 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> V
         > = lib.get(b"fmi2GetReal").unwrap();
         let free: libloading::Symbol<unsafe extern "C" fn(fmi2Component)> = lib.get(b"fmi2FreeInstance").unwrap();
 
-        let mut log = Log(Vec::new());
-        let callbacks = fmi2CallbackFunctions {
-            logger: Some(std::mem::transmute::<
-                unsafe extern "C" fn(
-                    fmi2ComponentEnvironment,
-                    fmi2String,
-                    fmi2Status,
-                    fmi2String,
-                    fmi2String,
-                    *const c_char,
-                ),
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-            >(collect_log)),
-            allocateMemory: None,
-            freeMemory: None,
-            stepFinished: None,
-            componentEnvironment: &mut log as *mut Log as fmi2ComponentEnvironment,
-        };
+        // The smoke run's one instance: its log and callbacks are leaked (a few hundred bytes).
+        let log = rustfmu::testing::Log::leak();
+        let callbacks = rustfmu::testing::callbacks(log);
         let name = CString::new("fmu-build-validate").unwrap();
         let guid = CString::new(guid).unwrap_or_default();
         let location = CString::new(file_uri(resources)).unwrap_or_default();
@@ -914,12 +878,12 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> V
             fmi2CoSimulation,
             guid.as_ptr(),
             location.as_ptr(),
-            &callbacks,
+            callbacks,
             fmi2False,
             fmi2False,
         );
         if c.is_null() {
-            problems.push(format!("fmi2Instantiate returned NULL: {}", log.0.join("; ")));
+            problems.push(format!("fmi2Instantiate returned NULL: {}", joined(log)));
             return problems;
         }
         let mut status = setup(c, fmi2False, 0.0, 0.0, fmi2True, 1.0);
@@ -936,7 +900,7 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> V
         if status != fmi2OK {
             problems.push(format!(
                 "a 0.1 s run from the start values did not return fmi2OK (worst status {status}): {}",
-                log.0.join("; ")
+                joined(log)
             ));
         }
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {

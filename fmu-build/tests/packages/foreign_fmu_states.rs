@@ -47,7 +47,7 @@ fn refused_by_the_other(from: &Fmu, to: &Fmu) {
         );
         let mut into = foreign;
         assert_eq!((to.get_state)(b, &mut into), fmi2Error, "fmi2GetFMUstate into {what}");
-        let log = log.take();
+        let log = log.take_texts();
         let refusals = log
             .iter()
             .filter(|(s, t)| *s == fmi2Error && t.contains("not a live state of this FMU"))

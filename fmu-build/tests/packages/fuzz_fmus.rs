@@ -271,13 +271,13 @@ impl Run<'_> {
         name: &'static str,
         f: impl FnOnce(&mut Self) -> fmi2Status,
     ) -> Result<fmi2Status, TestCaseError> {
-        self.log.take();
+        self.log.take_texts();
         let started = Instant::now();
         *IN_PROGRESS.lock().unwrap() = Some((started, format!("{} {name} in {:?}", self.fmu.name, self.current)));
         let s = f(self);
         let took = started.elapsed();
         *IN_PROGRESS.lock().unwrap() = None;
-        let log = self.log.take();
+        let log = self.log.take_texts();
         if let Some(n) = self
             .tally
             .borrow_mut()
@@ -312,7 +312,7 @@ impl Run<'_> {
         let mut values = vec![0.0; self.reals.len()];
         // SAFETY: a live instance; as many references as slots.
         let s = unsafe { (self.fmu.get_real)(self.c, self.reals.as_ptr(), self.reals.len(), values.as_mut_ptr()) };
-        let log = self.log.take();
+        let log = self.log.take_texts();
         if s == fmi2OK {
             let bad: Vec<String> = self
                 .fmu
@@ -378,7 +378,7 @@ impl Run<'_> {
         let mut t = 0.0;
         // SAFETY: a live instance; one slot.
         let s = unsafe { (self.fmu.real_status)(self.c, fmi2LastSuccessfulTime, &mut t) };
-        self.log.take();
+        self.log.take_texts();
         if s == fmi2OK { t } else { 0.0 }
     }
 
@@ -466,7 +466,7 @@ impl Run<'_> {
                             }
                             (fmu.free_state)(c, &mut own);
                         }
-                        self.log.take();
+                        self.log.take_texts();
                         if !v.is_empty() {
                             for (at, x) in flips {
                                 let n = v.len();

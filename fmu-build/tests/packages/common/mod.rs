@@ -5,10 +5,9 @@
 
 use rustfmu::__private::abi::*;
 use rustfmu::description::{ModelDescription, decode, find_encoded_for};
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::CString;
 use std::io::Read;
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 type Instantiate = unsafe extern "C" fn(
     fmi2String,
@@ -146,27 +145,8 @@ impl Fmu {
 
     /// A new instance and its log (leaked: the tests make a bounded number).
     pub fn instance(&self, logging_on: bool) -> (fmi2Component, &'static Log) {
-        let log: &'static Log = Box::leak(Box::default());
-        let callbacks: &'static fmi2CallbackFunctions = Box::leak(Box::new(fmi2CallbackFunctions {
-            // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
-            logger: Some(unsafe {
-                std::mem::transmute::<
-                    unsafe extern "C" fn(
-                        fmi2ComponentEnvironment,
-                        fmi2String,
-                        fmi2Status,
-                        fmi2String,
-                        fmi2String,
-                        *const c_char,
-                    ),
-                    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-                >(collect)
-            }),
-            allocateMemory: None,
-            freeMemory: None,
-            stepFinished: None,
-            componentEnvironment: log as *const Log as *mut c_void,
-        }));
+        let log = Log::leak();
+        let callbacks = rustfmu::testing::callbacks(log);
         // SAFETY: valid strings and callbacks that outlive the instance (leaked).
         let c = unsafe {
             (self.instantiate)(
@@ -179,7 +159,7 @@ impl Fmu {
                 logging_on as fmi2Boolean,
             )
         };
-        assert!(!c.is_null(), "{}: fmi2Instantiate: {:?}", self.name, log.take());
+        assert!(!c.is_null(), "{}: fmi2Instantiate: {:?}", self.name, log.take_texts());
         (c, log)
     }
 
@@ -200,27 +180,4 @@ impl Fmu {
 }
 
 /// One instance's log, reached through its componentEnvironment.
-#[derive(Default)]
-pub struct Log(pub Mutex<Vec<(fmi2Status, String)>>);
-
-impl Log {
-    pub fn take(&self) -> Vec<(fmi2Status, String)> {
-        std::mem::take(&mut *self.0.lock().unwrap())
-    }
-}
-
-unsafe extern "C" fn collect(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-    text: *const c_char,
-) {
-    // SAFETY: env is the leaked Log of the instance; the FMUs log "%s" with one argument.
-    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
-    log.0
-        .lock()
-        .unwrap()
-        .push((status, text.to_string_lossy().into_owned()));
-}
+pub use rustfmu::testing::Log;

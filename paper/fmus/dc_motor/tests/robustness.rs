@@ -5,27 +5,8 @@ use dc_motor_fmu::DcMotor;
 use dc_motor_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::Variables;
-use std::ffi::{CStr, CString, c_char};
-use std::sync::Mutex;
-
-#[derive(Default)]
-struct Log(Mutex<Vec<(fmi2Status, String)>>);
-
-unsafe extern "C" fn collect(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-    text: *const c_char,
-) {
-    // SAFETY: env is the leaked Log of the instance; the runtime logs "%s" with one argument.
-    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
-    log.0
-        .lock()
-        .unwrap()
-        .push((status, text.to_string_lossy().into_owned()));
-}
+use rustfmu::testing::Log;
+use std::ffi::CString;
 
 fn vr(name: &str) -> u32 {
     DcMotor::DESCRIPTION.by_name(name).unwrap().value_reference
@@ -33,27 +14,8 @@ fn vr(name: &str) -> u32 {
 
 /// An instance in initialization mode, and its log.
 fn instance() -> (fmi2Component, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
-        // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
-        logger: Some(unsafe {
-            std::mem::transmute::<
-                unsafe extern "C" fn(
-                    fmi2ComponentEnvironment,
-                    fmi2String,
-                    fmi2Status,
-                    fmi2String,
-                    fmi2String,
-                    *const c_char,
-                ),
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-            >(collect)
-        }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: log as *const Log as *mut _,
-    }));
+    let log = Log::leak();
+    let callbacks = rustfmu::testing::callbacks(log);
     let guid = CString::new(dc_motor_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
     // SAFETY: valid strings and callbacks that outlive the instance (leaked).
     unsafe {
@@ -81,7 +43,7 @@ fn set(c: fmi2Component, name: &str, x: f64) -> fmi2Status {
 fn a_zero_torque_constant_is_outside_the_declared_domain() {
     let (c, log) = instance();
     assert_eq!(set(c, "km", 0.0), fmi2Error, "km = 0 must be refused");
-    let entries = std::mem::take(&mut *log.0.lock().unwrap());
+    let entries = log.take_texts();
     assert!(
         entries
             .iter()
@@ -102,7 +64,7 @@ fn a_tiny_resistance_gives_the_right_current() {
         assert_eq!(set(c, "R", 1e-20), fmi2OK, "R = 1e-20 is > 0");
         assert_eq!(set(c, "U", 6.0), fmi2OK);
         assert_eq!(set(c, "omega", 2.0), fmi2OK);
-        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.0.lock().unwrap());
+        assert_eq!(fmi2ExitInitializationMode(c), fmi2OK, "{:?}", log.texts());
         for k in 0..15 {
             assert_eq!(fmi2DoStep(c, k as f64 * 1e-3, 1e-3, fmi2True), fmi2OK);
         }
@@ -128,7 +90,7 @@ fn an_unloaded_step_of_any_length_returns() {
         assert_eq!(set(c, "U", 6.0), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
         let s = fmi2DoStep(c, 0.0, 1e40, fmi2True);
-        let entries = std::mem::take(&mut *log.0.lock().unwrap());
+        let entries = log.take_texts();
         assert_eq!(s, fmi2OK, "h = 1e40: {entries:?}");
         let mut w = f64::NAN;
         assert_eq!(fmi2GetReal(c, &vr("omega_m"), 1, &mut w), fmi2OK);
@@ -149,7 +111,7 @@ fn an_inductance_whose_current_rate_is_beyond_f64_is_refused_at_initialization()
         assert_eq!(set(c, "L", 5e-324), fmi2OK);
         assert_eq!(set(c, "U", 6.0), fmi2OK);
         let s = fmi2ExitInitializationMode(c);
-        let entries = std::mem::take(&mut *log.0.lock().unwrap());
+        let entries = log.take_texts();
         assert_eq!(s, fmi2Error, "{entries:?}");
         assert!(
             entries

@@ -11,15 +11,6 @@ use rustfmu::Variables;
 use std::ffi::CString;
 use std::time::Instant;
 
-unsafe extern "C" fn ignore_log(
-    _: fmi2ComponentEnvironment,
-    _: fmi2String,
-    _: fmi2Status,
-    _: fmi2String,
-    _: fmi2String,
-) {
-}
-
 fn vr(name: &str) -> u32 {
     Pendulum::DESCRIPTION.by_name(name).unwrap().value_reference
 }
@@ -36,20 +27,7 @@ fn start() -> [f64; 4] {
 
 /// Seconds per step, and the state after `steps` steps.
 fn run(steps: usize) -> (f64, [f64; 4]) {
-    let callbacks = fmi2CallbackFunctions {
-        // SAFETY: the logger's C type is variadic; this one ignores every argument, so a
-        // non-variadic function with the fixed arguments is called correctly on this ABI.
-        logger: Some(unsafe {
-            std::mem::transmute::<
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String),
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-            >(ignore_log)
-        }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
-    };
+    let callbacks = *rustfmu::testing::silent_callbacks();
     let guid = CString::new(pendulum_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
     let state = ["alpha1", "omega1", "alpha2", "omega2"].map(vr);
     // SAFETY: valid strings and callbacks that outlive the instance; arrays as long as passed.

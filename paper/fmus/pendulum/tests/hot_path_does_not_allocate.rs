@@ -63,15 +63,6 @@ fn allocations_in(f: impl FnOnce()) -> u64 {
     COUNT.with(|c| c.get())
 }
 
-unsafe extern "C" fn ignore_log(
-    _env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    _status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-) {
-}
-
 /// The value reference of a Pendulum variable, from its declaration.
 fn vr(name: &str) -> u32 {
     Pendulum::DESCRIPTION
@@ -106,20 +97,7 @@ fn swinging_pendulum(callbacks: &fmi2CallbackFunctions) -> fmi2Component {
 }
 
 fn callbacks() -> fmi2CallbackFunctions {
-    fmi2CallbackFunctions {
-        // SAFETY: the logger's C type is variadic; this one ignores every argument, so a
-        // non-variadic function with the fixed arguments is called correctly on this ABI.
-        logger: Some(unsafe {
-            std::mem::transmute::<
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String),
-                unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-            >(ignore_log)
-        }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
-    }
+    *rustfmu::testing::silent_callbacks()
 }
 
 #[test]

@@ -6,28 +6,8 @@ use pendulum_fmu::Pendulum;
 use pendulum_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::Variables;
-use std::ffi::{CStr, CString, c_char};
-use std::sync::Mutex;
-
-/// One instance's log, reached through its componentEnvironment.
-#[derive(Default)]
-struct Log(Mutex<Vec<(fmi2Status, String)>>);
-
-unsafe extern "C" fn collect(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-    text: *const c_char,
-) {
-    // SAFETY: env is the leaked Log of the instance; the runtime logs "%s" with one argument.
-    let (log, text) = unsafe { (&*(env as *const Log), CStr::from_ptr(text)) };
-    log.0
-        .lock()
-        .unwrap()
-        .push((status, text.to_string_lossy().into_owned()));
-}
+use rustfmu::testing::Log;
+use std::ffi::CString;
 
 fn vr(name: &str) -> u32 {
     Pendulum::DESCRIPTION
@@ -45,27 +25,8 @@ struct Fmu {
 impl Fmu {
     /// Instantiated, fmi2SetupExperiment(startTime = t0), in initialization mode.
     fn new(t0: f64) -> Fmu {
-        let log: &'static Log = Box::leak(Box::default());
-        let callbacks = Box::leak(Box::new(fmi2CallbackFunctions {
-            // SAFETY: on this ABI a callee with the fixed arguments and one more reads "%s"'s argument.
-            logger: Some(unsafe {
-                std::mem::transmute::<
-                    unsafe extern "C" fn(
-                        fmi2ComponentEnvironment,
-                        fmi2String,
-                        fmi2Status,
-                        fmi2String,
-                        fmi2String,
-                        *const c_char,
-                    ),
-                    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...),
-                >(collect)
-            }),
-            allocateMemory: None,
-            freeMemory: None,
-            stepFinished: None,
-            componentEnvironment: log as *const Log as *mut _,
-        }));
+        let log = Log::leak();
+        let callbacks = rustfmu::testing::callbacks(log);
         let guid = CString::new(pendulum_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
         // SAFETY: valid strings and callbacks that outlive the instance (leaked).
         unsafe {
@@ -115,7 +76,7 @@ impl Fmu {
     }
 
     fn messages(&self) -> Vec<(fmi2Status, String)> {
-        std::mem::take(&mut *self.log.0.lock().unwrap())
+        self.log.take_texts()
     }
 
     fn assert_logged(&self, status: fmi2Status, words: &[&str]) {
