@@ -19,8 +19,44 @@ use serde::{Serialize, de::DeserializeOwned};
 
 /// The number type of [`Model::derivatives`] and [`Model::outputs`]: `f64` for values,
 /// [`num_dual::Dual64`] for directional derivatives. Anything `num_dual::DualNum<f64>` offers
-/// (arithmetic with `f64`, `sin`, `cos`, `exp`, `sqrt`, `powi`, comparisons through
-/// [`re`](num_dual::DualNum::re), ...) works on it.
+/// (arithmetic with `f64`, `sin`, `cos`, `exp`, `sqrt`, `powi`, ...) works on it.
+///
+/// A dual number is a value with its derivatives riding along, so it has no `<` or `>`: a
+/// branch compares the value, [`re()`](num_dual::DualStruct::re) (an `f64`), and both branches keep
+/// computing on `D`, so the directional derivatives stay exact on either side:
+///
+/// ```
+/// use rustfmu::prelude::*;
+/// use rustfmu::Variables;
+/// use serde::{Deserialize, Serialize};
+///
+/// /// A tank drained through an outlet above its floor: q = k sqrt(h - s) while h > s.
+/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+/// pub struct Tank {
+///     /// Level h
+///     #[variable(vr = 0, output, initial = exact, start = 1.0, unit = "m", depends = [h])]
+///     pub h: f64,
+///     /// dh/dt = -q
+///     #[variable(vr = 1, name = "der(h)", local, derivative_of = h, depends = [h])]
+///     pub der_h: f64,
+///     /// Height s of the outlet
+///     #[variable(vr = 2, name = "s", parameter, start = 0.2, unit = "m")]
+///     pub sill: f64,
+/// }
+///
+/// impl Model for Tank {
+///     fn derivatives<D: Real>(&self, _t: D, v: &mut TankContinuous<D>) {
+///         let head = v.h - self.sill; // D: the level's derivatives come along
+///         v.der_h = if head.re() > 0.0 { -head.sqrt() * 0.5 } else { head * 0.0 };
+///     }
+/// }
+/// # impl CoSimulation for Tank {}
+///
+/// // The same code on f64 gives the values: dh/dt = -0.5 sqrt(1.0 - 0.2).
+/// let mut c = Tank::start().continuous::<f64>();
+/// Tank::start().derivatives(0.0, &mut c);
+/// assert!((c.der_h + 0.5 * 0.8f64.sqrt()).abs() < 1e-15);
+/// ```
 pub trait Real: num_dual::DualNum<Primitive = f64> + Copy + Send + Sync + 'static {}
 impl<T: num_dual::DualNum<Primitive = f64> + Copy + Send + Sync + 'static> Real for T {}
 
@@ -131,7 +167,58 @@ pub trait Variables: Sized {
     }
 }
 
-/// What the runtime tells a model, and how a model logs.
+/// What the runtime tells a model, and how a model logs: the experiment's start time and
+/// tolerance, the FMU's unpacked `resources/` folder, whether the importer runs Model Exchange;
+/// [`log`](Self::log) sends a message to the importer's logger under a declared category. A model
+/// gets one in [`Model::initialize`], [`Model::parameters_changed`] and [`CoSimulation::do_step`].
+///
+/// ```
+/// use rustfmu::prelude::*;
+/// use rustfmu::Variables;
+/// use serde::{Deserialize, Serialize};
+///
+/// /// A gain read from the FMU's resources/gain.txt at initialization (1 without one).
+/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+/// #[fmu(log_category(name = "logTable", description = "where the gain came from"))]
+/// pub struct TableGain {
+///     /// Input u
+///     #[variable(vr = 0, input, start = 0.0)]
+///     pub u: f64,
+///     /// Output y = K u
+///     #[variable(vr = 1, output, depends = [u])]
+///     pub y: f64,
+///     /// The gain K, from resources/gain.txt
+///     #[variable(vr = 2, name = "K", calculated_parameter)]
+///     pub gain: f64,
+/// }
+///
+/// impl Model for TableGain {
+///     fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
+///         self.gain = match ctx.resource_dir() {
+///             Some(dir) => {
+///                 let file = dir.join("gain.txt");
+///                 let text = std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+///                 text.trim().parse().map_err(|e| format!("{}: {e}", file.display()))?
+///             }
+///             None => 1.0,
+///         };
+///         if ctx.logs("logTable") {
+///             ctx.log("logTable", &format!("K = {} (start time {} s)", self.gain, ctx.start_time()));
+///         }
+///         Ok(())
+///     }
+///
+///     fn outputs<D: Real>(&self, _t: D, v: &mut TableGainContinuous<D>) {
+///         v.y = v.u * self.gain;
+///     }
+/// }
+/// # impl CoSimulation for TableGain {}
+///
+/// // Outside an FMU (tests): no resources, nothing logged.
+/// let mut m = TableGain::start();
+/// m.initialize(&Context::standalone(0.0, None)).unwrap();
+/// assert_eq!(m.gain, 1.0);
+/// ```
 pub struct Context<'a> {
     pub(crate) start_time: f64,
     pub(crate) tolerance: Option<f64>,
@@ -262,11 +349,59 @@ impl Context<'_> {
     }
 }
 
-/// Why a step could not be taken. The runtime logs the message and answers `fmi2Discard`;
-/// the model's variables hold the last consistent state at `reached_time`.
+/// Why a step could not be taken. The runtime logs the message and answers `fmi2Discard`
+/// (FMI 3.0: `fmi3Discard`); the model's variables hold the last consistent state at
+/// `reached_time`, which the importer reads with `fmi2GetRealStatus(fmi2LastSuccessfulTime)`.
+///
+/// ```
+/// use rustfmu::prelude::*;
+/// use rustfmu::Variables;
+/// use serde::{Deserialize, Serialize};
+///
+/// /// A ball falling from height h, which this step does not follow below the floor.
+/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+/// pub struct Drop {
+///     /// Height h
+///     #[variable(vr = 0, output, initial = exact, start = 1.0, unit = "m", depends = [h])]
+///     pub h: f64,
+///     /// dh/dt
+///     #[variable(vr = 1, name = "der(h)", local, derivative_of = h, depends = [h])]
+///     pub der_h: f64,
+/// }
+///
+/// impl Model for Drop {
+///     fn derivatives<D: Real>(&self, _t: D, v: &mut DropContinuous<D>) {
+///         v.der_h = v.h * 0.0 - 1.0; // falls at 1 m/s
+///     }
+/// }
+///
+/// impl CoSimulation for Drop {
+///     fn do_step(&mut self, t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
+///         if self.h - h < 0.0 {
+///             // Go as far as the floor, and say where the step stopped and why.
+///             let reached = t + self.h;
+///             self.h = 0.0;
+///             return Err(StepFailure {
+///                 reached_time: reached,
+///                 message: format!("the ball reached the floor at t = {reached} s"),
+///             });
+///         }
+///         self.h -= h;
+///         Ok(())
+///     }
+/// }
+///
+/// let mut ball = Drop::start();
+/// let mut ctx = Context::standalone(0.0, None);
+/// assert!(ball.do_step(0.0, 0.75, &mut ctx).is_ok());
+/// let failure = ball.do_step(0.75, 0.5, &mut ctx).unwrap_err();
+/// assert_eq!(failure.reached_time, 1.0);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepFailure {
+    /// The time the model's variables are at: the end of the last part of the step it could take.
     pub reached_time: f64,
+    /// What went wrong, for the importer's log.
     pub message: String,
 }
 
@@ -329,7 +464,37 @@ pub trait CoSimulation: Model {
 
     /// The integrator's tolerances for [`Context::integrate`]: by default the importer's
     /// relative tolerance (fmi2SetupExperiment), else 1e-6, and an absolute tolerance of 1e-3
-    /// times it.
+    /// times it. A model whose states are far from 1 in size says what an error of its states
+    /// means:
+    ///
+    /// ```
+    /// # use rustfmu::prelude::*;
+    /// # use rustfmu::Variables;
+    /// use rustfmu::solver::Tolerances;
+    /// # use serde::{Deserialize, Serialize};
+    /// # /// A charge q in coulombs, of the order of microcoulombs
+    /// # #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+    /// # pub struct Capacitor {
+    /// #     /// Charge q
+    /// #     #[variable(vr = 0, output, initial = exact, start = 1e-6, depends = [q])]
+    /// #     pub q: f64,
+    /// #     /// dq/dt
+    /// #     #[variable(vr = 1, name = "der(q)", local, derivative_of = q, depends = [q])]
+    /// #     pub der_q: f64,
+    /// # }
+    /// # impl Model for Capacitor {
+    /// #     fn derivatives<D: Real>(&self, _t: D, v: &mut CapacitorContinuous<D>) {
+    /// #         v.der_q = -v.q;
+    /// #     }
+    /// # }
+    /// impl CoSimulation for Capacitor {
+    ///     /// Charges of microcoulombs: an absolute error of 1e-15 C, not the default 1e-9.
+    ///     fn tolerances(&self, ctx: &Context) -> Tolerances {
+    ///         Tolerances { rtol: ctx.tolerance().unwrap_or(1e-6), atol: 1e-15 }
+    ///     }
+    /// }
+    /// # assert_eq!(Capacitor::start().tolerances(&Context::standalone(0.0, Some(1e-8))).rtol, 1e-8);
+    /// ```
     fn tolerances(&self, ctx: &Context) -> Tolerances {
         let rtol = ctx.tolerance().unwrap_or(1e-6);
         Tolerances {

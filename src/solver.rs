@@ -17,10 +17,15 @@ use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 
-/// Relative and absolute error tolerances, per component: err_i / (atol + rtol·|x_i|) ≤ 1.
+/// Relative and absolute error tolerances of the integrator, per component: each step keeps
+/// err_i / (atol + rtol·|x_i|) ≤ 1 for every state x_i. A model chooses them with
+/// [`crate::CoSimulation::tolerances`] (by default rtol from the importer, else 1e-6, and
+/// atol = 1e-3 rtol); its documentation has an example.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Tolerances {
+    /// Relative tolerance (per unit of the state's size).
     pub rtol: f64,
+    /// Absolute tolerance (in the state's unit), what counts near 0.
     pub atol: f64,
 }
 
