@@ -227,7 +227,11 @@ pub fn package(
         })?,
         None => String::new(),
     };
-    let docs = crate::docs::index_html(&me.description, &fragment, version);
+    let platforms: Vec<String> = binaries
+        .iter()
+        .filter_map(|(name, _)| name.split('/').nth(1).map(String::from))
+        .collect();
+    let docs = crate::docs::index_html(&me.description, &fragment, me.interfaces, &platforms);
     let resources = match &krate.resources {
         Some(dir) => files_below(dir)?,
         None => vec![],

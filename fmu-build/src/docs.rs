@@ -1,13 +1,30 @@
-//! `documentation/index.html`: the variables with units, and the crate's own documentation
-//! fragment (`[package.metadata.fmu] documentation`).
+//! `documentation/index.html`: what the FMU is (FMI version, interfaces, the platforms its
+//! binaries are for), the variables with units, and the crate's own documentation fragment
+//! (`[package.metadata.fmu] documentation`).
 
-use rustfmu::description::{FmiVersion, ModelDescription, Start};
+use rustfmu::description::{FmiVersion, Interfaces, ModelDescription, Start};
 
 fn escape(s: &str) -> String {
     quick_xml::escape::escape(s).into_owned()
 }
 
-pub fn index_html(d: &ModelDescription, fragment: &str, version: FmiVersion) -> String {
+/// What the FMU is, in one phrase: "FMI 2.0 FMU for model exchange and co-simulation".
+fn kind(interfaces: Interfaces) -> String {
+    let version = match interfaces.version {
+        FmiVersion::V2 => "FMI 2.0",
+        FmiVersion::V3 => "FMI 3.0",
+    };
+    let what = match (interfaces.model_exchange, interfaces.co_simulation) {
+        (true, true) => "model exchange and co-simulation",
+        (true, false) => "model exchange",
+        (false, true) => "co-simulation",
+        (false, false) => "no interface",
+    };
+    format!("{version} FMU for {what}")
+}
+
+/// `platforms`: the folders of `binaries/` the FMU has (`linux64`, `x86_64-windows`, ...).
+pub fn index_html(d: &ModelDescription, fragment: &str, interfaces: Interfaces, platforms: &[String]) -> String {
     let mut rows = String::new();
     for v in d.variables {
         let start = if v.has_start() {
@@ -39,16 +56,57 @@ pub fn index_html(d: &ModelDescription, fragment: &str, version: FmiVersion) -> 
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\
          <style>body{{font-family:sans-serif;max-width:60em;margin:auto}}td,th{{padding:2px 8px;text-align:left}}\
          tr:nth-child(even){{background:#f3f3f3}}pre{{background:#f6f6f6;padding:8px}}</style></head><body>\n\
-         <h1>{id}</h1>\n<p>{description}</p>\n<p>{kind}, version {version}, built by {tool}.</p>\n\
+         <h1>{id}</h1>\n<p>{description}</p>\n<p>{kind}, version {version}, built by {tool}.</p>\n<p>Binaries for: {platforms}.</p>\n\
          <h2>Variables</h2>\n<table><tr><th>name</th><th>value reference</th><th>causality</th><th>variability</th>\
          <th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n{fragment}\n</body></html>\n",
         id = escape(d.model_identifier),
         description = escape(d.description),
         version = escape(d.version),
         tool = escape(d.generation_tool),
-        kind = match version {
-            FmiVersion::V2 => "FMI 2.0 co-simulation FMU",
-            FmiVersion::V3 => "FMI 3.0 FMU (model exchange and co-simulation)",
-        },
+        kind = kind(interfaces),
+        platforms = escape(&platforms.join(", ")),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 23: the page said "FMI 2.0 co-simulation FMU" of an FMU that is model exchange and
+    /// co-simulation, and named no platform.
+    #[test]
+    fn the_page_says_what_the_fmu_is_and_its_platforms() {
+        let d = ModelDescription {
+            model_identifier: "Lag",
+            description: "A lag",
+            author: "",
+            version: "0.1.0",
+            copyright: "",
+            license: "",
+            generation_tool: "rustfmu",
+            default_experiment: None,
+            units: &[],
+            log_categories: &[],
+            variables: &[],
+            internal_state: "",
+        };
+        let both = Interfaces {
+            co_simulation: true,
+            model_exchange: true,
+            version: FmiVersion::V2,
+        };
+        let html = index_html(&d, "", both, &["linux64".into(), "win64".into()]);
+        assert!(
+            html.contains("FMI 2.0 FMU for model exchange and co-simulation"),
+            "{html}"
+        );
+        assert!(html.contains("Binaries for: linux64, win64."), "{html}");
+        let cs3 = Interfaces {
+            co_simulation: true,
+            model_exchange: false,
+            version: FmiVersion::V3,
+        };
+        let html = index_html(&d, "", cs3, &["x86_64-linux".into()]);
+        assert!(html.contains("FMI 3.0 FMU for co-simulation"), "{html}");
+    }
 }
