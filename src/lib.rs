@@ -58,6 +58,8 @@ pub use rustfmu_derive::{FmuEnum, Model};
 pub use value::{FmiType, FmuEnum, Value};
 
 #[doc(hidden)]
+pub mod core;
+#[doc(hidden)]
 pub mod fmi2;
 #[doc(hidden)]
 pub mod fmi3;
@@ -85,7 +87,8 @@ pub mod prelude {
 /// What the macros expand to; not part of the API.
 #[doc(hidden)]
 pub mod __private {
-    pub use crate::fmi2::{abi, api};
-    pub use crate::fmi3::{abi as abi3, api as api3};
+    pub use crate::core::shared;
+    pub use crate::fmi2::{TERMS as TERMS2, abi, api};
+    pub use crate::fmi3::{TERMS as TERMS3, abi as abi3, api as api3};
     pub use serde;
 }

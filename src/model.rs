@@ -222,7 +222,7 @@ pub trait Variables: Sized {
 pub struct Context<'a> {
     pub(crate) start_time: f64,
     pub(crate) tolerance: Option<f64>,
-    pub(crate) logger: Option<&'a crate::fmi2::logging::Logger>,
+    pub(crate) logger: Option<&'a crate::core::logging::Logger>,
     pub(crate) resources: Option<&'a std::path::Path>,
     /// The integrator's memory, in a communication step.
     pub(crate) solver: Option<&'a mut Dopri5>,
@@ -540,7 +540,7 @@ impl<M: CoSimulation> Standalone<M> {
 
     /// Recomputes what the equations compute (after inputs were changed by hand).
     pub fn refresh(&mut self) {
-        crate::fmi2::instance::evaluate(&mut self.model, self.time);
+        crate::core::instance::evaluate(&mut self.model, self.time);
     }
 
     /// What fmi2DoStep does: [`CoSimulation::do_step`] from the current time over `h`, then
@@ -555,7 +555,7 @@ impl<M: CoSimulation> Standalone<M> {
             Err(f) => f.reached_time,
         };
         if !refreshed {
-            crate::fmi2::instance::evaluate(&mut self.model, reached);
+            crate::core::instance::evaluate(&mut self.model, reached);
         }
         self.time = reached;
         outcome

@@ -83,8 +83,16 @@ struct Log {
 }
 
 impl Log {
+    /// The messages so far; every one in FMI 3.0's words (the core words its messages in the
+    /// calling layer's terms, nothing is rewritten after the fact).
     fn take(&self) -> Vec<(fmi3Status, String, String)> {
-        std::mem::take(&mut *self.entries.lock().unwrap())
+        let entries = std::mem::take(&mut *self.entries.lock().unwrap());
+        for (_, _, message) in &entries {
+            for word in ["fmi2", "GUID", "StepComplete", "StepFailed", "FMUstate"] {
+                assert!(!message.contains(word), "an FMI 3.0 message says {word:?}: {message}");
+            }
+        }
+        entries
     }
 }
 

@@ -234,10 +234,11 @@ fn serialized(c: fmi2Component) -> Vec<u8> {
 }
 
 /// `bytes` decoded, changed by `doctor`, and encoded again with a correct header and checksum.
-fn doctored(bytes: &[u8], doctor: impl FnOnce(&mut rustfmu::fmi2::instance::Sim<Probe>)) -> Vec<u8> {
-    use rustfmu::fmi2::state;
+fn doctored(bytes: &[u8], doctor: impl FnOnce(&mut rustfmu::core::instance::Sim<Probe>)) -> Vec<u8> {
+    use rustfmu::core::state;
     let guid = probe::__rustfmu_fmi2_exports::GUID;
-    let mut sim = state::deserialize::<Probe>(guid, bytes).expect("the runtime reads its own state");
+    let mut sim =
+        state::deserialize::<Probe>(&rustfmu::fmi2::TERMS, guid, bytes).expect("the runtime reads its own state");
     doctor(&mut sim);
     state::serialize(guid, &sim).unwrap()
 }
@@ -246,7 +247,7 @@ fn doctored(bytes: &[u8], doctor: impl FnOnce(&mut rustfmu::fmi2::instance::Sim<
 fn a_deserialized_state_is_checked_like_values_set_through_the_api() {
     let (c, log) = initialized(1.0);
     let good = serialized(c);
-    type Doctor = fn(&mut rustfmu::fmi2::instance::Sim<Probe>);
+    type Doctor = fn(&mut rustfmu::core::instance::Sim<Probe>);
     let cases: [(&str, Doctor, &[&str]); 7] = [
         (
             "a NaN input",
@@ -355,11 +356,13 @@ fn generic_instance<M: rustfmu::CoSimulation>(guid: &'static str, name: &CStr) -
 
 /// An FMU state made by the Other model, and its instance.
 fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
-    use rustfmu::__private::api;
     let (c, _) = generic_instance::<other::Other>(other::GUID, c"other");
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     // SAFETY: a live instance and a valid out pointer.
-    assert_eq!(unsafe { api::get_fmu_state::<other::Other>(c, &mut s) }, fmi2OK);
+    assert_eq!(
+        unsafe { rustfmu::__private::shared::get_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, c, &mut s) },
+        fmi2OK
+    );
     (c, s)
 }
 
@@ -417,10 +420,10 @@ fn a_state_of_another_model_is_refused_by_every_state_function() {
     // SAFETY: s is the Other instance's live state, freed once by it.
     unsafe {
         assert_eq!(
-            rustfmu::__private::api::free_fmu_state::<other::Other>(other, &mut s),
+            rustfmu::__private::shared::free_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, other, &mut s),
             fmi2OK
         );
-        rustfmu::__private::api::free_instance::<other::Other>(other);
+        rustfmu::__private::shared::free_instance::<other::Other>(&rustfmu::fmi2::TERMS, other);
         fmi2FreeInstance(c);
     }
 }
@@ -642,6 +645,6 @@ fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
             );
             assert_eq!(y, [2.0 * u[0]], "y after the step at t = {t}");
         }
-        api::free_instance::<Gain>(c);
+        rustfmu::__private::shared::free_instance::<Gain>(&rustfmu::fmi2::TERMS, c);
     }
 }

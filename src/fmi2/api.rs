@@ -1,134 +1,24 @@
-//! The C boundary: every `fmi2*` function, generic over the model. The export macro
-//! ([`export_fmi2!`](crate::export_fmi2)) forwards the `#[no_mangle]`
-//! symbols of an FMU crate here. This is the one module with `unsafe`: pointers from the importer
-//! are checked for NULL and turned into slices and references, and every call runs under
-//! `catch_unwind`, so no panic crosses into the host.
-#![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
+//! The FMI 2.0 C boundary: the `fmi2*` functions that FMI 3.0 does not share, generic over
+//! the model (the shared ones are [`crate::core::shared`], called with [`TERMS`]). The export
+//! macro ([`export_fmi2!`](crate::export_fmi2)) forwards the `#[no_mangle]` symbols of an FMU
+//! crate here. Pointers from the importer are checked for NULL and turned into slices and
+//! references ([`crate::core::guard`]), and every call runs under `catch_unwind`, so no panic
+//! crosses into the host.
+#![allow(clippy::missing_safety_doc, clippy::too_many_arguments, non_upper_case_globals)]
 
+use super::TERMS;
 use super::abi::*;
-use super::instance::{Call, Instance, State};
-use super::logging::{Category, Logger};
-use super::snapshots;
+use crate::core::guard::{Component, slice, slice_mut, text, with_instance};
+use crate::core::instance::{EventInfo, Instance};
+use crate::core::logging::{Callback, Category, Logger};
+use crate::core::machine::Call;
+use crate::core::resources::resource_dir;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
 use std::cell::UnsafeCell;
-use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
-use std::sync::atomic::{AtomicBool, Ordering};
-
-pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    if let Some(s) = payload.downcast_ref::<&str>() {
-        format!("panic: {s}")
-    } else if let Some(s) = payload.downcast_ref::<String>() {
-        format!("panic: {s}")
-    } else {
-        "panic".into()
-    }
-}
-
-/// What fmi2Instantiate hands out as the `fmi2Component`: the instance, and what a call needs
-/// before it may touch it.
-pub struct Component<M: CoSimulation> {
-    /// Set while a call is inside the instance. A call that arrives meanwhile (made by the
-    /// importer's logger during that call, or from another thread) is refused: it would work on
-    /// an instance in the middle of a change (a nested fmi2DoStep advanced the model twice
-    /// while the clock said once).
-    pub(crate) busy: AtomicBool,
-    /// Logs those refusals. A copy taken at instantiation: error messages pass the logger
-    /// whatever its switches, so later fmi2SetDebugLogging calls do not matter to it.
-    pub(crate) refusals: Logger,
-    pub(crate) instance: UnsafeCell<Instance<M>>,
-}
-
-/// Runs `f` on the instance behind `c`, after the state check for `call`.
-/// A NULL instance cannot be logged to: the answer is fmi2Error.
-pub(crate) unsafe fn with_instance<M: CoSimulation>(
-    c: fmi2Component,
-    call: Call,
-    function: &str,
-    f: impl FnOnce(&mut Instance<M>) -> fmi2Status,
-) -> fmi2Status {
-    if c.is_null() {
-        return fmi2Error;
-    }
-    // SAFETY: a non-NULL component is one this library returned from fmi2Instantiate and that
-    // was not freed (the standard forbids any other). Only shared: a call already inside holds
-    // the instance, which is in the UnsafeCell.
-    let component = unsafe { &*(c as *const Component<M>) };
-    if component.busy.swap(true, Ordering::Acquire) {
-        component.refusals.log(
-            fmi2Error,
-            Category::StatusError,
-            &format!(
-                "{function}: called while a call into this instance is still running (from a \
-                 callback of that call, or from another thread); refused, nothing changed"
-            ),
-        );
-        return fmi2Error;
-    }
-    let instance = component.instance.get();
-    let result = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: this call set `busy`, so no other reference to the instance exists until it
-        // clears it below.
-        let inst = unsafe { &mut *instance };
-        let status = match inst.check_state(call, function) {
-            Ok(()) => f(inst),
-            Err(status) => status,
-        };
-        // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
-        // fmi3Error, the FMU enters state Terminated" (from there fmi3Reset or fmi3SetFMUState
-        // lead back). FMI 2.0 has no such rule: its instances stay where they were.
-        if inst.fmi3 && status == fmi2Error && inst.sim.state != State::Fatal {
-            inst.sim.state = State::Terminated;
-        }
-        status
-    }));
-    let status = match result {
-        Ok(status) => status,
-        Err(payload) => {
-            let what = panic_text(&*payload);
-            // SAFETY: as above; the closure's borrow ended with the unwind.
-            let inst = unsafe { &mut *instance };
-            let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
-            fmi2Fatal
-        }
-    };
-    component.busy.store(false, Ordering::Release);
-    status
-}
-
-/// An importer's array argument: NULL is fine only when it is empty.
-pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
-    if n == 0 {
-        Some(&[])
-    } else if p.is_null() {
-        None
-    } else {
-        // SAFETY: the standard makes the importer pass n valid elements.
-        Some(unsafe { std::slice::from_raw_parts(p, n) })
-    }
-}
-
-pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
-    if n == 0 {
-        Some(&mut [])
-    } else if p.is_null() {
-        None
-    } else {
-        // SAFETY: as for `slice`.
-        Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
-    }
-}
-
-pub(crate) unsafe fn text<'a>(s: fmi2String) -> Option<std::borrow::Cow<'a, str>> {
-    if s.is_null() {
-        None
-    } else {
-        // SAFETY: the importer passes NUL-terminated strings.
-        Some(unsafe { CStr::from_ptr(s) }.to_string_lossy())
-    }
-}
+use std::sync::atomic::AtomicBool;
 
 pub fn get_types_platform() -> fmi2String {
     TYPES_PLATFORM.as_ptr()
@@ -160,14 +50,16 @@ pub unsafe fn instantiate<M: CoSimulation>(
         // The embedded description stays in the binary for `cargo fmu` to read: this use keeps
         // the linker from discarding it.
         std::hint::black_box(description.len());
-        let Some(logger) = Logger::new(
-            &callbacks,
+        let Some(callback) = callbacks.logger else {
+            return ptr::null_mut();
+        };
+        let logger = Logger::new(
+            Callback::Printf(callback),
+            callbacks.componentEnvironment,
             name.as_deref().unwrap_or(""),
             logging_on != fmi2False,
             M::DESCRIPTION.log_categories,
-        ) else {
-            return ptr::null_mut();
-        };
+        );
         let refuse = |why: String| {
             logger.log(fmi2Error, Category::StatusError, &format!("fmi2Instantiate: {why}"));
             ptr::null_mut()
@@ -200,13 +92,10 @@ pub unsafe fn instantiate<M: CoSimulation>(
             }
             Some(_) => {}
         }
-        let inst = Instance::<M>::new(logger, own_guid, fmu_type == fmi2ModelExchange);
+        let inst = Instance::<M>::new(&TERMS, logger, own_guid, fmu_type == fmi2ModelExchange);
         let mut inst = inst;
-        inst.resources = resources
-            .as_deref()
-            .and_then(super::resources::resource_dir)
-            .filter(|d| d.is_dir());
-        inst.event(|| match resources.as_deref().map(super::resources::resource_dir) {
+        inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
+        inst.event(|| match resources.as_deref().map(resource_dir) {
             Some(Some(dir)) if dir.is_dir() => format!("resourceLocation resolves to {}", dir.display()),
             Some(Some(dir)) => format!(
                 "resourceLocation resolves to {}, which does not exist (the model sees no resources)",
@@ -222,53 +111,6 @@ pub unsafe fn instantiate<M: CoSimulation>(
         })) as fmi2Component
     }));
     made.unwrap_or(ptr::null_mut())
-}
-
-pub unsafe fn free_instance<M: CoSimulation>(c: fmi2Component) {
-    if c.is_null() {
-        return;
-    }
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: returned by fmi2Instantiate as a Box<Component<M>> and not freed (standard).
-        let component = unsafe { &*(c as *const Component<M>) };
-        if component.busy.swap(true, Ordering::Acquire) {
-            // Freeing it now would pull the instance from under the call that is running.
-            component.refusals.log(
-                fmi2Error,
-                Category::StatusError,
-                "fmi2FreeInstance: called while a call into this instance is still running; \
-                 the instance is not freed",
-            );
-            return;
-        }
-        // SAFETY: as above, and no call is inside: freed once.
-        drop(unsafe { Box::from_raw(c as *mut Component<M>) });
-    }));
-}
-
-pub unsafe fn set_debug_logging<M: CoSimulation>(
-    c: fmi2Component,
-    logging_on: fmi2Boolean,
-    n: usize,
-    categories: *const fmi2String,
-) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::SetDebugLogging, "fmi2SetDebugLogging", |inst| {
-            let Some(cats) = slice(categories, n) else {
-                return inst.error(&format!(
-                    "fmi2SetDebugLogging: categories is NULL with nCategories = {n}"
-                ));
-            };
-            let mut names = Vec::with_capacity(n);
-            for (i, s) in cats.iter().enumerate() {
-                match text(*s) {
-                    Some(t) => names.push(t.into_owned()),
-                    None => return inst.error(&format!("fmi2SetDebugLogging: categories[{i}] is NULL")),
-                }
-            }
-            inst.set_debug_logging(logging_on != fmi2False, &names)
-        })
-    }
 }
 
 pub unsafe fn setup_experiment<M: CoSimulation>(
@@ -450,159 +292,6 @@ pub unsafe fn set_string<M: CoSimulation>(
     }
 }
 
-pub unsafe fn get_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2GetFMUstate", |inst| {
-            if state.is_null() {
-                return inst.error("fmi2GetFMUstate: FMUstate is NULL");
-            }
-            if (*state).is_null() {
-                *state = snapshots::adopt(inst.guid, inst.sim.clone());
-                return fmi2OK;
-            }
-            // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
-            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
-                Ok(()) => fmi2OK,
-                Err(why) => inst.error(&format!("fmi2GetFMUstate: *FMUstate: {why}; refused, nothing changed")),
-            }
-        })
-    }
-}
-
-pub unsafe fn set_fmu_state<M: CoSimulation>(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2SetFMUstate", |inst| {
-            if state.is_null() {
-                return inst.error("fmi2SetFMUstate: FMUstate is NULL");
-            }
-            let fits = |s: &mut snapshots::Snapshot<M>| s.sim.state;
-            match snapshots::with::<M, _>(inst.guid, state, fits) {
-                Ok(s) if !inst.state_fits(s) => {
-                    return inst.error(&format!(
-                        "fmi2SetFMUstate: the state was saved in {s:?}, a state of the other interface \
-                         (this instance is {}); refused, nothing changed",
-                        if inst.model_exchange {
-                            "model exchange"
-                        } else {
-                            "co-simulation"
-                        }
-                    ));
-                }
-                Ok(_) => {}
-                Err(why) => return inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
-            }
-            match snapshots::with::<M, _>(inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
-                Ok(()) => {
-                    inst.restored();
-                    fmi2OK
-                }
-                Err(why) => inst.error(&format!("fmi2SetFMUstate: {why}; refused, nothing changed")),
-            }
-        })
-    }
-}
-
-pub unsafe fn free_fmu_state<M: CoSimulation>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2FreeFMUstate", |inst| {
-            if state.is_null() || (*state).is_null() {
-                return fmi2OK;
-            }
-            match snapshots::release::<M>(inst.guid, *state) {
-                Ok(()) => {
-                    *state = ptr::null_mut();
-                    fmi2OK
-                }
-                Err(why) => inst.error(&format!("fmi2FreeFMUstate: {why}; refused, nothing freed")),
-            }
-        })
-    }
-}
-
-pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    size: *mut usize,
-) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2SerializedFMUstateSize", |inst| {
-            if state.is_null() || size.is_null() {
-                return inst.error("fmi2SerializedFMUstateSize: FMUstate or size is NULL");
-            }
-            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
-                Ok(Ok(bytes)) => {
-                    *size = bytes.len();
-                    fmi2OK
-                }
-                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializedFMUstateSize: {why}")),
-            }
-        })
-    }
-}
-
-pub unsafe fn serialize_fmu_state<M: CoSimulation>(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    bytes: *mut fmi2Byte,
-    size: usize,
-) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2SerializeFMUstate", |inst| {
-            if state.is_null() || bytes.is_null() {
-                return inst.error("fmi2SerializeFMUstate: FMUstate or serializedState is NULL");
-            }
-            match snapshots::with::<M, _>(inst.guid, state, |s| super::state::serialize(inst.guid, &s.sim)) {
-                Ok(Ok(data)) if data.len() == size => {
-                    ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
-                    fmi2OK
-                }
-                Ok(Ok(data)) => inst.error(&format!(
-                    "fmi2SerializeFMUstate: size = {size}, but the state takes {} bytes \
-                     (ask fmi2SerializedFMUstateSize)",
-                    data.len()
-                )),
-                Ok(Err(why)) | Err(why) => inst.error(&format!("fmi2SerializeFMUstate: {why}")),
-            }
-        })
-    }
-}
-
-pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
-    c: fmi2Component,
-    bytes: *const fmi2Byte,
-    size: usize,
-    state: *mut fmi2FMUstate,
-) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, "fmi2DeSerializeFMUstate", |inst| {
-            if state.is_null() {
-                return inst.error("fmi2DeSerializeFMUstate: FMUstate is NULL");
-            }
-            let Some(data) = slice(bytes as *const u8, size) else {
-                return inst.error(&format!(
-                    "fmi2DeSerializeFMUstate: serializedState is NULL with size = {size}"
-                ));
-            };
-            let restored = super::state::deserialize::<M>(inst.guid, data)
-                .and_then(|sim| super::instance::check_restored(&sim).map(|()| sim));
-            let sim = match restored {
-                Ok(sim) => sim,
-                Err(e) => return inst.error(&format!("fmi2DeSerializeFMUstate: refused ({size} bytes): {e}")),
-            };
-            if (*state).is_null() {
-                *state = snapshots::adopt(inst.guid, sim);
-                return fmi2OK;
-            }
-            match snapshots::with::<M, _>(inst.guid, *state, |s| s.sim = sim) {
-                Ok(()) => fmi2OK,
-                Err(why) => inst.error(&format!(
-                    "fmi2DeSerializeFMUstate: *FMUstate: {why}; refused, nothing changed"
-                )),
-            }
-        })
-    }
-}
-
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
     c: fmi2Component,
     unknown_refs: *const fmi2ValueReference,
@@ -652,7 +341,7 @@ pub unsafe fn new_discrete_states<M: CoSimulation>(c: fmi2Component, info: *mut 
             if info.is_null() {
                 return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
             }
-            let mut e = super::instance::EventInfo::default();
+            let mut e = EventInfo::default();
             let status = inst.new_discrete_states(&mut e);
             let b = |v: bool| if v { fmi2True } else { fmi2False };
             *info = fmi2EventInfo {
@@ -691,59 +380,6 @@ pub unsafe fn completed_integrator_step<M: CoSimulation>(
 pub unsafe fn set_time<M: CoSimulation>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
     unsafe { with_instance::<M>(c, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time)) }
 }
-
-pub unsafe fn set_continuous_states<M: CoSimulation>(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status {
-    const F: &str = "fmi2SetContinuousStates";
-    unsafe {
-        with_instance::<M>(c, Call::SetContinuousStates, F, |inst| match slice(x, nx) {
-            Some(x) => inst.set_continuous_states(x),
-            None => inst.error(&format!("{F}: x is NULL with nx = {nx}")),
-        })
-    }
-}
-
-/// fmi2GetContinuousStates, fmi2GetDerivatives, fmi2GetNominalsOfContinuousStates,
-/// fmi2GetEventIndicators: an output array of the instance's size.
-macro_rules! me_vector {
-    ($fn_name:ident, $call:ident, $name:literal, $arg:literal, $method:ident) => {
-        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component, out: *mut fmi2Real, n: usize) -> fmi2Status {
-            unsafe {
-                with_instance::<M>(c, Call::$call, $name, |inst| match slice_mut(out, n) {
-                    Some(out) => inst.$method(out),
-                    None => inst.error(&format!(concat!($name, ": ", $arg, " is NULL with n = {}"), n)),
-                })
-            }
-        }
-    };
-}
-me_vector!(
-    get_continuous_states,
-    GetContinuousStates,
-    "fmi2GetContinuousStates",
-    "x",
-    get_continuous_states
-);
-me_vector!(
-    get_derivatives,
-    GetDerivatives,
-    "fmi2GetDerivatives",
-    "derivatives",
-    get_derivatives
-);
-me_vector!(
-    get_nominals_of_continuous_states,
-    GetNominalsOfContinuousStates,
-    "fmi2GetNominalsOfContinuousStates",
-    "x_nominal",
-    get_nominals
-);
-me_vector!(
-    get_event_indicators,
-    GetEventIndicators,
-    "fmi2GetEventIndicators",
-    "eventIndicators",
-    get_event_indicators_mut
-);
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
     unsafe {
@@ -808,7 +444,7 @@ pub unsafe fn get_status<M: CoSimulation>(
             if value.is_null() {
                 return inst.error("fmi2GetStatus: value is NULL");
             }
-            inst.status_unavailable("fmi2GetStatus", kind)
+            status_unavailable(inst, "fmi2GetStatus", kind)
         })
     }
 }
@@ -820,7 +456,7 @@ pub unsafe fn get_real_status<M: CoSimulation>(
 ) -> fmi2Status {
     unsafe {
         with_instance::<M>(c, Call::GetStatus, "fmi2GetRealStatus", |inst| match value.as_mut() {
-            Some(v) => inst.real_status(kind, v),
+            Some(v) => real_status(inst, kind, v),
             None => inst.error("fmi2GetRealStatus: value is NULL"),
         })
     }
@@ -836,7 +472,7 @@ pub unsafe fn get_integer_status<M: CoSimulation>(
             if value.is_null() {
                 return inst.error("fmi2GetIntegerStatus: value is NULL");
             }
-            inst.status_unavailable("fmi2GetIntegerStatus", kind)
+            status_unavailable(inst, "fmi2GetIntegerStatus", kind)
         })
     }
 }
@@ -849,7 +485,7 @@ pub unsafe fn get_boolean_status<M: CoSimulation>(
     unsafe {
         with_instance::<M>(c, Call::GetStatus, "fmi2GetBooleanStatus", |inst| {
             match value.as_mut() {
-                Some(v) => inst.boolean_status(kind, v),
+                Some(v) => boolean_status(inst, kind, v),
                 None => inst.error("fmi2GetBooleanStatus: value is NULL"),
             }
         })
@@ -866,14 +502,43 @@ pub unsafe fn get_string_status<M: CoSimulation>(
             if value.is_null() {
                 return inst.error("fmi2GetStringStatus: value is NULL");
             }
-            inst.status_unavailable("fmi2GetStringStatus", kind)
+            status_unavailable(inst, "fmi2GetStringStatus", kind)
         })
     }
 }
 
-/// The state an instance is in, for tests written against the runtime in Rust (not while a
-/// call is inside it).
-pub unsafe fn state_of<M: CoSimulation>(c: fmi2Component) -> Option<State> {
-    // SAFETY: as in `with_instance`; no call is inside (the caller's promise).
-    unsafe { (c as *const Component<M>).as_ref().map(|c| (*c.instance.get()).state()) }
+fn real_status<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {
+    if kind == fmi2LastSuccessfulTime {
+        *value = inst.sim.last_successful_time;
+        return fmi2OK;
+    }
+    status_unavailable(inst, "fmi2GetRealStatus", kind)
+}
+
+fn boolean_status<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind, value: &mut fmi2Boolean) -> fmi2Status {
+    if kind == fmi2Terminated {
+        *value = if inst.sim.terminate_requested {
+            fmi2True
+        } else {
+            fmi2False
+        };
+        return fmi2OK;
+    }
+    status_unavailable(inst, "fmi2GetBooleanStatus", kind)
+}
+
+/// The standard's answer for a status this FMU does not have: fmi2Discard.
+fn status_unavailable<M: CoSimulation>(inst: &Instance<M>, function: &str, kind: fmi2StatusKind) -> fmi2Status {
+    let what = match kind {
+        fmi2DoStepStatus | fmi2PendingStatus => "there is no asynchronous step (fmi2DoStep never returns fmi2Pending)",
+        fmi2LastSuccessfulTime => "fmi2LastSuccessfulTime is a Real status (fmi2GetRealStatus)",
+        fmi2Terminated => "fmi2Terminated is a Boolean status (fmi2GetBooleanStatus)",
+        _ => "unknown fmi2StatusKind",
+    };
+    inst.logger.log(
+        fmi2Discard,
+        Category::StatusDiscard,
+        &format!("{function}(kind = {kind}): not available: {what}"),
+    );
+    fmi2Discard
 }

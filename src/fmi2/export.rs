@@ -17,6 +17,7 @@ macro_rules! export_fmi2 {
             use super::*;
             use $crate::__private::abi::*;
             use $crate::__private::api;
+            use $crate::__private::{TERMS2 as TERMS, shared};
             type __RustfmuModel = $model;
 
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::BOTH;
@@ -48,7 +49,15 @@ macro_rules! export_fmi2 {
                 nCategories: usize,
                 categories: *const fmi2String,
             ) -> fmi2Status {
-                unsafe { api::set_debug_logging::<__RustfmuModel>(c, loggingOn, nCategories, categories) }
+                unsafe {
+                    shared::set_debug_logging::<__RustfmuModel>(
+                        &TERMS,
+                        c,
+                        loggingOn != fmi2False,
+                        nCategories,
+                        categories,
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Instantiate(
@@ -76,7 +85,7 @@ macro_rules! export_fmi2 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-                unsafe { api::free_instance::<__RustfmuModel>(c) }
+                unsafe { shared::free_instance::<__RustfmuModel>(&TERMS, c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetupExperiment(
@@ -188,15 +197,15 @@ macro_rules! export_fmi2 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { api::get_fmu_state::<__RustfmuModel>(c, FMUstate) }
+                unsafe { shared::get_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-                unsafe { api::set_fmu_state::<__RustfmuModel>(c, FMUstate) }
+                unsafe { shared::set_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { api::free_fmu_state::<__RustfmuModel>(c, FMUstate) }
+                unsafe { shared::free_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
@@ -204,7 +213,7 @@ macro_rules! export_fmi2 {
                 FMUstate: fmi2FMUstate,
                 size: *mut usize,
             ) -> fmi2Status {
-                unsafe { api::serialized_fmu_state_size::<__RustfmuModel>(c, FMUstate, size) }
+                unsafe { shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, c, FMUstate, size) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SerializeFMUstate(
@@ -213,7 +222,7 @@ macro_rules! export_fmi2 {
                 serializedState: *mut fmi2Byte,
                 size: usize,
             ) -> fmi2Status {
-                unsafe { api::serialize_fmu_state::<__RustfmuModel>(c, FMUstate, serializedState, size) }
+                unsafe { shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate, serializedState, size) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
@@ -222,7 +231,7 @@ macro_rules! export_fmi2 {
                 size: usize,
                 FMUstate: *mut fmi2FMUstate,
             ) -> fmi2Status {
-                unsafe { api::deserialize_fmu_state::<__RustfmuModel>(c, serializedState, size, FMUstate) }
+                unsafe { shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, c, serializedState, size, FMUstate) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
@@ -287,7 +296,7 @@ macro_rules! export_fmi2 {
                 x: *const fmi2Real,
                 nx: usize,
             ) -> fmi2Status {
-                unsafe { api::set_continuous_states::<__RustfmuModel>(c, x, nx) }
+                unsafe { shared::set_continuous_states::<__RustfmuModel>(&TERMS, c, x, nx) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetDerivatives(
@@ -295,7 +304,7 @@ macro_rules! export_fmi2 {
                 derivatives: *mut fmi2Real,
                 nx: usize,
             ) -> fmi2Status {
-                unsafe { api::get_derivatives::<__RustfmuModel>(c, derivatives, nx) }
+                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, c, derivatives, nx) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetEventIndicators(
@@ -303,7 +312,15 @@ macro_rules! export_fmi2 {
                 eventIndicators: *mut fmi2Real,
                 ni: usize,
             ) -> fmi2Status {
-                unsafe { api::get_event_indicators::<__RustfmuModel>(c, eventIndicators, ni) }
+                unsafe {
+                    shared::get_vector::<__RustfmuModel>(
+                        &TERMS,
+                        shared::Vector::EventIndicators,
+                        c,
+                        eventIndicators,
+                        ni,
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetContinuousStates(
@@ -311,7 +328,7 @@ macro_rules! export_fmi2 {
                 x: *mut fmi2Real,
                 nx: usize,
             ) -> fmi2Status {
-                unsafe { api::get_continuous_states::<__RustfmuModel>(c, x, nx) }
+                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, c, x, nx) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
@@ -319,7 +336,7 @@ macro_rules! export_fmi2 {
                 x_nominal: *mut fmi2Real,
                 nx: usize,
             ) -> fmi2Status {
-                unsafe { api::get_nominals_of_continuous_states::<__RustfmuModel>(c, x_nominal, nx) }
+                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, c, x_nominal, nx) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(

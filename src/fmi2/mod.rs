@@ -1,15 +1,13 @@
-//! The FMI 2.0 runtime, generic over the model: not part of the documented API.
+//! The FMI 2.0 C layer, generic over the model: not part of the documented API.
 //!
-//! Layers, with arrows pointing one way: a model ([`crate::Model`], declared with
-//! `#[derive(Model)]`) knows nothing of FMI; [`instance`] runs the standard's state machine
-//! around it; [`api`] is the C boundary; [`export`](crate::export_fmi2) puts the symbols in an
-//! FMU crate.
+//! [`abi`] declares the C types, [`api`] converts the importer's arguments and calls the
+//! version-neutral core ([`crate::core`]), [`export`](crate::export_fmi2) puts the symbols in
+//! an FMU crate, and [`TERMS`] is how this version names its functions and states in every
+//! message the core writes.
 
 pub mod abi;
 pub mod api;
 pub mod export;
-pub mod instance;
-pub mod logging;
-pub mod resources;
-pub mod snapshots;
-pub mod state;
+mod terms;
+
+pub use terms::TERMS;

@@ -1,18 +1,21 @@
-//! The C boundary of FMI 3.0: every `fmi3*` function, generic over the model. The export macro
-//! ([`export_fmi3!`](crate::export_fmi3)) forwards the `#[no_mangle]` symbols here. The
+//! The C boundary of FMI 3.0: the `fmi3*` functions that FMI 2.0 does not share, generic over
+//! the model (the shared ones are [`crate::core::shared`], called with [`TERMS`]). The export
+//! macro ([`export_fmi3!`](crate::export_fmi3)) forwards the `#[no_mangle]` symbols here. The
 //! instance core and the guard around every call (NULL checks, the re-entrancy refusal,
-//! `catch_unwind`) are FMI 2.0's ([`crate::fmi2::api`]); what differs in 3.0 is here: the
+//! `catch_unwind`) are the version-neutral [`crate::core`]'s; what differs in 3.0 is here: the
 //! instantiation functions and their callback, typed getters and setters with `nValues`, the
 //! independent variable `time`, Int64 enumerations, C `bool` booleans, the output arguments of
 //! fmi3DoStep and fmi3UpdateDiscreteStates, and the adjoint derivative.
 #![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
 
+use super::TERMS;
 use super::abi::*;
+use crate::core::guard::{Component, slice, slice_mut, text, with_instance};
+use crate::core::instance::{EventInfo, Instance};
+use crate::core::logging::{Callback, Category, Logger};
+use crate::core::machine::{Call, State};
+use crate::core::shared;
 use crate::description::VarType;
-use crate::fmi2::abi::{fmi2False, fmi2True};
-use crate::fmi2::api::{Component, slice, slice_mut, text, with_instance};
-use crate::fmi2::instance::{Call, Instance, State};
-use crate::fmi2::logging::{Category, Logger};
 use crate::model::CoSimulation;
 use std::cell::UnsafeCell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -49,8 +52,8 @@ unsafe fn instantiate<M: CoSimulation>(
         let (name, token, resources) = unsafe { (text(instance_name), text(token), text(resource_path)) };
         // The embedded description stays in the binary for `cargo fmu` to read.
         std::hint::black_box(description.len());
-        let logger = Logger::new_fmi3(
-            log_message,
+        let logger = Logger::new(
+            Callback::Message(log_message),
             environment,
             name.as_deref().unwrap_or(""),
             logging_on,
@@ -83,8 +86,7 @@ unsafe fn instantiate<M: CoSimulation>(
             }
             Some(_) => {}
         }
-        let mut inst = Instance::<M>::new(logger, own_token, model_exchange);
-        inst.fmi3 = true;
+        let mut inst = Instance::<M>::new(&TERMS, logger, own_token, model_exchange);
         inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
         inst.event(|| match resources.as_deref().map(|r| (r, resource_dir(r))) {
             Some((_, Some(dir))) if dir.is_dir() => format!("resourcePath is {}", dir.display()),
@@ -176,8 +178,8 @@ pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
     let _ = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: a NUL-terminated string from the importer, or NULL.
         let name = unsafe { text(instance_name) };
-        let logger = Logger::new_fmi3(
-            log_message,
+        let logger = Logger::new(
+            Callback::Message(log_message),
             environment,
             name.as_deref().unwrap_or(""),
             true,
@@ -201,8 +203,7 @@ pub unsafe fn set_debug_logging<M: CoSimulation>(
     n: usize,
     categories: *const fmi3String,
 ) -> fmi3Status {
-    let on = if logging_on { fmi2True } else { fmi2False };
-    unsafe { crate::fmi2::api::set_debug_logging::<M>(c, on, n, categories) }
+    unsafe { shared::set_debug_logging::<M>(&TERMS, c, logging_on, n, categories) }
 }
 
 pub unsafe fn enter_initialization_mode<M: CoSimulation>(
@@ -763,7 +764,7 @@ pub unsafe fn update_discrete_states<M: CoSimulation>(
             {
                 return inst.error(&format!("{F}: an output argument is NULL"));
             }
-            let mut e = crate::fmi2::instance::EventInfo::default();
+            let mut e = EventInfo::default();
             let status = inst.new_discrete_states(&mut e);
             *discrete_states_need_update = e.new_discrete_states_needed;
             *terminate_simulation = e.terminate_simulation;
@@ -801,7 +802,7 @@ pub unsafe fn set_time<M: CoSimulation>(c: fmi3Instance, time: fmi3Float64) -> f
 }
 
 pub unsafe fn set_continuous_states<M: CoSimulation>(c: fmi3Instance, x: *const fmi3Float64, nx: usize) -> fmi3Status {
-    unsafe { crate::fmi2::api::set_continuous_states::<M>(c, x, nx) }
+    unsafe { shared::set_continuous_states::<M>(&TERMS, c, x, nx) }
 }
 
 pub unsafe fn get_number_of_continuous_states<M: CoSimulation>(c: fmi3Instance, n: *mut usize) -> fmi3Status {

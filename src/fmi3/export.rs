@@ -14,8 +14,8 @@ macro_rules! export_fmi3 {
         pub mod __rustfmu_fmi3_exports {
             use super::*;
             use $crate::__private::abi3::*;
-            use $crate::__private::api as api2;
             use $crate::__private::api3;
+            use $crate::__private::{TERMS3 as TERMS, shared};
             type __RustfmuModel = $model;
 
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::BOTH_FMI3;
@@ -126,7 +126,7 @@ macro_rules! export_fmi3 {
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-                unsafe { api2::free_instance::<__RustfmuModel>(instance) }
+                unsafe { shared::free_instance::<__RustfmuModel>(&TERMS, instance) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3EnterInitializationMode(
@@ -661,18 +661,18 @@ macro_rules! export_fmi3 {
                 instance: fmi3Instance,
                 FMUState: *mut fmi3FMUState,
             ) -> fmi3Status {
-                unsafe { api2::get_fmu_state::<__RustfmuModel>(instance, FMUState) }
+                unsafe { shared::get_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status {
-                unsafe { api2::set_fmu_state::<__RustfmuModel>(instance, FMUState) }
+                unsafe { shared::set_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3FreeFMUState(
                 instance: fmi3Instance,
                 FMUState: *mut fmi3FMUState,
             ) -> fmi3Status {
-                unsafe { api2::free_fmu_state::<__RustfmuModel>(instance, FMUState) }
+                unsafe { shared::free_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
@@ -680,7 +680,7 @@ macro_rules! export_fmi3 {
                 FMUState: fmi3FMUState,
                 size: *mut usize,
             ) -> fmi3Status {
-                unsafe { api2::serialized_fmu_state_size::<__RustfmuModel>(instance, FMUState, size) }
+                unsafe { shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, instance, FMUState, size) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3SerializeFMUState(
@@ -689,7 +689,15 @@ macro_rules! export_fmi3 {
                 serializedState: *mut fmi3Byte,
                 size: usize,
             ) -> fmi3Status {
-                unsafe { api2::serialize_fmu_state::<__RustfmuModel>(instance, FMUState, serializedState.cast(), size) }
+                unsafe {
+                    shared::serialize_fmu_state::<__RustfmuModel>(
+                        &TERMS,
+                        instance,
+                        FMUState,
+                        serializedState.cast(),
+                        size,
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3DeserializeFMUState(
@@ -699,7 +707,13 @@ macro_rules! export_fmi3 {
                 FMUState: *mut fmi3FMUState,
             ) -> fmi3Status {
                 unsafe {
-                    api2::deserialize_fmu_state::<__RustfmuModel>(instance, serializedState.cast(), size, FMUState)
+                    shared::deserialize_fmu_state::<__RustfmuModel>(
+                        &TERMS,
+                        instance,
+                        serializedState.cast(),
+                        size,
+                        FMUState,
+                    )
                 }
             }
             #[unsafe(no_mangle)]
@@ -906,7 +920,9 @@ macro_rules! export_fmi3 {
                 derivatives: *mut fmi3Float64,
                 n: usize,
             ) -> fmi3Status {
-                unsafe { api2::get_derivatives::<__RustfmuModel>(instance, derivatives, n) }
+                unsafe {
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, instance, derivatives, n)
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3GetEventIndicators(
@@ -914,7 +930,15 @@ macro_rules! export_fmi3 {
                 eventIndicators: *mut fmi3Float64,
                 n: usize,
             ) -> fmi3Status {
-                unsafe { api2::get_event_indicators::<__RustfmuModel>(instance, eventIndicators, n) }
+                unsafe {
+                    shared::get_vector::<__RustfmuModel>(
+                        &TERMS,
+                        shared::Vector::EventIndicators,
+                        instance,
+                        eventIndicators,
+                        n,
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3GetContinuousStates(
@@ -922,7 +946,15 @@ macro_rules! export_fmi3 {
                 continuousStates: *mut fmi3Float64,
                 n: usize,
             ) -> fmi3Status {
-                unsafe { api2::get_continuous_states::<__RustfmuModel>(instance, continuousStates, n) }
+                unsafe {
+                    shared::get_vector::<__RustfmuModel>(
+                        &TERMS,
+                        shared::Vector::ContinuousStates,
+                        instance,
+                        continuousStates,
+                        n,
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
@@ -930,7 +962,7 @@ macro_rules! export_fmi3 {
                 nominals: *mut fmi3Float64,
                 n: usize,
             ) -> fmi3Status {
-                unsafe { api2::get_nominals_of_continuous_states::<__RustfmuModel>(instance, nominals, n) }
+                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, instance, nominals, n) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(

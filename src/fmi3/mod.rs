@@ -1,7 +1,13 @@
-//! The FMI 3.0 runtime: the C boundary and the exported symbols of FMI 3.0, over the same
-//! instance core as FMI 2.0 ([`crate::fmi2::instance`], which runs the FMI 3.0 state machine
-//! when instantiated through these functions). Not part of the documented API.
+//! The FMI 3.0 C layer, generic over the model: not part of the documented API.
+//!
+//! [`abi`] declares the C types, [`api`] converts the importer's arguments and calls the
+//! version-neutral core ([`crate::core`]), [`export`](crate::export_fmi3) puts the symbols in
+//! an FMU crate, and [`TERMS`] is how this version names its functions and states in every
+//! message the core writes.
 
 pub mod abi;
 pub mod api;
 pub mod export;
+mod terms;
+
+pub use terms::TERMS;

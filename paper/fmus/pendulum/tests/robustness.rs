@@ -184,8 +184,8 @@ fn masses_and_lengths_outside_their_declared_domain_are_refused_naming_them() {
 
 #[test]
 fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused() {
-    use rustfmu::fmi2::instance::Sim;
-    use rustfmu::fmi2::state;
+    use rustfmu::core::instance::Sim;
+    use rustfmu::core::state;
     let guid = pendulum_fmu::__rustfmu_fmi2_exports::GUID;
     let mut p = Fmu::new(0.0);
     assert_eq!(p.set(&[("alpha1_0", 0.3)]), fmi2OK);
@@ -221,7 +221,7 @@ fn a_deserialized_state_with_a_correct_checksum_but_illegal_content_is_refused()
         ("h_next = NaN", |s| s.solver.h_next = f64::NAN, "h_next = NaN"),
     ];
     for (what, doctor, says) in cases {
-        let mut sim = state::deserialize::<Pendulum>(guid, &good).unwrap();
+        let mut sim = state::deserialize::<Pendulum>(&rustfmu::fmi2::TERMS, guid, &good).unwrap();
         doctor(&mut sim);
         let bytes = state::serialize(guid, &sim).unwrap();
         let mut s: fmi2FMUstate = std::ptr::null_mut();

@@ -4,6 +4,7 @@
 //! `b"RFMUSTAT"` | format version u32 | GUID length u16 | GUID bytes | payload length u32 |
 //! payload (postcard encoding of [`Sim`]) | CRC-32 of everything before it, u32.
 
+use super::Terms;
 use super::instance::Sim;
 use crate::model::CoSimulation;
 
@@ -57,7 +58,7 @@ impl<'a> Reader<'a> {
 }
 
 /// Decodes a state written by [`serialize`] for the same model (same GUID) and format.
-pub fn deserialize<M: CoSimulation>(guid: &str, bytes: &[u8]) -> Result<Sim<M>, String> {
+pub fn deserialize<M: CoSimulation>(terms: &Terms, guid: &str, bytes: &[u8]) -> Result<Sim<M>, String> {
     let mut r = Reader { bytes, at: 0 };
     if r.take(8, "the header")? != MAGIC {
         return Err("not a serialized state of this exporter (wrong magic bytes)".into());
@@ -68,11 +69,12 @@ pub fn deserialize<M: CoSimulation>(guid: &str, bytes: &[u8]) -> Result<Sim<M>, 
             "format version {version}, but this FMU reads version {FORMAT_VERSION}"
         ));
     }
-    let n = r.u16("the GUID length")? as usize;
-    let their_guid = r.take(n, "the GUID")?;
+    let token = terms.token;
+    let n = r.u16(&format!("the {token} length"))? as usize;
+    let their_guid = r.take(n, &format!("the {token}"))?;
     if their_guid != guid.as_bytes() {
         return Err(format!(
-            "the state belongs to GUID {}, this FMU is {guid}",
+            "the state belongs to {token} {}, this FMU is {guid}",
             String::from_utf8_lossy(their_guid)
         ));
     }

@@ -1,208 +1,16 @@
-//! One FMU instance: the standard's state machine as a table, argument checks, and the calls
-//! into the model. Safe Rust: the C boundary (pointers, panics) is in [`super::api`].
-#![allow(non_upper_case_globals)]
+//! One FMU instance of either FMI version: the state check, argument checks, and the calls into
+//! the model, worded in the instance's [`Terms`]. Safe Rust: the C boundary (pointers, panics)
+//! is in [`super::guard`] and the C layers.
 
-use super::abi::*;
 use super::logging::{Category, Logger};
+use super::machine::{Call, State, contains, state_names};
+use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
 use crate::model::{CoSimulation, Context, StateVector};
 use crate::solver::Dopri5;
 use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
-
-/// States of the FMI 2.0 state machines: co-simulation (section 4.2.4) and model exchange
-/// (section 3.2.3; `EventMode`, `ContinuousTimeMode`). An instance is in the states of the
-/// interface it was instantiated for. `StepInProgress` does not occur: every step here is
-/// synchronous.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[repr(u8)]
-pub enum State {
-    Instantiated = 0,
-    InitializationMode = 1,
-    StepComplete = 2,
-    StepFailed = 3,
-    StepCanceled = 4,
-    Terminated = 5,
-    Error = 6,
-    Fatal = 7,
-    EventMode = 8,
-    ContinuousTimeMode = 9,
-}
-
-const fn bit(s: State) -> u16 {
-    1 << s as u8
-}
-const INSTANTIATED: u16 = bit(State::Instantiated);
-const INIT: u16 = bit(State::InitializationMode);
-const STEP_COMPLETE: u16 = bit(State::StepComplete);
-const STEP_FAILED: u16 = bit(State::StepFailed);
-const STEP_CANCELED: u16 = bit(State::StepCanceled);
-const TERMINATED: u16 = bit(State::Terminated);
-const ERROR: u16 = bit(State::Error);
-const FATAL: u16 = bit(State::Fatal);
-const EVENT: u16 = bit(State::EventMode);
-const CONTINUOUS: u16 = bit(State::ContinuousTimeMode);
-const ANY_BUT_FATAL: u16 =
-    INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS;
-
-/// The functions whose legality depends on the state, with the states each is allowed in,
-/// from the standard's tables in sections 3.2.3 and 4.2.4 (as the Reference-FMUs encode them).
-/// The co-simulation functions are allowed in co-simulation states only, the model-exchange
-/// ones in model-exchange states only, so each interface refuses the other's.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Call {
-    SetDebugLogging,
-    FreeInstance,
-    SetupExperiment,
-    EnterInitializationMode,
-    ExitInitializationMode,
-    Terminate,
-    Reset,
-    GetValues,
-    /// fmi2SetReal.
-    SetValues,
-    /// fmi2SetInteger, fmi2SetBoolean, fmi2SetString: not in continuous-time mode.
-    SetDiscreteValues,
-    FmuState,
-    GetDirectionalDerivative,
-    SetRealInputDerivatives,
-    GetRealOutputDerivatives,
-    DoStep,
-    CancelStep,
-    GetStatus,
-    EnterEventMode,
-    NewDiscreteStates,
-    EnterContinuousTimeMode,
-    CompletedIntegratorStep,
-    SetTime,
-    SetContinuousStates,
-    GetEventIndicators,
-    GetContinuousStates,
-    GetDerivatives,
-    GetNominalsOfContinuousStates,
-    /// FMI 3.0 only: fmi3GetNumberOfContinuousStates, fmi3GetNumberOfEventIndicators.
-    GetNumberOf,
-    /// FMI 3.0 only: fmi3EvaluateDiscreteStates.
-    EvaluateDiscreteStates,
-    /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode, which no FMU here has).
-    EnterStepMode,
-}
-
-impl Call {
-    pub const fn allowed_in(self) -> u16 {
-        match self {
-            Call::SetDebugLogging => ANY_BUT_FATAL,
-            Call::FreeInstance => ANY_BUT_FATAL | FATAL,
-            Call::SetupExperiment => INSTANTIATED,
-            Call::EnterInitializationMode => INSTANTIATED,
-            Call::ExitInitializationMode => INIT,
-            // Not from StepCanceled: after fmi2CancelStep only fmi2Reset and fmi2FreeInstance
-            // are meant to follow (the Reference FMUs' mask is StepComplete | StepFailed too).
-            Call::Terminate => STEP_COMPLETE | STEP_FAILED | EVENT | CONTINUOUS,
-            Call::Reset => ANY_BUT_FATAL,
-            Call::GetValues | Call::GetDirectionalDerivative => {
-                INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS
-            }
-            // Which variables may be set in which of these states: `Instance::settable`.
-            Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT | CONTINUOUS,
-            Call::SetDiscreteValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT,
-            Call::FmuState => ANY_BUT_FATAL,
-            Call::SetRealInputDerivatives => INSTANTIATED | INIT | STEP_COMPLETE,
-            Call::GetRealOutputDerivatives => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
-            Call::DoStep => STEP_COMPLETE,
-            Call::CancelStep => 0,
-            Call::GetStatus => STEP_COMPLETE | STEP_FAILED | TERMINATED,
-            Call::EnterEventMode => EVENT | CONTINUOUS,
-            Call::NewDiscreteStates | Call::EnterContinuousTimeMode => EVENT,
-            Call::CompletedIntegratorStep | Call::SetContinuousStates => CONTINUOUS,
-            Call::SetTime => EVENT | CONTINUOUS,
-            Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
-            Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
-            Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
-            Call::GetNumberOf | Call::EvaluateDiscreteStates | Call::EnterStepMode => 0,
-        }
-    }
-
-    /// The FMI 3.0 table (sections 3.2 and 4.2 of FMI 3.0, as the Reference-FMUs encode it) for
-    /// the FMUs this runtime makes: no event mode in co-simulation, no clocks, no configuration
-    /// mode. `StepComplete` is 3.0's Step Mode, `StepFailed` its Step Discarded. Where 3.0 differs
-    /// from 2.0: fmi3EnterEventMode only from Continuous-Time Mode; the model-exchange
-    /// evaluations also in Initialization Mode; the nominals not before initialization; the
-    /// getters also in Instantiated (FMI 3.0.2: "get variable start values", fmi-standard #2174),
-    /// for the variables that have a start value (`Instance::get_values`).
-    pub const fn allowed_in3(self) -> u16 {
-        match self {
-            Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
-            Call::EnterEventMode => CONTINUOUS,
-            Call::GetDerivatives | Call::GetEventIndicators | Call::GetContinuousStates => {
-                INIT | EVENT | CONTINUOUS | TERMINATED | ERROR
-            }
-            Call::GetNominalsOfContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
-            Call::GetNumberOf => ANY_BUT_FATAL,
-            Call::EvaluateDiscreteStates => EVENT,
-            Call::EnterStepMode => 0,
-            // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
-            // fmi3GetStatus in FMI 3.0.
-            Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,
-            _ => self.allowed_in(),
-        }
-    }
-}
-
-impl Call {
-    /// `Some(true)`: a model-exchange function; `Some(false)`: a co-simulation one; `None`:
-    /// common to both. The states of the two machines overlap (instantiated, initialization,
-    /// terminated, error), so the interface is checked besides the state.
-    pub const fn interface(self) -> Option<bool> {
-        match self {
-            Call::EnterEventMode
-            | Call::NewDiscreteStates
-            | Call::EnterContinuousTimeMode
-            | Call::CompletedIntegratorStep
-            | Call::SetTime
-            | Call::SetContinuousStates
-            | Call::GetEventIndicators
-            | Call::GetContinuousStates
-            | Call::GetDerivatives
-            | Call::GetNominalsOfContinuousStates
-            | Call::GetNumberOf
-            | Call::EvaluateDiscreteStates => Some(true),
-            Call::SetRealInputDerivatives
-            | Call::GetRealOutputDerivatives
-            | Call::DoStep
-            | Call::CancelStep
-            | Call::GetStatus
-            | Call::EnterStepMode => Some(false),
-            _ => None,
-        }
-    }
-}
-
-fn state_names(mask: u16) -> String {
-    const ALL: [State; 10] = [
-        State::Instantiated,
-        State::InitializationMode,
-        State::EventMode,
-        State::ContinuousTimeMode,
-        State::StepComplete,
-        State::StepFailed,
-        State::StepCanceled,
-        State::Terminated,
-        State::Error,
-        State::Fatal,
-    ];
-    let names: Vec<String> = ALL
-        .iter()
-        .filter(|s| mask & bit(**s) != 0)
-        .map(|s| format!("{s:?}"))
-        .collect();
-    if names.is_empty() {
-        "no state of this FMU".into()
-    } else {
-        names.join(", ")
-    }
-}
 
 /// Everything an FMU state snapshot holds: the model and the runtime's own bookkeeping.
 /// The logger and the importer's callbacks are not part of it.
@@ -263,26 +71,28 @@ pub struct Instance<M: CoSimulation> {
     pub logger: Logger,
     pub guid: &'static str,
     pub sim: Sim<M>,
-    /// Instantiated as fmi2ModelExchange (else fmi2CoSimulation).
+    /// Instantiated for model exchange (else co-simulation).
     pub model_exchange: bool,
-    /// The derivatives fmi2GetDerivatives computed last (valid while `!sim.stale_derivatives`):
+    /// The derivatives the get-derivatives function computed last (valid while `!sim.stale_derivatives`):
     /// it computes only those, and leaves the model's `der(..)` variables to the next full
     /// evaluation.
     derivatives: M::States,
     /// The model as it was before the step in progress, to go back to when the step leaves
     /// something that is not finite. Kept here so that a step does not allocate a copy.
     before_step: M,
-    /// What fmi2GetString last returned: valid until the next call, as the standard allows.
+    /// What the get-string function last returned: valid until the next call, as the standard
+    /// allows.
     strings: Vec<CString>,
     /// The unpacked `resources/` folder, from `fmuResourceLocation` (not part of the FMU state).
     pub resources: Option<std::path::PathBuf>,
-    /// Instantiated through the FMI 3.0 functions: the 3.0 state table applies.
-    pub fmi3: bool,
+    /// The words of the FMI version this instance was instantiated through; its
+    /// `version` picks the state table.
+    pub terms: &'static Terms,
 }
 
 /// The first Real variable the model computes (output, local, calculated parameter), or the
 /// first part of its internal state, that is not finite, described for a message. The one
-/// check every value computed by a model passes before it may leave under fmi2OK: after
+/// check every value computed by a model passes before it may leave under OK: after
 /// initialization, after every step and parameter change, and on every deserialized state
 /// (inputs and parameters pass the setters' checks when they are set).
 #[inline]
@@ -309,10 +119,10 @@ fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, interna
     )
 }
 
-type Outcome = Result<(), fmi2Status>;
+type Outcome = Result<(), Status>;
 
 impl<M: CoSimulation> Instance<M> {
-    pub fn new(logger: Logger, guid: &'static str, model_exchange: bool) -> Self {
+    pub fn new(terms: &'static Terms, logger: Logger, guid: &'static str, model_exchange: bool) -> Self {
         Instance {
             logger,
             guid,
@@ -322,7 +132,7 @@ impl<M: CoSimulation> Instance<M> {
             before_step: M::start(),
             strings: Vec::new(),
             resources: None,
-            fmi3: false,
+            terms,
         }
     }
 
@@ -334,20 +144,20 @@ impl<M: CoSimulation> Instance<M> {
         &self.sim.model
     }
 
-    pub fn error(&self, message: &str) -> fmi2Status {
-        self.logger.log(fmi2Error, Category::StatusError, message);
-        fmi2Error
+    pub fn error(&self, message: &str) -> Status {
+        self.logger.log(ERROR, Category::StatusError, message);
+        ERROR
     }
 
     pub fn event(&self, message: impl FnOnce() -> String) {
-        if self.logger.wants(fmi2OK, Category::Events) {
-            self.logger.log(fmi2OK, Category::Events, &message());
+        if self.logger.wants(OK, Category::Events) {
+            self.logger.log(OK, Category::Events, &message());
         }
     }
 
     pub fn trace(&self, message: impl FnOnce() -> String) {
-        if self.logger.wants(fmi2OK, Category::Calls) {
-            self.logger.log(fmi2OK, Category::Calls, &message());
+        if self.logger.wants(OK, Category::Calls) {
+            self.logger.log(OK, Category::Calls, &message());
         }
     }
 
@@ -355,7 +165,7 @@ impl<M: CoSimulation> Instance<M> {
     pub fn fatal(&mut self, function: &str, what: &str) {
         self.sim.state = State::Fatal;
         self.logger.log(
-            fmi2Fatal,
+            FATAL,
             Category::StatusFatal,
             &format!("{function}: internal error ({what}); this instance can only be freed"),
         );
@@ -380,54 +190,49 @@ impl<M: CoSimulation> Instance<M> {
                 }
             )));
         }
-        let allowed = if self.fmi3 {
-            call.allowed_in3()
-        } else {
-            call.allowed_in()
-        };
-        if allowed & bit(self.sim.state) != 0 {
+        let allowed = call.allowed(self.terms.version);
+        if contains(allowed, self.sim.state) {
             return Ok(());
         }
         Err(self.error(&format!(
-            "{function} is not allowed in state {:?} (allowed in: {})",
-            self.sim.state,
-            state_names(allowed)
+            "{function} is not allowed in state {} (allowed in: {})",
+            self.terms.state_name(self.sim.state),
+            state_names(self.terms, allowed)
         )))
     }
 
-    pub fn set_debug_logging(&mut self, logging_on: bool, categories: &[String]) -> fmi2Status {
+    pub fn set_debug_logging(&mut self, function: &str, logging_on: bool, categories: &[String]) -> Status {
         let mut known = Vec::with_capacity(categories.len());
         for name in categories {
             match self.logger.category_index(name) {
                 Some(c) => known.push(c),
                 None => {
                     return self.error(&format!(
-                        "fmi2SetDebugLogging: unknown log category '{name}' (declared: {})",
+                        "{function}: unknown log category '{name}' (declared: {})",
                         self.logger.category_names().join(", ")
                     ));
                 }
             }
         }
         self.logger.set_debug_logging(logging_on, &known);
-        fmi2OK
+        OK
     }
 
-    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> fmi2Status {
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Status {
+        let f = self.terms.name(Function::SetupExperiment);
         if !start.is_finite() {
-            return self.error(&format!("fmi2SetupExperiment: startTime = {start} is not finite"));
+            return self.error(&format!("{f}: startTime = {start} is not finite"));
         }
         if let Some(tol) = tolerance
             && !(tol.is_finite() && tol > 0.0)
         {
-            return self.error(&format!(
-                "fmi2SetupExperiment: tolerance = {tol} must be finite and > 0"
-            ));
+            return self.error(&format!("{f}: tolerance = {tol} must be finite and > 0"));
         }
         if let Some(stop) = stop
             && !(stop.is_finite() && stop >= start)
         {
             return self.error(&format!(
-                "fmi2SetupExperiment: stopTime = {stop} must be finite and not before startTime = {start}"
+                "{f}: stopTime = {stop} must be finite and not before startTime = {start}"
             ));
         }
         self.sim.tolerance = tolerance;
@@ -435,18 +240,18 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.stop_time = stop;
         self.sim.time = start;
         self.sim.last_successful_time = start;
-        fmi2OK
+        OK
     }
 
-    pub fn enter_initialization_mode(&mut self) -> fmi2Status {
+    pub fn enter_initialization_mode(&mut self) -> Status {
         self.sim.state = State::InitializationMode;
         self.sim.init_dirty = true;
-        fmi2OK
+        OK
     }
 
     /// Brings the calculated variables up to date with what was set in initialization mode
     /// (always when `force`, else only if something was set since). All or nothing: when the
-    /// model refuses, it is put back as it was, so a call answering fmi2Error changes nothing.
+    /// model refuses, it is put back as it was, so a call answering ERROR changes nothing.
     fn initialize_model(&mut self, function: &str, force: bool) -> Outcome {
         if !force && !self.sim.init_dirty {
             return Ok(());
@@ -484,8 +289,8 @@ impl<M: CoSimulation> Instance<M> {
         }
     }
 
-    pub fn exit_initialization_mode(&mut self) -> fmi2Status {
-        if let Err(status) = self.initialize_model("fmi2ExitInitializationMode", true) {
+    pub fn exit_initialization_mode(&mut self) -> Status {
+        if let Err(status) = self.initialize_model(self.terms.name(Function::ExitInitializationMode), true) {
             return status;
         }
         self.sim.state = if self.model_exchange {
@@ -497,23 +302,23 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.last_successful_time = self.sim.start_time;
         self.sim.solver.restart();
         self.event(|| format!("initialized at t = {}", self.sim.start_time));
-        fmi2OK
+        OK
     }
 
-    pub fn terminate(&mut self) -> fmi2Status {
+    pub fn terminate(&mut self) -> Status {
         self.sim.state = State::Terminated;
         self.event(|| format!("terminated at t = {}", self.sim.time));
-        fmi2OK
+        OK
     }
 
-    pub fn reset(&mut self) -> fmi2Status {
+    pub fn reset(&mut self) -> Status {
         self.sim = Sim::new();
         self.event(|| "reset: every variable is back at its start value".into());
-        fmi2OK
+        OK
     }
 
     /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal.
-    fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, fmi2Status> {
+    fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, Status> {
         if let Some(v) = M::DESCRIPTION.variable(vr, ty) {
             return Ok(v);
         }
@@ -531,7 +336,7 @@ impl<M: CoSimulation> Instance<M> {
         )
     }
 
-    pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> fmi2Status {
+    pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
         // Every reference is checked before anything is computed: a refused get changes nothing
         // (it used to run the initialization first, then refuse an unknown reference).
         for vr in vrs {
@@ -551,20 +356,22 @@ impl<M: CoSimulation> Instance<M> {
                 None => return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE)),
             }
         }
-        fmi2OK
+        OK
     }
 
-    /// fmi2GetString: the returned pointers stay valid until the next call on this instance.
-    pub fn get_strings(&mut self, vrs: &[u32], out: &mut [fmi2String]) -> fmi2Status {
+    /// The get-string function: the returned pointers stay valid until the next call on this
+    /// instance.
+    pub fn get_strings(&mut self, vrs: &[u32], out: &mut [*const std::os::raw::c_char]) -> Status {
+        let f = self.terms.name(Function::GetString);
         for vr in vrs {
             if let Err(status) = self
-                .lookup("fmi2GetString", *vr, VarType::String)
-                .and_then(|v| self.check_gettable("fmi2GetString", v))
+                .lookup(f, *vr, VarType::String)
+                .and_then(|v| self.check_gettable(f, v))
             {
                 return status;
             }
         }
-        if let Err(status) = self.up_to_date("fmi2GetString") {
+        if let Err(status) = self.up_to_date(f) {
             return status;
         }
         self.strings.clear();
@@ -575,17 +382,18 @@ impl<M: CoSimulation> Instance<M> {
         for (slot, s) in out.iter_mut().zip(&self.strings) {
             *slot = s.as_ptr();
         }
-        fmi2OK
+        OK
     }
 
-    pub fn set_strings(&mut self, vrs: &[u32], values: &[String]) -> fmi2Status {
+    pub fn set_strings(&mut self, vrs: &[u32], values: &[String]) -> Status {
+        let f = self.terms.name(Function::SetString);
         let mut parameter_changed = false;
         for vr in vrs {
-            let decl = match self.lookup("fmi2SetString", *vr, VarType::String) {
+            let decl = match self.lookup(f, *vr, VarType::String) {
                 Ok(d) => d,
                 Err(status) => return status,
             };
-            if let Err(status) = self.check_settable("fmi2SetString", decl) {
+            if let Err(status) = self.check_settable(f, decl) {
                 return status;
             }
             parameter_changed |= decl.causality == Causality::Parameter;
@@ -594,7 +402,7 @@ impl<M: CoSimulation> Instance<M> {
         for (vr, v) in vrs.iter().zip(values) {
             self.sim.model.set_string(*vr, v);
         }
-        self.after_set("fmi2SetString", previous)
+        self.after_set(f, previous)
     }
 
     /// Before initialization (FMI 3.0's Instantiated; FMI 2.0 allows no get there) a variable has
@@ -646,7 +454,7 @@ impl<M: CoSimulation> Instance<M> {
         )))
     }
 
-    fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static Variable, fmi2Status> {
+    fn check_one(&self, function: &str, vr: u32, value: Value) -> Result<&'static Variable, Status> {
         let decl = self.lookup(function, vr, value.api_type())?;
         self.check_settable(function, decl)?;
         match refusal(&self.sim.model, decl, value) {
@@ -657,7 +465,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// Sets all values or none: each is checked before any is stored.
-    pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> fmi2Status {
+    pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
         let mut parameter_changed = false;
         for (vr, v) in vrs.iter().zip(values) {
             let Some(value) = v.to_value() else {
@@ -679,7 +487,7 @@ impl<M: CoSimulation> Instance<M> {
 
     /// After values were stored: stale calculated variables in initialization mode; between
     /// steps, a tunable parameter change the model may still refuse (then nothing changes).
-    fn after_set(&mut self, function: &str, previous: Option<M>) -> fmi2Status {
+    fn after_set(&mut self, function: &str, previous: Option<M>) -> Status {
         if self.sim.state == State::InitializationMode {
             self.sim.init_dirty = true;
         }
@@ -709,7 +517,7 @@ impl<M: CoSimulation> Instance<M> {
             self.sim.solver.restart();
             self.event(|| format!("{function}: tunable parameters changed at t = {}", self.sim.time));
         }
-        fmi2OK
+        OK
     }
 
     /// Importers compute communication points as start + n·h or by summing h, so the point
@@ -723,33 +531,35 @@ impl<M: CoSimulation> Instance<M> {
         (t - self.sim.time).abs() <= tol
     }
 
-    pub fn do_step(&mut self, t: f64, h: f64) -> fmi2Status {
+    pub fn do_step(&mut self, t: f64, h: f64) -> Status {
+        let f = self.terms.name(Function::DoStep);
         if !(h.is_finite() && h > 0.0) {
             return self.error(&format!(
-                "fmi2DoStep: communicationStepSize = {h} must be finite and > 0; time stays {}",
+                "{f}: communicationStepSize = {h} must be finite and > 0; time stays {}",
                 self.sim.time
             ));
         }
         if !t.is_finite() || !self.time_matches(t, h) {
             return self.error(&format!(
-                "fmi2DoStep: currentCommunicationPoint = {t} does not match the FMU's time {}",
+                "{f}: currentCommunicationPoint = {t} does not match the FMU's time {}",
                 self.sim.time
             ));
         }
         let end = t + h;
         if end <= t {
             return self.error(&format!(
-                "fmi2DoStep: communicationStepSize = {h} is too small to advance time from {t}"
+                "{f}: communicationStepSize = {h} is too small to advance time from {t}"
             ));
         }
         if let Some(stop) = self.sim.stop_time
             && end > stop + 1e-8 * stop.abs().max(h)
         {
             return self.error(&format!(
-                "fmi2DoStep: the step from {t} by {h} ends after stopTime = {stop} set in fmi2SetupExperiment"
+                "{f}: the step from {t} by {h} ends after stopTime = {stop} set in {}",
+                self.terms.name(Function::SetupExperiment)
             ));
         }
-        self.trace(|| format!("fmi2DoStep(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
+        self.trace(|| format!("{f}(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
         self.before_step.clone_from(&self.sim.model);
         let before_solver = self.sim.solver;
         let mut ctx = Context {
@@ -787,7 +597,7 @@ impl<M: CoSimulation> Instance<M> {
             (Ok(()), None) => {
                 self.sim.time = end;
                 self.sim.last_successful_time = end;
-                fmi2OK
+                OK
             }
             (Err(failure), None) => {
                 // A model's claim outside the step is no time it reached.
@@ -815,54 +625,19 @@ impl<M: CoSimulation> Instance<M> {
         }
     }
 
-    fn discard_step(&mut self, t: f64, h: f64, reached: f64, why: &str) -> fmi2Status {
+    fn discard_step(&mut self, t: f64, h: f64, reached: f64, why: &str) -> Status {
         self.sim.time = reached;
         self.sim.last_successful_time = reached;
         self.sim.state = State::StepFailed;
         self.logger.log(
-            fmi2Discard,
+            DISCARD,
             Category::StatusDiscard,
-            &format!("fmi2DoStep from t = {t} by h = {h} discarded at t = {reached}: {why}"),
+            &format!(
+                "{} from t = {t} by h = {h} discarded at t = {reached}: {why}",
+                self.terms.name(Function::DoStep)
+            ),
         );
-        fmi2Discard
-    }
-
-    pub fn real_status(&self, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {
-        if kind == fmi2LastSuccessfulTime {
-            *value = self.sim.last_successful_time;
-            return fmi2OK;
-        }
-        self.status_unavailable("fmi2GetRealStatus", kind)
-    }
-
-    pub fn boolean_status(&self, kind: fmi2StatusKind, value: &mut fmi2Boolean) -> fmi2Status {
-        if kind == fmi2Terminated {
-            *value = if self.sim.terminate_requested {
-                fmi2True
-            } else {
-                fmi2False
-            };
-            return fmi2OK;
-        }
-        self.status_unavailable("fmi2GetBooleanStatus", kind)
-    }
-
-    /// The standard's answer for a status this FMU does not have: fmi2Discard.
-    pub fn status_unavailable(&self, function: &str, kind: fmi2StatusKind) -> fmi2Status {
-        let what = match kind {
-            fmi2DoStepStatus | fmi2PendingStatus => {
-                "there is no asynchronous step (fmi2DoStep never returns fmi2Pending)"
-            }
-            fmi2LastSuccessfulTime => "fmi2LastSuccessfulTime is a Real status (fmi2GetRealStatus)",
-            fmi2Terminated => "fmi2Terminated is a Boolean status (fmi2GetBooleanStatus)",
-            _ => "unknown fmi2StatusKind",
-        };
-        self.logger.log(
-            fmi2Discard,
-            Category::StatusDiscard,
-            &format!("{function}(kind = {kind}): not available: {what}"),
-        );
-        fmi2Discard
+        DISCARD
     }
 }
 
@@ -977,7 +752,8 @@ pub fn evaluate<M: CoSimulation>(model: &mut M, t: f64) {
     model.store_continuous(&c);
 }
 
-/// What fmi2NewDiscreteStates reports (fmi2EventInfo's fields).
+/// What the new-discrete-states function reports (`fmi2EventInfo`'s fields; fmi3UpdateDiscreteStates'
+/// output arguments).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct EventInfo {
     pub new_discrete_states_needed: bool,
@@ -1010,8 +786,8 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Brings every computed variable up to date before values leave: the initialization in
     /// initialization mode, else the equations if something they depend on changed. A result
-    /// that is not finite leaves nothing changed and is refused: fmi2Discard in model exchange
-    /// (the standard's answer for "outside the model's domain, try a smaller step"), fmi2Error
+    /// that is not finite leaves nothing changed and is refused: DISCARD in model exchange
+    /// (the standard's answer for "outside the model's domain, try a smaller step"), ERROR
     /// in co-simulation.
     fn up_to_date(&mut self, function: &str) -> Outcome {
         if self.sim.state == State::InitializationMode {
@@ -1031,54 +807,55 @@ impl<M: CoSimulation> Instance<M> {
         Ok(())
     }
 
-    fn not_finite(&self, function: &str, what: &str) -> fmi2Status {
+    fn not_finite(&self, function: &str, what: &str) -> Status {
         let message = format!(
             "{function}: at t = {}, {what} (computed from the current states, inputs and parameters); nothing returned",
             self.sim.time
         );
         if self.model_exchange {
-            self.logger.log(fmi2Discard, Category::StatusDiscard, &message);
-            fmi2Discard
+            self.logger.log(DISCARD, Category::StatusDiscard, &message);
+            DISCARD
         } else {
             self.error(&message)
         }
     }
 
-    pub fn enter_event_mode(&mut self) -> fmi2Status {
+    pub fn enter_event_mode(&mut self) -> Status {
         self.sim.state = State::EventMode;
-        self.trace(|| format!("fmi2EnterEventMode at t = {}", self.sim.time));
-        fmi2OK
+        self.trace(|| format!("{} at t = {}", self.terms.name(Function::EnterEventMode), self.sim.time));
+        OK
     }
 
     /// No model here has discrete states or time events yet: one call settles the event.
-    pub fn new_discrete_states(&mut self, info: &mut EventInfo) -> fmi2Status {
+    pub fn new_discrete_states(&mut self, info: &mut EventInfo) -> Status {
         *info = EventInfo::default();
         self.sim.last_successful_time = self.sim.time;
-        fmi2OK
+        OK
     }
 
-    pub fn enter_continuous_time_mode(&mut self) -> fmi2Status {
+    pub fn enter_continuous_time_mode(&mut self) -> Status {
         self.sim.state = State::ContinuousTimeMode;
-        fmi2OK
+        OK
     }
 
     /// Returns (enterEventMode, terminateSimulation): neither, for models without step events.
-    pub fn completed_integrator_step(&mut self) -> (fmi2Status, bool, bool) {
+    pub fn completed_integrator_step(&mut self) -> (Status, bool, bool) {
         self.sim.last_successful_time = self.sim.time;
-        (fmi2OK, false, false)
+        (OK, false, false)
     }
 
-    pub fn set_time(&mut self, t: f64) -> fmi2Status {
+    pub fn set_time(&mut self, t: f64) -> Status {
         if !t.is_finite() {
             return self.error(&format!(
-                "fmi2SetTime: time = {t} is not finite; time stays {}",
+                "{}: time = {t} is not finite; time stays {}",
+                self.terms.name(Function::SetTime),
                 self.sim.time
             ));
         }
         self.sim.time = t;
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
-        fmi2OK
+        OK
     }
 
     fn check_states_len(&self, function: &str, n: usize) -> Outcome {
@@ -1101,13 +878,13 @@ impl<M: CoSimulation> Instance<M> {
             .map_or("?", |v| v.name)
     }
 
-    pub fn set_continuous_states(&mut self, x: &[f64]) -> fmi2Status {
-        if let Err(status) = self.check_states_len("fmi2SetContinuousStates", x.len()) {
+    pub fn set_continuous_states(&mut self, function: &str, x: &[f64]) -> Status {
+        if let Err(status) = self.check_states_len(function, x.len()) {
             return status;
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return self.error(&format!(
-                "fmi2SetContinuousStates: x[{i}] ('{}') = {} is not a finite number; refused, states unchanged",
+                "{function}: x[{i}] ('{}') = {} is not a finite number; refused, states unchanged",
                 Self::state_name(i),
                 x[i]
             ));
@@ -1117,49 +894,49 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.model.set_states(&states);
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
-        fmi2OK
+        OK
     }
 
-    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> fmi2Status {
-        if let Err(status) = self.check_states_len("fmi2GetContinuousStates", x.len()) {
+    pub fn get_continuous_states(&mut self, function: &str, x: &mut [f64]) -> Status {
+        if let Err(status) = self.check_states_len(function, x.len()) {
             return status;
         }
         if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model("fmi2GetContinuousStates", false)
+            && let Err(status) = self.initialize_model(function, false)
         {
             return status;
         }
         x.copy_from_slice(self.sim.model.states().as_slice());
-        fmi2OK
+        OK
     }
 
-    pub fn get_nominals(&mut self, x: &mut [f64]) -> fmi2Status {
-        if let Err(status) = self.check_states_len("fmi2GetNominalsOfContinuousStates", x.len()) {
+    pub fn get_nominals(&mut self, function: &str, x: &mut [f64]) -> Status {
+        if let Err(status) = self.check_states_len(function, x.len()) {
             return status;
         }
         x.copy_from_slice(M::NOMINALS);
-        fmi2OK
+        OK
     }
 
-    pub fn get_event_indicators_mut(&mut self, z: &mut [f64]) -> fmi2Status {
+    pub fn get_event_indicators_mut(&mut self, function: &str, z: &mut [f64]) -> Status {
         if !z.is_empty() {
             return self.error(&format!(
-                "fmi2GetEventIndicators: ni = {}, but {} has no event indicators (numberOfEventIndicators = 0)",
+                "{function}: ni = {}, but {} has no event indicators (numberOfEventIndicators = 0)",
                 z.len(),
                 M::DESCRIPTION.model_identifier
             ));
         }
-        fmi2OK
+        OK
     }
 
-    /// fmi2GetDerivatives: the right-hand side only (the outputs stay for when they are read).
+    /// The get-derivatives function: the right-hand side only (the outputs stay for when they are read).
     #[inline]
-    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> fmi2Status {
-        if let Err(status) = self.check_states_len("fmi2GetDerivatives", dx.len()) {
+    pub fn get_derivatives(&mut self, function: &str, dx: &mut [f64]) -> Status {
+        if let Err(status) = self.check_states_len(function, dx.len()) {
             return status;
         }
         if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model("fmi2GetDerivatives", false)
+            && let Err(status) = self.initialize_model(function, false)
         {
             return status;
         }
@@ -1169,7 +946,7 @@ impl<M: CoSimulation> Instance<M> {
             let d = M::derivatives_of(&c);
             if let Some(i) = d.as_slice().iter().position(|v| !v.is_finite()) {
                 let what = format!("the derivative of '{}' is {}", Self::state_name(i), d.as_slice()[i]);
-                return self.not_finite("fmi2GetDerivatives", &what);
+                return self.not_finite(function, &what);
             }
             self.derivatives = d;
             self.sim.stale_derivatives = false;
@@ -1179,7 +956,7 @@ impl<M: CoSimulation> Instance<M> {
             self.derivatives = M::derivatives_of(&c);
         }
         dx.copy_from_slice(self.derivatives.as_slice());
-        fmi2OK
+        OK
     }
 
     /// fmi2GetDirectionalDerivative: dv_unknown = (d unknowns / d knowns) dv_known, exact, by
@@ -1192,15 +969,15 @@ impl<M: CoSimulation> Instance<M> {
         knowns: &[u32],
         dv_known: &[f64],
         dv_unknown: &mut [f64],
-    ) -> fmi2Status {
-        const F: &str = "fmi2GetDirectionalDerivative";
+    ) -> Status {
+        let f = self.terms.name(Function::GetDirectionalDerivative);
         use num_dual::Dual64;
         let probe = self.sim.model.continuous::<f64>();
         let mut probe = probe;
         for (vr, dv) in knowns.iter().zip(dv_known) {
             let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
                 return self.error(&format!(
-                    "{F}: known value reference {vr} is not a Real variable of {}",
+                    "{f}: known value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
                 ));
             };
@@ -1209,7 +986,7 @@ impl<M: CoSimulation> Instance<M> {
                 || (is_state && self.model_exchange);
             if !allowed || M::continuous_slot(&mut probe, *vr).is_none() {
                 return self.error(&format!(
-                    "{F}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}",
+                    "{f}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}",
                     decl.name,
                     if self.model_exchange { "model exchange" } else { "co-simulation" },
                     if self.model_exchange { " and the continuous states" } else { "" }
@@ -1217,7 +994,7 @@ impl<M: CoSimulation> Instance<M> {
             }
             if !dv.is_finite() {
                 return self.error(&format!(
-                    "{F}: dvKnown for '{}' (vr {vr}) = {dv} is not finite",
+                    "{f}: dvKnown for '{}' (vr {vr}) = {dv} is not finite",
                     decl.name
                 ));
             }
@@ -1225,19 +1002,19 @@ impl<M: CoSimulation> Instance<M> {
         for vr in unknowns {
             let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
                 return self.error(&format!(
-                    "{F}: unknown value reference {vr} is not a Real variable of {}",
+                    "{f}: unknown value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
                 ));
             };
             if M::continuous_slot(&mut probe, *vr).is_none() {
                 return self.error(&format!(
-                    "{F}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
+                    "{f}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
                     decl.name
                 ));
             }
         }
         if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(F, false)
+            && let Err(status) = self.initialize_model(f, false)
         {
             return status;
         }
@@ -1254,10 +1031,10 @@ impl<M: CoSimulation> Instance<M> {
             let d = M::continuous_slot(&mut c, *vr).map_or(0.0, |d| d.eps);
             if !d.is_finite() {
                 let name = M::DESCRIPTION.variable(*vr, VarType::Real).map_or("?", |v| v.name);
-                return self.not_finite(F, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
+                return self.not_finite(f, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
             }
             dv_unknown[i] = d;
         }
-        fmi2OK
+        OK
     }
 }

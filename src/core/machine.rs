@@ -1,0 +1,217 @@
+//! The standard's state machines as tables: the states of FMI 2.0 and 3.0 (co-simulation and
+//! model exchange) and, for every state-dependent function, the states it is allowed in, in each
+//! version. [`super::instance::Instance::check_state`] is the one place that enforces them.
+#![allow(non_upper_case_globals)]
+
+use super::{Terms, Version};
+use serde::{Deserialize, Serialize};
+
+/// The states of the state machines, named as in FMI 2.0 (co-simulation, section 4.2.4; model
+/// exchange, section 3.2.3: `EventMode`, `ContinuousTimeMode`); FMI 3.0 calls `StepComplete`
+/// Step Mode and `StepFailed` Step Discarded, and has no `StepCanceled` (each layer's
+/// [`Terms::state`] says the names). An instance is in the states of the interface it was
+/// instantiated for. `StepInProgress` does not occur: every step here is synchronous.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[repr(u8)]
+pub enum State {
+    Instantiated = 0,
+    InitializationMode = 1,
+    StepComplete = 2,
+    StepFailed = 3,
+    StepCanceled = 4,
+    Terminated = 5,
+    Error = 6,
+    Fatal = 7,
+    EventMode = 8,
+    ContinuousTimeMode = 9,
+}
+
+const fn bit(s: State) -> u16 {
+    1 << s as u8
+}
+const INSTANTIATED: u16 = bit(State::Instantiated);
+const INIT: u16 = bit(State::InitializationMode);
+const STEP_COMPLETE: u16 = bit(State::StepComplete);
+const STEP_FAILED: u16 = bit(State::StepFailed);
+const STEP_CANCELED: u16 = bit(State::StepCanceled);
+const TERMINATED: u16 = bit(State::Terminated);
+const ERROR: u16 = bit(State::Error);
+const FATAL: u16 = bit(State::Fatal);
+const EVENT: u16 = bit(State::EventMode);
+const CONTINUOUS: u16 = bit(State::ContinuousTimeMode);
+const ANY_BUT_FATAL: u16 =
+    INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS;
+
+/// The functions whose legality depends on the state, with the states each is allowed in,
+/// from the standard's tables in sections 3.2.3 and 4.2.4 (as the Reference-FMUs encode them).
+/// The co-simulation functions are allowed in co-simulation states only, the model-exchange
+/// ones in model-exchange states only, so each interface refuses the other's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Call {
+    SetDebugLogging,
+    FreeInstance,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    GetValues,
+    /// fmi2SetReal.
+    SetValues,
+    /// fmi2SetInteger, fmi2SetBoolean, fmi2SetString: not in continuous-time mode.
+    SetDiscreteValues,
+    FmuState,
+    GetDirectionalDerivative,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetEventIndicators,
+    GetContinuousStates,
+    GetDerivatives,
+    GetNominalsOfContinuousStates,
+    /// FMI 3.0 only: fmi3GetNumberOfContinuousStates, fmi3GetNumberOfEventIndicators.
+    GetNumberOf,
+    /// FMI 3.0 only: fmi3EvaluateDiscreteStates.
+    EvaluateDiscreteStates,
+    /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode, which no FMU here has).
+    EnterStepMode,
+}
+
+impl Call {
+    pub const fn allowed_in(self) -> u16 {
+        match self {
+            Call::SetDebugLogging => ANY_BUT_FATAL,
+            Call::FreeInstance => ANY_BUT_FATAL | FATAL,
+            Call::SetupExperiment => INSTANTIATED,
+            Call::EnterInitializationMode => INSTANTIATED,
+            Call::ExitInitializationMode => INIT,
+            // Not from StepCanceled: after fmi2CancelStep only fmi2Reset and fmi2FreeInstance
+            // are meant to follow (the Reference FMUs' mask is StepComplete | StepFailed too).
+            Call::Terminate => STEP_COMPLETE | STEP_FAILED | EVENT | CONTINUOUS,
+            Call::Reset => ANY_BUT_FATAL,
+            Call::GetValues | Call::GetDirectionalDerivative => {
+                INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS
+            }
+            // Which variables may be set in which of these states: `Instance::settable`.
+            Call::SetValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT | CONTINUOUS,
+            Call::SetDiscreteValues => INSTANTIATED | INIT | STEP_COMPLETE | EVENT,
+            Call::FmuState => ANY_BUT_FATAL,
+            Call::SetRealInputDerivatives => INSTANTIATED | INIT | STEP_COMPLETE,
+            Call::GetRealOutputDerivatives => STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR,
+            Call::DoStep => STEP_COMPLETE,
+            Call::CancelStep => 0,
+            Call::GetStatus => STEP_COMPLETE | STEP_FAILED | TERMINATED,
+            Call::EnterEventMode => EVENT | CONTINUOUS,
+            Call::NewDiscreteStates | Call::EnterContinuousTimeMode => EVENT,
+            Call::CompletedIntegratorStep | Call::SetContinuousStates => CONTINUOUS,
+            Call::SetTime => EVENT | CONTINUOUS,
+            Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNumberOf | Call::EvaluateDiscreteStates | Call::EnterStepMode => 0,
+        }
+    }
+
+    /// The FMI 3.0 table (sections 3.2 and 4.2 of FMI 3.0, as the Reference-FMUs encode it) for
+    /// the FMUs this runtime makes: no event mode in co-simulation, no clocks, no configuration
+    /// mode. `StepComplete` is 3.0's Step Mode, `StepFailed` its Step Discarded. Where 3.0 differs
+    /// from 2.0: fmi3EnterEventMode only from Continuous-Time Mode; the model-exchange
+    /// evaluations also in Initialization Mode; the nominals not before initialization; the
+    /// getters also in Instantiated (FMI 3.0.2: "get variable start values", fmi-standard #2174),
+    /// for the variables that have a start value (`Instance::get_values`).
+    pub const fn allowed_in3(self) -> u16 {
+        match self {
+            Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
+            Call::EnterEventMode => CONTINUOUS,
+            Call::GetDerivatives | Call::GetEventIndicators | Call::GetContinuousStates => {
+                INIT | EVENT | CONTINUOUS | TERMINATED | ERROR
+            }
+            Call::GetNominalsOfContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
+            Call::GetNumberOf => ANY_BUT_FATAL,
+            Call::EvaluateDiscreteStates => EVENT,
+            Call::EnterStepMode => 0,
+            // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
+            // fmi3GetStatus in FMI 3.0.
+            Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,
+            _ => self.allowed_in(),
+        }
+    }
+}
+
+impl Call {
+    /// `Some(true)`: a model-exchange function; `Some(false)`: a co-simulation one; `None`:
+    /// common to both. The states of the two machines overlap (instantiated, initialization,
+    /// terminated, error), so the interface is checked besides the state.
+    pub const fn interface(self) -> Option<bool> {
+        match self {
+            Call::EnterEventMode
+            | Call::NewDiscreteStates
+            | Call::EnterContinuousTimeMode
+            | Call::CompletedIntegratorStep
+            | Call::SetTime
+            | Call::SetContinuousStates
+            | Call::GetEventIndicators
+            | Call::GetContinuousStates
+            | Call::GetDerivatives
+            | Call::GetNominalsOfContinuousStates
+            | Call::GetNumberOf
+            | Call::EvaluateDiscreteStates => Some(true),
+            Call::SetRealInputDerivatives
+            | Call::GetRealOutputDerivatives
+            | Call::DoStep
+            | Call::CancelStep
+            | Call::GetStatus
+            | Call::EnterStepMode => Some(false),
+            _ => None,
+        }
+    }
+}
+
+impl Call {
+    /// The states `self` is allowed in, in `version`'s table.
+    pub const fn allowed(self, version: Version) -> u16 {
+        match version {
+            Version::Fmi2 => self.allowed_in(),
+            Version::Fmi3 => self.allowed_in3(),
+        }
+    }
+}
+
+/// Whether `state` is one of the states in `mask`.
+pub const fn contains(mask: u16, state: State) -> bool {
+    mask & bit(state) != 0
+}
+
+/// The states of `mask`, in `terms`' names, for a message.
+pub fn state_names(terms: &Terms, mask: u16) -> String {
+    const ALL: [State; 10] = [
+        State::Instantiated,
+        State::InitializationMode,
+        State::EventMode,
+        State::ContinuousTimeMode,
+        State::StepComplete,
+        State::StepFailed,
+        State::StepCanceled,
+        State::Terminated,
+        State::Error,
+        State::Fatal,
+    ];
+    let names: Vec<String> = ALL
+        .iter()
+        .filter(|s| mask & bit(**s) != 0)
+        .map(|s| terms.state_name(*s).to_string())
+        .collect();
+    if names.is_empty() {
+        "no state of this FMU".into()
+    } else {
+        names.join(", ")
+    }
+}

@@ -1,0 +1,104 @@
+//! The FMI-version-neutral core of the runtime, generic over the model: not part of the
+//! documented API.
+//!
+//! Layers, with arrows pointing one way: a model ([`crate::Model`], declared with
+//! `#[derive(Model)]`) knows nothing of FMI; [`instance`] runs the standard's state machine
+//! around it (the tables of both versions in [`machine`]), checks every argument, and keeps the
+//! FMU state ([`state`], [`snapshots`]); [`guard`] is what every C entry point runs through
+//! (NULL checks, re-entrancy, `catch_unwind`), and [`shared`] the entry points whose bodies are
+//! the same in both versions. The C layers, [`crate::fmi2`] and [`crate::fmi3`], convert the
+//! importer's pointers and say their own words: each gives the core its [`Terms`] (its function
+//! names, its state names, what it calls the instantiation token), and the core words every
+//! message in them. Nothing here rewrites a message after the fact.
+
+pub mod guard;
+pub mod instance;
+pub mod logging;
+pub mod machine;
+pub mod resources;
+pub mod shared;
+pub mod snapshots;
+pub mod state;
+
+use std::os::raw::c_uint;
+
+/// What every function returns: `fmi2Status` and `fmi3Status` have the same C type and the
+/// same values for the five statuses (`fmi2Pending` has no use here: every step is
+/// synchronous), so the core answers in these and the C layers pass them on unchanged; each
+/// layer asserts the equality at compile time.
+pub type Status = c_uint;
+pub const OK: Status = 0;
+pub const WARNING: Status = 1;
+pub const DISCARD: Status = 2;
+pub const ERROR: Status = 3;
+pub const FATAL: Status = 4;
+
+/// The FMI version an instance was instantiated through.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Version {
+    Fmi2,
+    Fmi3,
+}
+
+/// The functions the core names in its messages besides the one being called (which the C
+/// layer passes). Each version's [`Terms`] gives their names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Function {
+    SetDebugLogging,
+    /// 2.0's fmi2SetupExperiment; in 3.0 the experiment comes with
+    /// fmi3EnterInitializationMode.
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    FreeInstance,
+    GetString,
+    SetString,
+    DoStep,
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetContinuousStates,
+    GetDerivatives,
+    GetNominalsOfContinuousStates,
+    GetEventIndicators,
+    GetDirectionalDerivative,
+    GetFmuState,
+    SetFmuState,
+    FreeFmuState,
+    SerializedFmuStateSize,
+    SerializeFmuState,
+    DeserializeFmuState,
+}
+
+/// How one FMI version says what the core speaks of: given by each C layer
+/// (`crate::fmi2::TERMS`, `crate::fmi3::TERMS`), held by each instance.
+#[derive(Debug)]
+pub struct Terms {
+    pub version: Version,
+    /// A function's name in this version (`fmi2GetDerivatives`,
+    /// `fmi3GetContinuousStateDerivatives`).
+    pub function: fn(Function) -> &'static str,
+    /// A state's name in this version's state machine (2.0's `StepComplete` is 3.0's
+    /// `StepMode`).
+    pub state: fn(machine::State) -> &'static str,
+    /// What the modelDescription's identity of a build is called: `GUID` in 2.0,
+    /// `instantiationToken` in 3.0.
+    pub token: &'static str,
+    /// The name of the FMU state handle's argument: `FMUstate` in 2.0, `FMUState` in 3.0.
+    pub fmu_state: &'static str,
+}
+
+impl Terms {
+    pub fn name(&self, f: Function) -> &'static str {
+        (self.function)(f)
+    }
+
+    pub fn state_name(&self, s: machine::State) -> &'static str {
+        (self.state)(s)
+    }
+}
