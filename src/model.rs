@@ -148,6 +148,19 @@ pub trait Variables: Sized {
     fn set_states_of(c: &mut Self::Continuous<f64>, x: &Self::States);
     fn derivatives_of(c: &Self::Continuous<f64>) -> Self::States;
 
+    /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the variable with value
+    /// reference `vr`. `#[derive(Model)]` generates a `match`; this default (for hand-written
+    /// implementations) searches.
+    fn variable_index(vr: u32) -> Option<usize> {
+        Self::DESCRIPTION.variables.iter().position(|v| v.value_reference == vr)
+    }
+    /// The declaration of `vr` if it is a variable of C API type `ty` (an Enumeration is also
+    /// an Integer to FMI 2.0's functions).
+    #[inline]
+    fn declaration(vr: u32, ty: crate::description::VarType) -> Option<&'static crate::description::Variable> {
+        let v = &Self::DESCRIPTION.variables[Self::variable_index(vr)?];
+        crate::description::same_api_type(v.var_type, ty).then_some(v)
+    }
     /// The value of the numeric, Boolean or Enumeration variable `vr` of C API type `ty`.
     fn get(&self, vr: u32) -> Option<Value>;
     /// Stores `value` if `vr` names a variable of that C API type; false otherwise.

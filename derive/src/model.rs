@@ -906,6 +906,11 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
             .iter()
             .map(|(n, d, _)| quote!(#rt::description::LogCategory { name: #n, description: #d }));
         let variable_tokens: Vec<_> = vars.iter().map(|v| variable_tokens(&rt, v, &vars)).collect();
+        // Value reference -> index in DESCRIPTION.variables: a match, not a search per call.
+        let index_arms = vars.iter().enumerate().map(|(i, v)| {
+            let vr = v.vr;
+            quote!(#vr => ::core::option::Option::Some(#i))
+        });
 
         let start_fields = vars.iter().map(|v| {
             let f = &v.field;
@@ -1145,6 +1150,14 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
 
                 fn start() -> Self {
                     Self { #(#start_fields,)* #(#other_fields,)* }
+                }
+
+                #[inline]
+                fn variable_index(vr: u32) -> ::core::option::Option<usize> {
+                    match vr {
+                        #(#index_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
                 }
 
                 #[inline]

@@ -4,7 +4,7 @@
 
 use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};
-use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms};
+use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
 use crate::model::{CoSimulation, Context, StateVector};
 use crate::solver::Dopri5;
@@ -88,6 +88,8 @@ pub struct Instance<M: CoSimulation> {
     /// The words of the FMI version this instance was instantiated through; its
     /// `version` picks the state table.
     pub terms: &'static Terms,
+    /// `terms.version`, kept here: the state check reads it on every call.
+    pub version: Version,
 }
 
 /// The first Real variable the model computes (output, local, calculated parameter), or the
@@ -133,6 +135,7 @@ impl<M: CoSimulation> Instance<M> {
             strings: Vec::new(),
             resources: None,
             terms,
+            version: terms.version,
         }
     }
 
@@ -172,11 +175,25 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// The one place where the state machine is enforced.
+    #[inline]
     pub fn check_state(&self, call: Call, function: &str) -> Outcome {
+        let right_interface = match call.interface() {
+            Some(model_exchange) => model_exchange == self.model_exchange,
+            None => true,
+        };
+        if right_interface && contains(call.allowed(self.version), self.sim.state) {
+            return Ok(());
+        }
+        Err(self.refuse_call(call, function))
+    }
+
+    /// Why `call` is refused here, logged.
+    #[cold]
+    fn refuse_call(&self, call: Call, function: &str) -> Status {
         if let Some(model_exchange) = call.interface()
             && model_exchange != self.model_exchange
         {
-            return Err(self.error(&format!(
+            return self.error(&format!(
                 "{function} is a {} function; this instance was instantiated for {}",
                 if model_exchange {
                     "model-exchange"
@@ -188,17 +205,14 @@ impl<M: CoSimulation> Instance<M> {
                 } else {
                     "co-simulation"
                 }
-            )));
+            ));
         }
         let allowed = call.allowed(self.terms.version);
-        if contains(allowed, self.sim.state) {
-            return Ok(());
-        }
-        Err(self.error(&format!(
+        self.error(&format!(
             "{function} is not allowed in state {} (allowed in: {})",
             self.terms.state_name(self.sim.state),
             state_names(self.terms, allowed)
-        )))
+        ))
     }
 
     pub fn set_debug_logging(&mut self, function: &str, logging_on: bool, categories: &[String]) -> Status {
@@ -319,21 +333,19 @@ impl<M: CoSimulation> Instance<M> {
 
     /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal.
     fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, Status> {
-        if let Some(v) = M::DESCRIPTION.variable(vr, ty) {
+        if let Some(v) = M::declaration(vr, ty) {
             return Ok(v);
         }
-        Err(
-            match M::DESCRIPTION.variables.iter().find(|v| v.value_reference == vr) {
-                Some(other) => self.error(&format!(
-                    "{function}: value reference {vr} ('{}') is a {:?} variable, not a {ty:?}",
-                    other.name, other.var_type
-                )),
-                None => self.error(&format!(
-                    "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
-                    M::DESCRIPTION.model_identifier
-                )),
-            },
-        )
+        Err(match M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]) {
+            Some(other) => self.error(&format!(
+                "{function}: value reference {vr} ('{}') is a {:?} variable, not a {ty:?}",
+                other.name, other.var_type
+            )),
+            None => self.error(&format!(
+                "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
+                M::DESCRIPTION.model_identifier
+            )),
+        })
     }
 
     pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
@@ -858,15 +870,21 @@ impl<M: CoSimulation> Instance<M> {
         OK
     }
 
+    #[inline]
     fn check_states_len(&self, function: &str, n: usize) -> Outcome {
-        let expected = <M::States as StateVector>::LEN;
-        if n == expected {
+        if n == <M::States as StateVector>::LEN {
             return Ok(());
         }
-        Err(self.error(&format!(
-            "{function}: nx = {n}, but {} has {expected} continuous states (numberOfContinuousStates)",
-            M::DESCRIPTION.model_identifier
-        )))
+        Err(self.wrong_states_len(function, n))
+    }
+
+    #[cold]
+    fn wrong_states_len(&self, function: &str, n: usize) -> Status {
+        self.error(&format!(
+            "{function}: nx = {n}, but {} has {} continuous states (numberOfContinuousStates)",
+            M::DESCRIPTION.model_identifier,
+            <M::States as StateVector>::LEN
+        ))
     }
 
     fn state_name(i: usize) -> &'static str {
@@ -975,7 +993,7 @@ impl<M: CoSimulation> Instance<M> {
         let probe = self.sim.model.continuous::<f64>();
         let mut probe = probe;
         for (vr, dv) in knowns.iter().zip(dv_known) {
-            let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
+            let Some(decl) = M::declaration(*vr, VarType::Real) else {
                 return self.error(&format!(
                     "{f}: known value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
@@ -1000,7 +1018,7 @@ impl<M: CoSimulation> Instance<M> {
             }
         }
         for vr in unknowns {
-            let Some(decl) = M::DESCRIPTION.variable(*vr, VarType::Real) else {
+            let Some(decl) = M::declaration(*vr, VarType::Real) else {
                 return self.error(&format!(
                     "{f}: unknown value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
@@ -1030,7 +1048,7 @@ impl<M: CoSimulation> Instance<M> {
         for (i, vr) in unknowns.iter().enumerate() {
             let d = M::continuous_slot(&mut c, *vr).map_or(0.0, |d| d.eps);
             if !d.is_finite() {
-                let name = M::DESCRIPTION.variable(*vr, VarType::Real).map_or("?", |v| v.name);
+                let name = M::declaration(*vr, VarType::Real).map_or("?", |v| v.name);
                 return self.not_finite(f, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
             }
             dv_unknown[i] = d;

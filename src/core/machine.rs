@@ -26,6 +26,23 @@ pub enum State {
     ContinuousTimeMode = 9,
 }
 
+impl State {
+    pub const COUNT: usize = 10;
+    /// Every state, in declaration order (`ALL[s as usize] == s`).
+    pub const ALL: [State; State::COUNT] = [
+        State::Instantiated,
+        State::InitializationMode,
+        State::StepComplete,
+        State::StepFailed,
+        State::StepCanceled,
+        State::Terminated,
+        State::Error,
+        State::Fatal,
+        State::EventMode,
+        State::ContinuousTimeMode,
+    ];
+}
+
 const fn bit(s: State) -> u16 {
     1 << s as u8
 }
@@ -86,6 +103,7 @@ pub enum Call {
 }
 
 impl Call {
+    #[inline]
     pub const fn allowed_in(self) -> u16 {
         match self {
             Call::SetDebugLogging => ANY_BUT_FATAL,
@@ -127,6 +145,7 @@ impl Call {
     /// evaluations also in Initialization Mode; the nominals not before initialization; the
     /// getters also in Instantiated (FMI 3.0.2: "get variable start values", fmi-standard #2174),
     /// for the variables that have a start value (`Instance::get_values`).
+    #[inline]
     pub const fn allowed_in3(self) -> u16 {
         match self {
             Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
@@ -150,6 +169,7 @@ impl Call {
     /// `Some(true)`: a model-exchange function; `Some(false)`: a co-simulation one; `None`:
     /// common to both. The states of the two machines overlap (instantiated, initialization,
     /// terminated, error), so the interface is checked besides the state.
+    #[inline]
     pub const fn interface(self) -> Option<bool> {
         match self {
             Call::EnterEventMode
@@ -177,6 +197,7 @@ impl Call {
 
 impl Call {
     /// The states `self` is allowed in, in `version`'s table.
+    #[inline]
     pub const fn allowed(self, version: Version) -> u16 {
         match version {
             Version::Fmi2 => self.allowed_in(),
@@ -186,6 +207,7 @@ impl Call {
 }
 
 /// Whether `state` is one of the states in `mask`.
+#[inline]
 pub const fn contains(mask: u16, state: State) -> bool {
     mask & bit(state) != 0
 }

@@ -43,6 +43,7 @@ pub enum Version {
 /// The functions the core names in its messages besides the one being called (which the C
 /// layer passes). Each version's [`Terms`] gives their names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Function {
     SetDebugLogging,
     /// 2.0's fmi2SetupExperiment; in 3.0 the experiment comes with
@@ -75,17 +76,56 @@ pub enum Function {
     DeserializeFmuState,
 }
 
+impl Function {
+    pub const COUNT: usize = Function::DeserializeFmuState as usize + 1;
+    /// Every function, in declaration order (`ALL[f as usize] == f`).
+    pub const ALL: [Function; Function::COUNT] = {
+        use Function::*;
+        [
+            SetDebugLogging,
+            SetupExperiment,
+            EnterInitializationMode,
+            ExitInitializationMode,
+            Terminate,
+            Reset,
+            FreeInstance,
+            GetString,
+            SetString,
+            DoStep,
+            EnterEventMode,
+            NewDiscreteStates,
+            EnterContinuousTimeMode,
+            CompletedIntegratorStep,
+            SetTime,
+            SetContinuousStates,
+            GetContinuousStates,
+            GetDerivatives,
+            GetNominalsOfContinuousStates,
+            GetEventIndicators,
+            GetDirectionalDerivative,
+            GetFmuState,
+            SetFmuState,
+            FreeFmuState,
+            SerializedFmuStateSize,
+            SerializeFmuState,
+            DeserializeFmuState,
+        ]
+    };
+}
+
 /// How one FMI version says what the core speaks of: given by each C layer
-/// (`crate::fmi2::TERMS`, `crate::fmi3::TERMS`), held by each instance.
+/// (`crate::fmi2::TERMS`, `crate::fmi3::TERMS`), held by each instance. Tables, so that naming a
+/// function costs one load (the core names the function it serves on every call, for the
+/// message it may have to write).
 #[derive(Debug)]
 pub struct Terms {
     pub version: Version,
-    /// A function's name in this version (`fmi2GetDerivatives`,
+    /// Each [`Function`]'s name in this version, by `Function as usize` (`fmi2GetDerivatives`,
     /// `fmi3GetContinuousStateDerivatives`).
-    pub function: fn(Function) -> &'static str,
-    /// A state's name in this version's state machine (2.0's `StepComplete` is 3.0's
-    /// `StepMode`).
-    pub state: fn(machine::State) -> &'static str,
+    pub functions: [&'static str; Function::COUNT],
+    /// Each [`machine::State`]'s name in this version's state machine, by `State as usize`
+    /// (2.0's `StepComplete` is 3.0's `StepMode`).
+    pub states: [&'static str; machine::State::COUNT],
     /// What the modelDescription's identity of a build is called: `GUID` in 2.0,
     /// `instantiationToken` in 3.0.
     pub token: &'static str,
@@ -93,12 +133,47 @@ pub struct Terms {
     pub fmu_state: &'static str,
 }
 
+/// The table of `name(x)` for every `x` of `$ty::ALL`, built at compile time (a `const fn`
+/// cannot call a function pointer, so each layer builds its tables with this).
+macro_rules! table {
+    ($name:ident, $ty:ty) => {{
+        let mut table = [""; <$ty>::COUNT];
+        let mut i = 0;
+        while i < <$ty>::COUNT {
+            table[i] = $name(<$ty>::ALL[i]);
+            i += 1;
+        }
+        table
+    }};
+}
+pub(crate) use table;
+
 impl Terms {
+    #[inline]
     pub fn name(&self, f: Function) -> &'static str {
-        (self.function)(f)
+        self.functions[f as usize]
     }
 
+    #[inline]
     pub fn state_name(&self, s: machine::State) -> &'static str {
-        (self.state)(s)
+        self.states[s as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tables_list_every_function_and_state_at_its_own_index() {
+        for (i, f) in Function::ALL.iter().enumerate() {
+            assert_eq!(*f as usize, i, "{f:?}");
+        }
+        for (i, s) in machine::State::ALL.iter().enumerate() {
+            assert_eq!(*s as usize, i, "{s:?}");
+        }
+        for terms in [&crate::fmi2::TERMS, &crate::fmi3::TERMS] {
+            assert!(terms.functions.iter().chain(&terms.states).all(|n| !n.is_empty()));
+        }
     }
 }

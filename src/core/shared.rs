@@ -236,6 +236,7 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
     }
 }
 
+#[inline(always)]
 pub unsafe fn set_continuous_states<M: CoSimulation>(
     terms: &'static Terms,
     c: Handle,
@@ -262,6 +263,8 @@ pub enum Vector {
     EventIndicators,
 }
 
+/// Inlined into each exported function, so that `which` is a constant there.
+#[inline(always)]
 pub unsafe fn get_vector<M: CoSimulation>(
     terms: &'static Terms,
     which: Vector,

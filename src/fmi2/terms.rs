@@ -2,17 +2,17 @@
 //! standard's, section 4.2.4 and 3.2.3), and `GUID`.
 
 use crate::core::machine::State;
-use crate::core::{Function, Terms, Version};
+use crate::core::{Function, Terms, Version, table};
 
 pub static TERMS: Terms = Terms {
     version: Version::Fmi2,
-    function,
-    state,
+    functions: table!(function, Function),
+    states: table!(state, State),
     token: "GUID",
     fmu_state: "FMUstate",
 };
 
-fn function(f: Function) -> &'static str {
+const fn function(f: Function) -> &'static str {
     match f {
         Function::SetDebugLogging => "fmi2SetDebugLogging",
         Function::SetupExperiment => "fmi2SetupExperiment",
@@ -44,7 +44,7 @@ fn function(f: Function) -> &'static str {
     }
 }
 
-fn state(s: State) -> &'static str {
+const fn state(s: State) -> &'static str {
     match s {
         State::Instantiated => "Instantiated",
         State::InitializationMode => "InitializationMode",

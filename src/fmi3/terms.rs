@@ -2,17 +2,17 @@
 //! for 2.0's StepComplete, Step Discarded for StepFailed), and `instantiationToken`.
 
 use crate::core::machine::State;
-use crate::core::{Function, Terms, Version};
+use crate::core::{Function, Terms, Version, table};
 
 pub static TERMS: Terms = Terms {
     version: Version::Fmi3,
-    function,
-    state,
+    functions: table!(function, Function),
+    states: table!(state, State),
     token: "instantiationToken",
     fmu_state: "FMUState",
 };
 
-fn function(f: Function) -> &'static str {
+const fn function(f: Function) -> &'static str {
     match f {
         Function::SetDebugLogging => "fmi3SetDebugLogging",
         // FMI 3.0 has no fmi3SetupExperiment: the experiment comes with this call.
@@ -45,7 +45,7 @@ fn function(f: Function) -> &'static str {
     }
 }
 
-fn state(s: State) -> &'static str {
+const fn state(s: State) -> &'static str {
     match s {
         State::Instantiated => "Instantiated",
         State::InitializationMode => "InitializationMode",
