@@ -6,41 +6,43 @@
 use super::{Terms, Version};
 use serde::{Deserialize, Serialize};
 
-/// The states of the state machines, named as in FMI 2.0 (co-simulation, section 4.2.4; model
-/// exchange, section 3.2.3: `EventMode`, `ContinuousTimeMode`); FMI 3.0 calls `StepComplete`
-/// Step Mode and `StepFailed` Step Discarded, and has no `StepCanceled` (each layer's
-/// [`Terms::state`] says the names). An instance is in the states of the interface it was
-/// instantiated for. `StepInProgress` does not occur: every step here is synchronous.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[repr(u8)]
-pub enum State {
-    Instantiated = 0,
-    InitializationMode = 1,
-    StepComplete = 2,
-    StepFailed = 3,
-    StepCanceled = 4,
-    Terminated = 5,
-    Error = 6,
-    Fatal = 7,
-    EventMode = 8,
-    ContinuousTimeMode = 9,
+listed_enum! {
+    /// The states of the state machines, named as in FMI 2.0 (co-simulation, section 4.2.4; model
+    /// exchange, section 3.2.3: `EventMode`, `ContinuousTimeMode`); FMI 3.0 calls `StepComplete`
+    /// Step Mode and `StepFailed` Step Discarded, and has no `StepCanceled` (each layer's
+    /// [`Terms::states`] say the names). An instance is in the states of the interface it was
+    /// instantiated for. `StepInProgress` does not occur: every step here is synchronous.
+    #[derive(Serialize, Deserialize)]
+    pub enum State {
+        Instantiated,
+        InitializationMode,
+        StepComplete,
+        StepFailed,
+        StepCanceled,
+        Terminated,
+        Error,
+        Fatal,
+        EventMode,
+        ContinuousTimeMode,
+    }
 }
 
 impl State {
-    pub const COUNT: usize = 10;
-    /// Every state, in declaration order (`ALL[s as usize] == s`).
-    pub const ALL: [State; State::COUNT] = [
-        State::Instantiated,
-        State::InitializationMode,
-        State::StepComplete,
-        State::StepFailed,
-        State::StepCanceled,
-        State::Terminated,
-        State::Error,
-        State::Fatal,
-        State::EventMode,
-        State::ContinuousTimeMode,
-    ];
+    /// The core's name of the state: FMI 2.0's (each layer's [`Terms`] says its own).
+    pub const fn name(self) -> &'static str {
+        match self {
+            State::Instantiated => "Instantiated",
+            State::InitializationMode => "InitializationMode",
+            State::StepComplete => "StepComplete",
+            State::StepFailed => "StepFailed",
+            State::StepCanceled => "StepCanceled",
+            State::Terminated => "Terminated",
+            State::Error => "Error",
+            State::Fatal => "Fatal",
+            State::EventMode => "EventMode",
+            State::ContinuousTimeMode => "ContinuousTimeMode",
+        }
+    }
 }
 
 const fn bit(s: State) -> u16 {

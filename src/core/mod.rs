@@ -11,6 +11,22 @@
 //! names, its state names, what it calls the instantiation token), and the core words every
 //! message in them. Nothing here rewrites a message after the fact.
 
+/// An enum of unit variants with its `COUNT` and its `ALL` (in declaration order, so that
+/// `ALL[x as usize] == x`), from one list.
+macro_rules! listed_enum {
+    ($(#[$meta:meta])* $vis:vis enum $name:ident { $($(#[$vmeta:meta])* $variant:ident,)* }) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        #[repr(u8)]
+        $vis enum $name { $($(#[$vmeta])* $variant,)* }
+
+        impl $name {
+            pub const ALL: &'static [$name] = &[$($name::$variant,)*];
+            pub const COUNT: usize = $name::ALL.len();
+        }
+    };
+}
+
 pub mod guard;
 pub mod instance;
 pub mod logging;
@@ -40,77 +56,40 @@ pub enum Version {
     Fmi3,
 }
 
-/// The functions the core names in its messages besides the one being called (which the C
-/// layer passes). Each version's [`Terms`] gives their names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u8)]
-pub enum Function {
-    SetDebugLogging,
-    /// 2.0's fmi2SetupExperiment; in 3.0 the experiment comes with
-    /// fmi3EnterInitializationMode.
-    SetupExperiment,
-    EnterInitializationMode,
-    ExitInitializationMode,
-    Terminate,
-    Reset,
-    FreeInstance,
-    GetString,
-    SetString,
-    DoStep,
-    EnterEventMode,
-    NewDiscreteStates,
-    EnterContinuousTimeMode,
-    CompletedIntegratorStep,
-    SetTime,
-    SetContinuousStates,
-    GetContinuousStates,
-    GetDerivatives,
-    GetNominalsOfContinuousStates,
-    GetEventIndicators,
-    GetDirectionalDerivative,
-    GetFmuState,
-    SetFmuState,
-    FreeFmuState,
-    SerializedFmuStateSize,
-    SerializeFmuState,
-    DeserializeFmuState,
-}
-
-impl Function {
-    pub const COUNT: usize = Function::DeserializeFmuState as usize + 1;
-    /// Every function, in declaration order (`ALL[f as usize] == f`).
-    pub const ALL: [Function; Function::COUNT] = {
-        use Function::*;
-        [
-            SetDebugLogging,
-            SetupExperiment,
-            EnterInitializationMode,
-            ExitInitializationMode,
-            Terminate,
-            Reset,
-            FreeInstance,
-            GetString,
-            SetString,
-            DoStep,
-            EnterEventMode,
-            NewDiscreteStates,
-            EnterContinuousTimeMode,
-            CompletedIntegratorStep,
-            SetTime,
-            SetContinuousStates,
-            GetContinuousStates,
-            GetDerivatives,
-            GetNominalsOfContinuousStates,
-            GetEventIndicators,
-            GetDirectionalDerivative,
-            GetFmuState,
-            SetFmuState,
-            FreeFmuState,
-            SerializedFmuStateSize,
-            SerializeFmuState,
-            DeserializeFmuState,
-        ]
-    };
+listed_enum! {
+    /// The functions the core names in its messages besides the one being called (which the C
+    /// layer passes). Each version's [`Terms`] gives their names.
+    pub enum Function {
+        SetDebugLogging,
+        /// 2.0's fmi2SetupExperiment; in 3.0 the experiment comes with
+        /// fmi3EnterInitializationMode.
+        SetupExperiment,
+        EnterInitializationMode,
+        ExitInitializationMode,
+        Terminate,
+        Reset,
+        FreeInstance,
+        GetString,
+        SetString,
+        DoStep,
+        EnterEventMode,
+        NewDiscreteStates,
+        EnterContinuousTimeMode,
+        CompletedIntegratorStep,
+        SetTime,
+        SetContinuousStates,
+        GetContinuousStates,
+        GetDerivatives,
+        GetNominalsOfContinuousStates,
+        GetEventIndicators,
+        GetDirectionalDerivative,
+        GetFmuState,
+        SetFmuState,
+        FreeFmuState,
+        SerializedFmuStateSize,
+        SerializeFmuState,
+        DeserializeFmuState,
+    }
 }
 
 /// How one FMI version says what the core speaks of: given by each C layer

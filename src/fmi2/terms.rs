@@ -44,19 +44,9 @@ const fn function(f: Function) -> &'static str {
     }
 }
 
+/// The core's state names are FMI 2.0's.
 const fn state(s: State) -> &'static str {
-    match s {
-        State::Instantiated => "Instantiated",
-        State::InitializationMode => "InitializationMode",
-        State::StepComplete => "StepComplete",
-        State::StepFailed => "StepFailed",
-        State::StepCanceled => "StepCanceled",
-        State::Terminated => "Terminated",
-        State::Error => "Error",
-        State::Fatal => "Fatal",
-        State::EventMode => "EventMode",
-        State::ContinuousTimeMode => "ContinuousTimeMode",
-    }
+    s.name()
 }
 
 // The core answers in its own status values; they are FMI 2.0's.
