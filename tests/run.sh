@@ -120,7 +120,7 @@ record "Rust tests" "${p:-0}" "${f:-1}"
   # examples' markup): what a model author reads. Reuses clippy's check build of the dependencies.
   RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps -p rustfmu -p rustfmu-derive >"$logs/doc.log" 2>&1
   echo $? >"$logs/doc.rc"
-  nice -n 19 cargo build --release --target x86_64-pc-windows-gnu -p fmi2-conformance --bin fmu-check \
+  nice -n 19 cargo build --release --target x86_64-pc-windows-gnu -p fmi-conformance --bin fmu-check \
     >"$logs/fmu-check-exe.log" 2>&1 || true
 ) &
 beside=$!

@@ -213,12 +213,12 @@ fn check(
     random_sequences: u32,
     list: bool,
 ) -> Result<(), String> {
-    use fmi2_conformance::runner::{RunOptions, run_with};
+    use fmi_conformance::runner::{RunOptions, run_with};
     if list {
-        for c in fmi2_conformance::checks::all_checks() {
+        for c in fmi_conformance::checks::all_checks() {
             println!("{} / {}", c.group, c.name);
         }
-        for c in fmi2_conformance::fmi3::checks::all_checks() {
+        for c in fmi_conformance::fmi3::checks::all_checks() {
             println!("FMI 3.0: {} / {}", c.group, c.name);
         }
         return Ok(());
@@ -243,7 +243,7 @@ fn check(
     if report.success() { Ok(()) } else { Err(String::new()) }
 }
 
-/// The hidden subcommand a `check` child runs (fmi2_conformance::runner::worker_main).
+/// The hidden subcommand a `check` child runs (fmi_conformance::runner::worker_main).
 const CHECK_WORKER: &str = "__check-worker";
 
 /// `--fmi-version 2,3` / `--fmi-version both` ...: `None` when not given.
@@ -612,7 +612,7 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>) -> Result<(), String> {
 /// Entry point of both binaries; `tool` is how the messages name the program.
 pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
     if args.get(1).is_some_and(|a| a == CHECK_WORKER) {
-        return fmi2_conformance::runner::worker_main(
+        return fmi_conformance::runner::worker_main(
             args.into_iter().skip(2).map(|a| a.to_string_lossy().into_owned()),
         );
     }

@@ -360,302 +360,47 @@ pub fn workspace_files(workspace_root: &Path) -> Result<Vec<PathBuf>, String> {
         .collect()
 }
 
-/// Base type of an FMI 2.0 variable: the element under its `ScalarVariable`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum VarType {
-    Real,
-    Integer,
-    Boolean,
-    String,
-    Enumeration,
+pub use fmi_description::fmi2::{Enumeration, ModelDescription as FmuDescription, Type as VarType, Variable};
+pub use fmi_description::{Causality, Variability};
+
+/// `Mode (LQR = 1, PID = 2)`
+fn describe(e: &Enumeration) -> String {
+    let items: Vec<String> = e.items.iter().map(|(n, v)| format!("{n} = {v}")).collect();
+    format!("{} ({})", e.name, items.join(", "))
 }
 
-impl VarType {
-    /// Its element name, in modelDescription.xml as in SSP (`ssc:Real`, `ssv:Real`, ...).
-    pub fn name(self) -> &'static str {
-        match self {
-            VarType::Real => "Real",
-            VarType::Integer => "Integer",
-            VarType::Boolean => "Boolean",
-            VarType::String => "String",
-            VarType::Enumeration => "Enumeration",
-        }
-    }
-
-    fn from_element(name: &[u8]) -> Option<VarType> {
-        Some(match name {
-            b"Real" => VarType::Real,
-            b"Integer" => VarType::Integer,
-            b"Boolean" => VarType::Boolean,
-            b"String" => VarType::String,
-            b"Enumeration" => VarType::Enumeration,
-            _ => return None,
-        })
-    }
-}
-
-impl fmt::Display for VarType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Causality {
-    Parameter,
-    CalculatedParameter,
-    Input,
-    Output,
-    Local,
-    Independent,
-}
-
-impl Causality {
-    fn parse(s: &str) -> Option<Causality> {
-        Some(match s {
-            "parameter" => Causality::Parameter,
-            "calculatedParameter" => Causality::CalculatedParameter,
-            "input" => Causality::Input,
-            "output" => Causality::Output,
-            "local" => Causality::Local,
-            "independent" => Causality::Independent,
-            _ => return None,
-        })
-    }
-
-    /// As modelDescription.xml writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Causality::Parameter => "parameter",
-            Causality::CalculatedParameter => "calculatedParameter",
-            Causality::Input => "input",
-            Causality::Output => "output",
-            Causality::Local => "local",
-            Causality::Independent => "independent",
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Variability {
-    Constant,
-    Fixed,
-    Tunable,
-    Discrete,
-    Continuous,
-}
-
-impl Variability {
-    fn parse(s: &str) -> Option<Variability> {
-        Some(match s {
-            "constant" => Variability::Constant,
-            "fixed" => Variability::Fixed,
-            "tunable" => Variability::Tunable,
-            "discrete" => Variability::Discrete,
-            "continuous" => Variability::Continuous,
-            _ => return None,
-        })
-    }
-}
-
-/// A `ScalarVariable` of a modelDescription.xml.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Variable {
-    pub name: String,
-    pub value_reference: u32,
-    pub causality: Causality,
-    pub variability: Variability,
-    pub var_type: VarType,
-    /// `declaredType`: for an Enumeration, the name of its type in `TypeDefinitions`.
-    pub declared_type: Option<String>,
-    /// The `start` attribute, as written.
-    pub start: Option<String>,
-}
-
-impl Variable {
-    /// Whether an importer may give it a start or parameter value: it declares a start value,
-    /// is not an input (whose value comes from its connection) and not a constant.
-    pub fn takes_start_value(&self) -> bool {
-        self.start.is_some() && self.causality != Causality::Input && self.variability != Variability::Constant
-    }
-}
-
-/// An enumeration type of `TypeDefinitions`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Enumeration {
-    pub name: String,
-    /// (item name, value), in order.
-    pub items: Vec<(String, i32)>,
-}
-
-impl Enumeration {
-    /// `Mode (LQR = 1, PID = 2)`
-    fn describe(&self) -> String {
-        let items: Vec<String> = self.items.iter().map(|(n, v)| format!("{n} = {v}")).collect();
-        format!("{} ({})", self.name, items.join(", "))
-    }
-}
-
-/// What a system needs to know of an FMU, read from its modelDescription.xml.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FmuDescription {
-    /// modelIdentifier of its CoSimulation (else ModelExchange) element.
-    pub model_identifier: String,
-    pub variables: Vec<Variable>,
-    pub enumerations: Vec<Enumeration>,
-}
-
-impl FmuDescription {
-    /// Parses a modelDescription.xml (FMI 2.0).
-    pub fn parse(xml: &str) -> Result<FmuDescription, String> {
-        use quick_xml::Reader;
-        use quick_xml::events::Event;
-        let mut reader = Reader::from_str(xml);
-        let mut d = FmuDescription {
-            model_identifier: String::new(),
-            variables: vec![],
-            enumerations: vec![],
-        };
-        // The ScalarVariable being read: its attributes, until its type element comes.
-        let mut var: Option<Variable> = None;
-        // Inside <SimpleType>: the enumeration type being read, if it is one.
-        let mut simple_type: Option<String> = None;
-        let mut enumeration: Option<Enumeration> = None;
-        let mut fmi_version = None;
-        loop {
-            let event = reader.read_event().map_err(|e| {
-                format!(
-                    "modelDescription.xml is not well-formed at byte {}: {e}",
-                    reader.error_position()
-                )
-            })?;
-            let (e, empty) = match &event {
-                Event::Eof => break,
-                Event::Start(e) => (e, false),
-                Event::Empty(e) => (e, true),
-                Event::End(e) => {
-                    match e.name().as_ref() {
-                        b"ScalarVariable" => {
-                            if let Some(v) = var.take() {
-                                return Err(format!("variable '{}' has no type element", v.name));
-                            }
-                        }
-                        b"SimpleType" => {
-                            simple_type = None;
-                            d.enumerations.extend(enumeration.take());
-                        }
-                        _ => {}
-                    }
-                    continue;
-                }
-                _ => continue,
-            };
-            let mut attrs = BTreeMap::new();
-            for a in e.attributes() {
-                let a = a.map_err(|err| format!("modelDescription.xml: bad attribute: {err}"))?;
-                let value = a
-                    .unescape_value()
-                    .map_err(|err| format!("modelDescription.xml: bad attribute value: {err}"))?;
-                attrs.insert(a.key.as_ref().to_vec(), value.into_owned());
+/// Reads a modelDescription.xml of FMI 2.0 (the version a system's FMUs are packaged in).
+pub fn parse_description(xml: &str) -> Result<FmuDescription, String> {
+    let d = FmuDescription::parse(xml)?;
+    if d.fmi_version != "2.0" {
+        return Err(format!(
+            "fmiVersion is {}, expected \"2.0\"",
+            if d.fmi_version.is_empty() {
+                "missing".into()
+            } else {
+                format!("\"{}\"", d.fmi_version)
             }
-            let attr = |k: &str| attrs.get(k.as_bytes()).cloned();
-            match e.name().as_ref() {
-                b"fmiModelDescription" => fmi_version = attr("fmiVersion"),
-                b"CoSimulation" => d.model_identifier = attr("modelIdentifier").unwrap_or_default(),
-                b"ModelExchange" if d.model_identifier.is_empty() => {
-                    d.model_identifier = attr("modelIdentifier").unwrap_or_default()
-                }
-                b"SimpleType" if !empty => simple_type = attr("name"),
-                b"Enumeration" if simple_type.is_some() && var.is_none() => {
-                    enumeration = Some(Enumeration {
-                        name: simple_type.clone().unwrap_or_default(),
-                        items: vec![],
-                    })
-                }
-                b"Item" => {
-                    if let Some(en) = &mut enumeration {
-                        let name = attr("name").unwrap_or_default();
-                        let value = attr("value")
-                            .and_then(|v| v.trim().parse().ok())
-                            .ok_or_else(|| format!("enumeration {}: item '{name}' has no integer value", en.name))?;
-                        en.items.push((name, value));
-                    }
-                }
-                b"ScalarVariable" => {
-                    let name = attr("name").ok_or("a ScalarVariable has no name")?;
-                    let value_reference = attr("valueReference")
-                        .and_then(|v| v.trim().parse().ok())
-                        .ok_or_else(|| format!("variable '{name}' has no valueReference"))?;
-                    let causality = attr("causality").unwrap_or_else(|| "local".into());
-                    let causality = Causality::parse(&causality)
-                        .ok_or_else(|| format!("variable '{name}': unknown causality '{causality}'"))?;
-                    let variability = attr("variability").unwrap_or_else(|| "continuous".into());
-                    let variability = Variability::parse(&variability)
-                        .ok_or_else(|| format!("variable '{name}': unknown variability '{variability}'"))?;
-                    var = Some(Variable {
-                        name,
-                        value_reference,
-                        causality,
-                        variability,
-                        var_type: VarType::Real,
-                        declared_type: None,
-                        start: None,
-                    });
-                }
-                tag => {
-                    if let (Some(mut v), Some(t)) = (var.take(), VarType::from_element(tag)) {
-                        v.var_type = t;
-                        v.declared_type = attr("declaredType");
-                        v.start = attr("start");
-                        d.variables.push(v);
-                    }
-                }
-            }
-        }
-        if fmi_version.as_deref() != Some("2.0") {
-            return Err(format!(
-                "fmiVersion is {}, expected \"2.0\"",
-                fmi_version.map_or("missing".into(), |v| format!("\"{v}\""))
-            ));
-        }
-        for v in &d.variables {
-            if v.var_type == VarType::Enumeration && d.enumeration_of(v).is_none() {
-                return Err(format!(
-                    "Enumeration variable '{}' has no declaredType of TypeDefinitions",
-                    v.name
-                ));
-            }
-        }
-        Ok(d)
+        ));
     }
+    Ok(d)
+}
 
-    /// Reads `modelDescription.xml` from an `.fmu` archive.
-    pub fn read(fmu: &Path) -> Result<FmuDescription, String> {
-        let err = |e: &dyn fmt::Display| format!("{}: {e}", fmu.display());
-        let file = std::fs::File::open(fmu).map_err(|e| {
-            format!(
-                "{}: {e} (package the FMUs first: `cargo run --release -p fmu-build`)",
-                fmu.display()
-            )
-        })?;
-        let mut zip = zip::ZipArchive::new(file).map_err(|e| err(&e))?;
-        let mut xml = String::new();
-        zip.by_name("modelDescription.xml")
-            .map_err(|_| err(&"no modelDescription.xml at the archive's root"))?
-            .read_to_string(&mut xml)
-            .map_err(|e| err(&e))?;
-        FmuDescription::parse(&xml).map_err(|e| err(&e))
-    }
-
-    pub fn variable(&self, name: &str) -> Option<&Variable> {
-        self.variables.iter().find(|v| v.name == name)
-    }
-
-    /// The enumeration type of an Enumeration variable.
-    pub fn enumeration_of(&self, v: &Variable) -> Option<&Enumeration> {
-        let t = v.declared_type.as_deref()?;
-        self.enumerations.iter().find(|e| e.name == t)
-    }
+/// Reads `modelDescription.xml` from an `.fmu` archive.
+pub fn read_description(fmu: &Path) -> Result<FmuDescription, String> {
+    let err = |e: &dyn fmt::Display| format!("{}: {e}", fmu.display());
+    let file = std::fs::File::open(fmu).map_err(|e| {
+        format!(
+            "{}: {e} (package the FMUs first: `cargo run --release -p fmu-build`)",
+            fmu.display()
+        )
+    })?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| err(&e))?;
+    let mut xml = String::new();
+    zip.by_name("modelDescription.xml")
+        .map_err(|_| err(&"no modelDescription.xml at the archive's root"))?
+        .read_to_string(&mut xml)
+        .map_err(|e| err(&e))?;
+    parse_description(&xml).map_err(|e| err(&e))
 }
 
 /// The FMUs of a system, by the name its components give them (`fmu`).
@@ -726,8 +471,7 @@ impl System {
         for c in &self.components {
             if !fmus.contains_key(&c.fmu) {
                 let path = fmu_dir.join(format!("{}.fmu", c.fmu));
-                let d =
-                    FmuDescription::read(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
+                let d = read_description(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
                 fmus.insert(c.fmu.clone(), d);
             }
         }
@@ -765,17 +509,13 @@ impl System {
             let (ofmu, o) = self.lookup(fmus, &c.from)?;
             let (ifmu, inp) = self.lookup(fmus, &c.to)?;
             let (oe, ie) = (ofmu.enumeration_of(o), ifmu.enumeration_of(inp));
-            let same_items = o.var_type != VarType::Enumeration || oe.map(|e| &e.items) == ie.map(|e| &e.items);
-            if o.causality != Causality::Output
-                || inp.causality != Causality::Input
-                || o.var_type != inp.var_type
-                || !same_items
-            {
+            let same_items = o.ty != VarType::Enumeration || oe.map(|e| &e.items) == ie.map(|e| &e.items);
+            if o.causality != Causality::Output || inp.causality != Causality::Input || o.ty != inp.ty || !same_items {
                 let describe = |v: &Variable, e: Option<&Enumeration>| match e {
-                    Some(e) if v.var_type == VarType::Enumeration => {
-                        format!("{} Enumeration {}", v.causality.name(), e.describe())
+                    Some(e) if v.ty == VarType::Enumeration => {
+                        format!("{} Enumeration {}", v.causality.name(), describe(e))
                     }
-                    _ => format!("{} {}", v.causality.name(), v.var_type),
+                    _ => format!("{} {}", v.causality.name(), v.ty),
                 };
                 return Err(format!(
                     "{}: connection {c} must go from an output to an input of the same type: {} is {}, {} is {}",
@@ -797,8 +537,8 @@ impl System {
             }
             connections.push(TypedConnection {
                 connection: c,
-                var_type: o.var_type,
-                enumeration: oe.filter(|_| o.var_type == VarType::Enumeration).cloned(),
+                var_type: o.ty,
+                enumeration: oe.filter(|_| o.ty == VarType::Enumeration).cloned(),
             });
         }
         let mut parameters = Vec::new();
@@ -848,8 +588,8 @@ impl System {
 
 /// `literal` as a value of `v`'s type; the error completes "declares 'v' ...".
 fn typed_value(literal: &Literal, v: &Variable, fmu: &FmuDescription) -> Result<Value, String> {
-    let mismatch = |want: &str| format!("{}, which takes {want}", v.var_type);
-    match (v.var_type, literal) {
+    let mismatch = |want: &str| format!("{}, which takes {want}", v.ty);
+    match (v.ty, literal) {
         (VarType::Real, Literal::Float(x)) => Ok(Value::Real(*x)),
         (VarType::Real, Literal::Integer(x)) => Ok(Value::Real(*x as f64)),
         (VarType::Real, _) => Err(mismatch("a number")),
@@ -874,7 +614,7 @@ fn typed_value(literal: &Literal, v: &Variable, fmu: &FmuDescription) -> Result<
                 value: *value,
                 item: name.clone(),
             })
-            .ok_or_else(|| format!("Enumeration {}, which has no item {literal}", e.describe()))
+            .ok_or_else(|| format!("Enumeration {}, which has no item {literal}", describe(e)))
         }
         (VarType::Enumeration, _) => {
             let e = fmu
@@ -882,7 +622,7 @@ fn typed_value(literal: &Literal, v: &Variable, fmu: &FmuDescription) -> Result<
                 .expect("FmuDescription::parse checks every declaredType");
             Err(format!(
                 "Enumeration {}, which takes an item's value or name",
-                e.describe()
+                describe(e)
             ))
         }
     }
@@ -909,7 +649,7 @@ pub(crate) mod testing {
     }
 
     pub fn description(id: &str) -> FmuDescription {
-        FmuDescription::parse(&xml(id)).unwrap_or_else(|e| panic!("{id}: {e}"))
+        parse_description(&xml(id)).unwrap_or_else(|e| panic!("{id}: {e}"))
     }
 
     pub fn fmus() -> Fmus {
@@ -946,7 +686,7 @@ pub(crate) mod testing {
         let mut fmus = fmus();
         fmus.insert(
             "Controller".into(),
-            FmuDescription::parse(&enumeration_controller_xml()).unwrap_or_else(|e| panic!("{e}")),
+            parse_description(&enumeration_controller_xml()).unwrap_or_else(|e| panic!("{e}")),
         );
         fmus
     }
@@ -1145,29 +885,6 @@ mod tests {
                 "expected the items listed: {e}"
             );
         }
-    }
-
-    #[test]
-    fn a_description_with_an_enumeration_is_read() {
-        let d = FmuDescription::parse(&enumeration_controller_xml()).unwrap();
-        assert_eq!(d.model_identifier, "Controller");
-        let mode = d.variable("mode").unwrap();
-        assert_eq!(
-            (
-                mode.var_type,
-                mode.causality,
-                mode.value_reference,
-                mode.start.as_deref()
-            ),
-            (VarType::Enumeration, Causality::Parameter, 20, Some("1"))
-        );
-        assert_eq!(
-            d.enumeration_of(mode).unwrap().items,
-            [("LQR".into(), 1), ("PID".into(), 2), ("LQR_PID".into(), 3)]
-        );
-        // The Real after it is still read as a Real.
-        assert_eq!(d.variable("gear_ratio").unwrap().var_type, VarType::Real);
-        assert_eq!(d.variables.len(), description("Controller").variables.len());
     }
 
     #[test]

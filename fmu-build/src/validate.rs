@@ -2,8 +2,7 @@
 //! Archive layout, the description against the declarations it came from, the binary's
 //! exported functions, and a short run through the C API as an importer makes it.
 
-use quick_xml::Reader;
-use quick_xml::events::Event;
+use fmi_description::{Causality, ModelDescription, fmi2, fmi3};
 use rustfmu::__private::abi::*;
 use rustfmu::description::FmiVersion;
 use std::collections::BTreeSet;
@@ -179,6 +178,10 @@ pub const FMI3_FUNCTIONS: &[&str] = &[
     "fmi3ActivateModelPartition",
 ];
 
+/// What validation needs of the packaged description, read by the workspace's one reader
+/// (`fmi_description`). The checks of the archive itself (entry names, the XML's encoding and
+/// well-formedness, with line and column) are the conformance suite's archive module's, and
+/// the comparison with the description the binary carries compares the raw XML text.
 struct Description {
     version: FmiVersion,
     model_identifier: String,
@@ -188,72 +191,34 @@ struct Description {
 }
 
 fn read_description(xml: &str) -> Result<Description, String> {
-    let mut reader = Reader::from_str(xml);
-    let mut d = Description {
-        version: FmiVersion::V2,
-        model_identifier: String::new(),
-        guid: String::new(),
-        real_vrs: vec![],
+    let (version, cs, guid, real_vrs) = match fmi_description::parse(xml)? {
+        ModelDescription::Fmi2(d) => (
+            FmiVersion::V2,
+            d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
+            d.guid.clone(),
+            d.vrs_of_type(fmi2::Type::Real),
+        ),
+        // FMI 3.0: every Float64, arrays too (the smoke run gets them one by one).
+        ModelDescription::Fmi3(d) => (
+            FmiVersion::V3,
+            d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
+            d.token.clone(),
+            d.variables
+                .iter()
+                .filter(|v| v.ty == fmi3::Type::Float64)
+                .map(|v| v.vr)
+                .collect(),
+        ),
     };
-    let mut fmi_version = String::new();
-    let mut in_var: Option<u32> = None;
-    let mut in_variables = false;
-    loop {
-        match reader.read_event() {
-            Err(e) => {
-                return Err(format!(
-                    "modelDescription.xml is not well-formed at byte {}: {e}",
-                    reader.error_position()
-                ));
-            }
-            Ok(Event::Eof) => break,
-            Ok(Event::End(e)) if e.name().as_ref() == b"ModelVariables" => in_variables = false,
-            Ok(Event::Start(e) | Event::Empty(e)) => {
-                let attr = |name: &[u8]| -> Option<String> {
-                    e.attributes()
-                        .flatten()
-                        .find(|a| a.key.as_ref() == name)
-                        .and_then(|a| a.unescape_value().ok())
-                        .map(|v| v.into_owned())
-                };
-                match e.name().as_ref() {
-                    b"fmiModelDescription" => {
-                        fmi_version = attr(b"fmiVersion").unwrap_or_default();
-                        d.guid = if fmi_version == "3.0" {
-                            attr(b"instantiationToken").unwrap_or_default()
-                        } else {
-                            attr(b"guid").unwrap_or_default()
-                        };
-                    }
-                    b"CoSimulation" => d.model_identifier = attr(b"modelIdentifier").unwrap_or_default(),
-                    b"ModelVariables" => in_variables = true,
-                    b"ScalarVariable" => in_var = attr(b"valueReference").and_then(|v| v.parse().ok()),
-                    b"Real" => {
-                        if let Some(vr) = in_var.take() {
-                            d.real_vrs.push(vr);
-                        }
-                    }
-                    // FMI 3.0: the variable's element carries its value reference.
-                    b"Float64" if in_variables => {
-                        if let Some(vr) = attr(b"valueReference").and_then(|v| v.parse().ok()) {
-                            d.real_vrs.push(vr);
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            Ok(_) => {}
-        }
+    match cs {
+        Some(model_identifier) if !model_identifier.is_empty() => Ok(Description {
+            version,
+            model_identifier,
+            guid,
+            real_vrs,
+        }),
+        _ => Err("no <CoSimulation modelIdentifier=...>".into()),
     }
-    d.version = match fmi_version.as_str() {
-        "2.0" => FmiVersion::V2,
-        "3.0" => FmiVersion::V3,
-        other => return Err(format!("fmiVersion is '{other}', expected '2.0' or '3.0'")),
-    };
-    if d.model_identifier.is_empty() {
-        return Err("no <CoSimulation modelIdentifier=...>".into());
-    }
-    Ok(d)
 }
 
 /// Problems with an FMU file (an empty list: valid). The smoke run happens in a child process
@@ -266,7 +231,7 @@ pub fn validate(fmu: &Path) -> Vec<String> {
 }
 
 fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
-    use fmi2_conformance::archive;
+    use fmi_conformance::archive;
     // The file is untrusted: opened, read and unpacked only through the conformance suite's
     // archive module (no `..`, absolute names, backslashes, links; bounded sizes; the XML's
     // errors with line and column), into a private folder removed afterwards.
@@ -935,7 +900,7 @@ pub fn fmpy_validate(python: &Path, fmu: &Path) -> Vec<String> {
 /// `cargo fmu info`: what an FMU file offers, from its archive and description.
 pub fn info(fmu: &Path) -> Result<String, String> {
     let at = |e: &dyn std::fmt::Display| format!("{}: {e}", fmu.display());
-    let mut zip = fmi2_conformance::archive::open(fmu)?;
+    let mut zip = fmi_conformance::archive::open(fmu)?;
     let mut platforms = std::collections::BTreeSet::new();
     for name in zip.entry_names() {
         let parts: Vec<&str> = name.split('/').collect();
@@ -943,121 +908,53 @@ pub fn info(fmu: &Path) -> Result<String, String> {
             platforms.insert(format!("{} ({})", parts[1], parts[2]));
         }
     }
-    let xml = fmi2_conformance::archive::read_model_description(&mut zip)?;
-    let mut reader = Reader::from_str(&xml);
+    let xml = fmi_conformance::archive::read_model_description(&mut zip)?;
+    let md = fmi_description::parse(&xml).map_err(|e| at(&e))?;
     let mut out = String::new();
-    let mut counts: std::collections::BTreeMap<String, usize> = Default::default();
+    let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
     let mut interfaces = Vec::new();
     let mut variables = Vec::new();
-    let mut current: Option<(String, String, String)> = None;
-    let (mut fmi3, mut in_variables) = (false, false);
-    loop {
-        match reader.read_event() {
-            Err(e) => {
-                return Err(at(&format!(
-                    "modelDescription.xml is not well-formed at byte {}: {e}",
-                    reader.error_position()
-                )));
-            }
-            Ok(Event::Eof) => break,
-            Ok(Event::End(e)) if e.name().as_ref() == b"ModelVariables" => in_variables = false,
-            Ok(Event::Start(e) | Event::Empty(e)) => {
-                let attr = |name: &[u8]| -> String {
-                    e.attributes()
-                        .flatten()
-                        .find(|a| a.key.as_ref() == name)
-                        .and_then(|a| a.unescape_value().ok())
-                        .map(|v| v.into_owned())
-                        .unwrap_or_default()
-                };
-                match e.name().as_ref() {
-                    b"ModelVariables" => in_variables = true,
-                    b"fmiModelDescription" => {
-                        fmi3 = attr(b"fmiVersion").starts_with('3');
-                        out.push_str(&format!(
-                            "{}: FMI {}, model '{}', version '{}'\n  GUID/token {}\n  generated by {}\n  {}\n",
-                            fmu.display(),
-                            attr(b"fmiVersion"),
-                            attr(b"modelName"),
-                            attr(b"version"),
-                            match attr(b"guid") {
-                                g if g.is_empty() => attr(b"instantiationToken"),
-                                g => g,
-                            },
-                            attr(b"generationTool"),
-                            attr(b"description")
-                        ));
-                    }
-                    b"CoSimulation" | b"ModelExchange" => interfaces.push(format!(
-                        "{} ({})",
-                        String::from_utf8_lossy(e.name().as_ref()),
-                        attr(b"modelIdentifier")
-                    )),
-                    b"DefaultExperiment" => {
-                        let parts: Vec<String> = [
-                            ("start", b"startTime".as_slice()),
-                            ("stop", b"stopTime"),
-                            ("step", b"stepSize"),
-                            ("tolerance", b"tolerance"),
-                        ]
-                        .iter()
-                        .filter_map(|(label, key)| {
-                            let v = attr(key);
-                            (!v.is_empty()).then(|| format!("{label} {v}"))
-                        })
-                        .collect();
-                        out.push_str(&format!("  default experiment: {}\n", parts.join(", ")));
-                    }
-                    b"ScalarVariable" => {
-                        let causality = match attr(b"causality") {
-                            c if c.is_empty() => "local".to_string(),
-                            c => c,
-                        };
-                        *counts.entry(causality.clone()).or_default() += 1;
-                        current = Some((attr(b"name"), causality, attr(b"valueReference")));
-                    }
-                    // FMI 3.0: one element per variable, named after its type.
-                    b"Float32" | b"Float64" | b"Int8" | b"UInt8" | b"Int16" | b"UInt16" | b"Int32" | b"UInt32"
-                    | b"Int64" | b"UInt64" | b"Boolean" | b"String" | b"Binary" | b"Enumeration" | b"Clock"
-                        if in_variables && fmi3 =>
-                    {
-                        let causality = match attr(b"causality") {
-                            c if c.is_empty() => "local".to_string(),
-                            c => c,
-                        };
-                        *counts.entry(causality.clone()).or_default() += 1;
-                        let unit = attr(b"unit");
-                        variables.push(format!(
-                            "    {:>5} {} ({causality}, {}{})",
-                            attr(b"valueReference"),
-                            attr(b"name"),
-                            String::from_utf8_lossy(e.name().as_ref()),
-                            if unit.is_empty() {
-                                String::new()
-                            } else {
-                                format!(", {unit}")
-                            }
-                        ));
-                    }
-                    b"Real" | b"Integer" | b"Boolean" | b"String" | b"Enumeration" => {
-                        if let Some((name, causality, vr)) = current.take() {
-                            let unit = attr(b"unit");
-                            variables.push(format!(
-                                "    {vr:>5} {name} ({causality}, {}{})",
-                                String::from_utf8_lossy(e.name().as_ref()),
-                                if unit.is_empty() {
-                                    String::new()
-                                } else {
-                                    format!(", {unit}")
-                                }
-                            ));
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            Ok(_) => {}
+    // (value reference, name, causality, type, unit) of every variable, in order.
+    let listed: Vec<(u32, &str, Causality, &str, Option<&str>)> = match &md {
+        ModelDescription::Fmi2(d) => {
+            out.push_str(&head(
+                fmu,
+                &d.fmi_version,
+                &d.model_name,
+                &d.version,
+                &d.guid,
+                &d.generation_tool,
+                &d.description,
+            ));
+            out.push_str(&experiment(&d.default_experiment));
+            interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
+            interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
+            let v = d.variables.iter();
+            v.map(|v| (v.vr, v.name.as_str(), v.causality, v.ty.name(), v.unit.as_deref()))
+                .collect()
         }
+        ModelDescription::Fmi3(d) => {
+            out.push_str(&head(
+                fmu,
+                &d.fmi_version,
+                &d.model_name,
+                &d.version,
+                &d.token,
+                &d.generation_tool,
+                &d.description,
+            ));
+            out.push_str(&experiment(&d.default_experiment));
+            interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
+            interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
+            let v = d.variables.iter();
+            v.map(|v| (v.vr, v.name.as_str(), v.causality, v.ty.name(), v.unit.as_deref()))
+                .collect()
+        }
+    };
+    for (vr, name, causality, ty, unit) in listed {
+        *counts.entry(causality.name()).or_default() += 1;
+        let unit = unit.map(|u| format!(", {u}")).unwrap_or_default();
+        variables.push(format!("    {vr:>5} {name} ({causality}, {ty}{unit})"));
     }
     out.push_str(&format!("  interfaces: {}\n", interfaces.join(", ")));
     out.push_str(&format!(
@@ -1075,4 +972,38 @@ pub fn info(fmu: &Path) -> Result<String, String> {
         out.push('\n');
     }
     Ok(out)
+}
+
+/// The first lines of `cargo fmu info`.
+fn head(
+    fmu: &Path,
+    fmi_version: &str,
+    name: &str,
+    version: &str,
+    token: &str,
+    tool: &str,
+    description: &str,
+) -> String {
+    format!(
+        "{}: FMI {fmi_version}, model '{name}', version '{version}'\n  GUID/token {token}\n  generated by {tool}\n  {description}\n",
+        fmu.display()
+    )
+}
+
+/// `cargo fmu info`'s line of the default experiment, its values as written (none without one).
+fn experiment(e: &fmi_description::DefaultExperiment) -> String {
+    let parts: Vec<String> = [
+        ("start", &e.start_time),
+        ("stop", &e.stop_time),
+        ("step", &e.step_size),
+        ("tolerance", &e.tolerance),
+    ]
+    .iter()
+    .filter_map(|(label, v)| v.as_ref().filter(|v| !v.is_empty()).map(|v| format!("{label} {v}")))
+    .collect();
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!("  default experiment: {}\n", parts.join(", "))
+    }
 }

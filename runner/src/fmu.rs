@@ -4,10 +4,11 @@
 use crate::Error;
 use fmi::fmi2::import::Fmi2Import;
 use fmi::fmi2::instance::InstanceCS;
-use fmi2_conformance::{Description, Type, Variable};
+use fmi_description::Causality;
+use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
 use std::io::{Cursor, Read};
 
-pub use fmi2_conformance::Type as VarType;
+pub use fmi_description::fmi2::Type as VarType;
 
 pub struct Fmu {
     /// Where it came from ("resources/Pendulum.fmu" of an SSP file, or a path).
@@ -17,16 +18,6 @@ pub struct Fmu {
     /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
     /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
     pub feedthrough: Vec<u32>,
-}
-
-/// The `fmiVersion` attribute of a modelDescription.xml.
-fn fmi_version(xml: &str) -> Option<String> {
-    let at = xml.find("fmiVersion")?;
-    let rest = &xml[at + "fmiVersion".len()..];
-    let rest = rest.trim_start().strip_prefix('=')?.trim_start();
-    let quote = rest.chars().next()?;
-    let rest = &rest[1..];
-    Some(rest[..rest.find(quote)?].to_owned())
 }
 
 impl Fmu {
@@ -43,7 +34,7 @@ impl Fmu {
             .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
             .read_to_string(&mut xml)
             .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-        let version = fmi_version(&xml).unwrap_or_default();
+        let version = fmi_description::fmi_version(&xml).map_err(fail)?;
         if !version.starts_with("2.") {
             return Err(Error::unsupported(
                 Some(component),
@@ -53,22 +44,23 @@ impl Fmu {
                 ),
             ));
         }
-        let description = Description::parse(&xml).map_err(|e| {
-            if e.contains("not a co-simulation FMU") {
-                Error::unsupported(Some(component), None, format!(
+        let description = Description::parse(&xml).map_err(fail)?;
+        if description.cs.is_none() {
+            return Err(Error::unsupported(
+                Some(component),
+                None,
+                format!(
                     "component '{component}' ({label}): not a co-simulation FMU (no <CoSimulation> in modelDescription.xml)"
-                ))
-            } else {
-                fail(e)
-            }
-        })?;
+                ),
+            ));
+        }
         let import: Fmi2Import =
             fmi::import::new(Cursor::new(bytes)).map_err(|e| fail(format!("cannot import: {e}")))?;
         let mut feedthrough = Vec::new();
         let inputs: Vec<&Variable> = description
             .variables
             .iter()
-            .filter(|v| v.causality == "input")
+            .filter(|v| v.causality == Causality::Input)
             .collect();
         for output in &description.model_structure.outputs {
             match &output.dependencies {
@@ -78,7 +70,7 @@ impl Fmu {
                         let v = description.by_index(*d).ok_or_else(|| {
                             fail(format!("ModelStructure names variable index {d}, which does not exist"))
                         })?;
-                        if v.causality == "input" {
+                        if v.causality == Causality::Input {
                             feedthrough.push(v.vr);
                         }
                     }
@@ -105,7 +97,7 @@ impl Fmu {
     }
 
     pub fn model_identifier(&self) -> &str {
-        &self.description.model_identifier
+        self.description.model_identifier()
     }
 
     /// The variable `name`; the error names the component and lists the variables there are.
@@ -146,11 +138,5 @@ impl Fmu {
 
 /// The FMI 2.0 name of a variable type.
 pub fn type_name(t: Type) -> &'static str {
-    match t {
-        Type::Real => "Real",
-        Type::Integer => "Integer",
-        Type::Boolean => "Boolean",
-        Type::String => "String",
-        Type::Enumeration => "Enumeration",
-    }
+    t.name()
 }

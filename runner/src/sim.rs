@@ -27,7 +27,8 @@ use crate::fmu::{Fmu, type_name};
 use crate::ssp::{Archive, Connection};
 use crate::{Error, Value};
 use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
-use fmi2_conformance::Type;
+use fmi_description::Causality;
+use fmi_description::fmi2::Type;
 use std::ffi::CString;
 use std::path::Path;
 
@@ -441,10 +442,10 @@ impl Simulation {
                     .variables
                     .iter()
                     .find(|v| v.name == name)
-                    .map(|v| v.causality.clone())
+                    .map(|v| v.causality.name())
                     .unwrap_or_default()
             };
-            if causality(to, &k.end.1) != "input" {
+            if causality(to, &k.end.1) != Causality::Input.name() {
                 return Err(Error::unsupported(
                     Some(&k.end.0),
                     Some(&k.end.1),
@@ -560,7 +561,7 @@ impl Simulation {
         let mut out = Vec::new();
         for s in &self.slaves {
             for v in &self.fmus[s.fmu].description.variables {
-                if v.causality == "output"
+                if v.causality == Causality::Output
                     && matches!(v.ty, Type::Real | Type::Integer | Type::Boolean | Type::Enumeration)
                 {
                     out.push(format!("{}.{}", s.name, v.name));

@@ -1,5 +1,5 @@
 """The aarch64 Linux binaries of the FMI 3.0 FMUs (binaries/aarch64-linux/<id>.so; FMI 2.0 names
-no folder for aarch64), run where they will run: tests/conformance/c/host3.c compiled with
+no folder for aarch64), run where they will run: conformance/c/host3.c compiled with
 Debian's aarch64-linux-gnu-gcc and run under qemu-user loads each one from the unzipped FMU,
 makes 1,000 co-simulation steps and frees it; the x86-64 binary with the same inputs gives the
 same trajectory to 1e-12.
@@ -24,7 +24,7 @@ def arm_host():
         if not shutil.which(tool):
             pytest.fail(f"{tool} is missing: run `bash tests/setup-env.sh` (it installs gcc-aarch64-linux-gnu and qemu-user)")
     WORK.mkdir(parents=True, exist_ok=True)
-    c = ROOT / "tests" / "conformance" / "c" / "host3.c"
+    c = ROOT / "conformance" / "c" / "host3.c"
     out = run(["gcc", "-O2", "-Wall", "-Werror", "-o", WORK / "host3", c, "-ldl"])
     assert out.returncode == 0, out.stderr
     out = run(["aarch64-linux-gnu-gcc", "-O2", "-Wall", "-Werror", "-o", WORK / "host3-aarch64", c, "-ldl"])

@@ -1,5 +1,5 @@
 """The Windows binaries of the packaged FMUs, run where they will run: the project's C hosts
-(tests/conformance/c/host.c for FMI 2.0, host3.c for FMI 3.0) compiled for Windows with MinGW
+(conformance/c/host.c for FMI 2.0, host3.c for FMI 3.0) compiled for Windows with MinGW
 and run under wine load binaries/win64/<id>.dll (3.0: binaries/x86_64-windows/) from the unzipped
 FMU, make 1,000 co-simulation steps and free; the same hosts compiled for Linux run the linux64
 binary with the same inputs, and the two trajectories must agree to 1e-12.
@@ -41,7 +41,7 @@ def hosts():
         if not shutil.which(tool):
             pytest.fail(f"{tool} is missing: run `bash tests/setup-env.sh` (it installs gcc-mingw-w64-x86-64 and wine)")
     WORK.mkdir(parents=True, exist_ok=True)
-    c = ROOT / "tests" / "conformance" / "c"
+    c = ROOT / "conformance" / "c"
     started = time.monotonic()
     for name in ["host", "host3"]:
         out = run(["gcc", "-O2", "-Wall", "-Werror", "-o", WORK / name, c / f"{name}.c", "-ldl"])
@@ -239,7 +239,7 @@ NATIVE = "native C host/valgrind"
 def fmu_check_exe(hosts):
     started = time.monotonic()
     out = run(
-        ["cargo", "build", "--release", "--target", "x86_64-pc-windows-gnu", "-p", "fmi2-conformance", "--bin", "fmu-check"],
+        ["cargo", "build", "--release", "--target", "x86_64-pc-windows-gnu", "-p", "fmi-conformance", "--bin", "fmu-check"],
         cwd=ROOT,
     )
     assert out.returncode == 0, out.stderr[-3000:]

@@ -1,0 +1,118 @@
+//! `fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N]`: checks an FMI
+//! 2.0 FMU with the FMI 2.0 checks, an FMI 3.0 FMU with the FMI 3.0 ones (by the fmiVersion of
+//! its model description), each in a child process, and prints a report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
+//! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks).
+//!
+//! `fmu-check __worker ...` is the child's side ([`fmi_conformance::runner::worker_main`]).
+
+use fmi_conformance::checks::all_checks;
+use fmi_conformance::runner::{RunOptions, run_with, worker_main};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+const USAGE: &str =
+    "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] | --list";
+
+struct Args {
+    fmu: Option<PathBuf>,
+    filter: Option<String>,
+    timeout: Option<Duration>,
+    random_sequences: u32,
+    list: bool,
+    as_foreign: bool,
+}
+
+fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
+    let mut a = Args {
+        fmu: None,
+        filter: None,
+        timeout: None,
+        random_sequences: 0,
+        list: false,
+        as_foreign: false,
+    };
+    let mut it = args;
+    while let Some(arg) = it.next() {
+        let mut value = |what: &str| it.next().ok_or(format!("{what} needs a value"));
+        match arg.as_str() {
+            "--filter" => a.filter = Some(value("--filter")?),
+            "--timeout" => {
+                let s: f64 = value("--timeout")?.parse().map_err(|e| format!("--timeout: {e}"))?;
+                if !(s.is_finite() && s > 0.0) {
+                    return Err("--timeout: seconds > 0".into());
+                }
+                a.timeout = Some(Duration::from_secs_f64(s));
+            }
+            "--random-sequences" => {
+                a.random_sequences = value("--random-sequences")?
+                    .parse()
+                    .map_err(|e| format!("--random-sequences: {e}"))?
+            }
+            "--list" => a.list = true,
+            "--as-foreign" => a.as_foreign = true,
+            "-h" | "--help" => return Err(String::new()),
+            s if s.starts_with('-') => return Err(format!("unknown option {s}")),
+            s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
+            s => return Err(format!("one FMU at a time ({s})")),
+        }
+    }
+    Ok(a)
+}
+
+fn main() -> ExitCode {
+    let mut args = std::env::args().skip(1).peekable();
+    if args.peek().map(String::as_str) == Some("__worker") {
+        args.next();
+        return worker_main(args);
+    }
+    let a = match parse(args) {
+        Ok(a) => a,
+        Err(e) => {
+            if !e.is_empty() {
+                eprintln!("fmu-check: {e}");
+            }
+            eprintln!("{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    if a.list {
+        for c in all_checks() {
+            println!("{} / {}", c.group, c.name);
+        }
+        for c in fmi_conformance::fmi3::checks::all_checks() {
+            println!("FMI 3.0: {} / {}", c.group, c.name);
+        }
+        return ExitCode::SUCCESS;
+    }
+    let Some(fmu) = a.fmu else {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    };
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("fmu-check: cannot find my own executable: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut opts = RunOptions::new(exe, vec!["__worker".into()]);
+    opts.filter = a.filter;
+    opts.random_sequences = a.random_sequences;
+    opts.as_foreign = a.as_foreign;
+    if let Some(t) = a.timeout {
+        opts.timeout = t;
+    }
+    if opts.selected().is_empty() && opts.selected_fmi3().is_empty() {
+        eprintln!("fmu-check: no check matches the filter (fmu-check --list shows them)");
+        return ExitCode::from(2);
+    }
+    // Progress on stderr while it runs; the report on stdout.
+    let report = run_with(&fmu, &opts, &mut |c| eprintln!("{}", c.line()));
+    println!("{report}");
+    if report.success() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}

@@ -1,0 +1,399 @@
+//! FMU state for every packaged FMU: get/set/free and serialize/deserialize round-trips continue
+//! bit-identically, the serialized form is versioned, position-independent and checked, and a
+//! state serialized in one process restores in another.
+//!
+//! FMU state is optional in FMI 2.0: on an FMU that does not declare canGetAndSetFMUstate (and
+//! canSerializeFMUstate, for the serialized form) these checks are skipped. The layout of the
+//! serialized state is checked only on this exporter's FMUs; on another exporter's, a damaged
+//! state must be refused where its length is wrong, and must not crash otherwise.
+
+use crate::Fmu;
+use crate::fmi2::*;
+use crate::instance::{Instance, excitation, status_name, step_size};
+use crate::outcome::{convention, limitation, skip};
+use crate::state::{FORMAT_VERSION, parse, reseal};
+use std::ptr;
+
+/// Skips the check unless the FMU declares canGetAndSetFMUstate.
+fn needs_get_set(fmu: &Fmu) {
+    if !fmu.cs().can_get_and_set_fmu_state {
+        skip("the FMU does not declare canGetAndSetFMUstate (optional in FMI 2.0)");
+    }
+}
+
+/// Skips the check unless the FMU declares canGetAndSetFMUstate and canSerializeFMUstate.
+fn needs_serialize(fmu: &Fmu) {
+    needs_get_set(fmu);
+    if !fmu.cs().can_serialize_fmu_state {
+        skip("the FMU does not declare canSerializeFMUstate (optional in FMI 2.0)");
+    }
+}
+
+/// An excited, initialized instance after `k` steps.
+fn advanced(fmu: &Fmu, k: usize) -> Instance<'_> {
+    let mut inst = Instance::new(fmu);
+    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
+    assert_eq!(inst.set_real(&vrs, &vals), fmi2OK);
+    inst.initialize();
+    for _ in 0..k {
+        assert_eq!(inst.step(step_size(fmu)), fmi2OK, "{}", inst.log_text());
+    }
+    inst
+}
+
+fn continue_for(inst: &mut Instance, m: usize) -> Vec<Vec<u64>> {
+    let h = step_size(inst.fmu);
+    (0..m)
+        .map(|_| {
+            assert_eq!(inst.step(h), fmi2OK, "{}: {}", inst.fmu.id, inst.log_text());
+            inst.observe()
+        })
+        .collect()
+}
+
+pub fn every_fmu_declares_it_can_get_set_and_serialize_its_state(fmu: &Fmu) {
+    if !fmu.own_state_format() && !fmu.can_snapshot() {
+        skip(
+            "canGetAndSetFMUstate and canSerializeFMUstate are optional in FMI 2.0 (this exporter's FMUs declare both)",
+        );
+    }
+    assert!(fmu.cs().can_get_and_set_fmu_state, "{}: canGetAndSetFMUstate", fmu.id);
+    assert!(fmu.cs().can_serialize_fmu_state, "{}: canSerializeFMUstate", fmu.id);
+}
+
+pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
+    needs_get_set(fmu);
+    let mut inst = advanced(fmu, 10);
+    let (st, mut saved) = inst.get_state();
+    assert_eq!(st, fmi2OK);
+    let at_save = inst.observe();
+    let t = inst.time;
+    let first = continue_for(&mut inst, 20);
+    // Going back twice: the state is not consumed by fmi2SetFMUstate.
+    for round in 0..2 {
+        assert_eq!(inst.set_state(saved), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+        inst.time = t;
+        assert_eq!(
+            inst.observe(),
+            at_save,
+            "{}: values right after fmi2SetFMUstate",
+            fmu.id
+        );
+        assert_eq!(
+            continue_for(&mut inst, 20),
+            first,
+            "{}: continuation {round} differs",
+            fmu.id
+        );
+    }
+    // Re-using an existing FMUstate: fmi2GetFMUstate overwrites it in place.
+    let (before, old_ptr) = (inst.observe(), saved);
+    assert_eq!(unsafe { (fmu.api.get_fmu_state)(inst.c, &mut saved) }, fmi2OK);
+    assert_eq!(
+        saved, old_ptr,
+        "{}: fmi2GetFMUstate on an existing state must reuse it",
+        fmu.id
+    );
+    let t2 = inst.time;
+    continue_for(&mut inst, 3);
+    assert_eq!(inst.set_state(saved), fmi2OK);
+    inst.time = t2;
+    assert_eq!(inst.observe(), before, "{}: the overwritten state", fmu.id);
+    assert_eq!(inst.free_state(&mut saved), fmi2OK);
+    assert!(saved.is_null());
+    // Freeing NULL (or a pointer to NULL) is harmless.
+    assert_eq!(inst.free_state(&mut saved), fmi2OK);
+    // SAFETY: a NULL FMUstate* is refused or ignored, never dereferenced.
+    let s = unsafe { (fmu.api.free_fmu_state)(inst.c, ptr::null_mut()) };
+    assert!(
+        s == fmi2OK || s == fmi2Error,
+        "{}: fmi2FreeFMUstate(NULL): {}",
+        fmu.id,
+        status_name(s)
+    );
+    assert_eq!(
+        inst.set_state(ptr::null_mut()),
+        fmi2Error,
+        "{}: fmi2SetFMUstate(NULL)",
+        fmu.id
+    );
+}
+
+pub fn a_saved_state_is_a_complete_copy_independent_of_the_instance(fmu: &Fmu) {
+    needs_serialize(fmu);
+    let mut inst = advanced(fmu, 5);
+    let (_, mut saved) = inst.get_state();
+    let bytes = inst.serialize(saved).unwrap();
+    continue_for(&mut inst, 5);
+    assert_eq!(inst.reset(), fmi2OK);
+    assert_eq!(
+        inst.serialize(saved).unwrap(),
+        bytes,
+        "{}: the saved state changed with the instance",
+        fmu.id
+    );
+    // And another instance can continue from it exactly like the first would have.
+    let mut other = Instance::new(fmu);
+    assert_eq!(other.set_state(saved), fmi2OK, "{}: {}", fmu.id, other.log_text());
+    assert_eq!(inst.set_state(saved), fmi2OK);
+    let (_, t) = inst.last_successful_time();
+    (inst.time, other.time) = (t, t);
+    assert_eq!(
+        continue_for(&mut other, 10),
+        continue_for(&mut inst, 10),
+        "{}: two instances from one state",
+        fmu.id
+    );
+    assert_eq!(inst.free_state(&mut saved), fmi2OK);
+}
+
+pub fn serialize_deserialize_round_trip_continues_bit_identically(fmu: &Fmu) {
+    needs_serialize(fmu);
+    let mut inst = advanced(fmu, 10);
+    let bytes = inst.snapshot();
+    let t = inst.time;
+    let first = continue_for(&mut inst, 20);
+    inst.restore(&bytes);
+    inst.time = t;
+    assert_eq!(
+        continue_for(&mut inst, 20),
+        first,
+        "{}: continuation after deserializing",
+        fmu.id
+    );
+    // Into an existing FMUstate.
+    let (_, mut existing) = inst.get_state();
+    // SAFETY: `bytes.len()` readable bytes, an FMUstate of this FMU.
+    let s = unsafe {
+        (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut existing)
+    };
+    assert_eq!(s, fmi2OK);
+    assert_eq!(
+        inst.serialize(existing).unwrap(),
+        bytes,
+        "{}: deserializing into an existing state",
+        fmu.id
+    );
+    assert_eq!(inst.free_state(&mut existing), fmi2OK);
+}
+
+pub fn the_serialized_state_holds_no_pointers_and_is_versioned(fmu: &Fmu) {
+    needs_serialize(fmu);
+    // Two instances at different addresses in the same state serialize to the same bytes.
+    let (mut a, mut b) = (advanced(fmu, 7), advanced(fmu, 7));
+    let (sa, sb) = (a.snapshot(), b.snapshot());
+    assert_eq!(
+        sa, sb,
+        "{}: equal states, different bytes (addresses in the state?)",
+        fmu.id
+    );
+    if convention(fmu, "this exporter's versioned state format with the GUID") {
+        let layout = parse(&sa).unwrap_or_else(|e| panic!("{}: {e}", fmu.id));
+        assert_eq!(
+            &sa[layout.guid_at..layout.guid_at + layout.guid_len],
+            fmu.md.guid.as_bytes()
+        );
+    }
+    // Both instances keep their own FMU states: serialize one through the other.
+    let (_, mut s) = a.get_state();
+    assert_eq!(b.serialize(s).unwrap(), sa);
+    assert_eq!(a.free_state(&mut s), fmi2OK);
+}
+
+fn assert_refused(inst: &mut Instance, bytes: &[u8], what: &str) {
+    let before = inst.snapshot();
+    let (s, p) = inst.deserialize(bytes);
+    let log = inst.log();
+    assert_eq!(s, fmi2Error, "{}: {what} was accepted", inst.fmu.id);
+    assert!(
+        p.is_null(),
+        "{}: {what}: a refused deserialization wrote a state",
+        inst.fmu.id
+    );
+    assert!(
+        inst.says(&log, fmi2Error, &["fmi2DeSerializeFMUstate"]),
+        "{}: {what}: no message: {log:?}",
+        inst.fmu.id
+    );
+    assert_eq!(inst.snapshot(), before, "{}: {what}: the instance changed", inst.fmu.id);
+}
+
+/// For damage that only a checksum can find, on another exporter's FMU (whose format may have
+/// none): refused as [`assert_refused`] requires, or accepted; either way without a crash.
+fn refused_or_accepted(inst: &mut Instance, bytes: &[u8], what: &str) {
+    if inst.fmu.own_state_format() {
+        return assert_refused(inst, bytes, what);
+    }
+    let before = inst.snapshot();
+    let (s, mut p) = inst.deserialize(bytes);
+    if s == fmi2OK {
+        assert_eq!(inst.free_state(&mut p), fmi2OK, "{}: {what}: freeing it", inst.fmu.id);
+        inst.log();
+        assert_eq!(inst.snapshot(), before, "{}: {what}: the instance changed", inst.fmu.id);
+    } else {
+        assert_refused(inst, bytes, what);
+    }
+}
+
+pub fn damaged_serialized_states_are_refused_with_a_message(fmu: &Fmu) {
+    needs_serialize(fmu);
+    let mut inst = advanced(fmu, 3);
+    let good = inst.snapshot();
+    let own = fmu.own_state_format();
+    if own {
+        let l = parse(&good).unwrap();
+        let mut v = good.clone();
+        v[l.version_at..l.version_at + 4].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
+        reseal(&mut v, &l);
+        assert_refused(&mut inst, &v, "a newer format version");
+
+        let mut g = good.clone();
+        g[l.guid_at + 1] ^= 0x01;
+        reseal(&mut g, &l);
+        assert_refused(&mut inst, &g, "another FMU's GUID");
+    } else {
+        limitation(
+            "a serialized state of another format version or GUID is not tried (the layout of another exporter's state is unknown)",
+        );
+        limitation(
+            "bit flips and random bytes of the right length may be accepted (another exporter's state may have no checksum): they must not crash",
+        );
+    }
+
+    let mut m = good.clone();
+    m[0] = m[0].wrapping_add(1);
+    refused_or_accepted(&mut inst, &m, "wrong magic bytes (first byte changed)");
+
+    for len in 0..good.len() {
+        assert_refused(
+            &mut inst,
+            &good[..len],
+            &format!("truncated to {len} of {} bytes", good.len()),
+        );
+    }
+    let mut long = good.clone();
+    long.push(0);
+    assert_refused(&mut inst, &long, "a trailing byte");
+
+    // Every single-bit flip anywhere: caught by the checksum (or an earlier check).
+    for i in 0..good.len() {
+        let mut f = good.clone();
+        f[i] ^= 1 << (i % 8);
+        refused_or_accepted(&mut inst, &f, &format!("a bit flipped in byte {i}"));
+    }
+
+    // Random bytes of random lengths (a fixed xorshift sequence, so failures reproduce).
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    for _ in 0..200 {
+        let len = (next() % (2 * good.len() as u64)) as usize;
+        let r: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        if len == good.len() {
+            refused_or_accepted(&mut inst, &r, &format!("{len} random bytes"));
+        } else {
+            assert_refused(&mut inst, &r, &format!("{len} random bytes"));
+        }
+        if !own {
+            continue;
+        }
+        let l = parse(&good).unwrap();
+        // The same, behind a valid header: the payload decoder must refuse it.
+        let mut h = good[..l.payload_at - 4].to_vec();
+        h.extend_from_slice(&(r.len() as u32).to_le_bytes());
+        h.extend_from_slice(&r);
+        let crc = crc32fast::hash(&h);
+        h.extend_from_slice(&crc.to_le_bytes());
+        let (s, mut p) = inst.deserialize(&h);
+        if s == fmi2OK {
+            // Random bytes that happen to decode are a valid state of some kind: setting it
+            // must still not crash, and the instance must stay usable.
+            let _ = inst.set_state(p);
+            assert_eq!(inst.free_state(&mut p), fmi2OK);
+            assert_eq!(inst.reset(), fmi2OK);
+            inst.restore(&good);
+        } else {
+            assert_eq!(s, fmi2Error);
+        }
+        inst.log();
+    }
+
+    // NULL bytes with a size, NULL out pointer.
+    // SAFETY: the FMU must check both before reading.
+    let s = unsafe { (fmu.api.deserialize_fmu_state)(inst.c, ptr::null(), 16, &mut ptr::null_mut()) };
+    assert_eq!(s, fmi2Error, "{}: NULL serializedState", fmu.id);
+    // SAFETY: as above.
+    let s = unsafe {
+        (fmu.api.deserialize_fmu_state)(inst.c, good.as_ptr() as *const fmi2Byte, good.len(), ptr::null_mut())
+    };
+    assert_eq!(s, fmi2Error, "{}: NULL FMUstate*", fmu.id);
+    // A buffer of the wrong size for fmi2SerializeFMUstate.
+    let (_, mut st) = inst.get_state();
+    let mut small = vec![0u8; good.len() - 1];
+    // SAFETY: a buffer of the size passed.
+    let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, small.as_mut_ptr() as *mut fmi2Byte, small.len()) };
+    assert_eq!(
+        s, fmi2Error,
+        "{}: fmi2SerializeFMUstate into a too small buffer",
+        fmu.id
+    );
+    assert!(
+        small.iter().all(|b| *b == 0),
+        "{}: wrote into a too small buffer",
+        fmu.id
+    );
+    assert_eq!(inst.free_state(&mut st), fmi2OK);
+    inst.log();
+    assert_eq!(inst.step(step_size(fmu)), fmi2OK, "{}: still usable", fmu.id);
+}
+
+/// The other process is a worker ([`crate::worker`], mode `state-child`): it unpacks and loads
+/// the FMU afresh, restores the state, and prints what it observes.
+pub fn a_state_serialized_here_restores_in_another_process_and_continues_identically(fmu: &Fmu) {
+    needs_serialize(fmu);
+    let worker = crate::worker().unwrap_or_else(|| {
+        panic!("no worker executable set (fmi_conformance::set_worker): the other process cannot be started")
+    });
+    let mut inst = advanced(fmu, 10);
+    let bytes = inst.snapshot();
+    let expected = continue_for(&mut inst, 20);
+    let file = fmu.scratch.join("state.bin");
+    std::fs::write(&file, &bytes).unwrap();
+    let out = std::process::Command::new(&worker.exe)
+        .args(&worker.args_prefix)
+        .arg("state-child")
+        .arg(&fmu.archive)
+        .arg(&file)
+        .args(["20", &step_size(fmu).to_string()])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run the worker {}: {e}", worker.exe.display()));
+    let _ = std::fs::remove_file(&file);
+    assert!(
+        out.status.success(),
+        "{}: the other process failed ({}): {}",
+        fmu.id,
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let mut lines = stdout.lines();
+    let parse_hex = |l: &str| -> Vec<u64> {
+        l.split_whitespace()
+            .map(|x| u64::from_str_radix(x, 16).unwrap())
+            .collect()
+    };
+    let reserialized: Vec<u8> = parse_hex(lines.next().unwrap()).into_iter().map(|b| b as u8).collect();
+    assert_eq!(
+        reserialized, bytes,
+        "{}: the other process re-serializes the state differently",
+        fmu.id
+    );
+    let got: Vec<Vec<u64>> = lines.map(parse_hex).collect();
+    assert_eq!(got.len(), expected.len(), "{}: steps reported by the child", fmu.id);
+    assert_eq!(got, expected, "{}: the other process continues differently", fmu.id);
+}

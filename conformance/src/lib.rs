@@ -1,0 +1,344 @@
+//! A black-box checker of FMI 2.0 and FMI 3.0 FMUs (co-simulation, and model exchange where the
+//! FMU declares it): it loads an `.fmu` the way an importer does (unpacks it, reads its
+//! `modelDescription.xml`, `dlopen`s its binary) and drives its C API through named checks
+//! ([`checks::all_checks`] for FMI 2.0, [`fmi3::checks::all_checks`] for FMI 3.0, chosen by the
+//! file's `fmiVersion`).
+//!
+//! - [`runner::run`] checks one FMU file, each check in a child process of its own, so that an
+//!   FMU that crashes or hangs fails that check and nothing else; [`runner::worker_main`] is the
+//!   child's side. The `fmu-check` binary of this crate uses both; `cargo fmu check` too.
+//! - [`archive`] is the one way an (untrusted) FMU file is opened and unpacked.
+//! - The workspace's own test run (`cargo test -p fmi-conformance`) runs every check on every
+//!   packaged FMU of `target/fmu` ([`all`]), strictly: there, a limitation or a skip fails.
+//!
+//! Nothing here knows a particular FMU: value references, types, causalities and variabilities
+//! come from each FMU's model description, read by the `fmi-description` crate (the reader
+//! `cargo fmu` and the runner use too; it knows the standard, not this exporter). Nothing depends on the exporter either: the C types
+//! are declared from the standard ([`fmi2`]). Where a check can do more on an FMU of this
+//! exporter (whose serialized FMU state it can read and rewrite, see [`state`]), it finds out
+//! with [`Fmu::own_state_format`] and, on another exporter's FMU, tests what an importer can
+//! reach and reports the rest as a limitation.
+
+pub mod api;
+pub mod archive;
+pub mod checks;
+pub mod fmi2;
+pub mod fmi3;
+pub mod instance;
+pub mod logger;
+pub mod me;
+pub mod outcome;
+pub mod runner;
+pub mod standard;
+pub mod state;
+
+pub use api::Api;
+pub use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
+pub use instance::Instance;
+pub use logger::LogEntry;
+
+use archive::PrivateDir;
+
+/// Reads an FMI 2.0 description the suite can check: one with `<CoSimulation>` (the 2.0 checks
+/// drive co-simulation, and model exchange besides where it is declared).
+pub fn parse_description(xml: &str) -> Result<Description, String> {
+    let md = Description::parse(xml)?;
+    match &md.cs {
+        Some(cs) if !cs.model_identifier.is_empty() => Ok(md),
+        _ => Err("modelDescription.xml: no <CoSimulation modelIdentifier=...>: not a co-simulation FMU".into()),
+    }
+}
+
+/// The FMI 2.0 binaries folder of the platform this checker runs on: it loads that binary.
+#[cfg(not(windows))]
+pub const PLATFORM2: &str = "linux64";
+/// The FMI 2.0 binaries folder of the platform this checker runs on: it loads that binary.
+#[cfg(windows)]
+pub const PLATFORM2: &str = "win64";
+/// The file extension of a shared library here.
+#[cfg(not(windows))]
+pub const LIBRARY_EXTENSION: &str = "so";
+/// The file extension of a shared library here.
+#[cfg(windows)]
+pub const LIBRARY_EXTENSION: &str = "dll";
+use fmi2::*;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Mutex, OnceLock};
+
+/// One FMU, unpacked into a private folder and loaded.
+pub struct Fmu {
+    pub id: String,
+    /// The `.fmu` archive.
+    pub archive: PathBuf,
+    /// Where it was unpacked (holds `modelDescription.xml`, `binaries/`, `resources/`...).
+    pub dir: PathBuf,
+    /// `binaries/linux64/<modelIdentifier>.so` inside `dir`.
+    pub so: PathBuf,
+    /// A private folder for the suite's own files (compiled hosts, state files, copies).
+    pub scratch: PathBuf,
+    pub md: Description,
+    pub api: Api,
+    own: OnceLock<Result<(), String>>,
+    /// The state bytes of the model-exchange states (see [`me::StateCodes`]).
+    me_codes: OnceLock<Result<me::StateCodes, String>>,
+    /// Last: removed after the library is unloaded.
+    _dirs: (PrivateDir, PrivateDir),
+}
+
+impl Fmu {
+    /// Unpacks the archive (through [`archive::extract_private`]) into a new private folder
+    /// under `parent` and loads its binary. The folders are removed when this is dropped.
+    pub fn load(path: &Path, parent: &Path) -> Result<Fmu, String> {
+        let mut zip = archive::open(path)?;
+        let xml = archive::read_model_description(&mut zip)?;
+        let md = parse_description(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+        if md.fmi_version != "2.0" {
+            return Err(format!(
+                "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
+                path.display(),
+                md.fmi_version
+            ));
+        }
+        let id = md.model_identifier().to_owned();
+        let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !c_name {
+            return Err(format!(
+                "{}: modelIdentifier '{}' is not a C identifier",
+                path.display(),
+                id.escape_debug()
+            ));
+        }
+        let so_entry = format!("binaries/{PLATFORM2}/{id}.{LIBRARY_EXTENSION}");
+        if !zip.has_entry(&so_entry) {
+            let binaries: Vec<String> = zip
+                .entry_names()
+                .into_iter()
+                .filter(|n| n.starts_with("binaries/") && !n.ends_with('/'))
+                .collect();
+            return Err(format!(
+                "{}: no {so_entry}: no binary for this platform (binaries in the archive: {binaries:?})",
+                path.display()
+            ));
+        }
+        let unpacked = archive::extract_private(&mut zip, parent, &archive::Limits::default())?;
+        let scratch = PrivateDir::new_in(parent)?;
+        let dir = unpacked.path().to_path_buf();
+        std::fs::create_dir_all(dir.join("resources")).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let so = dir.join(&so_entry);
+        let api = Api::load(&so)?;
+        Ok(Fmu {
+            id,
+            archive: path.to_path_buf(),
+            dir,
+            so,
+            scratch: scratch.path().to_path_buf(),
+            md,
+            api,
+            own: OnceLock::new(),
+            me_codes: OnceLock::new(),
+            _dirs: (unpacked, scratch),
+        })
+    }
+
+    /// `file:///...` URI of the unpacked `resources/` folder (on Windows `file:///C:/...`).
+    pub fn resource_uri(&self) -> String {
+        if cfg!(windows) {
+            format!(
+                "file:///{}/resources",
+                self.dir.display().to_string().replace('\\', "/")
+            )
+        } else {
+            format!("file://{}/resources", self.dir.display())
+        }
+    }
+
+    /// Whether this FMU serializes its state in this exporter's format (magic `RFMUSTAT`, its
+    /// own GUID, a valid checksum): then it was made by this exporter, and the checks may read
+    /// and rewrite its state-machine state ([`state`]) and hold it to the exporter's conventions
+    /// ([`outcome::convention`]). Found out once, by instantiating it and serializing its state.
+    pub fn own_state_format(&self) -> bool {
+        self.state_format().is_ok()
+    }
+
+    /// Ok for this exporter's state format, else why not.
+    pub fn state_format(&self) -> &Result<(), String> {
+        self.own.get_or_init(|| self.detect_state_format())
+    }
+
+    /// The `<CoSimulation>` element ([`Fmu::load`] refuses a description without one).
+    pub fn cs(&self) -> &fmi_description::fmi2::CoSimulation {
+        self.md
+            .cs
+            .as_ref()
+            .expect("Fmu::load refuses a description without <CoSimulation>")
+    }
+
+    /// Whether the FMU declares that its state can be taken and serialized, so that the checks
+    /// can compare the whole state before and after a call.
+    pub fn can_snapshot(&self) -> bool {
+        self.cs().can_get_and_set_fmu_state && self.cs().can_serialize_fmu_state
+    }
+
+    fn detect_state_format(&self) -> Result<(), String> {
+        if AS_FOREIGN.load(Ordering::Relaxed) {
+            return Err("treated as another exporter's FMU on request".into());
+        }
+        if !self.can_snapshot() {
+            return Err("the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate".into());
+        }
+        let sink = logger::LogSink::default();
+        let callbacks = logger::callbacks(sink.env());
+        let guid = std::ffi::CString::new(self.md.guid.as_str()).map_err(|e| e.to_string())?;
+        let res = std::ffi::CString::new(self.resource_uri()).map_err(|e| e.to_string())?;
+        // SAFETY: the standard's calls with valid arguments on an instance made here.
+        unsafe {
+            let api = &self.api;
+            let c = (api.instantiate)(
+                c"probe".as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                res.as_ptr(),
+                &callbacks,
+                fmi2False,
+                fmi2False,
+            );
+            if c.is_null() {
+                return Err("fmi2Instantiate returned NULL".into());
+            }
+            let mut s: fmi2FMUstate = std::ptr::null_mut();
+            let mut bytes = vec![];
+            let mut status = (api.get_fmu_state)(c, &mut s);
+            if status == fmi2OK {
+                let mut size = 0usize;
+                status = (api.serialized_fmu_state_size)(c, s, &mut size);
+                if status == fmi2OK && size <= 1 << 30 {
+                    bytes = vec![0u8; size];
+                    status = (api.serialize_fmu_state)(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size);
+                }
+                (api.free_fmu_state)(c, &mut s);
+            }
+            (api.free_instance)(c);
+            if status != fmi2OK {
+                return Err(format!("serializing the state of a new instance answered {status}"));
+            }
+            let l = state::parse(&bytes)?;
+            if &bytes[l.guid_at..l.guid_at + l.guid_len] != self.md.guid.as_bytes() {
+                return Err("the serialized state holds another GUID".into());
+            }
+            Ok(())
+        }
+    }
+}
+
+/// The folder with the packaged FMUs: `$RUSTFMU_FMU_DIR`, else `<workspace>/target/fmu`.
+pub fn fmu_dir() -> PathBuf {
+    match std::env::var_os("RUSTFMU_FMU_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/fmu"),
+    }
+}
+
+/// Every packaged FMU of the workspace (`*.fmu` in [`fmu_dir`]), loaded. Panics (failing the
+/// calling test with the reason) when there is none: the suite must never pass by testing
+/// nothing.
+pub fn all() -> &'static [Fmu] {
+    static ALL: OnceLock<Vec<Fmu>> = OnceLock::new();
+    ALL.get_or_init(|| load_all().unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// The packaged FMU of that model identifier (for tests written against one model).
+pub fn by_id(id: &str) -> &'static Fmu {
+    all()
+        .iter()
+        .find(|f| f.id == id)
+        .unwrap_or_else(|| panic!("no packaged FMU '{id}'"))
+}
+
+fn load_all() -> Result<Vec<Fmu>, String> {
+    let dir = fmu_dir();
+    let hint = "build and package them first: cargo run --release -p fmu-build";
+    let mut archives: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map_err(|e| format!("cannot list {}: {e} ({hint})", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "fmu"))
+        .collect();
+    archives.sort();
+    if archives.is_empty() {
+        return Err(format!("no .fmu in {}: {hint}", dir.display()));
+    }
+    let root = unpack_root()?;
+    archives.iter().map(|a| Fmu::load(a, &root)).collect()
+}
+
+/// A folder of this process under the system temp dir; folders of processes that are gone
+/// (an interrupted run) are removed.
+pub(crate) fn unpack_root() -> Result<PathBuf, String> {
+    let base = std::env::temp_dir().join("rustfmu-conformance");
+    if let Ok(entries) = std::fs::read_dir(&base) {
+        for e in entries.flatten() {
+            let pid = e.file_name().to_string_lossy().parse::<u32>().ok();
+            if pid.is_some_and(|p| !Path::new(&format!("/proc/{p}")).exists()) {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+    let root = base.join(std::process::id().to_string());
+    std::fs::create_dir_all(&root).map_err(|e| format!("{}: {e}", root.display()))?;
+    Ok(root)
+}
+
+/// Bit patterns of floats, so that "identical" means bit-identical (and NaN equals NaN).
+pub fn bits(values: &[f64]) -> Vec<u64> {
+    values.iter().map(|v| v.to_bits()).collect()
+}
+
+/// How to start a worker process: the executable and the arguments before the worker's own
+/// (see [`runner::worker_main`]). The check of restoring a state in another process needs it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Worker {
+    pub exe: PathBuf,
+    pub args_prefix: Vec<String>,
+}
+
+static WORKER: Mutex<Option<Worker>> = Mutex::new(None);
+static RANDOM_SEQUENCES: AtomicU32 = AtomicU32::new(0);
+static AS_FOREIGN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Treats every FMU loaded from now on as another exporter's: the checks then test only what
+/// an importer can reach, as they do on a foreign FMU. For testing the checks themselves (a
+/// conformant FMU must pass them that way too).
+pub fn set_as_foreign(on: bool) {
+    AS_FOREIGN.store(on, Ordering::Relaxed);
+}
+
+/// Whether [`set_as_foreign`] is on (FMI 2.0 and 3.0 FMUs alike).
+pub fn as_foreign() -> bool {
+    AS_FOREIGN.load(Ordering::Relaxed)
+}
+
+/// Sets how checks start a worker process of their own.
+pub fn set_worker(worker: Worker) {
+    *WORKER.lock().unwrap_or_else(|e| e.into_inner()) = Some(worker);
+}
+
+pub fn worker() -> Option<Worker> {
+    WORKER.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Sets the number of random call sequences per FMU (0: the default).
+pub fn set_random_sequences(n: u32) {
+    RANDOM_SEQUENCES.store(n, Ordering::Relaxed);
+}
+
+/// Random call sequences per FMU: as set, else `$PROPTEST_CASES`, else 2000.
+pub fn random_sequences() -> u32 {
+    match RANDOM_SEQUENCES.load(Ordering::Relaxed) {
+        0 => std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(2000),
+        n => n,
+    }
+}

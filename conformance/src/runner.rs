@@ -1,0 +1,959 @@
+//! Checking one FMU file with every check, each in a child process of its own.
+//!
+//! An FMU is native code that runs inside the process that loads it: one that segfaults, aborts
+//! or hangs would take a checker down with it. [`run`] therefore starts a worker process per
+//! check (and one to probe the FMU first), with a timeout; a worker that dies or is killed
+//! fails its check with the signal or exit code and the tail of its stderr, and the run goes
+//! on. The runner itself only reads the archive ([`crate::archive`]); it never loads the
+//! binary.
+//!
+//! The worker is any executable that calls [`worker_main`] with the arguments after its own
+//! prefix: `fmu-check __worker ...` for this crate's binary, a hidden subcommand of a host
+//! binary such as `cargo fmu` ([`RunOptions::worker_exe`], [`RunOptions::worker_args_prefix`]).
+//! Each worker unpacks the FMU into a private folder of its own (under a private folder of the
+//! run, removed at the end even if a worker crashed) and removes it when done.
+
+use crate::archive::{self, PrivateDir};
+use crate::checks::{Check, Group, all_checks, find};
+use crate::fmi3::checks::Check3;
+use crate::outcome::{self, Findings, Outcome};
+use crate::{Fmu, Worker};
+use std::fmt::Write as _;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// How to run the checks.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// The executable that runs [`worker_main`].
+    pub worker_exe: PathBuf,
+    /// Arguments before the worker's own (the host binary's hidden subcommand).
+    pub worker_args_prefix: Vec<String>,
+    /// Longest a check may take; its worker is then killed and the check fails.
+    pub timeout: Duration,
+    /// Only checks whose name or group contains this text.
+    pub filter: Option<String>,
+    /// Random call sequences per FMU for the random-sequence checks (0: the default, 2000).
+    pub random_sequences: u32,
+    /// Where the run's private folder goes (default: the system's temp folder).
+    pub temp_dir: Option<PathBuf>,
+    /// Check even this exporter's FMUs as another exporter's ([`crate::set_as_foreign`]).
+    pub as_foreign: bool,
+}
+
+impl RunOptions {
+    /// Defaults: a timeout of 30 s per check (the slowest check of this project's FMUs takes
+    /// 9 s natively; a hanging FMU should not cost minutes), every check, 2000 random sequences.
+    pub fn new(worker_exe: impl Into<PathBuf>, worker_args_prefix: Vec<String>) -> RunOptions {
+        RunOptions {
+            worker_exe: worker_exe.into(),
+            worker_args_prefix,
+            timeout: Duration::from_secs(DEFAULT_TIMEOUT_SECONDS),
+            filter: None,
+            random_sequences: 0,
+            temp_dir: None,
+            as_foreign: false,
+        }
+    }
+
+    /// The FMI 2.0 checks the filter selects, in report order.
+    pub fn selected(&self) -> Vec<&'static Check> {
+        all_checks()
+            .iter()
+            .filter(|c| self.filter.as_deref().is_none_or(|f| c.matches(f)))
+            .collect()
+    }
+
+    /// The FMI 3.0 checks the filter selects, in report order.
+    pub fn selected_fmi3(&self) -> Vec<&'static Check3> {
+        crate::fmi3::checks::all_checks()
+            .iter()
+            .filter(|c| self.filter.as_deref().is_none_or(|f| c.matches(f)))
+            .collect()
+    }
+
+    /// (name, group) of the checks selected for an FMU of that `fmiVersion`.
+    fn selected_for(&self, fmi3: bool) -> Vec<(&'static str, Group)> {
+        if fmi3 {
+            self.selected_fmi3().iter().map(|c| (c.name, c.group)).collect()
+        } else {
+            self.selected().iter().map(|c| (c.name, c.group)).collect()
+        }
+    }
+}
+
+/// What one check found.
+#[derive(Debug, Clone)]
+pub struct CheckReport {
+    pub name: String,
+    pub group: Group,
+    pub outcome: Outcome,
+    /// Parts not tested on this FMU: a pass with limitations is a partial pass.
+    pub limitations: Vec<String>,
+    pub info: Vec<String>,
+    pub duration: Duration,
+}
+
+impl CheckReport {
+    pub fn partial(&self) -> bool {
+        self.outcome == Outcome::Pass && !self.limitations.is_empty()
+    }
+
+    /// The report's line for this check.
+    pub fn line(&self) -> String {
+        let took = format!("({:.2} s)", self.duration.as_secs_f64());
+        match &self.outcome {
+            Outcome::Pass if self.partial() => format!(
+                "PASS  {} / {}  {took}  partial: {} part(s) not tested, listed below",
+                self.group,
+                self.name,
+                self.limitations.len()
+            ),
+            Outcome::Pass => format!("PASS  {} / {}  {took}", self.group, self.name),
+            Outcome::Fail(m) => format!("FAIL  {} / {}  {took}  {}", self.group, self.name, summary(m)),
+            Outcome::Skip(why) => format!("SKIP  {} / {}: {why}", self.group, self.name),
+        }
+    }
+}
+
+/// A failure message on one line: its first three lines whole (an `assert_eq!` says what came and
+/// what was expected on the two after the first), never cut; the whole message is under
+/// "Failures:" at the end of the report.
+fn summary(message: &str) -> String {
+    let lines: Vec<&str> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("(check failed at"))
+        .collect();
+    let mut s = lines.iter().take(3).copied().collect::<Vec<_>>().join(" | ");
+    if lines.len() > 3 {
+        s.push_str(&format!(" | ({} more lines under Failures)", lines.len() - 3));
+    }
+    s
+}
+
+/// The default longest time of one check, in seconds (`--timeout` changes it).
+pub const DEFAULT_TIMEOUT_SECONDS: u64 = 30;
+
+/// What [`run`] found.
+#[derive(Debug, Clone)]
+pub struct Report {
+    pub fmu: PathBuf,
+    /// What the FMU is (model, GUID, tool, state format), for the report's head.
+    pub about: Vec<String>,
+    /// Why the FMU could not be checked at all (then every check is skipped).
+    pub load_error: Option<String>,
+    pub checks: Vec<CheckReport>,
+}
+
+impl Report {
+    pub fn passed(&self) -> usize {
+        self.checks.iter().filter(|c| c.outcome == Outcome::Pass).count()
+    }
+
+    /// Passes with limitations (counted in [`Report::passed`] too).
+    pub fn partial(&self) -> usize {
+        self.checks.iter().filter(|c| c.partial()).count()
+    }
+
+    /// Failed checks; an FMU that could not be loaded counts as one.
+    pub fn failed(&self) -> usize {
+        self.checks
+            .iter()
+            .filter(|c| matches!(c.outcome, Outcome::Fail(_)))
+            .count()
+            + self.load_error.is_some() as usize
+    }
+
+    pub fn skipped(&self) -> usize {
+        self.checks
+            .iter()
+            .filter(|c| matches!(c.outcome, Outcome::Skip(_)))
+            .count()
+    }
+
+    /// No failure (and the FMU loaded).
+    pub fn success(&self) -> bool {
+        self.failed() == 0
+    }
+
+    /// The closing line: `N passed, N failed, N skipped`.
+    pub fn totals(&self) -> String {
+        format!(
+            "{} passed, {} failed, {} skipped",
+            self.passed(),
+            self.failed(),
+            self.skipped()
+        )
+    }
+}
+
+impl std::fmt::Display for Report {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}", self.fmu.display())?;
+        for line in &self.about {
+            writeln!(f, "  {line}")?;
+        }
+        if let Some(e) = &self.load_error {
+            writeln!(f, "FAIL  the FMU cannot be checked: {e}")?;
+        }
+        for c in &self.checks {
+            writeln!(f, "{}", c.line())?;
+            for l in &c.limitations {
+                writeln!(f, "        not tested: {l}")?;
+            }
+            for l in &c.info {
+                writeln!(f, "        {l}")?;
+            }
+        }
+        let failures: Vec<&CheckReport> = self
+            .checks
+            .iter()
+            .filter(|c| matches!(c.outcome, Outcome::Fail(_)))
+            .collect();
+        if !failures.is_empty() {
+            writeln!(f, "\nFailures:")?;
+            for c in failures {
+                if let Outcome::Fail(m) = &c.outcome {
+                    writeln!(f, "\n--- {} / {}", c.group, c.name)?;
+                    for line in m.lines() {
+                        writeln!(f, "    {line}")?;
+                    }
+                }
+            }
+            writeln!(f)?;
+        }
+        if self.partial() > 0 {
+            writeln!(
+                f,
+                "{} of the passes are partial: what was not tested is listed under them",
+                self.partial()
+            )?;
+        }
+        write!(f, "{}", self.totals())
+    }
+}
+
+/// Checks the FMU at `fmu_path` with every check `opts` selects, each in a worker process.
+pub fn run(fmu_path: &Path, opts: &RunOptions) -> Report {
+    run_with(fmu_path, opts, &mut |_| {})
+}
+
+/// As [`run`], calling `progress` with each check's report as soon as it is done.
+pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&CheckReport)) -> Report {
+    // FMI 3.0 files get the FMI 3.0 checks; everything else the FMI 2.0 ones.
+    let fmi3 = crate::fmi3::fmi_version(fmu_path).is_ok_and(|v| crate::fmi3::is_fmi3(&v));
+    let selected = opts.selected_for(fmi3);
+    let mut report = Report {
+        fmu: fmu_path.to_path_buf(),
+        about: vec![],
+        load_error: None,
+        checks: vec![],
+    };
+    let skip_all = |report: &mut Report, why: &str| {
+        report.checks = selected
+            .iter()
+            .map(|(name, group)| CheckReport {
+                name: name.to_string(),
+                group: *group,
+                outcome: Outcome::Skip(why.to_string()),
+                limitations: vec![],
+                info: vec![],
+                duration: Duration::ZERO,
+            })
+            .collect();
+    };
+    // What the archive says, read here (no FMU code runs in this process).
+    match if fmi3 {
+        crate::fmi3::describe(fmu_path)
+    } else {
+        describe(fmu_path)
+    } {
+        Ok(about) => report.about = about,
+        Err(e) => {
+            report.load_error = Some(e);
+            skip_all(&mut report, "the FMU cannot be checked");
+            return report;
+        }
+    }
+    let base = opts.temp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let run_dir = match PrivateDir::new_in(&base) {
+        Ok(d) => d,
+        Err(e) => {
+            report.load_error = Some(e);
+            skip_all(&mut report, "the FMU cannot be checked");
+            return report;
+        }
+    };
+    // Loaded once in a worker: a binary that does not load (or crashes on load) fails here.
+    let probe = run_worker(opts, run_dir.path(), &["probe".into(), fmu_path.display().to_string()]);
+    match probe.result.clone() {
+        Some(r) if r.outcome == Outcome::Pass => {
+            report.about.extend(r.info);
+            if let Some(crash) = &probe.crash {
+                // It loads, but its process dies on the way out: every check will say so.
+                report
+                    .about
+                    .push(format!("after loading it, the worker process {crash}"));
+            }
+        }
+        Some(Parsed {
+            outcome: Outcome::Fail(m) | Outcome::Skip(m),
+            ..
+        }) if probe.crash.is_none() => report.load_error = Some(m),
+        _ => report.load_error = Some(format!("loading it in a worker process: {}", probe.describe_crash())),
+    }
+    if report.load_error.is_some() {
+        skip_all(&mut report, "the FMU cannot be checked");
+        return report;
+    }
+    for (name, group) in selected {
+        let mut args = vec![
+            "check".to_string(),
+            fmu_path.display().to_string(),
+            name.to_string(),
+            "--random-sequences".into(),
+            opts.random_sequences.to_string(),
+            "--self".into(),
+            opts.worker_exe.display().to_string(),
+        ];
+        for a in &opts.worker_args_prefix {
+            args.extend(["--self-arg".to_string(), a.clone()]);
+        }
+        let w = run_worker(opts, run_dir.path(), &args);
+        let mut c = CheckReport {
+            name: name.to_string(),
+            group,
+            outcome: Outcome::Pass,
+            limitations: vec![],
+            info: vec![],
+            duration: w.duration,
+        };
+        match (w.result.clone(), &w.crash) {
+            (Some(r), None) => {
+                c.outcome = r.outcome;
+                c.limitations = r.limitations;
+                c.info = r.info;
+            }
+            (Some(r), Some(_)) => {
+                c.outcome = Outcome::Fail(format!(
+                    "the check ended ({}), but then its process {}",
+                    match &r.outcome {
+                        Outcome::Pass => "passed".to_string(),
+                        Outcome::Fail(m) => format!("failed: {m}"),
+                        Outcome::Skip(m) => format!("skipped: {m}"),
+                    },
+                    w.describe_crash()
+                ))
+            }
+            (None, _) => c.outcome = Outcome::Fail(format!("the check's process {}", w.describe_crash())),
+        }
+        progress(&c);
+        report.checks.push(c);
+    }
+    report
+}
+
+/// The head of the report, from the archive alone.
+fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
+    let mut a = archive::open(fmu_path)?;
+    let xml = archive::read_model_description(&mut a)?;
+    let md = crate::parse_description(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
+    if md.fmi_version != "2.0" {
+        return Err(format!(
+            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
+            fmu_path.display(),
+            md.fmi_version
+        ));
+    }
+    let so = format!(
+        "binaries/{}/{}.{}",
+        crate::PLATFORM2,
+        md.model_identifier(),
+        crate::LIBRARY_EXTENSION
+    );
+    if !a.has_entry(&so) {
+        return Err(format!(
+            "{}: no {so}: the FMU has no binary for this platform",
+            fmu_path.display()
+        ));
+    }
+    let tool = if md.generation_tool.is_empty() {
+        "no generationTool".to_string()
+    } else {
+        format!("generated by {}", md.generation_tool)
+    };
+    Ok(vec![format!(
+        "model {} (FMI {}, GUID {}), {tool}",
+        md.model_identifier(),
+        md.fmi_version,
+        md.guid
+    )])
+}
+
+/// A worker's result file, parsed.
+#[derive(Debug, Clone)]
+struct Parsed {
+    outcome: Outcome,
+    limitations: Vec<String>,
+    info: Vec<String>,
+}
+
+struct WorkerRun {
+    result: Option<Parsed>,
+    /// The last thing the worker said it was about to do ([`outcome::breadcrumb`]).
+    breadcrumb: Option<String>,
+    /// How the process ended, when not with exit code 0.
+    crash: Option<String>,
+    stderr: String,
+    duration: Duration,
+}
+
+impl WorkerRun {
+    fn describe_crash(&self) -> String {
+        let mut how = self.crash.clone().unwrap_or_else(|| "wrote no result".into());
+        if let Some(b) = &self.breadcrumb {
+            how.push_str(&format!(" while doing: {b}"));
+        }
+        let tail = tail(&self.stderr, 25, 3000);
+        if tail.is_empty() {
+            format!("{how}; its stderr is empty")
+        } else {
+            format!("{how}; the end of its stderr:\n{tail}")
+        }
+    }
+}
+
+/// The last `lines` lines of `text`, at most `chars` characters.
+fn tail(text: &str, lines: usize, chars: usize) -> String {
+    let all: Vec<&str> = text.trim_end().lines().collect();
+    let mut t = all[all.len().saturating_sub(lines)..].join("\n");
+    if t.chars().count() > chars {
+        t = t.chars().skip(t.chars().count() - chars).collect();
+        t.insert_str(0, "...");
+    }
+    t
+}
+
+#[cfg(unix)]
+unsafe extern "C" {
+    fn kill(pid: i32, sig: i32) -> i32;
+}
+#[cfg(unix)]
+const SIGKILL: i32 = 9;
+
+#[cfg(unix)]
+fn signal_name(s: i32) -> &'static str {
+    match s {
+        1 => "SIGHUP",
+        2 => "SIGINT",
+        3 => "SIGQUIT",
+        4 => "SIGILL",
+        5 => "SIGTRAP",
+        6 => "SIGABRT",
+        7 => "SIGBUS",
+        8 => "SIGFPE",
+        9 => "SIGKILL",
+        11 => "SIGSEGV",
+        13 => "SIGPIPE",
+        15 => "SIGTERM",
+        31 => "SIGSYS",
+        _ => "a signal",
+    }
+}
+
+/// Reads a pipe to its end in a thread, keeping the last 256 KiB.
+fn drain(mut pipe: impl Read + Send + 'static) -> Arc<Mutex<(Vec<u8>, bool)>> {
+    let buf = Arc::new(Mutex::new((Vec::new(), false)));
+    let b = buf.clone();
+    std::thread::spawn(move || {
+        let mut chunk = [0u8; 8192];
+        loop {
+            match pipe.read(&mut chunk) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => {
+                    let mut g = b.lock().unwrap_or_else(|e| e.into_inner());
+                    g.0.extend_from_slice(&chunk[..n]);
+                    let len = g.0.len();
+                    if len > 256 * 1024 {
+                        g.0.drain(..len - 256 * 1024);
+                    }
+                }
+            }
+        }
+        b.lock().unwrap_or_else(|e| e.into_inner()).1 = true;
+    });
+    buf
+}
+
+fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
+    #[cfg(unix)]
+    use std::os::unix::process::{CommandExt, ExitStatusExt};
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let result_file = run_dir.join(format!("result-{n}.txt"));
+    let crumb_file = run_dir.join(format!("breadcrumb-{n}"));
+    let clock = Instant::now();
+    let mut cmd = Command::new(&opts.worker_exe);
+    cmd.args(&opts.worker_args_prefix).args(args);
+    if opts.as_foreign {
+        cmd.arg("--as-foreign");
+    }
+    cmd.arg("--tmp")
+        .arg(run_dir)
+        .arg("--result")
+        .arg(&result_file)
+        .arg("--breadcrumb")
+        .arg(&crumb_file)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // A group of its own, so that a timeout kills whatever the worker started too.
+    #[cfg(unix)]
+    cmd.process_group(0);
+    // Starting the worker can fail for reasons of the machine, not of the FMU (wine's
+    // CreateProcess answered "Internal error" (os error 1359) once in a few hundred starts in a CI
+    // run): one more try after a pause, and only then the start is reported as a failure.
+    let spawned = cmd.spawn().or_else(|_| {
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        cmd.spawn()
+    });
+    let mut child = match spawned {
+        Ok(c) => c,
+        Err(e) => {
+            return WorkerRun {
+                result: None,
+                breadcrumb: None,
+                crash: Some(format!("could not be started ({}: {e})", opts.worker_exe.display())),
+                stderr: String::new(),
+                duration: clock.elapsed(),
+            };
+        }
+    };
+    let out = drain(child.stdout.take().expect("piped"));
+    let err = drain(child.stderr.take().expect("piped"));
+    let mut crash = None;
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) => {
+                #[cfg(unix)]
+                let signal = status.signal().map(|sig| {
+                    let core = if status.core_dumped() { ", core dumped" } else { "" };
+                    format!("was killed by signal {sig} ({}{core})", signal_name(sig))
+                });
+                #[cfg(not(unix))]
+                let signal: Option<String> = None;
+                if let Some(s) = signal {
+                    crash = Some(s);
+                } else if status.code() != Some(0) {
+                    crash = Some(format!("exited with code {}", status.code().unwrap_or(-1)));
+                }
+                break;
+            }
+            Ok(None) if clock.elapsed() > opts.timeout => {
+                // SAFETY: kill(2) on the process group of a child not yet reaped (its id is
+                // still ours); SIGKILL ends the worker and whatever it started.
+                #[cfg(unix)]
+                unsafe {
+                    kill(-(child.id() as i32), SIGKILL)
+                };
+                let _ = child.kill();
+                let _ = child.wait();
+                crash = Some(format!(
+                    "timed out after {} s and was killed (a slow model may need more: --timeout SECONDS)",
+                    opts.timeout.as_secs_f64()
+                ));
+                break;
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(10)),
+            Err(e) => {
+                crash = Some(format!("could not be waited for: {e}"));
+                break;
+            }
+        }
+    }
+    let duration = clock.elapsed();
+    // The pipes close when the worker's last descendant is gone; wait for that a little.
+    let until = Instant::now() + Duration::from_secs(2);
+    while Instant::now() < until && !(out.lock().map_or(true, |g| g.1) && err.lock().map_or(true, |g| g.1)) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let stderr = String::from_utf8_lossy(&err.lock().unwrap_or_else(|e| e.into_inner()).0).into_owned();
+    let result = std::fs::read_to_string(&result_file)
+        .ok()
+        .and_then(|t| parse_result(&t));
+    let _ = std::fs::remove_file(&result_file);
+    let breadcrumb = outcome::read_breadcrumb(&crumb_file);
+    let _ = std::fs::remove_file(&crumb_file);
+    WorkerRun {
+        result,
+        breadcrumb,
+        crash,
+        stderr,
+        duration,
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('\\', "\\\\").replace('\n', "\\n").replace('\r', "\\r")
+}
+
+fn unescape(s: &str) -> String {
+    let mut out = String::new();
+    let mut chars = s.chars();
+    while let Some(c) = chars.next() {
+        if c == '\\' {
+            match chars.next() {
+                Some('n') => out.push('\n'),
+                Some('r') => out.push('\r'),
+                Some(other) => out.push(other),
+                None => {}
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+fn format_result(outcome: &Outcome, findings: &Findings) -> String {
+    let mut t = match outcome {
+        Outcome::Pass => "pass\n".to_string(),
+        Outcome::Fail(m) => format!("fail {}\n", escape(m)),
+        Outcome::Skip(m) => format!("skip {}\n", escape(m)),
+    };
+    for l in &findings.limitations {
+        let _ = writeln!(t, "limitation {}", escape(l));
+    }
+    for l in &findings.info {
+        let _ = writeln!(t, "info {}", escape(l));
+    }
+    t.push_str("end\n");
+    t
+}
+
+fn parse_result(text: &str) -> Option<Parsed> {
+    let mut lines = text.lines();
+    let first = lines.next()?;
+    let (kind, rest) = first.split_once(' ').unwrap_or((first, ""));
+    let outcome = match kind {
+        "pass" => Outcome::Pass,
+        "fail" => Outcome::Fail(unescape(rest)),
+        "skip" => Outcome::Skip(unescape(rest)),
+        _ => return None,
+    };
+    let mut p = Parsed {
+        outcome,
+        limitations: vec![],
+        info: vec![],
+    };
+    let mut complete = false;
+    for l in lines {
+        let (kind, rest) = l.split_once(' ').unwrap_or((l, ""));
+        match kind {
+            "limitation" => p.limitations.push(unescape(rest)),
+            "info" => p.info.push(unescape(rest)),
+            "end" => complete = true,
+            _ => return None,
+        }
+    }
+    complete.then_some(p)
+}
+
+/// The worker's side: what a host binary runs when it is called with its worker subcommand,
+/// with the arguments after it. Modes (the runner passes `--tmp DIR --result FILE` to each):
+///
+/// - `probe <fmu>`: load the FMU, report what its state format is;
+/// - `check <fmu> <check> [--random-sequences N] [--self EXE] [--self-arg A]...`: run one check
+///   (`--self`: how a check starts a worker of its own);
+/// - `state-child <fmu> <state file> <steps> <step size>`: restore a serialized state, then
+///   print the re-serialized state (hex) and the observations after each step (for the check
+///   of restoring a state in another process).
+///
+/// `--as-foreign`: [`crate::set_as_foreign`]. `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
+/// when the worker dies). The result goes to the result file; the exit code is 0 whenever a result was written
+/// (whatever it says), 2 for a usage error.
+pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
+    let mut positional = vec![];
+    let mut tmp = None;
+    let mut result = None;
+    let mut random = 0u32;
+    let mut self_exe = None;
+    let mut self_args = vec![];
+    let mut it = args.into_iter();
+    while let Some(a) = it.next() {
+        let mut value = |name: &str| {
+            it.next().unwrap_or_else(|| {
+                eprintln!("worker: {name} needs a value");
+                std::process::exit(2)
+            })
+        };
+        match a.as_str() {
+            "--tmp" => tmp = Some(PathBuf::from(value("--tmp"))),
+            "--result" => result = Some(PathBuf::from(value("--result"))),
+            "--random-sequences" => {
+                random = value("--random-sequences").parse().unwrap_or_else(|e| {
+                    eprintln!("worker: --random-sequences: {e}");
+                    std::process::exit(2)
+                })
+            }
+            "--self" => self_exe = Some(PathBuf::from(value("--self"))),
+            "--self-arg" => self_args.push(value("--self-arg")),
+            "--as-foreign" => crate::set_as_foreign(true),
+            "--breadcrumb" => {
+                let path = value("--breadcrumb");
+                if let Err(e) = outcome::set_breadcrumb_file(Path::new(&path)) {
+                    eprintln!("worker: {path}: {e}");
+                }
+            }
+            _ => positional.push(a),
+        }
+    }
+    let tmp = tmp.unwrap_or_else(std::env::temp_dir);
+    if let Some(exe) = self_exe {
+        crate::set_worker(Worker {
+            exe,
+            args_prefix: self_args,
+        });
+    }
+    crate::set_random_sequences(random);
+    let usage = || {
+        eprintln!(
+            "usage: worker probe <fmu> | check <fmu> <check> | state-child <fmu> <state file> <steps> <h> [cs|me <time> (FMI 3.0)]  [--tmp DIR] [--result FILE]"
+        );
+        ExitCode::from(2)
+    };
+    let write = |outcome: Outcome, findings: Findings| -> ExitCode {
+        let text = format_result(&outcome, &findings);
+        match &result {
+            Some(file) => {
+                if let Err(e) = std::fs::write(file, text) {
+                    eprintln!("worker: {}: {e}", file.display());
+                    return ExitCode::from(3);
+                }
+            }
+            None => print!("{text}"),
+        }
+        ExitCode::SUCCESS
+    };
+    match positional.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+        ["probe", fmu] if is_fmi3_file(fmu) => match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
+            Ok(f) => {
+                let about = format!(
+                    "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",
+                    crate::fmi3::api::FUNCTIONS.len()
+                );
+                let format = match f.state_format() {
+                    Ok(()) => "made by this exporter (rustfmu's serialized state format): every check runs in full"
+                        .to_string(),
+                    Err(why) => format!(
+                        "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
+                    ),
+                };
+                drop(f);
+                write(
+                    Outcome::Pass,
+                    Findings {
+                        limitations: vec![],
+                        info: vec![about, format],
+                    },
+                )
+            }
+            Err(e) => write(Outcome::Fail(e), Findings::default()),
+        },
+        ["check", fmu, name] if is_fmi3_file(fmu) => {
+            let Some(check) = crate::fmi3::checks::find(name) else {
+                eprintln!("worker: no FMI 3.0 check named {name}");
+                return ExitCode::from(2);
+            };
+            outcome::remember_panic_locations();
+            let fmu = match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
+                Ok(f) => f,
+                Err(e) => {
+                    return write(
+                        Outcome::Fail(format!("the FMU does not load: {e}")),
+                        Findings::default(),
+                    );
+                }
+            };
+            let (outcome, findings) = check.run_on(&fmu);
+            let code = write(outcome, findings);
+            drop(fmu);
+            code
+        }
+        ["probe", fmu] => {
+            let fmu = match Fmu::load(Path::new(fmu), &tmp) {
+                Ok(f) => f,
+                Err(e) => return write(Outcome::Fail(e), Findings::default()),
+            };
+            let about = match fmu.state_format() {
+                Ok(()) => {
+                    "made by this exporter (rustfmu's serialized state format): every check runs in full".to_string()
+                }
+                Err(why) => format!(
+                    "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
+                ),
+            };
+            write(
+                Outcome::Pass,
+                Findings {
+                    limitations: vec![],
+                    info: vec![about],
+                },
+            )
+        }
+        ["check", fmu, name] => {
+            let Some(check) = find(name) else {
+                eprintln!("worker: no check named {name}");
+                return ExitCode::from(2);
+            };
+            outcome::remember_panic_locations();
+            let fmu = match Fmu::load(Path::new(fmu), &tmp) {
+                Ok(f) => f,
+                Err(e) => {
+                    return write(
+                        Outcome::Fail(format!("the FMU does not load: {e}")),
+                        Findings::default(),
+                    );
+                }
+            };
+            let (outcome, findings) = check.run_on(&fmu);
+            let code = write(outcome, findings);
+            drop(fmu);
+            code
+        }
+        ["state-child", fmu, file, steps, h, interface, t] if is_fmi3_file(fmu) => {
+            match state_child3(Path::new(fmu), &tmp, file, steps, h, interface, t) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("state-child: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
+        ["state-child", fmu, file, steps, h] => match state_child(Path::new(fmu), &tmp, file, steps, h) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("state-child: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        _ => usage(),
+    }
+}
+
+/// Whether the file at `path` is an FMI 3.0 FMU (by its model description's fmiVersion).
+fn is_fmi3_file(path: &str) -> bool {
+    crate::fmi3::fmi_version(Path::new(path)).is_ok_and(|v| crate::fmi3::is_fmi3(&v))
+}
+
+fn hex(values: impl IntoIterator<Item = u64>) -> String {
+    values.into_iter().fold(String::new(), |mut s, b| {
+        let _ = write!(s, "{b:x} ");
+        s
+    })
+}
+
+/// The FMI 3.0 [`state_child`]: an instance of the interface `cs` or `me`, the state restored,
+/// its time `t` given by the parent (FMI 3.0 has no status function that tells it).
+fn state_child3(
+    fmu: &Path,
+    tmp: &Path,
+    file: &str,
+    steps: &str,
+    h: &str,
+    interface: &str,
+    t: &str,
+) -> Result<(), String> {
+    let steps: usize = steps.parse().map_err(|e| format!("steps: {e}"))?;
+    let h: f64 = h.parse().map_err(|e| format!("step size: {e}"))?;
+    let t: f64 = t.parse().map_err(|e| format!("time: {e}"))?;
+    let me = match interface {
+        "me" => true,
+        "cs" => false,
+        other => return Err(format!("interface '{other}': cs or me")),
+    };
+    let bytes = std::fs::read(file).map_err(|e| format!("{file}: {e}"))?;
+    let fmu = crate::fmi3::Fmu3::load(fmu, tmp)?;
+    let (outcome, _) = outcome::capture(|| {
+        let mut inst = if me {
+            crate::fmi3::Inst::me(&fmu)
+        } else {
+            crate::fmi3::Inst::cs(&fmu)
+        };
+        let s = inst.restore(&bytes);
+        assert_eq!(
+            s,
+            crate::fmi3::types::fmi3OK,
+            "restoring the state: {}",
+            inst.log_text()
+        );
+        inst.time = t;
+        println!("{}", hex(inst.snapshot().into_iter().map(u64::from)));
+        for _ in 0..steps {
+            inst.step(h);
+            println!("{}", hex(inst.observe()));
+        }
+    });
+    match outcome {
+        Outcome::Pass => Ok(()),
+        Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+    }
+}
+
+/// Loads the FMU afresh, restores the serialized state in `file`, prints the re-serialized
+/// state as hex on the first line, then one line of observations (hex bit patterns) after each
+/// of `steps` steps of `h`.
+fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str) -> Result<(), String> {
+    use crate::fmi2::fmi2OK;
+    let steps: usize = steps.parse().map_err(|e| format!("steps: {e}"))?;
+    let h: f64 = h.parse().map_err(|e| format!("step size: {e}"))?;
+    let bytes = std::fs::read(file).map_err(|e| format!("{file}: {e}"))?;
+    let fmu = Fmu::load(fmu, tmp)?;
+    let (outcome, _) = outcome::capture(|| {
+        let mut inst = crate::Instance::new(&fmu);
+        inst.restore(&bytes);
+        let (_, t) = inst.last_successful_time();
+        inst.time = t;
+        println!("{}", hex(inst.snapshot().into_iter().map(u64::from)));
+        for _ in 0..steps {
+            let s = inst.step(h);
+            assert_eq!(s, fmi2OK, "step at t = {}: status {s}: {}", inst.time, inst.log_text());
+            println!("{}", hex(inst.observe()));
+        }
+    });
+    match outcome {
+        Outcome::Pass => Ok(()),
+        Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 23: a failure's text was cut at 300 characters in the report's line for the check.
+    #[test]
+    fn a_failures_line_keeps_its_text_whole_and_points_to_the_rest() {
+        let long = format!("'T' = {}: the model refused it", "x".repeat(500));
+        let message = format!("{long}\n  left: 1\n right: 2\nmore\nand more\n(check failed at src/x.rs:1)");
+        let c = CheckReport {
+            name: "a_check".into(),
+            group: crate::checks::Group::Calls,
+            outcome: Outcome::Fail(message),
+            limitations: vec![],
+            info: vec![],
+            duration: Duration::from_millis(10),
+        };
+        let line = c.line();
+        assert!(line.contains(&long), "{line}");
+        assert!(
+            line.contains("left: 1 | right: 2 | (2 more lines under Failures)"),
+            "{line}"
+        );
+        assert!(!line.contains("..."), "{line}");
+    }
+}

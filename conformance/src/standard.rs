@@ -1,0 +1,125 @@
+//! The states of the FMI 2.0 co-simulation state machine and the states in which the standard
+//! allows each function (section 4.2.4; the Reference FMUs encode the same masks). Written from
+//! the standard, independently of any exporter's own table.
+
+use crate::{Type, Variable};
+use State::*;
+use fmi_description::{Causality, Initial, Variability};
+
+/// A state of the co-simulation state machine. The discriminants are also the numbering of the
+/// state byte in this exporter's serialized FMU state (see [`crate::state`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum State {
+    Instantiated = 0,
+    InitializationMode = 1,
+    StepComplete = 2,
+    StepFailed = 3,
+    StepCanceled = 4,
+    Terminated = 5,
+    Error = 6,
+    Fatal = 7,
+}
+
+/// Every state, indexed by its discriminant.
+pub const STATES: [State; 8] = [
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+    Fatal,
+];
+
+/// The states an importer reaches on any FMU by the standard's calls alone. StepFailed needs a
+/// step the model cannot do, StepCanceled an asynchronous step, Error and Fatal an FMU that
+/// failed: only an FMU whose serialized state the suite can rewrite is put there on purpose.
+pub const REACHABLE: [State; 4] = [Instantiated, InitializationMode, StepComplete, Terminated];
+
+pub const ALL_BUT_FATAL: &[State] = &[
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+];
+pub const GETTERS: &[State] = &[
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    StepCanceled,
+    Terminated,
+    Error,
+];
+pub const SETTERS: &[State] = &[Instantiated, InitializationMode, StepComplete];
+pub const STATUS: &[State] = &[StepComplete, StepFailed, Terminated];
+
+/// Where `function` may be called. fmi2CancelStep only in StepInProgress, which a synchronous
+/// FMU never enters; fmi2Terminate not after fmi2CancelStep (StepCanceled).
+pub fn allowed_states(function: &str) -> &'static [State] {
+    match function {
+        "fmi2SetDebugLogging"
+        | "fmi2Reset"
+        | "fmi2GetFMUstate"
+        | "fmi2SetFMUstate"
+        | "fmi2FreeFMUstate"
+        | "fmi2SerializedFMUstateSize"
+        | "fmi2SerializeFMUstate"
+        | "fmi2DeSerializeFMUstate" => ALL_BUT_FATAL,
+        "fmi2SetupExperiment" | "fmi2EnterInitializationMode" => &[Instantiated],
+        "fmi2ExitInitializationMode" => &[InitializationMode],
+        "fmi2Terminate" => &[StepComplete, StepFailed],
+        "fmi2GetReal" | "fmi2GetInteger" | "fmi2GetBoolean" | "fmi2GetString" | "fmi2GetDirectionalDerivative" => {
+            GETTERS
+        }
+        "fmi2SetReal" | "fmi2SetInteger" | "fmi2SetBoolean" | "fmi2SetString" | "fmi2SetRealInputDerivatives" => {
+            SETTERS
+        }
+        "fmi2GetRealOutputDerivatives" => &[StepComplete, StepFailed, StepCanceled, Terminated, Error],
+        "fmi2DoStep" => &[StepComplete],
+        "fmi2CancelStep" => &[],
+        "fmi2GetStatus"
+        | "fmi2GetRealStatus"
+        | "fmi2GetIntegerStatus"
+        | "fmi2GetBooleanStatus"
+        | "fmi2GetStringStatus" => STATUS,
+        other => panic!("{other} is not a co-simulation function with a state"),
+    }
+}
+
+/// Whether FMI 2.0 (section 4.2.4, the conditions on fmi2SetXXX in the co-simulation state
+/// table) lets an importer set this variable in the state of that name. Written here from
+/// the standard, independently of the runtime's own rule.
+pub fn settable_in(v: &Variable, state: &str) -> bool {
+    if v.variability == Variability::Constant {
+        return false;
+    }
+    let input = v.causality == Causality::Input;
+    match state {
+        // "variability != constant that have initial = exact or approx" (and inputs, whose
+        // start values an importer sets before initialization)
+        "Instantiated" => input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)),
+        // "variability != constant that have initial = exact, or causality = input"
+        "InitializationMode" => input || v.initial() == Some(Initial::Exact),
+        // "causality = input, or causality = parameter and variability = tunable"
+        "StepComplete" => input || (v.causality == Causality::Parameter && v.variability == Variability::Tunable),
+        _ => false,
+    }
+}
+
+/// Whether FMI 2.0 (section 3.2.3, the conditions on fmi2SetXXX in the model-exchange state
+/// table) lets an importer set this variable in that model-exchange state. Instantiated and
+/// InitializationMode are as in co-simulation; EventMode as StepComplete; in
+/// ContinuousTimeMode only continuous Real inputs.
+pub fn settable_in_me(v: &Variable, state: &str) -> bool {
+    match state {
+        "EventMode" => settable_in(v, "StepComplete"),
+        "ContinuousTimeMode" => {
+            v.ty == Type::Real && v.causality == Causality::Input && v.variability == Variability::Continuous
+        }
+        other => settable_in(v, other),
+    }
+}

@@ -1,0 +1,484 @@
+//! An FMI 3.0 `modelDescription.xml` (FMI 3.0 section 2.4): the interfaces and their flags, the
+//! variables (one element per type: `<Float64>`, `<Int32>`, ...), the model structure (by value
+//! reference), the log categories and the default experiment.
+
+use crate::common::{DefaultExperiment, kind};
+use crate::read::{Events, Node};
+use crate::{Causality, Initial, Variability, Version};
+use std::fmt;
+
+/// The element of a variable: its type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Type {
+    Float32,
+    Float64,
+    Int8,
+    UInt8,
+    Int16,
+    UInt16,
+    Int32,
+    UInt32,
+    Int64,
+    UInt64,
+    Boolean,
+    String,
+    Binary,
+    Enumeration,
+    Clock,
+}
+
+impl Type {
+    pub const ALL: [Type; 15] = [
+        Type::Float32,
+        Type::Float64,
+        Type::Int8,
+        Type::UInt8,
+        Type::Int16,
+        Type::UInt16,
+        Type::Int32,
+        Type::UInt32,
+        Type::Int64,
+        Type::UInt64,
+        Type::Boolean,
+        Type::String,
+        Type::Binary,
+        Type::Enumeration,
+        Type::Clock,
+    ];
+
+    /// Its element name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Type::Float32 => "Float32",
+            Type::Float64 => "Float64",
+            Type::Int8 => "Int8",
+            Type::UInt8 => "UInt8",
+            Type::Int16 => "Int16",
+            Type::UInt16 => "UInt16",
+            Type::Int32 => "Int32",
+            Type::UInt32 => "UInt32",
+            Type::Int64 => "Int64",
+            Type::UInt64 => "UInt64",
+            Type::Boolean => "Boolean",
+            Type::String => "String",
+            Type::Binary => "Binary",
+            Type::Enumeration => "Enumeration",
+            Type::Clock => "Clock",
+        }
+    }
+
+    pub fn from_element(name: &[u8]) -> Option<Type> {
+        Type::ALL.into_iter().find(|t| t.name().as_bytes() == name)
+    }
+
+    /// Float32 or Float64: the types that may be continuous.
+    pub fn is_float(self) -> bool {
+        matches!(self, Type::Float32 | Type::Float64)
+    }
+}
+
+impl fmt::Display for Type {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    pub name: String,
+    pub vr: u32,
+    pub ty: Type,
+    pub causality: Causality,
+    pub variability: Variability,
+    /// `initial` as written; [`Variable::initial`] is the one in force.
+    pub declared_initial: Option<Initial>,
+    /// The `start` attribute as written (of a String or Binary: the first `<Start value>`).
+    pub start: Option<String>,
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+    /// `derivative`: the value reference of the variable this one is the derivative of.
+    pub derivative: Option<u32>,
+    /// `<Dimension>` children: an array variable.
+    pub array: bool,
+    pub declared_type: Option<String>,
+    pub unit: Option<String>,
+    pub description: Option<String>,
+}
+
+impl Variable {
+    /// The `initial` in force: written, or the default of the FMI 3.0 table (causality ×
+    /// variability, section 2.4.7.4). `None` where it is not defined.
+    pub fn initial(&self) -> Option<Initial> {
+        self.declared_initial
+            .or_else(|| Initial::default_for(self.causality, self.variability))
+    }
+}
+
+/// `<CoSimulation>` or `<ModelExchange>` (the flags one of them lacks stay false).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Interface {
+    pub model_identifier: String,
+    pub can_get_and_set_fmu_state: bool,
+    pub can_serialize_fmu_state: bool,
+    pub provides_directional_derivatives: bool,
+    pub provides_adjoint_derivatives: bool,
+    pub has_event_mode: bool,
+    pub can_handle_variable_step: bool,
+    pub max_output_derivative_order: u32,
+    pub provides_intermediate_update: bool,
+    pub can_return_early: bool,
+}
+
+/// One element of `<ModelStructure>` (`<Output>`, `<ContinuousStateDerivative>`,
+/// `<InitialUnknown>`, `<EventIndicator>`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unknown {
+    pub vr: u32,
+    /// Value references it depends on; `None` when the attribute is missing.
+    pub dependencies: Option<Vec<u32>>,
+}
+
+/// An FMI 3.0 model description.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ModelDescription {
+    pub fmi_version: String,
+    pub model_name: String,
+    /// `instantiationToken`.
+    pub token: String,
+    pub description: String,
+    /// `version` of the model.
+    pub version: String,
+    pub generation_tool: String,
+    pub cs: Option<Interface>,
+    pub me: Option<Interface>,
+    /// Whether it has `<ScheduledExecution>`.
+    pub se: bool,
+    pub log_categories: Vec<String>,
+    pub default_experiment: DefaultExperiment,
+    pub variables: Vec<Variable>,
+    pub outputs: Vec<Unknown>,
+    pub derivatives: Vec<Unknown>,
+    pub initial_unknowns: Vec<Unknown>,
+    pub event_indicators: Vec<Unknown>,
+    /// The elements of `<ModelStructure>` that do not parse, for the caller to report.
+    pub errors: Vec<String>,
+}
+
+impl ModelDescription {
+    /// Reads an FMI 3.0 description. A description with neither `<CoSimulation>` nor
+    /// `<ModelExchange>` is refused (scheduled execution alone is no interface any tool here
+    /// runs).
+    pub fn parse(xml: &str) -> Result<ModelDescription, String> {
+        let mut events = Events::new(xml);
+        let mut d = ModelDescription::default();
+        // The variable being read (its <Start>/<Dimension> children follow).
+        let mut open: Option<usize> = None;
+        let mut in_variables = false;
+        loop {
+            let (e, empty) = match events.next()? {
+                Node::Eof => break,
+                Node::Start(e, empty) => (e, empty),
+                Node::End(name) => {
+                    if Type::from_element(&name).is_some() {
+                        open = None;
+                    }
+                    if name == b"ModelVariables" {
+                        in_variables = false;
+                    }
+                    continue;
+                }
+            };
+            let interface = || Interface {
+                model_identifier: e.string("modelIdentifier").unwrap_or_default(),
+                can_get_and_set_fmu_state: e.flag("canGetAndSetFMUState"),
+                can_serialize_fmu_state: e.flag("canSerializeFMUState"),
+                provides_directional_derivatives: e.flag("providesDirectionalDerivatives"),
+                provides_adjoint_derivatives: e.flag("providesAdjointDerivatives"),
+                has_event_mode: e.flag("hasEventMode"),
+                can_handle_variable_step: e.flag("canHandleVariableCommunicationStepSize"),
+                max_output_derivative_order: e.number("maxOutputDerivativeOrder").unwrap_or(0),
+                provides_intermediate_update: e.flag("providesIntermediateUpdate"),
+                can_return_early: e.flag("canReturnEarlyAfterIntermediateUpdate"),
+            };
+            if in_variables && let Some(ty) = Type::from_element(&e.name) {
+                let vr = e
+                    .number("valueReference")
+                    .ok_or_else(|| format!("{}: a <{ty}> without a valid valueReference", events.here()))?;
+                let name = e.string("name").unwrap_or_default();
+                // A variable of a type other than Float is discrete by default.
+                let default_variability = if ty.is_float() {
+                    Variability::Continuous
+                } else {
+                    Variability::Discrete
+                };
+                let (causality, variability, declared_initial) = kind(&e, &name, Version::Fmi3, default_variability)?;
+                d.variables.push(Variable {
+                    name,
+                    vr,
+                    ty,
+                    causality,
+                    variability,
+                    declared_initial,
+                    // A String's or Binary's start values are <Start> children.
+                    start: if matches!(ty, Type::String | Type::Binary) {
+                        None
+                    } else {
+                        e.string("start")
+                    },
+                    min: e.number("min"),
+                    max: e.number("max"),
+                    derivative: e.number("derivative"),
+                    array: false,
+                    declared_type: e.string("declaredType"),
+                    unit: e.string("unit"),
+                    description: e.string("description"),
+                });
+                open = (!empty).then_some(d.variables.len() - 1);
+                continue;
+            }
+            match e.name.as_slice() {
+                b"fmiModelDescription" => {
+                    d.fmi_version = e.string("fmiVersion").unwrap_or_default();
+                    d.model_name = e.string("modelName").unwrap_or_default();
+                    d.token = e.string("instantiationToken").unwrap_or_default();
+                    d.description = e.string("description").unwrap_or_default();
+                    d.version = e.string("version").unwrap_or_default();
+                    d.generation_tool = e.string("generationTool").unwrap_or_default();
+                }
+                b"CoSimulation" => d.cs = Some(interface()),
+                b"ModelExchange" => d.me = Some(interface()),
+                b"ScheduledExecution" => d.se = true,
+                b"ModelVariables" => in_variables = !empty,
+                b"Category" => d.log_categories.push(e.string("name").unwrap_or_default()),
+                b"DefaultExperiment" => d.default_experiment = DefaultExperiment::read(&e),
+                b"Start" => {
+                    if let Some(i) = open {
+                        d.variables[i].start = e.string("value");
+                    }
+                }
+                b"Dimension" => {
+                    if let Some(i) = open {
+                        d.variables[i].array = true;
+                    }
+                }
+                tag @ (b"Output" | b"ContinuousStateDerivative" | b"InitialUnknown" | b"EventIndicator") => {
+                    let at = events.here();
+                    match (e.number::<u32>("valueReference"), e.list::<u32>("dependencies")) {
+                        (None, _) => d.errors.push(format!(
+                            "{at}: <{}> without a valid valueReference",
+                            String::from_utf8_lossy(tag)
+                        )),
+                        (_, Some(Err(err))) => d.errors.push(format!("{at}: dependencies: {err}")),
+                        (Some(vr), deps) => {
+                            let u = Unknown {
+                                vr,
+                                dependencies: deps.map(|r| r.unwrap_or_default()),
+                            };
+                            match tag {
+                                b"Output" => d.outputs.push(u),
+                                b"ContinuousStateDerivative" => d.derivatives.push(u),
+                                b"InitialUnknown" => d.initial_unknowns.push(u),
+                                _ => d.event_indicators.push(u),
+                            }
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        if d.cs.is_none() && d.me.is_none() {
+            return Err("modelDescription.xml: neither <CoSimulation> nor <ModelExchange>".into());
+        }
+        Ok(d)
+    }
+
+    /// The model identifier (of CoSimulation, else of ModelExchange).
+    pub fn model_identifier(&self) -> &str {
+        self.cs
+            .as_ref()
+            .or(self.me.as_ref())
+            .map(|i| i.model_identifier.as_str())
+            .unwrap_or("")
+    }
+
+    /// The scalar (not array) variables of that type.
+    pub fn of_type(&self, ty: Type) -> impl Iterator<Item = &Variable> {
+        self.variables.iter().filter(move |v| v.ty == ty && !v.array)
+    }
+
+    pub fn vrs_of_type(&self, ty: Type) -> Vec<u32> {
+        self.of_type(ty).map(|v| v.vr).collect()
+    }
+
+    pub fn by_vr(&self, vr: u32) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.vr == vr)
+    }
+
+    /// A value reference that names no variable.
+    pub fn unknown_vr(&self) -> u32 {
+        self.variables.iter().map(|v| v.vr).max().unwrap_or(0) + 1000
+    }
+
+    /// The continuous states in the order of `<ContinuousStateDerivative>` (the order of the
+    /// state vector), as (state vr, derivative vr).
+    pub fn continuous_states(&self) -> Result<Vec<(u32, u32)>, String> {
+        if !self.errors.is_empty() {
+            return Err(self.errors.join("; "));
+        }
+        self.derivatives
+            .iter()
+            .map(|u| {
+                let der = self.by_vr(u.vr).ok_or(format!(
+                    "<ContinuousStateDerivative valueReference=\"{}\"> names no variable",
+                    u.vr
+                ))?;
+                let of = der.derivative.ok_or(format!(
+                    "'{}' is listed as a derivative but has no derivative attribute",
+                    der.name
+                ))?;
+                let state = self.by_vr(of).ok_or(format!(
+                    "'{}' has derivative=\"{of}\", which names no variable",
+                    der.name
+                ))?;
+                if !state.ty.is_float() || state.variability != Variability::Continuous {
+                    return Err(format!(
+                        "'{}' is the state of '{}' but no continuous Float",
+                        state.name, der.name
+                    ));
+                }
+                Ok((state.vr, der.vr))
+            })
+            .collect()
+    }
+
+    /// The independent variable (`causality="independent"`).
+    pub fn independent(&self) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.causality == Causality::Independent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const XML: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="Lag" instantiationToken="{t}" generationTool="hand">
+  <ModelExchange modelIdentifier="LagME" providesDirectionalDerivatives="true"/>
+  <CoSimulation modelIdentifier="Lag" canGetAndSetFMUState="true" providesAdjointDerivatives="true" hasEventMode="true"/>
+  <LogCategories><Category name="logEvents"/></LogCategories>
+  <DefaultExperiment stopTime="1.0"/>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent"/>
+    <Float64 name="y" valueReference="1" causality="output" start="0.5" unit="m"/>
+    <Float64 name="der(y)" valueReference="3" derivative="1"/>
+    <Float64 name="u" valueReference="2" causality="input" start="0" min="-1" max="1"/>
+    <Int32 name="n" valueReference="4" causality="parameter" variability="tunable" start="3"/>
+    <Boolean name="on" valueReference="5" causality="output"/>
+    <String name="label" valueReference="6" causality="parameter" variability="fixed"><Start value="hi"/></String>
+    <Float64 name="v" valueReference="7" causality="parameter" variability="fixed" start="1 2"><Dimension start="2"/></Float64>
+    <Float32 name="k" valueReference="8" causality="structuralParameter" variability="fixed" start="1"/>
+  </ModelVariables>
+  <ModelStructure>
+    <Output valueReference="1" dependencies=""/>
+    <Output valueReference="5"/>
+    <ContinuousStateDerivative valueReference="3" dependencies="1 2"/>
+    <InitialUnknown valueReference="3"/>
+  </ModelStructure>
+</fmiModelDescription>"#;
+
+    fn lag() -> ModelDescription {
+        ModelDescription::parse(XML).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn the_root_and_the_interfaces_are_read() {
+        let d = lag();
+        assert_eq!(
+            (d.fmi_version.as_str(), d.token.as_str(), d.model_name.as_str()),
+            ("3.0", "{t}", "Lag")
+        );
+        let cs = d.cs.as_ref().unwrap();
+        assert!(cs.can_get_and_set_fmu_state && cs.provides_adjoint_derivatives && cs.has_event_mode);
+        assert!(d.me.as_ref().unwrap().provides_directional_derivatives && !d.se);
+        assert_eq!(d.model_identifier(), "Lag");
+        assert_eq!(d.log_categories, ["logEvents"]);
+        assert_eq!(d.default_experiment.stop_time(), Some(1.0));
+        assert_eq!(d.independent().unwrap().name, "time");
+    }
+
+    #[test]
+    fn variables_are_read_with_the_defaults_of_their_type() {
+        let d = lag();
+        assert_eq!(d.variables.len(), 9);
+        let der = d.by_vr(3).unwrap();
+        assert_eq!(
+            (der.ty, der.causality, der.variability, der.initial(), der.derivative),
+            (
+                Type::Float64,
+                Causality::Local,
+                Variability::Continuous,
+                Some(Initial::Calculated),
+                Some(1)
+            )
+        );
+        // A type other than Float is discrete by default.
+        assert_eq!(d.by_vr(5).unwrap().variability, Variability::Discrete);
+        let n = d.by_vr(4).unwrap();
+        assert_eq!(
+            (n.ty, n.start.as_deref(), n.initial()),
+            (Type::Int32, Some("3"), Some(Initial::Exact))
+        );
+        assert_eq!(d.by_vr(6).unwrap().start.as_deref(), Some("hi"));
+        assert_eq!(d.by_vr(8).unwrap().causality, Causality::StructuralParameter);
+        // The array is no scalar of its type.
+        assert!(d.by_vr(7).unwrap().array);
+        assert_eq!(d.vrs_of_type(Type::Float64), [0, 1, 3, 2]);
+        assert_eq!(d.by_vr(1).unwrap().unit.as_deref(), Some("m"));
+        assert_eq!(d.unknown_vr(), 1008);
+    }
+
+    #[test]
+    fn the_model_structure_is_read_by_value_reference() {
+        let d = lag();
+        assert_eq!(
+            d.outputs[0],
+            Unknown {
+                vr: 1,
+                dependencies: Some(vec![])
+            }
+        );
+        assert_eq!(d.outputs[1].dependencies, None);
+        assert_eq!(d.continuous_states().unwrap(), [(1, 3)]);
+        assert_eq!(d.initial_unknowns.len(), 1);
+        let bad = ModelDescription::parse(&XML.replace(r#"<Output valueReference="5"/>"#, r#"<Output/>"#)).unwrap();
+        assert!(
+            bad.errors[0].ends_with("<Output> without a valid valueReference"),
+            "{:?}",
+            bad.errors
+        );
+        assert!(bad.continuous_states().is_err());
+    }
+
+    #[test]
+    fn what_no_importer_could_use_is_refused() {
+        let bad = |from: &str, to: &str| {
+            assert!(XML.contains(from), "{from}");
+            ModelDescription::parse(&XML.replacen(from, to, 1)).unwrap_err()
+        };
+        assert_eq!(
+            bad(r#"valueReference="4""#, ""),
+            "modelDescription.xml:12:77: a <Int32> without a valid valueReference"
+        );
+        assert_eq!(
+            bad(r#"causality="output" start"#, r#"causality="out" start"#),
+            "variable 'y': unknown causality 'out'"
+        );
+        let none = XML
+            .replace(r#"<ModelExchange modelIdentifier="LagME""#, "<X")
+            .replace(r#"<CoSimulation modelIdentifier="Lag""#, "<Y");
+        assert_eq!(
+            ModelDescription::parse(&none).unwrap_err(),
+            "modelDescription.xml: neither <CoSimulation> nor <ModelExchange>"
+        );
+    }
+}
