@@ -20,7 +20,7 @@
 //! be, so a function with six fixed arguments reads it. The recording logger reads the text
 //! only when the format is exactly `"%s"` and records any other format as it is. On Apple
 //! silicon variadic arguments go on the stack: there it records the format, never the argument. The FMI
-//! conformance suite (`tests/conformance`) keeps a logger of its own on purpose: it must not
+//! conformance suite (`conformance/`) keeps a logger of its own on purpose: it must not
 //! trust anything of the runtime it checks.
 
 use crate::fmi2::abi::*;
