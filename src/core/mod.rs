@@ -19,6 +19,7 @@ pub mod resources;
 pub mod shared;
 pub mod snapshots;
 pub mod state;
+mod trampolines;
 
 use std::os::raw::c_uint;
 
