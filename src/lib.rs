@@ -44,6 +44,9 @@
 //! instance while another call is inside it; the GUID; `catch_unwind` at every entry point. The declaration attributes are documented in
 //! `docs/declarations.md` and on [`macro@Model`].
 
+// `unsafe` only at the C boundary, each block with the reason it is sound.
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 extern crate self as rustfmu;
 
 pub mod description;

@@ -1,7 +1,9 @@
 //! What every C entry point of both versions runs through: the instance handle the importer
-//! holds ([`Component`]), the NULL check, the re-entrancy refusal, the state check and
-//! `catch_unwind` ([`with_instance`]), and the conversions of the importer's pointers into
-//! slices and text. Each `unsafe` block says why it is sound.
+//! holds ([`Component`], converted once by the unsafe [`Component::from_handle`]), then, in safe
+//! code, the NULL check, the re-entrancy refusal, the state check and `catch_unwind`
+//! ([`with_instance`], [`Component::run`]); and the conversions of the importer's other
+//! pointers into slices and text ([`slice`], [`slice_mut`], [`text`]), each an `unsafe fn`
+//! whose contract the caller's `SAFETY:` line answers.
 
 use super::instance::Instance;
 use super::logging::{Category, Logger};
@@ -38,97 +40,132 @@ pub struct Component<M: CoSimulation> {
     pub(crate) instance: UnsafeCell<Instance<M>>,
 }
 
-/// Runs `f` on the instance behind `c`, after the state check for `call`.
-/// A NULL instance cannot be logged to: the answer is an error status.
-pub(crate) unsafe fn with_instance<M: CoSimulation>(
-    c: *mut c_void,
+impl<M: CoSimulation> Component<M> {
+    /// The component behind the importer's instance handle; `None` for NULL (which cannot be
+    /// logged to: the callers answer it with an error status).
+    ///
+    /// # Safety
+    /// `c` is NULL or a handle that this library's instantiation function returned for model
+    /// `M` and that was not freed since: what the standard allows an importer to pass.
+    #[inline]
+    pub(crate) unsafe fn from_handle<'a>(c: *mut c_void) -> Option<&'a Self> {
+        // SAFETY: the caller's promise: NULL (`as_ref` gives `None`) or a live
+        // Box<Component<M>>. Only shared: a call already inside holds the instance, which is in
+        // the UnsafeCell.
+        unsafe { (c as *const Self).as_ref() }
+    }
+
+    /// Runs `f` on the instance after the state check for `call`: refused while another call
+    /// is inside the instance, under `catch_unwind` (a panic makes the instance fatal).
+    pub(crate) fn run(&self, call: Call, function: &str, f: impl FnOnce(&mut Instance<M>) -> Status) -> Status {
+        if self.busy.swap(true, Ordering::Acquire) {
+            self.refusals.log(
+                ERROR,
+                Category::StatusError,
+                &format!(
+                    "{function}: called while a call into this instance is still running (from a \
+                     callback of that call, or from another thread); refused, nothing changed"
+                ),
+            );
+            return ERROR;
+        }
+        let instance = self.instance.get();
+        let result = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: this call set `busy`, so no other reference to the instance exists until it
+            // clears it below.
+            let inst = unsafe { &mut *instance };
+            let status = match inst.check_state(call, function) {
+                Ok(()) => f(inst),
+                Err(status) => status,
+            };
+            // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
+            // fmi3Error, the FMU enters state Terminated" (from there fmi3Reset or fmi3SetFMUState
+            // lead back). FMI 2.0 has no such rule: its instances stay where they were.
+            if inst.terms.version == Version::Fmi3 && status == ERROR && inst.sim.state != State::Fatal {
+                inst.sim.state = State::Terminated;
+            }
+            status
+        }));
+        let status = match result {
+            Ok(status) => status,
+            Err(payload) => {
+                let what = panic_text(&*payload);
+                // SAFETY: as above; the closure's borrow ended with the unwind.
+                let inst = unsafe { &mut *instance };
+                let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
+                FATAL
+            }
+        };
+        self.busy.store(false, Ordering::Release);
+        status
+    }
+}
+
+/// Runs `f` on the instance of `component` (from [`Component::from_handle`]) after the state
+/// check for `call`; a NULL instance cannot be logged to: the answer is an error status.
+#[inline]
+pub(crate) fn with_instance<M: CoSimulation>(
+    component: Option<&Component<M>>,
     call: Call,
     function: &str,
     f: impl FnOnce(&mut Instance<M>) -> Status,
 ) -> Status {
-    if c.is_null() {
-        return ERROR;
+    match component {
+        None => ERROR,
+        Some(component) => component.run(call, function, f),
     }
-    // SAFETY: a non-NULL component is one this library returned from an instantiation function and that
-    // was not freed (the standard forbids any other). Only shared: a call already inside holds
-    // the instance, which is in the UnsafeCell.
-    let component = unsafe { &*(c as *const Component<M>) };
-    if component.busy.swap(true, Ordering::Acquire) {
-        component.refusals.log(
-            ERROR,
-            Category::StatusError,
-            &format!(
-                "{function}: called while a call into this instance is still running (from a \
-                 callback of that call, or from another thread); refused, nothing changed"
-            ),
-        );
-        return ERROR;
-    }
-    let instance = component.instance.get();
-    let result = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: this call set `busy`, so no other reference to the instance exists until it
-        // clears it below.
-        let inst = unsafe { &mut *instance };
-        let status = match inst.check_state(call, function) {
-            Ok(()) => f(inst),
-            Err(status) => status,
-        };
-        // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
-        // fmi3Error, the FMU enters state Terminated" (from there fmi3Reset or fmi3SetFMUState
-        // lead back). FMI 2.0 has no such rule: its instances stay where they were.
-        if inst.terms.version == Version::Fmi3 && status == ERROR && inst.sim.state != State::Fatal {
-            inst.sim.state = State::Terminated;
-        }
-        status
-    }));
-    let status = match result {
-        Ok(status) => status,
-        Err(payload) => {
-            let what = panic_text(&*payload);
-            // SAFETY: as above; the closure's borrow ended with the unwind.
-            let inst = unsafe { &mut *instance };
-            let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
-            FATAL
-        }
-    };
-    component.busy.store(false, Ordering::Release);
-    status
 }
 
 /// An importer's array argument: NULL is fine only when it is empty.
+///
+/// # Safety
+/// `p` is NULL or points to `n` valid elements that nothing else changes while the slice
+/// lives: what the standard asks of an importer's array of length `n`.
 pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
     if n == 0 {
         Some(&[])
     } else if p.is_null() {
         None
     } else {
-        // SAFETY: the standard makes the importer pass n valid elements.
+        // SAFETY: not NULL, and the caller's promise: `n` valid elements.
         Some(unsafe { std::slice::from_raw_parts(p, n) })
     }
 }
 
+/// An importer's output array: NULL is fine only when it is empty.
+///
+/// # Safety
+/// As for [`slice`], and no other reference reads or writes the elements meanwhile.
 pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
     } else if p.is_null() {
         None
     } else {
-        // SAFETY: as for `slice`.
+        // SAFETY: not NULL, and the caller's promise: `n` valid elements, not aliased.
         Some(unsafe { std::slice::from_raw_parts_mut(p, n) })
     }
 }
 
+/// An importer's string: `None` for NULL.
+///
+/// # Safety
+/// `s` is NULL or points to a NUL-terminated string that lives as long as the result.
 pub(crate) unsafe fn text<'a>(s: *const c_char) -> Option<std::borrow::Cow<'a, str>> {
     if s.is_null() {
         None
     } else {
-        // SAFETY: the importer passes NUL-terminated strings.
+        // SAFETY: not NULL, and the caller's promise: NUL-terminated.
         Some(unsafe { CStr::from_ptr(s) }.to_string_lossy())
     }
 }
 
 /// The state an instance is in, for tests written against the runtime in Rust (not while a
 /// call is inside it).
+///
+/// # Safety
+/// `c` is NULL or a live instance of model `M` (as for [`Component::from_handle`]), and no
+/// call is inside it.
 pub unsafe fn state_of<M: CoSimulation>(c: *mut c_void) -> Option<State> {
     // SAFETY: as in `with_instance`; no call is inside (the caller's promise).
     unsafe { (c as *const Component<M>).as_ref().map(|c| (*c.instance.get()).state()) }

@@ -2,6 +2,14 @@
 //! logging, FMU state, the model-exchange vectors), generic over the model. Each takes the
 //! calling layer's [`Terms`], so that its messages name the function the importer called; the
 //! layers convert their own argument types (`fmi3Boolean`, `fmi3Byte`) before calling.
+//!
+//! # Safety
+//! Every `unsafe fn` here has the contract of the C function it implements, which the standard
+//! puts on the importer: the instance handle is NULL or one this library's instantiation
+//! function returned for model `M` and did not free; every other pointer is NULL or valid as
+//! the standard describes it (an array of the length passed beside it, a NUL-terminated string,
+//! a writable output). Each `unsafe` block below says which part of that, and which check, makes
+//! its pointer operation sound.
 #![allow(clippy::missing_safety_doc)]
 
 use super::guard::{Component, slice, slice_mut, text, with_instance};
@@ -51,99 +59,103 @@ pub unsafe fn set_debug_logging<M: CoSimulation>(
     categories: *const *const c_char,
 ) -> Status {
     let f = terms.name(Function::SetDebugLogging);
-    // SAFETY: `c` and `categories` come from the importer as the standard describes them;
-    // `with_instance`, `slice` and `text` check for NULL.
-    unsafe {
-        with_instance::<M>(c, Call::SetDebugLogging, f, |inst| {
-            let Some(cats) = slice(categories, n) else {
-                return inst.error(&format!("{f}: categories is NULL with nCategories = {n}"));
-            };
-            let mut names = Vec::with_capacity(n);
-            for (i, s) in cats.iter().enumerate() {
-                match text(*s) {
-                    Some(t) => names.push(t.into_owned()),
-                    None => return inst.error(&format!("{f}: categories[{i}] is NULL")),
-                }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDebugLogging, f, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `categories` hold `n` strings.
+        let Some(cats) = (unsafe { slice(categories, n) }) else {
+            return inst.error(&format!("{f}: categories is NULL with nCategories = {n}"));
+        };
+        let mut names = Vec::with_capacity(n);
+        for (i, s) in cats.iter().enumerate() {
+            // SAFETY: `text` checks NULL; the contract makes each category NUL-terminated.
+            match unsafe { text(*s) } {
+                Some(t) => names.push(t.into_owned()),
+                None => return inst.error(&format!("{f}: categories[{i}] is NULL")),
             }
-            inst.set_debug_logging(f, logging_on, &names)
-        })
-    }
+        }
+        inst.set_debug_logging(f, logging_on, &names)
+    })
 }
 
 pub unsafe fn get_fmu_state<M: CoSimulation>(terms: &'static Terms, c: Handle, state: *mut Handle) -> Status {
     let (f, arg) = (terms.name(Function::GetFmuState), terms.fmu_state);
-    // SAFETY: `state` is checked for NULL before it is read or written.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() {
-                return inst.error(&format!("{f}: {arg} is NULL"));
-            }
-            if (*state).is_null() {
-                *state = snapshots::adopt(inst.guid, inst.sim.clone());
-                return OK;
-            }
-            // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
-            match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
-                Ok(()) => OK,
-                Err(why) => inst.error(&format!("{f}: *{arg}: {why}; refused, nothing changed")),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `state` point to the
+        // importer's writable FMU state variable.
+        let Some(state) = (unsafe { state.as_mut() }) else {
+            return inst.error(&format!("{f}: {arg} is NULL"));
+        };
+        if state.is_null() {
+            *state = snapshots::adopt(inst.guid, inst.sim.clone());
+            return OK;
+        }
+        // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
+        match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
+            Ok(()) => OK,
+            Err(why) => inst.error(&format!("{f}: *{arg}: {why}; refused, nothing changed")),
+        }
+    })
 }
 
 pub unsafe fn set_fmu_state<M: CoSimulation>(terms: &'static Terms, c: Handle, state: Handle) -> Status {
     let (f, arg) = (terms.name(Function::SetFmuState), terms.fmu_state);
-    // SAFETY: `state` is only used through `snapshots`, which accepts live states of this FMU.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() {
-                return inst.error(&format!("{f}: {arg} is NULL"));
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        if state.is_null() {
+            return inst.error(&format!("{f}: {arg} is NULL"));
+        }
+        let fits = |s: &mut snapshots::Snapshot<M>| s.sim.state;
+        match snapshots::with::<M, _>(terms, inst.guid, state, fits) {
+            Ok(s) if !inst.state_fits(s) => {
+                return inst.error(&format!(
+                    "{f}: the state was saved in {}, a state of the other interface \
+                     (this instance is {}); refused, nothing changed",
+                    terms.state_name(s),
+                    if inst.model_exchange {
+                        "model exchange"
+                    } else {
+                        "co-simulation"
+                    }
+                ));
             }
-            let fits = |s: &mut snapshots::Snapshot<M>| s.sim.state;
-            match snapshots::with::<M, _>(terms, inst.guid, state, fits) {
-                Ok(s) if !inst.state_fits(s) => {
-                    return inst.error(&format!(
-                        "{f}: the state was saved in {}, a state of the other interface \
-                         (this instance is {}); refused, nothing changed",
-                        terms.state_name(s),
-                        if inst.model_exchange {
-                            "model exchange"
-                        } else {
-                            "co-simulation"
-                        }
-                    ));
-                }
-                Ok(_) => {}
-                Err(why) => return inst.error(&format!("{f}: {why}; refused, nothing changed")),
+            Ok(_) => {}
+            Err(why) => return inst.error(&format!("{f}: {why}; refused, nothing changed")),
+        }
+        match snapshots::with::<M, _>(terms, inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
+            Ok(()) => {
+                inst.restored();
+                OK
             }
-            match snapshots::with::<M, _>(terms, inst.guid, state, |s| inst.sim.clone_from(&s.sim)) {
-                Ok(()) => {
-                    inst.restored();
-                    OK
-                }
-                Err(why) => inst.error(&format!("{f}: {why}; refused, nothing changed")),
-            }
-        })
-    }
+            Err(why) => inst.error(&format!("{f}: {why}; refused, nothing changed")),
+        }
+    })
 }
 
 pub unsafe fn free_fmu_state<M: CoSimulation>(terms: &'static Terms, c: Handle, state: *mut Handle) -> Status {
     let f = terms.name(Function::FreeFmuState);
-    // SAFETY: `state` is checked for NULL before it is read or written.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() || (*state).is_null() {
-                return OK;
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `state` point to the
+        // importer's writable FMU state variable.
+        let Some(state) = (unsafe { state.as_mut() }) else {
+            return OK;
+        };
+        if state.is_null() {
+            return OK;
+        }
+        match snapshots::release::<M>(terms, inst.guid, *state) {
+            Ok(()) => {
+                *state = ptr::null_mut();
+                OK
             }
-            match snapshots::release::<M>(terms, inst.guid, *state) {
-                Ok(()) => {
-                    *state = ptr::null_mut();
-                    OK
-                }
-                Err(why) => inst.error(&format!("{f}: {why}; refused, nothing freed")),
-            }
-        })
-    }
+            Err(why) => inst.error(&format!("{f}: {why}; refused, nothing freed")),
+        }
+    })
 }
 
 pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
@@ -153,21 +165,21 @@ pub unsafe fn serialized_fmu_state_size<M: CoSimulation>(
     size: *mut usize,
 ) -> Status {
     let (f, arg) = (terms.name(Function::SerializedFmuStateSize), terms.fmu_state);
-    // SAFETY: `size` is checked for NULL before it is written.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() || size.is_null() {
-                return inst.error(&format!("{f}: {arg} or size is NULL"));
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        if state.is_null() || size.is_null() {
+            return inst.error(&format!("{f}: {arg} or size is NULL"));
+        }
+        match snapshots::with::<M, _>(terms, inst.guid, state, |s| state::serialize(inst.guid, &s.sim)) {
+            Ok(Ok(bytes)) => {
+                // SAFETY: not NULL (checked above); the contract makes `size` writable.
+                unsafe { *size = bytes.len() };
+                OK
             }
-            match snapshots::with::<M, _>(terms, inst.guid, state, |s| state::serialize(inst.guid, &s.sim)) {
-                Ok(Ok(bytes)) => {
-                    *size = bytes.len();
-                    OK
-                }
-                Ok(Err(why)) | Err(why) => inst.error(&format!("{f}: {why}")),
-            }
-        })
-    }
+            Ok(Err(why)) | Err(why) => inst.error(&format!("{f}: {why}")),
+        }
+    })
 }
 
 pub unsafe fn serialize_fmu_state<M: CoSimulation>(
@@ -178,27 +190,27 @@ pub unsafe fn serialize_fmu_state<M: CoSimulation>(
     size: usize,
 ) -> Status {
     let (f, arg) = (terms.name(Function::SerializeFmuState), terms.fmu_state);
-    // SAFETY: `bytes` is checked for NULL, and the standard makes it hold `size` bytes; exactly
-    // that many are written.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() || bytes.is_null() {
-                return inst.error(&format!("{f}: {arg} or serializedState is NULL"));
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        if state.is_null() || bytes.is_null() {
+            return inst.error(&format!("{f}: {arg} or serializedState is NULL"));
+        }
+        match snapshots::with::<M, _>(terms, inst.guid, state, |s| state::serialize(inst.guid, &s.sim)) {
+            Ok(Ok(data)) if data.len() == size => {
+                // SAFETY: `bytes` is not NULL (checked above) and the contract makes it hold
+                // `size` bytes, exactly as many as are written; `data` is this library's own.
+                unsafe { ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size) };
+                OK
             }
-            match snapshots::with::<M, _>(terms, inst.guid, state, |s| state::serialize(inst.guid, &s.sim)) {
-                Ok(Ok(data)) if data.len() == size => {
-                    ptr::copy_nonoverlapping(data.as_ptr(), bytes as *mut u8, size);
-                    OK
-                }
-                Ok(Ok(data)) => inst.error(&format!(
-                    "{f}: size = {size}, but the state takes {} bytes (ask {})",
-                    data.len(),
-                    terms.name(Function::SerializedFmuStateSize)
-                )),
-                Ok(Err(why)) | Err(why) => inst.error(&format!("{f}: {why}")),
-            }
-        })
-    }
+            Ok(Ok(data)) => inst.error(&format!(
+                "{f}: size = {size}, but the state takes {} bytes (ask {})",
+                data.len(),
+                terms.name(Function::SerializedFmuStateSize)
+            )),
+            Ok(Err(why)) | Err(why) => inst.error(&format!("{f}: {why}")),
+        }
+    })
 }
 
 pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
@@ -209,31 +221,33 @@ pub unsafe fn deserialize_fmu_state<M: CoSimulation>(
     state: *mut Handle,
 ) -> Status {
     let (f, arg) = (terms.name(Function::DeserializeFmuState), terms.fmu_state);
-    // SAFETY: `state` is checked for NULL before it is read or written; `slice` checks `bytes`.
-    unsafe {
-        with_instance::<M>(c, Call::FmuState, f, |inst| {
-            if state.is_null() {
-                return inst.error(&format!("{f}: {arg} is NULL"));
-            }
-            let Some(data) = slice(bytes as *const u8, size) else {
-                return inst.error(&format!("{f}: serializedState is NULL with size = {size}"));
-            };
-            let restored = state::deserialize::<M>(terms, inst.guid, data)
-                .and_then(|sim| instance::check_restored(&sim).map(|()| sim));
-            let sim = match restored {
-                Ok(sim) => sim,
-                Err(e) => return inst.error(&format!("{f}: refused ({size} bytes): {e}")),
-            };
-            if (*state).is_null() {
-                *state = snapshots::adopt(inst.guid, sim);
-                return OK;
-            }
-            match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim = sim) {
-                Ok(()) => OK,
-                Err(why) => inst.error(&format!("{f}: *{arg}: {why}; refused, nothing changed")),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::FmuState, f, |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `state` point to the
+        // importer's writable FMU state variable.
+        let Some(state) = (unsafe { state.as_mut() }) else {
+            return inst.error(&format!("{f}: {arg} is NULL"));
+        };
+        // SAFETY: `slice` checks NULL; the contract makes `serializedState` hold `size` bytes.
+        let Some(data) = (unsafe { slice(bytes as *const u8, size) }) else {
+            return inst.error(&format!("{f}: serializedState is NULL with size = {size}"));
+        };
+        let restored = state::deserialize::<M>(terms, inst.guid, data)
+            .and_then(|sim| instance::check_restored(&sim).map(|()| sim));
+        let sim = match restored {
+            Ok(sim) => sim,
+            Err(e) => return inst.error(&format!("{f}: refused ({size} bytes): {e}")),
+        };
+        if state.is_null() {
+            *state = snapshots::adopt(inst.guid, sim);
+            return OK;
+        }
+        match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim = sim) {
+            Ok(()) => OK,
+            Err(why) => inst.error(&format!("{f}: *{arg}: {why}; refused, nothing changed")),
+        }
+    })
 }
 
 #[inline(always)]
@@ -244,13 +258,15 @@ pub unsafe fn set_continuous_states<M: CoSimulation>(
     nx: usize,
 ) -> Status {
     let f = terms.name(Function::SetContinuousStates);
-    // SAFETY: `slice` checks `x` for NULL; the standard makes it hold `nx` values.
-    unsafe {
-        with_instance::<M>(c, Call::SetContinuousStates, f, |inst| match slice(x, nx) {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetContinuousStates, f, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `x` hold `nx` values.
+        match unsafe { slice(x, nx) } {
             Some(x) => inst.set_continuous_states(f, x),
             None => inst.error(&format!("{f}: x is NULL with nx = {nx}")),
-        })
-    }
+        }
+    })
 }
 
 /// The model-exchange functions that fill an output array of the instance's size:
@@ -287,9 +303,11 @@ pub unsafe fn get_vector<M: CoSimulation>(
         ),
     };
     let f = terms.name(function);
-    // SAFETY: `slice_mut` checks `out` for NULL; the standard makes it hold `n` values.
-    unsafe {
-        with_instance::<M>(c, call, f, |inst| match slice_mut(out, n) {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, call, f, |inst| {
+        // SAFETY: `slice_mut` checks NULL; the contract makes `out` hold `n` writable values.
+        match unsafe { slice_mut(out, n) } {
             Some(out) => match which {
                 Vector::ContinuousStates => inst.get_continuous_states(f, out),
                 Vector::Derivatives => inst.get_derivatives(f, out),
@@ -297,6 +315,6 @@ pub unsafe fn get_vector<M: CoSimulation>(
                 Vector::EventIndicators => inst.get_event_indicators_mut(f, out),
             },
             None => inst.error(&format!("{f}: {arg} is NULL with n = {n}")),
-        })
-    }
+        }
+    })
 }

@@ -4,6 +4,14 @@
 //! crate here. Pointers from the importer are checked for NULL and turned into slices and
 //! references ([`crate::core::guard`]), and every call runs under `catch_unwind`, so no panic
 //! crosses into the host.
+//!
+//! # Safety
+//! Every `unsafe fn` here has the contract of the `fmi2*` function it implements, which the
+//! standard puts on the importer: the instance handle is NULL or one that [`instantiate`]
+//! returned for model `M` and that was not freed; every other pointer is NULL or valid as the
+//! standard describes it (an array of the length passed beside it, a NUL-terminated string, a
+//! writable output). Each `unsafe` block says which part of that, and which check, makes its
+//! pointer operation sound.
 #![allow(clippy::missing_safety_doc, clippy::too_many_arguments, non_upper_case_globals)]
 
 use super::TERMS;
@@ -121,32 +129,32 @@ pub unsafe fn setup_experiment<M: CoSimulation>(
     stop_time_defined: fmi2Boolean,
     stop_time: fmi2Real,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::SetupExperiment, "fmi2SetupExperiment", |inst| {
-            inst.trace(|| {
-                format!(
-                    "fmi2SetupExperiment(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, \
-                     startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
-                )
-            });
-            inst.setup_experiment(
-                (tolerance_defined != fmi2False).then_some(tolerance),
-                start_time,
-                (stop_time_defined != fmi2False).then_some(stop_time),
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetupExperiment, "fmi2SetupExperiment", |inst| {
+        inst.trace(|| {
+            format!(
+                "fmi2SetupExperiment(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, \
+                 startTime = {start_time}, stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
             )
-        })
-    }
+        });
+        inst.setup_experiment(
+            (tolerance_defined != fmi2False).then_some(tolerance),
+            start_time,
+            (stop_time_defined != fmi2False).then_some(stop_time),
+        )
+    })
 }
 
 macro_rules! simple_call {
     ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
         pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-            unsafe {
-                with_instance::<M>(c, Call::$call, $c_name, |inst| {
-                    inst.trace(|| concat!($c_name, "()").to_string());
-                    inst.$method()
-                })
-            }
+            // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+            let component = unsafe { Component::<M>::from_handle(c) };
+            with_instance(component, Call::$call, $c_name, |inst| {
+                inst.trace(|| concat!($c_name, "()").to_string());
+                inst.$method()
+            })
         }
     };
 }
@@ -173,14 +181,16 @@ pub unsafe fn get<M: CoSimulation, T: FmiType + Copy>(
     nvr: usize,
     value: *mut T,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, function, |inst| {
-            match (slice(vr, nvr), slice_mut(value, nvr)) {
-                (Some(vrs), Some(out)) => inst.get_values(function, vrs, out),
-                _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, function, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
+        // `nvr` elements each.
+        match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
+            (Some(vrs), Some(out)) => inst.get_values(function, vrs, out),
+            _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
@@ -195,12 +205,16 @@ pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
     } else {
         Call::SetDiscreteValues
     };
-    unsafe {
-        with_instance::<M>(c, call, function, |inst| match (slice(vr, nvr), slice(value, nvr)) {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, call, function, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
+        // each.
+        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
             (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
             _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
-        })
-    }
+        }
+    })
 }
 
 /// Booleans cross the ABI as `fmi2Boolean` (int): converted to and from `bool` here.
@@ -210,26 +224,28 @@ pub unsafe fn get_boolean<M: CoSimulation>(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, "fmi2GetBoolean", |inst| {
-            match (slice(vr, nvr), slice_mut(value, nvr)) {
-                (Some(vrs), Some(out)) => {
-                    // One call for all references, so that they are all checked before anything
-                    // is computed (one call per reference initialized the model, then refused
-                    // the next reference).
-                    let mut values = vec![false; vrs.len()];
-                    let status = inst.get_values("fmi2GetBoolean", vrs, &mut values);
-                    if status == fmi2OK {
-                        for (o, v) in out.iter_mut().zip(values) {
-                            *o = if v { fmi2True } else { fmi2False };
-                        }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, "fmi2GetBoolean", |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
+        // `nvr` elements each.
+        match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
+            (Some(vrs), Some(out)) => {
+                // One call for all references, so that they are all checked before anything
+                // is computed (one call per reference initialized the model, then refused
+                // the next reference).
+                let mut values = vec![false; vrs.len()];
+                let status = inst.get_values("fmi2GetBoolean", vrs, &mut values);
+                if status == fmi2OK {
+                    for (o, v) in out.iter_mut().zip(values) {
+                        *o = if v { fmi2True } else { fmi2False };
                     }
-                    status
                 }
-                _ => inst.error(&format!("fmi2GetBoolean: vr or value is NULL with nvr = {nvr}")),
+                status
             }
-        })
-    }
+            _ => inst.error(&format!("fmi2GetBoolean: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn set_boolean<M: CoSimulation>(
@@ -238,17 +254,19 @@ pub unsafe fn set_boolean<M: CoSimulation>(
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, "fmi2SetBoolean", |inst| {
-            match (slice(vr, nvr), slice(value, nvr)) {
-                (Some(vrs), Some(values)) => {
-                    let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
-                    inst.set_values("fmi2SetBoolean", vrs, &values)
-                }
-                _ => inst.error(&format!("fmi2SetBoolean: vr or value is NULL with nvr = {nvr}")),
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, "fmi2SetBoolean", |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
+        // each.
+        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
+            (Some(vrs), Some(values)) => {
+                let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
+                inst.set_values("fmi2SetBoolean", vrs, &values)
             }
-        })
-    }
+            _ => inst.error(&format!("fmi2SetBoolean: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn get_string<M: CoSimulation>(
@@ -257,14 +275,16 @@ pub unsafe fn get_string<M: CoSimulation>(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, "fmi2GetString", |inst| {
-            match (slice(vr, nvr), slice_mut(value, nvr)) {
-                (Some(vrs), Some(out)) => inst.get_strings(vrs, out),
-                _ => inst.error(&format!("fmi2GetString: vr or value is NULL with nvr = {nvr}")),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, "fmi2GetString", |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
+        // `nvr` elements each.
+        match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
+            (Some(vrs), Some(out)) => inst.get_strings(vrs, out),
+            _ => inst.error(&format!("fmi2GetString: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn set_string<M: CoSimulation>(
@@ -273,23 +293,26 @@ pub unsafe fn set_string<M: CoSimulation>(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, "fmi2SetString", |inst| {
-            match (slice(vr, nvr), slice(value, nvr)) {
-                (Some(vrs), Some(values)) => {
-                    let mut texts = Vec::with_capacity(values.len());
-                    for (i, p) in values.iter().enumerate() {
-                        match text(*p) {
-                            Some(t) => texts.push(t.into_owned()),
-                            None => return inst.error(&format!("fmi2SetString: value[{i}] is NULL")),
-                        }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, "fmi2SetString", |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
+        // each.
+        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
+            (Some(vrs), Some(values)) => {
+                let mut texts = Vec::with_capacity(values.len());
+                for (i, p) in values.iter().enumerate() {
+                    // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
+                    match unsafe { text(*p) } {
+                        Some(t) => texts.push(t.into_owned()),
+                        None => return inst.error(&format!("fmi2SetString: value[{i}] is NULL")),
                     }
-                    inst.set_strings(vrs, &texts)
                 }
-                _ => inst.error(&format!("fmi2SetString: vr or value is NULL with nvr = {nvr}")),
+                inst.set_strings(vrs, &texts)
             }
-        })
-    }
+            _ => inst.error(&format!("fmi2SetString: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
@@ -302,28 +325,34 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
-    unsafe {
-        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
-            let (Some(unknowns), Some(knowns), Some(dv), Some(out)) = (
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes the unknowns' arrays
+        // hold `nUnknown` elements and the knowns' `nKnown`.
+        let (Some(unknowns), Some(knowns), Some(dv), Some(out)) = (unsafe {
+            (
                 slice(unknown_refs, n_unknown),
                 slice(known_refs, n_known),
                 slice(dv_known, n_known),
                 slice_mut(dv_unknown, n_unknown),
-            ) else {
-                return inst.error(&format!(
-                    "{F}: vUnknown_ref, vKnown_ref, dvKnown or dvUnknown is NULL (nUnknown = {n_unknown}, nKnown = {n_known})"
-                ));
-            };
-            inst.directional_derivative(unknowns, knowns, dv, out)
-        })
-    }
+            )
+        }) else {
+            return inst.error(&format!(
+                "{F}: vUnknown_ref, vKnown_ref, dvKnown or dvUnknown is NULL (nUnknown = {n_unknown}, nKnown = {n_known})"
+            ));
+        };
+        inst.directional_derivative(unknowns, knowns, dv, out)
+    })
 }
 
 /// The model-exchange functions without arguments besides the instance.
 macro_rules! me_transition {
     ($fn_name:ident, $call:ident, $name:literal, $method:ident) => {
         pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-            unsafe { with_instance::<M>(c, Call::$call, $name, |inst| inst.$method()) }
+            // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+            let component = unsafe { Component::<M>::from_handle(c) };
+            with_instance(component, Call::$call, $name, |inst| inst.$method())
         }
     };
 }
@@ -336,25 +365,26 @@ me_transition!(
 );
 
 pub unsafe fn new_discrete_states<M: CoSimulation>(c: fmi2Component, info: *mut fmi2EventInfo) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::NewDiscreteStates, "fmi2NewDiscreteStates", |inst| {
-            if info.is_null() {
-                return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
-            }
-            let mut e = EventInfo::default();
-            let status = inst.new_discrete_states(&mut e);
-            let b = |v: bool| if v { fmi2True } else { fmi2False };
-            *info = fmi2EventInfo {
-                newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
-                terminateSimulation: b(e.terminate_simulation),
-                nominalsOfContinuousStatesChanged: b(e.nominals_changed),
-                valuesOfContinuousStatesChanged: b(e.values_changed),
-                nextEventTimeDefined: b(e.next_event_time.is_some()),
-                nextEventTime: e.next_event_time.unwrap_or(0.0),
-            };
-            status
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::NewDiscreteStates, "fmi2NewDiscreteStates", |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `info` writable.
+        let Some(info) = (unsafe { info.as_mut() }) else {
+            return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
+        };
+        let mut e = EventInfo::default();
+        let status = inst.new_discrete_states(&mut e);
+        let b = |v: bool| if v { fmi2True } else { fmi2False };
+        *info = fmi2EventInfo {
+            newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
+            terminateSimulation: b(e.terminate_simulation),
+            nominalsOfContinuousStatesChanged: b(e.nominals_changed),
+            valuesOfContinuousStatesChanged: b(e.values_changed),
+            nextEventTimeDefined: b(e.next_event_time.is_some()),
+            nextEventTime: e.next_event_time.unwrap_or(0.0),
+        };
+        status
+    })
 }
 
 pub unsafe fn completed_integrator_step<M: CoSimulation>(
@@ -364,53 +394,61 @@ pub unsafe fn completed_integrator_step<M: CoSimulation>(
     terminate_simulation: *mut fmi2Boolean,
 ) -> fmi2Status {
     const F: &str = "fmi2CompletedIntegratorStep";
-    unsafe {
-        with_instance::<M>(c, Call::CompletedIntegratorStep, F, |inst| {
-            if enter_event_mode.is_null() || terminate_simulation.is_null() {
-                return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
-            }
-            let (status, event, terminate) = inst.completed_integrator_step();
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::CompletedIntegratorStep, F, |inst| {
+        if enter_event_mode.is_null() || terminate_simulation.is_null() {
+            return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
+        }
+        let (status, event, terminate) = inst.completed_integrator_step();
+        // SAFETY: neither is NULL (checked above); the contract makes both writable. Written
+        // through the raw pointers, which may even be the same one.
+        unsafe {
             *enter_event_mode = if event { fmi2True } else { fmi2False };
             *terminate_simulation = if terminate { fmi2True } else { fmi2False };
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn set_time<M: CoSimulation>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    unsafe { with_instance::<M>(c, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time)) }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time))
 }
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(
-            c,
-            Call::SetRealInputDerivatives,
-            "fmi2SetRealInputDerivatives",
-            |inst| {
-                if nvr == 0 {
-                    return fmi2OK;
-                }
-                inst.error("fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs=\"false\")")
-            },
-        )
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(
+        component,
+        Call::SetRealInputDerivatives,
+        "fmi2SetRealInputDerivatives",
+        |inst| {
+            if nvr == 0 {
+                return fmi2OK;
+            }
+            inst.error(
+                "fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs=\"false\")",
+            )
+        },
+    )
 }
 
 pub unsafe fn get_real_output_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(
-            c,
-            Call::GetRealOutputDerivatives,
-            "fmi2GetRealOutputDerivatives",
-            |inst| {
-                if nvr == 0 {
-                    return fmi2OK;
-                }
-                inst.error("fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=\"0\")")
-            },
-        )
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(
+        component,
+        Call::GetRealOutputDerivatives,
+        "fmi2GetRealOutputDerivatives",
+        |inst| {
+            if nvr == 0 {
+                return fmi2OK;
+            }
+            inst.error("fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=\"0\")")
+        },
+    )
 }
 
 pub unsafe fn do_step<M: CoSimulation>(
@@ -419,19 +457,19 @@ pub unsafe fn do_step<M: CoSimulation>(
     communication_step_size: fmi2Real,
     _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::DoStep, "fmi2DoStep", |inst| {
-            inst.do_step(current_communication_point, communication_step_size)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::DoStep, "fmi2DoStep", |inst| {
+        inst.do_step(current_communication_point, communication_step_size)
+    })
 }
 
 pub unsafe fn cancel_step<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::CancelStep, "fmi2CancelStep", |_| {
-            unreachable!("CancelStep is allowed in no state of a synchronous FMU")
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::CancelStep, "fmi2CancelStep", |_| {
+        unreachable!("CancelStep is allowed in no state of a synchronous FMU")
+    })
 }
 
 pub unsafe fn get_status<M: CoSimulation>(
@@ -439,14 +477,14 @@ pub unsafe fn get_status<M: CoSimulation>(
     kind: fmi2StatusKind,
     value: *mut fmi2Status,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetStatus, "fmi2GetStatus", |inst| {
-            if value.is_null() {
-                return inst.error("fmi2GetStatus: value is NULL");
-            }
-            status_unavailable(inst, "fmi2GetStatus", kind)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetStatus, "fmi2GetStatus", |inst| {
+        if value.is_null() {
+            return inst.error("fmi2GetStatus: value is NULL");
+        }
+        status_unavailable(inst, "fmi2GetStatus", kind)
+    })
 }
 
 pub unsafe fn get_real_status<M: CoSimulation>(
@@ -454,12 +492,15 @@ pub unsafe fn get_real_status<M: CoSimulation>(
     kind: fmi2StatusKind,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetStatus, "fmi2GetRealStatus", |inst| match value.as_mut() {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetStatus, "fmi2GetRealStatus", |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `value` writable.
+        match unsafe { value.as_mut() } {
             Some(v) => real_status(inst, kind, v),
             None => inst.error("fmi2GetRealStatus: value is NULL"),
-        })
-    }
+        }
+    })
 }
 
 pub unsafe fn get_integer_status<M: CoSimulation>(
@@ -467,14 +508,14 @@ pub unsafe fn get_integer_status<M: CoSimulation>(
     kind: fmi2StatusKind,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetStatus, "fmi2GetIntegerStatus", |inst| {
-            if value.is_null() {
-                return inst.error("fmi2GetIntegerStatus: value is NULL");
-            }
-            status_unavailable(inst, "fmi2GetIntegerStatus", kind)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetStatus, "fmi2GetIntegerStatus", |inst| {
+        if value.is_null() {
+            return inst.error("fmi2GetIntegerStatus: value is NULL");
+        }
+        status_unavailable(inst, "fmi2GetIntegerStatus", kind)
+    })
 }
 
 pub unsafe fn get_boolean_status<M: CoSimulation>(
@@ -482,14 +523,15 @@ pub unsafe fn get_boolean_status<M: CoSimulation>(
     kind: fmi2StatusKind,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetStatus, "fmi2GetBooleanStatus", |inst| {
-            match value.as_mut() {
-                Some(v) => boolean_status(inst, kind, v),
-                None => inst.error("fmi2GetBooleanStatus: value is NULL"),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetStatus, "fmi2GetBooleanStatus", |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `value` writable.
+        match unsafe { value.as_mut() } {
+            Some(v) => boolean_status(inst, kind, v),
+            None => inst.error("fmi2GetBooleanStatus: value is NULL"),
+        }
+    })
 }
 
 pub unsafe fn get_string_status<M: CoSimulation>(
@@ -497,14 +539,14 @@ pub unsafe fn get_string_status<M: CoSimulation>(
     kind: fmi2StatusKind,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    unsafe {
-        with_instance::<M>(c, Call::GetStatus, "fmi2GetStringStatus", |inst| {
-            if value.is_null() {
-                return inst.error("fmi2GetStringStatus: value is NULL");
-            }
-            status_unavailable(inst, "fmi2GetStringStatus", kind)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetStatus, "fmi2GetStringStatus", |inst| {
+        if value.is_null() {
+            return inst.error("fmi2GetStringStatus: value is NULL");
+        }
+        status_unavailable(inst, "fmi2GetStringStatus", kind)
+    })
 }
 
 fn real_status<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {

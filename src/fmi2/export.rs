@@ -42,34 +42,31 @@ macro_rules! export_fmi2 {
             pub extern "C" fn fmi2GetVersion() -> fmi2String {
                 api::get_version()
             }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetDebugLogging(
-                c: fmi2Component,
-                loggingOn: fmi2Boolean,
-                nCategories: usize,
-                categories: *const fmi2String,
-            ) -> fmi2Status {
-                unsafe {
+            // One row per C function: its name, its parameters as fmi2Functions.h names them, and
+            // the runtime function it forwards to (see `rustfmu::core::trampolines`).
+            $crate::__rustfmu_extern_c! {
+                fmi2SetDebugLogging(
+                    c: fmi2Component,
+                    loggingOn: fmi2Boolean,
+                    nCategories: usize,
+                    categories: *const fmi2String,
+                ) -> fmi2Status =>
                     shared::set_debug_logging::<__RustfmuModel>(
                         &TERMS,
                         c,
                         loggingOn != fmi2False,
                         nCategories,
                         categories,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2Instantiate(
-                instanceName: fmi2String,
-                fmuType: fmi2Type,
-                fmuGUID: fmi2String,
-                fmuResourceLocation: fmi2String,
-                functions: *const fmi2CallbackFunctions,
-                visible: fmi2Boolean,
-                loggingOn: fmi2Boolean,
-            ) -> fmi2Component {
-                unsafe {
+                    );
+                fmi2Instantiate(
+                    instanceName: fmi2String,
+                    fmuType: fmi2Type,
+                    fmuGUID: fmi2String,
+                    fmuResourceLocation: fmi2String,
+                    functions: *const fmi2CallbackFunctions,
+                    visible: fmi2Boolean,
+                    loggingOn: fmi2Boolean,
+                ) -> fmi2Component =>
                     api::instantiate::<__RustfmuModel>(
                         GUID,
                         &DESCRIPTION,
@@ -80,23 +77,17 @@ macro_rules! export_fmi2 {
                         functions,
                         visible,
                         loggingOn,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-                unsafe { shared::free_instance::<__RustfmuModel>(&TERMS, c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetupExperiment(
-                c: fmi2Component,
-                toleranceDefined: fmi2Boolean,
-                tolerance: fmi2Real,
-                startTime: fmi2Real,
-                stopTimeDefined: fmi2Boolean,
-                stopTime: fmi2Real,
-            ) -> fmi2Status {
-                unsafe {
+                    );
+                fmi2FreeInstance(c: fmi2Component) =>
+                    shared::free_instance::<__RustfmuModel>(&TERMS, c);
+                fmi2SetupExperiment(
+                    c: fmi2Component,
+                    toleranceDefined: fmi2Boolean,
+                    tolerance: fmi2Real,
+                    startTime: fmi2Real,
+                    stopTimeDefined: fmi2Boolean,
+                    stopTime: fmi2Real,
+                ) -> fmi2Status =>
                     api::setup_experiment::<__RustfmuModel>(
                         c,
                         toleranceDefined,
@@ -104,146 +95,102 @@ macro_rules! export_fmi2 {
                         startTime,
                         stopTimeDefined,
                         stopTime,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::enter_initialization_mode::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::exit_initialization_mode::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-                unsafe { api::terminate::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-                unsafe { api::reset::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetReal(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *mut fmi2Real,
-            ) -> fmi2Status {
-                unsafe { api::get::<__RustfmuModel, f64>(c, "fmi2GetReal", vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetInteger(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *mut fmi2Integer,
-            ) -> fmi2Status {
-                unsafe { api::get::<__RustfmuModel, i32>(c, "fmi2GetInteger", vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetBoolean(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *mut fmi2Boolean,
-            ) -> fmi2Status {
-                unsafe { api::get_boolean::<__RustfmuModel>(c, vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetString(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *mut fmi2String,
-            ) -> fmi2Status {
-                unsafe { api::get_string::<__RustfmuModel>(c, vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetReal(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *const fmi2Real,
-            ) -> fmi2Status {
-                unsafe { api::set::<__RustfmuModel, f64>(c, "fmi2SetReal", vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetInteger(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *const fmi2Integer,
-            ) -> fmi2Status {
-                unsafe { api::set::<__RustfmuModel, i32>(c, "fmi2SetInteger", vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetBoolean(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *const fmi2Boolean,
-            ) -> fmi2Status {
-                unsafe { api::set_boolean::<__RustfmuModel>(c, vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetString(
-                c: fmi2Component,
-                vr: *const fmi2ValueReference,
-                nvr: usize,
-                value: *const fmi2String,
-            ) -> fmi2Status {
-                unsafe { api::set_string::<__RustfmuModel>(c, vr, nvr, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { shared::get_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-                unsafe { shared::set_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status {
-                unsafe { shared::free_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-                c: fmi2Component,
-                FMUstate: fmi2FMUstate,
-                size: *mut usize,
-            ) -> fmi2Status {
-                unsafe { shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, c, FMUstate, size) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SerializeFMUstate(
-                c: fmi2Component,
-                FMUstate: fmi2FMUstate,
-                serializedState: *mut fmi2Byte,
-                size: usize,
-            ) -> fmi2Status {
-                unsafe { shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate, serializedState, size) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-                c: fmi2Component,
-                serializedState: *const fmi2Byte,
-                size: usize,
-                FMUstate: *mut fmi2FMUstate,
-            ) -> fmi2Status {
-                unsafe { shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, c, serializedState, size, FMUstate) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
-                c: fmi2Component,
-                vUnknown_ref: *const fmi2ValueReference,
-                nUnknown: usize,
-                vKnown_ref: *const fmi2ValueReference,
-                nKnown: usize,
-                dvKnown: *const fmi2Real,
-                dvUnknown: *mut fmi2Real,
-            ) -> fmi2Status {
-                unsafe {
+                    );
+                fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status =>
+                    api::enter_initialization_mode::<__RustfmuModel>(c);
+                fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status =>
+                    api::exit_initialization_mode::<__RustfmuModel>(c);
+                fmi2Terminate(c: fmi2Component) -> fmi2Status =>
+                    api::terminate::<__RustfmuModel>(c);
+                fmi2Reset(c: fmi2Component) -> fmi2Status =>
+                    api::reset::<__RustfmuModel>(c);
+                fmi2GetReal(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *mut fmi2Real,
+                ) -> fmi2Status =>
+                    api::get::<__RustfmuModel, f64>(c, "fmi2GetReal", vr, nvr, value);
+                fmi2GetInteger(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *mut fmi2Integer,
+                ) -> fmi2Status =>
+                    api::get::<__RustfmuModel, i32>(c, "fmi2GetInteger", vr, nvr, value);
+                fmi2GetBoolean(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *mut fmi2Boolean,
+                ) -> fmi2Status =>
+                    api::get_boolean::<__RustfmuModel>(c, vr, nvr, value);
+                fmi2GetString(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *mut fmi2String,
+                ) -> fmi2Status =>
+                    api::get_string::<__RustfmuModel>(c, vr, nvr, value);
+                fmi2SetReal(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *const fmi2Real,
+                ) -> fmi2Status =>
+                    api::set::<__RustfmuModel, f64>(c, "fmi2SetReal", vr, nvr, value);
+                fmi2SetInteger(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *const fmi2Integer,
+                ) -> fmi2Status =>
+                    api::set::<__RustfmuModel, i32>(c, "fmi2SetInteger", vr, nvr, value);
+                fmi2SetBoolean(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *const fmi2Boolean,
+                ) -> fmi2Status =>
+                    api::set_boolean::<__RustfmuModel>(c, vr, nvr, value);
+                fmi2SetString(
+                    c: fmi2Component,
+                    vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    value: *const fmi2String,
+                ) -> fmi2Status =>
+                    api::set_string::<__RustfmuModel>(c, vr, nvr, value);
+                fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
+                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status =>
+                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
+                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                fmi2SerializedFMUstateSize(c: fmi2Component, FMUstate: fmi2FMUstate, size: *mut usize) -> fmi2Status =>
+                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, c, FMUstate, size);
+                fmi2SerializeFMUstate(
+                    c: fmi2Component,
+                    FMUstate: fmi2FMUstate,
+                    serializedState: *mut fmi2Byte,
+                    size: usize,
+                ) -> fmi2Status =>
+                    shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate, serializedState, size);
+                fmi2DeSerializeFMUstate(
+                    c: fmi2Component,
+                    serializedState: *const fmi2Byte,
+                    size: usize,
+                    FMUstate: *mut fmi2FMUstate,
+                ) -> fmi2Status =>
+                    shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, c, serializedState, size, FMUstate);
+                fmi2GetDirectionalDerivative(
+                    c: fmi2Component,
+                    vUnknown_ref: *const fmi2ValueReference,
+                    nUnknown: usize,
+                    vKnown_ref: *const fmi2ValueReference,
+                    nKnown: usize,
+                    dvKnown: *const fmi2Real,
+                    dvUnknown: *mut fmi2Real,
+                ) -> fmi2Status =>
                     api::get_directional_derivative::<__RustfmuModel>(
                         c,
                         vUnknown_ref,
@@ -252,171 +199,87 @@ macro_rules! export_fmi2 {
                         nKnown,
                         dvKnown,
                         dvUnknown,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::enter_event_mode::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2NewDiscreteStates(
-                c: fmi2Component,
-                fmi2eventInfo: *mut fmi2EventInfo,
-            ) -> fmi2Status {
-                unsafe { api::new_discrete_states::<__RustfmuModel>(c, fmi2eventInfo) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-                unsafe { api::enter_continuous_time_mode::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
-                c: fmi2Component,
-                noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
-                enterEventMode: *mut fmi2Boolean,
-                terminateSimulation: *mut fmi2Boolean,
-            ) -> fmi2Status {
-                unsafe {
+                    );
+                fmi2EnterEventMode(c: fmi2Component) -> fmi2Status =>
+                    api::enter_event_mode::<__RustfmuModel>(c);
+                fmi2NewDiscreteStates(c: fmi2Component, fmi2eventInfo: *mut fmi2EventInfo) -> fmi2Status =>
+                    api::new_discrete_states::<__RustfmuModel>(c, fmi2eventInfo);
+                fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status =>
+                    api::enter_continuous_time_mode::<__RustfmuModel>(c);
+                fmi2CompletedIntegratorStep(
+                    c: fmi2Component,
+                    noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+                    enterEventMode: *mut fmi2Boolean,
+                    terminateSimulation: *mut fmi2Boolean,
+                ) -> fmi2Status =>
                     api::completed_integrator_step::<__RustfmuModel>(
                         c,
                         noSetFMUStatePriorToCurrentPoint,
                         enterEventMode,
                         terminateSimulation,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-                unsafe { api::set_time::<__RustfmuModel>(c, time) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetContinuousStates(
-                c: fmi2Component,
-                x: *const fmi2Real,
-                nx: usize,
-            ) -> fmi2Status {
-                unsafe { shared::set_continuous_states::<__RustfmuModel>(&TERMS, c, x, nx) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetDerivatives(
-                c: fmi2Component,
-                derivatives: *mut fmi2Real,
-                nx: usize,
-            ) -> fmi2Status {
-                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, c, derivatives, nx) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetEventIndicators(
-                c: fmi2Component,
-                eventIndicators: *mut fmi2Real,
-                ni: usize,
-            ) -> fmi2Status {
-                unsafe {
+                    );
+                fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status =>
+                    api::set_time::<__RustfmuModel>(c, time);
+                fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status =>
+                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, c, x, nx);
+                fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status =>
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, c, derivatives, nx);
+                fmi2GetEventIndicators(c: fmi2Component, eventIndicators: *mut fmi2Real, ni: usize) -> fmi2Status =>
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::EventIndicators,
                         c,
                         eventIndicators,
                         ni,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetContinuousStates(
-                c: fmi2Component,
-                x: *mut fmi2Real,
-                nx: usize,
-            ) -> fmi2Status {
-                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, c, x, nx) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
-                c: fmi2Component,
-                x_nominal: *mut fmi2Real,
-                nx: usize,
-            ) -> fmi2Status {
-                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, c, x_nominal, nx) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
-                c: fmi2Component,
-                _vr: *const fmi2ValueReference,
-                nvr: usize,
-                _order: *const fmi2Integer,
-                _value: *const fmi2Real,
-            ) -> fmi2Status {
-                unsafe { api::set_real_input_derivatives::<__RustfmuModel>(c, nvr) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
-                c: fmi2Component,
-                _vr: *const fmi2ValueReference,
-                nvr: usize,
-                _order: *const fmi2Integer,
-                _value: *mut fmi2Real,
-            ) -> fmi2Status {
-                unsafe { api::get_real_output_derivatives::<__RustfmuModel>(c, nvr) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2DoStep(
-                c: fmi2Component,
-                currentCommunicationPoint: fmi2Real,
-                communicationStepSize: fmi2Real,
-                noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
-            ) -> fmi2Status {
-                unsafe {
+                    );
+                fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status =>
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, c, x, nx);
+                fmi2GetNominalsOfContinuousStates(
+                    c: fmi2Component,
+                    x_nominal: *mut fmi2Real,
+                    nx: usize,
+                ) -> fmi2Status =>
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, c, x_nominal, nx);
+                fmi2SetRealInputDerivatives(
+                    c: fmi2Component,
+                    _vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    _order: *const fmi2Integer,
+                    _value: *const fmi2Real,
+                ) -> fmi2Status =>
+                    api::set_real_input_derivatives::<__RustfmuModel>(c, nvr);
+                fmi2GetRealOutputDerivatives(
+                    c: fmi2Component,
+                    _vr: *const fmi2ValueReference,
+                    nvr: usize,
+                    _order: *const fmi2Integer,
+                    _value: *mut fmi2Real,
+                ) -> fmi2Status =>
+                    api::get_real_output_derivatives::<__RustfmuModel>(c, nvr);
+                fmi2DoStep(
+                    c: fmi2Component,
+                    currentCommunicationPoint: fmi2Real,
+                    communicationStepSize: fmi2Real,
+                    noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+                ) -> fmi2Status =>
                     api::do_step::<__RustfmuModel>(
                         c,
                         currentCommunicationPoint,
                         communicationStepSize,
                         noSetFMUStatePriorToCurrentPoint,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-                unsafe { api::cancel_step::<__RustfmuModel>(c) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetStatus(
-                c: fmi2Component,
-                s: fmi2StatusKind,
-                value: *mut fmi2Status,
-            ) -> fmi2Status {
-                unsafe { api::get_status::<__RustfmuModel>(c, s, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetRealStatus(
-                c: fmi2Component,
-                s: fmi2StatusKind,
-                value: *mut fmi2Real,
-            ) -> fmi2Status {
-                unsafe { api::get_real_status::<__RustfmuModel>(c, s, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetIntegerStatus(
-                c: fmi2Component,
-                s: fmi2StatusKind,
-                value: *mut fmi2Integer,
-            ) -> fmi2Status {
-                unsafe { api::get_integer_status::<__RustfmuModel>(c, s, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetBooleanStatus(
-                c: fmi2Component,
-                s: fmi2StatusKind,
-                value: *mut fmi2Boolean,
-            ) -> fmi2Status {
-                unsafe { api::get_boolean_status::<__RustfmuModel>(c, s, value) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetStringStatus(
-                c: fmi2Component,
-                s: fmi2StatusKind,
-                value: *mut fmi2String,
-            ) -> fmi2Status {
-                unsafe { api::get_string_status::<__RustfmuModel>(c, s, value) }
+                    );
+                fmi2CancelStep(c: fmi2Component) -> fmi2Status =>
+                    api::cancel_step::<__RustfmuModel>(c);
+                fmi2GetStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status =>
+                    api::get_status::<__RustfmuModel>(c, s, value);
+                fmi2GetRealStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status =>
+                    api::get_real_status::<__RustfmuModel>(c, s, value);
+                fmi2GetIntegerStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Integer) -> fmi2Status =>
+                    api::get_integer_status::<__RustfmuModel>(c, s, value);
+                fmi2GetBooleanStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Boolean) -> fmi2Status =>
+                    api::get_boolean_status::<__RustfmuModel>(c, s, value);
+                fmi2GetStringStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status =>
+                    api::get_string_status::<__RustfmuModel>(c, s, value);
             }
         }
         pub use __rustfmu_fmi2_exports::*;

@@ -6,6 +6,14 @@
 //! instantiation functions and their callback, typed getters and setters with `nValues`, the
 //! independent variable `time`, Int64 enumerations, C `bool` booleans, the output arguments of
 //! fmi3DoStep and fmi3UpdateDiscreteStates, and the adjoint derivative.
+//!
+//! # Safety
+//! Every `unsafe fn` here has the contract of the `fmi3*` function it implements, which the
+//! standard puts on the importer: the instance handle is NULL or one that an instantiation
+//! function of this library returned for model `M` and that was not freed; every other pointer
+//! is NULL or valid as the standard describes it (an array of the length passed beside it, a
+//! NUL-terminated string, a writable output). Each `unsafe` block says which part of that, and
+//! which check, makes its pointer operation sound.
 #![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
 
 use super::TERMS;
@@ -113,6 +121,7 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
     environment: fmi3InstanceEnvironment,
     log_message: fmi3LogMessageCallback,
 ) -> fmi3Instance {
+    // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
     unsafe {
         instantiate::<M>(
             "fmi3InstantiateModelExchange",
@@ -151,6 +160,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     let refusal = event_mode_used.then(|| {
         "eventModeUsed = true, but this FMU has no event mode in co-simulation (hasEventMode=\"false\")".to_string()
     });
+    // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
     unsafe {
         instantiate::<M>(
             "fmi3InstantiateCoSimulation",
@@ -203,6 +213,7 @@ pub unsafe fn set_debug_logging<M: CoSimulation>(
     n: usize,
     categories: *const fmi3String,
 ) -> fmi3Status {
+    // SAFETY: the arguments come with this function's contract, which is the callee's.
     unsafe { shared::set_debug_logging::<M>(&TERMS, c, logging_on, n, categories) }
 }
 
@@ -215,36 +226,36 @@ pub unsafe fn enter_initialization_mode<M: CoSimulation>(
     stop_time: fmi3Float64,
 ) -> fmi3Status {
     const F: &str = "fmi3EnterInitializationMode";
-    unsafe {
-        with_instance::<M>(c, Call::EnterInitializationMode, F, |inst| {
-            inst.trace(|| {
-                format!(
-                    "{F}(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, \
-                     stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
-                )
-            });
-            let status = inst.setup_experiment(
-                tolerance_defined.then_some(tolerance),
-                start_time,
-                stop_time_defined.then_some(stop_time),
-            );
-            if status != fmi3OK {
-                return status;
-            }
-            inst.enter_initialization_mode()
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::EnterInitializationMode, F, |inst| {
+        inst.trace(|| {
+            format!(
+                "{F}(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, startTime = {start_time}, \
+                 stopTimeDefined = {stop_time_defined}, stopTime = {stop_time})"
+            )
+        });
+        let status = inst.setup_experiment(
+            tolerance_defined.then_some(tolerance),
+            start_time,
+            stop_time_defined.then_some(stop_time),
+        );
+        if status != fmi3OK {
+            return status;
+        }
+        inst.enter_initialization_mode()
+    })
 }
 
 macro_rules! simple_call {
     ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
         pub unsafe fn $fn_name<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
-            unsafe {
-                with_instance::<M>(c, Call::$call, $c_name, |inst| {
-                    inst.trace(|| concat!($c_name, "()").to_string());
-                    inst.$method()
-                })
-            }
+            // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+            let component = unsafe { Component::<M>::from_handle(c) };
+            with_instance(component, Call::$call, $c_name, |inst| {
+                inst.trace(|| concat!($c_name, "()").to_string());
+                inst.$method()
+            })
         }
     };
 }
@@ -350,38 +361,41 @@ pub unsafe fn get_float64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetFloat64";
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, F, |inst| {
-            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            match added_time_vr::<M>() {
-                Some(time) if vrs.contains(&time) && inst.state() == State::Instantiated => inst.error(&format!(
-                    "{F}: value reference {time} is 'time', the independent variable: it has no start value and no \
-                     value before fmi3EnterInitializationMode sets the start time"
-                )),
-                Some(time) if vrs.contains(&time) => {
-                    let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
-                    let mut got = vec![0.0; others.len()];
-                    let status = inst.get_values(F, &others, &mut got);
-                    if status != fmi3OK {
-                        return status;
-                    }
-                    let mut got = got.into_iter();
-                    for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-                        *slot = if *vr == time {
-                            inst.sim.time
-                        } else {
-                            got.next().unwrap_or(f64::NAN)
-                        };
-                    }
-                    fmi3OK
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
+        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        match added_time_vr::<M>() {
+            Some(time) if vrs.contains(&time) && inst.state() == State::Instantiated => inst.error(&format!(
+                "{F}: value reference {time} is 'time', the independent variable: it has no start value and no \
+                 value before fmi3EnterInitializationMode sets the start time"
+            )),
+            Some(time) if vrs.contains(&time) => {
+                let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
+                let mut got = vec![0.0; others.len()];
+                let status = inst.get_values(F, &others, &mut got);
+                if status != fmi3OK {
+                    return status;
                 }
-                _ => inst.get_values(F, vrs, out),
+                let mut got = got.into_iter();
+                for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                    *slot = if *vr == time {
+                        inst.sim.time
+                    } else {
+                        got.next().unwrap_or(f64::NAN)
+                    };
+                }
+                fmi3OK
             }
-        })
-    }
+            _ => inst.get_values(F, vrs, out),
+        }
+    })
 }
 
 pub unsafe fn set_float64<M: CoSimulation>(
@@ -392,23 +406,26 @@ pub unsafe fn set_float64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetFloat64";
-    unsafe {
-        with_instance::<M>(c, Call::SetValues, F, |inst| {
-            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            if let Some(time) = added_time_vr::<M>()
-                && vrs.contains(&time)
-            {
-                return inst.error(&format!(
-                    "{F}: value reference {time} is 'time', the independent variable: it cannot be set \
-                     (fmi3EnterInitializationMode sets the start time, fmi3SetTime the time in model exchange); nothing set"
-                ));
-            }
-            inst.set_values(F, vrs, values)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetValues, F, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
+        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        if let Some(time) = added_time_vr::<M>()
+            && vrs.contains(&time)
+        {
+            return inst.error(&format!(
+                "{F}: value reference {time} is 'time', the independent variable: it cannot be set \
+                 (fmi3EnterInitializationMode sets the start time, fmi3SetTime the time in model exchange); nothing set"
+            ));
+        }
+        inst.set_values(F, vrs, values)
+    })
 }
 
 pub unsafe fn get_int32<M: CoSimulation>(
@@ -419,18 +436,21 @@ pub unsafe fn get_int32<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetInt32";
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, F, |inst| {
-            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
-                return status;
-            }
-            inst.get_values(F, vrs, out)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
+        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
+            return status;
+        }
+        inst.get_values(F, vrs, out)
+    })
 }
 
 pub unsafe fn set_int32<M: CoSimulation>(
@@ -441,18 +461,21 @@ pub unsafe fn set_int32<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetInt32";
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
-            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
-                return status;
-            }
-            inst.set_values(F, vrs, values)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, F, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
+        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
+            return status;
+        }
+        inst.set_values(F, vrs, values)
+    })
 }
 
 /// Enumerations: fmi3GetInt64 (their 3.0 type's accessor); the values are the items' `value`s.
@@ -464,25 +487,28 @@ pub unsafe fn get_int64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetInt64";
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, F, |inst| {
-            let (vrs, out) = match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            if let Err(status) = only_enumerations(inst, F, vrs) {
-                return status;
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
+        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        if let Err(status) = only_enumerations(inst, F, vrs) {
+            return status;
+        }
+        let mut got = vec![0i32; vrs.len()];
+        let status = inst.get_values(F, vrs, &mut got);
+        if status == fmi3OK {
+            for (o, v) in out.iter_mut().zip(got) {
+                *o = i64::from(v);
             }
-            let mut got = vec![0i32; vrs.len()];
-            let status = inst.get_values(F, vrs, &mut got);
-            if status == fmi3OK {
-                for (o, v) in out.iter_mut().zip(got) {
-                    *o = i64::from(v);
-                }
-            }
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn set_int64<M: CoSimulation>(
@@ -493,29 +519,32 @@ pub unsafe fn set_int64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetInt64";
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
-            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            if let Err(status) = only_enumerations(inst, F, vrs) {
-                return status;
-            }
-            let mut narrow = Vec::with_capacity(values.len());
-            for (vr, v) in vrs.iter().zip(values) {
-                match i32::try_from(*v) {
-                    Ok(x) => narrow.push(x),
-                    Err(_) => {
-                        return inst.error(&format!(
-                            "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
-                        ));
-                    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, F, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
+        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        if let Err(status) = only_enumerations(inst, F, vrs) {
+            return status;
+        }
+        let mut narrow = Vec::with_capacity(values.len());
+        for (vr, v) in vrs.iter().zip(values) {
+            match i32::try_from(*v) {
+                Ok(x) => narrow.push(x),
+                Err(_) => {
+                    return inst.error(&format!(
+                        "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
+                    ));
                 }
             }
-            inst.set_values(F, vrs, &narrow)
-        })
-    }
+        }
+        inst.set_values(F, vrs, &narrow)
+    })
 }
 
 /// Int64 reaches the enumerations only (this FMU declares no Int64 variable).
@@ -550,29 +579,26 @@ pub unsafe fn get_boolean<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetBoolean";
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, F, |inst| {
-            // Written as bytes 0 and 1: the importer's array is C `bool`.
-            let (vrs, out) = match arrays(
-                inst,
-                F,
-                slice(vr, nvr),
-                n_values,
-                slice_mut(values as *mut u8, n_values),
-            ) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            let mut got = vec![false; vrs.len()];
-            let status = inst.get_values(F, vrs, &mut got);
-            if status == fmi3OK {
-                for (o, v) in out.iter_mut().zip(got) {
-                    *o = u8::from(v);
-                }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // Written as bytes 0 and 1: the importer's array is C `bool`.
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values as *mut u8, n_values)) };
+        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let mut got = vec![false; vrs.len()];
+        let status = inst.get_values(F, vrs, &mut got);
+        if status == fmi3OK {
+            for (o, v) in out.iter_mut().zip(got) {
+                *o = u8::from(v);
             }
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn set_boolean<M: CoSimulation>(
@@ -583,17 +609,20 @@ pub unsafe fn set_boolean<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetBoolean";
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
-            // Read as bytes: any non-zero byte is true (a C caller may pass other values).
-            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values as *const u8, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            let values: Vec<bool> = values.iter().map(|b| *b != 0).collect();
-            inst.set_values(F, vrs, &values)
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, F, |inst| {
+        // Read as bytes: any non-zero byte is true (a C caller may pass other values).
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values as *const u8, n_values)) };
+        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let values: Vec<bool> = values.iter().map(|b| *b != 0).collect();
+        inst.set_values(F, vrs, &values)
+    })
 }
 
 pub unsafe fn get_string<M: CoSimulation>(
@@ -604,14 +633,17 @@ pub unsafe fn get_string<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetString";
-    unsafe {
-        with_instance::<M>(c, Call::GetValues, F, |inst| {
-            match arrays(inst, F, slice(vr, nvr), n_values, slice_mut(values, n_values)) {
-                Ok((vrs, out)) => inst.get_strings(vrs, out),
-                Err(status) => status,
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
+        match arrays(inst, F, vrs, n_values, given) {
+            Ok((vrs, out)) => inst.get_strings(vrs, out),
+            Err(status) => status,
+        }
+    })
 }
 
 pub unsafe fn set_string<M: CoSimulation>(
@@ -622,22 +654,26 @@ pub unsafe fn set_string<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetString";
-    unsafe {
-        with_instance::<M>(c, Call::SetDiscreteValues, F, |inst| {
-            let (vrs, values) = match arrays(inst, F, slice(vr, nvr), n_values, slice(values, n_values)) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            let mut texts = Vec::with_capacity(values.len());
-            for (i, p) in values.iter().enumerate() {
-                match text(*p) {
-                    Some(t) => texts.push(t.into_owned()),
-                    None => return inst.error(&format!("{F}: values[{i}] is NULL; nothing set")),
-                }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, F, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements and `values` `nValues`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
+        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let mut texts = Vec::with_capacity(values.len());
+        for (i, p) in values.iter().enumerate() {
+            // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
+            match unsafe { text(*p) } {
+                Some(t) => texts.push(t.into_owned()),
+                None => return inst.error(&format!("{F}: values[{i}] is NULL; nothing set")),
             }
-            inst.set_strings(vrs, &texts)
-        })
-    }
+        }
+        inst.set_strings(vrs, &texts)
+    })
 }
 
 /// A getter of a type no variable of this FMU has (Float32, Int8, ..., UInt64, Binary):
@@ -651,6 +687,7 @@ pub unsafe fn get_none<M: CoSimulation>(
     values_null: bool,
     n_values: usize,
 ) -> fmi3Status {
+    // SAFETY: the arguments come with this function's contract, which is the callee's.
     unsafe { none::<M>(c, Call::GetValues, function, type_name, vr, nvr, values_null, n_values) }
 }
 
@@ -663,6 +700,7 @@ pub unsafe fn set_none<M: CoSimulation>(
     values_null: bool,
     n_values: usize,
 ) -> fmi3Status {
+    // SAFETY: the arguments come with this function's contract, which is the callee's.
     unsafe {
         none::<M>(
             c,
@@ -687,60 +725,66 @@ unsafe fn none<M: CoSimulation>(
     values_null: bool,
     n_values: usize,
 ) -> fmi3Status {
-    unsafe {
-        with_instance::<M>(c, call, function, |inst| {
-            let values = (!values_null || n_values == 0).then_some(());
-            let (vrs, ()) = match arrays(inst, function, slice(vr, nvr), n_values, values) {
-                Ok(a) => a,
-                Err(status) => return status,
-            };
-            match vrs.first() {
-                None => fmi3OK,
-                Some(vr) => inst.error(&format!(
-                    "{function}: value reference {vr} is not a {type_name} variable: {} has no {type_name} variables{}",
-                    M::DESCRIPTION.model_identifier,
-                    M::DESCRIPTION
-                        .variables
-                        .iter()
-                        .find(|v| v.value_reference == *vr)
-                        .map(|v| format!(
-                            " ('{}' is {}, read and written with {})",
-                            v.name,
-                            fmi3_type_name(v.var_type),
-                            accessor(v.var_type)
-                        ))
-                        .unwrap_or_default()
-                )),
-            }
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, call, function, |inst| {
+        let values = (!values_null || n_values == 0).then_some(());
+        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
+        // `nValueReferences` elements.
+        let vrs = unsafe { slice(vr, nvr) };
+        let (vrs, ()) = match arrays(inst, function, vrs, n_values, values) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        match vrs.first() {
+            None => fmi3OK,
+            Some(vr) => inst.error(&format!(
+                "{function}: value reference {vr} is not a {type_name} variable: {} has no {type_name} variables{}",
+                M::DESCRIPTION.model_identifier,
+                M::DESCRIPTION
+                    .variables
+                    .iter()
+                    .find(|v| v.value_reference == *vr)
+                    .map(|v| format!(
+                        " ('{}' is {}, read and written with {})",
+                        v.name,
+                        fmi3_type_name(v.var_type),
+                        accessor(v.var_type)
+                    ))
+                    .unwrap_or_default()
+            )),
+        }
+    })
 }
 
 /// A function of a feature this FMU does not have (clocks, configuration mode, variable
 /// dependencies at run time): fmi3Error with the reason, in any state.
 pub unsafe fn not_provided<M: CoSimulation>(c: fmi3Instance, function: &'static str, why: &'static str) -> fmi3Status {
-    unsafe {
-        with_instance::<M>(c, Call::SetDebugLogging, function, |inst| {
-            inst.error(&format!("{function}: {why}"))
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDebugLogging, function, |inst| {
+        inst.error(&format!("{function}: {why}"))
+    })
 }
 
 pub unsafe fn evaluate_discrete_states<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
     // No discrete states, no clocks: nothing to evaluate.
-    unsafe {
-        with_instance::<M>(c, Call::EvaluateDiscreteStates, "fmi3EvaluateDiscreteStates", |_| {
-            fmi3OK
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(
+        component,
+        Call::EvaluateDiscreteStates,
+        "fmi3EvaluateDiscreteStates",
+        |_| fmi3OK,
+    )
 }
 
 pub unsafe fn enter_step_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
-    unsafe {
-        with_instance::<M>(c, Call::EnterStepMode, "fmi3EnterStepMode", |_| {
-            unreachable!("EnterStepMode is allowed in no state of an FMU without event mode")
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::EnterStepMode, "fmi3EnterStepMode", |_| {
+        unreachable!("EnterStepMode is allowed in no state of an FMU without event mode")
+    })
 }
 
 pub unsafe fn update_discrete_states<M: CoSimulation>(
@@ -753,28 +797,32 @@ pub unsafe fn update_discrete_states<M: CoSimulation>(
     next_event_time: *mut fmi3Float64,
 ) -> fmi3Status {
     const F: &str = "fmi3UpdateDiscreteStates";
-    unsafe {
-        with_instance::<M>(c, Call::NewDiscreteStates, F, |inst| {
-            if discrete_states_need_update.is_null()
-                || terminate_simulation.is_null()
-                || nominals_changed.is_null()
-                || values_changed.is_null()
-                || next_event_time_defined.is_null()
-                || next_event_time.is_null()
-            {
-                return inst.error(&format!("{F}: an output argument is NULL"));
-            }
-            let mut e = EventInfo::default();
-            let status = inst.new_discrete_states(&mut e);
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::NewDiscreteStates, F, |inst| {
+        if discrete_states_need_update.is_null()
+            || terminate_simulation.is_null()
+            || nominals_changed.is_null()
+            || values_changed.is_null()
+            || next_event_time_defined.is_null()
+            || next_event_time.is_null()
+        {
+            return inst.error(&format!("{F}: an output argument is NULL"));
+        }
+        let mut e = EventInfo::default();
+        let status = inst.new_discrete_states(&mut e);
+        // SAFETY: none is NULL (checked above); the contract makes each writable. Written
+        // through the raw pointers, which need not be distinct.
+        unsafe {
             *discrete_states_need_update = e.new_discrete_states_needed;
             *terminate_simulation = e.terminate_simulation;
             *nominals_changed = e.nominals_changed;
             *values_changed = e.values_changed;
             *next_event_time_defined = e.next_event_time.is_some();
             *next_event_time = e.next_event_time.unwrap_or(0.0);
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn completed_integrator_step<M: CoSimulation>(
@@ -784,51 +832,64 @@ pub unsafe fn completed_integrator_step<M: CoSimulation>(
     terminate_simulation: *mut fmi3Boolean,
 ) -> fmi3Status {
     const F: &str = "fmi3CompletedIntegratorStep";
-    unsafe {
-        with_instance::<M>(c, Call::CompletedIntegratorStep, F, |inst| {
-            if enter_event_mode.is_null() || terminate_simulation.is_null() {
-                return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
-            }
-            let (status, event, terminate) = inst.completed_integrator_step();
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::CompletedIntegratorStep, F, |inst| {
+        if enter_event_mode.is_null() || terminate_simulation.is_null() {
+            return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
+        }
+        let (status, event, terminate) = inst.completed_integrator_step();
+        // SAFETY: neither is NULL (checked above); the contract makes both writable. Written
+        // through the raw pointers, which need not be distinct.
+        unsafe {
             *enter_event_mode = event;
             *terminate_simulation = terminate;
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn set_time<M: CoSimulation>(c: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-    unsafe { with_instance::<M>(c, Call::SetTime, "fmi3SetTime", |inst| inst.set_time(time)) }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetTime, "fmi3SetTime", |inst| inst.set_time(time))
 }
 
 pub unsafe fn set_continuous_states<M: CoSimulation>(c: fmi3Instance, x: *const fmi3Float64, nx: usize) -> fmi3Status {
+    // SAFETY: the arguments come with this function's contract, which is the callee's.
     unsafe { shared::set_continuous_states::<M>(&TERMS, c, x, nx) }
 }
 
 pub unsafe fn get_number_of_continuous_states<M: CoSimulation>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
     const F: &str = "fmi3GetNumberOfContinuousStates";
-    unsafe {
-        with_instance::<M>(c, Call::GetNumberOf, F, |inst| match n.as_mut() {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetNumberOf, F, |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
+        match unsafe { n.as_mut() } {
             Some(n) => {
                 *n = <M::States as crate::StateVector>::LEN;
                 fmi3OK
             }
             None => inst.error(&format!("{F}: nContinuousStates is NULL")),
-        })
-    }
+        }
+    })
 }
 
 pub unsafe fn get_number_of_event_indicators<M: CoSimulation>(c: fmi3Instance, n: *mut usize) -> fmi3Status {
     const F: &str = "fmi3GetNumberOfEventIndicators";
-    unsafe {
-        with_instance::<M>(c, Call::GetNumberOf, F, |inst| match n.as_mut() {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetNumberOf, F, |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
+        match unsafe { n.as_mut() } {
             Some(n) => {
                 *n = 0;
                 fmi3OK
             }
             None => inst.error(&format!("{F}: nEventIndicators is NULL")),
-        })
-    }
+        }
+    })
 }
 
 pub unsafe fn get_output_derivatives<M: CoSimulation>(
@@ -840,17 +901,17 @@ pub unsafe fn get_output_derivatives<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetOutputDerivatives";
-    unsafe {
-        with_instance::<M>(c, Call::GetRealOutputDerivatives, F, |inst| {
-            if nvr == 0 && n_values == 0 {
-                return fmi3OK;
-            }
-            let _ = (vr, orders, values);
-            inst.error(&format!(
-                "{F}: not provided (maxOutputDerivativeOrder = 0: this FMU computes no output derivatives)"
-            ))
-        })
-    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetRealOutputDerivatives, F, |inst| {
+        if nvr == 0 && n_values == 0 {
+            return fmi3OK;
+        }
+        let _ = (vr, orders, values);
+        inst.error(&format!(
+            "{F}: not provided (maxOutputDerivativeOrder = 0: this FMU computes no output derivatives)"
+        ))
+    })
 }
 
 pub unsafe fn do_step<M: CoSimulation>(
@@ -864,26 +925,30 @@ pub unsafe fn do_step<M: CoSimulation>(
     last_successful_time: *mut fmi3Float64,
 ) -> fmi3Status {
     const F: &str = "fmi3DoStep";
-    unsafe {
-        with_instance::<M>(c, Call::DoStep, F, |inst| {
-            if event_handling_needed.is_null()
-                || terminate_simulation.is_null()
-                || early_return.is_null()
-                || last_successful_time.is_null()
-            {
-                return inst.error(&format!(
-                    "{F}: eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime is NULL; no step"
-                ));
-            }
-            let status = inst.do_step(current_communication_point, communication_step_size);
-            // No event mode, no intermediate update: never an event to handle, never early.
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::DoStep, F, |inst| {
+        if event_handling_needed.is_null()
+            || terminate_simulation.is_null()
+            || early_return.is_null()
+            || last_successful_time.is_null()
+        {
+            return inst.error(&format!(
+                "{F}: eventHandlingNeeded, terminateSimulation, earlyReturn or lastSuccessfulTime is NULL; no step"
+            ));
+        }
+        let status = inst.do_step(current_communication_point, communication_step_size);
+        // No event mode, no intermediate update: never an event to handle, never early.
+        // SAFETY: none is NULL (checked above); the contract makes each writable. Written
+        // through the raw pointers, which need not be distinct.
+        unsafe {
             *event_handling_needed = false;
             *terminate_simulation = inst.sim.terminate_requested;
             *early_return = false;
             *last_successful_time = inst.sim.last_successful_time;
-            status
-        })
-    }
+        }
+        status
+    })
 }
 
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
@@ -898,32 +963,36 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     n_sensitivity: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetDirectionalDerivative";
-    unsafe {
-        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
-            if n_seed != n_knowns || n_sensitivity != n_unknowns {
-                return inst.error(&format!(
-                    "{F}: nSeed = {n_seed} must equal nKnowns = {n_knowns} and nSensitivity = {n_sensitivity} \
-                     nUnknowns = {n_unknowns} (every variable is a scalar)"
-                ));
-            }
-            let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
+        if n_seed != n_knowns || n_sensitivity != n_unknowns {
+            return inst.error(&format!(
+                "{F}: nSeed = {n_seed} must equal nKnowns = {n_knowns} and nSensitivity = {n_sensitivity} \
+                 nUnknowns = {n_unknowns} (every variable is a scalar)"
+            ));
+        }
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
+        // the count beside it.
+        let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (unsafe {
+            (
                 slice(unknowns, n_unknowns),
                 slice(knowns, n_knowns),
                 slice(seed, n_seed),
                 slice_mut(sensitivity, n_sensitivity),
-            ) else {
-                return inst.error(&format!(
-                    "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
-                ));
-            };
-            let mut got = vec![0.0; unknowns.len()];
-            let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
-            if status == fmi3OK {
-                out.copy_from_slice(&got);
-            }
-            status
-        })
-    }
+            )
+        }) else {
+            return inst.error(&format!(
+                "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
+            ));
+        };
+        let mut got = vec![0.0; unknowns.len()];
+        let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
+        if status == fmi3OK {
+            out.copy_from_slice(&got);
+        }
+        status
+    })
 }
 
 /// fmi3GetAdjointDerivative: sensitivity = Jᵀ seed, J = d unknowns / d knowns, exact: each
@@ -940,48 +1009,52 @@ pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
     n_sensitivity: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetAdjointDerivative";
-    unsafe {
-        with_instance::<M>(c, Call::GetDirectionalDerivative, F, |inst| {
-            if n_seed != n_unknowns || n_sensitivity != n_knowns {
-                return inst.error(&format!(
-                    "{F}: nSeed = {n_seed} must equal nUnknowns = {n_unknowns} and nSensitivity = {n_sensitivity} \
-                     nKnowns = {n_knowns} (every variable is a scalar)"
-                ));
-            }
-            let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
+        if n_seed != n_unknowns || n_sensitivity != n_knowns {
+            return inst.error(&format!(
+                "{F}: nSeed = {n_seed} must equal nUnknowns = {n_unknowns} and nSensitivity = {n_sensitivity} \
+                 nKnowns = {n_knowns} (every variable is a scalar)"
+            ));
+        }
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
+        // the count beside it.
+        let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (unsafe {
+            (
                 slice(unknowns, n_unknowns),
                 slice(knowns, n_knowns),
                 slice(seed, n_seed),
                 slice_mut(sensitivity, n_sensitivity),
-            ) else {
-                return inst.error(&format!(
-                    "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
-                ));
-            };
-            if let Some((i, s)) = seed.iter().enumerate().find(|(_, s)| !s.is_finite()) {
-                return inst.error(&format!("{F}: seed[{i}] = {s} is not finite"));
+            )
+        }) else {
+            return inst.error(&format!(
+                "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
+            ));
+        };
+        if let Some((i, s)) = seed.iter().enumerate().find(|(_, s)| !s.is_finite()) {
+            return inst.error(&format!("{F}: seed[{i}] = {s} is not finite"));
+        }
+        let mut result = vec![0.0; knowns.len()];
+        let mut unit = vec![0.0; knowns.len()];
+        let mut column = vec![0.0; unknowns.len()];
+        // Checks the references even when there is no known (no column is computed then).
+        if knowns.is_empty() {
+            let status = inst.directional_derivative(unknowns, knowns, &[], &mut column);
+            if status != fmi3OK {
+                return status;
             }
-            let mut result = vec![0.0; knowns.len()];
-            let mut unit = vec![0.0; knowns.len()];
-            let mut column = vec![0.0; unknowns.len()];
-            // Checks the references even when there is no known (no column is computed then).
-            if knowns.is_empty() {
-                let status = inst.directional_derivative(unknowns, knowns, &[], &mut column);
-                if status != fmi3OK {
-                    return status;
-                }
+        }
+        for j in 0..knowns.len() {
+            unit.fill(0.0);
+            unit[j] = 1.0;
+            let status = inst.directional_derivative(unknowns, knowns, &unit, &mut column);
+            if status != fmi3OK {
+                return status;
             }
-            for j in 0..knowns.len() {
-                unit.fill(0.0);
-                unit[j] = 1.0;
-                let status = inst.directional_derivative(unknowns, knowns, &unit, &mut column);
-                if status != fmi3OK {
-                    return status;
-                }
-                result[j] = column.iter().zip(seed).map(|(d, s)| d * s).sum();
-            }
-            out.copy_from_slice(&result);
-            fmi3OK
-        })
-    }
+            result[j] = column.iter().zip(seed).map(|(d, s)| d * s).sum();
+        }
+        out.copy_from_slice(&result);
+        fmi3OK
+    })
 }

@@ -1,6 +1,65 @@
 //! `export_fmi3!(Model)`: the FMI 3.0 functions of a model (usually through
 //! [`export_fmu!`](crate::export_fmu), which exports both versions).
 
+/// Rows for [`__rustfmu_extern_c!`](crate::__rustfmu_extern_c) of the FMI 3.0 functions that
+/// refuse, written from shorter rows: the C name of a refusal says what it refuses (passed on
+/// with `stringify!`), and every one of a kind has the same parameters. Not part of the API.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __rustfmu_fmi3_refusals {
+    // `fmi3GetX, fmi3SetX(fmi3X, "X");`: the getter and the setter of a type no variable of this
+    // FMU has; every value reference is refused, NULL arrays as in any getter and setter.
+    (none for $model:ty: $($get:ident, $set:ident($t:ty, $type_name:literal);)*) => {
+        $crate::__rustfmu_extern_c! {
+            $(
+                $get(
+                    instance: $crate::__private::abi3::fmi3Instance,
+                    valueReferences: *const $crate::__private::abi3::fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut $t,
+                    nValues: usize,
+                ) -> $crate::__private::abi3::fmi3Status =>
+                    $crate::__private::api3::get_none::<$model>(
+                        instance,
+                        stringify!($get),
+                        $type_name,
+                        valueReferences,
+                        nValueReferences,
+                        values.is_null(),
+                        nValues,
+                    );
+                $set(
+                    instance: $crate::__private::abi3::fmi3Instance,
+                    valueReferences: *const $crate::__private::abi3::fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const $t,
+                    nValues: usize,
+                ) -> $crate::__private::abi3::fmi3Status =>
+                    $crate::__private::api3::set_none::<$model>(
+                        instance,
+                        stringify!($set),
+                        $type_name,
+                        valueReferences,
+                        nValueReferences,
+                        values.is_null(),
+                        nValues,
+                    );
+            )*
+        }
+    };
+    // `fmi3X(parameters after the instance) => why;`: a function of a feature this FMU does not
+    // have; fmi3Error with `why`, in any state.
+    (not_provided for $model:ty: $($name:ident($($arg:ident: $ty:ty),* $(,)?) => $why:expr;)*) => {
+        $crate::__rustfmu_extern_c! {
+            $(
+                $name(instance: $crate::__private::abi3::fmi3Instance, $($arg: $ty),*)
+                    -> $crate::__private::abi3::fmi3Status =>
+                    $crate::__private::api3::not_provided::<$model>(instance, stringify!($name), $why);
+            )*
+        }
+    };
+}
+
 /// Exports `Model` as an FMI 3.0 FMU for model exchange and co-simulation in one binary:
 /// defines every function of the FMI 3.0 standard (`fmi3Functions.h`) as an unmangled
 /// `extern "C"` symbol with its exact signature, forwarded to the runtime, and embeds the
@@ -36,26 +95,25 @@ macro_rules! export_fmi3 {
             pub extern "C" fn fmi3GetVersion() -> *const ::std::os::raw::c_char {
                 api3::get_version()
             }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetDebugLogging(
-                instance: fmi3Instance,
-                loggingOn: fmi3Boolean,
-                nCategories: usize,
-                categories: *const fmi3String,
-            ) -> fmi3Status {
-                unsafe { api3::set_debug_logging::<__RustfmuModel>(instance, loggingOn, nCategories, categories) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3InstantiateModelExchange(
-                instanceName: fmi3String,
-                instantiationToken: fmi3String,
-                resourcePath: fmi3String,
-                visible: fmi3Boolean,
-                loggingOn: fmi3Boolean,
-                instanceEnvironment: fmi3InstanceEnvironment,
-                logMessage: fmi3LogMessageCallback,
-            ) -> fmi3Instance {
-                unsafe {
+            // One row per C function: its name, its parameters as fmi3Functions.h names them, and
+            // the runtime function it forwards to (see `rustfmu::core::trampolines`).
+            $crate::__rustfmu_extern_c! {
+                fmi3SetDebugLogging(
+                    instance: fmi3Instance,
+                    loggingOn: fmi3Boolean,
+                    nCategories: usize,
+                    categories: *const fmi3String,
+                ) -> fmi3Status =>
+                    api3::set_debug_logging::<__RustfmuModel>(instance, loggingOn, nCategories, categories);
+                fmi3InstantiateModelExchange(
+                    instanceName: fmi3String,
+                    instantiationToken: fmi3String,
+                    resourcePath: fmi3String,
+                    visible: fmi3Boolean,
+                    loggingOn: fmi3Boolean,
+                    instanceEnvironment: fmi3InstanceEnvironment,
+                    logMessage: fmi3LogMessageCallback,
+                ) -> fmi3Instance =>
                     api3::instantiate_model_exchange::<__RustfmuModel>(
                         TOKEN,
                         &DESCRIPTION,
@@ -66,25 +124,21 @@ macro_rules! export_fmi3 {
                         loggingOn,
                         instanceEnvironment,
                         logMessage,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
-                instanceName: fmi3String,
-                instantiationToken: fmi3String,
-                resourcePath: fmi3String,
-                visible: fmi3Boolean,
-                loggingOn: fmi3Boolean,
-                eventModeUsed: fmi3Boolean,
-                earlyReturnAllowed: fmi3Boolean,
-                requiredIntermediateVariables: *const fmi3ValueReference,
-                nRequiredIntermediateVariables: usize,
-                instanceEnvironment: fmi3InstanceEnvironment,
-                logMessage: fmi3LogMessageCallback,
-                intermediateUpdate: fmi3IntermediateUpdateCallback,
-            ) -> fmi3Instance {
-                unsafe {
+                    );
+                fmi3InstantiateCoSimulation(
+                    instanceName: fmi3String,
+                    instantiationToken: fmi3String,
+                    resourcePath: fmi3String,
+                    visible: fmi3Boolean,
+                    loggingOn: fmi3Boolean,
+                    eventModeUsed: fmi3Boolean,
+                    earlyReturnAllowed: fmi3Boolean,
+                    requiredIntermediateVariables: *const fmi3ValueReference,
+                    nRequiredIntermediateVariables: usize,
+                    instanceEnvironment: fmi3InstanceEnvironment,
+                    logMessage: fmi3LogMessageCallback,
+                    intermediateUpdate: fmi3IntermediateUpdateCallback,
+                ) -> fmi3Instance =>
                     api3::instantiate_co_simulation::<__RustfmuModel>(
                         TOKEN,
                         &DESCRIPTION,
@@ -100,44 +154,34 @@ macro_rules! export_fmi3 {
                         instanceEnvironment,
                         logMessage,
                         intermediateUpdate,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
-                instanceName: fmi3String,
-                _instantiationToken: fmi3String,
-                _resourcePath: fmi3String,
-                _visible: fmi3Boolean,
-                _loggingOn: fmi3Boolean,
-                instanceEnvironment: fmi3InstanceEnvironment,
-                logMessage: fmi3LogMessageCallback,
-                _clockUpdate: fmi3ClockUpdateCallback,
-                _lockPreemption: fmi3LockPreemptionCallback,
-                _unlockPreemption: fmi3UnlockPreemptionCallback,
-            ) -> fmi3Instance {
-                unsafe {
+                    );
+                fmi3InstantiateScheduledExecution(
+                    instanceName: fmi3String,
+                    _instantiationToken: fmi3String,
+                    _resourcePath: fmi3String,
+                    _visible: fmi3Boolean,
+                    _loggingOn: fmi3Boolean,
+                    instanceEnvironment: fmi3InstanceEnvironment,
+                    logMessage: fmi3LogMessageCallback,
+                    _clockUpdate: fmi3ClockUpdateCallback,
+                    _lockPreemption: fmi3LockPreemptionCallback,
+                    _unlockPreemption: fmi3UnlockPreemptionCallback,
+                ) -> fmi3Instance =>
                     api3::instantiate_scheduled_execution::<__RustfmuModel>(
                         instanceName,
                         instanceEnvironment,
                         logMessage,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-                unsafe { shared::free_instance::<__RustfmuModel>(&TERMS, instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EnterInitializationMode(
-                instance: fmi3Instance,
-                toleranceDefined: fmi3Boolean,
-                tolerance: fmi3Float64,
-                startTime: fmi3Float64,
-                stopTimeDefined: fmi3Boolean,
-                stopTime: fmi3Float64,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3FreeInstance(instance: fmi3Instance) =>
+                    shared::free_instance::<__RustfmuModel>(&TERMS, instance);
+                fmi3EnterInitializationMode(
+                    instance: fmi3Instance,
+                    toleranceDefined: fmi3Boolean,
+                    tolerance: fmi3Float64,
+                    startTime: fmi3Float64,
+                    stopTimeDefined: fmi3Boolean,
+                    stopTime: fmi3Float64,
+                ) -> fmi3Status =>
                     api3::enter_initialization_mode::<__RustfmuModel>(
                         instance,
                         toleranceDefined,
@@ -145,435 +189,103 @@ macro_rules! export_fmi3 {
                         startTime,
                         stopTimeDefined,
                         stopTime,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::exit_initialization_mode::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::enter_event_mode::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::terminate::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3Reset(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::reset::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetFloat32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Float32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetFloat32",
-                        "Float32",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetInt8(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Int8,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetInt8",
-                        "Int8",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetUInt8(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3UInt8,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetUInt8",
-                        "UInt8",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetInt16(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Int16,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetInt16",
-                        "Int16",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetUInt16(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3UInt16,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetUInt16",
-                        "UInt16",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetUInt32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3UInt32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetUInt32",
-                        "UInt32",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetUInt64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3UInt64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetUInt64",
-                        "UInt64",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetFloat64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Float64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetInt32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Int32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetInt64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Int64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetBoolean(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3Boolean,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetString(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *mut fmi3String,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::get_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetFloat32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Float32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetFloat32",
-                        "Float32",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetInt8(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Int8,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetInt8",
-                        "Int8",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetUInt8(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3UInt8,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetUInt8",
-                        "UInt8",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetInt16(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Int16,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetInt16",
-                        "Int16",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetUInt16(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3UInt16,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetUInt16",
-                        "UInt16",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetUInt32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3UInt32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetUInt32",
-                        "UInt32",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetUInt64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3UInt64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_none::<__RustfmuModel>(
-                        instance,
-                        "fmi3SetUInt64",
-                        "UInt64",
-                        valueReferences,
-                        nValueReferences,
-                        values.is_null(),
-                        nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetFloat64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Float64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetInt32(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Int32,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetInt64(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Int64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetBoolean(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3Boolean,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetString(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                values: *const fmi3String,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::set_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetBinary(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                valueSizes: *mut usize,
-                values: *mut fmi3Binary,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::exit_initialization_mode::<__RustfmuModel>(instance);
+                fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::enter_event_mode::<__RustfmuModel>(instance);
+                fmi3Terminate(instance: fmi3Instance) -> fmi3Status =>
+                    api3::terminate::<__RustfmuModel>(instance);
+                fmi3Reset(instance: fmi3Instance) -> fmi3Status =>
+                    api3::reset::<__RustfmuModel>(instance);
+                fmi3GetFloat64(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3Float64,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::get_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3GetInt32(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3Int32,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::get_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3GetInt64(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3Int64,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::get_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3GetBoolean(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3Boolean,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::get_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3GetString(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3String,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::get_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3SetFloat64(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3Float64,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::set_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3SetInt32(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3Int32,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::set_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3SetInt64(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3Int64,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::set_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3SetBoolean(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3Boolean,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::set_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3SetString(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3String,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    api3::set_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                fmi3GetBinary(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    valueSizes: *mut usize,
+                    values: *mut fmi3Binary,
+                    nValues: usize,
+                ) -> fmi3Status =>
                     api3::get_none::<__RustfmuModel>(
                         instance,
                         "fmi3GetBinary",
@@ -582,19 +294,15 @@ macro_rules! export_fmi3 {
                         nValueReferences,
                         values.is_null() || valueSizes.is_null(),
                         nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetBinary(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                valueSizes: *const usize,
-                values: *const fmi3Binary,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3SetBinary(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    valueSizes: *const usize,
+                    values: *const fmi3Binary,
+                    nValues: usize,
+                ) -> fmi3Status =>
                     api3::set_none::<__RustfmuModel>(
                         instance,
                         "fmi3SetBinary",
@@ -603,132 +311,56 @@ macro_rules! export_fmi3 {
                         nValueReferences,
                         values.is_null() || valueSizes.is_null(),
                         nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetClock(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _values: *mut fmi3Clock,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3GetClock", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetClock(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _values: *const fmi3Clock,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3SetClock", NO_CLOCKS) }
-            }
-            const NO_CLOCKS: &str = "this FMU has no clocks";
-            const NO_DEPENDENCIES: &str =
-                "not provided at run time: the dependencies are in modelDescription.xml's ModelStructure";
-            const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(
-                instance: fmi3Instance,
-                _valueReference: fmi3ValueReference,
-                _nDependencies: *mut usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::not_provided::<__RustfmuModel>(
-                        instance,
-                        "fmi3GetNumberOfVariableDependencies",
-                        NO_DEPENDENCIES,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetVariableDependencies(
-                instance: fmi3Instance,
-                _dependent: fmi3ValueReference,
-                _elementIndicesOfDependent: *mut usize,
-                _independents: *mut fmi3ValueReference,
-                _elementIndicesOfIndependents: *mut usize,
-                _dependencyKinds: *mut fmi3DependencyKind,
-                _nDependencies: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    api3::not_provided::<__RustfmuModel>(instance, "fmi3GetVariableDependencies", NO_DEPENDENCIES)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetFMUState(
-                instance: fmi3Instance,
-                FMUState: *mut fmi3FMUState,
-            ) -> fmi3Status {
-                unsafe { shared::get_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status {
-                unsafe { shared::set_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3FreeFMUState(
-                instance: fmi3Instance,
-                FMUState: *mut fmi3FMUState,
-            ) -> fmi3Status {
-                unsafe { shared::free_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
-                instance: fmi3Instance,
-                FMUState: fmi3FMUState,
-                size: *mut usize,
-            ) -> fmi3Status {
-                unsafe { shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, instance, FMUState, size) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SerializeFMUState(
-                instance: fmi3Instance,
-                FMUState: fmi3FMUState,
-                serializedState: *mut fmi3Byte,
-                size: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
+                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status =>
+                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                fmi3FreeFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
+                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                fmi3SerializedFMUStateSize(
+                    instance: fmi3Instance,
+                    FMUState: fmi3FMUState,
+                    size: *mut usize,
+                ) -> fmi3Status =>
+                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, instance, FMUState, size);
+                fmi3SerializeFMUState(
+                    instance: fmi3Instance,
+                    FMUState: fmi3FMUState,
+                    serializedState: *mut fmi3Byte,
+                    size: usize,
+                ) -> fmi3Status =>
                     shared::serialize_fmu_state::<__RustfmuModel>(
                         &TERMS,
                         instance,
                         FMUState,
                         serializedState.cast(),
                         size,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3DeserializeFMUState(
-                instance: fmi3Instance,
-                serializedState: *const fmi3Byte,
-                size: usize,
-                FMUState: *mut fmi3FMUState,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3DeserializeFMUState(
+                    instance: fmi3Instance,
+                    serializedState: *const fmi3Byte,
+                    size: usize,
+                    FMUState: *mut fmi3FMUState,
+                ) -> fmi3Status =>
                     shared::deserialize_fmu_state::<__RustfmuModel>(
                         &TERMS,
                         instance,
                         serializedState.cast(),
                         size,
                         FMUState,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
-                instance: fmi3Instance,
-                unknowns: *const fmi3ValueReference,
-                nUnknowns: usize,
-                knowns: *const fmi3ValueReference,
-                nKnowns: usize,
-                seed: *const fmi3Float64,
-                nSeed: usize,
-                sensitivity: *mut fmi3Float64,
-                nSensitivity: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3GetDirectionalDerivative(
+                    instance: fmi3Instance,
+                    unknowns: *const fmi3ValueReference,
+                    nUnknowns: usize,
+                    knowns: *const fmi3ValueReference,
+                    nKnowns: usize,
+                    seed: *const fmi3Float64,
+                    nSeed: usize,
+                    sensitivity: *mut fmi3Float64,
+                    nSensitivity: usize,
+                ) -> fmi3Status =>
                     api3::get_directional_derivative::<__RustfmuModel>(
                         instance,
                         unknowns,
@@ -739,22 +371,18 @@ macro_rules! export_fmi3 {
                         nSeed,
                         sensitivity,
                         nSensitivity,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetAdjointDerivative(
-                instance: fmi3Instance,
-                unknowns: *const fmi3ValueReference,
-                nUnknowns: usize,
-                knowns: *const fmi3ValueReference,
-                nKnowns: usize,
-                seed: *const fmi3Float64,
-                nSeed: usize,
-                sensitivity: *mut fmi3Float64,
-                nSensitivity: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3GetAdjointDerivative(
+                    instance: fmi3Instance,
+                    unknowns: *const fmi3ValueReference,
+                    nUnknowns: usize,
+                    knowns: *const fmi3ValueReference,
+                    nKnowns: usize,
+                    seed: *const fmi3Float64,
+                    nSeed: usize,
+                    sensitivity: *mut fmi3Float64,
+                    nSensitivity: usize,
+                ) -> fmi3Status =>
                     api3::get_adjoint_derivative::<__RustfmuModel>(
                         instance,
                         unknowns,
@@ -765,112 +393,18 @@ macro_rules! export_fmi3 {
                         nSeed,
                         sensitivity,
                         nSensitivity,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe {
-                    api3::not_provided::<__RustfmuModel>(instance, "fmi3EnterConfigurationMode", NO_CONFIGURATION)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3ExitConfigurationMode", NO_CONFIGURATION) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetIntervalDecimal(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _intervals: *mut fmi3Float64,
-                _qualifiers: *mut fmi3IntervalQualifier,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3GetIntervalDecimal", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetIntervalFraction(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _counters: *mut fmi3UInt64,
-                _resolutions: *mut fmi3UInt64,
-                _qualifiers: *mut fmi3IntervalQualifier,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3GetIntervalFraction", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetShiftDecimal(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _shifts: *mut fmi3Float64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3GetShiftDecimal", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetShiftFraction(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _counters: *mut fmi3UInt64,
-                _resolutions: *mut fmi3UInt64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3GetShiftFraction", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetIntervalDecimal(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _intervals: *const fmi3Float64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3SetIntervalDecimal", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetIntervalFraction(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _counters: *const fmi3UInt64,
-                _resolutions: *const fmi3UInt64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3SetIntervalFraction", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetShiftDecimal(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _shifts: *const fmi3Float64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3SetShiftDecimal", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetShiftFraction(
-                instance: fmi3Instance,
-                _valueReferences: *const fmi3ValueReference,
-                _nValueReferences: usize,
-                _counters: *const fmi3UInt64,
-                _resolutions: *const fmi3UInt64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3SetShiftFraction", NO_CLOCKS) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::evaluate_discrete_states::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
-                instance: fmi3Instance,
-                discreteStatesNeedUpdate: *mut fmi3Boolean,
-                terminateSimulation: *mut fmi3Boolean,
-                nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
-                valuesOfContinuousStatesChanged: *mut fmi3Boolean,
-                nextEventTimeDefined: *mut fmi3Boolean,
-                nextEventTime: *mut fmi3Float64,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status =>
+                    api3::evaluate_discrete_states::<__RustfmuModel>(instance);
+                fmi3UpdateDiscreteStates(
+                    instance: fmi3Instance,
+                    discreteStatesNeedUpdate: *mut fmi3Boolean,
+                    terminateSimulation: *mut fmi3Boolean,
+                    nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
+                    valuesOfContinuousStatesChanged: *mut fmi3Boolean,
+                    nextEventTimeDefined: *mut fmi3Boolean,
+                    nextEventTime: *mut fmi3Float64,
+                ) -> fmi3Status =>
                     api3::update_discrete_states::<__RustfmuModel>(
                         instance,
                         discreteStatesNeedUpdate,
@@ -879,119 +413,79 @@ macro_rules! export_fmi3 {
                         valuesOfContinuousStatesChanged,
                         nextEventTimeDefined,
                         nextEventTime,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::enter_continuous_time_mode::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
-                instance: fmi3Instance,
-                noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
-                enterEventMode: *mut fmi3Boolean,
-                terminateSimulation: *mut fmi3Boolean,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::enter_continuous_time_mode::<__RustfmuModel>(instance);
+                fmi3CompletedIntegratorStep(
+                    instance: fmi3Instance,
+                    noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
+                    enterEventMode: *mut fmi3Boolean,
+                    terminateSimulation: *mut fmi3Boolean,
+                ) -> fmi3Status =>
                     api3::completed_integrator_step::<__RustfmuModel>(
                         instance,
                         noSetFMUStatePriorToCurrentPoint,
                         enterEventMode,
                         terminateSimulation,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status {
-                unsafe { api3::set_time::<__RustfmuModel>(instance, time) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3SetContinuousStates(
-                instance: fmi3Instance,
-                continuousStates: *const fmi3Float64,
-                nContinuousStates: usize,
-            ) -> fmi3Status {
-                unsafe { api3::set_continuous_states::<__RustfmuModel>(instance, continuousStates, nContinuousStates) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
-                instance: fmi3Instance,
-                derivatives: *mut fmi3Float64,
-                n: usize,
-            ) -> fmi3Status {
-                unsafe {
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, instance, derivatives, n)
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetEventIndicators(
-                instance: fmi3Instance,
-                eventIndicators: *mut fmi3Float64,
-                n: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status =>
+                    api3::set_time::<__RustfmuModel>(instance, time);
+                fmi3SetContinuousStates(
+                    instance: fmi3Instance,
+                    continuousStates: *const fmi3Float64,
+                    nContinuousStates: usize,
+                ) -> fmi3Status =>
+                    api3::set_continuous_states::<__RustfmuModel>(instance, continuousStates, nContinuousStates);
+                fmi3GetContinuousStateDerivatives(
+                    instance: fmi3Instance,
+                    derivatives: *mut fmi3Float64,
+                    n: usize,
+                ) -> fmi3Status =>
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, instance, derivatives, n);
+                fmi3GetEventIndicators(
+                    instance: fmi3Instance,
+                    eventIndicators: *mut fmi3Float64,
+                    n: usize,
+                ) -> fmi3Status =>
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::EventIndicators,
                         instance,
                         eventIndicators,
                         n,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetContinuousStates(
-                instance: fmi3Instance,
-                continuousStates: *mut fmi3Float64,
-                n: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3GetContinuousStates(
+                    instance: fmi3Instance,
+                    continuousStates: *mut fmi3Float64,
+                    n: usize,
+                ) -> fmi3Status =>
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::ContinuousStates,
                         instance,
                         continuousStates,
                         n,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
-                instance: fmi3Instance,
-                nominals: *mut fmi3Float64,
-                n: usize,
-            ) -> fmi3Status {
-                unsafe { shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, instance, nominals, n) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(
-                instance: fmi3Instance,
-                n: *mut usize,
-            ) -> fmi3Status {
-                unsafe { api3::get_number_of_event_indicators::<__RustfmuModel>(instance, n) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(
-                instance: fmi3Instance,
-                n: *mut usize,
-            ) -> fmi3Status {
-                unsafe { api3::get_number_of_continuous_states::<__RustfmuModel>(instance, n) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status {
-                unsafe { api3::enter_step_mode::<__RustfmuModel>(instance) }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3GetOutputDerivatives(
-                instance: fmi3Instance,
-                valueReferences: *const fmi3ValueReference,
-                nValueReferences: usize,
-                orders: *const fmi3Int32,
-                values: *mut fmi3Float64,
-                nValues: usize,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3GetNominalsOfContinuousStates(
+                    instance: fmi3Instance,
+                    nominals: *mut fmi3Float64,
+                    n: usize,
+                ) -> fmi3Status =>
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, instance, nominals, n);
+                fmi3GetNumberOfEventIndicators(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
+                    api3::get_number_of_event_indicators::<__RustfmuModel>(instance, n);
+                fmi3GetNumberOfContinuousStates(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
+                    api3::get_number_of_continuous_states::<__RustfmuModel>(instance, n);
+                fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::enter_step_mode::<__RustfmuModel>(instance);
+                fmi3GetOutputDerivatives(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    orders: *const fmi3Int32,
+                    values: *mut fmi3Float64,
+                    nValues: usize,
+                ) -> fmi3Status =>
                     api3::get_output_derivatives::<__RustfmuModel>(
                         instance,
                         valueReferences,
@@ -999,21 +493,17 @@ macro_rules! export_fmi3 {
                         orders,
                         values,
                         nValues,
-                    )
-                }
-            }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3DoStep(
-                instance: fmi3Instance,
-                currentCommunicationPoint: fmi3Float64,
-                communicationStepSize: fmi3Float64,
-                noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
-                eventHandlingNeeded: *mut fmi3Boolean,
-                terminateSimulation: *mut fmi3Boolean,
-                earlyReturn: *mut fmi3Boolean,
-                lastSuccessfulTime: *mut fmi3Float64,
-            ) -> fmi3Status {
-                unsafe {
+                    );
+                fmi3DoStep(
+                    instance: fmi3Instance,
+                    currentCommunicationPoint: fmi3Float64,
+                    communicationStepSize: fmi3Float64,
+                    noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
+                    eventHandlingNeeded: *mut fmi3Boolean,
+                    terminateSimulation: *mut fmi3Boolean,
+                    earlyReturn: *mut fmi3Boolean,
+                    lastSuccessfulTime: *mut fmi3Float64,
+                ) -> fmi3Status =>
                     api3::do_step::<__RustfmuModel>(
                         instance,
                         currentCommunicationPoint,
@@ -1023,16 +513,100 @@ macro_rules! export_fmi3 {
                         terminateSimulation,
                         earlyReturn,
                         lastSuccessfulTime,
-                    )
-                }
+                    );
             }
-            #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi3ActivateModelPartition(
-                instance: fmi3Instance,
-                _clockReference: fmi3ValueReference,
-                _activationTime: fmi3Float64,
-            ) -> fmi3Status {
-                unsafe { api3::not_provided::<__RustfmuModel>(instance, "fmi3ActivateModelPartition", NO_CLOCKS) }
+            // The getters and setters of the types no variable of this FMU has.
+            $crate::__rustfmu_fmi3_refusals! {
+                none for __RustfmuModel:
+                fmi3GetFloat32, fmi3SetFloat32(fmi3Float32, "Float32");
+                fmi3GetInt8, fmi3SetInt8(fmi3Int8, "Int8");
+                fmi3GetUInt8, fmi3SetUInt8(fmi3UInt8, "UInt8");
+                fmi3GetInt16, fmi3SetInt16(fmi3Int16, "Int16");
+                fmi3GetUInt16, fmi3SetUInt16(fmi3UInt16, "UInt16");
+                fmi3GetUInt32, fmi3SetUInt32(fmi3UInt32, "UInt32");
+                fmi3GetUInt64, fmi3SetUInt64(fmi3UInt64, "UInt64");
+            }
+            const NO_CLOCKS: &str = "this FMU has no clocks";
+            const NO_DEPENDENCIES: &str =
+                "not provided at run time: the dependencies are in modelDescription.xml's ModelStructure";
+            const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
+            // The functions of the features this FMU does not have, each with the reason.
+            $crate::__rustfmu_fmi3_refusals! {
+                not_provided for __RustfmuModel:
+                fmi3GetClock(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _values: *mut fmi3Clock,
+                ) => NO_CLOCKS;
+                fmi3SetClock(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _values: *const fmi3Clock,
+                ) => NO_CLOCKS;
+                fmi3GetNumberOfVariableDependencies(
+                    _valueReference: fmi3ValueReference,
+                    _nDependencies: *mut usize,
+                ) => NO_DEPENDENCIES;
+                fmi3GetVariableDependencies(
+                    _dependent: fmi3ValueReference,
+                    _elementIndicesOfDependent: *mut usize,
+                    _independents: *mut fmi3ValueReference,
+                    _elementIndicesOfIndependents: *mut usize,
+                    _dependencyKinds: *mut fmi3DependencyKind,
+                    _nDependencies: usize,
+                ) => NO_DEPENDENCIES;
+                fmi3EnterConfigurationMode() => NO_CONFIGURATION;
+                fmi3ExitConfigurationMode() => NO_CONFIGURATION;
+                fmi3GetIntervalDecimal(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _intervals: *mut fmi3Float64,
+                    _qualifiers: *mut fmi3IntervalQualifier,
+                ) => NO_CLOCKS;
+                fmi3GetIntervalFraction(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _counters: *mut fmi3UInt64,
+                    _resolutions: *mut fmi3UInt64,
+                    _qualifiers: *mut fmi3IntervalQualifier,
+                ) => NO_CLOCKS;
+                fmi3GetShiftDecimal(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _shifts: *mut fmi3Float64,
+                ) => NO_CLOCKS;
+                fmi3GetShiftFraction(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _counters: *mut fmi3UInt64,
+                    _resolutions: *mut fmi3UInt64,
+                ) => NO_CLOCKS;
+                fmi3SetIntervalDecimal(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _intervals: *const fmi3Float64,
+                ) => NO_CLOCKS;
+                fmi3SetIntervalFraction(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _counters: *const fmi3UInt64,
+                    _resolutions: *const fmi3UInt64,
+                ) => NO_CLOCKS;
+                fmi3SetShiftDecimal(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _shifts: *const fmi3Float64,
+                ) => NO_CLOCKS;
+                fmi3SetShiftFraction(
+                    _valueReferences: *const fmi3ValueReference,
+                    _nValueReferences: usize,
+                    _counters: *const fmi3UInt64,
+                    _resolutions: *const fmi3UInt64,
+                ) => NO_CLOCKS;
+                fmi3ActivateModelPartition(
+                    _clockReference: fmi3ValueReference,
+                    _activationTime: fmi3Float64,
+                ) => NO_CLOCKS;
             }
         }
     };
