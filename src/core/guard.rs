@@ -81,7 +81,7 @@ impl<M: CoSimulation> Component<M> {
             // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
             // fmi3Error, the FMU enters state Terminated" (from there fmi3Reset or fmi3SetFMUState
             // lead back). FMI 2.0 has no such rule: its instances stay where they were.
-            if inst.terms.version == Version::Fmi3 && status == ERROR && inst.sim.state != State::Fatal {
+            if inst.version == Version::Fmi3 && status == ERROR && inst.sim.state != State::Fatal {
                 inst.sim.state = State::Terminated;
             }
             status

@@ -318,7 +318,7 @@ fn check_declared<M: CoSimulation>(
     want: VarType,
 ) -> Result<(), fmi3Status> {
     for vr in vrs {
-        if let Some(v) = M::DESCRIPTION.variables.iter().find(|v| v.value_reference == *vr)
+        if let Some(v) = M::variable_index(*vr).map(|i| &M::DESCRIPTION.variables[i])
             && v.var_type != want
             && crate::description::same_api_type(v.var_type, want)
         {
@@ -550,7 +550,7 @@ pub unsafe fn set_int64<M: CoSimulation>(
 /// Int64 reaches the enumerations only (this FMU declares no Int64 variable).
 fn only_enumerations<M: CoSimulation>(inst: &Instance<M>, function: &str, vrs: &[u32]) -> Result<(), fmi3Status> {
     for vr in vrs {
-        match M::DESCRIPTION.variables.iter().find(|v| v.value_reference == *vr) {
+        match M::variable_index(*vr).map(|i| &M::DESCRIPTION.variables[i]) {
             Some(v) if v.var_type == VarType::Enumeration => {}
             Some(v) => {
                 return Err(inst.error(&format!(
