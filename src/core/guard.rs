@@ -1,8 +1,8 @@
 //! What every C entry point of both versions runs through: the instance handle the importer
-//! holds ([`Component`], converted once by the unsafe [`Component::from_handle`]), then, in safe
+//! holds ([`Component`], converted once by the unsafe `Component::from_handle`), then, in safe
 //! code, the NULL check, the re-entrancy refusal, the state check and `catch_unwind`
-//! ([`with_instance`], [`Component::run`]); and the conversions of the importer's other
-//! pointers into slices and text ([`slice`], [`slice_mut`], [`text`]), each an `unsafe fn`
+//! (`with_instance`, `Component::run`); and the conversions of the importer's other
+//! pointers into slices and text (`slice`, `slice_mut`, `text`), each an `unsafe fn`
 //! whose contract the caller's `SAFETY:` line answers.
 
 use super::instance::Instance;
@@ -101,7 +101,7 @@ impl<M: CoSimulation> Component<M> {
     }
 }
 
-/// Runs `f` on the instance of `component` (from [`Component::from_handle`]) after the state
+/// Runs `f` on the instance of `component` (from `Component::from_handle`) after the state
 /// check for `call`; a NULL instance cannot be logged to: the answer is an error status.
 #[inline]
 pub(crate) fn with_instance<M: CoSimulation>(
@@ -135,7 +135,7 @@ pub(crate) unsafe fn slice<'a, T>(p: *const T, n: usize) -> Option<&'a [T]> {
 /// An importer's output array: NULL is fine only when it is empty.
 ///
 /// # Safety
-/// As for [`slice`], and no other reference reads or writes the elements meanwhile.
+/// As for `slice`, and no other reference reads or writes the elements meanwhile.
 pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Option<&'a mut [T]> {
     if n == 0 {
         Some(&mut [])
@@ -164,7 +164,7 @@ pub(crate) unsafe fn text<'a>(s: *const c_char) -> Option<std::borrow::Cow<'a, s
 /// call is inside it).
 ///
 /// # Safety
-/// `c` is NULL or a live instance of model `M` (as for [`Component::from_handle`]), and no
+/// `c` is NULL or a live instance of model `M` (as for `Component::from_handle`), and no
 /// call is inside it.
 pub unsafe fn state_of<M: CoSimulation>(c: *mut c_void) -> Option<State> {
     // SAFETY: as in `with_instance`; no call is inside (the caller's promise).
