@@ -175,7 +175,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// The one place where the state machine is enforced.
-    #[inline]
+    #[inline(always)]
     pub fn check_state(&self, call: Call, function: &str) -> Outcome {
         let right_interface = match call.interface() {
             Some(model_exchange) => model_exchange == self.model_exchange,
