@@ -13,12 +13,16 @@ bash tests/setup-env.sh --main-job
 lap "setup (tests/setup-env.sh --main-job)"
 # Every host program the main job runs, and the runner's Python module, in one cargo invocation:
 # cargo resolves features per invocation, so `cargo run -p A` then `cargo run -p B` (or maturin's
-# own build of the module) would build the shared dependencies twice.
+# own build of the module) would build the shared dependencies twice. The FMU crates' libraries
+# are built here too: with only binaries as roots cargo builds the shared dependencies for a
+# binary's LTO (bitcode only), and `cargo fmu build` then compiled the FMU crates' whole tree again
+# for a library (45 s); built here, the FMU build's host step finds them.
 # (Setup and builds run one after the other: pip's install and maturin's build beside this build
 # made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
 source tests/pyo3-env.sh
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
-  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
+  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python -p pendulum-fmu -p controller-fmu \
+  -p dc-motor-fmu --lib
 bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python

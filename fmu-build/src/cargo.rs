@@ -260,15 +260,16 @@ fn version_folder(version: FmiVersion) -> &'static str {
 }
 
 /// `cargo build --release -p ...` in the workspace: the libraries of `crates`, each one binary of
-/// both FMI versions (`export_fmu!`). `target`: a triple other than the host's (`--target
-/// <triple>`, with the linker [`crate::target::build_env`] names), or `None` for the host.
-pub fn build(ws: &Workspace, crates: &[FmuCrate], target: Option<&str>) -> Result<(), String> {
+/// both FMI versions (`export_fmu!`). `targets`: triples other than the host's, built side by
+/// side in this one invocation (`--target <triple>` each, with the linkers
+/// [`crate::target::build_env`] names), or none for the host.
+pub fn build(ws: &Workspace, crates: &[FmuCrate], targets: &[&str]) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut args: Vec<String> = vec!["build".into(), "--release".into()];
     let mut env = Vec::new();
-    if let Some(t) = target {
+    for t in targets {
         args.extend(["--target".into(), t.to_string()]);
-        env = crate::target::build_env(t);
+        env.extend(crate::target::build_env(t));
     }
     for c in crates {
         args.extend(["-p".into(), c.package.clone()]);

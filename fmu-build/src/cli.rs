@@ -402,10 +402,10 @@ pub fn build_versions(
         ));
     }
     let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
+    // What each target builds: every crate this target is for, in one cargo build (one binary
+    // per crate serves both FMI versions: `export_fmu!` exports the fmi2* and the fmi3* functions).
+    let mut jobs: Vec<(String, Vec<(FmuCrate, Vec<FmiVersion>)>)> = Vec::new();
     for t in &all_targets {
-        let cross = (*t != host).then_some(t.as_str());
-        // Every crate this target is for, in one cargo build: one binary per crate serves both
-        // FMI versions (`export_fmu!` exports the fmi2* and the fmi3* functions).
         let mine: Vec<(FmuCrate, Vec<FmiVersion>)> = plan
             .iter()
             .filter(|(_, _, ts)| ts.contains(t))
@@ -417,20 +417,41 @@ pub fn build_versions(
             })
             .filter(|(_, vs)| !vs.is_empty())
             .collect();
-        if mine.is_empty() {
-            continue;
+        if !mine.is_empty() {
+            jobs.push((t.clone(), mine));
         }
+    }
+    // The host alone (its units are the ones `cargo build` and `cargo test` share in
+    // target/release/), then the other targets that build the same crates in one cargo
+    // invocation with several `--target`s: each target compiles its whole dependency tree, a
+    // mostly serial chain, so two of them side by side keep two cores busy (Windows then aarch64
+    // one after the other took 50 + 46 s; together: docs/performance.md).
+    for group in build_groups(&jobs, &host) {
         let started = std::time::Instant::now();
-        let crates: Vec<FmuCrate> = mine.iter().map(|(c, _)| c.clone()).collect();
-        cargo::build(&ws, &crates, cross)?;
-        for (c, versions) in &mine {
-            for v in versions {
-                let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
-                check_built_version(c, *v, &kept)?;
-                libraries.push((c.clone(), *v, t.clone(), kept));
+        let crates: Vec<FmuCrate> = jobs[group[0]].1.iter().map(|(c, _)| c.clone()).collect();
+        let cross: Vec<&str> = group
+            .iter()
+            .map(|&j| jobs[j].0.as_str())
+            .filter(|t| *t != host)
+            .collect();
+        cargo::build(&ws, &crates, &cross)?;
+        for &j in &group {
+            let (t, mine) = &jobs[j];
+            for (c, versions) in mine {
+                for v in versions {
+                    let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
+                    check_built_version(c, *v, &kept)?;
+                    libraries.push((c.clone(), *v, t.clone(), kept));
+                }
             }
         }
-        eprintln!("fmu: built target {t} in {:.1} s", started.elapsed().as_secs_f64());
+        let names: Vec<&str> = group.iter().map(|&j| jobs[j].0.as_str()).collect();
+        eprintln!(
+            "fmu: built target{} {} in {:.1} s",
+            if names.len() > 1 { "s" } else { "" },
+            names.join(" and "),
+            started.elapsed().as_secs_f64()
+        );
     }
     // Each target is built once; its library is copied to target/fmu-build/fmi{2,3}/ for each
     // version packaged (the same bytes in both), so that a later build of another crate set
@@ -465,6 +486,28 @@ pub fn build_versions(
         write_ssp(&ws, None, None)?;
     }
     Ok(built)
+}
+
+/// Which targets of `jobs` (target, crates) one cargo invocation builds: the host on its own,
+/// the others grouped where they build the same crates (a crate is never built for a target it
+/// is not for). Indices into `jobs`, in their order.
+fn build_groups<T>(jobs: &[(String, Vec<(FmuCrate, T)>)], host: &str) -> Vec<Vec<usize>> {
+    let packages = |j: usize| -> Vec<&str> { jobs[j].1.iter().map(|(c, _)| c.package.as_str()).collect() };
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (j, (t, _)) in jobs.iter().enumerate() {
+        let joins = if t == host {
+            None
+        } else {
+            groups
+                .iter()
+                .position(|g| jobs[g[0]].0 != host && packages(g[0]) == packages(j))
+        };
+        match joins {
+            Some(g) => groups[g].push(j),
+            None => groups.push(vec![j]),
+        }
+    }
+    groups
 }
 
 /// The library built for `version` must implement that version: a crate that calls
@@ -642,5 +685,49 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
             eprintln!("{tool}: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn krate(package: &str) -> FmuCrate {
+        FmuCrate {
+            package: package.into(),
+            manifest_dir: PathBuf::from(package),
+            lib_name: package.replace('-', "_"),
+            documentation: None,
+            resources: None,
+            fmi_versions: None,
+            targets: None,
+        }
+    }
+
+    fn job(target: &str, packages: &[&str]) -> (String, Vec<(FmuCrate, ())>) {
+        (target.into(), packages.iter().map(|p| (krate(p), ())).collect())
+    }
+
+    #[test]
+    fn the_host_builds_alone_and_cross_targets_of_the_same_crates_build_together() {
+        let host = "x86_64-unknown-linux-gnu";
+        let jobs = [
+            job(host, &["a", "b"]),
+            job("x86_64-pc-windows-gnu", &["a", "b"]),
+            job("aarch64-unknown-linux-gnu", &["a", "b"]),
+        ];
+        assert_eq!(build_groups(&jobs, host), vec![vec![0], vec![1, 2]]);
+    }
+
+    #[test]
+    fn a_cross_target_with_other_crates_builds_on_its_own() {
+        let host = "x86_64-unknown-linux-gnu";
+        let jobs = [
+            job(host, &["a", "b"]),
+            job("x86_64-pc-windows-gnu", &["a"]),
+            job("aarch64-unknown-linux-gnu", &["a", "b"]),
+            job("i686-pc-windows-gnu", &["a"]),
+        ];
+        assert_eq!(build_groups(&jobs, host), vec![vec![0], vec![1, 3], vec![2]]);
     }
 }
