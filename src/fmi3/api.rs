@@ -353,6 +353,68 @@ fn accessor(t: VarType) -> &'static str {
     }
 }
 
+/// What every 3.0 getter does before its type's own part: the instance and the state check
+/// (`with_instance`), the two arrays (NULL and length checks, [`arrays`]); `read` then fills
+/// `values` for the value references. One copy for every type (issue 22); each getter below is
+/// its type's conversion only.
+///
+/// # Safety
+/// The getter's contract: `c` NULL or a live instance of this library for `M`; `vr` NULL or
+/// `nvr` elements; `values` NULL or `n_values` writable elements of `T`.
+#[inline(always)]
+unsafe fn getter<M: CoSimulation, T>(
+    function: &'static str,
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut T,
+    n_values: usize,
+    read: impl FnOnce(&mut Instance<M>, &[u32], &mut [T]) -> fmi3Status,
+) -> fmi3Status {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, function, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` hold `nvr`
+        // elements and `values` `n_values`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
+        match arrays(inst, function, vrs, n_values, given) {
+            Ok((vrs, out)) => read(inst, vrs, out),
+            Err(status) => status,
+        }
+    })
+}
+
+/// What every 3.0 setter does before its type's own part (as [`getter`]); `call` is the state
+/// table's row: Float64 may be set where continuous inputs may, the other types where discrete
+/// ones may.
+///
+/// # Safety
+/// The setter's contract: `c` NULL or a live instance of this library for `M`; `vr` NULL or
+/// `nvr` elements; `values` NULL or `n_values` elements of `T`.
+#[inline(always)]
+unsafe fn setter<M: CoSimulation, T>(
+    function: &'static str,
+    call: Call,
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const T,
+    n_values: usize,
+    write: impl FnOnce(&mut Instance<M>, &[u32], &[T]) -> fmi3Status,
+) -> fmi3Status {
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, call, function, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` hold `nvr` elements and `values`
+        // `n_values`.
+        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
+        match arrays(inst, function, vrs, n_values, given) {
+            Ok((vrs, values)) => write(inst, vrs, values),
+            Err(status) => status,
+        }
+    })
+}
+
 pub unsafe fn get_float64<M: CoSimulation>(
     c: fmi3Instance,
     vr: *const fmi3ValueReference,
@@ -361,41 +423,32 @@ pub unsafe fn get_float64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetFloat64";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, F, |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
-        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
-        match added_time_vr::<M>() {
-            Some(time) if vrs.contains(&time) && inst.state() == State::Instantiated => inst.error(&format!(
-                "{F}: value reference {time} is 'time', the independent variable: it has no start value and no \
-                 value before fmi3EnterInitializationMode sets the start time"
-            )),
-            Some(time) if vrs.contains(&time) => {
-                let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
-                let mut got = vec![0.0; others.len()];
-                let status = inst.get_values(F, &others, &mut got);
-                if status != fmi3OK {
-                    return status;
-                }
-                let mut got = got.into_iter();
-                for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-                    *slot = if *vr == time {
-                        inst.sim.time
-                    } else {
-                        got.next().unwrap_or(f64::NAN)
-                    };
-                }
-                fmi3OK
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [f64]| match added_time_vr::<M>() {
+        Some(time) if vrs.contains(&time) && inst.state() == State::Instantiated => inst.error(&format!(
+            "{F}: value reference {time} is 'time', the independent variable: it has no start value and no \
+             value before fmi3EnterInitializationMode sets the start time"
+        )),
+        Some(time) if vrs.contains(&time) => {
+            let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
+            let mut got = vec![0.0; others.len()];
+            let status = inst.get_values(F, &others, &mut got);
+            if status != fmi3OK {
+                return status;
             }
-            _ => inst.get_values(F, vrs, out),
+            let mut got = got.into_iter();
+            for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+                *slot = if *vr == time {
+                    inst.sim.time
+                } else {
+                    got.next().unwrap_or(f64::NAN)
+                };
+            }
+            fmi3OK
         }
-    })
+        _ => inst.get_values(F, vrs, out),
+    };
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, _>(F, c, vr, nvr, values, n_values, read) }
 }
 
 pub unsafe fn set_float64<M: CoSimulation>(
@@ -406,16 +459,7 @@ pub unsafe fn set_float64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetFloat64";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetValues, F, |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
-        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[f64]| {
         if let Some(time) = added_time_vr::<M>()
             && vrs.contains(&time)
         {
@@ -425,7 +469,9 @@ pub unsafe fn set_float64<M: CoSimulation>(
             ));
         }
         inst.set_values(F, vrs, values)
-    })
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter::<M, _>(F, Call::SetValues, c, vr, nvr, values, n_values, write) }
 }
 
 pub unsafe fn get_int32<M: CoSimulation>(
@@ -436,21 +482,13 @@ pub unsafe fn get_int32<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetInt32";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, F, |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
-        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
+    let read =
+        |inst: &mut Instance<M>, vrs: &[u32], out: &mut [i32]| match check_declared(inst, F, vrs, VarType::Integer) {
+            Ok(()) => inst.get_values(F, vrs, out),
+            Err(status) => status,
         };
-        if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
-            return status;
-        }
-        inst.get_values(F, vrs, out)
-    })
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, _>(F, c, vr, nvr, values, n_values, read) }
 }
 
 pub unsafe fn set_int32<M: CoSimulation>(
@@ -461,21 +499,13 @@ pub unsafe fn set_int32<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetInt32";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, F, |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
-        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
+    let write =
+        |inst: &mut Instance<M>, vrs: &[u32], values: &[i32]| match check_declared(inst, F, vrs, VarType::Integer) {
+            Ok(()) => inst.set_values(F, vrs, values),
+            Err(status) => status,
         };
-        if let Err(status) = check_declared(inst, F, vrs, VarType::Integer) {
-            return status;
-        }
-        inst.set_values(F, vrs, values)
-    })
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
 /// Enumerations: fmi3GetInt64 (their 3.0 type's accessor); the values are the items' `value`s.
@@ -487,16 +517,7 @@ pub unsafe fn get_int64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetInt64";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, F, |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
-        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [i64]| {
         if let Err(status) = only_enumerations(inst, F, vrs) {
             return status;
         }
@@ -508,7 +529,9 @@ pub unsafe fn get_int64<M: CoSimulation>(
             }
         }
         status
-    })
+    };
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, _>(F, c, vr, nvr, values, n_values, read) }
 }
 
 pub unsafe fn set_int64<M: CoSimulation>(
@@ -519,16 +542,7 @@ pub unsafe fn set_int64<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetInt64";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, F, |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
-        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[i64]| {
         if let Err(status) = only_enumerations(inst, F, vrs) {
             return status;
         }
@@ -544,7 +558,9 @@ pub unsafe fn set_int64<M: CoSimulation>(
             }
         }
         inst.set_values(F, vrs, &narrow)
-    })
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
 /// Int64 reaches the enumerations only (this FMU declares no Int64 variable).
@@ -579,17 +595,8 @@ pub unsafe fn get_boolean<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetBoolean";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, F, |inst| {
-        // Written as bytes 0 and 1: the importer's array is C `bool`.
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values as *mut u8, n_values)) };
-        let (vrs, out) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    // Written as bytes 0 and 1: the importer's array is C `bool` (one byte).
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [u8]| {
         let mut got = vec![false; vrs.len()];
         let status = inst.get_values(F, vrs, &mut got);
         if status == fmi3OK {
@@ -598,7 +605,9 @@ pub unsafe fn get_boolean<M: CoSimulation>(
             }
         }
         status
-    })
+    };
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, u8>(F, c, vr, nvr, values as *mut u8, n_values, read) }
 }
 
 pub unsafe fn set_boolean<M: CoSimulation>(
@@ -609,20 +618,24 @@ pub unsafe fn set_boolean<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetBoolean";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, F, |inst| {
-        // Read as bytes: any non-zero byte is true (a C caller may pass other values).
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values as *const u8, n_values)) };
-        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    // Read as bytes: any non-zero byte is true (a C caller may pass other values).
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[u8]| {
         let values: Vec<bool> = values.iter().map(|b| *b != 0).collect();
         inst.set_values(F, vrs, &values)
-    })
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe {
+        setter::<M, u8>(
+            F,
+            Call::SetDiscreteValues,
+            c,
+            vr,
+            nvr,
+            values as *const u8,
+            n_values,
+            write,
+        )
+    }
 }
 
 pub unsafe fn get_string<M: CoSimulation>(
@@ -633,17 +646,9 @@ pub unsafe fn get_string<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetString";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, F, |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice_mut(values, n_values)) };
-        match arrays(inst, F, vrs, n_values, given) {
-            Ok((vrs, out)) => inst.get_strings(vrs, out),
-            Err(status) => status,
-        }
-    })
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [fmi3String]| inst.get_strings(vrs, out);
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, _>(F, c, vr, nvr, values, n_values, read) }
 }
 
 pub unsafe fn set_string<M: CoSimulation>(
@@ -654,16 +659,7 @@ pub unsafe fn set_string<M: CoSimulation>(
     n_values: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3SetString";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, F, |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements and `values` `nValues`.
-        let (vrs, given) = unsafe { (slice(vr, nvr), slice(values, n_values)) };
-        let (vrs, values) = match arrays(inst, F, vrs, n_values, given) {
-            Ok(a) => a,
-            Err(status) => return status,
-        };
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[fmi3String]| {
         let mut texts = Vec::with_capacity(values.len());
         for (i, p) in values.iter().enumerate() {
             // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
@@ -673,7 +669,9 @@ pub unsafe fn set_string<M: CoSimulation>(
             }
         }
         inst.set_strings(vrs, &texts)
-    })
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
 /// A getter of a type no variable of this FMU has (Float32, Int8, ..., UInt64, Binary):
