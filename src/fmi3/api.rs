@@ -949,6 +949,60 @@ pub unsafe fn do_step<M: CoSimulation>(
     })
 }
 
+/// What the directional and the adjoint derivative share: the instance and the state check,
+/// the array lengths (`seed` has one element per known and `sensitivity` one per unknown for
+/// the directional derivative, the other way round for the adjoint), the four arrays' NULL
+/// checks; `compute(inst, unknowns, knowns, seed, sensitivity)` then does the function's part.
+///
+/// # Safety
+/// The contract of fmi3GetDirectionalDerivative / fmi3GetAdjointDerivative: `c` NULL or a live
+/// instance of this library for `M`; each array NULL or as long as the count beside it,
+/// `sensitivity` writable.
+#[inline(always)]
+unsafe fn derivative<M: CoSimulation>(
+    function: &'static str,
+    adjoint: bool,
+    c: fmi3Instance,
+    (unknowns, n_unknowns): (*const fmi3ValueReference, usize),
+    (knowns, n_knowns): (*const fmi3ValueReference, usize),
+    (seed, n_seed): (*const fmi3Float64, usize),
+    (sensitivity, n_sensitivity): (*mut fmi3Float64, usize),
+    compute: impl FnOnce(&mut Instance<M>, &[u32], &[u32], &[f64], &mut [f64]) -> fmi3Status,
+) -> fmi3Status {
+    let ((seed_of, n_seed_of), (sensitivity_of, n_sensitivity_of)) = if adjoint {
+        (("nUnknowns", n_unknowns), ("nKnowns", n_knowns))
+    } else {
+        (("nKnowns", n_knowns), ("nUnknowns", n_unknowns))
+    };
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetDirectionalDerivative, function, |inst| {
+        if n_seed != n_seed_of || n_sensitivity != n_sensitivity_of {
+            return inst.error(&format!(
+                "{function}: nSeed = {n_seed} must equal {seed_of} = {n_seed_of} and nSensitivity = \
+                 {n_sensitivity} must equal {sensitivity_of} = {n_sensitivity_of} (every variable is a scalar)"
+            ));
+        }
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
+        // the count beside it.
+        let arrays = unsafe {
+            (
+                slice(unknowns, n_unknowns),
+                slice(knowns, n_knowns),
+                slice(seed, n_seed),
+                slice_mut(sensitivity, n_sensitivity),
+            )
+        };
+        match arrays {
+            (Some(unknowns), Some(knowns), Some(seed), Some(out)) => compute(inst, unknowns, knowns, seed, out),
+            _ => inst.error(&format!(
+                "{function}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
+            )),
+        }
+    })
+}
+
+/// fmi3GetDirectionalDerivative: sensitivity = J seed, exact (dual numbers).
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
     c: fmi3Instance,
     unknowns: *const fmi3ValueReference,
@@ -960,37 +1014,27 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     sensitivity: *mut fmi3Float64,
     n_sensitivity: usize,
 ) -> fmi3Status {
-    const F: &str = "fmi3GetDirectionalDerivative";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
-        if n_seed != n_knowns || n_sensitivity != n_unknowns {
-            return inst.error(&format!(
-                "{F}: nSeed = {n_seed} must equal nKnowns = {n_knowns} and nSensitivity = {n_sensitivity} \
-                 nUnknowns = {n_unknowns} (every variable is a scalar)"
-            ));
-        }
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
-        // the count beside it.
-        let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (unsafe {
-            (
-                slice(unknowns, n_unknowns),
-                slice(knowns, n_knowns),
-                slice(seed, n_seed),
-                slice_mut(sensitivity, n_sensitivity),
-            )
-        }) else {
-            return inst.error(&format!(
-                "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
-            ));
-        };
+    let compute = |inst: &mut Instance<M>, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]| {
         let mut got = vec![0.0; unknowns.len()];
         let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
         if status == fmi3OK {
             out.copy_from_slice(&got);
         }
         status
-    })
+    };
+    // SAFETY: this function's contract is `derivative`'s.
+    unsafe {
+        derivative::<M>(
+            "fmi3GetDirectionalDerivative",
+            false,
+            c,
+            (unknowns, n_unknowns),
+            (knowns, n_knowns),
+            (seed, n_seed),
+            (sensitivity, n_sensitivity),
+            compute,
+        )
+    }
 }
 
 /// fmi3GetAdjointDerivative: sensitivity = Jᵀ seed, J = d unknowns / d knowns, exact: each
@@ -1007,29 +1051,7 @@ pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
     n_sensitivity: usize,
 ) -> fmi3Status {
     const F: &str = "fmi3GetAdjointDerivative";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
-        if n_seed != n_unknowns || n_sensitivity != n_knowns {
-            return inst.error(&format!(
-                "{F}: nSeed = {n_seed} must equal nUnknowns = {n_unknowns} and nSensitivity = {n_sensitivity} \
-                 nKnowns = {n_knowns} (every variable is a scalar)"
-            ));
-        }
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
-        // the count beside it.
-        let (Some(unknowns), Some(knowns), Some(seed), Some(out)) = (unsafe {
-            (
-                slice(unknowns, n_unknowns),
-                slice(knowns, n_knowns),
-                slice(seed, n_seed),
-                slice_mut(sensitivity, n_sensitivity),
-            )
-        }) else {
-            return inst.error(&format!(
-                "{F}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
-            ));
-        };
+    let compute = |inst: &mut Instance<M>, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]| {
         if let Some((i, s)) = seed.iter().enumerate().find(|(_, s)| !s.is_finite()) {
             return inst.error(&format!("{F}: seed[{i}] = {s} is not finite"));
         }
@@ -1054,5 +1076,18 @@ pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
         }
         out.copy_from_slice(&result);
         fmi3OK
-    })
+    };
+    // SAFETY: this function's contract is `derivative`'s.
+    unsafe {
+        derivative::<M>(
+            F,
+            true,
+            c,
+            (unknowns, n_unknowns),
+            (knowns, n_knowns),
+            (seed, n_seed),
+            (sensitivity, n_sensitivity),
+            compute,
+        )
+    }
 }
