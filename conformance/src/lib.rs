@@ -1,15 +1,17 @@
 //! A black-box checker of FMI 2.0 and FMI 3.0 FMUs (co-simulation, and model exchange where the
 //! FMU declares it): it loads an `.fmu` the way an importer does (unpacks it, reads its
-//! `modelDescription.xml`, `dlopen`s its binary) and drives its C API through named checks
-//! ([`checks::all_checks`] for FMI 2.0, [`fmi3::checks::all_checks`] for FMI 3.0, chosen by the
-//! file's `fmiVersion`).
+//! `modelDescription.xml`, `dlopen`s its binary) and drives its C API through named checks: one
+//! registry of both versions ([`checks::all_checks`]; the FMI 2.0 checks in [`checks`]' files,
+//! the FMI 3.0 ones in [`fmi3::checks`]'), each check of one version, chosen by the file's
+//! `fmiVersion`. An FMU is loaded as its version's [`Loaded`] kind: [`Fmu`] or [`Fmu3`].
 //!
 //! - [`runner::run`] checks one FMU file, each check in a child process of its own, so that an
 //!   FMU that crashes or hangs fails that check and nothing else; [`runner::worker_main`] is the
 //!   child's side. The `fmu-check` binary of this crate uses both; `cargo fmu check` too.
 //! - [`archive`] is the one way an (untrusted) FMU file is opened and unpacked.
 //! - The workspace's own test run (`cargo test -p fmi-conformance`) runs every check on every
-//!   packaged FMU of `target/fmu` ([`all`]), strictly: there, a limitation or a skip fails.
+//!   packaged FMU of its version ([`all`], [`checks::on_every_fmu`]; `target/fmu` and
+//!   `target/fmu/fmi3`), strictly: there, a limitation or a skip fails.
 //!
 //! Nothing here knows a particular FMU: value references, types, causalities and variabilities
 //! come from each FMU's model description, read by the `fmi-description` crate (the reader
@@ -33,7 +35,9 @@ pub mod standard;
 pub mod state;
 
 pub use api::Api;
+pub use fmi_description::Version;
 pub use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
+pub use fmi3::Fmu3;
 pub use instance::Instance;
 pub use logger::LogEntry;
 
@@ -101,44 +105,19 @@ impl Fmu {
             ));
         }
         let id = md.model_identifier().to_owned();
-        let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !c_name {
-            return Err(format!(
-                "{}: modelIdentifier '{}' is not a C identifier",
-                path.display(),
-                id.escape_debug()
-            ));
-        }
-        let so_entry = format!("binaries/{PLATFORM2}/{id}.{LIBRARY_EXTENSION}");
-        if !zip.has_entry(&so_entry) {
-            let binaries: Vec<String> = zip
-                .entry_names()
-                .into_iter()
-                .filter(|n| n.starts_with("binaries/") && !n.ends_with('/'))
-                .collect();
-            return Err(format!(
-                "{}: no {so_entry}: no binary for this platform (binaries in the archive: {binaries:?})",
-                path.display()
-            ));
-        }
-        let unpacked = archive::extract_private(&mut zip, parent, &archive::Limits::default())?;
-        let scratch = PrivateDir::new_in(parent)?;
-        let dir = unpacked.path().to_path_buf();
-        std::fs::create_dir_all(dir.join("resources")).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let so = dir.join(&so_entry);
-        let api = Api::load(&so)?;
+        let u = Unpacked::new(path, parent, &mut zip, &id, PLATFORM2)?;
+        let api = Api::load(&u.so)?;
         Ok(Fmu {
             id,
             archive: path.to_path_buf(),
-            dir,
-            so,
-            scratch: scratch.path().to_path_buf(),
+            dir: u.dir,
+            so: u.so,
+            scratch: u.scratch,
             md,
             api,
             own: OnceLock::new(),
             me_codes: OnceLock::new(),
-            _dirs: (unpacked, scratch),
+            _dirs: u.dirs,
         })
     }
 
@@ -232,7 +211,157 @@ impl Fmu {
     }
 }
 
-/// The folder with the packaged FMUs: `$RUSTFMU_FMU_DIR`, else `<workspace>/target/fmu`.
+/// What the suite loads and checks: an FMI 2.0 FMU ([`Fmu`]) or an FMI 3.0 one ([`fmi3::Fmu3`]).
+/// One machinery over both: [`all`] loads the packaged FMUs of a version,
+/// [`checks::Check::run_on`] runs a check of that version on one, [`checks::on_every_fmu`] runs a
+/// check on every packaged FMU of its version, and the runner's worker loads a file as its
+/// version's kind.
+pub trait Loaded: Sized + Sync + 'static {
+    /// The FMI version of this kind of FMU.
+    const VERSION: Version;
+    /// Unpacks the archive into a new private folder under `parent` and loads its binary; the
+    /// folders are removed when the value is dropped.
+    fn load(path: &Path, parent: &Path) -> Result<Self, String>;
+    /// The model identifier.
+    fn id(&self) -> &str;
+    /// Ok for this exporter's serialized state format, else why not (see [`Fmu::state_format`]).
+    fn state_format(&self) -> &Result<(), String>;
+    /// The report's head for a file of this version, from the archive alone (no FMU code runs).
+    fn describe(path: &Path) -> Result<Vec<String>, String>;
+    /// The folder with the workspace's packaged FMUs of this version.
+    fn packaged_dir() -> PathBuf;
+    /// Every packaged FMU of this version ([`packaged_dir`](Loaded::packaged_dir)), loaded once.
+    fn packaged() -> &'static [Self];
+    /// The check function of `run` when it is a check of this version.
+    fn check_fn(run: checks::Run) -> Option<fn(&Self)>;
+}
+
+impl Loaded for Fmu {
+    const VERSION: Version = Version::Fmi2;
+    fn load(path: &Path, parent: &Path) -> Result<Self, String> {
+        Fmu::load(path, parent)
+    }
+    fn id(&self) -> &str {
+        &self.id
+    }
+    fn state_format(&self) -> &Result<(), String> {
+        Fmu::state_format(self)
+    }
+    fn describe(path: &Path) -> Result<Vec<String>, String> {
+        describe(path)
+    }
+    fn packaged_dir() -> PathBuf {
+        fmu_dir()
+    }
+    fn packaged() -> &'static [Self] {
+        static ALL: OnceLock<Vec<Fmu>> = OnceLock::new();
+        ALL.get_or_init(load_packaged)
+    }
+    fn check_fn(run: checks::Run) -> Option<fn(&Self)> {
+        match run {
+            checks::Run::Fmi2(f) => Some(f),
+            checks::Run::Fmi3(_) => None,
+        }
+    }
+}
+
+/// The head of the report for an FMI 2.0 file, from the archive alone.
+fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
+    let mut a = archive::open(fmu_path)?;
+    let xml = archive::read_model_description(&mut a)?;
+    let md = parse_description(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
+    if md.fmi_version != "2.0" {
+        return Err(format!(
+            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
+            fmu_path.display(),
+            md.fmi_version
+        ));
+    }
+    let so = format!("binaries/{}/{}.{}", PLATFORM2, md.model_identifier(), LIBRARY_EXTENSION);
+    if !a.has_entry(&so) {
+        return Err(format!(
+            "{}: no {so}: the FMU has no binary for this platform",
+            fmu_path.display()
+        ));
+    }
+    let tool = if md.generation_tool.is_empty() {
+        "no generationTool".to_string()
+    } else {
+        format!("generated by {}", md.generation_tool)
+    };
+    Ok(vec![format!(
+        "model {} (FMI {}, GUID {}), {tool}",
+        md.model_identifier(),
+        md.fmi_version,
+        md.guid
+    )])
+}
+
+/// The FMI version of the FMU file's model description (its `fmiVersion`).
+pub fn file_version(path: &Path) -> Result<Version, String> {
+    let mut zip = archive::open(path)?;
+    let xml = archive::read_model_description(&mut zip)?;
+    let v = fmi_description::fmi_version(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+    Version::of(&v).ok_or_else(|| format!("{}: fmiVersion \"{v}\": neither FMI 2.0 nor FMI 3.0", path.display()))
+}
+
+/// An FMU archive unpacked for loading: its folder, its binary for this platform, a scratch
+/// folder; both folders are removed when `dirs` is dropped.
+pub(crate) struct Unpacked {
+    pub dir: PathBuf,
+    pub so: PathBuf,
+    pub scratch: PathBuf,
+    pub dirs: (PrivateDir, PrivateDir),
+}
+
+impl Unpacked {
+    /// Checks that `id` (the model identifier) is a C identifier and that the archive has the
+    /// binary `binaries/<platform>/<id>.<so>`, then unpacks it (through
+    /// [`archive::extract_private`]) into a new private folder under `parent`, with a
+    /// `resources/` folder (made empty when the archive has none).
+    pub fn new(
+        path: &Path,
+        parent: &Path,
+        zip: &mut archive::Archive,
+        id: &str,
+        platform: &str,
+    ) -> Result<Unpacked, String> {
+        let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !c_name {
+            return Err(format!(
+                "{}: modelIdentifier '{}' is not a C identifier",
+                path.display(),
+                id.escape_debug()
+            ));
+        }
+        let so_entry = format!("binaries/{platform}/{id}.{LIBRARY_EXTENSION}");
+        if !zip.has_entry(&so_entry) {
+            let binaries: Vec<String> = zip
+                .entry_names()
+                .into_iter()
+                .filter(|n| n.starts_with("binaries/") && !n.ends_with('/'))
+                .collect();
+            return Err(format!(
+                "{}: no {so_entry}: no binary for this platform (binaries in the archive: {binaries:?})",
+                path.display()
+            ));
+        }
+        let unpacked = archive::extract_private(zip, parent, &archive::Limits::default())?;
+        let scratch = PrivateDir::new_in(parent)?;
+        let dir = unpacked.path().to_path_buf();
+        std::fs::create_dir_all(dir.join("resources")).map_err(|e| format!("{}: {e}", dir.display()))?;
+        Ok(Unpacked {
+            so: dir.join(&so_entry),
+            dir,
+            scratch: scratch.path().to_path_buf(),
+            dirs: (unpacked, scratch),
+        })
+    }
+}
+
+/// The folder with the packaged FMI 2.0 FMUs: `$RUSTFMU_FMU_DIR`, else `<workspace>/target/fmu`
+/// (the FMI 3.0 ones are in its `fmi3/`, see [`fmi3::fmu3_dir`]).
 pub fn fmu_dir() -> PathBuf {
     match std::env::var_os("RUSTFMU_FMU_DIR") {
         Some(d) => PathBuf::from(d),
@@ -240,36 +369,37 @@ pub fn fmu_dir() -> PathBuf {
     }
 }
 
-/// Every packaged FMU of the workspace (`*.fmu` in [`fmu_dir`]), loaded. Panics (failing the
-/// calling test with the reason) when there is none: the suite must never pass by testing
-/// nothing.
-pub fn all() -> &'static [Fmu] {
-    static ALL: OnceLock<Vec<Fmu>> = OnceLock::new();
-    ALL.get_or_init(|| load_all().unwrap_or_else(|e| panic!("{e}")))
+/// Every packaged FMU of the workspace of one FMI version (`all::<Fmu>()`, `all::<Fmu3>()`:
+/// `*.fmu` in [`Loaded::packaged_dir`]), loaded. Panics (failing the calling test with the
+/// reason) when there is none: the suite must never pass by testing nothing.
+pub fn all<F: Loaded>() -> &'static [F] {
+    F::packaged()
 }
 
-/// The packaged FMU of that model identifier (for tests written against one model).
+/// The packaged FMI 2.0 FMU of that model identifier (for tests written against one model).
 pub fn by_id(id: &str) -> &'static Fmu {
-    all()
+    all::<Fmu>()
         .iter()
         .find(|f| f.id == id)
         .unwrap_or_else(|| panic!("no packaged FMU '{id}'"))
 }
 
-fn load_all() -> Result<Vec<Fmu>, String> {
-    let dir = fmu_dir();
-    let hint = "build and package them first: cargo run --release -p fmu-build";
+/// Loads every `*.fmu` of [`Loaded::packaged_dir`]; panics when there is none or one does not load.
+pub(crate) fn load_packaged<F: Loaded>() -> Vec<F> {
+    let dir = F::packaged_dir();
+    let hint = "build and package them first: cargo run --release -p fmu-build -- build --workspace";
     let mut archives: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map_err(|e| format!("cannot list {}: {e} ({hint})", dir.display()))?
+        .unwrap_or_else(|e| panic!("cannot list {}: {e} ({hint})", dir.display()))
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "fmu"))
         .collect();
     archives.sort();
-    if archives.is_empty() {
-        return Err(format!("no .fmu in {}: {hint}", dir.display()));
-    }
-    let root = unpack_root()?;
-    archives.iter().map(|a| Fmu::load(a, &root)).collect()
+    assert!(!archives.is_empty(), "no .fmu in {}: {hint}", dir.display());
+    let root = unpack_root().unwrap_or_else(|e| panic!("{e}"));
+    archives
+        .iter()
+        .map(|a| F::load(a, &root).unwrap_or_else(|e| panic!("{e}")))
+        .collect()
 }
 
 /// A folder of this process under the system temp dir; folders of processes that are gone

@@ -13,11 +13,10 @@
 //! Each worker unpacks the FMU into a private folder of its own (under a private folder of the
 //! run, removed at the end even if a worker crashed) and removes it when done.
 
-use crate::archive::{self, PrivateDir};
+use crate::archive::PrivateDir;
 use crate::checks::{Check, Group, all_checks, find};
-use crate::fmi3::checks::Check3;
 use crate::outcome::{self, Findings, Outcome};
-use crate::{Fmu, Worker};
+use crate::{Fmu, Fmu3, Loaded, Version, Worker};
 use std::fmt::Write as _;
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -59,7 +58,7 @@ impl RunOptions {
         }
     }
 
-    /// The FMI 2.0 checks the filter selects, in report order.
+    /// The checks the filter selects, of both FMI versions, in report order.
     pub fn selected(&self) -> Vec<&'static Check> {
         all_checks()
             .iter()
@@ -67,21 +66,9 @@ impl RunOptions {
             .collect()
     }
 
-    /// The FMI 3.0 checks the filter selects, in report order.
-    pub fn selected_fmi3(&self) -> Vec<&'static Check3> {
-        crate::fmi3::checks::all_checks()
-            .iter()
-            .filter(|c| self.filter.as_deref().is_none_or(|f| c.matches(f)))
-            .collect()
-    }
-
-    /// (name, group) of the checks selected for an FMU of that `fmiVersion`.
-    fn selected_for(&self, fmi3: bool) -> Vec<(&'static str, Group)> {
-        if fmi3 {
-            self.selected_fmi3().iter().map(|c| (c.name, c.group)).collect()
-        } else {
-            self.selected().iter().map(|c| (c.name, c.group)).collect()
-        }
+    /// The checks selected for an FMU of that FMI version.
+    pub fn selected_for(&self, version: Version) -> Vec<&'static Check> {
+        self.selected().into_iter().filter(|c| c.version() == version).collect()
     }
 }
 
@@ -245,8 +232,8 @@ pub fn run(fmu_path: &Path, opts: &RunOptions) -> Report {
 /// As [`run`], calling `progress` with each check's report as soon as it is done.
 pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&CheckReport)) -> Report {
     // FMI 3.0 files get the FMI 3.0 checks; everything else the FMI 2.0 ones.
-    let fmi3 = crate::fmi3::fmi_version(fmu_path).is_ok_and(|v| crate::fmi3::is_fmi3(&v));
-    let selected = opts.selected_for(fmi3);
+    let version = file_version(fmu_path);
+    let selected = opts.selected_for(version);
     let mut report = Report {
         fmu: fmu_path.to_path_buf(),
         about: vec![],
@@ -256,9 +243,9 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
     let skip_all = |report: &mut Report, why: &str| {
         report.checks = selected
             .iter()
-            .map(|(name, group)| CheckReport {
-                name: name.to_string(),
-                group: *group,
+            .map(|c| CheckReport {
+                name: c.name.to_string(),
+                group: c.group,
                 outcome: Outcome::Skip(why.to_string()),
                 limitations: vec![],
                 info: vec![],
@@ -267,11 +254,11 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             .collect();
     };
     // What the archive says, read here (no FMU code runs in this process).
-    match if fmi3 {
-        crate::fmi3::describe(fmu_path)
-    } else {
-        describe(fmu_path)
-    } {
+    let about = match version {
+        Version::Fmi2 => Fmu::describe(fmu_path),
+        Version::Fmi3 => Fmu3::describe(fmu_path),
+    };
+    match about {
         Ok(about) => report.about = about,
         Err(e) => {
             report.load_error = Some(e);
@@ -310,7 +297,8 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         skip_all(&mut report, "the FMU cannot be checked");
         return report;
     }
-    for (name, group) in selected {
+    for check in selected {
+        let (name, group) = (check.name, check.group);
         let mut args = vec![
             "check".to_string(),
             fmu_path.display().to_string(),
@@ -355,43 +343,6 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         report.checks.push(c);
     }
     report
-}
-
-/// The head of the report, from the archive alone.
-fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
-    let mut a = archive::open(fmu_path)?;
-    let xml = archive::read_model_description(&mut a)?;
-    let md = crate::parse_description(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
-    if md.fmi_version != "2.0" {
-        return Err(format!(
-            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
-            fmu_path.display(),
-            md.fmi_version
-        ));
-    }
-    let so = format!(
-        "binaries/{}/{}.{}",
-        crate::PLATFORM2,
-        md.model_identifier(),
-        crate::LIBRARY_EXTENSION
-    );
-    if !a.has_entry(&so) {
-        return Err(format!(
-            "{}: no {so}: the FMU has no binary for this platform",
-            fmu_path.display()
-        ));
-    }
-    let tool = if md.generation_tool.is_empty() {
-        "no generationTool".to_string()
-    } else {
-        format!("generated by {}", md.generation_tool)
-    };
-    Ok(vec![format!(
-        "model {} (FMI {}, GUID {}), {tool}",
-        md.model_identifier(),
-        md.fmi_version,
-        md.guid
-    )])
 }
 
 /// A worker's result file, parsed.
@@ -740,90 +691,25 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
         ExitCode::SUCCESS
     };
     match positional.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
-        ["probe", fmu] if is_fmi3_file(fmu) => match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
-            Ok(f) => {
-                let about = format!(
-                    "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",
-                    crate::fmi3::api::FUNCTIONS.len()
-                );
-                let format = match f.state_format() {
-                    Ok(()) => "made by this exporter (rustfmu's serialized state format): every check runs in full"
-                        .to_string(),
-                    Err(why) => format!(
-                        "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
-                    ),
-                };
-                drop(f);
-                write(
-                    Outcome::Pass,
-                    Findings {
-                        limitations: vec![],
-                        info: vec![about, format],
-                    },
-                )
-            }
-            Err(e) => write(Outcome::Fail(e), Findings::default()),
+        ["probe", fmu] => match file_version(Path::new(fmu)) {
+            Version::Fmi2 => probe::<Fmu>(Path::new(fmu), &tmp, write),
+            Version::Fmi3 => probe::<Fmu3>(Path::new(fmu), &tmp, write),
         },
-        ["check", fmu, name] if is_fmi3_file(fmu) => {
-            let Some(check) = crate::fmi3::checks::find(name) else {
-                eprintln!("worker: no FMI 3.0 check named {name}");
-                return ExitCode::from(2);
-            };
-            outcome::remember_panic_locations();
-            let fmu = match crate::fmi3::Fmu3::load(Path::new(fmu), &tmp) {
-                Ok(f) => f,
-                Err(e) => {
-                    return write(
-                        Outcome::Fail(format!("the FMU does not load: {e}")),
-                        Findings::default(),
-                    );
-                }
-            };
-            let (outcome, findings) = check.run_on(&fmu);
-            let code = write(outcome, findings);
-            drop(fmu);
-            code
-        }
-        ["probe", fmu] => {
-            let fmu = match Fmu::load(Path::new(fmu), &tmp) {
-                Ok(f) => f,
-                Err(e) => return write(Outcome::Fail(e), Findings::default()),
-            };
-            let about = match fmu.state_format() {
-                Ok(()) => {
-                    "made by this exporter (rustfmu's serialized state format): every check runs in full".to_string()
-                }
-                Err(why) => format!(
-                    "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
-                ),
-            };
-            write(
-                Outcome::Pass,
-                Findings {
-                    limitations: vec![],
-                    info: vec![about],
-                },
-            )
-        }
         ["check", fmu, name] => {
             let Some(check) = find(name) else {
                 eprintln!("worker: no check named {name}");
                 return ExitCode::from(2);
             };
+            let version = file_version(Path::new(fmu));
+            if check.version() != version {
+                eprintln!("worker: {name} checks {:?} FMUs, {fmu} is {version:?}", check.version());
+                return ExitCode::from(2);
+            }
             outcome::remember_panic_locations();
-            let fmu = match Fmu::load(Path::new(fmu), &tmp) {
-                Ok(f) => f,
-                Err(e) => {
-                    return write(
-                        Outcome::Fail(format!("the FMU does not load: {e}")),
-                        Findings::default(),
-                    );
-                }
-            };
-            let (outcome, findings) = check.run_on(&fmu);
-            let code = write(outcome, findings);
-            drop(fmu);
-            code
+            match version {
+                Version::Fmi2 => check_in_worker::<Fmu>(check, Path::new(fmu), &tmp, write),
+                Version::Fmi3 => check_in_worker::<Fmu3>(check, Path::new(fmu), &tmp, write),
+            }
         }
         ["state-child", fmu, file, steps, h, interface, t] if is_fmi3_file(fmu) => {
             match state_child3(Path::new(fmu), &tmp, file, steps, h, interface, t) {
@@ -847,7 +733,70 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
 
 /// Whether the file at `path` is an FMI 3.0 FMU (by its model description's fmiVersion).
 fn is_fmi3_file(path: &str) -> bool {
-    crate::fmi3::fmi_version(Path::new(path)).is_ok_and(|v| crate::fmi3::is_fmi3(&v))
+    file_version(Path::new(path)) == Version::Fmi3
+}
+
+/// The version whose checks an FMU file gets: FMI 3.0 for an FMI 3.0 model description, else
+/// FMI 2.0 (whose loading then says what is wrong with the file).
+fn file_version(path: &Path) -> Version {
+    match crate::file_version(path) {
+        Ok(Version::Fmi3) => Version::Fmi3,
+        _ => Version::Fmi2,
+    }
+}
+
+/// The worker's `probe`: loads the FMU; its info lines say what it is.
+fn probe<F: Loaded>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) -> ExitCode) -> ExitCode {
+    let f = match F::load(fmu, tmp) {
+        Ok(f) => f,
+        Err(e) => return write(Outcome::Fail(e), Findings::default()),
+    };
+    let mut info = vec![];
+    if F::VERSION == Version::Fmi3 {
+        info.push(format!(
+            "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",
+            crate::fmi3::api::FUNCTIONS.len()
+        ));
+    }
+    info.push(match f.state_format() {
+        Ok(()) => "made by this exporter (rustfmu's serialized state format): every check runs in full".to_string(),
+        Err(why) => format!(
+            "another exporter's FMU ({why}): the checks test what an importer can reach and list what they could not test"
+        ),
+    });
+    // Written before the FMU is unloaded: a binary that crashes on the way out still loads (the
+    // runner then says so in the report's head, and every check will fail on it).
+    let code = write(
+        Outcome::Pass,
+        Findings {
+            limitations: vec![],
+            info,
+        },
+    );
+    drop(f);
+    code
+}
+
+/// The worker's `check`: loads the FMU and runs the check on it.
+fn check_in_worker<F: Loaded>(
+    check: &Check,
+    fmu: &Path,
+    tmp: &Path,
+    write: impl Fn(Outcome, Findings) -> ExitCode,
+) -> ExitCode {
+    let fmu = match F::load(fmu, tmp) {
+        Ok(f) => f,
+        Err(e) => {
+            return write(
+                Outcome::Fail(format!("the FMU does not load: {e}")),
+                Findings::default(),
+            );
+        }
+    };
+    let (outcome, findings) = check.run_on(&fmu);
+    let code = write(outcome, findings);
+    drop(fmu);
+    code
 }
 
 fn hex(values: impl IntoIterator<Item = u64>) -> String {

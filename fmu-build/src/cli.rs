@@ -216,10 +216,7 @@ fn check(
     use fmi_conformance::runner::{RunOptions, run_with};
     if list {
         for c in fmi_conformance::checks::all_checks() {
-            println!("{} / {}", c.group, c.name);
-        }
-        for c in fmi_conformance::fmi3::checks::all_checks() {
-            println!("FMI 3.0: {} / {}", c.group, c.name);
+            println!("{}", c.list_line());
         }
         return Ok(());
     }
@@ -234,7 +231,7 @@ fn check(
         }
         opts.timeout = std::time::Duration::from_secs_f64(t);
     }
-    if opts.selected().is_empty() && opts.selected_fmi3().is_empty() {
+    if opts.selected().is_empty() {
         return Err("no check matches the filter (`cargo fmu check --list` shows them)".into());
     }
     // Progress on stderr while it runs; the report on stdout.

@@ -78,10 +78,7 @@ fn main() -> ExitCode {
     };
     if a.list {
         for c in all_checks() {
-            println!("{} / {}", c.group, c.name);
-        }
-        for c in fmi_conformance::fmi3::checks::all_checks() {
-            println!("FMI 3.0: {} / {}", c.group, c.name);
+            println!("{}", c.list_line());
         }
         return ExitCode::SUCCESS;
     }
@@ -103,7 +100,7 @@ fn main() -> ExitCode {
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }
-    if opts.selected().is_empty() && opts.selected_fmi3().is_empty() {
+    if opts.selected().is_empty() {
         eprintln!("fmu-check: no check matches the filter (fmu-check --list shows them)");
         return ExitCode::from(2);
     }

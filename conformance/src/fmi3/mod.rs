@@ -1,7 +1,9 @@
-//! The FMI 3.0 side of the suite: an FMI 3.0 FMU is loaded ([`Fmu3`]) and driven through its
-//! own C API ([`api`], declared from the standard's headers) by a check set of its own
-//! ([`checks`]). The runner picks it by the `fmiVersion` of the model description, so one
-//! `fmu-check X.fmu` (and `cargo fmu check X.fmu`) checks 2.0 and 3.0 files alike.
+//! The FMI 3.0 side of the suite: an FMI 3.0 FMU is loaded ([`Fmu3`], a [`crate::Loaded`] like
+//! the FMI 2.0 [`crate::Fmu`]) and driven through its own C API ([`api`], declared from the
+//! standard's headers) by the FMI 3.0 checks ([`checks`], registered with the FMI 2.0 ones in
+//! [`crate::checks::all_checks`]). The runner picks them by the `fmiVersion` of the model
+//! description, so one `fmu-check X.fmu` (and `cargo fmu check X.fmu`) checks 2.0 and 3.0 files
+//! alike.
 
 pub mod api;
 pub mod checks;
@@ -38,20 +40,8 @@ pub struct Fmu3 {
     _dirs: (PrivateDir, PrivateDir),
 }
 
-/// The `fmiVersion` of the FMU file's model description.
-pub fn fmi_version(path: &Path) -> Result<String, String> {
-    let mut zip = archive::open(path)?;
-    let xml = archive::read_model_description(&mut zip)?;
-    fmi_description::fmi_version(&xml).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-/// Whether an `fmiVersion` is FMI 3 (3.0, 3.0.1, ...).
-pub fn is_fmi3(version: &str) -> bool {
-    fmi_description::Version::of(version) == Some(fmi_description::Version::Fmi3)
-}
-
 /// What the report's head says about a 3.0 file (from the archive alone).
-pub fn describe(path: &Path) -> Result<Vec<String>, String> {
+fn describe(path: &Path) -> Result<Vec<String>, String> {
     let mut a = archive::open(path)?;
     let xml = archive::read_model_description(&mut a)?;
     let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -90,7 +80,7 @@ impl Fmu3 {
         let mut zip = archive::open(path)?;
         let xml = archive::read_model_description(&mut zip)?;
         let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
-        if !is_fmi3(&md.fmi_version) {
+        if fmi_description::Version::of(&md.fmi_version) != Some(fmi_description::Version::Fmi3) {
             return Err(format!(
                 "{}: fmiVersion \"{}\" is not 3.0",
                 path.display(),
@@ -98,15 +88,6 @@ impl Fmu3 {
             ));
         }
         let id = md.model_identifier().to_string();
-        let c_name = id.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !c_name {
-            return Err(format!(
-                "{}: modelIdentifier '{}' is not a C identifier",
-                path.display(),
-                id.escape_debug()
-            ));
-        }
         if let (Some(cs), Some(me)) = (&md.cs, &md.me)
             && cs.model_identifier != me.model_identifier
         {
@@ -117,29 +98,18 @@ impl Fmu3 {
                 me.model_identifier
             ));
         }
-        let so_entry = format!("binaries/{PLATFORM}/{id}.{}", crate::LIBRARY_EXTENSION);
-        if !zip.has_entry(&so_entry) {
-            return Err(format!(
-                "{}: no {so_entry}: no binary for this platform",
-                path.display()
-            ));
-        }
-        let unpacked = archive::extract_private(&mut zip, parent, &archive::Limits::default())?;
-        let scratch = PrivateDir::new_in(parent)?;
-        let dir = unpacked.path().to_path_buf();
-        std::fs::create_dir_all(dir.join("resources")).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let so = dir.join(&so_entry);
-        let api = api::Api::load(&so)?;
+        let u = crate::Unpacked::new(path, parent, &mut zip, &id, PLATFORM)?;
+        let api = api::Api::load(&u.so)?;
         Ok(Fmu3 {
             id,
             archive: path.to_path_buf(),
-            dir,
-            so,
-            scratch: scratch.path().to_path_buf(),
+            dir: u.dir,
+            so: u.so,
+            scratch: u.scratch,
             md,
             api,
             own: std::sync::OnceLock::new(),
-            _dirs: (unpacked, scratch),
+            _dirs: u.dirs,
         })
     }
 
@@ -708,23 +678,31 @@ pub fn fmu3_dir() -> PathBuf {
     }
 }
 
-/// Every packaged FMI 3.0 FMU of the workspace, loaded; panics when there is none.
-pub fn all3() -> &'static [Fmu3] {
-    static ALL: std::sync::OnceLock<Vec<Fmu3>> = std::sync::OnceLock::new();
-    ALL.get_or_init(|| {
-        let dir = fmu3_dir();
-        let hint = "build and package them first: cargo run --release -p fmu-build -- build --workspace";
-        let mut archives: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap_or_else(|e| panic!("cannot list {}: {e} ({hint})", dir.display()))
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "fmu"))
-            .collect();
-        archives.sort();
-        assert!(!archives.is_empty(), "no .fmu in {}: {hint}", dir.display());
-        let root = crate::unpack_root().unwrap_or_else(|e| panic!("{e}"));
-        archives
-            .iter()
-            .map(|a| Fmu3::load(a, &root).unwrap_or_else(|e| panic!("{e}")))
-            .collect()
-    })
+impl crate::Loaded for Fmu3 {
+    const VERSION: crate::Version = crate::Version::Fmi3;
+    fn load(path: &Path, parent: &Path) -> Result<Self, String> {
+        Fmu3::load(path, parent)
+    }
+    fn id(&self) -> &str {
+        &self.id
+    }
+    fn state_format(&self) -> &Result<(), String> {
+        Fmu3::state_format(self)
+    }
+    fn describe(path: &Path) -> Result<Vec<String>, String> {
+        describe(path)
+    }
+    fn packaged_dir() -> PathBuf {
+        fmu3_dir()
+    }
+    fn packaged() -> &'static [Self] {
+        static ALL: std::sync::OnceLock<Vec<Fmu3>> = std::sync::OnceLock::new();
+        ALL.get_or_init(crate::load_packaged)
+    }
+    fn check_fn(run: crate::checks::Run) -> Option<fn(&Self)> {
+        match run {
+            crate::checks::Run::Fmi3(f) => Some(f),
+            crate::checks::Run::Fmi2(_) => None,
+        }
+    }
 }

@@ -1,0 +1,853 @@
+//! The FMI 3.0 calls one by one: version, instantiation, bad arguments, setting each variable
+//! where the standard allows it, start values, the time variable, fmi3DoStep's output
+//! arguments, fmi3SetDebugLogging.
+
+use super::*;
+
+// ---------------------------------------------------------------------------------------------
+// Calls
+
+pub fn fmi3_get_version_is_3_0(fmu: &Fmu3) {
+    // SAFETY: no arguments; returns a static string.
+    let v = unsafe { (fmu.api.get_version)() };
+    assert!(!v.is_null(), "{}: fmi3GetVersion returned NULL", fmu.id);
+    let v = unsafe { std::ffi::CStr::from_ptr(v) }.to_string_lossy().into_owned();
+    assert!(
+        v.starts_with("3."),
+        "{}: fmi3GetVersion returned \"{v}\", not a 3.x version (fmi3Version is \"3.0\")",
+        fmu.id
+    );
+    assert!(
+        crate::Version::of(&fmu.md.fmi_version) == Some(crate::Version::Fmi3),
+        "{}: fmiVersion \"{}\"",
+        fmu.id,
+        fmu.md.fmi_version
+    );
+}
+
+type Instantiate<'a> = dyn Fn(
+        *const std::os::raw::c_char,
+        *const std::os::raw::c_char,
+        bool,
+        fmi3LogMessageCallback,
+        fmi3InstanceEnvironment,
+    ) -> fmi3Instance
+    + 'a;
+
+pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null(fmu: &Fmu3) {
+    let api = &fmu.api;
+    let res = CString::new(fmu.resource_path()).unwrap();
+    let token = CString::new(fmu.md.token.as_str()).unwrap();
+    let wrong = CString::new(format!("{}-wrong", fmu.md.token)).unwrap();
+    let name = c"conformance";
+    let mut interfaces: Vec<(&str, Box<Instantiate<'_>>)> = vec![];
+    if fmu.md.cs.is_some() {
+        let res = res.as_ptr();
+        interfaces.push((
+            "fmi3InstantiateCoSimulation",
+            Box::new(move |n, t, event_mode, log, env| unsafe {
+                (api.instantiate_co_simulation)(n, t, res, false, false, event_mode, false, null(), 0, env, log, None)
+            }),
+        ));
+    }
+    if fmu.md.me.is_some() {
+        let res = res.as_ptr();
+        interfaces.push((
+            "fmi3InstantiateModelExchange",
+            Box::new(move |n, t, _, log, env| unsafe {
+                (api.instantiate_model_exchange)(n, t, res, false, false, env, log)
+            }),
+        ));
+    }
+    for (what, inst) in &interfaces {
+        let sink = crate::fmi3::LogSink::default();
+        let log = Some(crate::fmi3::log_message as unsafe extern "C" fn(_, _, _, _));
+        for (case, n, t) in [
+            ("a wrong instantiationToken", name.as_ptr(), wrong.as_ptr()),
+            ("a NULL instantiationToken", name.as_ptr(), null()),
+            ("a NULL instanceName", null(), token.as_ptr()),
+        ] {
+            crate::outcome::breadcrumb(&format!("{what} with {case}"));
+            let c = inst(n, t, false, log, sink.env());
+            if !c.is_null() {
+                unsafe { (api.free_instance)(c) };
+                panic!("{}: {what} with {case} returned an instance; expected NULL", fmu.id);
+            }
+        }
+        // The right token: an instance, also without a logger, and with a NULL resourcePath.
+        crate::outcome::breadcrumb(&format!("{what} without a logMessage callback"));
+        let c = inst(name.as_ptr(), token.as_ptr(), false, None, null_mut());
+        assert!(
+            !c.is_null(),
+            "{}: {what} without a logMessage callback returned NULL (it may be NULL: FMI 3.0 section 2.3.1)",
+            fmu.id
+        );
+        unsafe { (api.free_instance)(c) };
+        let c = inst(name.as_ptr(), token.as_ptr(), false, log, sink.env());
+        assert!(
+            !c.is_null(),
+            "{}: {what}: NULL with valid arguments: {:?}",
+            fmu.id,
+            sink.take()
+        );
+        unsafe { (api.free_instance)(c) };
+    }
+    if let Some(cs) = &fmu.md.cs {
+        if !cs.has_event_mode {
+            let sink = crate::fmi3::LogSink::default();
+            let c = unsafe {
+                (api.instantiate_co_simulation)(
+                    name.as_ptr(),
+                    token.as_ptr(),
+                    res.as_ptr(),
+                    false,
+                    false,
+                    true,
+                    false,
+                    null(),
+                    0,
+                    sink.env(),
+                    Some(crate::fmi3::log_message),
+                    None,
+                )
+            };
+            if !c.is_null() {
+                unsafe { (api.free_instance)(c) };
+                panic!(
+                    "{}: fmi3InstantiateCoSimulation with eventModeUsed = true returned an instance, but <CoSimulation> has no hasEventMode=\"true\": expected NULL",
+                    fmu.id
+                );
+            }
+        }
+        let c = unsafe {
+            (api.instantiate_co_simulation)(
+                c"nores".as_ptr(),
+                token.as_ptr(),
+                null(),
+                false,
+                false,
+                false,
+                false,
+                null(),
+                0,
+                null_mut(),
+                None,
+                None,
+            )
+        };
+        assert!(
+            !c.is_null(),
+            "{}: fmi3InstantiateCoSimulation with resourcePath = NULL returned NULL",
+            fmu.id
+        );
+        unsafe { (api.free_instance)(c) };
+    }
+    if !fmu.md.se {
+        let c = unsafe {
+            (api.instantiate_scheduled_execution)(
+                name.as_ptr(),
+                token.as_ptr(),
+                res.as_ptr(),
+                false,
+                false,
+                null_mut(),
+                None,
+                None,
+                None,
+                None,
+            )
+        };
+        if !c.is_null() {
+            unsafe { (api.free_instance)(c) };
+            panic!(
+                "{}: fmi3InstantiateScheduledExecution returned an instance, but there is no <ScheduledExecution>",
+                fmu.id
+            );
+        }
+    }
+}
+
+pub fn fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fmu3) {
+    for me in [false, true] {
+        if (me && fmu.md.me.is_some()) || (!me && fmu.md.cs.is_some()) {
+            bad_arguments(fmu, me);
+        }
+    }
+}
+
+fn bad_arguments(fmu: &Fmu3, me: bool) {
+    let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+    excite(&inst);
+    inst.initialize();
+    inst.step(fmu.step_size());
+    let api = &fmu.api;
+    let md = &fmu.md;
+    let unknown = md.unknown_vr();
+    let floats = md.vrs_of_type(Type::Float64);
+    let f = floats[0];
+    let mut out = vec![0.0f64; 4];
+    // NULL arrays with n > 0.
+    refused(&inst, "fmi3GetFloat64(vrs = NULL, n = 1)", |c| unsafe {
+        (api.get_float64)(c, null(), 1, out.as_mut_ptr(), 1)
+    });
+    refused(&inst, "fmi3GetFloat64(values = NULL, n = 1)", |c| unsafe {
+        (api.get_float64)(c, &f, 1, null_mut(), 1)
+    });
+    refused(&inst, "fmi3SetFloat64(vrs = NULL, n = 1)", |c| unsafe {
+        (api.set_float64)(c, null(), 1, [0.0].as_ptr(), 1)
+    });
+    refused(&inst, "fmi3SetFloat64(values = NULL, n = 1)", |c| unsafe {
+        (api.set_float64)(c, &f, 1, null(), 1)
+    });
+    // nValues != nValueReferences (every variable is a scalar).
+    refused(&inst, "fmi3GetFloat64(n = 1, nValues = 2)", |c| unsafe {
+        (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 2)
+    });
+    refused(&inst, "fmi3GetFloat64(n = 1, nValues = 0)", |c| unsafe {
+        (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 0)
+    });
+    // Unknown value references, and a known one with an unknown one (all-or-nothing).
+    refused(&inst, &format!("fmi3GetFloat64([{unknown}])"), |c| unsafe {
+        (api.get_float64)(c, &unknown, 1, out.as_mut_ptr(), 1)
+    });
+    let inputs = float_inputs(fmu);
+    if let Some(u) = inputs.first() {
+        let vrs = [u.vr, unknown];
+        refused(&inst, "fmi3SetFloat64([an input, an unknown vr])", |c| unsafe {
+            (api.set_float64)(c, vrs.as_ptr(), 2, [0.5, 0.5].as_ptr(), 2)
+        });
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            refused(&inst, &format!("fmi3SetFloat64({} = {bad})", u.name), |c| unsafe {
+                (api.set_float64)(c, &u.vr, 1, &bad, 1)
+            });
+        }
+        if let Some(hi) = u.max {
+            let v = hi + 1.0 + hi.abs();
+            refused(
+                &inst,
+                &format!("fmi3SetFloat64({} = {v} > max {hi})", u.name),
+                |c| unsafe { (api.set_float64)(c, &u.vr, 1, &v, 1) },
+            );
+        }
+        if let Some(lo) = u.min {
+            let v = lo - 1.0 - lo.abs();
+            refused(
+                &inst,
+                &format!("fmi3SetFloat64({} = {v} < min {lo})", u.name),
+                |c| unsafe { (api.set_float64)(c, &u.vr, 1, &v, 1) },
+            );
+        }
+        // all-or-nothing: a good value with a NaN.
+        if inputs.len() > 1 {
+            let vrs = [inputs[0].vr, inputs[1].vr];
+            refused(&inst, "fmi3SetFloat64([input = 0.25, input = NaN])", |c| unsafe {
+                (api.set_float64)(c, vrs.as_ptr(), 2, [0.25, f64::NAN].as_ptr(), 2)
+            });
+        }
+    } else {
+        info("no continuous Float64 input: NaN/inf/min/max and all-or-nothing of setters not exercised");
+    }
+    // Wrong types: a Float64 vr through every other getter.
+    let mut buf = [0u64; 4];
+    let p = buf.as_mut_ptr() as *mut std::ffi::c_void;
+    for (name, g) in [
+        ("fmi3GetFloat32", api.get_float32),
+        ("fmi3GetInt8", api.get_int8),
+        ("fmi3GetUInt8", api.get_uint8),
+        ("fmi3GetInt16", api.get_int16),
+        ("fmi3GetUInt16", api.get_uint16),
+        ("fmi3GetUInt32", api.get_uint32),
+        ("fmi3GetUInt64", api.get_uint64),
+    ] {
+        refused(&inst, &format!("{name} of a Float64 (vr {f})"), |c| unsafe {
+            g(c, &f, 1, p, 1)
+        });
+    }
+    refused(&inst, "fmi3GetInt32 of a Float64", |c| unsafe {
+        (api.get_int32)(c, &f, 1, buf.as_mut_ptr() as *mut i32, 1)
+    });
+    refused(&inst, "fmi3GetInt64 of a Float64", |c| unsafe {
+        (api.get_int64)(c, &f, 1, buf.as_mut_ptr() as *mut i64, 1)
+    });
+    refused(&inst, "fmi3GetBoolean of a Float64", |c| unsafe {
+        (api.get_boolean)(c, &f, 1, buf.as_mut_ptr() as *mut u8, 1)
+    });
+    let mut s: fmi3String = null();
+    refused(&inst, "fmi3GetString of a Float64", |c| unsafe {
+        (api.get_string)(c, &f, 1, &mut s, 1)
+    });
+    let (mut size, mut bin) = (0usize, null::<u8>());
+    refused(&inst, "fmi3GetBinary of a Float64", |c| unsafe {
+        (api.get_binary)(c, &f, 1, &mut size, &mut bin, 1)
+    });
+    if let Some(i32v) = md.of_type(Type::Int32).next() {
+        let mut x = 0.0;
+        refused(
+            &inst,
+            &format!("fmi3GetFloat64 of the Int32 '{}'", i32v.name),
+            |c| unsafe { (api.get_float64)(c, &i32v.vr, 1, &mut x, 1) },
+        );
+    }
+    if let Some(b) = md.of_type(Type::Boolean).next() {
+        let mut x = 0i32;
+        refused(
+            &inst,
+            &format!("fmi3GetInt32 of the Boolean '{}'", b.name),
+            |c| unsafe { (api.get_int32)(c, &b.vr, 1, &mut x, 1) },
+        );
+    }
+    if let Some(e) = md.of_type(Type::Enumeration).next() {
+        let mut x = 0i32;
+        refused(
+            &inst,
+            &format!(
+                "fmi3GetInt32 of the Enumeration '{}' (FMI 3.0: Enumerations are Int64)",
+                e.name
+            ),
+            |c| unsafe { (api.get_int32)(c, &e.vr, 1, &mut x, 1) },
+        );
+        let mut y = 0i64;
+        let s = inst.call("fmi3GetInt64 of an Enumeration", |c| unsafe {
+            (api.get_int64)(c, &e.vr, 1, &mut y, 1)
+        });
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{}: fmi3GetInt64 of the Enumeration '{}': {}",
+            fmu.id,
+            e.name,
+            inst.log_text()
+        );
+    }
+    // Setting what may not be set here: outputs, the independent variable, constants.
+    let state = if me { State::ContinuousTimeMode } else { State::StepMode };
+    for v in md
+        .variables
+        .iter()
+        .filter(|v| v.ty == Type::Float64 && !v.array && !settable_in(v, state))
+        .take(8)
+    {
+        refused(
+            &inst,
+            &format!(
+                "fmi3SetFloat64 of '{}' ({}, {}) in {state:?}",
+                v.name, v.causality, v.variability
+            ),
+            |c| unsafe { (api.set_float64)(c, &v.vr, 1, &0.125, 1) },
+        );
+    }
+    // Zero values with NULL arrays are fine.
+    let s = inst.call("fmi3GetFloat64(NULL, 0, NULL, 0)", |c| unsafe {
+        (api.get_float64)(c, null(), 0, null_mut(), 0)
+    });
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{}: fmi3GetFloat64 of no variables with NULL arrays: expected fmi3OK, got {}",
+        fmu.id,
+        status_name(s)
+    );
+    // ME vector functions with a wrong size.
+    if me {
+        let n = md.derivatives.len();
+        let mut v = vec![0.0; n + 2];
+        refused(&inst, "fmi3GetContinuousStates(nContinuousStates + 1)", |c| unsafe {
+            (api.get_continuous_states)(c, v.as_mut_ptr(), n + 1)
+        });
+        refused(&inst, "fmi3SetContinuousStates(nContinuousStates + 1)", |c| unsafe {
+            (api.set_continuous_states)(c, v.as_ptr(), n + 1)
+        });
+        if n > 0 {
+            refused(&inst, "fmi3GetContinuousStateDerivatives(NULL)", |c| unsafe {
+                (api.get_continuous_state_derivatives)(c, null_mut(), n)
+            });
+            let nan = vec![f64::NAN; n];
+            refused(&inst, "fmi3SetContinuousStates(NaN...)", |c| unsafe {
+                (api.set_continuous_states)(c, nan.as_ptr(), n)
+            });
+        }
+        refused(&inst, "fmi3SetTime(NaN)", |c| unsafe { (api.set_time)(c, f64::NAN) });
+    }
+}
+
+pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu3) {
+    let mut cases = 0;
+    for me in [false, true] {
+        if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
+            continue;
+        }
+        let states: &[State] = if me { &State::ME } else { &State::CS };
+        for &state in states.iter().filter(|s| **s != State::Terminated) {
+            for v in
+                fmu.md.variables.iter().filter(|v| {
+                    !v.array && matches!(v.ty, Type::Float64 | Type::Int32 | Type::Boolean | Type::Enumeration)
+                })
+            {
+                let inst = in_state(fmu, me, state);
+                let api = &fmu.api;
+                let s = match v.ty {
+                    Type::Float64 => {
+                        let mut x = 0.0;
+                        // the value it has (where readable), else its start, else 0
+                        let got = state != State::Instantiated
+                            && inst.call("get", |c| unsafe { (api.get_float64)(c, &v.vr, 1, &mut x, 1) }) == fmi3OK;
+                        if !got {
+                            x = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0.0);
+                        }
+                        inst.call("fmi3SetFloat64", |c| unsafe { (api.set_float64)(c, &v.vr, 1, &x, 1) })
+                    }
+                    Type::Int32 => {
+                        let x: i32 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0);
+                        inst.call("fmi3SetInt32", |c| unsafe { (api.set_int32)(c, &v.vr, 1, &x, 1) })
+                    }
+                    Type::Enumeration => {
+                        let x: i64 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(1);
+                        inst.call("fmi3SetInt64", |c| unsafe { (api.set_int64)(c, &v.vr, 1, &x, 1) })
+                    }
+                    _ => {
+                        let x = v.start.as_deref() == Some("true");
+                        inst.call("fmi3SetBoolean", |c| unsafe { (api.set_boolean)(c, &v.vr, 1, &x, 1) })
+                    }
+                };
+                let want = settable_in(v, state);
+                cases += 1;
+                if want {
+                    assert_eq!(
+                        s,
+                        fmi3OK,
+                        "{}: setting '{}' ({}, {}, initial {:?}) in {state:?} ({}) answered {}: the standard allows it: {}",
+                        fmu.id,
+                        v.name,
+                        v.causality,
+                        v.variability,
+                        v.initial(),
+                        if me { "ME" } else { "CS" },
+                        status_name(s),
+                        inst.log_text()
+                    );
+                } else {
+                    assert_eq!(
+                        s,
+                        fmi3Error,
+                        "{}: setting '{}' ({}, {}, initial {:?}) in {state:?} ({}) answered {}: the standard does not allow it",
+                        fmu.id,
+                        v.name,
+                        v.causality,
+                        v.variability,
+                        v.initial(),
+                        if me { "ME" } else { "CS" },
+                        status_name(s)
+                    );
+                }
+            }
+        }
+    }
+    info(format!("{cases} (variable, state) cases"));
+}
+
+/// FMI 3.0.2's state table allows fmi3Get{VariableType} in Instantiated "to get variable start
+/// values" (fmi-standard #2174): right after instantiation, every variable with a start value
+/// answers it, in its own type's getter, and a value set there is what a get answers next. A
+/// variable without a start value (initial calculated) is not what the table speaks of: an FMU
+/// may refuse it or answer, but must not crash, and what it answers must be finite.
+pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
+    let mut n = 0;
+    for me in [false, true] {
+        if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
+            continue;
+        }
+        let inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        let api = &fmu.api;
+        let id = &fmu.id;
+        for v in with_start(fmu, Type::Float64) {
+            let want: f64 = v
+                .start
+                .as_deref()
+                .unwrap()
+                .parse()
+                .unwrap_or_else(|e| panic!("{id}: start of {}: {e}", v.name));
+            let (s, got) = inst.get_f64(&[v.vr]);
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{id}: fmi3GetFloat64 of '{}' in Instantiated: {}: {}",
+                v.name,
+                status_name(s),
+                inst.log_text()
+            );
+            assert_eq!(
+                got[0].to_bits(),
+                want.to_bits(),
+                "{id}: '{}' in Instantiated: {} (start {want})",
+                v.name,
+                got[0]
+            );
+            n += 1;
+        }
+        // Int32 and Enumeration (read as Int64): the start attribute is the integer.
+        macro_rules! integers {
+            ($ty:expr, $get:ident, $t:ty, $name:literal) => {
+                for v in with_start(fmu, $ty) {
+                    let start = v.start.as_deref().unwrap_or_default();
+                    let want: $t = start
+                        .parse()
+                        .unwrap_or_else(|e| panic!("{id}: start '{start}' of {}: {e}", v.name));
+                    let mut got: [$t; 1] = [0];
+                    let s = inst.call($name, |c| unsafe { (api.$get)(c, &v.vr, 1, got.as_mut_ptr(), 1) });
+                    assert_eq!(
+                        (s, got[0]),
+                        (fmi3OK, want),
+                        "{id}: {} of '{}' in Instantiated: {}",
+                        $name,
+                        v.name,
+                        inst.log_text()
+                    );
+                    n += 1;
+                }
+            };
+        }
+        integers!(Type::Int32, get_int32, i32, "fmi3GetInt32");
+        integers!(Type::Enumeration, get_int64, i64, "fmi3GetInt64");
+        for v in with_start(fmu, Type::Boolean) {
+            let want = matches!(v.start.as_deref(), Some("true" | "1"));
+            let mut got = [2u8];
+            let s = inst.call("fmi3GetBoolean", |c| unsafe {
+                (api.get_boolean)(c, &v.vr, 1, got.as_mut_ptr(), 1)
+            });
+            assert_eq!(
+                (s, got[0] != 0),
+                (fmi3OK, want),
+                "{id}: fmi3GetBoolean of '{}' in Instantiated: {}",
+                v.name,
+                inst.log_text()
+            );
+            n += 1;
+        }
+        for v in with_start(fmu, Type::String) {
+            let mut got = [null::<std::ffi::c_char>()];
+            let s = inst.call("fmi3GetString", |c| unsafe {
+                (api.get_string)(c, &v.vr, 1, got.as_mut_ptr(), 1)
+            });
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{id}: fmi3GetString of '{}' in Instantiated: {}",
+                v.name,
+                inst.log_text()
+            );
+            assert!(!got[0].is_null(), "{id}: fmi3GetString of '{}' gave NULL", v.name);
+            // SAFETY: a string the FMU returned, valid until the next call on this instance.
+            let text = unsafe { std::ffi::CStr::from_ptr(got[0]) }
+                .to_string_lossy()
+                .into_owned();
+            assert_eq!(
+                Some(text.as_str()),
+                v.start.as_deref(),
+                "{id}: '{}' in Instantiated",
+                v.name
+            );
+            n += 1;
+        }
+        // A value set in Instantiated is read back there (a settable Float64 one, inside its bounds).
+        if let Some((v, x)) = with_start(fmu, Type::Float64)
+            .filter(|v| settable_in(v, State::Instantiated))
+            .find_map(|v| {
+                let start: f64 = v.start.as_deref()?.parse().ok()?;
+                let inside = |x: f64| v.min.is_none_or(|m| x >= m) && v.max.is_none_or(|m| x <= m);
+                [start * 0.5 + 0.25, start + 1.0, start - 1.0]
+                    .into_iter()
+                    .find(|x| *x != start && inside(*x))
+                    .map(|x| (v, x))
+            })
+        {
+            assert_eq!(
+                inst.set_f64(&[v.vr], &[x]),
+                fmi3OK,
+                "{id}: setting '{}' = {x} in Instantiated: {}",
+                v.name,
+                inst.log_text()
+            );
+            let (s, got) = inst.get_f64(&[v.vr]);
+            assert_eq!(
+                (s, got[0].to_bits()),
+                (fmi3OK, x.to_bits()),
+                "{id}: '{}' set to {x} in Instantiated reads {}",
+                v.name,
+                got[0]
+            );
+        }
+        drop(inst);
+        // The calculated ones: refused or answered finitely, never a crash.
+        for v in fmu
+            .md
+            .of_type(Type::Float64)
+            .filter(|v| !v.array && v.initial() == Some(Initial::Calculated))
+        {
+            let inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+            let (s, got) = inst.get_f64(&[v.vr]);
+            assert!(
+                s == fmi3Error || (s == fmi3OK && got[0].is_finite()),
+                "{id}: fmi3GetFloat64 of the calculated '{}' in Instantiated: {} {}",
+                v.name,
+                status_name(s),
+                got[0]
+            );
+        }
+    }
+    info(format!("{n} start values read in Instantiated"));
+}
+
+pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu3) {
+    let t = fmu.md.independent().unwrap_or_else(|| {
+        panic!(
+            "{}: no variable with causality=\"independent\" (FMI 3.0 section 2.4.7.4: exactly one is required)",
+            fmu.id
+        )
+    });
+    assert_eq!(
+        t.ty,
+        Type::Float64,
+        "{}: the independent variable '{}' is a {}, not a Float64",
+        fmu.id,
+        t.name,
+        t.ty
+    );
+    assert!(
+        t.start.is_none(),
+        "{}: the independent variable has a start value",
+        fmu.id
+    );
+    for me in [false, true] {
+        if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
+            continue;
+        }
+        let mut i = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        let api = &fmu.api;
+        assert_eq!(
+            i.enter_init(0.25),
+            fmi3OK,
+            "{}: fmi3EnterInitializationMode(startTime = 0.25): {}",
+            fmu.id,
+            i.log_text()
+        );
+        let (s, v) = i.get_f64(&[t.vr]);
+        assert_eq!(
+            (s, v[0]),
+            (fmi3OK, 0.25),
+            "{}: {} in initialization mode with startTime 0.25",
+            fmu.id,
+            t.name
+        );
+        // On an instance of its own: after fmi3Error the FMU is Terminated.
+        let mut other = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        assert_eq!(other.enter_init(0.25), fmi3OK);
+        refused(
+            &other,
+            &format!("fmi3SetFloat64 of the independent variable '{}'", t.name),
+            |c| unsafe { (api.set_float64)(c, &t.vr, 1, &1.0, 1) },
+        );
+        assert_eq!(i.exit_init(), fmi3OK);
+        if me {
+            i.event_iteration();
+            assert_eq!(
+                i.call("ctm", |c| unsafe { (api.enter_continuous_time_mode)(c) }),
+                fmi3OK
+            );
+        }
+        let h = fmu.step_size();
+        for _ in 0..3 {
+            i.step(h);
+        }
+        let (s, v) = i.get_f64(&[t.vr]);
+        assert_eq!(s, fmi3OK);
+        assert_eq!(
+            v[0],
+            i.time,
+            "{}: {} after 3 steps of {h} from 0.25 ({})",
+            fmu.id,
+            t.name,
+            if me { "ME" } else { "CS" }
+        );
+    }
+}
+
+pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
+    cs_only(fmu);
+    let mut i = Inst::cs(fmu);
+    excite(&i);
+    i.initialize();
+    let h = fmu.step_size();
+    for n in 0..10 {
+        let t = i.time;
+        let (s, flags, last) = i.do_step(h);
+        assert_eq!(s, fmi3OK, "{}: fmi3DoStep({t}, {h}): {}", fmu.id, i.log_text());
+        assert_eq!(
+            flags,
+            [0, 0, 0],
+            "{}: step {n}: eventHandlingNeeded, terminateSimulation, earlyReturn = {flags:?}: expected all false (no event mode, no early return)",
+            fmu.id
+        );
+        assert_eq!(
+            last,
+            t + h,
+            "{}: step {n}: lastSuccessfulTime {last}, expected t + h = {}",
+            fmu.id,
+            t + h
+        );
+    }
+    // Refused steps: the instance stays where it was.
+    let api = &fmu.api;
+    let t = i.time;
+    for bad in [0.0, -h, f64::NAN, f64::INFINITY] {
+        let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+        let s = i.call("fmi3DoStep(bad h)", |c| unsafe {
+            (api.do_step)(c, t, bad, true, &mut a, &mut b, &mut c2, &mut last)
+        });
+        assert_eq!(
+            s,
+            fmi3Error,
+            "{}: fmi3DoStep(t = {t}, h = {bad}): expected fmi3Error, got {}",
+            fmu.id,
+            status_name(s)
+        );
+    }
+    // After refused steps the instance may be in an error state (FMI 3.0: after fmi3Error only
+    // some calls are allowed); a fresh instance continues.
+    let mut j = Inst::cs(fmu);
+    excite(&j);
+    j.initialize();
+    let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+    let s = j.call("fmi3DoStep(wrong currentCommunicationPoint)", |c| unsafe {
+        (api.do_step)(c, 1.0 + 10.0 * h, h, true, &mut a, &mut b, &mut c2, &mut last)
+    });
+    assert_ne!(
+        s, fmi3OK,
+        "{}: fmi3DoStep at currentCommunicationPoint 1 + 10 h while the FMU is at 0 answered fmi3OK",
+        fmu.id
+    );
+    // null output pointers with valid step
+    let mut k = Inst::cs(fmu);
+    k.initialize();
+    let s = k.call("fmi3DoStep(NULL outputs)", |c| unsafe {
+        (api.do_step)(c, 0.0, h, true, null_mut(), null_mut(), null_mut(), null_mut())
+    });
+    assert!(
+        s == fmi3OK || s == fmi3Error,
+        "{}: fmi3DoStep with NULL output pointers: {} (expected fmi3OK or fmi3Error, no crash)",
+        fmu.id,
+        status_name(s)
+    );
+    let _ = k.time;
+    // A huge step: completed (lastSuccessfulTime = t + h) or discarded (fmi3Discard with a
+    // message, t <= lastSuccessfulTime < t + h); then the outputs are readable and the
+    // instance can be terminated (FMI 3.0 fmi3DoStep, "fmi3Discard").
+    let mut big = Inst::cs(fmu);
+    excite(&big);
+    big.initialize();
+    let huge = 1e3 * fmu.md.default_experiment.stop_time().unwrap_or(1.0).max(1.0);
+    let (s, flags, last) = big.do_step(huge);
+    if s == fmi3OK {
+        assert_eq!(
+            last, huge,
+            "{}: a completed step of {huge}: lastSuccessfulTime {last}",
+            fmu.id
+        );
+    } else if s == fmi3Discard {
+        assert!(
+            (0.0..huge).contains(&last),
+            "{}: a discarded step of {huge} from 0: lastSuccessfulTime {last}",
+            fmu.id
+        );
+        info(format!("a step of {huge} s: fmi3Discard at lastSuccessfulTime {last}"));
+    } else {
+        panic!(
+            "{}: a step of {huge} s answered {}: expected fmi3OK or fmi3Discard",
+            fmu.id,
+            status_name(s)
+        );
+    }
+    assert!(
+        flags[1] <= 1 && flags[0] == 0 && flags[2] == 0,
+        "{}: flags {flags:?} after a huge step",
+        fmu.id
+    );
+    let (g, _) = big.get_f64(&fmu.md.vrs_of_type(Type::Float64));
+    assert_eq!(
+        g,
+        fmi3OK,
+        "{}: fmi3GetFloat64 after the huge step: {}",
+        fmu.id,
+        big.log_text()
+    );
+    let t = big.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) });
+    assert_eq!(
+        t,
+        fmi3OK,
+        "{}: fmi3Terminate after the huge step ({}): {}",
+        fmu.id,
+        status_name(s),
+        big.log_text()
+    );
+}
+
+pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
+    let i = if fmu.md.cs.is_some() {
+        Inst::cs(fmu)
+    } else {
+        Inst::me(fmu)
+    };
+    let api = &fmu.api;
+    let cats: Vec<CString> = fmu
+        .md
+        .log_categories
+        .iter()
+        .map(|c| CString::new(c.as_str()).unwrap())
+        .collect();
+    let ptrs: Vec<fmi3String> = cats.iter().map(|c| c.as_ptr()).collect();
+    let s = i.call("fmi3SetDebugLogging(true, declared categories)", |c| unsafe {
+        (api.set_debug_logging)(c, true, ptrs.len(), ptrs.as_ptr())
+    });
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{}: fmi3SetDebugLogging with the declared categories {:?}: {}",
+        fmu.id,
+        fmu.md.log_categories,
+        i.log_text()
+    );
+    let s = i.call("fmi3SetDebugLogging(true, none)", |c| unsafe {
+        (api.set_debug_logging)(c, true, 0, null())
+    });
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{}: fmi3SetDebugLogging(true, 0, NULL): {}",
+        fmu.id,
+        i.log_text()
+    );
+    let bad = [c"noSuchCategory".as_ptr()];
+    let s = i.call("fmi3SetDebugLogging(unknown)", |c| unsafe {
+        (api.set_debug_logging)(c, true, 1, bad.as_ptr())
+    });
+    assert_eq!(
+        s,
+        fmi3Error,
+        "{}: fmi3SetDebugLogging with an undeclared category: {}",
+        fmu.id,
+        status_name(s)
+    );
+    let s = i.call("fmi3SetDebugLogging(NULL, 1)", |c| unsafe {
+        (api.set_debug_logging)(c, true, 1, null())
+    });
+    assert_eq!(
+        s,
+        fmi3Error,
+        "{}: fmi3SetDebugLogging(nCategories = 1, categories = NULL): {}",
+        fmu.id,
+        status_name(s)
+    );
+    let s = i.call("fmi3SetDebugLogging(false)", |c| unsafe {
+        (api.set_debug_logging)(c, false, 0, null())
+    });
+    assert_eq!(s, fmi3OK);
+}

@@ -1,0 +1,224 @@
+//! The FMI 3.0 checks, by concern, as the FMI 2.0 ones in [`crate::checks`] (whose registry,
+//! [`crate::checks::all_checks`], lists both). Each is a `fn(&Fmu3)` that returns when the FMU
+//! passed and panics with what was expected and what came instead when it did not (skips and
+//! limitations as in [`crate::outcome`]). Written from the FMI 3.0 standard: the state machine
+//! of section 4.2.x / 3.2.x (Co-Simulation, Model Exchange; its table is [`table`]), the
+//! function descriptions of section 2.3, the model description of section 2.4; nothing here
+//! knows rustfmu or a particular model.
+//!
+//! This module holds what several of them use: bringing an instance into a state, the inputs'
+//! excitation, a whole run.
+
+pub mod calls;
+pub mod directional_derivatives;
+pub mod fmu_state;
+pub mod instances;
+pub mod memory;
+pub mod model_exchange;
+pub mod native;
+pub mod random_sequences;
+pub mod state_machine;
+pub mod table;
+
+use super::Type;
+use super::standard::{State, settable_in};
+use super::types::*;
+use super::{Fmu3, Inst, euler_step};
+use crate::outcome::{info, limitation, skip, skip_not_declared};
+use fmi_description::{Causality, Initial, Variability};
+use std::ffi::CString;
+use std::ptr::{null, null_mut};
+
+crate::checks::registry! {
+    /// The FMI 3.0 checks.
+    const FMI3 = Fmi3 {
+        Native: native::{
+            fmi3_the_binary_exports_every_fmi3_function_and_no_others,
+        };
+        Calls: calls::{
+            fmi3_get_version_is_3_0,
+            fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null,
+            fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing,
+            fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it,
+            fmi3_start_values_are_readable_in_instantiated,
+            fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set,
+            fmi3_do_step_output_arguments_are_truthful,
+            fmi3_set_debug_logging_refuses_unknown_categories,
+        };
+        StateMachine: state_machine::{
+            fmi3_co_simulation_every_function_in_every_state_answers_as_the_standard_says,
+            fmi3_model_exchange_every_function_in_every_state_answers_as_the_standard_says,
+            fmi3_reset_from_every_state_then_a_rerun_is_bit_identical,
+            fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state,
+            fmi3_a_null_instance_is_refused_by_every_function,
+        };
+        ModelExchange: model_exchange::{
+            fmi3_model_exchange_states_and_derivatives_are_consistent,
+            fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run,
+        };
+        DirectionalDerivatives: directional_derivatives::{
+            fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,
+            fmi3_model_exchange_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,
+        };
+        FmuState: fmu_state::{
+            fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically,
+            fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused,
+            fmi3_a_state_serialized_here_restores_in_another_process_and_continues_identically,
+        };
+        Instances: instances::{
+            fmi3_interleaved_instances_and_instances_on_threads_match_a_single_run,
+        };
+        Memory: memory::{
+            fmi3_ten_thousand_instantiate_free_cycles_leave_memory_flat,
+        };
+        RandomSequences: random_sequences::{
+            fmi3_random_call_sequences_never_crash_and_keep_status_consistent,
+        };
+        Native: native::{
+            fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind,
+        };
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+fn cs_only(fmu: &Fmu3) {
+    if fmu.md.cs.is_none() {
+        skip_not_declared("<CoSimulation>");
+    }
+}
+fn me_only(fmu: &Fmu3) {
+    if fmu.md.me.is_none() {
+        skip_not_declared("<ModelExchange>");
+    }
+}
+
+/// An instance of the interface brought into `state`.
+fn in_state(fmu: &Fmu3, me: bool, state: State) -> Inst<'_> {
+    let mut i = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+    let id = &fmu.id;
+    let api = &fmu.api;
+    if state == State::Instantiated {
+        return i;
+    }
+    assert_eq!(
+        i.enter_init(0.0),
+        fmi3OK,
+        "{id}: fmi3EnterInitializationMode: {}",
+        i.log_text()
+    );
+    if state == State::InitializationMode {
+        return i;
+    }
+    assert_eq!(
+        i.exit_init(),
+        fmi3OK,
+        "{id}: fmi3ExitInitializationMode: {}",
+        i.log_text()
+    );
+    if me {
+        i.event_iteration();
+        if state == State::ContinuousTimeMode {
+            assert_eq!(
+                i.call("fmi3EnterContinuousTimeMode", |c| unsafe {
+                    (api.enter_continuous_time_mode)(c)
+                }),
+                fmi3OK
+            );
+        }
+    }
+    if state == State::Terminated {
+        assert_eq!(
+            i.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) }),
+            fmi3OK,
+            "{id}: fmi3Terminate: {}",
+            i.log_text()
+        );
+    }
+    i
+}
+
+fn float_inputs(fmu: &Fmu3) -> Vec<&super::Variable> {
+    fmu.md
+        .of_type(Type::Float64)
+        .filter(|v| v.causality == Causality::Input && v.variability == Variability::Continuous)
+        .collect()
+}
+
+/// A moderate excitation of every continuous Float64 input (inside min/max).
+fn excitation(fmu: &Fmu3) -> Vec<(u32, f64)> {
+    float_inputs(fmu)
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let mut x = 0.1 * (k as f64 + 1.0);
+            if let Some(lo) = v.min {
+                x = x.max(lo);
+            }
+            if let Some(hi) = v.max {
+                x = x.min(hi);
+            }
+            (v.vr, x)
+        })
+        .collect()
+}
+
+fn excite(inst: &Inst) {
+    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(inst.fmu).into_iter().unzip();
+    assert_eq!(
+        inst.set_f64(&vrs, &vals),
+        fmi3OK,
+        "{}: setting the inputs: {}",
+        inst.fmu.id,
+        inst.log_text()
+    );
+}
+
+/// A run: excitation, initialization, `steps` steps of `h`; every Float64 after each step.
+fn run(fmu: &Fmu3, me: bool, steps: usize, h: f64) -> Vec<Vec<u64>> {
+    let mut i = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+    excite(&i);
+    i.initialize();
+    (0..steps)
+        .map(|_| {
+            i.step(h);
+            i.observe()
+        })
+        .collect()
+}
+
+/// Runs `f`, which must be refused with fmi3Error, with a message; then the Float64 values
+/// must be what they were (`what` says what was passed).
+fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) {
+    let before = inst.observe();
+    let s = inst.call(what, f);
+    assert_eq!(
+        s,
+        fmi3Error,
+        "{}: {what}: expected fmi3Error, got {}",
+        inst.fmu.id,
+        status_name(s)
+    );
+    assert_eq!(
+        inst.observe(),
+        before,
+        "{}: {what} was refused but changed values",
+        inst.fmu.id
+    );
+}
+
+/// The scalar variables of element `ty` that have a start value in the description (FMI 3.0,
+/// 2.4.7.4: inputs, and initial exact or approx; never the independent variable).
+fn with_start(fmu: &Fmu3, ty: Type) -> impl Iterator<Item = &super::Variable> {
+    fmu.md.of_type(ty).filter(|v| {
+        !v.array
+            && v.causality != Causality::Independent
+            && v.start.is_some()
+            && (v.causality == Causality::Input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)))
+    })
+}
+
+fn start_vrs(fmu: &Fmu3, ty: Type) -> Vec<u32> {
+    with_start(fmu, ty).map(|v| v.vr).collect()
+}

@@ -1,0 +1,187 @@
+//! The FMI 3.0 binary as a native library: the functions it exports, and a C host that runs it
+//! (co-simulation and model exchange) under valgrind's memcheck.
+
+use super::*;
+
+// ---------------------------------------------------------------------------------------------
+// Native: symbols
+
+pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
+    let so = fmu.so.to_str().unwrap();
+    let out = match std::process::Command::new("nm")
+        .args(["-D", "--defined-only", so])
+        .output()
+    {
+        Ok(o) => o,
+        Err(_) => skip("nm is not installed (tests/setup-env.sh installs it)"),
+    };
+    assert!(
+        out.status.success(),
+        "nm -D {so}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let names: Vec<&str> = text.lines().filter_map(|l| l.split_whitespace().nth(2)).collect();
+    let linker = ["_init", "_fini", "_edata", "_end", "__bss_start"];
+    let foreign: Vec<&&str> = names
+        .iter()
+        .filter(|n| !n.starts_with("fmi3") && !n.starts_with("fmi2") && !linker.contains(n))
+        .collect();
+    assert!(
+        foreign.is_empty(),
+        "{}: exports symbols that are not FMI functions: {foreign:?}",
+        fmu.id
+    );
+    // A binary may implement FMI 2.0 too (rustfmu's `export_fmu!` binaries serve both
+    // versions): then its co-simulation functions (34), with model exchange 44.
+    let fmi2 = names.iter().filter(|n| n.starts_with("fmi2")).count();
+    assert!(
+        [0, 34, 44].contains(&fmi2),
+        "{}: exports {fmi2} fmi2 names: FMI 2.0 whole (34 functions of co-simulation, 44 with model \
+         exchange) or none",
+        fmu.id
+    );
+    let missing: Vec<&&str> = crate::fmi3::api::FUNCTIONS
+        .iter()
+        .filter(|f| !names.contains(f))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "{}: does not export {missing:?} (FMI 3.0 section 2.3: every function of fmi3Functions.h)",
+        fmu.id
+    );
+    let extra: Vec<&&str> = names
+        .iter()
+        .filter(|n| n.starts_with("fmi3") && !crate::fmi3::api::FUNCTIONS.contains(n))
+        .collect();
+    assert!(
+        extra.is_empty(),
+        "{}: exports fmi3 symbols the standard does not define: {extra:?}",
+        fmu.id
+    );
+    info(format!(
+        "{} fmi3 functions{}, nothing else",
+        crate::fmi3::api::FUNCTIONS.len(),
+        if fmi2 > 0 {
+            format!(" and FMI 2.0's {fmi2}")
+        } else {
+            String::new()
+        }
+    ));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The C host
+
+pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(fmu: &Fmu3) {
+    cs_only(fmu);
+    let src = fmu.scratch.join("host3.c");
+    std::fs::write(&src, include_str!("../../../c/host3.c")).unwrap();
+    std::fs::write(fmu.scratch.join("dl.h"), include_str!("../../../c/dl.h")).unwrap();
+    let exe = fmu.scratch.join("c-host3");
+    let cc = std::process::Command::new("cc")
+        .args(["-std=gnu11", "-O1", "-g", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(&exe)
+        .arg(&src)
+        .arg("-ldl")
+        .output();
+    let cc = match cc {
+        Ok(o) => o,
+        Err(_) => skip("cc is not installed (tests/setup-env.sh installs it)"),
+    };
+    assert!(
+        cc.status.success(),
+        "compiling c/host3.c: {}",
+        String::from_utf8_lossy(&cc.stderr)
+    );
+    let n_states = if fmu.md.me.is_some() {
+        fmu.md.derivatives.len().to_string()
+    } else {
+        "-1".into()
+    };
+    let vrs: Vec<String> = fmu.md.vrs_of_type(Type::Float64).iter().map(u32::to_string).collect();
+    let mut args = vec![
+        fmu.so.to_string_lossy().into_owned(),
+        fmu.md.token.clone(),
+        fmu.resource_path(),
+        "1000".into(),
+        format!("{:?}", fmu.step_size().min(1e-3)),
+        n_states,
+        vrs.join(","),
+    ];
+    args.extend(excitation(fmu).iter().map(|(vr, v)| format!("{vr}={v:?}")));
+    let plain = std::process::Command::new(&exe).args(&args).output().unwrap();
+    let stdout = String::from_utf8_lossy(&plain.stdout).into_owned();
+    assert!(
+        plain.status.success(),
+        "{}: the C host failed: {}{stdout}",
+        fmu.id,
+        String::from_utf8_lossy(&plain.stderr)
+    );
+    // The same numbers as this importer.
+    let final_line = stdout
+        .lines()
+        .find(|l| l.starts_with("final "))
+        .unwrap_or_else(|| panic!("no final line: {stdout}"));
+    let got: Vec<u64> = final_line
+        .split_whitespace()
+        .skip(1)
+        .map(|x| u64::from_str_radix(x, 16).unwrap())
+        .collect();
+    let want = run(fmu, false, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+    assert_eq!(
+        got, want,
+        "{}: the C host's co-simulation run differs from this importer's",
+        fmu.id
+    );
+    if fmu.md.me.is_some() {
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with("me-final "))
+            .unwrap_or_else(|| panic!("no me-final line: {stdout}"));
+        let got: Vec<u64> = line
+            .split_whitespace()
+            .skip(1)
+            .map(|x| u64::from_str_radix(x, 16).unwrap())
+            .collect();
+        let want = run(fmu, true, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+        assert_eq!(
+            got, want,
+            "{}: the C host's explicit-Euler ME run differs from this importer's",
+            fmu.id
+        );
+    }
+    if std::process::Command::new("valgrind")
+        .arg("--version")
+        .output()
+        .is_err()
+    {
+        skip("valgrind is not installed (tests/setup-env.sh installs it)");
+    }
+    let out = std::process::Command::new("valgrind")
+        .args([
+            "--error-exitcode=1",
+            "--leak-check=full",
+            "--show-leak-kinds=definite,indirect,possible",
+            "--errors-for-leak-kinds=definite,indirect,possible",
+            "--quiet",
+        ])
+        .arg(&exe)
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}: valgrind memcheck: {}{}",
+        fmu.id,
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        stdout,
+        "{}: results under valgrind differ",
+        fmu.id
+    );
+    info("C host: 1000 co-simulation steps and an explicit-Euler ME run, memcheck clean");
+}

@@ -1,0 +1,461 @@
+//! The FMI 3.0 state table as data: for every function that takes an instance, what the
+//! standard says a valid call answers in each state of co-simulation (section 4.2) and model
+//! exchange (section 3.2). One row per function ([`TABLE`]); the call each row makes is
+//! dispatched from its function id ([`F::call`]). Used by the state-table checks and the check
+//! of a NULL instance ([`super::state_machine`]).
+
+use super::directional_derivatives::{knowns, unknowns};
+use super::*;
+use State::*;
+
+/// What the standard says of a call in a state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expect {
+    /// Allowed: fmi3OK (or fmi3Warning).
+    Ok,
+    /// Not allowed: fmi3Error.
+    Error,
+    /// Allowed by the state machine but refusable because the FMU lacks the capability (no
+    /// clocks, no structural parameters, no output derivatives, no dependencies API), or a
+    /// cell the standard leaves open: anything but fmi3Fatal and a crash.
+    Either,
+}
+
+impl Expect {
+    /// Whether `status` is what this cell allows.
+    pub fn allows(self, status: fmi3Status) -> bool {
+        match self {
+            Expect::Ok => status == fmi3OK || status == fmi3Warning,
+            Expect::Error => status == fmi3Error,
+            Expect::Either => [fmi3OK, fmi3Warning, fmi3Error, fmi3Discard].contains(&status),
+        }
+    }
+}
+
+/// A set of states, one bit each.
+type States = u8;
+
+const fn bit(s: State) -> States {
+    1 << s as u8
+}
+const I: States = bit(Instantiated);
+const IM: States = bit(InitializationMode);
+const EM: States = bit(EventMode);
+const CT: States = bit(ContinuousTimeMode);
+const SM: States = bit(StepMode);
+const T: States = bit(Terminated);
+const ALL: States = I | IM | EM | CT | SM | T;
+
+/// The cells of one interface's row: the states where a call is allowed, those where it may
+/// also be refused ([`Expect::Either`]); in every other state it is refused.
+#[derive(Debug, Clone, Copy)]
+pub struct Cells {
+    ok: States,
+    either: States,
+}
+
+/// Allowed in these states.
+const fn ok(states: States) -> Cells {
+    Cells { ok: states, either: 0 }
+}
+/// Allowed in `ok`, open in `either`.
+const fn ok_either(ok: States, either: States) -> Cells {
+    Cells { ok, either }
+}
+/// Open in these states.
+const fn either(states: States) -> Cells {
+    Cells { ok: 0, either: states }
+}
+/// Refused in every state.
+const NEVER: Cells = ok(0);
+/// Open in every state.
+const OPEN: Cells = either(ALL);
+
+/// Getters: FMI 3.0.2's table allows fmi3Get{VariableType} in Instantiated too ("get variable
+/// start values", fmi-standard #2174; which variables:
+/// [`super::calls::fmi3_start_values_are_readable_in_instantiated`]).
+const GETTERS: Cells = ok(ALL);
+/// fmi3SetFloat64.
+const SET_FLOAT: Cells = ok(I | IM | EM | CT | SM);
+/// The other setters: the standard's table lets ContinuousTimeMode set continuous-time inputs
+/// only, which are Float: with no variable the call is open there.
+const SETTERS: Cells = ok_either(I | IM | EM | SM, CT);
+/// The derivatives' functions.
+const DERIVATIVES: Cells = ok(IM | EM | CT | SM | T);
+/// The vectors of model exchange (states, derivatives, event indicators, nominals).
+const ME_VECTOR: Cells = ok(IM | EM | CT | T);
+/// fmi3GetNumberOf* (Model Exchange only): the allowed calls of Instantiated and Event Mode list
+/// them; those of Initialization Mode and Terminated do not, but the Reference FMUs allow them
+/// in every state: open there, as in Continuous-Time Mode.
+const NUMBER_OF: Cells = ok_either(I | EM, ALL & !(I | EM));
+
+/// One function's row: its cells in co-simulation and in model exchange.
+#[derive(Debug, Clone, Copy)]
+pub struct Row {
+    pub f: F,
+    pub cs: Cells,
+    pub me: Cells,
+}
+
+impl Row {
+    /// What the standard says of a valid call in `state` of an instance of that interface.
+    pub fn expect(&self, state: State, me: bool) -> Expect {
+        let cells = if me { self.me } else { self.cs };
+        if cells.ok & bit(state) != 0 {
+            Expect::Ok
+        } else if cells.either & bit(state) != 0 {
+            Expect::Either
+        } else {
+            Expect::Error
+        }
+    }
+}
+
+/// `Function: co-simulation cells, model-exchange cells;` per row: the function ids ([`F`],
+/// the C name without `fmi3`) and [`TABLE`].
+macro_rules! state_table {
+    ($($(#[$doc:meta])* $f:ident: $cs:expr, $me:expr;)*) => {
+        /// A function of the table, by its C name without `fmi3`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum F {
+            $($(#[$doc])* $f,)*
+        }
+
+        impl F {
+            /// The C name: `fmi3` and the id.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(F::$f => concat!("fmi3", stringify!($f)),)*
+                }
+            }
+        }
+
+        /// Every function that takes an instance, in every state: the FMI 3.0 state table.
+        pub const TABLE: &[Row] = &[$(Row { f: F::$f, cs: $cs, me: $me },)*];
+    };
+}
+
+state_table! {
+    // function                       co-simulation            model exchange
+    SetDebugLogging:                  ok(ALL),                 ok(ALL);
+    EnterInitializationMode:          ok(I),                   ok(I);
+    ExitInitializationMode:           ok(IM),                  ok(IM);
+    /// CS without event mode: never; ME: from continuous-time mode.
+    EnterEventMode:                   NEVER,                   ok(CT);
+    Terminate:                        ok(EM | CT | SM),        ok(EM | CT | SM);
+    Reset:                            ok(ALL),                 ok(ALL);
+    GetFloat64:                       GETTERS,                 GETTERS;
+    GetInt32:                         GETTERS,                 GETTERS;
+    GetInt64:                         GETTERS,                 GETTERS;
+    GetBoolean:                       GETTERS,                 GETTERS;
+    GetString:                        GETTERS,                 GETTERS;
+    GetFloat32:                       GETTERS,                 GETTERS;
+    GetInt8:                          GETTERS,                 GETTERS;
+    GetUInt8:                         GETTERS,                 GETTERS;
+    GetInt16:                         GETTERS,                 GETTERS;
+    GetUInt16:                        GETTERS,                 GETTERS;
+    GetUInt32:                        GETTERS,                 GETTERS;
+    GetUInt64:                        GETTERS,                 GETTERS;
+    GetBinary:                        GETTERS,                 GETTERS;
+    SetFloat64:                       SET_FLOAT,               SET_FLOAT;
+    SetInt32:                         SETTERS,                 SETTERS;
+    SetInt64:                         SETTERS,                 SETTERS;
+    SetBoolean:                       SETTERS,                 SETTERS;
+    SetString:                        SETTERS,                 SETTERS;
+    SetFloat32:                       SETTERS,                 SETTERS;
+    SetInt8:                          SETTERS,                 SETTERS;
+    SetUInt8:                         SETTERS,                 SETTERS;
+    SetInt16:                         SETTERS,                 SETTERS;
+    SetUInt16:                        SETTERS,                 SETTERS;
+    SetUInt32:                        SETTERS,                 SETTERS;
+    SetUInt64:                        SETTERS,                 SETTERS;
+    SetBinary:                        SETTERS,                 SETTERS;
+    GetClock:                         OPEN,                    OPEN;
+    SetClock:                         OPEN,                    OPEN;
+    GetNumberOfVariableDependencies:  OPEN,                    OPEN;
+    GetVariableDependencies:          OPEN,                    OPEN;
+    /// fmi3GetFMUState, then fmi3FreeFMUState of the state taken.
+    GetFMUState:                      ok(ALL),                 ok(ALL);
+    /// fmi3FreeFMUState of a NULL state.
+    FreeFMUState:                     ok(ALL),                 ok(ALL);
+    GetDirectionalDerivative:         DERIVATIVES,             DERIVATIVES;
+    GetAdjointDerivative:             DERIVATIVES,             DERIVATIVES;
+    /// Allowed by the state machine in Instantiated, EventMode and StepMode, but only for an
+    /// FMU with structural parameters.
+    EnterConfigurationMode:           either(I | EM | SM),     either(I | EM | SM);
+    ExitConfigurationMode:            NEVER,                   NEVER;
+    GetIntervalDecimal:               OPEN,                    OPEN;
+    GetIntervalFraction:              OPEN,                    OPEN;
+    GetShiftDecimal:                  OPEN,                    OPEN;
+    GetShiftFraction:                 OPEN,                    OPEN;
+    SetIntervalDecimal:               OPEN,                    OPEN;
+    SetIntervalFraction:              OPEN,                    OPEN;
+    SetShiftDecimal:                  OPEN,                    OPEN;
+    SetShiftFraction:                 OPEN,                    OPEN;
+    /// EventMode (ME); in CS it belongs to Step Mode without event mode: left open.
+    EvaluateDiscreteStates:           either(SM),              ok(EM);
+    UpdateDiscreteStates:             NEVER,                   ok(EM);
+    EnterContinuousTimeMode:          NEVER,                   ok(EM);
+    CompletedIntegratorStep:          NEVER,                   ok(CT);
+    /// Continuous-Time Mode; Event Mode's list of allowed calls has no fmi3SetTime, but the
+    /// Reference FMUs allow it there: open.
+    SetTime:                          NEVER,                   ok_either(CT, EM);
+    /// Event Mode: not in the 3.0 list of allowed calls, but the 3.0.2 maintenance release
+    /// allows setting continuous states in more states: open.
+    SetContinuousStates:              NEVER,                   ok_either(CT, EM);
+    GetContinuousStateDerivatives:    NEVER,                   ME_VECTOR;
+    GetEventIndicators:               NEVER,                   ME_VECTOR;
+    GetContinuousStates:              NEVER,                   ME_VECTOR;
+    GetNominalsOfContinuousStates:    NEVER,                   ME_VECTOR;
+    GetNumberOfEventIndicators:       NEVER,                   NUMBER_OF;
+    GetNumberOfContinuousStates:      NEVER,                   NUMBER_OF;
+    /// Only from EventMode of a CS instance with event mode: never here.
+    EnterStepMode:                    NEVER,                   NEVER;
+    GetOutputDerivatives:             either(SM | T),          NEVER;
+    DoStep:                           ok(SM),                  NEVER;
+    ActivateModelPartition:           NEVER,                   NEVER;
+}
+
+impl F {
+    /// A valid call of this function on the instance (NULL arrays of length 0 where the
+    /// function takes value references and there is nothing to pass); its status.
+    pub fn call(self, i: &Inst) -> fmi3Status {
+        let api = i.api();
+        let name = self.name();
+        /// A getter of one readable variable of that type.
+        macro_rules! get {
+            ($f:ident, $ty:expr, $t:ty) => {{
+                let v = readable(i.fmu, $ty);
+                let mut out: Vec<$t> = vec![Default::default(); v.len()];
+                i.call(name, |c| unsafe {
+                    (api.$f)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len())
+                })
+            }};
+        }
+        /// A getter of no variable.
+        macro_rules! none {
+            ($f:ident) => {
+                i.call(name, |c| unsafe { (api.$f)(c, null(), 0, null_mut(), 0) })
+            };
+        }
+        /// A setter of no variable.
+        macro_rules! none_set {
+            ($f:ident) => {
+                i.call(name, |c| unsafe { (api.$f)(c, null(), 0, null(), 0) })
+            };
+        }
+        macro_rules! unary {
+            ($f:ident) => {
+                i.call(name, |c| unsafe { (api.$f)(c) })
+            };
+        }
+        /// A model-exchange vector of `n` values.
+        macro_rules! vector {
+            ($f:ident, $n:expr) => {
+                i.vector(name, api.$f, $n).0
+            };
+        }
+        let n_states = i.fmu.md.derivatives.len();
+        // SAFETY (every call): the standard's functions with valid pointers of the lengths
+        // passed, on a live instance (or NULL, which the FMU must refuse).
+        match self {
+            F::SetDebugLogging => i.call(name, |c| unsafe { (api.set_debug_logging)(c, false, 0, null()) }),
+            F::EnterInitializationMode => i.call(name, |c| unsafe {
+                (api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
+            }),
+            F::ExitInitializationMode => unary!(exit_initialization_mode),
+            F::EnterEventMode => unary!(enter_event_mode),
+            F::Terminate => unary!(terminate),
+            F::Reset => unary!(reset),
+            F::GetFloat64 => get!(get_float64, Type::Float64, f64),
+            F::GetInt32 => get!(get_int32, Type::Int32, i32),
+            F::GetInt64 => get!(get_int64, Type::Enumeration, i64),
+            F::GetBoolean => get!(get_boolean, Type::Boolean, u8),
+            F::GetString => {
+                let v = readable(i.fmu, Type::String);
+                let mut out = vec![null(); v.len()];
+                i.call(name, |c| unsafe {
+                    (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len())
+                })
+            }
+            F::GetFloat32 => none!(get_float32),
+            F::GetInt8 => none!(get_int8),
+            F::GetUInt8 => none!(get_uint8),
+            F::GetInt16 => none!(get_int16),
+            F::GetUInt16 => none!(get_uint16),
+            F::GetUInt32 => none!(get_uint32),
+            F::GetUInt64 => none!(get_uint64),
+            F::GetBinary => i.call(name, |c| unsafe {
+                (api.get_binary)(c, null(), 0, null_mut(), null_mut(), 0)
+            }),
+            F::SetFloat64 => none_set!(set_float64),
+            F::SetInt32 => none_set!(set_int32),
+            F::SetInt64 => none_set!(set_int64),
+            F::SetBoolean => none_set!(set_boolean),
+            F::SetString => none_set!(set_string),
+            F::SetFloat32 => none_set!(set_float32),
+            F::SetInt8 => none_set!(set_int8),
+            F::SetUInt8 => none_set!(set_uint8),
+            F::SetInt16 => none_set!(set_int16),
+            F::SetUInt16 => none_set!(set_uint16),
+            F::SetUInt32 => none_set!(set_uint32),
+            F::SetUInt64 => none_set!(set_uint64),
+            F::SetBinary => i.call(name, |c| unsafe { (api.set_binary)(c, null(), 0, null(), null(), 0) }),
+            F::GetClock => i.call(name, |c| unsafe { (api.get_clock)(c, null(), 0, null_mut()) }),
+            F::SetClock => i.call(name, |c| unsafe { (api.set_clock)(c, null(), 0, null()) }),
+            F::GetNumberOfVariableDependencies => {
+                let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
+                let mut n = 0;
+                i.call(name, |c| unsafe {
+                    (api.get_number_of_variable_dependencies)(c, vr, &mut n)
+                })
+            }
+            F::GetVariableDependencies => {
+                let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
+                i.call(name, |c| unsafe {
+                    (api.get_variable_dependencies)(c, vr, null_mut(), null_mut(), null_mut(), null_mut(), 0)
+                })
+            }
+            F::GetFMUState => {
+                let mut st: fmi3FMUState = null_mut();
+                let s = i.call(name, |c| unsafe { (api.get_fmu_state)(c, &mut st) });
+                if s == fmi3OK {
+                    let f = i.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
+                    assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState of a state just taken", i.fmu.id);
+                }
+                s
+            }
+            F::FreeFMUState => {
+                let mut st: fmi3FMUState = null_mut();
+                i.call(name, |c| unsafe { (api.free_fmu_state)(c, &mut st) })
+            }
+            F::GetDirectionalDerivative => derivative_call(i, false),
+            F::GetAdjointDerivative => derivative_call(i, true),
+            F::EnterConfigurationMode => unary!(enter_configuration_mode),
+            F::ExitConfigurationMode => unary!(exit_configuration_mode),
+            F::GetIntervalDecimal => i.call(name, |c| unsafe {
+                (api.get_interval_decimal)(c, null(), 0, null_mut(), null_mut())
+            }),
+            F::GetIntervalFraction => i.call(name, |c| unsafe {
+                (api.get_interval_fraction)(c, null(), 0, null_mut(), null_mut(), null_mut())
+            }),
+            F::GetShiftDecimal => i.call(name, |c| unsafe { (api.get_shift_decimal)(c, null(), 0, null_mut()) }),
+            F::GetShiftFraction => i.call(name, |c| unsafe {
+                (api.get_shift_fraction)(c, null(), 0, null_mut(), null_mut())
+            }),
+            F::SetIntervalDecimal => i.call(name, |c| unsafe { (api.set_interval_decimal)(c, null(), 0, null()) }),
+            F::SetIntervalFraction => i.call(name, |c| unsafe {
+                (api.set_interval_fraction)(c, null(), 0, null(), null())
+            }),
+            F::SetShiftDecimal => i.call(name, |c| unsafe { (api.set_shift_decimal)(c, null(), 0, null()) }),
+            F::SetShiftFraction => i.call(name, |c| unsafe {
+                (api.set_shift_fraction)(c, null(), 0, null(), null())
+            }),
+            F::EvaluateDiscreteStates => unary!(evaluate_discrete_states),
+            F::UpdateDiscreteStates => {
+                let mut f = [0u8; 5];
+                let mut t = 0.0;
+                i.call(name, |c| unsafe {
+                    let [a, b, cc, d, e] = &mut f;
+                    (api.update_discrete_states)(c, a, b, cc, d, e, &mut t)
+                })
+            }
+            F::EnterContinuousTimeMode => unary!(enter_continuous_time_mode),
+            F::CompletedIntegratorStep => {
+                let (mut a, mut b) = (0u8, 0u8);
+                i.call(name, |c| unsafe {
+                    (api.completed_integrator_step)(c, true, &mut a, &mut b)
+                })
+            }
+            F::SetTime => i.call(name, |c| unsafe { (api.set_time)(c, 0.0) }),
+            F::SetContinuousStates => {
+                let x = vec![0.0; n_states];
+                i.call(name, |c| unsafe {
+                    (api.set_continuous_states)(c, x.as_ptr(), n_states)
+                })
+            }
+            F::GetContinuousStateDerivatives => vector!(get_continuous_state_derivatives, n_states),
+            F::GetEventIndicators => vector!(get_event_indicators, i.fmu.md.event_indicators.len()),
+            F::GetContinuousStates => vector!(get_continuous_states, n_states),
+            F::GetNominalsOfContinuousStates => vector!(get_nominals_of_continuous_states, n_states),
+            F::GetNumberOfEventIndicators => {
+                let mut n = 0;
+                i.call(name, |c| unsafe { (api.get_number_of_event_indicators)(c, &mut n) })
+            }
+            F::GetNumberOfContinuousStates => {
+                let mut n = 0;
+                i.call(name, |c| unsafe { (api.get_number_of_continuous_states)(c, &mut n) })
+            }
+            F::EnterStepMode => unary!(enter_step_mode),
+            F::GetOutputDerivatives => {
+                let v = vr_list(i.fmu, Type::Float64);
+                let orders = vec![1i32; v.len()];
+                let mut out = vec![0.0; v.len()];
+                i.call(name, |c| unsafe {
+                    (api.get_output_derivatives)(c, v.as_ptr(), v.len(), orders.as_ptr(), out.as_mut_ptr(), out.len())
+                })
+            }
+            F::DoStep => {
+                let (mut a, mut b, mut d, mut t) = (0u8, 0u8, 0u8, 0.0);
+                let h = i.fmu.step_size();
+                i.call(name, |c| unsafe {
+                    (api.do_step)(c, 0.0, h, true, &mut a, &mut b, &mut d, &mut t)
+                })
+            }
+            F::ActivateModelPartition => i.call(name, |c| unsafe { (api.activate_model_partition)(c, 0, 0.0) }),
+        }
+    }
+}
+
+fn first_of(fmu: &Fmu3, ty: Type) -> Option<u32> {
+    fmu.md
+        .of_type(ty)
+        .find(|v| v.causality == Causality::Output)
+        .or_else(|| fmu.md.of_type(ty).next())
+        .map(|v| v.vr)
+}
+
+fn vr_list(fmu: &Fmu3, ty: Type) -> Vec<u32> {
+    first_of(fmu, ty).into_iter().collect()
+}
+
+/// The Derivative call with valid arguments: one unknown (an output, else a derivative), one
+/// known (a continuous input, else a state in ME), or none.
+fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
+    let (u, k) = derivative_pair(i.fmu, i.me);
+    let (nu, nk) = (u.len(), k.len());
+    let seed = vec![1.0; if adjoint { nu } else { nk }];
+    let mut sens = vec![0.0; if adjoint { nk } else { nu }];
+    let f = if adjoint {
+        i.api().get_adjoint_derivative
+    } else {
+        i.api().get_directional_derivative
+    };
+    i.call("fmi3Get*Derivative", |c| unsafe {
+        f(
+            c,
+            u.as_ptr(),
+            nu,
+            k.as_ptr(),
+            nk,
+            seed.as_ptr(),
+            seed.len(),
+            sens.as_mut_ptr(),
+            sens.len(),
+        )
+    })
+}
+
+fn derivative_pair(fmu: &Fmu3, me: bool) -> (Vec<u32>, Vec<u32>) {
+    let (u, k) = (unknowns(fmu, me), knowns(fmu, me));
+    if u.is_empty() || k.is_empty() {
+        return (vec![], vec![]);
+    }
+    (vec![u[0]], vec![k[0]])
+}
+
+/// What the getters' rows read: one variable with a start value (readable in every state the
+/// getters are allowed in, Instantiated included), or none.
+fn readable(fmu: &Fmu3, ty: Type) -> Vec<u32> {
+    with_start(fmu, ty).map(|v| v.vr).take(1).collect()
+}
