@@ -729,7 +729,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         v.name,
                         v.causality,
                         v.variability,
-                        v.initial(),
+                        crate::standard::initial(v.causality, v.variability, v.declared_initial),
                         if me { "ME" } else { "CS" },
                         status_name(s),
                         inst.log_text()
@@ -743,7 +743,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         v.name,
                         v.causality,
                         v.variability,
-                        v.initial(),
+                        crate::standard::initial(v.causality, v.variability, v.declared_initial),
                         if me { "ME" } else { "CS" },
                         status_name(s)
                     );
@@ -761,7 +761,11 @@ fn with_start(fmu: &Fmu3, ty: Type) -> impl Iterator<Item = &super::Variable> {
         !v.array
             && v.causality != Causality::Independent
             && v.start.is_some()
-            && (v.causality == Causality::Input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)))
+            && (v.causality == Causality::Input
+                || matches!(
+                    crate::standard::initial(v.causality, v.variability, v.declared_initial),
+                    Some(Initial::Exact | Initial::Approx)
+                ))
     })
 }
 
@@ -902,11 +906,10 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         }
         drop(inst);
         // The calculated ones: refused or answered finitely, never a crash.
-        for v in fmu
-            .md
-            .of_type(Type::Float64)
-            .filter(|v| !v.array && v.initial() == Some(Initial::Calculated))
-        {
+        for v in fmu.md.of_type(Type::Float64).filter(|v| {
+            !v.array
+                && crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Calculated)
+        }) {
             let inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
             let (s, got) = inst.get_f64(&[v.vr]);
             assert!(
