@@ -8,8 +8,8 @@
 //! tables for every combination FMI 2.0 has and adds one causality, `structuralParameter`
 //! (a parameter that may change the FMU's structure, array sizes; set in Configuration Mode),
 //! which the tables treat as `parameter`: variability `fixed` or `tunable`, `initial = exact`.
-//! What else FMI 3.0 adds around these attributes (clocks with variability `discrete`, the
-//! `dependent` causality of some drafts, `intermediateUpdate`) is not modelled here.
+//! FMI 3.0's other additions around variables (clocks, arrays, `intermediateUpdate`) are not
+//! modelled here: the exporter declares none of them.
 //!
 //! The conformance suite (`fmi-conformance`) does not use this crate for its own checks: it is
 //! the check of the exporter and keeps an independent copy written from the standard's text.
