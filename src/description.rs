@@ -21,34 +21,11 @@ pub enum VarType {
     Enumeration = 4,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum Causality {
-    Parameter = 0,
-    CalculatedParameter = 1,
-    Input = 2,
-    Output = 3,
-    Local = 4,
-    Independent = 5,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum Variability {
-    Constant = 0,
-    Fixed = 1,
-    Tunable = 2,
-    Discrete = 3,
-    Continuous = 4,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum Initial {
-    Exact = 0,
-    Approx = 1,
-    Calculated = 2,
-}
+/// `causality`, `variability` and `initial`, and the standard's rules on them (FMI 2.0 section
+/// 2.2.7): the types of `fmi-standard`, the one copy of those rules that the derive macro,
+/// this runtime, `cargo fmu` and the description reader share. Their discriminants are the codes
+/// of the encoded description.
+pub use fmi_standard::{Causality, Initial, Variability};
 
 /// A declared start value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -173,24 +150,16 @@ pub struct Variable {
 }
 
 impl Variable {
-    /// The `initial` in force: the declared one, or the standard's default (FMI 2.0, 2.2.7).
-    pub fn effective_initial(&self) -> Option<Initial> {
-        if self.initial.is_some() {
-            return self.initial;
-        }
-        match (self.causality, self.variability) {
-            (Causality::Input, _) | (Causality::Independent, _) => None,
-            (_, Variability::Constant) => Some(Initial::Exact),
-            (Causality::Parameter, _) => Some(Initial::Exact),
-            (Causality::CalculatedParameter, _) => Some(Initial::Calculated),
-            (Causality::Output | Causality::Local, _) => Some(Initial::Calculated),
-        }
+    /// The `initial` in force: the declared one, or the standard's default (FMI 2.0, 2.2.7;
+    /// [`fmi_standard::effective_initial`]).
+    pub const fn effective_initial(&self) -> Option<Initial> {
+        fmi_standard::effective_initial(self.causality, self.variability, self.initial)
     }
 
     /// Whether the description carries a `start` value (required for inputs and exact/approx,
-    /// forbidden for calculated and the independent variable).
-    pub fn has_start(&self) -> bool {
-        self.causality == Causality::Input || matches!(self.effective_initial(), Some(Initial::Exact | Initial::Approx))
+    /// forbidden for calculated and the independent variable; [`fmi_standard::has_start`]).
+    pub const fn has_start(&self) -> bool {
+        fmi_standard::has_start(self.causality, self.variability, self.initial)
     }
 }
 
@@ -790,29 +759,13 @@ impl Dec<'_> {
             4 => VarType::Enumeration,
             t => return Err(format!("'{name}': unknown type code {t}")),
         };
-        let causality = match self.u8()? {
-            0 => Causality::Parameter,
-            1 => Causality::CalculatedParameter,
-            2 => Causality::Input,
-            3 => Causality::Output,
-            4 => Causality::Local,
-            5 => Causality::Independent,
-            t => return Err(format!("'{name}': unknown causality code {t}")),
-        };
-        let variability = match self.u8()? {
-            0 => Variability::Constant,
-            1 => Variability::Fixed,
-            2 => Variability::Tunable,
-            3 => Variability::Discrete,
-            4 => Variability::Continuous,
-            t => return Err(format!("'{name}': unknown variability code {t}")),
-        };
+        let c = self.u8()?;
+        let causality = Causality::from_code(c).ok_or_else(|| format!("'{name}': unknown causality code {c}"))?;
+        let v = self.u8()?;
+        let variability = Variability::from_code(v).ok_or_else(|| format!("'{name}': unknown variability code {v}"))?;
         let initial = match self.u8()? {
             255 => None,
-            0 => Some(Initial::Exact),
-            1 => Some(Initial::Approx),
-            2 => Some(Initial::Calculated),
-            t => return Err(format!("'{name}': unknown initial code {t}")),
+            i => Some(Initial::from_code(i).ok_or_else(|| format!("'{name}': unknown initial code {i}"))?),
         };
         let start = match self.u8()? {
             0 => Start::None,

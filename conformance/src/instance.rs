@@ -510,7 +510,8 @@ pub fn excitation(fmu: &Fmu) -> Vec<(u32, f64)> {
         .of_type(Type::Real)
         .filter(|v| {
             v.causality == Causality::Input
-                || (v.causality != Causality::Parameter && v.initial() == Some(Initial::Exact))
+                || (v.causality != Causality::Parameter
+                    && crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Exact))
         })
         .filter(|v| v.variability != Variability::Constant)
         .map(|v| (v.vr, excite(v)))

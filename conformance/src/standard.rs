@@ -1,6 +1,10 @@
 //! The states of the FMI 2.0 co-simulation state machine and the states in which the standard
 //! allows each function (section 4.2.4; the Reference FMUs encode the same masks). Written from
 //! the standard, independently of any exporter's own table.
+//!
+//! The suite keeps its own copy of the standard's rules (here the default `initial` too), written
+//! from the standard's text, and does not use `fmi-standard`, the exporter's one copy: the suite
+//! is the check of the exporter, and a mistake shared by both would pass unnoticed.
 
 use crate::{Type, Variable};
 use State::*;
@@ -90,6 +94,18 @@ pub fn allowed_states(function: &str) -> &'static [State] {
     }
 }
 
+/// The `initial` in force: the written one, or the default of the table causality ×
+/// variability (FMI 2.0 section 2.2.7: exact for constants and parameters, calculated for
+/// calculated parameters, outputs and locals; none for inputs and the independent variable; FMI
+/// 3.0 section 2.4.7.4 the same, and exact for structural parameters). The suite's own copy.
+pub fn initial(causality: Causality, variability: Variability, written: Option<Initial>) -> Option<Initial> {
+    written.or(match (causality, variability) {
+        (Causality::Input | Causality::Independent, _) => None,
+        (_, Variability::Constant) | (Causality::Parameter | Causality::StructuralParameter, _) => Some(Initial::Exact),
+        (Causality::CalculatedParameter | Causality::Output | Causality::Local, _) => Some(Initial::Calculated),
+    })
+}
+
 /// Whether FMI 2.0 (section 4.2.4, the conditions on fmi2SetXXX in the co-simulation state
 /// table) lets an importer set this variable in the state of that name. Written here from
 /// the standard, independently of the runtime's own rule.
@@ -101,9 +117,17 @@ pub fn settable_in(v: &Variable, state: &str) -> bool {
     match state {
         // "variability != constant that have initial = exact or approx" (and inputs, whose
         // start values an importer sets before initialization)
-        "Instantiated" => input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)),
+        "Instantiated" => {
+            input
+                || matches!(
+                    crate::standard::initial(v.causality, v.variability, v.declared_initial),
+                    Some(Initial::Exact | Initial::Approx)
+                )
+        }
         // "variability != constant that have initial = exact, or causality = input"
-        "InitializationMode" => input || v.initial() == Some(Initial::Exact),
+        "InitializationMode" => {
+            input || crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Exact)
+        }
         // "causality = input, or causality = parameter and variability = tunable"
         "StepComplete" => input || (v.causality == Causality::Parameter && v.variability == Variability::Tunable),
         _ => false,

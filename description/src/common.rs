@@ -1,137 +1,12 @@
 //! What FMI 2.0 and FMI 3.0 descriptions share: a variable's causality, variability and
-//! initial, and the default experiment.
+//! initial (re-exported from `fmi-standard`), and the default experiment.
 
 use crate::Version;
-use std::fmt;
 
-/// `causality` of a variable. `StructuralParameter` is FMI 3.0's only.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Causality {
-    Parameter,
-    CalculatedParameter,
-    StructuralParameter,
-    Input,
-    Output,
-    Local,
-    Independent,
-}
-
-impl Causality {
-    /// As the XML writes it, where `version` defines it.
-    pub fn parse(s: &str, version: Version) -> Option<Causality> {
-        Some(match s {
-            "parameter" => Causality::Parameter,
-            "calculatedParameter" => Causality::CalculatedParameter,
-            "structuralParameter" if version == Version::Fmi3 => Causality::StructuralParameter,
-            "input" => Causality::Input,
-            "output" => Causality::Output,
-            "local" => Causality::Local,
-            "independent" => Causality::Independent,
-            _ => return None,
-        })
-    }
-
-    /// As the XML writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Causality::Parameter => "parameter",
-            Causality::CalculatedParameter => "calculatedParameter",
-            Causality::StructuralParameter => "structuralParameter",
-            Causality::Input => "input",
-            Causality::Output => "output",
-            Causality::Local => "local",
-            Causality::Independent => "independent",
-        }
-    }
-}
-
-/// `variability` of a variable.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Variability {
-    Constant,
-    Fixed,
-    Tunable,
-    Discrete,
-    Continuous,
-}
-
-impl Variability {
-    /// As the XML writes it.
-    pub fn parse(s: &str) -> Option<Variability> {
-        Some(match s {
-            "constant" => Variability::Constant,
-            "fixed" => Variability::Fixed,
-            "tunable" => Variability::Tunable,
-            "discrete" => Variability::Discrete,
-            "continuous" => Variability::Continuous,
-            _ => return None,
-        })
-    }
-
-    /// As the XML writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Variability::Constant => "constant",
-            Variability::Fixed => "fixed",
-            Variability::Tunable => "tunable",
-            Variability::Discrete => "discrete",
-            Variability::Continuous => "continuous",
-        }
-    }
-}
-
-/// `initial` of a variable.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Initial {
-    Exact,
-    Approx,
-    Calculated,
-}
-
-impl Initial {
-    /// As the XML writes it.
-    pub fn parse(s: &str) -> Option<Initial> {
-        Some(match s {
-            "exact" => Initial::Exact,
-            "approx" => Initial::Approx,
-            "calculated" => Initial::Calculated,
-            _ => return None,
-        })
-    }
-
-    /// As the XML writes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Initial::Exact => "exact",
-            Initial::Approx => "approx",
-            Initial::Calculated => "calculated",
-        }
-    }
-
-    /// The `initial` in force where none is written: the default of the table causality ×
-    /// variability (FMI 2.0 section 2.2.7, FMI 3.0 section 2.4.7.4; the two agree on every
-    /// combination 2.0 has). `None` where `initial` is not defined (inputs, the independent
-    /// variable).
-    pub fn default_for(causality: Causality, variability: Variability) -> Option<Initial> {
-        match (causality, variability) {
-            (Causality::Input | Causality::Independent, _) => None,
-            (_, Variability::Constant) => Some(Initial::Exact),
-            (Causality::Parameter | Causality::StructuralParameter, _) => Some(Initial::Exact),
-            (Causality::CalculatedParameter | Causality::Output | Causality::Local, _) => Some(Initial::Calculated),
-        }
-    }
-}
-
-macro_rules! display_as_written {
-    ($($t:ty),*) => {$(
-        impl fmt::Display for $t {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str(self.name())
-            }
-        }
-    )*};
-}
-display_as_written!(Causality, Variability, Initial);
+/// `causality`, `variability` and `initial` of a variable: the types of `fmi-standard`, where
+/// the standard's rules on them (legal combinations, the default `initial`) are written once.
+/// `Causality::StructuralParameter` is FMI 3.0's only.
+pub use fmi_standard::{Causality, Initial, Variability};
 
 /// `<DefaultExperiment>`: each attribute as written (a report shows it unchanged), and as a
 /// number by the method of the same name.
@@ -184,15 +59,17 @@ pub(crate) fn kind(
 ) -> Result<(Causality, Variability, Option<Initial>), String> {
     let causality = match e.attr("causality") {
         None => Causality::Local,
-        Some(c) => Causality::parse(c, version).ok_or_else(|| format!("variable '{name}': unknown causality '{c}'"))?,
+        Some(c) => Causality::from_name(c)
+            .filter(|c| c.in_fmi2() || version == Version::Fmi3)
+            .ok_or_else(|| format!("variable '{name}': unknown causality '{c}'"))?,
     };
     let variability = match e.attr("variability") {
         None => default_variability,
-        Some(v) => Variability::parse(v).ok_or_else(|| format!("variable '{name}': unknown variability '{v}'"))?,
+        Some(v) => Variability::from_name(v).ok_or_else(|| format!("variable '{name}': unknown variability '{v}'"))?,
     };
     let initial = match e.attr("initial") {
         None => None,
-        Some(i) => Some(Initial::parse(i).ok_or_else(|| format!("variable '{name}': unknown initial '{i}'"))?),
+        Some(i) => Some(Initial::from_name(i).ok_or_else(|| format!("variable '{name}': unknown initial '{i}'"))?),
     };
     Ok((causality, variability, initial))
 }

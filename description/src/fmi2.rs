@@ -75,7 +75,7 @@ impl Variable {
     /// causality × variability). `None` where `initial` is not defined (inputs, independent).
     pub fn initial(&self) -> Option<Initial> {
         self.declared_initial
-            .or_else(|| Initial::default_for(self.causality, self.variability))
+            .or_else(|| fmi_standard::default_initial(self.causality, self.variability))
     }
 
     pub fn start_real(&self) -> Option<f64> {

@@ -110,7 +110,7 @@ impl Variable {
     /// variability, section 2.4.7.4). `None` where it is not defined.
     pub fn initial(&self) -> Option<Initial> {
         self.declared_initial
-            .or_else(|| Initial::default_for(self.causality, self.variability))
+            .or_else(|| fmi_standard::default_initial(self.causality, self.variability))
     }
 }
 

@@ -2,11 +2,12 @@
 //! the typed description that the built library carries, each in the element order of its XSD.
 //! Both come from the same decoded `ModelDescription`; only the encoding of the XML differs.
 
+use fmi_standard::TypeKind;
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use rustfmu::description::{
     Bound, Causality, FmiVersion, Initial, Interfaces, ModelDescription, RUNTIME_LOG_CATEGORIES, Start, VarType,
-    Variability, Variable,
+    Variable,
 };
 use std::collections::BTreeSet;
 
@@ -16,7 +17,8 @@ pub fn real_text(x: f64) -> String {
 }
 
 /// Checks a decoded description against the rules of FMI 2.0 section 2.2.7 once more (the
-/// derive macro enforces them at compile time; a description from elsewhere is re-checked).
+/// derive macro enforces them at compile time; a description from elsewhere is re-checked), with
+/// the same rules (`fmi-standard`) the derive uses.
 pub fn check_description(d: &ModelDescription) -> Result<(), String> {
     let decls = d.variables;
     let mut seen_names = BTreeSet::new();
@@ -30,7 +32,12 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
             return Err(format!("{at}: the value reference is used twice"));
         }
         rustfmu::description::check_values(v).map_err(|e| format!("{at}: {}", e.message()))?;
-        if v.var_type != VarType::Real && v.variability == Variability::Continuous {
+        let kind = if v.var_type == VarType::Real {
+            TypeKind::Real
+        } else {
+            TypeKind::Other
+        };
+        if !fmi_standard::legal_variability_for_type(kind, v.variability) {
             return Err(format!("{at}: only Real variables may be continuous"));
         }
         if !v.unit.is_empty() && !d.units.iter().any(|u| u.name == v.unit) {
@@ -39,30 +46,22 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
         if v.var_type == VarType::Enumeration && v.enumeration.is_none() {
             return Err(format!("{at}: an Enumeration variable without its type"));
         }
-        use Causality as C;
-        use Variability as V;
-        let legal_variability = match v.causality {
-            C::Parameter | C::CalculatedParameter => matches!(v.variability, V::Fixed | V::Tunable),
-            C::Input => matches!(v.variability, V::Discrete | V::Continuous),
-            C::Output => matches!(v.variability, V::Constant | V::Discrete | V::Continuous),
-            C::Local => true,
-            C::Independent => v.variability == V::Continuous,
-        };
-        if !legal_variability {
+        if !v.causality.in_fmi2() {
+            // The declarations have no structural parameters; FMI 2.0 has none either.
+            return Err(format!(
+                "{at}: causality {:?} is not written by this exporter",
+                v.causality
+            ));
+        }
+        if !fmi_standard::legal_variability(v.causality, v.variability) {
             return Err(format!(
                 "{at}: causality {:?} with variability {:?} is not allowed",
                 v.causality, v.variability
             ));
         }
-        let legal_initial = match (v.causality, v.variability, v.initial) {
-            (_, _, None) => true,
-            (C::Input | C::Independent, _, Some(_)) => false,
-            (C::Parameter, _, Some(i)) | (_, V::Constant, Some(i)) => i == Initial::Exact,
-            (C::CalculatedParameter, _, Some(i)) => i != Initial::Exact,
-            (C::Local, V::Fixed | V::Tunable, Some(i)) => i != Initial::Exact,
-            (C::Output | C::Local, _, Some(_)) => true,
-        };
-        if !legal_initial {
+        if let Some(i) = v.initial
+            && !fmi_standard::legal_initial(v.causality, v.variability, i)
+        {
             return Err(format!(
                 "{at}: initial {:?} is not allowed with causality {:?} and variability {:?}",
                 v.initial, v.causality, v.variability
@@ -78,7 +77,7 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
         for dep in v.depends_on.unwrap_or(&[]) {
             if !decls
                 .iter()
-                .any(|o| o.name == *dep && (o.causality == C::Input || is_state(o.name)))
+                .any(|o| o.name == *dep && (o.causality == Causality::Input || is_state(o.name)))
             {
                 return Err(format!(
                     "{at}: depends on '{dep}', which is neither an input nor a continuous state"
@@ -725,7 +724,7 @@ fn is_flat_name(name: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rustfmu::description::{Start, Variable};
+    use rustfmu::description::{Start, Variability, Variable};
 
     const fn var(name: &'static str, vr: u32, min: Option<Bound>, max: Option<Bound>) -> Variable {
         Variable {

@@ -395,7 +395,7 @@ pub fn each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu) 
                 v.name,
                 v.causality,
                 v.variability,
-                v.initial()
+                crate::standard::initial(v.causality, v.variability, v.declared_initial)
             );
             if want && s != fmi2OK {
                 failures.push(format!(
@@ -949,11 +949,10 @@ pub fn reset_from_every_state_then_a_rerun_is_bit_identical(fmu: &Fmu) {
         }
         // Every variable with a start value is back at it.
         assert_eq!([inst.setup(0.0, None), inst.enter_init()], [fmi2OK; 2]);
-        for v in fmu
-            .md
-            .of_type(Type::Real)
-            .filter(|v| v.causality != Causality::Output || v.initial() == Some(Initial::Exact))
-        {
+        for v in fmu.md.of_type(Type::Real).filter(|v| {
+            v.causality != Causality::Output
+                || crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Exact)
+        }) {
             if let Some(start) = v.start_real() {
                 let (st, got) = inst.get_real(&[v.vr]);
                 assert_eq!(

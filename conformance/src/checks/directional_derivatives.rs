@@ -383,7 +383,9 @@ fn at_random_point<'f>(fmu: &'f Fmu, me: bool, rng: &mut Rng) -> Instance<'f> {
         for v in fmu.md.of_type(Type::Real).filter(|v| {
             v.variability != Variability::Constant
                 && (v.causality == Causality::Input
-                    || (v.causality != Causality::Parameter && v.initial() == Some(Initial::Exact)))
+                    || (v.causality != Causality::Parameter
+                        && crate::standard::initial(v.causality, v.variability, v.declared_initial)
+                            == Some(Initial::Exact)))
         }) {
             let x = moderate(rng, v);
             assert_eq!(inst.set_real(&[v.vr], &[x]), fmi2OK, "{}", inst.log_text());

@@ -960,7 +960,7 @@ pub fn model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows
                 v.ty,
                 v.causality,
                 v.variability,
-                v.initial()
+                crate::standard::initial(v.causality, v.variability, v.declared_initial)
             );
             if want && s != fmi2OK {
                 failures.push(format!(

@@ -45,8 +45,16 @@ pub fn settable_in(v: &Variable, state: State) -> bool {
     let input = v.causality == Causality::Input;
     let tunable = v.causality == Causality::Parameter && v.variability == Variability::Tunable;
     match state {
-        State::Instantiated => input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)),
-        State::InitializationMode => input || v.initial() == Some(Initial::Exact),
+        State::Instantiated => {
+            input
+                || matches!(
+                    crate::standard::initial(v.causality, v.variability, v.declared_initial),
+                    Some(Initial::Exact | Initial::Approx)
+                )
+        }
+        State::InitializationMode => {
+            input || crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Exact)
+        }
         State::EventMode | State::StepMode => input || tunable,
         State::ContinuousTimeMode => input && v.variability == Variability::Continuous && v.ty.is_float(),
         State::Terminated => false,

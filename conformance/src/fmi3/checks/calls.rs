@@ -420,7 +420,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         v.name,
                         v.causality,
                         v.variability,
-                        v.initial(),
+                        crate::standard::initial(v.causality, v.variability, v.declared_initial),
                         if me { "ME" } else { "CS" },
                         status_name(s),
                         inst.log_text()
@@ -434,7 +434,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         v.name,
                         v.causality,
                         v.variability,
-                        v.initial(),
+                        crate::standard::initial(v.causality, v.variability, v.declared_initial),
                         if me { "ME" } else { "CS" },
                         status_name(s)
                     );
@@ -578,11 +578,10 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         }
         drop(inst);
         // The calculated ones: refused or answered finitely, never a crash.
-        for v in fmu
-            .md
-            .of_type(Type::Float64)
-            .filter(|v| !v.array && v.initial() == Some(Initial::Calculated))
-        {
+        for v in fmu.md.of_type(Type::Float64).filter(|v| {
+            !v.array
+                && crate::standard::initial(v.causality, v.variability, v.declared_initial) == Some(Initial::Calculated)
+        }) {
             let inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
             let (s, got) = inst.get_f64(&[v.vr]);
             assert!(

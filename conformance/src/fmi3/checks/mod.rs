@@ -215,7 +215,11 @@ fn with_start(fmu: &Fmu3, ty: Type) -> impl Iterator<Item = &super::Variable> {
         !v.array
             && v.causality != Causality::Independent
             && v.start.is_some()
-            && (v.causality == Causality::Input || matches!(v.initial(), Some(Initial::Exact | Initial::Approx)))
+            && (v.causality == Causality::Input
+                || matches!(
+                    crate::standard::initial(v.causality, v.variability, v.declared_initial),
+                    Some(Initial::Exact | Initial::Approx)
+                ))
     })
 }
 

@@ -2,6 +2,7 @@
 //! generates the typed description, the start values and the get/set dispatch.
 
 use crate::units::{self, Base};
+use fmi_standard::{Causality, Initial, TypeKind, Variability};
 use proc_macro2::{Span, TokenStream};
 use quote::{quote, quote_spanned};
 use std::collections::BTreeMap;
@@ -18,32 +19,6 @@ enum Kind {
     Boolean,
     Str,
     Enum,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Causality {
-    Parameter,
-    CalculatedParameter,
-    Input,
-    Output,
-    Local,
-    Independent,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Variability {
-    Constant,
-    Fixed,
-    Tunable,
-    Discrete,
-    Continuous,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Initial {
-    Exact,
-    Approx,
-    Calculated,
 }
 
 /// One `#[variable(...)]` and the field it sits on.
@@ -284,44 +259,18 @@ fn kind_of(ty: &Type) -> Result<Kind> {
     })
 }
 
-fn legal_variability(c: Causality, v: Variability) -> bool {
-    use Causality as C;
-    use Variability as V;
-    match c {
-        C::Parameter | C::CalculatedParameter => matches!(v, V::Fixed | V::Tunable),
-        C::Input => matches!(v, V::Discrete | V::Continuous),
-        C::Output => matches!(v, V::Constant | V::Discrete | V::Continuous),
-        C::Local => true,
-        C::Independent => v == V::Continuous,
+/// A variable's type as the standard's rules see it (only Reals may be continuous).
+fn type_kind(kind: Kind) -> TypeKind {
+    if kind == Kind::Real {
+        TypeKind::Real
+    } else {
+        TypeKind::Other
     }
 }
 
-fn legal_initial(c: Causality, v: Variability, i: Initial) -> bool {
-    use Causality as C;
-    use Variability as V;
-    match (c, v) {
-        (C::Input | C::Independent, _) => false,
-        (C::Parameter, _) | (_, V::Constant) => i == Initial::Exact,
-        (C::CalculatedParameter, _) => i != Initial::Exact,
-        (C::Local, V::Fixed | V::Tunable) => i != Initial::Exact,
-        (C::Output | C::Local, _) => true,
-    }
-}
-
-/// The standard's default `initial` (FMI 2.0, 2.2.7).
-fn effective_initial(v: &Var) -> Option<Initial> {
-    if v.initial.is_some() {
-        return v.initial;
-    }
-    match (v.causality, v.variability) {
-        (Causality::Input | Causality::Independent, _) => None,
-        (_, Variability::Constant) | (Causality::Parameter, _) => Some(Initial::Exact),
-        _ => Some(Initial::Calculated),
-    }
-}
-
+/// Whether the description carries a start value for `v` (`fmi_standard::has_start`).
 fn has_start(v: &Var) -> bool {
-    v.causality == Causality::Input || matches!(effective_initial(v), Some(Initial::Exact | Initial::Approx))
+    fmi_standard::has_start(v.causality, v.variability, v.initial)
 }
 
 fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
@@ -339,13 +288,13 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
     })?;
     let variability = match a.variability {
         Some((v, s)) => {
-            if !legal_variability(causality, v) {
+            if !fmi_standard::legal_variability(causality, v) {
                 return Err(Error::new(
                     s,
                     format!("causality {causality:?} with variability {v:?} is not allowed (FMI 2.0, section 2.2.7)"),
                 ));
             }
-            if v == Variability::Continuous && kind != Kind::Real {
+            if !fmi_standard::legal_variability_for_type(type_kind(kind), v) {
                 return Err(Error::new(
                     s,
                     "only Real (f64) variables may be continuous; Integer, Boolean, String and Enumeration variables are discrete",
@@ -353,18 +302,13 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
             }
             v
         }
-        None => match causality {
-            Causality::Parameter | Causality::CalculatedParameter => Variability::Fixed,
-            _ if kind == Kind::Real => Variability::Continuous,
-            Causality::Independent => Variability::Continuous,
-            _ => Variability::Discrete,
-        },
+        None => fmi_standard::default_variability(causality, type_kind(kind)),
     };
     if causality == Causality::Independent && kind != Kind::Real {
         return Err(Error::new(span, "the independent variable (time) is a Real (f64)"));
     }
     if let Some((i, s)) = a.initial
-        && !legal_initial(causality, variability, i)
+        && !fmi_standard::legal_initial(causality, variability, i)
     {
         return Err(Error::new(
             s,
@@ -802,7 +746,46 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
     }
 }
 
+/// What `#[derive(Model)]` makes of a struct: the generated code (where the declarations parse
+/// and the generator gets past them) and the mistake in the declarations, if any.
+pub(crate) struct Expansion {
+    pub generated: Option<TokenStream>,
+    pub error: Option<Error>,
+}
+
+/// The derive's output: the generated code, followed by the mistake's `compile_error!` if there
+/// is one; or the mistake alone where nothing can be generated.
 pub fn expand(input: DeriveInput) -> Result<TokenStream> {
+    match expand_parts(input) {
+        Expansion {
+            generated: Some(generated),
+            error: None,
+        } => Ok(generated),
+        Expansion {
+            generated: Some(generated),
+            error: Some(problem),
+        } => {
+            let error = problem.to_compile_error();
+            Ok(quote!(#generated #error))
+        }
+        Expansion {
+            error: Some(problem), ..
+        } => Err(problem),
+        Expansion {
+            generated: None,
+            error: None,
+        } => unreachable!("an expansion has code or an error"),
+    }
+}
+
+pub(crate) fn expand_parts(input: DeriveInput) -> Expansion {
+    expand_checked(input).unwrap_or_else(|e| Expansion {
+        generated: None,
+        error: Some(e),
+    })
+}
+
+fn expand_checked(input: DeriveInput) -> Result<Expansion> {
     let rt = crate::runtime_path();
     let Data::Struct(data) = &input.data else {
         return Err(Error::new(input.ident.span(), "#[derive(Model)] is for structs"));
@@ -1206,16 +1189,25 @@ pub fn expand(input: DeriveInput) -> Result<TokenStream> {
             #manifest
         })
     };
-    match (
-        problem,
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(generate)),
-    ) {
-        (None, Ok(generated)) => generated,
-        (None, Err(panic)) => std::panic::resume_unwind(panic),
-        (Some(problem), Ok(Ok(generated))) => {
-            let error = problem.to_compile_error();
-            Ok(quote!(#generated #error))
+    let generated = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(generate)) {
+        Ok(generated) => generated,
+        Err(panic) if problem.is_none() => std::panic::resume_unwind(panic),
+        Err(_) => {
+            return Ok(Expansion {
+                generated: None,
+                error: problem,
+            });
         }
-        (Some(problem), _) => Err(problem),
-    }
+    };
+    Ok(match (generated, problem) {
+        (Ok(generated), problem) => Expansion {
+            generated: Some(generated),
+            error: problem,
+        },
+        (Err(e), None) => return Err(e),
+        (Err(_), Some(problem)) => Expansion {
+            generated: None,
+            error: Some(problem),
+        },
+    })
 }
