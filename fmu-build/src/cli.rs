@@ -401,7 +401,7 @@ pub fn build_versions(
     let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
     // What each target builds: every crate this target is for, in one cargo build (one binary
     // per crate serves both FMI versions: `export_fmu!` exports the fmi2* and the fmi3* functions).
-    let mut jobs: Vec<(String, Vec<(FmuCrate, Vec<FmiVersion>)>)> = Vec::new();
+    let mut jobs: Vec<(String, Vec<CrateVersions>)> = Vec::new();
     for t in &all_targets {
         let mine: Vec<(FmuCrate, Vec<FmiVersion>)> = plan
             .iter()
@@ -484,6 +484,9 @@ pub fn build_versions(
     }
     Ok(built)
 }
+
+/// A crate and the FMI versions one target's build of it is packaged for.
+type CrateVersions = (FmuCrate, Vec<FmiVersion>);
 
 /// Which targets of `jobs` (target, crates) one cargo invocation builds: the host on its own,
 /// the others grouped where they build the same crates (a crate is never built for a target it
