@@ -144,6 +144,10 @@ pub struct Variable {
     /// For outputs (and, with Model Exchange, derivatives): the inputs this variable depends on
     /// directly, by name. `Some(&[])`: none; `None`: every input (the attribute is left out).
     pub depends_on: Option<&'static [&'static str]>,
+    /// For an unknown of Initialization Mode (FMI 2.0 `InitialUnknowns`): the knowns it is
+    /// computed from at initialization (inputs and variables with initial = exact, parameters
+    /// among them), by name. `None`: every known (the attribute is left out).
+    pub initial_depends_on: Option<&'static [&'static str]>,
     /// For a derivative: the name of the state variable it is the derivative of.
     pub derivative_of: Option<&'static str>,
     pub enumeration: Option<&'static EnumType>,
@@ -445,7 +449,20 @@ impl Enc<'_> {
         self.bound(v.min);
         self.bound(v.max);
         self.opt_f64(v.nominal);
-        match v.depends_on {
+        self.names(v.depends_on);
+        self.names(v.initial_depends_on);
+        self.opt_str(v.derivative_of);
+        match v.enumeration {
+            None => self.u8(0),
+            Some(e) => {
+                self.u8(1);
+                self.enum_type(e);
+            }
+        }
+    }
+    /// An optional list of names (`depends`, `initial_depends`).
+    const fn names(&mut self, names: Option<&[&str]>) {
+        match names {
             None => self.u8(0),
             Some(deps) => {
                 self.u8(1);
@@ -455,14 +472,6 @@ impl Enc<'_> {
                     self.str(deps[i]);
                     i += 1;
                 }
-            }
-        }
-        self.opt_str(v.derivative_of);
-        match v.enumeration {
-            None => self.u8(0),
-            Some(e) => {
-                self.u8(1);
-                self.enum_type(e);
             }
         }
     }
@@ -737,6 +746,16 @@ impl Dec<'_> {
             }),
         })
     }
+    fn names(&mut self) -> Result<Option<&'static [&'static str]>, String> {
+        Ok(match self.u8()? {
+            0 => None,
+            _ => {
+                let n = self.count()?;
+                let names = (0..n).map(|_| self.str()).collect::<Result<Vec<_>, _>>()?;
+                Some(leak_slice(names))
+            }
+        })
+    }
     fn count(&mut self) -> Result<usize, String> {
         let n = self.u32()? as usize;
         // Every element takes at least one byte: a larger count is corrupt, not a huge model.
@@ -780,14 +799,8 @@ impl Dec<'_> {
         let min = self.bound()?;
         let max = self.bound()?;
         let nominal = self.opt_f64()?;
-        let depends_on = match self.u8()? {
-            0 => None,
-            _ => {
-                let n = self.count()?;
-                let deps = (0..n).map(|_| self.str()).collect::<Result<Vec<_>, _>>()?;
-                Some(leak_slice(deps))
-            }
-        };
+        let depends_on = self.names()?;
+        let initial_depends_on = self.names()?;
         let derivative_of = if self.u8()? == 0 { None } else { Some(self.str()?) };
         let enumeration = if self.u8()? == 0 {
             None
@@ -823,6 +836,7 @@ impl Dec<'_> {
             max,
             nominal,
             depends_on,
+            initial_depends_on,
             derivative_of,
             enumeration,
         })

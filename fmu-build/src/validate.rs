@@ -580,8 +580,12 @@ fn smoke_run_in_child(so: &Path, d: &Description, resources: &Path) -> Vec<Strin
         .arg(resources)
         .output()
     {
-        Ok(out) if out.status.success() => vec![],
+        Ok(out) if out.status.success() => {
+            forward_notes(&out.stderr);
+            vec![]
+        }
         Ok(out) => {
+            forward_notes(&out.stderr);
             let said = String::from_utf8_lossy(&out.stdout)
                 .lines()
                 .map(str::to_string)
@@ -602,6 +606,13 @@ fn smoke_run_in_child(so: &Path, d: &Description, resources: &Path) -> Vec<Strin
             }
         }
         Err(e) => vec![format!("cannot start the smoke run ({}): {e}", exe.display())],
+    }
+}
+
+/// The child's notes ([`NOTE`]), printed by the parent.
+fn forward_notes(stderr: &[u8]) {
+    for line in String::from_utf8_lossy(stderr).lines().filter(|l| l.starts_with(NOTE)) {
+        eprintln!("{line}");
     }
 }
 
@@ -875,8 +886,36 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> V
             ));
         }
     }
+    // The declared `depends` against the model's exact directional derivatives (a rustfmu
+    // library carries its declarations; another FMU's binary is not checked here).
+    if problems.is_empty()
+        && let Ok(binary) = std::fs::read(so)
+        && let Ok(me) = crate::bundle::read_library(&binary, FmiVersion::V2)
+    {
+        let uri = file_uri(resources);
+        let mut reports = vec![crate::depends::check_initial(
+            so,
+            &me.description,
+            guid,
+            &uri,
+            me.interfaces.co_simulation,
+        )];
+        if me.interfaces.model_exchange {
+            reports.push(crate::depends::check(so, &me.description, guid, &uri));
+        }
+        for report in reports {
+            for note in &report.notes {
+                eprintln!("{NOTE}{note}");
+            }
+            problems.extend(report.problems);
+        }
+    }
     problems
 }
+
+/// How a smoke run (in the child process too) says what is worth knowing but no problem: on
+/// stderr, a line each, forwarded by [`smoke_run_in_child`].
+pub const NOTE: &str = "fmu: note: ";
 
 /// fmpy's validator, run with the given Python.
 pub fn fmpy_validate(python: &Path, fmu: &Path) -> Vec<String> {

@@ -84,6 +84,24 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
                 ));
             }
         }
+        // The knowns of Initialization Mode: inputs, the independent variable and the variables
+        // with initial = exact (parameters among them).
+        for dep in v.initial_depends_on.unwrap_or(&[]) {
+            if !decls.iter().any(|o| {
+                o.name == *dep
+                    && (matches!(o.causality, Causality::Input | Causality::Independent)
+                        || o.effective_initial() == Some(Initial::Exact))
+            }) {
+                return Err(format!(
+                    "{at}: initially depends on '{dep}', which is neither an input nor a variable with initial = exact"
+                ));
+            }
+        }
+        if v.initial_depends_on.is_some() && !is_initial_unknown(decls, v) {
+            return Err(format!(
+                "{at}: declares initial dependencies but is no unknown of Initialization Mode"
+            ));
+        }
         if let Some(state) = v.derivative_of
             && !decls.iter().any(|o| o.name == state)
         {
@@ -395,12 +413,15 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
     }
     close(&mut w, "ModelVariables")?;
 
-    let index_of = |name: &str| decls.iter().position(|d| d.name == name).map(|i| (i + 1).to_string());
+    let index_of = |name: &str| decls.iter().position(|d| d.name == name).map(|i| i + 1);
+    // dependencies: indices of the knowns, "ordered according to size" (FMI 2.0, 3.3.1).
+    let indices = |deps: &[&str]| {
+        let set: BTreeSet<usize> = deps.iter().filter_map(|n| index_of(n)).collect();
+        set.into_iter().map(|i| i.to_string()).collect::<Vec<_>>().join(" ")
+    };
     let unknown = |w: &mut Xml, i: usize, v: &Variable| -> Result<(), String> {
         let index = (i + 1).to_string();
-        let deps = v
-            .depends_on
-            .map(|deps| deps.iter().filter_map(|n| index_of(n)).collect::<Vec<_>>().join(" "));
+        let deps = v.depends_on.map(indices);
         let mut attrs = vec![("index", index.as_str())];
         if let Some(deps) = &deps {
             attrs.push(("dependencies", deps));
@@ -432,16 +453,21 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         }
         close(&mut w, "Derivatives")?;
     }
-    let initial_unknowns: Vec<usize> = decls
+    let initial_unknowns: Vec<(usize, &Variable)> = decls
         .iter()
         .enumerate()
         .filter(|(_, v)| is_initial_unknown(decls, v))
-        .map(|(i, _)| i + 1)
         .collect();
     if !initial_unknowns.is_empty() {
         open(&mut w, "InitialUnknowns", &[])?;
-        for i in initial_unknowns {
-            empty(&mut w, "Unknown", &[("index", &i.to_string())])?;
+        for (i, v) in initial_unknowns {
+            let index = (i + 1).to_string();
+            let deps = v.initial_depends_on.map(indices);
+            let mut attrs = vec![("index", index.as_str())];
+            if let Some(deps) = &deps {
+                attrs.push(("dependencies", deps));
+            }
+            empty(&mut w, "Unknown", &attrs)?;
         }
         close(&mut w, "InitialUnknowns")?;
     }
@@ -455,7 +481,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
 /// The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0 `InitialUnknown`, the
 /// same rule in both): outputs, continuous states and their derivatives whose `initial` is
 /// approx or calculated, and every calculated parameter.
-fn is_initial_unknown(decls: &[Variable], v: &Variable) -> bool {
+pub(crate) fn is_initial_unknown(decls: &[Variable], v: &Variable) -> bool {
     let is_state = decls.iter().any(|d| d.derivative_of == Some(v.name));
     ((v.causality == Causality::Output || v.derivative_of.is_some() || is_state)
         && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
@@ -683,9 +709,9 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
 
     // dependencies: value references of the knowns (inputs and continuous states), in
     // ascending order; dependenciesKind "dependent" for each (no particular structure claimed).
-    let unknown = |w: &mut Xml, element: &str, v: &Variable| -> Result<(), String> {
+    let unknown = |w: &mut Xml, element: &str, v: &Variable, deps: Option<&[&str]>| -> Result<(), String> {
         let vr = v.value_reference.to_string();
-        let deps = v.depends_on.map(|deps| {
+        let deps = deps.map(|deps| {
             let set: BTreeSet<u32> = deps.iter().filter_map(|n| vr_of(n)).collect();
             set.into_iter().map(|vr| vr.to_string()).collect::<Vec<_>>()
         });
@@ -700,14 +726,13 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
     };
     open(&mut w, "ModelStructure", &[])?;
     for v in decls.iter().filter(|v| v.causality == Causality::Output) {
-        unknown(&mut w, "Output", v)?;
+        unknown(&mut w, "Output", v, v.depends_on)?;
     }
     for v in decls.iter().filter(|v| v.derivative_of.is_some()) {
-        unknown(&mut w, "ContinuousStateDerivative", v)?;
+        unknown(&mut w, "ContinuousStateDerivative", v, v.depends_on)?;
     }
     for v in decls.iter().filter(|v| is_initial_unknown(decls, v)) {
-        let vr = v.value_reference.to_string();
-        empty(&mut w, "InitialUnknown", &[("valueReference", &vr)])?;
+        unknown(&mut w, "InitialUnknown", v, v.initial_depends_on)?;
     }
     close(&mut w, "ModelStructure")?;
     close(&mut w, "fmiModelDescription")?;
@@ -741,6 +766,7 @@ mod tests {
             max,
             nominal: None,
             depends_on: None,
+            initial_depends_on: None,
             derivative_of: None,
             enumeration: None,
         }
@@ -876,6 +902,7 @@ mod tests {
             max: None,
             nominal: None,
             depends_on: None,
+            initial_depends_on: None,
             derivative_of: None,
             enumeration: None,
         }
@@ -893,15 +920,18 @@ mod tests {
             start: Start::Real(1.0),
             nominal: Some(2.0),
             depends_on: Some(&["y"]),
+            initial_depends_on: None,
             ..v3("y", 7, VarType::Real, Causality::Output, Variability::Continuous)
         },
         Variable {
             depends_on: Some(&["y", "u"]),
+            initial_depends_on: None,
             derivative_of: Some("y"),
             ..v3("der(y)", 3, VarType::Real, Causality::Local, Variability::Continuous)
         },
         Variable {
             depends_on: Some(&[]),
+            initial_depends_on: None,
             ..v3("z", 9, VarType::Real, Causality::Output, Variability::Continuous)
         },
         Variable {

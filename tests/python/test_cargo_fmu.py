@@ -8,6 +8,7 @@ import math
 import re
 import subprocess
 import zipfile
+from pathlib import Path
 
 import fmpy
 import fmpy.validation
@@ -299,10 +300,10 @@ pub struct PiControl {
     #[variable(vr = 2, output, initial = exact, start = 0.0, depends = [x])]
     pub x: f64,
     /// dx/dt = kp (r - y) / Ti
-    #[variable(vr = 3, name = "der(x)", local, derivative_of = x, depends = [r, y])]
+    #[variable(vr = 3, name = "der(x)", local, derivative_of = x, depends = [r, y], initial_depends = [r, y, kp, Ti])]
     pub der_x: f64,
     /// Command u = kp (r - y) + x
-    #[variable(vr = 4, output, depends = [r, y, x])]
+    #[variable(vr = 4, output, depends = [r, y, x], initial_depends = [r, y, x, kp])]
     pub u: f64,
     /// Proportional gain
     #[variable(vr = 5, name = "kp", parameter, tunable, start = 2.0, min > 0.0)]
@@ -350,3 +351,60 @@ def test_cargo_fmu_check_passes_on_a_pi_controller_with_positive_parameters_and_
                                start_values={"r": 1.0, "y": 0.25}, output=["u", "x"])
     assert abs(result["x"][-1] - 2.0 * 0.75 / 0.5) < 1e-9, result["x"][-1]
     assert abs(result["u"][-1] - (2.0 * 0.75 + 3.0)) < 1e-9, result["u"][-1]
+
+
+def test_cargo_fmu_build_refuses_a_depends_that_leaves_out_an_input():
+    """Issue 23: a `depends` that misses an input the output uses passed `cargo fmu build` and
+    `cargo fmu validate` and was caught only by `cargo fmu check`. The build's smoke run now asks
+    the model's exact directional derivatives (dual numbers) at random points and refuses the
+    declaration, naming the output and the input; an unknown declared without `depends` (written
+    as depending on everything) gets a note with the dependencies found. The same for the
+    dependencies at initialization (`initial_depends`, InitialUnknowns): a parameter left out is
+    refused, found by moving each known of Initialization Mode on its own."""
+    crate, env = outside_crate("pi-wrong-depends", fresh=True)
+    src = PI_CONTROL.replace("PiControl", "PiWrongDepends")
+    wrong = src.replace("#[variable(vr = 4, output, depends = [r, y, x], initial_depends = [r, y, x, kp])]",
+                        "#[variable(vr = 4, output, depends = [r, x], initial_depends = [r, y, x])]")
+    wrong = wrong.replace('derivative_of = x, depends = [r, y], initial_depends = [r, y, kp, Ti])]', 'derivative_of = x)]')
+    assert wrong.count("depends = [") == 3, wrong
+    (crate / "src" / "lib.rs").write_text(wrong)
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+    assert out.returncode != 0, out.stderr
+    assert ("output 'u' depends on the input 'y'" in out.stderr and "`depends = [r, x]` leaves out: add 'y'" in out.stderr), \
+        out.stderr[-4000:]
+    assert ("derivative 'der(x)' declares no `depends`" in out.stderr and "`depends = [r, y]` would say so" in out.stderr), \
+        out.stderr[-4000:]
+    assert ("initial unknown 'u' depends in Initialization Mode on 'kp'" in out.stderr
+            and "`initial_depends = [r, y, x]` leaves out: add 'kp'" in out.stderr), out.stderr[-4000:]
+    assert ("initial unknown 'der(x)' declares no `initial_depends`" in out.stderr
+            and "`initial_depends = [r, y, kp, Ti]` would say so" in out.stderr), out.stderr[-4000:]
+    # The declarations the checks ask for build clean, without a note.
+    (crate / "src" / "lib.rs").write_text(src)
+    out = run(["cargo", "fmu", "build"], crate, env)
+    assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
+
+
+def test_every_initial_unknown_of_the_project_fmus_lists_its_dependencies():
+    """Issue 23: the InitialUnknowns carried no `dependencies`, which the standard reads as
+    "depends on every known, the inputs included": OMSimulator saw an algebraic loop through the
+    feedthrough Controller at initialization. Every initial unknown of the three FMUs now lists its
+    dependencies (declared with `initial_depends`, checked by `cargo fmu build`), in both
+    versions; the Pendulum's states depend on their parameters alpha1_0 ... omega2_0 only."""
+    import xml.etree.ElementTree as ET
+    root = Path(__file__).resolve().parents[2] / "modelDescription"
+    for name in ("Pendulum", "Controller", "DCMotor"):
+        for version, path in (("2.0", root / f"{name}.xml"), ("3.0", root / "fmi3" / f"{name}.xml")):
+            md = ET.parse(path).getroot()
+            unknowns = (md.findall("ModelStructure/InitialUnknowns/Unknown") if version == "2.0"
+                        else md.findall("ModelStructure/InitialUnknown"))
+            assert unknowns, (name, version)
+            for u in unknowns:
+                assert "dependencies" in u.attrib, (name, version, u.attrib)
+    md = ET.parse(root / "Pendulum.xml").getroot()
+    variables = md.findall("ModelVariables/ScalarVariable")
+    by_index = {str(i + 1): v.get("name") for i, v in enumerate(variables)}
+    deps = {by_index[u.get("index")]: sorted(by_index[d] for d in u.get("dependencies").split())
+            for u in md.findall("ModelStructure/InitialUnknowns/Unknown")}
+    assert deps["alpha1"] == ["alpha1_0"] and deps["omega2"] == ["omega2_0"], deps
+    assert deps["der(alpha1)"] == ["omega1_0"], deps
+    assert "M1" in deps["der(omega1)"] and "m1" in deps["der(omega1)"], deps

@@ -38,6 +38,7 @@ struct Var {
     max: Option<(Expr, bool)>,
     nominal: Option<Expr>,
     depends: Option<Vec<(String, Span)>>,
+    initial_depends: Option<Vec<(String, Span)>>,
     derivative_of: Option<(String, Span)>,
     description: String,
 }
@@ -56,6 +57,7 @@ struct VarAttr {
     max: Option<(Expr, bool)>,
     nominal: Option<Expr>,
     depends: Option<Vec<(String, Span)>>,
+    initial_depends: Option<Vec<(String, Span)>>,
     derivative_of: Option<(String, Span)>,
 }
 
@@ -207,6 +209,14 @@ impl Parse for VarAttr {
                     let list = content.parse_terminated(name_or_ident, Token![,])?;
                     a.depends = Some(list.into_iter().collect());
                 }
+                "initial_depends" => {
+                    once(a.initial_depends.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    let content;
+                    syn::bracketed!(content in input);
+                    let list = content.parse_terminated(name_or_ident, Token![,])?;
+                    a.initial_depends = Some(list.into_iter().collect());
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -218,7 +228,7 @@ impl Parse for VarAttr {
                         format!(
                             "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
                              calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
-                             continuous, initial, start, unit, min, max, nominal, depends, derivative_of"
+                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of"
                         ),
                     ));
                 }
@@ -352,6 +362,7 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         max: a.max,
         nominal: a.nominal,
         depends: a.depends,
+        initial_depends: a.initial_depends,
         derivative_of: a.derivative_of,
         description: crate::doc_text(&field.attrs),
     };
@@ -562,6 +573,49 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                 }
             }
         }
+        if let Some(deps) = &v.initial_depends {
+            let effective = |x: &Var| fmi_standard::effective_initial(x.causality, x.variability, x.initial);
+            // The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0
+            // `InitialUnknown`): outputs, states and derivatives that are approx or calculated,
+            // and calculated parameters.
+            let initial_unknown =
+                ((v.causality == Causality::Output || v.derivative_of.is_some() || is_state(vars, v))
+                    && matches!(effective(v), Some(Initial::Approx | Initial::Calculated)))
+                    || v.causality == Causality::CalculatedParameter;
+            if !initial_unknown {
+                return Err(Error::new(
+                    v.span,
+                    "only the unknowns of Initialization Mode (outputs, states and derivatives that are \
+                     calculated or approx, calculated parameters) declare `initial_depends`: it becomes their \
+                     `dependencies` in InitialUnknowns",
+                ));
+            }
+            for (d, span) in deps {
+                match by_name(d) {
+                    Some(dep)
+                        if dep.causality == Causality::Input
+                            || dep.causality == Causality::Independent
+                            || effective(dep) == Some(Initial::Exact) => {}
+                    Some(dep) => {
+                        return Err(Error::new(
+                            *span,
+                            format!(
+                                "'{}' initially depends on '{d}', which is not known in Initialization Mode (it is a \
+                                 {:?} whose initial is not exact); `initial_depends` lists inputs and variables with \
+                                 initial = exact, parameters among them",
+                                v.name, dep.causality
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(Error::new(
+                            *span,
+                            format!("'{}' initially depends on '{d}', which is not declared", v.name),
+                        ));
+                    }
+                }
+            }
+        }
         if let Some((d, span)) = &v.derivative_of {
             if let Some(other) = vars.iter().take_while(|o| !std::ptr::eq(*o, v)).find(|o| {
                 o.derivative_of
@@ -718,6 +772,13 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
         }
         None => quote!(::core::option::Option::None),
     };
+    let initial_depends = match &v.initial_depends {
+        Some(deps) => {
+            let names: Vec<String> = deps.iter().map(|(d, _)| fmi_name(vars, d)).collect();
+            quote!(::core::option::Option::Some(&[#(#names),*]))
+        }
+        None => quote!(::core::option::Option::None),
+    };
     let derivative_of = match &v.derivative_of {
         Some((d, _)) => {
             let d = fmi_name(vars, d);
@@ -740,6 +801,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             max: #max,
             nominal: #nominal,
             depends_on: #depends,
+            initial_depends_on: #initial_depends,
             derivative_of: #derivative_of,
             enumeration: <#ty as #rt::FmiType>::ENUMERATION,
         }

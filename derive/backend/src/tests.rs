@@ -328,6 +328,26 @@ fn model_wide_mistakes_are_one_error_and_the_code_is_still_generated() {
         0,
     );
     assert!(expand(&src).generated.is_some());
+    // `initial_depends` on a variable that is known at initialization, or naming one that is not
+    // (issue 23: the dependencies of InitialUnknowns).
+    let src = model(
+        "    #[variable(vr = 0, input, start = 0.0)]\n    u: f64,\n    #[variable(vr = 1, output, initial_depends = [u])]\n    y: f64,\n    #[variable(vr = 2, parameter, start = 1.0, initial_depends = [u])]\n    p: f64,",
+    );
+    assert_error(
+        &src,
+        "only the unknowns of Initialization Mode (outputs, states and derivatives that are calculated or approx, calculated parameters) declare `initial_depends`",
+        "p: f64",
+        0,
+    );
+    let src = model(
+        "    #[variable(vr = 0, input, start = 0.0)]\n    u: f64,\n    #[variable(vr = 1, output, initial_depends = [z])]\n    y: f64,\n    #[variable(vr = 2, output, initial_depends = [y])]\n    z: f64,",
+    );
+    assert_error(
+        &src,
+        "'y' initially depends on 'z', which is not known in Initialization Mode",
+        "z]",
+        0,
+    );
     // An undeclared unit: the generator cannot get past it (it has no base units), the error
     // comes alone.
     let src = model("    #[variable(vr = 0, input, unit = \"furlong\")]\n    u: f64,");

@@ -52,16 +52,16 @@ pub struct Controller {
     #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
     pub alpha2_ref: f64,
     /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (with sampled = true, from the inputs held at the last communication point)
-    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub M1: f64,
     /// Torque demand M2 for joint 2, limited to +-M_max; as M1
-    #[variable(vr = 11, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    #[variable(vr = 11, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub M2: f64,
     /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; computed like M1
-    #[variable(vr = 12, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    #[variable(vr = 12, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
     pub U1: f64,
     /// Voltage command U2 for the motor of joint 2, as U1
-    #[variable(vr = 13, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    #[variable(vr = 13, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
     pub U2: f64,
     /// PID memory of joint 1: the integral of the control error e1 = alpha1_ref - alpha1 (a continuous state in model exchange; advanced at communication points in co-simulation)
     #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
@@ -70,22 +70,22 @@ pub struct Controller {
     #[variable(vr = 15, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
     pub integral2: f64,
     /// Filtered speed of joint 1, Tf d(rate_filter1)/dt = omega1 - rate_filter1, starting at the measured omega1 (the derivative term's input; unused when Tf = 0)
-    #[variable(vr = 16, local, continuous, initial = calculated, unit = "rad/s")]
+    #[variable(vr = 16, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega1])]
     pub rate_filter1: f64,
     /// Filtered speed of joint 2, as rate_filter1
-    #[variable(vr = 17, local, continuous, initial = calculated, unit = "rad/s")]
+    #[variable(vr = 17, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega2])]
     pub rate_filter2: f64,
     /// d(integral1)/dt = e1, 0 while the command is at a limit in the direction of e1 (anti-windup)
-    #[variable(vr = 80, name = "der(integral1)", local, continuous, unit = "rad", derivative_of = integral1, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    #[variable(vr = 80, name = "der(integral1)", local, continuous, unit = "rad", derivative_of = integral1, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
     pub der_integral1: f64,
     /// d(integral2)/dt = e2, as der(integral1)
-    #[variable(vr = 81, name = "der(integral2)", local, continuous, unit = "rad", derivative_of = integral2, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    #[variable(vr = 81, name = "der(integral2)", local, continuous, unit = "rad", derivative_of = integral2, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
     pub der_integral2: f64,
     /// d(rate_filter1)/dt = (omega1 - rate_filter1)/Tf (0 when Tf = 0)
-    #[variable(vr = 82, name = "der(rate_filter1)", local, continuous, unit = "rad/s2", derivative_of = rate_filter1, depends = [omega1, rate_filter1])]
+    #[variable(vr = 82, name = "der(rate_filter1)", local, continuous, unit = "rad/s2", derivative_of = rate_filter1, depends = [omega1, rate_filter1], initial_depends = [])]
     pub der_rate_filter1: f64,
     /// d(rate_filter2)/dt = (omega2 - rate_filter2)/Tf (0 when Tf = 0)
-    #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2])]
+    #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2], initial_depends = [])]
     pub der_rate_filter2: f64,
     /// The measurement alpha1 the Controller held at the last communication point (the inputs at the start of the last fmi2DoStep; before the first step, at initialization): with sampled = true the outputs use these
     #[variable(vr = 90, local, discrete, unit = "rad")]
@@ -196,28 +196,28 @@ pub struct Controller {
     #[variable(vr = 65, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
     pub U_max: f64,
     /// LQR gain K(1,1), computed at initialization by solving the Riccati equation for the plant linearized upright (paper eq. (14): 14.0666)
-    #[variable(vr = 70, calculated_parameter, fixed, unit = "N.m/rad")]
+    #[variable(vr = 70, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K11: f64,
     /// LQR gain K(1,2) (paper: 2.8816)
-    #[variable(vr = 71, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    #[variable(vr = 71, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K12: f64,
     /// LQR gain K(1,3) (paper: 1.1348)
-    #[variable(vr = 72, calculated_parameter, fixed, unit = "N.m/rad")]
+    #[variable(vr = 72, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K13: f64,
     /// LQR gain K(1,4) (paper: 1.0010)
-    #[variable(vr = 73, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    #[variable(vr = 73, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K14: f64,
     /// LQR gain K(2,1) (paper: -3.1814)
-    #[variable(vr = 74, calculated_parameter, fixed, unit = "N.m/rad")]
+    #[variable(vr = 74, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K21: f64,
     /// LQR gain K(2,2) (paper: 0.1161)
-    #[variable(vr = 75, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    #[variable(vr = 75, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K22: f64,
     /// LQR gain K(2,3) (paper: 4.8456)
-    #[variable(vr = 76, calculated_parameter, fixed, unit = "N.m/rad")]
+    #[variable(vr = 76, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K23: f64,
     /// LQR gain K(2,4) (paper: 0.9957)
-    #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad")]
+    #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K24: f64,
 }
 

@@ -20,25 +20,25 @@ pub struct DcMotor {
     #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
     pub omega: f64,
     /// Torque on the joint, tau = n (km i - B omega_m) (connect to Pendulum.M1 or M2); 0 when coupled = false (unloaded)
-    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [omega, i])]
+    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [omega, i], initial_depends = [omega, i, km, B, gear_ratio, coupled])]
     pub tau: f64,
     /// Armature current i, L di/dt = U_applied - R i - kb omega_m; the start value is the initial state
     #[variable(vr = 11, output, continuous, initial = exact, start = 0.0, unit = "A", depends = [i])]
     pub i: f64,
     /// Rotor speed omega_m: n omega when coupled, else the state omega_r of eq. (17)
-    #[variable(vr = 12, output, continuous, unit = "rad/s", depends = [omega, omega_r])]
+    #[variable(vr = 12, output, continuous, unit = "rad/s", depends = [omega, omega_r], initial_depends = [omega, omega_r, gear_ratio, coupled])]
     pub omega_m: f64,
     /// Voltage actually applied: U limited to +-U_max
-    #[variable(vr = 13, output, continuous, unit = "V", depends = [U])]
+    #[variable(vr = 13, output, continuous, unit = "V", depends = [U], initial_depends = [U])]
     pub U_applied: f64,
     /// Rotor speed of the unloaded motor (coupled = false), J d(omega_r)/dt = km i - B omega_r; the start value is the initial speed. Coupled, the rotor follows the joint (omega_m = n omega) and omega_r keeps its start value
     #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad/s")]
     pub omega_r: f64,
     /// d(i)/dt
-    #[variable(vr = 15, name = "der(i)", local, continuous, unit = "A/s", derivative_of = i, depends = [U, omega, i, omega_r])]
+    #[variable(vr = 15, name = "der(i)", local, continuous, unit = "A/s", derivative_of = i, depends = [U, omega, i, omega_r], initial_depends = [U, omega, i, omega_r, L, R, kb, gear_ratio, coupled])]
     pub der_i: f64,
     /// d(omega_r)/dt (0 when coupled)
-    #[variable(vr = 16, name = "der(omega_r)", local, continuous, unit = "rad/s2", derivative_of = omega_r, depends = [i, omega_r])]
+    #[variable(vr = 16, name = "der(omega_r)", local, continuous, unit = "rad/s2", derivative_of = omega_r, depends = [i, omega_r], initial_depends = [i, omega_r, km, J, B, coupled])]
     pub der_omega_r: f64,
     /// Armature inductance L
     #[variable(vr = 20, parameter, fixed, start = 0.000121, unit = "H", min > 0.0)]

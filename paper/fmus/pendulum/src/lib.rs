@@ -22,43 +22,43 @@ pub struct Pendulum {
     #[variable(vr = 1, input, continuous, start = 0.0, unit = "N.m")]
     pub M2: f64,
     /// Angle alpha1 of link 1 from the upward vertical; starts at alpha1_0
-    #[variable(vr = 2, output, continuous, initial = calculated, unit = "rad", depends = [alpha1])]
+    #[variable(vr = 2, output, continuous, initial = calculated, unit = "rad", depends = [alpha1], initial_depends = [alpha1_0])]
     pub alpha1: f64,
     /// Angular velocity of link 1, d(alpha1)/dt; starts at omega1_0
-    #[variable(vr = 3, output, continuous, initial = calculated, unit = "rad/s", depends = [omega1])]
+    #[variable(vr = 3, output, continuous, initial = calculated, unit = "rad/s", depends = [omega1], initial_depends = [omega1_0])]
     pub omega1: f64,
     /// Angle alpha2 of link 2 from the upward vertical (absolute, not relative to link 1); starts at alpha2_0
-    #[variable(vr = 4, output, continuous, initial = calculated, unit = "rad", depends = [alpha2])]
+    #[variable(vr = 4, output, continuous, initial = calculated, unit = "rad", depends = [alpha2], initial_depends = [alpha2_0])]
     pub alpha2: f64,
     /// Angular velocity of link 2, d(alpha2)/dt; starts at omega2_0
-    #[variable(vr = 5, output, continuous, initial = calculated, unit = "rad/s", depends = [omega2])]
+    #[variable(vr = 5, output, continuous, initial = calculated, unit = "rad/s", depends = [omega2], initial_depends = [omega2_0])]
     pub omega2: f64,
     /// Total energy E = Ek1 + Ek2 + Ep1 + Ep2, eqs. (2)-(5); constant when M1 = M2 = 0
-    #[variable(vr = 6, output, continuous, unit = "J", depends = [alpha1, omega1, alpha2, omega2])]
+    #[variable(vr = 6, output, continuous, unit = "J", depends = [alpha1, omega1, alpha2, omega2], initial_depends = [m1, m2, l1, l2, g, J1, J2, alpha1_0, omega1_0, alpha2_0, omega2_0])]
     pub energy: f64,
     /// Horizontal position of joint 2 (end of link 1), pivot at the origin
-    #[variable(vr = 7, output, continuous, unit = "m", depends = [alpha1])]
+    #[variable(vr = 7, output, continuous, unit = "m", depends = [alpha1], initial_depends = [l1, alpha1_0])]
     pub x1: f64,
     /// Height of joint 2 (end of link 1) above the pivot
-    #[variable(vr = 8, output, continuous, unit = "m", depends = [alpha1])]
+    #[variable(vr = 8, output, continuous, unit = "m", depends = [alpha1], initial_depends = [l1, alpha1_0])]
     pub y1: f64,
     /// Horizontal position of the tip of link 2
-    #[variable(vr = 9, output, continuous, unit = "m", depends = [alpha1, alpha2])]
+    #[variable(vr = 9, output, continuous, unit = "m", depends = [alpha1, alpha2], initial_depends = [l1, l2, alpha1_0, alpha2_0])]
     pub x2: f64,
     /// Height of the tip of link 2 above the pivot
-    #[variable(vr = 10, output, continuous, unit = "m", depends = [alpha1, alpha2])]
+    #[variable(vr = 10, output, continuous, unit = "m", depends = [alpha1, alpha2], initial_depends = [l1, l2, alpha1_0, alpha2_0])]
     pub y2: f64,
     /// d(alpha1)/dt = omega1
-    #[variable(vr = 12, name = "der(alpha1)", local, continuous, unit = "rad/s", derivative_of = alpha1, depends = [omega1])]
+    #[variable(vr = 12, name = "der(alpha1)", local, continuous, unit = "rad/s", derivative_of = alpha1, depends = [omega1], initial_depends = [omega1_0])]
     pub der_alpha1: f64,
     /// d(omega1)/dt: the angular acceleration of link 1, eqs. (6)-(7) solved for it
-    #[variable(vr = 13, name = "der(omega1)", local, continuous, unit = "rad/s2", derivative_of = omega1, depends = [M1, M2, alpha1, omega1, alpha2, omega2])]
+    #[variable(vr = 13, name = "der(omega1)", local, continuous, unit = "rad/s2", derivative_of = omega1, depends = [M1, M2, alpha1, omega1, alpha2, omega2], initial_depends = [M1, M2, m1, m2, l1, l2, g, J1, J2, alpha1_0, omega1_0, alpha2_0, omega2_0])]
     pub der_omega1: f64,
     /// d(alpha2)/dt = omega2
-    #[variable(vr = 14, name = "der(alpha2)", local, continuous, unit = "rad/s", derivative_of = alpha2, depends = [omega2])]
+    #[variable(vr = 14, name = "der(alpha2)", local, continuous, unit = "rad/s", derivative_of = alpha2, depends = [omega2], initial_depends = [omega2_0])]
     pub der_alpha2: f64,
     /// d(omega2)/dt: the angular acceleration of link 2, eqs. (6)-(7) solved for it
-    #[variable(vr = 15, name = "der(omega2)", local, continuous, unit = "rad/s2", derivative_of = omega2, depends = [M1, M2, alpha1, omega1, alpha2, omega2])]
+    #[variable(vr = 15, name = "der(omega2)", local, continuous, unit = "rad/s2", derivative_of = omega2, depends = [M1, M2, alpha1, omega1, alpha2, omega2], initial_depends = [M1, M2, m1, m2, l1, l2, g, J1, J2, alpha1_0, omega1_0, alpha2_0, omega2_0])]
     pub der_omega2: f64,
     /// Mass m1 of link 1 (uniform rod)
     #[variable(vr = 20, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]

@@ -1,0 +1,744 @@
+//! The `depends` of every output and derivative, checked against the model itself when the FMU
+//! is built: its directional derivatives are exact (the equations run on dual numbers), so a
+//! derivative ∂unknown/∂known that is not 0 at some point proves a dependency. At a few random
+//! points (states and continuous inputs spread around their start values, inside their bounds)
+//! the smoke run asks `fmi2GetDirectionalDerivative` for every column of the model-exchange
+//! Jacobian: a dependency the declaration leaves out is a problem (the importer trusts the
+//! description: a missing dependency makes it order a feedthrough wrongly or skip an algebraic
+//! loop); a declared dependency never seen, or an unknown declared without `depends` (written
+//! as depending on everything), is a note with what was found.
+//!
+//! Checked through FMI 2.0 model exchange: the FMI 3.0 description of the same library is
+//! written from the same declarations. Knowns that are not continuous Reals (Integer, Boolean or
+//! discrete inputs) have no directional derivative: a `depends` on them is not checked.
+
+use rustfmu::__private::abi::*;
+use rustfmu::description::{Causality, Initial, ModelDescription, Start, VarType, Variability, Variable};
+use std::ffi::CString;
+use std::path::Path;
+
+/// Random points of the check. The first has the parameters at their start values; at the
+/// others every parameter is drawn too (a Boolean or enumeration parameter that switches a
+/// dependency on shows it at some point: eight points miss one switch with probability 1/128).
+const POINTS: usize = 8;
+
+/// How often a point's parameters are drawn again when the model refuses them.
+const DRAWS: usize = 5;
+
+/// What the check found.
+#[derive(Debug, Default, PartialEq)]
+pub struct Report {
+    /// Dependencies the declarations leave out: the build fails on them.
+    pub problems: Vec<String>,
+    /// Declared dependencies never seen, unknowns without `depends`, points that could not be
+    /// checked: printed, not failed.
+    pub notes: Vec<String>,
+}
+
+/// A known of model exchange: a continuous state or a continuous Real input.
+#[derive(Clone, Copy)]
+enum Known<'a> {
+    State(&'a Variable),
+    Input(&'a Variable),
+}
+
+impl<'a> Known<'a> {
+    fn var(&self) -> &'a Variable {
+        match self {
+            Known::State(v) | Known::Input(v) => v,
+        }
+    }
+}
+
+/// The states in the order of the state vector: the variables the derivatives are of, in the
+/// order the derivatives are declared (the order of `<Derivatives>` and of the runtime's vector).
+fn states(d: &ModelDescription) -> Vec<&Variable> {
+    d.variables
+        .iter()
+        .filter_map(|der| der.derivative_of)
+        .filter_map(|name| d.variables.iter().find(|v| v.name == name))
+        .collect()
+}
+
+fn is_continuous_real(v: &Variable) -> bool {
+    v.var_type == VarType::Real && v.variability == Variability::Continuous
+}
+
+/// The unknowns: the derivatives, then the continuous Real outputs (each once).
+fn unknowns(d: &ModelDescription) -> Vec<&Variable> {
+    let mut out: Vec<&Variable> = d.variables.iter().filter(|v| v.derivative_of.is_some()).collect();
+    for v in d
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output && is_continuous_real(v))
+    {
+        if !out.iter().any(|u| u.value_reference == v.value_reference) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+fn knowns(d: &ModelDescription) -> Vec<Known<'_>> {
+    let mut out: Vec<Known> = states(d).into_iter().map(Known::State).collect();
+    out.extend(
+        d.variables
+            .iter()
+            .filter(|v| v.causality == Causality::Input && is_continuous_real(v))
+            .map(Known::Input),
+    );
+    out
+}
+
+/// A deterministic generator (splitmix64): the same points in every build.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// A value spread around `center` (by up to `scale` times its magnitude, at least `scale`) and
+/// kept inside the variable's bounds (an exclusive bound by a margin). Small spreads keep a model
+/// inside its limits (a saturated output shows no dependency on what it saturates).
+fn spread_by(rng: &mut Rng, v: &Variable, center: f64, scale: f64) -> f64 {
+    let width = center.abs().max(1.0) * scale;
+    let mut x = center + rng.uniform(-0.5, 0.5) * width;
+    let (lo, hi) = (v.min.map(|b| b.value), v.max.map(|b| b.value));
+    if let (Some(lo), Some(hi)) = (lo, hi) {
+        // Inside both: a random point of the range.
+        return lo + (hi - lo) * rng.uniform(0.05, 0.95);
+    }
+    if let Some(lo) = lo
+        && x <= lo
+    {
+        x = lo + rng.uniform(0.05, 0.5) * width;
+    }
+    if let Some(hi) = hi
+        && x >= hi
+    {
+        x = hi - rng.uniform(0.05, 0.5) * width;
+    }
+    x
+}
+
+/// A random value of a parameter or input: a Real spread around its start value, a Boolean
+/// either way, an enumeration any of its items, an Integer inside its bounds (or near its start).
+fn draw(rng: &mut Rng, v: &Variable) -> f64 {
+    draw_by(rng, v, 1.0)
+}
+
+/// [`draw`], a Real spread by `scale` times as far ([`spread_by`]).
+fn draw_by(rng: &mut Rng, v: &Variable, scale: f64) -> f64 {
+    let x = start_number(v);
+    match v.var_type {
+        VarType::Real => spread_by(rng, v, x, scale),
+        VarType::Boolean => (rng.uniform(0.0, 1.0) < 0.5) as u8 as f64,
+        VarType::Enumeration => match v.enumeration {
+            Some(e) if !e.items.is_empty() => {
+                let i = ((rng.uniform(0.0, 1.0) * e.items.len() as f64) as usize).min(e.items.len() - 1);
+                e.items[i].value as f64
+            }
+            _ => x,
+        },
+        _ => match (v.min, v.max) {
+            (Some(lo), Some(hi)) => rng.uniform(lo.value, hi.value + 1.0).floor().min(hi.value),
+            _ => x + rng.uniform(-2.0, 3.0).floor(),
+        },
+    }
+}
+
+/// The parameters the check draws at each random point but the first: tunable or fixed, with
+/// initial = exact.
+fn parameters(d: &ModelDescription) -> Vec<&Variable> {
+    d.variables
+        .iter()
+        .filter(|v| {
+            v.causality == Causality::Parameter
+                && v.effective_initial() == Some(Initial::Exact)
+                && v.var_type != VarType::String
+        })
+        .collect()
+}
+
+fn start_of(v: &Variable) -> f64 {
+    match v.start {
+        Start::Real(x) if x.is_finite() => x,
+        _ => 0.0,
+    }
+}
+
+/// `depends = [a, b]` as written in the declaration.
+fn list(names: &[&str]) -> String {
+    format!("[{}]", names.join(", "))
+}
+
+/// Checks the declared dependencies of the library at `so` (a rustfmu model whose declarations
+/// are `d`) through FMI 2.0 model exchange. `guid` and `resource_uri` as for fmi2Instantiate.
+pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) -> Report {
+    let mut report = Report::default();
+    let unknowns = unknowns(d);
+    let knowns = knowns(d);
+    if unknowns.is_empty() || knowns.is_empty() {
+        return report;
+    }
+    // seen[u][k]: a point where ∂unknown u / ∂known k was not 0, and its value.
+    let mut seen: Vec<Vec<Option<f64>>> = vec![vec![None; knowns.len()]; unknowns.len()];
+    let mut checked_points = 0;
+    let api = match Api::load(so, true, guid, resource_uri) {
+        Ok(api) => api,
+        Err(e) => {
+            report.notes.push(format!("`depends` was not checked: {e}"));
+            return report;
+        }
+    };
+    let mut rng = Rng(0x0005_eed0_fde9_e0d5);
+    let parameters = parameters(d);
+    for point in 0..POINTS {
+        // The parameters drawn, again while the model refuses them (a combination it does not
+        // accept), at most DRAWS times; then this point with their start values.
+        let mut jacobian = Err(String::new());
+        for attempt in 0..=DRAWS {
+            let drawn: Vec<(&Variable, f64)> = if point == 0 || attempt == DRAWS {
+                vec![]
+            } else {
+                parameters.iter().map(|v| (*v, draw(&mut rng, v))).collect()
+            };
+            // Every other point close to the initial state and the start values of the inputs.
+            let scale = if point % 2 == 1 { 1e-3 } else { 1.0 };
+            jacobian = columns(&api, d, &unknowns, &knowns, &drawn, scale, &mut rng);
+            if jacobian.is_ok() || drawn.is_empty() {
+                break;
+            }
+        }
+        match jacobian {
+            Ok(jacobian) => {
+                checked_points += 1;
+                for (i, row) in jacobian.iter().enumerate() {
+                    for (j, &value) in row.iter().enumerate() {
+                        if value != 0.0 && seen[i][j].is_none() {
+                            seen[i][j] = Some(value);
+                        }
+                    }
+                }
+            }
+            Err(e) => report
+                .notes
+                .push(format!("the dependency check skipped random point {}: {e}", point + 1)),
+        }
+    }
+    if checked_points == 0 {
+        report
+            .notes
+            .push("`depends` was not checked: no random point could be evaluated (above)".into());
+        return report;
+    }
+    for (i, u) in unknowns.iter().enumerate() {
+        let what = if u.derivative_of.is_some() {
+            "derivative"
+        } else {
+            "output"
+        };
+        let found: Vec<&str> = knowns
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| seen[i][*j].is_some())
+            .map(|(_, k)| k.var().name)
+            .collect();
+        match u.depends_on {
+            None => report.notes.push(format!(
+                "{what} '{}' declares no `depends`, so its description says it depends on every input and state; \
+                 at {checked_points} random points it depended on {}: `depends = {}` would say so",
+                u.name,
+                list(&found),
+                list(&found)
+            )),
+            Some(declared) => {
+                let mut unseen = vec![];
+                for (j, k) in knowns.iter().enumerate() {
+                    let name = k.var().name;
+                    let listed = declared.contains(&name);
+                    match (seen[i][j], listed) {
+                        (Some(value), false) => report.problems.push(format!(
+                            "{what} '{}' depends on {} '{name}' (∂{}/∂{name} = {value:e} at a random point, by \
+                             fmi2GetDirectionalDerivative), which its `depends = {}` leaves out: add '{name}' to it",
+                            u.name,
+                            match k {
+                                Known::State(_) => "the state",
+                                Known::Input(_) => "the input",
+                            },
+                            u.name,
+                            list(declared)
+                        )),
+                        (None, true) => unseen.push(name),
+                        _ => {}
+                    }
+                }
+                if !unseen.is_empty() {
+                    report.notes.push(format!(
+                        "{what} '{}' declares dependencies on {} that {checked_points} random points never showed \
+                         (a derivative 0 at each): drop them from `depends` if they are not there (a dependency \
+                         through a switch or a limit has derivative 0 and shows only as a jump: keep it then)",
+                        u.name,
+                        list(&unseen)
+                    ));
+                }
+            }
+        }
+    }
+    report
+}
+
+/// The FMI 2.0 functions the checks call, from a loaded rustfmu library.
+struct Api {
+    _lib: libloading::Library,
+    instantiate: unsafe extern "C" fn(
+        fmi2String,
+        fmi2Type,
+        fmi2String,
+        fmi2String,
+        *const fmi2CallbackFunctions,
+        fmi2Boolean,
+        fmi2Boolean,
+    ) -> fmi2Component,
+    setup: unsafe extern "C" fn(fmi2Component, fmi2Boolean, f64, f64, fmi2Boolean, f64) -> fmi2Status,
+    enter_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
+    exit_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
+    enter_continuous: Option<unsafe extern "C" fn(fmi2Component) -> fmi2Status>,
+    set_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const f64) -> fmi2Status,
+    get_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut f64) -> fmi2Status,
+    set_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const i32) -> fmi2Status,
+    get_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut i32) -> fmi2Status,
+    set_boolean: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const fmi2Boolean) -> fmi2Status,
+    get_states: Option<unsafe extern "C" fn(fmi2Component, *mut f64, usize) -> fmi2Status>,
+    set_states: Option<unsafe extern "C" fn(fmi2Component, *const f64, usize) -> fmi2Status>,
+    directional:
+        unsafe extern "C" fn(fmi2Component, *const u32, usize, *const u32, usize, *const f64, *mut f64) -> fmi2Status,
+    free: unsafe extern "C" fn(fmi2Component),
+    /// Model exchange when the library has it, else co-simulation.
+    kind: fmi2Type,
+    /// fmi2Instantiate's GUID and resource location.
+    guid: CString,
+    location: CString,
+}
+
+/// A function of `lib`, as the (`Copy`) function-pointer type `T` the caller expects.
+///
+/// # Safety
+/// `T` is the symbol's real type.
+unsafe fn symbol<T: Copy>(lib: &libloading::Library, name: &str) -> Result<T, String> {
+    // SAFETY: as the caller promises.
+    unsafe { lib.get::<T>(name.as_bytes()) }
+        .map(|s| *s)
+        .map_err(|_| format!("the binary does not export {name}"))
+}
+
+impl Api {
+    fn load(so: &Path, model_exchange: bool, guid: &str, resource_uri: &str) -> Result<Api, String> {
+        // SAFETY: our own freshly built FMU binary (the smoke run loaded it already); the
+        // signatures are the standard's (proved against fmi-sys in the rustfmu tests).
+        unsafe {
+            let lib = libloading::Library::new(so).map_err(|e| format!("the binary does not load: {e}"))?;
+            let me = |name: &str| model_exchange.then(|| symbol(&lib, name).ok()).flatten();
+            Ok(Api {
+                instantiate: symbol(&lib, "fmi2Instantiate")?,
+                setup: symbol(&lib, "fmi2SetupExperiment")?,
+                enter_init: symbol(&lib, "fmi2EnterInitializationMode")?,
+                exit_init: symbol(&lib, "fmi2ExitInitializationMode")?,
+                enter_continuous: me("fmi2EnterContinuousTimeMode"),
+                set_real: symbol(&lib, "fmi2SetReal")?,
+                get_real: symbol(&lib, "fmi2GetReal")?,
+                set_integer: symbol(&lib, "fmi2SetInteger")?,
+                get_integer: symbol(&lib, "fmi2GetInteger")?,
+                set_boolean: symbol(&lib, "fmi2SetBoolean")?,
+                get_states: model_exchange
+                    .then(|| symbol(&lib, "fmi2GetContinuousStates").ok())
+                    .flatten(),
+                set_states: model_exchange
+                    .then(|| symbol(&lib, "fmi2SetContinuousStates").ok())
+                    .flatten(),
+                directional: symbol(&lib, "fmi2GetDirectionalDerivative")?,
+                free: symbol(&lib, "fmi2FreeInstance")?,
+                kind: if model_exchange {
+                    fmi2ModelExchange
+                } else {
+                    fmi2CoSimulation
+                },
+                guid: CString::new(guid).unwrap_or_default(),
+                location: CString::new(resource_uri).unwrap_or_default(),
+                _lib: lib,
+            })
+        }
+    }
+
+    /// Sets a Real, Integer, enumeration or Boolean variable (a Boolean from 0 or 1).
+    ///
+    /// # Safety
+    /// `c` is a live instance of this library.
+    unsafe fn set(&self, c: fmi2Component, v: &Variable, x: f64) -> fmi2Status {
+        let vr = [v.value_reference];
+        // SAFETY: one value reference, one value.
+        unsafe {
+            match v.var_type {
+                VarType::Real => (self.set_real)(c, vr.as_ptr(), 1, [x].as_ptr()),
+                VarType::Boolean => (self.set_boolean)(
+                    c,
+                    vr.as_ptr(),
+                    1,
+                    [if x != 0.0 { fmi2True } else { fmi2False }].as_ptr(),
+                ),
+                _ => (self.set_integer)(c, vr.as_ptr(), 1, [x as i32].as_ptr()),
+            }
+        }
+    }
+
+    /// Runs `body` on a fresh instance set up for t = 0, freeing it afterwards.
+    fn with_instance<T>(
+        &self,
+        body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
+    ) -> Result<T, String> {
+        let log = rustfmu::testing::Log::leak();
+        let callbacks = rustfmu::testing::callbacks(log);
+        let name = CString::new("fmu-build-depends").unwrap();
+        // SAFETY: every string is NUL-terminated and outlives the call; the callbacks are 'static.
+        let c = unsafe {
+            (self.instantiate)(
+                name.as_ptr(),
+                self.kind,
+                self.guid.as_ptr(),
+                self.location.as_ptr(),
+                callbacks,
+                fmi2False,
+                fmi2False,
+            )
+        };
+        if c.is_null() {
+            return Err(format!("fmi2Instantiate returned NULL: {}", said(log)));
+        }
+        let ok = |s: fmi2Status, what: &str| {
+            if s == fmi2OK {
+                Ok(())
+            } else {
+                Err(format!("{what} answered status {s}: {}", said(log)))
+            }
+        };
+        // SAFETY: `c` is a live instance of this library until the free below.
+        let result = ok(
+            unsafe { (self.setup)(c, fmi2False, 0.0, 0.0, fmi2False, 1.0) },
+            "fmi2SetupExperiment",
+        )
+        .and_then(|_| body(c, &ok));
+        // SAFETY: as above; not used afterwards.
+        unsafe { (self.free)(c) };
+        result
+    }
+}
+
+/// The model-exchange Jacobian of the unknowns with respect to the knowns at one random point
+/// (rows: unknowns), from a fresh instance.
+fn columns(
+    api: &Api,
+    d: &ModelDescription,
+    unknowns: &[&Variable],
+    knowns: &[Known],
+    parameters: &[(&Variable, f64)],
+    scale: f64,
+    rng: &mut Rng,
+) -> Result<Vec<Vec<f64>>, String> {
+    let n_states = knowns.iter().filter(|k| matches!(k, Known::State(_))).count();
+    let inputs: Vec<&Variable> = knowns
+        .iter()
+        .filter_map(|k| match k {
+            Known::Input(v) => Some(*v),
+            Known::State(_) => None,
+        })
+        .collect();
+    let (Some(enter_continuous), Some(get_states), Some(set_states)) =
+        (api.enter_continuous, api.get_states, api.set_states)
+    else {
+        return Err("the library has no model exchange".into());
+    };
+    api.with_instance(|c, ok| {
+        // SAFETY: `c` is live; every array passed has the length passed with it.
+        unsafe {
+            for (v, x) in parameters {
+                ok(api.set(c, v, *x), &format!("setting the parameter '{}' to {x}", v.name))?;
+            }
+            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
+            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            ok(enter_continuous(c), "fmi2EnterContinuousTimeMode")?;
+            let mut x = vec![0.0; n_states];
+            ok(get_states(c, x.as_mut_ptr(), x.len()), "fmi2GetContinuousStates")?;
+            let states: Vec<&Variable> = states(d);
+            for (j, xj) in x.iter_mut().enumerate() {
+                *xj = spread_by(rng, states[j], *xj, scale);
+            }
+            ok(set_states(c, x.as_ptr(), x.len()), "fmi2SetContinuousStates")?;
+            let vrs: Vec<u32> = inputs.iter().map(|v| v.value_reference).collect();
+            let values: Vec<f64> = inputs.iter().map(|v| spread_by(rng, v, start_of(v), scale)).collect();
+            ok(
+                (api.set_real)(c, vrs.as_ptr(), vrs.len(), values.as_ptr()),
+                "fmi2SetReal of the inputs",
+            )?;
+            let u_vrs: Vec<u32> = unknowns.iter().map(|v| v.value_reference).collect();
+            let mut jacobian = vec![vec![0.0; knowns.len()]; unknowns.len()];
+            for (j, k) in knowns.iter().enumerate() {
+                let k_vr = [k.var().value_reference];
+                let mut column = vec![f64::NAN; u_vrs.len()];
+                ok(
+                    (api.directional)(
+                        c,
+                        u_vrs.as_ptr(),
+                        u_vrs.len(),
+                        k_vr.as_ptr(),
+                        1,
+                        [1.0].as_ptr(),
+                        column.as_mut_ptr(),
+                    ),
+                    &format!("fmi2GetDirectionalDerivative with respect to '{}'", k.var().name),
+                )?;
+                for (i, value) in column.into_iter().enumerate() {
+                    if !value.is_finite() {
+                        return Err(format!(
+                            "fmi2GetDirectionalDerivative answered fmi2OK with ∂{}/∂{} = {value}",
+                            unknowns[i].name,
+                            k.var().name
+                        ));
+                    }
+                    jacobian[i][j] = value;
+                }
+            }
+            Ok(jacobian)
+        }
+    })
+}
+
+fn said(log: &rustfmu::testing::Log) -> String {
+    log.entries()
+        .iter()
+        .map(|e| e.text.clone())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+fn is_initial_unknown(d: &ModelDescription, v: &Variable) -> bool {
+    crate::xml::is_initial_unknown(d.variables, v)
+}
+
+/// Whether the check can set `v` (a known of Initialization Mode: an input or a variable with
+/// initial = exact, not a constant) and read it back as a number.
+fn is_settable_known(v: &Variable) -> bool {
+    (v.causality == Causality::Input || v.effective_initial() == Some(Initial::Exact))
+        && v.causality != Causality::Independent
+        && v.variability != Variability::Constant
+        && v.var_type != VarType::String
+}
+
+fn is_number(v: &Variable) -> bool {
+    matches!(v.var_type, VarType::Real | VarType::Integer | VarType::Enumeration)
+}
+
+/// One known's value, as set before Initialization Mode.
+fn start_number(v: &Variable) -> f64 {
+    match v.start {
+        Start::Real(x) if x.is_finite() => x,
+        Start::Integer(i) => i as f64,
+        Start::Boolean(b) => b as u8 as f64,
+        _ => 0.0,
+    }
+}
+
+/// The value a known is moved to: a small step inside its bounds (a Real), the other Boolean,
+/// the next enumeration item, an Integer by one.
+fn perturbed(v: &Variable, x: f64) -> f64 {
+    match v.var_type {
+        VarType::Boolean => 1.0 - x,
+        VarType::Enumeration if v.enumeration.is_some_and(|e| e.items.len() > 1) => {
+            let items = v.enumeration.map(|e| e.items).unwrap_or(&[]);
+            let at = items.iter().position(|i| i.value as f64 == x).unwrap_or(0);
+            items[(at + 1) % items.len()].value as f64
+        }
+        _ => {
+            let step = if v.var_type == VarType::Real {
+                1e-3 * x.abs().max(1.0)
+            } else {
+                1.0
+            };
+            let above = |y: f64| v.max.is_some_and(|b| y > b.value || (b.exclusive && y >= b.value));
+            if above(x + step) { x - step } else { x + step }
+        }
+    }
+}
+
+/// The values of the initial unknowns after Initialization Mode with the knowns set to `values`.
+fn initial_values(api: &Api, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String> {
+    api.with_instance(|c, ok| {
+        // SAFETY: `c` is live; every array passed has the length passed with it.
+        unsafe {
+            for (v, &x) in knowns.iter().zip(values) {
+                ok(api.set(c, v, x), &format!("setting '{}' to {x}", v.name))?;
+            }
+            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
+            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            let mut out = Vec::with_capacity(unknowns.len());
+            for v in unknowns {
+                let vr = [v.value_reference];
+                if v.var_type == VarType::Real {
+                    let mut x = [0.0];
+                    ok(
+                        (api.get_real)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
+                        &format!("fmi2GetReal of '{}'", v.name),
+                    )?;
+                    out.push(x[0]);
+                } else {
+                    let mut x = [0];
+                    ok(
+                        (api.get_integer)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
+                        &format!("fmi2GetInteger of '{}'", v.name),
+                    )?;
+                    out.push(x[0] as f64);
+                }
+            }
+            Ok(out)
+        }
+    })
+}
+
+/// Checks the declared `initial_depends` of the library at `so` (a rustfmu model whose
+/// declarations are `d`): at a few random points (Real knowns spread around their start values,
+/// inside their bounds; Booleans and enumerations drawn), each known of Initialization Mode is
+/// moved a little on its own, in a fresh instance, and the initial unknowns read after
+/// Initialization Mode. An unknown that moved depends on that known. Integer knowns move by one,
+/// Booleans to the other value, enumerations to the next item; String knowns are not moved (a
+/// dependency on them is not checked).
+pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str, co_simulation: bool) -> Report {
+    let mut report = Report::default();
+    let unknowns: Vec<&Variable> = d
+        .variables
+        .iter()
+        .filter(|v| is_initial_unknown(d, v) && is_number(v))
+        .collect();
+    let knowns: Vec<&Variable> = d.variables.iter().filter(|v| is_settable_known(v)).collect();
+    if unknowns.is_empty() {
+        return report;
+    }
+    // Co-simulation where the library has it: the InitialUnknowns are the same for both
+    // interfaces, and co-simulation accepts every parameter model exchange does (not the other
+    // way round: a sampled controller).
+    let api = match Api::load(so, !co_simulation, guid, resource_uri) {
+        Ok(api) => api,
+        Err(e) => {
+            report.notes.push(format!("`initial_depends` was not checked: {e}"));
+            return report;
+        }
+    };
+    // seen[u][k]: how known k moved unknown u, at the first point it did.
+    let mut seen: Vec<Vec<Option<String>>> = vec![vec![None; knowns.len()]; unknowns.len()];
+    let mut checked_points = 0;
+    let mut rng = Rng(0x1_0171_a1de_9e05);
+    for point in 0..POINTS {
+        // The first point is the start values themselves; the others are drawn, again while the
+        // model refuses them, at most DRAWS times.
+        let mut base: Vec<f64> = knowns.iter().map(|v| start_number(v)).collect();
+        let mut at_base = Err(String::new());
+        for attempt in 0..DRAWS {
+            if point > 0 {
+                // Every other point close to the start values (inside the model's limits).
+                let scale = if point % 2 == 1 { 1e-3 } else { 1.0 };
+                base = knowns.iter().map(|v| draw_by(&mut rng, v, scale)).collect();
+            }
+            at_base = initial_values(&api, &knowns, &base, &unknowns);
+            if at_base.is_ok() || point == 0 || attempt + 1 == DRAWS {
+                break;
+            }
+        }
+        let at_base = match at_base {
+            Ok(values) => values,
+            Err(e) => {
+                report.notes.push(format!(
+                    "the initial dependency check skipped random point {}: {e}",
+                    point + 1
+                ));
+                continue;
+            }
+        };
+        checked_points += 1;
+        for (j, k) in knowns.iter().enumerate() {
+            let mut moved = base.clone();
+            moved[j] = perturbed(k, base[j]);
+            match initial_values(&api, &knowns, &moved, &unknowns) {
+                Ok(values) => {
+                    for (i, (&a, &b)) in at_base.iter().zip(&values).enumerate() {
+                        if a.to_bits() != b.to_bits() && seen[i][j].is_none() {
+                            seen[i][j] = Some(format!(
+                                "{} = {} gave {a}, {} = {} gave {b}",
+                                k.name, base[j], k.name, moved[j]
+                            ));
+                        }
+                    }
+                }
+                // The model refuses the moved value: whatever it initializes depends on it.
+                Err(e) => report.notes.push(format!(
+                    "the initial dependency check could not move '{}' from {} to {}: {e}",
+                    k.name, base[j], moved[j]
+                )),
+            }
+        }
+    }
+    if checked_points == 0 {
+        return report;
+    }
+    for (i, u) in unknowns.iter().enumerate() {
+        let found: Vec<&str> = knowns
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| seen[i][*j].is_some())
+            .map(|(_, k)| k.name)
+            .collect();
+        match u.initial_depends_on {
+            None => report.notes.push(format!(
+                "initial unknown '{}' declares no `initial_depends`, so its InitialUnknowns entry says it depends on \
+                 every known of Initialization Mode; at {checked_points} random points it depended on {}: \
+                 `initial_depends = {}` would say so",
+                u.name,
+                list(&found),
+                list(&found)
+            )),
+            Some(declared) => {
+                let mut unseen = vec![];
+                for (j, k) in knowns.iter().enumerate() {
+                    let listed = declared.contains(&k.name);
+                    match (&seen[i][j], listed) {
+                        (Some(how), false) => report.problems.push(format!(
+                            "initial unknown '{}' depends in Initialization Mode on '{}' ({how} for '{}'), which its \
+                             `initial_depends = {}` leaves out: add '{}' to it",
+                            u.name,
+                            k.name,
+                            u.name,
+                            list(declared),
+                            k.name
+                        )),
+                        (None, true) => unseen.push(k.name),
+                        _ => {}
+                    }
+                }
+                if !unseen.is_empty() {
+                    report.notes.push(format!(
+                        "initial unknown '{}' declares initial dependencies on {} that {checked_points} random points \
+                         never showed: drop them from `initial_depends` if they are not there (a dependency through a \
+                         switch or a limit shows only where the switch flips: keep it then)",
+                        u.name,
+                        list(&unseen)
+                    ));
+                }
+            }
+        }
+    }
+    report
+}
