@@ -45,6 +45,10 @@ def user_crate():
     # ... in the equations too (model exchange, directional derivatives).
     assert "v.der_y = (v.u - v.y) / self.time_constant;" in src, src
     src = src.replace("v.der_y = (v.u - v.y) / self.time_constant;", "v.der_y = (v.u * self.gain - v.y) / self.time_constant;")
+    # ... and in der(y)'s dependencies at initialization, which `cargo fmu build` checks (it
+    # refuses the template's `initial_depends = [u, y, T]` now: "add 'K' to it").
+    assert "initial_depends = [u, y, T])]" in src, src
+    src = src.replace("initial_depends = [u, y, T])]", "initial_depends = [u, y, T, K])]")
     lib.write_text(src)
     build = run(["cargo", "fmu", "build"], crate, env)
     fmu = FMUS / "GainLag.fmu"
