@@ -231,7 +231,28 @@ pub fn package(
         .iter()
         .filter_map(|(name, _)| name.split('/').nth(1).map(String::from))
         .collect();
-    let docs = crate::docs::index_html(&me.description, &fragment, me.interfaces, &platforms);
+    // The default experiment as a picture, run on this machine's library (none when no library
+    // of this machine was built: a cross build alone).
+    let here = crate::target::this_machine();
+    let picture = libraries
+        .iter()
+        .find(|(triple, _)| crate::target::platform(triple).ok() == here)
+        .map(|(_, library)| crate::plot::picture(library, krate.resources.as_deref()));
+    let picture = match picture {
+        Some(Ok(svg)) => Some(svg),
+        Some(Err(e)) => {
+            eprintln!("fmu: note: {id}: documentation/index.html shows no default experiment: {e}");
+            None
+        }
+        None => None,
+    };
+    let docs = crate::docs::index_html(
+        &me.description,
+        &fragment,
+        me.interfaces,
+        &platforms,
+        picture.as_deref(),
+    );
     let resources = match &krate.resources {
         Some(dir) => files_below(dir)?,
         None => vec![],

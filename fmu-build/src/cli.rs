@@ -108,6 +108,9 @@ enum Cmd {
         #[arg(long)]
         manifest_path: Option<PathBuf>,
     },
+    /// Internal: the default experiment's picture for `build`, in a child process (SVG on stdout).
+    #[command(hide = true, name = "__plot")]
+    Plot { library: PathBuf, resource_uri: String },
     /// Internal: the smoke run of `validate`, in a child process.
     #[command(hide = true, name = "__smoke-run")]
     SmokeRun {
@@ -179,6 +182,10 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
         } => {
             let ws = cargo::workspace(manifest_path.as_deref())?;
             write_ssp(&ws, systems.as_deref(), fmu_dir.as_deref())
+        }
+        Cmd::Plot { library, resource_uri } => {
+            print!("{}", crate::plot::default_experiment_svg(&library, &resource_uri)?);
+            Ok(())
         }
         Cmd::SmokeRun {
             library,

@@ -295,8 +295,9 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
     report
 }
 
-/// The FMI 2.0 functions the checks call, from a loaded rustfmu library.
-struct Api {
+/// The FMI 2.0 functions the checks (and the default experiment's plot) call, from a loaded
+/// rustfmu library.
+pub(crate) struct Api {
     _lib: libloading::Library,
     instantiate: unsafe extern "C" fn(
         fmi2String,
@@ -308,11 +309,11 @@ struct Api {
         fmi2Boolean,
     ) -> fmi2Component,
     setup: unsafe extern "C" fn(fmi2Component, fmi2Boolean, f64, f64, fmi2Boolean, f64) -> fmi2Status,
-    enter_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
-    exit_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
+    pub(crate) enter_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
+    pub(crate) exit_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
     enter_continuous: Option<unsafe extern "C" fn(fmi2Component) -> fmi2Status>,
     set_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const f64) -> fmi2Status,
-    get_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut f64) -> fmi2Status,
+    pub(crate) get_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut f64) -> fmi2Status,
     set_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const i32) -> fmi2Status,
     get_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut i32) -> fmi2Status,
     set_boolean: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const fmi2Boolean) -> fmi2Status,
@@ -321,6 +322,8 @@ struct Api {
     directional:
         unsafe extern "C" fn(fmi2Component, *const u32, usize, *const u32, usize, *const f64, *mut f64) -> fmi2Status,
     free: unsafe extern "C" fn(fmi2Component),
+    /// Co-simulation's step, when loaded for co-simulation.
+    pub(crate) do_step: Option<unsafe extern "C" fn(fmi2Component, f64, f64, fmi2Boolean) -> fmi2Status>,
     /// Model exchange when the library has it, else co-simulation.
     kind: fmi2Type,
     /// fmi2Instantiate's GUID and resource location.
@@ -340,7 +343,7 @@ unsafe fn symbol<T: Copy>(lib: &libloading::Library, name: &str) -> Result<T, St
 }
 
 impl Api {
-    fn load(so: &Path, model_exchange: bool, guid: &str, resource_uri: &str) -> Result<Api, String> {
+    pub(crate) fn load(so: &Path, model_exchange: bool, guid: &str, resource_uri: &str) -> Result<Api, String> {
         // SAFETY: our own freshly built FMU binary (the smoke run loaded it already); the
         // signatures are the standard's (proved against fmi-sys in the rustfmu tests).
         unsafe {
@@ -365,6 +368,7 @@ impl Api {
                     .flatten(),
                 directional: symbol(&lib, "fmi2GetDirectionalDerivative")?,
                 free: symbol(&lib, "fmi2FreeInstance")?,
+                do_step: (!model_exchange).then(|| symbol(&lib, "fmi2DoStep").ok()).flatten(),
                 kind: if model_exchange {
                     fmi2ModelExchange
                 } else {
@@ -403,6 +407,16 @@ impl Api {
         &self,
         body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
     ) -> Result<T, String> {
+        self.with_instance_at(0.0, None, body)
+    }
+
+    /// [`Self::with_instance`] set up for `start` (and a stop time, when given).
+    pub(crate) fn with_instance_at<T>(
+        &self,
+        start: f64,
+        stop: Option<f64>,
+        body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
+    ) -> Result<T, String> {
         let log = rustfmu::testing::Log::leak();
         let callbacks = rustfmu::testing::callbacks(log);
         let name = CString::new("fmu-build-depends").unwrap();
@@ -430,7 +444,16 @@ impl Api {
         };
         // SAFETY: `c` is a live instance of this library until the free below.
         let result = ok(
-            unsafe { (self.setup)(c, fmi2False, 0.0, 0.0, fmi2False, 1.0) },
+            unsafe {
+                (self.setup)(
+                    c,
+                    fmi2False,
+                    0.0,
+                    start,
+                    if stop.is_some() { fmi2True } else { fmi2False },
+                    stop.unwrap_or(start),
+                )
+            },
             "fmi2SetupExperiment",
         )
         .and_then(|_| body(c, &ok));

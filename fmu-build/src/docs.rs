@@ -24,7 +24,14 @@ fn kind(interfaces: Interfaces) -> String {
 }
 
 /// `platforms`: the folders of `binaries/` the FMU has (`linux64`, `x86_64-windows`, ...).
-pub fn index_html(d: &ModelDescription, fragment: &str, interfaces: Interfaces, platforms: &[String]) -> String {
+/// `picture`: the default experiment as SVG ([`crate::plot`]), shown above the variables.
+pub fn index_html(
+    d: &ModelDescription,
+    fragment: &str,
+    interfaces: Interfaces,
+    platforms: &[String],
+    picture: Option<&str>,
+) -> String {
     let mut rows = String::new();
     for v in d.variables {
         let start = if v.has_start() {
@@ -56,7 +63,7 @@ pub fn index_html(d: &ModelDescription, fragment: &str, interfaces: Interfaces, 
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{id}</title>\
          <style>body{{font-family:sans-serif;max-width:60em;margin:auto}}td,th{{padding:2px 8px;text-align:left}}\
          tr:nth-child(even){{background:#f3f3f3}}pre{{background:#f6f6f6;padding:8px}}</style></head><body>\n\
-         <h1>{id}</h1>\n<p>{description}</p>\n<p>{kind}, version {version}, built by {tool}.</p>\n<p>Binaries for: {platforms}.</p>\n\
+         <h1>{id}</h1>\n<p>{description}</p>\n<p>{kind}, version {version}, built by {tool}.</p>\n<p>Binaries for: {platforms}.</p>\n{picture}\
          <h2>Variables</h2>\n<table><tr><th>name</th><th>value reference</th><th>causality</th><th>variability</th>\
          <th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n{fragment}\n</body></html>\n",
         id = escape(d.model_identifier),
@@ -65,6 +72,10 @@ pub fn index_html(d: &ModelDescription, fragment: &str, interfaces: Interfaces, 
         tool = escape(d.generation_tool),
         kind = kind(interfaces),
         platforms = escape(&platforms.join(", ")),
+        picture = match picture {
+            Some(svg) => format!("<h2>Default experiment</h2>\n<figure>\n{svg}</figure>\n"),
+            None => String::new(),
+        },
     )
 }
 
@@ -95,7 +106,7 @@ mod tests {
             model_exchange: true,
             version: FmiVersion::V2,
         };
-        let html = index_html(&d, "", both, &["linux64".into(), "win64".into()]);
+        let html = index_html(&d, "", both, &["linux64".into(), "win64".into()], None);
         assert!(
             html.contains("FMI 2.0 FMU for model exchange and co-simulation"),
             "{html}"
@@ -106,7 +117,7 @@ mod tests {
             model_exchange: false,
             version: FmiVersion::V3,
         };
-        let html = index_html(&d, "", cs3, &["x86_64-linux".into()]);
+        let html = index_html(&d, "", cs3, &["x86_64-linux".into()], Some("<svg></svg>"));
         assert!(html.contains("FMI 3.0 FMU for co-simulation"), "{html}");
     }
 }

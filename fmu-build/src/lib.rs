@@ -12,6 +12,7 @@ pub mod cli;
 pub mod depends;
 pub mod docs;
 pub mod new;
+pub mod plot;
 pub mod ssp;
 pub mod systems;
 pub mod target;

@@ -77,6 +77,27 @@ def test_the_new_crate_packages_a_valid_fmu(user_crate):
     assert names["T"].unit == "s" and float(names["T"].min) > 0
 
 
+def test_the_fmus_page_shows_the_default_experiment(user_crate):
+    """Issue 23: an engineer opening an FMU in a tool looks before reading. The FMU's
+    documentation/index.html shows its default experiment as an SVG chart of its Real outputs,
+    simulated by `cargo fmu build` through co-simulation; in both versions' packages."""
+    import xml.etree.ElementTree as ET
+    _, fmu, _ = user_crate
+    for path in (fmu, FMUS / "fmi3" / "GainLag.fmu"):
+        with zipfile.ZipFile(path) as z:
+            html = z.read("documentation/index.html").decode()
+        assert "<h2>Default experiment</h2>" in html, html[:2000]
+        svg = html[html.index("<svg"):html.index("</svg>") + len("</svg>")]
+        chart = ET.fromstring(svg)
+        ns = "{http://www.w3.org/2000/svg}"
+        lines = chart.findall(f"{ns}polyline")
+        assert len(lines) == 1, svg
+        # The lag's output y from its start value: one point per recorded time, all finite.
+        points = [tuple(map(float, p.split(","))) for p in lines[0].get("points").split()]
+        assert len(points) > 10, svg
+        assert [t.text for t in chart.findall(f"{ns}text") if t.text == "y"], svg
+
+
 def test_the_fmu_simulates_the_analytic_step_response(user_crate):
     _, fmu, _ = user_crate
     K, T = 3.0, 0.2

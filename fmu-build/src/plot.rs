@@ -1,0 +1,348 @@
+//! The default experiment as a picture for the FMU's `documentation/index.html`: `cargo fmu
+//! build` runs the freshly built library through FMI 2.0 co-simulation from the default
+//! experiment's start to its stop time (in a child process, like the smoke run: a model that
+//! crashes takes no build down with it) and draws its Real outputs as an SVG line chart.
+//!
+//! The chart is written here rather than with `plotters`: it is a few polylines, two axes and a
+//! legend (about 100 lines), where `plotters` would add its font and rendering crates to every
+//! `cargo fmu` build for it.
+
+use crate::depends::Api;
+use rustfmu::__private::abi::fmi2True;
+use rustfmu::description::{Causality, ModelDescription, VarType, Variable};
+use std::path::Path;
+
+/// Points per curve at most.
+const POINTS: usize = 500;
+
+/// One simulated output: its name, unit and values at `times`.
+pub struct Curve {
+    pub name: String,
+    pub unit: String,
+    pub values: Vec<f64>,
+}
+
+/// What the default experiment gave.
+pub struct Run {
+    pub times: Vec<f64>,
+    pub curves: Vec<Curve>,
+    /// Why it stopped before the stop time, if it did.
+    pub stopped: Option<String>,
+}
+
+/// Simulates the default experiment of the rustfmu library at `so` (description `d`) through
+/// FMI 2.0 co-simulation and records its Real outputs (at most [`POINTS`] times).
+pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) -> Result<Run, String> {
+    let outputs: Vec<&Variable> = d
+        .variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output && v.var_type == VarType::Real)
+        .collect();
+    if outputs.is_empty() {
+        return Err("the model has no Real output to plot".into());
+    }
+    let e = d.default_experiment.unwrap_or_default();
+    let start = e.start_time.unwrap_or(0.0);
+    let stop = e.stop_time.unwrap_or(start + 1.0);
+    if !(start.is_finite() && stop.is_finite() && stop > start) {
+        return Err(format!("the default experiment runs from {start} to {stop}"));
+    }
+    // The default step where given (a sampled model's behaviour depends on it), recorded every
+    // `stride` steps; else the span in POINTS steps.
+    let (h, stride) = match e.step_size {
+        Some(h) if h > 0.0 && h.is_finite() => {
+            let steps = ((stop - start) / h).ceil().max(1.0);
+            (h, (steps / POINTS as f64).ceil().max(1.0) as usize)
+        }
+        _ => ((stop - start) / POINTS as f64, 1),
+    };
+    let api = Api::load(so, false, guid, resource_uri)?;
+    let do_step = api.do_step.ok_or("the library has no fmi2DoStep")?;
+    let vrs: Vec<u32> = outputs.iter().map(|v| v.value_reference).collect();
+    api.with_instance_at(start, Some(stop), |c, ok| {
+        // SAFETY: `c` is live; every array passed has the length passed with it.
+        unsafe {
+            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
+            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            let mut run = Run {
+                times: vec![],
+                curves: outputs
+                    .iter()
+                    .map(|v| Curve {
+                        name: v.name.to_string(),
+                        unit: v.unit.to_string(),
+                        values: vec![],
+                    })
+                    .collect(),
+                stopped: None,
+            };
+            let mut y = vec![0.0; vrs.len()];
+            let record = |run: &mut Run, t: f64, y: &[f64]| {
+                run.times.push(t);
+                for (curve, &value) in run.curves.iter_mut().zip(y) {
+                    curve.values.push(value);
+                }
+            };
+            ok(
+                (api.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
+                "fmi2GetReal",
+            )?;
+            record(&mut run, start, &y);
+            let mut t = start;
+            let mut n = 0usize;
+            while t < stop - 1e-12 * (stop - start) {
+                let step = h.min(stop - t);
+                let status = do_step(c, t, step, fmi2True);
+                if let Err(e) = ok(status, &format!("fmi2DoStep at t = {t} s")) {
+                    run.stopped = Some(e);
+                    break;
+                }
+                t += step;
+                n += 1;
+                if n.is_multiple_of(stride) || t >= stop - 1e-12 * (stop - start) {
+                    ok(
+                        (api.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
+                        "fmi2GetReal",
+                    )?;
+                    record(&mut run, t, &y);
+                }
+            }
+            Ok(run)
+        }
+    })
+}
+
+/// A number for an axis label: few digits, no trailing noise.
+fn label(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let a = x.abs();
+    if (1e-3..1e4).contains(&a) {
+        let s = format!("{x:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The run as an SVG line chart: one polyline per output, shared axes, a legend with units.
+/// Non-finite values break their line.
+pub fn svg(run: &Run, title: &str) -> String {
+    const W: f64 = 720.0;
+    const H: f64 = 360.0;
+    let (left, right, top, bottom) = (70.0, 180.0, 30.0, 40.0);
+    let (pw, ph) = (W - left - right, H - top - bottom);
+    let t0 = run.times.first().copied().unwrap_or(0.0);
+    let t1 = run.times.last().copied().unwrap_or(1.0).max(t0 + f64::MIN_POSITIVE);
+    let finite = run
+        .curves
+        .iter()
+        .flat_map(|c| c.values.iter().copied())
+        .filter(|v| v.is_finite());
+    let (mut lo, mut hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    if !lo.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    if hi - lo <= 1e-12 * hi.abs().max(lo.abs()).max(1e-300) {
+        (lo, hi) = (lo - 0.5 * lo.abs().max(1.0), hi + 0.5 * hi.abs().max(1.0));
+    }
+    let x = |t: f64| left + (t - t0) / (t1 - t0) * pw;
+    let y = |v: f64| top + (hi - v) / (hi - lo) * ph;
+    const COLORS: [&str; 8] = [
+        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+    ];
+    let mut out = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" viewBox=\"0 0 {W} {H}\" \
+         font-family=\"sans-serif\" font-size=\"12\">\n<title>{}</title>\n\
+         <rect x=\"{left}\" y=\"{top}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"#888\"/>\n",
+        escape(title)
+    );
+    // Axis labels: the ends and the middle of each axis.
+    for (i, frac) in [0.0, 0.5, 1.0].iter().enumerate() {
+        let t = t0 + frac * (t1 - t0);
+        let v = lo + frac * (hi - lo);
+        let anchor = ["start", "middle", "end"][i];
+        out.push_str(&format!(
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"{anchor}\">{}</text>\n",
+            x(t),
+            top + ph + 16.0,
+            label(t)
+        ));
+        out.push_str(&format!(
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
+            left - 6.0,
+            y(v) + 4.0,
+            label(v)
+        ));
+    }
+    out.push_str(&format!(
+        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">time (s)</text>\n",
+        left + pw / 2.0,
+        H - 6.0
+    ));
+    out.push_str(&format!("<text x=\"{left}\" y=\"18\">{}</text>\n", escape(title)));
+    for (k, curve) in run.curves.iter().enumerate() {
+        let color = COLORS[k % COLORS.len()];
+        // A polyline per finite stretch.
+        let mut points = Vec::new();
+        let flush = |points: &mut Vec<String>, out: &mut String| {
+            if !points.is_empty() {
+                out.push_str(&format!(
+                    "<polyline fill=\"none\" stroke=\"{color}\" stroke-width=\"1.5\" points=\"{}\"/>\n",
+                    points.join(" ")
+                ));
+                points.clear();
+            }
+        };
+        for (&t, &v) in run.times.iter().zip(&curve.values) {
+            if v.is_finite() {
+                points.push(format!("{:.1},{:.1}", x(t), y(v)));
+            } else {
+                flush(&mut points, &mut out);
+            }
+        }
+        flush(&mut points, &mut out);
+        let ly = top + 14.0 + 16.0 * k as f64;
+        let unit = if curve.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", curve.unit)
+        };
+        out.push_str(&format!(
+            "<line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"{color}\" stroke-width=\"2\"/>\
+             <text x=\"{:.1}\" y=\"{:.1}\">{}</text>\n",
+            W - right + 12.0,
+            ly - 4.0,
+            W - right + 30.0,
+            ly - 4.0,
+            W - right + 36.0,
+            ly,
+            escape(&format!("{}{unit}", curve.name))
+        ));
+    }
+    if let Some(why) = &run.stopped {
+        out.push_str(&format!(
+            "<text x=\"{left}\" y=\"{:.1}\" fill=\"#d62728\">stopped: {}</text>\n",
+            top + 14.0,
+            escape(why)
+        ));
+    }
+    out.push_str("</svg>\n");
+    out
+}
+
+/// The default experiment of the library at `so` as an SVG (the smoke run's child does this;
+/// `Err` says why there is no picture).
+pub fn default_experiment_svg(so: &Path, resource_uri: &str) -> Result<String, String> {
+    let binary = std::fs::read(so).map_err(|e| format!("{}: {e}", so.display()))?;
+    let me = crate::bundle::read_library(&binary, rustfmu::description::FmiVersion::V2)
+        .map_err(|_| "the library has no FMI 2.0 interface to run it through".to_string())?;
+    if !me.interfaces.co_simulation {
+        return Err("the library has no co-simulation interface to run it through".into());
+    }
+    let run = simulate(so, &me.description, &me.guid, resource_uri)?;
+    let e = me.description.default_experiment.unwrap_or_default();
+    let title = format!(
+        "{}: the default experiment, {} s to {} s",
+        me.description.model_identifier,
+        label(e.start_time.unwrap_or(0.0)),
+        label(run.times.last().copied().unwrap_or(0.0))
+    );
+    Ok(svg(&run, &title))
+}
+
+/// The picture of the library at `so`, made in a child process (this program run as `__plot`)
+/// when this program is `cargo fmu`, else here; once per library and process (the FMI 2.0 and
+/// 3.0 packages of one build share it). `resources`: the crate's `resources/` folder, if any.
+pub fn picture(so: &Path, resources: Option<&Path>) -> Result<String, String> {
+    use std::collections::HashMap;
+    use std::sync::Mutex;
+    static MADE: Mutex<Option<HashMap<std::path::PathBuf, Result<String, String>>>> = Mutex::new(None);
+    let key = so.to_path_buf();
+    if let Some(made) = MADE
+        .lock()
+        .ok()
+        .and_then(|m| m.as_ref().and_then(|m| m.get(&key).cloned()))
+    {
+        return made;
+    }
+    // A crate without resources/ gets an empty folder, as an importer gives one.
+    let empty = std::env::temp_dir().join(format!("cargo-fmu-no-resources-{}", std::process::id()));
+    let uri = match resources {
+        Some(dir) => crate::validate::file_uri(dir),
+        None => {
+            std::fs::create_dir_all(&empty).map_err(|e| format!("{}: {e}", empty.display()))?;
+            crate::validate::file_uri(&empty)
+        }
+    };
+    let made = match std::env::current_exe() {
+        Ok(exe) if exe.file_stem().is_some_and(|s| s == "cargo-fmu" || s == "fmu-build") => {
+            match std::process::Command::new(&exe)
+                .arg("__plot")
+                .arg(so)
+                .arg(&uri)
+                .output()
+            {
+                Ok(out) if out.status.success() => Ok(String::from_utf8_lossy(&out.stdout).into_owned()),
+                Ok(out) => Err(String::from_utf8_lossy(&out.stderr)
+                    .lines()
+                    .last()
+                    .map(str::to_string)
+                    .unwrap_or_else(|| format!("the default experiment's run ended with {}", out.status))),
+                Err(e) => Err(format!("cannot start {}: {e}", exe.display())),
+            }
+        }
+        _ => default_experiment_svg(so, &uri),
+    };
+    let _ = std::fs::remove_dir(&empty);
+    if let Ok(mut m) = MADE.lock() {
+        m.get_or_insert_with(HashMap::new).insert(key, made.clone());
+    }
+    made
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_chart_has_a_line_per_output_and_breaks_at_non_finite_values() {
+        let run = Run {
+            times: vec![0.0, 0.5, 1.0, 1.5],
+            curves: vec![
+                Curve {
+                    name: "y".into(),
+                    unit: "m".into(),
+                    values: vec![0.0, 1.0, 2.0, 3.0],
+                },
+                Curve {
+                    name: "z<1>".into(),
+                    unit: String::new(),
+                    values: vec![1.0, f64::NAN, 1.0, 1.0],
+                },
+            ],
+            stopped: None,
+        };
+        let s = svg(&run, "Lag");
+        assert_eq!(s.matches("<polyline").count(), 3, "{s}");
+        assert!(s.contains("y (m)") && s.contains("z&lt;1&gt;"), "{s}");
+        assert!(s.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""), "{s}");
+        assert!(!s.contains("NaN"), "{s}");
+    }
+
+    #[test]
+    fn labels_are_short() {
+        assert_eq!(label(0.0), "0");
+        assert_eq!(label(1.5), "1.5");
+        assert_eq!(label(10.0), "10");
+        assert_eq!(label(1e-7), "1.000e-7");
+    }
+}
