@@ -453,6 +453,81 @@ def test_a_mass_spring_damper_builds_clean_checks_clean_and_follows_the_exact_so
     assert worst < 1e-5, worst
 
 
+BOUNCING_BALL = '''//! A bouncing ball whose co-simulation step is the exact flight, bounces included.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A ball dropped on a floor, stepped exactly
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct Ball {
+    /// Height h above the floor
+    #[variable(vr = 0, output, discrete, initial = exact, start = 1.0, unit = "m", min = 0.0, depends = [])]
+    pub h: f64,
+    /// Velocity v, upwards
+    #[variable(vr = 1, output, discrete, initial = exact, start = 0.0, unit = "m/s", depends = [])]
+    pub v: f64,
+    /// Coefficient of restitution e
+    #[variable(vr = 2, parameter, fixed, start = 0.8, min = 0.0, max = 1.0)]
+    pub e: f64,
+    /// Gravity g
+    #[variable(vr = 3, parameter, fixed, start = 9.81, unit = "m/s2", min > 0.0)]
+    pub g: f64,
+}
+
+impl Model for Ball {}
+
+impl CoSimulation for Ball {
+    /// The exact ballistic flight over the step, bounce by bounce (h = 0, v -> -e v).
+    fn do_step(&mut self, _t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
+        let mut left = h;
+        while left > 0.0 {
+            // The time to the floor: h + v s - g s^2 / 2 = 0.
+            let to_floor = (self.v + (self.v * self.v + 2.0 * self.g * self.h).sqrt()) / self.g;
+            if to_floor > left || self.v.abs() + self.h < 1e-9 {
+                let s = if to_floor > left { left } else { 0.0 };
+                self.h = (self.h + self.v * s - 0.5 * self.g * s * s).max(0.0);
+                self.v -= self.g * s;
+                if to_floor <= left {
+                    (self.h, self.v) = (0.0, 0.0);
+                }
+                break;
+            }
+            self.v = -self.e * (self.v - self.g * to_floor);
+            self.h = 0.0;
+            left -= to_floor;
+        }
+        Ok(())
+    }
+}
+
+rustfmu::export_fmu!(Ball);
+'''
+
+
+def test_a_bouncing_ball_with_an_exact_step_checks_clean_and_bounces_where_the_formula_says():
+    """Issue 23: the second of the new user's crates: no continuous states, its own exact
+    `do_step` (the flight and the bounces in closed form). `cargo fmu check` fails nothing in FMI
+    2.0 and 3.0 (its excitation of many instances kept inside the height's `min = 0` now), and
+    fmpy's co-simulation finds the first bounce at sqrt(2 h0 / g) and the second apex at e^2 h0."""
+    crate, env = outside_crate("ball", fresh=True)
+    (crate / "src" / "lib.rs").write_text(BOUNCING_BALL)
+    out = run(["cargo", "fmu", "build"], crate, env)
+    assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
+    for fmu in (FMUS / "Ball.fmu", FMUS / "fmi3" / "Ball.fmu"):
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                             timeout=900)
+        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    result = fmpy.simulate_fmu(str(FMUS / "Ball.fmu"), fmi_type="CoSimulation", stop_time=2.0, output_interval=0.001,
+                               output=["h", "v"])
+    t_hit = math.sqrt(2 * 1.0 / 9.81)
+    first = next(t for t, v in zip(result["time"], result["v"]) if v > 0)
+    assert abs(first - t_hit) <= 0.001 + 1e-9, (first, t_hit)
+    # After the first bounce the ball rises with e v_hit to e^2 h0.
+    apex = max(h for t, h in zip(result["time"], result["h"]) if t_hit < t < t_hit + 2 * 0.8 * math.sqrt(2 * 9.81) / 9.81)
+    assert abs(apex - 0.64) < 1e-5, apex
+
+
 def test_cargo_fmu_build_refuses_a_depends_that_leaves_out_an_input():
     """Issue 23: a `depends` that misses an input the output uses passed `cargo fmu build` and
     `cargo fmu validate` and was caught only by `cargo fmu check`. The build's smoke run now asks

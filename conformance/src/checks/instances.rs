@@ -7,9 +7,21 @@ use crate::instance::{Instance, excitation, step_size};
 use crate::{Api, Description, Fmu, Type, bits};
 use std::ffi::CString;
 
-/// The excitation of the suite scaled by `scale`, so that each instance runs differently.
+/// The excitation of the suite scaled by `scale`, so that each instance runs differently, kept
+/// inside each variable's [min, max] (a negative scale would otherwise set a height declared
+/// `min = 0` below the floor, which a correct model refuses).
 fn excite_scaled(inst: &mut Instance, scale: f64) {
-    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(inst.fmu).into_iter().map(|(vr, v)| (vr, v * scale)).unzip();
+    let md = &inst.fmu.md;
+    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(inst.fmu)
+        .into_iter()
+        .map(|(vr, v)| {
+            let var = md.of_type(Type::Real).find(|x| x.vr == vr);
+            let x = v * scale;
+            let x = var.and_then(|var| var.max).map_or(x, |m| x.min(m));
+            let x = var.and_then(|var| var.min).map_or(x, |m| x.max(m));
+            (vr, x)
+        })
+        .unzip();
     assert_eq!(inst.set_real(&vrs, &vals), fmi2OK, "{}", inst.log_text());
 }
 
