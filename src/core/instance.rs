@@ -1024,7 +1024,10 @@ impl<M: CoSimulation> Instance<M> {
                     M::DESCRIPTION.model_identifier
                 ));
             };
-            if M::continuous_slot(&mut probe, *vr).is_none() {
+            // A discrete output is held between events: its derivative with respect to the
+            // continuous knowns is 0 (answered below: it has no slot in the equations).
+            let held = decl.causality == Causality::Output && decl.variability == Variability::Discrete;
+            if !held && M::continuous_slot(&mut probe, *vr).is_none() {
                 return self.error(&format!(
                     "{f}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
                     decl.name

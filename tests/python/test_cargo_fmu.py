@@ -528,6 +528,82 @@ def test_a_bouncing_ball_with_an_exact_step_checks_clean_and_bounces_where_the_f
     assert abs(apex - 0.64) < 1e-5, apex
 
 
+SAMPLED_PI = '''//! A PI controller sampled every Ts = 10 ms: at each sample u = kp e + i, then i += ki Ts e.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A sampled PI controller
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct SampledPi {
+    /// Reference r
+    #[variable(vr = 0, input, start = 0.0)]
+    pub r: f64,
+    /// Measurement y
+    #[variable(vr = 1, input, start = 0.0)]
+    pub y: f64,
+    /// Command u, held between samples
+    #[variable(vr = 2, output, discrete, initial = exact, start = 0.0, depends = [])]
+    pub u: f64,
+    /// Integral part i, held between samples
+    #[variable(vr = 3, local, discrete, initial = exact, start = 0.0)]
+    pub i: f64,
+    /// Proportional gain
+    #[variable(vr = 4, parameter, tunable, start = 2.0, min = 0.0, max = 100.0)]
+    pub kp: f64,
+    /// Integral gain (1/s)
+    #[variable(vr = 5, parameter, tunable, start = 1.0, min = 0.0, max = 100.0)]
+    pub ki: f64,
+    /// Sample period
+    #[variable(vr = 6, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
+    pub ts: f64,
+    /// Samples taken
+    #[variable(vr = 7, output, discrete, initial = exact, start = 0)]
+    pub samples: i32,
+}
+
+impl Model for SampledPi {}
+
+impl CoSimulation for SampledPi {
+    /// The sample instants k Ts in (t, t + h], with the inputs as they are (held over the step):
+    /// the command of the last one, and the integral after all of them.
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
+        let first = (t / self.ts + 1e-9).floor() + 1.0;
+        let last = ((t + h) / self.ts + 1e-9).floor();
+        if last >= first {
+            let n = last - first + 1.0;
+            let e = self.r - self.y;
+            self.u = self.kp * e + self.i + (n - 1.0) * self.ki * self.ts * e;
+            self.i += n * self.ki * self.ts * e;
+            self.samples = (f64::from(self.samples) + n).min(f64::from(i32::MAX)) as i32;
+        }
+        Ok(())
+    }
+}
+
+rustfmu::export_fmu!(SampledPi);
+'''
+
+
+def test_a_pi_controller_sampled_every_10_ms_checks_clean_and_samples_on_time():
+    """Issue 23: the fourth of the new user's crates: a PI controller sampled every 10 ms in its
+    own `do_step` (discrete states only). `cargo fmu check` fails nothing in FMI 2.0 and 3.0, and
+    in fmpy a step of 25 ms takes the two samples at 10 and 20 ms."""
+    crate, env = outside_crate("sampled-pi", fresh=True)
+    (crate / "src" / "lib.rs").write_text(SAMPLED_PI)
+    out = run(["cargo", "fmu", "build"], crate, env)
+    assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
+    for fmu in (FMUS / "SampledPi.fmu", FMUS / "fmi3" / "SampledPi.fmu"):
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                             timeout=900)
+        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    result = fmpy.simulate_fmu(str(FMUS / "SampledPi.fmu"), stop_time=0.1, output_interval=0.025,
+                               start_values={"r": 1.0}, output=["u", "samples"])
+    assert list(result["samples"]) == [0, 2, 5, 7, 10], result
+    # u at 25 ms: the second sample, kp e + ki Ts e = 2 + 0.01.
+    assert abs(result["u"][1] - 2.01) < 1e-12, result
+
+
 def test_cargo_fmu_build_refuses_a_depends_that_leaves_out_an_input():
     """Issue 23: a `depends` that misses an input the output uses passed `cargo fmu build` and
     `cargo fmu validate` and was caught only by `cargo fmu check`. The build's smoke run now asks
