@@ -12,7 +12,7 @@
 //! written from the same declarations. Knowns that are not continuous Reals (Integer, Boolean or
 //! discrete inputs) have no directional derivative: a `depends` on them is not checked.
 
-use rustfmu::__private::abi::*;
+use fmi_conformance::fmi2::*;
 use rustfmu::description::{Causality, Initial, ModelDescription, Start, VarType, Variability, Variable};
 use std::ffi::CString;
 use std::path::Path;
@@ -295,90 +295,33 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
     report
 }
 
-/// The FMI 2.0 functions the checks (and the default experiment's plot) call, from a loaded
-/// rustfmu library.
+/// A loaded rustfmu library for the checks (and the default experiment's plot): the conformance
+/// suite's table of FMI 2.0 functions ([`fmi_conformance::Api`]), the interface instances are
+/// made for, and fmi2Instantiate's GUID and resource location.
 pub(crate) struct Api {
-    _lib: libloading::Library,
-    instantiate: unsafe extern "C" fn(
-        fmi2String,
-        fmi2Type,
-        fmi2String,
-        fmi2String,
-        *const fmi2CallbackFunctions,
-        fmi2Boolean,
-        fmi2Boolean,
-    ) -> fmi2Component,
-    setup: unsafe extern "C" fn(fmi2Component, fmi2Boolean, f64, f64, fmi2Boolean, f64) -> fmi2Status,
-    pub(crate) enter_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
-    pub(crate) exit_init: unsafe extern "C" fn(fmi2Component) -> fmi2Status,
-    enter_continuous: Option<unsafe extern "C" fn(fmi2Component) -> fmi2Status>,
-    set_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const f64) -> fmi2Status,
-    pub(crate) get_real: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut f64) -> fmi2Status,
-    set_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const i32) -> fmi2Status,
-    get_integer: unsafe extern "C" fn(fmi2Component, *const u32, usize, *mut i32) -> fmi2Status,
-    set_boolean: unsafe extern "C" fn(fmi2Component, *const u32, usize, *const fmi2Boolean) -> fmi2Status,
-    get_states: Option<unsafe extern "C" fn(fmi2Component, *mut f64, usize) -> fmi2Status>,
-    set_states: Option<unsafe extern "C" fn(fmi2Component, *const f64, usize) -> fmi2Status>,
-    directional:
-        unsafe extern "C" fn(fmi2Component, *const u32, usize, *const u32, usize, *const f64, *mut f64) -> fmi2Status,
-    free: unsafe extern "C" fn(fmi2Component),
-    /// Co-simulation's step, when loaded for co-simulation.
-    pub(crate) do_step: Option<unsafe extern "C" fn(fmi2Component, f64, f64, fmi2Boolean) -> fmi2Status>,
-    /// Model exchange when the library has it, else co-simulation.
+    pub(crate) fmi: fmi_conformance::Api,
+    /// Model exchange when asked for (and exported), else co-simulation.
     kind: fmi2Type,
-    /// fmi2Instantiate's GUID and resource location.
     guid: CString,
     location: CString,
 }
 
-/// A function of `lib`, as the (`Copy`) function-pointer type `T` the caller expects.
-///
-/// # Safety
-/// `T` is the symbol's real type.
-unsafe fn symbol<T: Copy>(lib: &libloading::Library, name: &str) -> Result<T, String> {
-    // SAFETY: as the caller promises.
-    unsafe { lib.get::<T>(name.as_bytes()) }
-        .map(|s| *s)
-        .map_err(|_| format!("the binary does not export {name}"))
-}
-
 impl Api {
     pub(crate) fn load(so: &Path, model_exchange: bool, guid: &str, resource_uri: &str) -> Result<Api, String> {
-        // SAFETY: our own freshly built FMU binary (the smoke run loaded it already); the
-        // signatures are the standard's (proved against fmi-sys in the rustfmu tests).
-        unsafe {
-            let lib = libloading::Library::new(so).map_err(|e| format!("the binary does not load: {e}"))?;
-            let me = |name: &str| model_exchange.then(|| symbol(&lib, name).ok()).flatten();
-            Ok(Api {
-                instantiate: symbol(&lib, "fmi2Instantiate")?,
-                setup: symbol(&lib, "fmi2SetupExperiment")?,
-                enter_init: symbol(&lib, "fmi2EnterInitializationMode")?,
-                exit_init: symbol(&lib, "fmi2ExitInitializationMode")?,
-                enter_continuous: me("fmi2EnterContinuousTimeMode"),
-                set_real: symbol(&lib, "fmi2SetReal")?,
-                get_real: symbol(&lib, "fmi2GetReal")?,
-                set_integer: symbol(&lib, "fmi2SetInteger")?,
-                get_integer: symbol(&lib, "fmi2GetInteger")?,
-                set_boolean: symbol(&lib, "fmi2SetBoolean")?,
-                get_states: model_exchange
-                    .then(|| symbol(&lib, "fmi2GetContinuousStates").ok())
-                    .flatten(),
-                set_states: model_exchange
-                    .then(|| symbol(&lib, "fmi2SetContinuousStates").ok())
-                    .flatten(),
-                directional: symbol(&lib, "fmi2GetDirectionalDerivative")?,
-                free: symbol(&lib, "fmi2FreeInstance")?,
-                do_step: (!model_exchange).then(|| symbol(&lib, "fmi2DoStep").ok()).flatten(),
-                kind: if model_exchange {
-                    fmi2ModelExchange
-                } else {
-                    fmi2CoSimulation
-                },
-                guid: CString::new(guid).unwrap_or_default(),
-                location: CString::new(resource_uri).unwrap_or_default(),
-                _lib: lib,
-            })
+        let fmi = fmi_conformance::Api::load(so)?;
+        if model_exchange && let Err(e) = &fmi.me {
+            return Err(format!("the library has no model exchange: {e}"));
         }
+        Ok(Api {
+            fmi,
+            kind: if model_exchange {
+                fmi2ModelExchange
+            } else {
+                fmi2CoSimulation
+            },
+            guid: CString::new(guid).unwrap_or_default(),
+            location: CString::new(resource_uri).unwrap_or_default(),
+        })
     }
 
     /// Sets a Real, Integer, enumeration or Boolean variable (a Boolean from 0 or 1).
@@ -390,14 +333,14 @@ impl Api {
         // SAFETY: one value reference, one value.
         unsafe {
             match v.var_type {
-                VarType::Real => (self.set_real)(c, vr.as_ptr(), 1, [x].as_ptr()),
-                VarType::Boolean => (self.set_boolean)(
+                VarType::Real => (self.fmi.set_real)(c, vr.as_ptr(), 1, [x].as_ptr()),
+                VarType::Boolean => (self.fmi.set_boolean)(
                     c,
                     vr.as_ptr(),
                     1,
                     [if x != 0.0 { fmi2True } else { fmi2False }].as_ptr(),
                 ),
-                _ => (self.set_integer)(c, vr.as_ptr(), 1, [x as i32].as_ptr()),
+                _ => (self.fmi.set_integer)(c, vr.as_ptr(), 1, [x as i32].as_ptr()),
             }
         }
     }
@@ -417,35 +360,36 @@ impl Api {
         stop: Option<f64>,
         body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
     ) -> Result<T, String> {
-        let log = rustfmu::testing::Log::leak();
-        let callbacks = rustfmu::testing::callbacks(log);
+        // The log and the callbacks outlive the instance (freed below).
+        let log = Box::new(fmi_conformance::logger::LogSink::default());
+        let callbacks = Box::new(fmi_conformance::logger::callbacks(log.env()));
         let name = CString::new("fmu-build-depends").unwrap();
-        // SAFETY: every string is NUL-terminated and outlives the call; the callbacks are 'static.
+        // SAFETY: every string is NUL-terminated and outlives the call; so do the callbacks.
         let c = unsafe {
-            (self.instantiate)(
+            (self.fmi.instantiate)(
                 name.as_ptr(),
                 self.kind,
                 self.guid.as_ptr(),
                 self.location.as_ptr(),
-                callbacks,
+                &*callbacks,
                 fmi2False,
                 fmi2False,
             )
         };
         if c.is_null() {
-            return Err(format!("fmi2Instantiate returned NULL: {}", said(log)));
+            return Err(format!("fmi2Instantiate returned NULL: {}", said(&log)));
         }
         let ok = |s: fmi2Status, what: &str| {
             if s == fmi2OK {
                 Ok(())
             } else {
-                Err(format!("{what} answered status {s}: {}", said(log)))
+                Err(format!("{what} answered status {s}: {}", said(&log)))
             }
         };
         // SAFETY: `c` is a live instance of this library until the free below.
         let result = ok(
             unsafe {
-                (self.setup)(
+                (self.fmi.setup_experiment)(
                     c,
                     fmi2False,
                     0.0,
@@ -458,7 +402,7 @@ impl Api {
         )
         .and_then(|_| body(c, &ok));
         // SAFETY: as above; not used afterwards.
-        unsafe { (self.free)(c) };
+        unsafe { (self.fmi.free_instance)(c) };
         result
     }
 }
@@ -482,19 +426,24 @@ fn columns(
             Known::State(_) => None,
         })
         .collect();
-    let (Some(enter_continuous), Some(get_states), Some(set_states)) =
-        (api.enter_continuous, api.get_states, api.set_states)
-    else {
-        return Err("the library has no model exchange".into());
-    };
+    let me = api
+        .fmi
+        .me
+        .as_ref()
+        .map_err(|e| format!("the library has no model exchange: {e}"))?;
+    let (enter_continuous, get_states, set_states) = (
+        me.enter_continuous_time_mode,
+        me.get_continuous_states,
+        me.set_continuous_states,
+    );
     api.with_instance(|c, ok| {
         // SAFETY: `c` is live; every array passed has the length passed with it.
         unsafe {
             for (v, x) in parameters {
                 ok(api.set(c, v, *x), &format!("setting the parameter '{}' to {x}", v.name))?;
             }
-            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
-            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
+            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
             ok(enter_continuous(c), "fmi2EnterContinuousTimeMode")?;
             let mut x = vec![0.0; n_states];
             ok(get_states(c, x.as_mut_ptr(), x.len()), "fmi2GetContinuousStates")?;
@@ -506,7 +455,7 @@ fn columns(
             let vrs: Vec<u32> = inputs.iter().map(|v| v.value_reference).collect();
             let values: Vec<f64> = inputs.iter().map(|v| spread_by(rng, v, start_of(v), scale)).collect();
             ok(
-                (api.set_real)(c, vrs.as_ptr(), vrs.len(), values.as_ptr()),
+                (api.fmi.set_real)(c, vrs.as_ptr(), vrs.len(), values.as_ptr()),
                 "fmi2SetReal of the inputs",
             )?;
             let u_vrs: Vec<u32> = unknowns.iter().map(|v| v.value_reference).collect();
@@ -515,7 +464,7 @@ fn columns(
                 let k_vr = [k.var().value_reference];
                 let mut column = vec![f64::NAN; u_vrs.len()];
                 ok(
-                    (api.directional)(
+                    (api.fmi.get_directional_derivative)(
                         c,
                         u_vrs.as_ptr(),
                         u_vrs.len(),
@@ -542,12 +491,8 @@ fn columns(
     })
 }
 
-fn said(log: &rustfmu::testing::Log) -> String {
-    log.entries()
-        .iter()
-        .map(|e| e.text.clone())
-        .collect::<Vec<_>>()
-        .join("; ")
+fn said(log: &fmi_conformance::logger::LogSink) -> String {
+    log.take().into_iter().map(|e| e.text).collect::<Vec<_>>().join("; ")
 }
 
 fn is_initial_unknown(d: &ModelDescription, v: &Variable) -> bool {
@@ -607,22 +552,22 @@ fn initial_values(api: &Api, knowns: &[&Variable], values: &[f64], unknowns: &[&
             for (v, &x) in knowns.iter().zip(values) {
                 ok(api.set(c, v, x), &format!("setting '{}' to {x}", v.name))?;
             }
-            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
-            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
+            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
             let mut out = Vec::with_capacity(unknowns.len());
             for v in unknowns {
                 let vr = [v.value_reference];
                 if v.var_type == VarType::Real {
                     let mut x = [0.0];
                     ok(
-                        (api.get_real)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
+                        (api.fmi.get_real)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
                         &format!("fmi2GetReal of '{}'", v.name),
                     )?;
                     out.push(x[0]);
                 } else {
                     let mut x = [0];
                     ok(
-                        (api.get_integer)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
+                        (api.fmi.get_integer)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
                         &format!("fmi2GetInteger of '{}'", v.name),
                     )?;
                     out.push(x[0] as f64);

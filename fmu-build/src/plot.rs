@@ -8,7 +8,7 @@
 //! `cargo fmu` build for it.
 
 use crate::depends::Api;
-use rustfmu::__private::abi::fmi2True;
+use fmi_conformance::fmi2::fmi2True;
 use rustfmu::description::{Causality, ModelDescription, VarType, Variable};
 use std::path::Path;
 
@@ -57,13 +57,13 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
         _ => ((stop - start) / POINTS as f64, 1),
     };
     let api = Api::load(so, false, guid, resource_uri)?;
-    let do_step = api.do_step.ok_or("the library has no fmi2DoStep")?;
+    let do_step = api.fmi.do_step;
     let vrs: Vec<u32> = outputs.iter().map(|v| v.value_reference).collect();
     api.with_instance_at(start, Some(stop), |c, ok| {
         // SAFETY: `c` is live; every array passed has the length passed with it.
         unsafe {
-            ok((api.enter_init)(c), "fmi2EnterInitializationMode")?;
-            ok((api.exit_init)(c), "fmi2ExitInitializationMode")?;
+            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
+            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
             let mut run = Run {
                 times: vec![],
                 curves: outputs
@@ -84,7 +84,7 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
                 }
             };
             ok(
-                (api.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
+                (api.fmi.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
                 "fmi2GetReal",
             )?;
             record(&mut run, start, &y);
@@ -101,7 +101,7 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
                 n += 1;
                 if n.is_multiple_of(stride) || t >= stop - 1e-12 * (stop - start) {
                     ok(
-                        (api.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
+                        (api.fmi.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
                         "fmi2GetReal",
                     )?;
                     record(&mut run, t, &y);

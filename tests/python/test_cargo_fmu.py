@@ -308,6 +308,15 @@ def test_a_model_that_reads_its_resources_builds_checks_and_simulates():
         assert abs(result["y"][-1] - 2.5 * (1.0 - math.exp(-1.0 / 0.1))) < 1e-6, result["y"][-1]
 
 
+def check_clean(crate, env, model_identifier):
+    """`cargo fmu check` of the crate's FMI 2.0 and 3.0 FMUs: 0 failed in each."""
+    for fmu in (FMUS / f"{model_identifier}.fmu", FMUS / "fmi3" / f"{model_identifier}.fmu"):
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                             timeout=900)
+        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
+        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+
+
 PI_CONTROL = '''//! A PI controller, u = kp (r - y) + x with Ti dx/dt = kp (r - y), as a user writes one.
 use rustfmu::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -366,11 +375,7 @@ def test_cargo_fmu_check_passes_on_a_pi_controller_with_positive_parameters_and_
     crate, env = outside_crate("pi-control", fresh=True)
     (crate / "src" / "lib.rs").write_text(PI_CONTROL)
     run(["cargo", "fmu", "build"], crate, env)
-    for fmu in (FMUS / "PiControl.fmu", FMUS / "fmi3" / "PiControl.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
-                             timeout=900)
-        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
-        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    check_clean(crate, env, "PiControl")
     # The gains act: the tunable-parameter check found one that changes the trajectory.
     result = fmpy.simulate_fmu(str(FMUS / "PiControl.fmu"), stop_time=1.0, output_interval=0.1,
                                start_values={"r": 1.0, "y": 0.25}, output=["u", "x"])
@@ -440,11 +445,7 @@ def test_a_mass_spring_damper_builds_clean_checks_clean_and_follows_the_exact_so
     (crate / "src" / "lib.rs").write_text(MASS_SPRING_DAMPER)
     out = run(["cargo", "fmu", "build"], crate, env)
     assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
-    for fmu in (FMUS / "Msd.fmu", FMUS / "fmi3" / "Msd.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
-                             timeout=900)
-        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
-        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    check_clean(crate, env, "Msd")
     result = fmpy.simulate_fmu(str(FMUS / "Msd.fmu"), stop_time=5.0, output_interval=0.01, output=["x"])
     # x(0) = 1, v(0) = 0, m = 1, c = 0.4, k = 4: x = e^(-0.2 t) (cos wd t + 0.2/wd sin wd t)
     wd = math.sqrt(4.0 - 0.2 ** 2)
@@ -513,11 +514,7 @@ def test_a_bouncing_ball_with_an_exact_step_checks_clean_and_bounces_where_the_f
     (crate / "src" / "lib.rs").write_text(BOUNCING_BALL)
     out = run(["cargo", "fmu", "build"], crate, env)
     assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
-    for fmu in (FMUS / "Ball.fmu", FMUS / "fmi3" / "Ball.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
-                             timeout=900)
-        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
-        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    check_clean(crate, env, "Ball")
     result = fmpy.simulate_fmu(str(FMUS / "Ball.fmu"), fmi_type="CoSimulation", stop_time=2.0, output_interval=0.001,
                                output=["h", "v"])
     t_hit = math.sqrt(2 * 1.0 / 9.81)
@@ -592,11 +589,7 @@ def test_a_pi_controller_sampled_every_10_ms_checks_clean_and_samples_on_time():
     (crate / "src" / "lib.rs").write_text(SAMPLED_PI)
     out = run(["cargo", "fmu", "build"], crate, env)
     assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
-    for fmu in (FMUS / "SampledPi.fmu", FMUS / "fmi3" / "SampledPi.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
-                             timeout=900)
-        summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
-        assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    check_clean(crate, env, "SampledPi")
     result = fmpy.simulate_fmu(str(FMUS / "SampledPi.fmu"), stop_time=0.1, output_interval=0.025,
                                start_values={"r": 1.0}, output=["u", "samples"])
     assert list(result["samples"]) == [0, 2, 5, 7, 10], result

@@ -61,6 +61,15 @@ struct VarAttr {
     derivative_of: Option<(String, Span)>,
 }
 
+/// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
+fn names_list(input: ParseStream) -> Result<Vec<(String, Span)>> {
+    input.parse::<Token![=]>()?;
+    let content;
+    syn::bracketed!(content in input);
+    let list = content.parse_terminated(name_or_ident, Token![,])?;
+    Ok(list.into_iter().collect())
+}
+
 fn name_or_ident(input: ParseStream) -> Result<(String, Span)> {
     if input.peek(LitStr) {
         let s: LitStr = input.parse()?;
@@ -203,19 +212,11 @@ impl Parse for VarAttr {
                 }
                 "depends" => {
                     once(a.depends.is_some())?;
-                    input.parse::<Token![=]>()?;
-                    let content;
-                    syn::bracketed!(content in input);
-                    let list = content.parse_terminated(name_or_ident, Token![,])?;
-                    a.depends = Some(list.into_iter().collect());
+                    a.depends = Some(names_list(input)?);
                 }
                 "initial_depends" => {
                     once(a.initial_depends.is_some())?;
-                    input.parse::<Token![=]>()?;
-                    let content;
-                    syn::bracketed!(content in input);
-                    let list = content.parse_terminated(name_or_ident, Token![,])?;
-                    a.initial_depends = Some(list.into_iter().collect());
+                    a.initial_depends = Some(names_list(input)?);
                 }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
