@@ -174,6 +174,37 @@ fn start_of(v: &Variable) -> f64 {
     }
 }
 
+/// One unknown's declaration against what the points showed (`seen[j]`: known `names[j]` moved
+/// it): both checks read it the same way.
+struct Comparison<'a> {
+    /// The knowns it moved with.
+    found: Vec<&'a str>,
+    /// The indices of those the declaration leaves out.
+    missing: Vec<usize>,
+    /// The declared knowns no point showed.
+    unseen: Vec<&'a str>,
+}
+
+fn compare<'a, T>(declared: Option<&[&str]>, names: &[&'a str], seen: &[Option<T>]) -> Comparison<'a> {
+    let mut c = Comparison {
+        found: vec![],
+        missing: vec![],
+        unseen: vec![],
+    };
+    for (j, (name, seen)) in names.iter().zip(seen).enumerate() {
+        let listed = declared.map(|d| d.contains(name));
+        match (seen.is_some(), listed) {
+            (true, Some(false)) => c.missing.push(j),
+            (false, Some(true)) => c.unseen.push(name),
+            _ => {}
+        }
+        if seen.is_some() {
+            c.found.push(name);
+        }
+    }
+    c
+}
+
 /// `depends = [a, b]` as written in the declaration.
 fn list(names: &[&str]) -> String {
     format!("[{}]", names.join(", "))
@@ -245,51 +276,40 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
         } else {
             "output"
         };
-        let found: Vec<&str> = knowns
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| seen[i][*j].is_some())
-            .map(|(_, k)| k.var().name)
-            .collect();
-        match u.depends_on {
-            None => report.notes.push(format!(
+        let names: Vec<&str> = knowns.iter().map(|k| k.var().name).collect();
+        let c = compare(u.depends_on, &names, &seen[i]);
+        let Some(declared) = u.depends_on else {
+            report.notes.push(format!(
                 "{what} '{}' declares no `depends`, so its description says it depends on every input and state; \
                  at {checked_points} random points it depended on {}: `depends = {}` would say so",
                 u.name,
-                list(&found),
-                list(&found)
-            )),
-            Some(declared) => {
-                let mut unseen = vec![];
-                for (j, k) in knowns.iter().enumerate() {
-                    let name = k.var().name;
-                    let listed = declared.contains(&name);
-                    match (seen[i][j], listed) {
-                        (Some(value), false) => report.problems.push(format!(
-                            "{what} '{}' depends on {} '{name}' (∂{}/∂{name} = {value:e} at a random point, by \
-                             fmi2GetDirectionalDerivative), which its `depends = {}` leaves out: add '{name}' to it",
-                            u.name,
-                            match k {
-                                Known::State(_) => "the state",
-                                Known::Input(_) => "the input",
-                            },
-                            u.name,
-                            list(declared)
-                        )),
-                        (None, true) => unseen.push(name),
-                        _ => {}
-                    }
-                }
-                if !unseen.is_empty() {
-                    report.notes.push(format!(
-                        "{what} '{}' declares dependencies on {} that {checked_points} random points never showed \
-                         (a derivative 0 at each): drop them from `depends` if they are not there (a dependency \
-                         through a switch or a limit has derivative 0 and shows only as a jump: keep it then)",
-                        u.name,
-                        list(&unseen)
-                    ));
-                }
-            }
+                list(&c.found),
+                list(&c.found)
+            ));
+            continue;
+        };
+        for j in c.missing {
+            let (name, value) = (names[j], seen[i][j].unwrap_or_default());
+            report.problems.push(format!(
+                "{what} '{}' depends on {} '{name}' (∂{}/∂{name} = {value:e} at a random point, by \
+                 fmi2GetDirectionalDerivative), which its `depends = {}` leaves out: add '{name}' to it",
+                u.name,
+                match knowns[j] {
+                    Known::State(_) => "the state",
+                    Known::Input(_) => "the input",
+                },
+                u.name,
+                list(declared)
+            ));
+        }
+        if !c.unseen.is_empty() {
+            report.notes.push(format!(
+                "{what} '{}' declares dependencies on {} that {checked_points} random points never showed \
+                 (a derivative 0 at each): drop them from `depends` if they are not there (a dependency \
+                 through a switch or a limit has derivative 0 and shows only as a jump: keep it then)",
+                u.name,
+                list(&c.unseen)
+            ));
         }
     }
     report
@@ -663,49 +683,39 @@ pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: 
         return report;
     }
     for (i, u) in unknowns.iter().enumerate() {
-        let found: Vec<&str> = knowns
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| seen[i][*j].is_some())
-            .map(|(_, k)| k.name)
-            .collect();
-        match u.initial_depends_on {
-            None => report.notes.push(format!(
+        let names: Vec<&str> = knowns.iter().map(|k| k.name).collect();
+        let c = compare(u.initial_depends_on, &names, &seen[i]);
+        let Some(declared) = u.initial_depends_on else {
+            report.notes.push(format!(
                 "initial unknown '{}' declares no `initial_depends`, so its InitialUnknowns entry says it depends on \
                  every known of Initialization Mode; at {checked_points} random points it depended on {}: \
                  `initial_depends = {}` would say so",
                 u.name,
-                list(&found),
-                list(&found)
-            )),
-            Some(declared) => {
-                let mut unseen = vec![];
-                for (j, k) in knowns.iter().enumerate() {
-                    let listed = declared.contains(&k.name);
-                    match (&seen[i][j], listed) {
-                        (Some(how), false) => report.problems.push(format!(
-                            "initial unknown '{}' depends in Initialization Mode on '{}' ({how} for '{}'), which its \
-                             `initial_depends = {}` leaves out: add '{}' to it",
-                            u.name,
-                            k.name,
-                            u.name,
-                            list(declared),
-                            k.name
-                        )),
-                        (None, true) => unseen.push(k.name),
-                        _ => {}
-                    }
-                }
-                if !unseen.is_empty() {
-                    report.notes.push(format!(
-                        "initial unknown '{}' declares initial dependencies on {} that {checked_points} random points \
-                         never showed: drop them from `initial_depends` if they are not there (a dependency through a \
-                         switch or a limit shows only where the switch flips: keep it then)",
-                        u.name,
-                        list(&unseen)
-                    ));
-                }
-            }
+                list(&c.found),
+                list(&c.found)
+            ));
+            continue;
+        };
+        for j in c.missing {
+            let how = seen[i][j].as_deref().unwrap_or_default();
+            report.problems.push(format!(
+                "initial unknown '{}' depends in Initialization Mode on '{}' ({how} for '{}'), which its \
+                 `initial_depends = {}` leaves out: add '{}' to it",
+                u.name,
+                names[j],
+                u.name,
+                list(declared),
+                names[j]
+            ));
+        }
+        if !c.unseen.is_empty() {
+            report.notes.push(format!(
+                "initial unknown '{}' declares initial dependencies on {} that {checked_points} random points \
+                 never showed: drop them from `initial_depends` if they are not there (a dependency through a \
+                 switch or a limit shows only where the switch flips: keep it then)",
+                u.name,
+                list(&c.unseen)
+            ));
         }
     }
     report
