@@ -235,6 +235,10 @@ pub struct ModelDescription {
     /// The model's other fields (`name: Type; ...`): part of the FMU state, so part of the GUID
     /// (a changed internal state changes the GUID, and old serialized states are refused).
     pub internal_state: &'static str,
+    /// The event indicators (variables declared `event_indicator`), by name, in declaration
+    /// order: FMI 2.0's `numberOfEventIndicators` and the order of `fmi2GetEventIndicators`,
+    /// FMI 3.0's `<EventIndicator>` elements.
+    pub event_indicators: &'static [&'static str],
 }
 
 impl ModelDescription {
@@ -527,6 +531,12 @@ impl Enc<'_> {
             i += 1;
         }
         self.str(d.internal_state);
+        // Only models with event indicators carry the block: the encodings (and GUIDs) of the
+        // models without events are those before events existed.
+        if !d.event_indicators.is_empty() {
+            self.u8(EVENT_INDICATORS_TAG);
+            self.names(Some(d.event_indicators));
+        }
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
         if let FmiVersion::V3 = interfaces.version {
@@ -536,6 +546,8 @@ impl Enc<'_> {
 }
 
 const HEADER: usize = MAGIC.len() + 4 + 4;
+/// Marks the event indicators' block after the internal state (distinct from the version tag 3).
+const EVENT_INDICATORS_TAG: u8 = 0xE1;
 
 const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
     let mut body = Enc { buf, pos: 0 };
@@ -908,6 +920,11 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         variables.push(d.variable()?);
     }
     let internal_state = d.str()?;
+    let mut event_indicators: &'static [&'static str] = &[];
+    if d.at < d.b.len() && d.b[d.at] == EVENT_INDICATORS_TAG {
+        d.u8()?;
+        event_indicators = d.names()?.unwrap_or(&[]);
+    }
     if d.at + 1 == d.b.len() {
         match d.u8()? {
             3 => interfaces.version = FmiVersion::V3,
@@ -938,6 +955,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             log_categories: leak_slice(log_categories),
             variables: leak_slice(variables),
             internal_state,
+            event_indicators,
         },
         interfaces,
     ))

@@ -50,12 +50,16 @@
 extern crate self as rustfmu;
 
 pub mod description;
+mod events;
 mod model;
 pub mod solver;
 pub mod testing;
 mod value;
 
-pub use model::{CoSimulation, Context, Model, Real, Standalone, StateVector, StepFailure, Variables};
+pub use events::{Event, MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
+pub use model::{
+    CoSimulation, Context, EventClock, Model, Real, Standalone, StateVector, StepFailure, StepView, Variables,
+};
 pub use num_dual;
 pub use rustfmu_derive::{FmuEnum, Model};
 pub use value::{FmiType, FmuEnum, Value};
@@ -84,7 +88,7 @@ macro_rules! export_fmu {
 /// Everything a model file needs.
 pub mod prelude {
     pub use crate::description::Variable;
-    pub use crate::{CoSimulation, Context, FmuEnum, Model, Real, StepFailure, Value};
+    pub use crate::{CoSimulation, Context, Event, FmuEnum, Model, Real, StepFailure, Value};
 }
 
 /// What the macros expand to; not part of the API.

@@ -13,9 +13,10 @@
 //!   with an exact step of its own supplies it instead.
 
 use crate::description::{ModelDescription, Variable};
+pub use crate::events::Event;
 use crate::solver::{Dopri5, Tolerances};
 use crate::value::Value;
-use serde::{Serialize, de::DeserializeOwned};
+use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 /// The number type of [`Model::derivatives`] and [`Model::outputs`]: `f64` for values,
 /// [`num_dual::Dual64`] for directional derivatives. Anything `num_dual::DualNum<f64>` offers
@@ -76,6 +77,34 @@ pub trait StateVector: Copy + Send + 'static {
         x: &mut Self,
         tol: Tolerances,
     ) -> Result<(), crate::solver::OdeError>;
+    /// [`integrate`](Self::integrate), showing `stop` every accepted step
+    /// ([`crate::solver::Dopri5::integrate_until`]).
+    fn integrate_until<F: FnMut(f64, &Self) -> Self, S: FnMut(&StepView<'_, Self>) -> Option<(f64, Self)>>(
+        solver: &mut Dopri5,
+        f: F,
+        stop: S,
+        t0: f64,
+        span: f64,
+        x: &mut Self,
+        tol: Tolerances,
+    ) -> Result<Option<f64>, crate::solver::OdeError>;
+}
+
+/// One accepted step of the integrator, as [`StateVector::integrate_until`] shows it: from local
+/// time `s0` (time `t0 + s0`) over `h`, its end state, and its continuous extension.
+pub struct StepView<'a, X> {
+    pub t0: f64,
+    pub s0: f64,
+    pub h: f64,
+    pub end: X,
+    dense: &'a dyn Fn(f64) -> X,
+}
+
+impl<X> StepView<'_, X> {
+    /// The state at local time `s` within the step (the integrator's dense output).
+    pub fn at(&self, s: f64) -> X {
+        (self.dense)(s)
+    }
 }
 
 impl<const N: usize> StateVector for [f64; N] {
@@ -108,6 +137,38 @@ impl<const N: usize> StateVector for [f64; N] {
             span,
             &mut v,
             tol,
+        );
+        *x = v.into();
+        result
+    }
+    #[inline]
+    fn integrate_until<F: FnMut(f64, &Self) -> Self, S: FnMut(&StepView<'_, Self>) -> Option<(f64, Self)>>(
+        solver: &mut Dopri5,
+        mut f: F,
+        mut stop: S,
+        t0: f64,
+        span: f64,
+        x: &mut Self,
+        tol: Tolerances,
+    ) -> Result<Option<f64>, crate::solver::OdeError> {
+        let mut v = nalgebra::SVector::<f64, N>::from(*x);
+        let result = solver.integrate_until(
+            |t, v: &nalgebra::SVector<f64, N>| nalgebra::SVector::from(f(t, &(*v).into())),
+            t0,
+            span,
+            &mut v,
+            tol,
+            |step: &crate::solver::DenseStep<'_, N>| {
+                let dense = |s: f64| -> [f64; N] { step.at(s).into() };
+                stop(&StepView {
+                    t0: step.t0,
+                    s0: step.s0,
+                    h: step.h,
+                    end: (*step.end()).into(),
+                    dense: &dense,
+                })
+                .map(|(s, x)| (s, nalgebra::SVector::from(x)))
+            },
         );
         *x = v.into();
         result
@@ -147,6 +208,17 @@ pub trait Variables: Sized {
     fn states_of(c: &Self::Continuous<f64>) -> Self::States;
     fn set_states_of(c: &mut Self::Continuous<f64>, x: &Self::States);
     fn derivatives_of(c: &Self::Continuous<f64>) -> Self::States;
+
+    /// Value references of the event indicators (the variables declared `event_indicator`), in
+    /// declaration order: the order of the get-event-indicators functions.
+    const INDICATORS: &'static [u32] = &[];
+    /// The event indicators' values in `c` (after the equations ran on it), into `z`, which has
+    /// `INDICATORS.len()` elements.
+    fn indicators_of<D: Copy>(_c: &Self::Continuous<D>, _z: &mut [D]) {}
+    /// Whether the FMU offers Model Exchange (`#[fmu(co_simulation_only)]` says no).
+    const MODEL_EXCHANGE: bool = true;
+    /// Whether the FMU offers Co-Simulation (`#[fmu(model_exchange_only)]` says no).
+    const CO_SIMULATION: bool = true;
 
     /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the variable with value
     /// reference `vr`. `#[derive(Model)]` generates a `match`; this default (for hand-written
@@ -243,6 +315,23 @@ pub struct Context<'a> {
     pub(crate) refreshed: bool,
     /// Instantiated as fmi2ModelExchange.
     pub(crate) model_exchange: bool,
+    /// The pending time event and the termination request, in a communication step (the
+    /// runtime's integrator handles the model's events inside the step).
+    pub(crate) events: Option<&'a mut EventClock>,
+}
+
+/// The runtime's part of a model's events, kept in the FMU state: the time event the model asked
+/// for, whether the event iteration at initialization is still running, and the event counter.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct EventClock {
+    /// The time event the model scheduled ([`Event::schedule`]) and that has not happened yet.
+    pub next_event_time: Option<f64>,
+    /// The event iteration right after initialization has not ended yet.
+    pub initial: bool,
+    /// Events handled so far (state and time events, and the initial one), for logs and tests.
+    pub count: u64,
+    /// The model asked to end the simulation ([`crate::Event::terminate`]).
+    pub terminated: bool,
 }
 
 impl Context<'_> {
@@ -257,6 +346,7 @@ impl Context<'_> {
             solver: None,
             refreshed: false,
             model_exchange: false,
+            events: None,
         }
     }
 
@@ -271,6 +361,7 @@ impl Context<'_> {
             solver: Some(solver),
             refreshed: false,
             model_exchange: false,
+            events: None,
         }
     }
 
@@ -278,7 +369,16 @@ impl Context<'_> {
     /// Dormand-Prince 5(4) integrator, at [`CoSimulation::tolerances`], the inputs held; then
     /// computes its outputs at the end. What [`CoSimulation::do_step`] does unless a model
     /// supplies its own step.
+    ///
+    /// A model with events ([`Model::update`] with event indicators or time events) has them
+    /// handled inside the step: the integrator stops at every sign change of an event indicator
+    /// (located on its dense output to [`CoSimulation::event_tolerance`]) and at every time
+    /// event, the model's [`Model::update`] runs (event iteration included), and the
+    /// integration restarts from the new state.
     pub fn integrate<M: CoSimulation>(&mut self, model: &mut M, t: f64, h: f64) -> Result<(), StepFailure> {
+        if !M::INDICATORS.is_empty() || self.events.as_ref().is_some_and(|e| e.next_event_time.is_some()) {
+            return crate::events::integrate_with_events(self, model, t, h);
+        }
         let tol = model.tolerances(self);
         let Some(solver) = self.solver.as_deref_mut() else {
             return Err(StepFailure {
@@ -437,6 +537,23 @@ pub trait Model: Variables + Clone + Serialize + DeserializeOwned + Send + 'stat
         Ok(())
     }
 
+    /// At an event: updates the discrete states and discrete variables (`discrete` outputs and
+    /// locals, a counter, a held sample), and may change the continuous states (a bounce),
+    /// schedule the next time event, ask for another round of the event iteration or end the
+    /// simulation; [`Event`] says when and why it is called. The variables hold the values
+    /// just before the event (the equations evaluated there); after it the runtime recomputes
+    /// the outputs and tells the importer what changed (the continuous states are compared
+    /// bit for bit).
+    ///
+    /// Called in Model Exchange by fmi2NewDiscreteStates / fmi3UpdateDiscreteStates (the
+    /// importer iterates), in Co-Simulation by the runtime's integrator inside the step
+    /// ([`Context::integrate`]), and in both once right after initialization
+    /// ([`Event::initial`]), where a sampled model schedules its first sample. `Err` refuses
+    /// the event: the model is put back as it was and the call fails with the message.
+    fn update(&mut self, _event: &mut Event) -> Result<(), String> {
+        Ok(())
+    }
+
     /// A tunable parameter was set between steps; recompute what depends on it.
     fn parameters_changed(&mut self, _ctx: &Context) -> Result<(), String> {
         Ok(())
@@ -515,6 +632,14 @@ pub trait CoSimulation: Model {
             atol: rtol * 1e-3,
         }
     }
+
+    /// How closely [`Context::integrate`] locates a state event in time, in seconds: the
+    /// event's time is at most this after the indicator's zero on the integrator's continuous
+    /// extension (the event is handled where the indicator has already changed sign). By
+    /// default 1e-12 s, or 1e-15 of the time where that is larger.
+    fn event_tolerance(&self, t: f64) -> f64 {
+        1e-12_f64.max(1e-15 * t.abs())
+    }
 }
 
 /// A model run outside any FMU the way the runtime runs it: its integrator memory, time, and
@@ -527,6 +652,8 @@ pub struct Standalone<M> {
     pub time: f64,
     pub start_time: f64,
     pub tolerance: Option<f64>,
+    /// The model's pending time event and event count.
+    pub events: EventClock,
 }
 
 impl<M: CoSimulation> Standalone<M> {
@@ -538,6 +665,7 @@ impl<M: CoSimulation> Standalone<M> {
             time: start_time,
             start_time,
             tolerance,
+            events: EventClock::default(),
         }
     }
 
@@ -548,7 +676,13 @@ impl<M: CoSimulation> Standalone<M> {
         self.solver.restart();
         self.time = self.start_time;
         self.refresh();
-        Ok(())
+        self.events = EventClock {
+            initial: true,
+            ..EventClock::default()
+        };
+        let outcome = crate::events::iterate(&mut self.model, &ctx, self.time, &mut self.events);
+        self.events.initial = false;
+        outcome.map(|_| ())
     }
 
     /// Recomputes what the equations compute (after inputs were changed by hand).
@@ -561,6 +695,7 @@ impl<M: CoSimulation> Standalone<M> {
     pub fn do_step(&mut self, h: f64) -> Result<(), StepFailure> {
         let t = self.time;
         let mut ctx = Context::standalone_with_solver(self.start_time, self.tolerance, &mut self.solver);
+        ctx.events = Some(&mut self.events);
         let outcome = self.model.do_step(t, h, &mut ctx);
         let refreshed = ctx.refreshed;
         let reached = match &outcome {

@@ -234,9 +234,10 @@ impl Dopri5 {
     /// `t0 + s`. So the steps it takes, and the result, do not depend on where time starts: at
     /// `t0` = 1.7e9 s (a Unix time stamp) a step of 1e-6 s is as fine as at 0, and a master's
     /// rounded communication points (`t0 + n h`) do not leak into the state through `t_end - t0`.
+    #[inline]
     pub fn integrate<const N: usize, F>(
         &mut self,
-        mut f: F,
+        f: F,
         t0: f64,
         span: f64,
         x: &mut SVector<f64, N>,
@@ -245,11 +246,33 @@ impl Dopri5 {
     where
         F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
     {
+        self.integrate_until(f, t0, span, x, tol, |_: &DenseStep<'_, N>| None)
+            .map(|_| ())
+    }
+
+    /// [`integrate`](Self::integrate), shown every accepted step with its continuous extension
+    /// ([`DenseStep`]): when `stop` answers `Some((s, x_s))` (a local time `s` within the step,
+    /// the state there), the integration ends at `s` with `x = x_s` and answers `Ok(Some(s))`;
+    /// `Ok(None)` when it reached `span`. This is how the co-simulation step finds state events
+    /// (`stop` looks for a sign change of the event indicators on the step and locates it).
+    pub fn integrate_until<const N: usize, F, S>(
+        &mut self,
+        mut f: F,
+        t0: f64,
+        span: f64,
+        x: &mut SVector<f64, N>,
+        tol: Tolerances,
+        mut stop: S,
+    ) -> Result<Option<f64>, OdeError>
+    where
+        F: FnMut(f64, &SVector<f64, N>) -> SVector<f64, N>,
+        S: FnMut(&DenseStep<'_, N>) -> Option<(f64, SVector<f64, N>)>,
+    {
         // No state (a model of outputs and parameters only, a sampled controller): nothing to
         // integrate. Without this the error norm is 0/0 = NaN and every step was rejected as
         // "the state became NaN or infinite" (issue 23).
         if N == 0 {
-            return Ok(());
+            return Ok(None);
         }
         let mut s = 0.0;
         let mut k1 = f(t0, x);
@@ -328,6 +351,19 @@ impl Dopri5 {
                 };
                 self.err_old = err.max(1e-4);
                 self.stats.accepted_steps += 1;
+                let dense = DenseStep {
+                    t0,
+                    s0: s,
+                    h,
+                    x0: x,
+                    x1: &x_new,
+                    k: [&k1, &k3, &k4, &k5, &k6, &k7],
+                };
+                if let Some((s_stop, x_stop)) = stop(&dense) {
+                    *x = x_stop;
+                    self.h_next = h_new;
+                    return Ok(Some(s_stop));
+                }
                 s = if last { span } else { s + h };
                 *x = x_new;
                 k1 = k7;
@@ -342,7 +378,58 @@ impl Dopri5 {
                 reject = true;
             }
         }
-        Ok(())
+        Ok(None)
+    }
+}
+
+// Dense output of DOPRI5 (Hairer, Nørsett & Wanner, II.6; the DOPRI5 code's CONTD5): a
+// continuous extension of order 4 from the stages of the step.
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// One accepted step of [`Dopri5::integrate_until`], from local time `s0` to `s0 + h` (time
+/// `t0 + s0` to `t0 + s0 + h`), with its continuous extension.
+pub struct DenseStep<'a, const N: usize> {
+    /// The time the integration's local times count from.
+    pub t0: f64,
+    /// The step's start, as a local time.
+    pub s0: f64,
+    /// Its length.
+    pub h: f64,
+    x0: &'a SVector<f64, N>,
+    x1: &'a SVector<f64, N>,
+    /// k1, k3, k4, k5, k6, k7 (k2 has no weight in the extension).
+    k: [&'a SVector<f64, N>; 6],
+}
+
+impl<const N: usize> DenseStep<'_, N> {
+    /// The state at the step's start.
+    pub fn start(&self) -> &SVector<f64, N> {
+        self.x0
+    }
+    /// The state at its end.
+    pub fn end(&self) -> &SVector<f64, N> {
+        self.x1
+    }
+    /// The state at local time `s` within the step (4th-order accurate; exactly the ends at the
+    /// ends).
+    pub fn at(&self, s: f64) -> SVector<f64, N> {
+        let theta = ((s - self.s0) / self.h).clamp(0.0, 1.0);
+        if theta == 1.0 {
+            return *self.x1;
+        }
+        let theta1 = 1.0 - theta;
+        let [k1, k3, k4, k5, k6, k7] = self.k;
+        let h = self.h;
+        let ydiff = self.x1 - self.x0;
+        let bspl = k1 * h - ydiff;
+        let r4 = ydiff - k7 * h - bspl;
+        let r5 = (k1 * D1 + k3 * D3 + k4 * D4 + k5 * D5 + k6 * D6 + k7 * D7) * h;
+        self.x0 + (ydiff + (bspl + (r4 + r5 * theta1) * theta) * theta1) * theta
     }
 }
 
@@ -426,6 +513,71 @@ mod tests {
         }
         let exact = Vector2::new(t.cos(), -t.sin());
         assert!((x - exact).norm() < 1e-8, "error {} after 10 s", (x - exact).norm());
+    }
+
+    /// The continuous extension is of order 4: halving the step divides its error in the
+    /// middle of the step by about 2^5 (local error O(h^5)); it is exact at both ends.
+    #[test]
+    fn the_dense_output_is_fourth_order_within_the_step() {
+        let tol = Tolerances { rtol: 1.0, atol: 1.0 };
+        let error_at_middle = |h: f64| {
+            let mut ode = Dopri5 {
+                h_next: h,
+                ..Dopri5::default()
+            };
+            let mut x = Vector2::new(1.0, 0.0);
+            let mut seen = None;
+            let stopped = ode
+                .integrate_until(
+                    |_, x: &Vector2<f64>| Vector2::new(x[1], -x[0]),
+                    0.0,
+                    h,
+                    &mut x,
+                    tol,
+                    |step: &DenseStep<'_, 2>| {
+                        assert_eq!(step.at(step.s0 + step.h), *step.end());
+                        assert_eq!(step.at(step.s0), *step.start());
+                        seen = Some(step.at(step.s0 + step.h / 2.0));
+                        None
+                    },
+                )
+                .unwrap();
+            assert_eq!(stopped, None);
+            let m = seen.expect("one step");
+            let exact = Vector2::new((h / 2.0).cos(), -(h / 2.0).sin());
+            (m - exact).norm()
+        };
+        let (e1, e2) = (error_at_middle(0.2), error_at_middle(0.1));
+        let order = (e1 / e2).log2();
+        assert!(order > 4.5 && order < 6.5, "errors {e1:e}, {e2:e}: local order {order}");
+    }
+
+    #[test]
+    fn integrate_until_stops_where_stop_says() {
+        let mut ode = Dopri5::default();
+        let tol = Tolerances {
+            rtol: 1e-10,
+            atol: 1e-10,
+        };
+        // x' = -1 from 1: reaches 0 at t = 1; stop at the step that crosses 0.
+        let mut x = nalgebra::Vector1::new(1.0);
+        let stopped = ode
+            .integrate_until(
+                |_, _: &nalgebra::Vector1<f64>| nalgebra::Vector1::new(-1.0),
+                0.0,
+                3.0,
+                &mut x,
+                tol,
+                |step: &DenseStep<'_, 1>| {
+                    (step.end()[0] <= 0.0).then(|| {
+                        let s = step.s0 + step.start()[0];
+                        (s, step.at(s))
+                    })
+                },
+            )
+            .unwrap();
+        assert_eq!(stopped, Some(1.0));
+        assert!(x[0].abs() < 1e-14, "{x}");
     }
 
     #[test]

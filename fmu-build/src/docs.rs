@@ -100,6 +100,7 @@ mod tests {
             log_categories: &[],
             variables: &[],
             internal_state: "",
+            event_indicators: &[],
         };
         let both = Interfaces {
             co_simulation: true,

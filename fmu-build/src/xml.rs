@@ -21,6 +21,19 @@ pub fn real_text(x: f64) -> String {
 /// the same rules (`fmi-standard`) the derive uses.
 pub fn check_description(d: &ModelDescription) -> Result<(), String> {
     let decls = d.variables;
+    for name in d.event_indicators {
+        match d.by_name(name) {
+            Some(v)
+                if v.var_type == VarType::Real && v.variability == rustfmu::description::Variability::Continuous => {}
+            Some(v) => {
+                return Err(format!(
+                    "event indicator '{name}' (vr {}) is not a continuous Real variable",
+                    v.value_reference
+                ));
+            }
+            None => return Err(format!("event indicator '{name}' is no variable of the model")),
+        }
+    }
     let mut seen_names = BTreeSet::new();
     let mut seen_vrs = BTreeSet::new();
     for v in decls {
@@ -273,7 +286,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
             },
         ),
     ]);
-    let n_event_indicators = "0".to_string();
+    let n_event_indicators = d.event_indicators.len().to_string();
     root.push(("numberOfEventIndicators", &n_event_indicators));
     open(&mut w, "fmiModelDescription", &root)?;
     if interfaces.model_exchange {
@@ -734,6 +747,12 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
     for v in decls.iter().filter(|v| is_initial_unknown(decls, v)) {
         unknown(&mut w, "InitialUnknown", v, v.initial_depends_on)?;
     }
+    for name in d.event_indicators {
+        let v = d
+            .by_name(name)
+            .ok_or_else(|| format!("{}: event indicator '{name}' is no variable", d.model_identifier))?;
+        unknown(&mut w, "EventIndicator", v, v.depends_on)?;
+    }
     close(&mut w, "ModelStructure")?;
     close(&mut w, "fmiModelDescription")?;
     let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
@@ -812,6 +831,7 @@ mod tests {
         log_categories: &[],
         variables: VARS,
         internal_state: "",
+        event_indicators: &[],
     };
 
     #[test]
@@ -1006,6 +1026,7 @@ mod tests {
         log_categories: &[],
         variables: LAG_VARS,
         internal_state: "",
+        event_indicators: &[],
     };
 
     fn lag3() -> String {

@@ -6,7 +6,7 @@ use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};
 use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
-use crate::model::{CoSimulation, Context, StateVector};
+use crate::model::{CoSimulation, Context, EventClock, StateVector};
 use crate::solver::Dopri5;
 use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
@@ -28,6 +28,8 @@ pub struct Sim<M> {
     pub init_dirty: bool,
     /// The co-simulation integrator's memory (step size, error history).
     pub solver: Dopri5,
+    /// The pending time event, the initial event iteration, the event count.
+    pub events: EventClock,
     /// Something the derivatives depend on (a state, an input, time, a parameter) changed
     /// since they were computed. A cache flag, not part of the serialized state (a restored
     /// state recomputes on demand).
@@ -55,6 +57,7 @@ impl<M: CoSimulation> Sim<M> {
             terminate_requested: false,
             init_dirty: true,
             solver: Dopri5::default(),
+            events: EventClock::default(),
             stale_derivatives: true,
             stale_outputs: true,
         }
@@ -279,6 +282,7 @@ impl<M: CoSimulation> Instance<M> {
             solver: None,
             refreshed: false,
             model_exchange: self.model_exchange,
+            events: None,
         };
         let outcome = self
             .sim
@@ -304,16 +308,40 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn exit_initialization_mode(&mut self) -> Status {
+        // All or nothing: a refused initial event leaves the instance as the call found it.
+        let before = (!self.model_exchange).then(|| self.sim.clone());
         if let Err(status) = self.initialize_model(self.terms.name(Function::ExitInitializationMode), true) {
             return status;
+        }
+        self.sim.time = self.sim.start_time;
+        self.sim.last_successful_time = self.sim.start_time;
+        self.sim.events = EventClock {
+            initial: true,
+            ..EventClock::default()
+        };
+        if !self.model_exchange {
+            // Co-simulation has no event mode for the importer: the event iteration at the
+            // start runs here (Model Exchange: the importer's first new-discrete-states calls),
+            // all or nothing.
+            let f = self.terms.name(Function::ExitInitializationMode);
+            let mut info = EventInfo::default();
+            let status = self.event_iteration(f, &mut info, true);
+            self.sim.events.initial = false;
+            if status != OK {
+                if let Some(before) = before {
+                    self.sim = before;
+                }
+                return status;
+            }
+            if info.terminate_simulation {
+                self.sim.terminate_requested = true;
+            }
         }
         self.sim.state = if self.model_exchange {
             State::EventMode
         } else {
             State::StepComplete
         };
-        self.sim.time = self.sim.start_time;
-        self.sim.last_successful_time = self.sim.start_time;
         self.sim.solver.restart();
         self.event(|| format!("initialized at t = {}", self.sim.start_time));
         OK
@@ -363,7 +391,12 @@ impl<M: CoSimulation> Instance<M> {
             return status;
         }
         for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-            match self.sim.model.get(*vr).and_then(T::from_value) {
+            // The independent variable is the instance's time, whatever the model's field holds.
+            let value = match M::declaration(*vr, T::TYPE) {
+                Some(d) if d.causality == Causality::Independent => Some(Value::Real(self.sim.time)),
+                _ => self.sim.model.get(*vr),
+            };
+            match value.and_then(T::from_value) {
                 Some(v) => *slot = v,
                 None => return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE)),
             }
@@ -514,6 +547,7 @@ impl<M: CoSimulation> Instance<M> {
                 solver: None,
                 refreshed: false,
                 model_exchange: self.model_exchange,
+                events: None,
             };
             let outcome = self
                 .sim
@@ -574,6 +608,7 @@ impl<M: CoSimulation> Instance<M> {
         self.trace(|| format!("{f}(currentCommunicationPoint = {t}, communicationStepSize = {h})"));
         self.before_step.clone_from(&self.sim.model);
         let before_solver = self.sim.solver;
+        let before_events = self.sim.events;
         let mut ctx = Context {
             start_time: self.sim.start_time,
             tolerance: self.sim.tolerance,
@@ -582,9 +617,14 @@ impl<M: CoSimulation> Instance<M> {
             solver: Some(&mut self.sim.solver),
             refreshed: false,
             model_exchange: self.model_exchange,
+            events: Some(&mut self.sim.events),
         };
         let mut outcome = self.sim.model.do_step(t, h, &mut ctx);
-        if !ctx.refreshed {
+        let refreshed = ctx.refreshed;
+        if self.sim.events.terminated {
+            self.sim.terminate_requested = true;
+        }
+        if !refreshed {
             // The model's own step advanced the states: its outputs follow from them.
             let reached = match &outcome {
                 Ok(()) => end,
@@ -611,6 +651,20 @@ impl<M: CoSimulation> Instance<M> {
                 self.sim.last_successful_time = end;
                 OK
             }
+            (Err(failure), None) if self.sim.events.terminated && self.version == Version::Fmi3 => {
+                // FMI 3.0: the step ends where the model ended the simulation, with fmi3OK,
+                // terminateSimulation and lastSuccessfulTime (FMI 2.0: fmi2Discard and the
+                // fmi2Terminated status).
+                let reached = if failure.reached_time.is_finite() {
+                    failure.reached_time.clamp(t, end)
+                } else {
+                    t
+                };
+                self.sim.time = reached;
+                self.sim.last_successful_time = reached;
+                self.event(|| format!("{f}: {}", failure.message));
+                OK
+            }
             (Err(failure), None) => {
                 // A model's claim outside the step is no time it reached.
                 let reached = if failure.reached_time.is_finite() {
@@ -623,6 +677,7 @@ impl<M: CoSimulation> Instance<M> {
             (outcome, Some(what)) => {
                 std::mem::swap(&mut self.sim.model, &mut self.before_step);
                 self.sim.solver = before_solver;
+                self.sim.events = before_events;
                 let model_said = match outcome {
                     Ok(()) => String::new(),
                     Err(failure) => format!(" (the model reported: {})", failure.message),
@@ -715,6 +770,11 @@ pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
         return Err(format!("in the state, {what}"));
     }
     sim.solver.validate().map_err(|e| format!("in the state, {e}"))?;
+    if let Some(te) = sim.events.next_event_time
+        && !te.is_finite()
+    {
+        return Err(format!("the state's next time event {te} is not finite"));
+    }
     let times = [
         ("startTime", sim.start_time),
         ("time", sim.time),
@@ -838,19 +898,99 @@ impl<M: CoSimulation> Instance<M> {
         OK
     }
 
-    /// No model here has discrete states or time events yet: one call settles the event.
+    /// fmi2NewDiscreteStates / fmi3UpdateDiscreteStates: one round of the event iteration
+    /// ([`Model::update`](crate::Model::update)); the importer calls again while
+    /// `new_discrete_states_needed`.
     pub fn new_discrete_states(&mut self, info: &mut EventInfo) -> Status {
+        let f = self.terms.name(Function::NewDiscreteStates);
+        let status = self.event_iteration(f, info, false);
+        if status == OK {
+            self.sim.last_successful_time = self.sim.time;
+        }
+        status
+    }
+
+    /// One round (`all_rounds`: every round, as co-simulation runs it) of the event iteration
+    /// at the current time, all or nothing: on a refusal the model and its clock are as before.
+    fn event_iteration(&mut self, function: &str, info: &mut EventInfo, all_rounds: bool) -> Status {
         *info = EventInfo::default();
-        self.sim.last_successful_time = self.sim.time;
-        OK
+        if let Err(status) = self.up_to_date(function) {
+            return status;
+        }
+        let before = (self.sim.model.clone(), self.sim.events);
+        let ctx = Context {
+            start_time: self.sim.start_time,
+            tolerance: self.sim.tolerance,
+            logger: Some(&self.logger),
+            resources: self.resources.as_deref(),
+            solver: None,
+            refreshed: false,
+            model_exchange: self.model_exchange,
+            events: None,
+        };
+        let time = self.sim.time;
+        let outcome = if all_rounds {
+            crate::events::iterate(&mut self.sim.model, &ctx, time, &mut self.sim.events).map(|(changed, terminate)| {
+                crate::events::Round {
+                    again: false,
+                    terminate,
+                    states_changed: changed,
+                }
+            })
+        } else {
+            crate::events::update_round(&mut self.sim.model, &ctx, time, &mut self.sim.events)
+        };
+        match outcome {
+            Ok(round) => {
+                self.sim.stale_derivatives = false;
+                self.sim.stale_outputs = false;
+                if round.states_changed {
+                    self.sim.solver.restart();
+                }
+                info.new_discrete_states_needed = round.again;
+                info.values_changed = round.states_changed;
+                info.next_event_time = self.sim.events.next_event_time;
+                if let Some(reason) = &round.terminate {
+                    self.sim.events.terminated = true;
+                    info.terminate_simulation = true;
+                    self.event(|| format!("{function}: the model ends the simulation at t = {time}: {reason}"));
+                }
+                self.event(|| {
+                    format!(
+                        "{function}: event at t = {time}{}{}{}",
+                        if round.states_changed {
+                            ", continuous states changed"
+                        } else {
+                            ""
+                        },
+                        if round.again { ", another round asked for" } else { "" },
+                        match info.next_event_time {
+                            Some(te) => format!(", next time event at t = {te}"),
+                            None => String::new(),
+                        }
+                    )
+                });
+                OK
+            }
+            Err(why) => {
+                (self.sim.model, self.sim.events) = before;
+                self.sim.stale_derivatives = true;
+                self.sim.stale_outputs = true;
+                self.error(&format!(
+                    "{function}: at t = {time}: {why}; the model is as before the event"
+                ))
+            }
+        }
     }
 
     pub fn enter_continuous_time_mode(&mut self) -> Status {
         self.sim.state = State::ContinuousTimeMode;
+        self.sim.events.initial = false;
         OK
     }
 
-    /// Returns (enterEventMode, terminateSimulation): neither, for models without step events.
+    /// Returns (enterEventMode, terminateSimulation): the models here have no step events
+    /// (their state and time events are found by the importer).
     pub fn completed_integrator_step(&mut self) -> (Status, bool, bool) {
         self.sim.last_successful_time = self.sim.time;
         (OK, false, false)
@@ -937,12 +1077,33 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn get_event_indicators_mut(&mut self, function: &str, z: &mut [f64]) -> Status {
-        if !z.is_empty() {
+        if z.len() != M::INDICATORS.len() {
             return self.error(&format!(
-                "{function}: ni = {}, but {} has no event indicators (numberOfEventIndicators = 0)",
+                "{function}: ni = {}, but {} has {} event indicators (numberOfEventIndicators)",
                 z.len(),
-                M::DESCRIPTION.model_identifier
+                M::DESCRIPTION.model_identifier,
+                M::INDICATORS.len()
             ));
+        }
+        if z.is_empty() {
+            return OK;
+        }
+        if self.sim.state == State::InitializationMode
+            && let Err(status) = self.initialize_model(function, false)
+        {
+            return status;
+        }
+        let mut c = self.sim.model.continuous::<f64>();
+        self.sim.model.derivatives(self.sim.time, &mut c);
+        self.sim.model.outputs(self.sim.time, &mut c);
+        M::indicators_of(&c, z);
+        if let Some(i) = z.iter().position(|v| !v.is_finite()) {
+            let vr = M::INDICATORS[i];
+            let name = M::declaration(vr, VarType::Real).map_or("?", |v| v.name);
+            return self.not_finite(
+                function,
+                &format!("event indicator {i} ('{name}', vr {vr}) is {}", z[i]),
+            );
         }
         OK
     }

@@ -36,6 +36,23 @@ pub fn get_version() -> fmi2String {
     VERSION.as_ptr()
 }
 
+/// Why an instance of the interface asked for cannot be made: the model declares the other
+/// interface only (`#[fmu(co_simulation_only)]`, `#[fmu(model_exchange_only)]`).
+pub fn offered<M: CoSimulation>(model_exchange: bool) -> Option<String> {
+    let (offered, name, declared) = if model_exchange {
+        (M::MODEL_EXCHANGE, "Model Exchange", "co_simulation_only")
+    } else {
+        (M::CO_SIMULATION, "Co-Simulation", "model_exchange_only")
+    };
+    (!offered).then(|| {
+        format!(
+            "{} offers no {name} (declared #[fmu({declared})]; modelDescription.xml has no <{}> element)",
+            M::DESCRIPTION.model_identifier,
+            name.replace([' ', '-'], "")
+        )
+    })
+}
+
 pub unsafe fn instantiate<M: CoSimulation>(
     own_guid: &'static str,
     description: &'static [u8],
@@ -88,6 +105,9 @@ pub unsafe fn instantiate<M: CoSimulation>(
             return refuse(format!(
                 "fmuType = {fmu_type} is neither fmi2ModelExchange (0) nor fmi2CoSimulation (1)"
             ));
+        }
+        if let Some(why) = offered::<M>(fmu_type == fmi2ModelExchange) {
+            return refuse(why);
         }
         match guid.as_deref() {
             None => return refuse(format!("GUID is NULL; expected {own_guid}")),

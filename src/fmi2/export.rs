@@ -20,7 +20,11 @@ macro_rules! export_fmi2 {
             use $crate::__private::{TERMS2 as TERMS, shared};
             type __RustfmuModel = $model;
 
-            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::BOTH;
+            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
+                co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
+                model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
+                version: $crate::description::FmiVersion::V2,
+            };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
             const ENCODED: [u8; LEN] =

@@ -71,7 +71,7 @@ unsafe fn instantiate<M: CoSimulation>(
             logger.log(fmi3Error, Category::StatusError, &format!("{function}: {why}"));
             ptr::null_mut()
         };
-        if let Some(why) = refusal {
+        if let Some(why) = refusal.or_else(|| crate::fmi2::api::offered::<M>(model_exchange)) {
             return refuse(why);
         }
         match name.as_deref() {
@@ -882,7 +882,7 @@ pub unsafe fn get_number_of_event_indicators<M: CoSimulation>(c: fmi3Instance, n
         // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
         match unsafe { n.as_mut() } {
             Some(n) => {
-                *n = 0;
+                *n = M::INDICATORS.len();
                 fmi3OK
             }
             None => inst.error(&format!("{F}: nEventIndicators is NULL")),

@@ -77,7 +77,11 @@ macro_rules! export_fmi3 {
             use $crate::__private::{TERMS3 as TERMS, shared};
             type __RustfmuModel = $model;
 
-            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces::BOTH_FMI3;
+            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
+                co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
+                model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
+                version: $crate::description::FmiVersion::V3,
+            };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
             const ENCODED: [u8; LEN] =

@@ -40,6 +40,8 @@ struct Var {
     depends: Option<Vec<(String, Span)>>,
     initial_depends: Option<Vec<(String, Span)>>,
     derivative_of: Option<(String, Span)>,
+    /// Declared `event_indicator` (at this span).
+    event_indicator: Option<Span>,
     description: String,
 }
 
@@ -59,6 +61,7 @@ struct VarAttr {
     depends: Option<Vec<(String, Span)>>,
     initial_depends: Option<Vec<(String, Span)>>,
     derivative_of: Option<(String, Span)>,
+    event_indicator: Option<Span>,
 }
 
 /// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
@@ -218,6 +221,10 @@ impl Parse for VarAttr {
                     once(a.initial_depends.is_some())?;
                     a.initial_depends = Some(names_list(input)?);
                 }
+                "event_indicator" => {
+                    once(a.event_indicator.is_some())?;
+                    a.event_indicator = Some(key.span());
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -229,7 +236,7 @@ impl Parse for VarAttr {
                         format!(
                             "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
                              calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
-                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of"
+                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator"
                         ),
                     ));
                 }
@@ -365,8 +372,18 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         depends: a.depends,
         initial_depends: a.initial_depends,
         derivative_of: a.derivative_of,
+        event_indicator: a.event_indicator,
         description: crate::doc_text(&field.attrs),
     };
+    if let Some(span) = var.event_indicator
+        && !in_equations(&var)
+    {
+        return Err(Error::new(
+            span,
+            "an event indicator is a continuous Real (f64) input, output or local variable: a state or \
+             a value the equations compute, whose change of sign (z > 0 to z <= 0 or back) is a state event",
+        ));
+    }
     if let Some(start) = &var.start
         && !has_start(&var)
     {
@@ -393,6 +410,8 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
 struct ModelAttr {
     identifier: Option<LitStr>,
     description: Option<String>,
+    /// `co_simulation_only` / `model_exchange_only`: (model exchange, co-simulation) offered.
+    interfaces: Option<(bool, bool, Span)>,
     units: Vec<(String, Base, Span)>,
     categories: Vec<(String, String, Span)>,
 }
@@ -416,6 +435,12 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
             } else if meta.path.is_ident("description") {
                 let s: LitStr = meta.value()?.parse()?;
                 m.description = Some(s.value());
+            } else if meta.path.is_ident("co_simulation_only") || meta.path.is_ident("model_exchange_only") {
+                if m.interfaces.is_some() {
+                    return Err(meta.error("co_simulation_only and model_exchange_only exclude each other and are given once"));
+                }
+                let cs_only = meta.path.is_ident("co_simulation_only");
+                m.interfaces = Some((!cs_only, cs_only, meta.path.span()));
             } else if meta.path.is_ident("unit") {
                 let span = meta.path.span();
                 let mut name = None;
@@ -475,7 +500,7 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 }
                 m.categories.push((name, description, span));
             } else {
-                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, unit(..), log_category(..)"));
+                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, unit(..), log_category(..)"));
             }
             Ok(())
         })?;
@@ -1101,6 +1126,17 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             quote!(matches!(vr, #(#known_vrs)|*))
         };
 
+        // The event indicators, in declaration order.
+        let indicators: Vec<&Var> = vars.iter().filter(|v| v.event_indicator.is_some()).collect();
+        let indicator_vrs = indicators.iter().map(|v| v.vr);
+        let indicator_names: Vec<String> = indicators.iter().map(|v| v.name.clone()).collect();
+        let indicator_fields: Vec<&Ident> = indicators.iter().map(|v| &v.field).collect();
+        let indicator_idx: Vec<usize> = (0..indicators.len()).collect();
+        let (offers_me, offers_cs) = match model.interfaces {
+            Some((me, cs, _)) => (me, cs),
+            None => (true, true),
+        };
+
         let manifest = meta.manifest.as_ref().map(|p| {
             let p = p.display().to_string();
             quote!(
@@ -1143,6 +1179,16 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                         #(#cont_slots,)*
                         _ => ::core::option::Option::None,
                     }
+                }
+
+                const INDICATORS: &'static [u32] = &[#(#indicator_vrs),*];
+                const MODEL_EXCHANGE: bool = #offers_me;
+                const CO_SIMULATION: bool = #offers_cs;
+
+                #[inline]
+                fn indicators_of<D: ::core::marker::Copy>(c: &#cont_ident<D>, z: &mut [D]) {
+                    let _ = (c, &z);
+                    #(z[#indicator_idx] = c.#indicator_fields;)*
                 }
 
                 #[inline]
@@ -1192,6 +1238,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     log_categories: &[#(#category_tokens),*],
                     variables: &[#(#variable_tokens),*],
                     internal_state: #internal_state,
+                    event_indicators: &[#(#indicator_names),*],
                 };
 
                 fn start() -> Self {

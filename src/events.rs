@@ -1,0 +1,428 @@
+//! Events: what a model's [`Model::update`] is told ([`Event`]), one round of the event
+//! iteration as both interfaces run it ([`update_round`]), and the co-simulation step that
+//! finds and handles state and time events inside a communication step
+//! ([`integrate_with_events`]).
+
+use crate::model::{CoSimulation, Context, EventClock, Model, StateVector, StepFailure};
+
+/// What a model is told at an event, and what it answers ([`Model::update`]).
+///
+/// ```
+/// use rustfmu::prelude::*;
+/// use rustfmu::Variables;
+/// use serde::{Deserialize, Serialize};
+///
+/// /// Counts seconds: a time event every `period`.
+/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+/// pub struct Ticker {
+///     /// Ticks so far
+///     #[variable(vr = 0, output, discrete, initial = exact, start = 0)]
+///     pub ticks: i32,
+///     /// Time between ticks
+///     #[variable(vr = 1, parameter, fixed, start = 1.0, unit = "s", min > 0.0)]
+///     pub period: f64,
+/// }
+///
+/// impl Model for Ticker {
+///     fn update(&mut self, event: &mut Event) -> Result<(), String> {
+///         if event.time_event() {
+///             self.ticks += 1;
+///         }
+///         // The first tick one period after the start, then every period.
+///         event.schedule(event.time() + self.period);
+///         Ok(())
+///     }
+/// }
+/// impl CoSimulation for Ticker {}
+///
+/// let mut m = Ticker::start();
+/// let mut clock = rustfmu::EventClock { initial: true, ..Default::default() };
+/// let round = rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 0.0, &mut clock).unwrap();
+/// assert_eq!((m.ticks, clock.next_event_time, round.again), (0, Some(1.0), false));
+/// rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 1.0, &mut clock).unwrap();
+/// assert_eq!((m.ticks, clock.next_event_time), (1, Some(2.0)));
+/// ```
+pub struct Event<'e, 'c> {
+    time: f64,
+    initial: bool,
+    time_event: bool,
+    next_event_time: Option<f64>,
+    scheduled: bool,
+    again: bool,
+    terminate: Option<String>,
+    ctx: &'e Context<'c>,
+}
+
+impl Event<'_, '_> {
+    /// The time of the event: for a time event, the time it was scheduled for (the importer's
+    /// time may differ from it by round-off).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The event iteration right after initialization (Model Exchange: the first
+    /// fmi2NewDiscreteStates / fmi3UpdateDiscreteStates; Co-Simulation: at the end of
+    /// initialization). A sampled model schedules its first sample here.
+    pub fn initial(&self) -> bool {
+        self.initial
+    }
+
+    /// Whether the time event the model scheduled is due now (rather than, or as well as, a
+    /// state event).
+    pub fn time_event(&self) -> bool {
+        self.time_event
+    }
+
+    /// The time event scheduled now (before this call: the one pending, if any).
+    pub fn next_event_time(&self) -> Option<f64> {
+        self.next_event_time
+    }
+
+    /// Asks for a time event at `t` (after [`time`](Self::time)); it replaces the one pending.
+    /// A time event that is due and not rescheduled is over after this event.
+    pub fn schedule(&mut self, t: f64) {
+        self.next_event_time = Some(t);
+        self.scheduled = true;
+    }
+
+    /// Cancels the pending time event.
+    pub fn unschedule(&mut self) {
+        self.next_event_time = None;
+        self.scheduled = true;
+    }
+
+    /// Asks for another round of the event iteration at the same time (FMI's
+    /// newDiscreteStatesNeeded): the update runs again with the values this round left.
+    pub fn iterate(&mut self) {
+        self.again = true;
+    }
+
+    /// Ends the simulation (FMI's terminateSimulation), with the reason, which is logged.
+    pub fn terminate(&mut self, reason: impl Into<String>) {
+        self.terminate = Some(reason.into());
+    }
+
+    /// The runtime's context: start time, tolerance, resources, logging.
+    pub fn context(&self) -> &Context<'_> {
+        self.ctx
+    }
+}
+
+/// What one round of the event iteration answered.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Round {
+    /// The model asked for another round.
+    pub again: bool,
+    /// The model asked to end the simulation, with this reason.
+    pub terminate: Option<String>,
+    /// The continuous states changed (bit for bit).
+    pub states_changed: bool,
+}
+
+/// One round of the event iteration at `time`: the equations evaluated at the values before
+/// the event, [`Model::update`], the pending time event kept in `clock`, the equations evaluated
+/// again. `Err` when the model refused the event, scheduled a time event that is not after
+/// `time` or left a value that is not finite; the caller puts the model back.
+pub fn update_round<M: CoSimulation>(
+    model: &mut M,
+    ctx: &Context,
+    time: f64,
+    clock: &mut EventClock,
+) -> Result<Round, String> {
+    crate::core::instance::evaluate(model, time);
+    let states = model.states();
+    let pending = clock.next_event_time;
+    let time_event = pending.is_some_and(|te| due(te, time));
+    // A due time event happens at the time it was scheduled for: the importer's time may differ
+    // from it in the last bits (communication points summed up), the model's sample times must not.
+    let time = match pending {
+        Some(te) if time_event => te,
+        _ => time,
+    };
+    let mut event = Event {
+        time,
+        initial: clock.initial,
+        time_event,
+        next_event_time: pending,
+        scheduled: false,
+        again: false,
+        terminate: None,
+        ctx,
+    };
+    model.update(&mut event)?;
+    let Event {
+        next_event_time,
+        scheduled,
+        again,
+        terminate,
+        ..
+    } = event;
+    clock.next_event_time = match next_event_time {
+        Some(te) if !te.is_finite() => {
+            return Err(format!("the next time event it scheduled, {te}, is not a finite time"));
+        }
+        Some(te) if due(te, time) && scheduled => {
+            return Err(format!(
+                "it scheduled the next time event at t = {te}, which is not after the event's time {time}"
+            ));
+        }
+        // A due time event the model did not reschedule is over.
+        Some(te) if due(te, time) => None,
+        other => other,
+    };
+    clock.count += 1;
+    crate::core::instance::evaluate(model, time);
+    if let Some(what) = crate::core::instance::non_finite(model) {
+        return Err(format!("after the update, {what}"));
+    }
+    let states_changed = model
+        .states()
+        .as_slice()
+        .iter()
+        .zip(states.as_slice())
+        .any(|(a, b)| a.to_bits() != b.to_bits());
+    Ok(Round {
+        again,
+        terminate,
+        states_changed,
+    })
+}
+
+/// Whether a time event at `te` is due at `time`: reached, up to the round-off of the times an
+/// importer computes (start + n h, or sums of steps).
+pub fn due(te: f64, time: f64) -> bool {
+    time >= te - 4.0 * f64::EPSILON * te.abs().max(time.abs())
+}
+
+/// The most rounds of one event iteration before the runtime gives up on it.
+pub const MAX_ROUNDS: usize = 100;
+
+/// The most events inside one communication step before the step is refused (chattering).
+pub const MAX_EVENTS_PER_STEP: usize = 100_000;
+
+/// The event iteration at `time` until the model asks for no more rounds (at most
+/// [`MAX_ROUNDS`]): all of it or nothing (on `Err` the model is as before). Answers whether the
+/// continuous states changed and the termination request.
+pub fn iterate<M: CoSimulation>(
+    model: &mut M,
+    ctx: &Context,
+    time: f64,
+    clock: &mut EventClock,
+) -> Result<(bool, Option<String>), String> {
+    let (before, clock_before) = (model.clone(), *clock);
+    let mut changed = false;
+    for _ in 0..MAX_ROUNDS {
+        match update_round(model, ctx, time, clock) {
+            Ok(round) => {
+                changed |= round.states_changed;
+                if round.terminate.is_some() || !round.again {
+                    return Ok((changed, round.terminate));
+                }
+            }
+            Err(why) => {
+                *model = before;
+                *clock = clock_before;
+                return Err(why);
+            }
+        }
+    }
+    *model = before;
+    *clock = clock_before;
+    Err(format!(
+        "the event iteration at t = {time} did not settle after {MAX_ROUNDS} rounds (update keeps asking for another)"
+    ))
+}
+
+/// The event indicators of `model` at state `x` and time `t` (the equations run on a copy of
+/// its continuous variables).
+fn indicators<M: Model>(model: &M, t: f64, x: &M::States, z: &mut [f64]) {
+    let mut c = model.continuous::<f64>();
+    M::set_states_of(&mut c, x);
+    model.derivatives(t, &mut c);
+    model.outputs(t, &mut c);
+    M::indicators_of(&c, z);
+}
+
+/// The FMI domain of an indicator: z > 0 or z <= 0; an event is a change of domain.
+fn side(z: f64) -> bool {
+    z > 0.0
+}
+
+/// [`Context::integrate`] for a model with events: integrates from `t` over `h`, stopping at
+/// every state event (a change of domain of an event indicator, located on the integrator's
+/// continuous extension by the Illinois method to [`CoSimulation::event_tolerance`]; the state
+/// is taken where the indicator is already on its new side) and at every time event, where
+/// the event iteration runs and the integrator restarts.
+pub(crate) fn integrate_with_events<M: CoSimulation>(
+    ctx: &mut Context,
+    model: &mut M,
+    t: f64,
+    h: f64,
+) -> Result<(), StepFailure> {
+    let tol = model.tolerances(ctx);
+    let end = t + h;
+    let n = M::INDICATORS.len();
+    let mut now = t;
+    let mut events = 0usize;
+    let mut clock = ctx.events.as_deref().copied().unwrap_or_default();
+    let fail = |ctx: &mut Context, clock: EventClock, reached: f64, message: String| {
+        if let Some(c) = ctx.events.as_deref_mut() {
+            *c = clock;
+        }
+        Err(StepFailure {
+            reached_time: reached,
+            message,
+        })
+    };
+    let mut z_now = vec![0.0; n];
+    let mut z_end = vec![0.0; n];
+    let mut z_probe = vec![0.0; n];
+    loop {
+        // The time event inside this step, if any; one within round-off of the step's end
+        // happens at its end.
+        let time_event = clock
+            .next_event_time
+            .filter(|te| *te <= end || due(*te, end) || (*te - end) <= 1e-9 * h);
+        let target = time_event.map_or(end, |te| te.clamp(now, end));
+        let mut x = model.states();
+        indicators(model, now, &x, &mut z_now);
+        let mut c = model.continuous::<f64>();
+        let solver = ctx.solver.as_deref_mut().expect("checked by the caller");
+        let model_ref = &*model;
+        let event_tol = model.event_tolerance(now);
+        let outcome = if target > now {
+            <M::States as StateVector>::integrate_until(
+                solver,
+                |t, x| {
+                    M::set_states_of(&mut c, x);
+                    model_ref.derivatives(t, &mut c);
+                    M::derivatives_of(&c)
+                },
+                |step| {
+                    let t_end = step.t0 + step.s0 + step.h;
+                    indicators(model_ref, t_end, &step.end, &mut z_end);
+                    let crossed = (0..n).filter(|&i| side(z_now[i]) != side(z_end[i]));
+                    let mut first: Option<f64> = None;
+                    for i in crossed {
+                        // Illinois on the continuous extension: [a, b] with the indicator on its
+                        // old side at a, on its new side at b.
+                        let old = side(z_now[i]);
+                        let (mut a, mut b) = (step.s0, step.s0 + step.h);
+                        let (mut za, mut zb) = (z_now[i], z_end[i]);
+                        let mut last_kept = 0i8;
+                        let tol_s = event_tol.max(4.0 * f64::EPSILON * (step.t0 + b).abs());
+                        while b - a > tol_s {
+                            let mut s = if zb != za {
+                                b - zb * (b - a) / (zb - za)
+                            } else {
+                                0.5 * (a + b)
+                            };
+                            if !(s > a && s < b) {
+                                s = 0.5 * (a + b);
+                            }
+                            let xs = step.at(s);
+                            indicators(model_ref, step.t0 + s, &xs, &mut z_probe);
+                            let zs = z_probe[i];
+                            if side(zs) == old {
+                                a = s;
+                                za = zs;
+                                if last_kept == -1 {
+                                    zb *= 0.5;
+                                }
+                                last_kept = -1;
+                            } else {
+                                b = s;
+                                zb = zs;
+                                if last_kept == 1 {
+                                    za *= 0.5;
+                                }
+                                last_kept = 1;
+                            }
+                        }
+                        first = Some(first.map_or(b, |f| f.min(b)));
+                    }
+                    match first {
+                        Some(s) => Some((s, step.at(s))),
+                        None => {
+                            z_now.copy_from_slice(&z_end);
+                            None
+                        }
+                    }
+                },
+                now,
+                target - now,
+                &mut x,
+                tol,
+            )
+        } else {
+            Ok(None)
+        };
+        let (reached, state_event) = match outcome {
+            Ok(Some(at)) => (now + at, true),
+            Ok(None) => (target, false),
+            Err(e) => {
+                let reached = e.time();
+                model.set_states(&x);
+                crate::core::instance::evaluate(model, reached);
+                return fail(ctx, clock, reached, e.to_string());
+            }
+        };
+        model.set_states(&x);
+        now = reached;
+        let time_event_now = time_event.is_some_and(|te| reached >= te.min(end));
+        if state_event || time_event_now {
+            events += 1;
+            if events > MAX_EVENTS_PER_STEP {
+                crate::core::instance::evaluate(model, now);
+                return fail(
+                    ctx,
+                    clock,
+                    now,
+                    format!("more than {MAX_EVENTS_PER_STEP} events in one step (chattering at t = {now})"),
+                );
+            }
+            // A time event within round-off of the step's end is handled at the end.
+            if time_event_now && let Some(te) = clock.next_event_time.filter(|te| !due(*te, now)) {
+                clock.next_event_time = Some(te.min(now));
+            }
+            let solver_ctx = Context {
+                start_time: ctx.start_time,
+                tolerance: ctx.tolerance,
+                logger: ctx.logger,
+                resources: ctx.resources,
+                solver: None,
+                refreshed: false,
+                model_exchange: false,
+                events: None,
+            };
+            match iterate(model, &solver_ctx, now, &mut clock) {
+                Ok((_, None)) => {}
+                Ok((_, Some(reason))) => {
+                    clock.terminated = true;
+                    return fail(
+                        ctx,
+                        clock,
+                        now,
+                        format!("the model ended the simulation at t = {now}: {reason}"),
+                    );
+                }
+                Err(why) => {
+                    crate::core::instance::evaluate(model, now);
+                    return fail(ctx, clock, now, format!("the event at t = {now} failed: {why}"));
+                }
+            }
+            if let Some(solver) = ctx.solver.as_deref_mut() {
+                solver.restart();
+            }
+        }
+        if now >= end {
+            break;
+        }
+    }
+    crate::core::instance::evaluate(model, end);
+    if let Some(c) = ctx.events.as_deref_mut() {
+        *c = clock;
+    }
+    ctx.refreshed = true;
+    Ok(())
+}
