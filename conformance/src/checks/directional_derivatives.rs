@@ -14,7 +14,7 @@
 use crate::fmi2::*;
 use crate::instance::{Instance, excitation, status_name, step_size};
 use crate::me::{Euler, Rng, needs_me};
-use crate::outcome::{info, limitation, skip_not_declared};
+use crate::outcome::{NOT_DECLARED, info, limitation, skip_not_declared};
 use crate::{Fmu, Type, Variable, bits};
 use fmi_description::{Causality, Initial, Variability};
 
@@ -169,7 +169,11 @@ pub fn directional_derivative_flag_is_either_value_and_false_means_refused(fmu: 
             assert_eq!(s, fmi2OK, "{at} (providesDirectionalDerivative=\"true\"): {log:?}");
             assert!(values.iter().all(|v| v.is_finite()), "{at}: not finite: {values:?}");
             if unknowns.is_empty() {
-                limitation(format!("{}: no Real unknown and known to ask for", interface(me)));
+                limitation(format!(
+                    "{NOT_DECLARED}{}: a Real unknown and known to ask for (no continuous Real input{})",
+                    interface(me),
+                    if me { " or state" } else { "" }
+                ));
             }
         } else {
             assert_eq!(
@@ -485,7 +489,7 @@ pub fn directional_derivatives_refuse_unknown_references_and_null_arrays(fmu: &F
         let (unknowns, knowns) = valid_pair(fmu, me);
         if unknowns.is_empty() {
             limitation(format!(
-                "{}: no Real unknown and known: bad arguments not tried",
+                "{NOT_DECLARED}{}: a Real unknown and known (bad arguments not tried)",
                 interface(me)
             ));
             continue;

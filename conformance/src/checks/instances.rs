@@ -30,12 +30,30 @@ fn solo(fmu: &Fmu, scale: f64, steps: usize) -> Vec<Vec<u64>> {
     excite_scaled(&mut inst, scale);
     inst.initialize();
     let h = step_size(fmu);
-    (0..steps)
-        .map(|_| {
-            assert_eq!(inst.step(h), fmi2OK);
-            inst.observe()
-        })
-        .collect()
+    let mut out = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        if !continues(&mut inst, h) {
+            break;
+        }
+        out.push(inst.observe());
+    }
+    out
+}
+
+/// One step of `h`: true when it completed, false when the model ended the simulation in it
+/// (fmi2Discard with fmi2Terminated, Stair at its last count); anything else fails the check.
+fn continues(inst: &mut Instance, h: f64) -> bool {
+    let s = inst.step(h);
+    if s == fmi2OK {
+        true
+    } else if s == fmi2Discard && inst.terminated() == (fmi2OK, fmi2True) {
+        false
+    } else {
+        panic!(
+            "fmi2DoStep at t = {}: {s} (not OK, and not the end of the simulation)",
+            inst.time
+        )
+    }
 }
 
 const SCALES: [f64; 6] = [0.5, 0.8, 1.0, 1.2, -0.7, 0.3];
@@ -52,10 +70,14 @@ pub fn interleaved_instances_do_not_affect_each_other(fmu: &Fmu) {
         })
         .collect();
     let mut got = vec![vec![]; insts.len()];
+    let mut ended = vec![false; insts.len()];
     let h = step_size(fmu);
     for _ in 0..steps {
         for (i, inst) in insts.iter_mut().enumerate() {
-            assert_eq!(inst.step(h), fmi2OK);
+            if ended[i] || !continues(inst, h) {
+                ended[i] = true;
+                continue;
+            }
             got[i].push(inst.observe());
         }
         // An instance freed and a new one made in between changes nothing either.
@@ -69,7 +91,10 @@ pub fn interleaved_instances_do_not_affect_each_other(fmu: &Fmu) {
             fmu.id
         );
     }
-    assert_ne!(got[0], got[1], "{}: differently excited instances must differ", fmu.id);
+    // (A model with no Real input or exact start value to excite, Stair, runs the same in all.)
+    if !excitation(fmu).is_empty() {
+        assert_ne!(got[0], got[1], "{}: differently excited instances must differ", fmu.id);
+    }
 }
 
 pub fn instances_on_their_own_threads_match_sequential_runs_bit_for_bit(fmu: &Fmu) {

@@ -18,7 +18,7 @@
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, excitation, status_name};
 use crate::me::{self, Euler, ME_REACHABLE, ME_STATES, MeState, MeState::*, Rng, needs_me};
-use crate::outcome::{convention, info, limitation, skip_not_declared};
+use crate::outcome::{NOT_DECLARED, convention, info, limitation, skip_not_declared};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State};
 use crate::{Fmu, LogEntry, Type, bits};
@@ -1241,9 +1241,19 @@ pub fn model_exchange_an_explicit_euler_run_gives_finite_outputs(fmu: &Fmu) {
         (inst, euler)
     };
     let reals = fmu.md.vrs_of_type(Type::Real);
-    for n in 0..steps {
+    // A step that reaches a time event ends there, so a model with time events takes more
+    // steps than 1 / h to reach 1 s (and ends within one step after it).
+    let mut n = 0;
+    while inst.time < 1.0 - 0.5 * h {
+        assert!(
+            n < 10 * steps,
+            "{}: more than {} steps to reach 1 s (t = {})",
+            fmu.id,
+            10 * steps,
+            inst.time
+        );
         euler.step(&mut inst);
-        if n % 100 == 99 || n + 1 == steps {
+        if n % 100 == 99 || inst.time >= 1.0 - 0.5 * h {
             let (s, y) = inst.get_real(&reals);
             assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
             if let Some(i) = y.iter().position(|v| !v.is_finite()) {
@@ -1256,16 +1266,104 @@ pub fn model_exchange_an_explicit_euler_run_gives_finite_outputs(fmu: &Fmu) {
                 );
             }
         }
+        n += 1;
     }
-    assert!(
-        (inst.time - 1.0).abs() < 1e-9,
-        "{}: the run ended at t = {}",
-        fmu.id,
-        inst.time
-    );
+    assert!(inst.time < 1.0 + h, "{}: the run ended at t = {}", fmu.id, inst.time);
     assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
     assert_eq!(inst.terminate(), fmi2OK, "{}", inst.log_text());
-    info(format!("{steps} steps of {h} s, {} events", euler.events));
+    info(format!(
+        "{n} steps of {h} s (or up to a time event), {} events",
+        euler.events
+    ));
+}
+
+/// The events of a run, as an importer handles them (the explicit-Euler run of
+/// [`Euler`], up to the default experiment's stop time, at most 2 s): every time event the FMU
+/// announces is reached exactly and is followed by a later one (or none); the event iteration
+/// settles within 100 rounds ([`Instance::event_iteration`]); the event indicators are a
+/// function of time and states (the same states set again give the same indicators, bit for
+/// bit, and fmi2NewDiscreteStates leaves them finite); the count of indicators is the
+/// description's.
+pub fn model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu) {
+    needs_me(fmu);
+    let h = crate::instance::step_size(fmu).min(1e-3);
+    let stop = fmu.md.default_experiment.stop_time().unwrap_or(1.0).clamp(h, 2.0);
+    let mut inst = Instance::new_me(fmu);
+    let info0 = inst.me_initialize();
+    let mut euler = Euler::new(&inst, h, &info0);
+    let (s, z) = inst.get_event_indicators();
+    assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
+    assert_eq!(
+        z.len(),
+        fmu.md.number_of_event_indicators,
+        "{}: fmi2GetEventIndicators with numberOfEventIndicators values",
+        fmu.id
+    );
+    let (mut time_events, mut n) = (0usize, 0usize);
+    while inst.time < stop - 0.5 * h {
+        assert!(
+            n < 100 * ((stop / h) as usize + 1),
+            "{}: no end of the run at t = {}",
+            fmu.id,
+            inst.time
+        );
+        n += 1;
+        let due = euler.next_event.filter(|te| *te <= inst.time + h);
+        let before = euler.events;
+        euler.step(&mut inst);
+        if let Some(te) = due {
+            time_events += 1;
+            assert_eq!(
+                inst.time.to_bits(),
+                te.max(inst.time - h).to_bits(),
+                "{}: the step to the time event at {te} ended at {}",
+                fmu.id,
+                inst.time
+            );
+            assert_eq!(euler.events, before + 1, "{}: no event at the time event {te}", fmu.id);
+            if let Some(next) = euler.next_event {
+                assert!(
+                    next > te,
+                    "{}: after the time event at {te} the next one is at {next}, not later",
+                    fmu.id
+                );
+            }
+        }
+        if n % 50 == 0 && !z.is_empty() {
+            // The indicators follow the states: the same states set again give the same values.
+            let (s1, z1) = inst.get_event_indicators();
+            let (s2, x) = inst.get_continuous_states();
+            let s3 = inst.set_continuous_states(&x);
+            let (s4, z2) = inst.get_event_indicators();
+            assert_eq!([s1, s2, s3, s4], [fmi2OK; 4], "{}: {}", fmu.id, inst.log_text());
+            assert_eq!(
+                bits(&z1),
+                bits(&z2),
+                "{}: indicators at t = {} after the same states",
+                fmu.id,
+                inst.time
+            );
+            assert!(
+                z1.iter().all(|v| v.is_finite()),
+                "{}: indicators {z1:?} at t = {}",
+                fmu.id,
+                inst.time
+            );
+        }
+    }
+    assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
+    assert_eq!(inst.terminate(), fmi2OK, "{}", inst.log_text());
+    if euler.events == 0 {
+        limitation(format!(
+            "{NOT_DECLARED}events: no event in {stop} s ({} event indicators, no time event)",
+            z.len()
+        ));
+    }
+    info(format!(
+        "{n} explicit-Euler steps to t = {stop}: {} events, {time_events} of them time events, {} event indicators",
+        euler.events,
+        z.len()
+    ));
 }
 
 /// The calls that continue a run from a saved state: in EventMode the event iteration first.

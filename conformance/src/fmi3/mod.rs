@@ -403,6 +403,11 @@ impl<'a> Inst<'a> {
 
     /// fmi3UpdateDiscreteStates until no update is needed (ME, event mode).
     pub fn event_iteration(&self) -> [u8; 5] {
+        self.event_iteration_timed().0
+    }
+
+    /// [`event_iteration`](Self::event_iteration), with the next time event it announced.
+    pub fn event_iteration_timed(&self) -> ([u8; 5], Option<f64>) {
         for _ in 0..100 {
             let mut flags = [0u8; 5];
             let mut next = 0.0;
@@ -423,7 +428,7 @@ impl<'a> Inst<'a> {
                 self.fmu.id
             );
             if flags[0] == 0 {
-                return flags;
+                return (flags, (flags[4] == 1).then_some(next));
             }
         }
         panic!(

@@ -47,6 +47,11 @@ fn model_exchange_an_explicit_euler_run_gives_finite_outputs() {
 }
 
 #[test]
+fn model_exchange_events_are_reached_settle_and_follow_the_states() {
+    on_every_fmu("model_exchange_events_are_reached_settle_and_follow_the_states");
+}
+
+#[test]
 fn model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_identically() {
     on_every_fmu("model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_identically");
 }

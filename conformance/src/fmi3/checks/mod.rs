@@ -55,6 +55,7 @@ crate::checks::registry! {
         ModelExchange: model_exchange::{
             fmi3_model_exchange_states_and_derivatives_are_consistent,
             fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run,
+            fmi3_model_exchange_events_are_reached_settle_and_follow_the_states,
         };
         DirectionalDerivatives: directional_derivatives::{
             fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,

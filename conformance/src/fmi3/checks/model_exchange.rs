@@ -119,3 +119,134 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
         }
     }
 }
+
+/// The events of an importer's run through the FMI 3.0 calls (explicit Euler up to the default
+/// experiment's stop time, at most 2 s, stepping onto every time event and entering Event Mode
+/// where an event indicator changes domain): every announced time event is reached and followed
+/// by a later one (or none), the event iteration settles within 100 rounds, the indicators are a
+/// function of time and states (the same states set again give them bit for bit), and
+/// fmi3GetNumberOfEventIndicators agrees with the `<EventIndicator>`s.
+pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu3) {
+    me_only(fmu);
+    let h = fmu.step_size().min(1e-3);
+    let stop = fmu.md.default_experiment.stop_time().unwrap_or(1.0).clamp(h, 2.0);
+    let id = &fmu.id;
+    let mut i = Inst::me(fmu);
+    excite(&i);
+    assert_eq!(i.enter_init(0.0), fmi3OK, "{id}: {}", i.log_text());
+    assert_eq!(i.exit_init(), fmi3OK, "{id}: {}", i.log_text());
+    let api = i.api();
+    let (_, mut next) = i.event_iteration_timed();
+    let enter_ct = |i: &Inst| {
+        let s = i.call("fmi3EnterContinuousTimeMode", |c| unsafe {
+            (api.enter_continuous_time_mode)(c)
+        });
+        assert_eq!(s, fmi3OK, "{id}: fmi3EnterContinuousTimeMode: {}", i.log_text());
+    };
+    enter_ct(&i);
+    let nz = fmu.md.event_indicators.len();
+    let mut count = usize::MAX;
+    let s = i.call("fmi3GetNumberOfEventIndicators", |c| unsafe {
+        (api.get_number_of_event_indicators)(c, &mut count)
+    });
+    assert_eq!((s, count), (fmi3OK, nz), "{id}: fmi3GetNumberOfEventIndicators");
+    let indicators = |i: &Inst| {
+        let (s, z) = i.vector("fmi3GetEventIndicators", api.get_event_indicators, nz);
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{id}: fmi3GetEventIndicators at t = {}: {}",
+            i.time,
+            i.log_text()
+        );
+        assert!(
+            z.iter().all(|v| v.is_finite()),
+            "{id}: indicators {z:?} at t = {}",
+            i.time
+        );
+        z
+    };
+    let n = fmu.md.derivatives.len();
+    let mut z = indicators(&i);
+    let (mut events, mut time_events, mut steps) = (0usize, 0usize, 0usize);
+    while i.time < stop - 0.5 * h {
+        steps += 1;
+        assert!(
+            steps < 100 * ((stop / h) as usize + 1),
+            "{id}: no end of the run at t = {}",
+            i.time
+        );
+        let due = next.filter(|te| *te <= i.time + h);
+        let t1 = due.map_or(i.time + h, |te| te.max(i.time));
+        let (s, x) = i.vector("fmi3GetContinuousStates", api.get_continuous_states, n);
+        let (s2, dx) = i.vector(
+            "fmi3GetContinuousStateDerivatives",
+            api.get_continuous_state_derivatives,
+            n,
+        );
+        assert_eq!([s, s2], [fmi3OK; 2], "{id}: at t = {}: {}", i.time, i.log_text());
+        let x1: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + (t1 - i.time) * d).collect();
+        let s = i.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t1) });
+        let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {
+            (api.set_continuous_states)(c, x1.as_ptr(), n)
+        });
+        assert_eq!([s, s2], [fmi3OK; 2], "{id}: at t = {t1}: {}", i.log_text());
+        i.time = t1;
+        let (mut enter, mut term) = (7u8, 7u8);
+        let s = i.call("fmi3CompletedIntegratorStep", |c| unsafe {
+            (api.completed_integrator_step)(c, true, &mut enter, &mut term)
+        });
+        assert_eq!(
+            (s, term),
+            (fmi3OK, 0),
+            "{id}: fmi3CompletedIntegratorStep at t = {t1}: {}",
+            i.log_text()
+        );
+        let z1 = indicators(&i);
+        let state_event = z1.iter().zip(&z).any(|(a, b)| (*a > 0.0) != (*b > 0.0));
+        z = z1;
+        if due.is_some() || state_event || enter == 1 {
+            events += 1;
+            time_events += usize::from(due.is_some());
+            let s = i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) });
+            assert_eq!(s, fmi3OK, "{id}: fmi3EnterEventMode at t = {t1}: {}", i.log_text());
+            let (flags, after) = i.event_iteration_timed();
+            if flags[1] == 1 {
+                info(format!("the model ended the simulation at t = {t1}"));
+                break;
+            }
+            if let (Some(te), Some(later)) = (due, after) {
+                assert!(
+                    later > te,
+                    "{id}: after the time event at {te} the next one is at {later}, not later"
+                );
+            }
+            next = after;
+            enter_ct(&i);
+            z = indicators(&i);
+        }
+        if steps % 50 == 0 && nz > 0 {
+            let (s, x) = i.vector("fmi3GetContinuousStates", api.get_continuous_states, n);
+            let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {
+                (api.set_continuous_states)(c, x.as_ptr(), n)
+            });
+            assert_eq!([s, s2], [fmi3OK; 2], "{id}: {}", i.log_text());
+            assert_eq!(
+                crate::bits(&indicators(&i)),
+                crate::bits(&z),
+                "{id}: indicators at t = {} after the same states",
+                i.time
+            );
+        }
+    }
+    if events == 0 {
+        limitation(format!(
+            "{}events: no event in {stop} s ({nz} event indicators, no time event)",
+            crate::outcome::NOT_DECLARED
+        ));
+    }
+    info(format!(
+        "{steps} explicit-Euler steps up to t = {}: {events} events, {time_events} of them time events, {nz} event indicators",
+        i.time
+    ));
+}
