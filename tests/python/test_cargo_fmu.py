@@ -597,6 +597,104 @@ def test_a_pi_controller_sampled_every_10_ms_checks_clean_and_samples_on_time():
     assert abs(result["u"][1] - 2.01) < 1e-12, result
 
 
+EVENT_PI = """//! A PI controller sampled every Ts = 10 ms by time events: at each sample u = kp e + i, then i += ki Ts e.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A sampled PI controller on time events
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct EventPi {
+    /// Reference r
+    #[variable(vr = 0, input, start = 0.0)]
+    pub r: f64,
+    /// Measurement y
+    #[variable(vr = 1, input, start = 0.0)]
+    pub y: f64,
+    /// Command u, set at the samples and held between them
+    #[variable(vr = 2, output, discrete, initial = exact, start = 0.0, depends = [])]
+    pub u: f64,
+    /// Integral part i, held between samples
+    #[variable(vr = 3, local, discrete, initial = exact, start = 0.0)]
+    pub i: f64,
+    /// Proportional gain
+    #[variable(vr = 4, parameter, tunable, start = 2.0, min = 0.0, max = 100.0)]
+    pub kp: f64,
+    /// Integral gain (1/s)
+    #[variable(vr = 5, parameter, tunable, start = 1.0, min = 0.0, max = 100.0)]
+    pub ki: f64,
+    /// Sample period
+    #[variable(vr = 6, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
+    pub ts: f64,
+    /// Samples taken
+    #[variable(vr = 7, output, discrete, initial = exact, start = 0)]
+    pub samples: i32,
+}
+
+impl Model for EventPi {
+    fn update(&mut self, event: &mut Event) -> Result<(), String> {
+        if event.time_event() {
+            let e = self.r - self.y;
+            self.u = self.kp * e + self.i;
+            self.i += self.ki * self.ts * e;
+            self.samples = self.samples.saturating_add(1);
+        }
+        // The samples are at k Ts, k = 1, 2, ...: the next one after this event.
+        event.schedule(((event.time() / self.ts + 1e-9).floor() + 1.0) * self.ts);
+        Ok(())
+    }
+}
+
+impl CoSimulation for EventPi {}
+
+rustfmu::export_fmu!(EventPi);
+"""
+
+
+def test_a_pi_controller_sampled_by_time_events_is_the_same_in_model_exchange_and_co_simulation():
+    """Issue 24: the sampled PI written with the event declarations (`update` at time events, a
+    `discrete` output set there). `cargo fmu check` fails nothing in FMI 2.0 and 3.0; the
+    reference steps from 0 to 1 at 32.5 ms; in fmpy's Model Exchange (time events at k Ts, CVode)
+    and Co-Simulation (5 ms steps, the runtime stepping onto the sample instants) the command at
+    every sample instant is the same to the bit, held between the samples, and is
+    kp e + ki Ts e (k - 4) from the fourth sample on."""
+    crate, env = outside_crate("event-pi", fresh=True)
+    (crate / "src" / "lib.rs").write_text(EVENT_PI)
+    out = run(["cargo", "fmu", "build"], crate, env)
+    assert "fmu: note:" not in out.stderr, out.stderr[-4000:]
+    check_clean(crate, env, "EventPi")
+    import numpy as np
+    signal = np.array([(0.0, 0.0), (0.0325, 0.0), (0.0325, 1.0), (0.1, 1.0)], dtype=[("time", float), ("r", float)])
+    runs = {}
+    for version, path in (("2.0", FMUS / "EventPi.fmu"), ("3.0", FMUS / "fmi3" / "EventPi.fmu")):
+        for kind, kw in (("ME", dict(fmi_type="ModelExchange", output_interval=1e-3)),
+                         ("CS", dict(fmi_type="CoSimulation", output_interval=5e-3))):
+            runs[version, kind] = fmpy.simulate_fmu(str(path), stop_time=0.1, input=signal, output=["u", "samples"],
+                                                    **kw)
+
+    def at_samples(r):
+        # The last value recorded at each sample instant (after its event).
+        out = []
+        for k in range(1, 11):
+            i = np.flatnonzero(np.abs(r["time"] - k * 0.01) < 1e-9)
+            assert len(i), (k, r["time"])
+            out.append((r["u"][i[-1]], r["samples"][i[-1]]))
+        return out
+
+    me, cs = at_samples(runs["2.0", "ME"]), at_samples(runs["2.0", "CS"])
+    assert me == cs, (me, cs)
+    expected = [0.0] * 3 + [2.0 + 0.01 * (k - 4) for k in range(4, 11)]
+    assert [u for u, _ in me] == pytest.approx(expected, abs=1e-12)
+    assert [n for _, n in me] == list(range(1, 11))
+    for kind in ("ME", "CS"):
+        a, b = runs["2.0", kind], runs["3.0", kind]
+        assert np.array_equal(a["u"], b["u"]) and np.array_equal(a["time"], b["time"]), kind
+    # Held between the samples: constant on every (k Ts, (k + 1) Ts).
+    r = runs["2.0", "ME"]
+    for k in range(10):
+        inside = (r["time"] > k * 0.01 + 1e-9) & (r["time"] < (k + 1) * 0.01 - 1e-9)
+        assert len(set(r["u"][inside])) <= 1, (k, r["u"][inside])
+
+
 def test_cargo_fmu_build_refuses_a_depends_that_leaves_out_an_input():
     """Issue 23: a `depends` that misses an input the output uses passed `cargo fmu build` and
     `cargo fmu validate` and was caught only by `cargo fmu check`. The build's smoke run now asks
