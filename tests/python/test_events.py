@@ -156,3 +156,50 @@ def test_van_der_pol_agrees_between_the_interfaces_and_versions():
     assert np.array_equal(cs["x0"], cs3["x0"])
     # A limit cycle of amplitude about 2.
     assert 1.9 < np.max(np.abs(cs["x0"][len(cs) // 2:])) < 2.1
+
+
+def test_the_controllers_torque_limit_is_a_state_event_in_model_exchange():
+    """The paper's Controller declares its limits as event indicators (M1_margin ... U2_margin):
+    CVode stops where the PID demand reaches M_max (t = 12 s for alpha1 = 0.1 rad held, Kp1 = 8,
+    Ki1 = 1, M_max = 2) and the anti-windup's integral is held from there, as the analytic answer
+    says (examples/controller_limit_events.py measures the same with and without the indicators)."""
+    start = {"mode": 2, "M_max": 2.0, "Kp1": 8.0, "Ki1": 1.0, "alpha1": 0.1}
+    r = fmpy.simulate_fmu(fmu("Controller"), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-6,
+                          stop_time=20.0, output_interval=1e-2, start_values=start, output=["integral1", "M1"])
+    events = r["time"][1:][np.diff(r["time"]) == 0]
+    assert len(events) == 1 and abs(events[0] - 12.0) < 1e-4, events
+    analytic = -0.1 * np.minimum(r["time"], 12.0)
+    assert np.max(np.abs(r["integral1"] - analytic)) < 1e-6, np.max(np.abs(r["integral1"] - analytic))
+    assert r["M1"][-1] == -2.0
+
+
+def test_the_sampled_controller_in_model_exchange_equals_its_co_simulation_at_the_samples():
+    """sampled = true in Model Exchange: time events every Ts, the PID memory advancing at the
+    samples only and the measurement of the previous sample in the outputs (one sample of
+    delay), as a co-simulation step of Ts does. Driven by the same measured signal, the commands
+    at every sample instant agree to rounding (fmpy's co-simulation steps are differences of
+    communication points, Ts within a few ulps)."""
+    ts = 0.01
+    t = np.linspace(0.0, 0.2, 41)
+    signal = np.zeros(len(t), dtype=[("time", float), ("alpha1", float), ("omega1", float), ("alpha1_ref", float),
+                                     ("alpha2_ref", float)])
+    signal["time"], signal["alpha1"], signal["omega1"] = t, 0.3 * np.sin(20 * t), 6.0 * np.cos(20 * t)
+    start = {"sampled": True, "mode": 3, "Ts": ts}
+    out = ["M1", "M2", "U1", "U2", "integral1"]
+    kw = dict(stop_time=0.2, output_interval=ts, input=signal, start_values=start, output=out)
+    me = fmpy.simulate_fmu(fmu("Controller"), fmi_type="ModelExchange", **kw)
+    cs = fmpy.simulate_fmu(fmu("Controller"), fmi_type="CoSimulation", **kw)
+    saturated = 0
+    for k in range(1, 21):
+        i = np.flatnonzero(np.abs(me["time"] - k * ts) < 1e-9)[-1]
+        j = np.flatnonzero(np.abs(cs["time"] - k * ts) < 1e-9)[-1]
+        for name in out:
+            assert abs(me[name][i] - cs[name][j]) < 1e-12, (k, name, me[name][i], cs[name][j])
+        saturated += abs(cs["M1"][j]) == 20.0
+    # Through the limit and back.
+    assert 0 < saturated < 20
+    # Held between the samples: at 1 ms, constant on every (k Ts, (k + 1) Ts).
+    fine = fmpy.simulate_fmu(fmu("Controller"), fmi_type="ModelExchange", **dict(kw, output_interval=1e-3))
+    for k in range(20):
+        inside = (fine["time"] > k * ts + 1e-9) & (fine["time"] < (k + 1) * ts - 1e-9)
+        assert inside.sum() >= 8 and len(set(fine["M1"][inside])) == 1, (k, fine["M1"][inside])

@@ -571,10 +571,10 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     };
     for v in vars {
         if let Some(deps) = &v.depends {
-            if v.causality != Causality::Output && v.derivative_of.is_none() {
+            if v.causality != Causality::Output && v.derivative_of.is_none() && v.event_indicator.is_none() {
                 return Err(Error::new(
                     v.span,
-                    "only outputs (and derivatives) declare `depends`: it becomes their `dependencies` in ModelStructure",
+                    "only outputs, derivatives and event indicators declare `depends`: it becomes their `dependencies` in ModelStructure",
                 ));
             }
             for (d, span) in deps {

@@ -200,6 +200,48 @@ impl ControlLaw {
         x: [D; 4],
         reference: [D; 2],
     ) -> ([D; 2], [D; 2], [bool; 2]) {
+        let (demand, limited, volts) = self.demands_of(integral, rate_filter, x, reference);
+        let mut saturated = [false; 2];
+        let mut u = [D::from(0.0); 2];
+        for i in 0..2 {
+            u[i] = limit(volts[i], self.motor.u_max);
+            // At a limit from its value on (|M| >= M_max), as the event indicators'
+            // domains have it (limit_margins_of <= 0): at an event located on the limit the
+            // law is already the saturated one.
+            saturated[i] =
+                demand[i].re().abs() >= self.m_max || (self.drives_motors && volts[i].re().abs() >= self.motor.u_max);
+        }
+        (limited, u, saturated)
+    }
+
+    /// How far each command is from its limit: (M_max − |M_i|, U_max − |U_i|) with M_i the
+    /// demand before its limit and U_i the voltage before its limit. Positive inside the limits,
+    /// ≤ 0 at or beyond one; where one changes sign the law switches (the command is held, the
+    /// integrator stops): the event indicators of model exchange.
+    pub fn limit_margins_of<D: DualNum<Primitive = f64> + Copy>(
+        &self,
+        integral: [D; 2],
+        rate_filter: [D; 2],
+        x: [D; 4],
+        reference: [D; 2],
+    ) -> ([D; 2], [D; 2]) {
+        let (demand, _, volts) = self.demands_of(integral, rate_filter, x, reference);
+        let margin = |v: D, bound: f64| if v.re() < 0.0 { v + bound } else { -v + bound };
+        (
+            [margin(demand[0], self.m_max), margin(demand[1], self.m_max)],
+            [margin(volts[0], self.motor.u_max), margin(volts[1], self.motor.u_max)],
+        )
+    }
+
+    /// The demands M_i before their limit (eqs. (14), (16)), the limited torques, and the
+    /// voltages for those before the voltage limit.
+    fn demands_of<D: DualNum<Primitive = f64> + Copy>(
+        &self,
+        integral: [D; 2],
+        rate_filter: [D; 2],
+        x: [D; 4],
+        reference: [D; 2],
+    ) -> ([D; 2], [D; 2], [D; 2]) {
         let zero = D::from(0.0);
         let mut m = [zero; 2];
         if self.mode.lqr() {
@@ -222,17 +264,8 @@ impl ControlLaw {
             }
         }
         let re = |v: &[D]| v.iter().map(|d| d.re()).collect::<Vec<f64>>();
-        let limit = |v: D, bound: f64| {
-            if v.re() > bound {
-                D::from(bound)
-            } else if v.re() < -bound {
-                D::from(-bound)
-            } else {
-                v
-            }
-        };
-        let mut saturated = [false; 2];
-        let mut u = [zero; 2];
+        let mut limited = [zero; 2];
+        let mut volts = [zero; 2];
         let p = &self.motor;
         let n = p.gear_ratio;
         for i in 0..2 {
@@ -246,17 +279,14 @@ impl ControlLaw {
                 let r = Vector2::new(reference[0].re(), reference[1].re());
                 m[i] = D::from(self.wide_demand(i, &state, &x, &r).to_f64());
             }
-            let limited = limit(m[i], self.m_max);
+            limited[i] = limit(m[i], self.m_max);
             let omega = x[RATE[i]];
-            let mut volts = (limited + omega * (n * n * p.b)) * (p.r / (n * p.km)) + omega * (n * p.kb);
-            if !volts.re().is_finite() {
-                volts = D::from(self.wide_voltage(limited.re(), omega.re()).to_f64());
+            volts[i] = (limited[i] + omega * (n * n * p.b)) * (p.r / (n * p.km)) + omega * (n * p.kb);
+            if !volts[i].re().is_finite() {
+                volts[i] = D::from(self.wide_voltage(limited[i].re(), omega.re()).to_f64());
             }
-            u[i] = limit(volts, p.u_max);
-            saturated[i] = limited.re() != m[i].re() || (self.drives_motors && u[i].re() != volts.re());
-            m[i] = limited;
         }
-        (m, u, saturated)
+        (m, limited, volts)
     }
 
     /// The continuous-time memory's rates: (d∫e_i/dt, dω_f,i/dt). Conditional integration: no
@@ -360,6 +390,18 @@ fn within_f64<D: DualNum<Primitive = f64> + Copy>(v: D) -> D {
         D::from(-f64::MAX)
     } else {
         D::from(0.0)
+    }
+}
+
+/// `v` limited to ±`bound`, taken on the value: a limited command is the bound, with no
+/// derivative.
+fn limit<D: DualNum<Primitive = f64> + Copy>(v: D, bound: f64) -> D {
+    if v.re() > bound {
+        D::from(bound)
+    } else if v.re() < -bound {
+        D::from(-bound)
+    } else {
+        v
     }
 }
 

@@ -3,8 +3,11 @@
 //! (integrals, derivative filters) advances at communication points (a sampled controller); in
 //! model exchange it is four continuous states. Both compute the outputs from the inputs and
 //! that memory through the same law: from the inputs as they are (direct feedthrough, the
-//! default), or, with `sampled = true` (co-simulation only), from the inputs held at the last
-//! communication point, a digital controller with one step of computation delay.
+//! default), or, with `sampled = true`, from the inputs held at the last sample, a digital
+//! controller with one sample of computation delay: its samples are the communication points in
+//! co-simulation and time events every `Ts` in model exchange. Its torque and voltage limits are
+//! event indicators (`M1_margin` .. `U2_margin`), so a model-exchange importer stops where the
+//! law switches.
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
@@ -105,9 +108,24 @@ pub struct Controller {
     /// alpha2_ref held at the last communication point, as alpha1_sample
     #[variable(vr = 95, local, discrete, unit = "rad")]
     pub alpha2_ref_sample: f64,
-    /// false (default): M, U follow the inputs as they are set (direct feedthrough, the paper's continuous state feedback). true: a digital controller with one communication step of computation delay: M, U at a communication point come from the inputs held at the previous one (alpha1_sample, ...). Co-simulation only: refused at initialization in model exchange, which has no communication points
+    /// false (default): M, U follow the inputs as they are set (direct feedthrough, the paper's continuous state feedback). true: a digital controller with one sample of computation delay: M, U at a sample instant come from the inputs held at the previous one (alpha1_sample, ...) and the PID memory advances from sample to sample. The samples are the communication points in co-simulation, and every Ts in model exchange (time events)
     #[variable(vr = 30, parameter, fixed, start = false)]
     pub sampled: bool,
+    /// Sample period of sampled = true in model exchange (time events at start + k Ts); co-simulation samples at its communication points
+    #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
+    pub Ts: f64,
+    /// Distance of the demand for joint 1 from the torque limit, M_max - |M1 before the limit|: > 0 inside, <= 0 at the limit (an event indicator: where it changes sign, M1 is held and the integrator stops)
+    #[variable(vr = 100, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    pub M1_margin: f64,
+    /// M_max - |M2 before the limit|, as M1_margin
+    #[variable(vr = 101, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    pub M2_margin: f64,
+    /// Distance of the voltage for joint 1 from the supply limit, U_max - |U1 before the limit| (an event indicator)
+    #[variable(vr = 102, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+    pub U1_margin: f64,
+    /// U_max - |U2 before the limit|, as U1_margin
+    #[variable(vr = 103, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+    pub U2_margin: f64,
     /// Control law: LQR (M = -K (x - x_ref)), PID per joint, or LQR + PID
     #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
     pub mode: ControlMode,
@@ -219,6 +237,13 @@ pub struct Controller {
     /// LQR gain K(2,4) (paper: 0.9957)
     #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K24: f64,
+    /// Sampled in model exchange: the memory changes at the samples only (time events).
+    pub sampled_events: bool,
+    /// The measurement at the last sample instant (alpha1, omega1, alpha2, omega2, alpha1_ref,
+    /// alpha2_ref), which the next sample uses (the one sample of delay).
+    pub pending: [f64; 6],
+    /// Samples taken since initialization (model exchange).
+    pub samples_taken: u64,
 }
 
 impl Controller {
@@ -323,14 +348,8 @@ fn knowns<D: Copy>(v: &ControllerContinuous<D>) -> ([D; 2], [D; 2], [D; 4], [D; 
 
 impl Model for Controller {
     fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
-        if self.sampled && ctx.model_exchange() {
-            return Err(
-                "sampled = true delays the outputs by one communication step, and model exchange has no \
-                        communication points: set sampled = false (outputs follow the inputs) or instantiate for \
-                        co-simulation"
-                    .into(),
-            );
-        }
+        self.sampled_events = self.sampled && ctx.model_exchange();
+        self.samples_taken = 0;
         self.hold();
         let v = &*self;
         let q = Matrix4::from_diagonal(&Vector4::new(v.Q11, v.Q22, v.Q33, v.Q44));
@@ -346,9 +365,14 @@ impl Model for Controller {
         Ok(())
     }
 
-    /// The PID memory in continuous time (model exchange).
+    /// The PID memory in continuous time (model exchange); sampled, it changes at the samples only.
     fn derivatives<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
         let (integral, filter, x, reference) = knowns(v);
+        if self.sampled_events {
+            let zero = integral[0] * 0.0;
+            [v.der_integral1, v.der_integral2, v.der_rate_filter1, v.der_rate_filter2] = [zero; 4];
+            return;
+        }
         let (d_integral, d_filter) = self.law().rates_of(integral, filter, x, reference);
         [v.der_integral1, v.der_integral2] = d_integral;
         [v.der_rate_filter1, v.der_rate_filter2] = d_filter;
@@ -368,9 +392,50 @@ impl Model for Controller {
             .map(D::from);
             reference = [self.alpha1_ref_sample, self.alpha2_ref_sample].map(D::from);
         }
-        let (m, u, _) = self.law().command_of(integral, filter, x, reference);
+        let law = self.law();
+        let (m, u, _) = law.command_of(integral, filter, x, reference);
         [v.M1, v.M2] = m;
         [v.U1, v.U2] = u;
+        // The event indicators: where a command reaches or leaves its limit.
+        let (m_margin, u_margin) = law.limit_margins_of(integral, filter, x, reference);
+        [v.M1_margin, v.M2_margin] = m_margin;
+        [v.U1_margin, v.U2_margin] = u_margin;
+    }
+
+    /// Sampled in model exchange, at the sample instants start + k Ts (time events): the memory
+    /// advances over Ts from the measurement of the previous sample, which becomes the one the
+    /// outputs use; the measurement now waits for the next sample. This is what a co-simulation
+    /// step of h = Ts does ([`CoSimulation::do_step`] below), so both agree at the samples. At
+    /// a limit's event (an indicator) nothing is stored: the law switches by itself.
+    fn update(&mut self, event: &mut Event) -> Result<(), String> {
+        if !self.sampled_events {
+            return Ok(());
+        }
+        let (x, reference) = self.measurement();
+        let now = [x[0], x[1], x[2], x[3], reference[0], reference[1]];
+        if event.time_event() {
+            let p = self.pending;
+            let (x_prev, ref_prev) = (Vector4::new(p[0], p[1], p[2], p[3]), Vector2::new(p[4], p[5]));
+            let law = self.law();
+            let s = self.memory();
+            let command = law.command(&s, &x_prev, &ref_prev);
+            self.set_memory(&law.advance(&s, &x_prev, &ref_prev, &command, self.Ts));
+            (
+                self.alpha1_sample,
+                self.omega1_sample,
+                self.alpha2_sample,
+                self.omega2_sample,
+                self.alpha1_ref_sample,
+                self.alpha2_ref_sample,
+            ) = (p[0], p[1], p[2], p[3], p[4], p[5]);
+            self.samples_taken += 1;
+        }
+        if event.initial() || event.time_event() {
+            self.pending = now;
+            let start = event.context().start_time();
+            event.schedule(start + (self.samples_taken + 1) as f64 * self.Ts);
+        }
+        Ok(())
     }
 }
 

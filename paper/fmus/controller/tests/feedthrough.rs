@@ -1,9 +1,12 @@
 //! When the Controller's outputs follow its inputs: at once by default (direct feedthrough, the
 //! paper's continuous state feedback), one communication step later with `sampled = true` (a
-//! digital controller with computation delay), which model exchange refuses.
+//! digital controller with computation delay; in model exchange the samples are time events).
 
 mod common;
 use common::*;
+use controller_fmu::__rustfmu_fmi2_exports::{
+    fmi2EnterContinuousTimeMode, fmi2EnterEventMode, fmi2NewDiscreteStates, fmi2SetTime,
+};
 use rustfmu::__private::abi::*;
 
 const STATE: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
@@ -67,19 +70,56 @@ fn sampled_outputs_come_from_the_inputs_of_the_previous_communication_point() {
     assert_eq!(held, X2.to_vec(), "the sample held at t = 1 ms");
 }
 
+/// fmi2NewDiscreteStates: (status, nextEventTime if defined, valuesOfContinuousStatesChanged).
+fn new_discrete_states(c: &Fmu) -> (fmi2Status, Option<f64>, bool) {
+    let mut info = fmi2EventInfo {
+        newDiscreteStatesNeeded: 0,
+        terminateSimulation: 0,
+        nominalsOfContinuousStatesChanged: 0,
+        valuesOfContinuousStatesChanged: 0,
+        nextEventTimeDefined: 0,
+        nextEventTime: 0.0,
+    };
+    // SAFETY: a live instance and a writable event info.
+    let s = unsafe { fmi2NewDiscreteStates(c.c, &mut info) };
+    (
+        s,
+        (info.nextEventTimeDefined == fmi2True).then_some(info.nextEventTime),
+        info.valuesOfContinuousStatesChanged == fmi2True,
+    )
+}
+
 #[test]
-fn sampled_is_refused_in_model_exchange() {
+fn sampled_model_exchange_samples_on_time_events_every_ts() {
     let c = Fmu::instantiate(fmi2ModelExchange);
     assert_eq!(c.set_boolean("sampled", true), fmi2OK);
-    let status = c.exit_init();
-    let messages = c.messages();
-    assert_ne!(status, fmi2OK, "model exchange accepted sampled = true: {messages:?}");
-    assert!(
-        messages
-            .iter()
-            .any(|(_, m)| m.contains("sampled = true") && m.contains("model exchange")),
-        "the refusal should name sampled and model exchange: {messages:?}"
-    );
+    assert_eq!(c.set(&[("Ts", 0.02)]), fmi2OK);
+    set_state(&c, X0);
+    assert_eq!(c.exit_init(), fmi2OK, "{:?}", c.messages());
+    // The initial event: the first sample at Ts; the outputs use the measurement of the start.
+    assert_eq!(new_discrete_states(&c), (fmi2OK, Some(0.02), false));
+    // SAFETY: a live instance.
+    assert_eq!(unsafe { fmi2EnterContinuousTimeMode(c.c) }, fmi2OK);
+    set_state(&c, X1);
+    assert_torques(&c, lqr(&c, X0), "x1 set between the samples: still the sample of t = 0");
+    // SAFETY: a live instance.
+    unsafe {
+        assert_eq!(fmi2SetTime(c.c, 0.02), fmi2OK);
+        assert_eq!(fmi2EnterEventMode(c.c), fmi2OK);
+    }
+    // The sample at Ts: the outputs now use the measurement of the previous sample (x0, one
+    // sample of delay), and x1 waits for the next one.
+    let (s, next, _) = new_discrete_states(&c);
+    assert_eq!((s, next), (fmi2OK, Some(0.04)), "{:?}", c.messages());
+    assert_torques(&c, lqr(&c, X0), "at the first sample: the measurement of t = 0");
+    // SAFETY: a live instance.
+    unsafe {
+        assert_eq!(fmi2EnterContinuousTimeMode(c.c), fmi2OK);
+        assert_eq!(fmi2SetTime(c.c, 0.04), fmi2OK);
+        assert_eq!(fmi2EnterEventMode(c.c), fmi2OK);
+    }
+    assert_eq!(new_discrete_states(&c).1, Some(0.06));
+    assert_torques(&c, lqr(&c, X1), "at the second sample: the measurement of the first");
 }
 
 #[test]
