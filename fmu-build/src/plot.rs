@@ -36,10 +36,10 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
     let outputs: Vec<&Variable> = d
         .variables
         .iter()
-        .filter(|v| v.causality == Causality::Output && v.var_type == VarType::Real)
+        .filter(|v| v.causality == Causality::Output && matches!(v.var_type, VarType::Real | VarType::Integer))
         .collect();
     if outputs.is_empty() {
-        return Err("the model has no Real output to plot".into());
+        return Err("the model has no Real or Integer output to plot".into());
     }
     let e = d.default_experiment.unwrap_or_default();
     let start = e.start_time.unwrap_or(0.0);
@@ -58,7 +58,21 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
     };
     let api = Api::load(so, false, guid, resource_uri)?;
     let do_step = api.fmi.do_step;
-    let vrs: Vec<u32> = outputs.iter().map(|v| v.value_reference).collect();
+    let of = |ty: VarType| -> Vec<u32> {
+        outputs
+            .iter()
+            .filter(|v| v.var_type == ty)
+            .map(|v| v.value_reference)
+            .collect()
+    };
+    let (vrs, int_vrs) = (of(VarType::Real), of(VarType::Integer));
+    // The curves in that order: the Real outputs, then the Integer ones (a counter, Stair's).
+    let outputs: Vec<&Variable> = outputs
+        .iter()
+        .filter(|v| v.var_type == VarType::Real)
+        .chain(outputs.iter().filter(|v| v.var_type == VarType::Integer))
+        .copied()
+        .collect();
     api.with_instance_at(start, Some(stop), |c, ok| {
         // SAFETY: `c` is live; every array passed has the length passed with it.
         unsafe {
@@ -77,17 +91,26 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
                 stopped: None,
             };
             let mut y = vec![0.0; vrs.len()];
-            let record = |run: &mut Run, t: f64, y: &[f64]| {
+            let mut k = vec![0i32; int_vrs.len()];
+            let record = |run: &mut Run, t: f64, y: &[f64], k: &[i32]| {
                 run.times.push(t);
-                for (curve, &value) in run.curves.iter_mut().zip(y) {
+                let values = y.iter().copied().chain(k.iter().map(|&n| f64::from(n)));
+                for (curve, value) in run.curves.iter_mut().zip(values) {
                     curve.values.push(value);
                 }
             };
-            ok(
-                (api.fmi.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
-                "fmi2GetReal",
-            )?;
-            record(&mut run, start, &y);
+            let get = |y: &mut [f64], k: &mut [i32]| -> Result<(), String> {
+                ok(
+                    (api.fmi.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
+                    "fmi2GetReal",
+                )?;
+                ok(
+                    (api.fmi.get_integer)(c, int_vrs.as_ptr(), int_vrs.len(), k.as_mut_ptr()),
+                    "fmi2GetInteger",
+                )
+            };
+            get(&mut y, &mut k)?;
+            record(&mut run, start, &y, &k);
             let mut t = start;
             let mut n = 0usize;
             while t < stop - 1e-12 * (stop - start) {
@@ -100,11 +123,8 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
                 t += step;
                 n += 1;
                 if n.is_multiple_of(stride) || t >= stop - 1e-12 * (stop - start) {
-                    ok(
-                        (api.fmi.get_real)(c, vrs.as_ptr(), vrs.len(), y.as_mut_ptr()),
-                        "fmi2GetReal",
-                    )?;
-                    record(&mut run, t, &y);
+                    get(&mut y, &mut k)?;
+                    record(&mut run, t, &y, &k);
                 }
             }
             Ok(run)
