@@ -370,6 +370,18 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         model.set_states(&x);
         now = reached;
         let time_event_now = time_event.is_some_and(|te| reached >= te.min(end));
+        if (state_event || time_event_now) && ctx.return_at_events {
+            // FMI 3.0 event mode with early return: stop here, the event unhandled; the
+            // importer enters Event Mode (a time event within round-off of the step's end is at
+            // the end).
+            crate::core::instance::evaluate(model, now);
+            clock.stopped_at = Some(now);
+            if let Some(c) = ctx.events.as_deref_mut() {
+                *c = clock;
+            }
+            ctx.refreshed = true;
+            return Ok(());
+        }
         if state_event || time_event_now {
             events += 1;
             if events > MAX_EVENTS_PER_STEP {
@@ -394,6 +406,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                 refreshed: false,
                 model_exchange: false,
                 events: None,
+                return_at_events: false,
             };
             match iterate(model, &solver_ctx, now, &mut clock) {
                 Ok((_, None)) => {}

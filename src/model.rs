@@ -318,6 +318,9 @@ pub struct Context<'a> {
     /// The pending time event and the termination request, in a communication step (the
     /// runtime's integrator handles the model's events inside the step).
     pub(crate) events: Option<&'a mut EventClock>,
+    /// FMI 3.0 event mode with early return: the step stops at the first event and leaves it to
+    /// the importer ([`EventClock::stopped_at`]).
+    pub(crate) return_at_events: bool,
 }
 
 /// The runtime's part of a model's events, kept in the FMU state: the time event the model asked
@@ -332,6 +335,10 @@ pub struct EventClock {
     pub count: u64,
     /// The model asked to end the simulation ([`crate::Event::terminate`]).
     pub terminated: bool,
+    /// The step stopped at this event, unhandled, for the importer's Event Mode (FMI 3.0 event
+    /// mode with early return); taken by the runtime after the step.
+    #[serde(skip)]
+    pub stopped_at: Option<f64>,
 }
 
 impl Context<'_> {
@@ -347,6 +354,7 @@ impl Context<'_> {
             refreshed: false,
             model_exchange: false,
             events: None,
+            return_at_events: false,
         }
     }
 
@@ -362,6 +370,7 @@ impl Context<'_> {
             refreshed: false,
             model_exchange: false,
             events: None,
+            return_at_events: false,
         }
     }
 

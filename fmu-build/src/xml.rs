@@ -593,7 +593,10 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
                 ("canSerializeFMUState", "true"),
                 ("providesDirectionalDerivatives", "true"),
                 ("providesAdjointDerivatives", "true"),
-                ("hasEventMode", "false"),
+                // Events are handled inside fmi3DoStep, or with eventModeUsed by the importer
+                // (with earlyReturnAllowed, the step returns at each event).
+                ("mightReturnEarlyFromDoStep", "true"),
+                ("hasEventMode", "true"),
             ],
         )?;
     }
@@ -1052,7 +1055,7 @@ mod tests {
             "{xml}"
         );
         assert!(xml.contains(r#"<ModelExchange modelIdentifier="Lag" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true"/>"#), "{xml}");
-        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" hasEventMode="false"/>"#), "{xml}");
+        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" mightReturnEarlyFromDoStep="true" hasEventMode="true"/>"#), "{xml}");
         let order = [
             "<ModelExchange ",
             "<CoSimulation ",

@@ -93,6 +93,14 @@ pub struct Instance<M: CoSimulation> {
     pub terms: &'static Terms,
     /// `terms.version`, kept here: the state check reads it on every call.
     pub version: Version,
+    /// FMI 3.0 co-simulation with event mode (`eventModeUsed`): the importer handles the events
+    /// in Event Mode (fmi3EnterEventMode, fmi3UpdateDiscreteStates, fmi3EnterStepMode).
+    pub event_mode_used: bool,
+    /// ... and `earlyReturnAllowed`: fmi3DoStep returns at an event inside the step.
+    pub early_return_allowed: bool,
+    /// The last step ended at an event the importer is to handle (fmi3DoStep's
+    /// `eventHandlingNeeded`).
+    pub step_event: bool,
 }
 
 /// The first Real variable the model computes (output, local, calculated parameter), or the
@@ -139,6 +147,9 @@ impl<M: CoSimulation> Instance<M> {
             resources: None,
             terms,
             version: terms.version,
+            event_mode_used: false,
+            early_return_allowed: false,
+            step_event: false,
         }
     }
 
@@ -181,18 +192,36 @@ impl<M: CoSimulation> Instance<M> {
     #[inline(always)]
     pub fn check_state(&self, call: Call, function: &str) -> Outcome {
         let right_interface = match call.interface() {
-            Some(model_exchange) => model_exchange == self.model_exchange,
+            Some(model_exchange) => model_exchange == self.model_exchange || self.cs_event_mode_call(call),
             None => true,
-        };
+        } && (call != Call::EnterStepMode || self.event_mode_used);
         if right_interface && contains(call.allowed(self.version), self.sim.state) {
             return Ok(());
         }
         Err(self.refuse_call(call, function))
     }
 
+    /// The calls of Event Mode that an FMI 3.0 co-simulation instance with event mode makes too.
+    #[inline]
+    fn cs_event_mode_call(&self, call: Call) -> bool {
+        self.event_mode_used && matches!(call, Call::EnterEventMode | Call::NewDiscreteStates)
+    }
+
     /// Why `call` is refused here, logged.
     #[cold]
     fn refuse_call(&self, call: Call, function: &str) -> Status {
+        if !self.model_exchange
+            && !self.event_mode_used
+            && self.version == Version::Fmi3
+            && matches!(
+                call,
+                Call::EnterEventMode | Call::NewDiscreteStates | Call::EnterStepMode
+            )
+        {
+            return self.error(&format!(
+                "{function} is for co-simulation with event mode: this instance was made with eventModeUsed = false"
+            ));
+        }
         if let Some(model_exchange) = call.interface()
             && model_exchange != self.model_exchange
         {
@@ -283,6 +312,7 @@ impl<M: CoSimulation> Instance<M> {
             refreshed: false,
             model_exchange: self.model_exchange,
             events: None,
+            return_at_events: false,
         };
         let outcome = self
             .sim
@@ -319,10 +349,10 @@ impl<M: CoSimulation> Instance<M> {
             initial: true,
             ..EventClock::default()
         };
-        if !self.model_exchange {
-            // Co-simulation has no event mode for the importer: the event iteration at the
-            // start runs here (Model Exchange: the importer's first new-discrete-states calls),
-            // all or nothing.
+        if !self.model_exchange && !self.event_mode_used {
+            // Co-simulation without event mode: the event iteration at the start runs here
+            // (Model Exchange and FMI 3.0's event mode: the importer's first
+            // new-discrete-states calls), all or nothing.
             let f = self.terms.name(Function::ExitInitializationMode);
             let mut info = EventInfo::default();
             let status = self.event_iteration(f, &mut info, true);
@@ -337,7 +367,7 @@ impl<M: CoSimulation> Instance<M> {
                 self.sim.terminate_requested = true;
             }
         }
-        self.sim.state = if self.model_exchange {
+        self.sim.state = if self.model_exchange || self.event_mode_used {
             State::EventMode
         } else {
             State::StepComplete
@@ -548,6 +578,7 @@ impl<M: CoSimulation> Instance<M> {
                 refreshed: false,
                 model_exchange: self.model_exchange,
                 events: None,
+                return_at_events: false,
             };
             let outcome = self
                 .sim
@@ -618,7 +649,9 @@ impl<M: CoSimulation> Instance<M> {
             refreshed: false,
             model_exchange: self.model_exchange,
             events: Some(&mut self.sim.events),
+            return_at_events: self.event_mode_used && self.early_return_allowed,
         };
+        self.step_event = false;
         let mut outcome = self.sim.model.do_step(t, h, &mut ctx);
         let refreshed = ctx.refreshed;
         if self.sim.events.terminated {
@@ -645,7 +678,18 @@ impl<M: CoSimulation> Instance<M> {
             self.sim.solver = before_solver;
             self.sim.solver.restart();
         }
+        let stopped_at = self.sim.events.stopped_at.take();
         match (outcome, non_finite(&self.sim.model)) {
+            (Ok(()), None) if stopped_at.is_some() => {
+                // FMI 3.0 event mode with early return: the step ends at the event, which the
+                // importer handles in Event Mode.
+                let at = stopped_at.unwrap_or(end).clamp(t, end);
+                self.sim.time = at;
+                self.sim.last_successful_time = at;
+                self.step_event = true;
+                self.event(|| format!("{f}: an event at t = {at}: returning for the importer to handle it"));
+                OK
+            }
             (Ok(()), None) => {
                 self.sim.time = end;
                 self.sim.last_successful_time = end;
@@ -845,7 +889,11 @@ impl<M: CoSimulation> Instance<M> {
     /// model-exchange instance restored into a co-simulation one would leave it in a state
     /// its interface does not have).
     pub fn state_fits(&self, state: State) -> bool {
-        let me_only = matches!(state, State::EventMode | State::ContinuousTimeMode);
+        let me_only = match state {
+            State::ContinuousTimeMode => true,
+            State::EventMode => !self.event_mode_used,
+            _ => false,
+        };
         let cs_only = matches!(state, State::StepComplete | State::StepFailed | State::StepCanceled);
         if self.model_exchange { !cs_only } else { !me_only }
     }
@@ -927,6 +975,7 @@ impl<M: CoSimulation> Instance<M> {
             refreshed: false,
             model_exchange: self.model_exchange,
             events: None,
+            return_at_events: false,
         };
         let time = self.sim.time;
         let outcome = if all_rounds {
@@ -981,6 +1030,15 @@ impl<M: CoSimulation> Instance<M> {
                 ))
             }
         }
+    }
+
+    /// fmi3EnterStepMode (co-simulation with event mode): the events handled, stepping resumes.
+    pub fn enter_step_mode(&mut self) -> Status {
+        self.sim.state = State::StepComplete;
+        self.sim.events.initial = false;
+        self.sim.solver.restart();
+        self.step_event = false;
+        OK
     }
 
     pub fn enter_continuous_time_mode(&mut self) -> Status {

@@ -100,7 +100,8 @@ pub enum Call {
     GetNumberOf,
     /// FMI 3.0 only: fmi3EvaluateDiscreteStates.
     EvaluateDiscreteStates,
-    /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode, which no FMU here has).
+    /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode; the instance checks that
+    /// it was made with eventModeUsed).
     EnterStepMode,
 }
 
@@ -141,9 +142,10 @@ impl Call {
     }
 
     /// The FMI 3.0 table (sections 3.2 and 4.2 of FMI 3.0, as the Reference-FMUs encode it) for
-    /// the FMUs this runtime makes: no event mode in co-simulation, no clocks, no configuration
+    /// the FMUs this runtime makes: co-simulation's event mode (Event Mode ⇄ Step Mode, for
+    /// instances made with eventModeUsed: `Instance::check_state`), no clocks, no configuration
     /// mode. `StepComplete` is 3.0's Step Mode, `StepFailed` its Step Discarded. Where 3.0 differs
-    /// from 2.0: fmi3EnterEventMode only from Continuous-Time Mode; the model-exchange
+    /// from 2.0: fmi3EnterEventMode from Continuous-Time Mode (and Step Mode); the model-exchange
     /// evaluations also in Initialization Mode; the nominals not before initialization; the
     /// getters also in Instantiated (FMI 3.0.2: "get variable start values", fmi-standard #2174),
     /// for the variables that have a start value (`Instance::get_values`).
@@ -151,14 +153,16 @@ impl Call {
     pub const fn allowed_in3(self) -> u16 {
         match self {
             Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
-            Call::EnterEventMode => CONTINUOUS,
+            // From Step Mode too: co-simulation with event mode (the instance checks that it
+            // was made with eventModeUsed).
+            Call::EnterEventMode => CONTINUOUS | STEP_COMPLETE,
             Call::GetDerivatives | Call::GetEventIndicators | Call::GetContinuousStates => {
                 INIT | EVENT | CONTINUOUS | TERMINATED | ERROR
             }
             Call::GetNominalsOfContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetNumberOf => ANY_BUT_FATAL,
             Call::EvaluateDiscreteStates => EVENT,
-            Call::EnterStepMode => 0,
+            Call::EnterStepMode => EVENT,
             // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
             // fmi3GetStatus in FMI 3.0.
             Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,

@@ -54,6 +54,7 @@ unsafe fn instantiate<M: CoSimulation>(
     log_message: fmi3LogMessageCallback,
     model_exchange: bool,
     refusal: Option<String>,
+    event_mode: (bool, bool),
 ) -> fmi3Instance {
     let made = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: NUL-terminated strings from the importer, or NULL.
@@ -95,6 +96,7 @@ unsafe fn instantiate<M: CoSimulation>(
             Some(_) => {}
         }
         let mut inst = Instance::<M>::new(&TERMS, logger, own_token, model_exchange);
+        (inst.event_mode_used, inst.early_return_allowed) = event_mode;
         inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
         inst.event(|| match resources.as_deref().map(|r| (r, resource_dir(r))) {
             Some((_, Some(dir))) if dir.is_dir() => format!("resourcePath is {}", dir.display()),
@@ -135,6 +137,7 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
             log_message,
             true,
             None,
+            (false, false),
         )
     }
 }
@@ -148,7 +151,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     _visible: fmi3Boolean,
     logging_on: fmi3Boolean,
     event_mode_used: fmi3Boolean,
-    _early_return_allowed: fmi3Boolean,
+    early_return_allowed: fmi3Boolean,
     _required_intermediate_variables: *const fmi3ValueReference,
     _n_required_intermediate_variables: usize,
     environment: fmi3InstanceEnvironment,
@@ -156,10 +159,10 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     _intermediate_update: fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance {
     // This FMU provides no intermediate update (providesIntermediateUpdate="false"), so the
-    // required intermediate variables and the callback are never used; it never returns early.
-    let refusal = event_mode_used.then(|| {
-        "eventModeUsed = true, but this FMU has no event mode in co-simulation (hasEventMode=\"false\")".to_string()
-    });
+    // required intermediate variables and the callback are never used. With eventModeUsed the
+    // importer handles the events in Event Mode; with earlyReturnAllowed too, fmi3DoStep returns
+    // at each event (hasEventMode="true", mightReturnEarlyFromDoStep="true").
+    let refusal = None;
     // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
     unsafe {
         instantiate::<M>(
@@ -174,6 +177,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
             log_message,
             false,
             refusal,
+            (event_mode_used, event_mode_used && early_return_allowed),
         )
     }
 }
@@ -780,8 +784,8 @@ pub unsafe fn evaluate_discrete_states<M: CoSimulation>(c: fmi3Instance) -> fmi3
 pub unsafe fn enter_step_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::EnterStepMode, "fmi3EnterStepMode", |_| {
-        unreachable!("EnterStepMode is allowed in no state of an FMU without event mode")
+    with_instance(component, Call::EnterStepMode, "fmi3EnterStepMode", |inst| {
+        inst.enter_step_mode()
     })
 }
 
@@ -936,13 +940,15 @@ pub unsafe fn do_step<M: CoSimulation>(
             ));
         }
         let status = inst.do_step(current_communication_point, communication_step_size);
-        // No event mode, no intermediate update: never an event to handle, never early.
+        // An event to handle only with event mode and early return (the step then ends at it).
+        let end = current_communication_point + communication_step_size;
+        let early = inst.step_event && inst.sim.last_successful_time < end;
         // SAFETY: none is NULL (checked above); the contract makes each writable. Written
         // through the raw pointers, which need not be distinct.
         unsafe {
-            *event_handling_needed = false;
+            *event_handling_needed = inst.step_event;
             *terminate_simulation = inst.sim.terminate_requested;
-            *early_return = false;
+            *early_return = early;
             *last_successful_time = inst.sim.last_successful_time;
         }
         status

@@ -203,3 +203,23 @@ def test_the_sampled_controller_in_model_exchange_equals_its_co_simulation_at_th
     for k in range(20):
         inside = (fine["time"] > k * ts + 1e-9) & (fine["time"] < (k + 1) * ts - 1e-9)
         assert inside.sum() >= 8 and len(set(fine["M1"][inside])) == 1, (k, fine["M1"][inside])
+
+
+def test_fmi3_co_simulation_with_event_mode_returns_at_every_bounce():
+    """FMI 3.0 Co-Simulation with eventModeUsed and earlyReturnAllowed (fmpy's use_event_mode,
+    early_return_allowed): fmi3DoStep returns early at each bounce with eventHandlingNeeded, fmpy
+    handles it in Event Mode (fmi3UpdateDiscreteStates) and steps on from there. The early returns
+    are the analytic bounce times within 1e-9 s, and at the communication points the ball is where
+    the run without event mode (events handled inside the step) puts it."""
+    kw = dict(fmi_type="CoSimulation", output_interval=1e-2)
+    r = simulate(fmu3("BouncingBall"), use_event_mode=True, early_return_allowed=True, **kw)
+    inside = r["time"][np.abs(r["time"] / 1e-2 - np.round(r["time"] / 1e-2)) > 1e-6]
+    returns = np.unique(inside)
+    seq = [tb for tb, _ in bounces()]
+    assert len(returns) == len(seq), (returns, seq)
+    assert np.max(np.abs(returns - seq)) < 1e-9, np.max(np.abs(returns - seq))
+    internal = simulate(fmu3("BouncingBall"), **kw)
+    on_grid = np.abs(r["time"] / 1e-2 - np.round(r["time"] / 1e-2)) <= 1e-6
+    assert on_grid.sum() == len(internal)
+    assert np.max(np.abs(r["h"][on_grid] - internal["h"])) < 1e-12
+    assert np.max(np.abs(r["v"][on_grid] - internal["v"])) < 1e-11

@@ -238,7 +238,17 @@ impl<'a> Inst<'a> {
         Self::try_new(fmu, true, "me").unwrap_or_else(|e| panic!("{}: {e}", fmu.id))
     }
 
+    /// A co-simulation instance with event mode and early return, panicking if it is NULL.
+    pub fn cs_event_mode(fmu: &'a Fmu3) -> Inst<'a> {
+        Self::try_new_with(fmu, false, "cs-events", true).unwrap_or_else(|e| panic!("{}: {e}", fmu.id))
+    }
+
     pub fn try_new(fmu: &'a Fmu3, me: bool, name: &str) -> Result<Inst<'a>, String> {
+        Self::try_new_with(fmu, me, name, false)
+    }
+
+    /// `event_mode`: co-simulation with eventModeUsed and earlyReturnAllowed.
+    pub fn try_new_with(fmu: &'a Fmu3, me: bool, name: &str, event_mode: bool) -> Result<Inst<'a>, String> {
         let sink = Box::<LogSink>::default();
         let name = CString::new(name).unwrap();
         let token = CString::new(fmu.md.token.as_str()).map_err(|e| e.to_string())?;
@@ -267,8 +277,8 @@ impl<'a> Inst<'a> {
                     res.as_ptr(),
                     false,
                     false,
-                    false,
-                    false,
+                    event_mode,
+                    event_mode,
                     std::ptr::null(),
                     0,
                     sink.env(),

@@ -93,6 +93,11 @@ fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states() {
 }
 
 #[test]
+fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer() {
+    on_every_fmu("fmi3_co_simulation_event_mode_hands_the_events_to_the_importer");
+}
+
+#[test]
 fn fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose() {
     on_every_fmu(
         "fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose",

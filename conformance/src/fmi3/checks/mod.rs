@@ -56,6 +56,7 @@ crate::checks::registry! {
             fmi3_model_exchange_states_and_derivatives_are_consistent,
             fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run,
             fmi3_model_exchange_events_are_reached_settle_and_follow_the_states,
+            fmi3_co_simulation_event_mode_hands_the_events_to_the_importer,
         };
         DirectionalDerivatives: directional_derivatives::{
             fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,

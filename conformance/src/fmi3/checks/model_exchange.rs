@@ -250,3 +250,82 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
         i.time
     ));
 }
+
+/// Co-simulation with event mode (`hasEventMode="true"`; instantiated with eventModeUsed and
+/// earlyReturnAllowed), as an importer runs it up to the default experiment's stop time (at most
+/// 2 s): after initialization the instance is in Event Mode (fmi3UpdateDiscreteStates settles,
+/// fmi3EnterStepMode); every fmi3DoStep completes, or returns at an event with
+/// eventHandlingNeeded, earlyReturn exactly when it stopped before the step's end, and
+/// lastSuccessfulTime within the step; the event is then handled in Event Mode and stepping
+/// resumes from there.
+pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3) {
+    let Some(cs) = &fmu.md.cs else {
+        skip_not_declared("<CoSimulation>");
+    };
+    if !cs.has_event_mode {
+        skip_not_declared("hasEventMode");
+    }
+    let id = &fmu.id;
+    let h = fmu.step_size();
+    let stop = fmu.md.default_experiment.stop_time().unwrap_or(1.0).clamp(h, 2.0);
+    let mut i = Inst::cs_event_mode(fmu);
+    excite(&i);
+    assert_eq!(i.enter_init(0.0), fmi3OK, "{id}: {}", i.log_text());
+    assert_eq!(i.exit_init(), fmi3OK, "{id}: {}", i.log_text());
+    let api = i.api();
+    let step_mode = |i: &Inst| {
+        let s = i.call("fmi3EnterStepMode", |c| unsafe { (api.enter_step_mode)(c) });
+        assert_eq!(s, fmi3OK, "{id}: fmi3EnterStepMode at t = {}: {}", i.time, i.log_text());
+    };
+    i.event_iteration();
+    step_mode(&i);
+    let (mut handed, mut steps) = (0usize, 0usize);
+    while i.time < stop - 0.5 * h {
+        steps += 1;
+        assert!(
+            steps < 100 * ((stop / h) as usize + 1),
+            "{id}: no end of the run at t = {}",
+            i.time
+        );
+        let t = i.time;
+        let step = h.min(stop - t);
+        let (s, [event, terminate, early], last) = i.do_step(step);
+        assert_eq!(s, fmi3OK, "{id}: fmi3DoStep({t}, {step}): {}", i.log_text());
+        if event == 0 {
+            assert_eq!((early, last), (0, t + step), "{id}: a step from {t} without an event");
+        } else {
+            assert!(
+                last >= t && last <= t + step,
+                "{id}: an event at lastSuccessfulTime {last}, outside the step from {t} by {step}"
+            );
+            assert_eq!(
+                early == 1,
+                last < t + step,
+                "{id}: earlyReturn {early} with lastSuccessfulTime {last}"
+            );
+            i.time = last;
+            handed += 1;
+            let s = i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) });
+            assert_eq!(s, fmi3OK, "{id}: fmi3EnterEventMode at t = {last}: {}", i.log_text());
+            let (flags, _) = i.event_iteration_timed();
+            if flags[1] == 1 {
+                info(format!("the model ended the simulation at t = {last}"));
+                break;
+            }
+            step_mode(&i);
+        }
+        if terminate == 1 {
+            info(format!("the model ended the simulation at t = {}", i.time));
+            break;
+        }
+    }
+    let (s, values) = i.get_f64(&fmu.md.vrs_of_type(Type::Float64));
+    assert_eq!(s, fmi3OK, "{id}: {}", i.log_text());
+    assert!(values.iter().all(|v| v.is_finite()), "{id}: {values:?}");
+    if handed == 0 {
+        limitation(format!("{}events: none in {stop} s", crate::outcome::NOT_DECLARED));
+    }
+    info(format!(
+        "{steps} steps of {h} s in event mode: {handed} events handed to the importer"
+    ));
+}
