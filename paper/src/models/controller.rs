@@ -226,7 +226,12 @@ impl ControlLaw {
         reference: [D; 2],
     ) -> ([D; 2], [D; 2]) {
         let (demand, _, volts) = self.demands_of(integral, rate_filter, x, reference);
-        let margin = |v: D, bound: f64| if v.re() < 0.0 { v + bound } else { -v + bound };
+        // A demand beyond f64 (a measurement near ±f64::MAX) is as far beyond its limit as f64
+        // goes: the margin stays finite, as every value that leaves the FMU must.
+        let margin = |v: D, bound: f64| {
+            let m = if v.re() < 0.0 { v + bound } else { -v + bound };
+            if m.re().is_finite() { m } else { D::from(-f64::MAX) }
+        };
         (
             [margin(demand[0], self.m_max), margin(demand[1], self.m_max)],
             [margin(volts[0], self.motor.u_max), margin(volts[1], self.motor.u_max)],
