@@ -397,17 +397,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             if time_event_now && let Some(te) = clock.next_event_time.filter(|te| !due(*te, now)) {
                 clock.next_event_time = Some(te.min(now));
             }
-            let solver_ctx = Context {
-                start_time: ctx.start_time,
-                tolerance: ctx.tolerance,
-                logger: ctx.logger,
-                resources: ctx.resources,
-                solver: None,
-                refreshed: false,
-                model_exchange: false,
-                events: None,
-                return_at_events: false,
-            };
+            let solver_ctx = Context::outside_step(ctx.start_time, ctx.tolerance, ctx.logger, ctx.resources, false);
             match iterate(model, &solver_ctx, now, &mut clock) {
                 Ok((_, None)) => {}
                 Ok((_, Some(reason))) => {

@@ -358,6 +358,28 @@ impl Context<'_> {
         }
     }
 
+    /// The context of a call outside a communication step (initialization, a parameter change,
+    /// an event): no integrator, no event clock.
+    pub(crate) fn outside_step<'a>(
+        start_time: f64,
+        tolerance: Option<f64>,
+        logger: Option<&'a crate::core::logging::Logger>,
+        resources: Option<&'a std::path::Path>,
+        model_exchange: bool,
+    ) -> Context<'a> {
+        Context {
+            start_time,
+            tolerance,
+            logger,
+            resources,
+            solver: None,
+            refreshed: false,
+            model_exchange,
+            events: None,
+            return_at_events: false,
+        }
+    }
+
     /// A standalone context with an integrator of its own, for calling
     /// [`CoSimulation::do_step`] directly.
     pub fn standalone_with_solver(start_time: f64, tolerance: Option<f64>, solver: &mut Dopri5) -> Context<'_> {

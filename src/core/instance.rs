@@ -303,17 +303,13 @@ impl<M: CoSimulation> Instance<M> {
             return Ok(());
         }
         let before = self.sim.model.clone();
-        let ctx = Context {
-            start_time: self.sim.start_time,
-            tolerance: self.sim.tolerance,
-            logger: Some(&self.logger),
-            resources: self.resources.as_deref(),
-            solver: None,
-            refreshed: false,
-            model_exchange: self.model_exchange,
-            events: None,
-            return_at_events: false,
-        };
+        let ctx = Context::outside_step(
+            self.sim.start_time,
+            self.sim.tolerance,
+            Some(&self.logger),
+            self.resources.as_deref(),
+            self.model_exchange,
+        );
         let outcome = self
             .sim
             .model
@@ -569,17 +565,13 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
         if let Some(previous) = previous {
-            let ctx = Context {
-                start_time: self.sim.start_time,
-                tolerance: self.sim.tolerance,
-                logger: Some(&self.logger),
-                resources: self.resources.as_deref(),
-                solver: None,
-                refreshed: false,
-                model_exchange: self.model_exchange,
-                events: None,
-                return_at_events: false,
-            };
+            let ctx = Context::outside_step(
+                self.sim.start_time,
+                self.sim.tolerance,
+                Some(&self.logger),
+                self.resources.as_deref(),
+                self.model_exchange,
+            );
             let outcome = self
                 .sim
                 .model
@@ -966,17 +958,13 @@ impl<M: CoSimulation> Instance<M> {
             return status;
         }
         let before = (self.sim.model.clone(), self.sim.events);
-        let ctx = Context {
-            start_time: self.sim.start_time,
-            tolerance: self.sim.tolerance,
-            logger: Some(&self.logger),
-            resources: self.resources.as_deref(),
-            solver: None,
-            refreshed: false,
-            model_exchange: self.model_exchange,
-            events: None,
-            return_at_events: false,
-        };
+        let ctx = Context::outside_step(
+            self.sim.start_time,
+            self.sim.tolerance,
+            Some(&self.logger),
+            self.resources.as_deref(),
+            self.model_exchange,
+        );
         let time = self.sim.time;
         let outcome = if all_rounds {
             crate::events::iterate(&mut self.sim.model, &ctx, time, &mut self.sim.events).map(|(changed, terminate)| {
