@@ -22,7 +22,7 @@ lap "setup (tests/setup-env.sh --main-job)"
 source tests/pyo3-env.sh
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
   -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python -p pendulum-fmu -p controller-fmu \
-  -p dc-motor-fmu -p bouncing-ball-fmu -p stair-fmu -p dahlquist-fmu -p van-der-pol-fmu --lib
+  -p dc-motor-fmu -p bouncing-ball-fmu -p stair-fmu -p dahlquist-fmu -p van-der-pol-fmu -p feedthrough-fmu --lib
 bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python

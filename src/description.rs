@@ -9,8 +9,9 @@
 //! Every item here is `const`-constructible: the derive macro writes a `ModelDescription`
 //! literal, and [`encode`] runs in const evaluation.
 
-/// FMI base types. FMI 3.0's `Float64`, `Int32` are `Real`, `Integer` here; more 3.0 types
-/// join this list when the declarations grow.
+/// FMI base types. FMI 3.0's `Float64`, `Int32` are FMI 2.0's `Real`, `Integer` (the names
+/// here are 2.0's); the others exist in FMI 3.0 only ([`VarType::in_fmi2`]). The discriminants
+/// are the codes of the encoded description.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum VarType {
@@ -19,6 +20,97 @@ pub enum VarType {
     Boolean = 2,
     String = 3,
     Enumeration = 4,
+    Float32 = 5,
+    Int8 = 6,
+    UInt8 = 7,
+    Int16 = 8,
+    UInt16 = 9,
+    UInt32 = 10,
+    Int64 = 11,
+    UInt64 = 12,
+    Binary = 13,
+}
+
+impl VarType {
+    /// Whether FMI 2.0 has this type (Real, Integer, Boolean, String, Enumeration).
+    pub const fn in_fmi2(self) -> bool {
+        (self as u8) <= 4
+    }
+
+    /// Float32 or Float64 (Real): the types that may be continuous.
+    pub const fn is_float(self) -> bool {
+        matches!(self, VarType::Real | VarType::Float32)
+    }
+
+    /// The integer types (Int8 .. UInt64, Int32 = Integer), not Enumeration.
+    pub const fn is_integer(self) -> bool {
+        matches!(
+            self,
+            VarType::Integer
+                | VarType::Int8
+                | VarType::UInt8
+                | VarType::Int16
+                | VarType::UInt16
+                | VarType::UInt32
+                | VarType::Int64
+                | VarType::UInt64
+        )
+    }
+
+    /// The range of an integer type (Enumerations: Int32's... FMI 3.0 Enumerations are Int64).
+    pub const fn integer_range(self) -> Option<(i128, i128)> {
+        Some(match self {
+            VarType::Int8 => (i8::MIN as i128, i8::MAX as i128),
+            VarType::UInt8 => (0, u8::MAX as i128),
+            VarType::Int16 => (i16::MIN as i128, i16::MAX as i128),
+            VarType::UInt16 => (0, u16::MAX as i128),
+            VarType::Integer | VarType::Enumeration => (i32::MIN as i128, i32::MAX as i128),
+            VarType::UInt32 => (0, u32::MAX as i128),
+            VarType::Int64 => (i64::MIN as i128, i64::MAX as i128),
+            VarType::UInt64 => (0, u64::MAX as i128),
+            _ => return None,
+        })
+    }
+
+    /// The FMI 3.0 element name (`Float64`, `Int32`, ...).
+    pub const fn fmi3_name(self) -> &'static str {
+        match self {
+            VarType::Real => "Float64",
+            VarType::Integer => "Int32",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+            VarType::Enumeration => "Enumeration",
+            VarType::Float32 => "Float32",
+            VarType::Int8 => "Int8",
+            VarType::UInt8 => "UInt8",
+            VarType::Int16 => "Int16",
+            VarType::UInt16 => "UInt16",
+            VarType::UInt32 => "UInt32",
+            VarType::Int64 => "Int64",
+            VarType::UInt64 => "UInt64",
+            VarType::Binary => "Binary",
+        }
+    }
+
+    const fn from_code(c: u8) -> Option<VarType> {
+        Some(match c {
+            0 => VarType::Real,
+            1 => VarType::Integer,
+            2 => VarType::Boolean,
+            3 => VarType::String,
+            4 => VarType::Enumeration,
+            5 => VarType::Float32,
+            6 => VarType::Int8,
+            7 => VarType::UInt8,
+            8 => VarType::Int16,
+            9 => VarType::UInt16,
+            10 => VarType::UInt32,
+            11 => VarType::Int64,
+            12 => VarType::UInt64,
+            13 => VarType::Binary,
+            _ => return None,
+        })
+    }
 }
 
 /// `causality`, `variability` and `initial`, and the standard's rules on them (FMI 2.0 section
@@ -37,6 +129,13 @@ pub enum Start {
     Integer(i32),
     Boolean(bool),
     String(&'static str),
+    /// Int8, UInt8, Int16, UInt16, UInt32 and Int64 variables (FMI 3.0). Float32 start values
+    /// are `Real` (every f32 is an f64).
+    Int64(i64),
+    /// UInt64 variables (FMI 3.0).
+    UInt64(u64),
+    /// Binary variables (FMI 3.0): the bytes.
+    Binary(&'static [u8]),
 }
 
 /// A bound of a variable's legal range: `value` itself is legal unless `exclusive`.
@@ -151,9 +250,43 @@ pub struct Variable {
     /// For a derivative: the name of the state variable it is the derivative of.
     pub derivative_of: Option<&'static str>,
     pub enumeration: Option<&'static EnumType>,
+    /// What only FMI 3.0 has; [`Fmi3Extras::NONE`] for most variables.
+    pub fmi3: Fmi3Extras,
+}
+
+/// A variable's declarations that only FMI 3.0 has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fmi3Extras {
+    /// The variable exists in FMI 3.0 only: left out of the FMI 2.0 description, and unknown to
+    /// the FMI 2.0 functions. Every variable of a type FMI 2.0 lacks is one.
+    pub only: bool,
+    /// A Binary's `maxSize` in bytes.
+    pub max_size: Option<u32>,
+    /// A Binary's `mimeType`; empty for the default (`application/octet-stream`).
+    pub mime_type: &'static str,
+}
+
+impl Fmi3Extras {
+    pub const NONE: Fmi3Extras = Fmi3Extras {
+        only: false,
+        max_size: None,
+        mime_type: "",
+    };
+
+    const fn is_none(&self) -> bool {
+        !self.only && self.max_size.is_none() && self.mime_type.is_empty()
+    }
 }
 
 impl Variable {
+    /// Whether the description of FMI `version` has this variable.
+    pub const fn in_version(&self, version: FmiVersion) -> bool {
+        match version {
+            FmiVersion::V2 => !self.fmi3.only && self.var_type.in_fmi2(),
+            FmiVersion::V3 => true,
+        }
+    }
+
     /// The `initial` in force: the declared one, or the standard's default (FMI 2.0, 2.2.7;
     /// [`fmi_standard::effective_initial`]).
     pub const fn effective_initial(&self) -> Option<Initial> {
@@ -239,6 +372,34 @@ pub struct ModelDescription {
     /// order: FMI 2.0's `numberOfEventIndicators` and the order of `fmi2GetEventIndicators`,
     /// FMI 3.0's `<EventIndicator>` elements.
     pub event_indicators: &'static [&'static str],
+    /// FMI 3.0 terminals (`terminalsAndIcons/terminalsAndIcons.xml`): named groups of
+    /// variables an importer connects as one (a mechanical flange: angle, speed, torque).
+    pub terminals: &'static [Terminal],
+}
+
+/// An FMI 3.0 `<Terminal>` (FMI 3.0, 2.4.9): variables that belong together.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terminal {
+    pub name: &'static str,
+    /// `terminalKind`: what kind of connector it is, for the importer to match (e.g.
+    /// `org.modelica.Modelica.Mechanics.Rotational.Interfaces.Flange_a`); empty for none.
+    pub kind: &'static str,
+    /// `matchingRule`: `plug` (connect members of the same name), `bus` or `sequence`.
+    pub matching_rule: &'static str,
+    pub description: &'static str,
+    pub members: &'static [TerminalMember],
+}
+
+/// A `<TerminalMemberVariable>`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TerminalMember {
+    /// The model variable's name.
+    pub variable: &'static str,
+    /// `memberName`: its name in the terminal (what a `plug` matches).
+    pub member: &'static str,
+    /// `variableKind`: `signal` (a potential or signal: angle, speed), `inflow` or `outflow`
+    /// (a flow, positive into resp. out of the FMU: torque).
+    pub kind: &'static str,
 }
 
 impl ModelDescription {
@@ -295,6 +456,71 @@ impl ModelDescription {
             i += 1;
         }
         false
+    }
+
+    /// Whether `v` is a continuous state: some variable is declared its derivative.
+    pub fn is_state(&self, v: &Variable) -> bool {
+        self.variables.iter().any(|d| d.derivative_of == Some(v.name))
+    }
+
+    /// The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0
+    /// `InitialUnknown`, the same rule in both): outputs, continuous states and their
+    /// derivatives whose `initial` is approx or calculated, and every calculated parameter.
+    pub fn is_initial_unknown(&self, v: &Variable) -> bool {
+        ((v.causality == Causality::Output || v.derivative_of.is_some() || self.is_state(v))
+            && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
+            || v.causality == Causality::CalculatedParameter
+    }
+
+    /// The value references `vr` depends on as `<ModelStructure>` says (FMI 3.0
+    /// `fmi3GetVariableDependencies`): in Initialization Mode (`initialization`) those of an
+    /// `<InitialUnknown>`, else those of an `<Output>`, `<ContinuousStateDerivative>` or
+    /// `<EventIndicator>`; where the declaration names none, every known (run time: the
+    /// inputs and continuous states; Initialization Mode: the inputs, the independent variable
+    /// `time_vr`, and the variables with initial = exact). In ascending order. `None`: `vr` is
+    /// no unknown there.
+    pub fn dependencies(&self, vr: u32, initialization: bool, time_vr: u32) -> Option<Vec<u32>> {
+        let v = self.variables.iter().find(|v| v.value_reference == vr)?;
+        let declared = if initialization {
+            if !self.is_initial_unknown(v) {
+                return None;
+            }
+            v.initial_depends_on
+        } else {
+            let unknown = v.causality == Causality::Output
+                || v.derivative_of.is_some()
+                || self.event_indicators.contains(&v.name);
+            if !unknown {
+                return None;
+            }
+            v.depends_on
+        };
+        let mut out: Vec<u32> = match declared {
+            Some(names) => names
+                .iter()
+                .filter_map(|n| self.by_name(n))
+                .map(|d| d.value_reference)
+                .collect(),
+            None if initialization => self
+                .variables
+                .iter()
+                .filter(|d| {
+                    matches!(d.causality, Causality::Input | Causality::Independent)
+                        || d.effective_initial() == Some(Initial::Exact)
+                })
+                .map(|d| d.value_reference)
+                .chain((!self.declares_independent()).then_some(time_vr))
+                .collect(),
+            None => self
+                .variables
+                .iter()
+                .filter(|d| d.causality == Causality::Input || self.is_state(d))
+                .map(|d| d.value_reference)
+                .collect(),
+        };
+        out.sort_unstable();
+        out.dedup();
+        Some(out)
     }
 
     /// Runtime categories first, then the model's own.
@@ -447,6 +673,19 @@ impl Enc<'_> {
                 self.u8(4);
                 self.str(s);
             }
+            Start::Int64(x) => {
+                self.u8(5);
+                self.bytes(&x.to_le_bytes());
+            }
+            Start::UInt64(x) => {
+                self.u8(6);
+                self.bytes(&x.to_le_bytes());
+            }
+            Start::Binary(b) => {
+                self.u8(7);
+                self.u32(b.len() as u32);
+                self.bytes(b);
+            }
         }
         self.str(v.unit);
         self.str(v.description);
@@ -524,10 +763,27 @@ impl Enc<'_> {
             self.str(d.log_categories[i].description);
             i += 1;
         }
-        self.u32(d.variables.len() as u32);
+        // A version's description holds the variables of that version (FMI 2.0 leaves out the
+        // FMI-3.0-only ones).
+        let version = interfaces.version;
+        let mut n = 0u32;
+        let mut extras = 0u32;
         let mut i = 0;
         while i < d.variables.len() {
-            self.variable(&d.variables[i]);
+            if d.variables[i].in_version(version) {
+                n += 1;
+                if !d.variables[i].fmi3.is_none() {
+                    extras += 1;
+                }
+            }
+            i += 1;
+        }
+        self.u32(n);
+        let mut i = 0;
+        while i < d.variables.len() {
+            if d.variables[i].in_version(version) {
+                self.variable(&d.variables[i]);
+            }
             i += 1;
         }
         self.str(d.internal_state);
@@ -536,6 +792,53 @@ impl Enc<'_> {
         if !d.event_indicators.is_empty() {
             self.u8(EVENT_INDICATORS_TAG);
             self.names(Some(d.event_indicators));
+        }
+        // The terminals: FMI 3.0 only, and only where there are some.
+        if !d.terminals.is_empty() && matches!(version, FmiVersion::V3) {
+            self.u8(TERMINALS_TAG);
+            self.u32(d.terminals.len() as u32);
+            let mut i = 0;
+            while i < d.terminals.len() {
+                let t = &d.terminals[i];
+                self.str(t.name);
+                self.str(t.kind);
+                self.str(t.matching_rule);
+                self.str(t.description);
+                self.u32(t.members.len() as u32);
+                let mut j = 0;
+                while j < t.members.len() {
+                    self.str(t.members[j].variable);
+                    self.str(t.members[j].member);
+                    self.str(t.members[j].kind);
+                    j += 1;
+                }
+                i += 1;
+            }
+        }
+        // Likewise the FMI 3.0 declarations: only where some variable has one.
+        if extras > 0 {
+            self.u8(FMI3_EXTRAS_TAG);
+            self.u32(extras);
+            let (mut i, mut at) = (0, 0u32);
+            while i < d.variables.len() {
+                let v = &d.variables[i];
+                if v.in_version(version) {
+                    if !v.fmi3.is_none() {
+                        self.u32(at);
+                        self.u8(v.fmi3.only as u8);
+                        match v.fmi3.max_size {
+                            None => self.u8(0),
+                            Some(m) => {
+                                self.u8(1);
+                                self.u32(m);
+                            }
+                        }
+                        self.str(v.fmi3.mime_type);
+                    }
+                    at += 1;
+                }
+                i += 1;
+            }
         }
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
@@ -548,6 +851,10 @@ impl Enc<'_> {
 const HEADER: usize = MAGIC.len() + 4 + 4;
 /// Marks the event indicators' block after the internal state (distinct from the version tag 3).
 const EVENT_INDICATORS_TAG: u8 = 0xE1;
+/// Marks the block of FMI 3.0 declarations ([`Fmi3Extras`]) after that.
+const FMI3_EXTRAS_TAG: u8 = 0xE2;
+/// Marks the terminals' block (FMI 3.0 encodings only), before the FMI 3.0 declarations.
+const TERMINALS_TAG: u8 = 0xE3;
 
 const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
     let mut body = Enc { buf, pos: 0 };
@@ -782,14 +1089,8 @@ impl Dec<'_> {
     fn variable(&mut self) -> Result<Variable, String> {
         let name = self.str()?;
         let value_reference = self.u32()?;
-        let var_type = match self.u8()? {
-            0 => VarType::Real,
-            1 => VarType::Integer,
-            2 => VarType::Boolean,
-            3 => VarType::String,
-            4 => VarType::Enumeration,
-            t => return Err(format!("'{name}': unknown type code {t}")),
-        };
+        let t = self.u8()?;
+        let var_type = VarType::from_code(t).ok_or_else(|| format!("'{name}': unknown type code {t}"))?;
         let c = self.u8()?;
         let causality = Causality::from_code(c).ok_or_else(|| format!("'{name}': unknown causality code {c}"))?;
         let v = self.u8()?;
@@ -804,6 +1105,12 @@ impl Dec<'_> {
             2 => Start::Integer(self.i32()?),
             3 => Start::Boolean(self.u8()? != 0),
             4 => Start::String(self.str()?),
+            5 => Start::Int64(i64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
+            6 => Start::UInt64(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
+            7 => {
+                let n = self.count()?;
+                Start::Binary(leak_slice(self.take(n)?.to_vec()))
+            }
             t => return Err(format!("'{name}': unknown start code {t}")),
         };
         let unit = self.str()?;
@@ -851,6 +1158,7 @@ impl Dec<'_> {
             initial_depends_on,
             derivative_of,
             enumeration,
+            fmi3: Fmi3Extras::NONE,
         })
     }
 }
@@ -925,6 +1233,49 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         d.u8()?;
         event_indicators = d.names()?.unwrap_or(&[]);
     }
+    let mut terminals: Vec<Terminal> = Vec::new();
+    if d.at < d.b.len() && d.b[d.at] == TERMINALS_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
+            let m = d.count()?;
+            let members = (0..m)
+                .map(|_| {
+                    Ok(TerminalMember {
+                        variable: d.str()?,
+                        member: d.str()?,
+                        kind: d.str()?,
+                    })
+                })
+                .collect::<Result<Vec<_>, String>>()?;
+            terminals.push(Terminal {
+                name,
+                kind,
+                matching_rule,
+                description,
+                members: leak_slice(members),
+            });
+        }
+    }
+    if d.at < d.b.len() && d.b[d.at] == FMI3_EXTRAS_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let only = d.u8()? != 0;
+            let max_size = if d.u8()? == 0 { None } else { Some(d.u32()?) };
+            let mime_type = d.str()?;
+            let v = variables
+                .get_mut(at)
+                .ok_or_else(|| format!("FMI 3.0 declarations of variable {at}, beyond the variables"))?;
+            v.fmi3 = Fmi3Extras {
+                only,
+                max_size,
+                mime_type,
+            };
+        }
+    }
     if d.at + 1 == d.b.len() {
         match d.u8()? {
             3 => interfaces.version = FmiVersion::V3,
@@ -956,6 +1307,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             variables: leak_slice(variables),
             internal_state,
             event_indicators,
+            terminals: leak_slice(terminals),
         },
         interfaces,
     ))
@@ -986,6 +1338,10 @@ pub enum ValueError {
     Nominal,
     /// the start value is no item of the enumeration
     StartNotAnItem,
+    /// an integer's min must be an integer of its type, within ±2^53
+    IntegerTypeMin,
+    /// an integer's max must be an integer of its type, within ±2^53
+    IntegerTypeMax,
 }
 
 impl ValueError {
@@ -1002,6 +1358,8 @@ impl ValueError {
             ValueError::StartAboveMax => "the start value is above max",
             ValueError::Nominal => "nominal must be finite and > 0",
             ValueError::StartNotAnItem => "the start value is no item of the enumeration",
+            ValueError::IntegerTypeMin => "an integer's min must be an integer of its type, within ±2^53",
+            ValueError::IntegerTypeMax => "an integer's max must be an integer of its type, within ±2^53",
         }
     }
 }
@@ -1039,7 +1397,31 @@ pub const fn check_values(v: &Variable) -> Result<(), ValueError> {
             return Err(ValueError::IntegerMax);
         }
     }
+    // The other integer types: integral bounds within the type's range and exact in f64
+    // (the runtime compares integers with them exactly).
+    if let (true, Some((lo, hi))) = (
+        v.var_type.is_integer() && !matches!(v.var_type, VarType::Integer),
+        v.var_type.integer_range(),
+    ) {
+        const EXACT: f64 = 9007199254740992.0; // 2^53
+        const fn fits(x: f64, lo: i128, hi: i128) -> bool {
+            // (an integral value within ±2^53 converts to i128 and back unchanged)
+            x.abs() <= EXACT && (x as i128) as f64 == x && (x as i128) >= lo && (x as i128) <= hi
+        }
+        if let Some(l) = v.min
+            && !fits(l.value, lo, hi)
+        {
+            return Err(ValueError::IntegerTypeMin);
+        }
+        if let Some(h) = v.max
+            && !fits(h.value, lo, hi)
+        {
+            return Err(ValueError::IntegerTypeMax);
+        }
+    }
     let x = match v.start {
+        Start::Int64(n) => Some(n as f64),
+        Start::UInt64(n) => Some(n as f64),
         Start::Real(x) => {
             if !finite(x) {
                 return Err(ValueError::StartNotFinite);

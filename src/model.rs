@@ -217,6 +217,9 @@ pub trait Variables: Sized {
     fn indicators_of<D: Copy>(_c: &Self::Continuous<D>, _z: &mut [D]) {}
     /// Whether the FMU offers Model Exchange (`#[fmu(co_simulation_only)]` says no).
     const MODEL_EXCHANGE: bool = true;
+    /// `#[fmu(fmi3_only)]`: no FMI 2.0 export (`export_fmu!` and `export_fmi2!` refuse it at
+    /// compile time).
+    const FMI3_ONLY: bool = false;
     /// Whether the FMU offers Co-Simulation (`#[fmu(model_exchange_only)]` says no).
     const CO_SIMULATION: bool = true;
 
@@ -239,15 +242,23 @@ pub trait Variables: Sized {
     fn set(&mut self, vr: u32, value: Value) -> bool;
     fn get_string(&self, vr: u32) -> Option<&str>;
     fn set_string(&mut self, vr: u32, value: &str) -> bool;
+    /// The bytes of the Binary variable `vr` (FMI 3.0).
+    fn get_binary(&self, _vr: u32) -> Option<&[u8]> {
+        None
+    }
+    /// Stores the bytes if `vr` names a Binary variable; false otherwise.
+    fn set_binary(&mut self, _vr: u32, _value: &[u8]) -> bool {
+        false
+    }
     /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the first Real variable
     /// the model computes (output, local, calculated parameter) whose value is not finite.
     /// Generated as one test per such field: the runtime asks after every step.
     fn non_finite_computed(&self) -> Option<usize> {
-        use crate::description::{Causality, VarType};
+        use crate::description::Causality;
         Self::DESCRIPTION.variables.iter().position(|v| {
-            v.var_type == VarType::Real
+            v.var_type.is_float()
                 && !matches!(v.causality, Causality::Input | Causality::Parameter)
-                && matches!(self.get(v.value_reference), Some(Value::Real(x)) if !x.is_finite())
+                && self.get(v.value_reference).is_some_and(|x| !x.is_finite())
         })
     }
 }
@@ -600,6 +611,14 @@ pub trait Model: Variables + Clone + Serialize + DeserializeOwned + Send + 'stat
     /// calls it whenever an output is read after something it depends on changed, in both
     /// interfaces: an output is always what the equations give for the current values.
     fn outputs<D: Real>(&self, _t: D, _v: &mut Self::Continuous<D>) {}
+
+    /// The values the generic equations cannot hold, computed directly from the current inputs,
+    /// parameters and states: outputs and locals of the types other than f64 (Float32, the
+    /// integers, Boolean, String, Binary, Enumeration) that follow their inputs without waiting
+    /// for an event (a feedthrough, a conversion, a comparison). Called wherever the outputs
+    /// are brought up to date (after a set, a step, an event, at initialization), after
+    /// [`Model::outputs`]. Values that change only at events belong in [`Model::update`].
+    fn calculate(&mut self, _t: f64) {}
 
     /// Checks what the model keeps besides its variables (integrator memory, filter states):
     /// `Err` names what is not finite or otherwise unusable. The runtime checks every Real

@@ -72,6 +72,7 @@ impl Master {
                     Value::Real(x) => RunnerValue::Real(x),
                     Value::Integer(x) => RunnerValue::Integer(i64::from(x)),
                     Value::Boolean(x) => RunnerValue::Boolean(x),
+                    other => unreachable!("the benchmark topologies hold FMI 2.0 values only, not {other:?}"),
                 };
                 (inst.to_string(), var.to_string(), v)
             })

@@ -121,6 +121,7 @@ impl ViaFmi {
                 Value::Real(x) => self.instance.set_real(&vr, &[x]),
                 Value::Integer(x) => self.instance.set_integer(&vr, &[x]),
                 Value::Boolean(x) => self.instance.set_boolean(&vr, &[i32::from(x)]),
+                other => unreachable!("the benchmark topologies hold FMI 2.0 values only, not {other:?}"),
             }
             .map_err(|err| e(&format!("setting start value {v:?} (vr {})", vr[0]), err))?;
         }

@@ -156,6 +156,7 @@ fn json_value(v: Value) -> String {
         Value::Real(x) => format!("[\"Real\", {x:e}]"),
         Value::Integer(x) => format!("[\"Integer\", {x}]"),
         Value::Boolean(x) => format!("[\"Boolean\", {x}]"),
+        other => unreachable!("the benchmark topologies hold FMI 2.0 values only, not {other:?}"),
     }
 }
 

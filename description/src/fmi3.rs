@@ -100,6 +100,8 @@ pub struct Variable {
     pub derivative: Option<u32>,
     /// `<Dimension>` children: an array variable.
     pub array: bool,
+    /// A Binary's `maxSize` (bytes).
+    pub max_size: Option<u64>,
     pub declared_type: Option<String>,
     pub unit: Option<String>,
     pub description: Option<String>,
@@ -229,6 +231,7 @@ impl ModelDescription {
                     max: e.number("max"),
                     derivative: e.number("derivative"),
                     array: false,
+                    max_size: e.number("maxSize"),
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),
                     description: e.string("description"),

@@ -516,7 +516,7 @@ fn said(log: &fmi_conformance::logger::LogSink) -> String {
 }
 
 fn is_initial_unknown(d: &ModelDescription, v: &Variable) -> bool {
-    crate::xml::is_initial_unknown(d.variables, v)
+    d.is_initial_unknown(v)
 }
 
 /// Whether the check can set `v` (a known of Initialization Mode: an input or a variable with

@@ -2,7 +2,7 @@
 //! binaries are for), the variables with units, and the crate's own documentation fragment
 //! (`[package.metadata.fmu] documentation`).
 
-use rustfmu::description::{FmiVersion, Interfaces, ModelDescription, Start};
+use rustfmu::description::{FmiVersion, Interfaces, ModelDescription, Start, VarType};
 
 fn escape(s: &str) -> String {
     quick_xml::escape::escape(s).into_owned()
@@ -36,7 +36,11 @@ pub fn index_html(
     for v in d.variables {
         let start = if v.has_start() {
             match v.start {
+                Start::Real(x) if v.var_type == VarType::Float32 => format!("{:?}", x as f32),
                 Start::Real(x) => format!("{x:?}"),
+                Start::Int64(x) => x.to_string(),
+                Start::UInt64(x) => x.to_string(),
+                Start::Binary(b) => format!("0x{}", b.iter().map(|x| format!("{x:02x}")).collect::<String>()),
                 Start::Integer(x) => match v.enumeration.and_then(|e| e.item(x)) {
                     Some(item) => format!("{x} ({})", item.name),
                     None => x.to_string(),
@@ -49,9 +53,10 @@ pub fn index_html(
             String::new()
         };
         rows.push_str(&format!(
-            "<tr><td><code>{}</code></td><td>{}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+            "<tr><td><code>{}</code></td><td>{}</td><td>{}</td><td>{:?}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
             escape(v.name),
             v.value_reference,
+            v.var_type.fmi3_name(),
             v.causality,
             v.variability,
             escape(v.unit),
@@ -64,7 +69,7 @@ pub fn index_html(
          <style>body{{font-family:sans-serif;max-width:60em;margin:auto}}td,th{{padding:2px 8px;text-align:left}}\
          tr:nth-child(even){{background:#f3f3f3}}pre{{background:#f6f6f6;padding:8px}}</style></head><body>\n\
          <h1>{id}</h1>\n<p>{description}</p>\n<p>{kind}, version {version}, built by {tool}.</p>\n<p>Binaries for: {platforms}.</p>\n{picture}\
-         <h2>Variables</h2>\n<table><tr><th>name</th><th>value reference</th><th>causality</th><th>variability</th>\
+         <h2>Variables</h2>\n<table><tr><th>name</th><th>value reference</th><th>type</th><th>causality</th><th>variability</th>\
          <th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n{fragment}\n</body></html>\n",
         id = escape(d.model_identifier),
         description = escape(d.description),
@@ -101,6 +106,7 @@ mod tests {
             variables: &[],
             internal_state: "",
             event_indicators: &[],
+            terminals: &[],
         };
         let both = Interfaces {
             co_simulation: true,

@@ -221,6 +221,65 @@ fn read_description(xml: &str) -> Result<Description, String> {
     }
 }
 
+/// What is wrong with `terminalsAndIcons.xml` against the model description (FMI 3.0, 2.4.9):
+/// not well-formed, another root or `fmiVersion`, a terminal without `name` or
+/// `matchingRule`, a member without `variableName` or `variableKind`, or naming no variable.
+pub fn terminal_problems(terminals: &str, model_description: &str) -> Vec<String> {
+    use quick_xml::events::Event;
+    let names: BTreeSet<String> = match fmi_description::parse(model_description) {
+        Ok(ModelDescription::Fmi3(d)) => d.variables.iter().map(|v| v.name.clone()).collect(),
+        _ => return vec!["terminalsAndIcons.xml beside a description that is not FMI 3.0".into()],
+    };
+    let mut problems = Vec::new();
+    let mut reader = quick_xml::Reader::from_str(terminals);
+    let mut root_seen = false;
+    loop {
+        let e = match reader.read_event() {
+            Ok(Event::Eof) => break,
+            Ok(Event::Start(e) | Event::Empty(e)) => e,
+            Ok(_) => continue,
+            Err(err) => {
+                problems.push(format!(
+                    "terminalsAndIcons.xml is not well-formed at byte {}: {err}",
+                    reader.error_position()
+                ));
+                break;
+            }
+        };
+        let attr = |name: &str| {
+            e.try_get_attribute(name)
+                .ok()
+                .flatten()
+                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+        };
+        match e.name().as_ref() {
+            b"fmiTerminalsAndIcons" => {
+                root_seen = true;
+                if !attr("fmiVersion").is_some_and(|v| v.starts_with("3.")) {
+                    problems.push("terminalsAndIcons.xml: fmiVersion is not 3.x".into());
+                }
+            }
+            b"Terminal" if attr("name").is_none() || attr("matchingRule").is_none() => {
+                problems.push("terminalsAndIcons.xml: a <Terminal> without name or matchingRule".into());
+            }
+            b"TerminalMemberVariable" => match (attr("variableName"), attr("variableKind")) {
+                (Some(v), Some(_)) if names.contains(&v) => {}
+                (Some(v), Some(_)) => problems.push(format!(
+                    "terminalsAndIcons.xml: member variable '{v}' is no variable of modelDescription.xml"
+                )),
+                _ => problems.push(
+                    "terminalsAndIcons.xml: a <TerminalMemberVariable> without variableName or variableKind".into(),
+                ),
+            },
+            _ => {}
+        }
+    }
+    if !root_seen && problems.is_empty() {
+        problems.push("terminalsAndIcons.xml: the root is not <fmiTerminalsAndIcons>".into());
+    }
+    problems
+}
+
 /// Problems with an FMU file (an empty list: valid). The smoke run happens in a child process
 /// (this program run as `__smoke-run`), so an FMU that crashes is reported, not shared.
 pub fn validate(fmu: &Path) -> Vec<String> {
@@ -292,6 +351,16 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
         }
     }
     let dir = archive::extract_private(&mut zip, &std::env::temp_dir(), &archive::Limits::default())?;
+    let terminals = dir.path().join("terminalsAndIcons/terminalsAndIcons.xml");
+    if terminals.exists() {
+        match (d.version, std::fs::read_to_string(&terminals)) {
+            (FmiVersion::V2, _) => {
+                problems.push("terminalsAndIcons/terminalsAndIcons.xml is FMI 3.0's; an FMI 2.0 FMU has none".into())
+            }
+            (_, Err(e)) => problems.push(format!("terminalsAndIcons/terminalsAndIcons.xml: {e}")),
+            (_, Ok(text)) => problems.extend(terminal_problems(&text, &xml)),
+        }
+    }
     for (folder, bin_name) in &binaries {
         let so = dir.path().join(bin_name);
         let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;
@@ -1044,5 +1113,41 @@ fn experiment(e: &fmi_description::DefaultExperiment) -> String {
         String::new()
     } else {
         format!("  default experiment: {}\n", parts.join(", "))
+    }
+}
+
+#[cfg(test)]
+mod terminal_tests {
+    use super::terminal_problems;
+
+    const MD: &str = r#"<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="{x}">
+  <CoSimulation modelIdentifier="M"/>
+  <ModelVariables><Float64 name="phi" valueReference="1" causality="output"/></ModelVariables>
+  <ModelStructure><Output valueReference="1"/></ModelStructure>
+</fmiModelDescription>"#;
+
+    fn terminals(member: &str) -> String {
+        format!(
+            r#"<fmiTerminalsAndIcons fmiVersion="3.0"><Terminals><Terminal name="f" matchingRule="plug">{member}</Terminal></Terminals></fmiTerminalsAndIcons>"#
+        )
+    }
+
+    #[test]
+    fn members_must_name_variables_and_have_a_kind() {
+        let good = terminals(r#"<TerminalMemberVariable variableName="phi" memberName="phi" variableKind="signal"/>"#);
+        assert!(terminal_problems(&good, MD).is_empty());
+        let unknown =
+            terminals(r#"<TerminalMemberVariable variableName="tau" memberName="tau" variableKind="inflow"/>"#);
+        assert_eq!(
+            terminal_problems(&unknown, MD),
+            ["terminalsAndIcons.xml: member variable 'tau' is no variable of modelDescription.xml"]
+        );
+        let kindless = terminals(r#"<TerminalMemberVariable variableName="phi"/>"#);
+        assert_eq!(terminal_problems(&kindless, MD).len(), 1);
+        assert_eq!(terminal_problems("<x", MD).len(), 1);
+        assert_eq!(
+            terminal_problems(&good.replace("3.0", "2.0"), MD),
+            ["terminalsAndIcons.xml: fmiVersion is not 3.x"]
+        );
     }
 }

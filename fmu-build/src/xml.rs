@@ -45,7 +45,7 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
             return Err(format!("{at}: the value reference is used twice"));
         }
         rustfmu::description::check_values(v).map_err(|e| format!("{at}: {}", e.message()))?;
-        let kind = if v.var_type == VarType::Real {
+        let kind = if v.var_type.is_float() {
             TypeKind::Real
         } else {
             TypeKind::Other
@@ -110,7 +110,7 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
                 ));
             }
         }
-        if v.initial_depends_on.is_some() && !is_initial_unknown(decls, v) {
+        if v.initial_depends_on.is_some() && !d.is_initial_unknown(v) {
             return Err(format!(
                 "{at}: declares initial dependencies but is no unknown of Initialization Mode"
             ));
@@ -258,6 +258,14 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
     }
     check_description(d)?;
     let decls = d.variables;
+    if let Some(v) = decls.iter().find(|v| !v.var_type.in_fmi2()) {
+        return Err(format!(
+            "{}: variable '{}' is a {}, which FMI 2.0 does not have (the FMI 2.0 encoding leaves such variables out: is the binary from another rustfmu release?)",
+            d.model_identifier,
+            v.name,
+            v.var_type.fmi3_name()
+        ));
+    }
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
         .map_err(io)?;
@@ -381,7 +389,8 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
             Start::Integer(x) => x.to_string(),
             Start::Boolean(x) => x.to_string(),
             Start::String(s) => s.to_string(),
-            Start::None => String::new(),
+            // Not FMI 2.0 types (refused above).
+            Start::Int64(_) | Start::UInt64(_) | Start::Binary(_) | Start::None => String::new(),
         };
         // An Integer's bounds are written as integers ("1", not "1.0": the XSD type is xs:int).
         let bound_text = |b: Bound, is_min: bool| match v.var_type {
@@ -469,7 +478,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
     let initial_unknowns: Vec<(usize, &Variable)> = decls
         .iter()
         .enumerate()
-        .filter(|(_, v)| is_initial_unknown(decls, v))
+        .filter(|(_, v)| d.is_initial_unknown(v))
         .collect();
     if !initial_unknowns.is_empty() {
         open(&mut w, "InitialUnknowns", &[])?;
@@ -489,27 +498,6 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
     let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
     text.push('\n');
     Ok(text)
-}
-
-/// The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0 `InitialUnknown`, the
-/// same rule in both): outputs, continuous states and their derivatives whose `initial` is
-/// approx or calculated, and every calculated parameter.
-pub(crate) fn is_initial_unknown(decls: &[Variable], v: &Variable) -> bool {
-    let is_state = decls.iter().any(|d| d.derivative_of == Some(v.name));
-    ((v.causality == Causality::Output || v.derivative_of.is_some() || is_state)
-        && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
-        || v.causality == Causality::CalculatedParameter
-}
-
-/// The FMI 3.0 element of a variable type (`Real` is `Float64`, `Integer` is `Int32`).
-fn fmi3_type_name(t: VarType) -> &'static str {
-    match t {
-        VarType::Real => "Float64",
-        VarType::Integer => "Int32",
-        VarType::Boolean => "Boolean",
-        VarType::String => "String",
-        VarType::Enumeration => "Enumeration",
-    }
 }
 
 /// `modelDescription.xml` (FMI 3.0) of a description, in the element order of the FMI 3.0 XSD
@@ -662,21 +650,26 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
         // Integer and Enumeration bounds are integers (xs:int, xs:long); an exclusive one moves
         // to the next integer inside the range.
         let bound_text = |b: Bound, is_min: bool| match v.var_type {
-            VarType::Integer | VarType::Enumeration => {
+            t if t.is_integer() || t == VarType::Enumeration => {
                 let x = bound_value(b, is_min);
-                (if is_min { x.ceil() } else { x.floor() } as i64).to_string()
+                (if is_min { x.ceil() } else { x.floor() } as i128).to_string()
             }
+            // A Float32 bound is written as the f32 it is.
+            VarType::Float32 => format!("{:?}", bound_value(b, is_min) as f32),
             _ => real_text(bound_value(b, is_min)),
         };
         let min = v.min.map(|b| bound_text(b, true));
         let max = v.max.map(|b| bound_text(b, false));
         let nominal = v.nominal.map(real_text);
         let start = match v.start {
+            Start::Real(x) if v.var_type == VarType::Float32 => Some(format!("{:?}", x as f32)),
             Start::Real(x) => Some(real_text(x)),
             Start::Integer(x) => Some(x.to_string()),
+            Start::Int64(x) => Some(x.to_string()),
+            Start::UInt64(x) => Some(x.to_string()),
             Start::Boolean(x) => Some(x.to_string()),
-            // A String's start is a child element.
-            Start::String(_) | Start::None => None,
+            // A String's and a Binary's start is a child element.
+            Start::String(_) | Start::Binary(_) | Start::None => None,
         };
         // In FMI 3.0 `derivative` is the value reference of the state, not an index.
         let derivative = match v.derivative_of {
@@ -687,10 +680,19 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             ),
             None => None,
         };
-        if v.var_type == VarType::Real && !v.unit.is_empty() {
+        if v.var_type.is_float() && !v.unit.is_empty() {
             attrs.push(("unit", v.unit));
         }
-        if v.var_type != VarType::Boolean && v.var_type != VarType::String {
+        let max_size = v.fmi3.max_size.map(|m| m.to_string());
+        if v.var_type == VarType::Binary {
+            if !v.fmi3.mime_type.is_empty() {
+                attrs.push(("mimeType", v.fmi3.mime_type));
+            }
+            if let Some(m) = &max_size {
+                attrs.push(("maxSize", m));
+            }
+        }
+        if !matches!(v.var_type, VarType::Boolean | VarType::String | VarType::Binary) {
             if let Some(min) = &min {
                 attrs.push(("min", min));
             }
@@ -698,7 +700,7 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
                 attrs.push(("max", max));
             }
         }
-        if v.var_type == VarType::Real
+        if v.var_type.is_float()
             && let Some(nominal) = &nominal
         {
             attrs.push(("nominal", nominal));
@@ -711,11 +713,18 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
         if let Some(derivative) = &derivative {
             attrs.push(("derivative", derivative));
         }
-        let element = fmi3_type_name(v.var_type);
+        let element = v.var_type.fmi3_name();
         match v.start {
             Start::String(s) if v.has_start() => {
                 open(&mut w, element, &attrs)?;
                 empty(&mut w, "Start", &[("value", s)])?;
+                close(&mut w, element)?;
+            }
+            Start::Binary(b) if v.has_start() => {
+                // xs:hexBinary
+                let hex: String = b.iter().map(|x| format!("{x:02x}")).collect();
+                open(&mut w, element, &attrs)?;
+                empty(&mut w, "Start", &[("value", &hex)])?;
                 close(&mut w, element)?;
             }
             _ => empty(&mut w, element, &attrs)?,
@@ -747,7 +756,7 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
     for v in decls.iter().filter(|v| v.derivative_of.is_some()) {
         unknown(&mut w, "ContinuousStateDerivative", v, v.depends_on)?;
     }
-    for v in decls.iter().filter(|v| is_initial_unknown(decls, v)) {
+    for v in decls.iter().filter(|v| d.is_initial_unknown(v)) {
         unknown(&mut w, "InitialUnknown", v, v.initial_depends_on)?;
     }
     for name in d.event_indicators {
@@ -761,6 +770,53 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
     let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
     text.push('\n');
     Ok(text)
+}
+
+/// `terminalsAndIcons/terminalsAndIcons.xml` (FMI 3.0, 2.4.9) of a description with terminals,
+/// in the order of `fmi3TerminalsAndIcons.xsd`; `None` without terminals. Every member names a
+/// variable of the description (checked here, as the derive checked it).
+pub fn terminals_and_icons(d: &ModelDescription) -> Result<Option<String>, String> {
+    if d.terminals.is_empty() {
+        return Ok(None);
+    }
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .map_err(io)?;
+    open(&mut w, "fmiTerminalsAndIcons", &[("fmiVersion", "3.0")])?;
+    open(&mut w, "Terminals", &[])?;
+    for t in d.terminals {
+        let mut attrs = vec![("name", t.name), ("matchingRule", t.matching_rule)];
+        if !t.kind.is_empty() {
+            attrs.push(("terminalKind", t.kind));
+        }
+        if !t.description.is_empty() {
+            attrs.push(("description", t.description));
+        }
+        open(&mut w, "Terminal", &attrs)?;
+        for m in t.members {
+            if d.by_name(m.variable).is_none() {
+                return Err(format!(
+                    "{}: terminal '{}': member '{}' names '{}', which is no variable",
+                    d.model_identifier, t.name, m.member, m.variable
+                ));
+            }
+            empty(
+                &mut w,
+                "TerminalMemberVariable",
+                &[
+                    ("variableName", m.variable),
+                    ("memberName", m.member),
+                    ("variableKind", m.kind),
+                ],
+            )?;
+        }
+        close(&mut w, "Terminal")?;
+    }
+    close(&mut w, "Terminals")?;
+    close(&mut w, "fmiTerminalsAndIcons")?;
+    let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
+    text.push('\n');
+    Ok(Some(text))
 }
 
 /// A flat name has no structure (`der(x)`, `a.b`, `a[1]` ask for "structured").
@@ -791,6 +847,7 @@ mod tests {
             initial_depends_on: None,
             derivative_of: None,
             enumeration: None,
+            fmi3: rustfmu::description::Fmi3Extras::NONE,
         }
     }
 
@@ -835,6 +892,7 @@ mod tests {
         variables: VARS,
         internal_state: "",
         event_indicators: &[],
+        terminals: &[],
     };
 
     #[test]
@@ -928,6 +986,7 @@ mod tests {
             initial_depends_on: None,
             derivative_of: None,
             enumeration: None,
+            fmi3: rustfmu::description::Fmi3Extras::NONE,
         }
     }
 
@@ -1030,6 +1089,7 @@ mod tests {
         variables: LAG_VARS,
         internal_state: "",
         event_indicators: &[],
+        terminals: &[],
     };
 
     fn lag3() -> String {

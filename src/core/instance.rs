@@ -86,6 +86,8 @@ pub struct Instance<M: CoSimulation> {
     /// What the get-string function last returned: valid until the next call, as the standard
     /// allows.
     strings: Vec<CString>,
+    /// What the last fmi3GetBinary returned, valid until the next call.
+    binaries: Vec<Vec<u8>>,
     /// The unpacked `resources/` folder, from `fmuResourceLocation` (not part of the FMU state).
     pub resources: Option<std::path::PathBuf>,
     /// The words of the FMI version this instance was instantiated through; its
@@ -144,6 +146,7 @@ impl<M: CoSimulation> Instance<M> {
             derivatives: <M::States as StateVector>::zeros(),
             before_step: M::start(),
             strings: Vec::new(),
+            binaries: Vec::new(),
             resources: None,
             terms,
             version: terms.version,
@@ -385,18 +388,38 @@ impl<M: CoSimulation> Instance<M> {
         OK
     }
 
+    /// A type's name in this instance's FMI version (2.0's `Real`, 3.0's `Float64`).
+    fn type_name(&self, ty: VarType) -> String {
+        match self.terms.version {
+            Version::Fmi2 => format!("{ty:?}"),
+            Version::Fmi3 => ty.fmi3_name().to_string(),
+        }
+    }
+
     /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal.
     fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, Status> {
-        if let Some(v) = M::declaration(vr, ty) {
+        let fmi2 = self.terms.version == Version::Fmi2;
+        if let Some(v) = M::declaration(vr, ty)
+            && (!fmi2 || v.in_version(crate::description::FmiVersion::V2))
+        {
             return Ok(v);
         }
         Err(match M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]) {
+            Some(other) if fmi2 && !other.in_version(crate::description::FmiVersion::V2) => self.error(&format!(
+                "{function}: value reference {vr} is not a variable of {} in FMI 2.0 ('{}' is a {} variable of its FMI 3.0 description only)",
+                M::DESCRIPTION.model_identifier,
+                other.name,
+                other.var_type.fmi3_name()
+            )),
             Some(other) => self.error(&format!(
-                "{function}: value reference {vr} ('{}') is a {:?} variable, not a {ty:?}",
-                other.name, other.var_type
+                "{function}: value reference {vr} ('{}') is a {} variable, not a {}",
+                other.name,
+                self.type_name(other.var_type),
+                self.type_name(ty)
             )),
             None => self.error(&format!(
-                "{function}: value reference {vr} is not a {ty:?} variable of {} (see modelDescription.xml)",
+                "{function}: value reference {vr} is not a {} variable of {} (see modelDescription.xml)",
+                self.type_name(ty),
                 M::DESCRIPTION.model_identifier
             )),
         })
@@ -537,21 +560,85 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
-        let mut parameter_changed = false;
+        let mut list = Vec::with_capacity(values.len());
         for (vr, v) in vrs.iter().zip(values) {
-            let Some(value) = v.to_value() else {
-                return self.error(&format!("{function}: value reference {vr}: not a numeric value"));
-            };
-            match self.check_one(function, *vr, value) {
+            match v.to_value() {
+                Some(value) => list.push(value),
+                None => return self.error(&format!("{function}: value reference {vr}: not a numeric value")),
+            }
+        }
+        self.set_value_list(function, vrs, &list)
+    }
+
+    /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
+    /// reaches Int64 and Enumeration variables in one call): all or none.
+    pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        let mut parameter_changed = false;
+        for (vr, value) in vrs.iter().zip(values) {
+            match self.check_one(function, *vr, *value) {
                 Ok(decl) => parameter_changed |= decl.causality == Causality::Parameter,
                 Err(status) => return status,
             }
         }
         let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
-        for (vr, v) in vrs.iter().zip(values) {
-            if let Some(value) = v.to_value() {
-                self.sim.model.set(*vr, value);
+        for (vr, value) in vrs.iter().zip(values) {
+            self.sim.model.set(*vr, *value);
+        }
+        self.after_set(function, previous)
+    }
+
+    /// The Binary getter (FMI 3.0): the returned pointers stay valid until the next call on
+    /// this instance (the bytes are copied, as the strings are).
+    pub fn get_binaries(&mut self, function: &str, vrs: &[u32], sizes: &mut [usize], out: &mut [*const u8]) -> Status {
+        for vr in vrs {
+            if let Err(status) = self
+                .lookup(function, *vr, VarType::Binary)
+                .and_then(|v| self.check_gettable(function, v))
+            {
+                return status;
             }
+        }
+        if let Err(status) = self.up_to_date(function) {
+            return status;
+        }
+        self.binaries.clear();
+        for vr in vrs {
+            self.binaries
+                .push(self.sim.model.get_binary(*vr).unwrap_or_default().to_vec());
+        }
+        for ((slot, size), b) in out.iter_mut().zip(sizes.iter_mut()).zip(&self.binaries) {
+            *slot = b.as_ptr();
+            *size = b.len();
+        }
+        OK
+    }
+
+    /// The Binary setter (FMI 3.0): all or none; a value longer than the variable's `maxSize`
+    /// is refused.
+    pub fn set_binaries(&mut self, function: &str, vrs: &[u32], values: &[&[u8]]) -> Status {
+        let mut parameter_changed = false;
+        for (vr, bytes) in vrs.iter().zip(values) {
+            let decl = match self.lookup(function, *vr, VarType::Binary) {
+                Ok(d) => d,
+                Err(status) => return status,
+            };
+            if let Err(status) = self.check_settable(function, decl) {
+                return status;
+            }
+            if let Some(max) = decl.fmi3.max_size
+                && bytes.len() > max as usize
+            {
+                return self.error(&format!(
+                    "{function}: {} bytes for '{}' (vr {vr}) exceed its maxSize = {max}; refused, values unchanged",
+                    bytes.len(),
+                    decl.name
+                ));
+            }
+            parameter_changed |= decl.causality == Causality::Parameter;
+        }
+        let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
+        for (vr, bytes) in vrs.iter().zip(values) {
+            self.sim.model.set_binary(*vr, bytes);
         }
         self.after_set(function, previous)
     }
@@ -757,16 +844,17 @@ enum Refusal {
 /// enumeration, accepted by the model's own check (with the other values of `model`).
 fn refusal<M: CoSimulation>(model: &M, decl: &Variable, value: Value) -> Option<Refusal> {
     let (name, vr) = (decl.name, decl.value_reference);
-    if let Value::Real(x) = value
-        && !x.is_finite()
-    {
+    if !value.is_finite() {
         return Some(Refusal::Rule(format!(
-            "{x} for '{name}' (vr {vr}) is not a finite number"
+            "{} for '{name}' (vr {vr}) is not a finite number",
+            value.as_f64().unwrap_or(f64::NAN)
         )));
     }
-    if let Some(x) = value.as_f64()
-        && (decl.min.is_some_and(|b| !b.admits_above(x)) || decl.max.is_some_and(|b| !b.admits_below(x)))
-    {
+    if !value.within(decl.min, decl.max) {
+        let x = match value.as_i128() {
+            Some(n) => n.to_string(),
+            None => value.as_f64().map(|x| x.to_string()).unwrap_or_default(),
+        };
         return Some(Refusal::Rule(format!(
             "{x} for '{name}' (vr {vr}) is outside {}",
             range_text(decl)
@@ -858,6 +946,7 @@ pub fn evaluate<M: CoSimulation>(model: &mut M, t: f64) {
     model.derivatives(t, &mut c);
     model.outputs(t, &mut c);
     model.store_continuous(&c);
+    model.calculate(t);
 }
 
 /// What the new-discrete-states function reports (`fmi2EventInfo`'s fields; fmi3UpdateDiscreteStates'

@@ -19,6 +19,10 @@ macro_rules! export_fmi2 {
             use $crate::__private::api;
             use $crate::__private::{TERMS2 as TERMS, shared};
             type __RustfmuModel = $model;
+            const _: () = assert!(
+                !<__RustfmuModel as $crate::Variables>::FMI3_ONLY,
+                "this model is #[fmu(fmi3_only)]: it has no FMI 2.0 export; use rustfmu::export_fmi3! instead of export_fmu! or export_fmi2!"
+            );
 
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
                 co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,

@@ -40,6 +40,12 @@ pub const fmi3Error: fmi3Status = 3;
 pub const fmi3Fatal: fmi3Status = 4;
 
 pub type fmi3DependencyKind = c_uint;
+pub const fmi3Independent: fmi3DependencyKind = 0;
+pub const fmi3Constant: fmi3DependencyKind = 1;
+pub const fmi3Fixed: fmi3DependencyKind = 2;
+pub const fmi3Tunable: fmi3DependencyKind = 3;
+pub const fmi3Discrete: fmi3DependencyKind = 4;
+pub const fmi3Dependent: fmi3DependencyKind = 5;
 pub type fmi3IntervalQualifier = c_uint;
 
 pub type fmi3LogMessageCallback = Option<

@@ -25,6 +25,7 @@ use crate::core::machine::{Call, State};
 use crate::core::shared;
 use crate::description::VarType;
 use crate::model::CoSimulation;
+use crate::value::{FmiType, Value};
 use std::cell::UnsafeCell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
@@ -337,24 +338,23 @@ fn check_declared<M: CoSimulation>(
     Ok(())
 }
 
-fn fmi3_type_name(t: VarType) -> &'static str {
-    match t {
-        VarType::Real => "a Float64 variable",
-        VarType::Integer => "an Int32 variable",
-        VarType::Boolean => "a Boolean variable",
-        VarType::String => "a String variable",
-        VarType::Enumeration => "an Enumeration variable",
-    }
+fn fmi3_type_name(t: VarType) -> String {
+    let name = t.fmi3_name();
+    let article = if matches!(name.as_bytes()[0], b'E' | b'I' | b'U') {
+        "an"
+    } else {
+        "a"
+    };
+    format!("{article} {name} variable")
 }
 
-fn accessor(t: VarType) -> &'static str {
-    match t {
-        VarType::Real => "fmi3GetFloat64/fmi3SetFloat64",
-        VarType::Integer => "fmi3GetInt32/fmi3SetInt32",
-        VarType::Boolean => "fmi3GetBoolean/fmi3SetBoolean",
-        VarType::String => "fmi3GetString/fmi3SetString",
-        VarType::Enumeration => "fmi3GetInt64/fmi3SetInt64",
-    }
+fn accessor(t: VarType) -> String {
+    let name = match t {
+        // FMI 3.0's Enumerations are Int64 values.
+        VarType::Enumeration => "Int64",
+        other => other.fmi3_name(),
+    };
+    format!("fmi3Get{name}/fmi3Set{name}")
 }
 
 /// What every 3.0 getter does before its type's own part: the instance and the state check
@@ -512,7 +512,8 @@ pub unsafe fn set_int32<M: CoSimulation>(
     unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
-/// Enumerations: fmi3GetInt64 (their 3.0 type's accessor); the values are the items' `value`s.
+/// Int64 variables and Enumerations (fmi3GetInt64 is their 3.0 type's accessor; the values
+/// are the items' `value`s), in one call if need be.
 pub unsafe fn get_int64<M: CoSimulation>(
     c: fmi3Instance,
     vr: *const fmi3ValueReference,
@@ -522,17 +523,41 @@ pub unsafe fn get_int64<M: CoSimulation>(
 ) -> fmi3Status {
     const F: &str = "fmi3GetInt64";
     let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [i64]| {
-        if let Err(status) = only_enumerations(inst, F, vrs) {
+        let enums = match int64_or_enumerations(inst, F, vrs) {
+            Ok(e) => e,
+            Err(status) => return status,
+        };
+        if !enums.iter().any(|e| *e) {
+            return inst.get_values(F, vrs, out);
+        }
+        // Both kinds read into their own arrays, copied out only when both succeeded.
+        let pick = |want: bool| -> Vec<u32> {
+            vrs.iter()
+                .zip(&enums)
+                .filter(|(_, e)| **e == want)
+                .map(|(v, _)| *v)
+                .collect()
+        };
+        let (e_vrs, i_vrs) = (pick(true), pick(false));
+        let mut e_got = vec![0i32; e_vrs.len()];
+        let mut i_got = vec![0i64; i_vrs.len()];
+        let status = inst.get_values(F, &e_vrs, &mut e_got);
+        if status != fmi3OK {
             return status;
         }
-        let mut got = vec![0i32; vrs.len()];
-        let status = inst.get_values(F, vrs, &mut got);
-        if status == fmi3OK {
-            for (o, v) in out.iter_mut().zip(got) {
-                *o = i64::from(v);
-            }
+        let status = inst.get_values(F, &i_vrs, &mut i_got);
+        if status != fmi3OK {
+            return status;
         }
-        status
+        let (mut e_got, mut i_got) = (e_got.into_iter(), i_got.into_iter());
+        for (o, e) in out.iter_mut().zip(enums) {
+            *o = if e {
+                e_got.next().map(i64::from).unwrap_or_default()
+            } else {
+                i_got.next().unwrap_or_default()
+            };
+        }
+        fmi3OK
     };
     // SAFETY: this function's contract is `getter`'s.
     unsafe { getter::<M, _>(F, c, vr, nvr, values, n_values, read) }
@@ -547,13 +572,18 @@ pub unsafe fn set_int64<M: CoSimulation>(
 ) -> fmi3Status {
     const F: &str = "fmi3SetInt64";
     let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[i64]| {
-        if let Err(status) = only_enumerations(inst, F, vrs) {
-            return status;
-        }
-        let mut narrow = Vec::with_capacity(values.len());
-        for (vr, v) in vrs.iter().zip(values) {
+        let enums = match int64_or_enumerations(inst, F, vrs) {
+            Ok(e) => e,
+            Err(status) => return status,
+        };
+        let mut list = Vec::with_capacity(values.len());
+        for ((vr, v), e) in vrs.iter().zip(values).zip(enums) {
+            if !e {
+                list.push(Value::Int64(*v));
+                continue;
+            }
             match i32::try_from(*v) {
-                Ok(x) => narrow.push(x),
+                Ok(x) => list.push(Value::Integer(x)),
                 Err(_) => {
                     return inst.error(&format!(
                         "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
@@ -561,17 +591,24 @@ pub unsafe fn set_int64<M: CoSimulation>(
                 }
             }
         }
-        inst.set_values(F, vrs, &narrow)
+        inst.set_value_list(F, vrs, &list)
     };
     // SAFETY: this function's contract is `setter`'s.
     unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
-/// Int64 reaches the enumerations only (this FMU declares no Int64 variable).
-fn only_enumerations<M: CoSimulation>(inst: &Instance<M>, function: &str, vrs: &[u32]) -> Result<(), fmi3Status> {
+/// For each value reference of an fmi3GetInt64/fmi3SetInt64 call: whether it is an Enumeration
+/// (else an Int64); a variable of another type is refused with its accessor named.
+fn int64_or_enumerations<M: CoSimulation>(
+    inst: &Instance<M>,
+    function: &str,
+    vrs: &[u32],
+) -> Result<Vec<bool>, fmi3Status> {
+    let mut out = Vec::with_capacity(vrs.len());
     for vr in vrs {
         match M::variable_index(*vr).map(|i| &M::DESCRIPTION.variables[i]) {
-            Some(v) if v.var_type == VarType::Enumeration => {}
+            Some(v) if v.var_type == VarType::Enumeration => out.push(true),
+            Some(v) if v.var_type == VarType::Int64 => out.push(false),
             Some(v) => {
                 return Err(inst.error(&format!(
                     "{function}: value reference {vr} ('{}') is {}, read and written with {}",
@@ -582,13 +619,112 @@ fn only_enumerations<M: CoSimulation>(inst: &Instance<M>, function: &str, vrs: &
             }
             None => {
                 return Err(inst.error(&format!(
-                    "{function}: value reference {vr} is not an Enumeration variable of {} (see modelDescription.xml)",
+                    "{function}: value reference {vr} is not an Int64 or Enumeration variable of {} (see modelDescription.xml)",
                     M::DESCRIPTION.model_identifier
                 )));
             }
         }
     }
-    Ok(())
+    Ok(out)
+}
+
+/// The getter of an FMI 3.0 numeric type without a 2.0 counterpart (Float32, Int8, UInt8,
+/// Int16, UInt16, UInt32, UInt64): the C array is the Rust type's.
+pub unsafe fn get_typed<M: CoSimulation, T: FmiType + Copy>(
+    c: fmi3Instance,
+    function: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut T,
+    n_values: usize,
+) -> fmi3Status {
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [T]| inst.get_values(function, vrs, out);
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter::<M, T>(function, c, vr, nvr, values, n_values, read) }
+}
+
+pub unsafe fn set_typed<M: CoSimulation, T: FmiType + Copy>(
+    c: fmi3Instance,
+    function: &'static str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const T,
+    n_values: usize,
+) -> fmi3Status {
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[T]| inst.set_values(function, vrs, values);
+    // Float32 may be continuous, so set where continuous inputs may be; the integers are discrete.
+    let call = if T::TYPE.is_float() {
+        Call::SetValues
+    } else {
+        Call::SetDiscreteValues
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter::<M, T>(function, call, c, vr, nvr, values, n_values, write) }
+}
+
+pub unsafe fn get_binary<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    value_sizes: *mut usize,
+    values: *mut fmi3Binary,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetBinary";
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::GetValues, F, |inst| {
+        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` hold `nvr`
+        // elements, and `valueSizes` and `values` `n_values` each.
+        let (vrs, sizes, out) = unsafe {
+            (
+                slice(vr, nvr),
+                slice_mut(value_sizes, n_values),
+                slice_mut(values, n_values),
+            )
+        };
+        let both = sizes.zip(out);
+        match arrays(inst, F, vrs, n_values, both) {
+            Ok((vrs, (sizes, out))) => inst.get_binaries(F, vrs, sizes, out),
+            Err(status) => status,
+        }
+    })
+}
+
+pub unsafe fn set_binary<M: CoSimulation>(
+    c: fmi3Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    value_sizes: *const usize,
+    values: *const fmi3Binary,
+    n_values: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3SetBinary";
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDiscreteValues, F, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` hold `nvr` elements, and
+        // `valueSizes` and `values` `n_values` each.
+        let (vrs, sizes, ptrs) = unsafe { (slice(vr, nvr), slice(value_sizes, n_values), slice(values, n_values)) };
+        let (vrs, (sizes, ptrs)) = match arrays(inst, F, vrs, n_values, sizes.zip(ptrs)) {
+            Ok(a) => a,
+            Err(status) => return status,
+        };
+        let mut bytes = Vec::with_capacity(vrs.len());
+        for (i, (size, p)) in sizes.iter().zip(ptrs).enumerate() {
+            // SAFETY: `slice` checks NULL (a size of 0 with NULL is an empty value); the
+            // contract makes `values[i]` hold `valueSizes[i]` bytes.
+            match unsafe { slice(*p, *size) } {
+                Some(b) => bytes.push(b),
+                None => {
+                    return inst.error(&format!(
+                        "{F}: values[{i}] is NULL with valueSizes[{i}] = {size}; nothing set"
+                    ));
+                }
+            }
+        }
+        inst.set_binaries(F, vrs, &bytes)
+    })
 }
 
 pub unsafe fn get_boolean<M: CoSimulation>(
@@ -678,84 +814,106 @@ pub unsafe fn set_string<M: CoSimulation>(
     unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
 }
 
-/// A getter of a type no variable of this FMU has (Float32, Int8, ..., UInt64, Binary):
-/// nothing to return, every value reference refused.
-pub unsafe fn get_none<M: CoSimulation>(
-    c: fmi3Instance,
-    function: &'static str,
-    type_name: &'static str,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values_null: bool,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the arguments come with this function's contract, which is the callee's.
-    unsafe { none::<M>(c, Call::GetValues, function, type_name, vr, nvr, values_null, n_values) }
+/// The dependencies of `dependent` in the instance's state, from the declarations (the same
+/// ones `<ModelStructure>` lists), or the logged refusal.
+fn dependencies_of<M: CoSimulation>(
+    inst: &Instance<M>,
+    function: &str,
+    dependent: u32,
+) -> Result<Vec<u32>, fmi3Status> {
+    let initialization = matches!(inst.state(), State::Instantiated | State::InitializationMode);
+    let time_vr = M::DESCRIPTION.time_value_reference();
+    M::DESCRIPTION
+        .dependencies(dependent, initialization, time_vr)
+        .ok_or_else(|| {
+            let what = match M::variable_index(dependent) {
+                Some(i) => format!("'{}'", M::DESCRIPTION.variables[i].name),
+                None if added_time_vr::<M>() == Some(dependent) => "'time'".to_string(),
+                None => {
+                    return inst.error(&format!(
+                        "{function}: value reference {dependent} is no variable of {}",
+                        M::DESCRIPTION.model_identifier
+                    ));
+                }
+            };
+            inst.error(&format!(
+                "{function}: {what} (vr {dependent}) is no unknown {}: it has no dependencies to report",
+                if initialization {
+                    "of Initialization Mode (<InitialUnknown>)"
+                } else {
+                    "of <ModelStructure> (an output, a state derivative or an event indicator)"
+                }
+            ))
+        })
 }
 
-pub unsafe fn set_none<M: CoSimulation>(
+pub unsafe fn get_number_of_variable_dependencies<M: CoSimulation>(
     c: fmi3Instance,
-    function: &'static str,
-    type_name: &'static str,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values_null: bool,
-    n_values: usize,
+    dependent: fmi3ValueReference,
+    n: *mut usize,
 ) -> fmi3Status {
-    // SAFETY: the arguments come with this function's contract, which is the callee's.
-    unsafe {
-        none::<M>(
-            c,
-            Call::SetDiscreteValues,
-            function,
-            type_name,
-            vr,
-            nvr,
-            values_null,
-            n_values,
-        )
-    }
-}
-
-unsafe fn none<M: CoSimulation>(
-    c: fmi3Instance,
-    call: Call,
-    function: &'static str,
-    type_name: &'static str,
-    vr: *const fmi3ValueReference,
-    nvr: usize,
-    values_null: bool,
-    n_values: usize,
-) -> fmi3Status {
+    const F: &str = "fmi3GetNumberOfVariableDependencies";
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, call, function, |inst| {
-        let values = (!values_null || n_values == 0).then_some(());
-        // SAFETY: `slice` checks NULL; the contract makes `valueReferences` hold
-        // `nValueReferences` elements.
-        let vrs = unsafe { slice(vr, nvr) };
-        let (vrs, ()) = match arrays(inst, function, vrs, n_values, values) {
-            Ok(a) => a,
+    with_instance(component, Call::SetDebugLogging, F, |inst| {
+        if n.is_null() {
+            return inst.error(&format!("{F}: nDependencies is NULL"));
+        }
+        match dependencies_of(inst, F, dependent) {
+            Ok(deps) => {
+                // SAFETY: not NULL; the contract makes it point to one size_t.
+                unsafe { *n = deps.len() };
+                fmi3OK
+            }
+            Err(status) => status,
+        }
+    })
+}
+
+pub unsafe fn get_variable_dependencies<M: CoSimulation>(
+    c: fmi3Instance,
+    dependent: fmi3ValueReference,
+    element_indices_of_dependent: *mut usize,
+    independents: *mut fmi3ValueReference,
+    element_indices_of_independents: *mut usize,
+    kinds: *mut fmi3DependencyKind,
+    n: usize,
+) -> fmi3Status {
+    const F: &str = "fmi3GetVariableDependencies";
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::SetDebugLogging, F, |inst| {
+        let deps = match dependencies_of(inst, F, dependent) {
+            Ok(deps) => deps,
             Err(status) => return status,
         };
-        match vrs.first() {
-            None => fmi3OK,
-            Some(vr) => inst.error(&format!(
-                "{function}: value reference {vr} is not a {type_name} variable: {} has no {type_name} variables{}",
-                M::DESCRIPTION.model_identifier,
-                M::DESCRIPTION
-                    .variables
-                    .iter()
-                    .find(|v| v.value_reference == *vr)
-                    .map(|v| format!(
-                        " ('{}' is {}, read and written with {})",
-                        v.name,
-                        fmi3_type_name(v.var_type),
-                        accessor(v.var_type)
-                    ))
-                    .unwrap_or_default()
-            )),
+        if n != deps.len() {
+            return inst.error(&format!(
+                "{F}: nDependencies = {n}, but '{dependent}' has {} (fmi3GetNumberOfVariableDependencies)",
+                deps.len()
+            ));
         }
+        // SAFETY: `slice_mut` checks NULL; the contract makes each array hold `n` elements.
+        let arrays = unsafe {
+            (
+                slice_mut(element_indices_of_dependent, n),
+                slice_mut(independents, n),
+                slice_mut(element_indices_of_independents, n),
+                slice_mut(kinds, n),
+            )
+        };
+        let (Some(e_dep), Some(ind), Some(e_ind), Some(k)) = arrays else {
+            return inst.error(&format!("{F}: an output array is NULL with nDependencies = {n}"));
+        };
+        for (i, vr) in deps.into_iter().enumerate() {
+            // Every variable is a scalar: element index 0 (the whole variable); the kind is not
+            // analysed further than "depends".
+            e_dep[i] = 0;
+            ind[i] = vr;
+            e_ind[i] = 0;
+            k[i] = fmi3Dependent;
+        }
+        fmi3OK
     })
 }
 

@@ -7,9 +7,9 @@
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __rustfmu_fmi3_refusals {
-    // `fmi3GetX, fmi3SetX(fmi3X, "X");`: the getter and the setter of a type no variable of this
-    // FMU has; every value reference is refused, NULL arrays as in any getter and setter.
-    (none for $model:ty: $($get:ident, $set:ident($t:ty, $type_name:literal);)*) => {
+    // `fmi3GetX, fmi3SetX(fmi3X);`: the getter and the setter of an FMI 3.0 numeric type
+    // without a 2.0 counterpart, through the runtime's generic ones.
+    (typed for $model:ty: $($get:ident, $set:ident($t:ty);)*) => {
         $crate::__rustfmu_extern_c! {
             $(
                 $get(
@@ -19,13 +19,12 @@ macro_rules! __rustfmu_fmi3_refusals {
                     values: *mut $t,
                     nValues: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
-                    $crate::__private::api3::get_none::<$model>(
+                    $crate::__private::api3::get_typed::<$model, $t>(
                         instance,
                         stringify!($get),
-                        $type_name,
                         valueReferences,
                         nValueReferences,
-                        values.is_null(),
+                        values,
                         nValues,
                     );
                 $set(
@@ -35,13 +34,12 @@ macro_rules! __rustfmu_fmi3_refusals {
                     values: *const $t,
                     nValues: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
-                    $crate::__private::api3::set_none::<$model>(
+                    $crate::__private::api3::set_typed::<$model, $t>(
                         instance,
                         stringify!($set),
-                        $type_name,
                         valueReferences,
                         nValueReferences,
-                        values.is_null(),
+                        values,
                         nValues,
                     );
             )*
@@ -290,13 +288,12 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3Binary,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_none::<__RustfmuModel>(
+                    api3::get_binary::<__RustfmuModel>(
                         instance,
-                        "fmi3GetBinary",
-                        "Binary",
                         valueReferences,
                         nValueReferences,
-                        values.is_null() || valueSizes.is_null(),
+                        valueSizes,
+                        values,
                         nValues,
                     );
                 fmi3SetBinary(
@@ -307,13 +304,12 @@ macro_rules! export_fmi3 {
                     values: *const fmi3Binary,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_none::<__RustfmuModel>(
+                    api3::set_binary::<__RustfmuModel>(
                         instance,
-                        "fmi3SetBinary",
-                        "Binary",
                         valueReferences,
                         nValueReferences,
-                        values.is_null() || valueSizes.is_null(),
+                        valueSizes,
+                        values,
                         nValues,
                     );
                 fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
@@ -498,6 +494,30 @@ macro_rules! export_fmi3 {
                         values,
                         nValues,
                     );
+                fmi3GetNumberOfVariableDependencies(
+                    instance: fmi3Instance,
+                    dependent: fmi3ValueReference,
+                    nDependencies: *mut usize,
+                ) -> fmi3Status =>
+                    api3::get_number_of_variable_dependencies::<__RustfmuModel>(instance, dependent, nDependencies);
+                fmi3GetVariableDependencies(
+                    instance: fmi3Instance,
+                    dependent: fmi3ValueReference,
+                    elementIndicesOfDependent: *mut usize,
+                    independents: *mut fmi3ValueReference,
+                    elementIndicesOfIndependents: *mut usize,
+                    dependencyKinds: *mut fmi3DependencyKind,
+                    nDependencies: usize,
+                ) -> fmi3Status =>
+                    api3::get_variable_dependencies::<__RustfmuModel>(
+                        instance,
+                        dependent,
+                        elementIndicesOfDependent,
+                        independents,
+                        elementIndicesOfIndependents,
+                        dependencyKinds,
+                        nDependencies,
+                    );
                 fmi3DoStep(
                     instance: fmi3Instance,
                     currentCommunicationPoint: fmi3Float64,
@@ -519,20 +539,18 @@ macro_rules! export_fmi3 {
                         lastSuccessfulTime,
                     );
             }
-            // The getters and setters of the types no variable of this FMU has.
+            // The getters and setters of the FMI 3.0 types without a 2.0 counterpart.
             $crate::__rustfmu_fmi3_refusals! {
-                none for __RustfmuModel:
-                fmi3GetFloat32, fmi3SetFloat32(fmi3Float32, "Float32");
-                fmi3GetInt8, fmi3SetInt8(fmi3Int8, "Int8");
-                fmi3GetUInt8, fmi3SetUInt8(fmi3UInt8, "UInt8");
-                fmi3GetInt16, fmi3SetInt16(fmi3Int16, "Int16");
-                fmi3GetUInt16, fmi3SetUInt16(fmi3UInt16, "UInt16");
-                fmi3GetUInt32, fmi3SetUInt32(fmi3UInt32, "UInt32");
-                fmi3GetUInt64, fmi3SetUInt64(fmi3UInt64, "UInt64");
+                typed for __RustfmuModel:
+                fmi3GetFloat32, fmi3SetFloat32(fmi3Float32);
+                fmi3GetInt8, fmi3SetInt8(fmi3Int8);
+                fmi3GetUInt8, fmi3SetUInt8(fmi3UInt8);
+                fmi3GetInt16, fmi3SetInt16(fmi3Int16);
+                fmi3GetUInt16, fmi3SetUInt16(fmi3UInt16);
+                fmi3GetUInt32, fmi3SetUInt32(fmi3UInt32);
+                fmi3GetUInt64, fmi3SetUInt64(fmi3UInt64);
             }
             const NO_CLOCKS: &str = "this FMU has no clocks";
-            const NO_DEPENDENCIES: &str =
-                "not provided at run time: the dependencies are in modelDescription.xml's ModelStructure";
             const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
             // The functions of the features this FMU does not have, each with the reason.
             $crate::__rustfmu_fmi3_refusals! {
@@ -547,18 +565,6 @@ macro_rules! export_fmi3 {
                     _nValueReferences: usize,
                     _values: *const fmi3Clock,
                 ) => NO_CLOCKS;
-                fmi3GetNumberOfVariableDependencies(
-                    _valueReference: fmi3ValueReference,
-                    _nDependencies: *mut usize,
-                ) => NO_DEPENDENCIES;
-                fmi3GetVariableDependencies(
-                    _dependent: fmi3ValueReference,
-                    _elementIndicesOfDependent: *mut usize,
-                    _independents: *mut fmi3ValueReference,
-                    _elementIndicesOfIndependents: *mut usize,
-                    _dependencyKinds: *mut fmi3DependencyKind,
-                    _nDependencies: usize,
-                ) => NO_DEPENDENCIES;
                 fmi3EnterConfigurationMode() => NO_CONFIGURATION;
                 fmi3ExitConfigurationMode() => NO_CONFIGURATION;
                 fmi3GetIntervalDecimal(

@@ -2,9 +2,9 @@ use rustfmu::prelude::*;
 
 #[derive(Model, Clone, serde::Serialize, serde::Deserialize)]
 pub struct M {
-    /// single precision is no FMI 2.0 type
+    /// a pointer-sized integer is no FMI type
     #[variable(vr = 1, input)]
-    pub x: f32,
+    pub x: usize,
 }
 
 fn main() {}

@@ -514,7 +514,8 @@ impl<'a> Inst<'a> {
         (s, v)
     }
 
-    /// Every Float64 value (bit patterns), for comparing runs.
+    /// Every Float64 value (bit patterns), then every value of the other numeric types and
+    /// Booleans (their C bytes) and every Binary (its length and bytes), for comparing runs.
     pub fn observe(&self) -> Vec<u64> {
         let vrs = self.fmu.md.vrs_of_type(Type::Float64);
         let (s, v) = self.get_f64(&vrs);
@@ -525,7 +526,108 @@ impl<'a> Inst<'a> {
             self.fmu.id,
             self.log_text()
         );
-        crate::bits(&v)
+        let mut out = crate::bits(&v);
+        for var in self.fmu.md.variables.iter().filter(|v| {
+            !v.array
+                && !matches!(v.ty, Type::Float64 | Type::String | Type::Clock)
+                && v.causality != fmi_description::Causality::Independent
+        }) {
+            let (s, bytes) = self.get_raw(var);
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{}: fmi3Get{} of '{}': {}",
+                self.fmu.id,
+                accessor(var.ty),
+                var.name,
+                self.log_text()
+            );
+            if var.ty == Type::Binary {
+                out.push(bytes.len() as u64);
+            }
+            out.extend(bytes.chunks(8).map(|c| {
+                let mut b = [0u8; 8];
+                b[..c.len()].copy_from_slice(c);
+                u64::from_le_bytes(b)
+            }));
+        }
+        out
+    }
+
+    /// The value of a scalar variable of any type but String and Clock, read with its type's
+    /// getter, as its C bytes (native order; a Binary's bytes).
+    pub fn get_raw(&self, v: &Variable) -> (fmi3Status, Vec<u8>) {
+        let api = self.api();
+        let mut word = 0u64;
+        let p = &mut word as *mut u64;
+        let vr = &v.vr;
+        let what = format!("fmi3Get{}", accessor(v.ty));
+        if v.ty == Type::Binary {
+            let (mut size, mut data) = (0usize, std::ptr::null::<u8>());
+            let s = self.call(&what, |c| unsafe {
+                (api.get_binary)(c, vr, 1, &mut size, &mut data, 1)
+            });
+            let bytes = if s == fmi3OK && !data.is_null() {
+                // SAFETY: the FMU's answer: `size` bytes at `data`, valid until the next call.
+                unsafe { std::slice::from_raw_parts(data, size) }.to_vec()
+            } else {
+                Vec::new()
+            };
+            return (s, bytes);
+        }
+        // SAFETY (every call): one value reference, and an 8-byte aligned buffer that holds one
+        // value of any of the types.
+        let s = self.call(&what, |c| unsafe {
+            match v.ty {
+                Type::Float32 => (api.get_float32)(c, vr, 1, p as Values, 1),
+                Type::Float64 => (api.get_float64)(c, vr, 1, p as *mut f64, 1),
+                Type::Int8 => (api.get_int8)(c, vr, 1, p as Values, 1),
+                Type::UInt8 => (api.get_uint8)(c, vr, 1, p as Values, 1),
+                Type::Int16 => (api.get_int16)(c, vr, 1, p as Values, 1),
+                Type::UInt16 => (api.get_uint16)(c, vr, 1, p as Values, 1),
+                Type::Int32 => (api.get_int32)(c, vr, 1, p as *mut i32, 1),
+                Type::UInt32 => (api.get_uint32)(c, vr, 1, p as Values, 1),
+                Type::Int64 | Type::Enumeration => (api.get_int64)(c, vr, 1, p as *mut i64, 1),
+                Type::UInt64 => (api.get_uint64)(c, vr, 1, p as Values, 1),
+                Type::Boolean => (api.get_boolean)(c, vr, 1, p as *mut u8, 1),
+                Type::String | Type::Binary | Type::Clock => fmi3Error,
+            }
+        });
+        (s, word.to_ne_bytes()[..c_size(v.ty)].to_vec())
+    }
+
+    /// Sets a scalar variable of any type but String and Clock from its C bytes (as
+    /// [`Inst::get_raw`] gives them).
+    pub fn set_raw(&self, v: &Variable, bytes: &[u8]) -> fmi3Status {
+        let api = self.api();
+        let vr = &v.vr;
+        let what = format!("fmi3Set{}", accessor(v.ty));
+        if v.ty == Type::Binary {
+            let (size, data) = (bytes.len(), bytes.as_ptr());
+            return self.call(&what, |c| unsafe { (api.set_binary)(c, vr, 1, &size, &data, 1) });
+        }
+        let mut b = [0u8; 8];
+        let n = c_size(v.ty).min(bytes.len());
+        b[..n].copy_from_slice(&bytes[..n]);
+        let word = u64::from_ne_bytes(b);
+        let p = &word as *const u64 as *const std::ffi::c_void;
+        // SAFETY (every call): one value reference, one value of the type in an aligned buffer.
+        self.call(&what, |c| unsafe {
+            match v.ty {
+                Type::Float32 => (api.set_float32)(c, vr, 1, p, 1),
+                Type::Float64 => (api.set_float64)(c, vr, 1, p as *const f64, 1),
+                Type::Int8 => (api.set_int8)(c, vr, 1, p, 1),
+                Type::UInt8 => (api.set_uint8)(c, vr, 1, p, 1),
+                Type::Int16 => (api.set_int16)(c, vr, 1, p, 1),
+                Type::UInt16 => (api.set_uint16)(c, vr, 1, p, 1),
+                Type::Int32 => (api.set_int32)(c, vr, 1, p as *const i32, 1),
+                Type::UInt32 => (api.set_uint32)(c, vr, 1, p, 1),
+                Type::Int64 | Type::Enumeration => (api.set_int64)(c, vr, 1, p as *const i64, 1),
+                Type::UInt64 => (api.set_uint64)(c, vr, 1, p, 1),
+                Type::Boolean => (api.set_boolean)(c, vr, 1, p as *const bool, 1),
+                Type::String | Type::Binary | Type::Clock => fmi3Error,
+            }
+        })
     }
 
     /// [`Inst::snapshot`] without panicking: the first call that was not fmi3OK, named.
@@ -719,5 +821,23 @@ impl crate::Loaded for Fmu3 {
             crate::checks::Run::Fmi3(f) => Some(f),
             crate::checks::Run::Fmi2(_) => None,
         }
+    }
+}
+
+/// The bytes of one value of a scalar type in the C API (Enumerations are Int64).
+pub fn c_size(ty: Type) -> usize {
+    match ty {
+        Type::Int8 | Type::UInt8 | Type::Boolean => 1,
+        Type::Int16 | Type::UInt16 => 2,
+        Type::Float32 | Type::Int32 | Type::UInt32 => 4,
+        _ => 8,
+    }
+}
+
+/// The type name of a variable's getter and setter (`Int64` for an Enumeration).
+pub fn accessor(ty: Type) -> &'static str {
+    match ty {
+        Type::Enumeration => "Int64",
+        other => other.name(),
     }
 }

@@ -83,8 +83,10 @@ pub fn expand(input: DeriveInput) -> syn::Result<TokenStream> {
             "give the first item its value (`Item = 1`): Rust would start at 0, FMI tools usually at 1",
         ));
     }
+    let first = &data.variants.first().expect("non-empty").ident;
     Ok(quote! {
         impl #rt::FmuEnum for #ident {
+            const FIRST: Self = #ident::#first;
             const TYPE: &'static #rt::description::EnumType = &#rt::description::EnumType {
                 name: #type_name,
                 description: #type_description,

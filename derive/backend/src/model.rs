@@ -19,6 +19,27 @@ enum Kind {
     Boolean,
     Str,
     Enum,
+    /// FMI 3.0 only: f32.
+    Float32,
+    /// FMI 3.0 only: i8, u8, i16, u16, u32, i64 (start values through `Start::Int64`).
+    Int3,
+    /// FMI 3.0 only: u64.
+    UInt64,
+    /// FMI 3.0 only: `Vec<u8>`.
+    Binary,
+}
+
+impl Kind {
+    /// A type FMI 2.0 has.
+    fn in_fmi2(self) -> bool {
+        matches!(
+            self,
+            Kind::Real | Kind::Integer | Kind::Boolean | Kind::Str | Kind::Enum
+        )
+    }
+    fn is_float(self) -> bool {
+        matches!(self, Kind::Real | Kind::Float32)
+    }
 }
 
 /// One `#[variable(...)]` and the field it sits on.
@@ -42,6 +63,10 @@ struct Var {
     derivative_of: Option<(String, Span)>,
     /// Declared `event_indicator` (at this span).
     event_indicator: Option<Span>,
+    /// Declared `fmi3_only`, or of a type only FMI 3.0 has.
+    fmi3_only: bool,
+    max_size: Option<Expr>,
+    mime_type: Option<LitStr>,
     description: String,
 }
 
@@ -62,6 +87,9 @@ struct VarAttr {
     initial_depends: Option<Vec<(String, Span)>>,
     derivative_of: Option<(String, Span)>,
     event_indicator: Option<Span>,
+    fmi3_only: Option<Span>,
+    max_size: Option<Expr>,
+    mime_type: Option<LitStr>,
 }
 
 /// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
@@ -225,6 +253,20 @@ impl Parse for VarAttr {
                     once(a.event_indicator.is_some())?;
                     a.event_indicator = Some(key.span());
                 }
+                "fmi3_only" => {
+                    once(a.fmi3_only.is_some())?;
+                    a.fmi3_only = Some(key.span());
+                }
+                "max_size" => {
+                    once(a.max_size.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.max_size = Some(input.parse()?);
+                }
+                "mime_type" => {
+                    once(a.mime_type.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.mime_type = Some(input.parse()?);
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -236,7 +278,8 @@ impl Parse for VarAttr {
                         format!(
                             "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
                              calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
-                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator"
+                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator, \
+                             fmi3_only, max_size, mime_type"
                         ),
                     ));
                 }
@@ -250,28 +293,40 @@ impl Parse for VarAttr {
     }
 }
 
+const TYPES: &str = "f64 (Float64/Real), i32 (Int32/Integer), bool (Boolean), String, a #[derive(FmuEnum)] enum \
+     (Enumeration), and FMI 3.0 only: f32 (Float32), i8, u8, i16, u16, u32, i64, u64 (Int8 .. UInt64), Vec<u8> (Binary)";
+
 fn kind_of(ty: &Type) -> Result<Kind> {
     let Type::Path(p) = ty else {
-        return Err(Error::new(
-            ty.span(),
-            "a variable's type is f64, i32, bool, String or a #[derive(FmuEnum)] enum",
-        ));
+        return Err(Error::new(ty.span(), format!("a variable's type is one of {TYPES}")));
     };
-    let last = p.path.segments.last().map(|s| s.ident.to_string()).unwrap_or_default();
+    let Some(seg) = p.path.segments.last() else {
+        return Err(Error::new(ty.span(), format!("a variable's type is one of {TYPES}")));
+    };
+    let last = seg.ident.to_string();
     Ok(match last.as_str() {
         "f64" => Kind::Real,
         "i32" => Kind::Integer,
         "bool" => Kind::Boolean,
         "String" => Kind::Str,
-        "f32" | "i8" | "i16" | "i64" | "i128" | "u8" | "u16" | "u32" | "u64" | "u128" | "isize" | "usize" | "str"
-        | "char" => {
-            return Err(Error::new(
-                ty.span(),
-                format!(
-                    "{last} is not an FMI 2.0 type: use f64 (Real), i32 (Integer), bool (Boolean), String, \
-                     or a #[derive(FmuEnum)] enum (Enumeration)"
-                ),
-            ));
+        "f32" => Kind::Float32,
+        "i8" | "u8" | "i16" | "u16" | "u32" | "i64" => Kind::Int3,
+        "u64" => Kind::UInt64,
+        "Vec" => {
+            let is_bytes = matches!(&seg.arguments, syn::PathArguments::AngleBracketed(a)
+                if a.args.len() == 1
+                    && matches!(a.args.first(), Some(syn::GenericArgument::Type(Type::Path(t)))
+                        if t.path.is_ident("u8")));
+            if !is_bytes {
+                return Err(Error::new(
+                    ty.span(),
+                    "a Vec variable is a Binary: Vec<u8> (arrays of values are not variables yet)",
+                ));
+            }
+            Kind::Binary
+        }
+        "i128" | "u128" | "isize" | "usize" | "str" | "char" => {
+            return Err(Error::new(ty.span(), format!("{last} is not an FMI type: use {TYPES}")));
         }
         _ => Kind::Enum,
     })
@@ -279,7 +334,7 @@ fn kind_of(ty: &Type) -> Result<Kind> {
 
 /// A variable's type as the standard's rules see it (only Reals may be continuous).
 fn type_kind(kind: Kind) -> TypeKind {
-    if kind == Kind::Real {
+    if kind.is_float() {
         TypeKind::Real
     } else {
         TypeKind::Other
@@ -315,7 +370,7 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
             if !fmi_standard::legal_variability_for_type(type_kind(kind), v) {
                 return Err(Error::new(
                     s,
-                    "only Real (f64) variables may be continuous; Integer, Boolean, String and Enumeration variables are discrete",
+                    "only Float64 (f64) and Float32 (f32) variables may be continuous; integer, Boolean, String, Binary and Enumeration variables are discrete",
                 ));
             }
             v
@@ -336,23 +391,38 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
             ),
         ));
     }
-    if kind == Kind::Enum && a.start.is_none() {
+    if kind == Kind::Enum
+        && a.start.is_none()
+        && fmi_standard::has_start(causality, variability, a.initial.map(|(i, _)| i))
+    {
         return Err(Error::new(
             span,
             "an Enumeration variable needs `start = Enum::Item` (its value before initialization)",
         ));
     }
-    if (a.min.is_some() || a.max.is_some()) && matches!(kind, Kind::Boolean | Kind::Str) {
+    if (a.min.is_some() || a.max.is_some()) && matches!(kind, Kind::Boolean | Kind::Str | Kind::Binary) {
         return Err(Error::new(
             span,
-            "min and max are for Real, Integer and Enumeration variables",
+            "min and max are for numeric (float and integer) and Enumeration variables",
         ));
     }
-    if a.unit.is_some() && kind != Kind::Real {
-        return Err(Error::new(span, "only Real (f64) variables have a unit"));
+    if a.unit.is_some() && !kind.is_float() {
+        return Err(Error::new(
+            span,
+            "only Float64 (f64) and Float32 (f32) variables have a unit",
+        ));
     }
-    if a.nominal.is_some() && kind != Kind::Real {
-        return Err(Error::new(span, "only Real (f64) variables have a nominal value"));
+    if a.nominal.is_some() && !kind.is_float() {
+        return Err(Error::new(
+            span,
+            "only Float64 (f64) and Float32 (f32) variables have a nominal value",
+        ));
+    }
+    if (a.max_size.is_some() || a.mime_type.is_some()) && kind != Kind::Binary {
+        return Err(Error::new(
+            span,
+            "max_size and mime_type are for Binary (Vec<u8>) variables",
+        ));
     }
     let var = Var {
         name: a.name.unwrap_or_else(|| ident.to_string()),
@@ -373,6 +443,9 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         initial_depends: a.initial_depends,
         derivative_of: a.derivative_of,
         event_indicator: a.event_indicator,
+        fmi3_only: a.fmi3_only.is_some(),
+        max_size: a.max_size,
+        mime_type: a.mime_type,
         description: crate::doc_text(&field.attrs),
     };
     if let Some(span) = var.event_indicator
@@ -412,8 +485,22 @@ struct ModelAttr {
     description: Option<String>,
     /// `co_simulation_only` / `model_exchange_only`: (model exchange, co-simulation) offered.
     interfaces: Option<(bool, bool, Span)>,
+    /// `fmi3_only`: the model has no FMI 2.0 export.
+    fmi3_only: Option<Span>,
     units: Vec<(String, Base, Span)>,
     categories: Vec<(String, String, Span)>,
+    terminals: Vec<TerminalAttr>,
+}
+
+/// `terminal(name = .., kind = .., matching_rule = .., description = .., member(..), ..)`.
+struct TerminalAttr {
+    name: String,
+    kind: String,
+    matching_rule: String,
+    description: String,
+    /// (variable, memberName, variableKind, span of the variable)
+    members: Vec<(String, String, String, Span)>,
+    span: Span,
 }
 
 fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
@@ -441,6 +528,11 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 }
                 let cs_only = meta.path.is_ident("co_simulation_only");
                 m.interfaces = Some((!cs_only, cs_only, meta.path.span()));
+            } else if meta.path.is_ident("fmi3_only") {
+                if m.fmi3_only.is_some() {
+                    return Err(meta.error("fmi3_only is given twice"));
+                }
+                m.fmi3_only = Some(meta.path.span());
             } else if meta.path.is_ident("unit") {
                 let span = meta.path.span();
                 let mut name = None;
@@ -499,8 +591,66 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                     return Err(Error::new(span, format!("log category '{name}' is declared twice (the runtime declares {})", RUNTIME_CATEGORIES.join(", "))));
                 }
                 m.categories.push((name, description, span));
+            } else if meta.path.is_ident("terminal") {
+                let span = meta.path.span();
+                let mut t = TerminalAttr {
+                    name: String::new(),
+                    kind: String::new(),
+                    matching_rule: "plug".into(),
+                    description: String::new(),
+                    members: Vec::new(),
+                    span,
+                };
+                meta.parse_nested_meta(|c| {
+                    if c.path.is_ident("name") {
+                        t.name = c.value()?.parse::<LitStr>()?.value();
+                    } else if c.path.is_ident("kind") {
+                        t.kind = c.value()?.parse::<LitStr>()?.value();
+                    } else if c.path.is_ident("matching_rule") {
+                        t.matching_rule = c.value()?.parse::<LitStr>()?.value();
+                    } else if c.path.is_ident("description") {
+                        t.description = c.value()?.parse::<LitStr>()?.value();
+                    } else if c.path.is_ident("member") {
+                        let (mut variable, mut member, mut kind) = (None, None, "signal".to_string());
+                        let mut vspan = c.path.span();
+                        c.parse_nested_meta(|m| {
+                            if m.path.is_ident("variable") {
+                                let v = m.value()?;
+                                let (name, sp) = name_or_ident(v)?;
+                                vspan = sp;
+                                variable = Some(name);
+                            } else if m.path.is_ident("name") {
+                                member = Some(m.value()?.parse::<LitStr>()?.value());
+                            } else if m.path.is_ident("kind") {
+                                kind = m.value()?.parse::<LitStr>()?.value();
+                                if !matches!(kind.as_str(), "signal" | "inflow" | "outflow") {
+                                    return Err(m.error("a member's kind is \"signal\", \"inflow\" or \"outflow\" (FMI 3.0's variableKind)"));
+                                }
+                            } else {
+                                return Err(m.error("a terminal member has `variable`, `name` and `kind`"));
+                            }
+                            Ok(())
+                        })?;
+                        let variable = variable.ok_or_else(|| Error::new(vspan, "a terminal member needs `variable = field_or_name`"))?;
+                        let member = member.unwrap_or_else(|| variable.clone());
+                        t.members.push((variable, member, kind, vspan));
+                    } else {
+                        return Err(c.error("a terminal has `name`, `kind`, `matching_rule`, `description` and `member(..)`s"));
+                    }
+                    Ok(())
+                })?;
+                if t.name.is_empty() {
+                    return Err(Error::new(span, "a terminal needs `name = \"...\"`"));
+                }
+                if t.members.is_empty() {
+                    return Err(Error::new(span, "a terminal needs at least one `member(variable = .., name = \"..\")`"));
+                }
+                if m.terminals.iter().any(|o| o.name == t.name) {
+                    return Err(Error::new(span, format!("terminal '{}' is declared twice", t.name)));
+                }
+                m.terminals.push(t);
             } else {
-                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, unit(..), log_category(..)"));
+                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, fmi3_only, unit(..), log_category(..), terminal(..)"));
             }
             Ok(())
         })?;
@@ -539,9 +689,44 @@ fn number(e: &Expr) -> Result<f64> {
 }
 
 fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
+    for t in &model.terminals {
+        let mut seen = Vec::new();
+        for (variable, member, _, span) in &t.members {
+            if !vars.iter().any(|v| v.name == *variable || v.field == variable) {
+                return Err(Error::new(
+                    *span,
+                    format!(
+                        "terminal '{}': member variable '{variable}' is no variable of the model",
+                        t.name
+                    ),
+                ));
+            }
+            if seen.contains(&member) {
+                return Err(Error::new(
+                    *span,
+                    format!("terminal '{}': member name '{member}' is used twice", t.name),
+                ));
+            }
+            seen.push(member);
+        }
+        let _ = t.span;
+    }
     let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
     let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
     for v in vars {
+        if !v.kind.in_fmi2() && !v.fmi3_only && model.fmi3_only.is_none() {
+            let ty = &v.ty;
+            return Err(Error::new(
+                v.span,
+                format!(
+                    "'{}' has type {}, which FMI 2.0 does not have: declare the variable `fmi3_only` (it is left out \
+                     of the FMI 2.0 description), or the model #[fmu(fmi3_only)] (no FMI 2.0 export: \
+                     rustfmu::export_fmi3! instead of export_fmu!)",
+                    v.name,
+                    quote!(#ty)
+                ),
+            ));
+        }
         if let Some(first) = names.insert(&v.name, v) {
             return Err(Error::new(
                 v.span,
@@ -774,8 +959,22 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             (Kind::Str, None) => quote!(#rt::description::Start::String("")),
             (Kind::Enum, Some(e)) => quote!(#rt::description::Start::Integer((#e) as i32)),
             (Kind::Enum, None) => unreachable!("checked: enumerations have a start"),
+            (Kind::Float32, Some(e)) => quote!(#rt::description::Start::Real((#e) as f32 as f64)),
+            (Kind::Float32, None) => quote!(#rt::description::Start::Real(0.0)),
+            (Kind::Int3, Some(e)) => quote!(#rt::description::Start::Int64({ let x: #ty = #e; x as i64 })),
+            (Kind::Int3, None) => quote!(#rt::description::Start::Int64(0)),
+            (Kind::UInt64, Some(e)) => quote!(#rt::description::Start::UInt64(#e)),
+            (Kind::UInt64, None) => quote!(#rt::description::Start::UInt64(0)),
+            (Kind::Binary, Some(e)) => quote!(#rt::description::Start::Binary(#e)),
+            (Kind::Binary, None) => quote!(#rt::description::Start::Binary(&[])),
         }
     };
+    let fmi3_only = v.fmi3_only || !v.kind.in_fmi2();
+    let max_size = match &v.max_size {
+        Some(e) => quote!(::core::option::Option::Some(#e)),
+        None => quote!(::core::option::Option::None),
+    };
+    let mime_type = v.mime_type.as_ref().map(|m| m.value()).unwrap_or_default();
     let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
     let description = &v.description;
     let bound = |b: &Option<(Expr, bool)>| match b {
@@ -830,6 +1029,11 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             initial_depends_on: #initial_depends,
             derivative_of: #derivative_of,
             enumeration: <#ty as #rt::FmiType>::ENUMERATION,
+            fmi3: #rt::description::Fmi3Extras {
+                only: #fmi3_only,
+                max_size: #max_size,
+                mime_type: #mime_type,
+            },
         }
     }
 }
@@ -988,17 +1192,35 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             let value = match (v.kind, &v.start) {
                 (Kind::Str, Some(e)) => quote!(::std::string::String::from(#e)),
                 (Kind::Str, None) => quote!(::std::string::String::new()),
+                (Kind::Binary, Some(e)) => quote!(::std::vec::Vec::from(&(#e)[..])),
+                (Kind::Binary, None) => quote!(::std::vec::Vec::new()),
                 (_, Some(e)) => quote!(#e),
-                (Kind::Real, None) => quote!(0.0),
-                (Kind::Integer, None) => quote!(0),
+                (Kind::Real | Kind::Float32, None) => quote!(0.0),
+                (Kind::Integer | Kind::Int3 | Kind::UInt64, None) => quote!(0),
                 (Kind::Boolean, None) => quote!(false),
-                (Kind::Enum, None) => unreachable!("checked"),
+                // A calculated Enumeration: its first item until the model computes it.
+                (Kind::Enum, None) => {
+                    let ty = &v.ty;
+                    quote!(<#ty as #rt::FmuEnum>::FIRST)
+                }
             };
             quote!(#f: #value)
         });
         let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
-        let numeric: Vec<&Var> = vars.iter().filter(|v| v.kind != Kind::Str).collect();
+        let numeric: Vec<&Var> = vars
+            .iter()
+            .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary))
+            .collect();
         let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
+        let binaries: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Binary).collect();
+        let get_bin_arms = binaries.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(self.#f.as_slice()))
+        });
+        let set_bin_arms = binaries.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => { self.#f = ::std::vec::Vec::from(value); true })
+        });
         let get_arms = numeric.iter().map(|v| {
             let (f, vr) = (&v.field, v.vr);
             quote!(#vr => #rt::FmiType::to_value(&self.#f))
@@ -1024,7 +1246,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             .iter()
             .enumerate()
             .filter(|(_, v)| {
-                v.kind == Kind::Real
+                v.kind.is_float()
                     && matches!(
                         v.causality,
                         Causality::Output | Causality::Local | Causality::CalculatedParameter | Causality::Independent
@@ -1033,7 +1255,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             .map(|(i, v)| (i, &v.field))
             .collect();
         let finite_checks = computed.iter().map(|(i, f)| {
-            quote!(if !::core::primitive::f64::is_finite(self.#f) {
+            quote!(if !self.#f.is_finite() {
                 return ::core::option::Option::Some(#i);
             })
         });
@@ -1055,6 +1277,8 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     ::core::result::Result::Err(#rt::description::ValueError::StartAboveMax) => panic!(concat!(#prefix, "the start value is above max")),
                     ::core::result::Result::Err(#rt::description::ValueError::Nominal) => panic!(concat!(#prefix, "nominal must be finite and > 0")),
                     ::core::result::Result::Err(#rt::description::ValueError::StartNotAnItem) => panic!(concat!(#prefix, "the start value is no item of the enumeration")),
+                    ::core::result::Result::Err(#rt::description::ValueError::IntegerTypeMin) => panic!(concat!(#prefix, "an integer's min must be an integer of its type, within ±2^53")),
+                    ::core::result::Result::Err(#rt::description::ValueError::IntegerTypeMax) => panic!(concat!(#prefix, "an integer's max must be an integer of its type, within ±2^53")),
                 };
             }
         });
@@ -1136,6 +1360,21 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             Some((me, cs, _)) => (me, cs),
             None => (true, true),
         };
+        let model_fmi3_only = model.fmi3_only.is_some();
+        let terminal_tokens = model.terminals.iter().map(|t| {
+            let (name, kind, rule, description) = (&t.name, &t.kind, &t.matching_rule, &t.description);
+            let members = t.members.iter().map(|(variable, member, kind, _)| {
+                let variable = fmi_name(&vars, variable);
+                quote!(#rt::description::TerminalMember { variable: #variable, member: #member, kind: #kind })
+            });
+            quote!(#rt::description::Terminal {
+                name: #name,
+                kind: #kind,
+                matching_rule: #rule,
+                description: #description,
+                members: &[#(#members),*],
+            })
+        });
 
         let manifest = meta.manifest.as_ref().map(|p| {
             let p = p.display().to_string();
@@ -1183,6 +1422,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
 
                 const INDICATORS: &'static [u32] = &[#(#indicator_vrs),*];
                 const MODEL_EXCHANGE: bool = #offers_me;
+                const FMI3_ONLY: bool = #model_fmi3_only;
                 const CO_SIMULATION: bool = #offers_cs;
 
                 #[inline]
@@ -1239,6 +1479,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     variables: &[#(#variable_tokens),*],
                     internal_state: #internal_state,
                     event_indicators: &[#(#indicator_names),*],
+                    terminals: &[#(#terminal_tokens),*],
                 };
 
                 fn start() -> Self {
@@ -1289,6 +1530,21 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     let _ = value;
                     match vr {
                         #(#set_str_arms,)*
+                        _ => false,
+                    }
+                }
+
+                fn get_binary(&self, vr: u32) -> ::core::option::Option<&[u8]> {
+                    match vr {
+                        #(#get_bin_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                fn set_binary(&mut self, vr: u32, value: &[u8]) -> bool {
+                    let _ = value;
+                    match vr {
+                        #(#set_bin_arms,)*
                         _ => false,
                     }
                 }

@@ -19,6 +19,7 @@ pub mod native;
 pub mod random_sequences;
 pub mod state_machine;
 pub mod table;
+pub mod types;
 
 use super::Type;
 use super::standard::{State, settable_in};
@@ -44,6 +45,10 @@ crate::checks::registry! {
             fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set,
             fmi3_do_step_output_arguments_are_truthful,
             fmi3_set_debug_logging_refuses_unknown_categories,
+        };
+        Calls: types::{
+            fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_bounds,
+            fmi3_variable_dependencies_equal_the_model_structure,
         };
         StateMachine: state_machine::{
             fmi3_co_simulation_every_function_in_every_state_answers_as_the_standard_says,

@@ -128,7 +128,9 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
         .skip(1)
         .map(|x| u64::from_str_radix(x, 16).unwrap())
         .collect();
-    let want = run(fmu, false, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+    // The C host prints the Float64 values: the first part of what `observe` gives.
+    let mut want = run(fmu, false, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+    want.truncate(fmu.md.vrs_of_type(Type::Float64).len());
     assert_eq!(
         got, want,
         "{}: the C host's co-simulation run differs from this importer's",
@@ -144,7 +146,8 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
             .skip(1)
             .map(|x| u64::from_str_radix(x, 16).unwrap())
             .collect();
-        let want = run(fmu, true, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+        let mut want = run(fmu, true, 1000, fmu.step_size().min(1e-3)).pop().unwrap();
+        want.truncate(fmu.md.vrs_of_type(Type::Float64).len());
         assert_eq!(
             got, want,
             "{}: the C host's explicit-Euler ME run differs from this importer's",
