@@ -267,6 +267,11 @@ pub fn package(
     let mut zip = zip::ZipWriter::new(file);
     let deflate = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
     let mut files: Vec<(String, Vec<u8>)> = vec![("modelDescription.xml".into(), xml.clone().into_bytes())];
+    if version == FmiVersion::V3
+        && let Some(terminals) = crate::xml::terminals_and_icons(&me.description)?
+    {
+        files.push(("terminalsAndIcons/terminalsAndIcons.xml".into(), terminals.into_bytes()));
+    }
     files.extend(binaries);
     files.push(("documentation/index.html".into(), docs.into_bytes()));
     for (name, path) in resources {

@@ -12,6 +12,15 @@ use serde::{Deserialize, Serialize};
 /// of holonomic system', eq. (17)); joint speed in, joint torque out
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
 #[fmu(identifier = "DCMotor")]
+// The output shaft (after the gearbox) as an FMI 3.0 terminal, a rotational flange as Modelica's:
+// the joint speed comes in as a signal, the torque the motor delivers flows out of the FMU.
+#[fmu(terminal(
+    name = "shaft",
+    kind = "org.modelica.Modelica.Mechanics.Rotational.Interfaces.Flange_b",
+    description = "The gearbox's output shaft: the joint speed it turns at, the torque it delivers",
+    member(variable = omega, name = "w", kind = "signal"),
+    member(variable = tau, name = "tau", kind = "outflow"),
+))]
 pub struct DcMotor {
     /// Terminal voltage command U; the supply limits it to +-U_max (connect to Controller.U1 or U2)
     #[variable(vr = 0, input, continuous, start = 0.0, unit = "V")]

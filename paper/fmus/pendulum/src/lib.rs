@@ -14,6 +14,25 @@ use serde::{Deserialize, Serialize};
 /// Double inverted pendulum with actuators at both joints: the nonlinear Lagrangian model of
 /// Liptak et al., 'The control of holonomic system', eqs. (6)-(7)
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+// The joints as FMI 3.0 terminals, rotational flanges as Modelica's (angle and speed are
+// signals, the torque a flow into the FMU). Joint 2's angle is link 2's absolute angle: M2 acts
+// between the links, whose support is link 1 (alpha1).
+#[fmu(terminal(
+    name = "joint1",
+    kind = "org.modelica.Modelica.Mechanics.Rotational.Interfaces.Flange_a",
+    description = "The pivot: link 1's angle and speed, the torque M1 applied to it",
+    member(variable = alpha1, name = "phi", kind = "signal"),
+    member(variable = omega1, name = "w", kind = "signal"),
+    member(variable = M1, name = "tau", kind = "inflow"),
+))]
+#[fmu(terminal(
+    name = "joint2",
+    kind = "org.modelica.Modelica.Mechanics.Rotational.Interfaces.Flange_a",
+    description = "The joint between the links: link 2's absolute angle and speed, the torque M2 between the links",
+    member(variable = alpha2, name = "phi", kind = "signal"),
+    member(variable = omega2, name = "w", kind = "signal"),
+    member(variable = M2, name = "tau", kind = "inflow"),
+))]
 pub struct Pendulum {
     /// Generalized torque M1 at joint 1 (pivot), eq. (6)
     #[variable(vr = 0, input, continuous, start = 0.0, unit = "N.m")]
