@@ -271,7 +271,7 @@ fn every_type_has_its_own_accessor_and_enumerations_are_int64() {
             (
                 "Float32",
                 &|| fmi3SetFloat32(c, count.as_ptr(), 1, [1.0f32].as_ptr(), 1),
-                &["fmi3SetFloat32", "no Float32 variables"],
+                &["fmi3SetFloat32", "('count') is an Int32 variable, not a Float32"],
             ),
         ];
         for (what, call, words) in refusals {

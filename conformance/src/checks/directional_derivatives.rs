@@ -7,7 +7,7 @@
 //!
 //! Knowns and unknowns: in model exchange, the continuous states and the continuous Real inputs,
 //! and the derivatives (`<Derivatives>`) and Real outputs (`<Outputs>`); in co-simulation, the
-//! Real inputs and the Real outputs (the states cannot be set there). Finite differences: in
+//! continuous Real inputs and the Real outputs (the states cannot be set there). Finite differences: in
 //! model exchange fmi2SetContinuousStates / fmi2SetReal of an input, then fmi2GetReal of the
 //! unknowns; in co-simulation fmi2SetReal of an input, then fmi2GetReal of the outputs.
 
@@ -76,9 +76,13 @@ pub fn knowns(fmu: &Fmu, me: bool) -> Vec<Known<'_>> {
                 .map(Known::Input),
         );
     } else {
+        // As in model exchange: the continuous inputs. A discrete input changes only at
+        // communication points and events; the partial derivatives the standard defines are
+        // those of the continuous-time equations (FMI 2.0, 2.1.9), which a discrete input is
+        // not a variable of.
         out.extend(
             md.of_type(Type::Real)
-                .filter(|v| v.causality == Causality::Input)
+                .filter(|v| v.causality == Causality::Input && v.variability == Variability::Continuous)
                 .map(Known::Input),
         );
     }

@@ -219,22 +219,34 @@ fn a_duplicate_name_is_one_error_at_the_second_field() {
 #[test]
 fn a_continuous_integer_is_one_error_at_the_variability() {
     let src = model("    #[variable(vr = 0, output, continuous)]\n    n: i32,");
-    assert_error(&src, "only Real (f64) variables may be continuous", "continuous", 0);
+    assert_error(
+        &src,
+        "only Float64 (f64) and Float32 (f32) variables may be continuous",
+        "continuous",
+        0,
+    );
 }
 
 #[test]
 fn an_unsupported_type_is_one_error_at_the_type() {
-    for ty in ["f32", "u8", "i64", "usize"] {
+    for ty in ["usize", "i128", "char"] {
         let src = model(&format!("    #[variable(vr = 0, input)]\n    x: {ty},"));
-        assert_error(&src, &format!("{ty} is not an FMI 2.0 type: use f64 (Real)"), ty, 0);
+        assert_error(&src, &format!("{ty} is not an FMI type: use f64 (Float64/Real)"), ty, 0);
     }
-    let src = model("    #[variable(vr = 0, input)]\n    x: [f64; 2],");
-    assert_error(
-        &src,
-        "a variable's type is f64, i32, bool, String or a #[derive(FmuEnum)] enum",
-        "[f64",
-        0,
-    );
+    // The FMI 3.0 types and arrays: FMI 3.0 only, by declaration.
+    for ty in ["f32", "u8", "i64", "Vec<u8>", "[f64; 2]"] {
+        let src = model(&format!("    #[variable(vr = 0, input)]\n    x: {ty},"));
+        assert_error(
+            &src,
+            "which FMI 2.0 does not have: declare the variable `fmi3_only`",
+            "x",
+            0,
+        );
+    }
+    let src = model("    #[variable(vr = 0, input)]\n    x: [[[f64; 2]; 2]; 2],");
+    assert_error(&src, "arrays have one or two dimensions", "[[[f64", 0);
+    let src = model("    #[variable(vr = 0, input)]\n    x: Vec<f64>,");
+    assert_error(&src, "a Vec variable is a Binary: Vec<u8>", "Vec", 0);
 }
 
 #[test]
@@ -299,13 +311,23 @@ fn a_declaration_given_twice_or_unknown_is_one_error_at_its_key() {
 #[test]
 fn type_mismatched_attributes_are_one_error_at_the_field() {
     let src = model("    #[variable(vr = 0, parameter, nominal = 2.0)]\n    n: i32,");
-    assert_error(&src, "only Real (f64) variables have a nominal value", "n: i32", 0);
+    assert_error(
+        &src,
+        "only Float64 (f64) and Float32 (f32) variables have a nominal value",
+        "n: i32",
+        0,
+    );
     let src = model("    #[variable(vr = 0, parameter, unit = \"m\")]\n    n: i32,");
-    assert_error(&src, "only Real (f64) variables have a unit", "n: i32", 0);
+    assert_error(
+        &src,
+        "only Float64 (f64) and Float32 (f32) variables have a unit",
+        "n: i32",
+        0,
+    );
     let src = model("    #[variable(vr = 0, input, min = 0)]\n    b: bool,");
     assert_error(
         &src,
-        "min and max are for Real, Integer and Enumeration variables",
+        "min and max are for numeric (float and integer) and Enumeration variables",
         "b: bool",
         0,
     );
