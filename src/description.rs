@@ -136,6 +136,8 @@ pub enum Start {
     UInt64(u64),
     /// Binary variables (FMI 3.0): the bytes.
     Binary(&'static [u8]),
+    /// An array (FMI 3.0): each element's start, row-major.
+    Array(&'static [Start]),
 }
 
 /// A bound of a variable's legal range: `value` itself is legal unless `exclusive`.
@@ -264,6 +266,9 @@ pub struct Fmi3Extras {
     pub max_size: Option<u32>,
     /// A Binary's `mimeType`; empty for the default (`application/octet-stream`).
     pub mime_type: &'static str,
+    /// An array's `<Dimension start="..">`s, outermost first (`[[f64; 4]; 2]`: `[2, 4]`);
+    /// empty for a scalar. The values are in row-major order.
+    pub dimensions: &'static [u32],
 }
 
 impl Fmi3Extras {
@@ -271,14 +276,32 @@ impl Fmi3Extras {
         only: false,
         max_size: None,
         mime_type: "",
+        dimensions: &[],
     };
 
     const fn is_none(&self) -> bool {
-        !self.only && self.max_size.is_none() && self.mime_type.is_empty()
+        !self.only && self.max_size.is_none() && self.mime_type.is_empty() && self.dimensions.is_empty()
     }
 }
 
 impl Variable {
+    /// How many values the variable has: 1 for a scalar, the product of the dimensions for an
+    /// array.
+    pub const fn element_count(&self) -> usize {
+        let mut n = 1usize;
+        let mut i = 0;
+        while i < self.fmi3.dimensions.len() {
+            n = n.saturating_mul(self.fmi3.dimensions[i] as usize);
+            i += 1;
+        }
+        n
+    }
+
+    /// Whether the variable is an array (FMI 3.0 `<Dimension>`s).
+    pub const fn is_array(&self) -> bool {
+        !self.fmi3.dimensions.is_empty()
+    }
+
     /// Whether the description of FMI `version` has this variable.
     pub const fn in_version(&self, version: FmiVersion) -> bool {
         match version {
@@ -444,6 +467,19 @@ impl ModelDescription {
             i += 1;
         }
         next
+    }
+
+    /// Whether some variable is an array (FMI 3.0 `<Dimension>`s). (`const`: the runtime takes
+    /// the scalar-only paths of a model without arrays at compile time.)
+    pub const fn has_arrays(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if self.variables[i].is_array() {
+                return true;
+            }
+            i += 1;
+        }
+        false
     }
 
     /// Whether the model declares its independent variable itself (else FMI 3.0 adds `time`).
@@ -655,7 +691,25 @@ impl Enc<'_> {
             None => self.u8(255),
             Some(i) => self.u8(i as u8),
         }
-        match v.start {
+        self.start(&v.start);
+        self.str(v.unit);
+        self.str(v.description);
+        self.bound(v.min);
+        self.bound(v.max);
+        self.opt_f64(v.nominal);
+        self.names(v.depends_on);
+        self.names(v.initial_depends_on);
+        self.opt_str(v.derivative_of);
+        match v.enumeration {
+            None => self.u8(0),
+            Some(e) => {
+                self.u8(1);
+                self.enum_type(e);
+            }
+        }
+    }
+    const fn start(&mut self, start: &Start) {
+        match *start {
             Start::None => self.u8(0),
             Start::Real(x) => {
                 self.u8(1);
@@ -686,20 +740,14 @@ impl Enc<'_> {
                 self.u32(b.len() as u32);
                 self.bytes(b);
             }
-        }
-        self.str(v.unit);
-        self.str(v.description);
-        self.bound(v.min);
-        self.bound(v.max);
-        self.opt_f64(v.nominal);
-        self.names(v.depends_on);
-        self.names(v.initial_depends_on);
-        self.opt_str(v.derivative_of);
-        match v.enumeration {
-            None => self.u8(0),
-            Some(e) => {
-                self.u8(1);
-                self.enum_type(e);
+            Start::Array(items) => {
+                self.u8(8);
+                self.u32(items.len() as u32);
+                let mut i = 0;
+                while i < items.len() {
+                    self.start(&items[i]);
+                    i += 1;
+                }
             }
         }
     }
@@ -834,6 +882,12 @@ impl Enc<'_> {
                             }
                         }
                         self.str(v.fmi3.mime_type);
+                        self.u32(v.fmi3.dimensions.len() as u32);
+                        let mut k = 0;
+                        while k < v.fmi3.dimensions.len() {
+                            self.u32(v.fmi3.dimensions[k]);
+                            k += 1;
+                        }
                     }
                     at += 1;
                 }
@@ -1086,6 +1140,27 @@ impl Dec<'_> {
         }
         Ok(n)
     }
+    fn start(&mut self, name: &str) -> Result<Start, String> {
+        Ok(match self.u8()? {
+            0 => Start::None,
+            1 => Start::Real(self.f64()?),
+            2 => Start::Integer(self.i32()?),
+            3 => Start::Boolean(self.u8()? != 0),
+            4 => Start::String(self.str()?),
+            5 => Start::Int64(i64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
+            6 => Start::UInt64(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
+            7 => {
+                let n = self.count()?;
+                Start::Binary(leak_slice(self.take(n)?.to_vec()))
+            }
+            8 => {
+                let n = self.count()?;
+                let items = (0..n).map(|_| self.start(name)).collect::<Result<Vec<_>, _>>()?;
+                Start::Array(leak_slice(items))
+            }
+            t => return Err(format!("'{name}': unknown start code {t}")),
+        })
+    }
     fn variable(&mut self) -> Result<Variable, String> {
         let name = self.str()?;
         let value_reference = self.u32()?;
@@ -1099,20 +1174,7 @@ impl Dec<'_> {
             255 => None,
             i => Some(Initial::from_code(i).ok_or_else(|| format!("'{name}': unknown initial code {i}"))?),
         };
-        let start = match self.u8()? {
-            0 => Start::None,
-            1 => Start::Real(self.f64()?),
-            2 => Start::Integer(self.i32()?),
-            3 => Start::Boolean(self.u8()? != 0),
-            4 => Start::String(self.str()?),
-            5 => Start::Int64(i64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
-            6 => Start::UInt64(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes"))),
-            7 => {
-                let n = self.count()?;
-                Start::Binary(leak_slice(self.take(n)?.to_vec()))
-            }
-            t => return Err(format!("'{name}': unknown start code {t}")),
-        };
+        let start = self.start(name)?;
         let unit = self.str()?;
         let description = self.str()?;
         let min = self.bound()?;
@@ -1266,6 +1328,8 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             let only = d.u8()? != 0;
             let max_size = if d.u8()? == 0 { None } else { Some(d.u32()?) };
             let mime_type = d.str()?;
+            let n_dims = d.count()?;
+            let dimensions = leak_slice((0..n_dims).map(|_| d.u32()).collect::<Result<Vec<_>, _>>()?);
             let v = variables
                 .get_mut(at)
                 .ok_or_else(|| format!("FMI 3.0 declarations of variable {at}, beyond the variables"))?;
@@ -1273,6 +1337,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 only,
                 max_size,
                 mime_type,
+                dimensions,
             };
         }
     }
@@ -1419,29 +1484,38 @@ pub const fn check_values(v: &Variable) -> Result<(), ValueError> {
             return Err(ValueError::IntegerTypeMax);
         }
     }
-    let x = match v.start {
-        Start::Int64(n) => Some(n as f64),
-        Start::UInt64(n) => Some(n as f64),
-        Start::Real(x) => {
-            if !finite(x) {
-                return Err(ValueError::StartNotFinite);
-            }
-            Some(x)
-        }
-        Start::Integer(n) => Some(n as f64),
-        _ => None,
+    // A scalar's start, or each element's of an array.
+    let starts: &[Start] = match &v.start {
+        Start::Array(items) => items,
+        one => core::slice::from_ref(one),
     };
-    if let Some(x) = x {
-        if let Some(l) = v.min
-            && !(if l.exclusive { x > l.value } else { x >= l.value })
-        {
-            return Err(ValueError::StartBelowMin);
+    let mut k = 0;
+    while k < starts.len() {
+        let x = match starts[k] {
+            Start::Int64(n) => Some(n as f64),
+            Start::UInt64(n) => Some(n as f64),
+            Start::Real(x) => {
+                if !finite(x) {
+                    return Err(ValueError::StartNotFinite);
+                }
+                Some(x)
+            }
+            Start::Integer(n) => Some(n as f64),
+            _ => None,
+        };
+        if let Some(x) = x {
+            if let Some(l) = v.min
+                && !(if l.exclusive { x > l.value } else { x >= l.value })
+            {
+                return Err(ValueError::StartBelowMin);
+            }
+            if let Some(h) = v.max
+                && !(if h.exclusive { x < h.value } else { x <= h.value })
+            {
+                return Err(ValueError::StartAboveMax);
+            }
         }
-        if let Some(h) = v.max
-            && !(if h.exclusive { x < h.value } else { x <= h.value })
-        {
-            return Err(ValueError::StartAboveMax);
-        }
+        k += 1;
     }
     if let Some(n) = v.nominal
         && !(finite(n) && n > 0.0)

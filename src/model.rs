@@ -242,6 +242,14 @@ pub trait Variables: Sized {
     fn set(&mut self, vr: u32, value: Value) -> bool;
     fn get_string(&self, vr: u32) -> Option<&str>;
     fn set_string(&mut self, vr: u32, value: &str) -> bool;
+    /// Element `i` (row-major) of the array variable `vr` (FMI 3.0).
+    fn get_element(&self, _vr: u32, _i: usize) -> Option<Value> {
+        None
+    }
+    /// Stores element `i` of the array variable `vr` if the value has its type; false otherwise.
+    fn set_element(&mut self, _vr: u32, _i: usize, _value: Value) -> bool {
+        false
+    }
     /// The bytes of the Binary variable `vr` (FMI 3.0).
     fn get_binary(&self, _vr: u32) -> Option<&[u8]> {
         None

@@ -102,6 +102,9 @@ pub struct Variable {
     pub array: bool,
     /// A Binary's `maxSize` (bytes).
     pub max_size: Option<u64>,
+    /// The `<Dimension>`s of an array, outermost first: the fixed size (`start`), or the value
+    /// reference of the structural parameter that sets it.
+    pub dimensions: Vec<Dimension>,
     pub declared_type: Option<String>,
     pub unit: Option<String>,
     pub description: Option<String>,
@@ -113,6 +116,25 @@ impl Variable {
     pub fn initial(&self) -> Option<Initial> {
         self.declared_initial
             .or_else(|| fmi_standard::default_initial(self.causality, self.variability))
+    }
+}
+
+/// One `<Dimension>` of an array variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    Fixed(u64),
+    /// `valueReference` of a structural parameter.
+    Parameter(u32),
+}
+
+impl Variable {
+    /// The number of values of the variable where its size is fixed: 1 for a scalar, the
+    /// product of the fixed dimensions for an array (`None` when a structural parameter sets one).
+    pub fn fixed_count(&self) -> Option<u64> {
+        self.dimensions.iter().try_fold(1u64, |n, d| match d {
+            Dimension::Fixed(k) => n.checked_mul(*k),
+            Dimension::Parameter(_) => None,
+        })
     }
 }
 
@@ -232,6 +254,7 @@ impl ModelDescription {
                     derivative: e.number("derivative"),
                     array: false,
                     max_size: e.number("maxSize"),
+                    dimensions: Vec::new(),
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),
                     description: e.string("description"),
@@ -262,6 +285,12 @@ impl ModelDescription {
                 b"Dimension" => {
                     if let Some(i) = open {
                         d.variables[i].array = true;
+                        let dim = match (e.number("start"), e.number("valueReference")) {
+                            (Some(n), _) => Dimension::Fixed(n),
+                            (None, Some(vr)) => Dimension::Parameter(vr),
+                            (None, None) => Dimension::Fixed(0),
+                        };
+                        d.variables[i].dimensions.push(dim);
                     }
                 }
                 tag @ (b"Output" | b"ContinuousStateDerivative" | b"InitialUnknown" | b"EventIndicator") => {

@@ -41,6 +41,7 @@ pub fn index_html(
                 Start::Int64(x) => x.to_string(),
                 Start::UInt64(x) => x.to_string(),
                 Start::Binary(b) => format!("0x{}", b.iter().map(|x| format!("{x:02x}")).collect::<String>()),
+                Start::Array(items) => format!("{} values", items.len()),
                 Start::Integer(x) => match v.enumeration.and_then(|e| e.item(x)) {
                     Some(item) => format!("{x} ({})", item.name),
                     None => x.to_string(),

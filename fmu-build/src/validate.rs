@@ -198,14 +198,15 @@ fn read_description(xml: &str) -> Result<Description, String> {
             d.guid.clone(),
             d.vrs_of_type(fmi2::Type::Real),
         ),
-        // FMI 3.0: every Float64, arrays too (the smoke run gets them one by one).
+        // FMI 3.0: every scalar Float64 (one value each; the arrays' elements are the
+        // conformance suite's to read).
         ModelDescription::Fmi3(d) => (
             FmiVersion::V3,
             d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
             d.token.clone(),
             d.variables
                 .iter()
-                .filter(|v| v.ty == fmi3::Type::Float64)
+                .filter(|v| v.ty == fmi3::Type::Float64 && !v.array)
                 .map(|v| v.vr)
                 .collect(),
         ),

@@ -390,7 +390,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
             Start::Boolean(x) => x.to_string(),
             Start::String(s) => s.to_string(),
             // Not FMI 2.0 types (refused above).
-            Start::Int64(_) | Start::UInt64(_) | Start::Binary(_) | Start::None => String::new(),
+            Start::Int64(_) | Start::UInt64(_) | Start::Binary(_) | Start::Array(_) | Start::None => String::new(),
         };
         // An Integer's bounds are written as integers ("1", not "1.0": the XSD type is xs:int).
         let bound_text = |b: Bound, is_min: bool| match v.var_type {
@@ -661,7 +661,7 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
         let min = v.min.map(|b| bound_text(b, true));
         let max = v.max.map(|b| bound_text(b, false));
         let nominal = v.nominal.map(real_text);
-        let start = match v.start {
+        let scalar_text = |start: &Start| match *start {
             Start::Real(x) if v.var_type == VarType::Float32 => Some(format!("{:?}", x as f32)),
             Start::Real(x) => Some(real_text(x)),
             Start::Integer(x) => Some(x.to_string()),
@@ -669,7 +669,12 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             Start::UInt64(x) => Some(x.to_string()),
             Start::Boolean(x) => Some(x.to_string()),
             // A String's and a Binary's start is a child element.
-            Start::String(_) | Start::Binary(_) | Start::None => None,
+            Start::String(_) | Start::Binary(_) | Start::Array(_) | Start::None => None,
+        };
+        // An array's start: its elements' in row-major order, separated by spaces.
+        let start = match v.start {
+            Start::Array(items) => Some(items.iter().filter_map(scalar_text).collect::<Vec<_>>().join(" ")),
+            ref one => scalar_text(one),
         };
         // In FMI 3.0 `derivative` is the value reference of the state, not an index.
         let derivative = match v.derivative_of {
@@ -725,6 +730,13 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
                 let hex: String = b.iter().map(|x| format!("{x:02x}")).collect();
                 open(&mut w, element, &attrs)?;
                 empty(&mut w, "Start", &[("value", &hex)])?;
+                close(&mut w, element)?;
+            }
+            _ if v.is_array() => {
+                open(&mut w, element, &attrs)?;
+                for n in v.fmi3.dimensions {
+                    empty(&mut w, "Dimension", &[("start", &n.to_string())])?;
+                }
                 close(&mut w, element)?;
             }
             _ => empty(&mut w, element, &attrs)?,

@@ -105,6 +105,12 @@ pub struct Instance<M: CoSimulation> {
     pub step_event: bool,
 }
 
+/// "an Int32", "a Float64", "an Enumeration" (as the type names are read aloud).
+fn with_article(name: &str) -> String {
+    let article = if name.starts_with(['I', 'E']) { "an" } else { "a" };
+    format!("{article} {name}")
+}
+
 /// The first Real variable the model computes (output, local, calculated parameter), or the
 /// first part of its internal state, that is not finite, described for a message. The one
 /// check every value computed by a model passes before it may leave under OK: after
@@ -412,14 +418,14 @@ impl<M: CoSimulation> Instance<M> {
                 other.var_type.fmi3_name()
             )),
             Some(other) => self.error(&format!(
-                "{function}: value reference {vr} ('{}') is a {} variable, not a {}",
+                "{function}: value reference {vr} ('{}') is {} variable, not {}",
                 other.name,
-                self.type_name(other.var_type),
-                self.type_name(ty)
+                with_article(&self.type_name(other.var_type)),
+                with_article(&self.type_name(ty))
             )),
             None => self.error(&format!(
-                "{function}: value reference {vr} is not a {} variable of {} (see modelDescription.xml)",
-                self.type_name(ty),
+                "{function}: value reference {vr} is not {} variable of {} (see modelDescription.xml)",
+                with_article(&self.type_name(ty)),
                 M::DESCRIPTION.model_identifier
             )),
         })
@@ -439,6 +445,9 @@ impl<M: CoSimulation> Instance<M> {
         if let Err(status) = self.up_to_date(function) {
             return status;
         }
+        if const { M::DESCRIPTION.has_arrays() } {
+            return self.get_with_arrays(function, vrs, out);
+        }
         for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
             // The independent variable is the instance's time, whatever the model's field holds.
             let value = match M::declaration(*vr, T::TYPE) {
@@ -449,6 +458,47 @@ impl<M: CoSimulation> Instance<M> {
                 Some(v) => *slot = v,
                 None => return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE)),
             }
+        }
+        OK
+    }
+
+    /// [`Instance::get_values`] of a model with array variables: each array's elements in
+    /// row-major order, one after the other (`out` holds the sum of the element counts; the
+    /// FMI 3.0 layer checked nValues).
+    #[cold]
+    fn get_with_arrays<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
+        let mut at = 0;
+        for vr in vrs {
+            let Some(d) = M::declaration(*vr, T::TYPE) else {
+                return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE));
+            };
+            let n = d.element_count();
+            let Some(slots) = out.get_mut(at..at + n) else {
+                return self.error(&format!(
+                    "{function}: the values array ends before the elements of '{}'",
+                    d.name
+                ));
+            };
+            for (i, slot) in slots.iter_mut().enumerate() {
+                let value = if d.causality == Causality::Independent {
+                    Some(Value::Real(self.sim.time))
+                } else if d.is_array() {
+                    self.sim.model.get_element(*vr, i)
+                } else {
+                    self.sim.model.get(*vr)
+                };
+                match value.and_then(T::from_value) {
+                    Some(v) => *slot = v,
+                    None => {
+                        return self.error(&format!(
+                            "{function}: '{}' has no {:?} value at element {i}",
+                            d.name,
+                            T::TYPE
+                        ));
+                    }
+                }
+            }
+            at += n;
         }
         OK
     }
@@ -560,11 +610,32 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
+        if !const { M::DESCRIPTION.has_arrays() } {
+            // One value per value reference, checked in place: no allocation on the hot path
+            // (fmi2SetReal before every step; tests/hot_path_does_not_allocate.rs).
+            let mut parameter_changed = false;
+            for (vr, v) in vrs.iter().zip(values) {
+                let Some(value) = v.to_value() else {
+                    return self.error(&format!("{function}: value reference {vr}: not a numeric value"));
+                };
+                match self.check_one(function, *vr, value) {
+                    Ok(decl) => parameter_changed |= decl.causality == Causality::Parameter,
+                    Err(status) => return status,
+                }
+            }
+            let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
+            for (vr, v) in vrs.iter().zip(values) {
+                if let Some(value) = v.to_value() {
+                    self.sim.model.set(*vr, value);
+                }
+            }
+            return self.after_set(function, previous);
+        }
         let mut list = Vec::with_capacity(values.len());
-        for (vr, v) in vrs.iter().zip(values) {
+        for (i, v) in values.iter().enumerate() {
             match v.to_value() {
                 Some(value) => list.push(value),
-                None => return self.error(&format!("{function}: value reference {vr}: not a numeric value")),
+                None => return self.error(&format!("{function}: values[{i}] is not a numeric value")),
             }
         }
         self.set_value_list(function, vrs, &list)
@@ -573,6 +644,9 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
     /// reaches Int64 and Enumeration variables in one call): all or none.
     pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        if const { M::DESCRIPTION.has_arrays() } {
+            return self.set_with_arrays(function, vrs, values);
+        }
         let mut parameter_changed = false;
         for (vr, value) in vrs.iter().zip(values) {
             match self.check_one(function, *vr, *value) {
@@ -583,6 +657,48 @@ impl<M: CoSimulation> Instance<M> {
         let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
         for (vr, value) in vrs.iter().zip(values) {
             self.sim.model.set(*vr, *value);
+        }
+        self.after_set(function, previous)
+    }
+
+    /// [`Instance::set_value_list`] of a model with array variables: `values` holds each
+    /// array's elements in row-major order; every element is checked before any is stored.
+    #[cold]
+    fn set_with_arrays(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        let mut parameter_changed = false;
+        let mut at = 0;
+        let mut spans = Vec::with_capacity(vrs.len());
+        for vr in vrs {
+            let n = M::variable_index(*vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count());
+            let Some(elements) = values.get(at..at + n) else {
+                return self.error(&format!(
+                    "{function}: the values array ends before the elements of value reference {vr}"
+                ));
+            };
+            for (i, value) in elements.iter().enumerate() {
+                match self.check_one(function, *vr, *value) {
+                    Ok(decl) => parameter_changed |= decl.causality == Causality::Parameter,
+                    Err(status) => {
+                        if n > 1 {
+                            self.trace(|| format!("{function}: (element {i} of value reference {vr})"));
+                        }
+                        return status;
+                    }
+                }
+            }
+            spans.push((*vr, at, n));
+            at += n;
+        }
+        let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
+        for (vr, at, n) in spans {
+            let is_array = M::variable_index(vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_array());
+            for (i, value) in values[at..at + n].iter().enumerate() {
+                if is_array {
+                    self.sim.model.set_element(vr, i, *value);
+                } else {
+                    self.sim.model.set(vr, *value);
+                }
+            }
         }
         self.after_set(function, previous)
     }
@@ -888,6 +1004,15 @@ pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
             && let Some(Refusal::Rule(why) | Refusal::Model(why)) = refusal(&sim.model, decl, value)
         {
             return Err(format!("the state's {why}"));
+        }
+        if decl.is_array() {
+            for i in 0..decl.element_count() {
+                if let Some(value) = sim.model.get_element(decl.value_reference, i)
+                    && let Some(Refusal::Rule(why) | Refusal::Model(why)) = refusal(&sim.model, decl, value)
+                {
+                    return Err(format!("the state's element {i}: {why}"));
+                }
+            }
         }
     }
     if let Some(what) = non_finite(&sim.model) {

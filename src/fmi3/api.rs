@@ -294,24 +294,45 @@ fn added_time_vr<M: CoSimulation>() -> Option<u32> {
 }
 
 /// The checks every 3.0 getter and setter makes of its arrays first.
-fn arrays<'a, T>(
-    inst: &Instance<impl CoSimulation>,
+fn arrays<'a, M: CoSimulation, T>(
+    inst: &Instance<M>,
     function: &str,
     vrs: Option<&'a [u32]>,
     n_values: usize,
     values: Option<T>,
 ) -> Result<(&'a [u32], T), fmi3Status> {
     match (vrs, values) {
-        (Some(vrs), Some(values)) if n_values == vrs.len() => Ok((vrs, values)),
-        (Some(vrs), Some(_)) => Err(inst.error(&format!(
+        (Some(vrs), Some(values)) if n_values == value_count::<M>(vrs) => Ok((vrs, values)),
+        (Some(vrs), Some(_)) if !M::DESCRIPTION.has_arrays() => Err(inst.error(&format!(
             "{function}: nValues = {n_values}, but nValueReferences = {} (every variable of this FMU is a scalar)",
             vrs.len()
+        ))),
+        (Some(vrs), Some(_)) => Err(inst.error(&format!(
+            "{function}: nValues = {n_values}, but the {} value references have {} values (an array counts each element)",
+            vrs.len(),
+            value_count::<M>(vrs)
         ))),
         _ => Err(inst.error(&format!(
             "{function}: valueReferences or values is NULL with nValueReferences = {}, nValues = {n_values}",
             vrs.map_or(0, |v| v.len())
         ))),
     }
+}
+
+/// How many values the variables of `vrs` have (FMI 3.0's nValues): one per scalar, every
+/// element of an array (an unknown value reference counts one; it is refused afterwards).
+fn value_count<M: CoSimulation>(vrs: &[u32]) -> usize {
+    if !const { M::DESCRIPTION.has_arrays() } {
+        return vrs.len();
+    }
+    vrs.iter()
+        .map(|vr| M::variable_index(*vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count()))
+        .sum()
+}
+
+/// The number of values of one value reference (1 for a scalar or an unknown one).
+fn count_of<M: CoSimulation>(vr: u32) -> usize {
+    M::variable_index(vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count())
 }
 
 /// Refuses a value reference whose variable is declared with another 3.0 type: Int32 is
@@ -340,7 +361,7 @@ fn check_declared<M: CoSimulation>(
 
 fn fmi3_type_name(t: VarType) -> String {
     let name = t.fmi3_name();
-    let article = if matches!(name.as_bytes()[0], b'E' | b'I' | b'U') {
+    let article = if matches!(name.as_bytes()[0], b'E' | b'I') {
         "an"
     } else {
         "a"
@@ -434,18 +455,25 @@ pub unsafe fn get_float64<M: CoSimulation>(
         )),
         Some(time) if vrs.contains(&time) => {
             let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
-            let mut got = vec![0.0; others.len()];
+            let mut got = vec![0.0; value_count::<M>(&others)];
             let status = inst.get_values(F, &others, &mut got);
             if status != fmi3OK {
                 return status;
             }
             let mut got = got.into_iter();
-            for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
-                *slot = if *vr == time {
-                    inst.sim.time
-                } else {
-                    got.next().unwrap_or(f64::NAN)
-                };
+            let mut slots = out.iter_mut();
+            for vr in vrs {
+                if *vr == time {
+                    if let Some(slot) = slots.next() {
+                        *slot = inst.sim.time;
+                    }
+                    continue;
+                }
+                for _ in 0..count_of::<M>(*vr) {
+                    if let Some(slot) = slots.next() {
+                        *slot = got.next().unwrap_or(f64::NAN);
+                    }
+                }
             }
             fmi3OK
         }
@@ -539,8 +567,8 @@ pub unsafe fn get_int64<M: CoSimulation>(
                 .collect()
         };
         let (e_vrs, i_vrs) = (pick(true), pick(false));
-        let mut e_got = vec![0i32; e_vrs.len()];
-        let mut i_got = vec![0i64; i_vrs.len()];
+        let mut e_got = vec![0i32; value_count::<M>(&e_vrs)];
+        let mut i_got = vec![0i64; value_count::<M>(&i_vrs)];
         let status = inst.get_values(F, &e_vrs, &mut e_got);
         if status != fmi3OK {
             return status;
@@ -550,12 +578,17 @@ pub unsafe fn get_int64<M: CoSimulation>(
             return status;
         }
         let (mut e_got, mut i_got) = (e_got.into_iter(), i_got.into_iter());
-        for (o, e) in out.iter_mut().zip(enums) {
-            *o = if e {
-                e_got.next().map(i64::from).unwrap_or_default()
-            } else {
-                i_got.next().unwrap_or_default()
-            };
+        let mut slots = out.iter_mut();
+        for (vr, e) in vrs.iter().zip(enums) {
+            for _ in 0..count_of::<M>(*vr) {
+                if let Some(o) = slots.next() {
+                    *o = if e {
+                        e_got.next().map(i64::from).unwrap_or_default()
+                    } else {
+                        i_got.next().unwrap_or_default()
+                    };
+                }
+            }
         }
         fmi3OK
     };
@@ -577,17 +610,20 @@ pub unsafe fn set_int64<M: CoSimulation>(
             Err(status) => return status,
         };
         let mut list = Vec::with_capacity(values.len());
-        for ((vr, v), e) in vrs.iter().zip(values).zip(enums) {
-            if !e {
-                list.push(Value::Int64(*v));
-                continue;
-            }
-            match i32::try_from(*v) {
-                Ok(x) => list.push(Value::Integer(x)),
-                Err(_) => {
-                    return inst.error(&format!(
-                        "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
-                    ));
+        let mut given = values.iter();
+        for (vr, e) in vrs.iter().zip(enums) {
+            for v in given.by_ref().take(count_of::<M>(*vr)) {
+                if !e {
+                    list.push(Value::Int64(*v));
+                    continue;
+                }
+                match i32::try_from(*v) {
+                    Ok(x) => list.push(Value::Integer(x)),
+                    Err(_) => {
+                        return inst.error(&format!(
+                            "{F}: {v} for value reference {vr} is no item of its enumeration (every item's value is an Int32); nothing set"
+                        ));
+                    }
                 }
             }
         }
@@ -737,7 +773,7 @@ pub unsafe fn get_boolean<M: CoSimulation>(
     const F: &str = "fmi3GetBoolean";
     // Written as bytes 0 and 1: the importer's array is C `bool` (one byte).
     let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [u8]| {
-        let mut got = vec![false; vrs.len()];
+        let mut got = vec![false; out.len()];
         let status = inst.get_values(F, vrs, &mut got);
         if status == fmi3OK {
             for (o, v) in out.iter_mut().zip(got) {

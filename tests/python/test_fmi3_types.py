@@ -329,3 +329,27 @@ def test_terminals_follow_the_schema_and_name_the_joints_and_the_shaft(name, ter
     assert got == terminals
     with zipfile.ZipFile(fmu(name)) as z:
         assert not any(n.startswith("terminalsAndIcons/") for n in z.namelist())
+
+
+def test_the_controllers_gain_is_a_2_by_4_array_equal_to_its_scalars():
+    """The Controller's K (vr 78, FMI 3.0 only): <Dimension>s 2 and 4 in fmpy's reading of the
+    description; its 8 values, read with nValues = 8, row-major, equal K11 .. K24; with nValues
+    = 7 the read is refused; the FMI 2.0 Controller has no K."""
+    path = fmu3("Controller")
+    md = read_model_description(path, validate=True)
+    k = next(v for v in md.modelVariables if v.name == "K")
+    assert [int(d.start) for d in k.dimensions] == [2, 4]
+    assert k.causality == "calculatedParameter"
+    unzipdir = extract(path)
+    try:
+        inst = instance(md, unzipdir, "cs")
+        vr = vrs(md)
+        scalars = inst.getFloat64([vr[f"K{i}{j}"] for i in (1, 2) for j in (1, 2, 3, 4)])
+        assert inst.getFloat64([78], nValues=8) == scalars
+        assert abs(scalars[7] - 0.9957) < 5e-4  # the paper's K(2,4)
+        with pytest.raises(FMICallException):
+            inst.getFloat64([78], nValues=7)
+        inst.freeInstance()
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)
+    assert "K" not in {v.name for v in read_model_description(fmu("Controller")).modelVariables}

@@ -528,8 +528,9 @@ impl<'a> Inst<'a> {
         );
         let mut out = crate::bits(&v);
         for var in self.fmu.md.variables.iter().filter(|v| {
-            !v.array
-                && !matches!(v.ty, Type::Float64 | Type::String | Type::Clock)
+            v.fixed_count().is_some()
+                && (v.array || v.ty != Type::Float64)
+                && !matches!(v.ty, Type::String | Type::Clock)
                 && v.causality != fmi_description::Causality::Independent
         }) {
             let (s, bytes) = self.get_raw(var);
@@ -554,12 +555,18 @@ impl<'a> Inst<'a> {
         out
     }
 
-    /// The value of a scalar variable of any type but String and Clock, read with its type's
-    /// getter, as its C bytes (native order; a Binary's bytes).
+    /// The value of a variable of any type but String and Clock (every element of a fixed-size
+    /// array, row-major), read with its type's getter, as its C bytes (native order; a Binary's
+    /// bytes).
     pub fn get_raw(&self, v: &Variable) -> (fmi3Status, Vec<u8>) {
+        self.get_raw_n(v, v.fixed_count().unwrap_or(1) as usize)
+    }
+
+    /// [`Inst::get_raw`] with `n` as nValues (which may be wrong on purpose).
+    pub fn get_raw_n(&self, v: &Variable, n: usize) -> (fmi3Status, Vec<u8>) {
         let api = self.api();
-        let mut word = 0u64;
-        let p = &mut word as *mut u64;
+        let mut words = vec![0u64; n.max(1)];
+        let p = words.as_mut_ptr();
         let vr = &v.vr;
         let what = format!("fmi3Get{}", accessor(v.ty));
         if v.ty == Type::Binary {
@@ -575,29 +582,34 @@ impl<'a> Inst<'a> {
             };
             return (s, bytes);
         }
-        // SAFETY (every call): one value reference, and an 8-byte aligned buffer that holds one
-        // value of any of the types.
+        // SAFETY (every call): one value reference, and an 8-byte aligned buffer that holds `n`
+        // values of any of the types.
         let s = self.call(&what, |c| unsafe {
             match v.ty {
-                Type::Float32 => (api.get_float32)(c, vr, 1, p as Values, 1),
-                Type::Float64 => (api.get_float64)(c, vr, 1, p as *mut f64, 1),
-                Type::Int8 => (api.get_int8)(c, vr, 1, p as Values, 1),
-                Type::UInt8 => (api.get_uint8)(c, vr, 1, p as Values, 1),
-                Type::Int16 => (api.get_int16)(c, vr, 1, p as Values, 1),
-                Type::UInt16 => (api.get_uint16)(c, vr, 1, p as Values, 1),
-                Type::Int32 => (api.get_int32)(c, vr, 1, p as *mut i32, 1),
-                Type::UInt32 => (api.get_uint32)(c, vr, 1, p as Values, 1),
-                Type::Int64 | Type::Enumeration => (api.get_int64)(c, vr, 1, p as *mut i64, 1),
-                Type::UInt64 => (api.get_uint64)(c, vr, 1, p as Values, 1),
-                Type::Boolean => (api.get_boolean)(c, vr, 1, p as *mut u8, 1),
+                Type::Float32 => (api.get_float32)(c, vr, 1, p as Values, n),
+                Type::Float64 => (api.get_float64)(c, vr, 1, p as *mut f64, n),
+                Type::Int8 => (api.get_int8)(c, vr, 1, p as Values, n),
+                Type::UInt8 => (api.get_uint8)(c, vr, 1, p as Values, n),
+                Type::Int16 => (api.get_int16)(c, vr, 1, p as Values, n),
+                Type::UInt16 => (api.get_uint16)(c, vr, 1, p as Values, n),
+                Type::Int32 => (api.get_int32)(c, vr, 1, p as *mut i32, n),
+                Type::UInt32 => (api.get_uint32)(c, vr, 1, p as Values, n),
+                Type::Int64 | Type::Enumeration => (api.get_int64)(c, vr, 1, p as *mut i64, n),
+                Type::UInt64 => (api.get_uint64)(c, vr, 1, p as Values, n),
+                Type::Boolean => (api.get_boolean)(c, vr, 1, p as *mut u8, n),
                 Type::String | Type::Binary | Type::Clock => fmi3Error,
             }
         });
-        (s, word.to_ne_bytes()[..c_size(v.ty)].to_vec())
+        let bytes: Vec<u8> = words
+            .iter()
+            .flat_map(|w| w.to_ne_bytes())
+            .take(n * c_size(v.ty))
+            .collect();
+        (s, bytes)
     }
 
-    /// Sets a scalar variable of any type but String and Clock from its C bytes (as
-    /// [`Inst::get_raw`] gives them).
+    /// Sets a variable of any type but String and Clock from its C bytes (as [`Inst::get_raw`]
+    /// gives them; an array's elements one after the other).
     pub fn set_raw(&self, v: &Variable, bytes: &[u8]) -> fmi3Status {
         let api = self.api();
         let vr = &v.vr;
@@ -606,25 +618,25 @@ impl<'a> Inst<'a> {
             let (size, data) = (bytes.len(), bytes.as_ptr());
             return self.call(&what, |c| unsafe { (api.set_binary)(c, vr, 1, &size, &data, 1) });
         }
-        let mut b = [0u8; 8];
-        let n = c_size(v.ty).min(bytes.len());
-        b[..n].copy_from_slice(&bytes[..n]);
-        let word = u64::from_ne_bytes(b);
-        let p = &word as *const u64 as *const std::ffi::c_void;
-        // SAFETY (every call): one value reference, one value of the type in an aligned buffer.
+        let n = bytes.len() / c_size(v.ty);
+        let mut words = vec![0u64; (bytes.len() / 8 + 1).max(1)];
+        // SAFETY: the words hold at least bytes.len() bytes; u8 has no alignment.
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), words.as_mut_ptr() as *mut u8, bytes.len()) };
+        let p = words.as_ptr() as *const std::ffi::c_void;
+        // SAFETY (every call): one value reference, `n` values of the type in an aligned buffer.
         self.call(&what, |c| unsafe {
             match v.ty {
-                Type::Float32 => (api.set_float32)(c, vr, 1, p, 1),
-                Type::Float64 => (api.set_float64)(c, vr, 1, p as *const f64, 1),
-                Type::Int8 => (api.set_int8)(c, vr, 1, p, 1),
-                Type::UInt8 => (api.set_uint8)(c, vr, 1, p, 1),
-                Type::Int16 => (api.set_int16)(c, vr, 1, p, 1),
-                Type::UInt16 => (api.set_uint16)(c, vr, 1, p, 1),
-                Type::Int32 => (api.set_int32)(c, vr, 1, p as *const i32, 1),
-                Type::UInt32 => (api.set_uint32)(c, vr, 1, p, 1),
-                Type::Int64 | Type::Enumeration => (api.set_int64)(c, vr, 1, p as *const i64, 1),
-                Type::UInt64 => (api.set_uint64)(c, vr, 1, p, 1),
-                Type::Boolean => (api.set_boolean)(c, vr, 1, p as *const bool, 1),
+                Type::Float32 => (api.set_float32)(c, vr, 1, p, n),
+                Type::Float64 => (api.set_float64)(c, vr, 1, p as *const f64, n),
+                Type::Int8 => (api.set_int8)(c, vr, 1, p, n),
+                Type::UInt8 => (api.set_uint8)(c, vr, 1, p, n),
+                Type::Int16 => (api.set_int16)(c, vr, 1, p, n),
+                Type::UInt16 => (api.set_uint16)(c, vr, 1, p, n),
+                Type::Int32 => (api.set_int32)(c, vr, 1, p as *const i32, n),
+                Type::UInt32 => (api.set_uint32)(c, vr, 1, p, n),
+                Type::Int64 | Type::Enumeration => (api.set_int64)(c, vr, 1, p as *const i64, n),
+                Type::UInt64 => (api.set_uint64)(c, vr, 1, p, n),
+                Type::Boolean => (api.set_boolean)(c, vr, 1, p as *const bool, n),
                 Type::String | Type::Binary | Type::Clock => fmi3Error,
             }
         })

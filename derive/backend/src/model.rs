@@ -47,6 +47,10 @@ struct Var {
     field: Ident,
     ty: Type,
     kind: Kind,
+    /// An array's element type (the field's type for a scalar).
+    elem: Type,
+    /// An array's lengths, outermost first (`[[f64; 4]; 2]`: `2, 4`); empty for a scalar.
+    dims: Vec<Expr>,
     span: Span,
     name: String,
     vr: u32,
@@ -296,6 +300,24 @@ impl Parse for VarAttr {
 const TYPES: &str = "f64 (Float64/Real), i32 (Int32/Integer), bool (Boolean), String, a #[derive(FmuEnum)] enum \
      (Enumeration), and FMI 3.0 only: f32 (Float32), i8, u8, i16, u16, u32, i64, u64 (Int8 .. UInt64), Vec<u8> (Binary)";
 
+/// A field type's element type and lengths: `[[f64; 4]; 2]` is `f64` and `[2, 4]`; a scalar
+/// is itself and `[]`. Two dimensions at most.
+fn array_parts(ty: &Type) -> Result<(Type, Vec<Expr>)> {
+    let mut dims = Vec::new();
+    let mut t = ty;
+    while let Type::Array(a) = t {
+        dims.push(a.len.clone());
+        t = &a.elem;
+    }
+    if dims.len() > 2 {
+        return Err(Error::new(
+            ty.span(),
+            "arrays have one or two dimensions (`[T; N]`, `[[T; M]; N]`)",
+        ));
+    }
+    Ok((t.clone(), dims))
+}
+
 fn kind_of(ty: &Type) -> Result<Kind> {
     let Type::Path(p) = ty else {
         return Err(Error::new(ty.span(), format!("a variable's type is one of {TYPES}")));
@@ -349,7 +371,15 @@ fn has_start(v: &Var) -> bool {
 fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
     let ident = field.ident.clone().expect("named field");
     let a: VarAttr = attr.parse_args()?;
-    let kind = kind_of(&field.ty)?;
+    // An array field (`[T; N]`, `[[T; M]; N]`): an FMI 3.0 array of T.
+    let (elem, dims) = array_parts(&field.ty)?;
+    let kind = kind_of(&elem)?;
+    if !dims.is_empty() && matches!(kind, Kind::Str | Kind::Binary) {
+        return Err(Error::new(
+            field.ty.span(),
+            "arrays are of numbers, Booleans and enumerations (not String or Binary)",
+        ));
+    }
     let span = ident.span();
     let vr =
         a.vr.ok_or_else(|| Error::new(attr.span(), "every variable needs a value reference: `vr = N`"))?;
@@ -429,6 +459,8 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         field: ident,
         ty: field.ty.clone(),
         kind,
+        elem,
+        dims,
         span,
         vr,
         causality,
@@ -714,7 +746,7 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
     let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
     for v in vars {
-        if !v.kind.in_fmi2() && !v.fmi3_only && model.fmi3_only.is_none() {
+        if (!v.kind.in_fmi2() || !v.dims.is_empty()) && !v.fmi3_only && model.fmi3_only.is_none() {
             let ty = &v.ty;
             return Err(Error::new(
                 v.span,
@@ -856,7 +888,10 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                         ),
                     ));
                 }
-                Some(state) if state.kind == Kind::Real && state.variability == Variability::Continuous => {}
+                Some(state)
+                    if state.kind == Kind::Real
+                        && state.dims.is_empty()
+                        && state.variability == Variability::Continuous => {}
                 Some(_) => {
                     return Err(Error::new(
                         *span,
@@ -870,8 +905,8 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                     ));
                 }
             }
-            if v.kind != Kind::Real || v.variability != Variability::Continuous {
-                return Err(Error::new(v.span, "a derivative is a continuous Real variable"));
+            if v.kind != Kind::Real || !v.dims.is_empty() || v.variability != Variability::Continuous {
+                return Err(Error::new(v.span, "a derivative is a continuous scalar Real variable"));
             }
         }
         if let Some(unit) = &v.unit {
@@ -906,7 +941,8 @@ fn is_state(vars: &[Var], v: &Var) -> bool {
 
 /// The variables of the equations' struct: continuous Reals that are not parameters.
 fn in_equations(v: &Var) -> bool {
-    v.kind == Kind::Real
+    v.dims.is_empty()
+        && v.kind == Kind::Real
         && v.variability == Variability::Continuous
         && matches!(v.causality, Causality::Input | Causality::Output | Causality::Local)
 }
@@ -932,6 +968,31 @@ fn fmi_name(vars: &[Var], n: &str) -> String {
         .map_or_else(|| n.to_string(), |v| v.name.clone())
 }
 
+/// A scalar zero of the variable's element kind (an enumeration's first item).
+fn zero_of(rt: &TokenStream, v: &Var) -> TokenStream {
+    let elem = &v.elem;
+    match v.kind {
+        Kind::Real | Kind::Float32 => quote!(0.0),
+        Kind::Integer | Kind::Int3 | Kind::UInt64 => quote!(0),
+        Kind::Boolean => quote!(false),
+        Kind::Enum => quote!(<#elem as #rt::FmuEnum>::FIRST),
+        Kind::Str => quote!(::std::string::String::new()),
+        Kind::Binary => quote!(::std::vec::Vec::new()),
+    }
+}
+
+/// An array variable's value before initialization: its `start`, else zeros of its shape.
+fn array_value(rt: &TokenStream, v: &Var) -> TokenStream {
+    if let Some(e) = &v.start {
+        return quote!(#e);
+    }
+    let mut value = zero_of(rt, v);
+    for len in v.dims.iter().rev() {
+        value = quote!([#value; #len]);
+    }
+    value
+}
+
 fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
     let name = &v.name;
     let vr = v.vr;
@@ -947,6 +1008,40 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
     };
     let start = if !has_start(v) {
         quote!(#rt::description::Start::None)
+    } else if !v.dims.is_empty() {
+        let (elem, value) = (&v.elem, array_value(rt, v));
+        let flat = if v.dims.len() == 2 {
+            quote!(V.as_flattened())
+        } else {
+            quote!(&V)
+        };
+        let conv = match v.kind {
+            Kind::Real => quote!(#rt::description::Start::Real(x)),
+            Kind::Float32 => quote!(#rt::description::Start::Real(x as f64)),
+            Kind::Integer => quote!(#rt::description::Start::Integer(x)),
+            Kind::Int3 => quote!(#rt::description::Start::Int64(x as i64)),
+            Kind::UInt64 => quote!(#rt::description::Start::UInt64(x)),
+            Kind::Boolean => quote!(#rt::description::Start::Boolean(x)),
+            Kind::Enum => quote!(#rt::description::Start::Integer(x as i32)),
+            Kind::Str | Kind::Binary => unreachable!("checked: no arrays of these"),
+        };
+        // The elements' starts, row-major, computed at compile time from the field's start.
+        quote!(#rt::description::Start::Array(&{
+            const V: #ty = #value;
+            const N: usize = ::core::mem::size_of::<#ty>() / ::core::mem::size_of::<#elem>();
+            const S: [#rt::description::Start; N] = {
+                let flat: &[#elem] = #flat;
+                let mut out = [#rt::description::Start::None; N];
+                let mut i = 0;
+                while i < N {
+                    let x = flat[i];
+                    out[i] = #conv;
+                    i += 1;
+                }
+                out
+            };
+            S
+        }))
     } else {
         match (v.kind, &v.start) {
             (Kind::Real, Some(e)) => quote!(#rt::description::Start::Real(#e)),
@@ -969,12 +1064,14 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             (Kind::Binary, None) => quote!(#rt::description::Start::Binary(&[])),
         }
     };
-    let fmi3_only = v.fmi3_only || !v.kind.in_fmi2();
+    let fmi3_only = v.fmi3_only || !v.kind.in_fmi2() || !v.dims.is_empty();
     let max_size = match &v.max_size {
         Some(e) => quote!(::core::option::Option::Some(#e)),
         None => quote!(::core::option::Option::None),
     };
     let mime_type = v.mime_type.as_ref().map(|m| m.value()).unwrap_or_default();
+    let dims = &v.dims;
+    let elem = &v.elem;
     let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
     let description = &v.description;
     let bound = |b: &Option<(Expr, bool)>| match b {
@@ -1015,7 +1112,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
         #rt::description::Variable {
             name: #name,
             value_reference: #vr,
-            var_type: <#ty as #rt::FmiType>::TYPE,
+            var_type: <#elem as #rt::FmiType>::TYPE,
             causality: #causality,
             variability: #variability,
             initial: #initial,
@@ -1028,11 +1125,12 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             depends_on: #depends,
             initial_depends_on: #initial_depends,
             derivative_of: #derivative_of,
-            enumeration: <#ty as #rt::FmiType>::ENUMERATION,
+            enumeration: <#elem as #rt::FmiType>::ENUMERATION,
             fmi3: #rt::description::Fmi3Extras {
                 only: #fmi3_only,
                 max_size: #max_size,
                 mime_type: #mime_type,
+                dimensions: &[#((#dims) as u32),*],
             },
         }
     }
@@ -1189,6 +1287,10 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
 
         let start_fields = vars.iter().map(|v| {
             let f = &v.field;
+            if !v.dims.is_empty() {
+                let value = array_value(&rt, v);
+                return quote!(#f: #value);
+            }
             let value = match (v.kind, &v.start) {
                 (Kind::Str, Some(e)) => quote!(::std::string::String::from(#e)),
                 (Kind::Str, None) => quote!(::std::string::String::new()),
@@ -1209,8 +1311,29 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
         let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
         let numeric: Vec<&Var> = vars
             .iter()
-            .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary))
+            .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary) && v.dims.is_empty())
             .collect();
+        let arrays: Vec<&Var> = vars.iter().filter(|v| !v.dims.is_empty()).collect();
+        let flat = |v: &Var, mutable: bool| {
+            let f = &v.field;
+            match (v.dims.len(), mutable) {
+                (2, false) => quote!(self.#f.as_flattened()),
+                (2, true) => quote!(self.#f.as_flattened_mut()),
+                (_, false) => quote!(self.#f.as_slice()),
+                (_, true) => quote!(self.#f.as_mut_slice()),
+            }
+        };
+        let get_elem_arms = arrays.iter().map(|v| {
+            let (vr, flat) = (v.vr, flat(v, false));
+            quote!(#vr => #flat.get(i).and_then(#rt::FmiType::to_value))
+        });
+        let set_elem_arms = arrays.iter().map(|v| {
+            let (vr, flat, elem) = (v.vr, flat(v, true), &v.elem);
+            quote!(#vr => match (#flat.get_mut(i), <#elem as #rt::FmiType>::from_value(value)) {
+                (::core::option::Option::Some(slot), ::core::option::Option::Some(x)) => { *slot = x; true }
+                _ => false,
+            })
+        });
         let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
         let binaries: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Binary).collect();
         let get_bin_arms = binaries.iter().map(|v| {
@@ -1255,9 +1378,17 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             .map(|(i, v)| (i, &v.field))
             .collect();
         let finite_checks = computed.iter().map(|(i, f)| {
-            quote!(if !self.#f.is_finite() {
-                return ::core::option::Option::Some(#i);
-            })
+            let v = &vars[*i];
+            if v.dims.is_empty() {
+                quote!(if !self.#f.is_finite() {
+                    return ::core::option::Option::Some(#i);
+                })
+            } else {
+                let flat = flat(v, false);
+                quote!(if !#flat.iter().all(|x| x.is_finite()) {
+                    return ::core::option::Option::Some(#i);
+                })
+            }
         });
         // Checks that need the values of the declarations (start within bounds, integral bounds
         // for Integers), evaluated at compile time and reported at the field.
@@ -1285,7 +1416,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
         // A type the derive does not know by name is taken for a #[derive(FmuEnum)] enum; make sure it
         // is one (a type alias such as `type Real = f64` would otherwise get an Integer start).
         let enum_checks = vars.iter().filter(|v| v.kind == Kind::Enum).map(|v| {
-            let (ty, span) = (&v.ty, v.ty.span());
+            let (ty, span) = (&v.elem, v.ty.span());
             let message = format!(
                 "variable '{}': its type is read as a #[derive(FmuEnum)] enumeration; write f64, i32, bool or String by name (no alias)",
                 v.name
@@ -1530,6 +1661,22 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     let _ = value;
                     match vr {
                         #(#set_str_arms,)*
+                        _ => false,
+                    }
+                }
+
+                fn get_element(&self, vr: u32, i: usize) -> ::core::option::Option<#rt::Value> {
+                    let _ = i;
+                    match vr {
+                        #(#get_elem_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                fn set_element(&mut self, vr: u32, i: usize, value: #rt::Value) -> bool {
+                    let _ = (i, value);
+                    match vr {
+                        #(#set_elem_arms,)*
                         _ => false,
                     }
                 }

@@ -7,8 +7,22 @@
 use super::super::{Inst, Type, Variable, accessor, c_size};
 use super::*;
 
-/// A start attribute as the C bytes of its type (native order), or why it does not parse.
+/// A start attribute as the C bytes of its type (native order), or why it does not parse; an
+/// array's elements (its start is a list) one after the other.
 fn start_bytes(v: &Variable) -> Result<Vec<u8>, String> {
+    if v.array {
+        let text = v.start.as_deref().unwrap_or_default();
+        let mut out = Vec::new();
+        for item in text.split_whitespace() {
+            let one = Variable {
+                start: Some(item.to_string()),
+                array: false,
+                ..v.clone()
+            };
+            out.extend(start_bytes(&one)?);
+        }
+        return Ok(out);
+    }
     let text = v.start.as_deref().unwrap_or_default();
     let bad = |e: String| format!("'{}': start '{text}' is no {}: {e}", v.name, v.ty);
     macro_rules! num {
@@ -114,15 +128,16 @@ fn another(v: &Variable, now: &[u8]) -> Option<Vec<u8>> {
 
 /// The scalar variables the check reads: every type but String and Clock, not the independent one.
 fn scalars(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
-    fmu.md
-        .variables
-        .iter()
-        .filter(|v| !v.array && !matches!(v.ty, Type::String | Type::Clock) && v.causality != Causality::Independent)
+    fmu.md.variables.iter().filter(|v| {
+        v.fixed_count().is_some()
+            && !matches!(v.ty, Type::String | Type::Clock)
+            && v.causality != Causality::Independent
+    })
 }
 
 pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_bounds(fmu: &Fmu3) {
     let id = &fmu.id;
-    let mut counts = [0usize; 5]; // starts, round trips, bounds, maxSize, wrong types
+    let mut counts = [0usize; 6]; // starts, round trips, bounds, maxSize, wrong types, short nValues
     let types: std::collections::BTreeSet<&str> = scalars(fmu).map(|v| v.ty.name()).collect();
     for me in [false, true] {
         if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
@@ -167,7 +182,9 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
                 v.name,
                 inst.log_text()
             );
-            let Some(x) = another(v, &now) else { continue };
+            // An array: its values set back as they are (every element through one call).
+            let x = if v.array { Some(now.clone()) } else { another(v, &now) };
+            let Some(x) = x else { continue };
             let s = inst.set_raw(v, &x);
             assert_eq!(
                 s,
@@ -188,7 +205,7 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
         }
         drop(inst);
         // 3. Integer bounds: one past min and max (where the type has it) refused, nothing set.
-        for v in scalars(fmu).filter(|v| v.causality == Causality::Input) {
+        for v in scalars(fmu).filter(|v| v.causality == Causality::Input && !v.array) {
             let Some((lo, hi)) = range(v.ty) else { continue };
             let past: Vec<i128> = [v.min.map(|m| m as i128 - 1), v.max.map(|m| m as i128 + 1)]
                 .into_iter()
@@ -240,6 +257,22 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
             );
             counts[3] += 1;
         }
+        // 6. An array read with nValues one short of its elements: refused.
+        for v in scalars(fmu).filter(|v| v.array && v.fixed_count().is_some_and(|n| n > 1)) {
+            let inst = in_state(fmu, me, state);
+            let n = v.fixed_count().unwrap_or(1) as usize;
+            let (s, _) = inst.get_raw_n(v, n - 1);
+            assert_eq!(
+                s,
+                fmi3Error,
+                "{id} ({interface}): fmi3Get{} of the array '{}' ({n} elements) with nValues = {} answered {}",
+                accessor(v.ty),
+                v.name,
+                n - 1,
+                status_name(s)
+            );
+            counts[5] += 1;
+        }
         // 5. Every variable through another type's getter: refused.
         let inst = in_state(fmu, me, state);
         for v in scalars(fmu) {
@@ -267,13 +300,14 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
         skip("no scalar variables to read");
     }
     info(format!(
-        "types {}: {} start values, {} set/get round trips, {} values outside the bounds, {} Binaries beyond maxSize, {} wrong-type reads",
+        "types {}: {} start values, {} set/get round trips, {} values outside the bounds, {} Binaries beyond maxSize, {} wrong-type reads, {} arrays read with too few values",
         types.into_iter().collect::<Vec<_>>().join(" "),
         counts[0],
         counts[1],
         counts[2],
         counts[3],
-        counts[4]
+        counts[4],
+        counts[5]
     ));
 }
 

@@ -237,6 +237,10 @@ pub struct Controller {
     /// LQR gain K(2,4) (paper: 0.9957)
     #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K24: f64,
+    /// LQR gain K of eq. (14) as one 2 x 4 matrix (row i: the torque M_i; columns alpha1,
+    /// omega1, alpha2, omega2; mixed units, N.m/rad and N.m.s/rad): K11 .. K24 as an FMI 3.0 array
+    #[variable(vr = 78, calculated_parameter, fixed, fmi3_only, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+    pub K: [[f64; 4]; 2],
     /// Sampled in model exchange: the memory changes at the samples only (time events).
     pub sampled_events: bool,
     /// The measurement at the last sample instant (alpha1, omega1, alpha2, omega2, alpha1_ref,
@@ -357,6 +361,10 @@ impl Model for Controller {
         let k = lqr_gain(&self.plant(), &q, &r)?;
         (self.K11, self.K12, self.K13, self.K14) = (k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]);
         (self.K21, self.K22, self.K23, self.K24) = (k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]);
+        self.K = [
+            [k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]],
+            [k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]],
+        ];
         // The filters start at the measured speeds (no derivative kick); the integrals at
         // their start values.
         let (x, _) = self.measurement();
