@@ -4,9 +4,10 @@
 //! checked before any is stored (bounds, all or nothing); the FMU state with arrays.
 
 use rustfmu::__private::abi3::*;
-use std::ffi::{CStr, c_void};
-use std::ptr::null;
-use std::sync::Mutex;
+use support::Log;
+
+#[path = "support/fmi3_host.rs"]
+mod support;
 
 mod model {
     use rustfmu::prelude::*;
@@ -68,37 +69,8 @@ fn the_description_has_the_dimensions_and_the_starts_row_major() {
     assert!(d.has_arrays());
 }
 
-#[derive(Default)]
-struct Log(Mutex<Vec<String>>);
-
-unsafe extern "C" fn collect(env: *mut c_void, _status: fmi3Status, _category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Log given at instantiation; the string is the runtime's.
-    let (log, message) = unsafe { (&*(env as *const Log), CStr::from_ptr(message)) };
-    log.0.lock().unwrap().push(message.to_string_lossy().into_owned());
-}
-
 fn instance() -> (fmi3Instance, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    let token = std::ffi::CString::new(TOKEN).unwrap();
-    // SAFETY: valid strings and a logger whose environment outlives the instance.
-    let c = unsafe {
-        fmi3InstantiateCoSimulation(
-            c"table".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            false,
-            false,
-            false,
-            null(),
-            0,
-            log as *const Log as *mut c_void,
-            Some(collect),
-            None,
-        )
-    };
-    assert!(!c.is_null());
-    (c, log)
+    support::instance(fmi3InstantiateCoSimulation, TOKEN, "table")
 }
 
 fn init(c: fmi3Instance) {
@@ -110,7 +82,7 @@ fn init(c: fmi3Instance) {
 }
 
 fn last(log: &Log) -> String {
-    log.0.lock().unwrap().last().cloned().unwrap_or_default()
+    log.last()
 }
 
 fn gains(c: fmi3Instance) -> [f64; 6] {

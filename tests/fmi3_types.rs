@@ -4,9 +4,11 @@
 //! refused, all or nothing over several values, and the messages say what and where.
 
 use rustfmu::__private::abi3::*;
-use std::ffi::{CStr, c_void};
+use support::Log;
+
+#[path = "support/fmi3_host.rs"]
+mod support;
 use std::ptr::null;
-use std::sync::Mutex;
 
 mod model {
     use rustfmu::prelude::*;
@@ -51,36 +53,9 @@ mod model {
 }
 use model::__rustfmu_fmi3_exports::*;
 
-#[derive(Default)]
-struct Log(Mutex<Vec<String>>);
-
-unsafe extern "C" fn collect(env: *mut c_void, _status: fmi3Status, _category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Log given at instantiation; the string is the runtime's.
-    let (log, message) = unsafe { (&*(env as *const Log), CStr::from_ptr(message)) };
-    log.0.lock().unwrap().push(message.to_string_lossy().into_owned());
-}
-
+/// An instance after initialization (Step Mode).
 fn instance() -> (fmi3Instance, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    let token = std::ffi::CString::new(TOKEN).unwrap();
-    // SAFETY: valid strings and a logger whose environment outlives the instance.
-    let c = unsafe {
-        fmi3InstantiateCoSimulation(
-            c"bounded".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            false,
-            false,
-            false,
-            null(),
-            0,
-            log as *const Log as *mut c_void,
-            Some(collect),
-            None,
-        )
-    };
-    assert!(!c.is_null());
+    let (c, log) = support::instance(fmi3InstantiateCoSimulation, TOKEN, "bounded");
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
@@ -90,7 +65,7 @@ fn instance() -> (fmi3Instance, &'static Log) {
 }
 
 fn last(log: &Log) -> String {
-    log.0.lock().unwrap().last().cloned().unwrap_or_default()
+    log.last()
 }
 
 #[test]
