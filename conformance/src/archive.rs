@@ -68,6 +68,25 @@ impl Archive {
         self.zip.index_for_name(name).is_some()
     }
 
+    /// The bytes of entry `name` (at most the default limit of a model description), or
+    /// `None` when the archive has no such entry.
+    pub fn read_entry(&mut self, name: &str) -> Result<Option<Vec<u8>>, String> {
+        let max = Limits::default().max_model_description_bytes;
+        let mut entry = match self.zip.by_name(name) {
+            Ok(e) => e,
+            Err(zip::result::ZipError::FileNotFound) => return Ok(None),
+            Err(e) => return Err(format!("{}: {name}: {e}", self.path.display())),
+        };
+        let mut bytes = vec![];
+        let read = (&mut entry).take(max + 1).read_to_end(&mut bytes);
+        drop(entry);
+        read.map_err(|e| self.at(format!("{name}: {e}")))?;
+        if bytes.len() as u64 > max {
+            return Err(self.at(format!("{name} is longer than the {max} bytes read")));
+        }
+        Ok(Some(bytes))
+    }
+
     fn at(&self, e: impl std::fmt::Display) -> String {
         format!("{}: {e}", self.path.display())
     }

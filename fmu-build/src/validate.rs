@@ -1024,7 +1024,7 @@ pub fn info(fmu: &Path) -> Result<String, String> {
     let mut interfaces = Vec::new();
     let mut variables = Vec::new();
     // (value reference, name, causality, type, unit) of every variable, in order.
-    let listed: Vec<(u32, &str, Causality, &str, Option<&str>)> = match &md {
+    let listed: Vec<(u32, &str, Causality, String, Option<&str>)> = match &md {
         ModelDescription::Fmi2(d) => {
             out.push_str(&head(
                 fmu,
@@ -1039,8 +1039,16 @@ pub fn info(fmu: &Path) -> Result<String, String> {
             interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
             interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
             let v = d.variables.iter();
-            v.map(|v| (v.vr, v.name.as_str(), v.causality, v.ty.name(), v.unit.as_deref()))
-                .collect()
+            v.map(|v| {
+                (
+                    v.vr,
+                    v.name.as_str(),
+                    v.causality,
+                    v.ty.name().to_string(),
+                    v.unit.as_deref(),
+                )
+            })
+            .collect()
         }
         ModelDescription::Fmi3(d) => {
             out.push_str(&head(
@@ -1055,10 +1063,32 @@ pub fn info(fmu: &Path) -> Result<String, String> {
             out.push_str(&experiment(&d.default_experiment));
             interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
             interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
-            let v = d.variables.iter();
-            v.map(|v| (v.vr, v.name.as_str(), v.causality, v.ty.name(), v.unit.as_deref()))
+            // An array's type with its dimensions: Float64[2,4].
+            d.variables
+                .iter()
+                .map(|v| {
+                    let ty = if v.array {
+                        let dims: Vec<String> = v
+                            .dimensions
+                            .iter()
+                            .map(|d| match d {
+                                fmi3::Dimension::Fixed(n) => n.to_string(),
+                                fmi3::Dimension::Parameter(vr) => format!("vr {vr}"),
+                            })
+                            .collect();
+                        format!("{}[{}]", v.ty.name(), dims.join(","))
+                    } else {
+                        v.ty.name().to_string()
+                    };
+                    (v.vr, v.name.as_str(), v.causality, ty, v.unit.as_deref())
+                })
                 .collect()
         }
+    };
+    // FMI 3.0 terminals: their names and members.
+    let terminals: Vec<String> = match zip.read_entry("terminalsAndIcons/terminalsAndIcons.xml") {
+        Ok(Some(text)) => terminal_lines(&String::from_utf8_lossy(&text)),
+        _ => Vec::new(),
     };
     for (vr, name, causality, ty, unit) in listed {
         *counts.entry(causality.name()).or_default() += 1;
@@ -1080,7 +1110,65 @@ pub fn info(fmu: &Path) -> Result<String, String> {
         out.push_str(&v);
         out.push('\n');
     }
+    if !terminals.is_empty() {
+        out.push_str(&format!("  terminals: {}\n", terminals.len()));
+        for t in terminals {
+            out.push_str(&format!("    {t}\n"));
+        }
+    }
     Ok(out)
+}
+
+/// One line per `<Terminal>` of terminalsAndIcons.xml: `name (kind): member = variable (kind), ...`.
+fn terminal_lines(text: &str) -> Vec<String> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut out: Vec<String> = Vec::new();
+    let mut members: Vec<String> = Vec::new();
+    let mut current: Option<String> = None;
+    loop {
+        let (e, empty) = match reader.read_event() {
+            Ok(Event::Start(e)) => (e, false),
+            Ok(Event::Empty(e)) => (e, true),
+            Ok(Event::End(e)) if e.name().as_ref() == b"Terminal" => {
+                if let Some(t) = current.take() {
+                    out.push(format!("{t}: {}", members.join(", ")));
+                    members.clear();
+                }
+                continue;
+            }
+            Ok(Event::Eof) | Err(_) => break,
+            Ok(_) => continue,
+        };
+        let attr = |name: &str| {
+            e.try_get_attribute(name)
+                .ok()
+                .flatten()
+                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+                .unwrap_or_default()
+        };
+        match e.name().as_ref() {
+            b"Terminal" => {
+                let kind = attr("terminalKind");
+                current = Some(if kind.is_empty() {
+                    attr("name")
+                } else {
+                    format!("{} ({kind})", attr("name"))
+                });
+                if empty {
+                    out.extend(current.take());
+                }
+            }
+            b"TerminalMemberVariable" => members.push(format!(
+                "{} = {} ({})",
+                attr("memberName"),
+                attr("variableName"),
+                attr("variableKind")
+            )),
+            _ => {}
+        }
+    }
+    out
 }
 
 /// The first lines of `cargo fmu info`.
