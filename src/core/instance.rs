@@ -105,6 +105,18 @@ pub struct Instance<M: CoSimulation> {
     pub step_event: bool,
 }
 
+/// Whether one of `vrs` is an array variable (then each has its element count of values). A
+/// model without arrays answers at compile time; one with arrays looks at the references, so
+/// a call on scalars only keeps the scalar paths (no allocation: the Controller's hot path).
+#[inline]
+fn any_array<M: CoSimulation>(vrs: &[u32]) -> bool {
+    let has_arrays = const { M::DESCRIPTION.has_arrays() };
+    has_arrays
+        && vrs
+            .iter()
+            .any(|vr| M::variable_index(*vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_array()))
+}
+
 /// "an Int32", "a Float64", "an Enumeration" (as the type names are read aloud).
 fn with_article(name: &str) -> String {
     let article = if name.starts_with(['I', 'E']) { "an" } else { "a" };
@@ -445,7 +457,7 @@ impl<M: CoSimulation> Instance<M> {
         if let Err(status) = self.up_to_date(function) {
             return status;
         }
-        if const { M::DESCRIPTION.has_arrays() } {
+        if any_array::<M>(vrs) {
             return self.get_with_arrays(function, vrs, out);
         }
         for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
@@ -465,7 +477,6 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::get_values`] of a model with array variables: each array's elements in
     /// row-major order, one after the other (`out` holds the sum of the element counts; the
     /// FMI 3.0 layer checked nValues).
-    #[cold]
     fn get_with_arrays<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
         let mut at = 0;
         for vr in vrs {
@@ -610,7 +621,7 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
-        if !const { M::DESCRIPTION.has_arrays() } {
+        if !any_array::<M>(vrs) {
             // One value per value reference, checked in place: no allocation on the hot path
             // (fmi2SetReal before every step; tests/hot_path_does_not_allocate.rs).
             let mut parameter_changed = false;
@@ -644,7 +655,7 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
     /// reaches Int64 and Enumeration variables in one call): all or none.
     pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
-        if const { M::DESCRIPTION.has_arrays() } {
+        if any_array::<M>(vrs) {
             return self.set_with_arrays(function, vrs, values);
         }
         let mut parameter_changed = false;
@@ -663,7 +674,6 @@ impl<M: CoSimulation> Instance<M> {
 
     /// [`Instance::set_value_list`] of a model with array variables: `values` holds each
     /// array's elements in row-major order; every element is checked before any is stored.
-    #[cold]
     fn set_with_arrays(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
         let mut parameter_changed = false;
         let mut at = 0;
@@ -1004,6 +1014,15 @@ pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
             && let Some(Refusal::Rule(why) | Refusal::Model(why)) = refusal(&sim.model, decl, value)
         {
             return Err(format!("the state's {why}"));
+        }
+        if let (Some(max), Some(bytes)) = (decl.fmi3.max_size, sim.model.get_binary(decl.value_reference))
+            && bytes.len() > max as usize
+        {
+            return Err(format!(
+                "the state's '{}' has {} bytes, more than its maxSize = {max}",
+                decl.name,
+                bytes.len()
+            ));
         }
         if decl.is_array() {
             for i in 0..decl.element_count() {
