@@ -469,6 +469,18 @@ impl ModelDescription {
         next
     }
 
+    /// Whether some variable exists in FMI 3.0 only (a type 2.0 lacks, an array, `fmi3_only`).
+    pub const fn has_fmi3_only(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if !self.variables[i].in_version(FmiVersion::V2) {
+                return true;
+            }
+            i += 1;
+        }
+        false
+    }
+
     /// Whether some variable is an array (FMI 3.0 `<Dimension>`s). (`const`: the runtime takes
     /// the scalar-only paths of a model without arrays at compile time.)
     pub const fn has_arrays(&self) -> bool {

@@ -414,15 +414,25 @@ impl<M: CoSimulation> Instance<M> {
         }
     }
 
-    /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal.
+    /// The declaration of `vr` as a variable of C API type `ty`, or the logged refusal. (The
+    /// found case is inlined into every getter and setter; the refusal's message is not.)
+    #[inline]
     fn lookup(&self, function: &str, vr: u32, ty: VarType) -> Result<&'static Variable, Status> {
-        let fmi2 = self.terms.version == Version::Fmi2;
+        // Only a model with FMI-3.0-only variables has declarations the 2.0 functions must not see.
+        let fmi3_only = const { M::DESCRIPTION.has_fmi3_only() };
         if let Some(v) = M::declaration(vr, ty)
-            && (!fmi2 || v.in_version(crate::description::FmiVersion::V2))
+            && (!fmi3_only || self.terms.version != Version::Fmi2 || v.in_version(crate::description::FmiVersion::V2))
         {
             return Ok(v);
         }
-        Err(match M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]) {
+        Err(self.lookup_refusal(function, vr, ty))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn lookup_refusal(&self, function: &str, vr: u32, ty: VarType) -> Status {
+        let fmi2 = self.terms.version == Version::Fmi2;
+        match M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]) {
             Some(other) if fmi2 && !other.in_version(crate::description::FmiVersion::V2) => self.error(&format!(
                 "{function}: value reference {vr} is not a variable of {} in FMI 2.0 ('{}' is a {} variable of its FMI 3.0 description only)",
                 M::DESCRIPTION.model_identifier,
@@ -440,7 +450,7 @@ impl<M: CoSimulation> Instance<M> {
                 with_article(&self.type_name(ty)),
                 M::DESCRIPTION.model_identifier
             )),
-        })
+        }
     }
 
     pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
