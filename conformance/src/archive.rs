@@ -71,7 +71,11 @@ impl Archive {
     /// The bytes of entry `name` (at most the default limit of a model description), or
     /// `None` when the archive has no such entry.
     pub fn read_entry(&mut self, name: &str) -> Result<Option<Vec<u8>>, String> {
-        let max = Limits::default().max_model_description_bytes;
+        self.read_entry_within(name, Limits::default().max_model_description_bytes)
+    }
+
+    /// [`Archive::read_entry`] of at most `max` bytes.
+    pub fn read_entry_within(&mut self, name: &str, max: u64) -> Result<Option<Vec<u8>>, String> {
         let mut entry = match self.zip.by_name(name) {
             Ok(e) => e,
             Err(zip::result::ZipError::FileNotFound) => return Ok(None),

@@ -159,7 +159,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             )
             .map(|_| ())
         }
-        Cmd::Validate { fmus, python } => validate_all(&fmus, python.as_deref()),
+        Cmd::Validate { fmus, python } => validate_all(&fmus, python.as_deref(), true),
         Cmd::Check {
             fmu,
             filter,
@@ -480,7 +480,7 @@ pub fn build_versions(
             built.push(p.fmu);
         }
     }
-    validate_all(&built, python)?;
+    validate_all(&built, python, false)?;
     if all && packages.is_empty() {
         // Every target's library carries the same description (bundle::package checked it):
         // the second of a crate and version finds its file already written.
@@ -631,7 +631,9 @@ fn committed_descriptions(
     }
 }
 
-fn validate_all(fmus: &[PathBuf], python: Option<&Path>) -> Result<(), String> {
+/// `report_glibc`: also say the oldest glibc each Linux binary loads with (`cargo fmu validate`;
+/// `cargo fmu build` keeps its output to the verdicts).
+fn validate_all(fmus: &[PathBuf], python: Option<&Path>, report_glibc: bool) -> Result<(), String> {
     if fmus.is_empty() {
         return Err("no FMU file given".into());
     }
@@ -645,6 +647,17 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>) -> Result<(), String> {
         }
         if problems.is_empty() {
             eprintln!("fmu: {} is valid", f.display());
+            // What the Linux binaries need of the system: the oldest glibc they load with.
+            let requirements = if report_glibc {
+                crate::validate::glibc_requirements(f).unwrap_or_default()
+            } else {
+                Vec::new()
+            };
+            for (name, needed) in requirements {
+                if let Some((major, minor)) = needed {
+                    eprintln!("fmu: {}: {name} needs glibc >= {major}.{minor}", f.display());
+                }
+            }
         } else {
             for p in &problems {
                 eprintln!("fmu: {}: {p}", f.display());

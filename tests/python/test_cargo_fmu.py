@@ -128,7 +128,10 @@ def test_cargo_fmu_info_and_validate_describe_it(user_crate):
     crate, fmu, env = user_crate
     info = run(["cargo", "fmu", "info", str(fmu)], crate, env).stdout
     assert "GainLag" in info and "linux64" in info and "CoSimulation" in info and "ModelExchange" in info, info
-    run(["cargo", "fmu", "validate", str(fmu)], crate, env)
+    # The oldest glibc the Linux binary loads with, read from its symbol versions (issue 27).
+    assert re.search(r"binaries/linux64/GainLag\.so needs glibc >= 2\.\d+", info), info
+    out = run(["cargo", "fmu", "validate", str(fmu)], crate, env)
+    assert re.search(r"GainLag\.so needs glibc >= 2\.\d+", out.stderr), out.stderr
 
 
 def test_cargo_fmu_check_passes_on_it(user_crate):
