@@ -86,11 +86,10 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
             ));
         }
         // The knowns of ModelStructure: inputs and continuous states.
-        let is_state = |name: &str| decls.iter().any(|d| d.derivative_of == Some(name));
         for dep in v.depends_on.unwrap_or(&[]) {
             if !decls
                 .iter()
-                .any(|o| o.name == *dep && (o.causality == Causality::Input || is_state(o.name)))
+                .any(|o| o.name == *dep && (o.causality == Causality::Input || d.is_state(o)))
             {
                 return Err(format!(
                     "{at}: depends on '{dep}', which is neither an input nor a continuous state"
