@@ -14,15 +14,13 @@ lap "setup (tests/setup-env.sh --main-job)"
 # Every host program the main job runs, and the runner's Python module, in one cargo invocation:
 # cargo resolves features per invocation, so `cargo run -p A` then `cargo run -p B` (or maturin's
 # own build of the module) would build the shared dependencies twice. The FMU crates' libraries
-# are built here too: with only binaries as roots cargo builds the shared dependencies for a
-# binary's LTO (bitcode only), and `cargo fmu build` then compiled the FMU crates' whole tree again
-# for a library (45 s); built here, the FMU build's host step finds them.
+# are not: `cargo fmu build` builds them in a profile and cargo folders of its own (every target,
+# linked by zig or MinGW; docs/platforms.md).
 # (Setup and builds run one after the other: pip's install and maturin's build beside this build
 # made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
 source tests/pyo3-env.sh
 cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
-  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python -p pendulum-fmu -p controller-fmu \
-  -p dc-motor-fmu -p bouncing-ball-fmu -p stair-fmu -p dahlquist-fmu -p van-der-pol-fmu -p feedthrough-fmu --lib
+  -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
 bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python
@@ -52,6 +50,8 @@ echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' 
 # The platforms each FMU carries: its binaries/ folders (the same for every FMU of one version).
 platforms() { .venv/bin/python -c 'import sys, zipfile; print(" ".join(sorted({n.split("/")[1] for n in zipfile.ZipFile(sys.argv[1]).namelist() if n.startswith("binaries/") and n.count("/") > 1})))' "$1"; }
 echo "Platforms: FMI 2.0 $(platforms target/fmu/Pendulum.fmu); FMI 3.0 $(platforms target/fmu/fmi3/Pendulum.fmu)"
+echo "  (Linux binaries load on glibc >= 2.17; the macOS ones, for macOS >= 10.12 on Intel and >= 11.0 on Apple"
+echo "  silicon, are built and checked here but never run: no Mac here. docs/platforms.md; cargo fmu info FILE.fmu)"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
 echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
 echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"

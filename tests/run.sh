@@ -55,7 +55,8 @@ bash tests/setup-env.sh --part module
 echo "Rust build: $((SECONDS - started)) s"
 echo "== fmu-build: build, package, validate (fmpy too) every FMU and SSP file"
 started=$SECONDS
-# Every FMU crate for each of its targets (Linux x86-64, Windows x86-64, aarch64 Linux for 3.0), FMI 2.0 and 3.0.
+# Every FMU crate for each of its targets (Linux x86-64 and aarch64 on glibc 2.17, Windows x86-64, macOS Intel and
+# Apple silicon; docs/platforms.md), FMI 2.0 and 3.0.
 # target/release/cargo-fmu without `fmu` is `fmu-build`, the same as `cargo run --release -p fmu-build`.
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 echo "fmu-build (every target, FMI 2.0 and 3.0): $((SECONDS - started)) s"

@@ -15,8 +15,10 @@
 #                                        installed or not, and exit (test_fresh_machine.py checks
 #                                        them against the dependency trees of what the main job builds)
 #
-# Main job: the Rust targets x86_64-pc-windows-gnu and aarch64-unknown-linux-gnu (rustup) and their
-# linkers (every FMU carries Linux and Windows binaries, the FMI 3.0 ones aarch64 Linux too);
+# Main job: the Rust targets x86_64-pc-windows-gnu, aarch64-unknown-linux-gnu, x86_64-apple-darwin and
+# aarch64-apple-darwin (rustup) and their linkers (every FMU carries Linux, Windows and macOS
+# binaries, the FMI 3.0 ones aarch64 Linux too; MinGW links Windows, zig from the venv's ziglang
+# and cargo-zigbuild the others, Debian's aarch64 gcc is kept for the tests' qemu runs);
 # gcc and libclang-dev: the runner (its `fmi` importer crate) compiles fmi-sys, whose build script
 # compiles C and runs bindgen; a venv at .venv with examples/requirements.txt; after the caller's
 # cargo build, the runner's Python module (--part module). The tests add wine and qemu-user (they run the Windows and aarch64
@@ -47,9 +49,9 @@ done
 
 # Debian packages: "package:command" (installed when the command is missing) or "package:"
 # (installed when dpkg does not know it).
-main_packages=(gcc-mingw-w64-x86-64:x86_64-w64-mingw32-gcc gcc-aarch64-linux-gnu:aarch64-linux-gnu-gcc
+main_packages=(gcc-mingw-w64-x86-64:x86_64-w64-mingw32-gcc
   gcc:gcc libclang-dev:)
-test_packages=(wine:wine qemu-user:qemu-aarch64 valgrind:valgrind binutils:nm libtbb12:)
+test_packages=(gcc-aarch64-linux-gnu:aarch64-linux-gnu-gcc wine:wine qemu-user:qemu-aarch64 valgrind:valgrind binutils:nm libtbb12:)
 packages=("${main_packages[@]}")
 $main_job || packages+=("${test_packages[@]}")
 
@@ -67,7 +69,7 @@ step() { echo "setup-env: $1 ($((SECONDS - step_at)) s)"; step_at=$SECONDS; }
 # caller's cargo build (--part module), which compiles it.
 wants() { { [ "$part" = both ] && [ "$1" != module ]; } || [ "$part" = "$1" ] || { [ "$part" = python ] && [ "$1" != system ]; }; }
 if wants system; then
-for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
+for triple in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu x86_64-apple-darwin aarch64-apple-darwin; do
   if [ ! -d "$(rustc --print sysroot)/lib/rustlib/$triple/lib" ]; then
     echo "setup-env: rustup target add $triple"
     rustup target add "$triple"

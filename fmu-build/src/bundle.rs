@@ -166,6 +166,46 @@ fn claim(krate: &FmuCrate, out: &Path, id: &str) -> Result<(PathBuf, String), St
     ))
 }
 
+/// One file per archive name: FMI 2.0's `darwin64` folder takes the x86_64 and the arm64
+/// library as one universal ("fat") Mach-O binary, which a Mac of either architecture loads
+/// (FMI 2.0 names no folder per macOS architecture; the Reference-FMUs ship theirs so). Two
+/// targets of one other folder are refused (`x86_64-unknown-linux-gnu` and
+/// `x86_64-unknown-linux-gnu.2.17` both go to `linux64`).
+fn merge_universal(binaries: Vec<(String, String, Vec<u8>)>) -> Result<Vec<(String, Vec<u8>)>, String> {
+    // (archive name, [(triple, bytes)]).
+    type Slices = Vec<(String, Vec<u8>)>;
+    let mut out: Vec<(String, Slices)> = Vec::new();
+    for (name, triple, bytes) in binaries {
+        match out.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, v)) => v.push((triple, bytes)),
+            None => out.push((name, vec![(triple, bytes)])),
+        }
+    }
+    out.into_iter()
+        .map(|(name, mut slices)| {
+            if slices.len() == 1 {
+                return Ok((name, slices.pop().expect("one").1));
+            }
+            let triples: Vec<&str> = slices.iter().map(|(t, _)| t.as_str()).collect();
+            if !name.ends_with(".dylib") {
+                return Err(format!(
+                    "the targets {} all go to {name}: name one of them",
+                    triples.join(" and ")
+                ));
+            }
+            let mut fat = fat_macho::FatWriter::new();
+            for (triple, bytes) in &slices {
+                fat.add(bytes.as_slice())
+                    .map_err(|e| format!("{name}: the {triple} library is no Mach-O binary: {e}"))?;
+            }
+            let mut bytes = Vec::new();
+            fat.write_to(&mut bytes)
+                .map_err(|e| format!("{name}: the universal binary of {}: {e}", triples.join(" and ")))?;
+            Ok((name, bytes))
+        })
+        .collect()
+}
+
 /// Packages built libraries of one crate (one per target: `(triple, library)`) as an FMU of FMI
 /// `version` into `out_dir/<id>.fmu` (FMI 2.0) or `out_dir/fmi3/<id>.fmu` (FMI 3.0), with the
 /// description of that version the libraries carry. Every library must carry the same one.
@@ -175,7 +215,8 @@ pub fn package(
     libraries: &[(String, PathBuf)],
     out_dir: &Path,
 ) -> Result<Packaged, String> {
-    let mut binaries: Vec<(String, Vec<u8>)> = Vec::new();
+    // (archive name, triple, bytes).
+    let mut binaries: Vec<(String, String, Vec<u8>)> = Vec::new();
     let mut first: Option<SelfDescription> = None;
     for (triple, library) in libraries {
         let binary = std::fs::read(library).map_err(|e| {
@@ -211,8 +252,9 @@ pub fn package(
             }
             Some(_) => {}
         }
-        binaries.push((name, binary));
+        binaries.push((name, triple.clone(), binary));
     }
+    let binaries = merge_universal(binaries).map_err(|e| format!("{}: {e}", krate.package))?;
     let me = first.ok_or_else(|| format!("{}: no library to package", krate.package))?;
     let id = me.description.model_identifier;
     let version = me.interfaces.version;

@@ -117,19 +117,30 @@ pub fn workspace(manifest_path: Option<&Path>) -> Result<Workspace, String> {
     }
     let m: Metadata = cmd.exec().map_err(|e| format!("cargo metadata: {e}"))?;
     let members: Vec<&Package> = m.workspace_packages();
+    let fmu_metadata = m
+        .workspace_metadata
+        .get("fmu")
+        .cloned()
+        .unwrap_or(serde_json::Value::Null);
+    // `[workspace.metadata.fmu] targets`: the targets of every crate that names none itself.
+    let workspace_targets = fmu_metadata
+        .get("targets")
+        .map(|t| crate::target::parse_targets(t).map_err(|e| format!("[workspace.metadata.fmu] {e}")));
     let crates = members
         .iter()
         .filter(|p| is_fmu_crate(p))
-        .map(|p| fmu_crate(p))
+        .map(|p| {
+            let mut c = fmu_crate(p);
+            if c.targets.is_none() {
+                c.targets = workspace_targets.clone();
+            }
+            c
+        })
         .collect();
     Ok(Workspace {
         root: m.workspace_root.as_std_path().to_path_buf(),
         target_dir: m.target_directory.as_std_path().to_path_buf(),
-        fmu_metadata: m
-            .workspace_metadata
-            .get("fmu")
-            .cloned()
-            .unwrap_or(serde_json::Value::Null),
+        fmu_metadata,
         crates,
         root_package: m.root_package().map(|p| p.name.to_string()),
     })
@@ -229,7 +240,16 @@ impl Workspace {
             .join(file))
     }
 
-    /// The built library of a crate (release profile, host target).
+    /// Whether the workspace's manifest defines `[profile.fmu-release]` itself.
+    pub fn defines_fmu_profile(&self) -> bool {
+        let manifest = self.root.join("Cargo.toml");
+        std::fs::read_to_string(&manifest)
+            .ok()
+            .and_then(|t| t.parse::<toml::Table>().ok())
+            .is_some_and(|t| t.get("profile").and_then(|p| p.get(FMU_PROFILE)).is_some())
+    }
+
+    /// The built library of a crate ([`FMU_PROFILE`], host target).
     pub fn library(&self, c: &FmuCrate) -> PathBuf {
         let (prefix, ext) = match std::env::consts::OS {
             "windows" => ("", "dll"),
@@ -237,18 +257,31 @@ impl Workspace {
             _ => ("lib", "so"),
         };
         self.target_dir
-            .join("release")
+            .join(FMU_PROFILE)
             .join(format!("{prefix}{}.{ext}", c.lib_name))
     }
 
-    /// The library cargo builds of a crate for a target: the host's in `target/release/`,
-    /// another's (`cargo build --target <triple>`) in `target/<triple>/release/`.
+    /// The cargo target folder of a target's FMU builds: the workspace's own for the host, one of
+    /// its own for every other (`target/fmu-build/cargo/<triple>/`), so that the targets build
+    /// side by side (cargo locks its folder for one invocation at a time).
+    pub fn cargo_dir(&self, triple: &str, host: &str) -> PathBuf {
+        if triple == host {
+            self.target_dir.clone()
+        } else {
+            self.target_dir.join("fmu-build").join("cargo").join(triple)
+        }
+    }
+
+    /// The library cargo builds of a crate for a target: the host's in `target/fmu-release/`,
+    /// another's (`--target <triple>`) in `target/fmu-build/cargo/<triple>/<triple>/fmu-release/`.
     pub fn library_for(&self, c: &FmuCrate, triple: &str, host: &str) -> Result<PathBuf, String> {
         if triple == host {
             return Ok(self.library(c));
         }
         let file = crate::target::platform(triple)?.cdylib_file(&c.lib_name);
-        Ok(self.target_dir.join(triple).join("release").join(file))
+        // cargo-zigbuild's `x86_64-unknown-linux-gnu.2.17` builds into x86_64-unknown-linux-gnu/.
+        let folder = crate::target::split_glibc(triple).0;
+        Ok(self.cargo_dir(triple, host).join(folder).join(FMU_PROFILE).join(file))
     }
 }
 
@@ -259,36 +292,91 @@ fn version_folder(version: FmiVersion) -> &'static str {
     }
 }
 
-/// `cargo build --release -p ...` in the workspace: the libraries of `crates`, each one binary of
-/// both FMI versions (`export_fmu!`). `targets`: triples other than the host's, built side by
-/// side in this one invocation (`--target <triple>` each, with the linkers
-/// [`crate::target::build_env`] names), or none for the host.
-pub fn build(ws: &Workspace, crates: &[FmuCrate], targets: &[&str]) -> Result<(), String> {
+/// The cargo profile FMU binaries are built with: `release` without symbols and with whole-program
+/// link-time optimisation, as FMU binaries are shipped. Measured on the Controller's Windows DLL
+/// (docs/platforms.md, "Size"): release 2,436,638 bytes; `strip` alone 1,740,800; with fat LTO
+/// 804,864 (codegen-units 16, the default) or 825,344 (codegen-units 1, slower to build too);
+/// thin LTO 1,027,072. Its own output folder (`target/fmu-release/`, and one cargo folder per
+/// other target), so that the tests' `cargo build --release` units are not rebuilt by it and it is
+/// not by them.
+pub const FMU_PROFILE: &str = "fmu-release";
+
+/// [`FMU_PROFILE`] where the workspace's manifest does not define it (then its own settings
+/// are taken as they are). `panic` stays `unwind` (release's default): every C entry point
+/// catches panics and turns them into an error status, which `panic = "abort"` would make a
+/// crash of the importer.
+pub const FMU_PROFILE_SETTINGS: &[&str] = &["inherits=\"release\"", "strip=true", "lto=\"fat\"", "panic=\"unwind\""];
+
+/// `cargo rustc --profile fmu-release --lib --crate-type cdylib -p ...` of each of `crates` for
+/// one target (`None`: the host; `Some(triple)`: `--target <triple>`, with the linker
+/// [`crate::target::build_env`] names), in that target's cargo folder
+/// ([`Workspace::cargo_dir`]): the library of each crate, one binary of both FMI versions
+/// (`export_fmu!`). With `zig`, the invocations are `cargo-zigbuild rustc` (macOS, Linux with a
+/// glibc version), which links with zig.
+///
+/// `--crate-type cdylib`: an FMU crate is `["cdylib", "rlib"]` (its tests use it as a library), and
+/// rustc runs no link-time optimisation for a build that also emits an rlib, so the profile's
+/// `lto` would do nothing. Without it nothing removed the Rust code no FMI function reaches from
+/// the Windows DLL (GNU ld's `--gc-sections` removed no section of it) or from the macOS dylib
+/// (zig ignores the export list, so every global symbol is a root): the DCMotor's DLL was
+/// 2,043,103 bytes, 713,071 with `--crate-type cdylib` (docs/platforms.md). cargo takes
+/// `--crate-type` for one package and one target at a time: one invocation per crate, the
+/// dependencies built by the first.
+pub fn build(
+    ws: &Workspace,
+    crates: &[FmuCrate],
+    triple: Option<&str>,
+    host: &str,
+    zig: Option<&crate::target::Zig>,
+) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut args: Vec<String> = vec!["build".into(), "--release".into()];
-    let mut env = Vec::new();
-    for t in targets {
-        args.extend(["--target".into(), t.to_string()]);
+    let mut common: Vec<String> = vec!["rustc".into(), "--profile".into(), FMU_PROFILE.into()];
+    if !ws.defines_fmu_profile() {
+        for setting in FMU_PROFILE_SETTINGS {
+            common.extend(["--config".into(), format!("profile.{FMU_PROFILE}.{setting}")]);
+        }
+    }
+    let mut env = vec![(
+        "CARGO_TARGET_DIR".to_string(),
+        ws.cargo_dir(triple.unwrap_or(host), host).display().to_string(),
+    )];
+    if let Some(t) = triple {
+        common.extend(["--target".into(), t.to_string()]);
         env.extend(crate::target::build_env(t));
     }
+    common.extend(["--lib".into(), "--crate-type".into(), "cdylib".into()]);
     for c in crates {
+        let mut args = common.clone();
         args.extend(["-p".into(), c.package.clone()]);
+        let mut cmd = match zig {
+            None => {
+                eprintln!("fmu: {cargo} {}", args.join(" "));
+                Command::new(&cargo)
+            }
+            Some(z) => {
+                eprintln!("fmu: {} {}", z.cargo_zigbuild.display(), args.join(" "));
+                let mut cmd = Command::new(&z.cargo_zigbuild);
+                if let Some(path) = z.path() {
+                    cmd.env("PATH", path);
+                }
+                cmd
+            }
+        };
+        let status = cmd
+            .current_dir(&ws.root)
+            .args(&args)
+            .envs(env.iter().cloned())
+            .status()
+            .map_err(|e| format!("cannot run {}: {e}", cmd.get_program().to_string_lossy()))?;
+        if !status.success() {
+            let on = triple.map(|t| format!(" for {t}")).unwrap_or_default();
+            return Err(format!("cargo rustc of {}{on} failed ({status})", c.package));
+        }
     }
-    eprintln!("fmu: {cargo} {}", args.join(" "));
-    let status = Command::new(&cargo)
-        .current_dir(&ws.root)
-        .args(&args)
-        .envs(env)
-        .status()
-        .map_err(|e| format!("cannot run {cargo}: {e}"))?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(format!("cargo build failed ({status})"))
-    }
+    Ok(())
 }
 
-/// Copies the library cargo just built (`target/release/lib<name>.so`) to
+/// Copies the library cargo just built (`target/fmu-release/lib<name>.so`) to
 /// [`Workspace::built_library`] before the next build overwrites it. Removed first and copied,
 /// never written through: cargo's file is a hard link to its own artifact.
 pub fn keep_library(

@@ -397,7 +397,7 @@ pub fn build_versions(
     all_targets.sort_by_key(|x| *x != host);
     let missing: Vec<String> = all_targets
         .iter()
-        .filter_map(|t| crate::target::preflight(t, &host).err())
+        .filter_map(|t| crate::target::preflight(t, &host, python).err())
         .collect();
     if !missing.is_empty() {
         return Err(format!(
@@ -406,7 +406,7 @@ pub fn build_versions(
         ));
     }
     let mut libraries: Vec<(FmuCrate, FmiVersion, String, PathBuf)> = Vec::new();
-    // What each target builds: every crate this target is for, in one cargo build (one binary
+    // What each target builds: every crate this target is for, one `cargo rustc` each (one binary
     // per crate serves both FMI versions: `export_fmu!` exports the fmi2* and the fmi3* functions).
     let mut jobs: Vec<(String, Vec<CrateVersions>)> = Vec::new();
     for t in &all_targets {
@@ -425,37 +425,57 @@ pub fn build_versions(
             jobs.push((t.clone(), mine));
         }
     }
-    // The host alone (its units are the ones `cargo build` and `cargo test` share in
-    // target/release/), then the other targets that build the same crates in one cargo
-    // invocation with several `--target`s: each target compiles its whole dependency tree, a
-    // mostly serial chain, so two of them side by side keep two cores busy (Windows then aarch64
-    // one after the other took 50 + 46 s; together: docs/performance.md).
-    for group in build_groups(&jobs, &host) {
-        let started = std::time::Instant::now();
-        let crates: Vec<FmuCrate> = jobs[group[0]].1.iter().map(|(c, _)| c.clone()).collect();
-        let cross: Vec<&str> = group
-            .iter()
-            .map(|&j| jobs[j].0.as_str())
-            .filter(|t| *t != host)
-            .collect();
-        cargo::build(&ws, &crates, &cross)?;
-        for &j in &group {
-            let (t, mine) = &jobs[j];
-            for (c, versions) in mine {
-                for v in versions {
-                    let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
-                    check_built_version(c, *v, &kept)?;
-                    libraries.push((c.clone(), *v, t.clone(), kept));
+    // Every target in a cargo folder of its own, as many side by side as the machine has cores:
+    // a target's build is a chain of `cargo rustc` invocations, one per crate, whose last step (the
+    // link-time optimisation of the whole library) runs on one core.
+    let zig = if jobs.iter().any(|(t, _)| crate::target::uses_zig(t, &host)) {
+        Some(crate::target::Zig::find(python)?)
+    } else {
+        None
+    };
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(jobs.len())
+        .max(1);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let outcomes: std::sync::Mutex<Vec<(usize, Result<f64, String>)>> = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let j = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let Some((t, mine)) = jobs.get(j) else { break };
+                    let started = std::time::Instant::now();
+                    let crates: Vec<FmuCrate> = mine.iter().map(|(c, _)| c.clone()).collect();
+                    let triple = (t != &host).then_some(t.as_str());
+                    let linker = if crate::target::uses_zig(t, &host) {
+                        zig.as_ref()
+                    } else {
+                        None
+                    };
+                    let outcome =
+                        cargo::build(&ws, &crates, triple, &host, linker).map(|()| started.elapsed().as_secs_f64());
+                    if let Ok(seconds) = &outcome {
+                        eprintln!("fmu: built target {t} in {seconds:.1} s");
+                    }
+                    outcomes.lock().unwrap_or_else(|e| e.into_inner()).push((j, outcome));
                 }
+            });
+        }
+    });
+    let mut outcomes = outcomes.into_inner().unwrap_or_else(|e| e.into_inner());
+    outcomes.sort_by_key(|(j, _)| *j);
+    if let Some((_, Err(e))) = outcomes.iter().find(|(_, o)| o.is_err()) {
+        return Err(e.clone());
+    }
+    for (t, mine) in &jobs {
+        for (c, versions) in mine {
+            for v in versions {
+                let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
+                check_built_version(c, *v, &kept)?;
+                libraries.push((c.clone(), *v, t.clone(), kept));
             }
         }
-        let names: Vec<&str> = group.iter().map(|&j| jobs[j].0.as_str()).collect();
-        eprintln!(
-            "fmu: built target{} {} in {:.1} s",
-            if names.len() > 1 { "s" } else { "" },
-            names.join(" and "),
-            started.elapsed().as_secs_f64()
-        );
     }
     // Each target is built once; its library is copied to target/fmu-build/fmi{2,3}/ for each
     // version packaged (the same bytes in both), so that a later build of another crate set
@@ -494,28 +514,6 @@ pub fn build_versions(
 
 /// A crate and the FMI versions one target's build of it is packaged for.
 type CrateVersions = (FmuCrate, Vec<FmiVersion>);
-
-/// Which targets of `jobs` (target, crates) one cargo invocation builds: the host on its own,
-/// the others grouped where they build the same crates (a crate is never built for a target it
-/// is not for). Indices into `jobs`, in their order.
-fn build_groups<T>(jobs: &[(String, Vec<(FmuCrate, T)>)], host: &str) -> Vec<Vec<usize>> {
-    let packages = |j: usize| -> Vec<&str> { jobs[j].1.iter().map(|(c, _)| c.package.as_str()).collect() };
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    for (j, (t, _)) in jobs.iter().enumerate() {
-        let joins = if t == host {
-            None
-        } else {
-            groups
-                .iter()
-                .position(|g| jobs[g[0]].0 != host && packages(g[0]) == packages(j))
-        };
-        match joins {
-            Some(g) => groups[g].push(j),
-            None => groups.push(vec![j]),
-        }
-    }
-    groups
-}
 
 /// The library built for `version` must implement that version: a crate that calls
 /// `export_fmi2!` (or `export_fmi3!`) itself instead of `export_fmu!` gives one version only.
@@ -658,6 +656,15 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>, report_glibc: bool) -> 
                     eprintln!("fmu: {}: {name} needs glibc >= {major}.{minor}", f.display());
                 }
             }
+            // The macOS binaries: built here, checked structurally, never run here.
+            if report_glibc {
+                for (name, slices) in crate::validate::macos_binaries(f).unwrap_or_default() {
+                    eprintln!(
+                        "fmu: {}: {name}: {slices}; checked (exports, imports, architecture), not run on this machine",
+                        f.display()
+                    );
+                }
+            }
         } else {
             for p in &problems {
                 eprintln!("fmu: {}: {p}", f.display());
@@ -705,49 +712,5 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
             eprintln!("{tool}: error: {e}");
             ExitCode::FAILURE
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn krate(package: &str) -> FmuCrate {
-        FmuCrate {
-            package: package.into(),
-            manifest_dir: PathBuf::from(package),
-            lib_name: package.replace('-', "_"),
-            documentation: None,
-            resources: None,
-            fmi_versions: None,
-            targets: None,
-        }
-    }
-
-    fn job(target: &str, packages: &[&str]) -> (String, Vec<(FmuCrate, ())>) {
-        (target.into(), packages.iter().map(|p| (krate(p), ())).collect())
-    }
-
-    #[test]
-    fn the_host_builds_alone_and_cross_targets_of_the_same_crates_build_together() {
-        let host = "x86_64-unknown-linux-gnu";
-        let jobs = [
-            job(host, &["a", "b"]),
-            job("x86_64-pc-windows-gnu", &["a", "b"]),
-            job("aarch64-unknown-linux-gnu", &["a", "b"]),
-        ];
-        assert_eq!(build_groups(&jobs, host), vec![vec![0], vec![1, 2]]);
-    }
-
-    #[test]
-    fn a_cross_target_with_other_crates_builds_on_its_own() {
-        let host = "x86_64-unknown-linux-gnu";
-        let jobs = [
-            job(host, &["a", "b"]),
-            job("x86_64-pc-windows-gnu", &["a"]),
-            job("aarch64-unknown-linux-gnu", &["a", "b"]),
-            job("i686-pc-windows-gnu", &["a"]),
-        ];
-        assert_eq!(build_groups(&jobs, host), vec![vec![0], vec![1, 3], vec![2]]);
     }
 }

@@ -3,9 +3,16 @@
 //! the file cargo makes, and the check that this machine can build it (the target's standard
 //! library, the linker) before anything is built.
 //!
-//! Adding a platform is adding its triple to [`platform`]: macOS (`x86_64-apple-darwin`,
-//! `aarch64-apple-darwin`) is named there already, but cannot be linked on a Linux machine
-//! (there is no macOS SDK), so [`preflight`] refuses it with that reason.
+//! Adding a platform is adding its triple to [`platform`].
+//!
+//! Two kinds of target are linked by zig through cargo-zigbuild (both from PyPI: `pip install
+//! ziglang cargo-zigbuild`) instead of the system's linker:
+//! - macOS (`x86_64-apple-darwin`, `aarch64-apple-darwin`) on a machine that is not a Mac: zig
+//!   carries the stubs of macOS's system libraries, so no Apple SDK is needed;
+//! - a Linux triple with a glibc version, `x86_64-unknown-linux-gnu.2.17` (cargo-zigbuild's
+//!   spelling): linked against the symbol versions of that glibc, so the binary loads on every
+//!   distribution with that glibc or a newer one (the system's linker links against the glibc of
+//!   the build machine, 2.34 or newer here: no Ubuntu 20.04, RHEL 8 or Debian 11).
 
 use rustfmu::description::FmiVersion;
 use std::path::{Path, PathBuf};
@@ -27,8 +34,42 @@ pub struct Platform {
     pub arch: &'static str,
 }
 
+/// A triple without cargo-zigbuild's glibc suffix, and that suffix's version:
+/// `x86_64-unknown-linux-gnu.2.17` is (`x86_64-unknown-linux-gnu`, Some((2, 17))).
+pub fn split_glibc(triple: &str) -> (&str, Option<(u32, u32)>) {
+    if let Some((base, version)) = triple.split_once('.')
+        && base.ends_with("-linux-gnu")
+        && let Some((major, minor)) = version.split_once('.')
+        && let (Ok(major), Ok(minor)) = (major.parse(), minor.parse())
+    {
+        return (base, Some((major, minor)));
+    }
+    (triple, None)
+}
+
+/// Whether `triple` is linked by zig (cargo-zigbuild) on a machine whose triple is `host`: macOS
+/// anywhere but on a Mac, and Linux with a glibc version.
+pub fn uses_zig(triple: &str, host: &str) -> bool {
+    let (base, glibc) = split_glibc(triple);
+    glibc.is_some() || (base.contains("-apple-darwin") && !host.contains("-apple-darwin"))
+}
+
 /// The platform of a Rust target triple, or why this tool does not build FMUs for it.
 pub fn platform(triple: &str) -> Result<Platform, String> {
+    let (base, glibc) = split_glibc(triple);
+    if triple.contains('.') && glibc.is_none() {
+        return Err(format!(
+            "target '{triple}': only a Linux GNU triple takes a glibc version (`x86_64-unknown-linux-gnu.2.17`)"
+        ));
+    }
+    if let Some((major, minor)) = glibc
+        && (major, minor) < (2, 17)
+    {
+        return Err(format!(
+            "target '{triple}': Rust's standard library needs glibc 2.17 or newer; ask for {base}.2.17 or a newer version"
+        ));
+    }
+    let triple = base;
     let arch = match triple.split('-').next().unwrap_or("") {
         "x86_64" => "x86_64",
         "i686" | "i586" => "x86",
@@ -63,7 +104,9 @@ impl Platform {
                 (Os::Linux, "x86") => Ok("linux32".into()),
                 (Os::Windows, "x86_64") => Ok("win64".into()),
                 (Os::Windows, "x86") => Ok("win32".into()),
-                (Os::Darwin, "x86_64") => Ok("darwin64".into()),
+                // FMI 2.0's one macOS folder: a universal binary of both architectures when
+                // both are built (as the Reference-FMUs ship it), else the one built.
+                (Os::Darwin, "x86_64" | "aarch64") => Ok("darwin64".into()),
                 (os, arch) => Err(format!(
                     "FMI 2.0 names no binaries folder for {arch} {os:?} (its folders: linux32, linux64, win32, win64, darwin32, darwin64); build it as FMI 3.0"
                 )),
@@ -169,9 +212,82 @@ fn on_path(program: &str) -> bool {
     std::env::var_os("PATH").is_some_and(|p| std::env::split_paths(&p).any(|d| d.join(program).is_file()))
 }
 
+/// The oldest macOS a binary of `triple` is built for: Rust's own minimum for the architecture
+/// (10.12 on Intel, 11.0 on Apple silicon, the first macOS that ran on it). Without it zig
+/// writes the newest macOS it knows (15.0 with zig 0.17: measured), and older Macs refuse the
+/// binary. `MACOSX_DEPLOYMENT_TARGET` in the environment overrides it.
+pub fn macos_deployment_target(triple: &str) -> Option<&'static str> {
+    match triple {
+        "x86_64-apple-darwin" => Some("10.12"),
+        "aarch64-apple-darwin" => Some("11.0"),
+        _ => None,
+    }
+}
+
+/// cargo-zigbuild and the zig it runs: `cargo-zigbuild` on `PATH` or beside the Python
+/// interpreter given (`--python`: the venv `pip install ziglang cargo-zigbuild` went to), and zig
+/// as `zig` on `PATH` or the `ziglang` package of that folder's `python3`.
+#[derive(Debug, Clone)]
+pub struct Zig {
+    /// The `cargo-zigbuild` program.
+    pub cargo_zigbuild: PathBuf,
+    /// A folder put first on `PATH` for cargo-zigbuild (the venv's `bin`, where it finds
+    /// `python3 -m ziglang`), if any.
+    pub path_first: Option<PathBuf>,
+}
+
+impl Zig {
+    /// Finds cargo-zigbuild and zig, or says what to install.
+    pub fn find(python: Option<&Path>) -> Result<Zig, String> {
+        let mut dirs: Vec<PathBuf> = Vec::new();
+        if let Some(p) = python
+            && let Some(d) = p.parent()
+        {
+            dirs.push(d.to_path_buf());
+        }
+        if let Some(p) = std::env::var_os("PATH") {
+            dirs.extend(std::env::split_paths(&p));
+        }
+        let install = "install them with `pip install ziglang cargo-zigbuild` (into a venv: then pass its \
+                       interpreter as --python; this project: `bash tests/setup-env.sh --main-job`)";
+        let Some(dir) = dirs.iter().find(|d| d.join("cargo-zigbuild").is_file()) else {
+            return Err(format!("cargo-zigbuild is not installed; {install}"));
+        };
+        let python3 = dir.join("python3");
+        let zig_here = on_path("zig")
+            || (python3.is_file()
+                && Command::new(&python3)
+                    .args(["-c", "import ziglang"])
+                    .output()
+                    .is_ok_and(|o| o.status.success()));
+        if !zig_here {
+            return Err(format!(
+                "zig is not installed (no `zig` on PATH, no ziglang package for {}); {install}",
+                python3.display()
+            ));
+        }
+        Ok(Zig {
+            cargo_zigbuild: dir.join("cargo-zigbuild"),
+            path_first: python3.is_file().then(|| dir.clone()),
+        })
+    }
+
+    /// `PATH` for cargo-zigbuild: [`Zig::path_first`] first.
+    pub fn path(&self) -> Option<std::ffi::OsString> {
+        let first = self.path_first.as_ref()?;
+        let rest = std::env::var_os("PATH").unwrap_or_default();
+        std::env::join_paths(std::iter::once(first.clone()).chain(std::env::split_paths(&rest))).ok()
+    }
+}
+
 /// What `cargo build --target <triple>` needs set in its environment (the linker of an
 /// aarch64 Linux target), after [`preflight`] said it is there.
 pub fn build_env(triple: &str) -> Vec<(String, String)> {
+    if let Some(version) = macos_deployment_target(triple)
+        && std::env::var_os("MACOSX_DEPLOYMENT_TARGET").is_none()
+    {
+        return vec![("MACOSX_DEPLOYMENT_TARGET".into(), version.into())];
+    }
     let var = linker_variable(triple);
     match default_linker(triple) {
         Some((linker, _)) if triple.contains("-linux-") && std::env::var_os(&var).is_none() => {
@@ -184,22 +300,27 @@ pub fn build_env(triple: &str) -> Vec<(String, String)> {
 /// Checks, before anything is built, that this machine can build `triple`: the platform has a
 /// binaries folder, the target's standard library is installed, the linker exists. The error
 /// says what to install.
-pub fn preflight(triple: &str, host: &str) -> Result<(), String> {
-    let p = platform(triple)?;
+pub fn preflight(triple: &str, host: &str, python: Option<&Path>) -> Result<(), String> {
+    platform(triple)?;
     if triple == host {
         return Ok(());
     }
-    if p.os == Os::Darwin && !host.contains("-apple-darwin") {
-        return Err(format!(
-            "target '{triple}': macOS binaries cannot be linked on this machine (there is no macOS SDK here); \
-             run `cargo fmu build --target {triple}` on a Mac"
-        ));
+    let zig = uses_zig(triple, host);
+    let triple = split_glibc(triple).0;
+    if zig {
+        Zig::find(python).map_err(|e| format!("target '{triple}' is linked by zig: {e}"))?;
+    }
+    if triple == host {
+        return Ok(());
     }
     if !std_installed(triple)? {
         return Err(format!(
             "target '{triple}': its Rust standard library is not installed; install it with `rustup target add {triple}` \
              (this project: `bash tests/setup-env.sh`)"
         ));
+    }
+    if zig {
+        return Ok(());
     }
     let var = linker_variable(triple);
     if let Some(linker) = std::env::var_os(&var) {
@@ -291,7 +412,13 @@ mod tests {
                 "dylib",
                 "libm.dylib",
             ),
-            ("aarch64-apple-darwin", None, "aarch64-darwin", "dylib", "libm.dylib"),
+            (
+                "aarch64-apple-darwin",
+                Some("darwin64"),
+                "aarch64-darwin",
+                "dylib",
+                "libm.dylib",
+            ),
         ];
         for (triple, v2, v3, ext, file) in cases {
             let p = platform(triple).unwrap();
@@ -323,9 +450,28 @@ mod tests {
     }
 
     #[test]
-    fn macos_is_refused_with_the_reason() {
-        let e = preflight("aarch64-apple-darwin", "x86_64-unknown-linux-gnu").unwrap_err();
-        assert!(e.contains("no macOS SDK"), "{e}");
-        assert!(preflight("x86_64-unknown-linux-gnu", "x86_64-unknown-linux-gnu").is_ok());
+    fn a_glibc_version_is_read_off_a_linux_triple_only() {
+        let linux = "x86_64-unknown-linux-gnu";
+        assert_eq!(split_glibc("x86_64-unknown-linux-gnu.2.17"), (linux, Some((2, 17))));
+        assert_eq!(split_glibc(linux), (linux, None));
+        assert_eq!(split_glibc("aarch64-apple-darwin"), ("aarch64-apple-darwin", None));
+        let p = platform("aarch64-unknown-linux-gnu.2.28").unwrap();
+        assert_eq!(p.folder(FmiVersion::V3).unwrap(), "aarch64-linux");
+        assert!(platform("x86_64-unknown-linux-gnu.2.12").unwrap_err().contains("2.17"));
+        assert!(platform("x86_64-pc-windows-gnu.2.17").is_err());
+        let host = "x86_64-unknown-linux-gnu";
+        assert!(uses_zig("x86_64-unknown-linux-gnu.2.17", host));
+        assert!(uses_zig("aarch64-apple-darwin", host));
+        assert!(!uses_zig("aarch64-apple-darwin", "aarch64-apple-darwin"));
+        assert!(!uses_zig("x86_64-pc-windows-gnu", host));
+        assert!(!uses_zig(linux, host));
+    }
+
+    #[test]
+    fn both_macos_architectures_go_to_darwin64_in_fmi2() {
+        for t in ["x86_64-apple-darwin", "aarch64-apple-darwin"] {
+            assert_eq!(platform(t).unwrap().folder(FmiVersion::V2).unwrap(), "darwin64");
+        }
+        assert!(preflight("x86_64-unknown-linux-gnu", "x86_64-unknown-linux-gnu", None).is_ok());
     }
 }

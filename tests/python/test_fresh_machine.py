@@ -33,10 +33,16 @@ NEEDS_OF_LINKS = {
 }
 # Crates whose presence in a build means a C compiler runs.
 NEEDS_OF_CRATE = {"cc": ["gcc"]}
-# Targets other than the host: the linker fmu-build's up-front check asks for.
+# Targets other than the host: the linker fmu-build's up-front check asks for. macOS and Linux with a
+# glibc version (`x86_64-unknown-linux-gnu.2.17`) are linked by zig, from the venv (ziglang and
+# cargo-zigbuild in examples/requirements.txt): no Debian package.
 NEEDS_OF_TARGET = {
     "x86_64-pc-windows-gnu": ["gcc-mingw-w64-x86-64"],
     "aarch64-unknown-linux-gnu": ["gcc-aarch64-linux-gnu"],
+    "x86_64-unknown-linux-gnu.2.17": [],
+    "aarch64-unknown-linux-gnu.2.17": [],
+    "x86_64-apple-darwin": [],
+    "aarch64-apple-darwin": [],
 }
 
 
@@ -54,15 +60,17 @@ def metadata():
 
 def fmu_crates(metadata):
     """The workspace's FMU crates (a cdylib depending on rustfmu), as `cargo fmu build --workspace`
-    finds them, with the targets each names."""
+    finds them, with the targets each names (or the workspace names for it)."""
     members = set(metadata["workspace_members"])
+    # A crate without targets of its own takes [workspace.metadata.fmu] targets.
+    default = ((metadata.get("metadata") or {}).get("fmu") or {}).get("targets") or []
     out = {}
     for p in metadata["packages"]:
         if p["id"] not in members:
             continue
         cdylib = any("cdylib" in t["crate_types"] for t in p["targets"])
         if cdylib and any(d["name"] == "rustfmu" for d in p["dependencies"]):
-            out[p["name"]] = ((p.get("metadata") or {}).get("fmu") or {}).get("targets") or []
+            out[p["name"]] = ((p.get("metadata") or {}).get("fmu") or {}).get("targets") or default
     return out
 
 
@@ -108,7 +116,7 @@ def test_the_main_jobs_setup_installs_what_its_builds_need(metadata):
     needed = {}  # Debian package -> why
     for target in sorted({t for ts in builds.values() for t in ts} | {host}):
         crates = list(builds) if target == host else [p for p, ts in builds.items() if target in ts]
-        names = tree(crates, target)
+        names = tree(crates, re.sub(r"\.\d+\.\d+$", "", target))
         for name in sorted(names):
             if name in links:
                 assert links[name] in NEEDS_OF_LINKS, (
@@ -125,6 +133,17 @@ def test_the_main_jobs_setup_installs_what_its_builds_need(metadata):
     missing = {deb: why for deb, why in needed.items() if deb not in installs}
     assert not missing, (f"the main job builds {sorted(builds)}; its setup (tests/setup-env.sh --main-job) does not "
                          f"install {missing}; it installs {sorted(installs)}")
+
+
+def test_the_main_job_installs_zig_for_the_targets_it_links_with_zig(metadata):
+    builds = main_job_builds(metadata)
+    zig_targets = {t for ts in builds.values() for t in ts if "apple-darwin" in t or re.search(r"\.\d+\.\d+$", t)}
+    assert zig_targets, "no FMU crate names a macOS or glibc-versioned target any more"
+    pins = (ROOT / "examples" / "requirements.txt").read_text()
+    assert re.search(r"^ziglang==", pins, re.M) and re.search(r"^cargo-zigbuild==", pins, re.M), pins
+    setup = (ROOT / "tests" / "setup-env.sh").read_text()
+    for t in {re.sub(r"\.\d+\.\d+$", "", t) for t in zig_targets} - {host_triple()}:
+        assert t in setup, f"tests/setup-env.sh does not `rustup target add {t}`"
 
 
 def test_the_tests_setup_installs_everything_the_main_jobs_does():
