@@ -219,6 +219,28 @@ impl Workspace {
             .join(name)
     }
 
+    /// A copy the last `cargo fmu build` kept of a crate's library for `version`, of any target
+    /// (the host's first): every target's carries the same description.
+    pub fn any_built_library(&self, c: &FmuCrate, version: FmiVersion) -> Option<PathBuf> {
+        let host = self.built_library(c, version);
+        if host.is_file() {
+            return Some(host);
+        }
+        let dir = self.target_dir.join("fmu-build").join(version_folder(version));
+        let mut triples: Vec<String> = std::fs::read_dir(&dir)
+            .ok()?
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_dir()))
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        triples.sort();
+        triples.into_iter().find_map(|t| {
+            let file = crate::target::platform(&t).ok()?.cdylib_file(&c.lib_name);
+            let path = dir.join(&t).join(file);
+            path.is_file().then_some(path)
+        })
+    }
+
     /// [`Workspace::built_library`] of any target: the host's where it always was, another
     /// target's in `target/fmu-build/fmi{2,3}/<triple>/`.
     pub fn built_library_for(
@@ -294,9 +316,9 @@ fn version_folder(version: FmiVersion) -> &'static str {
 
 /// The cargo profile FMU binaries are built with: `release` without symbols and with whole-program
 /// link-time optimisation, as FMU binaries are shipped. Measured on the Controller's Windows DLL
-/// (docs/platforms.md, "Size"): release 2,436,638 bytes; `strip` alone 1,740,800; with fat LTO
-/// 804,864 (codegen-units 16, the default) or 825,344 (codegen-units 1, slower to build too);
-/// thin LTO 1,027,072. Its own output folder (`target/fmu-release/`, and one cargo folder per
+/// (`bash bench/binary-sizes.sh`, docs/platforms.md "Size"): release 2,394,642 bytes; `strip`
+/// 1,860,608; with thin LTO 982,528; with fat LTO 805,888 (codegen-units 16, the default) or
+/// 825,344 (codegen-units 1, slower to build too). Its own output folder (`target/fmu-release/`, and one cargo folder per
 /// other target), so that the tests' `cargo build --release` units are not rebuilt by it and it is
 /// not by them.
 pub const FMU_PROFILE: &str = "fmu-release";

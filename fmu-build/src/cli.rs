@@ -581,8 +581,7 @@ fn committed_descriptions(
             .flat_map(|c| {
                 let kept: Vec<(PathBuf, Option<FmiVersion>)> = [FmiVersion::V2, FmiVersion::V3]
                     .into_iter()
-                    .map(|v| (ws.built_library(c, v), Some(v)))
-                    .filter(|(p, _)| p.is_file())
+                    .filter_map(|v| ws.any_built_library(c, v).map(|p| (p, Some(v))))
                     .collect();
                 if kept.is_empty() {
                     vec![(ws.library(c), None)]

@@ -18,14 +18,42 @@ fn fails_with(cmd: &mut Command, words: &[&str]) {
         assert!(err.contains(w), "'{w}' not in: {err}");
     }
     // Stopped before any build: cargo was never run.
-    assert!(!err.contains(" build --release"), "{err}");
+    assert!(!err.contains("--crate-type cdylib"), "{err}");
+}
+
+/// A `PATH` with cargo and the system's programs but no venv: no cargo-zigbuild, no zig.
+fn path_without_zig() -> String {
+    let cargo = std::path::PathBuf::from(env!("CARGO"));
+    let cargo_dir = cargo.parent().map(|d| d.display().to_string()).unwrap_or_default();
+    format!("{cargo_dir}:/usr/bin:/bin")
 }
 
 #[test]
-fn macos_is_refused_before_anything_is_built() {
+fn macos_without_zig_is_refused_before_anything_is_built() {
     fails_with(
-        cargo_fmu().args(["build", "-p", "pendulum-fmu", "--target", "x86_64-apple-darwin"]),
-        &["no macOS SDK", "nothing was built"],
+        cargo_fmu()
+            .args(["build", "-p", "pendulum-fmu", "--target", "x86_64-apple-darwin"])
+            .env("PATH", path_without_zig()),
+        &[
+            "x86_64-apple-darwin",
+            "linked by zig",
+            "cargo-zigbuild is not installed",
+            "pip install ziglang cargo-zigbuild",
+            "nothing was built",
+        ],
+    );
+    // A glibc version asks for zig too.
+    fails_with(
+        cargo_fmu()
+            .args([
+                "build",
+                "-p",
+                "pendulum-fmu",
+                "--target",
+                "x86_64-unknown-linux-gnu.2.17",
+            ])
+            .env("PATH", path_without_zig()),
+        &["cargo-zigbuild is not installed", "nothing was built"],
     );
 }
 
