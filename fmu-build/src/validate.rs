@@ -522,8 +522,8 @@ fn macos_system_library(path: &str) -> bool {
 /// The names a macOS dylib linked by zig exports besides the FMI functions, and why it may:
 /// zig's Mach-O linker (0.17) ignores the `-exported_symbols_list` rustc passes (ziglang/zig#24662;
 /// measured here: a two-function C library exports both with a list naming one), so the global
-/// symbols that survive link-time optimisation stay exported: the two every dylib has
-/// (`__dso_handle`, `_mh_dylib_header`, made by the linker) and two of Rust's runtime
+/// symbols that survive link-time optimisation stay exported: two the linker makes
+/// (`__dso_handle`, `_mh_dylib_header`) and two of Rust's runtime
 /// (`rust_eh_personality`, the unwinder's; `std::panicking::EMPTY_PANIC`, a constant). macOS binds
 /// symbols per library (two-level namespace): they do not collide with the importer's. Any other
 /// name is refused.
@@ -542,6 +542,9 @@ pub struct MachOSlice {
     pub libraries: Vec<String>,
     /// The oldest macOS it loads on (LC_BUILD_VERSION or LC_VERSION_MIN_MACOSX), (major, minor).
     pub min_macos: Option<(u32, u32)>,
+    /// Whether it carries a code signature (LC_CODE_SIGNATURE): macOS on Apple silicon runs no
+    /// unsigned code; zig signs arm64 binaries ad hoc, as Apple's linker does.
+    pub signed: bool,
 }
 
 /// The architectures of a Mach-O binary, thin or universal ("fat"); `None` for another format.
@@ -606,6 +609,7 @@ fn macho_slice(data: &[u8]) -> Result<MachOSlice, String> {
     let endian = file.endian();
     let mut libraries = Vec::new();
     let mut min_macos = None;
+    let mut signed = false;
     let mut commands = file
         .macho_load_commands()
         .map_err(|e| format!("its load commands: {e}"))?;
@@ -633,6 +637,7 @@ fn macho_slice(data: &[u8]) -> Result<MachOSlice, String> {
             LoadCommandVariant::VersionMin(v) if c.cmd() == macho::LC_VERSION_MIN_MACOSX => {
                 min_macos = Some(version(v.version.get(endian)));
             }
+            LoadCommandVariant::LinkeditData(_) if c.cmd() == macho::LC_CODE_SIGNATURE => signed = true,
             _ => {}
         }
     }
@@ -641,6 +646,7 @@ fn macho_slice(data: &[u8]) -> Result<MachOSlice, String> {
         exports,
         libraries,
         min_macos,
+        signed,
     })
 }
 

@@ -6,6 +6,7 @@ architecture, the libraries they load, the oldest macOS they load on and the FMI
 export; the Linux ones with binutils' objdump for the glibc symbol versions they need.
 """
 
+import hashlib
 import pathlib
 import re
 import shutil
@@ -36,7 +37,7 @@ FMI3 = ["fmi3GetVersion", "fmi3InstantiateCoSimulation", "fmi3InstantiateModelEx
 
 CPU_X86_64, CPU_ARM64 = 0x01000007, 0x0100000C
 LC_LOAD_DYLIB, LC_LOAD_WEAK_DYLIB, LC_REEXPORT_DYLIB = 0xC, 0x80000018, 0x8000001F
-LC_SYMTAB, LC_VERSION_MIN_MACOSX, LC_BUILD_VERSION = 0x2, 0x24, 0x32
+LC_SYMTAB, LC_VERSION_MIN_MACOSX, LC_BUILD_VERSION, LC_CODE_SIGNATURE = 0x2, 0x24, 0x32, 0x1D
 
 
 def fmu_path(name, version):
@@ -60,6 +61,39 @@ def slices(data):
         return out
     assert struct.unpack("<I", data[:4])[0] == 0xFEEDFACF, "not a 64-bit little-endian Mach-O file"
     return [(struct.unpack("<I", data[4:8])[0], data)]
+
+
+def code_signature_pages(data):
+    """Checks the code signature of a thin Mach-O file (macOS on Apple silicon runs no unsigned
+    code; zig signs ad hoc, as Apple's linker does): every page's SHA-256 in its CodeDirectory
+    against the page. Returns (pages, ad-hoc flag), or None without a signature."""
+    ncmds = struct.unpack("<I", data[16:20])[0]
+    at, where = 32, None
+    for _ in range(ncmds):
+        cmd, size = struct.unpack("<II", data[at:at + 8])
+        if cmd == LC_CODE_SIGNATURE:
+            where = struct.unpack("<II", data[at + 8:at + 16])
+        at += size
+    if where is None:
+        return None
+    blob = data[where[0]:where[0] + where[1]]
+    magic, _, count = struct.unpack(">III", blob[:12])
+    assert magic == 0xFADE0CC0, hex(magic)  # embedded signature SuperBlob
+    for i in range(count):
+        _, offset = struct.unpack(">II", blob[12 + 8 * i:20 + 8 * i])
+        cd = blob[offset:]
+        if struct.unpack(">I", cd[:4])[0] != 0xFADE0C02:  # not the CodeDirectory
+            continue
+        _, _, _, flags, hash_offset, _, _, n_code, code_limit = struct.unpack(">9I", cd[:36])
+        hash_size, hash_type, _, page_log2 = struct.unpack(">4B", cd[36:40])
+        assert hash_type == 2 and hash_size == 32, (hash_type, hash_size)  # SHA-256
+        page = 1 << page_log2
+        assert n_code == -(-code_limit // page), (n_code, code_limit)
+        for k in range(n_code):
+            want = cd[hash_offset + 32 * k:hash_offset + 32 * (k + 1)]
+            assert hashlib.sha256(data[k * page:min((k + 1) * page, code_limit)]).digest() == want, f"page {k}"
+        return n_code, bool(flags & 0x2)
+    raise AssertionError("a signature without a CodeDirectory")
 
 
 def read_macho(data):
@@ -117,6 +151,9 @@ def test_the_macos_binaries_are_what_their_folders_say(name):
         assert filetype == 6, "not a dynamic library (MH_DYLIB)"
         assert libraries == ["/usr/lib/libSystem.B.dylib"], libraries
         assert minos == oldest, minos
+        if cpu == CPU_ARM64:
+            signed = code_signature_pages(thin)
+            assert signed and signed[1], "an arm64 binary without a valid ad-hoc code signature does not load"
         names = {e[1:] for e in exports}  # Mach-O symbols carry a leading underscore
         missing = [f for f in FMI2 + FMI3 if f not in names]
         assert not missing, missing
