@@ -549,33 +549,13 @@ pub struct MachOSlice {
 
 /// The architectures of a Mach-O binary, thin or universal ("fat"); `None` for another format.
 pub fn macho_slices(binary: &[u8]) -> Option<Result<Vec<MachOSlice>, String>> {
-    use object::read::macho::{FatArch, MachOFatFile32, MachOFatFile64};
+    use object::read::macho::{FatArch32, FatArch64};
     let kind = object::FileKind::parse(binary).ok()?;
     let read = || -> Result<Vec<MachOSlice>, String> {
         match kind {
             object::FileKind::MachO64 => Ok(vec![macho_slice(binary)?]),
-            object::FileKind::MachOFat32 => MachOFatFile32::parse(binary)
-                .map_err(|e| format!("not a readable universal binary: {e}"))?
-                .arches()
-                .iter()
-                .map(|a| {
-                    macho_slice(
-                        a.data(binary)
-                            .map_err(|e| format!("a slice of the universal binary: {e}"))?,
-                    )
-                })
-                .collect(),
-            object::FileKind::MachOFat64 => MachOFatFile64::parse(binary)
-                .map_err(|e| format!("not a readable universal binary: {e}"))?
-                .arches()
-                .iter()
-                .map(|a| {
-                    macho_slice(
-                        a.data(binary)
-                            .map_err(|e| format!("a slice of the universal binary: {e}"))?,
-                    )
-                })
-                .collect(),
+            object::FileKind::MachOFat32 => universal_slices::<FatArch32>(binary),
+            object::FileKind::MachOFat64 => universal_slices::<FatArch64>(binary),
             _ => Err(format!("a Mach-O file of kind {kind:?}, not a 64-bit shared library")),
         }
     };
@@ -586,6 +566,21 @@ pub fn macho_slices(binary: &[u8]) -> Option<Result<Vec<MachOSlice>, String>> {
         | object::FileKind::MachOFat64 => Some(read()),
         _ => None,
     }
+}
+
+/// [`macho_slice`] of each architecture of a universal binary (32- or 64-bit fat header).
+fn universal_slices<Fat: object::read::macho::FatArch>(binary: &[u8]) -> Result<Vec<MachOSlice>, String> {
+    object::read::macho::MachOFatFile::<Fat>::parse(binary)
+        .map_err(|e| format!("not a readable universal binary: {e}"))?
+        .arches()
+        .iter()
+        .map(|a| {
+            macho_slice(
+                a.data(binary)
+                    .map_err(|e| format!("a slice of the universal binary: {e}"))?,
+            )
+        })
+        .collect()
 }
 
 fn macho_slice(data: &[u8]) -> Result<MachOSlice, String> {
