@@ -302,6 +302,20 @@ impl Variable {
         !self.fmi3.dimensions.is_empty()
     }
 
+    /// The FMI 2.0 name of element `k` (row-major) of an array: the standard's structured
+    /// name with indices from 1 (FMI 2.0, 2.2.9: `K[2,3]` of `[[f64; 4]; 2]` is element 6).
+    pub fn element_name(&self, k: usize) -> String {
+        let mut indices = Vec::with_capacity(self.fmi3.dimensions.len());
+        let mut rest = k;
+        for d in self.fmi3.dimensions.iter().rev() {
+            let d = (*d as usize).max(1);
+            indices.push(rest % d + 1);
+            rest /= d;
+        }
+        let indices: Vec<String> = indices.iter().rev().map(|i| i.to_string()).collect();
+        format!("{}[{}]", self.name, indices.join(","))
+    }
+
     /// Whether the description of FMI `version` has this variable.
     pub const fn in_version(&self, version: FmiVersion) -> bool {
         match version {
@@ -477,6 +491,61 @@ impl ModelDescription {
                 return true;
             }
             i += 1;
+        }
+        false
+    }
+
+    /// Whether some array variable is in the FMI 2.0 description (as its elements, scalars of
+    /// structured names: [`Variable::element_name`]). (`const`: the FMI 2.0 functions of a model
+    /// without one never look for elements.)
+    pub const fn has_fmi2_arrays(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            let v = &self.variables[i];
+            if v.is_array() && v.in_version(FmiVersion::V2) {
+                return true;
+            }
+            i += 1;
+        }
+        false
+    }
+
+    /// FMI 2.0's view of an array: the array variable (its index in `variables`) and the
+    /// element (row-major) that the FMI 2.0 value reference `vr` names. An array of FMI 2.0 is
+    /// its elements, scalars with the value references `vr, vr + 1, ..` of the array's `vr`
+    /// (the derive keeps that range free of other variables). `None`: `vr` names no element.
+    pub fn fmi2_element(&self, vr: u32) -> Option<(usize, usize)> {
+        self.variables.iter().enumerate().find_map(|(i, v)| {
+            let k = vr.checked_sub(v.value_reference)? as usize;
+            (v.is_array() && k < v.element_count() && v.in_version(FmiVersion::V2)).then_some((i, k))
+        })
+    }
+
+    /// Whether the FMI 2.0 value references of the elements of array `variables[i]` (its `vr`
+    /// to `vr + n - 1`) take another variable's value reference. (`const`: the derive asserts
+    /// at compile time that they do not.)
+    pub const fn fmi2_elements_overlap(&self, i: usize) -> bool {
+        let a = &self.variables[i];
+        if !a.is_array() || !a.in_version(FmiVersion::V2) {
+            return false;
+        }
+        let (first, n) = (a.value_reference as u64, a.element_count() as u64);
+        let mut j = 0;
+        while j < self.variables.len() {
+            let v = &self.variables[j];
+            let vr = v.value_reference as u64;
+            if j != i {
+                // The other's own range (its elements too, if it is an array of FMI 2.0).
+                let m = if v.is_array() && v.in_version(FmiVersion::V2) {
+                    v.element_count() as u64
+                } else {
+                    1
+                };
+                if vr < first + n && first < vr + m {
+                    return true;
+                }
+            }
+            j += 1;
         }
         false
     }
@@ -693,9 +762,63 @@ impl Enc<'_> {
             i += 1;
         }
     }
-    const fn variable(&mut self, v: &Variable) {
+    const fn variable(&mut self, d: &ModelDescription, version: FmiVersion, v: &Variable) {
         self.str(v.name);
         self.u32(v.value_reference);
+        self.rest(d, version, v, &v.start);
+    }
+    /// Element `k` of an array, as the scalar FMI 2.0 makes of it: `name[i,j]` (indices from 1),
+    /// value reference `vr + k`, the element's start, the array's other attributes.
+    const fn element(&mut self, d: &ModelDescription, v: &Variable, k: usize) {
+        self.element_name_only(v, k);
+        self.u32(v.value_reference + k as u32);
+        let start = match v.start {
+            Start::Array(items) if k < items.len() => items[k],
+            _ => Start::None,
+        };
+        self.rest(d, FmiVersion::V2, v, &start);
+    }
+    /// The name of element `k` of array `v` (as [`Enc::str`] writes a name): `name[i,j]`.
+    const fn element_name_only(&mut self, v: &Variable, k: usize) {
+        let dims = v.fmi3.dimensions;
+        // The indices, outermost first (at most 2 dimensions: the derive refuses more), and the
+        // name's length.
+        let mut indices = [0usize; 8];
+        let mut len = v.name.len() + 1;
+        let mut rest = k;
+        let mut j = dims.len();
+        while j > 0 {
+            j -= 1;
+            let n = if dims[j] == 0 { 1 } else { dims[j] as usize };
+            indices[j] = rest % n + 1;
+            rest /= n;
+            len += digits(indices[j]) + 1;
+        }
+        self.u32(len as u32);
+        self.bytes(v.name.as_bytes());
+        self.u8(b'[');
+        let mut j = 0;
+        while j < dims.len() {
+            if j > 0 {
+                self.u8(b',');
+            }
+            self.decimal(indices[j]);
+            j += 1;
+        }
+        self.u8(b']');
+    }
+    const fn decimal(&mut self, x: usize) {
+        let mut div = 1;
+        while x / div >= 10 {
+            div *= 10;
+        }
+        while div > 0 {
+            self.u8(b'0' + (x / div % 10) as u8);
+            div /= 10;
+        }
+    }
+    /// A variable's attributes after its name and value reference.
+    const fn rest(&mut self, d: &ModelDescription, version: FmiVersion, v: &Variable, start: &Start) {
         self.u8(v.var_type as u8);
         self.u8(v.causality as u8);
         self.u8(v.variability as u8);
@@ -703,14 +826,14 @@ impl Enc<'_> {
             None => self.u8(255),
             Some(i) => self.u8(i as u8),
         }
-        self.start(&v.start);
+        self.start(start);
         self.str(v.unit);
         self.str(v.description);
         self.bound(v.min);
         self.bound(v.max);
         self.opt_f64(v.nominal);
-        self.names(v.depends_on);
-        self.names(v.initial_depends_on);
+        self.dependency_names(d, version, v.depends_on);
+        self.dependency_names(d, version, v.initial_depends_on);
         self.opt_str(v.derivative_of);
         match v.enumeration {
             None => self.u8(0),
@@ -718,6 +841,40 @@ impl Enc<'_> {
                 self.u8(1);
                 self.enum_type(e);
             }
+        }
+    }
+    /// [`Enc::names`] of dependencies; in FMI 2.0 an array named there is each of its elements.
+    const fn dependency_names(&mut self, d: &ModelDescription, version: FmiVersion, names: Option<&[&str]>) {
+        let Some(deps) = names else {
+            return self.names(None);
+        };
+        if matches!(version, FmiVersion::V3) || !d.has_fmi2_arrays() {
+            return self.names(names);
+        }
+        let mut n = 0;
+        let mut i = 0;
+        while i < deps.len() {
+            n += match fmi2_array_named(d, deps[i]) {
+                Some(a) => a.element_count(),
+                None => 1,
+            };
+            i += 1;
+        }
+        self.u8(1);
+        self.u32(n as u32);
+        let mut i = 0;
+        while i < deps.len() {
+            match fmi2_array_named(d, deps[i]) {
+                Some(a) => {
+                    let mut k = 0;
+                    while k < a.element_count() {
+                        self.element_name_only(a, k);
+                        k += 1;
+                    }
+                }
+                None => self.str(deps[i]),
+            }
+            i += 1;
         }
     }
     const fn start(&mut self, start: &Start) {
@@ -825,15 +982,22 @@ impl Enc<'_> {
         }
         // A version's description holds the variables of that version (FMI 2.0 leaves out the
         // FMI-3.0-only ones).
+        // FMI 2.0 has no arrays: an array is its elements there, scalars of structured names
+        // (`K[1,2]`) with the value references vr, vr + 1, .. ([`Variable::element_name`]).
         let version = interfaces.version;
         let mut n = 0u32;
         let mut extras = 0u32;
         let mut i = 0;
         while i < d.variables.len() {
-            if d.variables[i].in_version(version) {
-                n += 1;
-                if !d.variables[i].fmi3.is_none() {
-                    extras += 1;
+            let v = &d.variables[i];
+            if v.in_version(version) {
+                if v.is_array() && matches!(version, FmiVersion::V2) {
+                    n += v.element_count() as u32;
+                } else {
+                    n += 1;
+                    if !v.fmi3.is_none() {
+                        extras += 1;
+                    }
                 }
             }
             i += 1;
@@ -841,8 +1005,17 @@ impl Enc<'_> {
         self.u32(n);
         let mut i = 0;
         while i < d.variables.len() {
-            if d.variables[i].in_version(version) {
-                self.variable(&d.variables[i]);
+            let v = &d.variables[i];
+            if v.in_version(version) {
+                if v.is_array() && matches!(version, FmiVersion::V2) {
+                    let mut k = 0;
+                    while k < v.element_count() {
+                        self.element(d, v, k);
+                        k += 1;
+                    }
+                } else {
+                    self.variable(d, version, v);
+                }
             }
             i += 1;
         }
@@ -882,7 +1055,9 @@ impl Enc<'_> {
             let (mut i, mut at) = (0, 0u32);
             while i < d.variables.len() {
                 let v = &d.variables[i];
-                if v.in_version(version) {
+                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                    at += v.element_count() as u32;
+                } else if v.in_version(version) {
                     if !v.fmi3.is_none() {
                         self.u32(at);
                         self.u8(v.fmi3.only as u8);
@@ -912,6 +1087,45 @@ impl Enc<'_> {
             self.u8(3);
         }
     }
+}
+
+/// How many decimal digits `x` has.
+const fn digits(x: usize) -> usize {
+    let mut n = 1;
+    let mut x = x;
+    while x >= 10 {
+        x /= 10;
+        n += 1;
+    }
+    n
+}
+
+/// The array variable of FMI 2.0's description named `name`, if any.
+const fn fmi2_array_named(d: &ModelDescription, name: &str) -> Option<&'static Variable> {
+    let mut i = 0;
+    while i < d.variables.len() {
+        let v = &d.variables[i];
+        if v.is_array() && v.in_version(FmiVersion::V2) && str_eq(v.name, name) {
+            return Some(v);
+        }
+        i += 1;
+    }
+    None
+}
+
+const fn str_eq(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }
 
 const HEADER: usize = MAGIC.len() + 4 + 4;

@@ -468,6 +468,9 @@ impl Context<'_> {
         model.outputs(reached, &mut c);
         model.store_continuous(&c);
         model.set_states(&x);
+        // And what the model computes outside the equations, from the step's end (as
+        // `evaluate` does; before, a step left those values where the last get had put them).
+        model.calculate(reached);
         self.refreshed = true;
         result.map_err(|e| StepFailure {
             reached_time: e.time(),

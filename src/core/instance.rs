@@ -117,6 +117,21 @@ fn any_array<M: CoSimulation>(vrs: &[u32]) -> bool {
             .any(|vr| M::variable_index(*vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_array()))
 }
 
+/// Whether an FMI 2.0 call names an element of an array (FMI 2.0 has no arrays: an array is its
+/// elements there, `K[1,1]` .. with the value references vr, vr + 1, ..). A model without
+/// arrays in its FMI 2.0 description answers at compile time; one with them looks up each
+/// reference, so calls on scalars keep the scalar paths.
+#[inline]
+fn any_fmi2_element<M: CoSimulation>(version: Version, vrs: &[u32]) -> bool {
+    let has_fmi2_arrays = const { M::DESCRIPTION.has_fmi2_arrays() };
+    has_fmi2_arrays
+        && version == Version::Fmi2
+        && vrs.iter().any(|vr| match M::variable_index(*vr) {
+            Some(i) => M::DESCRIPTION.variables[i].is_array(),
+            None => M::DESCRIPTION.fmi2_element(*vr).is_some(),
+        })
+}
+
 /// "an Int32", "a Float64", "an Enumeration" (as the type names are read aloud).
 fn with_article(name: &str) -> String {
     let article = if name.starts_with(['I', 'E']) { "an" } else { "a" };
@@ -454,6 +469,9 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn get_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
+        if any_fmi2_element::<M>(self.version, vrs) {
+            return self.get_fmi2_elements(function, vrs, out);
+        }
         // Every reference is checked before anything is computed: a refused get changes nothing
         // (it used to run the initialization first, then refuse an unknown reference).
         for vr in vrs {
@@ -482,6 +500,95 @@ impl<M: CoSimulation> Instance<M> {
             }
         }
         OK
+    }
+
+    /// FMI 2.0's view of an array variable: value reference `vr + k` is its element `k`
+    /// (row-major), a scalar named `name[i,j]`; any other reference is looked up as usual. The
+    /// declaration, and the element if it is one.
+    fn fmi2_resolve(&self, function: &str, vr: u32, ty: VarType) -> Result<(&'static Variable, Option<usize>), Status> {
+        if let Some((i, k)) = M::DESCRIPTION.fmi2_element(vr) {
+            let d = &M::DESCRIPTION.variables[i];
+            if crate::description::same_api_type(d.var_type, ty) {
+                return Ok((d, Some(k)));
+            }
+            return Err(self.error(&format!(
+                "{function}: value reference {vr} ('{}') is {} variable, not {}",
+                d.element_name(k),
+                with_article(&self.type_name(d.var_type)),
+                with_article(&self.type_name(ty))
+            )));
+        }
+        self.lookup(function, vr, ty).map(|d| (d, None))
+    }
+
+    /// [`Instance::get_values`] of an FMI 2.0 call that names array elements.
+    #[cold]
+    fn get_fmi2_elements<T: FmiType>(&mut self, function: &str, vrs: &[u32], out: &mut [T]) -> Status {
+        for vr in vrs {
+            if let Err(status) = self
+                .fmi2_resolve(function, *vr, T::TYPE)
+                .and_then(|(d, k)| self.check_gettable_as(function, d, k))
+            {
+                return status;
+            }
+        }
+        if let Err(status) = self.up_to_date(function) {
+            return status;
+        }
+        for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            let (d, element) = match self.fmi2_resolve(function, *vr, T::TYPE) {
+                Ok(found) => found,
+                Err(status) => return status,
+            };
+            let value = match element {
+                Some(k) => self.sim.model.get_element(d.value_reference, k),
+                None if d.causality == Causality::Independent => Some(Value::Real(self.sim.time)),
+                None => self.sim.model.get(*vr),
+            };
+            match value.and_then(T::from_value) {
+                Some(v) => *slot = v,
+                None => return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE)),
+            }
+        }
+        OK
+    }
+
+    /// [`Instance::set_value_list`] of an FMI 2.0 call that names array elements: all or none.
+    #[cold]
+    fn set_fmi2_elements(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        let mut parameter_changed = false;
+        for (vr, value) in vrs.iter().zip(values) {
+            let (decl, element) = match self.fmi2_resolve(function, *vr, value.api_type()) {
+                Ok(found) => found,
+                Err(status) => return status,
+            };
+            if let Err(status) = self.check_settable_as(function, decl, element) {
+                return status;
+            }
+            let (name, element_vr) = Self::name_and_vr(decl, element);
+            match refusal_as(&self.sim.model, decl, *value, &name, element_vr) {
+                None => {}
+                Some(Refusal::Rule(why)) => {
+                    return self.error(&format!("{function}: {why}; refused, value unchanged"));
+                }
+                Some(Refusal::Model(why)) => return self.error(&format!("{function}: {why}")),
+            }
+            parameter_changed |= decl.causality == Causality::Parameter;
+        }
+        let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
+        for (vr, value) in vrs.iter().zip(values) {
+            match M::DESCRIPTION.fmi2_element(*vr) {
+                Some((i, k)) => {
+                    self.sim
+                        .model
+                        .set_element(M::DESCRIPTION.variables[i].value_reference, k, *value);
+                }
+                None => {
+                    self.sim.model.set(*vr, *value);
+                }
+            }
+        }
+        self.after_set(function, previous)
     }
 
     /// [`Instance::get_values`] of a model with array variables: each array's elements in
@@ -575,14 +682,29 @@ impl<M: CoSimulation> Instance<M> {
     /// approx. A calculated variable is computed from the start values during initialization,
     /// so reading it here is refused rather than answered with a number that means nothing.
     fn check_gettable(&self, function: &str, decl: &Variable) -> Outcome {
+        self.check_gettable_as(function, decl, None)
+    }
+
+    /// [`Instance::check_gettable`] of a variable, or of element `k` of an array in FMI 2.0
+    /// (the message names the element and its value reference).
+    fn check_gettable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
         if self.sim.state != State::Instantiated || decl.has_start() {
             return Ok(());
         }
+        let (name, vr) = Self::name_and_vr(decl, element);
         Err(self.error(&format!(
-            "{function}: '{}' (vr {}, causality {:?}, initial calculated) has no value before initialization: \
+            "{function}: '{name}' (vr {vr}, causality {:?}, initial calculated) has no value before initialization: \
              in state Instantiated only start values can be read (inputs, initial exact or approx)",
-            decl.name, decl.value_reference, decl.causality
+            decl.causality
         )))
+    }
+
+    /// A variable's name and value reference, or those FMI 2.0 gives element `k` of an array.
+    fn name_and_vr(decl: &Variable, element: Option<usize>) -> (std::borrow::Cow<'static, str>, u32) {
+        match element {
+            Some(k) => (decl.element_name(k).into(), decl.value_reference + k as u32),
+            None => (decl.name.into(), decl.value_reference),
+        }
     }
 
     /// Whether the standard lets this variable be set in the current state (FMI 2.0, 4.2.4).
@@ -610,12 +732,18 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     fn check_settable(&self, function: &str, decl: &Variable) -> Outcome {
+        self.check_settable_as(function, decl, None)
+    }
+
+    /// [`Instance::check_settable`] of a variable, or of element `k` of an array in FMI 2.0.
+    fn check_settable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
         if self.settable(decl) {
             return Ok(());
         }
+        let (name, vr) = Self::name_and_vr(decl, element);
         Err(self.error(&format!(
-            "{function}: '{}' (vr {}, causality {:?}, variability {:?}) cannot be set in state {:?}",
-            decl.name, decl.value_reference, decl.causality, decl.variability, self.sim.state
+            "{function}: '{name}' (vr {vr}, causality {:?}, variability {:?}) cannot be set in state {:?}",
+            decl.causality, decl.variability, self.sim.state
         )))
     }
 
@@ -631,7 +759,7 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
-        if !any_array::<M>(vrs) {
+        if !any_array::<M>(vrs) && !any_fmi2_element::<M>(self.version, vrs) {
             // One value per value reference, checked in place: no allocation on the hot path
             // (fmi2SetReal before every step; tests/hot_path_does_not_allocate.rs).
             let mut parameter_changed = false;
@@ -665,6 +793,9 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
     /// reaches Int64 and Enumeration variables in one call): all or none.
     pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        if any_fmi2_element::<M>(self.version, vrs) {
+            return self.set_fmi2_elements(function, vrs, values);
+        }
         if any_array::<M>(vrs) {
             return self.set_with_arrays(function, vrs, values);
         }
@@ -979,7 +1110,11 @@ enum Refusal {
 /// from a serialized state: a finite number, within the declared bounds, an item of its
 /// enumeration, accepted by the model's own check (with the other values of `model`).
 fn refusal<M: CoSimulation>(model: &M, decl: &Variable, value: Value) -> Option<Refusal> {
-    let (name, vr) = (decl.name, decl.value_reference);
+    refusal_as(model, decl, value, decl.name, decl.value_reference)
+}
+
+/// [`refusal`], the messages naming the variable `name` (vr `vr`): FMI 2.0's element of an array.
+fn refusal_as<M: CoSimulation>(model: &M, decl: &Variable, value: Value, name: &str, vr: u32) -> Option<Refusal> {
     if !value.is_finite() {
         return Some(Refusal::Rule(format!(
             "{} for '{name}' (vr {vr}) is not a finite number",

@@ -114,14 +114,20 @@ def test_fmi3_description_says_3_0_with_both_interfaces_and_the_2_0_variables(na
     assert me.get("modelIdentifier") == cs.get("modelIdentifier") == name
     assert f"binaries/x86_64-linux/{name}.so" in files, files
     assert not any(f.startswith("binaries/linux64/") for f in files), files
-    # The same variables as the 2.0 twin, under their 3.0 type names, plus the independent time
-    # and what FMI 2.0 cannot express (arrays: the Controller's K; the types 2.0 lacks).
+    # The same variables as the 2.0 twin, under their 3.0 type names, plus the independent time;
+    # an array (the Controller's K) is one variable in 3.0 and its elements K[1,1] .. in 2.0.
     old, _ = description(fmu(name))
     v2 = {v.get("name"): (v.get("valueReference"), TYPE_IN_3[next(iter(v)).tag]) for v in old.iter("ScalarVariable")}
     variables = list(root.find("ModelVariables"))
-    only_3 = {v.get("name") for v in variables if v.find("Dimension") is not None or v.tag not in TYPE_IN_3.values()}
-    assert only_3 == ({"K"} if name == "Controller" else set()), only_3
-    v3 = {v.get("name"): (v.get("valueReference"), v.tag) for v in variables if v.get("name") not in only_3}
+    arrays = {v.get("name"): v for v in variables if v.find("Dimension") is not None}
+    assert set(arrays) == ({"K"} if name == "Controller" else set()), set(arrays)
+    for a, v in arrays.items():
+        rows, cols = (int(d.get("start")) for d in v.findall("Dimension"))
+        first = int(v.get("valueReference"))
+        elements = {f"{a}[{i},{j}]": (str(first + (i - 1) * cols + j - 1), v.tag)
+                    for i in range(1, rows + 1) for j in range(1, cols + 1)}
+        assert {n: v2.pop(n) for n in elements} == elements
+    v3 = {v.get("name"): (v.get("valueReference"), v.tag) for v in variables if v.get("name") not in arrays}
     independent = [v.get("name") for v in variables if v.get("causality") == "independent"]
     assert independent == ["time"] and variables[0].get("name") == "time", independent
     del v3["time"]

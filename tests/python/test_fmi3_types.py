@@ -332,9 +332,10 @@ def test_terminals_follow_the_schema_and_name_the_joints_and_the_shaft(name, ter
 
 
 def test_the_controllers_gain_is_a_2_by_4_array_equal_to_its_scalars():
-    """The Controller's K (vr 78, FMI 3.0 only): <Dimension>s 2 and 4 in fmpy's reading of the
+    """The Controller's K (vr 110): <Dimension>s 2 and 4 in fmpy's reading of the 3.0
     description; its 8 values, read with nValues = 8, row-major, equal K11 .. K24; with nValues
-    = 7 the read is refused; the FMI 2.0 Controller has no K."""
+    = 7 the read is refused. The FMI 2.0 Controller lists it as the scalars K[1,1] .. K[2,4]
+    (the standard's structured naming, value references 110 .. 117), equal to K11 .. K24 too."""
     path = fmu3("Controller")
     md = read_model_description(path, validate=True)
     k = next(v for v in md.modelVariables if v.name == "K")
@@ -345,11 +346,33 @@ def test_the_controllers_gain_is_a_2_by_4_array_equal_to_its_scalars():
         inst = instance(md, unzipdir, "cs")
         vr = vrs(md)
         scalars = inst.getFloat64([vr[f"K{i}{j}"] for i in (1, 2) for j in (1, 2, 3, 4)])
-        assert inst.getFloat64([78], nValues=8) == scalars
+        assert inst.getFloat64([110], nValues=8) == scalars
         assert abs(scalars[7] - 0.9957) < 5e-4  # the paper's K(2,4)
         with pytest.raises(FMICallException):
-            inst.getFloat64([78], nValues=7)
+            inst.getFloat64([110], nValues=7)
         inst.freeInstance()
     finally:
         shutil.rmtree(unzipdir, ignore_errors=True)
-    assert "K" not in {v.name for v in read_model_description(fmu("Controller")).modelVariables}
+
+    md2 = read_model_description(fmu("Controller"), validate=True)
+    assert md2.variableNamingConvention == "structured"
+    elements = [v for v in md2.modelVariables if v.name.startswith("K[")]
+    assert [(v.name, v.valueReference) for v in elements] == [
+        (f"K[{i},{j}]", 110 + 4 * (i - 1) + (j - 1)) for i in (1, 2) for j in (1, 2, 3, 4)
+    ]
+    assert all(v.causality == "calculatedParameter" and v.type == "Real" for v in elements)
+    unzipdir = extract(fmu("Controller"))
+    try:
+        slave = FMU2Slave(guid=md2.guid, unzipDirectory=unzipdir,
+                          modelIdentifier=md2.coSimulation.modelIdentifier, instanceName="k2")
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.exitInitializationMode()
+        vr2 = {v.name: v.valueReference for v in md2.modelVariables}
+        scalars2 = slave.getReal([vr2[f"K{i}{j}"] for i in (1, 2) for j in (1, 2, 3, 4)])
+        assert slave.getReal([v.valueReference for v in elements]) == scalars2 == scalars
+        slave.terminate()
+        slave.freeInstance()
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)

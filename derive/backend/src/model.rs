@@ -746,7 +746,7 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
     let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
     for v in vars {
-        if (!v.kind.in_fmi2() || !v.dims.is_empty()) && !v.fmi3_only && model.fmi3_only.is_none() {
+        if !v.kind.in_fmi2() && !v.fmi3_only && model.fmi3_only.is_none() {
             let ty = &v.ty;
             return Err(Error::new(
                 v.span,
@@ -1064,7 +1064,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             (Kind::Binary, None) => quote!(#rt::description::Start::Binary(&[])),
         }
     };
-    let fmi3_only = v.fmi3_only || !v.kind.in_fmi2() || !v.dims.is_empty();
+    let fmi3_only = v.fmi3_only || !v.kind.in_fmi2();
     let max_size = match &v.max_size {
         Some(e) => quote!(::core::option::Option::Some(#e)),
         None => quote!(::core::option::Option::None),
@@ -1507,6 +1507,23 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             })
         });
 
+        // FMI 2.0 has no arrays: an array is its elements there, scalars with the value
+        // references vr, vr + 1, ..; none may be another variable's (checked where the sizes are
+        // known: at compile time, by the compiler).
+        let element_checks = vars.iter().enumerate().filter(|(_, v)| !v.dims.is_empty() && !v.fmi3_only && model.fmi3_only.is_none()).map(|(i, v)| {
+            let message = format!(
+                "'{}' (vr {}) is an array, which FMI 2.0 lists as its elements `{}[i,j]` with the value references {} to {} + (elements - 1): \
+                 one of them is another variable's. Leave that range free (a vr above it), or declare the array `fmi3_only`",
+                v.name, v.vr, v.name, v.vr, v.vr
+            );
+            quote_spanned!(v.span =>
+                const _: () = ::core::assert!(
+                    !<#ident as #rt::Variables>::DESCRIPTION.fmi2_elements_overlap(#i),
+                    #message
+                );
+            )
+        });
+
         let manifest = meta.manifest.as_ref().map(|p| {
             let p = p.display().to_string();
             quote!(
@@ -1699,6 +1716,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
 
             #(#value_checks)*
             #(#enum_checks)*
+            #(#element_checks)*
             #manifest
         })
     };

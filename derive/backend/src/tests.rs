@@ -233,8 +233,9 @@ fn an_unsupported_type_is_one_error_at_the_type() {
         let src = model(&format!("    #[variable(vr = 0, input)]\n    x: {ty},"));
         assert_error(&src, &format!("{ty} is not an FMI type: use f64 (Float64/Real)"), ty, 0);
     }
-    // The FMI 3.0 types and arrays: FMI 3.0 only, by declaration.
-    for ty in ["f32", "u8", "i64", "Vec<u8>", "[f64; 2]"] {
+    // The FMI 3.0 types, arrays of them too: FMI 3.0 only, by declaration. (An array of an
+    // FMI 2.0 type is in both: FMI 2.0 lists its elements.)
+    for ty in ["f32", "u8", "i64", "Vec<u8>", "[u16; 2]"] {
         let src = model(&format!("    #[variable(vr = 0, input)]\n    x: {ty},"));
         assert_error(
             &src,

@@ -238,8 +238,10 @@ pub struct Controller {
     #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K24: f64,
     /// LQR gain K of eq. (14) as one 2 x 4 matrix (row i: the torque M_i; columns alpha1,
-    /// omega1, alpha2, omega2; mixed units, N.m/rad and N.m.s/rad): K11 .. K24 as an FMI 3.0 array
-    #[variable(vr = 78, calculated_parameter, fixed, fmi3_only, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+    /// omega1, alpha2, omega2; mixed units, N.m/rad and N.m.s/rad): K11 .. K24 as one array (FMI
+    /// 3.0: one variable with <Dimension>s 2 and 4; FMI 2.0: the scalars K[1,1] .. K[2,4], value
+    /// references 110 .. 117)
+    #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
     pub K: [[f64; 4]; 2],
     /// Sampled in model exchange: the memory changes at the samples only (time events).
     pub sampled_events: bool,
