@@ -277,13 +277,22 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
     let mut z_now = vec![0.0; n];
     let mut z_end = vec![0.0; n];
     let mut z_probe = vec![0.0; n];
+    // A time the importer asked to return early at, in the intermediate update (FMI 3.0
+    // co-simulation), not reached yet.
+    let mut early_return: Option<f64> = None;
     loop {
         // The time event inside this step, if any; one within round-off of the step's end
         // happens at its end.
         let time_event = clock
             .next_event_time
             .filter(|te| *te <= end || due(*te, end) || (*te - end) <= 1e-9 * h);
-        let target = time_event.map_or(end, |te| te.clamp(now, end));
+        let mut target = time_event.map_or(end, |te| te.clamp(now, end));
+        if let Some(tr) = early_return {
+            target = target.min(tr);
+        }
+        // Set when the step callback stops the integration for an early return (not an event).
+        let mut stopped_early: Option<f64> = None;
+        let intermediate = &mut ctx.intermediate;
         let mut x = model.states();
         indicators(model, now, &x, &mut z_now);
         let mut c = model.continuous::<f64>();
@@ -345,7 +354,21 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                         Some(s) => Some((s, step.at(s))),
                         None => {
                             z_now.copy_from_slice(&z_end);
-                            None
+                            // An accepted step without an event: the intermediate update. An
+                            // early return the importer asks for ends the integration here
+                            // (at or before this time) or at its time later in the step.
+                            let s_end = step.s0 + step.h;
+                            match intermediate.as_deref_mut().and_then(|f| f(t_end)) {
+                                Some(tr) if tr < end && s_end < target - now => {
+                                    stopped_early = Some(tr);
+                                    Some((s_end, step.end))
+                                }
+                                Some(tr) if tr < end => {
+                                    stopped_early = Some(tr);
+                                    None
+                                }
+                                _ => None,
+                            }
                         }
                     }
                 },
@@ -358,7 +381,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             Ok(None)
         };
         let (reached, state_event) = match outcome {
-            Ok(Some(at)) => (now + at, true),
+            Ok(Some(at)) => (now + at, stopped_early.is_none()),
             Ok(None) => (target, false),
             Err(e) => {
                 let reached = e.time();
@@ -369,7 +392,21 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         };
         model.set_states(&x);
         now = reached;
+        if let Some(tr) = stopped_early {
+            early_return = Some(tr.max(now));
+        }
         let time_event_now = time_event.is_some_and(|te| reached >= te.min(end));
+        if !state_event && !time_event_now && early_return.is_some_and(|tr| now >= tr) && now < end {
+            // The early return the importer asked for in the intermediate update: the step ends
+            // here, at an accepted state (FMI 3.0, 4.2.2).
+            crate::core::instance::evaluate(model, now);
+            clock.returned_early_at = Some(now);
+            if let Some(c) = ctx.events.as_deref_mut() {
+                *c = clock;
+            }
+            ctx.refreshed = true;
+            return Ok(());
+        }
         if (state_event || time_event_now) && ctx.return_at_events {
             // FMI 3.0 event mode with early return: stop here, the event unhandled; the
             // importer enters Event Mode (a time event within round-off of the step's end is at

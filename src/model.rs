@@ -340,6 +340,10 @@ pub struct Context<'a> {
     /// FMI 3.0 event mode with early return: the step stops at the first event and leaves it to
     /// the importer ([`EventClock::stopped_at`]).
     pub(crate) return_at_events: bool,
+    /// FMI 3.0 co-simulation's intermediate update: called at the end of every accepted step of
+    /// the integrator with its time; `Some(t_r)` when the importer asks the step to return
+    /// early at `t_r` ([`EventClock::returned_early_at`]).
+    pub(crate) intermediate: Option<&'a mut (dyn FnMut(f64) -> Option<f64> + 'static)>,
 }
 
 /// The runtime's part of a model's events, kept in the FMU state: the time event the model asked
@@ -358,6 +362,10 @@ pub struct EventClock {
     /// mode with early return); taken by the runtime after the step.
     #[serde(skip)]
     pub stopped_at: Option<f64>,
+    /// The step returned early here, as the importer asked in its intermediate-update callback
+    /// (FMI 3.0 co-simulation); taken by the runtime after the step.
+    #[serde(skip)]
+    pub returned_early_at: Option<f64>,
 }
 
 impl Context<'_> {
@@ -374,6 +382,7 @@ impl Context<'_> {
             model_exchange: false,
             events: None,
             return_at_events: false,
+            intermediate: None,
         }
     }
 
@@ -396,6 +405,7 @@ impl Context<'_> {
             model_exchange,
             events: None,
             return_at_events: false,
+            intermediate: None,
         }
     }
 
@@ -412,6 +422,7 @@ impl Context<'_> {
             model_exchange: false,
             events: None,
             return_at_events: false,
+            intermediate: None,
         }
     }
 
@@ -426,7 +437,10 @@ impl Context<'_> {
     /// event, the model's [`Model::update`] runs (event iteration included), and the
     /// integration restarts from the new state.
     pub fn integrate<M: CoSimulation>(&mut self, model: &mut M, t: f64, h: f64) -> Result<(), StepFailure> {
-        if !M::INDICATORS.is_empty() || self.events.as_ref().is_some_and(|e| e.next_event_time.is_some()) {
+        if !M::INDICATORS.is_empty()
+            || self.events.as_ref().is_some_and(|e| e.next_event_time.is_some())
+            || self.intermediate.is_some()
+        {
             return crate::events::integrate_with_events(self, model, t, h);
         }
         let tol = model.tolerances(self);

@@ -580,9 +580,15 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
                 ("canSerializeFMUState", "true"),
                 ("providesDirectionalDerivatives", "true"),
                 ("providesAdjointDerivatives", "true"),
+                // The runtime's integrator calls the importer's intermediate-update callback at
+                // the end of each accepted internal step (time only: no variable is
+                // intermediateUpdate="true"); with earlyReturnAllowed the importer may ask it
+                // to return early there.
+                ("providesIntermediateUpdate", "true"),
                 // Events are handled inside fmi3DoStep, or with eventModeUsed by the importer
                 // (with earlyReturnAllowed, the step returns at each event).
                 ("mightReturnEarlyFromDoStep", "true"),
+                ("canReturnEarlyAfterIntermediateUpdate", "true"),
                 ("hasEventMode", "true"),
             ],
         )?;
@@ -1126,7 +1132,7 @@ mod tests {
             "{xml}"
         );
         assert!(xml.contains(r#"<ModelExchange modelIdentifier="Lag" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true"/>"#), "{xml}");
-        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" mightReturnEarlyFromDoStep="true" hasEventMode="true"/>"#), "{xml}");
+        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" providesIntermediateUpdate="true" mightReturnEarlyFromDoStep="true" canReturnEarlyAfterIntermediateUpdate="true" hasEventMode="true"/>"#), "{xml}");
         let order = [
             "<ModelExchange ",
             "<CoSimulation ",

@@ -103,6 +103,12 @@ pub struct Instance<M: CoSimulation> {
     /// The last step ended at an event the importer is to handle (fmi3DoStep's
     /// `eventHandlingNeeded`).
     pub step_event: bool,
+    /// FMI 3.0 co-simulation's intermediate update: the importer's callback, called by the
+    /// runtime's integrator at the end of each accepted internal step; `Some(t_r)` when the
+    /// importer asked to return early at `t_r` (only where it may: earlyReturnAllowed).
+    pub intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
+    /// The last step returned early, as the importer asked in the intermediate update.
+    pub returned_early: bool,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -186,6 +192,8 @@ impl<M: CoSimulation> Instance<M> {
             event_mode_used: false,
             early_return_allowed: false,
             step_event: false,
+            intermediate_update: None,
+            returned_early: false,
         }
     }
 
@@ -996,6 +1004,7 @@ impl<M: CoSimulation> Instance<M> {
             model_exchange: self.model_exchange,
             events: Some(&mut self.sim.events),
             return_at_events: self.event_mode_used && self.early_return_allowed,
+            intermediate: self.intermediate_update.as_deref_mut(),
         };
         self.step_event = false;
         let mut outcome = self.sim.model.do_step(t, h, &mut ctx);
@@ -1025,7 +1034,18 @@ impl<M: CoSimulation> Instance<M> {
             self.sim.solver.restart();
         }
         let stopped_at = self.sim.events.stopped_at.take();
+        let returned_early_at = self.sim.events.returned_early_at.take();
+        self.returned_early = false;
         match (outcome, non_finite(&self.sim.model)) {
+            (Ok(()), None) if returned_early_at.is_some() && stopped_at.is_none() => {
+                // The importer asked for it in the intermediate update (FMI 3.0, 4.2.2).
+                let at = returned_early_at.unwrap_or(end).clamp(t, end);
+                self.sim.time = at;
+                self.sim.last_successful_time = at;
+                self.returned_early = at < end;
+                self.event(|| format!("{f}: returning early at t = {at}, as the intermediate update asked"));
+                OK
+            }
             (Ok(()), None) if stopped_at.is_some() => {
                 // FMI 3.0 event mode with early return: the step ends at the event, which the
                 // importer handles in Event Mode.

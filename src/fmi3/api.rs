@@ -56,6 +56,7 @@ unsafe fn instantiate<M: CoSimulation>(
     model_exchange: bool,
     refusal: Option<String>,
     event_mode: (bool, bool),
+    intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
 ) -> fmi3Instance {
     let made = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: NUL-terminated strings from the importer, or NULL.
@@ -98,6 +99,7 @@ unsafe fn instantiate<M: CoSimulation>(
         }
         let mut inst = Instance::<M>::new(&TERMS, logger, own_token, model_exchange);
         (inst.event_mode_used, inst.early_return_allowed) = event_mode;
+        inst.intermediate_update = intermediate_update;
         inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
         inst.event(|| match resources.as_deref().map(|r| (r, resource_dir(r))) {
             Some((_, Some(dir))) if dir.is_dir() => format!("resourcePath is {}", dir.display()),
@@ -139,6 +141,7 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
             true,
             None,
             (false, false),
+            None,
         )
     }
 }
@@ -154,16 +157,53 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     event_mode_used: fmi3Boolean,
     early_return_allowed: fmi3Boolean,
     _required_intermediate_variables: *const fmi3ValueReference,
-    _n_required_intermediate_variables: usize,
+    n_required_intermediate_variables: usize,
     environment: fmi3InstanceEnvironment,
     log_message: fmi3LogMessageCallback,
-    _intermediate_update: fmi3IntermediateUpdateCallback,
+    intermediate_update: fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance {
-    // This FMU provides no intermediate update (providesIntermediateUpdate="false"), so the
-    // required intermediate variables and the callback are never used. With eventModeUsed the
-    // importer handles the events in Event Mode; with earlyReturnAllowed too, fmi3DoStep returns
-    // at each event (hasEventMode="true", mightReturnEarlyFromDoStep="true").
-    let refusal = None;
+    // With eventModeUsed the importer handles the events in Event Mode; with earlyReturnAllowed
+    // too, fmi3DoStep returns at each event (hasEventMode="true", mightReturnEarlyFromDoStep="true").
+    //
+    // Intermediate update (providesIntermediateUpdate="true", canReturnEarlyAfterIntermediateUpdate
+    // ="true"): the runtime's integrator calls the importer's callback at the end of each accepted
+    // internal step, with intermediateStepFinished = true, and neither asks for inputs nor lets the
+    // importer read outputs there (intermediateVariableSetRequested = intermediateVariableGetAllowed
+    // = false: no variable is declared intermediateUpdate="true", as reading one would mean
+    // computing outputs in the middle of fmi3DoStep; a call from inside the callback is refused
+    // as one while another runs). With earlyReturnAllowed the importer may ask the step to return
+    // early (canReturnEarly = true): at the time it names if that is later in the step, else at the
+    // internal step's end it was told. So no required intermediate variable can be honoured.
+    let refusal = (n_required_intermediate_variables > 0).then(|| {
+        format!(
+            "{n_required_intermediate_variables} requiredIntermediateVariables given, but no variable of {} is declared \
+             intermediateUpdate=\"true\" (its intermediate update only reports the time and takes early-return requests)",
+            M::DESCRIPTION.model_identifier
+        )
+    });
+    let can_return_early = early_return_allowed;
+    let intermediate = intermediate_update.map(|callback| {
+        let hook = move |t: f64| -> Option<f64> {
+            let (mut requested, mut at) = (false, t);
+            // SAFETY: the importer's callback with its own environment pointer, as the
+            // standard's signature has it; the two outputs point to locals.
+            unsafe {
+                callback(
+                    environment,
+                    t,
+                    false,
+                    false,
+                    true,
+                    can_return_early,
+                    &mut requested,
+                    &mut at,
+                )
+            };
+            // A time that is no number is no time to return at: return at this step's end.
+            (can_return_early && requested).then_some(if at.is_nan() { t } else { at })
+        };
+        Box::new(hook) as Box<dyn FnMut(f64) -> Option<f64>>
+    });
     // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
     unsafe {
         instantiate::<M>(
@@ -179,6 +219,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
             false,
             refusal,
             (event_mode_used, event_mode_used && early_return_allowed),
+            intermediate,
         )
     }
 }
@@ -1136,7 +1177,7 @@ pub unsafe fn do_step<M: CoSimulation>(
         let status = inst.do_step(current_communication_point, communication_step_size);
         // An event to handle only with event mode and early return (the step then ends at it).
         let end = current_communication_point + communication_step_size;
-        let early = inst.step_event && inst.sim.last_successful_time < end;
+        let early = (inst.step_event || inst.returned_early) && inst.sim.last_successful_time < end;
         // SAFETY: none is NULL (checked above); the contract makes each writable. Written
         // through the raw pointers, which need not be distinct.
         unsafe {

@@ -6,6 +6,7 @@ equal the 2.0 loops, and fmpy's validator must accept every 3.0 FMU. docs/fmi3.m
 measured differences."""
 
 import csv
+import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -284,3 +285,59 @@ if __name__ == "__main__":
             same = all(np.array_equal(new[n], old[n]) for n in names)
             print(f"{system:15} {order:20} {len(old['time']):6} points  max |3.0 - 2.0| = {largest_difference(new, old, names):.3g}"
                   f"{'  (bit-identical)' if same else ''}")
+
+
+def test_intermediate_update_in_fmpy_reports_internal_steps_and_returns_early_where_asked():
+    """FMI 3.0 intermediate update through fmpy's FMU3Slave (its `intermediateUpdate`
+    argument): the Pendulum's integrator tells the callback the end of each accepted internal
+    step, time only (no variable may be read or set there), canReturnEarly with
+    earlyReturnAllowed; asked at the first call to return at t = 0.0375, fmi3DoStep(0, 0.1)
+    returns there with earlyReturn, and the angle equals a step of plain 0.0375 s (to the
+    integrator's tolerance); the next step starts there."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+
+    path = fmu3("Pendulum")
+    md = read_model_description(path)
+    assert md.coSimulation.providesIntermediateUpdate
+    assert md.coSimulation.canReturnEarlyAfterIntermediateUpdate
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipdir = extract(path)
+    calls = []
+    ask = [True]
+
+    def told(env, time, set_requested, get_allowed, finished, can_return_early, requested, at):
+        calls.append((time, set_requested, get_allowed, finished, can_return_early))
+        if ask[0]:
+            requested[0] = True
+            at[0] = 0.0375
+
+    def run(callback, h):
+        slave = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir,
+                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName="iu")
+        slave.instantiate(earlyReturnAllowed=True, intermediateUpdate=callback)
+        slave.setFloat64([vr["alpha1_0"]], [0.1])
+        slave.enterInitializationMode(startTime=0.0)
+        slave.exitInitializationMode()
+        result = slave.doStep(0.0, h)
+        alpha1 = slave.getFloat64([vr["alpha1"]])[0]
+        return slave, result, alpha1
+
+    try:
+        slave, (event, terminate, early, last), alpha1 = run(told, 0.1)
+        assert (event, terminate, early, last) == (False, False, True, 0.0375)
+        assert calls and calls[0][0] <= 0.0375, calls
+        assert all(c[1:] == (False, False, True, True) for c in calls), calls
+        # The next step starts where the early return ended, and the callback sees it too.
+        calls.clear()
+        ask[0] = False
+        assert slave.doStep(0.0375, 0.0625)[2:] == (False, 0.1)
+        assert calls and all(0.0375 < c[0] <= 0.1 for c in calls), calls
+        slave.freeInstance()
+
+        plain, (_, _, early, last), alpha1_plain = run(None, 0.0375)
+        assert (early, last) == (False, 0.0375)
+        assert abs(alpha1 - alpha1_plain) < 1e-9, (alpha1, alpha1_plain)
+        plain.freeInstance()
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)

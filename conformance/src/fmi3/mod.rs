@@ -174,6 +174,12 @@ pub struct LogEntry {
 #[derive(Debug, Default)]
 pub struct LogSink {
     pub entries: Mutex<Vec<LogEntry>>,
+    /// The intermediate-update callback's calls: (intermediateUpdateTime,
+    /// [intermediateVariableSetRequested, intermediateVariableGetAllowed,
+    /// intermediateStepFinished, canReturnEarly]).
+    pub intermediate: Mutex<Vec<(f64, [bool; 4])>>,
+    /// Asks for an early return at `.1` once told a time at or after `.0`.
+    pub early_request: Mutex<Option<(f64, f64)>>,
 }
 
 impl LogSink {
@@ -182,6 +188,48 @@ impl LogSink {
     }
     pub fn take(&self) -> Vec<LogEntry> {
         std::mem::take(&mut *self.entries.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+}
+
+/// The importer's fmi3IntermediateUpdateCallback: records the call into the [`LogSink`] the
+/// environment points to, and asks for the early return it holds.
+///
+/// # Safety
+///
+/// `env` is NULL or points to a live [`LogSink`]; the two outputs are writable (the FMU's).
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn intermediate_update(
+    env: fmi3InstanceEnvironment,
+    time: fmi3Float64,
+    set_requested: fmi3Boolean,
+    get_allowed: fmi3Boolean,
+    finished: fmi3Boolean,
+    can_return_early: fmi3Boolean,
+    early_return_requested: *mut fmi3Boolean,
+    early_return_time: *mut fmi3Float64,
+) {
+    if env.is_null() {
+        return;
+    }
+    // SAFETY: the environment given at instantiation, a live sink.
+    let sink = unsafe { &*(env as *const LogSink) };
+    let lock = |m: &Mutex<Vec<(f64, [bool; 4])>>| {
+        m.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push((time, [set_requested, get_allowed, finished, can_return_early]))
+    };
+    lock(&sink.intermediate);
+    let request = *sink.early_request.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((after, at)) = request
+        && time >= after
+        && !early_return_requested.is_null()
+        && !early_return_time.is_null()
+    {
+        // SAFETY: checked not NULL; the FMU's outputs.
+        unsafe {
+            *early_return_requested = true;
+            *early_return_time = at;
+        }
     }
 }
 
@@ -247,8 +295,27 @@ impl<'a> Inst<'a> {
         Self::try_new_with(fmu, me, name, false)
     }
 
+    /// A co-simulation instance with the intermediate-update callback (the calls and the early
+    /// return requests in its [`LogSink`]), earlyReturnAllowed as given, no event mode.
+    pub fn cs_intermediate_update(fmu: &'a Fmu3, early_return_allowed: bool) -> Inst<'a> {
+        Self::try_new_full(fmu, false, "cs-intermediate", (false, early_return_allowed), true)
+            .unwrap_or_else(|e| panic!("{}: {e}", fmu.id))
+    }
+
     /// `event_mode`: co-simulation with eventModeUsed and earlyReturnAllowed.
     pub fn try_new_with(fmu: &'a Fmu3, me: bool, name: &str, event_mode: bool) -> Result<Inst<'a>, String> {
+        Self::try_new_full(fmu, me, name, (event_mode, event_mode), false)
+    }
+
+    /// (eventModeUsed, earlyReturnAllowed) as given; `intermediate`: with the
+    /// intermediate-update callback.
+    fn try_new_full(
+        fmu: &'a Fmu3,
+        me: bool,
+        name: &str,
+        (event_mode, early_return): (bool, bool),
+        intermediate: bool,
+    ) -> Result<Inst<'a>, String> {
         let sink = Box::<LogSink>::default();
         let name = CString::new(name).unwrap();
         let token = CString::new(fmu.md.token.as_str()).map_err(|e| e.to_string())?;
@@ -278,12 +345,12 @@ impl<'a> Inst<'a> {
                     false,
                     false,
                     event_mode,
-                    event_mode,
+                    early_return,
                     std::ptr::null(),
                     0,
                     sink.env(),
                     Some(log_message),
-                    None,
+                    if intermediate { Some(intermediate_update) } else { None },
                 )
             }
         };

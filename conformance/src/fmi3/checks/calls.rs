@@ -858,3 +858,129 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
     });
     assert_eq!(s, fmi3OK);
 }
+
+/// Intermediate update (FMI 3.0, 4.2.2; `providesIntermediateUpdate`): over ten steps, every
+/// call of the importer's callback names a time inside the step in progress, never earlier than
+/// one it named with intermediateStepFinished, with canReturnEarly only where earlyReturnAllowed;
+/// the outputs equal a run without the callback. With `canReturnEarlyAfterIntermediateUpdate`
+/// and earlyReturnAllowed, asking (from the first call past the step's middle) to return at the
+/// step's three-quarter point ends the step there or at the time the callback was told, with
+/// earlyReturn and that lastSuccessfulTime, and the run goes on from it (five steps ten times as
+/// long, so that there are internal steps to return after).
+pub fn fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_where_asked(fmu: &Fmu3) {
+    let Some(cs) = &fmu.md.cs else {
+        skip_not_declared("<CoSimulation>");
+    };
+    if !cs.provides_intermediate_update {
+        skip_not_declared("providesIntermediateUpdate");
+    }
+    let id = &fmu.id;
+    let h = fmu.step_size();
+    let outputs: Vec<u32> = fmu
+        .md
+        .of_type(Type::Float64)
+        .filter(|v| v.causality == Causality::Output && !v.array)
+        .map(|v| v.vr)
+        .collect();
+    let mut plain = Inst::cs(fmu);
+    let mut told = Inst::cs_intermediate_update(fmu, false);
+    for i in [&plain, &told] {
+        excite(i);
+    }
+    plain.initialize();
+    told.initialize();
+    let mut finished_at = f64::NEG_INFINITY;
+    let mut calls = 0;
+    for n in 0..10 {
+        let t = told.time;
+        let (s, flags, last) = told.do_step(h);
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{id}: fmi3DoStep({t}, {h}) with the callback: {}",
+            told.log_text()
+        );
+        assert_eq!((flags, last), ([0, 0, 0], t + h), "{id}: step {n} with the callback");
+        let (s, _, _) = plain.do_step(h);
+        assert_eq!(s, fmi3OK, "{id}: fmi3DoStep({t}, {h}): {}", plain.log_text());
+        for (time, [_, _, finished, can_return_early]) in told.sink.intermediate.lock().unwrap().drain(..) {
+            calls += 1;
+            assert!(
+                time >= t && time <= t + h,
+                "{id}: intermediateUpdateTime {time} outside the step from {t} by {h}"
+            );
+            assert!(
+                time >= finished_at,
+                "{id}: intermediateUpdateTime {time} before {finished_at}, told earlier with intermediateStepFinished"
+            );
+            if finished {
+                finished_at = time;
+            }
+            assert!(
+                !can_return_early,
+                "{id}: canReturnEarly at {time} without earlyReturnAllowed"
+            );
+        }
+        let (a, b) = (plain.get_f64(&outputs), told.get_f64(&outputs));
+        assert_eq!(a.0, fmi3OK, "{id}: {}", plain.log_text());
+        assert_eq!(b.0, fmi3OK, "{id}: {}", told.log_text());
+        for (k, (x, y)) in a.1.iter().zip(&b.1).enumerate() {
+            assert!(
+                (x - y).abs() <= 1e-12 * x.abs().max(1.0),
+                "{id}: output vr {} at t = {}: {y} with the intermediate update, {x} without",
+                outputs[k],
+                t + h
+            );
+        }
+    }
+    info(format!("{calls} intermediate updates in 10 steps of {h}"));
+    if !cs.can_return_early {
+        limitation("canReturnEarlyAfterIntermediateUpdate is not declared: the early return was not tried");
+        return;
+    }
+    let mut early = Inst::cs_intermediate_update(fmu, true);
+    excite(&early);
+    early.initialize();
+    // Longer steps, so that the integrator takes several internal steps in one.
+    let h = 10.0 * h;
+    let mut returned = 0;
+    for n in 0..5 {
+        let t = early.time;
+        *early.sink.early_request.lock().unwrap() = Some((t + 0.5 * h, t + 0.75 * h));
+        let (s, flags, last) = early.do_step(h);
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{id}: fmi3DoStep({t}, {h}) asked to return early: {}",
+            early.log_text()
+        );
+        let calls: Vec<(f64, [bool; 4])> = early.sink.intermediate.lock().unwrap().drain(..).collect();
+        assert!(
+            calls.iter().all(|c| c.1[3]),
+            "{id}: canReturnEarly false with earlyReturnAllowed: {calls:?}"
+        );
+        let asked = calls.iter().find(|c| c.0 >= t + 0.5 * h).map(|c| c.0);
+        match asked {
+            Some(at) if at < t + h => {
+                let expected = at.max(t + 0.75 * h);
+                assert_eq!(flags[2], 1, "{id}: step {n}: no earlyReturn though asked at {at}");
+                assert!(
+                    (last - expected).abs() <= 1e-12 * expected.abs().max(1.0) || last == at,
+                    "{id}: step {n}: returned at {last}, asked at {at} to return at {}",
+                    t + 0.75 * h
+                );
+                early.time = last;
+                returned += 1;
+            }
+            _ => {
+                assert_eq!(
+                    (flags[2], last),
+                    (0, t + h),
+                    "{id}: step {n}: an early return nobody asked for"
+                );
+            }
+        }
+        *early.sink.early_request.lock().unwrap() = None;
+    }
+    info(format!("{returned} of 5 steps of {h} returned early where asked"));
+}
