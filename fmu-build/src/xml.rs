@@ -321,7 +321,8 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
                 ("needsExecutionTool", "false"),
                 ("canHandleVariableCommunicationStepSize", "true"),
                 ("canInterpolateInputs", "false"),
-                ("maxOutputDerivativeOrder", "0"),
+                // First derivatives of the outputs, exact (dual numbers through the equations).
+                ("maxOutputDerivativeOrder", "1"),
                 ("canRunAsynchronuously", "false"),
                 ("canBeInstantiatedOnlyOncePerProcess", "false"),
                 ("canNotUseMemoryManagementFunctions", "true"),
@@ -580,6 +581,8 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
                 ("canSerializeFMUState", "true"),
                 ("providesDirectionalDerivatives", "true"),
                 ("providesAdjointDerivatives", "true"),
+                // First derivatives of the outputs, exact (dual numbers through the equations).
+                ("maxOutputDerivativeOrder", "1"),
                 // The runtime's integrator calls the importer's intermediate-update callback at
                 // the end of each accepted internal step (time only: no variable is
                 // intermediateUpdate="true"); with earlyReturnAllowed the importer may ask it
@@ -1132,7 +1135,7 @@ mod tests {
             "{xml}"
         );
         assert!(xml.contains(r#"<ModelExchange modelIdentifier="Lag" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true"/>"#), "{xml}");
-        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" providesIntermediateUpdate="true" mightReturnEarlyFromDoStep="true" canReturnEarlyAfterIntermediateUpdate="true" hasEventMode="true"/>"#), "{xml}");
+        assert!(xml.contains(r#"<CoSimulation modelIdentifier="Lag" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="true" canSerializeFMUState="true" providesDirectionalDerivatives="true" providesAdjointDerivatives="true" maxOutputDerivativeOrder="1" providesIntermediateUpdate="true" mightReturnEarlyFromDoStep="true" canReturnEarlyAfterIntermediateUpdate="true" hasEventMode="true"/>"#), "{xml}");
         let order = [
             "<ModelExchange ",
             "<CoSimulation ",

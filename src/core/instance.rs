@@ -1582,6 +1582,70 @@ impl<M: CoSimulation> Instance<M> {
         OK
     }
 
+    /// The first time derivatives of Real outputs at the instance's time
+    /// (fmi2GetRealOutputDerivatives, fmi3GetOutputDerivatives; maxOutputDerivativeOrder = 1):
+    /// exact, from the model's equations in dual numbers, with time moving at rate 1, each
+    /// continuous state at its derivative, and the inputs held (canInterpolateInputs = false:
+    /// they are constant over a step). A discrete output's derivative is 0 (it changes at
+    /// events only). All references are checked before anything is computed.
+    pub fn output_derivatives(&mut self, function: &str, vrs: &[u32], orders: &[i32], out: &mut [f64]) -> Status {
+        use num_dual::Dual64;
+        let mut probe = self.sim.model.continuous::<f64>();
+        for (vr, order) in vrs.iter().zip(orders) {
+            let decl = match self.lookup(function, *vr, VarType::Real) {
+                Ok(d) => d,
+                Err(status) => return status,
+            };
+            if decl.causality != Causality::Output {
+                return self.error(&format!(
+                    "{function}: '{}' (vr {vr}) is a {:?}, not an output: output derivatives are those of outputs",
+                    decl.name, decl.causality
+                ));
+            }
+            if *order != 1 {
+                return self.error(&format!(
+                    "{function}: order {order} for '{}' (vr {vr}): this FMU gives first derivatives only (maxOutputDerivativeOrder = 1)",
+                    decl.name
+                ));
+            }
+            let held = decl.variability == Variability::Discrete;
+            if !held && M::continuous_slot(&mut probe, *vr).is_none() {
+                return self.error(&format!(
+                    "{function}: '{}' (vr {vr}) is computed outside the equations (Model::calculate): it has no derivative",
+                    decl.name
+                ));
+            }
+        }
+        if let Err(status) = self.up_to_date(function) {
+            return status;
+        }
+        let t = self.sim.time;
+        let mut c = self.sim.model.continuous::<f64>();
+        self.sim.model.derivatives(t, &mut c);
+        let x_dot = M::derivatives_of(&c);
+        let mut d = self.sim.model.continuous::<Dual64>();
+        for (vr, rate) in M::STATES.iter().zip(x_dot.as_slice()) {
+            if let Some(slot) = M::continuous_slot(&mut d, *vr) {
+                slot.eps = *rate;
+            }
+        }
+        let t = Dual64::new(t, 1.0);
+        self.sim.model.derivatives(t, &mut d);
+        self.sim.model.outputs(t, &mut d);
+        for (vr, slot) in vrs.iter().zip(out.iter_mut()) {
+            let rate = M::continuous_slot(&mut d, *vr).map_or(0.0, |x| x.eps);
+            if !rate.is_finite() {
+                let name = M::declaration(*vr, VarType::Real).map_or("?", |v| v.name);
+                return self.not_finite(
+                    function,
+                    &format!("the time derivative of '{name}' (vr {vr}) is {rate}"),
+                );
+            }
+            *slot = rate;
+        }
+        OK
+    }
+
     /// fmi2GetDirectionalDerivative: dv_unknown = (d unknowns / d knowns) dv_known, exact, by
     /// running the equations once on dual numbers seeded with dv_known. Knowns: the
     /// continuous states (model exchange) and the Real inputs; unknowns: what the equations

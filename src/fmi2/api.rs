@@ -455,20 +455,26 @@ pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr:
     )
 }
 
-pub unsafe fn get_real_output_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
+/// # Safety
+/// `c` is NULL or a live instance of this library; `vr`, `order` and `value` NULL or `nvr`
+/// long, `value` writable.
+pub unsafe fn get_real_output_derivatives<M: CoSimulation>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2GetRealOutputDerivatives";
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(
-        component,
-        Call::GetRealOutputDerivatives,
-        "fmi2GetRealOutputDerivatives",
-        |inst| {
-            if nvr == 0 {
-                return fmi2OK;
-            }
-            inst.error("fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=\"0\")")
-        },
-    )
+    with_instance(component, Call::GetRealOutputDerivatives, F, |inst| {
+        // SAFETY: the arrays are NULL or nvr long (this function's contract).
+        match unsafe { (slice(vr, nvr), slice(order, nvr), slice_mut(value, nvr)) } {
+            (Some(vrs), Some(orders), Some(out)) => inst.output_derivatives(F, vrs, orders, out),
+            _ => inst.error(&format!("{F}: vr, order or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 pub unsafe fn do_step<M: CoSimulation>(

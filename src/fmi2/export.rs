@@ -258,12 +258,12 @@ macro_rules! export_fmi2 {
                     api::set_real_input_derivatives::<__RustfmuModel>(c, nvr);
                 fmi2GetRealOutputDerivatives(
                     c: fmi2Component,
-                    _vr: *const fmi2ValueReference,
+                    vr: *const fmi2ValueReference,
                     nvr: usize,
-                    _order: *const fmi2Integer,
-                    _value: *mut fmi2Real,
+                    order: *const fmi2Integer,
+                    value: *mut fmi2Real,
                 ) -> fmi2Status =>
-                    api::get_real_output_derivatives::<__RustfmuModel>(c, nvr);
+                    api::get_real_output_derivatives::<__RustfmuModel>(c, vr, nvr, order, value);
                 fmi2DoStep(
                     c: fmi2Component,
                     currentCommunicationPoint: fmi2Real,

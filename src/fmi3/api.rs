@@ -1141,13 +1141,19 @@ pub unsafe fn get_output_derivatives<M: CoSimulation>(
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
     with_instance(component, Call::GetRealOutputDerivatives, F, |inst| {
-        if nvr == 0 && n_values == 0 {
-            return fmi3OK;
+        // The outputs of the equations are scalars: one value per value reference.
+        if n_values != nvr {
+            return inst.error(&format!(
+                "{F}: nValues = {n_values} for {nvr} value references: the outputs with derivatives are scalars, one value each"
+            ));
         }
-        let _ = (vr, orders, values);
-        inst.error(&format!(
-            "{F}: not provided (maxOutputDerivativeOrder = 0: this FMU computes no output derivatives)"
-        ))
+        // SAFETY: the arrays are NULL or nvr long (this function's contract).
+        match unsafe { (slice(vr, nvr), slice(orders, nvr), slice_mut(values, nvr)) } {
+            (Some(vrs), Some(orders), Some(out)) => inst.output_derivatives(F, vrs, orders, out),
+            _ => inst.error(&format!(
+                "{F}: valueReferences, orders or values is NULL with nValueReferences = {nvr}"
+            )),
+        }
     })
 }
 

@@ -341,3 +341,56 @@ def test_intermediate_update_in_fmpy_reports_internal_steps_and_returns_early_wh
         plain.freeInstance()
     finally:
         shutil.rmtree(unzipdir, ignore_errors=True)
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_pendulums_output_derivatives_are_its_equations(version):
+    """fmi2GetRealOutputDerivatives / fmi3GetOutputDerivatives (maxOutputDerivativeOrder = 1),
+    through fmpy after 0.25 s of the swinging Pendulum with a torque held: the derivatives of the
+    angle and rate outputs are the FMU's own der(..) values bit for bit (the states' rates), the
+    joint's position moves as l1 cos(alpha1) omega1, and the energy changes by the power of the
+    torques on the generalized coordinates of eqs. (6)-(7), M1 omega1 + M2 omega2 (no friction)."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi3 import FMU3Slave
+
+    path = fmu("Pendulum") if version == 2 else fmu3("Pendulum")
+    md = read_model_description(path)
+    assert int(md.coSimulation.maxOutputDerivativeOrder) == 1
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzipdir = extract(path)
+    try:
+        cls = FMU2Slave if version == 2 else FMU3Slave
+        slave = cls(guid=md.guid, unzipDirectory=unzipdir,
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="od")
+        slave.instantiate()
+        get = slave.getReal if version == 2 else slave.getFloat64
+        set_ = slave.setReal if version == 2 else slave.setFloat64
+        set_([vr["alpha1_0"], vr["alpha2_0"]], [0.3, -0.2])
+        if version == 2:
+            slave.setupExperiment(startTime=0.0)
+            slave.enterInitializationMode()
+        else:
+            slave.enterInitializationMode(startTime=0.0)
+        slave.exitInitializationMode()
+        set_([vr["M1"], vr["M2"]], [0.05, -0.02])
+        t = 0.0
+        for _ in range(25):
+            slave.doStep(t, 0.01)
+            t += 0.01
+        outputs = ["alpha1", "omega1", "alpha2", "omega2", "x1", "energy"]
+        refs = [vr[n] for n in outputs]
+        if version == 2:
+            d = slave.getRealOutputDerivatives(refs, [1] * len(refs))
+        else:
+            d = slave.getOutputDerivatives(refs, [1] * len(refs))
+        d = dict(zip(outputs, d))
+        der = get([vr[f"der({n})"] for n in ("alpha1", "omega1", "alpha2", "omega2")])
+        assert [d["alpha1"], d["omega1"], d["alpha2"], d["omega2"]] == der
+        a1, w1, w2, l1 = get([vr["alpha1"], vr["omega1"], vr["omega2"], vr["l1"]])
+        assert abs(d["x1"] - l1 * np.cos(a1) * w1) < 1e-14
+        assert abs(d["energy"] - (0.05 * w1 + -0.02 * w2)) < 1e-12, d["energy"]
+        slave.terminate()
+        slave.freeInstance()
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)

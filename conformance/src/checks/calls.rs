@@ -10,7 +10,7 @@
 
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, excitation, excite, run, run_on, status_name, step_size};
-use crate::outcome::{convention, info, limitation};
+use crate::outcome::{convention, info, limitation, skip_not_declared};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State, name};
 use crate::{Fmu, Type};
@@ -1130,4 +1130,114 @@ pub fn each_instance_logs_to_its_own_component_environment(fmu: &Fmu) {
     let (la, lb) = (a.log(), b.log());
     assert!(a.says(&la, fmi2Error, &["= 1"]), "{}: {la:?}", fmu.id);
     assert!(b.says(&lb, fmi2Error, &["= 2"]), "{}: {lb:?}", fmu.id);
+}
+
+/// How far a declared output derivative may be from the finite differences of the output: the
+/// second-order one-sided difference (4 y(t+d) - y(t+2d) - 3 y(t)) / 2d, whose error is of order
+/// d^2, against the derivative, relative to their size; where the first-order differences over d
+/// and 2d disagree by more than a tenth (an event, a kink) the point says nothing and is skipped.
+/// `None`: agrees or skipped (the bool says skipped); `Some(message)`: disagrees.
+pub(crate) fn output_derivative_disagrees(y: [f64; 3], d: f64, dy: f64) -> (bool, Option<String>) {
+    let (fd1, fd2) = ((y[1] - y[0]) / d, (y[2] - y[0]) / (2.0 * d));
+    if (fd1 - fd2).abs() > 0.1 * fd1.abs().max(fd2.abs()) + 1e-9 {
+        return (true, None);
+    }
+    let estimate = (4.0 * y[1] - y[2] - 3.0 * y[0]) / (2.0 * d);
+    // Relative 1e-3, and what an integrator's round-off of 1e-8 in the output makes of a
+    // difference over d.
+    let tolerance = 1e-3 * dy.abs().max(estimate.abs()) + 1e-8 * y[0].abs().max(1.0) / d;
+    if (estimate - dy).abs() <= tolerance {
+        (false, None)
+    } else {
+        (
+            false,
+            Some(format!(
+                "derivative {dy}, finite differences {estimate} (first order {fd1}, {fd2})"
+            )),
+        )
+    }
+}
+
+/// fmi2GetRealOutputDerivatives with `maxOutputDerivativeOrder` >= 1: at three communication
+/// points the first derivative of every continuous Real output agrees with the output's finite
+/// differences over the next two steps of d = a tenth of the step size (inputs held, as the FMU
+/// holds them);
+/// order 0 and orders beyond `maxOutputDerivativeOrder` are refused.
+pub fn output_derivatives_agree_with_finite_differences_of_the_outputs(fmu: &Fmu) {
+    let order = fmu.md.cs.as_ref().map_or(0, |cs| cs.max_output_derivative_order);
+    if order == 0 {
+        skip_not_declared("maxOutputDerivativeOrder >= 1");
+    }
+    let outputs: Vec<u32> = fmu
+        .md
+        .of_type(Type::Real)
+        .filter(|v| v.causality == Causality::Output && v.variability == Variability::Continuous)
+        .map(|v| v.vr)
+        .collect();
+    if outputs.is_empty() {
+        skip_not_declared("a continuous Real output");
+    }
+    let id = &fmu.id;
+    // The points a step apart; the differences over a tenth of it (their error falls with its
+    // square).
+    let (h, d) = (step_size(fmu), step_size(fmu) / 10.0);
+    let mut inst = Instance::new(fmu);
+    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
+    assert_eq!(inst.set_real(&vrs, &vals), fmi2OK);
+    inst.initialize();
+    let api = &fmu.api;
+    let derivatives = |inst: &Instance, orders: &[i32]| {
+        let mut out = vec![f64::NAN; outputs.len()];
+        // SAFETY: a live instance; arrays of outputs.len() elements.
+        let s = unsafe {
+            (api.get_real_output_derivatives)(
+                inst.c,
+                outputs.as_ptr(),
+                outputs.len(),
+                orders.as_ptr(),
+                out.as_mut_ptr(),
+            )
+        };
+        (s, out)
+    };
+    let (mut compared, mut skipped) = (0, 0);
+    for point in 0..3 {
+        for _ in 0..point * 2 {
+            assert_eq!(inst.step(h), fmi2OK, "{id}: {}", inst.log_text());
+        }
+        let t = inst.time;
+        let (s, dy) = derivatives(&inst, &vec![1; outputs.len()]);
+        assert_eq!(
+            s,
+            fmi2OK,
+            "{id}: fmi2GetRealOutputDerivatives at t = {t}: {}",
+            inst.log_text()
+        );
+        let mut samples: Vec<Vec<f64>> = Vec::with_capacity(3);
+        for k in 0..3 {
+            if k > 0 {
+                assert_eq!(inst.step(d), fmi2OK, "{id}: {}", inst.log_text());
+            }
+            let (s, v) = inst.get_real(&outputs);
+            assert_eq!(s, fmi2OK, "{id}: {}", inst.log_text());
+            samples.push(v);
+        }
+        for (j, vr) in outputs.iter().enumerate() {
+            match output_derivative_disagrees([samples[0][j], samples[1][j], samples[2][j]], d, dy[j]) {
+                (true, _) => skipped += 1,
+                (false, None) => compared += 1,
+                (false, Some(why)) => panic!("{id}: output vr {vr} at t = {t}: {why}"),
+            }
+        }
+    }
+    for bad in [0, order as i32 + 1] {
+        let (s, _) = derivatives(&inst, &vec![bad; outputs.len()]);
+        assert_ne!(
+            s, fmi2OK,
+            "{id}: fmi2GetRealOutputDerivatives of order {bad} answered fmi2OK"
+        );
+    }
+    info(format!(
+        "{compared} output derivatives agree with finite differences (step {d}); {skipped} points skipped (not smooth there)"
+    ));
 }

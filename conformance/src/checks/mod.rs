@@ -160,6 +160,7 @@ registry! {
             set_debug_logging_refuses_unknown_categories_and_null_arrays,
             a_percent_sign_in_a_message_reaches_the_logger_verbatim,
             each_instance_logs_to_its_own_component_environment,
+            output_derivatives_agree_with_finite_differences_of_the_outputs,
         };
         StateMachine: state_machine::{
             every_function_in_every_state_answers_as_the_standard_says,

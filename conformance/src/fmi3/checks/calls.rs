@@ -900,6 +900,10 @@ pub fn fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_wh
             "{id}: fmi3DoStep({t}, {h}) with the callback: {}",
             told.log_text()
         );
+        if flags[1] == 1 {
+            info(format!("the model ended the simulation at t = {last}"));
+            break;
+        }
         assert_eq!((flags, last), ([0, 0, 0], t + h), "{id}: step {n} with the callback");
         let (s, _, _) = plain.do_step(h);
         assert_eq!(s, fmi3OK, "{id}: fmi3DoStep({t}, {h}): {}", plain.log_text());
@@ -954,6 +958,10 @@ pub fn fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_wh
             "{id}: fmi3DoStep({t}, {h}) asked to return early: {}",
             early.log_text()
         );
+        if flags[1] == 1 {
+            info(format!("the model ended the simulation at t = {last}"));
+            break;
+        }
         let calls: Vec<(f64, [bool; 4])> = early.sink.intermediate.lock().unwrap().drain(..).collect();
         assert!(
             calls.iter().all(|c| c.1[3]),
@@ -983,4 +991,89 @@ pub fn fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_wh
         *early.sink.early_request.lock().unwrap() = None;
     }
     info(format!("{returned} of 5 steps of {h} returned early where asked"));
+}
+
+/// fmi3GetOutputDerivatives with `maxOutputDerivativeOrder` >= 1: as the FMI 2.0 check
+/// (`output_derivatives_agree_with_finite_differences_of_the_outputs`): at three communication
+/// points the first derivative of every continuous Float64 output agrees with the output's
+/// finite differences over two steps of a tenth of the step size; order 0 and orders beyond
+/// `maxOutputDerivativeOrder` are refused.
+pub fn fmi3_output_derivatives_agree_with_finite_differences_of_the_outputs(fmu: &Fmu3) {
+    let Some(cs) = &fmu.md.cs else {
+        skip_not_declared("<CoSimulation>");
+    };
+    let order = cs.max_output_derivative_order;
+    if order == 0 {
+        skip_not_declared("maxOutputDerivativeOrder >= 1");
+    }
+    let outputs: Vec<u32> = fmu
+        .md
+        .of_type(Type::Float64)
+        .filter(|v| v.causality == Causality::Output && v.variability == Variability::Continuous && !v.array)
+        .map(|v| v.vr)
+        .collect();
+    if outputs.is_empty() {
+        skip_not_declared("a continuous Float64 output");
+    }
+    let id = &fmu.id;
+    let (h, d) = (fmu.step_size(), fmu.step_size() / 10.0);
+    let mut i = Inst::cs(fmu);
+    excite(&i);
+    i.initialize();
+    let api = i.api();
+    let derivatives = |i: &Inst, orders: &[i32]| {
+        let mut out = vec![f64::NAN; outputs.len()];
+        let s = i.call("fmi3GetOutputDerivatives", |c| unsafe {
+            (api.get_output_derivatives)(
+                c,
+                outputs.as_ptr(),
+                outputs.len(),
+                orders.as_ptr(),
+                out.as_mut_ptr(),
+                out.len(),
+            )
+        });
+        (s, out)
+    };
+    let (mut compared, mut skipped) = (0, 0);
+    for point in 0..3 {
+        for _ in 0..point * 2 {
+            let (s, flags, _) = i.do_step(h);
+            assert_eq!((s, flags[1]), (fmi3OK, 0), "{id}: {}", i.log_text());
+        }
+        let t = i.time;
+        let (s, dy) = derivatives(&i, &vec![1; outputs.len()]);
+        assert_eq!(s, fmi3OK, "{id}: fmi3GetOutputDerivatives at t = {t}: {}", i.log_text());
+        let mut samples: Vec<Vec<f64>> = Vec::with_capacity(3);
+        for k in 0..3 {
+            if k > 0 {
+                let (s, flags, _) = i.do_step(d);
+                assert_eq!((s, flags[1]), (fmi3OK, 0), "{id}: {}", i.log_text());
+            }
+            let (s, v) = i.get_f64(&outputs);
+            assert_eq!(s, fmi3OK, "{id}: {}", i.log_text());
+            samples.push(v);
+        }
+        for (j, vr) in outputs.iter().enumerate() {
+            match crate::checks::calls::output_derivative_disagrees(
+                [samples[0][j], samples[1][j], samples[2][j]],
+                d,
+                dy[j],
+            ) {
+                (true, _) => skipped += 1,
+                (false, None) => compared += 1,
+                (false, Some(why)) => panic!("{id}: output vr {vr} at t = {t}: {why}"),
+            }
+        }
+    }
+    for bad in [0, order as i32 + 1] {
+        let (s, _) = derivatives(&i, &vec![bad; outputs.len()]);
+        assert_ne!(
+            s, fmi3OK,
+            "{id}: fmi3GetOutputDerivatives of order {bad} answered fmi3OK"
+        );
+    }
+    info(format!(
+        "{compared} output derivatives agree with finite differences (step {d}); {skipped} points skipped (not smooth there)"
+    ));
 }

@@ -45,6 +45,7 @@ crate::checks::registry! {
             fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set,
             fmi3_do_step_output_arguments_are_truthful,
             fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_where_asked,
+            fmi3_output_derivatives_agree_with_finite_differences_of_the_outputs,
             fmi3_set_debug_logging_refuses_unknown_categories,
         };
         Calls: types::{
