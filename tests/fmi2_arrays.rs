@@ -7,7 +7,9 @@
 
 use rustfmu::__private::abi::*;
 use rustfmu::description::{self, FmiVersion, Interfaces, Start, VarType};
-use std::ffi::CString;
+
+#[path = "support/fmi2_host.rs"]
+mod fmi2_host;
 
 mod model {
     use rustfmu::prelude::*;
@@ -122,21 +124,7 @@ fn log() -> &'static rustfmu::testing::Log {
 }
 
 fn instance(name: &std::ffi::CStr) -> fmi2Component {
-    let guid = CString::new(GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
-    let c = unsafe {
-        fmi2Instantiate(
-            name.as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            rustfmu::testing::callbacks(log()),
-            fmi2False,
-            fmi2False,
-        )
-    };
-    assert!(!c.is_null());
-    c
+    fmi2_host::cs_instance(fmi2Instantiate, GUID, name, log())
 }
 
 fn last_error(_instance: &str) -> String {

@@ -7,6 +7,9 @@ use rustfmu::__private::abi::*;
 use rustfmu::__private::abi3 as v3;
 use std::ffi::CString;
 
+#[path = "support/fmi2_host.rs"]
+mod fmi2_host;
+
 mod model {
     use rustfmu::prelude::*;
 
@@ -63,20 +66,9 @@ fn expected(x: f64, u: f64, t: f64) -> f64 {
 
 #[test]
 fn fmi2_output_derivatives_are_those_of_the_equations() {
-    let guid = CString::new(e2::GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked); each array as
-    // long as its count.
+    let c = fmi2_host::cs_instance(e2::fmi2Instantiate, e2::GUID, c"lag", log());
+    // SAFETY: a live instance; each array as long as its count.
     unsafe {
-        let c = e2::fmi2Instantiate(
-            c"lag".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            rustfmu::testing::callbacks(log()),
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(e2::fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(e2::fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(e2::fmi2ExitInitializationMode(c), fmi2OK);

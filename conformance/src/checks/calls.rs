@@ -1177,50 +1177,80 @@ pub fn output_derivatives_agree_with_finite_differences_of_the_outputs(fmu: &Fmu
     if outputs.is_empty() {
         skip_not_declared("a continuous Real output");
     }
-    let id = &fmu.id;
-    // The points a step apart; the differences over a tenth of it (their error falls with its
-    // square).
-    let (h, d) = (step_size(fmu), step_size(fmu) / 10.0);
     let mut inst = Instance::new(fmu);
     let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(fmu).into_iter().unzip();
     assert_eq!(inst.set_real(&vrs, &vals), fmi2OK);
     inst.initialize();
-    let api = &fmu.api;
-    let derivatives = |inst: &Instance, orders: &[i32]| {
-        let mut out = vec![f64::NAN; outputs.len()];
-        // SAFETY: a live instance; arrays of outputs.len() elements.
+    compare_output_derivatives(&mut inst, &fmu.id, &outputs, step_size(fmu), order);
+}
+
+/// An instance whose output derivatives [`compare_output_derivatives`] checks (FMI 2.0 and
+/// 3.0 alike).
+pub(crate) trait OutputDerivatives {
+    fn now(&self) -> f64;
+    /// A step of `h` that must succeed (the message says where it did not).
+    fn step_ok(&mut self, h: f64);
+    fn outputs(&mut self, vrs: &[u32]) -> Vec<f64>;
+    /// The output derivatives of `orders`; `Err(message)` where the FMU refused.
+    fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String>;
+}
+
+impl OutputDerivatives for Instance<'_> {
+    fn now(&self) -> f64 {
+        self.time
+    }
+    fn step_ok(&mut self, h: f64) {
+        assert_eq!(self.step(h), fmi2OK, "{}: {}", self.fmu.id, self.log_text());
+    }
+    fn outputs(&mut self, vrs: &[u32]) -> Vec<f64> {
+        let (s, v) = self.get_real(vrs);
+        assert_eq!(s, fmi2OK, "{}: {}", self.fmu.id, self.log_text());
+        v
+    }
+    fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String> {
+        let mut out = vec![f64::NAN; vrs.len()];
+        // SAFETY: a live instance; arrays of vrs.len() elements.
         let s = unsafe {
-            (api.get_real_output_derivatives)(
-                inst.c,
-                outputs.as_ptr(),
-                outputs.len(),
+            (self.fmu.api.get_real_output_derivatives)(
+                self.c,
+                vrs.as_ptr(),
+                vrs.len(),
                 orders.as_ptr(),
                 out.as_mut_ptr(),
             )
         };
-        (s, out)
-    };
+        if s == fmi2OK { Ok(out) } else { Err(self.log_text()) }
+    }
+}
+
+/// What both versions' output-derivative checks do: at three communication points `h` apart
+/// (plus the differences' own steps), the first derivative of each of `outputs` agrees with its
+/// finite differences over two steps of `h / 10` ([`output_derivative_disagrees`]); order 0 and
+/// orders beyond `order` are refused.
+pub(crate) fn compare_output_derivatives(
+    inst: &mut impl OutputDerivatives,
+    id: &str,
+    outputs: &[u32],
+    h: f64,
+    order: u32,
+) {
+    // The differences over a tenth of the step (their error falls with its square).
+    let d = h / 10.0;
     let (mut compared, mut skipped) = (0, 0);
     for point in 0..3 {
         for _ in 0..point * 2 {
-            assert_eq!(inst.step(h), fmi2OK, "{id}: {}", inst.log_text());
+            inst.step_ok(h);
         }
-        let t = inst.time;
-        let (s, dy) = derivatives(&inst, &vec![1; outputs.len()]);
-        assert_eq!(
-            s,
-            fmi2OK,
-            "{id}: fmi2GetRealOutputDerivatives at t = {t}: {}",
-            inst.log_text()
-        );
+        let t = inst.now();
+        let dy = inst
+            .output_derivatives(outputs, &vec![1; outputs.len()])
+            .unwrap_or_else(|log| panic!("{id}: the output derivatives at t = {t} were refused: {log}"));
         let mut samples: Vec<Vec<f64>> = Vec::with_capacity(3);
         for k in 0..3 {
             if k > 0 {
-                assert_eq!(inst.step(d), fmi2OK, "{id}: {}", inst.log_text());
+                inst.step_ok(d);
             }
-            let (s, v) = inst.get_real(&outputs);
-            assert_eq!(s, fmi2OK, "{id}: {}", inst.log_text());
-            samples.push(v);
+            samples.push(inst.outputs(outputs));
         }
         for (j, vr) in outputs.iter().enumerate() {
             match output_derivative_disagrees([samples[0][j], samples[1][j], samples[2][j]], d, dy[j]) {
@@ -1231,10 +1261,9 @@ pub fn output_derivatives_agree_with_finite_differences_of_the_outputs(fmu: &Fmu
         }
     }
     for bad in [0, order as i32 + 1] {
-        let (s, _) = derivatives(&inst, &vec![bad; outputs.len()]);
-        assert_ne!(
-            s, fmi2OK,
-            "{id}: fmi2GetRealOutputDerivatives of order {bad} answered fmi2OK"
+        assert!(
+            inst.output_derivatives(outputs, &vec![bad; outputs.len()]).is_err(),
+            "{id}: output derivatives of order {bad} were answered"
         );
     }
     info(format!(
