@@ -29,6 +29,8 @@ pub enum VarType {
     Int64 = 11,
     UInt64 = 12,
     Binary = 13,
+    /// FMI 3.0 `Clock`: no value of its own; active or not ([`crate::Clock`]).
+    Clock = 14,
 }
 
 impl VarType {
@@ -89,6 +91,7 @@ impl VarType {
             VarType::Int64 => "Int64",
             VarType::UInt64 => "UInt64",
             VarType::Binary => "Binary",
+            VarType::Clock => "Clock",
         }
     }
 
@@ -108,6 +111,7 @@ impl VarType {
             11 => VarType::Int64,
             12 => VarType::UInt64,
             13 => VarType::Binary,
+            14 => VarType::Clock,
             _ => return None,
         })
     }
@@ -269,6 +273,87 @@ pub struct Fmi3Extras {
     /// An array's `<Dimension start="..">`s, outermost first (`[[f64; 4]; 2]`: `[2, 4]`);
     /// empty for a scalar. The values are in row-major order.
     pub dimensions: &'static [u32],
+    /// A Clock's declaration (`<Clock>`'s attributes); `None` for every other variable.
+    pub clock: Option<ClockDecl>,
+    /// A clocked variable's clocks (FMI 3.0 `clocks`), by name: it is set and read while one of
+    /// them is active (and in Initialization Mode). Empty: not clocked.
+    pub clocks: &'static [&'static str],
+}
+
+/// FMI 3.0 `intervalVariability` of a Clock (FMI 3.0, 2.2.9.1). The first five are time-based
+/// (the importer activates them at the times their interval and shift say), `Triggered` ticks
+/// when the importer says so. The discriminants are the codes of the encoded description.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum IntervalVariability {
+    /// Periodic; the interval is `intervalDecimal` and nobody changes it.
+    Constant = 0,
+    /// Periodic; the interval is fixed at initialization (a fixed parameter, or set by the
+    /// importer in Initialization Mode when the description gives a default).
+    Fixed = 1,
+    /// Periodic; the interval may change at events (a tunable parameter, or set by the importer).
+    Tunable = 2,
+    /// Aperiodic: after each tick the model says the interval to the next one.
+    Changing = 3,
+    /// Aperiodic: the model says the time to the next tick whenever it knows it.
+    Countdown = 4,
+    /// Not time-based: ticks when the importer activates it.
+    Triggered = 5,
+}
+
+impl IntervalVariability {
+    /// The attribute's value in the XML.
+    pub const fn text(self) -> &'static str {
+        match self {
+            IntervalVariability::Constant => "constant",
+            IntervalVariability::Fixed => "fixed",
+            IntervalVariability::Tunable => "tunable",
+            IntervalVariability::Changing => "changing",
+            IntervalVariability::Countdown => "countdown",
+            IntervalVariability::Triggered => "triggered",
+        }
+    }
+
+    /// Periodic clocks: constant, fixed, tunable (they have a shift).
+    pub const fn periodic(self) -> bool {
+        matches!(
+            self,
+            IntervalVariability::Constant | IntervalVariability::Fixed | IntervalVariability::Tunable
+        )
+    }
+
+    /// Clocks whose interval the model sets as it runs: changing, countdown.
+    pub const fn model_timed(self) -> bool {
+        matches!(self, IntervalVariability::Changing | IntervalVariability::Countdown)
+    }
+
+    const fn from_code(c: u8) -> Option<IntervalVariability> {
+        Some(match c {
+            0 => IntervalVariability::Constant,
+            1 => IntervalVariability::Fixed,
+            2 => IntervalVariability::Tunable,
+            3 => IntervalVariability::Changing,
+            4 => IntervalVariability::Countdown,
+            5 => IntervalVariability::Triggered,
+            _ => return None,
+        })
+    }
+}
+
+/// A Clock variable's declaration (FMI 3.0 `<Clock>`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClockDecl {
+    pub interval_variability: IntervalVariability,
+    /// `intervalDecimal`: the interval of a constant clock; of a fixed or tunable one, the
+    /// default the importer may set another value for (`fmi3SetIntervalDecimal`).
+    pub interval: Option<f64>,
+    /// A fixed or tunable clock without `interval`: the name of the Float64 parameter whose
+    /// value is its interval (the importer reads it with `fmi3GetIntervalDecimal`); else empty.
+    pub interval_parameter: &'static str,
+    /// `shiftDecimal`: the first tick of a periodic clock is at start time + shift.
+    pub shift: f64,
+    /// `canBeDeactivated`.
+    pub can_be_deactivated: bool,
 }
 
 impl Fmi3Extras {
@@ -277,10 +362,21 @@ impl Fmi3Extras {
         max_size: None,
         mime_type: "",
         dimensions: &[],
+        clock: None,
+        clocks: &[],
     };
 
     const fn is_none(&self) -> bool {
-        !self.only && self.max_size.is_none() && self.mime_type.is_empty() && self.dimensions.is_empty()
+        !self.only
+            && self.max_size.is_none()
+            && self.mime_type.is_empty()
+            && self.dimensions.is_empty()
+            && !self.has_clock_part()
+    }
+
+    /// Whether the variable is a Clock or clocked (the encoding's clocks block).
+    const fn has_clock_part(&self) -> bool {
+        self.clock.is_some() || !self.clocks.is_empty()
     }
 }
 
@@ -333,7 +429,13 @@ impl Variable {
     /// Whether the description carries a `start` value (required for inputs and exact/approx,
     /// forbidden for calculated and the independent variable; [`fmi_standard::has_start`]).
     pub const fn has_start(&self) -> bool {
-        fmi_standard::has_start(self.causality, self.variability, self.initial)
+        !matches!(self.var_type, VarType::Clock)
+            && fmi_standard::has_start(self.causality, self.variability, self.initial)
+    }
+
+    /// Whether the variable is clocked (FMI 3.0 `clocks`).
+    pub const fn is_clocked(&self) -> bool {
+        !self.fmi3.clocks.is_empty()
     }
 }
 
@@ -550,6 +652,19 @@ impl ModelDescription {
         false
     }
 
+    /// Whether some variable is a Clock. (`const`: the clock functions of a model without one
+    /// refuse every call at compile time.)
+    pub const fn has_clocks(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if self.variables[i].fmi3.clock.is_some() {
+                return true;
+            }
+            i += 1;
+        }
+        false
+    }
+
     /// Whether some variable is an array (FMI 3.0 `<Dimension>`s). (`const`: the runtime takes
     /// the scalar-only paths of a model without arrays at compile time.)
     pub const fn has_arrays(&self) -> bool {
@@ -583,10 +698,13 @@ impl ModelDescription {
     /// The unknowns of Initialization Mode (FMI 2.0 `InitialUnknowns`, FMI 3.0
     /// `InitialUnknown`, the same rule in both): outputs, continuous states and their
     /// derivatives whose `initial` is approx or calculated, and every calculated parameter.
+    /// Clocked variables are not among them (FMI 3.0, 2.4.8: they are initialized at their
+    /// clocks' first tick).
     pub fn is_initial_unknown(&self, v: &Variable) -> bool {
-        ((v.causality == Causality::Output || v.derivative_of.is_some() || self.is_state(v))
-            && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
-            || v.causality == Causality::CalculatedParameter
+        let computed = v.causality == Causality::Output || v.derivative_of.is_some() || self.is_state(v);
+        let unknown = (computed && matches!(v.effective_initial(), Some(Initial::Approx | Initial::Calculated)))
+            || v.causality == Causality::CalculatedParameter;
+        unknown && !v.is_clocked()
     }
 
     /// The value references `vr` depends on as `<ModelStructure>` says (FMI 3.0
@@ -1081,6 +1199,45 @@ impl Enc<'_> {
                 i += 1;
             }
         }
+        // The clocks and the clocked variables (FMI 3.0): only where there are some, so the
+        // encodings (and instantiation tokens) of the models without clocks are those before.
+        let mut clocked = 0u32;
+        let mut i = 0;
+        while i < d.variables.len() {
+            if d.variables[i].in_version(version) && d.variables[i].fmi3.has_clock_part() {
+                clocked += 1;
+            }
+            i += 1;
+        }
+        if clocked > 0 {
+            self.u8(CLOCKS_TAG);
+            self.u32(clocked);
+            let (mut i, mut at) = (0, 0u32);
+            while i < d.variables.len() {
+                let v = &d.variables[i];
+                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                    at += v.element_count() as u32;
+                } else if v.in_version(version) {
+                    if v.fmi3.has_clock_part() {
+                        self.u32(at);
+                        match v.fmi3.clock {
+                            None => self.u8(0),
+                            Some(c) => {
+                                self.u8(1);
+                                self.u8(c.interval_variability as u8);
+                                self.opt_f64(c.interval);
+                                self.str(c.interval_parameter);
+                                self.f64(c.shift);
+                                self.u8(c.can_be_deactivated as u8);
+                            }
+                        }
+                        self.names(Some(v.fmi3.clocks));
+                    }
+                    at += 1;
+                }
+                i += 1;
+            }
+        }
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
         if let FmiVersion::V3 = interfaces.version {
@@ -1135,6 +1292,8 @@ const EVENT_INDICATORS_TAG: u8 = 0xE1;
 const FMI3_EXTRAS_TAG: u8 = 0xE2;
 /// Marks the terminals' block (FMI 3.0 encodings only), before the FMI 3.0 declarations.
 const TERMINALS_TAG: u8 = 0xE3;
+/// Marks the block of the clocks and clocked variables, after the FMI 3.0 declarations.
+const CLOCKS_TAG: u8 = 0xE4;
 
 const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
     let mut body = Enc { buf, pos: 0 };
@@ -1564,7 +1723,36 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 max_size,
                 mime_type,
                 dimensions,
+                clock: None,
+                clocks: &[],
             };
+        }
+    }
+    if d.at < d.b.len() && d.b[d.at] == CLOCKS_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let clock = if d.u8()? == 0 {
+                None
+            } else {
+                let c = d.u8()?;
+                let interval_variability = IntervalVariability::from_code(c)
+                    .ok_or_else(|| format!("variable {at}: unknown intervalVariability code {c}"))?;
+                Some(ClockDecl {
+                    interval_variability,
+                    interval: d.opt_f64()?,
+                    interval_parameter: d.str()?,
+                    shift: d.f64()?,
+                    can_be_deactivated: d.u8()? != 0,
+                })
+            };
+            let clocks = d.names()?.unwrap_or(&[]);
+            let v = variables
+                .get_mut(at)
+                .ok_or_else(|| format!("the clocks of variable {at}, beyond the variables"))?;
+            v.fmi3.clock = clock;
+            v.fmi3.clocks = clocks;
         }
     }
     if d.at + 1 == d.b.len() {

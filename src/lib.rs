@@ -49,6 +49,7 @@
 
 extern crate self as rustfmu;
 
+mod clock;
 pub mod description;
 mod events;
 mod model;
@@ -56,6 +57,7 @@ pub mod solver;
 pub mod testing;
 mod value;
 
+pub use clock::Clock;
 pub use events::{Event, MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
 pub use model::{
     CoSimulation, Context, EventClock, Model, Real, Standalone, StateVector, StepFailure, StepView, Variables,
@@ -88,7 +90,7 @@ macro_rules! export_fmu {
 /// Everything a model file needs.
 pub mod prelude {
     pub use crate::description::Variable;
-    pub use crate::{CoSimulation, Context, Event, FmuEnum, Model, Real, StepFailure, Value};
+    pub use crate::{Clock, CoSimulation, Context, Event, FmuEnum, Model, Real, StepFailure, Value};
 }
 
 /// What the macros expand to; not part of the API.

@@ -258,6 +258,16 @@ pub trait Variables: Sized {
     fn set_binary(&mut self, _vr: u32, _value: &[u8]) -> bool {
         false
     }
+    /// The Clock variable `vr` (FMI 3.0).
+    fn clock(&self, _vr: u32) -> Option<&crate::Clock> {
+        None
+    }
+    /// The Clock variable `vr`, to activate or deactivate it.
+    fn clock_mut(&mut self, _vr: u32) -> Option<&mut crate::Clock> {
+        None
+    }
+    /// Deactivates every clock (after the event's update).
+    fn deactivate_clocks(&mut self) {}
     /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the first Real variable
     /// the model computes (output, local, calculated parameter) whose value is not finite.
     /// Generated as one test per such field: the runtime asks after every step.

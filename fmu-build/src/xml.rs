@@ -726,6 +726,37 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
         if let Some(derivative) = &derivative {
             attrs.push(("derivative", derivative));
         }
+        // A clocked variable's clocks, by value reference (FMI 3.0 `clocks`).
+        let clocks = v
+            .fmi3
+            .clocks
+            .iter()
+            .map(|c| {
+                vr_of(c)
+                    .map(|vr| vr.to_string())
+                    .ok_or_else(|| format!("variable '{}': clocked by '{c}', which is not declared", v.name))
+            })
+            .collect::<Result<Vec<_>, String>>()?
+            .join(" ");
+        if !clocks.is_empty() {
+            attrs.push(("clocks", &clocks));
+        }
+        let (interval, shift) = match v.fmi3.clock {
+            Some(c) => (c.interval.map(real_text), (c.shift != 0.0).then(|| real_text(c.shift))),
+            None => (None, None),
+        };
+        if let Some(c) = v.fmi3.clock {
+            attrs.push(("intervalVariability", c.interval_variability.text()));
+            if let Some(i) = &interval {
+                attrs.push(("intervalDecimal", i));
+            }
+            if let Some(s) = &shift {
+                attrs.push(("shiftDecimal", s));
+            }
+            if c.can_be_deactivated {
+                attrs.push(("canBeDeactivated", "true"));
+            }
+        }
         let element = v.var_type.fmi3_name();
         match v.start {
             Start::String(s) if v.has_start() => {

@@ -109,6 +109,10 @@ pub struct Instance<M: CoSimulation> {
     pub intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
     /// The last step returned early, as the importer asked in the intermediate update.
     pub returned_early: bool,
+    /// FMI 3.0 clocks: the tick of the clocks active in this Event Mode was evaluated before
+    /// fmi3UpdateDiscreteStates (a clocked variable was read, or fmi3EvaluateDiscreteStates
+    /// ran): the event round's answers, which fmi3UpdateDiscreteStates then gives.
+    pub evaluated_tick: Option<EventInfo>,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -190,6 +194,7 @@ impl<M: CoSimulation> Instance<M> {
             terms,
             version: terms.version,
             event_mode_used: false,
+            evaluated_tick: None,
             early_return_allowed: false,
             step_event: false,
             intermediate_update: None,
@@ -425,6 +430,7 @@ impl<M: CoSimulation> Instance<M> {
 
     pub fn reset(&mut self) -> Status {
         self.sim = Sim::new();
+        self.evaluated_tick = None;
         self.event(|| "reset: every variable is back at its start value".into());
         OK
     }
@@ -489,6 +495,9 @@ impl<M: CoSimulation> Instance<M> {
             {
                 return status;
             }
+        }
+        if let Err(status) = self.evaluate_tick_for(function, vrs) {
+            return status;
         }
         if let Err(status) = self.up_to_date(function) {
             return status;
@@ -651,7 +660,7 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if let Err(status) = self.up_to_date(f) {
+        if let Err(status) = self.evaluate_tick_for(f, vrs).and_then(|()| self.up_to_date(f)) {
             return status;
         }
         self.strings.clear();
@@ -696,6 +705,9 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::check_gettable`] of a variable, or of element `k` of an array in FMI 2.0
     /// (the message names the element and its value reference).
     fn check_gettable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
+        if M::DESCRIPTION.has_clocks() && decl.is_clocked() {
+            self.clocked_access(function, decl, false)?;
+        }
         if self.sim.state != State::Instantiated || decl.has_start() {
             return Ok(());
         }
@@ -705,6 +717,103 @@ impl<M: CoSimulation> Instance<M> {
              in state Instantiated only start values can be read (inputs, initial exact or approx)",
             decl.causality
         )))
+    }
+
+    /// Whether the Clock named `name` is active.
+    fn clock_active(&self, name: &str) -> bool {
+        M::DESCRIPTION
+            .by_name(name)
+            .and_then(|c| self.sim.model.clock(c.value_reference))
+            .is_some_and(|c| c.is_active())
+    }
+
+    /// Whether some Clock is active.
+    pub fn any_clock_active(&self) -> bool {
+        M::DESCRIPTION
+            .variables
+            .iter()
+            .filter(|v| v.fmi3.clock.is_some())
+            .any(|v| self.sim.model.clock(v.value_reference).is_some_and(|c| c.is_active()))
+    }
+
+    /// FMI 3.0, 2.2.9: "setting and getting of clocked variables is only allowed during Event
+    /// Mode when their respective Clocks are active, and during Initialization Mode irrespective
+    /// of Clock activation status" (and their start values before). A clocked input is set
+    /// before the tick is evaluated: the first read of a clocked variable (or
+    /// fmi3EvaluateDiscreteStates) computes the tick from the inputs set until then.
+    fn clocked_access(&self, function: &str, decl: &Variable, setting: bool) -> Outcome {
+        let clocks = decl.fmi3.clocks;
+        let names = || clocks.iter().map(|c| format!("'{c}'")).collect::<Vec<_>>().join(", ");
+        match self.sim.state {
+            State::Instantiated | State::InitializationMode => Ok(()),
+            State::EventMode if clocks.iter().any(|c| self.clock_active(c)) => {
+                if setting && self.evaluated_tick.is_some() {
+                    return Err(self.error(&format!(
+                        "{function}: '{}' (vr {}) is set after the tick of its clock {} was evaluated (a clocked \
+                         variable was read, or fmi3EvaluateDiscreteStates ran): set the clocked inputs first; refused, \
+                         value unchanged",
+                        decl.name,
+                        decl.value_reference,
+                        names()
+                    )));
+                }
+                Ok(())
+            }
+            state => Err(self.error(&format!(
+                "{function}: '{}' (vr {}) is clocked by {}, which is not active{}: a clocked variable is {} in Event \
+                 Mode while one of its clocks is active (fmi3SetClock), and in Initialization Mode (FMI 3.0, 2.2.9)",
+                decl.name,
+                decl.value_reference,
+                names(),
+                if state == State::EventMode {
+                    String::new()
+                } else {
+                    format!(" (state {})", self.terms.state_name(state))
+                },
+                if setting { "set" } else { "read" }
+            ))),
+        }
+    }
+
+    /// Before a clocked variable is read in Event Mode: the tick of the active clocks, computed
+    /// once (one round of the event iteration, whose answers fmi3UpdateDiscreteStates gives).
+    pub fn evaluate_tick(&mut self, function: &str) -> Outcome {
+        if !M::DESCRIPTION.has_clocks()
+            || self.sim.state != State::EventMode
+            || self.evaluated_tick.is_some()
+            || !self.any_clock_active()
+        {
+            return Ok(());
+        }
+        let mut info = EventInfo::default();
+        match self.event_iteration(function, &mut info, false) {
+            OK => {
+                self.evaluated_tick = Some(info);
+                Ok(())
+            }
+            status => Err(status),
+        }
+    }
+
+    /// [`Instance::evaluate_tick`] when one of `vrs` is a clocked variable.
+    fn evaluate_tick_for(&mut self, function: &str, vrs: &[u32]) -> Outcome {
+        if M::DESCRIPTION.has_clocks()
+            && vrs
+                .iter()
+                .any(|vr| M::variable_index(*vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_clocked()))
+        {
+            self.evaluate_tick(function)?;
+        }
+        Ok(())
+    }
+
+    /// The clocks' activity ends with the event's update (FMI 3.0, 2.2.9: "Any Clock active
+    /// during fmi3UpdateDiscreteStates must be deactivated by the FMU itself"), or with Event Mode.
+    fn end_ticks(&mut self) {
+        if M::DESCRIPTION.has_clocks() {
+            self.sim.model.deactivate_clocks();
+            self.evaluated_tick = None;
+        }
     }
 
     /// A variable's name and value reference, or those FMI 2.0 gives element `k` of an array.
@@ -745,6 +854,9 @@ impl<M: CoSimulation> Instance<M> {
 
     /// [`Instance::check_settable`] of a variable, or of element `k` of an array in FMI 2.0.
     fn check_settable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
+        if M::DESCRIPTION.has_clocks() && decl.is_clocked() {
+            self.clocked_access(function, decl, true)?;
+        }
         if self.settable(decl) {
             return Ok(());
         }
@@ -873,7 +985,10 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if let Err(status) = self.up_to_date(function) {
+        if let Err(status) = self
+            .evaluate_tick_for(function, vrs)
+            .and_then(|()| self.up_to_date(function))
+        {
             return status;
         }
         self.binaries.clear();
@@ -1290,6 +1405,7 @@ impl<M: CoSimulation> Instance<M> {
 
     /// After an FMU state was restored: what the equations computed is recomputed on demand.
     pub fn restored(&mut self) {
+        self.evaluated_tick = None;
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
     }
@@ -1331,6 +1447,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn enter_event_mode(&mut self) -> Status {
+        self.end_ticks();
         self.sim.state = State::EventMode;
         self.trace(|| format!("{} at t = {}", self.terms.name(Function::EnterEventMode), self.sim.time));
         OK
@@ -1341,9 +1458,17 @@ impl<M: CoSimulation> Instance<M> {
     /// `new_discrete_states_needed`.
     pub fn new_discrete_states(&mut self, info: &mut EventInfo) -> Status {
         let f = self.terms.name(Function::NewDiscreteStates);
-        let status = self.event_iteration(f, info, false);
+        let status = match self.evaluated_tick.take() {
+            // The clocks' tick was computed when a clocked variable was read: that round.
+            Some(round) => {
+                *info = round;
+                OK
+            }
+            None => self.event_iteration(f, info, false),
+        };
         if status == OK {
             self.sim.last_successful_time = self.sim.time;
+            self.end_ticks();
         }
         status
     }
@@ -1420,6 +1545,7 @@ impl<M: CoSimulation> Instance<M> {
 
     /// fmi3EnterStepMode (co-simulation with event mode): the events handled, stepping resumes.
     pub fn enter_step_mode(&mut self) -> Status {
+        self.end_ticks();
         self.sim.state = State::StepComplete;
         self.sim.events.initial = false;
         self.sim.solver.restart();
@@ -1428,6 +1554,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn enter_continuous_time_mode(&mut self) -> Status {
+        self.end_ticks();
         self.sim.state = State::ContinuousTimeMode;
         self.sim.events.initial = false;
         OK

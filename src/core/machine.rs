@@ -103,6 +103,17 @@ pub enum Call {
     /// FMI 3.0 only: fmi3EnterStepMode (co-simulation with event mode; the instance checks that
     /// it was made with eventModeUsed).
     EnterStepMode,
+    /// FMI 3.0 only: fmi3SetClock (Event Mode).
+    SetClock,
+    /// FMI 3.0 only: fmi3GetClock.
+    GetClock,
+    /// FMI 3.0 only: fmi3GetIntervalDecimal, fmi3GetShiftDecimal (Initialization and Event Mode).
+    GetInterval,
+    /// FMI 3.0 only: fmi3SetIntervalDecimal (Initialization Mode; a tunable clock's also in
+    /// Event Mode: the instance checks).
+    SetInterval,
+    /// FMI 3.0 only: fmi3SetShiftDecimal (Initialization Mode).
+    SetShift,
 }
 
 impl Call {
@@ -137,7 +148,14 @@ impl Call {
             Call::GetEventIndicators | Call::GetContinuousStates => INIT | EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetDerivatives => EVENT | CONTINUOUS | TERMINATED | ERROR,
             Call::GetNominalsOfContinuousStates => INSTANTIATED | EVENT | CONTINUOUS | TERMINATED | ERROR,
-            Call::GetNumberOf | Call::EvaluateDiscreteStates | Call::EnterStepMode => 0,
+            Call::GetNumberOf
+            | Call::EvaluateDiscreteStates
+            | Call::EnterStepMode
+            | Call::SetClock
+            | Call::GetClock
+            | Call::GetInterval
+            | Call::SetInterval
+            | Call::SetShift => 0,
         }
     }
 
@@ -163,6 +181,13 @@ impl Call {
             Call::GetNumberOf => ANY_BUT_FATAL,
             Call::EvaluateDiscreteStates => EVENT,
             Call::EnterStepMode => EVENT,
+            // Clocks (FMI 3.0, 2.2.9 and its state tables): input clocks are activated in Event
+            // Mode; their intervals and shifts are read in Initialization and Event Mode, set in
+            // Initialization Mode (a tunable clock's interval also in Event Mode).
+            Call::SetClock => EVENT,
+            Call::GetClock => INIT | EVENT,
+            Call::GetInterval | Call::SetInterval => INIT | EVENT,
+            Call::SetShift => INIT,
             // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
             // fmi3GetStatus in FMI 3.0.
             Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,

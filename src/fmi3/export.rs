@@ -538,6 +538,56 @@ macro_rules! export_fmi3 {
                         earlyReturn,
                         lastSuccessfulTime,
                     );
+                // Clocks (a model without any refuses each call with that reason).
+                fmi3SetClock(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const fmi3Clock,
+                ) -> fmi3Status =>
+                    api3::set_clock::<__RustfmuModel>(instance, valueReferences, nValueReferences, values);
+                fmi3GetClock(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut fmi3Clock,
+                ) -> fmi3Status =>
+                    api3::get_clock::<__RustfmuModel>(instance, valueReferences, nValueReferences, values);
+                fmi3GetIntervalDecimal(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    intervals: *mut fmi3Float64,
+                    qualifiers: *mut fmi3IntervalQualifier,
+                ) -> fmi3Status =>
+                    api3::get_interval_decimal::<__RustfmuModel>(
+                        instance,
+                        valueReferences,
+                        nValueReferences,
+                        intervals,
+                        qualifiers,
+                    );
+                fmi3GetShiftDecimal(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    shifts: *mut fmi3Float64,
+                ) -> fmi3Status =>
+                    api3::get_shift_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, shifts);
+                fmi3SetIntervalDecimal(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    intervals: *const fmi3Float64,
+                ) -> fmi3Status =>
+                    api3::set_interval_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, intervals);
+                fmi3SetShiftDecimal(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    shifts: *const fmi3Float64,
+                ) -> fmi3Status =>
+                    api3::set_shift_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, shifts);
             }
             // The getters and setters of the FMI 3.0 types without a 2.0 counterpart.
             $crate::__rustfmu_fmi3_refusals! {
@@ -550,73 +600,42 @@ macro_rules! export_fmi3 {
                 fmi3GetUInt32, fmi3SetUInt32(fmi3UInt32);
                 fmi3GetUInt64, fmi3SetUInt64(fmi3UInt64);
             }
-            const NO_CLOCKS: &str = "this FMU has no clocks";
+            const NO_FRACTIONS: &str = "its clocks have supportsFraction = false: use the Decimal functions";
             const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
             // The functions of the features this FMU does not have, each with the reason.
             $crate::__rustfmu_fmi3_refusals! {
                 not_provided for __RustfmuModel:
-                fmi3GetClock(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _values: *mut fmi3Clock,
-                ) => NO_CLOCKS;
-                fmi3SetClock(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _values: *const fmi3Clock,
-                ) => NO_CLOCKS;
                 fmi3EnterConfigurationMode() => NO_CONFIGURATION;
                 fmi3ExitConfigurationMode() => NO_CONFIGURATION;
-                fmi3GetIntervalDecimal(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _intervals: *mut fmi3Float64,
-                    _qualifiers: *mut fmi3IntervalQualifier,
-                ) => NO_CLOCKS;
                 fmi3GetIntervalFraction(
                     _valueReferences: *const fmi3ValueReference,
                     _nValueReferences: usize,
                     _counters: *mut fmi3UInt64,
                     _resolutions: *mut fmi3UInt64,
                     _qualifiers: *mut fmi3IntervalQualifier,
-                ) => NO_CLOCKS;
-                fmi3GetShiftDecimal(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _shifts: *mut fmi3Float64,
-                ) => NO_CLOCKS;
+                ) => NO_FRACTIONS;
                 fmi3GetShiftFraction(
                     _valueReferences: *const fmi3ValueReference,
                     _nValueReferences: usize,
                     _counters: *mut fmi3UInt64,
                     _resolutions: *mut fmi3UInt64,
-                ) => NO_CLOCKS;
-                fmi3SetIntervalDecimal(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _intervals: *const fmi3Float64,
-                ) => NO_CLOCKS;
+                ) => NO_FRACTIONS;
                 fmi3SetIntervalFraction(
                     _valueReferences: *const fmi3ValueReference,
                     _nValueReferences: usize,
                     _counters: *const fmi3UInt64,
                     _resolutions: *const fmi3UInt64,
-                ) => NO_CLOCKS;
-                fmi3SetShiftDecimal(
-                    _valueReferences: *const fmi3ValueReference,
-                    _nValueReferences: usize,
-                    _shifts: *const fmi3Float64,
-                ) => NO_CLOCKS;
+                ) => NO_FRACTIONS;
                 fmi3SetShiftFraction(
                     _valueReferences: *const fmi3ValueReference,
                     _nValueReferences: usize,
                     _counters: *const fmi3UInt64,
                     _resolutions: *const fmi3UInt64,
-                ) => NO_CLOCKS;
+                ) => NO_FRACTIONS;
                 fmi3ActivateModelPartition(
                     _clockReference: fmi3ValueReference,
                     _activationTime: fmi3Float64,
-                ) => NO_CLOCKS;
+                ) => "Scheduled Execution is not offered (no <ScheduledExecution> element)";
             }
         }
     };

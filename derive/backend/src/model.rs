@@ -27,6 +27,8 @@ enum Kind {
     UInt64,
     /// FMI 3.0 only: `Vec<u8>`.
     Binary,
+    /// FMI 3.0 only: `Clock`.
+    Clock,
 }
 
 impl Kind {
@@ -71,7 +73,95 @@ struct Var {
     fmi3_only: bool,
     max_size: Option<Expr>,
     mime_type: Option<LitStr>,
+    /// A Clock's declaration (`clock(..)`).
+    clock: Option<ClockAttr>,
+    /// A clocked variable's clocks (`clocks = [..]`).
+    clocks: Vec<(String, Span)>,
     description: String,
+}
+
+/// `clock(constant | fixed | tunable | changing | countdown | triggered, interval = .., shift = ..,
+/// can_be_deactivated)`.
+#[derive(Clone)]
+struct ClockAttr {
+    /// The intervalVariability's name and its span.
+    variability: (String, Span),
+    /// `interval = 0.01` (a number: intervalDecimal) or `interval = Ts` (a parameter's name).
+    interval: Option<ClockInterval>,
+    shift: Option<Expr>,
+    can_be_deactivated: bool,
+}
+
+#[derive(Clone)]
+enum ClockInterval {
+    Value(Expr),
+    Parameter(String, Span),
+}
+
+impl Parse for ClockAttr {
+    fn parse(input: ParseStream) -> Result<Self> {
+        let mut variability = None;
+        let mut interval = None;
+        let mut shift = None;
+        let mut can_be_deactivated = false;
+        while !input.is_empty() {
+            let key: Ident = input.parse()?;
+            let k = key.to_string();
+            match k.as_str() {
+                "constant" | "fixed" | "tunable" | "changing" | "countdown" | "triggered" => {
+                    if variability.is_some() {
+                        return Err(Error::new(key.span(), "a clock has one intervalVariability"));
+                    }
+                    variability = Some((k, key.span()));
+                }
+                "interval" => {
+                    input.parse::<Token![=]>()?;
+                    interval = Some(
+                        if input.peek(Ident) && !input.peek2(Token![::]) && !input.peek2(syn::token::Paren) {
+                            let i: Ident = input.parse()?;
+                            ClockInterval::Parameter(i.to_string(), i.span())
+                        } else if input.peek(LitStr) {
+                            let s: LitStr = input.parse()?;
+                            ClockInterval::Parameter(s.value(), s.span())
+                        } else {
+                            ClockInterval::Value(input.parse()?)
+                        },
+                    );
+                }
+                "shift" => {
+                    input.parse::<Token![=]>()?;
+                    shift = Some(input.parse()?);
+                }
+                "can_be_deactivated" => can_be_deactivated = true,
+                other => {
+                    return Err(Error::new(
+                        key.span(),
+                        format!(
+                            "unknown clock declaration `{other}`; known: constant, fixed, tunable, changing, countdown, \
+                             triggered (its intervalVariability), interval = <seconds or a parameter>, shift = <seconds>, \
+                             can_be_deactivated"
+                        ),
+                    ));
+                }
+            }
+            if input.is_empty() {
+                break;
+            }
+            input.parse::<Token![,]>()?;
+        }
+        let variability = variability.ok_or_else(|| {
+            Error::new(
+                input.span(),
+                "a clock needs its intervalVariability: clock(constant | fixed | tunable | changing | countdown | triggered, ..)",
+            )
+        })?;
+        Ok(ClockAttr {
+            variability,
+            interval,
+            shift,
+            can_be_deactivated,
+        })
+    }
 }
 
 /// What `#[variable(...)]` says, before defaults are filled in.
@@ -94,6 +184,8 @@ struct VarAttr {
     fmi3_only: Option<Span>,
     max_size: Option<Expr>,
     mime_type: Option<LitStr>,
+    clock: Option<(ClockAttr, Span)>,
+    clocks: Option<Vec<(String, Span)>>,
 }
 
 /// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
@@ -271,6 +363,16 @@ impl Parse for VarAttr {
                     input.parse::<Token![=]>()?;
                     a.mime_type = Some(input.parse()?);
                 }
+                "clock" => {
+                    once(a.clock.is_some())?;
+                    let content;
+                    syn::parenthesized!(content in input);
+                    a.clock = Some((content.parse()?, key.span()));
+                }
+                "clocks" => {
+                    once(a.clocks.is_some())?;
+                    a.clocks = Some(names_list(input)?);
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -283,7 +385,7 @@ impl Parse for VarAttr {
                             "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
                              calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
                              continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator, \
-                             fmi3_only, max_size, mime_type"
+                             fmi3_only, max_size, mime_type, clock(..), clocks"
                         ),
                     ));
                 }
@@ -334,6 +436,7 @@ fn kind_of(ty: &Type) -> Result<Kind> {
         "f32" => Kind::Float32,
         "i8" | "u8" | "i16" | "u16" | "u32" | "i64" => Kind::Int3,
         "u64" => Kind::UInt64,
+        "Clock" => Kind::Clock,
         "Vec" => {
             let is_bytes = matches!(&seg.arguments, syn::PathArguments::AngleBracketed(a)
                 if a.args.len() == 1
@@ -363,9 +466,10 @@ fn type_kind(kind: Kind) -> TypeKind {
     }
 }
 
-/// Whether the description carries a start value for `v` (`fmi_standard::has_start`).
+/// Whether the description carries a start value for `v` (`fmi_standard::has_start`; a Clock
+/// has none).
 fn has_start(v: &Var) -> bool {
-    fmi_standard::has_start(v.causality, v.variability, v.initial)
+    v.kind != Kind::Clock && fmi_standard::has_start(v.causality, v.variability, v.initial)
 }
 
 fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
@@ -374,10 +478,10 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
     // An array field (`[T; N]`, `[[T; M]; N]`): an FMI 3.0 array of T.
     let (elem, dims) = array_parts(&field.ty)?;
     let kind = kind_of(&elem)?;
-    if !dims.is_empty() && matches!(kind, Kind::Str | Kind::Binary) {
+    if !dims.is_empty() && matches!(kind, Kind::Str | Kind::Binary | Kind::Clock) {
         return Err(Error::new(
             field.ty.span(),
-            "arrays are of numbers, Booleans and enumerations (not String or Binary)",
+            "arrays are of numbers, Booleans and enumerations (not String, Binary or Clock)",
         ));
     }
     let span = ident.span();
@@ -420,6 +524,17 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
                 format!("{i:?}").to_lowercase()
             ),
         ));
+    }
+    clock_rules(&a, kind, causality, variability, span)?;
+    let mut depends = a.depends;
+    if let (Some(deps), Some(clocks)) = (&mut depends, &a.clocks) {
+        // "All dependencies must be listed, also the dependencies of clocked variables on their
+        // input Clocks" (FMI 3.0, 2.4.8): a clocked variable depends on its clocks.
+        for c in clocks {
+            if !deps.iter().any(|(d, _)| *d == c.0) {
+                deps.push(c.clone());
+            }
+        }
     }
     if kind == Kind::Enum
         && a.start.is_none()
@@ -471,13 +586,15 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         min: a.min,
         max: a.max,
         nominal: a.nominal,
-        depends: a.depends,
+        depends,
         initial_depends: a.initial_depends,
         derivative_of: a.derivative_of,
         event_indicator: a.event_indicator,
         fmi3_only: a.fmi3_only.is_some(),
         max_size: a.max_size,
         mime_type: a.mime_type,
+        clock: a.clock.map(|(c, _)| c),
+        clocks: a.clocks.unwrap_or_default(),
         description: crate::doc_text(&field.attrs),
     };
     if let Some(span) = var.event_indicator
@@ -508,6 +625,94 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         return Err(Error::new(start.span(), why));
     }
     Ok(var)
+}
+
+/// The rules of FMI 3.0 (2.4.7.6, `<Clock>`, `clocks`) on a Clock field and a clocked variable.
+fn clock_rules(a: &VarAttr, kind: Kind, causality: Causality, variability: Variability, span: Span) -> Result<()> {
+    if kind != Kind::Clock {
+        if let Some((_, s)) = &a.clock {
+            return Err(Error::new(
+                *s,
+                "clock(..) declares a Clock: the field's type is rustfmu::Clock",
+            ));
+        }
+        if let Some(clocks) = &a.clocks
+            && !matches!(variability, Variability::Discrete | Variability::Tunable)
+        {
+            let s = clocks.first().map_or(span, |c| c.1);
+            return Err(Error::new(
+                s,
+                "a clocked variable is discrete (or a tunable parameter): its value changes at its clocks' ticks \
+                 only (FMI 3.0, 2.4.7.6)",
+            ));
+        }
+        return Ok(());
+    }
+    let Some((clock, _)) = &a.clock else {
+        return Err(Error::new(
+            span,
+            "a Clock needs clock(constant | fixed | tunable | changing | countdown | triggered, ..): its intervalVariability",
+        ));
+    };
+    if causality != Causality::Input {
+        return Err(Error::new(
+            span,
+            "a Clock here is an input clock (the importer activates it); output and local clocks are not supported yet",
+        ));
+    }
+    if a.start.is_some() || a.unit.is_some() || a.min.is_some() || a.max.is_some() || a.clocks.is_some() {
+        return Err(Error::new(span, "a Clock has no start, unit, min, max or clocks"));
+    }
+    if let Some((_, s)) = a.variability
+        && variability != Variability::Discrete
+    {
+        return Err(Error::new(
+            s,
+            "a Clock is discrete (FMI 3.0: \"Clocks are discrete variables\")",
+        ));
+    }
+    let (v, vspan) = (&clock.variability.0, clock.variability.1);
+    let periodic = matches!(v.as_str(), "constant" | "fixed" | "tunable");
+    match (v.as_str(), &clock.interval) {
+        ("constant", Some(ClockInterval::Value(_))) => {}
+        ("constant", _) => {
+            return Err(Error::new(
+                vspan,
+                "a constant clock declares its interval in seconds: clock(constant, interval = 0.01)",
+            ));
+        }
+        ("fixed" | "tunable", Some(_)) => {}
+        ("fixed" | "tunable", None) => {
+            return Err(Error::new(
+                vspan,
+                format!(
+                    "a {v} clock has an interval: a default in seconds the importer may set another value for \
+                     (interval = 0.01), or the parameter that is its interval (interval = Ts)"
+                ),
+            ));
+        }
+        (_, Some(_)) => {
+            return Err(Error::new(
+                vspan,
+                format!(
+                    "a {v} clock has no declared interval: {}",
+                    if v == "triggered" {
+                        "it ticks when the importer activates it"
+                    } else {
+                        "the model gives it with Clock::set_interval"
+                    }
+                ),
+            ));
+        }
+        _ => {}
+    }
+    if clock.shift.is_some() && !periodic {
+        return Err(Error::new(
+            vspan,
+            "only periodic clocks (constant, fixed, tunable) have a shift",
+        ));
+    }
+    Ok(())
 }
 
 /// `#[fmu(...)]` on the struct.
@@ -825,11 +1030,11 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                 ((v.causality == Causality::Output || v.derivative_of.is_some() || is_state(vars, v))
                     && matches!(effective(v), Some(Initial::Approx | Initial::Calculated)))
                     || v.causality == Causality::CalculatedParameter;
-            if !initial_unknown {
+            if !initial_unknown || !v.clocks.is_empty() {
                 return Err(Error::new(
                     v.span,
                     "only the unknowns of Initialization Mode (outputs, states and derivatives that are \
-                     calculated or approx, calculated parameters) declare `initial_depends`: it becomes their \
+                     calculated or approx, calculated parameters; not clocked variables) declare `initial_depends`: it becomes their \
                      `dependencies` in InitialUnknowns",
                 ));
             }
@@ -909,6 +1114,69 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                 return Err(Error::new(v.span, "a derivative is a continuous scalar Real variable"));
             }
         }
+        if (v.kind == Kind::Clock || !v.clocks.is_empty()) && model.fmi3_only.is_none() {
+            return Err(Error::new(
+                v.span,
+                format!(
+                    "'{}' is a Clock or clocked: FMI 2.0 has no clocks, so the model is FMI 3.0 only: \
+                     #[fmu(fmi3_only)] on the struct, and rustfmu::export_fmi3! instead of export_fmu!",
+                    v.name
+                ),
+            ));
+        }
+        for (c, span) in &v.clocks {
+            match by_name(c) {
+                Some(clock) if clock.kind == Kind::Clock => {}
+                Some(_) => {
+                    return Err(Error::new(
+                        *span,
+                        format!("'{}' is clocked by '{c}', which is no Clock", v.name),
+                    ));
+                }
+                None => {
+                    return Err(Error::new(
+                        *span,
+                        format!("'{}' is clocked by '{c}', which is not declared", v.name),
+                    ));
+                }
+            }
+        }
+        if let Some(ClockAttr {
+            variability: (cv, _),
+            interval: Some(ClockInterval::Parameter(p, span)),
+            ..
+        }) = &v.clock
+        {
+            let fits = |x: &Var| {
+                x.kind == Kind::Real
+                    && x.dims.is_empty()
+                    && matches!(
+                        (x.causality, x.variability, cv.as_str()),
+                        (Causality::Parameter, Variability::Fixed, _)
+                            | (Causality::Parameter, Variability::Tunable, "tunable")
+                            | (Causality::Local, Variability::Constant, _)
+                    )
+            };
+            match by_name(p) {
+                Some(x) if fits(x) => {}
+                Some(_) => {
+                    return Err(Error::new(
+                        *span,
+                        format!(
+                            "the interval of {cv} clock '{}' is '{p}', which is not a scalar f64 parameter of its \
+                             variability (a fixed clock: a fixed parameter; a tunable clock: a fixed or tunable one)",
+                            v.name
+                        ),
+                    ));
+                }
+                None => {
+                    return Err(Error::new(
+                        *span,
+                        format!("the interval of clock '{}' is '{p}', which is not declared", v.name),
+                    ));
+                }
+            }
+        }
         if let Some(unit) = &v.unit {
             let u = unit.value();
             if units::default_unit(&u).is_none() && !model.units.iter().any(|(n, _, _)| *n == u) {
@@ -978,6 +1246,7 @@ fn zero_of(rt: &TokenStream, v: &Var) -> TokenStream {
         Kind::Enum => quote!(<#elem as #rt::FmuEnum>::FIRST),
         Kind::Str => quote!(::std::string::String::new()),
         Kind::Binary => quote!(::std::vec::Vec::new()),
+        Kind::Clock => quote!(#rt::Clock::default()),
     }
 }
 
@@ -1023,7 +1292,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             Kind::UInt64 => quote!(#rt::description::Start::UInt64(x)),
             Kind::Boolean => quote!(#rt::description::Start::Boolean(x)),
             Kind::Enum => quote!(#rt::description::Start::Integer(x as i32)),
-            Kind::Str | Kind::Binary => unreachable!("checked: no arrays of these"),
+            Kind::Str | Kind::Binary | Kind::Clock => unreachable!("checked: no arrays of these"),
         };
         // The elements' starts, row-major, computed at compile time from the field's start.
         quote!(#rt::description::Start::Array(&{
@@ -1062,6 +1331,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             (Kind::UInt64, None) => quote!(#rt::description::Start::UInt64(0)),
             (Kind::Binary, Some(e)) => quote!(#rt::description::Start::Binary(#e)),
             (Kind::Binary, None) => quote!(#rt::description::Start::Binary(&[])),
+            (Kind::Clock, _) => unreachable!("a Clock has no start"),
         }
     };
     let fmi3_only = v.fmi3_only || !v.kind.in_fmi2();
@@ -1108,11 +1378,50 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
         }
         None => quote!(::core::option::Option::None),
     };
+    let clock = match &v.clock {
+        Some(c) => {
+            let iv = variant(rt, "IntervalVariability", &{
+                let mut n = c.variability.0.clone();
+                n[..1].make_ascii_uppercase();
+                n
+            });
+            let (interval, parameter) = match &c.interval {
+                Some(ClockInterval::Value(e)) => (quote!(::core::option::Option::Some((#e) as f64)), String::new()),
+                Some(ClockInterval::Parameter(p, _)) => (quote!(::core::option::Option::None), fmi_name(vars, p)),
+                None => (quote!(::core::option::Option::None), String::new()),
+            };
+            let shift = match &c.shift {
+                Some(e) => quote!((#e) as f64),
+                None => quote!(0.0),
+            };
+            let can = c.can_be_deactivated;
+            quote!(::core::option::Option::Some(#rt::description::ClockDecl {
+                interval_variability: #iv,
+                interval: #interval,
+                interval_parameter: #parameter,
+                shift: #shift,
+                can_be_deactivated: #can,
+            }))
+        }
+        None => quote!(::core::option::Option::None),
+    };
+    let clocks: Vec<String> = v.clocks.iter().map(|(c, _)| fmi_name(vars, c)).collect();
+    let (var_type, enumeration) = if v.kind == Kind::Clock {
+        (
+            quote!(#rt::description::VarType::Clock),
+            quote!(::core::option::Option::None),
+        )
+    } else {
+        (
+            quote!(<#elem as #rt::FmiType>::TYPE),
+            quote!(<#elem as #rt::FmiType>::ENUMERATION),
+        )
+    };
     quote! {
         #rt::description::Variable {
             name: #name,
             value_reference: #vr,
-            var_type: <#elem as #rt::FmiType>::TYPE,
+            var_type: #var_type,
             causality: #causality,
             variability: #variability,
             initial: #initial,
@@ -1125,12 +1434,14 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             depends_on: #depends,
             initial_depends_on: #initial_depends,
             derivative_of: #derivative_of,
-            enumeration: <#elem as #rt::FmiType>::ENUMERATION,
+            enumeration: #enumeration,
             fmi3: #rt::description::Fmi3Extras {
                 only: #fmi3_only,
                 max_size: #max_size,
                 mime_type: #mime_type,
                 dimensions: &[#((#dims) as u32),*],
+                clock: #clock,
+                clocks: &[#(#clocks),*],
             },
         }
     }
@@ -1296,6 +1607,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                 (Kind::Str, None) => quote!(::std::string::String::new()),
                 (Kind::Binary, Some(e)) => quote!(::std::vec::Vec::from(&(#e)[..])),
                 (Kind::Binary, None) => quote!(::std::vec::Vec::new()),
+                (Kind::Clock, _) => quote!(#rt::Clock::default()),
                 (_, Some(e)) => quote!(#e),
                 (Kind::Real | Kind::Float32, None) => quote!(0.0),
                 (Kind::Integer | Kind::Int3 | Kind::UInt64, None) => quote!(0),
@@ -1311,8 +1623,21 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
         let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
         let numeric: Vec<&Var> = vars
             .iter()
-            .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary) && v.dims.is_empty())
+            .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary | Kind::Clock) && v.dims.is_empty())
             .collect();
+        let clock_fields: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Clock).collect();
+        let clock_arms = clock_fields.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(&self.#f))
+        });
+        let clock_mut_arms = clock_fields.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(&mut self.#f))
+        });
+        let deactivate = clock_fields.iter().map(|v| {
+            let f = &v.field;
+            quote!(self.#f.__set_active(false);)
+        });
         let arrays: Vec<&Var> = vars.iter().filter(|v| !v.dims.is_empty()).collect();
         let flat = |v: &Var, mutable: bool| {
             let f = &v.field;
@@ -1711,6 +2036,21 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                         #(#set_bin_arms,)*
                         _ => false,
                     }
+                }
+                fn clock(&self, vr: u32) -> ::core::option::Option<&#rt::Clock> {
+                    match vr {
+                        #(#clock_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+                fn clock_mut(&mut self, vr: u32) -> ::core::option::Option<&mut #rt::Clock> {
+                    match vr {
+                        #(#clock_mut_arms,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+                fn deactivate_clocks(&mut self) {
+                    #(#deactivate)*
                 }
             }
 
