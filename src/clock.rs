@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 ///     #[variable(vr = 0, input, clock(constant, interval = 0.1))]
 ///     pub tick: Clock,
 ///     /// Ticks so far
-///     #[variable(vr = 1, output, discrete, clocks = [tick], start = 0)]
+///     #[variable(vr = 1, output, discrete, clocks = [tick])]
 ///     pub count: i32,
 /// }
 ///

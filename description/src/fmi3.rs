@@ -108,6 +108,8 @@ pub struct Variable {
     pub declared_type: Option<String>,
     pub unit: Option<String>,
     pub description: Option<String>,
+    /// `clocks`: the value references of the clocks of a clocked variable (empty: not clocked).
+    pub clocks: Vec<u32>,
 }
 
 impl Variable {
@@ -258,6 +260,10 @@ impl ModelDescription {
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),
                     description: e.string("description"),
+                    clocks: e
+                        .string("clocks")
+                        .map(|s| s.split_whitespace().filter_map(|x| x.parse().ok()).collect())
+                        .unwrap_or_default(),
                 });
                 open = (!empty).then_some(d.variables.len() - 1);
                 continue;

@@ -122,6 +122,9 @@ enum Cmd {
         /// The unpacked FMU's resources/ folder.
         #[arg(long)]
         resources: PathBuf,
+        /// Instantiate with eventModeUsed (FMI 3.0 FMUs with clocks).
+        #[arg(long = "event-mode")]
+        event_mode: bool,
     },
 }
 
@@ -193,6 +196,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             vrs,
             fmi_version,
             resources,
+            event_mode,
         } => {
             let version = cargo::parse_fmi_version(&fmi_version)?;
             let vrs: Vec<u32> = vrs
@@ -200,7 +204,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 .filter(|s| !s.is_empty())
                 .filter_map(|s| s.parse().ok())
                 .collect();
-            let problems = crate::validate::smoke_run_version(version, &library, &guid, &vrs, &resources);
+            let problems = crate::validate::smoke_run_version(version, &library, &guid, &vrs, &resources, event_mode);
             for p in &problems {
                 println!("{p}");
             }

@@ -188,15 +188,18 @@ struct Description {
     /// The GUID (FMI 2.0) or instantiationToken (FMI 3.0).
     guid: String,
     real_vrs: Vec<u32>,
+    /// FMI 3.0 with clocks: co-simulation needs eventModeUsed (the smoke run then handles Event Mode).
+    clocks: bool,
 }
 
 fn read_description(xml: &str) -> Result<Description, String> {
-    let (version, cs, guid, real_vrs) = match fmi_description::parse(xml)? {
+    let (version, cs, guid, real_vrs, clocks) = match fmi_description::parse(xml)? {
         ModelDescription::Fmi2(d) => (
             FmiVersion::V2,
             d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
             d.guid.clone(),
             d.vrs_of_type(fmi2::Type::Real),
+            false,
         ),
         // FMI 3.0: every scalar Float64 (one value each; the arrays' elements are the
         // conformance suite's to read).
@@ -204,11 +207,13 @@ fn read_description(xml: &str) -> Result<Description, String> {
             FmiVersion::V3,
             d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
             d.token.clone(),
+            // (Clocked ones are read while their clock ticks only: not here.)
             d.variables
                 .iter()
-                .filter(|v| v.ty == fmi3::Type::Float64 && !v.array)
+                .filter(|v| v.ty == fmi3::Type::Float64 && !v.array && v.clocks.is_empty())
                 .map(|v| v.vr)
                 .collect(),
+            d.variables.iter().any(|v| v.ty == fmi3::Type::Clock),
         ),
     };
     match cs {
@@ -217,6 +222,7 @@ fn read_description(xml: &str) -> Result<Description, String> {
             model_identifier,
             guid,
             real_vrs,
+            clocks,
         }),
         _ => Err("no <CoSimulation modelIdentifier=...>".into()),
     }
@@ -885,9 +891,10 @@ fn smoke_run_in_child(so: &Path, d: &Description, resources: &Path) -> Vec<Strin
     let exe = match std::env::current_exe() {
         Ok(e) if e.file_stem().is_some_and(|s| s == "cargo-fmu" || s == "fmu-build") => e,
         // Called from elsewhere (tests): run in this process.
-        _ => return smoke_run_version(d.version, so, &d.guid, &d.real_vrs, resources),
+        _ => return smoke_run_version(d.version, so, &d.guid, &d.real_vrs, resources, d.clocks),
     };
-    match std::process::Command::new(&exe)
+    let mut command = std::process::Command::new(&exe);
+    command
         .arg("__smoke-run")
         .arg(so)
         .arg(&d.guid)
@@ -895,9 +902,11 @@ fn smoke_run_in_child(so: &Path, d: &Description, resources: &Path) -> Vec<Strin
         .arg("--fmi-version")
         .arg(d.version.text())
         .arg("--resources")
-        .arg(resources)
-        .output()
-    {
+        .arg(resources);
+    if d.clocks {
+        command.arg("--event-mode");
+    }
+    match command.output() {
         Ok(out) if out.status.success() => {
             forward_notes(&out.stderr);
             vec![]
@@ -941,10 +950,11 @@ pub fn smoke_run_version(
     guid: &str,
     real_vrs: &[u32],
     resources: &Path,
+    event_mode: bool,
 ) -> Vec<String> {
     match version {
         FmiVersion::V2 => smoke_run(so, guid, real_vrs, resources),
-        FmiVersion::V3 => smoke_run3(so, guid, real_vrs, resources),
+        FmiVersion::V3 => smoke_run3(so, guid, real_vrs, resources, event_mode),
     }
 }
 
@@ -982,8 +992,10 @@ unsafe extern "C" fn collect_log3(env: *mut c_void, status: i32, category: *cons
 }
 
 /// FMI 3.0: loads the binary, checks that it exports every fmi3 function of the standard and no
-/// fmi2 one, and runs 0.1 s of co-simulation from the start values.
-pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) -> Vec<String> {
+/// fmi2 one, and runs 0.1 s of co-simulation from the start values. `event_mode`: with
+/// eventModeUsed (an FMU with clocks requires it), its events handled in Event Mode (no clock
+/// activated: the smoke run checks that the FMU steps, not its clocks).
+pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path, event_mode: bool) -> Vec<String> {
     type Instance = *mut c_void;
     type LogMessage = unsafe extern "C" fn(*mut c_void, i32, *const c_char, *const c_char);
     // fmi3InstantiateCoSimulationTYPE: instanceName, instantiationToken, resourcePath, visible,
@@ -1037,6 +1049,29 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) ->
         let get_float64: libloading::Symbol<unsafe extern "C" fn(Instance, *const u32, usize, *mut f64, usize) -> i32> =
             lib.get(b"fmi3GetFloat64").unwrap();
         let free: libloading::Symbol<unsafe extern "C" fn(Instance)> = lib.get(b"fmi3FreeInstance").unwrap();
+        type Update =
+            unsafe extern "C" fn(Instance, *mut bool, *mut bool, *mut bool, *mut bool, *mut bool, *mut f64) -> i32;
+        let update: libloading::Symbol<Update> = lib.get(b"fmi3UpdateDiscreteStates").unwrap();
+        // Event Mode (after initialization and after a step that needs it): the updates, then Step Mode.
+        let handle_events = |c: Instance| -> i32 {
+            let (mut again, mut term, mut nominals, mut values, mut defined, mut next) =
+                (true, false, false, false, false, 0.0);
+            let mut status = 0;
+            let mut rounds = 0;
+            while again && status == 0 && rounds < 100 {
+                status = update(
+                    c,
+                    &mut again,
+                    &mut term,
+                    &mut nominals,
+                    &mut values,
+                    &mut defined,
+                    &mut next,
+                );
+                rounds += 1;
+            }
+            status.max(unary(b"fmi3EnterStepMode")(c))
+        };
 
         let mut log = Log(Vec::new());
         let name = CString::new("fmu-build-validate").unwrap();
@@ -1050,7 +1085,7 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) ->
             resource_path.as_ptr(),
             false,
             false,
-            false,
+            event_mode,
             false,
             std::ptr::null(),
             0,
@@ -1067,6 +1102,9 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) ->
         }
         let mut status = enter_init(c, false, 0.0, 0.0, true, 1.0);
         status = status.max(unary(b"fmi3ExitInitializationMode")(c));
+        if event_mode && status == 0 {
+            status = handle_events(c);
+        }
         let mut flags = [false; 3];
         let mut reached = 0.0;
         for i in 0..10 {
@@ -1078,6 +1116,10 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path) ->
                     "fmi3DoStep from {t} by 0.01 returned fmi3OK with lastSuccessfulTime {reached}"
                 ));
                 break;
+            }
+            if event_mode && flags == [true, false, false] && status == 0 {
+                status = unary(b"fmi3EnterEventMode")(c).max(handle_events(c));
+                continue;
             }
             if flags.iter().any(|f| *f) {
                 problems.push(format!(

@@ -951,7 +951,7 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
     let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
     for v in vars {
-        if !v.kind.in_fmi2() && !v.fmi3_only && model.fmi3_only.is_none() {
+        if !v.kind.in_fmi2() && v.kind != Kind::Clock && !v.fmi3_only && model.fmi3_only.is_none() {
             let ty = &v.ty;
             return Err(Error::new(
                 v.span,

@@ -358,7 +358,7 @@ fn model_wide_mistakes_are_one_error_and_the_code_is_still_generated() {
     );
     assert_error(
         &src,
-        "only the unknowns of Initialization Mode (outputs, states and derivatives that are calculated or approx, calculated parameters) declare `initial_depends`",
+        "only the unknowns of Initialization Mode (outputs, states and derivatives that are calculated or approx, calculated parameters; not clocked variables) declare `initial_depends`",
         "p: f64",
         0,
     );
