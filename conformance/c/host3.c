@@ -10,7 +10,10 @@
  *   SetContinuousStates / CompletedIntegratorStep, terminate, free.
  * Prints "final <hex bit patterns>" (CS) and "me-final <hex bit patterns>" (ME). Exits 1 with a
  * reason on stderr on any failure. With HOST_TRACE set, also "trace <step> <hex bit patterns>"
- * after every co-simulation step. Builds for Linux (dlopen) or, with MinGW, for Windows
+ * after every co-simulation step. With HOST_EVENT_MODE set (an FMU with clocks, which requires
+ * it), Co-Simulation runs with eventModeUsed: Event Mode after initialization and after a step
+ * that needs it is passed with fmi3UpdateDiscreteStates and fmi3EnterStepMode (no clock activated).
+ * Builds for Linux (dlopen) or, with MinGW, for Windows
  * (LoadLibraryA). */
 #if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf (%zu, %llx) from MinGW, not msvcrt's */
@@ -129,6 +132,7 @@ int main(int argc, char **argv) {
     LOAD(Update, update, "fmi3UpdateDiscreteStates");
     LOAD(Unary, enter_ctm, "fmi3EnterContinuousTimeMode");
     LOAD(Unary, enter_event_mode, "fmi3EnterEventMode");
+    LOAD(Unary, enter_step_mode, "fmi3EnterStepMode");
     LOAD(Vector, get_x, "fmi3GetContinuousStates");
     LOAD(Vector, get_dx, "fmi3GetContinuousStateDerivatives");
     LOAD(SetVector, set_x, "fmi3SetContinuousStates");
@@ -137,17 +141,32 @@ int main(int argc, char **argv) {
     LOAD(Count, n_states, "fmi3GetNumberOfContinuousStates");
 
     /* Co-Simulation */
-    fmi3Instance c = instantiate_cs("host3", token, res, false, false, false, false, NULL, 0, &messages, logger, NULL);
+    bool event_mode = getenv("HOST_EVENT_MODE") != NULL;
+    fmi3Instance c = instantiate_cs("host3", token, res, false, false, event_mode, false, NULL, 0, &messages, logger, NULL);
     if (!c) { fprintf(stderr, "fmi3InstantiateCoSimulation returned NULL: %s\n", last); return 1; }
     CHECK(set_f64(c, set_vrs, nset, set_vals, nset));
     CHECK(enter_init(c, false, 0.0, 0.0, false, 0.0));
     CHECK(exit_init(c));
+    if (event_mode) {
+        bool need = true, term = false, nom = false, vals = false, next_defined = false;
+        double next = 0.0;
+        for (int k = 0; need && k < 100; k++) CHECK(update(c, &need, &term, &nom, &vals, &next_defined, &next));
+        CHECK(enter_step_mode(c));
+    }
     double t = 0.0;
     int trace = getenv("HOST_TRACE") != NULL;
     for (int i = 0; i < steps; i++) {
         bool event = true, term = true, early = true;
         double reached = -1.0;
         CHECK(do_step(c, t, h, true, &event, &term, &early, &reached));
+        if (event_mode && event && !term && !early && reached == t + h) {
+            bool need = true, term2 = false, nom = false, vals = false, next_defined = false;
+            double next = 0.0;
+            CHECK(enter_event_mode(c));
+            for (int k = 0; need && k < 100; k++) CHECK(update(c, &need, &term2, &nom, &vals, &next_defined, &next));
+            CHECK(enter_step_mode(c));
+            event = false;
+        }
         if (event || term || early || reached != t + h) {
             fprintf(stderr, "fmi3DoStep at %g: event %d terminate %d early %d lastSuccessfulTime %g\n", t, event, term, early, reached);
             return 1;

@@ -110,6 +110,17 @@ pub struct Variable {
     pub description: Option<String>,
     /// `clocks`: the value references of the clocks of a clocked variable (empty: not clocked).
     pub clocks: Vec<u32>,
+    /// A Clock's `intervalVariability`, `intervalDecimal`, `shiftDecimal`, `canBeDeactivated`.
+    pub clock: Option<ClockAttrs>,
+}
+
+/// The attributes of a `<Clock>` (FMI 3.0, 2.4.7.6).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClockAttrs {
+    pub interval_variability: String,
+    pub interval_decimal: Option<f64>,
+    pub shift_decimal: Option<f64>,
+    pub can_be_deactivated: bool,
 }
 
 impl Variable {
@@ -260,6 +271,12 @@ impl ModelDescription {
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),
                     description: e.string("description"),
+                    clock: (ty == Type::Clock).then(|| ClockAttrs {
+                        interval_variability: e.string("intervalVariability").unwrap_or_default(),
+                        interval_decimal: e.number("intervalDecimal"),
+                        shift_decimal: e.number("shiftDecimal"),
+                        can_be_deactivated: e.string("canBeDeactivated").as_deref() == Some("true"),
+                    }),
                     clocks: e
                         .string("clocks")
                         .map(|s| s.split_whitespace().filter_map(|x| x.parse().ok()).collect())
@@ -339,9 +356,12 @@ impl ModelDescription {
             .unwrap_or("")
     }
 
-    /// The scalar (not array) variables of that type.
+    /// The scalar (not array) variables of that type that are not clocked (a clocked variable
+    /// is read and set while one of its clocks ticks only: `clocks`).
     pub fn of_type(&self, ty: Type) -> impl Iterator<Item = &Variable> {
-        self.variables.iter().filter(move |v| v.ty == ty && !v.array)
+        self.variables
+            .iter()
+            .filter(move |v| v.ty == ty && !v.array && v.clocks.is_empty())
     }
 
     pub fn vrs_of_type(&self, ty: Type) -> Vec<u32> {

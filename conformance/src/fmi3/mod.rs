@@ -137,6 +137,12 @@ impl Fmu3 {
         })
     }
 
+    /// Whether the FMU has clocks (FMI 3.0: its co-simulation then needs eventModeUsed, and its
+    /// clocked variables are read and set at their clocks' ticks only).
+    pub fn has_clocks(&self) -> bool {
+        self.md.variables.iter().any(|v| v.ty == Type::Clock)
+    }
+
     pub fn own_state_format(&self) -> bool {
         self.state_format().is_ok()
     }
@@ -274,6 +280,11 @@ pub struct Inst<'a> {
     pub me: bool,
     pub sink: Box<LogSink>,
     pub time: f64,
+    /// A co-simulation instance of an FMU with clocks, made with eventModeUsed because the
+    /// standard requires it, for a check that does not itself handle Event Mode: the suite passes
+    /// Event Mode for it (after initialization and where a step needs it) with
+    /// fmi3UpdateDiscreteStates and fmi3EnterStepMode, activating no clock.
+    pub auto_events: bool,
 }
 
 impl<'a> Inst<'a> {
@@ -317,6 +328,9 @@ impl<'a> Inst<'a> {
         intermediate: bool,
     ) -> Result<Inst<'a>, String> {
         let sink = Box::<LogSink>::default();
+        // FMI 3.0, 4.2.1: "For FMUs that have clocks, eventModeUsed == fmi3True is required."
+        let auto_events = !me && !event_mode && fmu.has_clocks();
+        let event_mode = event_mode || auto_events;
         let name = CString::new(name).unwrap();
         let token = CString::new(fmu.md.token.as_str()).map_err(|e| e.to_string())?;
         let res = CString::new(fmu.resource_path()).map_err(|e| e.to_string())?;
@@ -367,6 +381,7 @@ impl<'a> Inst<'a> {
             me,
             sink,
             time: 0.0,
+            auto_events,
         })
     }
 
@@ -379,6 +394,7 @@ impl<'a> Inst<'a> {
             me,
             sink: Box::default(),
             time: 0.0,
+            auto_events: false,
         }
     }
 
@@ -442,9 +458,19 @@ impl<'a> Inst<'a> {
         s
     }
     pub fn exit_init(&self) -> fmi3Status {
-        self.call("fmi3ExitInitializationMode", |c| unsafe {
+        let s = self.call("fmi3ExitInitializationMode", |c| unsafe {
             (self.fmu.api.exit_initialization_mode)(c)
-        })
+        });
+        if s == fmi3OK && self.auto_events {
+            return self.pass_event_mode();
+        }
+        s
+    }
+
+    /// [`Inst::auto_events`]: from Event Mode to Step Mode (the event iteration, no clock active).
+    pub fn pass_event_mode(&self) -> fmi3Status {
+        self.event_iteration();
+        self.call("fmi3EnterStepMode", |c| unsafe { (self.fmu.api.enter_step_mode)(c) })
     }
 
     /// Enter and exit initialization at t = 0 (ME: then the event iteration and continuous-time mode).
@@ -539,6 +565,18 @@ impl<'a> Inst<'a> {
         });
         if s == fmi3OK {
             self.time = t + h;
+            if self.auto_events && flags[0] == 1 {
+                // An event inside the step (no early return): handled before the next step.
+                let e = self.call("fmi3EnterEventMode", |c| unsafe { (self.fmu.api.enter_event_mode)(c) });
+                assert_eq!(e, fmi3OK, "{}: fmi3EnterEventMode: {}", self.fmu.id, self.log_text());
+                assert_eq!(
+                    self.pass_event_mode(),
+                    fmi3OK,
+                    "{}: fmi3EnterStepMode: {}",
+                    self.fmu.id,
+                    self.log_text()
+                );
+            }
         }
         (s, flags, last)
     }
@@ -583,8 +621,15 @@ impl<'a> Inst<'a> {
 
     /// Every Float64 value (bit patterns), then every value of the other numeric types and
     /// Booleans (their C bytes) and every Binary (its length and bytes), for comparing runs.
+    /// Clocked variables are left out: they are read at their clocks' ticks only.
     pub fn observe(&self) -> Vec<u64> {
-        let vrs = self.fmu.md.vrs_of_type(Type::Float64);
+        let vrs: Vec<u32> = self
+            .fmu
+            .md
+            .of_type(Type::Float64)
+            .filter(|v| v.clocks.is_empty())
+            .map(|v| v.vr)
+            .collect();
         let (s, v) = self.get_f64(&vrs);
         assert_eq!(
             s,
@@ -598,6 +643,7 @@ impl<'a> Inst<'a> {
             v.fixed_count().is_some()
                 && (v.array || v.ty != Type::Float64)
                 && !matches!(v.ty, Type::String | Type::Clock)
+                && v.clocks.is_empty()
                 && v.causality != fmi_description::Causality::Independent
         }) {
             let (s, bytes) = self.get_raw(var);

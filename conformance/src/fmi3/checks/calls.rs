@@ -76,14 +76,15 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
         }
         // The right token: an instance, also without a logger, and with a NULL resourcePath.
         crate::outcome::breadcrumb(&format!("{what} without a logMessage callback"));
-        let c = inst(name.as_ptr(), token.as_ptr(), false, None, null_mut());
+        // (An FMU with clocks requires eventModeUsed: FMI 3.0, 4.2.1.)
+        let c = inst(name.as_ptr(), token.as_ptr(), fmu.has_clocks(), None, null_mut());
         assert!(
             !c.is_null(),
             "{}: {what} without a logMessage callback returned NULL (it may be NULL: FMI 3.0 section 2.3.1)",
             fmu.id
         );
         unsafe { (api.free_instance)(c) };
-        let c = inst(name.as_ptr(), token.as_ptr(), false, log, sink.env());
+        let c = inst(name.as_ptr(), token.as_ptr(), fmu.has_clocks(), log, sink.env());
         assert!(
             !c.is_null(),
             "{}: {what}: NULL with valid arguments: {:?}",
@@ -126,7 +127,7 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
                 null(),
                 false,
                 false,
-                false,
+                fmu.has_clocks(),
                 false,
                 null(),
                 0,
@@ -378,11 +379,12 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
         }
         let states: &[State] = if me { &State::ME } else { &State::CS };
         for &state in states.iter().filter(|s| **s != State::Terminated) {
-            for v in
-                fmu.md.variables.iter().filter(|v| {
-                    !v.array && matches!(v.ty, Type::Float64 | Type::Int32 | Type::Boolean | Type::Enumeration)
-                })
-            {
+            // (Clocked variables: where they may be set is the clock check's.)
+            for v in fmu.md.variables.iter().filter(|v| {
+                !v.array
+                    && v.clocks.is_empty()
+                    && matches!(v.ty, Type::Float64 | Type::Int32 | Type::Boolean | Type::Enumeration)
+            }) {
                 let inst = in_state(fmu, me, state);
                 let api = &fmu.api;
                 let s = match v.ty {

@@ -10,6 +10,7 @@
 //! excitation, a whole run.
 
 pub mod calls;
+pub mod clocks;
 pub mod directional_derivatives;
 pub mod fmu_state;
 pub mod instances;
@@ -64,6 +65,9 @@ crate::checks::registry! {
             fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run,
             fmi3_model_exchange_events_are_reached_settle_and_follow_the_states,
             fmi3_co_simulation_event_mode_hands_the_events_to_the_importer,
+        };
+        ModelExchange: clocks::{
+            fmi3_clocks_tick_where_their_intervals_say_and_clocked_variables_are_read_at_the_ticks,
         };
         DirectionalDerivatives: directional_derivatives::{
             fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,

@@ -110,7 +110,15 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
         vrs.join(","),
     ];
     args.extend(excitation(fmu).iter().map(|(vr, v)| format!("{vr}={v:?}")));
-    let plain = std::process::Command::new(&exe).args(&args).output().unwrap();
+    // An FMU with clocks: co-simulation with eventModeUsed (FMI 3.0, 4.2.1).
+    let event_mode = |c: &mut std::process::Command| {
+        if fmu.has_clocks() {
+            c.env("HOST_EVENT_MODE", "1");
+        }
+    };
+    let mut plain = std::process::Command::new(&exe);
+    event_mode(&mut plain);
+    let plain = plain.args(&args).output().unwrap();
     let stdout = String::from_utf8_lossy(&plain.stdout).into_owned();
     assert!(
         plain.status.success(),
@@ -161,7 +169,9 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
     {
         skip("valgrind is not installed (tests/setup-env.sh installs it)");
     }
-    let out = std::process::Command::new("valgrind")
+    let mut valgrind = std::process::Command::new("valgrind");
+    event_mode(&mut valgrind);
+    let out = valgrind
         .args([
             "--error-exitcode=1",
             "--leak-check=full",

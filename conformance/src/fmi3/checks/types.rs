@@ -126,10 +126,12 @@ fn another(v: &Variable, now: &[u8]) -> Option<Vec<u8>> {
     }
 }
 
-/// The scalar variables the check reads: every type but String and Clock, not the independent one.
+/// The scalar variables the check reads: every type but String and Clock, not the independent
+/// one, not clocked ones (read at their clocks' ticks only: the clock check's).
 fn scalars(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
     fmu.md.variables.iter().filter(|v| {
         v.fixed_count().is_some()
+            && v.clocks.is_empty()
             && !matches!(v.ty, Type::String | Type::Clock)
             && v.causality != Causality::Independent
     })
