@@ -52,13 +52,16 @@ pub struct Clock {
     set_shift: Option<f64>,
     /// The interval last reported to the importer (periodic clocks: "changed" when it differs).
     reported: Option<f64>,
+    /// An output clock the model ticked at this event.
+    #[serde(default)]
+    ticked: bool,
 }
 
 impl Clock {
     /// Whether the clock ticks now (in [`Model::update`](crate::Model::update): the importer
     /// activated it for this event).
     pub fn is_active(&self) -> bool {
-        self.active
+        self.active || self.ticked
     }
 
     /// A `changing` or `countdown` clock: the next tick comes `interval` seconds from now (the
@@ -71,6 +74,20 @@ impl Clock {
         self.fresh = true;
     }
 
+    /// A triggered output clock: it ticks at this event (call it in
+    /// [`Model::update`](crate::Model::update)). The importer learns it with `fmi3GetClock` in
+    /// this Event Mode and reads the variables it clocks, which are then the values `update`
+    /// left; `fmi3UpdateDiscreteStates` ends the tick. (On an input clock it does nothing: the
+    /// importer activates those.)
+    pub fn tick(&mut self) {
+        self.ticked = true;
+    }
+
+    /// Whether [`tick`](Self::tick) was called at this event (an output clock).
+    pub fn ticked(&self) -> bool {
+        self.ticked
+    }
+
     /// The interval given by [`set_interval`](Self::set_interval), if any.
     pub fn interval(&self) -> Option<f64> {
         self.interval
@@ -79,6 +96,9 @@ impl Clock {
     #[doc(hidden)]
     pub fn __set_active(&mut self, active: bool) {
         self.active = active;
+        if !active {
+            self.ticked = false;
+        }
     }
 
     /// (interval, changed since the last report) of a clock the model times; the report is taken.

@@ -3,7 +3,9 @@
 //! and shift functions, and the refusals the standard asks for. A model exported here with
 //! `export_fmi3!`: `count` counts the ticks of `tick` (constant, 0.1 s), `sum` adds the clocked
 //! input `u` at each tick of `sample` (fixed: the parameter `Ts`); a tunable clock with a default
-//! interval, a countdown clock the model times, and a triggered clock.
+//! interval, a countdown clock the model times, and a triggered clock; and a triggered output
+//! clock `crossed` that ticks where the state `level` (rising at 1/s) crosses 100 (an event
+//! indicator), counting the crossings in the variable it clocks.
 
 use rustfmu::__private::abi3::*;
 use std::ffi::{CStr, CString, c_void};
@@ -47,9 +49,34 @@ mod model {
         /// Ticks of `alarm` and `trigger`
         #[variable(vr = 13, output, discrete, clocks = [alarm, trigger])]
         pub alarms: i32,
+        /// A level rising at 1/s
+        #[variable(vr = 20, output, continuous, initial = exact, start = 0.0, depends = [level])]
+        pub level: f64,
+        /// Its rate
+        #[variable(vr = 21, name = "der(level)", local, continuous, derivative_of = level, depends = [])]
+        pub der_level: f64,
+        /// level - 100: its change of sign is a state event
+        #[variable(vr = 22, local, continuous, event_indicator, depends = [level])]
+        pub above: f64,
+        /// Ticks where the level rises through 100
+        #[variable(vr = 23, output, clock(triggered), depends = [level])]
+        pub crossed: Clock,
+        /// Crossings so far
+        #[variable(vr = 24, output, discrete, clocks = [crossed])]
+        pub crossings: i32,
+        /// The level was above 100 at the last event.
+        pub was_above: bool,
     }
 
     impl Model for Clocked {
+        fn derivatives<D: Real>(&self, _t: D, v: &mut ClockedContinuous<D>) {
+            v.der_level = v.level * 0.0 + 1.0;
+        }
+
+        fn outputs<D: Real>(&self, _t: D, v: &mut ClockedContinuous<D>) {
+            v.above = v.level - 100.0;
+        }
+
         fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
             self.alarm.set_interval(0.3);
             Ok(())
@@ -69,6 +96,12 @@ mod model {
             if self.trigger.is_active() {
                 self.alarms += 100;
             }
+            let above = self.level >= 100.0;
+            if above && !self.was_above {
+                self.crossed.tick();
+                self.crossings += 1;
+            }
+            self.was_above = above;
             Ok(())
         }
     }
@@ -316,6 +349,45 @@ fn clocked_variables_change_at_their_ticks_only_in_model_exchange() {
     assert_eq!(set_clock(c, 4, false), fmi3OK);
     // SAFETY: a live instance.
     unsafe { fmi3FreeInstance(c) };
+}
+
+#[test]
+fn an_output_clock_ticks_at_the_event_the_model_says_and_its_variables_are_read_there() {
+    let (c, _) = model_exchange();
+    exit_init(c);
+    // The initial event: `crossed` does not tick (fmi3GetClock runs the event's update).
+    let mut on = true;
+    // SAFETY: a live instance; locals.
+    assert_eq!(unsafe { fmi3GetClock(c, &23, 1, &mut on) }, fmi3OK);
+    assert!(!on);
+    update(c);
+    // The importer integrates to the crossing (here: sets the state there) and enters Event Mode.
+    // SAFETY: a live instance; locals.
+    unsafe {
+        assert_eq!(fmi3EnterContinuousTimeMode(c), fmi3OK);
+        assert_eq!(fmi3SetTime(c, 100.0), fmi3OK);
+        assert_eq!(fmi3SetContinuousStates(c, &100.0, 1), fmi3OK);
+        assert_eq!(fmi3EnterEventMode(c), fmi3OK);
+        assert_eq!(fmi3GetClock(c, &23, 1, &mut on), fmi3OK);
+    }
+    assert!(on, "the output clock ticks at the crossing");
+    assert_eq!(get_i32(c, 24), (fmi3OK, 1));
+    update(c);
+    // SAFETY: a live instance; locals.
+    assert_eq!(unsafe { fmi3GetClock(c, &23, 1, &mut on) }, fmi3OK);
+    assert!(!on, "inactive after fmi3UpdateDiscreteStates");
+    // SAFETY: a live instance.
+    unsafe { fmi3FreeInstance(c) };
+    // The importer does not activate an output clock, and reads its variables where it ticks only.
+    // (Each closure: SAFETY: a live instance; locals.)
+    refused(false, "is an output clock", |c| set_clock(c, 23, true));
+    refused(false, "clocked by 'crossed', which is not active", |c| get_i32(c, 24).0);
+    // After the event was evaluated, no input is set in this Event Mode.
+    refused(false, "set after this event was evaluated", |c| unsafe {
+        let mut on = false;
+        assert_eq!(fmi3GetClock(c, &23, 1, &mut on), fmi3OK);
+        fmi3SetFloat64(c, &3, 1, &0.5, 1)
+    });
 }
 
 #[test]

@@ -486,8 +486,11 @@ impl<M: CoSimulation> Instance<M> {
         if any_fmi2_element::<M>(self.version, vrs) {
             return self.get_fmi2_elements(function, vrs, out);
         }
-        // Every reference is checked before anything is computed: a refused get changes nothing
-        // (it used to run the initialization first, then refuse an unknown reference).
+        // A clock's tick first (whether a variable is readable depends on it), then every
+        // reference is checked before anything is computed: a refused get changes nothing.
+        if let Err(status) = self.evaluate_tick_for(function, vrs) {
+            return status;
+        }
         for vr in vrs {
             if let Err(status) = self
                 .lookup(function, *vr, T::TYPE)
@@ -495,9 +498,6 @@ impl<M: CoSimulation> Instance<M> {
             {
                 return status;
             }
-        }
-        if let Err(status) = self.evaluate_tick_for(function, vrs) {
-            return status;
         }
         if let Err(status) = self.up_to_date(function) {
             return status;
@@ -777,11 +777,13 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Before a clocked variable is read in Event Mode: the tick of the active clocks, computed
     /// once (one round of the event iteration, whose answers fmi3UpdateDiscreteStates gives).
-    pub fn evaluate_tick(&mut self, function: &str) -> Outcome {
+    /// `force`: also without an active input clock (the importer asks whether an output clock
+    /// ticks, or reads a variable it clocks: the model's update decides that).
+    pub fn evaluate_tick(&mut self, function: &str, force: bool) -> Outcome {
         if !M::DESCRIPTION.has_clocks()
             || self.sim.state != State::EventMode
             || self.evaluated_tick.is_some()
-            || !self.any_clock_active()
+            || !(force || self.any_clock_active())
         {
             return Ok(());
         }
@@ -795,14 +797,28 @@ impl<M: CoSimulation> Instance<M> {
         }
     }
 
-    /// [`Instance::evaluate_tick`] when one of `vrs` is a clocked variable.
+    /// [`Instance::evaluate_tick`] when one of `vrs` is a clocked variable (forced when one of its
+    /// clocks is an output clock).
     fn evaluate_tick_for(&mut self, function: &str, vrs: &[u32]) -> Outcome {
-        if M::DESCRIPTION.has_clocks()
-            && vrs
-                .iter()
-                .any(|vr| M::variable_index(*vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_clocked()))
-        {
-            self.evaluate_tick(function)?;
+        if !M::DESCRIPTION.has_clocks() {
+            return Ok(());
+        }
+        let mut clocked = false;
+        let mut by_output_clock = false;
+        for vr in vrs {
+            if let Some(v) = M::variable_index(*vr).map(|i| &M::DESCRIPTION.variables[i])
+                && v.is_clocked()
+            {
+                clocked = true;
+                by_output_clock |= v.fmi3.clocks.iter().any(|c| {
+                    M::DESCRIPTION
+                        .by_name(c)
+                        .is_some_and(|c| c.causality == Causality::Output)
+                });
+            }
+        }
+        if clocked {
+            self.evaluate_tick(function, by_output_clock)?;
         }
         Ok(())
     }
@@ -856,6 +872,15 @@ impl<M: CoSimulation> Instance<M> {
     fn check_settable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
         if M::DESCRIPTION.has_clocks() && decl.is_clocked() {
             self.clocked_access(function, decl, true)?;
+        }
+        if M::DESCRIPTION.has_clocks() && self.evaluated_tick.is_some() && self.sim.state == State::EventMode {
+            // The event's update already ran (for a clock's tick): a value set now would be missing
+            // from it.
+            return Err(self.error(&format!(
+                "{function}: '{}' (vr {}) is set after this event was evaluated (a clock was asked for, or a \
+                 clocked variable read): set the inputs first; refused, value unchanged",
+                decl.name, decl.value_reference
+            )));
         }
         if self.settable(decl) {
             return Ok(());

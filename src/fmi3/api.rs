@@ -1022,7 +1022,7 @@ pub unsafe fn evaluate_discrete_states<M: CoSimulation>(c: fmi3Instance) -> fmi3
         Call::EvaluateDiscreteStates,
         "fmi3EvaluateDiscreteStates",
         // The tick of the active clocks, if there is one to compute (else nothing to evaluate).
-        |inst| match inst.evaluate_tick("fmi3EvaluateDiscreteStates") {
+        |inst| match inst.evaluate_tick("fmi3EvaluateDiscreteStates", false) {
             Ok(()) => fmi3OK,
             Err(status) => status,
         },
@@ -1469,6 +1469,12 @@ pub unsafe fn set_clock<M: CoSimulation>(
             };
             // Every value is checked before any clock changes (all or nothing).
             for ((v, decl), active) in clocks.iter().zip(values) {
+                if v.causality != crate::description::Causality::Input {
+                    return inst.error(&format!(
+                        "{F}: '{}' (vr {}) is an output clock: the FMU ticks it (fmi3GetClock tells); no clock changed",
+                        v.name, v.value_reference
+                    ));
+                }
                 if inst.evaluated_tick.is_some() {
                     return inst.error(&format!(
                         "{F}: '{}' (vr {}): the tick of this Event Mode was already evaluated (a clocked variable was \
@@ -1532,6 +1538,15 @@ pub unsafe fn get_clock<M: CoSimulation>(
             let Some(out) = slice_mut(values, nvr) else {
                 return inst.error(&format!("{F}: values is NULL with nValueReferences = {nvr}"));
             };
+            // Whether an output clock ticks at this event is the model's update's to say: it runs
+            // now if it has not (its answers are those fmi3UpdateDiscreteStates then gives).
+            if clocks
+                .iter()
+                .any(|(v, _)| v.causality == crate::description::Causality::Output)
+                && let Err(status) = inst.evaluate_tick(F, true)
+            {
+                return status;
+            }
             for ((v, _), slot) in clocks.iter().zip(out.iter_mut()) {
                 *slot = inst.sim.model.clock(v.value_reference).is_some_and(|k| k.is_active());
             }

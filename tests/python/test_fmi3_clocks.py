@@ -49,6 +49,12 @@ pub struct SampledLag {
     /// dz/dt = y
     #[variable(vr = 7, name = "der(z)", local, continuous, derivative_of = z, depends = [])]
     pub der_z: f64,
+    /// Ticks where y rises through 0.5 (at a tick of `sample`)
+    #[variable(vr = 8, output, clock(triggered), depends = [])]
+    pub high: Clock,
+    /// How often y rose through 0.5
+    #[variable(vr = 9, output, discrete, clocks = [high])]
+    pub highs: i32,
     /// The filter's state: the output of the next tick
     pub next: f64,
 }
@@ -60,8 +66,13 @@ impl Model for SampledLag {
 
     fn update(&mut self, _event: &mut Event) -> Result<(), String> {
         if self.sample.is_active() {
+            let before = self.y;
             self.y = self.next;
             self.next = self.y + self.ts / self.t * (self.u - self.y);
+            if before < 0.5 && self.y >= 0.5 {
+                self.high.tick();
+                self.highs += 1;
+            }
         }
         Ok(())
     }
@@ -80,13 +91,16 @@ def u_of(t):
 
 
 def expected():
-    """y at each tick k (t = k Ts), and z(STOP) = the sum of y[k] Ts."""
-    y, nxt, ys = 0.0, 0.0, []
+    """y at each tick k (t = k Ts), and z(STOP) = the sum of y[k] Ts; the ticks where y rises
+    through 0.5 (the output clock `high`)."""
+    y, nxt, ys, highs = 0.0, 0.0, [], []
     for k in range(int(round(STOP / TS)) + 1):
-        y = nxt
+        before, y = y, nxt
         nxt = y + TS / T * (u_of(k * TS) - y)
         ys.append(y)
-    return ys, sum(ys[:-1]) * TS
+        if before < 0.5 <= y:
+            highs.append(k)
+    return ys, sum(ys[:-1]) * TS, highs
 
 
 @pytest.fixture(scope="module")
@@ -109,6 +123,9 @@ def test_the_description_is_valid_and_declares_the_clock(sampled_lag):
     assert v["sample"].type == "Clock" and v["sample"].causality == "input"
     assert v["sample"].intervalVariability == "fixed"
     assert [c.name for c in v["y"].clocks] == ["sample"] and [c.name for c in v["u"].clocks] == ["sample"]
+    assert v["high"].type == "Clock" and v["high"].causality == "output" and v["high"].intervalVariability == "triggered"
+    assert [c.name for c in v["highs"].clocks] == ["high"]
+    assert "high" in [o.variable.name for o in md.outputs]
     # A clocked output depends on its clock, and is no initial unknown.
     out = {o.variable.name: o for o in md.outputs}
     assert "sample" in [d.name for d in out["y"].dependencies]
@@ -123,12 +140,15 @@ def vr_of(path):
     return md, {x.name: x.valueReference for x in md.modelVariables}
 
 
-def tick(fmu, vr, t, seen):
+def tick(fmu, vr, t, seen, highs=None):
     """Event Mode at a tick: activate the clock, set the clocked input, read the clocked output
-    (evaluating the tick), update."""
+    (evaluating the tick), ask whether the output clock `high` ticks (and then read what it
+    clocks), update."""
     fmu.setClock([vr["sample"]], [True])
     fmu.setFloat64([vr["u"]], [u_of(t)])
     seen.append(fmu.getFloat64([vr["y"]])[0])
+    if highs is not None and fmu.getClock([vr["high"]])[0]:
+        highs.append((len(seen) - 1, fmu.getInt32([vr["highs"]])[0]))
     again = True
     while again:
         again, terminate, *_ = fmu.updateDiscreteStates()
@@ -148,12 +168,12 @@ def test_model_exchange_activates_the_clock_at_its_ticks(sampled_lag):
     fmu.getIntervalDecimal((ctypes.c_uint * 1)(vr["sample"]), h, q)
     assert (h[0], q[0]) == (TS, 2)
     fmu.exitInitializationMode()
-    seen, t, k = [], 0.0, 0
+    seen, highs, t, k = [], [], 0.0, 0
     n = int(round(STOP / TS))
     x = (ctypes.c_double * 1)()
     dx = (ctypes.c_double * 1)()
     while True:
-        tick(fmu, vr, t, seen)
+        tick(fmu, vr, t, seen, highs)
         if k == n:
             break
         fmu.enterContinuousTimeMode()
@@ -171,9 +191,11 @@ def test_model_exchange_activates_the_clock_at_its_ticks(sampled_lag):
         t = k * TS
         fmu.setTime(t)
         fmu.enterEventMode()
-    ys, z = expected()
+    ys, z, want_highs = expected()
     assert max(abs(a - b) for a, b in zip(seen, ys)) < 1e-12, (seen, ys)
     assert abs(fmu.getFloat64([vr["z"]])[0] - z) < 1e-12
+    # The output clock ticked where y rose through 0.5, and counted each.
+    assert want_highs and highs == [(k, i + 1) for i, k in enumerate(want_highs)], (highs, want_highs)
     fmu.terminate()
     fmu.freeInstance()
 
@@ -196,7 +218,7 @@ def test_co_simulation_with_event_mode_agrees(sampled_lag):
         event, terminate, early, last = fmu.doStep(k * TS, TS)
         assert not terminate and not early
         fmu.enterEventMode()
-    ys, z = expected()
+    ys, z, _ = expected()
     assert max(abs(a - b) for a, b in zip(seen, ys)) < 1e-12
     # The runtime's integrator between the ticks: z = sum of y Ts to its tolerance.
     assert abs(fmu.getFloat64([vr["z"]])[0] - z) < 1e-6
@@ -212,3 +234,15 @@ def test_co_simulation_without_event_mode_is_refused_with_the_reason(sampled_lag
     with pytest.raises(Exception):
         fmu.instantiate(eventModeUsed=False, logMessage=lambda *a: messages.append(a[-1]))
     assert any(b"eventModeUsed = true" in m for m in messages), messages
+
+
+def test_cargo_fmu_check_passes_on_the_clocked_fmu(sampled_lag):
+    """The conformance suite on an FMU with input and output clocks: its clock check (an importer
+    that activates the input clocks at their ticks and asks for the output clocks at every event)
+    and every other check, which run its co-simulation with eventModeUsed as the standard requires."""
+    crate, env = outside_crate("sampled-lag")
+    out = subprocess.run(["cargo", "fmu", "check", sampled_lag], cwd=crate, env=env, capture_output=True, text=True,
+                         timeout=900)
+    summary = [line for line in out.stdout.splitlines() if " passed, " in line and " failed" in line]
+    assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
+    assert "PASS  model exchange / fmi3_clocks_tick_where_their_intervals_say" in out.stdout, out.stdout[-3000:]

@@ -654,11 +654,25 @@ fn clock_rules(a: &VarAttr, kind: Kind, causality: Causality, variability: Varia
             "a Clock needs clock(constant | fixed | tunable | changing | countdown | triggered, ..): its intervalVariability",
         ));
     };
-    if causality != Causality::Input {
-        return Err(Error::new(
-            span,
-            "a Clock here is an input clock (the importer activates it); output and local clocks are not supported yet",
-        ));
+    let triggered = clock.variability.0 == "triggered";
+    match causality {
+        Causality::Input => {}
+        // "The attribute intervalVariability must be triggered for output Clocks" (FMI 3.0, 2.4.7.6).
+        Causality::Output if triggered => {}
+        Causality::Output => {
+            return Err(Error::new(
+                clock.variability.1,
+                "an output clock is triggered (FMI 3.0: \"intervalVariability must be triggered for output Clocks\"): \
+                 clock(triggered); the model ticks it with Clock::tick in update",
+            ));
+        }
+        _ => {
+            return Err(Error::new(
+                span,
+                "a Clock is an input clock (the importer activates it) or a triggered output clock (the model ticks \
+                 it); local clocks are not supported",
+            ));
+        }
     }
     if a.start.is_some() || a.unit.is_some() || a.min.is_some() || a.max.is_some() || a.clocks.is_some() {
         return Err(Error::new(span, "a Clock has no start, unit, min, max or clocks"));

@@ -61,11 +61,15 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
     let mut out = vec![];
     for v in inst.fmu.md.variables.iter().filter(|v| v.ty == Type::Clock) {
         let Some(c) = &v.clock else { continue };
-        if v.causality != Causality::Input {
+        if v.causality == Causality::Local {
             limitation(format!(
-                "output and local clocks ('{}'): the suite activates input clocks only",
+                "local clock '{}': the FMU's own, not the importer's to see",
                 v.name
             ));
+            continue;
+        }
+        if v.causality != Causality::Input {
+            // Output clocks: asked for at every event (in `run`).
             continue;
         }
         let iv = c.interval_variability.as_str();
@@ -281,6 +285,41 @@ fn run(
                 inst.log_text()
             );
             values.extend(bytes);
+        }
+        // The output clocks: whether each ticks at this event, and then what it clocks.
+        for oc in fmu
+            .md
+            .variables
+            .iter()
+            .filter(|v| v.ty == Type::Clock && v.causality == Causality::Output)
+        {
+            let mut on = 7u8;
+            let s = inst.call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
+            assert!(
+                s == fmi3OK && on <= 1,
+                "{id}: fmi3GetClock of output clock '{}' at t = {t}: status {s}, value {on}: {}",
+                oc.name,
+                inst.log_text()
+            );
+            values.push(on);
+            if on == 1 {
+                for v in fmu.md.variables.iter().filter(|v| {
+                    v.clocks.contains(&oc.vr)
+                        && v.fixed_count().is_some()
+                        && !matches!(v.ty, Type::String | Type::Binary)
+                }) {
+                    let (s, bytes) = inst.get_raw(v);
+                    assert_eq!(
+                        s,
+                        fmi3OK,
+                        "{id}: reading '{}' where its output clock '{}' ticks (t = {t}): {}",
+                        v.name,
+                        oc.name,
+                        inst.log_text()
+                    );
+                    values.extend(bytes);
+                }
+            }
         }
         seen.push(
             values

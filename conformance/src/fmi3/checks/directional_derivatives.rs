@@ -15,7 +15,12 @@ pub(super) fn unknowns(fmu: &Fmu3, me: bool) -> Vec<u32> {
             .outputs
             .iter()
             .map(|u| u.vr)
-            .filter(|vr| fmu.md.by_vr(*vr).is_some_and(|v| v.ty == Type::Float64)),
+            // (Clocked outputs are read at their ticks only, not where derivatives are taken.)
+            .filter(|vr| {
+                fmu.md
+                    .by_vr(*vr)
+                    .is_some_and(|v| v.ty == Type::Float64 && v.clocks.is_empty())
+            }),
     );
     list
 }
