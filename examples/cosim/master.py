@@ -16,6 +16,14 @@ In initialization mode the connections are propagated once per component.
 instances; the parameter study (`examples/pendulum_study/closed_loop.py`) keeps loops alive and
 runs many experiments on each (fmi2Reset between them).
 
+Clocks (FMI 3.0): a component with periodic input clocks (the SampledController's `sample`)
+runs with eventModeUsed; the master reads each clock's interval and shift in Initialization Mode
+and requires its ticks to fall on communication points. At a communication point where a clock
+ticks, the instance is in Event Mode: fmi3SetClock, then the connections (its clocked inputs are
+set, its clocked outputs read), then fmi3UpdateDiscreteStates and fmi3EnterStepMode before it
+steps. Between the ticks its clocked inputs are not set and its clocked outputs hold the values
+read at the last tick (they cannot be read there).
+
 The FMI version is each FMU's own (its modelDescription's fmiVersion): a 2.0 FMU runs on
 FMU2Slave (fmi2SetupExperiment, then fmi2EnterInitializationMode; Real, Integer, Enumeration
 through fmi2SetInteger), a 3.0 FMU on FMU3Slave (fmi3EnterInitializationMode with the same start
@@ -78,6 +86,12 @@ class Fmu:
         if self.md.fmiVersion not in ("2.0",) and not self.md.fmiVersion.startswith("3."):
             raise ValueError(f"{path}: FMI {self.md.fmiVersion}: the master runs FMI 2.0 and 3.0 FMUs")
         self.fmi3 = self.md.fmiVersion.startswith("3.")
+        # FMI 3.0 clocks: the input clocks the master activates, the clocked variables.
+        self.clocks = [v for v in self.md.modelVariables if v.type == "Clock"]
+        for c in self.clocks:
+            if c.causality != "input" or c.intervalVariability not in ("constant", "fixed", "tunable"):
+                raise ValueError(f"{path}: clock '{c.name}' ({c.causality}, {c.intervalVariability}): the master activates periodic input clocks only")
+        self.clocked = {v.valueReference for v in self.md.modelVariables if getattr(v, "clocks", None)}
         self.dir = extract(path, unzipdir=tempfile.mkdtemp(prefix=self.md.coSimulation.modelIdentifier + "-", dir=workdir))
         self.vars = {v.name: v for v in self.md.modelVariables}
 
@@ -97,21 +111,41 @@ class RealPort:
     10 us per call against 4 us here (measured, 4 values), and a run makes about ten such calls
     per communication point."""
 
-    def __init__(self, slave: FMU2Slave | FMU3Slave, vrs: list[int]):
+    def __init__(self, slave: FMU2Slave | FMU3Slave, vrs: list[int], clocked=frozenset(), ticking=None):
         self.slave = slave
         self.fmi3 = isinstance(slave, FMU3Slave)
         self.n = len(vrs)
         self.vr = (ctypes.c_uint * self.n)(*vrs)
         self.buf = (ctypes.c_double * self.n)()
+        # Clocked variables (FMI 3.0) are read and set while their instance ticks (`ticking()`)
+        # only; between the ticks a read gives the values of the last tick, a set sets the others.
+        self.clocked = [vr in clocked for vr in vrs]
+        self.ticking = ticking if any(self.clocked) else None
+        self.held = (ctypes.c_double * self.n)()
+        self.free = [vr for vr, c in zip(vrs, self.clocked) if not c]
 
     def get(self):
+        if self.ticking is not None and not self.ticking():
+            if self.free:
+                values = iter(self.slave.getFloat64(self.free))
+                for i, c in enumerate(self.clocked):
+                    if not c:
+                        self.held[i] = next(values)
+            return self.held
         if self.fmi3:
             self.slave.fmi3GetFloat64(self.slave.component, self.vr, self.n, self.buf, self.n)
         else:
             self.slave.fmi2GetReal(self.slave.component, self.vr, self.n, self.buf)
+        if self.ticking is not None:
+            ctypes.memmove(self.held, self.buf, ctypes.sizeof(self.buf))
         return self.buf
 
     def set(self, values) -> None:
+        if self.ticking is not None and not self.ticking():
+            free = [(vr, x) for vr, c, x in zip(self.vr, self.clocked, values) if not c]
+            if free:
+                self.slave.setFloat64([vr for vr, _ in free], [x for _, x in free])
+            return
         for i, x in enumerate(values):
             self.buf[i] = x
         if self.fmi3:
@@ -146,6 +180,12 @@ class Loop:
         self.fmus = {c.name: fmus[c.fmu] for c in system.components}
         self.start = {f"{c.name}.{k}": v for c in system.components for k, v in c.start.items()}
         self.slaves: dict[str, FMU2Slave | FMU3Slave] = {}
+        # Clocked instances: their clocks' (value reference, shift, interval), and whether each
+        # is in Event Mode (ticking: at a tick; or right after initialization).
+        self._ticks: dict[str, list[tuple[int, float, float]]] = {}
+        self._ticking: dict[str, bool] = {}
+        self._in_event_mode: dict[str, bool] = {}
+        self._held: dict[tuple[str, int], float] = {}
         try:
             for name, fmu in self.fmus.items():
                 cls = FMU3Slave if fmu.fmi3 else FMU2Slave
@@ -156,7 +196,9 @@ class Loop:
                     instanceName=name,
                 )
                 if fmu.fmi3:
-                    slave.instantiate(loggingOn=False, logMessage=_fmi3_logger(callbacks, name))
+                    # With clocks, eventModeUsed is required (FMI 3.0, 4.2.1).
+                    slave.instantiate(loggingOn=False, logMessage=_fmi3_logger(callbacks, name),
+                                      eventModeUsed=bool(fmu.clocks))
                 else:
                     slave.instantiate(callbacks=getattr(callbacks, "callbacks", callbacks), loggingOn=False)
                 self.slaves[name] = slave
@@ -176,7 +218,8 @@ class Loop:
 
     def port(self, component: str, names) -> RealPort:
         """A RealPort on Real (Float64) variables `names` of `component`."""
-        return RealPort(self.slaves[component], [self.var(component, v).valueReference for v in names])
+        return RealPort(self.slaves[component], [self.var(component, v).valueReference for v in names],
+                        self.fmus[component].clocked, lambda: self._ticking.get(component, False))
 
     def feeds_through(self, component: str, inputs) -> bool:
         """Whether an output of `component` depends directly on one of `inputs` (its
@@ -281,6 +324,17 @@ class Loop:
     def get(self, component: str, name: str):
         v = self.var(component, name)
         slave = self.slaves[component]
+        if v.valueReference in self.fmus[component].clocked:
+            # A clocked variable: read at a tick, held between them.
+            key = (component, v.valueReference)
+            if self._ticking.get(component, False) or key not in self._held:
+                self._held[key] = slave.getFloat64([v.valueReference])[0] if v.type == "Float64" else self._plain_get(component, v)
+            return self._held[key]
+        return self._plain_get(component, v)
+
+    def _plain_get(self, component: str, v):
+        slave = self.slaves[component]
+        name = v.name
         if v.type == "Real":
             return slave.getReal([v.valueReference])[0]
         if v.type == "Float64":
@@ -321,21 +375,84 @@ class Loop:
                 slave.enterInitializationMode(startTime=0.0, stopTime=n * step)
             else:
                 slave.enterInitializationMode()
+        # In Initialization Mode clocked variables are set and read whatever the clocks (FMI 3.0).
+        self._ticking = {name: bool(fmu.clocks) for name, fmu in self.fmus.items()}
+        self._in_event_mode = {name: False for name in self.fmus}
         for _ in self.slaves:
             self.propagate()
-        for slave in self.slaves.values():
+        self._read_clocks(step)
+        self._ticking = {name: False for name in self.fmus}
+        for name, slave in self.slaves.items():
             slave.exitInitializationMode()
+            self._in_event_mode[name] = bool(self.fmus[name].clocks)
+        self._held.clear()
         for k in range(n + 1):
             t = k * step
+            self._tick(k, step)
             self.propagate()
             if not observe(k, t) or k == n:
                 break
+            self._end_events()
             for name, slave in self.slaves.items():
                 done = slave.doStep(currentCommunicationPoint=t, communicationStepSize=step)
                 if self.fmus[name].fmi3:
                     _check_fmi3_step(name, t, step, done)
+        self._end_events()
         for slave in self.slaves.values():
             slave.terminate()
+
+    def _read_clocks(self, step: float) -> None:
+        """In Initialization Mode: each clock's interval and shift (fmi3GetIntervalDecimal,
+        fmi3GetShiftDecimal), whose ticks must be communication points."""
+        self._ticks.clear()
+        for name, fmu in self.fmus.items():
+            if not fmu.clocks:
+                continue
+            slave = self.slaves[name]
+            vrs = (ctypes.c_uint * len(fmu.clocks))(*[c.valueReference for c in fmu.clocks])
+            intervals = (ctypes.c_double * len(fmu.clocks))()
+            qualifiers = (ctypes.c_int * len(fmu.clocks))()
+            shifts = (ctypes.c_double * len(fmu.clocks))()
+            slave.getIntervalDecimal(vrs, intervals, qualifiers)
+            slave.fmi3GetShiftDecimal(slave.component, vrs, len(fmu.clocks), shifts)
+            ticks = []
+            for c, h, s in zip(fmu.clocks, intervals, shifts):
+                for what, x in (("interval", h), ("shift", s)):
+                    if abs(x / step - round(x / step)) > 1e-9 * max(1.0, x / step):
+                        raise ValueError(f"{name}: the {what} of clock '{c.name}', {x} s, is no multiple of the communication step {step} s: its ticks would fall between communication points")
+                ticks.append((c.valueReference, int(round(s / step)), int(round(h / step))))
+            self._ticks[name] = ticks
+
+    def _tick(self, k: int, step: float) -> None:
+        """At communication point k: every clocked instance whose clocks tick enters Event Mode
+        (after initialization it is there) and activates them."""
+        for name, ticks in self._ticks.items():
+            due = [vr for vr, s, h in ticks if k >= s and (k - s) % h == 0]
+            if not due:
+                continue
+            slave = self.slaves[name]
+            if not self._in_event_mode[name]:
+                slave.enterEventMode()
+                self._in_event_mode[name] = True
+            slave.setClock(due, [True] * len(due))
+            self._ticking[name] = True
+
+    def _end_events(self) -> None:
+        """Every instance in Event Mode: fmi3UpdateDiscreteStates until done (it deactivates the
+        clocks), then fmi3EnterStepMode."""
+        for name, in_event in self._in_event_mode.items():
+            if not in_event:
+                continue
+            slave = self.slaves[name]
+            while True:
+                need, terminate, *_ = slave.updateDiscreteStates()
+                if terminate:
+                    raise RuntimeError(f"{name}: fmi3UpdateDiscreteStates asked to terminate the simulation")
+                if not need:
+                    break
+            slave.enterStepMode()
+            self._in_event_mode[name] = False
+            self._ticking[name] = False
 
     def close(self) -> None:
         for slave in self.slaves.values():

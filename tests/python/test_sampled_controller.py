@@ -15,7 +15,7 @@ from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 import pytest
 
-from conftest import fmu, fmu3
+from conftest import ROOT, fmu, fmu3
 
 TS = 0.01
 TICKS = 150
@@ -129,3 +129,34 @@ def test_the_description_declares_the_sample_clock_and_clocked_variables():
         assert [c.name for c in v[n].clocks] == ["sample"], n
         assert v[n].variability == "discrete"
     assert fmpy.validation.validate_fmu(fmu3("SampledController")) == []
+
+
+def test_the_clocked_controller_closes_the_loop_like_the_sampled_controller():
+    """PendulumLQR with the SampledController in place of the Controller, run by the project's
+    master (examples/cosim), which activates the clock at its ticks: at h = Ts the loop equals the
+    loop with the 2.0 Controller's `sampled = true` (samples at the communication points) bit for
+    bit; at h = Ts/2 the clocked controller holds its torques over two steps, and the plant
+    differs only by its integration over two substeps."""
+    import dataclasses
+    import sys
+
+    import numpy as np
+
+    sys.path.insert(0, str(ROOT / "examples"))
+    from cosim import simulate
+    from cosim.systems import plant_and_controller
+
+    record = {"pendulum": ["alpha1", "omega1", "alpha2", "omega2"], "controller": ["M1", "M2"]}
+    sampled = plant_and_controller(fmu3("Pendulum"), fmu("Controller"))
+    sampled = dataclasses.replace(sampled, components=tuple(
+        dataclasses.replace(c, start={**c.start, "sampled": True, "Ts": TS}) if c.name == "controller" else c
+        for c in sampled.components))
+    want = simulate(sampled, 2.0, TS, record)
+    clocked = plant_and_controller(fmu3("Pendulum"), fmu3("SampledController"))
+    got = simulate(clocked, 2.0, TS, record)
+    for key in want:
+        assert np.array_equal(got[key], want[key]), (key, np.max(np.abs(got[key] - want[key])))
+    assert np.max(np.abs(want["controller.M1"])) > 0.5  # the controller works: not a run of zeros
+    half = simulate(clocked, 2.0, TS / 2, record)
+    assert np.array_equal(half["controller.M1"][1::2], half["controller.M1"][0:-1:2]), "held between ticks"
+    assert np.max(np.abs(half["pendulum.alpha1"][::2] - got["pendulum.alpha1"])) < 1e-9
