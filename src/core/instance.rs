@@ -652,6 +652,10 @@ impl<M: CoSimulation> Instance<M> {
     /// instance.
     pub fn get_strings(&mut self, vrs: &[u32], out: &mut [*const std::os::raw::c_char]) -> Status {
         let f = self.terms.name(Function::GetString);
+        // A clock's tick first (as in `get_values`), then the checks.
+        if let Err(status) = self.evaluate_tick_for(f, vrs) {
+            return status;
+        }
         for vr in vrs {
             if let Err(status) = self
                 .lookup(f, *vr, VarType::String)
@@ -660,7 +664,7 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if let Err(status) = self.evaluate_tick_for(f, vrs).and_then(|()| self.up_to_date(f)) {
+        if let Err(status) = self.up_to_date(f) {
             return status;
         }
         self.strings.clear();
@@ -1002,6 +1006,10 @@ impl<M: CoSimulation> Instance<M> {
     /// The Binary getter (FMI 3.0): the returned pointers stay valid until the next call on
     /// this instance (the bytes are copied, as the strings are).
     pub fn get_binaries(&mut self, function: &str, vrs: &[u32], sizes: &mut [usize], out: &mut [*const u8]) -> Status {
+        // A clock's tick first (as in `get_values`), then the checks.
+        if let Err(status) = self.evaluate_tick_for(function, vrs) {
+            return status;
+        }
         for vr in vrs {
             if let Err(status) = self
                 .lookup(function, *vr, VarType::Binary)
@@ -1010,10 +1018,7 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        if let Err(status) = self
-            .evaluate_tick_for(function, vrs)
-            .and_then(|()| self.up_to_date(function))
-        {
+        if let Err(status) = self.up_to_date(function) {
             return status;
         }
         self.binaries.clear();
