@@ -7,8 +7,11 @@ and in Co-Simulation with event mode, activating the clock at its ticks: the clo
 at the ticks only, equal to the difference equation computed here, and both interfaces agree."""
 
 import math
+import pathlib
+import re
 import shutil
 import subprocess
+import sys
 
 import fmpy
 import fmpy.validation
@@ -130,9 +133,12 @@ def test_the_description_is_valid_and_declares_the_clock(sampled_lag):
     out = {o.variable.name: o for o in md.outputs}
     assert "sample" in [d.name for d in out["y"].dependencies]
     assert "y" not in [u.variable.name for u in md.initialUnknowns]
-    if shutil.which("fmutool"):
-        r = subprocess.run(["fmutool", "-input", sampled_lag, "-check"], capture_output=True, text=True, timeout=300)
-        assert r.returncode == 0 and "ERROR" not in r.stdout.upper(), r.stdout + r.stderr
+    fmutool = shutil.which("fmutool") or shutil.which("fmutool", path=str(pathlib.Path(sys.executable).parent))
+    if fmutool:
+        r = subprocess.run([fmutool, "-input", sampled_lag, "-check"], capture_output=True, text=True, timeout=300)
+        # Its log lines start with the level ("ERROR    | ..."); "No semantic error" is fine.
+        errors = [line for line in (r.stdout + r.stderr).splitlines() if re.match(r"^\s*(ERROR|CRITICAL)\b", line)]
+        assert r.returncode == 0 and not errors and "No semantic error" in r.stdout, r.stdout + r.stderr
 
 
 def vr_of(path):
