@@ -391,6 +391,31 @@ fn an_output_clock_ticks_at_the_event_the_model_says_and_its_variables_are_read_
 }
 
 #[test]
+fn an_fmu_state_taken_after_a_tick_was_evaluated_restores_to_one_tick() {
+    let (c, _) = model_exchange();
+    exit_init(c);
+    assert_eq!(set_clock(c, 2, true), fmi3OK);
+    // SAFETY: a live instance; locals.
+    assert_eq!(unsafe { fmi3SetFloat64(c, &11, 1, &2.0, 1) }, fmi3OK);
+    assert_eq!(get_f64(c, 12), (fmi3OK, 2.0), "the tick evaluated: sum = u");
+    // The state between the evaluation and the update: restored, the tick is evaluated once more
+    // from what it was evaluated from, not added a second time.
+    let mut state: fmi3FMUState = std::ptr::null_mut();
+    // SAFETY: a live instance; a local state handle.
+    assert_eq!(unsafe { fmi3GetFMUState(c, &mut state) }, fmi3OK);
+    update(c);
+    // SAFETY: a live instance; the state it gave.
+    assert_eq!(unsafe { fmi3SetFMUState(c, state) }, fmi3OK);
+    assert_eq!(get_f64(c, 12), (fmi3OK, 2.0), "restored: one tick, not two");
+    update(c);
+    // SAFETY: a live instance; its state.
+    unsafe {
+        assert_eq!(fmi3FreeFMUState(c, &mut state), fmi3OK);
+        fmi3FreeInstance(c);
+    }
+}
+
+#[test]
 fn co_simulation_needs_event_mode_and_ticks_there() {
     let l: &'static Log = Box::leak(Box::default());
     let token = CString::new(TOKEN).unwrap();

@@ -113,6 +113,9 @@ pub struct Instance<M: CoSimulation> {
     /// fmi3UpdateDiscreteStates (a clocked variable was read, or fmi3EvaluateDiscreteStates
     /// ran): the event round's answers, which fmi3UpdateDiscreteStates then gives.
     pub evaluated_tick: Option<EventInfo>,
+    /// ... and the model and its event clock before that evaluation: an FMU state taken until
+    /// fmi3UpdateDiscreteStates is this one (restored, the tick is evaluated again, once).
+    tick_before: Option<Box<(M, EventClock)>>,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -195,6 +198,7 @@ impl<M: CoSimulation> Instance<M> {
             version: terms.version,
             event_mode_used: false,
             evaluated_tick: None,
+            tick_before: None,
             early_return_allowed: false,
             step_event: false,
             intermediate_update: None,
@@ -431,6 +435,7 @@ impl<M: CoSimulation> Instance<M> {
     pub fn reset(&mut self) -> Status {
         self.sim = Sim::new();
         self.evaluated_tick = None;
+        self.tick_before = None;
         self.event(|| "reset: every variable is back at its start value".into());
         OK
     }
@@ -792,9 +797,11 @@ impl<M: CoSimulation> Instance<M> {
             return Ok(());
         }
         let mut info = EventInfo::default();
+        let before = Box::new((self.sim.model.clone(), self.sim.events));
         match self.event_iteration(function, &mut info, false) {
             OK => {
                 self.evaluated_tick = Some(info);
+                self.tick_before = Some(before);
                 Ok(())
             }
             status => Err(status),
@@ -833,6 +840,21 @@ impl<M: CoSimulation> Instance<M> {
         if M::DESCRIPTION.has_clocks() {
             self.sim.model.deactivate_clocks();
             self.evaluated_tick = None;
+            self.tick_before = None;
+        }
+    }
+
+    /// What an FMU state holds: the simulation, or, between the evaluation of a clock's tick and
+    /// fmi3UpdateDiscreteStates, the simulation before that evaluation (the tick is a function of
+    /// it; restored, the next read or update evaluates it again).
+    pub fn state_to_save(&self) -> std::borrow::Cow<'_, Sim<M>> {
+        match (&self.evaluated_tick, &self.tick_before) {
+            (Some(_), Some(before)) => {
+                let mut sim = self.sim.clone();
+                (sim.model, sim.events) = (before.0.clone(), before.1);
+                std::borrow::Cow::Owned(sim)
+            }
+            _ => std::borrow::Cow::Borrowed(&self.sim),
         }
     }
 
@@ -1436,6 +1458,7 @@ impl<M: CoSimulation> Instance<M> {
     /// After an FMU state was restored: what the equations computed is recomputed on demand.
     pub fn restored(&mut self) {
         self.evaluated_tick = None;
+        self.tick_before = None;
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
     }

@@ -88,12 +88,13 @@ pub unsafe fn get_fmu_state<M: CoSimulation>(terms: &'static Terms, c: Handle, s
         let Some(state) = (unsafe { state.as_mut() }) else {
             return inst.error(&format!("{f}: {arg} is NULL"));
         };
+        let sim = inst.state_to_save();
         if state.is_null() {
-            *state = snapshots::adopt(inst.guid, inst.sim.clone());
+            *state = snapshots::adopt(inst.guid, sim.into_owned());
             return OK;
         }
         // A non-NULL *FMUstate is overwritten in place: it must be one of this FMU's.
-        match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim.clone_from(&inst.sim)) {
+        match snapshots::with::<M, _>(terms, inst.guid, *state, |s| s.sim.clone_from(&sim)) {
             Ok(()) => OK,
             Err(why) => inst.error(&format!("{f}: *{arg}: {why}; refused, nothing changed")),
         }
