@@ -797,11 +797,9 @@ impl<M: CoSimulation> Instance<M> {
             return Ok(());
         }
         let mut info = EventInfo::default();
-        let before = Box::new((self.sim.model.clone(), self.sim.events));
-        match self.event_iteration(function, &mut info, false) {
+        match self.event_iteration_keeping(function, &mut info, false, true) {
             OK => {
                 self.evaluated_tick = Some(info);
-                self.tick_before = Some(before);
                 Ok(())
             }
             status => Err(status),
@@ -839,8 +837,9 @@ impl<M: CoSimulation> Instance<M> {
     fn end_ticks(&mut self) {
         if M::DESCRIPTION.has_clocks() {
             self.sim.model.deactivate_clocks();
+            // (`tick_before` keeps its allocation for the next tick; without an evaluated tick
+            // it means nothing.)
             self.evaluated_tick = None;
-            self.tick_before = None;
         }
     }
 
@@ -1529,6 +1528,19 @@ impl<M: CoSimulation> Instance<M> {
     /// One round (`all_rounds`: every round, as co-simulation runs it) of the event iteration
     /// at the current time, all or nothing: on a refusal the model and its clock are as before.
     fn event_iteration(&mut self, function: &str, info: &mut EventInfo, all_rounds: bool) -> Status {
+        self.event_iteration_keeping(function, info, all_rounds, false)
+    }
+
+    /// [`Instance::event_iteration`]; `keep`: the model and clock from before the round go to
+    /// [`Instance::tick_before`] (a clock's tick evaluated before fmi3UpdateDiscreteStates),
+    /// reusing its allocation.
+    fn event_iteration_keeping(
+        &mut self,
+        function: &str,
+        info: &mut EventInfo,
+        all_rounds: bool,
+        keep: bool,
+    ) -> Status {
         *info = EventInfo::default();
         if let Err(status) = self.up_to_date(function) {
             return status;
@@ -1583,6 +1595,12 @@ impl<M: CoSimulation> Instance<M> {
                         }
                     )
                 });
+                if keep {
+                    match &mut self.tick_before {
+                        Some(b) => **b = before,
+                        None => self.tick_before = Some(Box::new(before)),
+                    }
+                }
                 OK
             }
             Err(why) => {
