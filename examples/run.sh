@@ -30,7 +30,9 @@ target/release/examples/paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
 lap "paper numbers, Figures 6-8"
 .venv/bin/python examples/composed_demo.py --out out
-lap "composed demo (fmpy)"
+# The FMI 3.0 clocked controller (its sample rate a clock) closing the loop, against the 2.0 one.
+.venv/bin/python examples/clocked_controller.py --out out
+lap "composed demo (fmpy), clocked controller"
 # The full loop from the command line of the native SSP runner (runner/).
 target/release/rustfmu-runner run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
   --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
@@ -53,7 +55,8 @@ echo "Platforms: FMI 2.0 $(platforms target/fmu/Pendulum.fmu); FMI 3.0 $(platfor
 echo "  (Linux binaries load on glibc >= 2.17; the macOS ones, for macOS >= 10.12 on Intel and >= 11.0 on Apple"
 echo "  silicon, are built and checked here but never run: no Mac here. docs/platforms.md; cargo fmu info FILE.fmu)"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
-echo "demo (controller -> 2 motors -> pendulum through fmpy), the same loop in the native runner's"
+echo "demo (controller -> 2 motors -> pendulum through fmpy), the FMI 3.0 clocked controller's loop against"
+echo "the 2.0 sampled one (clocked_controller.csv), the same loop in the native runner's"
 echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"
 (cd out && find . -type f | sort | sed 's|^\./|  out/|')
 echo "Time: $((SECONDS - started)) s in all"
