@@ -464,6 +464,10 @@ pub struct Interfaces {
     pub co_simulation: bool,
     pub model_exchange: bool,
     pub version: FmiVersion,
+    /// FMI 2.0 co-simulation `canInterpolateInputs`: the step follows the first derivatives of
+    /// the Real inputs given with fmi2SetRealInputDerivatives
+    /// ([`crate::CoSimulation::INTERPOLATES_INPUTS`]).
+    pub can_interpolate_inputs: bool,
 }
 
 impl Interfaces {
@@ -471,18 +475,21 @@ impl Interfaces {
         co_simulation: true,
         model_exchange: false,
         version: FmiVersion::V2,
+        can_interpolate_inputs: false,
     };
     /// Model exchange and co-simulation in one binary: what `export_fmi2!` exports.
     pub const BOTH: Interfaces = Interfaces {
         co_simulation: true,
         model_exchange: true,
         version: FmiVersion::V2,
+        can_interpolate_inputs: false,
     };
     /// ... and what `export_fmi3!` exports.
     pub const BOTH_FMI3: Interfaces = Interfaces {
         co_simulation: true,
         model_exchange: true,
         version: FmiVersion::V3,
+        can_interpolate_inputs: false,
     };
 }
 
@@ -1238,6 +1245,10 @@ impl Enc<'_> {
                 i += 1;
             }
         }
+        // canInterpolateInputs: only where it is true, so the other encodings are those before.
+        if interfaces.can_interpolate_inputs {
+            self.u8(INTERPOLATES_INPUTS_TAG);
+        }
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
         if let FmiVersion::V3 = interfaces.version {
@@ -1294,6 +1305,8 @@ const FMI3_EXTRAS_TAG: u8 = 0xE2;
 const TERMINALS_TAG: u8 = 0xE3;
 /// Marks the block of the clocks and clocked variables, after the FMI 3.0 declarations.
 const CLOCKS_TAG: u8 = 0xE4;
+/// Marks a co-simulation step that follows input derivatives (canInterpolateInputs), last.
+const INTERPOLATES_INPUTS_TAG: u8 = 0xE5;
 
 const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
     let mut body = Enc { buf, pos: 0 };
@@ -1631,6 +1644,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         co_simulation: d.u8()? != 0,
         model_exchange: d.u8()? != 0,
         version: FmiVersion::V2,
+        can_interpolate_inputs: false,
     };
     let default_experiment = if d.u8()? == 0 {
         None
@@ -1754,6 +1768,10 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             v.fmi3.clock = clock;
             v.fmi3.clocks = clocks;
         }
+    }
+    if d.at < d.b.len() && d.b[d.at] == INTERPOLATES_INPUTS_TAG {
+        d.u8()?;
+        interfaces.can_interpolate_inputs = true;
     }
     if d.at + 1 == d.b.len() {
         match d.u8()? {

@@ -354,6 +354,19 @@ pub struct Context<'a> {
     /// the integrator with its time; `Some(t_r)` when the importer asks the step to return
     /// early at `t_r` ([`EventClock::returned_early_at`]).
     pub(crate) intermediate: Option<&'a mut (dyn FnMut(f64) -> Option<f64> + 'static)>,
+    /// FMI 2.0 input derivatives: (input, du/dt); over a step from t the input is u + du (t' - t).
+    pub(crate) input_slopes: &'a [(u32, f64)],
+}
+
+/// The inputs of `c` with a derivative in `slopes` at `dt` after the step's start: u + du dt,
+/// u the value the model holds (set by the importer at the step's start).
+#[inline]
+fn slope_inputs<M: Variables>(c: &mut M::Continuous<f64>, model: &M, slopes: &[(u32, f64)], dt: f64) {
+    for &(vr, s) in slopes {
+        if let (Some(Value::Real(u)), Some(slot)) = (model.get(vr), M::continuous_slot(c, vr)) {
+            *slot = u + s * dt;
+        }
+    }
 }
 
 /// The runtime's part of a model's events, kept in the FMU state: the time event the model asked
@@ -393,6 +406,7 @@ impl Context<'_> {
             events: None,
             return_at_events: false,
             intermediate: None,
+            input_slopes: &[],
         }
     }
 
@@ -416,6 +430,7 @@ impl Context<'_> {
             events: None,
             return_at_events: false,
             intermediate: None,
+            input_slopes: &[],
         }
     }
 
@@ -433,6 +448,7 @@ impl Context<'_> {
             events: None,
             return_at_events: false,
             intermediate: None,
+            input_slopes: &[],
         }
     }
 
@@ -453,6 +469,15 @@ impl Context<'_> {
         {
             return crate::events::integrate_with_events(self, model, t, h);
         }
+        let slopes = self.input_slopes;
+        if !slopes.is_empty() && self.events.as_ref().is_some_and(|e| e.next_event_time.is_some()) {
+            return Err(StepFailure {
+                reached_time: t,
+                message: "input derivatives over a step with a pending time event are not supported: the step that \
+                          handles time events holds the inputs"
+                    .into(),
+            });
+        }
         let tol = model.tolerances(self);
         let Some(solver) = self.solver.as_deref_mut() else {
             return Err(StepFailure {
@@ -460,12 +485,14 @@ impl Context<'_> {
                 message: "no integrator in this context (use Context::standalone_with_solver)".into(),
             });
         };
+        let t0 = t;
         let mut c = model.continuous::<f64>();
         let mut x = M::states_of(&c);
         let result = <M::States as StateVector>::integrate(
             solver,
             |t, x| {
                 M::set_states_of(&mut c, x);
+                slope_inputs(&mut c, &*model, slopes, t - t0);
                 model.derivatives(t, &mut c);
                 M::derivatives_of(&c)
             },
@@ -486,7 +513,16 @@ impl Context<'_> {
             Ok(()) => t + h,
             Err(e) => e.time(),
         };
-        if !fresh {
+        if !slopes.is_empty() {
+            // The inputs at the step's end: there they now have these values.
+            slope_inputs(&mut c, &*model, slopes, reached - t0);
+            for &(vr, s) in slopes {
+                if let Some(Value::Real(u)) = model.get(vr) {
+                    model.set(vr, Value::Real(u + s * (reached - t0)));
+                }
+            }
+        }
+        if !fresh || !slopes.is_empty() {
             model.derivatives(reached, &mut c);
         }
         model.outputs(reached, &mut c);
@@ -670,6 +706,14 @@ pub trait Model: Variables + Clone + Serialize + DeserializeOwned + Send + 'stat
 /// `impl CoSimulation for MyModel {}` integrates [`Model::derivatives`] with the runtime's
 /// integrator; a model with an exact step of its own overrides [`do_step`](Self::do_step).
 pub trait CoSimulation: Model {
+    /// FMI 2.0 `canInterpolateInputs`: the co-simulation step follows the first time derivatives
+    /// of the Real inputs the importer gives with fmi2SetRealInputDerivatives (each input varies
+    /// linearly over the step: u(t) = u + du (t - t_c)). True for a model whose step is the
+    /// runtime's integrator ([`Context::integrate`], the default `do_step`), which applies them;
+    /// a model with a step of its own that does not leaves it false (the default), and the
+    /// runtime refuses input derivatives.
+    const INTERPOLATES_INPUTS: bool = false;
+
     /// Advances the states from `t` to `t + h` with the inputs as they are now. The runtime
     /// computes the outputs from the new states afterwards ([`Model::outputs`]).
     /// On failure the model leaves a consistent state at [`StepFailure::reached_time`].

@@ -61,6 +61,7 @@ const V2: Interfaces = Interfaces {
     co_simulation: true,
     model_exchange: true,
     version: FmiVersion::V2,
+    can_interpolate_inputs: false,
 };
 
 #[test]

@@ -113,6 +113,7 @@ mod tests {
             co_simulation: true,
             model_exchange: true,
             version: FmiVersion::V2,
+            can_interpolate_inputs: false,
         };
         let html = index_html(&d, "", both, &["linux64".into(), "win64".into()], None);
         assert!(
@@ -124,6 +125,7 @@ mod tests {
             co_simulation: true,
             model_exchange: false,
             version: FmiVersion::V3,
+            can_interpolate_inputs: false,
         };
         let html = index_html(&d, "", cs3, &["x86_64-linux".into()], Some("<svg></svg>"));
         assert!(html.contains("FMI 3.0 FMU for co-simulation"), "{html}");

@@ -320,7 +320,16 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
                 ("modelIdentifier", d.model_identifier),
                 ("needsExecutionTool", "false"),
                 ("canHandleVariableCommunicationStepSize", "true"),
-                ("canInterpolateInputs", "false"),
+                // The runtime's integrator follows input derivatives where the model says its
+                // step is that integrator (CoSimulation::INTERPOLATES_INPUTS).
+                (
+                    "canInterpolateInputs",
+                    if interfaces.can_interpolate_inputs {
+                        "true"
+                    } else {
+                        "false"
+                    },
+                ),
                 // First derivatives of the outputs, exact (dual numbers through the equations).
                 ("maxOutputDerivativeOrder", "1"),
                 ("canRunAsynchronuously", "false"),

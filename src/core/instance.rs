@@ -116,6 +116,11 @@ pub struct Instance<M: CoSimulation> {
     /// ... and the model and its event clock before that evaluation: an FMU state taken until
     /// fmi3UpdateDiscreteStates is this one (restored, the tick is evaluated again, once).
     tick_before: Option<Box<(M, EventClock)>>,
+    /// FMI 2.0 input derivatives (fmi2SetRealInputDerivatives, first order): (input's value
+    /// reference, du/dt). The runtime's integrator makes each input u + du (t - t_c) over a
+    /// step from t_c and leaves it at u + du h; a derivative holds until it is set again (0 ends
+    /// it) or fmi2Reset, whatever order the importer sets values and derivatives in.
+    pub input_slopes: Vec<(u32, f64)>,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -199,6 +204,7 @@ impl<M: CoSimulation> Instance<M> {
             event_mode_used: false,
             evaluated_tick: None,
             tick_before: None,
+            input_slopes: Vec::new(),
             early_return_allowed: false,
             step_event: false,
             intermediate_update: None,
@@ -434,6 +440,7 @@ impl<M: CoSimulation> Instance<M> {
 
     pub fn reset(&mut self) -> Status {
         self.sim = Sim::new();
+        self.input_slopes.clear();
         self.evaluated_tick = None;
         self.tick_before = None;
         self.event(|| "reset: every variable is back at its start value".into());
@@ -927,6 +934,48 @@ impl<M: CoSimulation> Instance<M> {
         }
     }
 
+    /// fmi2SetRealInputDerivatives (a model that declares `CoSimulation::INTERPOLATES_INPUTS`):
+    /// the first time derivatives of continuous Real inputs, all or none. Refused: another
+    /// order (the runtime's integrator interpolates linearly), a variable that is no continuous
+    /// Real input, a value that is not finite, or a state where the input could not be set.
+    pub fn set_input_derivatives(&mut self, function: &str, vrs: &[u32], orders: &[i32], values: &[f64]) -> Status {
+        for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
+            let decl = match self.lookup(function, *vr, VarType::Real) {
+                Ok(d) => d,
+                Err(status) => return status,
+            };
+            if decl.causality != Causality::Input || decl.variability != Variability::Continuous {
+                return self.error(&format!(
+                    "{function}: '{}' (vr {vr}) is no continuous Real input; refused, nothing changed",
+                    decl.name
+                ));
+            }
+            if *order != 1 {
+                return self.error(&format!(
+                    "{function}: order {order} for '{}' (vr {vr}): the inputs are interpolated linearly, so only first \
+                     derivatives (order 1) are taken; refused, nothing changed",
+                    decl.name
+                ));
+            }
+            if !value.is_finite() {
+                return self.error(&format!(
+                    "{function}: {value} for the derivative of '{}' (vr {vr}) is not finite; refused, nothing changed",
+                    decl.name
+                ));
+            }
+            if let Err(status) = self.check_settable(function, decl) {
+                return status;
+            }
+        }
+        for (vr, value) in vrs.iter().zip(values) {
+            match self.input_slopes.iter_mut().find(|(v, _)| v == vr) {
+                Some(slot) => slot.1 = *value,
+                None => self.input_slopes.push((*vr, *value)),
+            }
+        }
+        OK
+    }
+
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
         if !any_array::<M>(vrs) && !any_fmi2_element::<M>(self.version, vrs) {
@@ -1171,6 +1220,7 @@ impl<M: CoSimulation> Instance<M> {
             events: Some(&mut self.sim.events),
             return_at_events: self.event_mode_used && self.early_return_allowed,
             intermediate: self.intermediate_update.as_deref_mut(),
+            input_slopes: &self.input_slopes,
         };
         self.step_event = false;
         let mut outcome = self.sim.model.do_step(t, h, &mut ctx);

@@ -437,22 +437,31 @@ pub unsafe fn set_time<M: CoSimulation>(c: fmi2Component, time: fmi2Real) -> fmi
     with_instance(component, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time))
 }
 
-pub unsafe fn set_real_input_derivatives<M: CoSimulation>(c: fmi2Component, nvr: usize) -> fmi2Status {
+pub unsafe fn set_real_input_derivatives<M: CoSimulation>(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    const F: &str = "fmi2SetRealInputDerivatives";
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(
-        component,
-        Call::SetRealInputDerivatives,
-        "fmi2SetRealInputDerivatives",
-        |inst| {
-            if nvr == 0 {
-                return fmi2OK;
-            }
-            inst.error(
-                "fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs=\"false\")",
-            )
-        },
-    )
+    with_instance(component, Call::SetRealInputDerivatives, F, |inst| {
+        if nvr == 0 {
+            return fmi2OK;
+        }
+        if !M::INTERPOLATES_INPUTS {
+            return inst.error(&format!(
+                "{F}: inputs are held constant over a step (canInterpolateInputs=\"false\")"
+            ));
+        }
+        // SAFETY: each array is NULL or nvr long (this function's contract); `slice` checks NULL.
+        match unsafe { (slice(vr, nvr), slice(order, nvr), slice(value, nvr)) } {
+            (Some(vrs), Some(orders), Some(values)) => inst.set_input_derivatives(F, vrs, orders, values),
+            _ => inst.error(&format!("{F}: vr, order or value is NULL with nvr = {nvr}")),
+        }
+    })
 }
 
 /// # Safety

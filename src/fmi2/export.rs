@@ -24,10 +24,18 @@ macro_rules! export_fmi2 {
                 "this model is #[fmu(fmi3_only)]: it has no FMI 2.0 export; use rustfmu::export_fmi3! instead of export_fmu! or export_fmi2!"
             );
 
+            // Input derivatives are applied by the runtime's integrator on its plain path; a model
+            // with event indicators takes the path that locates state events, which does not.
+            const _: () = assert!(
+                !<__RustfmuModel as $crate::CoSimulation>::INTERPOLATES_INPUTS
+                    || <__RustfmuModel as $crate::Variables>::INDICATORS.is_empty(),
+                "CoSimulation::INTERPOLATES_INPUTS with event indicators is not supported: the step that locates state events holds the inputs"
+            );
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
                 co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
                 model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
                 version: $crate::description::FmiVersion::V2,
+                can_interpolate_inputs: <__RustfmuModel as $crate::CoSimulation>::INTERPOLATES_INPUTS,
             };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
@@ -250,12 +258,12 @@ macro_rules! export_fmi2 {
                     shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, c, x_nominal, nx);
                 fmi2SetRealInputDerivatives(
                     c: fmi2Component,
-                    _vr: *const fmi2ValueReference,
+                    vr: *const fmi2ValueReference,
                     nvr: usize,
-                    _order: *const fmi2Integer,
-                    _value: *const fmi2Real,
+                    order: *const fmi2Integer,
+                    value: *const fmi2Real,
                 ) -> fmi2Status =>
-                    api::set_real_input_derivatives::<__RustfmuModel>(c, nvr);
+                    api::set_real_input_derivatives::<__RustfmuModel>(c, vr, nvr, order, value);
                 fmi2GetRealOutputDerivatives(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,

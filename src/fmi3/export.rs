@@ -79,6 +79,8 @@ macro_rules! export_fmi3 {
                 co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
                 model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
                 version: $crate::description::FmiVersion::V3,
+                // FMI 3.0 has no input derivatives.
+                can_interpolate_inputs: false,
             };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);

@@ -169,7 +169,10 @@ impl Model for Pendulum {
 }
 
 impl CoSimulation for Pendulum {
-    // The step: the runtime's Dormand-Prince 5(4) on `derivatives`, at these tolerances.
+    // The step: the runtime's Dormand-Prince 5(4) on `derivatives`, at these tolerances. It
+    // follows the torques' derivatives an importer gives (fmi2SetRealInputDerivatives): M1, M2
+    // vary linearly over the step (canInterpolateInputs="true").
+    const INTERPOLATES_INPUTS: bool = true;
 
     /// The parameters rtol and atol, the relative one tightened (never loosened) by the
     /// importer's tolerance from fmi2SetupExperiment.
