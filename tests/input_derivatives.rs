@@ -119,8 +119,8 @@ fn bad_input_derivatives_are_refused_with_the_reason() {
     // (Each call: SAFETY: a live instance; locals.)
     let cases: [(&str, Call); 5] = [
         (
-            "only first derivatives",
-            Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &1, 1, &2, &1.0) }),
+            "0 is not allowed",
+            Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &1, 1, &0, &1.0) }),
         ),
         (
             "is no continuous Real input",
@@ -147,6 +147,26 @@ fn bad_input_derivatives_are_refused_with_the_reason() {
         // SAFETY: a live instance.
         unsafe { e2::fmi2FreeInstance(c) };
     }
+}
+
+#[test]
+fn a_higher_order_is_ignored_with_a_warning() {
+    let c = initialized();
+    // SAFETY: a live instance; locals (two inputs' worth: u's first and second derivative).
+    unsafe {
+        assert_eq!(e2::fmi2SetReal(c, &1, 1, &1.0), fmi2OK);
+        let (vrs, orders, values) = ([1, 1], [1, 2], [2.0, 5.0]);
+        assert_eq!(
+            e2::fmi2SetRealInputDerivatives(c, vrs.as_ptr(), 2, orders.as_ptr(), values.as_ptr()),
+            fmi2Warning
+        );
+        assert!(last().contains("order 2 of vr 1 ignored"), "{}", last());
+        assert_eq!(e2::fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
+    }
+    // The first derivative was taken: x = 0.75 as without the second.
+    assert!((get(c, 2) - 0.75).abs() < 1e-12, "{}", get(c, 2));
+    // SAFETY: a live instance.
+    unsafe { e2::fmi2FreeInstance(c) };
 }
 
 #[test]

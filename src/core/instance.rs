@@ -4,7 +4,7 @@
 
 use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};
-use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version};
+use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version, WARNING};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
 use crate::model::{CoSimulation, Context, EventClock, StateVector};
 use crate::solver::Dopri5;
@@ -935,9 +935,10 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// fmi2SetRealInputDerivatives (a model that declares `CoSimulation::INTERPOLATES_INPUTS`):
-    /// the first time derivatives of continuous Real inputs, all or none. Refused: another
-    /// order (the runtime's integrator interpolates linearly), a variable that is no continuous
-    /// Real input, a value that is not finite, or a state where the input could not be set.
+    /// the first time derivatives of continuous Real inputs, all or none. Refused: order 0 or
+    /// less (FMI 2.0: "0 is not allowed"), a variable that is no continuous Real input, a value
+    /// that is not finite, or a state where the input could not be set. Higher orders are legal
+    /// calls the runtime's linear interpolation does not use: ignored, with fmi2Warning saying so.
     pub fn set_input_derivatives(&mut self, function: &str, vrs: &[u32], orders: &[i32], values: &[f64]) -> Status {
         for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
             let decl = match self.lookup(function, *vr, VarType::Real) {
@@ -950,10 +951,10 @@ impl<M: CoSimulation> Instance<M> {
                     decl.name
                 ));
             }
-            if *order != 1 {
+            if *order < 1 {
                 return self.error(&format!(
-                    "{function}: order {order} for '{}' (vr {vr}): the inputs are interpolated linearly, so only first \
-                     derivatives (order 1) are taken; refused, nothing changed",
+                    "{function}: order {order} for '{}' (vr {vr}): derivative orders start at 1 (0 is not allowed); \
+                     refused, nothing changed",
                     decl.name
                 ));
             }
@@ -967,13 +968,29 @@ impl<M: CoSimulation> Instance<M> {
                 return status;
             }
         }
-        for (vr, value) in vrs.iter().zip(values) {
+        let mut ignored = vec![];
+        for ((vr, order), value) in vrs.iter().zip(orders).zip(values) {
+            if *order > 1 {
+                ignored.push(format!("order {order} of vr {vr}"));
+                continue;
+            }
             match self.input_slopes.iter_mut().find(|(v, _)| v == vr) {
                 Some(slot) => slot.1 = *value,
                 None => self.input_slopes.push((*vr, *value)),
             }
         }
-        OK
+        if ignored.is_empty() {
+            return OK;
+        }
+        self.logger.log(
+            WARNING,
+            Category::StatusWarning,
+            &format!(
+                "{function}: {} ignored: the inputs are interpolated linearly over a step (first derivatives only)",
+                ignored.join(", ")
+            ),
+        );
+        WARNING
     }
 
     /// Sets all values or none: each is checked before any is stored.
