@@ -1,9 +1,8 @@
-//! One FMU, loaded through the `fmi` crate's importer (which unzips it into a temporary
-//! directory it removes again), with its variables by name.
+//! One FMU, loaded through the runner's importer ([`crate::fmi2`]: an archive unpacked into a
+//! temporary folder it removes again, or a folder already unpacked), with its variables by name.
 
 use crate::Error;
-use fmi::fmi2::import::Fmi2Import;
-use fmi::fmi2::instance::InstanceCS;
+use crate::fmi2::{Fmi2Import, InstanceCS};
 use fmi_description::Causality;
 use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
 use std::io::{Cursor, Read};
@@ -34,7 +33,33 @@ impl Fmu {
             .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
             .read_to_string(&mut xml)
             .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-        let version = fmi_description::fmi_version(&xml).map_err(fail)?;
+        let description = Fmu::description(component, label, &xml)?;
+        let import = Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid)
+            .map_err(|e| fail(format!("cannot import: {e}")))?;
+        Fmu::with(component, label, description, import)
+    }
+
+    /// Loads the FMU unpacked in the folder `dir` (a container's components).
+    pub fn from_dir(component: &str, label: &str, dir: &std::path::Path) -> Result<Fmu, Error> {
+        let fail = |what: String| Error {
+            component: Some(component.to_owned()),
+            ..Error::io(format!("component '{component}' ({label}): {what}"))
+        };
+        let path = dir.join("modelDescription.xml");
+        let xml = std::fs::read_to_string(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+        let description = Fmu::description(component, label, &xml)?;
+        let import = Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid)
+            .map_err(|e| fail(format!("cannot import: {e}")))?;
+        Fmu::with(component, label, description, import)
+    }
+
+    /// The description of `xml`, checked to be one of an FMI 2.0 co-simulation FMU.
+    fn description(component: &str, label: &str, xml: &str) -> Result<Description, Error> {
+        let fail = |what: String| Error {
+            component: Some(component.to_owned()),
+            ..Error::io(format!("component '{component}' ({label}): {what}"))
+        };
+        let version = fmi_description::fmi_version(xml).map_err(fail)?;
         if !version.starts_with("2.") {
             return Err(Error::unsupported(
                 Some(component),
@@ -44,7 +69,7 @@ impl Fmu {
                 ),
             ));
         }
-        let description = Description::parse(&xml).map_err(fail)?;
+        let description = Description::parse(xml).map_err(fail)?;
         if description.cs.is_none() {
             return Err(Error::unsupported(
                 Some(component),
@@ -54,8 +79,14 @@ impl Fmu {
                 ),
             ));
         }
-        let import: Fmi2Import =
-            fmi::import::new(Cursor::new(bytes)).map_err(|e| fail(format!("cannot import: {e}")))?;
+        Ok(description)
+    }
+
+    fn with(component: &str, label: &str, description: Description, import: Fmi2Import) -> Result<Fmu, Error> {
+        let fail = |what: String| Error {
+            component: Some(component.to_owned()),
+            ..Error::io(format!("component '{component}' ({label}): {what}"))
+        };
         let mut feedthrough = Vec::new();
         let inputs: Vec<&Variable> = description
             .variables
@@ -122,17 +153,19 @@ impl Fmu {
 
     /// A co-simulation instance.
     pub fn instantiate(&self, component: &str) -> Result<InstanceCS, Error> {
-        self.import.instantiate_cs(component, false, false).map_err(|e| Error {
-            component: Some(component.to_owned()),
-            function: Some("fmi2Instantiate".into()),
-            ..Error::new(
-                crate::ErrorKind::Fmi,
-                format!(
-                    "component '{component}' ({}): fmi2Instantiate failed: {e}",
-                    self.model_identifier()
-                ),
-            )
-        })
+        self.import
+            .instantiate_cs(component, false, false)
+            .map_err(|e: String| Error {
+                component: Some(component.to_owned()),
+                function: Some("fmi2Instantiate".into()),
+                ..Error::new(
+                    crate::ErrorKind::Fmi,
+                    format!(
+                        "component '{component}' ({}): fmi2Instantiate failed: {e}",
+                        self.model_identifier()
+                    ),
+                )
+            })
     }
 }
 

@@ -20,6 +20,8 @@
 // exceptions, a study's row): 144 bytes, on the cold path only.
 #![allow(clippy::result_large_err)]
 
+pub mod container;
+pub mod fmi2;
 pub mod fmu;
 pub mod fmu_log;
 pub mod sim;
@@ -99,11 +101,11 @@ impl Error {
     }
 
     /// A failed FMI call of `component`.
-    pub fn fmi(component: &str, function: &str, err: &fmi::fmi2::Fmi2Error, time: Option<f64>, what: &str) -> Error {
+    pub fn fmi(component: &str, function: &str, err: &crate::fmi2::Fmi2Error, time: Option<f64>, what: &str) -> Error {
         let status = match err {
-            fmi::fmi2::Fmi2Error::Discard => "Discard".to_owned(),
-            fmi::fmi2::Fmi2Error::Error => "Error".to_owned(),
-            fmi::fmi2::Fmi2Error::Fatal => "Fatal".to_owned(),
+            crate::fmi2::Fmi2Error::Discard => "Discard".to_owned(),
+            crate::fmi2::Fmi2Error::Error => "Error".to_owned(),
+            crate::fmi2::Fmi2Error::Fatal => "Fatal".to_owned(),
             other => format!("{other}"),
         };
         let at = time.map(|t| format!(" at t = {t} s")).unwrap_or_default();

@@ -23,10 +23,10 @@
 //! All buffers are made when the simulation is built: a communication step allocates nothing
 //! but the recorded row.
 
+use crate::fmi2::{Fmi2Error, InstanceCS};
 use crate::fmu::{Fmu, type_name};
 use crate::ssp::{Archive, Connection};
 use crate::{Error, Value};
-use fmi::fmi2::instance::{CoSimulation, Common, InstanceCS};
 use fmi_description::Causality;
 use fmi_description::fmi2::Type;
 use std::ffi::CString;
@@ -201,9 +201,11 @@ pub struct Simulation {
     runs: usize,
     /// An instance returned fmi2Fatal: the next run instantiates every FMU again.
     broken: bool,
+    /// The connections, as the system names them.
+    connections: Vec<Connection>,
 }
 
-fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(fmi::fmi2::Fmi2Error) -> Error {
+fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
     let (slave, function, what) = (slave.to_owned(), function.to_owned(), what.to_owned());
     move |e| Error::fmi(&slave, &function, &e, time, &what)
 }
@@ -212,7 +214,10 @@ impl Simulation {
     /// The system of an SSP file: every component's FMU read from the archive, its parameter
     /// bindings applied at every run.
     pub fn from_ssp(path: &Path) -> Result<Simulation, Error> {
-        let mut archive = Archive::open(path)?;
+        Simulation::from_archive(Archive::open(path)?)
+    }
+
+    fn from_archive(mut archive: Archive) -> Result<Simulation, Error> {
         let ssd = archive.ssd.clone();
         let mut fmus: Vec<Fmu> = Vec::new();
         let mut sources: Vec<String> = Vec::new();
@@ -221,8 +226,11 @@ impl Simulation {
             let i = match sources.iter().position(|s| *s == c.source) {
                 Some(i) => i,
                 None => {
-                    let bytes = archive.fmu_bytes(&c.name)?;
-                    fmus.push(Fmu::from_bytes(&c.name, &c.source, bytes).map_err(|e| Error {
+                    let fmu = match archive.unpacked_fmu(&c.name)? {
+                        Some(dir) => Fmu::from_dir(&c.name, &c.source, &dir),
+                        None => Fmu::from_bytes(&c.name, &c.source, archive.fmu_bytes(&c.name)?),
+                    };
+                    fmus.push(fmu.map_err(|e| Error {
                         message: format!("{}: {}", archive.path, e.message),
                         ..e
                     })?);
@@ -281,6 +289,7 @@ impl Simulation {
             starts: Vec::new(),
             runs: 0,
             broken: false,
+            connections: connections.to_vec(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
@@ -291,7 +300,100 @@ impl Simulation {
         Ok(sim)
     }
 
-    fn slave_index(&self, component: &str) -> Result<usize, Error> {
+    /// The system's folder form: `dir/SystemStructure.ssd` and the files it names below `dir`
+    /// (an SSP archive unpacked; a container FMU's `resources/system`).
+    pub fn from_dir(dir: &Path) -> Result<Simulation, Error> {
+        Simulation::from_archive(Archive::open_dir(dir)?)
+    }
+
+    /// Each component's name and its FMU's description, in the system's order.
+    pub fn component_descriptions(&self) -> Vec<(&str, &fmi_description::fmi2::ModelDescription)> {
+        self.slaves
+            .iter()
+            .map(|s| (s.name.as_str(), &self.fmus[s.fmu].description))
+            .collect()
+    }
+
+    /// Whether a connection drives input `variable` of `component`.
+    pub fn is_connected_input(&self, component: &str, variable: &str) -> bool {
+        self.source_of(component, variable).is_some()
+    }
+
+    /// The output (component, variable) connected to input `variable` of `component`.
+    pub fn source_of(&self, component: &str, variable: &str) -> Option<(String, String)> {
+        self.connections
+            .iter()
+            .find(|k| k.end.0 == component && k.end.1 == variable)
+            .map(|k| k.start.clone())
+    }
+
+    /// The inputs of `component` its variable `output` depends on directly (ModelStructure;
+    /// an output without `dependencies` depends on every input, as in fmpy).
+    pub fn direct_inputs(&self, component: &str, output: &str) -> Vec<String> {
+        let Ok(i) = self.slave_index(component) else {
+            return Vec::new();
+        };
+        let d = &self.fmu_of(i).description;
+        let inputs = || {
+            d.variables
+                .iter()
+                .filter(|v| v.causality == Causality::Input)
+                .map(|v| v.name.clone())
+                .collect::<Vec<_>>()
+        };
+        let Some(index) = d.variables.iter().position(|v| v.name == output) else {
+            return Vec::new();
+        };
+        match d.model_structure.outputs.iter().find(|u| u.index == index + 1) {
+            None => Vec::new(),
+            Some(u) => match &u.dependencies {
+                None => inputs(),
+                Some(deps) => deps
+                    .iter()
+                    .filter_map(|k| d.by_index(*k))
+                    .filter(|v| v.causality == Causality::Input)
+                    .map(|v| v.name.clone())
+                    .collect(),
+            },
+        }
+    }
+
+    /// The system's own value of `component.variable` (its parameter set), as an XML start value.
+    pub fn start_value(&self, component: &str, variable: &str) -> Option<String> {
+        let key = format!("{component}.{variable}");
+        self.starts.iter().find(|(k, _, _)| *k == key).map(|(_, _, s)| match s {
+            Setter::Real(x) => format!("{x:?}"),
+            Setter::Integer(x) => x.to_string(),
+            Setter::Boolean(x) => x.to_string(),
+            Setter::String(s) => s.to_string_lossy().into_owned(),
+        })
+    }
+
+    /// The instance of component number `i` (the system's order).
+    pub fn instance_mut(&mut self, i: usize) -> &mut InstanceCS {
+        self.instance(i)
+    }
+
+    /// The number of components.
+    pub fn len(&self) -> usize {
+        self.slaves.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.slaves.is_empty()
+    }
+
+    /// Sets the system's parameter and start values (its parameter set), in order.
+    pub fn apply_starts(&mut self) -> Result<(), Error> {
+        let starts = self.starts.clone();
+        for (key, target, value) in &starts {
+            self.set(key, *target, value)?;
+        }
+        Ok(())
+    }
+
+    /// The index of `component` in the system's order.
+    pub fn slave_index(&self, component: &str) -> Result<usize, Error> {
         self.slaves.iter().position(|s| s.name == component).ok_or_else(|| {
             let names: Vec<&str> = self.slaves.iter().map(|s| s.name.as_str()).collect();
             Error::variable(
@@ -756,7 +858,8 @@ impl Simulation {
         r
     }
 
-    fn do_step(&mut self, t: f64, h: f64) -> Result<(), Error> {
+    /// fmi2DoStep(t, h) of every instance, in the system's order.
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Error> {
         for s in &mut self.slaves {
             s.instance
                 .as_mut()

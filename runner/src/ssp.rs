@@ -376,7 +376,30 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
 pub struct Archive {
     pub path: String,
     pub ssd: Ssd,
-    zip: zip::ZipArchive<std::fs::File>,
+    files: Files,
+}
+
+/// Where an archive's files are: a zip file, or a folder (an SSP unpacked).
+enum Files {
+    Zip(zip::ZipArchive<std::fs::File>),
+    Dir(std::path::PathBuf),
+}
+
+impl Files {
+    fn read(&mut self, archive: &str, name: &str) -> Result<Vec<u8>, Error> {
+        match self {
+            Files::Zip(zip) => read_entry(zip, archive, name),
+            Files::Dir(dir) => {
+                let name = name.trim_start_matches("./");
+                if name.split('/').any(|part| part == "..") {
+                    return Err(Error::io(format!(
+                        "{archive}: '{name}' lies outside the system's folder"
+                    )));
+                }
+                std::fs::read(dir.join(name)).map_err(|e| Error::io(format!("{archive}: cannot read '{name}': {e}")))
+            }
+        }
+    }
 }
 
 fn read_entry<R: Read + Seek>(zip: &mut zip::ZipArchive<R>, archive: &str, name: &str) -> Result<Vec<u8>, Error> {
@@ -394,21 +417,51 @@ impl Archive {
     pub fn open(path: &std::path::Path) -> Result<Archive, Error> {
         let shown = path.display().to_string();
         let file = std::fs::File::open(path).map_err(|e| Error::io(format!("{shown}: cannot open: {e}")))?;
-        let mut zip =
+        let zip =
             zip::ZipArchive::new(file).map_err(|e| Error::io(format!("{shown}: not an SSP (zip) archive: {e}")))?;
+        Archive::of_files(shown, Files::Zip(zip))
+    }
+
+    /// An SSP archive unpacked into the folder `dir`.
+    pub fn open_dir(dir: &std::path::Path) -> Result<Archive, Error> {
+        Archive::of_files(dir.display().to_string(), Files::Dir(dir.to_owned()))
+    }
+
+    fn of_files(shown: String, mut files: Files) -> Result<Archive, Error> {
         let text = |bytes: Vec<u8>, name: &str| {
             String::from_utf8(bytes).map_err(|_| Error::io(format!("{shown}: {name} is not UTF-8")))
         };
-        let ssd_text = text(
-            read_entry(&mut zip, &shown, "SystemStructure.ssd")?,
-            "SystemStructure.ssd",
-        )?;
-        let mut read = |name: &str| -> Result<String, Error> { text(read_entry(&mut zip, &shown, name)?, name) };
+        let ssd_text = text(files.read(&shown, "SystemStructure.ssd")?, "SystemStructure.ssd")?;
+        let mut read = |name: &str| -> Result<String, Error> { text(files.read(&shown, name)?, name) };
         let ssd = parse_ssd(&ssd_text, &mut read).map_err(|e| Error {
             message: format!("{shown}: {}", e.message),
             ..e
         })?;
-        Ok(Archive { path: shown, ssd, zip })
+        Ok(Archive {
+            path: shown,
+            ssd,
+            files,
+        })
+    }
+
+    /// The folder of a component's FMU when the system is a folder and the FMU is unpacked
+    /// there (a container's `resources/system/`: its `source` is a folder), else None.
+    pub fn unpacked_fmu(&self, component: &str) -> Result<Option<std::path::PathBuf>, Error> {
+        let Files::Dir(dir) = &self.files else {
+            return Ok(None);
+        };
+        let c = self
+            .ssd
+            .components
+            .iter()
+            .find(|c| c.name == component)
+            .ok_or_else(|| Error::new(ErrorKind::Variable, format!("no component '{component}'")))?;
+        let source = c.source.trim_start_matches("./");
+        if source.contains("://") || source.starts_with('/') || source.split('/').any(|p| p == "..") {
+            return Ok(None);
+        }
+        let path = dir.join(source);
+        Ok(path.is_dir().then_some(path))
     }
 
     /// The bytes of a component's FMU (its `source`, inside the archive).
@@ -427,7 +480,7 @@ impl Archive {
                 format!("component '{component}': source '{source}' lies outside the archive: not supported"),
             ));
         }
-        read_entry(&mut self.zip, &self.path, &source).map_err(|e| Error {
+        self.files.read(&self.path, &source).map_err(|e| Error {
             component: Some(component.to_owned()),
             message: format!("component '{component}': {}", e.message),
             ..e

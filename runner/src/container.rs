@@ -1,0 +1,439 @@
+//! A composed system as one co-simulation FMU (`cargo fmu container SYSTEM.ssp`).
+//!
+//! The container FMU holds the system's SSP tree under `resources/system/`
+//! (`SystemStructure.ssd`, the parameter set, the component FMUs), a [`Spec`] in
+//! `resources/container.toml` (the exposed variables and the internal step) and one binary, the
+//! same for every system (`runner/container`), which runs this crate's [`crate::Simulation`] on
+//! the folder. [`Spec::new`] decides what the container exposes; [`Spec::model_description`]
+//! writes its FMI 2.0 `modelDescription.xml`. The binary reads the spec back and checks that
+//! its GUID is the one the importer passes to fmi2Instantiate.
+//!
+//! What a container exposes (the issue's default; an SSD's own system connectors are refused
+//! by [`crate::ssp`]): every unconnected input and every output of every component, and every
+//! fixed and tunable parameter, each named `component.variable`, in the system's component
+//! order and each component's variable order, with value references 0, 1, 2, ... Their start
+//! values are the SSP's parameter set where it binds them, otherwise the component's.
+
+use crate::Error;
+use crate::sim::Simulation;
+use fmi_description::fmi2::{ModelDescription as Description, Type};
+use fmi_description::{Causality, Initial, Variability};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+
+/// Where the system's SSP tree lies inside the container's `resources/`.
+pub const SYSTEM_FOLDER: &str = "system";
+/// The log categories of a container: its own refusals and the components' messages.
+pub const LOG_CATEGORIES: [(&str, &str); 4] = [
+    (
+        "logStatusError",
+        "A call refused or failed: what was wrong and where (the component, the function, the time)",
+    ),
+    ("logStatusDiscard", "A step discarded"),
+    ("logStatusFatal", "The instance cannot go on"),
+    (
+        "logAll",
+        "The components' messages, \"[component] message\", and the container's own",
+    ),
+];
+
+/// The spec's file inside `resources/`.
+pub const SPEC_FILE: &str = "container.toml";
+
+/// One variable of the container: a variable of one component.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Exposed {
+    /// The container's value reference.
+    pub vr: u32,
+    /// `component.variable`.
+    pub name: String,
+    pub component: String,
+    pub variable: String,
+    /// Real, Integer, Boolean, String or Enumeration.
+    #[serde(rename = "type")]
+    pub ty: String,
+    /// input, output or parameter.
+    pub causality: String,
+    pub variability: String,
+    /// The start value as the XML writes it (none for a calculated output).
+    #[serde(default)]
+    pub start: Option<String>,
+}
+
+impl Exposed {
+    pub fn ty(&self) -> Type {
+        match self.ty.as_str() {
+            "Real" => Type::Real,
+            "Integer" => Type::Integer,
+            "Boolean" => Type::Boolean,
+            "String" => Type::String,
+            _ => Type::Enumeration,
+        }
+    }
+    pub fn causality(&self) -> Causality {
+        Causality::from_name(&self.causality).unwrap_or(Causality::Local)
+    }
+    pub fn variability(&self) -> Variability {
+        match self.variability.as_str() {
+            "constant" => Variability::Constant,
+            "fixed" => Variability::Fixed,
+            "tunable" => Variability::Tunable,
+            "discrete" => Variability::Discrete,
+            _ => Variability::Continuous,
+        }
+    }
+}
+
+/// What `cargo fmu container` writes to `resources/container.toml`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Spec {
+    /// The container's modelName and modelIdentifier (the system's name).
+    pub model_identifier: String,
+    pub guid: String,
+    /// The internal communication step of the components, s: a communication step of the
+    /// importer is cut into n = ceil(H / step) equal steps (H / n = step when H is a multiple).
+    pub step: f64,
+    #[serde(rename = "variable")]
+    pub variables: Vec<Exposed>,
+}
+
+fn type_of(t: Type) -> &'static str {
+    t.name()
+}
+
+fn variability_name(v: Variability) -> &'static str {
+    match v {
+        Variability::Constant => "constant",
+        Variability::Fixed => "fixed",
+        Variability::Tunable => "tunable",
+        Variability::Discrete => "discrete",
+        Variability::Continuous => "continuous",
+    }
+}
+
+/// A model identifier from a system name: letters, digits and '_' (a C identifier).
+pub fn identifier(name: &str) -> String {
+    let mut id: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if id.is_empty() || id.starts_with(|c: char| c.is_ascii_digit()) {
+        id.insert(0, '_');
+    }
+    id
+}
+
+impl Spec {
+    /// The container of `sim` (a system read by [`Simulation::from_ssp`]) at internal step `step`.
+    pub fn new(sim: &Simulation, step: f64) -> Result<Spec, Error> {
+        if !(step > 0.0 && step.is_finite()) {
+            return Err(Error::usage(format!(
+                "internal step = {step} s: must be a positive number"
+            )));
+        }
+        let mut variables = Vec::new();
+        for (component, description) in sim.component_descriptions() {
+            for v in &description.variables {
+                let connected = sim.is_connected_input(component, &v.name);
+                let exposed = match v.causality {
+                    Causality::Input => !connected,
+                    Causality::Output => true,
+                    Causality::Parameter => matches!(v.variability, Variability::Fixed | Variability::Tunable),
+                    _ => false,
+                };
+                if !exposed {
+                    continue;
+                }
+                let bound = sim.start_value(component, &v.name);
+                let start = match v.causality {
+                    Causality::Output => match v.initial() {
+                        Some(Initial::Exact) => v.start.clone(),
+                        _ => None,
+                    },
+                    _ => bound.or_else(|| v.start.clone()),
+                };
+                variables.push(Exposed {
+                    vr: variables.len() as u32,
+                    name: format!("{component}.{}", v.name),
+                    component: component.to_owned(),
+                    variable: v.name.clone(),
+                    ty: type_of(v.ty).to_owned(),
+                    causality: v.causality.name().to_owned(),
+                    variability: variability_name(v.variability).to_owned(),
+                    start,
+                });
+            }
+        }
+        let mut spec = Spec {
+            model_identifier: identifier(&sim.name),
+            guid: String::new(),
+            step,
+            variables,
+        };
+        // The GUID: a digest of what the container is (its spec and its components' GUIDs).
+        let mut seed = toml::to_string(&spec).map_err(|e| Error::io(format!("container spec: {e}")))?;
+        for (c, d) in sim.component_descriptions() {
+            let _ = write!(seed, "{c}={}", d.guid);
+        }
+        let h = const_sha1::sha1(seed.as_bytes()).as_bytes();
+        let hex: String = h.iter().map(|b| format!("{b:02x}")).collect();
+        spec.guid = format!(
+            "{{{}-{}-{}-{}-{}}}",
+            &hex[0..8],
+            &hex[8..12],
+            &hex[12..16],
+            &hex[16..20],
+            &hex[20..32]
+        );
+        Ok(spec)
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a spec serializes")
+    }
+
+    pub fn from_toml(text: &str) -> Result<Spec, String> {
+        toml::from_str(text).map_err(|e| format!("{SPEC_FILE}: {e}"))
+    }
+
+    /// The container's FMI 2.0 modelDescription.xml. `descriptions` are the components'
+    /// (name, description, its modelDescription.xml text), in the system's order.
+    pub fn model_description(&self, sim: &Simulation, system_name: &str, component_xml: &[(String, String)]) -> String {
+        let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+        let descriptions = sim.component_descriptions();
+        let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
+            descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
+        };
+        let state = all(|cs| cs.can_get_and_set_fmu_state);
+        let serialize = state && all(|cs| cs.can_serialize_fmu_state);
+        let mut x = String::new();
+        let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+        let names: Vec<String> = descriptions
+            .iter()
+            .map(|(c, d)| format!("{c} ({})", d.model_identifier()))
+            .collect();
+        let _ = writeln!(
+            x,
+            r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
+            esc(system_name),
+            self.guid,
+            esc(&format!(
+                "The system {system_name} as one FMU: {}, stepped by rustfmu-runner's master at {} s",
+                names.join(", "),
+                self.step
+            )),
+            env!("CARGO_PKG_VERSION")
+        );
+        let _ = writeln!(
+            x,
+            r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="{state}" canSerializeFMUstate="{serialize}" canNotUseMemoryManagementFunctions="true"/>"#,
+            self.model_identifier
+        );
+        // Units and enumeration types: the components' definitions the exposed variables use,
+        // each once (a name two components define differently keeps the first).
+        let mut units: Vec<(String, String)> = Vec::new();
+        let mut types: Vec<(String, String)> = Vec::new();
+        for (component, xml) in component_xml {
+            let d = descriptions.iter().find(|(c, _)| c == component).map(|(_, d)| *d);
+            let Some(d) = d else { continue };
+            for e in self.variables.iter().filter(|e| &e.component == component) {
+                let Some(v) = d.variable(&e.variable) else { continue };
+                if let Some(u) = &v.unit
+                    && !units.iter().any(|(n, _)| n == u)
+                    && let Some(block) = element_text(xml, "Unit", u)
+                {
+                    units.push((u.clone(), block));
+                }
+                if let Some(t) = &v.declared_type
+                    && !types.iter().any(|(n, _)| n == t)
+                    && let Some(block) = element_text(xml, "SimpleType", t)
+                {
+                    // A SimpleType's unit is a unit too.
+                    if let Some(u) = attribute_in(&block, "unit")
+                        && !units.iter().any(|(n, _)| *n == u)
+                        && let Some(ub) = element_text(xml, "Unit", &u)
+                    {
+                        units.push((u, ub));
+                    }
+                    types.push((t.clone(), block));
+                }
+            }
+        }
+        if !units.is_empty() {
+            let _ = writeln!(x, "  <UnitDefinitions>");
+            for (_, b) in &units {
+                let _ = writeln!(x, "    {}", b.trim());
+            }
+            let _ = writeln!(x, "  </UnitDefinitions>");
+        }
+        if !types.is_empty() {
+            let _ = writeln!(x, "  <TypeDefinitions>");
+            for (_, b) in &types {
+                let _ = writeln!(x, "    {}", b.trim());
+            }
+            let _ = writeln!(x, "  </TypeDefinitions>");
+        }
+        // The categories of the container's own messages (the components' go under logAll,
+        // prefixed with the component's name).
+        let _ = writeln!(x, "  <LogCategories>");
+        for (name, what) in LOG_CATEGORIES {
+            let _ = writeln!(x, r#"    <Category name="{name}" description="{what}"/>"#);
+        }
+        let _ = writeln!(x, "  </LogCategories>");
+        let _ = writeln!(x, "  <DefaultExperiment stepSize=\"{}\"/>", self.step);
+        let _ = writeln!(x, "  <ModelVariables>");
+        for e in &self.variables {
+            let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);
+            let v = d.and_then(|d| d.variable(&e.variable));
+            let description = v.and_then(|v| v.description.clone()).unwrap_or_default();
+            let _ = write!(
+                x,
+                r#"    <ScalarVariable name="{}" valueReference="{}" causality="{}" variability="{}""#,
+                esc(&e.name),
+                e.vr,
+                e.causality,
+                e.variability
+            );
+            if !description.is_empty() {
+                let _ = write!(x, r#" description="{}""#, esc(&description));
+            }
+            let initial = match e.causality() {
+                Causality::Output if e.start.is_some() => Some("exact"),
+                Causality::Parameter => Some("exact"),
+                _ => None,
+            };
+            if let Some(i) = initial {
+                let _ = write!(x, r#" initial="{i}""#);
+            }
+            let _ = write!(x, ">\n      <{}", e.ty);
+            if let Some(v) = v {
+                if let Some(t) = &v.declared_type {
+                    let _ = write!(x, r#" declaredType="{}""#, esc(t));
+                }
+                if let Some(u) = &v.unit {
+                    let _ = write!(x, r#" unit="{}""#, esc(u));
+                }
+                if e.ty() != Type::Boolean && e.ty() != Type::String {
+                    if let Some(m) = v.min {
+                        let _ = write!(x, r#" min="{m}""#);
+                    }
+                    if let Some(m) = v.max {
+                        let _ = write!(x, r#" max="{m}""#);
+                    }
+                }
+            }
+            if let Some(s) = &e.start {
+                let _ = write!(x, r#" start="{}""#, esc(s));
+            }
+            let _ = writeln!(x, "/>\n    </ScalarVariable>");
+        }
+        let _ = writeln!(x, "  </ModelVariables>");
+        let _ = writeln!(x, "  <ModelStructure>");
+        let outputs: Vec<&Exposed> = self
+            .variables
+            .iter()
+            .filter(|e| e.causality() == Causality::Output)
+            .collect();
+        if !outputs.is_empty() {
+            let _ = writeln!(x, "    <Outputs>");
+            for e in &outputs {
+                let deps = self.output_dependencies(sim, e);
+                let list: Vec<String> = deps.iter().map(|i| i.to_string()).collect();
+                let _ = writeln!(
+                    x,
+                    r#"      <Unknown index="{}" dependencies="{}"/>"#,
+                    e.vr + 1,
+                    list.join(" ")
+                );
+            }
+            let _ = writeln!(x, "    </Outputs>");
+            let initial: Vec<&&Exposed> = outputs.iter().filter(|e| e.start.is_none()).collect();
+            if !initial.is_empty() {
+                let _ = writeln!(x, "    <InitialUnknowns>");
+                for e in initial {
+                    let _ = writeln!(x, r#"      <Unknown index="{}"/>"#, e.vr + 1);
+                }
+                let _ = writeln!(x, "    </InitialUnknowns>");
+            }
+        }
+        let _ = writeln!(x, "  </ModelStructure>");
+        let _ = writeln!(x, "</fmiModelDescription>");
+        x
+    }
+
+    /// The indices (1-based, the container's variable order) of the container's inputs an
+    /// output depends on directly: through its component's ModelStructure, and through every
+    /// connection into an input it depends on, back to the exposed inputs.
+    pub fn output_dependencies(&self, sim: &Simulation, output: &Exposed) -> Vec<u32> {
+        let mut out = Vec::new();
+        let mut seen: Vec<(String, String)> = Vec::new();
+        let mut todo = vec![(output.component.clone(), output.variable.clone())];
+        while let Some((c, v)) = todo.pop() {
+            if seen.contains(&(c.clone(), v.clone())) {
+                continue;
+            }
+            seen.push((c.clone(), v.clone()));
+            for input in sim.direct_inputs(&c, &v) {
+                if let Some(e) = self
+                    .variables
+                    .iter()
+                    .find(|e| e.component == c && e.variable == input && e.causality() == Causality::Input)
+                {
+                    out.push(e.vr + 1);
+                } else if let Some((sc, sv)) = sim.source_of(&c, &input) {
+                    todo.push((sc, sv));
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// The exposed variable of value reference `vr`.
+    pub fn by_vr(&self, vr: u32) -> Option<&Exposed> {
+        self.variables.get(vr as usize).filter(|e| e.vr == vr)
+    }
+}
+
+/// The whole `<tag name="name" ...>...</tag>` (or `<tag name="name" .../>`) element of `xml`.
+fn element_text(xml: &str, tag: &str, name: &str) -> Option<String> {
+    let open = format!("<{tag} ");
+    let mut from = 0;
+    while let Some(i) = xml[from..].find(&open) {
+        let start = from + i;
+        let head_end = start + xml[start..].find('>')?;
+        let head = &xml[start..=head_end];
+        if attribute_in(head, "name").as_deref() == Some(name) {
+            if head.ends_with("/>") {
+                return Some(head.to_owned());
+            }
+            let close = format!("</{tag}>");
+            let end = head_end + xml[head_end..].find(&close)? + close.len();
+            return Some(xml[start..end].to_owned());
+        }
+        from = head_end;
+    }
+    None
+}
+
+/// The value of attribute `name` in the first tag of `text`.
+fn attribute_in(text: &str, name: &str) -> Option<String> {
+    let head = &text[..text.find('>').unwrap_or(text.len())];
+    let key = format!(" {name}=\"");
+    let i = head.find(&key)? + key.len();
+    let j = head[i..].find('"')?;
+    Some(head[i..i + j].to_owned())
+}
+
+/// The component's description, checked to be one the container can run.
+pub fn check_component(component: &str, d: &Description) -> Result<(), Error> {
+    if d.cs.is_none() {
+        return Err(Error::unsupported(
+            Some(component),
+            None,
+            format!("component '{component}': not a co-simulation FMU"),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,665 @@
+//! The runner's FMI 2.0 co-simulation importer: an FMU unpacked (or found unpacked), its binary
+//! loaded once, instances, values, steps and FMU states.
+//!
+//! Written here rather than taken from the `fmi` crate (0.8), which the runner used before the
+//! container FMU (`cargo fmu container`) linked the runner into an FMU binary of its own. What
+//! was measured against the crate there (`cargo fmu check` of the PendulumLQR container):
+//! - its fmi-sys exports a `callback_log` symbol from every library it is linked into (the
+//!   check "the binary exports the fmi2 functions and no others" failed); this importer's C
+//!   logger (`c/logger.c`) is a static C function, not exported;
+//! - its import unpacks every FMU into a fresh temporary folder at every load (30 ms per
+//!   instantiation of the container), and the `tempfile` names come from a thread-local random
+//!   generator whose thread handle stays allocated after the container is unloaded (valgrind:
+//!   48 bytes possibly lost per run); here an FMU is unpacked once (or read unpacked from a
+//!   container's resources) and its binary loaded once for all its instances;
+//! - it never calls fmi2FreeFMUstate before the instance is freed, so every deserialized state
+//!   stayed allocated: [`InstanceCS::free_fmu_state`] frees one;
+//! - its logger shim panics on an `fmi2Pending` status inside a C callback (an abort of the
+//!   importer); here every status is a message;
+//! - fmi-sys runs bindgen (libclang) at build time: a cross build of the container for Windows
+//!   or macOS needed libclang with the target's headers; this importer's C types are
+//!   `rustfmu::fmi2::abi`'s, proven equal to the official headers by `tests/abi_matches_fmi_sys.rs`.
+
+#![allow(non_upper_case_globals)]
+
+use rustfmu::fmi2::abi::*;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A status other than fmi2OK and fmi2Warning (which count as success).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Fmi2Error {
+    Discard,
+    Error,
+    Fatal,
+    Pending,
+    /// A status code the standard does not define.
+    Unknown(u32),
+    /// The importer's own failure (a NULL state, a missing function): the message.
+    Importer(String),
+}
+
+impl std::fmt::Display for Fmi2Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fmi2Error::Discard => write!(f, "fmi2Discard"),
+            Fmi2Error::Error => write!(f, "fmi2Error"),
+            Fmi2Error::Fatal => write!(f, "fmi2Fatal"),
+            Fmi2Error::Pending => write!(f, "fmi2Pending"),
+            Fmi2Error::Unknown(s) => write!(f, "status {s}"),
+            Fmi2Error::Importer(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+fn check(status: fmi2Status) -> Result<(), Fmi2Error> {
+    match status {
+        fmi2OK | fmi2Warning => Ok(()),
+        fmi2Discard => Err(Fmi2Error::Discard),
+        fmi2Error => Err(Fmi2Error::Error),
+        fmi2Fatal => Err(Fmi2Error::Fatal),
+        fmi2Pending => Err(Fmi2Error::Pending),
+        s => Err(Fmi2Error::Unknown(s)),
+    }
+}
+
+type Instantiate = unsafe extern "C" fn(
+    fmi2String,
+    fmi2Type,
+    fmi2String,
+    fmi2String,
+    *const fmi2CallbackFunctions,
+    fmi2Boolean,
+    fmi2Boolean,
+) -> fmi2Component;
+type FreeInstance = unsafe extern "C" fn(fmi2Component);
+type SetDebugLogging = unsafe extern "C" fn(fmi2Component, fmi2Boolean, usize, *const fmi2String) -> fmi2Status;
+type SetupExperiment = unsafe extern "C" fn(fmi2Component, fmi2Boolean, f64, f64, fmi2Boolean, f64) -> fmi2Status;
+type Unary = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
+type Get<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut T) -> fmi2Status;
+type Set<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const T) -> fmi2Status;
+type DoStep = unsafe extern "C" fn(fmi2Component, f64, f64, fmi2Boolean) -> fmi2Status;
+type GetState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+type SetState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
+type StateSize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
+type Serialize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
+type Deserialize = unsafe extern "C" fn(fmi2Component, *const fmi2Byte, usize, *mut fmi2FMUstate) -> fmi2Status;
+
+/// The functions of an FMI 2.0 co-simulation binary the runner calls.
+struct Api {
+    instantiate: Instantiate,
+    free_instance: FreeInstance,
+    set_debug_logging: SetDebugLogging,
+    setup_experiment: SetupExperiment,
+    enter_initialization_mode: Unary,
+    exit_initialization_mode: Unary,
+    terminate: Unary,
+    reset: Unary,
+    get_real: Get<f64>,
+    get_integer: Get<fmi2Integer>,
+    get_boolean: Get<fmi2Boolean>,
+    get_string: Get<fmi2String>,
+    set_real: Set<f64>,
+    set_integer: Set<fmi2Integer>,
+    set_boolean: Set<fmi2Boolean>,
+    set_string: Set<fmi2String>,
+    do_step: DoStep,
+    /// The FMU-state functions: absent from an FMU that declares no FMU state.
+    get_fmu_state: Option<GetState>,
+    set_fmu_state: Option<SetState>,
+    free_fmu_state: Option<GetState>,
+    serialized_size: Option<StateSize>,
+    serialize: Option<Serialize>,
+    deserialize: Option<Deserialize>,
+}
+
+/// A loaded FMU binary.
+pub struct Library {
+    api: Api,
+    // Last: unloaded after the function pointers above are gone.
+    _lib: libloading::Library,
+}
+
+impl Library {
+    fn load(path: &Path) -> Result<Library, String> {
+        // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
+        // importer trusts the FMU it was given.
+        let lib =
+            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+        // SAFETY: each symbol is an FMI 2.0 function of the type the standard's header gives.
+        let api = unsafe {
+            macro_rules! f {
+                ($name:literal) => {
+                    *lib.get(concat!($name, "\0").as_bytes())
+                        .map_err(|e| format!("{}: no function {} ({e})", path.display(), $name))?
+                };
+            }
+            macro_rules! opt {
+                ($name:literal) => {
+                    lib.get(concat!($name, "\0").as_bytes()).ok().map(|s| *s)
+                };
+            }
+            Api {
+                instantiate: f!("fmi2Instantiate"),
+                free_instance: f!("fmi2FreeInstance"),
+                set_debug_logging: f!("fmi2SetDebugLogging"),
+                setup_experiment: f!("fmi2SetupExperiment"),
+                enter_initialization_mode: f!("fmi2EnterInitializationMode"),
+                exit_initialization_mode: f!("fmi2ExitInitializationMode"),
+                terminate: f!("fmi2Terminate"),
+                reset: f!("fmi2Reset"),
+                get_real: f!("fmi2GetReal"),
+                get_integer: f!("fmi2GetInteger"),
+                get_boolean: f!("fmi2GetBoolean"),
+                get_string: f!("fmi2GetString"),
+                set_real: f!("fmi2SetReal"),
+                set_integer: f!("fmi2SetInteger"),
+                set_boolean: f!("fmi2SetBoolean"),
+                set_string: f!("fmi2SetString"),
+                do_step: f!("fmi2DoStep"),
+                get_fmu_state: opt!("fmi2GetFMUstate"),
+                set_fmu_state: opt!("fmi2SetFMUstate"),
+                free_fmu_state: opt!("fmi2FreeFMUstate"),
+                serialized_size: opt!("fmi2SerializedFMUstateSize"),
+                serialize: opt!("fmi2SerializeFMUstate"),
+                deserialize: opt!("fmi2DeSerializeFMUstate"),
+            }
+        };
+        Ok(Library { api, _lib: lib })
+    }
+}
+
+/// A folder this process made (an FMU unpacked), removed with everything in it when dropped.
+struct Scratch(PathBuf);
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A fresh folder under the system's temporary folder.
+fn scratch() -> Result<Scratch, String> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    let base = std::env::temp_dir();
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    for _ in 0..100 {
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let dir = base.join(format!("rustfmu-runner-{}-{nanos:x}-{n}", std::process::id()));
+        match std::fs::create_dir(&dir) {
+            Ok(()) => return Ok(Scratch(dir)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(format!("cannot make a folder in {}: {e}", base.display())),
+        }
+    }
+    Err(format!("cannot make a fresh folder in {}", base.display()))
+}
+
+/// The FMI 2.0 platform folder of the machine this runs on.
+pub fn platform_folder() -> Option<&'static str> {
+    match (std::env::consts::OS, std::env::consts::ARCH) {
+        ("linux", "x86_64") => Some("linux64"),
+        ("linux", "x86") => Some("linux32"),
+        ("linux", "aarch64") => Some("aarch64-linux"),
+        ("windows", "x86_64") => Some("win64"),
+        ("windows", "x86") => Some("win32"),
+        ("macos", _) => Some("darwin64"),
+        _ => None,
+    }
+}
+
+/// `file:` URI of a folder, percent-encoded (RFC 3986; on Windows `file:///C:/...`).
+pub fn file_uri(dir: &Path) -> String {
+    let abs = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let mut text = abs.to_string_lossy().replace('\\', "/");
+    if !text.starts_with('/') {
+        text.insert(0, '/');
+    }
+    let mut out = String::from("file://");
+    for b in text.bytes() {
+        if b.is_ascii_alphanumeric() || b"/-._~:".contains(&b) {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+/// An FMU ready to instantiate: its folder (unpacked by this process, or as found) and binary.
+pub struct Fmi2Import {
+    dir: PathBuf,
+    library: Arc<Library>,
+    guid: CString,
+    resource_uri: CString,
+    /// Last: the unpacked folder goes after the library is unloaded.
+    _scratch: Option<Scratch>,
+}
+
+impl Fmi2Import {
+    /// Unpacks the FMU archive `bytes` into a fresh temporary folder (removed when this is dropped).
+    pub fn from_bytes(bytes: &[u8], model_identifier: &str, guid: &str) -> Result<Fmi2Import, String> {
+        let tmp = scratch()?;
+        let mut zip =
+            zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| format!("not a zip archive: {e}"))?;
+        zip.extract(&tmp.0)
+            .map_err(|e| format!("cannot unpack into {}: {e}", tmp.0.display()))?;
+        let mut import = Fmi2Import::from_dir(&tmp.0, model_identifier, guid)?;
+        import._scratch = Some(tmp);
+        Ok(import)
+    }
+
+    /// The FMU unpacked in `dir` (left as it is).
+    pub fn from_dir(dir: &Path, model_identifier: &str, guid: &str) -> Result<Fmi2Import, String> {
+        let folder = platform_folder().ok_or_else(|| {
+            format!(
+                "FMI 2.0 names no binaries folder for {} on {}",
+                std::env::consts::OS,
+                std::env::consts::ARCH
+            )
+        })?;
+        let binary = dir
+            .join("binaries")
+            .join(folder)
+            .join(format!("{model_identifier}{}", std::env::consts::DLL_SUFFIX));
+        if !binary.is_file() {
+            return Err(format!("no binary for this platform: {} is missing", binary.display()));
+        }
+        let library = Arc::new(Library::load(&binary)?);
+        let uri = file_uri(&dir.join("resources"));
+        Ok(Fmi2Import {
+            dir: dir.to_path_buf(),
+            library,
+            guid: CString::new(guid).map_err(|_| "a GUID with a NUL".to_string())?,
+            resource_uri: CString::new(uri).map_err(|_| "a path with a NUL".to_string())?,
+            _scratch: None,
+        })
+    }
+
+    /// Where the FMU is unpacked.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// fmi2Instantiate(name, fmi2CoSimulation, ...) with the runner's logger.
+    pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<InstanceCS, String> {
+        let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
+        let env = Box::new(LogEnv {
+            sink: forward,
+            instance: name_c.clone(),
+        });
+        let callbacks = Box::new(fmi2CallbackFunctions {
+            logger: Some(logger()),
+            allocateMemory: Some(calloc_),
+            freeMemory: Some(free_),
+            stepFinished: None,
+            componentEnvironment: &*env as *const LogEnv as *mut c_void,
+        });
+        // SAFETY: the arguments are valid C strings and callbacks that outlive the instance
+        // (boxed, dropped after fmi2FreeInstance).
+        let c = unsafe {
+            (self.library.api.instantiate)(
+                name_c.as_ptr(),
+                fmi2CoSimulation,
+                self.guid.as_ptr(),
+                self.resource_uri.as_ptr(),
+                &*callbacks,
+                fmi2Boolean::from(visible),
+                fmi2Boolean::from(logging_on),
+            )
+        };
+        if c.is_null() {
+            return Err("fmi2Instantiate returned NULL".into());
+        }
+        Ok(InstanceCS {
+            library: self.library.clone(),
+            c,
+            states: Vec::new(),
+            _callbacks: callbacks,
+            _env: env,
+        })
+    }
+}
+
+unsafe extern "C" fn calloc_(n: usize, size: usize) -> *mut c_void {
+    // The FMU asks for n objects of size bytes each, zeroed (fmi2CallbackAllocateMemory).
+    let Some(bytes) = n.checked_mul(size) else {
+        return std::ptr::null_mut();
+    };
+    let bytes = bytes.max(1);
+    let Ok(layout) = std::alloc::Layout::from_size_align(bytes + 16, 16) else {
+        return std::ptr::null_mut();
+    };
+    // SAFETY: a non-zero size; the length is kept in front of the block for free_.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout);
+        if p.is_null() {
+            return p as *mut c_void;
+        }
+        (p as *mut usize).write(bytes + 16);
+        p.add(16) as *mut c_void
+    }
+}
+
+unsafe extern "C" fn free_(p: *mut c_void) {
+    if p.is_null() {
+        return;
+    }
+    // SAFETY: `p` came from calloc_, 16 bytes after the start of a block whose size is there.
+    unsafe {
+        let start = (p as *mut u8).sub(16);
+        let size = (start as *const usize).read();
+        std::alloc::dealloc(start, std::alloc::Layout::from_size_align_unchecked(size, 16));
+    }
+}
+
+/// The componentEnvironment of an instance: the C logger calls `sink` (its first field) with
+/// the formatted text.
+#[repr(C)]
+struct LogEnv {
+    sink: unsafe extern "C" fn(*const LogEnv, *const c_char, u32, *const c_char, *const c_char),
+    instance: CString,
+}
+
+unsafe extern "C" {
+    fn rustfmu_runner_logger(
+        env: fmi2ComponentEnvironment,
+        instance: fmi2String,
+        status: fmi2Status,
+        category: fmi2String,
+        message: fmi2String,
+        ...
+    );
+}
+
+fn logger() -> unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...) {
+    rustfmu_runner_logger
+}
+
+/// Every FMU message goes to the `log` crate: module path "logger", target the instance name,
+/// the level from the status (fmi2OK: Info, fmi2Warning: Warn, fmi2Discard: Trace, fmi2Error
+/// and fmi2Fatal: Error; what [`crate::fmu_log`] and the container read back).
+unsafe extern "C" fn forward(
+    env: *const LogEnv,
+    instance: *const c_char,
+    status: u32,
+    category: *const c_char,
+    text: *const c_char,
+) {
+    let _ = std::panic::catch_unwind(|| {
+        let s = |p: *const c_char| {
+            if p.is_null() {
+                String::new()
+            } else {
+                // SAFETY: the C logger passes NUL-terminated strings.
+                unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+            }
+        };
+        let name = if instance.is_null() && !env.is_null() {
+            // SAFETY: `env` is the LogEnv this instance was given.
+            unsafe { &*env }.instance.to_string_lossy().into_owned()
+        } else {
+            s(instance)
+        };
+        let _ = s(category);
+        let level = match status {
+            fmi2OK | fmi2Pending => log::Level::Info,
+            fmi2Warning => log::Level::Warn,
+            fmi2Discard => log::Level::Trace,
+            _ => log::Level::Error,
+        };
+        log::logger().log(
+            &log::Record::builder()
+                .args(format_args!("{}", s(text)))
+                .level(level)
+                .module_path(Some("logger"))
+                .target(&name)
+                .build(),
+        );
+    });
+}
+
+/// An FMU state of an [`InstanceCS`] (an index into its states).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FmuState(usize);
+
+/// A co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
+pub struct InstanceCS {
+    library: Arc<Library>,
+    c: fmi2Component,
+    /// FMU states taken (None: freed).
+    states: Vec<Option<fmi2FMUstate>>,
+    _callbacks: Box<fmi2CallbackFunctions>,
+    _env: Box<LogEnv>,
+}
+
+// SAFETY: an FMI instance may be used from any one thread at a time (FMI 2.0, 2.1.1); the
+// runner never uses one from two threads at once (it is owned by one Simulation).
+unsafe impl Send for InstanceCS {}
+
+impl Drop for InstanceCS {
+    fn drop(&mut self) {
+        if let Some(free) = self.library.api.free_fmu_state {
+            for s in self.states.iter_mut().filter_map(|s| s.as_mut()) {
+                // SAFETY: a state this instance took and did not free.
+                unsafe { free(self.c, s) };
+            }
+        }
+        // SAFETY: the instance this library made, freed once.
+        unsafe { (self.library.api.free_instance)(self.c) };
+    }
+}
+
+fn missing(what: &str) -> Fmi2Error {
+    Fmi2Error::Importer(format!("the FMU has no {what}"))
+}
+
+impl InstanceCS {
+    fn api(&self) -> &Api {
+        &self.library.api
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error> {
+        let owned: Vec<CString> = categories
+            .iter()
+            .map(|c| CString::new(*c).unwrap_or_default())
+            .collect();
+        let ptrs: Vec<fmi2String> = owned.iter().map(|c| c.as_ptr()).collect();
+        // SAFETY: a live instance; `ptrs` holds `len` valid strings.
+        check(unsafe { (self.api().set_debug_logging)(self.c, fmi2Boolean::from(on), ptrs.len(), ptrs.as_ptr()) })
+    }
+
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe {
+            (self.api().setup_experiment)(
+                self.c,
+                fmi2Boolean::from(tolerance.is_some()),
+                tolerance.unwrap_or(0.0),
+                start,
+                fmi2Boolean::from(stop.is_some()),
+                stop.unwrap_or(0.0),
+            )
+        })
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().enter_initialization_mode)(self.c) })
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().exit_initialization_mode)(self.c) })
+    }
+
+    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().terminate)(self.c) })
+    }
+
+    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().reset)(self.c) })
+    }
+
+    pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().do_step)(self.c, t, h, fmi2Boolean::from(no_set_prior)) })
+    }
+
+    fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {
+        if vrs == values {
+            Ok(())
+        } else {
+            Err(Fmi2Error::Importer(format!("{vrs} value references, {values} values")))
+        }
+    }
+
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
+    }
+
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        // SAFETY: as get_real.
+        check(unsafe { (self.api().get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
+    }
+
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        // SAFETY: as get_real.
+        check(unsafe { (self.api().get_boolean)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
+    }
+
+    pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        let mut ptrs: Vec<fmi2String> = vec![std::ptr::null(); vrs.len()];
+        // SAFETY: as get_real; the FMU's strings are copied before the next call.
+        check(unsafe { (self.api().get_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_mut_ptr()) })?;
+        for (o, p) in out.iter_mut().zip(&ptrs) {
+            if p.is_null() {
+                return Err(Fmi2Error::Importer("fmi2GetString gave a NULL string".into()));
+            }
+            // SAFETY: a NUL-terminated string of the FMU, valid until its next call.
+            *o = unsafe { CStr::from_ptr(*p) }.to_owned();
+        }
+        Ok(())
+    }
+
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
+    }
+
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        // SAFETY: as set_real.
+        check(unsafe { (self.api().set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
+    }
+
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        // SAFETY: as set_real.
+        check(unsafe { (self.api().set_boolean)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
+    }
+
+    pub fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        let ptrs: Vec<fmi2String> = values.iter().map(|s| s.as_ptr()).collect();
+        // SAFETY: as set_real.
+        check(unsafe { (self.api().set_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_ptr()) })
+    }
+
+    /// fmi2GetFMUstate into a new state of this instance.
+    pub fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error> {
+        let get = self.api().get_fmu_state.ok_or_else(|| missing("fmi2GetFMUstate"))?;
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: a live instance; `s` is NULL, so the FMU makes a new state.
+        check(unsafe { get(self.c, &mut s) })?;
+        self.keep(s)
+    }
+
+    fn keep(&mut self, s: fmi2FMUstate) -> Result<FmuState, Fmi2Error> {
+        if s.is_null() {
+            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
+        }
+        match self.states.iter().position(Option::is_none) {
+            Some(i) => {
+                self.states[i] = Some(s);
+                Ok(FmuState(i))
+            }
+            None => {
+                self.states.push(Some(s));
+                Ok(FmuState(self.states.len() - 1))
+            }
+        }
+    }
+
+    fn raw(&self, s: &FmuState) -> Result<fmi2FMUstate, Fmi2Error> {
+        self.states
+            .get(s.0)
+            .copied()
+            .flatten()
+            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
+    }
+
+    /// fmi2GetFMUstate into the existing state `s` (overwritten).
+    pub fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        let get = self.api().get_fmu_state.ok_or_else(|| missing("fmi2GetFMUstate"))?;
+        let mut raw = self.raw(s)?;
+        // SAFETY: a live instance and one of its states.
+        check(unsafe { get(self.c, &mut raw) })?;
+        self.states[s.0] = Some(raw);
+        Ok(())
+    }
+
+    pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        let set = self.api().set_fmu_state.ok_or_else(|| missing("fmi2SetFMUstate"))?;
+        let raw = self.raw(s)?;
+        // SAFETY: a live instance and one of its states.
+        check(unsafe { set(self.c, raw) })
+    }
+
+    /// fmi2FreeFMUstate of `s` (which is then no state of this instance).
+    pub fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error> {
+        let free = self.api().free_fmu_state.ok_or_else(|| missing("fmi2FreeFMUstate"))?;
+        let mut raw = self.raw(&s)?;
+        self.states[s.0] = None;
+        // SAFETY: a live instance and one of its states, freed once.
+        check(unsafe { free(self.c, &mut raw) })
+    }
+
+    pub fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error> {
+        let size_of = self
+            .api()
+            .serialized_size
+            .ok_or_else(|| missing("fmi2SerializedFMUstateSize"))?;
+        let serialize = self.api().serialize.ok_or_else(|| missing("fmi2SerializeFMUstate"))?;
+        let raw = self.raw(s)?;
+        let mut size = 0usize;
+        // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
+        check(unsafe { size_of(self.c, raw, &mut size) })?;
+        let mut out = vec![0u8; size];
+        check(unsafe { serialize(self.c, raw, out.as_mut_ptr() as *mut fmi2Byte, size) })?;
+        Ok(out)
+    }
+
+    pub fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error> {
+        let deserialize = self
+            .api()
+            .deserialize
+            .ok_or_else(|| missing("fmi2DeSerializeFMUstate"))?;
+        let mut s: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: a live instance; `bytes` is readable for its length.
+        check(unsafe { deserialize(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s) })?;
+        self.keep(s)
+    }
+}
