@@ -171,7 +171,7 @@ fn claim(krate: &FmuCrate, out: &Path, id: &str) -> Result<(PathBuf, String), St
 /// (FMI 2.0 names no folder per macOS architecture; the Reference-FMUs ship theirs so). Two
 /// targets of one other folder are refused (`x86_64-unknown-linux-gnu` and
 /// `x86_64-unknown-linux-gnu.2.17` both go to `linux64`).
-fn merge_universal(binaries: Vec<(String, String, Vec<u8>)>) -> Result<Vec<(String, Vec<u8>)>, String> {
+pub fn merge_universal(binaries: Vec<(String, String, Vec<u8>)>) -> Result<Vec<(String, Vec<u8>)>, String> {
     // (archive name, [(triple, bytes)]).
     type Slices = Vec<(String, Vec<u8>)>;
     let mut out: Vec<(String, Slices)> = Vec::new();

@@ -108,6 +108,30 @@ enum Cmd {
         #[arg(long)]
         manifest_path: Option<PathBuf>,
     },
+    /// Write a composed system (an SSP file) as one FMI 2.0 co-simulation FMU: the component FMUs
+    /// in its resources, rustfmu-runner's master inside at the internal step, the system's
+    /// unconnected inputs, outputs and parameters as its variables (`component.variable`), the
+    /// SSP's parameter set as their start values.
+    Container {
+        ssp: PathBuf,
+        /// The FMU to write (default: <system>.fmu beside the SSP file).
+        #[arg(short = 'o', long = "output")]
+        out: Option<PathBuf>,
+        /// The components' internal communication step, s (default: the smallest default step
+        /// size of the components). An importer's step is cut into ceil(H / step) equal steps.
+        #[arg(long)]
+        step: Option<f64>,
+        /// The FMI version of the container: 2 (FMI 3.0 containers are not made yet).
+        #[arg(long = "fmi-version", default_value = "2")]
+        fmi_version: String,
+        /// A Rust target triple whose binary goes into the container (repeatable, or a comma
+        /// list; default: the rustfmu workspace's FMU targets that every component has a binary for).
+        #[arg(long = "target", value_delimiter = ',', value_name = "TRIPLE")]
+        targets: Vec<String>,
+        /// The venv Python whose zig links macOS and old-glibc Linux targets.
+        #[arg(long)]
+        python: Option<PathBuf>,
+    },
     /// Internal: the default experiment's picture for `build`, in a child process (SVG on stdout).
     #[command(hide = true, name = "__plot")]
     Plot { library: PathBuf, resource_uri: String },
@@ -130,6 +154,33 @@ enum Cmd {
 
 fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
     match cmd {
+        Cmd::Container {
+            ssp,
+            out,
+            step,
+            fmi_version,
+            targets,
+            python,
+        } => {
+            match fmi_version.as_str() {
+                "2" | "2.0" => {}
+                "3" | "3.0" | "both" => {
+                    return Err(format!(
+                        "--fmi-version {fmi_version}: FMI 3.0 containers are not made yet (the runner runs FMI 2.0 components only); use --fmi-version 2"
+                    ));
+                }
+                other => return Err(format!("--fmi-version {other}: expected 2")),
+            }
+            let out = crate::container::container(&crate::container::Request {
+                ssp: &ssp,
+                out: out.as_deref(),
+                step,
+                targets: &targets,
+                python: python.as_deref(),
+            })?;
+            println!("{}", out.display());
+            Ok(())
+        }
         Cmd::New {
             name,
             path,

@@ -9,6 +9,7 @@
 pub mod bundle;
 pub mod cargo;
 pub mod cli;
+pub mod container;
 pub mod depends;
 pub mod docs;
 pub mod new;

@@ -1,0 +1,311 @@
+//! `cargo fmu container SYSTEM.ssp`: a composed system as one FMI 2.0 co-simulation FMU.
+//!
+//! The container is the system's SSP tree (unchanged, under `resources/system/`), a spec of
+//! what it exposes (`resources/container.toml`, `rustfmu_runner::container::Spec`), a
+//! `modelDescription.xml` written from the spec and the components' descriptions, and the
+//! binary of `runner/container` (rustfmu-runner's master behind the FMI 2.0 API) built for
+//! every platform all the components carry (or the `--target`s given), named after the
+//! container's model identifier.
+
+use crate::cargo::{self, FmuCrate};
+use rustfmu::description::FmiVersion;
+use rustfmu_runner::Simulation;
+use rustfmu_runner::container::{SPEC_FILE, SYSTEM_FOLDER, Spec};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use zip::write::SimpleFileOptions;
+
+/// What `cargo fmu container` was asked for.
+pub struct Request<'a> {
+    pub ssp: &'a Path,
+    pub out: Option<&'a Path>,
+    pub step: Option<f64>,
+    pub targets: &'a [String],
+    pub python: Option<&'a Path>,
+}
+
+/// The archive's entries: (name, bytes).
+fn entries(path: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| format!("{}: not a zip archive: {e}", path.display()))?;
+    let mut out = Vec::new();
+    for i in 0..zip.len() {
+        let mut f = zip.by_index(i).map_err(|e| format!("{}: {e}", path.display()))?;
+        if f.is_dir() {
+            continue;
+        }
+        let name = f.name().map_err(|e| format!("{}: {e}", path.display()))?.into_owned();
+        let mut bytes = Vec::new();
+        f.read_to_end(&mut bytes)
+            .map_err(|e| format!("{}: {name}: {e}", path.display()))?;
+        out.push((name, bytes));
+    }
+    Ok(out)
+}
+
+/// The files of a zip archive in memory: (name, bytes); names that would leave the folder refused.
+fn entries_of(bytes: &[u8]) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| format!("not a zip archive: {e}"))?;
+    let mut out = Vec::new();
+    for i in 0..zip.len() {
+        let mut f = zip.by_index(i).map_err(|e| e.to_string())?;
+        if f.is_dir() {
+            continue;
+        }
+        let name = f
+            .enclosed_name()
+            .ok_or_else(|| format!("entry {i} has a name that leaves the archive's folder"))?
+            .to_string_lossy()
+            .replace('\\', "/");
+        let mut data = Vec::new();
+        f.read_to_end(&mut data).map_err(|e| format!("{name}: {e}"))?;
+        out.push((name, data));
+    }
+    Ok(out)
+}
+
+/// The FMI 2.0 platform folders an FMU archive has binaries for.
+fn platforms_of(fmu: &[u8]) -> Result<Vec<String>, String> {
+    let zip = zip::ZipArchive::new(std::io::Cursor::new(fmu)).map_err(|e| e.to_string())?;
+    let mut out: Vec<String> = Vec::new();
+    for name in zip.file_names() {
+        let Ok(name) = name else { continue };
+        if let Some(rest) = name.strip_prefix("binaries/")
+            && let Some((folder, file)) = rest.split_once('/')
+            && !file.is_empty()
+            && !out.iter().any(|f| f == folder)
+        {
+            out.push(folder.to_owned());
+        }
+    }
+    Ok(out)
+}
+
+fn model_description_of(fmu: &[u8]) -> Result<String, String> {
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(fmu)).map_err(|e| e.to_string())?;
+    let mut xml = String::new();
+    zip.by_name("modelDescription.xml")
+        .map_err(|e| e.to_string())?
+        .read_to_string(&mut xml)
+        .map_err(|e| e.to_string())?;
+    Ok(xml)
+}
+
+/// The rustfmu workspace this cargo-fmu was built from: the container's binary is built there.
+fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("no rustfmu workspace")?
+        .to_path_buf();
+    let manifest = root.join("Cargo.toml");
+    if !root.join("runner/container/Cargo.toml").is_file() {
+        return Err(format!(
+            "the container's binary is built from rustfmu's sources (runner/container), and this cargo-fmu was built from {}, \
+             which has no runner/container any more",
+            root.display()
+        ));
+    }
+    cargo::workspace(Some(&manifest))
+}
+
+/// Writes the container FMU of `req.ssp`; returns its path.
+pub fn container(req: &Request) -> Result<PathBuf, String> {
+    let shown = req.ssp.display().to_string();
+    let sim = Simulation::from_ssp(req.ssp).map_err(|e| e.message)?;
+    let files = entries(req.ssp)?;
+    let mut archive = rustfmu_runner::ssp::Archive::open(req.ssp).map_err(|e| e.message)?;
+    let system_name = archive.ssd.name.clone();
+    let components: Vec<String> = archive.ssd.components.iter().map(|c| c.name.clone()).collect();
+    // The components' descriptions as written, and the platforms every one of them carries.
+    let mut xmls = Vec::new();
+    let mut common: Option<Vec<String>> = None;
+    for c in &components {
+        let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
+        xmls.push((
+            c.clone(),
+            model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?,
+        ));
+        let mine = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
+        common = Some(match common {
+            None => mine,
+            Some(before) => before.into_iter().filter(|f| mine.contains(f)).collect(),
+        });
+    }
+    let common = common.unwrap_or_default();
+    if common.is_empty() {
+        return Err(format!(
+            "{shown}: no platform has a binary in every component FMU: a container cannot run anywhere"
+        ));
+    }
+    let step = match req.step {
+        Some(h) => h,
+        None => sim
+            .component_descriptions()
+            .iter()
+            .filter_map(|(_, d)| {
+                d.default_experiment
+                    .step_size
+                    .as_deref()
+                    .and_then(|s| s.trim().parse::<f64>().ok())
+            })
+            .fold(None, |m: Option<f64>, h| Some(m.map_or(h, |m| m.min(h))))
+            .ok_or_else(|| {
+                format!(
+                    "{shown}: no component names a default step size: give the container's internal step with --step"
+                )
+            })?,
+    };
+    let spec = Spec::new(&sim, step).map_err(|e| e.message)?;
+    let xml = spec.model_description(&sim, &system_name, &xmls);
+    drop(sim);
+
+    // Which binaries: the targets asked for, else the rustfmu workspace's FMU targets, those
+    // whose FMI 2.0 folder every component has.
+    let ws = rustfmu_workspace()?;
+    let host = crate::target::host_triple()?;
+    let wanted: Vec<String> = if req.targets.is_empty() {
+        let all = match ws.fmu_metadata.get("targets") {
+            Some(v) => crate::target::parse_targets(v)?,
+            None => vec![host.clone()],
+        };
+        all.into_iter()
+            .filter(|t| {
+                crate::target::platform(t)
+                    .and_then(|p| p.folder(FmiVersion::V2))
+                    .is_ok_and(|f| common.contains(&f))
+            })
+            .collect()
+    } else {
+        req.targets.to_vec()
+    };
+    let mut binaries: Vec<(String, String, PathBuf)> = Vec::new();
+    for t in &wanted {
+        let p = crate::target::platform(t)?;
+        let folder = p.folder(FmiVersion::V2).map_err(|e| format!("target {t}: {e}"))?;
+        if !common.contains(&folder) {
+            return Err(format!(
+                "target {t}: not every component has a {folder} binary (all of them have: {})",
+                common.join(", ")
+            ));
+        }
+        binaries.push((
+            t.clone(),
+            format!("binaries/{folder}/{}.{}", spec.model_identifier, p.extension()),
+            PathBuf::new(),
+        ));
+    }
+    if binaries.is_empty() {
+        return Err(format!(
+            "{shown}: none of the targets to build ({}) is a platform every component has ({})",
+            wanted.join(", "),
+            common.join(", ")
+        ));
+    }
+    for t in &wanted {
+        crate::target::preflight(t, &host, req.python)?;
+    }
+    let krate = FmuCrate {
+        package: "rustfmu-container".into(),
+        manifest_dir: ws.root.join("runner/container"),
+        lib_name: "rustfmu_container".into(),
+        documentation: None,
+        resources: None,
+        fmi_versions: None,
+        targets: None,
+    };
+    let zig = if wanted.iter().any(|t| crate::target::uses_zig(t, &host)) {
+        Some(crate::target::Zig::find(req.python)?)
+    } else {
+        None
+    };
+    let mut built: Vec<(String, String, Vec<u8>)> = Vec::new();
+    for (t, name, _) in &binaries {
+        let triple = (t != &host).then_some(t.as_str());
+        let linker = if crate::target::uses_zig(t, &host) {
+            zig.as_ref()
+        } else {
+            None
+        };
+        cargo::build(&ws, std::slice::from_ref(&krate), triple, &host, linker)?;
+        let lib = ws.library_for(&krate, t, &host)?;
+        let bytes = std::fs::read(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
+        built.push((name.clone(), t.clone(), bytes));
+    }
+    let binaries = crate::bundle::merge_universal(built)?;
+
+    let out = match req.out {
+        Some(p) => p.to_path_buf(),
+        None => req.ssp.with_file_name(format!("{}.fmu", spec.model_identifier)),
+    };
+    if out.extension().is_none_or(|e| e != "fmu") {
+        return Err(format!("{}: the container's file name must end in .fmu", out.display()));
+    }
+    let tmp = out.with_extension("fmu.partial");
+    let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let deflate = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let zip_err = |e: &dyn std::fmt::Display| format!("{}: {e}", tmp.display());
+    let mut add = |name: &str, bytes: &[u8], exec: bool| -> Result<(), String> {
+        let options = if exec { deflate.unix_permissions(0o755) } else { deflate };
+        zip.start_file(name, options).map_err(|e| zip_err(&e))?;
+        zip.write_all(bytes).map_err(|e| zip_err(&e))
+    };
+    add("modelDescription.xml", xml.as_bytes(), false)?;
+    for (name, bytes) in &binaries {
+        add(name, bytes, true)?;
+    }
+    add(&format!("resources/{SPEC_FILE}"), spec.to_toml().as_bytes(), false)?;
+    // The system's files; each component FMU unpacked into a folder of its file's name, which
+    // the container's binary loads without unpacking it again at every instantiation.
+    let sources: Vec<String> = archive
+        .ssd
+        .components
+        .iter()
+        .map(|c| c.source.trim_start_matches("./").to_owned())
+        .collect();
+    for (name, bytes) in &files {
+        if sources.contains(name) {
+            for (inner, data) in entries_of(bytes).map_err(|e| format!("{shown}: {name}: {e}"))? {
+                let exec = inner.starts_with("binaries/");
+                add(&format!("resources/{SYSTEM_FOLDER}/{name}/{inner}"), &data, exec)?;
+            }
+        } else {
+            add(&format!("resources/{SYSTEM_FOLDER}/{name}"), bytes, false)?;
+        }
+    }
+    let names: Vec<String> = spec
+        .variables
+        .iter()
+        .map(|e| format!("{} {} {}", e.causality, e.ty, e.name))
+        .collect();
+    add(
+        "documentation/index.html",
+        format!(
+            "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{id}</title></head><body>\n<h1>{id}</h1>\n\
+             <p>The system {system} (components {components}) as one co-simulation FMU, made by <code>cargo fmu container</code>: \
+             rustfmu-runner's Gauss-Seidel master steps the components at {step} s inside.</p>\n<h2>Variables</h2>\n<ul>\n{vars}\n</ul>\n</body></html>\n",
+            id = spec.model_identifier,
+            system = quick_xml::escape::escape(&system_name),
+            components = quick_xml::escape::escape(components.join(", ")),
+            step = spec.step,
+            vars = names
+                .iter()
+                .map(|n| format!("<li>{}</li>", quick_xml::escape::escape(n)))
+                .collect::<Vec<_>>()
+                .join("\n")
+        )
+        .as_bytes(),
+        false,
+    )?;
+    zip.finish().map_err(|e| zip_err(&e))?;
+    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
+    eprintln!(
+        "fmu: wrote {} ({} variables: {} components of {shown}, internal step {} s; binaries: {})",
+        out.display(),
+        spec.variables.len(),
+        components.len(),
+        spec.step,
+        binaries.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+    );
+    Ok(out)
+}
