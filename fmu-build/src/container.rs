@@ -91,6 +91,20 @@ fn model_description_of(fmu: &[u8]) -> Result<String, String> {
     Ok(xml)
 }
 
+/// The stepSize of the SSD's fixed-step master annotation (`<oms:FixedStepMaster stepSize="..."/>`).
+fn fixed_step_of(ssd: &str) -> Option<f64> {
+    let at = ssd.find("FixedStepMaster")?;
+    let rest = &ssd[at..ssd[at..].find('>').map_or(ssd.len(), |e| at + e)];
+    let key = "stepSize=\"";
+    let i = rest.find(key)? + key.len();
+    let j = rest[i..].find('"')?;
+    rest[i..i + j]
+        .trim()
+        .parse()
+        .ok()
+        .filter(|h: &f64| *h > 0.0 && h.is_finite())
+}
+
 /// The rustfmu workspace this cargo-fmu was built from: the container's binary is built there.
 fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -112,6 +126,26 @@ fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
 pub fn container(req: &Request) -> Result<PathBuf, String> {
     let shown = req.ssp.display().to_string();
     let sim = Simulation::from_ssp(req.ssp).map_err(|e| e.message)?;
+    let name = rustfmu_runner::container::identifier(&sim.name);
+    let out = match req.out {
+        Some(p) => p.to_path_buf(),
+        None => req.ssp.with_file_name(format!("{}.fmu", name)),
+    };
+    if out.extension().is_none_or(|e| e != "fmu") {
+        return Err(format!("{}: the container's file name must end in .fmu", out.display()));
+    }
+    // Never over another FMU (a system named like one of its components, beside it).
+    if out.exists() {
+        let bytes = std::fs::read(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+        let ours = model_description_of(&bytes).is_ok_and(|x| x.contains("generationTool=\"rustfmu-container"));
+        if !ours {
+            return Err(format!(
+                "{} exists and is not a container FMU: name another file with -o",
+                out.display()
+            ));
+        }
+    }
+
     let files = entries(req.ssp)?;
     let mut archive = rustfmu_runner::ssp::Archive::open(req.ssp).map_err(|e| e.message)?;
     let system_name = archive.ssd.name.clone();
@@ -137,26 +171,26 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
             "{shown}: no platform has a binary in every component FMU: a container cannot run anywhere"
         ));
     }
+    // The internal step: --step, else the step the SSD names for a fixed-step master (the
+    // OMSimulator annotation `cargo fmu` writes: <oms:FixedStepMaster stepSize=...>).
+    let ssd_text = files
+        .iter()
+        .find(|(n, _)| n == "SystemStructure.ssd")
+        .map(|(_, b)| String::from_utf8_lossy(b).into_owned())
+        .unwrap_or_default();
     let step = match req.step {
         Some(h) => h,
-        None => sim
-            .component_descriptions()
-            .iter()
-            .filter_map(|(_, d)| {
-                d.default_experiment
-                    .step_size
-                    .as_deref()
-                    .and_then(|s| s.trim().parse::<f64>().ok())
-            })
-            .fold(None, |m: Option<f64>, h| Some(m.map_or(h, |m| m.min(h))))
-            .ok_or_else(|| {
-                format!(
-                    "{shown}: no component names a default step size: give the container's internal step with --step"
-                )
-            })?,
+        None => fixed_step_of(&ssd_text).ok_or_else(|| {
+            format!("{shown}: the SSD names no fixed step size (oms:FixedStepMaster stepSize): give the container's internal step with --step")
+        })?,
     };
     let spec = Spec::new(&sim, step).map_err(|e| e.message)?;
-    let xml = spec.model_description(&sim, &system_name, &xmls);
+    let xml = spec.model_description(
+        &sim,
+        &system_name,
+        &xmls,
+        (archive.ssd.start_time, archive.ssd.stop_time),
+    );
     drop(sim);
 
     // Which binaries: the targets asked for, else the rustfmu workspace's FMU targets, those
@@ -233,13 +267,6 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
     }
     let binaries = crate::bundle::merge_universal(built)?;
 
-    let out = match req.out {
-        Some(p) => p.to_path_buf(),
-        None => req.ssp.with_file_name(format!("{}.fmu", spec.model_identifier)),
-    };
-    if out.extension().is_none_or(|e| e != "fmu") {
-        return Err(format!("{}: the container's file name must end in .fmu", out.display()));
-    }
     let tmp = out.with_extension("fmu.partial");
     let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
     let mut zip = zip::ZipWriter::new(file);

@@ -267,8 +267,13 @@ impl Zig {
             ));
         }
         Ok(Zig {
-            cargo_zigbuild: dir.join("cargo-zigbuild"),
-            path_first: python3.is_file().then(|| dir.clone()),
+            cargo_zigbuild: std::path::absolute(dir.join("cargo-zigbuild"))
+                .unwrap_or_else(|_| dir.join("cargo-zigbuild")),
+            // Absolute: build scripts run in their package's folder, and cargo-zigbuild's `ar`
+            // (cc-rs archives C code with it) finds zig through this PATH entry.
+            path_first: python3
+                .is_file()
+                .then(|| std::path::absolute(dir).unwrap_or_else(|_| dir.clone())),
         })
     }
 

@@ -198,7 +198,15 @@ impl Spec {
 
     /// The container's FMI 2.0 modelDescription.xml. `descriptions` are the components'
     /// (name, description, its modelDescription.xml text), in the system's order.
-    pub fn model_description(&self, sim: &Simulation, system_name: &str, component_xml: &[(String, String)]) -> String {
+    /// `experiment`: the SSD's DefaultExperiment (start, stop), written with the step into the
+    /// container's.
+    pub fn model_description(
+        &self,
+        sim: &Simulation,
+        system_name: &str,
+        component_xml: &[(String, String)],
+        experiment: (Option<f64>, Option<f64>),
+    ) -> String {
         let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
         let descriptions = sim.component_descriptions();
         let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
@@ -277,10 +285,17 @@ impl Spec {
         // prefixed with the component's name).
         let _ = writeln!(x, "  <LogCategories>");
         for (name, what) in LOG_CATEGORIES {
-            let _ = writeln!(x, r#"    <Category name="{name}" description="{what}"/>"#);
+            let _ = writeln!(x, r#"    <Category name="{name}" description="{}"/>"#, esc(what));
         }
         let _ = writeln!(x, "  </LogCategories>");
-        let _ = writeln!(x, "  <DefaultExperiment stepSize=\"{}\"/>", self.step);
+        let mut times = String::new();
+        if let Some(t) = experiment.0 {
+            let _ = write!(times, r#" startTime="{t:?}""#);
+        }
+        if let Some(t) = experiment.1 {
+            let _ = write!(times, r#" stopTime="{t:?}""#);
+        }
+        let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{}\"/>", self.step);
         let _ = writeln!(x, "  <ModelVariables>");
         for e in &self.variables {
             let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);

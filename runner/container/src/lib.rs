@@ -155,6 +155,7 @@ struct Saved {
     state: State,
     dirty: bool,
     last_successful: f64,
+    stop_time: Option<f64>,
 }
 
 struct Container {
@@ -354,7 +355,10 @@ impl Container {
     /// Whether the variable of `vr` may be set now (FMI 2.0, 4.2.4).
     fn settable(&self, vr: u32, p: &Port, function: &str) -> Result<(), fmi2Status> {
         let name = &self.spec.variables[vr as usize].name;
+        let e = &self.spec.variables[vr as usize];
         let ok = match (self.state, p.causality) {
+            // An output with a start value (initial = exact) takes one before initialization.
+            (State::Instantiated | State::InitializationMode, Causality::Output) => e.start.is_some(),
             (_, Causality::Output) => false,
             (State::Instantiated | State::InitializationMode, _) => true,
             (State::StepComplete, Causality::Input) => true,
@@ -1470,6 +1474,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
             saved.state = me.state;
             saved.dirty = me.dirty;
             saved.last_successful = me.last_successful;
+            saved.stop_time = me.stop_time;
             return Ok(fmi2OK);
         }
         let slots = me.free.pop();
@@ -1484,6 +1489,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUst
             state: me.state,
             dirty: me.dirty,
             last_successful: me.last_successful,
+            stop_time: me.stop_time,
         }));
         states().push(p as usize);
         unsafe { *state = p as fmi2FMUstate };
@@ -1527,6 +1533,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) 
         me.state = saved.state;
         me.dirty = saved.dirty;
         me.last_successful = saved.last_successful;
+        me.stop_time = saved.stop_time;
         Ok(fmi2OK)
     })
 }
@@ -1558,8 +1565,8 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUs
 }
 
 /// A serialized container state: this magic, the container's GUID, time, last successful time,
-/// mode, then each component's serialized state with its length.
-const MAGIC: &[u8; 8] = b"RFMUCNT1";
+/// mode, the stop time (a flag and the value), then each component's serialized state with its length.
+const MAGIC: &[u8; 8] = b"RFMUCNT2";
 
 fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, fmi2Status> {
     let Some(parts) = &saved.bytes else {
@@ -1574,6 +1581,8 @@ fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, f
     out.extend_from_slice(&saved.last_successful.to_le_bytes());
     out.push(saved.state as u8);
     out.push(u8::from(saved.dirty));
+    out.push(u8::from(saved.stop_time.is_some()));
+    out.extend_from_slice(&saved.stop_time.unwrap_or(0.0).to_le_bytes());
     out.extend_from_slice(&(parts.len() as u32).to_le_bytes());
     for part in parts {
         out.extend_from_slice(&(part.len() as u64).to_le_bytes());
@@ -1629,6 +1638,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
 struct Parsed {
     time: f64,
     last_successful: f64,
+    stop_time: Option<f64>,
     state: State,
     dirty: bool,
     parts: Vec<Vec<u8>>,
@@ -1675,6 +1685,13 @@ fn parse_state(me: &Container, data: &[u8]) -> Result<Parsed, String> {
         1 => true,
         x => return Err(format!("flag {x} is not 0 or 1")),
     };
+    let has_stop = match take(1)?[0] {
+        0 => false,
+        1 => true,
+        x => return Err(format!("flag {x} is not 0 or 1")),
+    };
+    let stop = f64::from_le_bytes(take(8)?.try_into().expect("8"));
+    let stop_time = has_stop.then_some(stop);
     let count = u32::from_le_bytes(take(4)?.try_into().expect("4")) as usize;
     if count != me.sim.len() {
         return Err(format!(
@@ -1691,12 +1708,15 @@ fn parse_state(me: &Container, data: &[u8]) -> Result<Parsed, String> {
     if at != data.len() {
         return Err(format!("{} bytes after the state", data.len() - at));
     }
-    if !time.is_finite() || !last_successful.is_finite() {
-        return Err(format!("time {time}, last successful time {last_successful}"));
+    if !time.is_finite() || !last_successful.is_finite() || !stop.is_finite() {
+        return Err(format!(
+            "time {time}, last successful time {last_successful}, stop time {stop}"
+        ));
     }
     Ok(Parsed {
         time,
         last_successful,
+        stop_time,
         state,
         dirty,
         parts,
@@ -1735,6 +1755,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
             state: parsed.state,
             dirty: parsed.dirty,
             last_successful: parsed.last_successful,
+            stop_time: parsed.stop_time,
         }));
         states().push(p as usize);
         unsafe { *state = p as fmi2FMUstate };
