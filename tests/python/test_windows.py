@@ -305,3 +305,21 @@ def test_the_conformance_suite_passes_on_the_windows_binaries_under_wine(conform
               if l.startswith("SKIP") and NATIVE not in l and "not declared by the FMU: <Clock> variables" not in l]
     assert not others, others
     assert passed >= (15 if fmi3 else 40), summary
+
+
+# -- A container FMU (cargo fmu container): its Windows binary loads the components' DLLs --
+
+
+def test_the_container_of_the_closed_loop_runs_on_windows_as_on_linux(hosts):
+    """PendulumLQR as one FMU (target/fmu/containers/, made by the main job and tests/run.sh with
+    every platform its components carry): under wine its win64 binary unpacks nothing, loads the
+    Pendulum's and the Controller's win64 DLLs from its resources and steps them; 1,000 steps
+    equal the linux64 binary's to 1e-12."""
+    fmu = FMU_DIR / "containers" / "PendulumLQR.fmu"
+    assert fmu.exists(), f"{fmu} is missing: run `bash tests/run.sh` (or the main job) first"
+    a, b, seconds = linux_and_windows(hosts, "PendulumLQR", False, [], fmu=fmu)
+    d = largest_difference(a, b)
+    scale = max(1.0, max(abs(x) for row in a for x in row))
+    report(f"PendulumLQR container FMI 2.0, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
+    assert d <= 1e-12 * scale, d
+    assert a[-1] != a[0], "the loop did not move"
