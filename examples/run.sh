@@ -25,6 +25,13 @@ bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 lap "FMUs and SSP files (cargo fmu build)"
+# Each composed system as one FMU (cargo fmu container; the components inside, the runner's
+# master in its binary, for every platform the components carry), beside the SSP files.
+mkdir -p target/fmu/containers
+for s in PendulumLQR PendulumMotors; do
+  target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python
+done
+lap "container FMUs (cargo fmu container)"
 mkdir -p out
 target/release/examples/paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
@@ -32,7 +39,9 @@ lap "paper numbers, Figures 6-8"
 .venv/bin/python examples/composed_demo.py --out out
 # The FMI 3.0 clocked controller (its sample rate a clock) closing the loop, against the 2.0 one.
 .venv/bin/python examples/clocked_controller.py --out out
-lap "composed demo (fmpy), clocked controller"
+# The closed loop as one FMU in fmpy, against the native runner on its SSP file.
+.venv/bin/python examples/container_demo.py --out out
+lap "composed demo (fmpy), clocked controller, container"
 # The full loop from the command line of the native SSP runner (runner/).
 target/release/rustfmu-runner run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
   --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
@@ -49,6 +58,7 @@ echo "== Made"
 echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
 echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
+echo "Container FMUs, the SSP files' systems as one FMU each (target/fmu/containers): $(cd target/fmu/containers && ls *.fmu | tr '\n' ' ')"
 # The platforms each FMU carries: its binaries/ folders (the same for every FMU of one version).
 platforms() { .venv/bin/python -c 'import sys, zipfile; print(" ".join(sorted({n.split("/")[1] for n in zipfile.ZipFile(sys.argv[1]).namelist() if n.startswith("binaries/") and n.count("/") > 1})))' "$1"; }
 echo "Platforms: FMI 2.0 $(platforms target/fmu/Pendulum.fmu); FMI 3.0 $(platforms target/fmu/fmi3/Pendulum.fmu)"
@@ -56,7 +66,8 @@ echo "  (Linux binaries load on glibc >= 2.17; the macOS ones, for macOS >= 10.1
 echo "  silicon, are built and checked here but never run: no Mac here. docs/platforms.md; cargo fmu info FILE.fmu)"
 echo "Results (out/): the paper's numbers computed (paper_numbers.txt), Figures 6-8, the composed"
 echo "demo (controller -> 2 motors -> pendulum through fmpy), the FMI 3.0 clocked controller's loop against"
-echo "the 2.0 sampled one (clocked_controller.csv), the same loop in the native runner's"
+echo "the 2.0 sampled one (clocked_controller.csv), the loop as one container FMU in fmpy against the runner"
+echo "(container_demo.csv), the same loop in the native runner's"
 echo "command line (runner_motors.csv), the Dask studies on the native runner (out/study):"
 (cd out && find . -type f | sort | sed 's|^\./|  out/|')
 echo "Time: $((SECONDS - started)) s in all"

@@ -77,6 +77,16 @@ reuses_test_build() {
   fi
 }
 step "FMU build reused the test build" reuses_test_build
+# The composed systems as container FMUs (issue 28), for every platform their components carry:
+# tests/python/test_container.py and test_windows.py run them.
+containers() {
+  for s in PendulumLQR PendulumMotors; do
+    target/release/cargo-fmu fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" \
+      --python .venv/bin/python || return 1
+  done
+}
+mkdir -p target/fmu/containers
+step "cargo fmu container (PendulumLQR, PendulumMotors)" containers
 # The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.
 step "modelDescription/ is up to date" git diff --exit-code --stat -- modelDescription
 n=0

@@ -826,7 +826,7 @@ fn get_values<T: Copy>(
     vr: *const fmi2ValueReference,
     nvr: usize,
     out: *mut T,
-    get: impl Fn(&mut InstanceCS, u32, &mut T) -> Result<(), Fmi2Error>,
+    get: impl Fn(&mut InstanceCS, &[u32], &mut [T]) -> Result<(), Fmi2Error>,
     check: impl Fn(&T) -> bool,
 ) -> fmi2Status {
     with(c, function, |me| {
@@ -843,9 +843,19 @@ fn get_values<T: Copy>(
         if nvr > 0 {
             me.settle(function)?;
         }
-        for (k, p) in ports.iter().enumerate() {
-            let r = get(me.sim.instance_mut(p.component), p.vr, &mut out[k]);
-            me.component_call(function, vrs[k], r)?;
+        // One call per run of variables of the same component.
+        let mut i = 0;
+        let mut component_vrs = Vec::with_capacity(nvr);
+        while i < nvr {
+            let c = ports[i].component;
+            let j = i + ports[i..].iter().take_while(|p| p.component == c).count();
+            component_vrs.clear();
+            component_vrs.extend(ports[i..j].iter().map(|p| p.vr));
+            let r = get(me.sim.instance_mut(c), &component_vrs, &mut out[i..j]);
+            me.component_call(function, vrs[i], r)?;
+            i = j;
+        }
+        for k in 0..nvr {
             if !check(&out[k]) {
                 return Err(me.error(&format!(
                     "{function}: '{}' (vr {}) is not a finite number",
@@ -871,7 +881,7 @@ pub unsafe extern "C" fn fmi2GetReal(
         vr,
         nvr,
         value,
-        |i, v, out| i.get_real(&[v], std::slice::from_mut(out)).map(|_| ()),
+        |i, v, out| i.get_real(v, out),
         |x| x.is_finite(),
     )
 }
@@ -890,7 +900,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
         vr,
         nvr,
         value,
-        |i, v, out| i.get_integer(&[v], std::slice::from_mut(out)).map(|_| ()),
+        |i, v, out| i.get_integer(v, out),
         |_| true,
     )
 }
@@ -909,7 +919,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
         vr,
         nvr,
         value,
-        |i, v, out| i.get_boolean(&[v], std::slice::from_mut(out)).map(|_| ()),
+        |i, v, out| i.get_boolean(v, out),
         |_| true,
     )
 }
