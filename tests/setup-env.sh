@@ -19,11 +19,12 @@
 # aarch64-apple-darwin (rustup) and their linkers (every FMU carries Linux, Windows and macOS
 # binaries, the FMI 3.0 ones aarch64 Linux too; MinGW links Windows, zig from the venv's ziglang
 # and cargo-zigbuild the others, Debian's aarch64 gcc is kept for the tests' qemu runs);
-# gcc and libclang-dev: the runner (its `fmi` importer crate) compiles fmi-sys, whose build script
-# compiles C and runs bindgen; a venv at .venv with examples/requirements.txt; after the caller's
+# gcc: the runner's FMU importer compiles its C logger (runner/c/logger.c, with the cc crate); a venv at .venv with examples/requirements.txt; after the caller's
 # cargo build, the runner's Python module (--part module). The tests add wine and qemu-user (they run the Windows and aarch64
 # binaries), valgrind and binutils (the conformance suite's C host and symbol checks), libtbb12
-# (ecospy) and tests/python/requirements.txt.
+# (ecospy), libclang-dev (the benchmarks and one test import FMUs with the `fmi` crate, whose
+# fmi-sys runs bindgen; the main job no longer builds it since the runner has its own importer)
+# and tests/python/requirements.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -50,8 +51,9 @@ done
 # Debian packages: "package:command" (installed when the command is missing) or "package:"
 # (installed when dpkg does not know it).
 main_packages=(gcc-mingw-w64-x86-64:x86_64-w64-mingw32-gcc
-  gcc:gcc libclang-dev:)
-test_packages=(gcc-aarch64-linux-gnu:aarch64-linux-gnu-gcc wine:wine qemu-user:qemu-aarch64 valgrind:valgrind binutils:nm libtbb12:)
+  gcc:gcc)
+test_packages=(gcc-aarch64-linux-gnu:aarch64-linux-gnu-gcc wine:wine qemu-user:qemu-aarch64 valgrind:valgrind binutils:nm libtbb12:
+  libclang-dev:)
 packages=("${main_packages[@]}")
 $main_job || packages+=("${test_packages[@]}")
 

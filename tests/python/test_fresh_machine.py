@@ -1,6 +1,6 @@
 """The main job's setup installs what the main job's builds need, read from the dependency trees of
-what it builds, not from what this machine happens to have: the tests install more (libclang-dev,
-valgrind, wine, ...), CI keeps the packages of earlier runs, so a main job that works here can
+what it builds, not from what this machine happens to have: the tests install more (libclang-dev
+for the benchmarks' fmi crate, valgrind, wine, ...), CI keeps the packages of earlier runs, so a main job that works here can
 still fail on a new user's fresh machine (it did: the runner's fmi-sys runs bindgen, which needs
 libclang, and only the tests' setup installed it).
 
@@ -87,6 +87,10 @@ def main_job_builds(metadata):
     assert builds, "found no `cargo run/build -p NAME` in examples/run.sh"
     if re.search(r"(-p fmu-build --|cargo-fmu) build --workspace", script):
         builds.update(fmu_crates(metadata))
+    if re.search(r"cargo-fmu (fmu )?container", script):
+        # The container FMUs' binary, for the workspace's FMU targets (those the components carry).
+        default = ((metadata.get("metadata") or {}).get("fmu") or {}).get("targets") or []
+        builds["rustfmu-container"] = list(default)
     by_dir = {str(pathlib.Path(p["manifest_path"]).parent.relative_to(ROOT)): p["name"]
               for p in metadata["packages"] if p["id"] in set(metadata["workspace_members"])}
     for folder in re.findall(r"cd (\S+) && [^\n]*maturin", setup):
