@@ -73,8 +73,16 @@ pub struct Workspace {
     pub root_package: Option<String>,
 }
 
+/// A cdylib that depends on rustfmu, unless its `[package.metadata.fmu] model = false` says it
+/// exports no model (the container FMUs' binary, which uses rustfmu's ABI types only).
 fn is_fmu_crate(p: &Package) -> bool {
-    p.dependencies.iter().any(|d| d.name == "rustfmu")
+    let not_a_model = p
+        .metadata
+        .get("fmu")
+        .and_then(|m| m.get("model"))
+        .is_some_and(|v| v == &serde_json::Value::Bool(false));
+    !not_a_model
+        && p.dependencies.iter().any(|d| d.name == "rustfmu")
         && p.targets
             .iter()
             .any(|t| t.crate_types.iter().any(|c| c.to_string() == "cdylib"))

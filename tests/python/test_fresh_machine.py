@@ -69,7 +69,8 @@ def fmu_crates(metadata):
         if p["id"] not in members:
             continue
         cdylib = any("cdylib" in t["crate_types"] for t in p["targets"])
-        if cdylib and any(d["name"] == "rustfmu" for d in p["dependencies"]):
+        model = ((p.get("metadata") or {}).get("fmu") or {}).get("model", True)
+        if cdylib and model is not False and any(d["name"] == "rustfmu" for d in p["dependencies"]):
             out[p["name"]] = ((p.get("metadata") or {}).get("fmu") or {}).get("targets") or default
     return out
 
