@@ -86,6 +86,44 @@ type OurInstantiate = unsafe extern "C" fn(
 ) -> sys::fmi2Component;
 const _: OurInstantiate = fmi2Instantiate;
 
+// The function types an importer loads (rustfmu::fmi2::abi's `fmi2...TYPE`, what rustfmu-runner's
+// importer and the container FMU use) are the header's: each `None` of ours is a value of theirs.
+macro_rules! same_type {
+    ($($ours:ty => $theirs:ident),* $(,)?) => {
+        $(const _: sys::$theirs = None::<$ours>;)*
+    };
+}
+mod abi_types {
+    use super::sys;
+    use rustfmu::fmi2::abi::*;
+    same_type!(
+        fmi2FreeInstanceTYPE => fmi2FreeInstanceTYPE,
+        fmi2SetDebugLoggingTYPE => fmi2SetDebugLoggingTYPE,
+        fmi2SetupExperimentTYPE => fmi2SetupExperimentTYPE,
+        fmi2ComponentFunctionTYPE => fmi2EnterInitializationModeTYPE,
+        fmi2ComponentFunctionTYPE => fmi2ExitInitializationModeTYPE,
+        fmi2ComponentFunctionTYPE => fmi2TerminateTYPE,
+        fmi2ComponentFunctionTYPE => fmi2ResetTYPE,
+        fmi2GetTYPE<fmi2Real> => fmi2GetRealTYPE,
+        fmi2GetTYPE<fmi2Integer> => fmi2GetIntegerTYPE,
+        fmi2GetTYPE<fmi2Boolean> => fmi2GetBooleanTYPE,
+        fmi2GetTYPE<fmi2String> => fmi2GetStringTYPE,
+        fmi2SetTYPE<fmi2Real> => fmi2SetRealTYPE,
+        fmi2SetTYPE<fmi2Integer> => fmi2SetIntegerTYPE,
+        fmi2SetTYPE<fmi2Boolean> => fmi2SetBooleanTYPE,
+        fmi2SetTYPE<fmi2String> => fmi2SetStringTYPE,
+        fmi2DoStepTYPE => fmi2DoStepTYPE,
+        fmi2GetFMUstateTYPE => fmi2GetFMUstateTYPE,
+        fmi2GetFMUstateTYPE => fmi2FreeFMUstateTYPE,
+        fmi2SetFMUstateTYPE => fmi2SetFMUstateTYPE,
+        fmi2SerializedFMUstateSizeTYPE => fmi2SerializedFMUstateSizeTYPE,
+        fmi2SerializeFMUstateTYPE => fmi2SerializeFMUstateTYPE,
+        fmi2DeSerializeFMUstateTYPE => fmi2DeSerializeFMUstateTYPE,
+    );
+    // fmi2Instantiate: as above, the callbacks struct is ours.
+    const _: Option<super::OurInstantiate> = None::<fmi2InstantiateTYPE>;
+}
+
 const fn same<T>(_: &T, _: &T) {}
 
 #[test]

@@ -64,54 +64,32 @@ fn check(status: fmi2Status) -> Result<(), Fmi2Error> {
     }
 }
 
-type Instantiate = unsafe extern "C" fn(
-    fmi2String,
-    fmi2Type,
-    fmi2String,
-    fmi2String,
-    *const fmi2CallbackFunctions,
-    fmi2Boolean,
-    fmi2Boolean,
-) -> fmi2Component;
-type FreeInstance = unsafe extern "C" fn(fmi2Component);
-type SetDebugLogging = unsafe extern "C" fn(fmi2Component, fmi2Boolean, usize, *const fmi2String) -> fmi2Status;
-type SetupExperiment = unsafe extern "C" fn(fmi2Component, fmi2Boolean, f64, f64, fmi2Boolean, f64) -> fmi2Status;
-type Unary = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
-type Get<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut T) -> fmi2Status;
-type Set<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const T) -> fmi2Status;
-type DoStep = unsafe extern "C" fn(fmi2Component, f64, f64, fmi2Boolean) -> fmi2Status;
-type GetState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
-type SetState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
-type StateSize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
-type Serialize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
-type Deserialize = unsafe extern "C" fn(fmi2Component, *const fmi2Byte, usize, *mut fmi2FMUstate) -> fmi2Status;
-
 /// The functions of an FMI 2.0 co-simulation binary the runner calls.
 struct Api {
-    instantiate: Instantiate,
-    free_instance: FreeInstance,
-    set_debug_logging: SetDebugLogging,
-    setup_experiment: SetupExperiment,
-    enter_initialization_mode: Unary,
-    exit_initialization_mode: Unary,
-    terminate: Unary,
-    reset: Unary,
-    get_real: Get<f64>,
-    get_integer: Get<fmi2Integer>,
-    get_boolean: Get<fmi2Boolean>,
-    get_string: Get<fmi2String>,
-    set_real: Set<f64>,
-    set_integer: Set<fmi2Integer>,
-    set_boolean: Set<fmi2Boolean>,
-    set_string: Set<fmi2String>,
-    do_step: DoStep,
+    instantiate: fmi2InstantiateTYPE,
+    free_instance: fmi2FreeInstanceTYPE,
+    set_debug_logging: fmi2SetDebugLoggingTYPE,
+    setup_experiment: fmi2SetupExperimentTYPE,
+    enter_initialization_mode: fmi2ComponentFunctionTYPE,
+    exit_initialization_mode: fmi2ComponentFunctionTYPE,
+    terminate: fmi2ComponentFunctionTYPE,
+    reset: fmi2ComponentFunctionTYPE,
+    get_real: fmi2GetTYPE<f64>,
+    get_integer: fmi2GetTYPE<fmi2Integer>,
+    get_boolean: fmi2GetTYPE<fmi2Boolean>,
+    get_string: fmi2GetTYPE<fmi2String>,
+    set_real: fmi2SetTYPE<f64>,
+    set_integer: fmi2SetTYPE<fmi2Integer>,
+    set_boolean: fmi2SetTYPE<fmi2Boolean>,
+    set_string: fmi2SetTYPE<fmi2String>,
+    do_step: fmi2DoStepTYPE,
     /// The FMU-state functions: absent from an FMU that declares no FMU state.
-    get_fmu_state: Option<GetState>,
-    set_fmu_state: Option<SetState>,
-    free_fmu_state: Option<GetState>,
-    serialized_size: Option<StateSize>,
-    serialize: Option<Serialize>,
-    deserialize: Option<Deserialize>,
+    get_fmu_state: Option<fmi2GetFMUstateTYPE>,
+    set_fmu_state: Option<fmi2SetFMUstateTYPE>,
+    free_fmu_state: Option<fmi2GetFMUstateTYPE>,
+    serialized_size: Option<fmi2SerializedFMUstateSizeTYPE>,
+    serialize: Option<fmi2SerializeFMUstateTYPE>,
+    deserialize: Option<fmi2DeSerializeFMUstateTYPE>,
 }
 
 /// A loaded FMU binary.

@@ -444,19 +444,23 @@ impl Archive {
         })
     }
 
+    /// The `source` of a component.
+    fn source_of(&self, component: &str) -> Result<&str, Error> {
+        self.ssd
+            .components
+            .iter()
+            .find(|c| c.name == component)
+            .map(|c| c.source.as_str())
+            .ok_or_else(|| Error::new(ErrorKind::Variable, format!("no component '{component}'")))
+    }
+
     /// The folder of a component's FMU when the system is a folder and the FMU is unpacked
     /// there (a container's `resources/system/`: its `source` is a folder), else None.
     pub fn unpacked_fmu(&self, component: &str) -> Result<Option<std::path::PathBuf>, Error> {
         let Files::Dir(dir) = &self.files else {
             return Ok(None);
         };
-        let c = self
-            .ssd
-            .components
-            .iter()
-            .find(|c| c.name == component)
-            .ok_or_else(|| Error::new(ErrorKind::Variable, format!("no component '{component}'")))?;
-        let source = c.source.trim_start_matches("./");
+        let source = self.source_of(component)?.trim_start_matches("./");
         if source.contains("://") || source.starts_with('/') || source.split('/').any(|p| p == "..") {
             return Ok(None);
         }
@@ -466,13 +470,7 @@ impl Archive {
 
     /// The bytes of a component's FMU (its `source`, inside the archive).
     pub fn fmu_bytes(&mut self, component: &str) -> Result<Vec<u8>, Error> {
-        let c = self
-            .ssd
-            .components
-            .iter()
-            .find(|c| c.name == component)
-            .ok_or_else(|| Error::new(ErrorKind::Variable, format!("no component '{component}'")))?;
-        let source = c.source.clone();
+        let source = self.source_of(component)?.to_owned();
         if source.contains("://") || source.starts_with('/') {
             return Err(Error::unsupported(
                 Some(component),

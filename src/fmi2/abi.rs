@@ -80,6 +80,38 @@ pub struct fmi2EventInfo {
     pub nextEventTime: fmi2Real,
 }
 
+// The function types of `fmi2FunctionTypes.h` an importer loads (pointers to them: what
+// `dlsym` gives), named as the header names them; the runner's importer uses these.
+pub type fmi2InstantiateTYPE = unsafe extern "C" fn(
+    fmi2String,
+    fmi2Type,
+    fmi2String,
+    fmi2String,
+    *const fmi2CallbackFunctions,
+    fmi2Boolean,
+    fmi2Boolean,
+) -> fmi2Component;
+pub type fmi2FreeInstanceTYPE = unsafe extern "C" fn(fmi2Component);
+pub type fmi2SetDebugLoggingTYPE =
+    unsafe extern "C" fn(fmi2Component, fmi2Boolean, usize, *const fmi2String) -> fmi2Status;
+pub type fmi2SetupExperimentTYPE =
+    unsafe extern "C" fn(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> fmi2Status;
+/// fmi2EnterInitializationMode, fmi2ExitInitializationMode, fmi2Terminate, fmi2Reset.
+pub type fmi2ComponentFunctionTYPE = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
+/// fmi2GetReal (T = fmi2Real), fmi2GetInteger, fmi2GetBoolean, fmi2GetString.
+pub type fmi2GetTYPE<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut T) -> fmi2Status;
+/// fmi2SetReal (T = fmi2Real), fmi2SetInteger, fmi2SetBoolean, fmi2SetString.
+pub type fmi2SetTYPE<T> = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const T) -> fmi2Status;
+pub type fmi2DoStepTYPE = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
+/// fmi2GetFMUstate, fmi2FreeFMUstate.
+pub type fmi2GetFMUstateTYPE = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+pub type fmi2SetFMUstateTYPE = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
+pub type fmi2SerializedFMUstateSizeTYPE = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
+pub type fmi2SerializeFMUstateTYPE =
+    unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
+pub type fmi2DeSerializeFMUstateTYPE =
+    unsafe extern "C" fn(fmi2Component, *const fmi2Byte, usize, *mut fmi2FMUstate) -> fmi2Status;
+
 /// `fmi2TypesPlatform` and `fmi2Version` as NUL-terminated C strings.
 pub const TYPES_PLATFORM: &std::ffi::CStr = c"default";
 pub const VERSION: &std::ffi::CStr = c"2.0";
