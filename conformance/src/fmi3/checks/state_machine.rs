@@ -25,6 +25,17 @@ fn state_table(fmu: &Fmu3, me: bool) {
             if !me && fmu.has_clocks() && state == StepMode && row.f.name() == "fmi3EnterEventMode" {
                 want = Expect::Ok;
             }
+            // A derivative function of an FMU that does not provide it (FMI 3.0, 2.2.2: it is
+            // not to be called): refused with the reason, in every state.
+            let interface = if me { fmu.md.me.as_ref() } else { fmu.md.cs.as_ref() };
+            let provided = match row.f.name() {
+                "fmi3GetDirectionalDerivative" => interface.is_some_and(|x| x.provides_directional_derivatives),
+                "fmi3GetAdjointDerivative" => interface.is_some_and(|x| x.provides_adjoint_derivatives),
+                _ => true,
+            };
+            if !provided {
+                want = Expect::Error;
+            }
             if !want.allows(s) {
                 failures.push(format!(
                     "{name} in {state:?}: {}, expected {:?} ({})",
