@@ -5,7 +5,9 @@ the native runner (the rustfmu_runner module) on the SSP file it was made from, 
 
 fmpy's steps are (k+1) h - k h, a few ulps off h, so the two differ in the last bits (the
 container driven with the runner's own steps gives 0: tests/python/test_container.py). Prints
-the largest difference of every output and writes both runs to container_demo.csv.
+the largest difference of every output and writes both runs to container_demo.csv. The FMI 3.0
+container of the same system (containers/fmi3/, the same binary behind FMI 3.0's API) runs the
+same way and is compared too.
 
 Usage: python examples/container_demo.py [--out DIR] [--fmu-dir target/fmu] [--stop 5] [--system PendulumLQR]
 """
@@ -51,6 +53,16 @@ def main():
         f"largest difference of any output {worst:.3g}; alpha1 {one['pendulum.alpha1'][0]} -> {one['pendulum.alpha1'][-1]:.3g} rad"
     )
     assert worst <= 1e-12 * max(1.0, max(float(np.max(np.abs(native[r]))) for r in record)), worst
+    fmi3 = fmus / "containers" / "fmi3" / f"{args.system}.fmu"
+    if fmi3.exists():
+        three = fmpy.simulate_fmu(str(fmi3), stop_time=args.stop, step_size=h, output_interval=h, output=record)
+        worst3 = max(float(np.max(np.abs(np.asarray(three[r], float) - np.asarray(native[r], float)))) for r in record)
+        same = max(float(np.max(np.abs(np.asarray(three[r], float) - np.asarray(one[r], float)))) for r in record)
+        print(
+            f"  {fmi3} (FMI 3.0) in fmpy: largest difference {worst3:.3g} against the runner, "
+            f"{same:.3g} against the FMI 2.0 container"
+        )
+        assert worst3 <= 1e-12 * max(1.0, max(float(np.max(np.abs(native[r]))) for r in record)), worst3
     assert abs(native["pendulum.alpha1"][-1]) < 0.05
 
 

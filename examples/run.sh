@@ -26,7 +26,8 @@ lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 target/release/cargo-fmu build --workspace --python .venv/bin/python
 lap "FMUs and SSP files (cargo fmu build)"
 # Each composed system as one FMU (cargo fmu container; the components inside, the runner's
-# master in its binary, for every platform the components carry), beside the SSP files.
+# master in its binary, for every platform the components carry), beside the SSP files: FMI 2.0
+# in target/fmu/containers, FMI 3.0 in target/fmu/containers/fmi3 (the same binary).
 mkdir -p target/fmu/containers
 for s in PendulumLQR PendulumMotors; do
   target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python
@@ -58,7 +59,7 @@ echo "== Made"
 echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
 echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
-echo "Container FMUs, the SSP files' systems as one FMU each (target/fmu/containers): $(cd target/fmu/containers && ls *.fmu | tr '\n' ' ')"
+echo "Container FMUs, the SSP files' systems as one FMU each (target/fmu/containers, FMI 3.0 in containers/fmi3): $(cd target/fmu/containers && ls *.fmu | tr '\n' ' ')"
 # The platforms each FMU carries: its binaries/ folders (the same for every FMU of one version).
 platforms() { .venv/bin/python -c 'import sys, zipfile; print(" ".join(sorted({n.split("/")[1] for n in zipfile.ZipFile(sys.argv[1]).namelist() if n.startswith("binaries/") and n.count("/") > 1})))' "$1"; }
 echo "Platforms: FMI 2.0 $(platforms target/fmu/Pendulum.fmu); FMI 3.0 $(platforms target/fmu/fmi3/Pendulum.fmu)"

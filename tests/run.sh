@@ -78,7 +78,8 @@ reuses_test_build() {
 }
 step "FMU build reused the test build" reuses_test_build
 # The composed systems as container FMUs (issue 28), for every platform their components carry:
-# tests/python/test_container.py and test_windows.py run them.
+# tests/python/test_container.py, test_container_fmi3.py and test_windows.py run them (FMI 2.0
+# and FMI 3.0, containers/fmi3/).
 containers() {
   for s in PendulumLQR PendulumMotors; do
     target/release/cargo-fmu fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" \

@@ -121,9 +121,10 @@ enum Cmd {
         /// size of the components). An importer's step is cut into ceil(H / step) equal steps.
         #[arg(long)]
         step: Option<f64>,
-        /// The FMI version of the container: 2 (FMI 3.0 containers are not made yet).
-        #[arg(long = "fmi-version", default_value = "2")]
-        fmi_version: String,
+        /// The FMI version of the container: 2, 3 or both (default both: FMI 2.0 at the output
+        /// path, FMI 3.0 in fmi3/ beside it; one version alone goes to the output path).
+        #[arg(long = "fmi-version", value_delimiter = ',', value_name = "2|3|both")]
+        fmi_versions: Vec<String>,
         /// A Rust target triple whose binary goes into the container (repeatable, or a comma
         /// list; default: the rustfmu workspace's FMU targets that every component has a binary for).
         #[arg(long = "target", value_delimiter = ',', value_name = "TRIPLE")]
@@ -158,27 +159,23 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             ssp,
             out,
             step,
-            fmi_version,
+            fmi_versions,
             targets,
             python,
         } => {
-            match fmi_version.as_str() {
-                "2" | "2.0" => {}
-                "3" | "3.0" | "both" => {
-                    return Err(format!(
-                        "--fmi-version {fmi_version}: FMI 3.0 containers are not made yet (the runner runs FMI 2.0 components only); use --fmi-version 2"
-                    ));
-                }
-                other => return Err(format!("--fmi-version {other}: expected 2")),
-            }
-            let out = crate::container::container(&crate::container::Request {
+            let versions: Vec<FmiVersion> = parse_version_choice(&fmi_versions)?
+                .map_or_else(|| vec![FmiVersion::V2, FmiVersion::V3], |v| v.into_iter().collect());
+            let outs = crate::container::container(&crate::container::Request {
                 ssp: &ssp,
                 out: out.as_deref(),
                 step,
                 targets: &targets,
                 python: python.as_deref(),
+                versions: &versions,
             })?;
-            println!("{}", out.display());
+            for out in outs {
+                println!("{}", out.display());
+            }
             Ok(())
         }
         Cmd::New {

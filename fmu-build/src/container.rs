@@ -1,9 +1,9 @@
-//! `cargo fmu container SYSTEM.ssp`: a composed system as one FMI 2.0 co-simulation FMU.
+//! `cargo fmu container SYSTEM.ssp`: a composed system as one FMI 2.0 or 3.0 co-simulation FMU.
 //!
 //! The container is the system's SSP tree (unchanged, under `resources/system/`), a spec of
 //! what it exposes (`resources/container.toml`, `rustfmu_runner::container::Spec`), a
 //! `modelDescription.xml` written from the spec and the components' descriptions, and the
-//! binary of `runner/container` (rustfmu-runner's master behind the FMI 2.0 API) built for
+//! binary of `runner/container` (rustfmu-runner's master behind the FMI 2.0 and 3.0 APIs) built for
 //! every platform all the components carry (or the `--target`s given), named after the
 //! container's model identifier.
 
@@ -22,6 +22,9 @@ pub struct Request<'a> {
     pub step: Option<f64>,
     pub targets: &'a [String],
     pub python: Option<&'a Path>,
+    /// The FMI versions to write: FMI 2.0 to `out`, FMI 3.0 to `out` when it is the only one,
+    /// else to `fmi3/` beside it (as `cargo fmu build` places FMI 3.0 FMUs).
+    pub versions: &'a [FmiVersion],
 }
 
 /// The archive's entries: (name, bytes).
@@ -122,8 +125,8 @@ fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
     cargo::workspace(Some(&manifest))
 }
 
-/// Writes the container FMU of `req.ssp`; returns its path.
-pub fn container(req: &Request) -> Result<PathBuf, String> {
+/// Writes the container FMUs of `req.ssp` (one per FMI version asked); returns their paths.
+pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     let shown = req.ssp.display().to_string();
     let sim = Simulation::from_ssp(req.ssp).map_err(|e| e.message)?;
     let name = rustfmu_runner::container::identifier(&sim.name);
@@ -134,15 +137,33 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
     if out.extension().is_none_or(|e| e != "fmu") {
         return Err(format!("{}: the container's file name must end in .fmu", out.display()));
     }
+    if req.versions.is_empty() {
+        return Err("no FMI version to write".into());
+    }
+    let outs: Vec<(FmiVersion, PathBuf)> = req
+        .versions
+        .iter()
+        .map(|&v| {
+            let path = if v == FmiVersion::V3 && req.versions.len() > 1 {
+                let name = out.file_name().expect("a file name ending in .fmu");
+                out.with_file_name("fmi3").join(name)
+            } else {
+                out.clone()
+            };
+            (v, path)
+        })
+        .collect();
     // Never over another FMU (a system named like one of its components, beside it).
-    if out.exists() {
-        let bytes = std::fs::read(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-        let ours = model_description_of(&bytes).is_ok_and(|x| x.contains("generationTool=\"rustfmu-container"));
-        if !ours {
-            return Err(format!(
-                "{} exists and is not a container FMU: name another file with -o",
-                out.display()
-            ));
+    for (_, out) in &outs {
+        if out.exists() {
+            let bytes = std::fs::read(out).map_err(|e| format!("{}: {e}", out.display()))?;
+            let ours = model_description_of(&bytes).is_ok_and(|x| x.contains("generationTool=\"rustfmu-container"));
+            if !ours {
+                return Err(format!(
+                    "{} exists and is not a container FMU: name another file with -o",
+                    out.display()
+                ));
+            }
         }
     }
 
@@ -185,12 +206,9 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
         })?,
     };
     let spec = Spec::new(&sim, step).map_err(|e| e.message)?;
-    let xml = spec.model_description(
-        &sim,
-        &system_name,
-        &xmls,
-        (archive.ssd.start_time, archive.ssd.stop_time),
-    );
+    let experiment = (archive.ssd.start_time, archive.ssd.stop_time);
+    let xml2 = spec.model_description(&sim, &system_name, &xmls, experiment);
+    let xml3 = spec.model_description3(&sim, &system_name, &xmls, experiment);
     drop(sim);
 
     // Which binaries: the targets asked for, else the rustfmu workspace's FMU targets, those
@@ -212,7 +230,7 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
     } else {
         req.targets.to_vec()
     };
-    let mut binaries: Vec<(String, String, PathBuf)> = Vec::new();
+    let mut binaries: Vec<(String, String, String)> = Vec::new();
     for t in &wanted {
         let p = crate::target::platform(t)?;
         let folder = p.folder(FmiVersion::V2).map_err(|e| format!("target {t}: {e}"))?;
@@ -222,10 +240,11 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
                 common.join(", ")
             ));
         }
+        let folder3 = p.folder(FmiVersion::V3).map_err(|e| format!("target {t}: {e}"))?;
         binaries.push((
             t.clone(),
             format!("binaries/{folder}/{}.{}", spec.model_identifier, p.extension()),
-            PathBuf::new(),
+            format!("binaries/{folder3}/{}.{}", spec.model_identifier, p.extension()),
         ));
     }
     if binaries.is_empty() {
@@ -252,8 +271,10 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
     } else {
         None
     };
+    // One binary serves both versions (it exports the fmi2* and the fmi3* functions).
     let mut built: Vec<(String, String, Vec<u8>)> = Vec::new();
-    for (t, name, _) in &binaries {
+    let mut built3: Vec<(String, String, Vec<u8>)> = Vec::new();
+    for (t, name, name3) in &binaries {
         let triple = (t != &host).then_some(t.as_str());
         let linker = if crate::target::uses_zig(t, &host) {
             zig.as_ref()
@@ -263,9 +284,76 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
         cargo::build(&ws, std::slice::from_ref(&krate), triple, &host, linker)?;
         let lib = ws.library_for(&krate, t, &host)?;
         let bytes = std::fs::read(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
+        built3.push((name3.clone(), t.clone(), bytes.clone()));
         built.push((name.clone(), t.clone(), bytes));
     }
-    let binaries = crate::bundle::merge_universal(built)?;
+    let binaries2 = crate::bundle::merge_universal(built)?;
+    let binaries3 = crate::bundle::merge_universal(built3)?;
+    let sources: Vec<String> = archive
+        .ssd
+        .components
+        .iter()
+        .map(|c| c.source.trim_start_matches("./").to_owned())
+        .collect();
+    let mut written = Vec::new();
+    for (version, out) in &outs {
+        let (xml, binaries) = match version {
+            FmiVersion::V2 => (&xml2, &binaries2),
+            FmiVersion::V3 => (&xml3, &binaries3),
+        };
+        let package = Package {
+            xml,
+            binaries,
+            spec: &spec,
+            files: &files,
+            sources: &sources,
+            system_name: &system_name,
+            components: &components,
+        };
+        write_fmu(out, &package, &shown)?;
+        eprintln!(
+            "fmu: wrote {} (FMI {}; {} variables: {} components of {shown}, internal step {} s; binaries: {})",
+            out.display(),
+            version.text(),
+            spec.variables.len(),
+            components.len(),
+            spec.step,
+            binaries.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+        );
+        written.push(out.clone());
+    }
+    Ok(written)
+}
+
+/// What goes into one container FMU.
+struct Package<'a> {
+    xml: &'a str,
+    binaries: &'a [(String, Vec<u8>)],
+    spec: &'a Spec,
+    /// The SSP archive's files.
+    files: &'a [(String, Vec<u8>)],
+    /// The component FMUs' names among them.
+    sources: &'a [String],
+    system_name: &'a str,
+    components: &'a [String],
+}
+
+/// Writes the FMU `out` (through a partial file renamed at the end).
+fn write_fmu(out: &Path, p: &Package, shown: &str) -> Result<(), String> {
+    let Package {
+        xml,
+        binaries,
+        spec,
+        files,
+        sources,
+        system_name,
+        components,
+    } = *p;
+    if let Some(dir) = out.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
 
     let tmp = out.with_extension("fmu.partial");
     let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
@@ -278,19 +366,13 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
         zip.write_all(bytes).map_err(|e| zip_err(&e))
     };
     add("modelDescription.xml", xml.as_bytes(), false)?;
-    for (name, bytes) in &binaries {
+    for (name, bytes) in binaries {
         add(name, bytes, true)?;
     }
     add(&format!("resources/{SPEC_FILE}"), spec.to_toml().as_bytes(), false)?;
     // The system's files; each component FMU unpacked into a folder of its file's name, which
     // the container's binary loads without unpacking it again at every instantiation.
-    let sources: Vec<String> = archive
-        .ssd
-        .components
-        .iter()
-        .map(|c| c.source.trim_start_matches("./").to_owned())
-        .collect();
-    for (name, bytes) in &files {
+    for (name, bytes) in files {
         if sources.contains(name) {
             for (inner, data) in entries_of(bytes).map_err(|e| format!("{shown}: {name}: {e}"))? {
                 let exec = inner.starts_with("binaries/");
@@ -312,7 +394,7 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
              <p>The system {system} (components {components}) as one co-simulation FMU, made by <code>cargo fmu container</code>: \
              rustfmu-runner's Gauss-Seidel master steps the components at {step} s inside.</p>\n<h2>Variables</h2>\n<ul>\n{vars}\n</ul>\n</body></html>\n",
             id = spec.model_identifier,
-            system = quick_xml::escape::escape(&system_name),
+            system = quick_xml::escape::escape(system_name),
             components = quick_xml::escape::escape(components.join(", ")),
             step = spec.step,
             vars = names
@@ -325,14 +407,6 @@ pub fn container(req: &Request) -> Result<PathBuf, String> {
         false,
     )?;
     zip.finish().map_err(|e| zip_err(&e))?;
-    std::fs::rename(&tmp, &out).map_err(|e| format!("{}: {e}", out.display()))?;
-    eprintln!(
-        "fmu: wrote {} ({} variables: {} components of {shown}, internal step {} s; binaries: {})",
-        out.display(),
-        spec.variables.len(),
-        components.len(),
-        spec.step,
-        binaries.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
-    );
-    Ok(out)
+    std::fs::rename(&tmp, out).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(())
 }

@@ -8,11 +8,13 @@
 //! writes its FMI 2.0 `modelDescription.xml`. The binary reads the spec back and checks that
 //! its GUID is the one the importer passes to fmi2Instantiate.
 //!
-//! What a container exposes (the issue's default; an SSD's own system connectors are refused
-//! by [`crate::ssp`]): every unconnected input and every output of every component, and every
-//! fixed and tunable parameter, each named `component.variable`, in the system's component
-//! order and each component's variable order, with value references 0, 1, 2, ... Their start
-//! values are the SSP's parameter set where it binds them, otherwise the component's.
+//! What a container exposes: the SSD's own system connectors when it has any (each system input
+//! sets every component input it is connected to; each system output is the component output
+//! connected to it; named as the connectors), otherwise every unconnected input and every output
+//! of every component, named `component.variable`; and in both cases every fixed and tunable
+//! parameter of every component, named `component.variable`. In the system's connector order (or
+//! component order and each component's variable order), with value references 0, 1, 2, ...
+//! Their start values are the SSP's parameter set where it binds them, otherwise the component's.
 
 use crate::Error;
 use crate::sim::Simulation;
@@ -58,6 +60,10 @@ pub struct Exposed {
     /// The start value as the XML writes it (none for a calculated output).
     #[serde(default)]
     pub start: Option<String>,
+    /// A system input connected to several component inputs: the others (component,
+    /// variable), each set with the first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<(String, String)>,
 }
 
 impl Exposed {
@@ -131,13 +137,73 @@ impl Spec {
                 "internal step = {step} s: must be a positive number"
             )));
         }
-        let mut variables = Vec::new();
-        for (component, description) in sim.component_descriptions() {
+        let mut variables: Vec<Exposed> = Vec::new();
+        let descriptions = sim.component_descriptions();
+        let description_of = |c: &str| descriptions.iter().find(|(n, _)| *n == c).map(|(_, d)| *d);
+        let connectors = sim.system_connectors();
+        // The system's own connectors, when it has any.
+        for sc in connectors {
+            let Some((first, rest)) = sc.links.split_first() else {
+                return Err(Error::unsupported(
+                    None,
+                    Some(&sc.name),
+                    format!(
+                        "the system's {} '{}' is connected to no component: a container cannot give it a value",
+                        sc.kind, sc.name
+                    ),
+                ));
+            };
+            let d = description_of(&first.0).expect("resolved when the system was read");
+            let v = d.variable(&first.1).expect("resolved when the system was read");
+            let wanted = if sc.kind == "input" {
+                Causality::Input
+            } else {
+                Causality::Output
+            };
+            for (c, name) in &sc.links {
+                let other = description_of(c).and_then(|d| d.variable(name)).expect("resolved");
+                if other.causality != wanted || other.ty != v.ty {
+                    return Err(Error::unsupported(
+                        Some(c),
+                        Some(name),
+                        format!(
+                            "the system's {} '{}' is connected to '{c}.{name}', a {} {} (expected {} {})",
+                            sc.kind,
+                            sc.name,
+                            other.causality.name(),
+                            other.ty.name(),
+                            wanted.name(),
+                            v.ty.name()
+                        ),
+                    ));
+                }
+            }
+            let start = match v.causality {
+                Causality::Output => match v.initial() {
+                    Some(Initial::Exact) => v.start.clone(),
+                    _ => None,
+                },
+                _ => sim.start_value(&first.0, &v.name).or_else(|| v.start.clone()),
+            };
+            variables.push(Exposed {
+                vr: variables.len() as u32,
+                name: sc.name.clone(),
+                component: first.0.clone(),
+                variable: first.1.clone(),
+                ty: type_of(v.ty).to_owned(),
+                causality: v.causality.name().to_owned(),
+                variability: variability_name(v.variability).to_owned(),
+                start,
+                also: rest.to_vec(),
+            });
+        }
+        for (component, description) in &descriptions {
+            let component = *component;
             for v in &description.variables {
                 let connected = sim.is_connected_input(component, &v.name);
                 let exposed = match v.causality {
-                    Causality::Input => !connected,
-                    Causality::Output => true,
+                    Causality::Input => connectors.is_empty() && !connected,
+                    Causality::Output => connectors.is_empty(),
                     Causality::Parameter => matches!(v.variability, Variability::Fixed | Variability::Tunable),
                     _ => false,
                 };
@@ -152,15 +218,24 @@ impl Spec {
                     },
                     _ => bound.or_else(|| v.start.clone()),
                 };
+                let name = format!("{component}.{}", v.name);
+                if variables.iter().any(|e| e.name == name) {
+                    return Err(Error::unsupported(
+                        None,
+                        Some(&name),
+                        format!("the system's connector '{name}' has the name of a component's parameter"),
+                    ));
+                }
                 variables.push(Exposed {
                     vr: variables.len() as u32,
-                    name: format!("{component}.{}", v.name),
+                    name,
                     component: component.to_owned(),
                     variable: v.name.clone(),
                     ty: type_of(v.ty).to_owned(),
                     causality: v.causality.name().to_owned(),
                     variability: variability_name(v.variability).to_owned(),
                     start,
+                    also: Vec::new(),
                 });
             }
         }
@@ -237,36 +312,7 @@ impl Spec {
             r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="{state}" canSerializeFMUstate="{serialize}" canNotUseMemoryManagementFunctions="true"/>"#,
             self.model_identifier
         );
-        // Units and enumeration types: the components' definitions the exposed variables use,
-        // each once (a name two components define differently keeps the first).
-        let mut units: Vec<(String, String)> = Vec::new();
-        let mut types: Vec<(String, String)> = Vec::new();
-        for (component, xml) in component_xml {
-            let d = descriptions.iter().find(|(c, _)| c == component).map(|(_, d)| *d);
-            let Some(d) = d else { continue };
-            for e in self.variables.iter().filter(|e| &e.component == component) {
-                let Some(v) = d.variable(&e.variable) else { continue };
-                if let Some(u) = &v.unit
-                    && !units.iter().any(|(n, _)| n == u)
-                    && let Some(block) = element_text(xml, "Unit", u)
-                {
-                    units.push((u.clone(), block));
-                }
-                if let Some(t) = &v.declared_type
-                    && !types.iter().any(|(n, _)| n == t)
-                    && let Some(block) = element_text(xml, "SimpleType", t)
-                {
-                    // A SimpleType's unit is a unit too.
-                    if let Some(u) = attribute_in(&block, "unit")
-                        && !units.iter().any(|(n, _)| *n == u)
-                        && let Some(ub) = element_text(xml, "Unit", &u)
-                    {
-                        units.push((u, ub));
-                    }
-                    types.push((t.clone(), block));
-                }
-            }
-        }
+        let (units, types) = self.definitions(sim, component_xml);
         if !units.is_empty() {
             let _ = writeln!(x, "  <UnitDefinitions>");
             for (_, b) in &units {
@@ -376,6 +422,218 @@ impl Spec {
         x
     }
 
+    /// The container's FMI 3.0 modelDescription.xml (co-simulation): the variables of
+    /// [`Spec::model_description`] in FMI 3.0's types (Real as Float64, Integer as Int32,
+    /// Enumeration with its EnumerationType), the independent variable `time` after them (value
+    /// reference: their count), the same units, output dependencies (as value references) and
+    /// experiment; the GUID is the instantiation token.
+    pub fn model_description3(
+        &self,
+        sim: &Simulation,
+        system_name: &str,
+        component_xml: &[(String, String)],
+        experiment: (Option<f64>, Option<f64>),
+    ) -> String {
+        let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+        let descriptions = sim.component_descriptions();
+        let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
+            descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
+        };
+        let state = all(|cs| cs.can_get_and_set_fmu_state);
+        let serialize = state && all(|cs| cs.can_serialize_fmu_state);
+        let mut x = String::new();
+        let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
+        let names: Vec<String> = descriptions
+            .iter()
+            .map(|(c, d)| format!("{c} ({})", d.model_identifier()))
+            .collect();
+        let _ = writeln!(
+            x,
+            r#"<fmiModelDescription fmiVersion="3.0" modelName="{}" instantiationToken="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured">"#,
+            esc(system_name),
+            self.guid,
+            esc(&format!(
+                "The system {system_name} as one FMU: {}, stepped by rustfmu-runner's master at {} s",
+                names.join(", "),
+                self.step
+            )),
+            env!("CARGO_PKG_VERSION")
+        );
+        let _ = writeln!(
+            x,
+            r#"  <CoSimulation modelIdentifier="{}" canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="{state}" canSerializeFMUState="{serialize}" hasEventMode="false"/>"#,
+            self.model_identifier
+        );
+        let (units, types) = self.definitions(sim, component_xml);
+        if !units.is_empty() {
+            let _ = writeln!(x, "  <UnitDefinitions>");
+            for (_, b) in &units {
+                let _ = writeln!(x, "    {}", b.trim());
+            }
+            let _ = writeln!(x, "  </UnitDefinitions>");
+        }
+        let types: Vec<String> = types.iter().filter_map(|(_, b)| simple_type3(b)).collect();
+        if !types.is_empty() {
+            let _ = writeln!(x, "  <TypeDefinitions>");
+            for b in &types {
+                let _ = writeln!(x, "    {b}");
+            }
+            let _ = writeln!(x, "  </TypeDefinitions>");
+        }
+        let _ = writeln!(x, "  <LogCategories>");
+        for (name, what) in LOG_CATEGORIES {
+            let _ = writeln!(x, r#"    <Category name="{name}" description="{}"/>"#, esc(what));
+        }
+        let _ = writeln!(x, "  </LogCategories>");
+        let mut times = String::new();
+        if let Some(t) = experiment.0 {
+            let _ = write!(times, r#" startTime="{t:?}""#);
+        }
+        if let Some(t) = experiment.1 {
+            let _ = write!(times, r#" stopTime="{t:?}""#);
+        }
+        let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{}\"/>", self.step);
+        let _ = writeln!(x, "  <ModelVariables>");
+        let _ = writeln!(
+            x,
+            r#"    <Float64 name="time" valueReference="{}" causality="independent" variability="continuous" description="Simulation time"/>"#,
+            self.time_vr()
+        );
+        for e in &self.variables {
+            let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);
+            let v = d.and_then(|d| d.variable(&e.variable));
+            let element = match e.ty() {
+                Type::Real => "Float64",
+                Type::Integer => "Int32",
+                Type::Boolean => "Boolean",
+                Type::String => "String",
+                Type::Enumeration => "Enumeration",
+            };
+            let _ = write!(
+                x,
+                r#"    <{element} name="{}" valueReference="{}" causality="{}" variability="{}""#,
+                esc(&e.name),
+                e.vr,
+                e.causality,
+                e.variability
+            );
+            if let Some(description) = v.and_then(|v| v.description.as_deref())
+                && !description.is_empty()
+            {
+                let _ = write!(x, r#" description="{}""#, esc(description));
+            }
+            let initial = match e.causality() {
+                Causality::Output if e.start.is_some() => Some("exact"),
+                Causality::Parameter => Some("exact"),
+                _ => None,
+            };
+            if let Some(i) = initial {
+                let _ = write!(x, r#" initial="{i}""#);
+            }
+            if let Some(v) = v {
+                if let Some(t) = &v.declared_type {
+                    let _ = write!(x, r#" declaredType="{}""#, esc(t));
+                }
+                if let Some(u) = &v.unit {
+                    let _ = write!(x, r#" unit="{}""#, esc(u));
+                }
+                if e.ty() != Type::Boolean && e.ty() != Type::String {
+                    if let Some(m) = v.min {
+                        let _ = write!(x, r#" min="{m}""#);
+                    }
+                    if let Some(m) = v.max {
+                        let _ = write!(x, r#" max="{m}""#);
+                    }
+                }
+            }
+            match (&e.start, e.ty()) {
+                (Some(s), Type::String) => {
+                    let _ = writeln!(x, ">\n      <Start value=\"{}\"/>\n    </String>", esc(s));
+                }
+                (Some(s), _) => {
+                    let _ = writeln!(x, r#" start="{}"/>"#, esc(s));
+                }
+                (None, _) => {
+                    let _ = writeln!(x, "/>");
+                }
+            }
+        }
+        let _ = writeln!(x, "  </ModelVariables>");
+        let _ = writeln!(x, "  <ModelStructure>");
+        let outputs: Vec<&Exposed> = self
+            .variables
+            .iter()
+            .filter(|e| e.causality() == Causality::Output)
+            .collect();
+        for e in &outputs {
+            let deps: Vec<String> = self
+                .output_dependencies(sim, e)
+                .iter()
+                .map(|i| (i - 1).to_string())
+                .collect();
+            let _ = writeln!(
+                x,
+                r#"    <Output valueReference="{}" dependencies="{}"/>"#,
+                e.vr,
+                deps.join(" ")
+            );
+        }
+        for e in outputs.iter().filter(|e| e.start.is_none()) {
+            let _ = writeln!(x, r#"    <InitialUnknown valueReference="{}"/>"#, e.vr);
+        }
+        let _ = writeln!(x, "  </ModelStructure>");
+        let _ = writeln!(x, "</fmiModelDescription>");
+        x
+    }
+
+    /// FMI 3.0's independent variable `time`: the value reference after the exposed variables'.
+    pub fn time_vr(&self) -> u32 {
+        self.variables.len() as u32
+    }
+
+    /// The units and simple types (their 2.0 XML blocks) the exposed variables use: the
+    /// components' definitions, each once (a name two components define differently keeps the
+    /// first).
+    #[allow(clippy::type_complexity)]
+    fn definitions(
+        &self,
+        sim: &Simulation,
+        component_xml: &[(String, String)],
+    ) -> (Vec<(String, String)>, Vec<(String, String)>) {
+        let descriptions = sim.component_descriptions();
+        let mut units: Vec<(String, String)> = Vec::new();
+        let mut types: Vec<(String, String)> = Vec::new();
+        for (component, xml) in component_xml {
+            let d = descriptions.iter().find(|(c, _)| c == component).map(|(_, d)| *d);
+            let Some(d) = d else { continue };
+            for e in self.variables.iter().filter(|e| &e.component == component) {
+                let Some(v) = d.variable(&e.variable) else { continue };
+                if let Some(u) = &v.unit
+                    && !units.iter().any(|(n, _)| n == u)
+                    && let Some(block) = element_text(xml, "Unit", u)
+                {
+                    units.push((u.clone(), block));
+                }
+                if let Some(t) = &v.declared_type
+                    && !types.iter().any(|(n, _)| n == t)
+                    && let Some(block) = element_text(xml, "SimpleType", t)
+                {
+                    // A SimpleType's unit is a unit too.
+                    if let Some(u) = attribute_in(
+                        &block[block.find("unit=").map_or(0, |i| block[..i].rfind('<').unwrap_or(0))..],
+                        "unit",
+                    ) && !units.iter().any(|(n, _)| *n == u)
+                        && let Some(ub) = element_text(xml, "Unit", &u)
+                    {
+                        units.push((u, ub));
+                    }
+                    types.push((t.clone(), block));
+                }
+            }
+        }
+        (units, types)
+    }
+
     /// The indices (1-based, the container's variable order) of the container's inputs an
     /// output depends on directly: through its component's ModelStructure, and through every
     /// connection into an input it depends on, back to the exposed inputs.
@@ -389,11 +647,12 @@ impl Spec {
             }
             seen.push((c.clone(), v.clone()));
             for input in sim.direct_inputs(&c, &v) {
-                if let Some(e) = self
-                    .variables
-                    .iter()
-                    .find(|e| e.component == c && e.variable == input && e.causality() == Causality::Input)
-                {
+                let feeds = |e: &&Exposed| {
+                    e.causality() == Causality::Input
+                        && ((e.component == c && e.variable == input)
+                            || e.also.iter().any(|(ac, av)| *ac == c && *av == input))
+                };
+                if let Some(e) = self.variables.iter().find(feeds) {
                     out.push(e.vr + 1);
                 } else if let Some((sc, sv)) = sim.source_of(&c, &input) {
                     todo.push((sc, sv));
@@ -451,4 +710,67 @@ pub fn check_component(component: &str, d: &Description) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// An FMI 2.0 `<SimpleType>` block in FMI 3.0's form: `<Float64Type>`, `<Int32Type>`,
+/// `<BooleanType>`, `<StringType>` or `<EnumerationType>` with its items (None if unreadable).
+fn simple_type3(block: &str) -> Option<String> {
+    use quick_xml::events::Event;
+    let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+    let attrs = |e: &quick_xml::events::BytesStart| -> Option<Vec<(String, String)>> {
+        e.attributes()
+            .map(|a| {
+                let a = a.ok()?;
+                let key = String::from_utf8(a.key.as_ref().to_vec()).ok()?;
+                let value = a.unescape_value().ok()?.into_owned();
+                Some((key, value))
+            })
+            .collect()
+    };
+    let mut reader = quick_xml::Reader::from_str(block);
+    let mut outer = Vec::new();
+    let mut kind: Option<(String, Vec<(String, String)>)> = None;
+    let mut items = Vec::new();
+    loop {
+        match reader.read_event().ok()? {
+            Event::Start(e) | Event::Empty(e) => {
+                let name = String::from_utf8(e.name().as_ref().to_vec()).ok()?;
+                let a = attrs(&e)?;
+                match name.as_str() {
+                    "SimpleType" => outer = a,
+                    "Item" => items.push(a),
+                    _ => kind = Some((name, a)),
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    let (kind, inner) = kind?;
+    let element = match kind.as_str() {
+        "Real" => "Float64Type",
+        "Integer" => "Int32Type",
+        "Boolean" => "BooleanType",
+        "String" => "StringType",
+        "Enumeration" => "EnumerationType",
+        _ => return None,
+    };
+    let mut out = format!("<{element}");
+    for (k, v) in outer.iter().chain(&inner) {
+        let _ = write!(out, r#" {k}="{}""#, esc(v));
+    }
+    if items.is_empty() {
+        out.push_str("/>");
+        return Some(out);
+    }
+    out.push('>');
+    for item in &items {
+        out.push_str("\n      <Item");
+        for (k, v) in item {
+            let _ = write!(out, r#" {k}="{}""#, esc(v));
+        }
+        out.push_str("/>");
+    }
+    let _ = write!(out, "\n    </{element}>");
+    Some(out)
 }

@@ -203,6 +203,8 @@ pub struct Simulation {
     broken: bool,
     /// The connections, as the system names them.
     connections: Vec<Connection>,
+    /// The system's own connectors (the runner runs without them; a container exposes them).
+    system_connectors: Vec<crate::ssp::SystemConnector>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -245,10 +247,27 @@ impl Simulation {
             .iter()
             .flat_map(|c| c.parameters.iter().map(|(v, x)| (c.name.clone(), v.clone(), x.clone())))
             .collect();
-        Simulation::new(&ssd.name, fmus, components, &ssd.connections, parameters).map_err(|e| Error {
-            message: format!("{}: {}", archive.path, e.message),
-            ..e
-        })
+        let mut sim =
+            Simulation::new(&ssd.name, fmus, components, &ssd.connections, parameters).map_err(|e| Error {
+                message: format!("{}: {}", archive.path, e.message),
+                ..e
+            })?;
+        for sc in &ssd.connectors {
+            for (c, v) in &sc.links {
+                sim.resolve(c, v).map_err(|e| Error {
+                    message: format!("{}: the system's connector '{}': {}", archive.path, sc.name, e.message),
+                    ..e
+                })?;
+            }
+        }
+        sim.system_connectors = ssd.connectors;
+        Ok(sim)
+    }
+
+    /// The system's own connectors (an SSD's `ssd:System/ssd:Connectors`) with the component
+    /// variables they are connected to.
+    pub fn system_connectors(&self) -> &[crate::ssp::SystemConnector] {
+        &self.system_connectors
     }
 
     /// A system of `fmus`: `components` are (instance name, index into `fmus`); `parameters`
@@ -290,6 +309,7 @@ impl Simulation {
             runs: 0,
             broken: false,
             connections: connections.to_vec(),
+            system_connectors: Vec::new(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {

@@ -7,8 +7,14 @@
 //! or `source="X.ssv"` (a file of the archive), the connectors' units and the
 //! `ssd:DefaultExperiment`.
 //!
-//! What is refused, with the component and connector it concerns: connections to or from the
-//! system's own connectors (no `startElement` / `endElement`), nested systems, connection
+//! The system's own connectors (`ssd:System/ssd:Connectors`, kind input or output) and their
+//! connections (no `startElement` / `endElement`) are read into [`Ssd::connectors`]: a container
+//! FMU exposes them (`cargo fmu container`); the runner runs the system without them (a
+//! component input a system input feeds keeps its start value, as an unconnected input).
+//!
+//! What is refused, with the component and connector it concerns: a system connector of another
+//! kind that a connection uses, a connection from the system to itself, a system output fed by
+//! other than one connection, nested systems, connection
 //! transformations (`ssc:LinearTransformation`, mapping transformations), connections between
 //! connectors of different units (a unit conversion), parameter mappings and prefixes,
 //! parameter bindings of the system itself, signal dictionaries, components that are not FMUs
@@ -38,12 +44,27 @@ pub struct Connection {
     pub end: (String, String),
 }
 
+/// One of the system's own connectors (`ssd:System/ssd:Connectors/ssd:Connector`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SystemConnector {
+    pub name: String,
+    /// "input" or "output".
+    pub kind: String,
+    pub unit: Option<String>,
+    /// An input: the component inputs it feeds (component, connector), in the connections'
+    /// order; an output: the one component output that feeds it.
+    pub links: Vec<(String, String)>,
+}
+
 /// The system of an SSD.
 #[derive(Debug, Clone)]
 pub struct Ssd {
     pub name: String,
     pub components: Vec<Component>,
+    /// The connections between components.
     pub connections: Vec<Connection>,
+    /// The system's own connectors, with the connections to and from them.
+    pub connectors: Vec<SystemConnector>,
     /// `ssd:DefaultExperiment` startTime, stopTime, s.
     pub start_time: Option<f64>,
     pub stop_time: Option<f64>,
@@ -127,9 +148,16 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
         name: String::new(),
         components: Vec::new(),
         connections: Vec::new(),
+        connectors: Vec::new(),
         start_time: None,
         stop_time: None,
     };
+    // Connections that name a system connector: (system connector, component end, text),
+    // resolved once every connector is read.
+    let mut boundary: Vec<(String, bool, (String, String), String)> = Vec::new();
+    let mut system_connector: Option<usize> = None;
+    // The end (component, connector) of the connection being read.
+    let mut connection_end: (Option<String>, String) = (None, String::new());
     // The open elements' local names.
     let mut stack: Vec<String> = Vec::new();
     let mut systems = 0usize;
@@ -144,7 +172,10 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                 let tag = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
                 match tag.as_str() {
                     "Parameter" => param = None,
-                    "Connector" => connector = None,
+                    "Connector" => {
+                        connector = None;
+                        system_connector = None;
+                    }
                     "Connection" => connection = None,
                     _ => {}
                 }
@@ -227,13 +258,25 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     let c = ssd.components.last_mut().expect("inside a component");
                     c.connectors.push((name, kind, None));
                     connector = Some(c.connectors.len() - 1);
+                } else {
+                    ssd.connectors.push(SystemConnector {
+                        name,
+                        kind,
+                        unit: None,
+                        links: Vec::new(),
+                    });
+                    system_connector = Some(ssd.connectors.len() - 1);
                 }
-                // The system's own connectors are refused when a connection uses them.
             }
             "Real" | "Integer" | "Boolean" | "String" | "Enumeration" if connector.is_some() && param.is_none() => {
                 if let Some(unit) = attr(&e, "unit") {
                     let c = ssd.components.last_mut().expect("inside a component");
                     c.connectors[connector.expect("checked")].2 = Some(unit);
+                }
+            }
+            "Real" | "Integer" | "Boolean" | "String" | "Enumeration" if system_connector.is_some() => {
+                if let Some(unit) = attr(&e, "unit") {
+                    ssd.connectors[system_connector.expect("checked")].unit = Some(unit);
                 }
             }
             "ParameterBinding" => {
@@ -299,19 +342,28 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     end.1
                 );
                 let (Some(se), Some(ee)) = (start.0.clone(), end.0.clone()) else {
-                    let (c, k) = if start.0.is_none() {
-                        (None, &start.1)
-                    } else {
-                        (end.0.as_deref(), &end.1)
-                    };
-                    return Err(Error::unsupported(
-                        c,
-                        Some(k),
-                        format!(
-                            "connection {text}: connections to the system's own connector '{k}' are not supported (connect components directly)"
-                        ),
-                    ));
+                    match (start.0.clone(), end.0.clone()) {
+                        (None, Some(ee)) => boundary.push((start.1.clone(), true, (ee, end.1.clone()), text.clone())),
+                        (Some(se), None) => boundary.push((end.1.clone(), false, (se, start.1.clone()), text.clone())),
+                        _ => {
+                            return Err(Error::unsupported(
+                                None,
+                                Some(&start.1),
+                                format!(
+                                    "connection {text}: from the system's connector '{}' to its connector '{}': a system that passes a value through itself is not supported",
+                                    start.1, end.1
+                                ),
+                            ));
+                        }
+                    }
+                    connection_end = (end.0.clone(), end.1.clone());
+                    connection = Some(text);
+                    if !empty {
+                        stack.push(tag);
+                    }
+                    continue;
                 };
+                connection_end = (Some(ee.clone()), end.1.clone());
                 ssd.connections.push(Connection {
                     start: (se, start.1),
                     end: (ee, end.1),
@@ -324,10 +376,9 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
             | "EnumerationMappingTransformation"
                 if connection.is_some() =>
             {
-                let k = ssd.connections.last().expect("inside a connection");
                 return Err(Error::unsupported(
-                    Some(&k.end.0),
-                    Some(&k.end.1),
+                    connection_end.0.as_deref(),
+                    Some(&connection_end.1),
                     format!(
                         "connection {}: ssc:{tag} is not supported",
                         connection.as_deref().unwrap_or("")
@@ -346,6 +397,49 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
     }
     if systems == 0 {
         return Err(Error::io(format!("{FILE}: no ssd:System")));
+    }
+    // The connections of the system's own connectors.
+    for (name, from_system, end, text) in boundary {
+        let Some(sc) = ssd.connectors.iter_mut().find(|c| c.name == name) else {
+            return Err(Error::io(format!(
+                "{FILE}: connection {text}: the system '{}' has no connector '{name}'",
+                ssd.name
+            )));
+        };
+        let wanted = if from_system { "input" } else { "output" };
+        if sc.kind != wanted {
+            return Err(Error::unsupported(
+                None,
+                Some(&name),
+                format!(
+                    "connection {text}: the system's connector '{name}' is of kind '{}': only system inputs feed components and only system outputs are fed by them (kinds parameter, calculatedParameter and inout are not supported)",
+                    sc.kind
+                ),
+            ));
+        }
+        if !from_system && !sc.links.is_empty() {
+            return Err(Error::unsupported(
+                None,
+                Some(&name),
+                format!("connection {text}: the system's output '{name}' is fed by more than one connection"),
+            ));
+        }
+        let unit = ssd
+            .components
+            .iter()
+            .find(|x| x.name == end.0)
+            .and_then(|x| x.connectors.iter().find(|(n, _, _)| *n == end.1))
+            .and_then(|(_, _, u)| u.clone());
+        if let (Some(a), Some(b)) = (&sc.unit, &unit)
+            && a != b
+        {
+            return Err(Error::unsupported(
+                Some(&end.0),
+                Some(&end.1),
+                format!("connection {text}: unit conversion between '{a}' and '{b}' is not supported"),
+            ));
+        }
+        sc.links.push(end);
     }
     // Unit conversions: both ends declare a unit and they differ.
     for k in &ssd.connections {

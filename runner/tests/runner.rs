@@ -76,16 +76,62 @@ fn refused(body: &str) -> rustfmu_runner::Error {
 }
 
 #[test]
-fn a_connection_to_the_systems_own_connector_is_refused_naming_it() {
+fn the_systems_own_connectors_are_read_with_what_they_connect() {
+    let mut read = |_: &str| Ok("<ssv:ParameterSet xmlns:ssv=\"x\"/>".to_owned());
+    let s = parse_ssd(
+        &ssd(&format!(
+            r#"<ssd:Connectors><ssd:Connector name="cmd" kind="input"><ssc:Real unit="m"/></ssd:Connector>
+            <ssd:Connector name="out" kind="output"/></ssd:Connectors>{TWO_LAGS}
+            <ssd:Connections><ssd:Connection startConnector="cmd" endElement="a" endConnector="u"/>
+            <ssd:Connection startConnector="cmd" endElement="b" endConnector="u"/>
+            <ssd:Connection startElement="b" startConnector="y" endConnector="out"/></ssd:Connections>"#
+        )),
+        &mut read,
+    )
+    .expect("an SSD with system connectors");
+    assert!(s.connections.is_empty());
+    let names: Vec<(&str, &str, Option<&str>)> = s
+        .connectors
+        .iter()
+        .map(|c| (c.name.as_str(), c.kind.as_str(), c.unit.as_deref()))
+        .collect();
+    assert_eq!(names, vec![("cmd", "input", Some("m")), ("out", "output", None)]);
+    assert_eq!(
+        s.connectors[0].links,
+        vec![("a".to_owned(), "u".to_owned()), ("b".to_owned(), "u".to_owned())]
+    );
+    assert_eq!(s.connectors[1].links, vec![("b".to_owned(), "y".to_owned())]);
+}
+
+#[test]
+fn system_connectors_the_runner_cannot_use_are_refused_naming_them() {
+    // Undeclared.
     let e = refused(&format!(
-        r#"<ssd:Connectors><ssd:Connector name="cmd" kind="input"/></ssd:Connectors>{TWO_LAGS}
+        r#"{TWO_LAGS}<ssd:Connections><ssd:Connection startConnector="cmd" endElement="b" endConnector="u"/></ssd:Connections>"#
+    ));
+    assert!(
+        e.message.contains("<system>.cmd -> b.u") && e.message.contains("has no connector 'cmd'"),
+        "{e}"
+    );
+    // Of the wrong kind, and an output fed twice.
+    let e = refused(&format!(
+        r#"<ssd:Connectors><ssd:Connector name="cmd" kind="parameter"/></ssd:Connectors>{TWO_LAGS}
         <ssd:Connections><ssd:Connection startConnector="cmd" endElement="b" endConnector="u"/></ssd:Connections>"#
     ));
     assert_eq!(e.kind, ErrorKind::Unsupported);
-    assert!(
-        e.message.contains("<system>.cmd -> b.u") && e.message.contains("system's own connector 'cmd'"),
-        "{e}"
-    );
+    assert!(e.message.contains("is of kind 'parameter'"), "{e}");
+    let e = refused(&format!(
+        r#"<ssd:Connectors><ssd:Connector name="out" kind="output"/></ssd:Connectors>{TWO_LAGS}
+        <ssd:Connections><ssd:Connection startElement="a" startConnector="y" endConnector="out"/>
+        <ssd:Connection startElement="b" startConnector="y" endConnector="out"/></ssd:Connections>"#
+    ));
+    assert!(e.message.contains("fed by more than one connection"), "{e}");
+    // From the system to itself.
+    let e = refused(&format!(
+        r#"<ssd:Connectors><ssd:Connector name="i" kind="input"/><ssd:Connector name="o" kind="output"/></ssd:Connectors>{TWO_LAGS}
+        <ssd:Connections><ssd:Connection startConnector="i" endConnector="o"/></ssd:Connections>"#
+    ));
+    assert!(e.message.contains("passes a value through itself"), "{e}");
 }
 
 #[test]

@@ -1,5 +1,5 @@
 """Container FMUs (`cargo fmu container SYSTEM.ssp`, issue 28): each composed system of the paper as
-one FMI 2.0 co-simulation FMU, run in the importers users have (fmpy, libcosim, Ecos), equal to the
+one FMI 2.0 co-simulation FMU (FMI 3.0: test_container_fmi3.py), run in the importers users have (fmpy, libcosim, Ecos), equal to the
 native runner on the SSP file, conformant (`cargo fmu check`, fmpy's validator, fmutool).
 
 The containers are the ones the main job and tests/run.sh write (target/fmu/containers/, every
@@ -331,6 +331,128 @@ def test_what_cargo_fmu_container_cannot_make_is_refused_with_the_reason(tmp_pat
     )
     assert r.returncode != 0 and "must end in .fmu" in r.stderr
     r = subprocess.run(
-        [CARGO_FMU, "fmu", "container", ssp("PendulumLQR"), "--fmi-version", "3"], capture_output=True, text=True, timeout=600
+        [CARGO_FMU, "fmu", "container", ssp("PendulumLQR"), "--fmi-version", "4"], capture_output=True, text=True, timeout=600
     )
-    assert r.returncode != 0 and "FMI 3.0 containers are not made yet" in r.stderr
+    assert r.returncode != 0 and "--fmi-version" in r.stderr
+
+
+def with_system_connectors(ssd: str) -> str:
+    """PendulumLQR's SSD with connectors of its own: one input `reference` that sets both of the
+    Controller's angle references, outputs `angle1` (pendulum.alpha1) and `torque1`
+    (controller.M1)."""
+    connectors = (
+        "<ssd:Connectors>"
+        '<ssd:Connector name="reference" kind="input"><ssc:Real unit="rad"/></ssd:Connector>'
+        '<ssd:Connector name="angle1" kind="output"><ssc:Real unit="rad"/></ssd:Connector>'
+        '<ssd:Connector name="torque1" kind="output"><ssc:Real/></ssd:Connector>'
+        "</ssd:Connectors>\n    <ssd:Elements>"
+    )
+    connections = (
+        "<ssd:Connections>"
+        '<ssd:Connection startConnector="reference" endElement="controller" endConnector="alpha1_ref"/>'
+        '<ssd:Connection startConnector="reference" endElement="controller" endConnector="alpha2_ref"/>'
+        '<ssd:Connection startElement="pendulum" startConnector="alpha1" endConnector="angle1"/>'
+        '<ssd:Connection startElement="controller" startConnector="M1" endConnector="torque1"/>'
+    )
+    assert ssd.count("<ssd:Elements>") == 1 and ssd.count("<ssd:Connections>") == 1
+    return ssd.replace("<ssd:Elements>", connectors, 1).replace("<ssd:Connections>", connections, 1)
+
+
+def edited_ssp(tmp_path, edit):
+    import zipfile
+
+    out = tmp_path / "PendulumLQRConnectors.ssp"
+    with zipfile.ZipFile(ssp("PendulumLQR")) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                data = edit(data.decode()).encode()
+            dst.writestr(item, data)
+    return out
+
+
+def test_the_ssds_own_connectors_are_the_containers_inputs_and_outputs(tmp_path):
+    """An SSD with system connectors: the container exposes them (and the parameters) instead of
+    every free input and output; a system input sets every component input it is connected to.
+    Driven with reference = 0.02 rad, its outputs equal the default container's with both
+    references set to 0.02 (bit for bit), in FMI 2.0 and in FMI 3.0."""
+    from fmpy.fmi3 import FMU3Slave
+
+    path = edited_ssp(tmp_path, with_system_connectors)
+    out = tmp_path / "PendulumLQRConnectors.fmu"
+    r = subprocess.run(
+        [CARGO_FMU, "fmu", "container", path, "-o", out, "--fmi-version", "both", "--target", "x86_64-unknown-linux-gnu"],
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    assert r.returncode == 0, r.stderr[-4000:]
+    md = fmpy.read_model_description(out)
+    v = {x.name: x for x in md.modelVariables}
+    io = sorted((x.name, x.causality) for x in md.modelVariables if x.causality in ("input", "output"))
+    assert io == [("angle1", "output"), ("reference", "input"), ("torque1", "output")]
+    assert v["reference"].unit == "rad" and "controller.M_max" in v and "pendulum.alpha1" not in v
+    deps = {o.variable.name: [d.name for d in o.dependencies] for o in md.outputs}
+    assert deps == {"angle1": [], "torque1": ["reference"]}
+    assert validate_fmu(str(out)) == [] and validate_fmu(str(tmp_path / "fmi3" / out.name)) == []
+
+    # The default container with both references set, at 1 ms for 1 s.
+    s = Slave("PendulumLQR", tmp_path)
+    fmu = s.fmu
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.setReal([s.vr["controller.alpha1_ref"], s.vr["controller.alpha2_ref"]], [0.02, 0.02])
+    want = []
+    for k in range(1000):
+        fmu.doStep(k * H, H)
+        want.append(fmu.getReal([s.vr["pendulum.alpha1"], s.vr["controller.M1"]]))
+    s.free()
+
+    def drive(f, set_real, get_real, vr):
+        rows = []
+        set_real([vr["reference"]], [0.02])
+        for k in range(1000):
+            f(k)
+            rows.append(get_real([vr["angle1"], vr["torque1"]]))
+        return rows
+
+    unzipped = fmpy.extract(out, unzipdir=tmp_path / "c2")
+    two = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c2")
+    two.instantiate()
+    two.setupExperiment(startTime=0.0)
+    two.enterInitializationMode()
+    two.exitInitializationMode()
+    got2 = drive(lambda k: two.doStep(k * H, H), two.setReal, two.getReal, {n: x.valueReference for n, x in v.items()})
+    two.terminate()
+    two.freeInstance()
+
+    md3 = fmpy.read_model_description(tmp_path / "fmi3" / out.name)
+    unzipped3 = fmpy.extract(tmp_path / "fmi3" / out.name, unzipdir=tmp_path / "c3")
+    three = FMU3Slave(guid=md3.guid, unzipDirectory=unzipped3, modelIdentifier=md3.coSimulation.modelIdentifier, instanceName="c3")
+    three.instantiate()
+    three.enterInitializationMode(startTime=0.0)
+    three.exitInitializationMode()
+    vr3 = {x.name: x.valueReference for x in md3.modelVariables}
+    got3 = drive(lambda k: three.doStep(k * H, H), three.setFloat64, three.getFloat64, vr3)
+    three.terminate()
+    three.freeInstance()
+    assert np.array_equal(np.array(want), np.array(got2)) and np.array_equal(np.array(want), np.array(got3))
+    # The reference moved the loop: at 1 s the angle is not the one of the loop without it.
+    assert abs(want[-1][0] - runner("PendulumLQR", 1.0, H, ["pendulum.alpha1"])[-1, 0]) > 1e-3
+
+
+def test_system_connectors_a_container_cannot_give_a_value_are_refused(tmp_path):
+    def dangling(ssd):
+        return with_system_connectors(ssd).replace(
+            '<ssd:Connector name="torque1"', '<ssd:Connector name="spare" kind="input"><ssc:Real/></ssd:Connector><ssd:Connector name="torque1"', 1
+        )
+
+    path = edited_ssp(tmp_path, dangling)
+    r = subprocess.run(
+        [CARGO_FMU, "fmu", "container", path, "-o", tmp_path / "x.fmu", "--target", "x86_64-unknown-linux-gnu"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert r.returncode != 0 and "'spare' is connected to no component" in r.stderr, r.stderr

@@ -127,8 +127,16 @@ def test_an_ssp_it_cannot_run_is_refused_naming_component_and_connector(tmp_path
         assert n == 1, ssd
         return new
 
-    with pytest.raises(rustfmu_runner.SspError, match=r"connection <system>\.M1 -> pendulum\.M1: connections to the system's own connector 'M1'"):
+    with pytest.raises(rustfmu_runner.SspError, match=r"connection <system>\.M1 -> pendulum\.M1: the system 'PendulumLQR' has no connector 'M1'"):
         rustfmu_runner.System(rewritten_ssp(tmp_path, "PendulumLQR", to_system_connector))
+
+    def to_system_output(ssd):
+        # A system connector of kind output that feeds a component: refused with its kind.
+        new = to_system_connector(ssd)
+        return new.replace("<ssd:Elements>", '<ssd:Connectors><ssd:Connector name="M1" kind="output"><ssc:Real/></ssd:Connector></ssd:Connectors><ssd:Elements>', 1)
+
+    with pytest.raises(rustfmu_runner.SspError, match=r"the system's connector 'M1' is of kind 'output'"):
+        rustfmu_runner.System(rewritten_ssp(tmp_path, "PendulumLQR", to_system_output))
 
     def scaled(ssd):
         return re.sub(r'(startElement="controller" startConnector="M1"[^>]*)/>', r'\1><ssc:LinearTransformation factor="2"/></ssd:Connection>', ssd, count=1)

@@ -1,28 +1,31 @@
 //! The binary of every container FMU: `cargo fmu container SYSTEM.ssp` copies this library,
 //! renamed to the container's model identifier, into an FMU whose `resources/` hold the system
 //! (`resources/system/`: SystemStructure.ssd and the component FMUs) and its
-//! `resources/container.toml` ([`rustfmu_runner::container::Spec`]).
+//! `resources/container.toml` ([`rustfmu_runner::container::Spec`]). One binary serves both FMI
+//! versions: it exports the FMI 2.0 co-simulation functions ([`fmi2`]) and the FMI 3.0 ones
+//! ([`fmi3`]); the archive's modelDescription.xml says which one an importer uses.
 //!
-//! fmi2Instantiate reads the spec (its GUID must be the importer's), loads the system with
-//! rustfmu-runner ([`rustfmu_runner::Simulation::from_dir`]: every component FMU unpacked and
-//! instantiated) and sets the system's parameter set. Then every FMI 2.0 co-simulation call is
-//! checked against the standard's state table (the FMU runtime's, `rustfmu::core::machine`) and
-//! the exposed variables' causality and variability, and forwarded:
+//! Instantiation reads the spec (its GUID must be the importer's GUID or instantiation token),
+//! loads the system with rustfmu-runner ([`rustfmu_runner::Simulation::from_dir`]: every
+//! component FMU unpacked and instantiated) and sets the system's parameter set. Then every call
+//! is checked against the standard's state table of its version (the FMU runtime's,
+//! `rustfmu::core::machine`) and the exposed variables' causality and variability, and forwarded
+//! by the version-neutral [`Container`] here:
 //!
-//! - fmi2Set*/fmi2Get* of an exposed variable go to its component (all or nothing: every value
+//! - sets and gets of an exposed variable go to its component (all or nothing: every value
 //!   reference, type, bound and finite value is checked before the first is set); an output read
 //!   after an input changed, or after a step, first propagates the connections (the runner's
 //!   Gauss-Seidel order), so a container output equals the runner's at the same point;
-//! - fmi2ExitInitializationMode propagates the connections once per component, as the runner;
-//! - fmi2DoStep(t, H) makes n = ceil(H / step) internal steps of H / n (the connections
+//! - leaving initialization propagates the connections once per component, as the runner;
+//! - a step (t, H) makes n = ceil(H / step) internal steps of H / n (the connections
 //!   propagated before each), so at the spec's step and H a multiple of it the components see
 //!   the runner's calls exactly;
 //! - an FMU state is every component's FMU state plus the container's time and mode;
 //! - the components' log messages go to the importer's logger, "[component] message", with
 //!   their status; the container's own refusals say what was wrong and where.
 //!
-//! No panic crosses the C boundary: each function runs under `catch_unwind` and returns
-//! fmi2Fatal (logged) if anything in it panicked.
+//! No panic crosses the C boundary: each function runs under `catch_unwind` and returns Fatal
+//! (logged) if anything in it panicked.
 #![allow(
     non_snake_case,
     non_upper_case_globals,
@@ -32,42 +35,77 @@
     clippy::too_many_arguments
 )]
 
+pub mod fmi2;
+pub mod fmi3;
+
 use fmi_description::fmi2::Type;
 use fmi_description::{Causality, Variability};
-use rustfmu::__private::TERMS2 as TERMS;
+use rustfmu::__private::{TERMS2, TERMS3};
+use rustfmu::core::Terms;
+use rustfmu::core::Version;
 use rustfmu::core::machine::{Call, State, contains, state_names};
-use rustfmu::fmi2::abi::*;
-use rustfmu_runner::container::{SPEC_FILE, SYSTEM_FOLDER, Spec};
+use rustfmu::fmi2::abi::{
+    fmi2CallbackLogger, fmi2ComponentEnvironment, fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Status, fmi2Warning,
+};
+use rustfmu::fmi3::abi::{fmi3InstanceEnvironment, fmi3LogMessageCallback};
+use rustfmu_runner::container::{LOG_CATEGORIES, SPEC_FILE, SYSTEM_FOLDER, Spec};
 use rustfmu_runner::fmi2::{Fmi2Error, FmuState, InstanceCS};
 use rustfmu_runner::{Error, Simulation};
 use std::cell::Cell;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+/// A status of either version: FMI 2.0's and 3.0's codes are the same for OK, Warning, Discard,
+/// Error and Fatal (0 .. 4), the only ones a container returns.
+pub(crate) type Status = fmi2Status;
+
+/// The importer's logger, as the version it speaks gave it.
+enum Logger {
+    V2 {
+        logger: fmi2CallbackLogger,
+        environment: fmi2ComponentEnvironment,
+        name: CString,
+    },
+    V3 {
+        logger: fmi3LogMessageCallback,
+        environment: fmi3InstanceEnvironment,
+    },
+}
 
 /// Where the messages of the call in progress go (the importer's logger and environment).
 struct Sink {
-    logger: fmi2CallbackLogger,
-    environment: fmi2ComponentEnvironment,
-    name: CString,
+    logger: Logger,
     logging_on: Cell<bool>,
 }
 
 impl Sink {
-    fn log(&self, status: fmi2Status, category: &str, message: &str) {
-        if let Some(f) = self.logger {
-            let category = CString::new(category).unwrap_or_default();
-            let message = CString::new(message.replace('\0', "?")).unwrap_or_default();
-            // "%s": a message is never a format.
-            unsafe {
-                f(
-                    self.environment,
-                    self.name.as_ptr(),
-                    status,
-                    category.as_ptr(),
-                    c"%s".as_ptr(),
-                    message.as_ptr(),
-                )
-            };
+    fn log(&self, status: Status, category: &str, message: &str) {
+        let category = CString::new(category).unwrap_or_default();
+        let message = CString::new(message.replace('\0', "?")).unwrap_or_default();
+        match &self.logger {
+            Logger::V2 {
+                logger: Some(f),
+                environment,
+                name,
+            } => {
+                // "%s": a message is never a format.
+                unsafe {
+                    f(
+                        *environment,
+                        name.as_ptr(),
+                        status,
+                        category.as_ptr(),
+                        c"%s".as_ptr(),
+                        message.as_ptr(),
+                    )
+                };
+            }
+            Logger::V3 {
+                logger: Some(f),
+                environment,
+            } => unsafe { f(*environment, status, category.as_ptr(), message.as_ptr()) },
+            _ => {}
         }
     }
 }
@@ -77,8 +115,9 @@ thread_local! {
     static CURRENT: Cell<*const Sink> = const { Cell::new(std::ptr::null()) };
 }
 
-/// The `log` crate's logger: the fmi crate hands each component's message to it (module path
-/// "logger", target the component's instance name); it goes to the container's importer.
+/// The `log` crate's logger: the runner's importer hands each component's message to it
+/// (module path "logger", target the component's instance name); it goes to the container's
+/// importer.
 struct Forward;
 
 impl log::Log for Forward {
@@ -130,6 +169,9 @@ impl Drop for Using {
     }
 }
 
+/// The component index of FMI 3.0's independent variable `time` (the container's own).
+const TIME: usize = usize::MAX;
+
 /// An exposed variable resolved: its component (index), the component's value reference, type.
 #[derive(Clone, Copy)]
 struct Port {
@@ -158,33 +200,44 @@ struct Saved {
     stop_time: Option<f64>,
 }
 
-struct Container {
+pub(crate) struct Container {
     /// This instance among all of the process (FMU states name their owner by it).
     id: u64,
+    /// The FMI version the importer speaks to this instance.
+    version: Version,
     sink: Box<Sink>,
     spec: Spec,
+    /// By value reference: the spec's variables, then (FMI 3.0) `time`.
     ports: Vec<Port>,
+    /// By value reference: the further component inputs (component, value reference) a system
+    /// input sets besides its port's (empty for most).
+    also: Vec<Vec<(usize, u32)>>,
     sim: Simulation,
     state: State,
     /// The current communication point, s.
     time: f64,
     /// Something was set (or stepped) since the connections were last propagated.
     dirty: bool,
-    /// stopTime of fmi2SetupExperiment, if given.
+    /// The stop time the importer gave, if it gave one.
     stop_time: Option<f64>,
-    /// The end of the last step completed (fmi2GetRealStatus(fmi2LastSuccessfulTime)).
+    /// The end of the last step completed (fmi2LastSuccessfulTime, fmi3DoStep's lastSuccessfulTime).
     last_successful: f64,
-    /// The strings fmi2GetString returned last (valid until the next call).
+    /// The strings a string getter returned last (valid until the next call).
     strings: Vec<CString>,
-    /// Component state slots of freed FMU states, reused by the next fmi2GetFMUstate.
+    /// By value reference: the values set in Instantiated (read back there in FMI 3.0).
+    held: Vec<Option<Held>>,
+    /// By value reference: the strings set in Instantiated.
+    held_strings: Vec<Option<CString>>,
+    /// Component state slots of freed FMU states, reused by the next FMU state taken.
     free: Vec<Vec<FmuState>>,
     /// Every component's state before the call in progress that moves them (a step, the
     /// initialization), restored if one of them fails: a failed call changes nothing.
     rollback: Option<Vec<FmuState>>,
 }
 
-/// The most internal steps one fmi2DoStep makes: a longer step is discarded before it begins
-/// (fmi2Discard, the last successful time its start), so that a huge step cannot hang the importer.
+/// The most internal steps one step of the importer makes: a longer step is discarded before it
+/// begins (Discard, the last successful time its start), so that a huge step cannot hang the
+/// importer.
 pub const MAX_INTERNAL_STEPS: f64 = 1.0e6;
 
 /// Every live FMU state of every container of the process (their addresses): a pointer that is
@@ -196,10 +249,39 @@ fn states() -> std::sync::MutexGuard<'static, Vec<usize>> {
     STATES.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-type Outcome = Result<fmi2Status, fmi2Status>;
+type Outcome = Result<Status, Status>;
+
+/// A variable's type as `version` names it.
+fn type_name(version: Version, ty: Type) -> &'static str {
+    match version {
+        Version::Fmi2 => ty.name(),
+        Version::Fmi3 => match ty {
+            Type::Real => "Float64",
+            Type::Integer => "Int32",
+            Type::Boolean => "Boolean",
+            Type::String => "String",
+            Type::Enumeration => "Enumeration",
+        },
+    }
+}
+
+fn status_of(e: &Error) -> Status {
+    match e.status.as_deref() {
+        Some("Discard") => fmi2Discard,
+        Some("Fatal") => fmi2Fatal,
+        _ => fmi2Error,
+    }
+}
 
 impl Container {
-    fn error(&self, message: &str) -> fmi2Status {
+    fn terms(&self) -> &'static Terms {
+        match self.version {
+            Version::Fmi2 => &TERMS2,
+            Version::Fmi3 => &TERMS3,
+        }
+    }
+
+    fn error(&self, message: &str) -> Status {
         self.sink.log(fmi2Error, "logStatusError", message);
         fmi2Error
     }
@@ -210,14 +292,15 @@ impl Container {
         }
     }
 
+    /// The name of the variable of value reference `vr` (checked before).
+    fn name(&self, vr: u32) -> &str {
+        self.spec.variables.get(vr as usize).map_or("time", |e| e.name.as_str())
+    }
+
     /// A component's refusal of a call that changed nothing (a setup, an FMU state): logged; the
-    /// container stays where it was, unless the component answered fmi2Fatal.
-    fn refused(&mut self, function: &str, e: Error) -> fmi2Status {
-        let status = match e.status.as_deref() {
-            Some("Discard") => fmi2Discard,
-            Some("Fatal") => fmi2Fatal,
-            _ => fmi2Error,
-        };
+    /// container stays where it was, unless the component answered Fatal.
+    fn refused(&mut self, function: &str, e: Error) -> Status {
+        let status = status_of(&e);
         self.sink.log(
             status,
             "logStatusError",
@@ -230,14 +313,10 @@ impl Container {
     }
 
     /// A component's failure in a call that moves the system (initialization, a step): logged;
-    /// the container's state follows the worst status (fmi2Error: Error, as some components
-    /// may have moved and others not).
-    fn failed(&mut self, function: &str, e: Error) -> fmi2Status {
-        let status = match e.status.as_deref() {
-            Some("Discard") => fmi2Discard,
-            Some("Fatal") => fmi2Fatal,
-            _ => fmi2Error,
-        };
+    /// the container's state follows the worst status (Error: Error, as some components may have
+    /// moved and others not).
+    fn failed(&mut self, function: &str, e: Error) -> Status {
+        let status = status_of(&e);
         self.sink.log(
             status,
             "logStatusError",
@@ -295,9 +374,9 @@ impl Container {
     }
 
     /// A component failed in a call that moves the system: every component back to where the
-    /// call found it if they can be (the container stays in its state: fmi2Error changes
-    /// nothing), else the container follows the failure's status ([`Container::failed`]).
-    fn undo(&mut self, function: &str, e: Error, saved: bool) -> fmi2Status {
+    /// call found it if they can be (the container stays in its state: Error changes nothing),
+    /// else the container follows the failure's status ([`Container::failed`]).
+    fn undo(&mut self, function: &str, e: Error, saved: bool) -> Status {
         if e.status.as_deref() == Some("Fatal") || !saved {
             return self.failed(function, e);
         }
@@ -320,18 +399,21 @@ impl Container {
         }
     }
 
-    fn check(&self, call: Call, function: &str) -> Result<(), fmi2Status> {
-        if contains(call.allowed_in(), self.state) {
+    fn check(&self, call: Call, function: &str) -> Result<(), Status> {
+        let allowed = call.allowed(self.version);
+        if contains(allowed, self.state) {
             return Ok(());
         }
         Err(self.error(&format!(
             "{function} is not allowed in state {}; it is allowed in: {}",
-            TERMS.state_name(self.state),
-            state_names(&TERMS, call.allowed_in())
+            self.terms().state_name(self.state),
+            state_names(self.terms(), allowed)
         )))
     }
 
-    fn port(&self, vr: fmi2ValueReference, ty: Type, function: &str) -> Result<Port, fmi2Status> {
+    /// The variable of `vr`, checked to be of type `ty` (`asked`: the type the function reads
+    /// or writes, as its version names it). FMI 2.0's Integer functions take Enumerations too.
+    fn port(&self, vr: u32, ty: Type, asked: &str, function: &str) -> Result<Port, Status> {
         let Some(p) = self.ports.get(vr as usize) else {
             return Err(self.error(&format!(
                 "{function}: value reference {vr} is not a variable of {} (0 .. {})",
@@ -339,22 +421,25 @@ impl Container {
                 self.ports.len().saturating_sub(1)
             )));
         };
-        let same = p.ty == ty || (ty == Type::Integer && p.ty == Type::Enumeration);
+        let same = p.ty == ty || (self.version == Version::Fmi2 && ty == Type::Integer && p.ty == Type::Enumeration);
         if !same {
-            let e = &self.spec.variables[vr as usize];
             return Err(self.error(&format!(
-                "{function}: '{}' (vr {vr}) is {}, not {}",
-                e.name,
-                e.ty,
-                ty.name()
+                "{function}: '{}' (vr {vr}) is {}, not {asked}",
+                self.name(vr),
+                type_name(self.version, p.ty),
             )));
         }
         Ok(*p)
     }
 
-    /// Whether the variable of `vr` may be set now (FMI 2.0, 4.2.4).
-    fn settable(&self, vr: u32, p: &Port, function: &str) -> Result<(), fmi2Status> {
-        let name = &self.spec.variables[vr as usize].name;
+    /// Whether the variable of `vr` may be set now (FMI 2.0, 4.2.4; FMI 3.0, 4.2).
+    fn settable(&self, vr: u32, p: &Port, function: &str) -> Result<(), Status> {
+        let name = self.name(vr);
+        if p.component == TIME {
+            return Err(self.error(&format!(
+                "{function}: '{name}' (vr {vr}) is the independent variable: it is not set"
+            )));
+        }
         let e = &self.spec.variables[vr as usize];
         let ok = match (self.state, p.causality) {
             // An output with a start value (initial = exact) takes one before initialization.
@@ -372,14 +457,14 @@ impl Container {
             "{function}: '{name}' (vr {vr}, {} {}) cannot be set in state {}",
             p.variability.name(),
             p.causality.name(),
-            TERMS.state_name(self.state)
+            self.terms().state_name(self.state)
         )))
     }
 
     /// Propagates the connections if anything changed since they last were (before values are
     /// read). A component that fails it leaves every component as it was (when they can get and
     /// set their state), and the container where it was.
-    fn settle(&mut self, function: &str) -> Result<(), fmi2Status> {
+    fn settle(&mut self, function: &str) -> Result<(), Status> {
         if self.dirty && matches!(self.state, State::InitializationMode | State::StepComplete) {
             let saved = self.snapshot();
             let t = self.time;
@@ -391,7 +476,7 @@ impl Container {
         Ok(())
     }
 
-    fn component_call<T>(&mut self, function: &str, vr: u32, r: Result<T, Fmi2Error>) -> Result<T, fmi2Status> {
+    fn component_call<T>(&mut self, function: &str, vr: u32, r: Result<T, Fmi2Error>) -> Result<T, Status> {
         r.map_err(|e| {
             let v = &self.spec.variables[vr as usize];
             let status = match e {
@@ -413,6 +498,13 @@ impl Container {
             status
         })
     }
+
+    fn all_components(&self, f: fn(&fmi_description::fmi2::CoSimulation) -> bool) -> bool {
+        self.sim
+            .component_descriptions()
+            .iter()
+            .all(|(_, d)| d.cs.as_ref().is_some_and(f))
+    }
 }
 
 fn slice<'a, T>(p: *const T, n: usize) -> &'a [T] {
@@ -431,8 +523,16 @@ fn slice_mut<'a, T>(p: *mut T, n: usize) -> &'a mut [T] {
     }
 }
 
+fn text(p: *const c_char) -> Option<String> {
+    if p.is_null() {
+        None
+    } else {
+        Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+    }
+}
+
 /// Runs `f` on the container `c` with its sink set and panics caught.
-fn with(c: fmi2Component, function: &str, f: impl FnOnce(&mut Container) -> Outcome) -> fmi2Status {
+fn with(c: *mut c_void, function: &str, f: impl FnOnce(&mut Container) -> Outcome) -> Status {
     if c.is_null() {
         return fmi2Error;
     }
@@ -440,7 +540,15 @@ fn with(c: fmi2Component, function: &str, f: impl FnOnce(&mut Container) -> Outc
     let sink: *const Sink = &*container.sink;
     let _using = Using::new(unsafe { &*sink });
     match catch_unwind(AssertUnwindSafe(|| f(container))) {
-        Ok(Ok(s)) | Ok(Err(s)) => s,
+        Ok(Ok(s)) | Ok(Err(s)) => {
+            // FMI 3.0, 2.3.1: "If any function called in super state FMU State Setable returns
+            // fmi3Error, the FMU enters state Terminated" (fmi3Reset or fmi3SetFMUState lead
+            // back), as the FMU runtime does. FMI 2.0 instances stay where they were.
+            if container.version == Version::Fmi3 && s == fmi2Error && container.state != State::Fatal {
+                container.state = State::Terminated;
+            }
+            s
+        }
         Err(panic) => {
             let what = panic
                 .downcast_ref::<&str>()
@@ -459,87 +567,33 @@ fn with(c: fmi2Component, function: &str, f: impl FnOnce(&mut Container) -> Outc
     }
 }
 
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
-    TYPES_PLATFORM.as_ptr()
+/// What an instantiation function was given, in either version.
+struct Request<'a> {
+    version: Version,
+    function: &'a str,
+    name: Option<String>,
+    /// The GUID (2.0) or instantiation token (3.0).
+    token: Option<String>,
+    /// The resources folder (from 2.0's URI or 3.0's path), or why there is none.
+    resources: Result<std::path::PathBuf, String>,
+    logging_on: bool,
 }
 
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi2GetVersion() -> *const c_char {
-    VERSION.as_ptr()
-}
-
-fn text(p: fmi2String) -> Option<String> {
-    if p.is_null() {
-        None
-    } else {
-        Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
-    }
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2Instantiate(
-    instanceName: fmi2String,
-    fmuType: fmi2Type,
-    fmuGUID: fmi2String,
-    fmuResourceLocation: fmi2String,
-    functions: *const fmi2CallbackFunctions,
-    _visible: fmi2Boolean,
-    loggingOn: fmi2Boolean,
-) -> fmi2Component {
-    let r = catch_unwind(AssertUnwindSafe(|| {
-        instantiate(
-            instanceName,
-            fmuType,
-            fmuGUID,
-            fmuResourceLocation,
-            functions,
-            loggingOn,
-        )
-    }));
-    match r {
-        Ok(Some(c)) => Box::into_raw(c) as fmi2Component,
-        _ => std::ptr::null_mut(),
-    }
-}
-
-fn instantiate(
-    instance_name: fmi2String,
-    fmu_type: fmi2Type,
-    guid: fmi2String,
-    resources: fmi2String,
-    functions: *const fmi2CallbackFunctions,
-    logging_on: fmi2Boolean,
-) -> Option<Box<Container>> {
-    if functions.is_null() {
-        return None;
-    }
-    let functions = unsafe { *functions };
-    let name = text(instance_name).unwrap_or_default();
-    let sink = Box::new(Sink {
-        logger: functions.logger,
-        environment: functions.componentEnvironment,
-        name: CString::new(name.clone()).unwrap_or_default(),
-        logging_on: Cell::new(logging_on != fmi2False),
-    });
+/// A new container, or None (the reason logged).
+fn instantiate(sink: Box<Sink>, req: Request) -> Option<Box<Container>> {
+    let function = req.function;
     let _using = Using::new(&sink);
     let fail = |m: String| {
-        sink.log(fmi2Error, "logStatusError", &format!("fmi2Instantiate: {m}"));
+        sink.log(fmi2Error, "logStatusError", &format!("{function}: {m}"));
         None
     };
+    let name = req.name.unwrap_or_default();
     if name.is_empty() {
         return fail("instanceName is NULL or empty".into());
     }
-    if fmu_type != fmi2CoSimulation {
-        return fail(format!(
-            "fmuType = {fmu_type}: a container is a co-simulation FMU only (fmi2CoSimulation = 1)"
-        ));
-    }
-    let Some(uri) = text(resources) else {
-        return fail("fmuResourceLocation is NULL: the container's system is in its resources".into());
-    };
-    let Some(dir) = rustfmu::core::resources::resource_dir(&uri) else {
-        return fail(format!("fmuResourceLocation '{uri}' is not a file: URI of a folder"));
+    let dir = match req.resources {
+        Ok(d) => d,
+        Err(e) => return fail(e),
     };
     let spec_path = dir.join(SPEC_FILE);
     let spec = match std::fs::read_to_string(&spec_path)
@@ -549,10 +603,14 @@ fn instantiate(
         Ok(s) => s,
         Err(e) => return fail(e),
     };
-    let given = text(guid).unwrap_or_default();
+    let token = match req.version {
+        Version::Fmi2 => "fmuGUID",
+        Version::Fmi3 => "instantiationToken",
+    };
+    let given = req.token.unwrap_or_default();
     if given != spec.guid {
         return fail(format!(
-            "fmuGUID '{given}' is not this container's ({}): the modelDescription.xml and the resources are of different builds",
+            "{token} '{given}' is not this container's ({}): the modelDescription.xml and the resources are of different builds",
             spec.guid
         ));
     }
@@ -560,10 +618,35 @@ fn instantiate(
         Ok(s) => s,
         Err(e) => return fail(e.message),
     };
-    let mut ports = Vec::with_capacity(spec.variables.len());
+    let mut ports = Vec::with_capacity(spec.variables.len() + 1);
+    let mut also = Vec::with_capacity(spec.variables.len() + 1);
     {
         let descriptions = sim.component_descriptions();
         for e in &spec.variables {
+            // The further inputs a system input sets: the same type, the bounds of all of them.
+            let (mut min, mut max) = (None::<f64>, None::<f64>);
+            let mut more = Vec::new();
+            for (c, name) in &e.also {
+                let target = descriptions
+                    .iter()
+                    .position(|(n, _)| n == c)
+                    .and_then(|ci| Some((ci, descriptions[ci].1.variable(name)?)));
+                let Some((ci, v)) = target.filter(|(_, v)| v.ty == e.ty() && v.causality == Causality::Input) else {
+                    return fail(format!(
+                        "{SPEC_FILE}: '{}': '{c}.{name}' is not an input of its type in the system",
+                        e.name
+                    ));
+                };
+                min = match (min, v.min) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                };
+                max = match (max, v.max) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
+                more.push((ci, v.vr));
+            }
             let Some(ci) = descriptions.iter().position(|(c, _)| *c == e.component) else {
                 return fail(format!(
                     "{SPEC_FILE}: '{}': the system has no component '{}'",
@@ -588,12 +671,32 @@ fn instantiate(
                 ty: v.ty,
                 causality: v.causality,
                 variability: v.variability,
-                min: v.min,
-                max: v.max,
+                min: match (v.min, min) {
+                    (Some(a), Some(b)) => Some(a.max(b)),
+                    (a, b) => a.or(b),
+                },
+                max: match (v.max, max) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                },
             });
+            also.push(more);
         }
     }
-    if logging_on != fmi2False {
+    if req.version == Version::Fmi3 {
+        // FMI 3.0's independent variable, after the spec's (value reference: their count).
+        ports.push(Port {
+            component: TIME,
+            vr: 0,
+            ty: Type::Real,
+            causality: Causality::Independent,
+            variability: Variability::Continuous,
+            min: None,
+            max: None,
+        });
+        also.push(Vec::new());
+    }
+    if req.logging_on {
         for i in 0..sim.len() {
             let _ = sim.instance_mut(i).set_debug_logging(true, &[]);
         }
@@ -604,9 +707,11 @@ fn instantiate(
     drop(_using);
     let c = Box::new(Container {
         id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+        version: req.version,
         sink,
         spec,
         ports,
+        also,
         sim,
         state: State::Instantiated,
         time: 0.0,
@@ -614,113 +719,30 @@ fn instantiate(
         stop_time: None,
         last_successful: 0.0,
         strings: Vec::new(),
+        held: Vec::new(),
+        held_strings: Vec::new(),
         free: Vec::new(),
         rollback: None,
     });
     c.debug(&format!(
         "instantiated: {} components, {} variables, internal step {} s",
         c.sim.len(),
-        c.ports.len(),
+        c.spec.variables.len(),
         c.spec.step
     ));
     Some(c)
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+/// Frees a container (its FMU states stay valid through their bytes; the importer frees them).
+fn free_instance(c: *mut c_void) {
     if c.is_null() {
         return;
     }
     let _ = catch_unwind(AssertUnwindSafe(|| {
         let container = unsafe { Box::from_raw(c as *mut Container) };
         let _using = Using::new(&container.sink);
-        // Its FMU states stay valid (their bytes); the importer frees them with fmi2FreeFMUstate.
         drop(container);
     }));
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetDebugLogging(
-    c: fmi2Component,
-    loggingOn: fmi2Boolean,
-    nCategories: usize,
-    categories: *const fmi2String,
-) -> fmi2Status {
-    with(c, "fmi2SetDebugLogging", |me| {
-        me.check(Call::SetDebugLogging, "fmi2SetDebugLogging")?;
-        if nCategories > 0 && categories.is_null() {
-            return Err(me.error(&format!(
-                "fmi2SetDebugLogging: {nCategories} categories in a NULL array"
-            )));
-        }
-        let mut names = Vec::new();
-        for &p in slice(categories, nCategories) {
-            match text(p) {
-                Some(n) if rustfmu_runner::container::LOG_CATEGORIES.iter().any(|(c, _)| *c == n) => names.push(n),
-                Some(n) => {
-                    let known: Vec<&str> = rustfmu_runner::container::LOG_CATEGORIES
-                        .iter()
-                        .map(|(c, _)| *c)
-                        .collect();
-                    return Err(me.error(&format!(
-                        "fmi2SetDebugLogging: unknown log category '{n}' (this FMU's: {})",
-                        known.join(", ")
-                    )));
-                }
-                None => return Err(me.error("fmi2SetDebugLogging: a category is NULL")),
-            }
-        }
-        me.sink.logging_on.set(loggingOn != fmi2False);
-        for i in 0..me.sim.len() {
-            let _ = me.sim.instance_mut(i).set_debug_logging(loggingOn != fmi2False, &[]);
-        }
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetupExperiment(
-    c: fmi2Component,
-    toleranceDefined: fmi2Boolean,
-    tolerance: fmi2Real,
-    startTime: fmi2Real,
-    stopTimeDefined: fmi2Boolean,
-    stopTime: fmi2Real,
-) -> fmi2Status {
-    with(c, "fmi2SetupExperiment", |me| {
-        me.check(Call::SetupExperiment, "fmi2SetupExperiment")?;
-        if !startTime.is_finite() {
-            return Err(me.error(&format!("fmi2SetupExperiment: startTime = {startTime}")));
-        }
-        let tol = (toleranceDefined != fmi2False).then_some(tolerance);
-        let stop = (stopTimeDefined != fmi2False).then_some(stopTime);
-        if let Some(tol) = tol
-            && !(tol.is_finite() && tol > 0.0)
-        {
-            return Err(me.error(&format!(
-                "fmi2SetupExperiment: tolerance = {tol} must be finite and > 0"
-            )));
-        }
-        if let Some(s) = stop
-            && !(s.is_finite() && s >= startTime)
-        {
-            return Err(me.error(&format!(
-                "fmi2SetupExperiment: stopTime = {s} must be finite and not before startTime = {startTime}"
-            )));
-        }
-        for i in 0..me.sim.len() {
-            let r = me.sim.instance_mut(i).setup_experiment(tol, startTime, stop);
-            if let Err(e) = r {
-                let name = me.sim.component_descriptions()[i].0.to_owned();
-                let e = Error::fmi(&name, "fmi2SetupExperiment", &e, None, "");
-                return Err(me.refused("fmi2SetupExperiment", e));
-            }
-        }
-        me.time = startTime;
-        me.last_successful = startTime;
-        me.stop_time = stop;
-        Ok(fmi2OK)
-    })
 }
 
 /// Calls `f` on every component, in order; the first failure stops it and is returned.
@@ -744,7 +766,7 @@ fn each(
     me: &mut Container,
     function: &str,
     f: impl Fn(&mut InstanceCS) -> Result<(), Fmi2Error>,
-) -> Result<(), fmi2Status> {
+) -> Result<(), Status> {
     for i in 0..me.sim.len() {
         if let Err(e) = f(me.sim.instance_mut(i)) {
             let name = me.sim.component_descriptions()[i].0.to_owned();
@@ -756,92 +778,248 @@ fn each(
     Ok(())
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    with(c, "fmi2EnterInitializationMode", |me| {
-        me.check(Call::EnterInitializationMode, "fmi2EnterInitializationMode")?;
-        let saved = me.snapshot();
-        if let Err(e) = each_raw(me, "fmi2EnterInitializationMode", |i| i.enter_initialization_mode()) {
-            return Err(me.undo("fmi2EnterInitializationMode", e, saved));
-        }
-        me.state = State::InitializationMode;
-        me.dirty = true;
-        Ok(fmi2OK)
-    })
+/// A value set before initialization (FMI 3.0 reads it back in Instantiated, where the FMI 2.0
+/// components cannot be read).
+#[derive(Clone, Debug)]
+pub(crate) enum Held {
+    Number(f64),
+    Integer(i64),
+    Boolean(bool),
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    with(c, "fmi2ExitInitializationMode", |me| {
-        me.check(Call::ExitInitializationMode, "fmi2ExitInitializationMode")?;
-        let saved = me.snapshot();
-        // As the runner: the connections once per component, then every component leaves.
-        for _ in 0..me.sim.len() {
-            let t = me.time;
-            if let Err(e) = me.sim.propagate(t) {
-                return Err(me.undo("fmi2ExitInitializationMode", e, saved));
+/// A value of a getter's or setter's type: read from a start value of the spec, or from a value
+/// set before initialization.
+pub(crate) trait Scalar: Sized + Copy {
+    fn from_start(text: &str) -> Option<Self>;
+    fn held(self) -> Held;
+    fn from_held(h: &Held) -> Option<Self>;
+}
+
+impl Scalar for f64 {
+    fn from_start(text: &str) -> Option<f64> {
+        text.trim().parse().ok()
+    }
+    fn held(self) -> Held {
+        Held::Number(self)
+    }
+    fn from_held(h: &Held) -> Option<f64> {
+        match h {
+            Held::Number(x) => Some(*x),
+            _ => None,
+        }
+    }
+}
+impl Scalar for i32 {
+    fn from_start(text: &str) -> Option<i32> {
+        text.trim().parse().ok()
+    }
+    fn held(self) -> Held {
+        Held::Integer(i64::from(self))
+    }
+    fn from_held(h: &Held) -> Option<i32> {
+        match h {
+            Held::Integer(x) => i32::try_from(*x).ok(),
+            _ => None,
+        }
+    }
+}
+impl Scalar for i64 {
+    fn from_start(text: &str) -> Option<i64> {
+        text.trim().parse().ok()
+    }
+    fn held(self) -> Held {
+        Held::Integer(self)
+    }
+    fn from_held(h: &Held) -> Option<i64> {
+        match h {
+            Held::Integer(x) => Some(*x),
+            _ => None,
+        }
+    }
+}
+impl Scalar for bool {
+    fn from_start(text: &str) -> Option<bool> {
+        match text.trim() {
+            "true" | "1" => Some(true),
+            "false" | "0" => Some(false),
+            _ => None,
+        }
+    }
+    fn held(self) -> Held {
+        Held::Boolean(self)
+    }
+    fn from_held(h: &Held) -> Option<bool> {
+        match h {
+            Held::Boolean(x) => Some(*x),
+            _ => None,
+        }
+    }
+}
+
+impl Container {
+    fn set_debug_logging(&mut self, function: &str, on: bool, categories: &[*const c_char]) -> Outcome {
+        self.check(Call::SetDebugLogging, function)?;
+        for &p in categories {
+            match text(p) {
+                Some(n) if LOG_CATEGORIES.iter().any(|(c, _)| *c == n) => {}
+                Some(n) => {
+                    let known: Vec<&str> = LOG_CATEGORIES.iter().map(|(c, _)| *c).collect();
+                    return Err(self.error(&format!(
+                        "{function}: unknown log category '{n}' (this FMU's: {})",
+                        known.join(", ")
+                    )));
+                }
+                None => return Err(self.error(&format!("{function}: a category is NULL"))),
             }
         }
-        if let Err(e) = each_raw(me, "fmi2ExitInitializationMode", |i| i.exit_initialization_mode()) {
-            return Err(me.undo("fmi2ExitInitializationMode", e, saved));
+        self.sink.logging_on.set(on);
+        for i in 0..self.sim.len() {
+            let _ = self.sim.instance_mut(i).set_debug_logging(on, &[]);
         }
-        me.state = State::StepComplete;
-        me.dirty = true;
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    with(c, "fmi2Terminate", |me| {
-        me.check(Call::Terminate, "fmi2Terminate")?;
-        each(me, "fmi2Terminate", |i| i.terminate())?;
-        me.state = State::Terminated;
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    with(c, "fmi2Reset", |me| {
-        me.check(Call::Reset, "fmi2Reset")?;
-        each(me, "fmi2Reset", |i| i.reset())?;
-        if let Err(e) = me.sim.apply_starts() {
-            return Err(me.failed("fmi2Reset", e));
+    /// The experiment's tolerance, start and stop time, checked and handed to every component
+    /// (fmi2SetupExperiment; the first half of fmi3EnterInitializationMode).
+    fn setup(&mut self, function: &str, tol: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Status> {
+        if !start.is_finite() {
+            return Err(self.error(&format!("{function}: startTime = {start}")));
         }
-        me.state = State::Instantiated;
-        me.time = 0.0;
-        me.last_successful = 0.0;
-        me.stop_time = None;
-        me.dirty = true;
-        Ok(fmi2OK)
-    })
-}
-
-/// Reads `vrs` of type `ty` into `out` (one value per value reference) with `get`.
-fn get_values<T: Copy>(
-    c: fmi2Component,
-    function: &'static str,
-    ty: Type,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    out: *mut T,
-    get: impl Fn(&mut InstanceCS, &[u32], &mut [T]) -> Result<(), Fmi2Error>,
-    check: impl Fn(&T) -> bool,
-) -> fmi2Status {
-    with(c, function, |me| {
-        me.check(Call::GetValues, function)?;
-        let vrs = slice(vr, nvr);
-        if nvr > 0 && (vr.is_null() || out.is_null()) {
-            return Err(me.error(&format!("{function}: {nvr} values asked with a NULL array")));
+        if let Some(tol) = tol
+            && !(tol.is_finite() && tol > 0.0)
+        {
+            return Err(self.error(&format!("{function}: tolerance = {tol} must be finite and > 0")));
         }
-        let out = slice_mut(out, nvr);
-        let mut ports = Vec::with_capacity(nvr);
-        for &v in vrs {
-            ports.push(me.port(v, ty, function)?);
+        if let Some(s) = stop
+            && !(s.is_finite() && s >= start)
+        {
+            return Err(self.error(&format!(
+                "{function}: stopTime = {s} must be finite and not before startTime = {start}"
+            )));
+        }
+        for i in 0..self.sim.len() {
+            let r = self.sim.instance_mut(i).setup_experiment(tol, start, stop);
+            if let Err(e) = r {
+                let name = self.sim.component_descriptions()[i].0.to_owned();
+                let e = Error::fmi(&name, "fmi2SetupExperiment", &e, None, "");
+                return Err(self.refused(function, e));
+            }
+        }
+        self.time = start;
+        self.last_successful = start;
+        self.stop_time = stop;
+        Ok(())
+    }
+
+    fn enter_initialization_mode(&mut self, function: &str) -> Outcome {
+        let saved = self.snapshot();
+        if let Err(e) = each_raw(self, "fmi2EnterInitializationMode", |i| i.enter_initialization_mode()) {
+            return Err(self.undo(function, e, saved));
+        }
+        self.state = State::InitializationMode;
+        self.dirty = true;
+        Ok(fmi2OK)
+    }
+
+    fn exit_initialization_mode(&mut self, function: &str) -> Outcome {
+        self.check(Call::ExitInitializationMode, function)?;
+        let saved = self.snapshot();
+        // As the runner: the connections once per component, then every component leaves.
+        for _ in 0..self.sim.len() {
+            let t = self.time;
+            if let Err(e) = self.sim.propagate(t) {
+                return Err(self.undo(function, e, saved));
+            }
+        }
+        if let Err(e) = each_raw(self, "fmi2ExitInitializationMode", |i| i.exit_initialization_mode()) {
+            return Err(self.undo(function, e, saved));
+        }
+        self.state = State::StepComplete;
+        self.dirty = true;
+        Ok(fmi2OK)
+    }
+
+    fn terminate(&mut self, function: &str) -> Outcome {
+        self.check(Call::Terminate, function)?;
+        each(self, "fmi2Terminate", |i| i.terminate())?;
+        self.state = State::Terminated;
+        Ok(fmi2OK)
+    }
+
+    fn reset(&mut self, function: &str) -> Outcome {
+        self.check(Call::Reset, function)?;
+        each(self, "fmi2Reset", |i| i.reset())?;
+        if let Err(e) = self.sim.apply_starts() {
+            return Err(self.failed(function, e));
+        }
+        self.state = State::Instantiated;
+        self.time = 0.0;
+        self.last_successful = 0.0;
+        self.stop_time = None;
+        self.dirty = true;
+        self.held.clear();
+        self.held_strings.clear();
+        Ok(fmi2OK)
+    }
+
+    /// Keeps a value set in Instantiated, to be read back there.
+    fn hold(&mut self, vr: u32, h: Held) {
+        let n = self.ports.len();
+        self.held.resize(n, None);
+        self.held[vr as usize] = Some(h);
+    }
+
+    /// The ports of `vrs`, each checked to be of type `ty`.
+    fn ports_of(&self, vrs: &[u32], ty: Type, asked: &str, function: &str) -> Result<Vec<Port>, Status> {
+        vrs.iter().map(|&v| self.port(v, ty, asked, function)).collect()
+    }
+
+    /// A value before initialization (FMI 3.0 getters in Instantiated): the one set since
+    /// instantiation (or reset), else the spec's start value.
+    fn start_of<T: Scalar>(&self, vr: u32, p: &Port, function: &str) -> Result<T, Status> {
+        if let Some(Some(h)) = self.held.get(vr as usize)
+            && let Some(x) = T::from_held(h)
+        {
+            return Ok(x);
+        }
+        let e = (p.component != TIME).then(|| &self.spec.variables[vr as usize]);
+        match e.and_then(|e| e.start.as_deref()).and_then(T::from_start) {
+            Some(x) => Ok(x),
+            None => Err(self.error(&format!(
+                "{function}: '{}' (vr {vr}) has no start value: it is known after initialization begins",
+                self.name(vr)
+            ))),
+        }
+    }
+
+    /// Reads `vrs` of type `ty` into `out` (one value per value reference) with `get`; `time`
+    /// gives the independent variable's value in the getter's type (FMI 3.0 Float64 only).
+    fn get_values<T: Scalar>(
+        &mut self,
+        function: &str,
+        ty: Type,
+        asked: &str,
+        vrs: &[u32],
+        out: &mut [T],
+        get: impl Fn(&mut InstanceCS, &[u32], &mut [T]) -> Result<(), Fmi2Error>,
+        finite: impl Fn(&T) -> bool,
+        time: impl Fn(f64) -> Option<T>,
+    ) -> Outcome {
+        self.check(Call::GetValues, function)?;
+        let ports = self.ports_of(vrs, ty, asked, function)?;
+        let nvr = vrs.len();
+        if self.state == State::Instantiated {
+            // FMI 3.0 only (2.0's table refuses it): the start values.
+            for k in 0..nvr {
+                out[k] = match (ports[k].component, time(self.time)) {
+                    (TIME, Some(t)) => t,
+                    _ => self.start_of(vrs[k], &ports[k], function)?,
+                };
+            }
+            return Ok(fmi2OK);
         }
         if nvr > 0 {
-            me.settle(function)?;
+            self.settle(function)?;
         }
         // One call per run of variables of the same component.
         let mut i = 0;
@@ -849,153 +1027,97 @@ fn get_values<T: Copy>(
         while i < nvr {
             let c = ports[i].component;
             let j = i + ports[i..].iter().take_while(|p| p.component == c).count();
+            if c == TIME {
+                let t = time(self.time).expect("time is Float64");
+                out[i..j].fill(t);
+                i = j;
+                continue;
+            }
             component_vrs.clear();
             component_vrs.extend(ports[i..j].iter().map(|p| p.vr));
-            let r = get(me.sim.instance_mut(c), &component_vrs, &mut out[i..j]);
-            me.component_call(function, vrs[i], r)?;
+            let r = get(self.sim.instance_mut(c), &component_vrs, &mut out[i..j]);
+            self.component_call(function, vrs[i], r)?;
             i = j;
         }
         for k in 0..nvr {
-            if !check(&out[k]) {
-                return Err(me.error(&format!(
+            if !finite(&out[k]) {
+                return Err(self.error(&format!(
                     "{function}: '{}' (vr {}) is not a finite number",
-                    me.spec.variables[vrs[k] as usize].name, vrs[k]
+                    self.name(vrs[k]),
+                    vrs[k]
                 )));
             }
         }
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    get_values(
-        c,
-        "fmi2GetReal",
-        Type::Real,
-        vr,
-        nvr,
-        value,
-        |i, v, out| i.get_real(v, out),
-        |x| x.is_finite(),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    get_values(
-        c,
-        "fmi2GetInteger",
-        Type::Integer,
-        vr,
-        nvr,
-        value,
-        |i, v, out| i.get_integer(v, out),
-        |_| true,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    get_values(
-        c,
-        "fmi2GetBoolean",
-        Type::Boolean,
-        vr,
-        nvr,
-        value,
-        |i, v, out| i.get_boolean(v, out),
-        |_| true,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *mut fmi2String,
-) -> fmi2Status {
-    with(c, "fmi2GetString", |me| {
-        me.check(Call::GetValues, "fmi2GetString")?;
-        if nvr > 0 && (vr.is_null() || value.is_null()) {
-            return Err(me.error(&format!("fmi2GetString: {nvr} values asked with a NULL array")));
+    /// Reads the String variables `vrs` into `self.strings`.
+    fn get_strings(&mut self, function: &str, vrs: &[u32]) -> Outcome {
+        self.check(Call::GetValues, function)?;
+        let ports = self.ports_of(vrs, Type::String, "String", function)?;
+        let mut strings = Vec::with_capacity(vrs.len());
+        if self.state == State::Instantiated {
+            for &vr in vrs {
+                if let Some(Some(s)) = self.held_strings.get(vr as usize) {
+                    strings.push(s.clone());
+                    continue;
+                }
+                match self.spec.variables[vr as usize].start.as_deref() {
+                    Some(s) => strings.push(CString::new(s).unwrap_or_default()),
+                    None => {
+                        return Err(self.error(&format!(
+                            "{function}: '{}' (vr {vr}) has no start value: it is known after initialization begins",
+                            self.name(vr)
+                        )));
+                    }
+                }
+            }
+            self.strings = strings;
+            return Ok(fmi2OK);
         }
-        let vrs = slice(vr, nvr);
-        let mut ports = Vec::with_capacity(nvr);
-        for &v in vrs {
-            ports.push(me.port(v, Type::String, "fmi2GetString")?);
+        if !vrs.is_empty() {
+            self.settle(function)?;
         }
-        if nvr > 0 {
-            me.settle("fmi2GetString")?;
-        }
-        let mut strings = Vec::with_capacity(nvr);
         for (k, p) in ports.iter().enumerate() {
             let mut s = vec![CString::default()];
-            let r = me.sim.instance_mut(p.component).get_string(&[p.vr], &mut s);
-            me.component_call("fmi2GetString", vrs[k], r)?;
+            let r = self.sim.instance_mut(p.component).get_string(&[p.vr], &mut s);
+            self.component_call(function, vrs[k], r)?;
             strings.push(s.pop().unwrap_or_default());
         }
-        me.strings = strings;
-        let out = slice_mut(value, nvr);
-        for (k, s) in me.strings.iter().enumerate() {
-            out[k] = s.as_ptr();
-        }
+        self.strings = strings;
         Ok(fmi2OK)
-    })
-}
+    }
 
-/// Sets `vrs` of type `ty`: every value reference and value checked first (all or nothing).
-fn set_values<T: Copy>(
-    c: fmi2Component,
-    function: &'static str,
-    ty: Type,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const T,
-    number: impl Fn(&T) -> Option<f64>,
-    set: impl Fn(&mut InstanceCS, u32, T) -> Result<(), Fmi2Error>,
-) -> fmi2Status {
-    with(c, function, |me| {
+    /// Sets `vrs` of type `ty`: every value reference and value checked first (all or nothing).
+    fn set_values<T: Scalar>(
+        &mut self,
+        function: &str,
+        ty: Type,
+        asked: &str,
+        vrs: &[u32],
+        values: &[T],
+        number: impl Fn(&T) -> Option<f64>,
+        set: impl Fn(&mut InstanceCS, u32, T) -> Result<(), Fmi2Error>,
+    ) -> Outcome {
         let call = if ty == Type::Real {
             Call::SetValues
         } else {
             Call::SetDiscreteValues
         };
-        me.check(call, function)?;
-        if nvr > 0 && (vr.is_null() || value.is_null()) {
-            return Err(me.error(&format!("{function}: {nvr} values given with a NULL array")));
-        }
-        let vrs = slice(vr, nvr);
-        let values = slice(value, nvr);
-        let mut ports = Vec::with_capacity(nvr);
+        self.check(call, function)?;
+        let mut ports = Vec::with_capacity(vrs.len());
         for (k, &v) in vrs.iter().enumerate() {
-            let p = me.port(v, ty, function)?;
-            me.settable(v, &p, function)?;
+            let p = self.port(v, ty, asked, function)?;
+            self.settable(v, &p, function)?;
             if let Some(x) = number(&values[k]) {
-                let name = &me.spec.variables[v as usize].name;
+                let name = self.name(v);
                 if !x.is_finite() {
-                    return Err(me.error(&format!(
+                    return Err(self.error(&format!(
                         "{function}: '{name}' (vr {v}) = {x}: not a finite number; nothing set"
                     )));
                 }
                 if p.min.is_some_and(|m| x < m) || p.max.is_some_and(|m| x > m) {
-                    return Err(me.error(&format!(
+                    return Err(self.error(&format!(
                         "{function}: '{name}' (vr {v}) = {x} is outside [{}, {}]; nothing set",
                         p.min.map_or("-inf".into(), |m| m.to_string()),
                         p.max.map_or("inf".into(), |m| m.to_string())
@@ -1005,372 +1127,167 @@ fn set_values<T: Copy>(
             ports.push(p);
         }
         for (k, p) in ports.iter().enumerate() {
-            let r = set(me.sim.instance_mut(p.component), p.vr, values[k]);
-            me.component_call(function, vrs[k], r)?;
+            let r = set(self.sim.instance_mut(p.component), p.vr, values[k]);
+            self.component_call(function, vrs[k], r)?;
+            for i in 0..self.also[vrs[k] as usize].len() {
+                let (c, vr) = self.also[vrs[k] as usize][i];
+                let r = set(self.sim.instance_mut(c), vr, values[k]);
+                self.component_call(function, vrs[k], r)?;
+            }
+            if self.state == State::Instantiated {
+                self.hold(vrs[k], values[k].held());
+            }
         }
-        if nvr > 0 {
-            me.dirty = true;
+        if !vrs.is_empty() {
+            self.dirty = true;
         }
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetReal(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Real,
-) -> fmi2Status {
-    set_values(
-        c,
-        "fmi2SetReal",
-        Type::Real,
-        vr,
-        nvr,
-        value,
-        |x| Some(*x),
-        |i, v, x| i.set_real(&[v], &[x]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetInteger(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Integer,
-) -> fmi2Status {
-    set_values(
-        c,
-        "fmi2SetInteger",
-        Type::Integer,
-        vr,
-        nvr,
-        value,
-        |x| Some(f64::from(*x)),
-        |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2Boolean,
-) -> fmi2Status {
-    set_values(
-        c,
-        "fmi2SetBoolean",
-        Type::Boolean,
-        vr,
-        nvr,
-        value,
-        |_| None,
-        |i, v, x| i.set_boolean(&[v], &[x]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetString(
-    c: fmi2Component,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
-    value: *const fmi2String,
-) -> fmi2Status {
-    with(c, "fmi2SetString", |me| {
-        me.check(Call::SetDiscreteValues, "fmi2SetString")?;
-        if nvr > 0 && (vr.is_null() || value.is_null()) {
-            return Err(me.error(&format!("fmi2SetString: {nvr} values given with a NULL array")));
-        }
-        let vrs = slice(vr, nvr);
-        let values = slice(value, nvr);
-        let mut sets = Vec::with_capacity(nvr);
+    /// Sets the String variables `vrs` (all or nothing).
+    fn set_strings(&mut self, function: &str, vrs: &[u32], values: &[*const c_char]) -> Outcome {
+        self.check(Call::SetDiscreteValues, function)?;
+        let mut sets = Vec::with_capacity(vrs.len());
         for (k, &v) in vrs.iter().enumerate() {
-            let p = me.port(v, Type::String, "fmi2SetString")?;
-            me.settable(v, &p, "fmi2SetString")?;
+            let p = self.port(v, Type::String, "String", function)?;
+            self.settable(v, &p, function)?;
             if values[k].is_null() {
-                return Err(me.error(&format!(
-                    "fmi2SetString: '{}' (vr {v}): the value is NULL; nothing set",
-                    me.spec.variables[v as usize].name
+                return Err(self.error(&format!(
+                    "{function}: '{}' (vr {v}): the value is NULL; nothing set",
+                    self.name(v)
                 )));
             }
             sets.push((p, unsafe { CStr::from_ptr(values[k]) }.to_owned()));
         }
         for (k, (p, s)) in sets.iter().enumerate() {
-            let r = me
+            let r = self
                 .sim
                 .instance_mut(p.component)
                 .set_string(&[p.vr], std::slice::from_ref(s));
-            me.component_call("fmi2SetString", vrs[k], r)?;
+            self.component_call(function, vrs[k], r)?;
+            for i in 0..self.also[vrs[k] as usize].len() {
+                let (c, vr) = self.also[vrs[k] as usize][i];
+                let r = self.sim.instance_mut(c).set_string(&[vr], std::slice::from_ref(s));
+                self.component_call(function, vrs[k], r)?;
+            }
+            if self.state == State::Instantiated {
+                let n = self.ports.len();
+                self.held_strings.resize(n, None);
+                self.held_strings[vrs[k] as usize] = Some(s.clone());
+            }
         }
-        if nvr > 0 {
-            me.dirty = true;
+        if !vrs.is_empty() {
+            self.dirty = true;
         }
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DoStep(
-    c: fmi2Component,
-    currentCommunicationPoint: fmi2Real,
-    communicationStepSize: fmi2Real,
-    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
-) -> fmi2Status {
-    with(c, "fmi2DoStep", |me| {
-        me.check(Call::DoStep, "fmi2DoStep")?;
-        let (t, big_h) = (currentCommunicationPoint, communicationStepSize);
+    /// A communication step from `t` by `big_h`: n internal steps of the components.
+    fn do_step(&mut self, function: &str, t: f64, big_h: f64) -> Outcome {
+        self.check(Call::DoStep, function)?;
         if !(big_h > 0.0 && big_h.is_finite()) {
-            return Err(me.error(&format!(
-                "fmi2DoStep: communicationStepSize = {big_h} must be finite and > 0; time stays {}",
-                me.time
+            return Err(self.error(&format!(
+                "{function}: communicationStepSize = {big_h} must be finite and > 0; time stays {}",
+                self.time
             )));
         }
         // As the FMU runtime: a tolerance for importers that sum their steps.
-        let tol = 1e-8 * me.time.abs().max(1.0) + 4.0 * f64::EPSILON * big_h;
-        if !t.is_finite() || (t - me.time).abs() > tol {
-            return Err(me.error(&format!(
-                "fmi2DoStep: currentCommunicationPoint = {t} does not match the container's time {}",
-                me.time
+        let tol = 1e-8 * self.time.abs().max(1.0) + 4.0 * f64::EPSILON * big_h;
+        if !t.is_finite() || (t - self.time).abs() > tol {
+            return Err(self.error(&format!(
+                "{function}: currentCommunicationPoint = {t} does not match the container's time {}",
+                self.time
             )));
         }
         let end = t + big_h;
         if end <= t {
-            return Err(me.error(&format!(
-                "fmi2DoStep: communicationStepSize = {big_h} is too small to advance time from {t}"
+            return Err(self.error(&format!(
+                "{function}: communicationStepSize = {big_h} is too small to advance time from {t}"
             )));
         }
-        if let Some(stop) = me.stop_time
+        if let Some(stop) = self.stop_time
             && end > stop + 1e-8 * stop.abs().max(big_h)
         {
-            return Err(me.error(&format!(
-                "fmi2DoStep: the step from {t} by {big_h} ends after stopTime = {stop} set in fmi2SetupExperiment"
+            let given = match self.version {
+                Version::Fmi2 => "fmi2SetupExperiment",
+                Version::Fmi3 => "fmi3EnterInitializationMode",
+            };
+            return Err(self.error(&format!(
+                "{function}: the step from {t} by {big_h} ends after stopTime = {stop} set in {given}"
             )));
         }
-        let ratio = big_h / me.spec.step;
+        let ratio = big_h / self.spec.step;
         let n = if (ratio - ratio.round()).abs() <= 1e-9 * ratio.max(1.0) {
             ratio.round().max(1.0)
         } else {
             ratio.ceil().max(1.0)
         };
         if n > MAX_INTERNAL_STEPS {
-            me.state = State::StepFailed;
-            me.last_successful = t;
-            me.sink.log(
+            self.state = State::StepFailed;
+            self.last_successful = t;
+            self.sink.log(
                 fmi2Discard,
                 "logStatusDiscard",
                 &format!(
-                    "fmi2DoStep: a step of {big_h} s from t = {t} is {n} internal steps of {} s, more than {MAX_INTERNAL_STEPS}: discarded, nothing stepped",
-                    me.spec.step
+                    "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {} s, more than {MAX_INTERNAL_STEPS}: discarded, nothing stepped",
+                    self.spec.step
                 ),
             );
             return Err(fmi2Discard);
         }
         let n = n as usize;
         let h = big_h / n as f64;
-        let saved = me.snapshot();
-        let (time0, dirty0) = (me.time, me.dirty);
+        let saved = self.snapshot();
+        let (time0, dirty0) = (self.time, self.dirty);
         for k in 0..n {
             let tk = t + k as f64 * h;
-            me.time = tk;
+            self.time = tk;
             if k > 0 {
-                me.dirty = true;
+                self.dirty = true;
             }
-            let r = if me.dirty {
-                me.sim.propagate(tk).map(|_| me.dirty = false)
+            let r = if self.dirty {
+                self.sim.propagate(tk).map(|_| self.dirty = false)
             } else {
                 Ok(())
             };
             let last = k + 1 == n;
-            let r = r.and_then(|_| me.sim.do_step(tk, h)).and_then(|_| {
+            let r = r.and_then(|_| self.sim.do_step(tk, h)).and_then(|_| {
                 // The connections at the step's end, inside the step (undone with it): what the
                 // runner does before it reads the outputs.
                 if last {
-                    me.sim.propagate(end).map(|_| me.dirty = false)
+                    self.sim.propagate(end).map(|_| self.dirty = false)
                 } else {
                     Ok(())
                 }
             });
             if let Err(e) = r {
                 let discard = e.status.as_deref() == Some("Discard");
-                let status = me.undo("fmi2DoStep", e, saved);
-                if saved && me.state != State::Error && me.state != State::Fatal {
+                let status = self.undo(function, e, saved);
+                if saved && self.state != State::Error && self.state != State::Fatal {
                     // Back at the step's start: nothing of it happened.
-                    (me.time, me.dirty) = (time0, dirty0);
-                    me.last_successful = time0;
+                    (self.time, self.dirty) = (time0, dirty0);
+                    self.last_successful = time0;
                     if discard {
-                        me.state = State::StepFailed;
+                        self.state = State::StepFailed;
                     }
                 } else {
-                    me.last_successful = tk;
-                    if discard && me.state != State::Fatal {
-                        me.state = State::StepFailed;
+                    self.last_successful = tk;
+                    if discard && self.state != State::Fatal {
+                        self.state = State::StepFailed;
                     }
                 }
                 return Err(status);
             }
         }
-        me.last_successful = end;
-        me.time = end;
+        self.last_successful = end;
+        self.time = end;
         Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    with(c, "fmi2CancelStep", |me| {
-        me.check(Call::CancelStep, "fmi2CancelStep")?;
-        Ok(fmi2OK)
-    })
-}
-
-/// The standard's answer for a status a container does not have: fmi2Discard, with the reason.
-fn status_unavailable(me: &Container, function: &str, kind: fmi2StatusKind) -> Outcome {
-    let what = match kind {
-        fmi2DoStepStatus | fmi2PendingStatus => "there is no asynchronous step (fmi2DoStep never returns fmi2Pending)",
-        fmi2LastSuccessfulTime => "fmi2LastSuccessfulTime is a Real status (fmi2GetRealStatus)",
-        fmi2Terminated => "fmi2Terminated is a Boolean status (fmi2GetBooleanStatus)",
-        _ => "unknown fmi2StatusKind",
-    };
-    me.sink.log(
-        fmi2Discard,
-        "logStatusDiscard",
-        &format!("{function}(kind = {kind}): not available: {what}"),
-    );
-    Err(fmi2Discard)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status {
-    with(c, "fmi2GetStatus", |me| {
-        me.check(Call::GetStatus, "fmi2GetStatus")?;
-        if value.is_null() {
-            return Err(me.error("fmi2GetStatus: value is NULL"));
-        }
-        status_unavailable(me, "fmi2GetStatus", s)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status {
-    with(c, "fmi2GetRealStatus", |me| {
-        me.check(Call::GetStatus, "fmi2GetRealStatus")?;
-        if value.is_null() {
-            return Err(me.error("fmi2GetRealStatus: value is NULL"));
-        }
-        if s != fmi2LastSuccessfulTime {
-            return status_unavailable(me, "fmi2GetRealStatus", s);
-        }
-        unsafe { *value = me.last_successful };
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetIntegerStatus(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    with(c, "fmi2GetIntegerStatus", |me| {
-        me.check(Call::GetStatus, "fmi2GetIntegerStatus")?;
-        if value.is_null() {
-            return Err(me.error("fmi2GetIntegerStatus: value is NULL"));
-        }
-        status_unavailable(me, "fmi2GetIntegerStatus", s)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetBooleanStatus(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    with(c, "fmi2GetBooleanStatus", |me| {
-        me.check(Call::GetStatus, "fmi2GetBooleanStatus")?;
-        if value.is_null() {
-            return Err(me.error("fmi2GetBooleanStatus: value is NULL"));
-        }
-        if s != fmi2Terminated {
-            return status_unavailable(me, "fmi2GetBooleanStatus", s);
-        }
-        unsafe { *value = fmi2False };
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetStringStatus(
-    c: fmi2Component,
-    s: fmi2StatusKind,
-    value: *mut fmi2String,
-) -> fmi2Status {
-    with(c, "fmi2GetStringStatus", |me| {
-        me.check(Call::GetStatus, "fmi2GetStringStatus")?;
-        if value.is_null() {
-            return Err(me.error("fmi2GetStringStatus: value is NULL"));
-        }
-        status_unavailable(me, "fmi2GetStringStatus", s)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *const fmi2Real,
-) -> fmi2Status {
-    with(c, "fmi2SetRealInputDerivatives", |me| {
-        Err(me.error(
-            "fmi2SetRealInputDerivatives: a container does not interpolate inputs (canInterpolateInputs = false)",
-        ))
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
-    c: fmi2Component,
-    _vr: *const fmi2ValueReference,
-    _nvr: usize,
-    _order: *const fmi2Integer,
-    _value: *mut fmi2Real,
-) -> fmi2Status {
-    with(c, "fmi2GetRealOutputDerivatives", |me| {
-        Err(me.error(
-            "fmi2GetRealOutputDerivatives: a container gives no output derivatives (maxOutputDerivativeOrder = 0)",
-        ))
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
-    c: fmi2Component,
-    _u: *const fmi2ValueReference,
-    _nu: usize,
-    _z: *const fmi2ValueReference,
-    _nz: usize,
-    _du: *const fmi2Real,
-    _dz: *mut fmi2Real,
-) -> fmi2Status {
-    with(c, "fmi2GetDirectionalDerivative", |me| {
-        Err(me.error("fmi2GetDirectionalDerivative: a container gives no directional derivatives (providesDirectionalDerivative = false)"))
-    })
-}
-
-impl Container {
-    fn all_components(&self, f: fn(&fmi_description::fmi2::CoSimulation) -> bool) -> bool {
-        self.sim
-            .component_descriptions()
-            .iter()
-            .all(|(_, d)| d.cs.as_ref().is_some_and(f))
     }
+}
 
-    fn can_state(&self, function: &str) -> Result<(), fmi2Status> {
+// FMU states (the same in both versions: FMI 3.0 renamed FMUstate to FMUState).
+impl Container {
+    fn can_state(&self, function: &str) -> Result<(), Status> {
         if self.all_components(|cs| cs.can_get_and_set_fmu_state) {
             Ok(())
         } else {
@@ -1380,7 +1297,7 @@ impl Container {
         }
     }
 
-    fn can_serialize(&self, function: &str) -> Result<(), fmi2Status> {
+    fn can_serialize(&self, function: &str) -> Result<(), Status> {
         self.can_state(function)?;
         if self.all_components(|cs| cs.can_serialize_fmu_state) {
             Ok(())
@@ -1392,7 +1309,7 @@ impl Container {
     }
 
     /// The state `state` points to, if it is a live state of this container (any instance).
-    fn saved(&self, state: fmi2FMUstate, function: &str) -> Result<&'static mut Saved, fmi2Status> {
+    fn saved(&self, state: *mut c_void, function: &str) -> Result<&'static mut Saved, Status> {
         let live = !state.is_null() && states().contains(&(state as usize));
         if !live {
             return Err(self.error(&format!(
@@ -1409,7 +1326,7 @@ impl Container {
         Ok(saved)
     }
 
-    fn component_refused(&mut self, function: &str, i: usize, e: Fmi2Error) -> fmi2Status {
+    fn component_refused(&mut self, function: &str, i: usize, e: Fmi2Error) -> Status {
         let name = self.sim.component_descriptions()[i].0.to_owned();
         let t = self.time;
         let e = Error::fmi(&name, function, &e, Some(t), "");
@@ -1417,13 +1334,13 @@ impl Container {
     }
 
     /// Every component's current FMU state, in `slots` (updated) or in new ones.
-    fn take_components(&mut self, slots: Option<Vec<FmuState>>) -> Result<Vec<FmuState>, fmi2Status> {
+    fn take_components(&mut self, function: &str, slots: Option<Vec<FmuState>>) -> Result<Vec<FmuState>, Status> {
         match slots {
             Some(slots) => {
                 for (i, slot) in slots.iter().enumerate() {
                     if let Err(e) = self.sim.instance_mut(i).update_fmu_state(slot) {
                         self.free.push(slots);
-                        return Err(self.component_refused("fmi2GetFMUstate", i, e));
+                        return Err(self.component_refused(function, i, e));
                     }
                 }
                 Ok(slots)
@@ -1433,7 +1350,7 @@ impl Container {
                 for i in 0..self.sim.len() {
                     match self.sim.instance_mut(i).get_fmu_state() {
                         Ok(s) => slots.push(s),
-                        Err(e) => return Err(self.component_refused("fmi2GetFMUstate", i, e)),
+                        Err(e) => return Err(self.component_refused(function, i, e)),
                     }
                 }
                 Ok(slots)
@@ -1442,7 +1359,7 @@ impl Container {
     }
 
     /// The serialized form of every component's state in `slots` (None where one cannot).
-    fn serialize_components(&mut self, slots: &[FmuState]) -> Result<Option<Vec<Vec<u8>>>, fmi2Status> {
+    fn serialize_components(&mut self, function: &str, slots: &[FmuState]) -> Result<Option<Vec<Vec<u8>>>, Status> {
         if !self.all_components(|cs| cs.can_serialize_fmu_state) {
             return Ok(None);
         }
@@ -1450,113 +1367,104 @@ impl Container {
         for (i, slot) in slots.iter().enumerate() {
             match self.sim.instance_mut(i).serialize_fmu_state(slot) {
                 Ok(b) => out.push(b),
-                Err(e) => return Err(self.component_refused("fmi2GetFMUstate", i, e)),
+                Err(e) => return Err(self.component_refused(function, i, e)),
             }
         }
         Ok(Some(out))
     }
-}
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    with(c, "fmi2GetFMUstate", |me| {
-        me.check(Call::FmuState, "fmi2GetFMUstate")?;
-        me.can_state("fmi2GetFMUstate")?;
+    fn get_fmu_state(&mut self, function: &str, state: *mut *mut c_void) -> Outcome {
+        self.check(Call::FmuState, function)?;
+        self.can_state(function)?;
         if state.is_null() {
-            return Err(me.error("fmi2GetFMUstate: the FMUstate pointer is NULL"));
+            return Err(self.error(&format!("{function}: the FMU state pointer is NULL")));
         }
         let existing = unsafe { *state };
         if !existing.is_null() {
-            // fmi2GetFMUstate with *FMUstate != NULL: that state is overwritten.
-            let saved = me.saved(existing, "fmi2GetFMUstate")?;
-            let mine = saved.owner == me.id;
+            // With *FMUstate != NULL: that state is overwritten.
+            let saved = self.saved(existing, function)?;
+            let mine = saved.owner == self.id;
             let slots = if mine {
                 Some(std::mem::take(&mut saved.components))
             } else {
-                me.free.pop()
+                self.free.pop()
             };
-            let components = me.take_components(slots)?;
-            let bytes = me.serialize_components(&components)?;
-            saved.owner = me.id;
+            let components = self.take_components(function, slots)?;
+            let bytes = self.serialize_components(function, &components)?;
+            saved.owner = self.id;
             saved.components = components;
             saved.bytes = bytes;
-            saved.time = me.time;
-            saved.state = me.state;
-            saved.dirty = me.dirty;
-            saved.last_successful = me.last_successful;
-            saved.stop_time = me.stop_time;
+            saved.time = self.time;
+            saved.state = self.state;
+            saved.dirty = self.dirty;
+            saved.last_successful = self.last_successful;
+            saved.stop_time = self.stop_time;
             return Ok(fmi2OK);
         }
-        let slots = me.free.pop();
-        let components = me.take_components(slots)?;
-        let bytes = me.serialize_components(&components)?;
+        let slots = self.free.pop();
+        let components = self.take_components(function, slots)?;
+        let bytes = self.serialize_components(function, &components)?;
         let p = Box::into_raw(Box::new(Saved {
-            owner: me.id,
-            guid: me.spec.guid.clone(),
+            owner: self.id,
+            guid: self.spec.guid.clone(),
             components,
             bytes,
-            time: me.time,
-            state: me.state,
-            dirty: me.dirty,
-            last_successful: me.last_successful,
-            stop_time: me.stop_time,
+            time: self.time,
+            state: self.state,
+            dirty: self.dirty,
+            last_successful: self.last_successful,
+            stop_time: self.stop_time,
         }));
         states().push(p as usize);
-        unsafe { *state = p as fmi2FMUstate };
+        unsafe { *state = p as *mut c_void };
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    with(c, "fmi2SetFMUstate", |me| {
-        me.check(Call::FmuState, "fmi2SetFMUstate")?;
-        me.can_state("fmi2SetFMUstate")?;
-        let saved = me.saved(state, "fmi2SetFMUstate")?;
-        if saved.owner == me.id {
-            for i in 0..me.sim.len() {
-                if let Err(e) = me.sim.instance_mut(i).set_fmu_state(&saved.components[i]) {
-                    return Err(me.component_refused("fmi2SetFMUstate", i, e));
+    fn set_fmu_state(&mut self, function: &str, state: *mut c_void) -> Outcome {
+        self.check(Call::FmuState, function)?;
+        self.can_state(function)?;
+        let saved = self.saved(state, function)?;
+        if saved.owner == self.id {
+            for i in 0..self.sim.len() {
+                if let Err(e) = self.sim.instance_mut(i).set_fmu_state(&saved.components[i]) {
+                    return Err(self.component_refused(function, i, e));
                 }
             }
         } else {
             // Another instance's state: taken up from its serialized form.
             let Some(bytes) = &saved.bytes else {
-                return Err(me.error(
-                    "fmi2SetFMUstate: the FMU state is another instance's, and a component cannot serialize its state to carry it over",
-                ));
+                return Err(self.error(&format!(
+                    "{function}: the FMU state is another instance's, and a component cannot serialize its state to carry it over"
+                )));
             };
             for (i, b) in bytes.iter().enumerate() {
-                let r = me.sim.instance_mut(i).deserialize_fmu_state(b);
+                let r = self.sim.instance_mut(i).deserialize_fmu_state(b);
                 let slot = match r {
                     Ok(slot) => slot,
-                    Err(e) => return Err(me.component_refused("fmi2SetFMUstate", i, e)),
+                    Err(e) => return Err(self.component_refused(function, i, e)),
                 };
-                let set = me.sim.instance_mut(i).set_fmu_state(&slot);
-                let _ = me.sim.instance_mut(i).free_fmu_state(slot);
+                let set = self.sim.instance_mut(i).set_fmu_state(&slot);
+                let _ = self.sim.instance_mut(i).free_fmu_state(slot);
                 if let Err(e) = set {
-                    return Err(me.component_refused("fmi2SetFMUstate", i, e));
+                    return Err(self.component_refused(function, i, e));
                 }
             }
         }
-        me.time = saved.time;
-        me.state = saved.state;
-        me.dirty = saved.dirty;
-        me.last_successful = saved.last_successful;
-        me.stop_time = saved.stop_time;
+        self.time = saved.time;
+        self.state = saved.state;
+        self.dirty = saved.dirty;
+        self.last_successful = saved.last_successful;
+        self.stop_time = saved.stop_time;
         Ok(fmi2OK)
-    })
-}
+    }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    with(c, "fmi2FreeFMUstate", |me| {
-        me.check(Call::FmuState, "fmi2FreeFMUstate")?;
+    fn free_fmu_state(&mut self, function: &str, state: *mut *mut c_void) -> Outcome {
+        self.check(Call::FmuState, function)?;
         if state.is_null() || unsafe { *state }.is_null() {
             return Ok(fmi2OK);
         }
         let p = unsafe { *state };
-        let saved = me.saved(p, "fmi2FreeFMUstate")?;
+        let saved = self.saved(p, function)?;
         {
             let mut live = states();
             live.retain(|s| *s != p as usize);
@@ -1566,19 +1474,77 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUs
             }
         }
         let saved = unsafe { Box::from_raw(saved as *mut Saved) };
-        if saved.owner == me.id {
-            me.free.push(saved.components);
+        if saved.owner == self.id {
+            self.free.push(saved.components);
         }
         unsafe { *state = std::ptr::null_mut() };
         Ok(fmi2OK)
-    })
+    }
+
+    fn serialized_size(&mut self, function: &str, state: *mut c_void, size: *mut usize) -> Outcome {
+        self.check(Call::FmuState, function)?;
+        self.can_serialize(function)?;
+        let saved = self.saved(state, function)?;
+        if size.is_null() {
+            return Err(self.error(&format!("{function}: size is NULL")));
+        }
+        let bytes = serialize(self, saved, function)?;
+        unsafe { *size = bytes.len() };
+        Ok(fmi2OK)
+    }
+
+    fn serialize_state(&mut self, function: &str, state: *mut c_void, bytes: *mut u8, size: usize) -> Outcome {
+        self.check(Call::FmuState, function)?;
+        self.can_serialize(function)?;
+        let saved = self.saved(state, function)?;
+        let data = serialize(self, saved, function)?;
+        if bytes.is_null() || size < data.len() {
+            return Err(self.error(&format!(
+                "{function}: the buffer holds {size} bytes, the state needs {} (the serialized size)",
+                data.len()
+            )));
+        }
+        slice_mut(bytes, data.len()).copy_from_slice(&data);
+        Ok(fmi2OK)
+    }
+
+    fn deserialize_state(&mut self, function: &str, bytes: *const u8, size: usize, state: *mut *mut c_void) -> Outcome {
+        self.check(Call::FmuState, function)?;
+        self.can_serialize(function)?;
+        if state.is_null() || (bytes.is_null() && size > 0) {
+            return Err(self.error(&format!("{function}: NULL pointer")));
+        }
+        let data = slice(bytes, size);
+        let parsed = parse_state(self, data).map_err(|e| self.error(&format!("{function}: {e}; nothing changed")))?;
+        let mut components = Vec::with_capacity(parsed.parts.len());
+        for (i, part) in parsed.parts.iter().enumerate() {
+            match self.sim.instance_mut(i).deserialize_fmu_state(part) {
+                Ok(s) => components.push(s),
+                Err(e) => return Err(self.component_refused(function, i, e)),
+            }
+        }
+        let p = Box::into_raw(Box::new(Saved {
+            owner: self.id,
+            guid: self.spec.guid.clone(),
+            components,
+            bytes: Some(parsed.parts),
+            time: parsed.time,
+            state: parsed.state,
+            dirty: parsed.dirty,
+            last_successful: parsed.last_successful,
+            stop_time: parsed.stop_time,
+        }));
+        states().push(p as usize);
+        unsafe { *state = p as *mut c_void };
+        Ok(fmi2OK)
+    }
 }
 
 /// A serialized container state: this magic, the container's GUID, time, last successful time,
 /// mode, the stop time (a flag and the value), then each component's serialized state with its length.
 const MAGIC: &[u8; 8] = b"RFMUCNT2";
 
-fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, fmi2Status> {
+fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, Status> {
     let Some(parts) = &saved.bytes else {
         return Err(me.error(&format!("{function}: a component cannot serialize its FMU state")));
     };
@@ -1599,48 +1565,6 @@ fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, f
         out.extend_from_slice(part);
     }
     Ok(out)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    size: *mut usize,
-) -> fmi2Status {
-    with(c, "fmi2SerializedFMUstateSize", |me| {
-        me.check(Call::FmuState, "fmi2SerializedFMUstateSize")?;
-        me.can_serialize("fmi2SerializedFMUstateSize")?;
-        let saved = me.saved(state, "fmi2SerializedFMUstateSize")?;
-        if size.is_null() {
-            return Err(me.error("fmi2SerializedFMUstateSize: size is NULL"));
-        }
-        let bytes = serialize(me, saved, "fmi2SerializedFMUstateSize")?;
-        unsafe { *size = bytes.len() };
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SerializeFMUstate(
-    c: fmi2Component,
-    state: fmi2FMUstate,
-    bytes: *mut fmi2Byte,
-    size: usize,
-) -> fmi2Status {
-    with(c, "fmi2SerializeFMUstate", |me| {
-        me.check(Call::FmuState, "fmi2SerializeFMUstate")?;
-        me.can_serialize("fmi2SerializeFMUstate")?;
-        let saved = me.saved(state, "fmi2SerializeFMUstate")?;
-        let data = serialize(me, saved, "fmi2SerializeFMUstate")?;
-        if bytes.is_null() || size < data.len() {
-            return Err(me.error(&format!(
-                "fmi2SerializeFMUstate: the buffer holds {size} bytes, the state needs {} (fmi2SerializedFMUstateSize)",
-                data.len()
-            )));
-        }
-        slice_mut(bytes as *mut u8, data.len()).copy_from_slice(&data);
-        Ok(fmi2OK)
-    })
 }
 
 /// A serialized container state read back (the components' parts not yet checked: each
@@ -1733,44 +1657,26 @@ fn parse_state(me: &Container, data: &[u8]) -> Result<Parsed, String> {
     })
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-    c: fmi2Component,
-    bytes: *const fmi2Byte,
-    size: usize,
-    state: *mut fmi2FMUstate,
-) -> fmi2Status {
-    with(c, "fmi2DeSerializeFMUstate", |me| {
-        me.check(Call::FmuState, "fmi2DeSerializeFMUstate")?;
-        me.can_serialize("fmi2DeSerializeFMUstate")?;
-        if state.is_null() || (bytes.is_null() && size > 0) {
-            return Err(me.error("fmi2DeSerializeFMUstate: NULL pointer"));
-        }
-        let data = slice(bytes as *const u8, size);
-        let parsed =
-            parse_state(me, data).map_err(|e| me.error(&format!("fmi2DeSerializeFMUstate: {e}; nothing changed")))?;
-        let mut components = Vec::with_capacity(parsed.parts.len());
-        for (i, part) in parsed.parts.iter().enumerate() {
-            match me.sim.instance_mut(i).deserialize_fmu_state(part) {
-                Ok(s) => components.push(s),
-                Err(e) => return Err(me.component_refused("fmi2DeSerializeFMUstate", i, e)),
-            }
-        }
-        let p = Box::into_raw(Box::new(Saved {
-            owner: me.id,
-            guid: me.spec.guid.clone(),
-            components,
-            bytes: Some(parsed.parts),
-            time: parsed.time,
-            state: parsed.state,
-            dirty: parsed.dirty,
-            last_successful: parsed.last_successful,
-            stop_time: parsed.stop_time,
-        }));
-        states().push(p as usize);
-        unsafe { *state = p as fmi2FMUstate };
-        Ok(fmi2OK)
-    })
+/// The resources folder of a `file:` URI (FMI 2.0's fmuResourceLocation).
+fn resources_of_uri(uri: Option<String>) -> Result<std::path::PathBuf, String> {
+    let Some(uri) = uri else {
+        return Err("fmuResourceLocation is NULL: the container's system is in its resources".into());
+    };
+    rustfmu::core::resources::resource_dir(&uri)
+        .ok_or_else(|| format!("fmuResourceLocation '{uri}' is not a file: URI of a folder"))
+}
+
+/// The resources folder of FMI 3.0's resourcePath (a native absolute path).
+fn resources_of_path(path: Option<String>) -> Result<std::path::PathBuf, String> {
+    let Some(path) = path else {
+        return Err("resourcePath is NULL: the container's system is in its resources".into());
+    };
+    let p = Path::new(&path);
+    if p.is_absolute() {
+        Ok(p.to_path_buf())
+    } else {
+        Err(format!("resourcePath '{path}' is not an absolute path"))
+    }
 }
 
 /// Keeps `c_void` in the ABI's imports used on every platform.
