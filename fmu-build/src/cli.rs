@@ -108,17 +108,19 @@ enum Cmd {
         #[arg(long)]
         manifest_path: Option<PathBuf>,
     },
-    /// Write a composed system (an SSP file) as one FMI 2.0 co-simulation FMU: the component FMUs
-    /// in its resources, rustfmu-runner's master inside at the internal step, the system's
-    /// unconnected inputs, outputs and parameters as its variables (`component.variable`), the
-    /// SSP's parameter set as their start values.
+    /// Write a composed system (an SSP file) as one FMI 2.0 and/or 3.0 co-simulation FMU: the
+    /// component FMUs in its resources, rustfmu-runner's master inside at the internal step, the
+    /// SSD's own connectors (or else the system's unconnected inputs and all outputs,
+    /// `component.variable`) and the components' parameters as its variables, the SSP's
+    /// parameter set as their start values.
     Container {
         ssp: PathBuf,
         /// The FMU to write (default: <system>.fmu beside the SSP file).
         #[arg(short = 'o', long = "output")]
         out: Option<PathBuf>,
-        /// The components' internal communication step, s (default: the smallest default step
-        /// size of the components). An importer's step is cut into ceil(H / step) equal steps.
+        /// The components' internal communication step, s (default: the SSD's fixed-step master
+        /// step, oms:FixedStepMaster stepSize). An importer's step is cut into ceil(H / step)
+        /// equal steps.
         #[arg(long)]
         step: Option<f64>,
         /// The FMI version of the container: 2, 3 or both (default both: FMI 2.0 at the output

@@ -6,8 +6,11 @@ importer equal to the native runner on the SSP file and to the FMI 2.0 container
 The containers are the ones the main job and tests/run.sh write (target/fmu/containers/fmi3/);
 a missing one is made here for this machine's platform only."""
 
+import pathlib
 import re
+import shutil
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -102,9 +105,14 @@ def test_fmpy_simulate_fmu_runs_the_fmi3_container_as_the_fmi2_one(name):
 
 
 @pytest.mark.parametrize("name", SYSTEMS)
-def test_the_fmi3_container_is_valid_for_fmpy_and_cargo_fmu_check(name):
+def test_the_fmi3_container_is_valid_for_fmpy_fmutool_and_cargo_fmu_check(name):
     path = container3(name)
     assert validate_fmu(str(path)) == []
+    fmutool = shutil.which("fmutool") or shutil.which("fmutool", path=str(pathlib.Path(sys.executable).parent))
+    assert fmutool, "fmutool is missing: run tests/setup-env.sh"
+    r = subprocess.run([fmutool, "-input", path, "-check"], capture_output=True, text=True, timeout=300)
+    errors = [line for line in (r.stdout + r.stderr).splitlines() if re.match(r"^\s*(ERROR|CRITICAL)\b", line)]
+    assert r.returncode == 0 and not errors and "No semantic error against the FMI-3" in r.stdout + r.stderr, r.stdout + r.stderr
     r = subprocess.run([CARGO_FMU, "fmu", "check", path], capture_output=True, text=True, timeout=1800)
     tail = (r.stdout + r.stderr)[-6000:]
     assert r.returncode == 0, tail

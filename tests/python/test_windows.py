@@ -310,16 +310,20 @@ def test_the_conformance_suite_passes_on_the_windows_binaries_under_wine(conform
 # -- A container FMU (cargo fmu container): its Windows binary loads the components' DLLs --
 
 
-def test_the_container_of_the_closed_loop_runs_on_windows_as_on_linux(hosts):
-    """PendulumLQR as one FMU (target/fmu/containers/, made by the main job and tests/run.sh with
-    every platform its components carry): under wine its win64 binary unpacks nothing, loads the
-    Pendulum's and the Controller's win64 DLLs from its resources and steps them; 1,000 steps
-    equal the linux64 binary's to 1e-12."""
-    fmu = FMU_DIR / "containers" / "PendulumLQR.fmu"
+@pytest.mark.parametrize("fmi3", [False, True], ids=["fmi2", "fmi3"])
+def test_the_container_of_the_closed_loop_runs_on_windows_as_on_linux(hosts, fmi3):
+    """PendulumLQR as one FMU (target/fmu/containers/, FMI 3.0 in containers/fmi3/, made by the
+    main job and tests/run.sh with every platform its components carry): under wine its win64
+    binary unpacks nothing, loads the Pendulum's and the Controller's win64 DLLs from its
+    resources and steps them; 1,000 steps equal the linux64 binary's to 1e-12."""
+    fmu = FMU_DIR / "containers" / ("fmi3" if fmi3 else "") / "PendulumLQR.fmu"
     assert fmu.exists(), f"{fmu} is missing: run `bash tests/run.sh` (or the main job) first"
-    a, b, seconds = linux_and_windows(hosts, "PendulumLQR", False, [], fmu=fmu)
+    a, b, seconds = linux_and_windows(hosts, "PendulumLQR", fmi3, [], fmu=fmu)
     d = largest_difference(a, b)
     scale = max(1.0, max(abs(x) for row in a for x in row))
-    report(f"PendulumLQR container FMI 2.0, {STEPS} steps: largest |linux - windows| = {d:.3g} (wine run {seconds:.1f} s)")
+    report(
+        f"PendulumLQR container FMI {'3.0' if fmi3 else '2.0'}, {STEPS} steps: largest |linux - windows| = {d:.3g} "
+        f"(wine run {seconds:.1f} s)"
+    )
     assert d <= 1e-12 * scale, d
     assert a[-1] != a[0], "the loop did not move"
