@@ -27,7 +27,7 @@ pub mod fmu_log;
 pub mod sim;
 pub mod ssp;
 
-pub use sim::{Override, RunOptions, RunResult, Scheme, Simulation};
+pub use sim::{Adaptive, Override, RunOptions, RunResult, Scheme, Simulation};
 
 use std::fmt;
 

@@ -31,9 +31,19 @@ enum Command {
         /// End of the run, s (default: the SSD's DefaultExperiment stopTime).
         #[arg(long)]
         stop_time: Option<f64>,
-        /// Communication step, s.
+        /// Communication step, s (with --tolerance: the first step).
         #[arg(long)]
         step: f64,
+        /// Error-controlled communication steps to this tolerance (step doubling with rollback
+        /// through the FMUs' states; a system that cannot runs fixed steps and says why).
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// With --tolerance: the smallest step, s (default: step / 1000).
+        #[arg(long, requires = "tolerance")]
+        min_step: Option<f64>,
+        /// With --tolerance: the largest step, s (default: the stop time / 10).
+        #[arg(long, requires = "tolerance")]
+        max_step: Option<f64>,
         /// component.variable=value on top of the SSP's parameter bindings (repeatable).
         #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
         set: Vec<String>,
@@ -88,6 +98,9 @@ fn run(cli: Cli) -> Result<(), String> {
             ssp,
             stop_time,
             step,
+            tolerance,
+            min_step,
+            max_step,
             set,
             record,
             output,
@@ -106,9 +119,18 @@ fn run(cli: Cli) -> Result<(), String> {
                 sim.scheme = Scheme::Jacobi;
             }
             let mut opts = RunOptions::new(stop_time, step);
+            opts.adaptive = tolerance.map(|tolerance| rustfmu_runner::Adaptive {
+                tolerance,
+                min_step,
+                max_step,
+            });
             opts.overrides = set.iter().map(|s| parse_set(s)).collect::<Result<_, _>>()?;
             opts.record = if record.is_empty() { sim.outputs() } else { record };
-            let n = (stop_time / step).round() as u64;
+            let n = if opts.adaptive.is_some() {
+                1000
+            } else {
+                (stop_time / step).round() as u64
+            };
             let bar = if no_progress {
                 ProgressBar::hidden()
             } else {
@@ -127,6 +149,17 @@ fn run(cli: Cli) -> Result<(), String> {
             });
             bar.finish_and_clear();
             let result = result.map_err(|f| f.error.message)?;
+            if let Some(note) = &result.note {
+                eprintln!("rustfmu-runner: {note}");
+            }
+            if opts.adaptive.is_some() {
+                eprintln!(
+                    "rustfmu-runner: {} points, {} fmi2DoStep calls per component, {} steps rejected",
+                    result.time.len(),
+                    result.fmu_steps,
+                    result.rejected
+                );
+            }
             let mut out: Box<dyn Write> = match &output {
                 Some(p) => Box::new(std::io::BufWriter::new(
                     std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?,

@@ -23,7 +23,7 @@
 //! All buffers are made when the simulation is built: a communication step allocates nothing
 //! but the recorded row.
 
-use crate::fmi2::{Fmi2Error, InstanceCS};
+use crate::fmi2::{Fmi2Error, FmuState, InstanceCS};
 use crate::fmu::{Fmu, type_name};
 use crate::ssp::{Archive, Connection};
 use crate::{Error, Value};
@@ -65,6 +65,26 @@ pub struct RunOptions {
     /// Stop the run after the first communication point where |value| > limit, for a recorded
     /// "component.variable" (a fallen pendulum, a diverged run).
     pub stop_when_above: Vec<(String, f64)>,
+    /// Error-controlled communication steps ([`Adaptive`]); `None`: fixed steps of `step`.
+    pub adaptive: Option<Adaptive>,
+}
+
+/// Error-controlled communication steps: each step of h is made once whole and once as two
+/// halves from the same FMU states (step doubling); the difference of the connected outputs at
+/// its end estimates the coupling error of the halves. A step whose scaled difference
+/// max |a - b| / (tolerance (1 + |b|)) exceeds 1 is rejected (every FMU set back to its state at
+/// the step's start) and retried shorter; an accepted one keeps the halves' result, and the next
+/// step grows or shrinks by 0.9 err^(-1/2) (the local coupling error of a held input is O(h^2)),
+/// between 1/5 and 2 times, within [min_step, max_step]. Needs every component to get and set its
+/// FMU state and to take variable steps; otherwise the run is made with fixed steps and
+/// [`RunResult::note`] says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adaptive {
+    pub tolerance: f64,
+    /// s (default: the run's `step` / 1000).
+    pub min_step: Option<f64>,
+    /// s (default: the run's stop time / 10).
+    pub max_step: Option<f64>,
 }
 
 impl RunOptions {
@@ -75,6 +95,7 @@ impl RunOptions {
             overrides: Vec::new(),
             record: Vec::new(),
             stop_when_above: Vec::new(),
+            adaptive: None,
         }
     }
 }
@@ -89,6 +110,13 @@ pub struct RunResult {
     pub values: Vec<f64>,
     /// Whether a `stop_when_above` condition ended the run before `stop_time`.
     pub stopped: bool,
+    /// fmi2DoStep calls of the run (each is one call per component): the steps made, accepted
+    /// or not.
+    pub fmu_steps: usize,
+    /// Error-controlled steps rejected (and made again shorter).
+    pub rejected: usize,
+    /// Why an error-controlled run was made with fixed steps, if it was.
+    pub note: Option<String>,
 }
 
 impl RunResult {
@@ -878,13 +906,20 @@ impl Simulation {
         r
     }
 
-    /// fmi2DoStep(t, h) of every instance, in the system's order.
+    /// fmi2DoStep(t, h) of every instance, in the system's order (noSetFMUStatePriorToCurrentPoint
+    /// = true: nothing is set back before this point).
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Error> {
+        self.do_step_with(t, h, true)
+    }
+
+    /// fmi2DoStep(t, h, no_set_prior) of every instance, in the system's order; `no_set_prior =
+    /// false` when an FMU state of before this point may be set afterwards (a rollback).
+    pub fn do_step_with(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
         for s in &mut self.slaves {
             s.instance
                 .as_mut()
                 .expect("instantiated")
-                .do_step(t, h, true)
+                .do_step(t, h, no_set_prior)
                 .map_err(|e| Error::fmi(&s.name, "fmi2DoStep", &e, Some(t), &format!("step {h} s")))?;
         }
         Ok(())
@@ -1005,7 +1040,16 @@ impl Simulation {
             time: Vec::with_capacity(n + 1),
             values: Vec::with_capacity((n + 1) * m),
             stopped: false,
+            fmu_steps: 0,
+            rejected: 0,
+            note: None,
         };
+        if let Some(a) = opts.adaptive {
+            match self.why_fixed_steps() {
+                None => return self.run_adaptive(opts, a, &values, &mut groups, &stops, result, progress),
+                Some(why) => result.note = Some(why),
+            }
+        }
         if let Err(error) = self.initialize_with(n as f64 * opts.step, &values) {
             return Err(Failure { error, partial: result });
         }
@@ -1033,6 +1077,167 @@ impl Simulation {
                 self.note(&error);
                 return Err(Failure { error, partial: result });
             }
+            result.fmu_steps += 1;
+        }
+        if let Err(error) = self.terminate() {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
+        }
+        Ok(result)
+    }
+
+    /// Why this system cannot take error-controlled steps (None: it can).
+    pub fn why_fixed_steps(&self) -> Option<String> {
+        for s in &self.slaves {
+            let d = &self.fmus[s.fmu].description;
+            let Some(cs) = d.cs.as_ref() else {
+                return Some(format!("fixed steps: component '{}' is no co-simulation FMU", s.name));
+            };
+            if !cs.can_get_and_set_fmu_state {
+                return Some(format!(
+                    "fixed steps: component '{}' cannot get and set its FMU state (canGetAndSetFMUstate = false), so a step cannot be made again",
+                    s.name
+                ));
+            }
+            if !cs.can_handle_variable_step {
+                return Some(format!(
+                    "fixed steps: component '{}' cannot take steps of varying size (canHandleVariableCommunicationStepSize = false)",
+                    s.name
+                ));
+            }
+        }
+        None
+    }
+
+    /// Every component's FMU state into `slots` (taken anew, or updated).
+    fn save_states(&mut self, slots: &mut Vec<FmuState>, t: f64) -> Result<(), Error> {
+        if slots.is_empty() {
+            for i in 0..self.slaves.len() {
+                let name = self.slaves[i].name.clone();
+                let st = self
+                    .instance(i)
+                    .get_fmu_state()
+                    .map_err(fmi_err(&name, "fmi2GetFMUstate", Some(t), ""))?;
+                slots.push(st);
+            }
+        } else {
+            for (i, slot) in slots.iter().enumerate() {
+                let name = self.slaves[i].name.clone();
+                self.instance(i)
+                    .update_fmu_state(slot)
+                    .map_err(fmi_err(&name, "fmi2GetFMUstate", Some(t), ""))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn load_states(&mut self, slots: &[FmuState], t: f64) -> Result<(), Error> {
+        for (i, slot) in slots.iter().enumerate() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i).set_fmu_state(slot).map_err(fmi_err(
+                &name,
+                "fmi2SetFMUstate",
+                Some(t),
+                "rolling back a rejected step",
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// The connected outputs, as the last propagation read them.
+    fn coupling(&self, out: &mut Vec<f64>) {
+        out.clear();
+        for r in &self.reads {
+            out.extend_from_slice(&r.buf);
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run_adaptive(
+        &mut self,
+        opts: &RunOptions,
+        a: Adaptive,
+        values: &[(String, Target, Setter)],
+        groups: &mut [RecordGroup],
+        stops: &[(usize, f64)],
+        mut result: RunResult,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<RunResult, Failure> {
+        let stop = opts.stop_time;
+        let min_step = a.min_step.unwrap_or(opts.step / 1000.0);
+        let max_step = a.max_step.unwrap_or(stop / 10.0).max(min_step);
+        if !(a.tolerance > 0.0 && a.tolerance.is_finite() && min_step > 0.0 && min_step.is_finite()) {
+            return Err(Error::usage(format!(
+                "error-controlled steps: tolerance = {}, min_step = {min_step}: both must be positive numbers",
+                a.tolerance
+            ))
+            .into());
+        }
+        if let Err(error) = self.initialize_with(stop, values) {
+            return Err(Failure { error, partial: result });
+        }
+        let scale = 1000usize;
+        let m = opts.record.len();
+        let mut row = vec![0.0; m];
+        let (mut whole, mut halves) = (Vec::new(), Vec::new());
+        let mut slots: Vec<FmuState> = Vec::new();
+        let mut t = 0.0f64;
+        let mut h = opts.step.clamp(min_step, max_step);
+        let outcome: Result<(), Error> = (|| {
+            loop {
+                self.propagate(t)?;
+                self.read_record(groups, &mut row, t)?;
+                result.time.push(t);
+                result.values.extend_from_slice(&row);
+                progress(((t / stop.max(f64::MIN_POSITIVE)) * scale as f64) as usize, scale);
+                if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
+                    result.stopped = t < stop;
+                    return Ok(());
+                }
+                if t >= stop {
+                    return Ok(());
+                }
+                loop {
+                    // The last step ends at the stop time (a remainder under a tenth of a step joins it).
+                    let mut step = h.min(stop - t);
+                    if stop - (t + step) < 0.1 * step {
+                        step = stop - t;
+                    }
+                    self.save_states(&mut slots, t)?;
+                    self.do_step_with(t, step, false)?;
+                    self.propagate(t + step)?;
+                    self.coupling(&mut whole);
+                    self.load_states(&slots, t)?;
+                    let mid = t + step / 2.0;
+                    self.do_step_with(t, step / 2.0, false)?;
+                    self.propagate(mid)?;
+                    self.do_step_with(mid, t + step - mid, false)?;
+                    self.propagate(t + step)?;
+                    self.coupling(&mut halves);
+                    result.fmu_steps += 3;
+                    let err = whole
+                        .iter()
+                        .zip(&halves)
+                        .map(|(w, b)| (w - b).abs() / (a.tolerance * (1.0 + b.abs())))
+                        .fold(0.0f64, f64::max);
+                    let grow = if err > 0.0 { 0.9 / err.sqrt() } else { 2.0 };
+                    if err <= 1.0 || step <= min_step * (1.0 + 1e-9) {
+                        t = if step == stop - t { stop } else { t + step };
+                        h = (step * grow.clamp(0.2, 2.0)).clamp(min_step, max_step);
+                        break;
+                    }
+                    result.rejected += 1;
+                    self.load_states(&slots, t)?;
+                    h = (step * grow.clamp(0.2, 0.9)).max(min_step);
+                }
+            }
+        })();
+        for (i, slot) in slots.into_iter().enumerate() {
+            let _ = self.instance(i).free_fmu_state(slot);
+        }
+        if let Err(error) = outcome {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
         }
         if let Err(error) = self.terminate() {
             self.note(&error);

@@ -1251,7 +1251,7 @@ impl Container {
                 Ok(())
             };
             let last = k + 1 == n;
-            let r = r.and_then(|_| self.sim.do_step(tk, h)).and_then(|_| {
+            let r = r.and_then(|_| self.sim.do_step_with(tk, h, false)).and_then(|_| {
                 // The connections at the step's end, inside the step (undone with it): what the
                 // runner does before it reads the outputs.
                 if last {

@@ -23,7 +23,7 @@ use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
 use runner::sim::Failure;
-use runner::{Error, ErrorKind, Override, RunOptions, RunResult, Scheme, Simulation};
+use runner::{Adaptive, Error, ErrorKind, Override, RunOptions, RunResult, Scheme, Simulation};
 use std::sync::Mutex;
 
 create_exception!(rustfmu_runner, RunnerError, PyException, "Any error of the runner.");
@@ -127,6 +127,8 @@ struct PySystem {
     /// The system's parameter bindings, "component.variable".
     #[pyo3(get)]
     parameters: Vec<String>,
+    /// What the last run made (`last_run`).
+    last_run: Mutex<Option<Py<PyDict>>>,
 }
 
 #[pymethods]
@@ -161,6 +163,7 @@ impl PySystem {
                 .collect(),
             outputs: sim.0.outputs(),
             parameters: sim.0.parameters().iter().map(|s| s.to_string()).collect(),
+            last_run: Mutex::new(None),
             inner: Mutex::new(sim),
         })
     }
@@ -171,7 +174,14 @@ impl PySystem {
     /// order, the `record`ed variables read (default: every output), every FMU stepped.
     /// `stop_when` ({"component.variable": limit}, recorded variables) ends the run after the
     /// first point where |value| > limit. Returns {"time": array, name: array, ...}.
-    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None))]
+    ///
+    /// `tolerance`: error-controlled communication steps (step doubling with rollback through
+    /// the FMUs' states; `step` is the first step, `min_step` and `max_step` bound them): the
+    /// points are where steps were accepted. A system that cannot (a component without FMU
+    /// state or variable steps) runs with fixed steps, with a RuntimeWarning saying why.
+    /// `last_run` says what the run made.
+    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None))]
+    #[allow(clippy::too_many_arguments)]
     fn run<'py>(
         &self,
         py: Python<'py>,
@@ -180,8 +190,22 @@ impl PySystem {
         start: Option<&Bound<'py, PyDict>>,
         record: Option<Vec<String>>,
         stop_when: Option<&Bound<'py, PyDict>>,
+        tolerance: Option<f64>,
+        min_step: Option<f64>,
+        max_step: Option<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut opts = RunOptions::new(stop_time, step);
+        if let Some(tolerance) = tolerance {
+            opts.adaptive = Some(Adaptive {
+                tolerance,
+                min_step,
+                max_step,
+            });
+        } else if min_step.is_some() || max_step.is_some() {
+            return Err(VariableError::new_err(
+                "min_step and max_step bound error-controlled steps: give a tolerance too",
+            ));
+        }
         if let Some(start) = start {
             for (k, v) in start.iter() {
                 let key: String = k.extract()?;
@@ -202,10 +226,43 @@ impl PySystem {
                 "the system is unusable: an earlier run panicked while holding it",
             ))),
         });
+        let made = |r: &RunResult| -> PyResult<Py<PyDict>> {
+            let d = PyDict::new(py);
+            d.set_item("fmu_steps", r.fmu_steps)?;
+            d.set_item("rejected", r.rejected)?;
+            d.set_item("note", r.note.clone())?;
+            Ok(d.unbind())
+        };
         match result {
-            Ok(r) => arrays(py, &r),
-            Err(f) => Err(to_pyerr(py, &f.error, Some(&f.partial))),
+            Ok(r) => {
+                *self.last_run.lock().unwrap_or_else(|e| e.into_inner()) = Some(made(&r)?);
+                if let Some(note) = &r.note {
+                    PyErr::warn(
+                        py,
+                        &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(),
+                        &std::ffi::CString::new(note.as_str()).unwrap_or_default(),
+                        1,
+                    )?;
+                }
+                arrays(py, &r)
+            }
+            Err(f) => {
+                *self.last_run.lock().unwrap_or_else(|e| e.into_inner()) = Some(made(&f.partial)?);
+                Err(to_pyerr(py, &f.error, Some(&f.partial)))
+            }
         }
+    }
+
+    /// What the last run made: {"fmu_steps": fmi2DoStep calls (each one per component),
+    /// "rejected": error-controlled steps rejected, "note": why an error-controlled run was made
+    /// with fixed steps, or None}; None before the first run.
+    #[getter]
+    fn last_run(&self, py: Python<'_>) -> Option<Py<PyDict>> {
+        self.last_run
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+            .map(|d| d.clone_ref(py))
     }
 
     fn __repr__(&self) -> String {
