@@ -44,6 +44,10 @@ enum Command {
         /// With --tolerance: the largest step, s (default: the stop time / 10).
         #[arg(long, requires = "tolerance")]
         max_step: Option<f64>,
+        /// With --tolerance: a Real component.variable the error is estimated on (repeatable;
+        /// default: every connected output).
+        #[arg(long = "error-on", value_name = "COMPONENT.VARIABLE", requires = "tolerance")]
+        error_on: Vec<String>,
         /// component.variable=value on top of the SSP's parameter bindings (repeatable).
         #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
         set: Vec<String>,
@@ -101,6 +105,7 @@ fn run(cli: Cli) -> Result<(), String> {
             tolerance,
             min_step,
             max_step,
+            error_on,
             set,
             record,
             output,
@@ -123,6 +128,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 tolerance,
                 min_step,
                 max_step,
+                error_on: error_on.clone(),
             });
             opts.overrides = set.iter().map(|s| parse_set(s)).collect::<Result<_, _>>()?;
             opts.record = if record.is_empty() { sim.outputs() } else { record };

@@ -78,13 +78,16 @@ pub struct RunOptions {
 /// between 1/5 and 2 times, within [min_step, max_step]. Needs every component to get and set its
 /// FMU state and to take variable steps; otherwise the run is made with fixed steps and
 /// [`RunResult::note`] says why.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Adaptive {
     pub tolerance: f64,
     /// s (default: the run's `step` / 1000).
     pub min_step: Option<f64>,
     /// s (default: the run's stop time / 10).
     pub max_step: Option<f64>,
+    /// The Real variables ("component.variable") whose difference is the estimate; empty: every
+    /// connected output.
+    pub error_on: Vec<String>,
 }
 
 impl RunOptions {
@@ -1044,7 +1047,7 @@ impl Simulation {
             rejected: 0,
             note: None,
         };
-        if let Some(a) = opts.adaptive {
+        if let Some(a) = &opts.adaptive {
             match self.why_fixed_steps() {
                 None => return self.run_adaptive(opts, a, &values, &mut groups, &stops, result, progress),
                 Some(why) => result.note = Some(why),
@@ -1144,19 +1147,34 @@ impl Simulation {
         Ok(())
     }
 
-    /// The connected outputs, as the last propagation read them.
-    fn coupling(&self, out: &mut Vec<f64>) {
+    /// What the error is estimated on: the `watched` variables, read now, or (none watched)
+    /// every connected output as the last propagation read them.
+    fn estimated(&mut self, watched: &[Target], out: &mut Vec<f64>, t: f64) -> Result<(), Error> {
         out.clear();
-        for r in &self.reads {
-            out.extend_from_slice(&r.buf);
+        if watched.is_empty() {
+            for r in &self.reads {
+                out.extend_from_slice(&r.buf);
+            }
+            return Ok(());
         }
+        let mut x = [0.0];
+        for w in watched {
+            let s = &mut self.slaves[w.slave];
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .get_real(&[w.vr], &mut x)
+                .map_err(|e| Error::fmi(&s.name, "fmi2GetReal", &e, Some(t), "error estimate"))?;
+            out.push(x[0]);
+        }
+        Ok(())
     }
 
     #[allow(clippy::too_many_arguments)]
     fn run_adaptive(
         &mut self,
         opts: &RunOptions,
-        a: Adaptive,
+        a: &Adaptive,
         values: &[(String, Target, Setter)],
         groups: &mut [RecordGroup],
         stops: &[(usize, f64)],
@@ -1172,6 +1190,15 @@ impl Simulation {
                 a.tolerance
             ))
             .into());
+        }
+        let mut watched = Vec::with_capacity(a.error_on.len());
+        for key in &a.error_on {
+            let target = self.resolve_qualified(key)?;
+            if target.ty != Type::Real {
+                let (c, v) = key.split_once('.').unwrap_or((key, ""));
+                return Err(Error::variable(c, v, format!("error_on {key}: not a Real variable")).into());
+            }
+            watched.push(target);
         }
         if let Err(error) = self.initialize_with(stop, values) {
             return Err(Failure { error, partial: result });
@@ -1206,14 +1233,14 @@ impl Simulation {
                     self.save_states(&mut slots, t)?;
                     self.do_step_with(t, step, false)?;
                     self.propagate(t + step)?;
-                    self.coupling(&mut whole);
+                    self.estimated(&watched, &mut whole, t + step)?;
                     self.load_states(&slots, t)?;
                     let mid = t + step / 2.0;
                     self.do_step_with(t, step / 2.0, false)?;
                     self.propagate(mid)?;
                     self.do_step_with(mid, t + step - mid, false)?;
                     self.propagate(t + step)?;
-                    self.coupling(&mut halves);
+                    self.estimated(&watched, &mut halves, t + step)?;
                     result.fmu_steps += 3;
                     let err = whole
                         .iter()

@@ -109,3 +109,18 @@ def test_the_command_line_takes_a_tolerance(tmp_path):
     assert np.array_equal(data["time"], r["time"]) and np.array_equal(data["pendulumalpha1"], r["pendulum.alpha1"])
     out = cli("run", ssp("PendulumLQR"), "--step", "1e-3", "--min-step", "1e-4", "--no-progress")
     assert out.returncode != 0 and "--tolerance" in out.stderr
+
+
+def test_the_error_can_be_estimated_on_chosen_variables():
+    """error_on: the estimate on the torques the Controller sends (two of the loop's eight
+    connected outputs) makes fewer steps than on every connected output, at the same tolerance;
+    what is not a Real variable is refused, naming it."""
+    s = rustfmu_runner.System(ssp("PendulumMotors"))
+    s.run(1.0, 1e-3, record=REC, tolerance=1e-4)
+    every = s.last_run["fmu_steps"]
+    r = s.run(1.0, 1e-3, record=REC, tolerance=1e-4, error_on=["controller.M1", "controller.M2"])
+    assert s.last_run["fmu_steps"] < every / 3 and r["time"][-1] == 1.0
+    with pytest.raises(rustfmu_runner.VariableError, match="controller.mode: not a Real variable"):
+        s.run(1.0, 1e-3, record=REC, tolerance=1e-4, error_on=["controller.mode"])
+    with pytest.raises(rustfmu_runner.VariableError, match="give a tolerance"):
+        s.run(1.0, 1e-3, record=REC, error_on=["controller.M1"])

@@ -42,13 +42,14 @@ fn main() {
     }
 }
 
-fn options(seconds: f64, h: f64, tolerance: Option<f64>) -> RunOptions {
+fn options(seconds: f64, h: f64, tolerance: Option<f64>, on_angles: bool) -> RunOptions {
     let mut o = RunOptions::new(seconds, h);
     o.record = RECORD.iter().map(|s| s.to_string()).collect();
     o.adaptive = tolerance.map(|tolerance| Adaptive {
         tolerance,
         min_step: None,
         max_step: None,
+        error_on: if on_angles { o.record.clone() } else { Vec::new() },
     });
     o
 }
@@ -68,8 +69,8 @@ fn run() -> Result<(), String> {
     let mut sim = Simulation::from_ssp(&ssp).map_err(|e| e.message)?;
     let mut once =
         |o: &RunOptions| -> Result<RunResult, String> { sim.run(o, &mut |_, _| {}).map_err(|f| f.to_string()) };
-    let coarse = once(&options(args.seconds, 1e-4, None))?;
-    let fine = once(&options(args.seconds, 5e-5, None))?;
+    let coarse = once(&options(args.seconds, 1e-4, None, false))?;
+    let fine = once(&options(args.seconds, 5e-5, None, false))?;
     let m = RECORD.len();
     let reference = (
         coarse.time.clone(),
@@ -87,12 +88,24 @@ fn run() -> Result<(), String> {
     let mut rows = Vec::new();
     let cases: Vec<(String, RunOptions)> = [8e-3, 4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4]
         .iter()
-        .map(|&h| (format!("fixed h = {} ms", h * 1e3), options(args.seconds, h, None)))
-        .chain(
-            [1e-3, 1e-4, 1e-5, 1e-6]
-                .iter()
-                .map(|&tol| (format!("tolerance {tol:e}"), options(args.seconds, 1e-3, Some(tol)))),
-        )
+        .map(|&h| {
+            (
+                format!("fixed h = {} ms", h * 1e3),
+                options(args.seconds, h, None, false),
+            )
+        })
+        .chain([1e-3, 1e-4, 1e-5, 1e-6].iter().map(|&tol| {
+            (
+                format!("tolerance {tol:e}"),
+                options(args.seconds, 1e-3, Some(tol), false),
+            )
+        }))
+        .chain([1e-4, 1e-5, 1e-6].iter().map(|&tol| {
+            (
+                format!("tolerance {tol:e} on the angles"),
+                options(args.seconds, 1e-3, Some(tol), true),
+            )
+        }))
         .collect();
     for (label, o) in &cases {
         let mut times = Vec::new();

@@ -176,11 +176,12 @@ impl PySystem {
     /// first point where |value| > limit. Returns {"time": array, name: array, ...}.
     ///
     /// `tolerance`: error-controlled communication steps (step doubling with rollback through
-    /// the FMUs' states; `step` is the first step, `min_step` and `max_step` bound them): the
+    /// the FMUs' states; `step` is the first step, `min_step` and `max_step` bound them; the
+    /// error estimated on the Real variables `error_on`, default every connected output): the
     /// points are where steps were accepted. A system that cannot (a component without FMU
     /// state or variable steps) runs with fixed steps, with a RuntimeWarning saying why.
     /// `last_run` says what the run made.
-    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None))]
+    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
         &self,
@@ -193,6 +194,7 @@ impl PySystem {
         tolerance: Option<f64>,
         min_step: Option<f64>,
         max_step: Option<f64>,
+        error_on: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut opts = RunOptions::new(stop_time, step);
         if let Some(tolerance) = tolerance {
@@ -200,10 +202,11 @@ impl PySystem {
                 tolerance,
                 min_step,
                 max_step,
+                error_on: error_on.unwrap_or_default(),
             });
-        } else if min_step.is_some() || max_step.is_some() {
+        } else if min_step.is_some() || max_step.is_some() || error_on.is_some() {
             return Err(VariableError::new_err(
-                "min_step and max_step bound error-controlled steps: give a tolerance too",
+                "min_step, max_step and error_on are of error-controlled steps: give a tolerance too",
             ));
         }
         if let Some(start) = start {
