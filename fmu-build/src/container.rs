@@ -176,10 +176,13 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     let mut common: Option<Vec<String>> = None;
     for c in &components {
         let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
-        xmls.push((
-            c.clone(),
-            model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?,
-        ));
+        let xml = model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
+        if fmi_description::fmi_version(&xml).is_ok_and(|v| !v.starts_with("2.")) {
+            return Err(format!(
+                "{shown}: component '{c}' is an FMI 3.0 FMU: a container's components are FMI 2.0 co-simulation FMUs (the runner runs FMI 3.0 ones, a container does not carry them yet)"
+            ));
+        }
+        xmls.push((c.clone(), xml));
         let mine = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
         common = Some(match common {
             None => mine,

@@ -214,7 +214,31 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
 /// Writes `<out_dir>/<system>.ssp`: the SSD and the system's FMUs, read from
 /// `<fmu_dir>/<fmu>.fmu` (packaged before).
 pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf, String> {
-    let fmus = system.read_fmus(fmu_dir)?;
+    write_from(system, fmu_dir, fmu_dir, out_dir)
+}
+
+/// Writes `<out_dir>/fmi3/<system>.ssp`, the same system of the FMI 3.0 FMUs
+/// (`<fmu_dir>/fmi3/<fmu>.fmu`, the same models as the FMI 2.0 ones the SSD is checked against:
+/// `cargo fmu build` makes both from one crate); `None` if a component has no FMI 3.0 FMU.
+pub fn write_fmi3(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<Option<PathBuf>, String> {
+    let fmi3 = fmu_dir.join("fmi3");
+    if system
+        .components
+        .iter()
+        .any(|c| !fmi3.join(format!("{}.fmu", c.fmu)).is_file())
+    {
+        return Ok(None);
+    }
+    let out = out_dir.join("fmi3");
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    write_from(system, fmu_dir, &fmi3, &out).map(Some)
+}
+
+/// Writes `<out_dir>/<system>.ssp`: the SSD checked against the FMUs of `check_dir`, the FMU
+/// files of `files_dir`.
+fn write_from(system: &System, check_dir: &Path, files_dir: &Path, out_dir: &Path) -> Result<PathBuf, String> {
+    let fmu_dir = files_dir;
+    let fmus = system.read_fmus(check_dir)?;
     let ssd = ssd(system, &fmus)?;
     let out = out_dir.join(format!("{}.ssp", system.name));
     // Written aside and renamed, so an interrupted build never leaves a half-written .ssp.
@@ -248,9 +272,15 @@ pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf,
     Ok(out)
 }
 
-/// Writes `<out_dir>/<system>.ssp` for every system of a file.
+/// Writes `<out_dir>/<system>.ssp` for every system of a file, and `<out_dir>/fmi3/<system>.ssp`
+/// where every component has an FMI 3.0 FMU too.
 pub fn write_all(systems: &Systems, fmu_dir: &Path, out_dir: &Path) -> Result<Vec<PathBuf>, String> {
-    systems.systems.iter().map(|s| write(s, fmu_dir, out_dir)).collect()
+    let mut out = Vec::new();
+    for s in &systems.systems {
+        out.push(write(s, fmu_dir, out_dir)?);
+        out.extend(write_fmi3(s, fmu_dir, out_dir)?);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -149,7 +149,7 @@ impl Library {
 }
 
 /// A folder this process made (an FMU unpacked), removed with everything in it when dropped.
-struct Scratch(PathBuf);
+pub(crate) struct Scratch(pub(crate) PathBuf);
 
 impl Drop for Scratch {
     fn drop(&mut self) {
@@ -158,7 +158,7 @@ impl Drop for Scratch {
 }
 
 /// A fresh folder under the system's temporary folder.
-fn scratch() -> Result<Scratch, String> {
+pub(crate) fn scratch() -> Result<Scratch, String> {
     use std::sync::atomic::{AtomicU64, Ordering};
     static NEXT: AtomicU64 = AtomicU64::new(0);
     let base = std::env::temp_dir();
@@ -264,7 +264,7 @@ impl Fmi2Import {
     }
 
     /// fmi2Instantiate(name, fmi2CoSimulation, ...) with the runner's logger.
-    pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<InstanceCS, String> {
+    pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance2, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(LogEnv {
             sink: forward,
@@ -293,7 +293,7 @@ impl Fmi2Import {
         if c.is_null() {
             return Err("fmi2Instantiate returned NULL".into());
         }
-        Ok(InstanceCS {
+        Ok(Instance2 {
             library: self.library.clone(),
             c,
             states: Vec::new(),
@@ -403,10 +403,62 @@ unsafe extern "C" fn forward(
 
 /// An FMU state of an [`InstanceCS`] (an index into its states).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FmuState(usize);
+pub struct FmuState(pub(crate) usize);
 
-/// A co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
-pub struct InstanceCS {
+/// A co-simulation instance of an FMI 2.0 or an FMI 3.0 FMU ([`crate::fmi3`]), with FMI 2.0's
+/// view of its values and statuses; freed when dropped (its FMU states first).
+pub enum InstanceCS {
+    V2(Instance2),
+    V3(crate::fmi3::Instance3),
+}
+
+/// Each method of [`InstanceCS`], forwarded to the version's instance.
+macro_rules! forward {
+    ($( $(#[$doc:meta])* fn $name:ident(&mut self $(, $arg:ident: $ty:ty)*) -> $ret:ty; )*) => {
+        impl InstanceCS {
+            $(
+                $(#[$doc])*
+                pub fn $name(&mut self $(, $arg: $ty)*) -> $ret {
+                    match self {
+                        InstanceCS::V2(i) => i.$name($($arg),*),
+                        InstanceCS::V3(i) => i.$name($($arg),*),
+                    }
+                }
+            )*
+        }
+    };
+}
+
+forward! {
+    fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error>;
+    /// FMI 3.0: kept for fmi3EnterInitializationMode.
+    fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error>;
+    fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn terminate(&mut self) -> Result<(), Fmi2Error>;
+    fn reset(&mut self) -> Result<(), Fmi2Error>;
+    fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error>;
+    fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
+    fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
+    fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error>;
+    fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
+    fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
+    fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
+    fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error>;
+    /// A new FMU state of this instance.
+    fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error>;
+    /// The existing state `s` overwritten with the current one.
+    fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
+    fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
+    /// Frees `s` (then no state of this instance).
+    fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error>;
+    fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error>;
+    fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error>;
+}
+
+/// An FMI 2.0 co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
+pub struct Instance2 {
     library: Arc<Library>,
     c: fmi2Component,
     /// FMU states taken (None: freed).
@@ -417,9 +469,9 @@ pub struct InstanceCS {
 
 // SAFETY: an FMI instance may be used from any one thread at a time (FMI 2.0, 2.1.1); the
 // runner never uses one from two threads at once (it is owned by one Simulation).
-unsafe impl Send for InstanceCS {}
+unsafe impl Send for Instance2 {}
 
-impl Drop for InstanceCS {
+impl Drop for Instance2 {
     fn drop(&mut self) {
         if let Some(free) = self.library.api.free_fmu_state {
             for s in self.states.iter_mut().filter_map(|s| s.as_mut()) {
@@ -436,7 +488,7 @@ fn missing(what: &str) -> Fmi2Error {
     Fmi2Error::Importer(format!("the FMU has no {what}"))
 }
 
-impl InstanceCS {
+impl Instance2 {
     fn api(&self) -> &Api {
         &self.library.api
     }

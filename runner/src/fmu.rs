@@ -1,19 +1,30 @@
-//! One FMU, loaded through the runner's importer ([`crate::fmi2`]: an archive unpacked into a
-//! temporary folder it removes again, or a folder already unpacked), with its variables by name.
+//! One FMU, loaded through the runner's importers ([`crate::fmi2`], [`crate::fmi3`]: an archive
+//! unpacked into a temporary folder it removes again, or a folder already unpacked), with its
+//! variables by name (an FMI 3.0 FMU's as the FMI 2.0 ones they are: [`crate::fmi3::as_fmi2`]).
 
 use crate::Error;
 use crate::fmi2::{Fmi2Import, InstanceCS};
+use crate::fmi3::Fmi3Import;
 use fmi_description::Causality;
 use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
 use std::io::{Cursor, Read};
 
 pub use fmi_description::fmi2::Type as VarType;
 
+/// The importer of an FMU's version.
+pub enum Import {
+    V2(Fmi2Import),
+    V3(Fmi3Import),
+}
+
 pub struct Fmu {
     /// Where it came from ("resources/Pendulum.fmu" of an SSP file, or a path).
     pub label: String,
+    /// FMI 2.0's, or an FMI 3.0 FMU's read as FMI 2.0's.
     pub description: Description,
-    pub import: Fmi2Import,
+    pub import: Import,
+    /// An FMI 3.0 FMU's variables the runner does not read: (name, type).
+    pub skipped: Vec<(String, String)>,
     /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
     /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
     pub feedthrough: Vec<u32>,
@@ -33,10 +44,15 @@ impl Fmu {
             .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
             .read_to_string(&mut xml)
             .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-        let description = Fmu::description(component, label, &xml)?;
-        let import = Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid)
-            .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import)
+        let (description, int64, skipped) = Fmu::description(component, label, &xml)?;
+        let import = match int64 {
+            None => Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid).map(Import::V2),
+            Some(int64) => {
+                Fmi3Import::from_bytes(&bytes, description.model_identifier(), &description.guid, int64).map(Import::V3)
+            }
+        }
+        .map_err(|e| fail(format!("cannot import: {e}")))?;
+        Fmu::with(component, label, description, import, skipped)
     }
 
     /// Loads the FMU unpacked in the folder `dir` (a container's components).
@@ -47,29 +63,52 @@ impl Fmu {
         };
         let path = dir.join("modelDescription.xml");
         let xml = std::fs::read_to_string(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-        let description = Fmu::description(component, label, &xml)?;
-        let import = Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid)
-            .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import)
+        let (description, int64, skipped) = Fmu::description(component, label, &xml)?;
+        let import = match int64 {
+            None => Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid).map(Import::V2),
+            Some(int64) => {
+                Fmi3Import::from_dir(dir, description.model_identifier(), &description.guid, int64).map(Import::V3)
+            }
+        }
+        .map_err(|e| fail(format!("cannot import: {e}")))?;
+        Fmu::with(component, label, description, import, skipped)
     }
 
-    /// The description of `xml`, checked to be one of an FMI 2.0 co-simulation FMU.
-    fn description(component: &str, label: &str, xml: &str) -> Result<Description, Error> {
+    /// The description of `xml`, checked to be one of an FMI 2.0 or 3.0 co-simulation FMU; for
+    /// FMI 3.0 also the value references read with fmi3GetInt64 and the variables left out.
+    #[allow(clippy::type_complexity)]
+    fn description(
+        component: &str,
+        label: &str,
+        xml: &str,
+    ) -> Result<
+        (
+            Description,
+            Option<std::collections::HashSet<u32>>,
+            Vec<(String, String)>,
+        ),
+        Error,
+    > {
         let fail = |what: String| Error {
             component: Some(component.to_owned()),
             ..Error::io(format!("component '{component}' ({label}): {what}"))
         };
         let version = fmi_description::fmi_version(xml).map_err(fail)?;
-        if !version.starts_with("2.") {
+        let (description, int64, skipped) = if version.starts_with("3.") {
+            let d3 = fmi_description::fmi3::ModelDescription::parse(xml).map_err(fail)?;
+            let parts = crate::fmi3::as_fmi2(&d3);
+            (parts.description, Some(parts.int64), parts.skipped)
+        } else if version.starts_with("2.") {
+            (Description::parse(xml).map_err(fail)?, None, Vec::new())
+        } else {
             return Err(Error::unsupported(
                 Some(component),
                 None,
                 format!(
-                    "component '{component}' ({label}): an FMI {version} FMU; the runner runs FMI 2.0 co-simulation FMUs only"
+                    "component '{component}' ({label}): an FMI {version} FMU; the runner runs FMI 2.0 and 3.0 co-simulation FMUs"
                 ),
             ));
-        }
-        let description = Description::parse(xml).map_err(fail)?;
+        };
         if description.cs.is_none() {
             return Err(Error::unsupported(
                 Some(component),
@@ -79,10 +118,16 @@ impl Fmu {
                 ),
             ));
         }
-        Ok(description)
+        Ok((description, int64, skipped))
     }
 
-    fn with(component: &str, label: &str, description: Description, import: Fmi2Import) -> Result<Fmu, Error> {
+    fn with(
+        component: &str,
+        label: &str,
+        description: Description,
+        import: Import,
+        skipped: Vec<(String, String)>,
+    ) -> Result<Fmu, Error> {
         let fail = |what: String| Error {
             component: Some(component.to_owned()),
             ..Error::io(format!("component '{component}' ({label}): {what}"))
@@ -114,6 +159,7 @@ impl Fmu {
             label: label.to_owned(),
             description,
             import,
+            skipped,
             feedthrough,
         })
     }
@@ -138,6 +184,16 @@ impl Fmu {
             .iter()
             .find(|v| v.name == name)
             .ok_or_else(|| {
+                if let Some((_, ty)) = self.skipped.iter().find(|(n, _)| n == name) {
+                    return Error::unsupported(
+                        Some(component),
+                        Some(name),
+                        format!(
+                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}, a type the runner does not read (it reads Float64, Int32, Enumeration, Boolean, String scalars)",
+                            self.model_identifier()
+                        ),
+                    );
+                }
                 let names: Vec<&str> = self.description.variables.iter().map(|v| v.name.as_str()).collect();
                 Error::variable(
                     component,
@@ -153,19 +209,35 @@ impl Fmu {
 
     /// A co-simulation instance.
     pub fn instantiate(&self, component: &str) -> Result<InstanceCS, Error> {
-        self.import
-            .instantiate_cs(component, false, false)
-            .map_err(|e: String| Error {
-                component: Some(component.to_owned()),
-                function: Some("fmi2Instantiate".into()),
-                ..Error::new(
-                    crate::ErrorKind::Fmi,
-                    format!(
-                        "component '{component}' ({}): fmi2Instantiate failed: {e}",
-                        self.model_identifier()
-                    ),
-                )
-            })
+        let (function, r) = match &self.import {
+            Import::V2(i) => (
+                "fmi2Instantiate",
+                i.instantiate_cs(component, false, false).map(InstanceCS::V2),
+            ),
+            Import::V3(i) => (
+                "fmi3InstantiateCoSimulation",
+                i.instantiate_cs(component, false, false).map(InstanceCS::V3),
+            ),
+        };
+        r.map_err(|e: String| Error {
+            component: Some(component.to_owned()),
+            function: Some(function.into()),
+            ..Error::new(
+                crate::ErrorKind::Fmi,
+                format!(
+                    "component '{component}' ({}): {function} failed: {e}",
+                    self.model_identifier()
+                ),
+            )
+        })
+    }
+
+    /// The FMI version of the FMU, "2.0" or "3.0".
+    pub fn fmi_version(&self) -> &'static str {
+        match self.import {
+            Import::V2(_) => "2.0",
+            Import::V3(_) => "3.0",
+        }
     }
 }
 

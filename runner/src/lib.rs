@@ -22,6 +22,7 @@
 
 pub mod container;
 pub mod fmi2;
+pub mod fmi3;
 pub mod fmu;
 pub mod fmu_log;
 pub mod sim;

@@ -160,6 +160,32 @@ struct Slave {
     /// Index into `Simulation::fmus`.
     fmu: usize,
     instance: Option<InstanceCS>,
+    /// An FMI 3.0 FMU: its functions' names in messages are FMI 3.0's ([`fname`]).
+    v3: bool,
+}
+
+/// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
+fn fname(v3: bool, name: &'static str) -> &'static str {
+    if !v3 {
+        return name;
+    }
+    match name {
+        "fmi2SetReal" => "fmi3SetFloat64",
+        "fmi2GetReal" => "fmi3GetFloat64",
+        "fmi2SetInteger" => "fmi3SetInt32/fmi3SetInt64",
+        "fmi2GetInteger" => "fmi3GetInt32/fmi3GetInt64",
+        "fmi2SetBoolean" => "fmi3SetBoolean",
+        "fmi2GetBoolean" => "fmi3GetBoolean",
+        "fmi2SetString" => "fmi3SetString",
+        "fmi2Reset" => "fmi3Reset",
+        "fmi2SetupExperiment" | "fmi2EnterInitializationMode" => "fmi3EnterInitializationMode",
+        "fmi2ExitInitializationMode" => "fmi3ExitInitializationMode",
+        "fmi2DoStep" => "fmi3DoStep",
+        "fmi2Terminate" => "fmi3Terminate",
+        "fmi2GetFMUstate" => "fmi3GetFMUState",
+        "fmi2SetFMUstate" => "fmi3SetFMUState",
+        other => other,
+    }
 }
 
 /// Real value references of one instance and their values.
@@ -324,6 +350,7 @@ impl Simulation {
                 name: c.clone(),
                 fmu: *f,
                 instance: Some(fmu.instantiate(c)?),
+                v3: fmu.fmi_version() == "3.0",
             });
         }
         let mut sim = Simulation {
@@ -735,6 +762,7 @@ impl Simulation {
 
     fn set(&mut self, key: &str, t: Target, value: &Setter) -> Result<(), Error> {
         let name = self.slaves[t.slave].name.clone();
+        let v3 = self.slaves[t.slave].v3;
         let variable = key.split_once('.').map_or(key, |(_, v)| v).to_owned();
         let inst = self.instance(t.slave);
         let vr = [t.vr];
@@ -746,7 +774,7 @@ impl Simulation {
         };
         r.map_err(|err| Error {
             variable: Some(variable.clone()),
-            ..Error::fmi(&name, function, &err, None, &format!("{variable} = {value}"))
+            ..Error::fmi(&name, fname(v3, function), &err, None, &format!("{variable} = {value}"))
         })
     }
 
@@ -758,7 +786,7 @@ impl Simulation {
             .expect("instantiated")
             .get_real(&port.vrs, &mut port.buf)
             .map(|_| ())
-            .map_err(|e| Error::fmi(&s.name, "fmi2GetReal", &e, Some(t), "connected outputs"))
+            .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2GetReal"), &e, Some(t), "connected outputs"))
     }
 
     fn write(&mut self, w: usize, t: f64) -> Result<(), Error> {
@@ -773,7 +801,7 @@ impl Simulation {
             .expect("instantiated")
             .set_real(&write.port.vrs, &write.port.buf)
             .map(|_| ())
-            .map_err(|e| Error::fmi(&s.name, "fmi2SetReal", &e, Some(t), "connected inputs"))
+            .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2SetReal"), &e, Some(t), "connected inputs"))
     }
 
     /// Sets every connected input from its output, as [`Simulation::scheme`] says.
@@ -863,7 +891,7 @@ impl Simulation {
                 let name = self.slaves[i].name.clone();
                 self.instance(i)
                     .reset()
-                    .map_err(fmi_err(&name, "fmi2Reset", None, ""))?;
+                    .map_err(fmi_err(&name, fname(self.slaves[i].v3, "fmi2Reset"), None, ""))?;
             }
         }
         self.runs += 1;
@@ -874,13 +902,18 @@ impl Simulation {
             let name = self.slaves[i].name.clone();
             self.instance(i)
                 .setup_experiment(None, 0.0, Some(stop_time))
-                .map_err(fmi_err(&name, "fmi2SetupExperiment", None, ""))?;
+                .map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2SetupExperiment"),
+                    None,
+                    "",
+                ))?;
         }
         for i in 0..self.slaves.len() {
             let name = self.slaves[i].name.clone();
             self.instance(i).enter_initialization_mode().map_err(fmi_err(
                 &name,
-                "fmi2EnterInitializationMode",
+                fname(self.slaves[i].v3, "fmi2EnterInitializationMode"),
                 None,
                 "",
             ))?;
@@ -892,7 +925,7 @@ impl Simulation {
             let name = self.slaves[i].name.clone();
             self.instance(i).exit_initialization_mode().map_err(fmi_err(
                 &name,
-                "fmi2ExitInitializationMode",
+                fname(self.slaves[i].v3, "fmi2ExitInitializationMode"),
                 None,
                 "",
             ))?;
@@ -923,7 +956,7 @@ impl Simulation {
                 .as_mut()
                 .expect("instantiated")
                 .do_step(t, h, no_set_prior)
-                .map_err(|e| Error::fmi(&s.name, "fmi2DoStep", &e, Some(t), &format!("step {h} s")))?;
+                .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s")))?;
         }
         Ok(())
     }
@@ -932,9 +965,12 @@ impl Simulation {
     pub fn terminate(&mut self) -> Result<(), Error> {
         for i in 0..self.slaves.len() {
             let name = self.slaves[i].name.clone();
-            self.instance(i)
-                .terminate()
-                .map_err(fmi_err(&name, "fmi2Terminate", None, ""))?;
+            self.instance(i).terminate().map_err(fmi_err(
+                &name,
+                fname(self.slaves[i].v3, "fmi2Terminate"),
+                None,
+                "",
+            ))?;
         }
         Ok(())
     }
@@ -943,9 +979,12 @@ impl Simulation {
     pub fn get_real(&mut self, component: &str, vrs: &[u32]) -> Result<Vec<f64>, Error> {
         let i = self.slave_index(component)?;
         let mut out = vec![0.0; vrs.len()];
-        self.instance(i)
-            .get_real(vrs, &mut out)
-            .map_err(fmi_err(component, "fmi2GetReal", None, ""))?;
+        self.instance(i).get_real(vrs, &mut out).map_err(fmi_err(
+            component,
+            fname(self.slaves[i].v3, "fmi2GetReal"),
+            None,
+            "",
+        ))?;
         Ok(out)
     }
 
@@ -1117,18 +1156,23 @@ impl Simulation {
         if slots.is_empty() {
             for i in 0..self.slaves.len() {
                 let name = self.slaves[i].name.clone();
-                let st = self
-                    .instance(i)
-                    .get_fmu_state()
-                    .map_err(fmi_err(&name, "fmi2GetFMUstate", Some(t), ""))?;
+                let st = self.instance(i).get_fmu_state().map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
+                    Some(t),
+                    "",
+                ))?;
                 slots.push(st);
             }
         } else {
             for (i, slot) in slots.iter().enumerate() {
                 let name = self.slaves[i].name.clone();
-                self.instance(i)
-                    .update_fmu_state(slot)
-                    .map_err(fmi_err(&name, "fmi2GetFMUstate", Some(t), ""))?;
+                self.instance(i).update_fmu_state(slot).map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
+                    Some(t),
+                    "",
+                ))?;
             }
         }
         Ok(())
@@ -1139,7 +1183,7 @@ impl Simulation {
             let name = self.slaves[i].name.clone();
             self.instance(i).set_fmu_state(slot).map_err(fmi_err(
                 &name,
-                "fmi2SetFMUstate",
+                fname(self.slaves[i].v3, "fmi2SetFMUstate"),
                 Some(t),
                 "rolling back a rejected step",
             ))?;
@@ -1164,7 +1208,7 @@ impl Simulation {
                 .as_mut()
                 .expect("instantiated")
                 .get_real(&[w.vr], &mut x)
-                .map_err(|e| Error::fmi(&s.name, "fmi2GetReal", &e, Some(t), "error estimate"))?;
+                .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2GetReal"), &e, Some(t), "error estimate"))?;
             out.push(x[0]);
         }
         Ok(())
@@ -1282,7 +1326,7 @@ impl Simulation {
                 Kind::Integer => ("fmi2GetInteger", inst.get_integer(&g.vrs, &mut g.ints)),
                 Kind::Boolean => ("fmi2GetBoolean", inst.get_boolean(&g.vrs, &mut g.ints)),
             };
-            r.map_err(|e| Error::fmi(&s.name, f, &e, Some(t), "recorded variables"))?;
+            r.map_err(|e| Error::fmi(&s.name, fname(s.v3, f), &e, Some(t), "recorded variables"))?;
             for (j, c) in g.columns.iter().enumerate() {
                 row[*c] = match g.kind {
                     Kind::Real => g.reals[j],

@@ -204,20 +204,31 @@ fn tmpdir(name: &str) -> PathBuf {
 }
 
 #[test]
-fn an_fmi3_fmu_is_refused_naming_the_component() {
+fn an_fmu_the_runner_cannot_import_is_refused_naming_the_component() {
     let dir = tmpdir("fmi3");
+    // FMI 3.0 is read, but this one has no binary for the platform.
     let path = archive_with(
-        r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="3.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/></fmiModelDescription>"#,
+        r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="3.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/><ModelVariables/></fmiModelDescription>"#,
         &dir,
     );
     let e = Simulation::from_ssp(&path)
         .err()
-        .expect("an FMI 3.0 FMU must be refused");
+        .expect("an FMU without a binary must be refused");
+    assert!(
+        e.message.contains("component 'plant3'") && e.message.contains("no binary for this platform"),
+        "{e}"
+    );
+    let dir4 = tmpdir("fmi4");
+    let path = archive_with(
+        r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="4.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/></fmiModelDescription>"#,
+        &dir4,
+    );
+    let e = Simulation::from_ssp(&path)
+        .err()
+        .expect("an FMI 4.0 FMU must be refused");
     assert_eq!(e.kind, ErrorKind::Unsupported);
     assert!(
-        e.message.contains("component 'plant3'")
-            && e.message.contains("FMI 3.0")
-            && e.message.contains("FMI 2.0 co-simulation"),
+        e.message.contains("component 'plant3'") && e.message.contains("FMI 4.0"),
         "{e}"
     );
     let e = match Simulation::from_ssp(&dir.join("missing.ssp")) {

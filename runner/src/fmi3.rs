@@ -1,0 +1,693 @@
+//! The runner's FMI 3.0 co-simulation importer: an FMU unpacked (or found unpacked), its binary
+//! loaded once, instances (without event mode), values, steps and FMU states, behind the same
+//! [`crate::fmi2::InstanceCS`] as FMI 2.0 instances, so a system mixes both.
+//!
+//! The runner reads an FMI 3.0 FMU as the FMI 2.0 one it would be ([`as_fmi2`]): Float64 as
+//! Real, Int32 as Integer, Enumeration (read and set here with fmi3GetInt64 / fmi3SetInt64),
+//! Boolean (C `bool`), String; variables of the other types and arrays are left out, named in
+//! [`Fmi3Parts::skipped`] (a connection or parameter naming one is refused with its type).
+//! Written here for the reasons of [`crate::fmi2`]'s header, and because the `fmi` crate's FMI 3.0
+//! description parser refuses FMI 3.0 units; the description is `fmi-description`'s.
+
+#![allow(non_upper_case_globals, non_camel_case_types)]
+
+use crate::fmi2::{Fmi2Error, FmuState, Scratch, scratch};
+use fmi_description::Causality;
+use fmi_description::fmi2 as d2;
+use fmi_description::fmi3 as d3;
+use rustfmu::fmi3::abi::*;
+use std::collections::HashSet;
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
+    match status {
+        fmi3OK | fmi3Warning => Ok(()),
+        fmi3Discard => Err(Fmi2Error::Discard),
+        fmi3Error => Err(Fmi2Error::Error),
+        fmi3Fatal => Err(Fmi2Error::Fatal),
+        s => Err(Fmi2Error::Unknown(s)),
+    }
+}
+
+type Get<T> = unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *mut T, usize) -> fmi3Status;
+type Set<T> = unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *const T, usize) -> fmi3Status;
+type InstantiateCS = unsafe extern "C" fn(
+    fmi3String,
+    fmi3String,
+    fmi3String,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3Boolean,
+    *const fmi3ValueReference,
+    usize,
+    fmi3InstanceEnvironment,
+    fmi3LogMessageCallback,
+    fmi3IntermediateUpdateCallback,
+) -> fmi3Instance;
+type InstanceFunction = unsafe extern "C" fn(fmi3Instance) -> fmi3Status;
+type EnterInit =
+    unsafe extern "C" fn(fmi3Instance, fmi3Boolean, fmi3Float64, fmi3Float64, fmi3Boolean, fmi3Float64) -> fmi3Status;
+type DoStep = unsafe extern "C" fn(
+    fmi3Instance,
+    fmi3Float64,
+    fmi3Float64,
+    fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Float64,
+) -> fmi3Status;
+type SetDebugLogging = unsafe extern "C" fn(fmi3Instance, fmi3Boolean, usize, *const fmi3String) -> fmi3Status;
+type GetState = unsafe extern "C" fn(fmi3Instance, *mut fmi3FMUState) -> fmi3Status;
+type SetState = unsafe extern "C" fn(fmi3Instance, fmi3FMUState) -> fmi3Status;
+type StateSize = unsafe extern "C" fn(fmi3Instance, fmi3FMUState, *mut usize) -> fmi3Status;
+type Serialize = unsafe extern "C" fn(fmi3Instance, fmi3FMUState, *mut fmi3Byte, usize) -> fmi3Status;
+type Deserialize = unsafe extern "C" fn(fmi3Instance, *const fmi3Byte, usize, *mut fmi3FMUState) -> fmi3Status;
+
+/// The functions of an FMI 3.0 co-simulation binary the runner calls.
+struct Api {
+    instantiate: InstantiateCS,
+    free_instance: unsafe extern "C" fn(fmi3Instance),
+    set_debug_logging: SetDebugLogging,
+    enter_initialization_mode: EnterInit,
+    exit_initialization_mode: InstanceFunction,
+    terminate: InstanceFunction,
+    reset: InstanceFunction,
+    get_float64: Get<f64>,
+    get_int32: Get<i32>,
+    get_int64: Get<i64>,
+    get_boolean: Get<bool>,
+    get_string: Get<fmi3String>,
+    set_float64: Set<f64>,
+    set_int32: Set<i32>,
+    set_int64: Set<i64>,
+    set_boolean: Set<bool>,
+    set_string: Set<fmi3String>,
+    do_step: DoStep,
+    get_fmu_state: GetState,
+    set_fmu_state: SetState,
+    free_fmu_state: GetState,
+    serialized_size: StateSize,
+    serialize: Serialize,
+    deserialize: Deserialize,
+}
+
+/// A loaded FMI 3.0 binary.
+struct Library {
+    api: Api,
+    _lib: libloading::Library,
+}
+
+impl Library {
+    fn load(path: &Path) -> Result<Library, String> {
+        // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
+        // importer trusts the FMU it was given.
+        let lib =
+            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+        // SAFETY: each symbol is an FMI 3.0 function of the type fmi3FunctionTypes.h gives
+        // (every one is exported by an FMI 3.0 binary: FMI 3.0, 2.3.1).
+        let api = unsafe {
+            macro_rules! f {
+                ($name:literal) => {
+                    *lib.get(concat!($name, "\0").as_bytes())
+                        .map_err(|e| format!("{}: no function {} ({e})", path.display(), $name))?
+                };
+            }
+            Api {
+                instantiate: f!("fmi3InstantiateCoSimulation"),
+                free_instance: f!("fmi3FreeInstance"),
+                set_debug_logging: f!("fmi3SetDebugLogging"),
+                enter_initialization_mode: f!("fmi3EnterInitializationMode"),
+                exit_initialization_mode: f!("fmi3ExitInitializationMode"),
+                terminate: f!("fmi3Terminate"),
+                reset: f!("fmi3Reset"),
+                get_float64: f!("fmi3GetFloat64"),
+                get_int32: f!("fmi3GetInt32"),
+                get_int64: f!("fmi3GetInt64"),
+                get_boolean: f!("fmi3GetBoolean"),
+                get_string: f!("fmi3GetString"),
+                set_float64: f!("fmi3SetFloat64"),
+                set_int32: f!("fmi3SetInt32"),
+                set_int64: f!("fmi3SetInt64"),
+                set_boolean: f!("fmi3SetBoolean"),
+                set_string: f!("fmi3SetString"),
+                do_step: f!("fmi3DoStep"),
+                get_fmu_state: f!("fmi3GetFMUState"),
+                set_fmu_state: f!("fmi3SetFMUState"),
+                free_fmu_state: f!("fmi3FreeFMUState"),
+                serialized_size: f!("fmi3SerializedFMUStateSize"),
+                serialize: f!("fmi3SerializeFMUState"),
+                deserialize: f!("fmi3DeserializeFMUState"),
+            }
+        };
+        Ok(Library { api, _lib: lib })
+    }
+}
+
+/// The FMI 3.0 platform folder (`<arch>-<os>`) of the machine this runs on.
+pub fn platform_folder() -> Option<String> {
+    let arch = match std::env::consts::ARCH {
+        "x86_64" => "x86_64",
+        "x86" => "x86",
+        "aarch64" => "aarch64",
+        _ => return None,
+    };
+    let os = match std::env::consts::OS {
+        "linux" => "linux",
+        "windows" => "windows",
+        "macos" => "darwin",
+        _ => return None,
+    };
+    Some(format!("{arch}-{os}"))
+}
+
+/// An FMI 3.0 description read as the runner's FMI 2.0 one, and what was left out of it.
+pub struct Fmi3Parts {
+    pub description: d2::ModelDescription,
+    /// Value references of the Enumeration variables (fmi3GetInt64 / fmi3SetInt64).
+    pub int64: HashSet<u32>,
+    /// (name, FMI 3.0 type) of the variables the runner does not read: other types, arrays.
+    pub skipped: Vec<(String, String)>,
+}
+
+/// The FMI 3.0 description `d` as the FMI 2.0 one the runner reads (see the module).
+pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
+    let mut variables = Vec::new();
+    let mut int64 = HashSet::new();
+    let mut skipped = Vec::new();
+    for v in &d.variables {
+        let ty = match v.ty {
+            d3::Type::Float64 => Some(d2::Type::Real),
+            d3::Type::Int32 => Some(d2::Type::Integer),
+            d3::Type::Enumeration => Some(d2::Type::Enumeration),
+            d3::Type::Boolean => Some(d2::Type::Boolean),
+            d3::Type::String => Some(d2::Type::String),
+            _ => None,
+        };
+        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && v.clocks.is_empty()) else {
+            if v.causality != Causality::Independent {
+                let what = if v.dimensions.is_empty() && !v.array {
+                    format!("{:?}", v.ty)
+                } else {
+                    format!("{:?} array", v.ty)
+                };
+                skipped.push((v.name.clone(), what));
+            }
+            continue;
+        };
+        if ty == d2::Type::Enumeration {
+            int64.insert(v.vr);
+        }
+        variables.push(d2::Variable {
+            name: v.name.clone(),
+            vr: v.vr,
+            ty,
+            causality: v.causality,
+            variability: v.variability,
+            declared_initial: v.declared_initial,
+            start: v.start.clone(),
+            min: v.min,
+            max: v.max,
+            derivative: None,
+            declared_type: v.declared_type.clone(),
+            unit: v.unit.clone(),
+            description: v.description.clone(),
+        });
+    }
+    let index = |vr: u32| variables.iter().position(|x: &d2::Variable| x.vr == vr).map(|i| i + 1);
+    let outputs = d
+        .outputs
+        .iter()
+        .filter_map(|u| {
+            Some(d2::Unknown {
+                index: index(u.vr)?,
+                dependencies: u
+                    .dependencies
+                    .as_ref()
+                    .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
+            })
+        })
+        .collect();
+    let cs = d.cs.as_ref().map(|cs| d2::CoSimulation {
+        model_identifier: cs.model_identifier.clone(),
+        can_get_and_set_fmu_state: cs.can_get_and_set_fmu_state,
+        can_serialize_fmu_state: cs.can_serialize_fmu_state,
+        provides_directional_derivative: cs.provides_directional_derivatives,
+        can_handle_variable_step: cs.can_handle_variable_step,
+        can_interpolate_inputs: false,
+        max_output_derivative_order: cs.max_output_derivative_order,
+        can_run_asynchronuously: false,
+    });
+    let description = d2::ModelDescription {
+        fmi_version: d.fmi_version.clone(),
+        model_name: d.model_name.clone(),
+        guid: d.token.clone(),
+        description: d.description.clone(),
+        version: d.version.clone(),
+        generation_tool: d.generation_tool.clone(),
+        number_of_event_indicators: 0,
+        cs,
+        me: None,
+        enumerations: Vec::new(),
+        log_categories: d.log_categories.clone(),
+        default_experiment: d.default_experiment.clone(),
+        variables,
+        model_structure: d2::ModelStructure {
+            outputs,
+            derivatives: Vec::new(),
+            initial_unknowns: Vec::new(),
+            errors: d.errors.clone(),
+        },
+    };
+    Fmi3Parts {
+        description,
+        int64,
+        skipped,
+    }
+}
+
+/// An FMI 3.0 FMU ready to instantiate: its folder and binary.
+pub struct Fmi3Import {
+    dir: PathBuf,
+    library: Arc<Library>,
+    token: CString,
+    resource_path: CString,
+    int64: Arc<HashSet<u32>>,
+    /// Last: the unpacked folder goes after the library is unloaded.
+    _scratch: Option<Scratch>,
+}
+
+impl Fmi3Import {
+    /// Unpacks the FMU archive `bytes` into a fresh temporary folder (removed when this is dropped).
+    pub fn from_bytes(
+        bytes: &[u8],
+        model_identifier: &str,
+        token: &str,
+        int64: HashSet<u32>,
+    ) -> Result<Fmi3Import, String> {
+        let tmp = scratch()?;
+        let mut zip =
+            zip::ZipArchive::new(std::io::Cursor::new(bytes)).map_err(|e| format!("not a zip archive: {e}"))?;
+        zip.extract(&tmp.0)
+            .map_err(|e| format!("cannot unpack into {}: {e}", tmp.0.display()))?;
+        let mut import = Fmi3Import::from_dir(&tmp.0, model_identifier, token, int64)?;
+        import._scratch = Some(tmp);
+        Ok(import)
+    }
+
+    /// The FMU unpacked in `dir` (left as it is).
+    pub fn from_dir(
+        dir: &Path,
+        model_identifier: &str,
+        token: &str,
+        int64: HashSet<u32>,
+    ) -> Result<Fmi3Import, String> {
+        let folder = platform_folder().ok_or_else(|| {
+            format!(
+                "FMI 3.0 names no binaries folder for {} on {}",
+                std::env::consts::OS,
+                std::env::consts::ARCH
+            )
+        })?;
+        let binary = dir
+            .join("binaries")
+            .join(&folder)
+            .join(format!("{model_identifier}{}", std::env::consts::DLL_SUFFIX));
+        if !binary.is_file() {
+            return Err(format!("no binary for this platform: {} is missing", binary.display()));
+        }
+        let library = Arc::new(Library::load(&binary)?);
+        // resourcePath: a native absolute path with a trailing separator (FMI 3.0, 2.3.1).
+        let abs = std::path::absolute(dir.join("resources")).unwrap_or_else(|_| dir.join("resources"));
+        let mut path = abs.to_string_lossy().into_owned();
+        if !path.ends_with(std::path::MAIN_SEPARATOR) {
+            path.push(std::path::MAIN_SEPARATOR);
+        }
+        Ok(Fmi3Import {
+            dir: dir.to_path_buf(),
+            library,
+            token: CString::new(token).map_err(|_| "an instantiation token with a NUL".to_string())?,
+            resource_path: CString::new(path).map_err(|_| "a path with a NUL".to_string())?,
+            int64: Arc::new(int64),
+            _scratch: None,
+        })
+    }
+
+    /// Where the FMU is unpacked.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// fmi3InstantiateCoSimulation(name, ...) without event mode, with the runner's logger.
+    pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
+        let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
+        let env = Box::new(Env {
+            instance: name_c.clone(),
+        });
+        // SAFETY: valid C strings; the environment outlives the instance (dropped after
+        // fmi3FreeInstance).
+        let c = unsafe {
+            (self.library.api.instantiate)(
+                name_c.as_ptr(),
+                self.token.as_ptr(),
+                self.resource_path.as_ptr(),
+                visible,
+                logging_on,
+                false,
+                false,
+                std::ptr::null(),
+                0,
+                &*env as *const Env as *mut c_void,
+                Some(log_message),
+                None,
+            )
+        };
+        if c.is_null() {
+            return Err("fmi3InstantiateCoSimulation returned NULL".into());
+        }
+        Ok(Instance3 {
+            library: self.library.clone(),
+            c,
+            states: Vec::new(),
+            experiment: (None, 0.0, None),
+            int64: self.int64.clone(),
+            _env: env,
+        })
+    }
+}
+
+/// The instanceEnvironment of an instance: its name, for the messages.
+struct Env {
+    instance: CString,
+}
+
+/// Every FMU message goes to the `log` crate as FMI 2.0 ones do (module path "logger", target
+/// the instance name, the level from the status).
+unsafe extern "C" fn log_message(
+    env: fmi3InstanceEnvironment,
+    status: fmi3Status,
+    category: fmi3String,
+    message: fmi3String,
+) {
+    let _ = std::panic::catch_unwind(|| {
+        let s = |p: *const c_char| {
+            if p.is_null() {
+                String::new()
+            } else {
+                // SAFETY: the FMU passes NUL-terminated strings.
+                unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+            }
+        };
+        let name = if env.is_null() {
+            String::new()
+        } else {
+            // SAFETY: `env` is the Env this instance was given.
+            unsafe { &*(env as *const Env) }.instance.to_string_lossy().into_owned()
+        };
+        let _ = s(category);
+        let level = match status {
+            fmi3OK => log::Level::Info,
+            fmi3Warning => log::Level::Warn,
+            fmi3Discard => log::Level::Trace,
+            _ => log::Level::Error,
+        };
+        log::logger().log(
+            &log::Record::builder()
+                .args(format_args!("{}", s(message)))
+                .level(level)
+                .module_path(Some("logger"))
+                .target(&name)
+                .build(),
+        );
+    });
+}
+
+/// An FMI 3.0 co-simulation instance; fmi3FreeInstance when dropped (its FMU states freed first).
+pub struct Instance3 {
+    library: Arc<Library>,
+    c: fmi3Instance,
+    states: Vec<Option<fmi3FMUState>>,
+    /// tolerance, start and stop time of `setup_experiment`, for fmi3EnterInitializationMode.
+    experiment: (Option<f64>, f64, Option<f64>),
+    int64: Arc<HashSet<u32>>,
+    _env: Box<Env>,
+}
+
+// SAFETY: as an FMI 2.0 instance (FMI 3.0, 2.2.1: one thread at a time).
+unsafe impl Send for Instance3 {}
+
+impl Drop for Instance3 {
+    fn drop(&mut self) {
+        for s in self.states.iter_mut().filter_map(|s| s.as_mut()) {
+            // SAFETY: a state this instance took and did not free.
+            unsafe { (self.library.api.free_fmu_state)(self.c, s) };
+        }
+        // SAFETY: the instance this library made, freed once.
+        unsafe { (self.library.api.free_instance)(self.c) };
+    }
+}
+
+fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {
+    if vrs == values {
+        Ok(())
+    } else {
+        Err(Fmi2Error::Importer(format!("{vrs} value references, {values} values")))
+    }
+}
+
+impl Instance3 {
+    fn api(&self) -> &Api {
+        &self.library.api
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error> {
+        let owned: Vec<CString> = categories
+            .iter()
+            .map(|c| CString::new(*c).unwrap_or_default())
+            .collect();
+        let ptrs: Vec<fmi3String> = owned.iter().map(|c| c.as_ptr()).collect();
+        // SAFETY: a live instance; `ptrs` holds `len` valid strings.
+        check(unsafe { (self.api().set_debug_logging)(self.c, on, ptrs.len(), ptrs.as_ptr()) })
+    }
+
+    /// Kept for fmi3EnterInitializationMode, which takes them (FMI 3.0 has no setup function).
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error> {
+        self.experiment = (tolerance, start, stop);
+        Ok(())
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        let (tol, start, stop) = self.experiment;
+        // SAFETY: a live instance.
+        check(unsafe {
+            (self.api().enter_initialization_mode)(
+                self.c,
+                tol.is_some(),
+                tol.unwrap_or(0.0),
+                start,
+                stop.is_some(),
+                stop.unwrap_or(0.0),
+            )
+        })
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().exit_initialization_mode)(self.c) })
+    }
+
+    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().terminate)(self.c) })
+    }
+
+    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().reset)(self.c) })
+    }
+
+    pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
+        // SAFETY: a live instance; the four outputs point to locals.
+        check(unsafe {
+            (self.api().do_step)(
+                self.c,
+                t,
+                h,
+                no_set_prior,
+                &mut event,
+                &mut terminate,
+                &mut early,
+                &mut last,
+            )
+        })?;
+        if terminate {
+            return Err(Fmi2Error::Importer(format!(
+                "fmi3DoStep({t}, {h}) asked to terminate the simulation at {last}"
+            )));
+        }
+        if early {
+            return Err(Fmi2Error::Importer(format!(
+                "fmi3DoStep({t}, {h}) returned early at {last} (not allowed: earlyReturnAllowed = false)"
+            )));
+        }
+        Ok(())
+    }
+
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), out.len())?;
+        // SAFETY: a live instance; both arrays hold vrs.len() elements (every variable a scalar).
+        check(unsafe { (self.api().get_float64)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr(), out.len()) })
+    }
+
+    /// Int32 variables, and Enumerations (fmi3GetInt64, narrowed).
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), out.len())?;
+        for (k, vr) in vrs.iter().enumerate() {
+            if self.int64.contains(vr) {
+                let mut x = [0i64];
+                // SAFETY: a live instance; one value.
+                check(unsafe { (self.api().get_int64)(self.c, vr, 1, x.as_mut_ptr(), 1) })?;
+                out[k] = i32::try_from(x[0])
+                    .map_err(|_| Fmi2Error::Importer(format!("value reference {vr}: {} does not fit 32 bits", x[0])))?;
+            } else {
+                // SAFETY: as above.
+                check(unsafe { (self.api().get_int32)(self.c, vr, 1, &mut out[k], 1) })?;
+            }
+        }
+        Ok(())
+    }
+
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), out.len())?;
+        let mut b = vec![false; vrs.len()];
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().get_boolean)(self.c, vrs.as_ptr(), vrs.len(), b.as_mut_ptr(), b.len()) })?;
+        for (o, x) in out.iter_mut().zip(b) {
+            *o = i32::from(x);
+        }
+        Ok(())
+    }
+
+    pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), out.len())?;
+        let mut ptrs: Vec<fmi3String> = vec![std::ptr::null(); vrs.len()];
+        // SAFETY: as get_real; the FMU's strings are copied before the next call.
+        check(unsafe { (self.api().get_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_mut_ptr(), ptrs.len()) })?;
+        for (o, p) in out.iter_mut().zip(&ptrs) {
+            if p.is_null() {
+                return Err(Fmi2Error::Importer("fmi3GetString gave a NULL string".into()));
+            }
+            // SAFETY: a NUL-terminated string of the FMU, valid until its next call.
+            *o = unsafe { CStr::from_ptr(*p) }.to_owned();
+        }
+        Ok(())
+    }
+
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), values.len())?;
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().set_float64)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr(), values.len()) })
+    }
+
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), values.len())?;
+        for (vr, &x) in vrs.iter().zip(values) {
+            if self.int64.contains(vr) {
+                let wide = [i64::from(x)];
+                // SAFETY: a live instance; one value.
+                check(unsafe { (self.api().set_int64)(self.c, vr, 1, wide.as_ptr(), 1) })?;
+            } else {
+                // SAFETY: as above.
+                check(unsafe { (self.api().set_int32)(self.c, vr, 1, &x, 1) })?;
+            }
+        }
+        Ok(())
+    }
+
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), values.len())?;
+        let b: Vec<bool> = values.iter().map(|&x| x != 0).collect();
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().set_boolean)(self.c, vrs.as_ptr(), vrs.len(), b.as_ptr(), b.len()) })
+    }
+
+    pub fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), values.len())?;
+        let ptrs: Vec<fmi3String> = values.iter().map(|s| s.as_ptr()).collect();
+        // SAFETY: as set_real.
+        check(unsafe { (self.api().set_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_ptr(), ptrs.len()) })
+    }
+
+    pub fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error> {
+        let mut s: fmi3FMUState = std::ptr::null_mut();
+        // SAFETY: a live instance; `s` is NULL, so the FMU makes a new state.
+        check(unsafe { (self.api().get_fmu_state)(self.c, &mut s) })?;
+        self.keep(s)
+    }
+
+    fn keep(&mut self, s: fmi3FMUState) -> Result<FmuState, Fmi2Error> {
+        if s.is_null() {
+            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
+        }
+        match self.states.iter().position(Option::is_none) {
+            Some(i) => {
+                self.states[i] = Some(s);
+                Ok(FmuState(i))
+            }
+            None => {
+                self.states.push(Some(s));
+                Ok(FmuState(self.states.len() - 1))
+            }
+        }
+    }
+
+    fn raw(&self, s: &FmuState) -> Result<fmi3FMUState, Fmi2Error> {
+        self.states
+            .get(s.0)
+            .copied()
+            .flatten()
+            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
+    }
+
+    pub fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        let mut raw = self.raw(s)?;
+        // SAFETY: a live instance and one of its states.
+        check(unsafe { (self.api().get_fmu_state)(self.c, &mut raw) })?;
+        self.states[s.0] = Some(raw);
+        Ok(())
+    }
+
+    pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        let raw = self.raw(s)?;
+        // SAFETY: a live instance and one of its states.
+        check(unsafe { (self.api().set_fmu_state)(self.c, raw) })
+    }
+
+    pub fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error> {
+        let mut raw = self.raw(&s)?;
+        self.states[s.0] = None;
+        // SAFETY: a live instance and one of its states, freed once.
+        check(unsafe { (self.api().free_fmu_state)(self.c, &mut raw) })
+    }
+
+    pub fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error> {
+        let raw = self.raw(s)?;
+        let mut size = 0usize;
+        // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
+        check(unsafe { (self.api().serialized_size)(self.c, raw, &mut size) })?;
+        let mut out = vec![0u8; size];
+        check(unsafe { (self.api().serialize)(self.c, raw, out.as_mut_ptr(), size) })?;
+        Ok(out)
+    }
+
+    pub fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error> {
+        let mut s: fmi3FMUState = std::ptr::null_mut();
+        // SAFETY: a live instance; `bytes` is readable for its length.
+        check(unsafe { (self.api().deserialize)(self.c, bytes.as_ptr(), bytes.len(), &mut s) })?;
+        self.keep(s)
+    }
+}
