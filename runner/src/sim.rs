@@ -637,6 +637,24 @@ impl Simulation {
                     ),
                 ));
             }
+            // Units: both declared and different is a conversion the runner does not make.
+            let unit = |t: Target, name: &str| {
+                self.fmu_of(t.slave)
+                    .description
+                    .variables
+                    .iter()
+                    .find(|v| v.name == name)
+                    .and_then(|v| v.unit.clone())
+            };
+            if let (Some(a), Some(b)) = (unit(from, &k.start.1), unit(to, &k.end.1))
+                && a != b
+            {
+                return Err(Error::unsupported(
+                    Some(&k.end.0),
+                    Some(&k.end.1),
+                    format!("connection {text}: from unit '{a}' to unit '{b}': the runner converts no units"),
+                ));
+            }
             if !source_vars[from.slave].contains(&from.vr) {
                 source_vars[from.slave].push(from.vr);
             }

@@ -118,3 +118,26 @@ def test_an_fmi3_variable_the_runner_does_not_read_is_refused_with_its_type(tmp_
     out = cli("run", file("Float64_fixed_parameter", "nan"), "--stop-time", "0.01", "--step", "1e-3",
               "--record", "f.Float64_continuous_output", "--no-progress")
     assert out.returncode != 0 and "fmi3SetFloat64" in out.stderr, out.stderr
+
+
+def test_a_connection_between_different_units_is_refused_across_versions(tmp_path):
+    """The FMI 3.0 Pendulum's angular velocity (rad/s) into the FMI 2.0 Controller's angle input
+    (rad): refused, naming both units (the runner converts none)."""
+    import re
+
+    path = mixed(tmp_path)
+    out = tmp_path / "Units.ssp"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                text, n = re.subn(
+                    r'startElement="pendulum" startConnector="alpha1" endElement="controller" endConnector="alpha1"',
+                    'startElement="pendulum" startConnector="omega1" endElement="controller" endConnector="alpha1"',
+                    data.decode(),
+                )
+                assert n == 1
+                data = text.encode()
+            dst.writestr(item, data)
+    with pytest.raises(rustfmu_runner.RunnerError, match=r"pendulum\.omega1 -> controller\.alpha1: from unit 'rad/s' to unit 'rad'"):
+        rustfmu_runner.System(str(out))
