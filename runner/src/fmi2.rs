@@ -82,7 +82,10 @@ struct Api {
     set_integer: fmi2SetTYPE<fmi2Integer>,
     set_boolean: fmi2SetTYPE<fmi2Boolean>,
     set_string: fmi2SetTYPE<fmi2String>,
-    do_step: fmi2DoStepTYPE,
+    /// Absent from a model-exchange-only FMU.
+    do_step: Option<fmi2DoStepTYPE>,
+    /// The model-exchange functions (fmi2FunctionTypes.h): absent from a co-simulation-only FMU.
+    me: Option<MeApi>,
     /// The FMU-state functions: absent from an FMU that declares no FMU state.
     get_fmu_state: Option<fmi2GetFMUstateTYPE>,
     set_fmu_state: Option<fmi2SetFMUstateTYPE>,
@@ -90,6 +93,26 @@ struct Api {
     serialized_size: Option<fmi2SerializedFMUstateSizeTYPE>,
     serialize: Option<fmi2SerializeFMUstateTYPE>,
     deserialize: Option<fmi2DeSerializeFMUstateTYPE>,
+}
+
+/// `fmi2GetDerivativesTYPE`, `fmi2GetEventIndicatorsTYPE`, `fmi2GetContinuousStatesTYPE`,
+/// `fmi2GetNominalsOfContinuousStatesTYPE`, `fmi2SetContinuousStatesTYPE` (const).
+type VectorGet = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
+type VectorSet = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
+
+/// The model-exchange functions of an FMI 2.0 binary (fmi2FunctionTypes.h, section 3.2).
+struct MeApi {
+    set_time: unsafe extern "C" fn(fmi2Component, fmi2Real) -> fmi2Status,
+    set_continuous_states: VectorSet,
+    get_derivatives: VectorGet,
+    get_event_indicators: VectorGet,
+    get_continuous_states: VectorGet,
+    get_nominals: VectorGet,
+    completed_integrator_step:
+        unsafe extern "C" fn(fmi2Component, fmi2Boolean, *mut fmi2Boolean, *mut fmi2Boolean) -> fmi2Status,
+    enter_event_mode: fmi2ComponentFunctionTYPE,
+    new_discrete_states: unsafe extern "C" fn(fmi2Component, *mut fmi2EventInfo) -> fmi2Status,
+    enter_continuous_time_mode: fmi2ComponentFunctionTYPE,
 }
 
 /// A loaded FMU binary.
@@ -135,7 +158,21 @@ impl Library {
                 set_integer: f!("fmi2SetInteger"),
                 set_boolean: f!("fmi2SetBoolean"),
                 set_string: f!("fmi2SetString"),
-                do_step: f!("fmi2DoStep"),
+                do_step: opt!("fmi2DoStep"),
+                me: (|| {
+                    Some(MeApi {
+                        set_time: opt!("fmi2SetTime")?,
+                        set_continuous_states: opt!("fmi2SetContinuousStates")?,
+                        get_derivatives: opt!("fmi2GetDerivatives")?,
+                        get_event_indicators: opt!("fmi2GetEventIndicators")?,
+                        get_continuous_states: opt!("fmi2GetContinuousStates")?,
+                        get_nominals: opt!("fmi2GetNominalsOfContinuousStates")?,
+                        completed_integrator_step: opt!("fmi2CompletedIntegratorStep")?,
+                        enter_event_mode: opt!("fmi2EnterEventMode")?,
+                        new_discrete_states: opt!("fmi2NewDiscreteStates")?,
+                        enter_continuous_time_mode: opt!("fmi2EnterContinuousTimeMode")?,
+                    })
+                })(),
                 get_fmu_state: opt!("fmi2GetFMUstate"),
                 set_fmu_state: opt!("fmi2SetFMUstate"),
                 free_fmu_state: opt!("fmi2FreeFMUstate"),
@@ -265,6 +302,18 @@ impl Fmi2Import {
 
     /// fmi2Instantiate(name, fmi2CoSimulation, ...) with the runner's logger.
     pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance2, String> {
+        self.instantiate(name, fmi2CoSimulation, visible, logging_on)
+    }
+
+    /// fmi2Instantiate(name, fmi2ModelExchange, ...) with the runner's logger.
+    pub fn instantiate_me(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance2, String> {
+        if self.library.api.me.is_none() {
+            return Err("the binary lacks the model-exchange functions (fmi2SetTime, fmi2GetDerivatives, ...)".into());
+        }
+        self.instantiate(name, fmi2ModelExchange, visible, logging_on)
+    }
+
+    fn instantiate(&self, name: &str, kind: fmi2Type, visible: bool, logging_on: bool) -> Result<Instance2, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(LogEnv {
             sink: forward,
@@ -282,7 +331,7 @@ impl Fmi2Import {
         let c = unsafe {
             (self.library.api.instantiate)(
                 name_c.as_ptr(),
-                fmi2CoSimulation,
+                kind,
                 self.guid.as_ptr(),
                 self.resource_uri.as_ptr(),
                 &*callbacks,
@@ -410,6 +459,8 @@ pub struct FmuState(pub(crate) usize);
 pub enum InstanceCS {
     V2(Instance2),
     V3(crate::fmi3::Instance3),
+    /// An FMI 2.0 model-exchange instance the runner integrates ([`crate::me`]).
+    Me(crate::me::MeInstance),
 }
 
 /// Each method of [`InstanceCS`], forwarded to the version's instance.
@@ -422,6 +473,7 @@ macro_rules! forward {
                     match self {
                         InstanceCS::V2(i) => i.$name($($arg),*),
                         InstanceCS::V3(i) => i.$name($($arg),*),
+                        InstanceCS::Me(i) => i.$name($($arg),*),
                     }
                 }
             )*
@@ -538,8 +590,91 @@ impl Instance2 {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        let step = self.api().do_step.ok_or_else(|| missing("fmi2DoStep"))?;
         // SAFETY: a live instance.
-        check(unsafe { (self.api().do_step)(self.c, t, h, fmi2Boolean::from(no_set_prior)) })
+        check(unsafe { step(self.c, t, h, fmi2Boolean::from(no_set_prior)) })
+    }
+
+    fn me(&self) -> Result<&MeApi, Fmi2Error> {
+        self.api()
+            .me
+            .as_ref()
+            .ok_or_else(|| missing("model-exchange functions"))
+    }
+
+    pub fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        let f = self.me()?.set_time;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c, t) })
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.set_continuous_states;
+        // SAFETY: a live model-exchange instance; `x` holds its states.
+        check(unsafe { f(self.c, x.as_ptr(), x.len()) })
+    }
+
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_derivatives;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, dx.as_mut_ptr(), dx.len()) })
+    }
+
+    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), Fmi2Error> {
+        if z.is_empty() {
+            return Ok(());
+        }
+        let f = self.me()?.get_event_indicators;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, z.as_mut_ptr(), z.len()) })
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_continuous_states;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
+    }
+
+    pub fn get_nominals(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_nominals;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
+    }
+
+    /// fmi2CompletedIntegratorStep: (enterEventMode, terminateSimulation).
+    pub fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error> {
+        let f = self.me()?.completed_integrator_step;
+        let (mut event, mut terminate) = (fmi2False, fmi2False);
+        // SAFETY: a live model-exchange instance; the outputs point to locals.
+        check(unsafe { f(self.c, fmi2Boolean::from(no_set_prior), &mut event, &mut terminate) })?;
+        Ok((event != fmi2False, terminate != fmi2False))
+    }
+
+    pub fn enter_event_mode(&mut self) -> Result<(), Fmi2Error> {
+        let f = self.me()?.enter_event_mode;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c) })
+    }
+
+    pub fn new_discrete_states(&mut self) -> Result<fmi2EventInfo, Fmi2Error> {
+        let f = self.me()?.new_discrete_states;
+        let mut info = fmi2EventInfo {
+            newDiscreteStatesNeeded: fmi2False,
+            terminateSimulation: fmi2False,
+            nominalsOfContinuousStatesChanged: fmi2False,
+            valuesOfContinuousStatesChanged: fmi2False,
+            nextEventTimeDefined: fmi2False,
+            nextEventTime: 0.0,
+        };
+        // SAFETY: a live model-exchange instance; `info` is a local.
+        check(unsafe { f(self.c, &mut info) })?;
+        Ok(info)
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error> {
+        let f = self.me()?.enter_continuous_time_mode;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c) })
     }
 
     fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {

@@ -109,12 +109,12 @@ impl Fmu {
                 ),
             ));
         };
-        if description.cs.is_none() {
+        if description.cs.is_none() && (description.me.is_none() || int64.is_some()) {
             return Err(Error::unsupported(
                 Some(component),
                 None,
                 format!(
-                    "component '{component}' ({label}): not a co-simulation FMU (no <CoSimulation> in modelDescription.xml)"
+                    "component '{component}' ({label}): neither an FMI 2.0 / 3.0 co-simulation FMU nor an FMI 2.0 model-exchange one (the runner integrates FMI 2.0 model exchange only)"
                 ),
             ));
         }
@@ -230,6 +230,32 @@ impl Fmu {
                 ),
             )
         })
+    }
+
+    /// A model-exchange instance the runner integrates (FMI 2.0 FMUs with `<ModelExchange>`).
+    pub fn instantiate_me(&self, component: &str) -> Result<InstanceCS, Error> {
+        let fail = |m: String| Error {
+            component: Some(component.to_owned()),
+            function: Some("fmi2Instantiate".into()),
+            ..Error::new(
+                crate::ErrorKind::Unsupported,
+                format!("component '{component}' ({}): {m}", self.model_identifier()),
+            )
+        };
+        let Import::V2(import) = &self.import else {
+            return Err(fail(
+                "an FMI 3.0 FMU: the runner integrates FMI 2.0 model-exchange FMUs only".into(),
+            ));
+        };
+        if self.description.me.is_none() {
+            return Err(fail("no <ModelExchange> in its modelDescription.xml".into()));
+        }
+        let nx = self.description.model_structure.derivatives.len();
+        let nz = self.description.number_of_event_indicators;
+        import
+            .instantiate_me(component, false, false)
+            .map(|i| InstanceCS::Me(crate::me::MeInstance::new(i, nx, nz)))
+            .map_err(|e| fail(format!("fmi2Instantiate(fmi2ModelExchange) failed: {e}")))
     }
 
     /// The FMI version of the FMU, "2.0" or "3.0".

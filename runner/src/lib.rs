@@ -25,6 +25,7 @@ pub mod fmi2;
 pub mod fmi3;
 pub mod fmu;
 pub mod fmu_log;
+pub mod me;
 pub mod sim;
 pub mod ssp;
 

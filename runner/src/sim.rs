@@ -162,6 +162,8 @@ struct Slave {
     instance: Option<InstanceCS>,
     /// An FMI 3.0 FMU: its functions' names in messages are FMI 3.0's ([`fname`]).
     v3: bool,
+    /// Run as model exchange, integrated by the runner ([`crate::me`]).
+    me: bool,
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
@@ -309,6 +311,12 @@ impl Simulation {
                 message: format!("{}: {}", archive.path, e.message),
                 ..e
             })?;
+        for c in ssd.components.iter().filter(|c| c.model_exchange) {
+            sim.use_model_exchange(&c.name).map_err(|e| Error {
+                message: format!("{}: {}", archive.path, e.message),
+                ..e
+            })?;
+        }
         for sc in &ssd.connectors {
             for (c, v) in &sc.links {
                 sim.resolve(c, v).map_err(|e| Error {
@@ -346,11 +354,18 @@ impl Simulation {
             let fmu = fmus
                 .get(*f)
                 .ok_or_else(|| Error::usage(format!("component '{c}': no FMU {f}")))?;
+            // A model-exchange-only FMU is integrated by the runner.
+            let me = fmu.description.cs.is_none();
             slaves.push(Slave {
                 name: c.clone(),
                 fmu: *f,
-                instance: Some(fmu.instantiate(c)?),
+                instance: Some(if me {
+                    fmu.instantiate_me(c)?
+                } else {
+                    fmu.instantiate(c)?
+                }),
                 v3: fmu.fmi_version() == "3.0",
+                me,
             });
         }
         let mut sim = Simulation {
@@ -857,7 +872,11 @@ impl Simulation {
         for i in 0..self.slaves.len() {
             self.slaves[i].instance = None; // fmi2FreeInstance
             let name = self.slaves[i].name.clone();
-            let inst = self.fmu_of(i).instantiate(&name)?;
+            let inst = if self.slaves[i].me {
+                self.fmu_of(i).instantiate_me(&name)?
+            } else {
+                self.fmu_of(i).instantiate(&name)?
+            };
             self.slaves[i].instance = Some(inst);
         }
         self.runs = 0;
@@ -1146,10 +1165,38 @@ impl Simulation {
         Ok(result)
     }
 
+    /// Runs `component` as model exchange, integrated by the runner (an SSD's
+    /// `implementation="ModelExchange"`): its FMU must offer model exchange (FMI 2.0).
+    pub fn use_model_exchange(&mut self, component: &str) -> Result<(), Error> {
+        let i = self.slave_index(component)?;
+        if self.slaves[i].me {
+            return Ok(());
+        }
+        let inst = self.fmu_of(i).instantiate_me(component)?;
+        self.slaves[i].instance = Some(inst);
+        self.slaves[i].me = true;
+        Ok(())
+    }
+
+    /// Whether `component` runs as model exchange, integrated by the runner.
+    pub fn is_model_exchange(&self, component: &str) -> bool {
+        self.slave_index(component).is_ok_and(|i| self.slaves[i].me)
+    }
+
     /// Why this system cannot take error-controlled steps (None: it can).
     pub fn why_fixed_steps(&self) -> Option<String> {
         for s in &self.slaves {
             let d = &self.fmus[s.fmu].description;
+            if s.me {
+                // The runner's own integration takes any step; the FMU's state must be settable.
+                if !d.me.as_ref().is_some_and(|me| me.can_get_and_set_fmu_state) {
+                    return Some(format!(
+                        "fixed steps: component '{}' cannot get and set its FMU state (canGetAndSetFMUstate = false), so a step cannot be made again",
+                        s.name
+                    ));
+                }
+                continue;
+            }
             let Some(cs) = d.cs.as_ref() else {
                 return Some(format!("fixed steps: component '{}' is no co-simulation FMU", s.name));
             };

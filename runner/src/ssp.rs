@@ -17,8 +17,9 @@
 //! other than one connection, nested systems, connection
 //! transformations (`ssc:LinearTransformation`, mapping transformations), connections between
 //! connectors of different units (a unit conversion), parameter mappings and prefixes,
-//! parameter bindings of the system itself, signal dictionaries, components that are not FMUs
-//! or are to be run as model exchange, and sources outside the archive.
+//! parameter bindings of the system itself, signal dictionaries, components that are not FMUs,
+//! and sources outside the archive. A component with `implementation="ModelExchange"` is
+//! integrated by the runner ([`crate::me`]).
 
 use crate::{Error, ErrorKind, Value};
 use quick_xml::Reader;
@@ -35,6 +36,8 @@ pub struct Component {
     pub parameters: Vec<(String, Value)>,
     /// Connectors: (name, kind, unit).
     pub connectors: Vec<(String, String, Option<String>)>,
+    /// `implementation="ModelExchange"`: the runner integrates it ([`crate::me`]).
+    pub model_exchange: bool,
 }
 
 /// `start.0.start.1 -> end.0.end.1`: (component, connector).
@@ -222,20 +225,25 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                         ),
                     ));
                 }
-                if attr(&e, "implementation").as_deref() == Some("ModelExchange") {
-                    return Err(Error::unsupported(
-                        Some(&name),
-                        None,
-                        format!(
-                            "component '{name}': implementation=\"ModelExchange\" is not supported (the runner is a co-simulation master)"
-                        ),
-                    ));
-                }
+                let model_exchange = match attr(&e, "implementation").as_deref() {
+                    None | Some("any") | Some("CoSimulation") => false,
+                    Some("ModelExchange") => true,
+                    Some(other) => {
+                        return Err(Error::unsupported(
+                            Some(&name),
+                            None,
+                            format!(
+                                "component '{name}': implementation=\"{other}\" is not supported (CoSimulation, ModelExchange or any)"
+                            ),
+                        ));
+                    }
+                };
                 ssd.components.push(Component {
                     name,
                     source,
                     parameters: Vec::new(),
                     connectors: Vec::new(),
+                    model_exchange,
                 });
             }
             "SignalDictionary" | "SignalDictionaryReference" => {

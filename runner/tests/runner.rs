@@ -164,11 +164,20 @@ fn transformations_unit_conversions_and_nested_systems_are_refused() {
     let e = refused(r#"<ssd:Elements><ssd:System name="Inner"/></ssd:Elements>"#);
     assert!(e.message.contains("subsystem 'Inner'"), "{e}");
 
+    // implementation="ModelExchange" is read (the runner integrates the component); an
+    // implementation SSP does not define is refused.
+    let mut read = |_: &str| Ok("<ssv:ParameterSet xmlns:ssv=\"x\"/>".to_owned());
+    let s = parse_ssd(
+        &ssd(r#"<ssd:Elements><ssd:Component name="m" source="resources/M.fmu" implementation="ModelExchange"/></ssd:Elements>"#),
+        &mut read,
+    )
+    .expect("implementation=ModelExchange is read");
+    assert!(s.components[0].model_exchange);
     let e = refused(
-        r#"<ssd:Elements><ssd:Component name="m" source="resources/M.fmu" implementation="ModelExchange"/></ssd:Elements>"#,
+        r#"<ssd:Elements><ssd:Component name="m" source="resources/M.fmu" implementation="ScheduledExecution"/></ssd:Elements>"#,
     );
     assert!(
-        e.message.contains("component 'm'") && e.message.contains("ModelExchange"),
+        e.message.contains("component 'm'") && e.message.contains("ScheduledExecution"),
         "{e}"
     );
 }

@@ -1,0 +1,119 @@
+"""Model-exchange components in the native runner (issue 26): an FMI 2.0 FMU without
+co-simulation, or one the SSD marks `implementation="ModelExchange"`, is integrated by the runner
+(runner/src/me.rs: Dormand-Prince 5(4), time, state and step events through fmi2EnterEventMode /
+fmi2NewDiscreteStates). Against the same FMUs' own co-simulation (the runtime's DOPRI5)."""
+
+import re
+import zipfile
+
+import numpy as np
+import pytest
+from conftest import FMU_DIR
+from test_runner import ssp
+
+import rustfmu_runner
+
+
+def as_model_exchange(name, component, tmp_path) -> str:
+    out = tmp_path / f"{name}-{component}-me.ssp"
+    with zipfile.ZipFile(ssp(name)) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                text, n = re.subn(rf'(<ssd:Component name="{component}" )', r'\1implementation="ModelExchange" ', data.decode())
+                assert n == 1
+                data = text.encode()
+            dst.writestr(item, data)
+    return str(out)
+
+
+@pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
+def test_the_pendulum_integrated_by_the_runner_equals_its_co_simulation(name, tmp_path):
+    """The same method (DOPRI5) at the same tolerance on a smooth plant: equal to 1e-12."""
+    a = rustfmu_runner.System(ssp(name))
+    b = rustfmu_runner.System(as_model_exchange(name, "pendulum", tmp_path))
+    ra, rb = a.run(2.0, 1e-3), b.run(2.0, 1e-3)
+    for k in ra:
+        scale = max(1.0, np.max(np.abs(ra[k])))
+        assert np.max(np.abs(ra[k] - rb[k])) <= 1e-12 * scale, k
+    assert abs(rb["pendulum.alpha1"][-1]) < 0.05
+
+
+BALL_SSD = """<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+    xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="Ball">
+  <ssd:System name="Ball"><ssd:Elements>
+    <ssd:Component name="ball" source="resources/BouncingBall.fmu" type="application/x-fmu-sharedlibrary" IMPL/>
+  </ssd:Elements></ssd:System>
+</ssd:SystemStructureDescription>"""
+
+
+def ball(tmp_path, impl="", fmu_bytes=None) -> str:
+    out = tmp_path / f"ball{len(impl)}{'x' if fmu_bytes else ''}.ssp"
+    with zipfile.ZipFile(out, "w") as z:
+        z.writestr("SystemStructure.ssd", BALL_SSD.replace("IMPL", impl))
+        z.writestr("resources/BouncingBall.fmu", fmu_bytes or (FMU_DIR / "BouncingBall.fmu").read_bytes())
+    return str(out)
+
+
+def without_co_simulation() -> bytes:
+    """BouncingBall.fmu whose modelDescription.xml offers model exchange only."""
+    import io
+
+    out = io.BytesIO()
+    with zipfile.ZipFile(FMU_DIR / "BouncingBall.fmu") as f, zipfile.ZipFile(out, "w") as g:
+        for i in f.infolist():
+            d = f.read(i.filename)
+            if i.filename == "modelDescription.xml":
+                d, n = re.subn(rb"<CoSimulation[^>]*/>", b"", d)
+                assert n == 1
+            g.writestr(i, d)
+    return out.getvalue()
+
+
+def test_state_events_of_a_model_exchange_fmu_are_located_and_handled(tmp_path):
+    """The bouncing ball: each impact a state event (h crosses 0), located by bisection to 1e-12
+    in time and handled in event mode (v reversed and damped): equal to the FMU's own
+    co-simulation to 1e-9; the first impact where the free fall says, at sqrt(2 h0 / g)."""
+    cs = rustfmu_runner.System(ball(tmp_path))
+    me = rustfmu_runner.System(ball(tmp_path, 'implementation="ModelExchange"'))
+    ra, rb = cs.run(3.0, 1e-2), me.run(3.0, 1e-2)
+    for k in ["ball.h", "ball.v"]:
+        assert np.max(np.abs(ra[k] - rb[k])) <= 1e-9, k
+    t, v = rb["time"], rb["ball.v"]
+    first = np.argmax(v > 0)  # the first point after the first impact
+    assert t[first - 1] < np.sqrt(2 * 1.0 / 9.81) <= t[first]
+    assert np.sum(np.diff(np.sign(v)) > 0) >= 3  # it bounced, more than once
+
+
+def test_an_fmu_without_co_simulation_is_integrated_by_the_runner(tmp_path):
+    me_only = rustfmu_runner.System(ball(tmp_path, fmu_bytes=without_co_simulation()))
+    me = rustfmu_runner.System(ball(tmp_path, 'implementation="ModelExchange"'))
+    ra, rb = me_only.run(2.0, 1e-2), me.run(2.0, 1e-2)
+    for k in ["ball.h", "ball.v"]:
+        assert np.array_equal(ra[k], rb[k]), k
+
+
+def test_rollback_restores_the_runners_integrator_with_the_fmu_state(tmp_path):
+    """Error-controlled steps held at 2 ms over a model-exchange Pendulum: the whole step set
+    back (the FMU's state and the integrator's time and step size), the halves equal fixed 1 ms
+    steps to 1e-14."""
+    s = rustfmu_runner.System(as_model_exchange("PendulumLQR", "pendulum", tmp_path))
+    rec = ["pendulum.alpha1", "controller.M1"]
+    a = s.run(1.0, 2e-3, record=rec, tolerance=1e9, min_step=2e-3, max_step=2e-3)
+    b = s.run(1.0, 1e-3, record=rec)
+    for x in rec:
+        scale = max(1.0, np.max(np.abs(b[x])))
+        assert np.max(np.abs(a[x] - b[x][::2])) <= 1e-14 * scale, x
+
+
+def test_model_exchange_the_runner_cannot_integrate_is_refused(tmp_path):
+    path = tmp_path / "fmi3-me.ssp"
+    with zipfile.ZipFile(FMU_DIR / "fmi3" / "PendulumLQR.ssp") as src, zipfile.ZipFile(path, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "SystemStructure.ssd":
+                data = data.replace(b'<ssd:Component name="pendulum" ', b'<ssd:Component name="pendulum" implementation="ModelExchange" ')
+            dst.writestr(item, data)
+    with pytest.raises(rustfmu_runner.RunnerError, match="an FMI 3.0 FMU: the runner integrates FMI 2.0 model-exchange FMUs only"):
+        rustfmu_runner.System(str(path))
