@@ -84,6 +84,10 @@ struct Api {
     set_string: fmi2SetTYPE<fmi2String>,
     /// Absent from a model-exchange-only FMU.
     do_step: Option<fmi2DoStepTYPE>,
+    /// fmi2GetRealOutputDerivatives, fmi2SetRealInputDerivatives (co-simulation, optional).
+    get_output_derivatives: Option<DerivativesGet>,
+    set_input_derivatives: Option<DerivativesSet>,
+    get_directional_derivative: Option<DirectionalDerivative>,
     /// The model-exchange functions (fmi2FunctionTypes.h): absent from a co-simulation-only FMU.
     me: Option<MeApi>,
     /// The FMU-state functions: absent from an FMU that declares no FMU state.
@@ -99,6 +103,32 @@ struct Api {
 /// `fmi2GetNominalsOfContinuousStatesTYPE`, `fmi2SetContinuousStatesTYPE` (const).
 type VectorGet = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
 type VectorSet = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
+
+/// `fmi2GetRealOutputDerivativesTYPE`, `fmi2SetRealInputDerivativesTYPE`,
+/// `fmi2GetDirectionalDerivativeTYPE`.
+type DerivativesGet = unsafe extern "C" fn(
+    fmi2Component,
+    *const fmi2ValueReference,
+    usize,
+    *const fmi2Integer,
+    *mut fmi2Real,
+) -> fmi2Status;
+type DerivativesSet = unsafe extern "C" fn(
+    fmi2Component,
+    *const fmi2ValueReference,
+    usize,
+    *const fmi2Integer,
+    *const fmi2Real,
+) -> fmi2Status;
+type DirectionalDerivative = unsafe extern "C" fn(
+    fmi2Component,
+    *const fmi2ValueReference,
+    usize,
+    *const fmi2ValueReference,
+    usize,
+    *const fmi2Real,
+    *mut fmi2Real,
+) -> fmi2Status;
 
 /// The model-exchange functions of an FMI 2.0 binary (fmi2FunctionTypes.h, section 3.2).
 struct MeApi {
@@ -159,6 +189,9 @@ impl Library {
                 set_boolean: f!("fmi2SetBoolean"),
                 set_string: f!("fmi2SetString"),
                 do_step: opt!("fmi2DoStep"),
+                get_output_derivatives: opt!("fmi2GetRealOutputDerivatives"),
+                set_input_derivatives: opt!("fmi2SetRealInputDerivatives"),
+                get_directional_derivative: opt!("fmi2GetDirectionalDerivative"),
                 me: (|| {
                     Some(MeApi {
                         set_time: opt!("fmi2SetTime")?,
@@ -507,6 +540,12 @@ forward! {
     fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error>;
     fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error>;
     fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error>;
+    /// First time derivatives of outputs (FMI 2.0 fmi2GetRealOutputDerivatives, FMI 3.0
+    /// fmi3GetOutputDerivatives; order 1).
+    fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
+    /// First time derivatives of inputs (FMI 2.0 only: canInterpolateInputs).
+    fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
+    fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error>;
 }
 
 /// An FMI 2.0 co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
@@ -593,6 +632,58 @@ impl Instance2 {
         let step = self.api().do_step.ok_or_else(|| missing("fmi2DoStep"))?;
         // SAFETY: a live instance.
         check(unsafe { step(self.c, t, h, fmi2Boolean::from(no_set_prior)) })
+    }
+
+    /// First time derivatives (order 1) of the outputs `vrs` (fmi2GetRealOutputDerivatives).
+    pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        let f = self
+            .api()
+            .get_output_derivatives
+            .ok_or_else(|| missing("fmi2GetRealOutputDerivatives"))?;
+        let orders = vec![1 as fmi2Integer; vrs.len()];
+        // SAFETY: a live instance; the arrays hold vrs.len() elements.
+        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr()) })
+    }
+
+    /// First time derivatives of the inputs `vrs` (fmi2SetRealInputDerivatives, order 1).
+    pub fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        let f = self
+            .api()
+            .set_input_derivatives
+            .ok_or_else(|| missing("fmi2SetRealInputDerivatives"))?;
+        let orders = vec![1 as fmi2Integer; vrs.len()];
+        // SAFETY: a live instance; the arrays hold vrs.len() elements.
+        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), values.as_ptr()) })
+    }
+
+    /// d(unknowns) = J d(knowns) (fmi2GetDirectionalDerivative).
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), Fmi2Error> {
+        Self::lengths(knowns.len(), seed.len())?;
+        Self::lengths(unknowns.len(), out.len())?;
+        let f = self
+            .api()
+            .get_directional_derivative
+            .ok_or_else(|| missing("fmi2GetDirectionalDerivative"))?;
+        // SAFETY: a live instance; the arrays hold the lengths passed.
+        check(unsafe {
+            f(
+                self.c,
+                unknowns.as_ptr(),
+                unknowns.len(),
+                knowns.as_ptr(),
+                knowns.len(),
+                seed.as_ptr(),
+                out.as_mut_ptr(),
+            )
+        })
     }
 
     fn me(&self) -> Result<&MeApi, Fmi2Error> {

@@ -60,6 +60,25 @@ type DoStep = unsafe extern "C" fn(
     *mut fmi3Boolean,
     *mut fmi3Float64,
 ) -> fmi3Status;
+type OutputDerivatives = unsafe extern "C" fn(
+    fmi3Instance,
+    *const fmi3ValueReference,
+    usize,
+    *const fmi3Int32,
+    *mut fmi3Float64,
+    usize,
+) -> fmi3Status;
+type DirectionalDerivative = unsafe extern "C" fn(
+    fmi3Instance,
+    *const fmi3ValueReference,
+    usize,
+    *const fmi3ValueReference,
+    usize,
+    *const fmi3Float64,
+    usize,
+    *mut fmi3Float64,
+    usize,
+) -> fmi3Status;
 type SetDebugLogging = unsafe extern "C" fn(fmi3Instance, fmi3Boolean, usize, *const fmi3String) -> fmi3Status;
 type GetState = unsafe extern "C" fn(fmi3Instance, *mut fmi3FMUState) -> fmi3Status;
 type SetState = unsafe extern "C" fn(fmi3Instance, fmi3FMUState) -> fmi3Status;
@@ -87,6 +106,8 @@ struct Api {
     set_boolean: Set<bool>,
     set_string: Set<fmi3String>,
     do_step: DoStep,
+    get_output_derivatives: OutputDerivatives,
+    get_directional_derivative: DirectionalDerivative,
     get_fmu_state: GetState,
     set_fmu_state: SetState,
     free_fmu_state: GetState,
@@ -135,6 +156,8 @@ impl Library {
                 set_boolean: f!("fmi3SetBoolean"),
                 set_string: f!("fmi3SetString"),
                 do_step: f!("fmi3DoStep"),
+                get_output_derivatives: f!("fmi3GetOutputDerivatives"),
+                get_directional_derivative: f!("fmi3GetDirectionalDerivative"),
                 get_fmu_state: f!("fmi3GetFMUState"),
                 set_fmu_state: f!("fmi3SetFMUState"),
                 free_fmu_state: f!("fmi3FreeFMUState"),
@@ -535,6 +558,52 @@ impl Instance3 {
             )));
         }
         Ok(())
+    }
+
+    pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), out.len())?;
+        let orders = vec![1i32; vrs.len()];
+        // SAFETY: a live instance; the arrays hold vrs.len() elements.
+        check(unsafe {
+            (self.api().get_output_derivatives)(
+                self.c,
+                vrs.as_ptr(),
+                vrs.len(),
+                orders.as_ptr(),
+                out.as_mut_ptr(),
+                out.len(),
+            )
+        })
+    }
+
+    /// FMI 3.0 has no input derivatives.
+    pub fn set_input_derivatives(&mut self, _vrs: &[u32], _values: &[f64]) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer("FMI 3.0 has no input derivatives".into()))
+    }
+
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), Fmi2Error> {
+        lengths(knowns.len(), seed.len())?;
+        lengths(unknowns.len(), out.len())?;
+        // SAFETY: a live instance; the arrays hold the lengths passed (every variable a scalar).
+        check(unsafe {
+            (self.api().get_directional_derivative)(
+                self.c,
+                unknowns.as_ptr(),
+                unknowns.len(),
+                knowns.as_ptr(),
+                knowns.len(),
+                seed.as_ptr(),
+                seed.len(),
+                out.as_mut_ptr(),
+                out.len(),
+            )
+        })
     }
 
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {

@@ -44,6 +44,11 @@ enum Command {
         /// With --tolerance: the largest step, s (default: the stop time / 10).
         #[arg(long, requires = "tolerance")]
         max_step: Option<f64>,
+        /// A first-order hold on the connections: the connected outputs' time derivatives
+        /// (each component's own, and through its feedthrough by its directional derivative) set
+        /// as input derivatives where a component interpolates its inputs.
+        #[arg(long)]
+        input_derivatives: bool,
         /// With --tolerance: a Real component.variable the error is estimated on (repeatable;
         /// default: every connected output).
         #[arg(long = "error-on", value_name = "COMPONENT.VARIABLE", requires = "tolerance")]
@@ -105,6 +110,7 @@ fn run(cli: Cli) -> Result<(), String> {
             tolerance,
             min_step,
             max_step,
+            input_derivatives,
             error_on,
             set,
             record,
@@ -124,6 +130,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 sim.scheme = Scheme::Jacobi;
             }
             let mut opts = RunOptions::new(stop_time, step);
+            opts.input_derivatives = input_derivatives;
             opts.adaptive = tolerance.map(|tolerance| rustfmu_runner::Adaptive {
                 tolerance,
                 min_step,

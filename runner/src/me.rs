@@ -379,6 +379,29 @@ impl MeInstance {
         self.inner.set_string(vrs, values)
     }
 
+    /// Not offered: the runner's integration has no output derivatives of its own.
+    pub fn get_output_derivatives(&mut self, _vrs: &[u32], _out: &mut [f64]) -> Result<(), Fmi2Error> {
+        Err(importer(
+            "a model-exchange component gives no output derivatives".into(),
+        ))
+    }
+
+    pub fn set_input_derivatives(&mut self, _vrs: &[u32], _values: &[f64]) -> Result<(), Fmi2Error> {
+        Err(importer(
+            "a model-exchange component does not interpolate inputs".into(),
+        ))
+    }
+
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), Fmi2Error> {
+        self.inner.get_directional_derivative(unknowns, knowns, seed, out)
+    }
+
     fn remember(&mut self, s: &FmuState) {
         if self.saved.len() <= s.0 {
             self.saved.resize(s.0 + 1, None);

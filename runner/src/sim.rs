@@ -67,6 +67,8 @@ pub struct RunOptions {
     pub stop_when_above: Vec<(String, f64)>,
     /// Error-controlled communication steps ([`Adaptive`]); `None`: fixed steps of `step`.
     pub adaptive: Option<Adaptive>,
+    /// A first-order hold on the connections: see [`Simulation::input_derivatives`].
+    pub input_derivatives: bool,
 }
 
 /// Error-controlled communication steps: each step of h is made once whole and once as two
@@ -99,6 +101,7 @@ impl RunOptions {
             record: Vec::new(),
             stop_when_above: Vec::new(),
             adaptive: None,
+            input_derivatives: false,
         }
     }
 }
@@ -260,6 +263,17 @@ pub struct Simulation {
     runs: usize,
     /// An instance returned fmi2Fatal: the next run instantiates every FMU again.
     broken: bool,
+    /// A first-order hold on the connections (set per run from [`RunOptions::input_derivatives`]):
+    /// after each propagation the connected outputs' first time derivatives are computed in the
+    /// evaluation order, each component's own (fmi2GetRealOutputDerivatives, inputs held) plus
+    /// its directional derivative along its connected inputs' derivatives (the chain rule through
+    /// a feedthrough), twice (the second sweep with every input final), and set as input
+    /// derivatives (fmi2SetRealInputDerivatives) on every FMI 2.0 component that can interpolate
+    /// its inputs: it then ramps them over the step. A component that gives no output derivatives
+    /// passes 0 (a zero-order hold of its outputs).
+    pub input_derivatives: bool,
+    /// The derivatives of each read port's outputs (as `reads[r].buf`).
+    dbufs: Vec<Vec<f64>>,
     /// The connections, as the system names them.
     connections: Vec<Connection>,
     /// The system's own connectors (the runner runs without them; a container exposes them).
@@ -381,6 +395,8 @@ impl Simulation {
             starts: Vec::new(),
             runs: 0,
             broken: false,
+            input_derivatives: false,
+            dbufs: Vec::new(),
             connections: connections.to_vec(),
             system_connectors: Vec::new(),
         };
@@ -837,8 +853,124 @@ impl Simulation {
             .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2SetReal"), &e, Some(t), "connected inputs"))
     }
 
-    /// Sets every connected input from its output, as [`Simulation::scheme`] says.
+    /// Sets every connected input from its output, as [`Simulation::scheme`] says (and, with
+    /// [`Simulation::input_derivatives`], their first derivatives).
     pub fn propagate(&mut self, t: f64) -> Result<(), Error> {
+        self.propagate_values(t)?;
+        if self.input_derivatives {
+            self.propagate_derivatives(t)?;
+        }
+        Ok(())
+    }
+
+    /// The first-order hold of [`Simulation::input_derivatives`].
+    fn propagate_derivatives(&mut self, t: f64) -> Result<(), Error> {
+        if self.dbufs.len() != self.reads.len() {
+            self.dbufs = self.reads.iter().map(|r| vec![0.0; r.vrs.len()]).collect();
+        }
+        for _sweep in 0..2 {
+            for i in 0..self.steps.len() {
+                let c = self.steps[i].0;
+                let Some(r) = self.read_of[c] else { continue };
+                let fmu = &self.fmus[self.slaves[c].fmu].description;
+                let own = fmu.cs.as_ref().is_some_and(|cs| cs.max_output_derivative_order >= 1) && !self.slaves[c].me;
+                let directional = fmu.cs.as_ref().is_some_and(|cs| cs.provides_directional_derivative);
+                let vrs = self.reads[r].vrs.clone();
+                let mut dy = vec![0.0; vrs.len()];
+                let s = &mut self.slaves[c];
+                let inst = s.instance.as_mut().expect("instantiated");
+                if own {
+                    inst.get_output_derivatives(&vrs, &mut dy).map_err(|e| {
+                        Error::fmi(
+                            &s.name,
+                            fname(s.v3, "fmi2GetRealOutputDerivatives"),
+                            &e,
+                            Some(t),
+                            "first-order hold",
+                        )
+                    })?;
+                }
+                // The chain rule through the component's feedthrough: J du of its connected inputs.
+                let (knowns, du) = self.input_derivative_values(c);
+                if directional && du.iter().any(|x| *x != 0.0) {
+                    let ft = &self.fmus[self.slaves[c].fmu].feedthrough;
+                    if knowns.iter().any(|k| ft.contains(k)) {
+                        let mut jdu = vec![0.0; vrs.len()];
+                        let s = &mut self.slaves[c];
+                        s.instance
+                            .as_mut()
+                            .expect("instantiated")
+                            .get_directional_derivative(&vrs, &knowns, &du, &mut jdu)
+                            .map_err(|e| {
+                                Error::fmi(
+                                    &s.name,
+                                    fname(s.v3, "fmi2GetDirectionalDerivative"),
+                                    &e,
+                                    Some(t),
+                                    "first-order hold",
+                                )
+                            })?;
+                        for (a, b) in dy.iter_mut().zip(jdu) {
+                            *a += b;
+                        }
+                    }
+                }
+                if let Some((k, x)) = dy.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                    return Err(Error::fmi(
+                        &self.slaves[c].name,
+                        "fmi2GetRealOutputDerivatives",
+                        &crate::fmi2::Fmi2Error::Importer(format!(
+                            "the derivative of value reference {} is {x}",
+                            vrs[k]
+                        )),
+                        Some(t),
+                        "first-order hold",
+                    ));
+                }
+                self.dbufs[r] = dy;
+            }
+        }
+        for c in 0..self.slaves.len() {
+            let interpolates = !self.slaves[c].v3
+                && !self.slaves[c].me
+                && self.fmus[self.slaves[c].fmu]
+                    .description
+                    .cs
+                    .as_ref()
+                    .is_some_and(|cs| cs.can_interpolate_inputs);
+            if !interpolates {
+                continue;
+            }
+            let (vrs, du) = self.input_derivative_values(c);
+            if vrs.is_empty() {
+                continue;
+            }
+            let s = &mut self.slaves[c];
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .set_input_derivatives(&vrs, &du)
+                .map_err(|e| Error::fmi(&s.name, "fmi2SetRealInputDerivatives", &e, Some(t), "first-order hold"))?;
+        }
+        Ok(())
+    }
+
+    /// The connected inputs of component `c` and their derivatives (its sources' current ones).
+    fn input_derivative_values(&self, c: usize) -> (Vec<u32>, Vec<f64>) {
+        let mut vrs = Vec::new();
+        let mut du = Vec::new();
+        for w in self.writes.iter().filter(|w| w.port.slave == c) {
+            let src = self.dbufs.get(w.source);
+            for (j, vr) in w.port.vrs.iter().enumerate() {
+                vrs.push(*vr);
+                du.push(src.map_or(0.0, |d| d[w.idx[j]]));
+            }
+        }
+        (vrs, du)
+    }
+
+    /// Sets every connected input from its output, as [`Simulation::scheme`] says.
+    fn propagate_values(&mut self, t: f64) -> Result<(), Error> {
         match self.scheme {
             Scheme::GaussSeidel => {
                 for i in 0..self.steps.len() {
@@ -909,7 +1041,11 @@ impl Simulation {
         if self.broken {
             self.reinstantiate()?;
         }
+        // No derivatives in Initialization Mode (FMI 2.0, 4.2.4): the first-order hold begins
+        // at the first communication point.
+        let derivatives = std::mem::replace(&mut self.input_derivatives, false);
         let result = self.initialize_inner(stop_time, values);
+        self.input_derivatives = derivatives;
         if let Err(e) = &result {
             self.note(e);
         }
@@ -1099,6 +1235,14 @@ impl Simulation {
         n: usize,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<RunResult, Failure> {
+        if opts.input_derivatives && self.scheme == Scheme::Jacobi {
+            return Err(Error::usage(
+                "input derivatives (a first-order hold) follow the Gauss-Seidel order: not with the Jacobi scheme",
+            )
+            .into());
+        }
+        self.input_derivatives = opts.input_derivatives;
+        self.dbufs.clear();
         let values = self.start_values(&opts.overrides)?;
         let mut groups = self.record_groups(&opts.record)?;
         let mut stops = Vec::new();

@@ -180,8 +180,10 @@ impl PySystem {
     /// error estimated on the Real variables `error_on`, default every connected output): the
     /// points are where steps were accepted. A system that cannot (a component without FMU
     /// state or variable steps) runs with fixed steps, with a RuntimeWarning saying why.
-    /// `last_run` says what the run made.
-    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None))]
+    /// `last_run` says what the run made. `input_derivatives=True`: a first-order hold on the
+    /// connections (the outputs' exact time derivatives, through each feedthrough by its
+    /// directional derivative, set as input derivatives where a component interpolates inputs).
+    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None, input_derivatives = false))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
         &self,
@@ -195,8 +197,10 @@ impl PySystem {
         min_step: Option<f64>,
         max_step: Option<f64>,
         error_on: Option<Vec<String>>,
+        input_derivatives: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut opts = RunOptions::new(stop_time, step);
+        opts.input_derivatives = input_derivatives;
         if let Some(tolerance) = tolerance {
             opts.adaptive = Some(Adaptive {
                 tolerance,
