@@ -284,17 +284,9 @@ impl Spec {
     ) -> String {
         let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
         let descriptions = sim.component_descriptions();
-        let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
-            descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
-        };
-        let state = all(|cs| cs.can_get_and_set_fmu_state);
-        let serialize = state && all(|cs| cs.can_serialize_fmu_state);
+        let (state, serialize, names) = capabilities(sim);
         let mut x = String::new();
         let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
-        let names: Vec<String> = descriptions
-            .iter()
-            .map(|(c, d)| format!("{c} ({})", d.model_identifier()))
-            .collect();
         let _ = writeln!(
             x,
             r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
@@ -313,13 +305,7 @@ impl Spec {
             self.model_identifier
         );
         let (units, types) = self.definitions(sim, component_xml);
-        if !units.is_empty() {
-            let _ = writeln!(x, "  <UnitDefinitions>");
-            for (_, b) in &units {
-                let _ = writeln!(x, "    {}", b.trim());
-            }
-            let _ = writeln!(x, "  </UnitDefinitions>");
-        }
+        write_units(&mut x, &units);
         if !types.is_empty() {
             let _ = writeln!(x, "  <TypeDefinitions>");
             for (_, b) in &types {
@@ -328,20 +314,8 @@ impl Spec {
             let _ = writeln!(x, "  </TypeDefinitions>");
         }
         // The categories of the container's own messages (the components' go under logAll,
-        // prefixed with the component's name).
-        let _ = writeln!(x, "  <LogCategories>");
-        for (name, what) in LOG_CATEGORIES {
-            let _ = writeln!(x, r#"    <Category name="{name}" description="{}"/>"#, esc(what));
-        }
-        let _ = writeln!(x, "  </LogCategories>");
-        let mut times = String::new();
-        if let Some(t) = experiment.0 {
-            let _ = write!(times, r#" startTime="{t:?}""#);
-        }
-        if let Some(t) = experiment.1 {
-            let _ = write!(times, r#" stopTime="{t:?}""#);
-        }
-        let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{}\"/>", self.step);
+        // prefixed with the component's name), and the experiment.
+        write_categories_and_experiment(&mut x, experiment, self.step);
         let _ = writeln!(x, "  <ModelVariables>");
         for e in &self.variables {
             let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);
@@ -436,17 +410,9 @@ impl Spec {
     ) -> String {
         let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
         let descriptions = sim.component_descriptions();
-        let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
-            descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
-        };
-        let state = all(|cs| cs.can_get_and_set_fmu_state);
-        let serialize = state && all(|cs| cs.can_serialize_fmu_state);
+        let (state, serialize, names) = capabilities(sim);
         let mut x = String::new();
         let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
-        let names: Vec<String> = descriptions
-            .iter()
-            .map(|(c, d)| format!("{c} ({})", d.model_identifier()))
-            .collect();
         let _ = writeln!(
             x,
             r#"<fmiModelDescription fmiVersion="3.0" modelName="{}" instantiationToken="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured">"#,
@@ -465,13 +431,7 @@ impl Spec {
             self.model_identifier
         );
         let (units, types) = self.definitions(sim, component_xml);
-        if !units.is_empty() {
-            let _ = writeln!(x, "  <UnitDefinitions>");
-            for (_, b) in &units {
-                let _ = writeln!(x, "    {}", b.trim());
-            }
-            let _ = writeln!(x, "  </UnitDefinitions>");
-        }
+        write_units(&mut x, &units);
         let types: Vec<String> = types.iter().filter_map(|(_, b)| simple_type3(b)).collect();
         if !types.is_empty() {
             let _ = writeln!(x, "  <TypeDefinitions>");
@@ -480,19 +440,7 @@ impl Spec {
             }
             let _ = writeln!(x, "  </TypeDefinitions>");
         }
-        let _ = writeln!(x, "  <LogCategories>");
-        for (name, what) in LOG_CATEGORIES {
-            let _ = writeln!(x, r#"    <Category name="{name}" description="{}"/>"#, esc(what));
-        }
-        let _ = writeln!(x, "  </LogCategories>");
-        let mut times = String::new();
-        if let Some(t) = experiment.0 {
-            let _ = write!(times, r#" startTime="{t:?}""#);
-        }
-        if let Some(t) = experiment.1 {
-            let _ = write!(times, r#" stopTime="{t:?}""#);
-        }
-        let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{}\"/>", self.step);
+        write_categories_and_experiment(&mut x, experiment, self.step);
         let _ = writeln!(x, "  <ModelVariables>");
         let _ = writeln!(
             x,
@@ -710,6 +658,52 @@ pub fn check_component(component: &str, d: &Description) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// Whether every component can get and set (and serialize) its FMU state, and each component
+/// as "name (modelIdentifier)".
+fn capabilities(sim: &Simulation) -> (bool, bool, Vec<String>) {
+    let descriptions = sim.component_descriptions();
+    let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
+        descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
+    };
+    let state = all(|cs| cs.can_get_and_set_fmu_state);
+    let serialize = state && all(|cs| cs.can_serialize_fmu_state);
+    let names = descriptions
+        .iter()
+        .map(|(c, d)| format!("{c} ({})", d.model_identifier()))
+        .collect();
+    (state, serialize, names)
+}
+
+/// `<UnitDefinitions>` of the components' unit blocks (the same in FMI 2.0 and 3.0).
+fn write_units(x: &mut String, units: &[(String, String)]) {
+    if units.is_empty() {
+        return;
+    }
+    let _ = writeln!(x, "  <UnitDefinitions>");
+    for (_, b) in units {
+        let _ = writeln!(x, "    {}", b.trim());
+    }
+    let _ = writeln!(x, "  </UnitDefinitions>");
+}
+
+/// `<LogCategories>` and `<DefaultExperiment>` (the same in FMI 2.0 and 3.0).
+fn write_categories_and_experiment(x: &mut String, experiment: (Option<f64>, Option<f64>), step: f64) {
+    let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+    let _ = writeln!(x, "  <LogCategories>");
+    for (name, what) in LOG_CATEGORIES {
+        let _ = writeln!(x, r#"    <Category name="{name}" description="{}"/>"#, esc(what));
+    }
+    let _ = writeln!(x, "  </LogCategories>");
+    let mut times = String::new();
+    if let Some(t) = experiment.0 {
+        let _ = write!(times, r#" startTime="{t:?}""#);
+    }
+    if let Some(t) = experiment.1 {
+        let _ = write!(times, r#" stopTime="{t:?}""#);
+    }
+    let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{step}\"/>");
 }
 
 /// An FMI 2.0 `<SimpleType>` block in FMI 3.0's form: `<Float64Type>`, `<Int32Type>`,

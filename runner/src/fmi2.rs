@@ -378,7 +378,7 @@ impl Fmi2Import {
         Ok(Instance2 {
             library: self.library.clone(),
             c,
-            states: Vec::new(),
+            states: Slots::default(),
             _callbacks: callbacks,
             _env: env,
         })
@@ -487,6 +487,53 @@ unsafe extern "C" fn forward(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FmuState(pub(crate) usize);
 
+/// The FMU states an instance took (its C pointers; None: freed), handed out as [`FmuState`]
+/// indices; the same for FMI 2.0 and 3.0 instances.
+#[derive(Default)]
+pub(crate) struct Slots(Vec<Option<*mut c_void>>);
+
+impl Slots {
+    /// A new state's index (a freed slot reused).
+    pub(crate) fn keep(&mut self, s: *mut c_void) -> Result<FmuState, Fmi2Error> {
+        if s.is_null() {
+            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
+        }
+        match self.0.iter().position(Option::is_none) {
+            Some(i) => {
+                self.0[i] = Some(s);
+                Ok(FmuState(i))
+            }
+            None => {
+                self.0.push(Some(s));
+                Ok(FmuState(self.0.len() - 1))
+            }
+        }
+    }
+
+    /// The C pointer of `s`, if it is one of these states.
+    pub(crate) fn raw(&self, s: &FmuState) -> Result<*mut c_void, Fmi2Error> {
+        self.0
+            .get(s.0)
+            .copied()
+            .flatten()
+            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
+    }
+
+    pub(crate) fn replace(&mut self, s: &FmuState, raw: *mut c_void) {
+        self.0[s.0] = Some(raw);
+    }
+
+    /// Forgets `s` (freed by the caller).
+    pub(crate) fn forget(&mut self, s: &FmuState) {
+        self.0[s.0] = None;
+    }
+
+    /// Every live state, to free them all.
+    pub(crate) fn live(&mut self) -> impl Iterator<Item = &mut *mut c_void> {
+        self.0.iter_mut().filter_map(|s| s.as_mut())
+    }
+}
+
 /// A co-simulation instance of an FMI 2.0 or an FMI 3.0 FMU ([`crate::fmi3`]), with FMI 2.0's
 /// view of its values and statuses; freed when dropped (its FMU states first).
 pub enum InstanceCS {
@@ -552,8 +599,8 @@ forward! {
 pub struct Instance2 {
     library: Arc<Library>,
     c: fmi2Component,
-    /// FMU states taken (None: freed).
-    states: Vec<Option<fmi2FMUstate>>,
+    /// FMU states taken.
+    states: Slots,
     _callbacks: Box<fmi2CallbackFunctions>,
     _env: Box<LogEnv>,
 }
@@ -565,7 +612,7 @@ unsafe impl Send for Instance2 {}
 impl Drop for Instance2 {
     fn drop(&mut self) {
         if let Some(free) = self.library.api.free_fmu_state {
-            for s in self.states.iter_mut().filter_map(|s| s.as_mut()) {
+            for s in self.states.live() {
                 // SAFETY: a state this instance took and did not free.
                 unsafe { free(self.c, s) };
             }
@@ -840,46 +887,22 @@ impl Instance2 {
         let mut s: fmi2FMUstate = std::ptr::null_mut();
         // SAFETY: a live instance; `s` is NULL, so the FMU makes a new state.
         check(unsafe { get(self.c, &mut s) })?;
-        self.keep(s)
-    }
-
-    fn keep(&mut self, s: fmi2FMUstate) -> Result<FmuState, Fmi2Error> {
-        if s.is_null() {
-            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
-        }
-        match self.states.iter().position(Option::is_none) {
-            Some(i) => {
-                self.states[i] = Some(s);
-                Ok(FmuState(i))
-            }
-            None => {
-                self.states.push(Some(s));
-                Ok(FmuState(self.states.len() - 1))
-            }
-        }
-    }
-
-    fn raw(&self, s: &FmuState) -> Result<fmi2FMUstate, Fmi2Error> {
-        self.states
-            .get(s.0)
-            .copied()
-            .flatten()
-            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
+        self.states.keep(s)
     }
 
     /// fmi2GetFMUstate into the existing state `s` (overwritten).
     pub fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
         let get = self.api().get_fmu_state.ok_or_else(|| missing("fmi2GetFMUstate"))?;
-        let mut raw = self.raw(s)?;
+        let mut raw = self.states.raw(s)?;
         // SAFETY: a live instance and one of its states.
         check(unsafe { get(self.c, &mut raw) })?;
-        self.states[s.0] = Some(raw);
+        self.states.replace(s, raw);
         Ok(())
     }
 
     pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
         let set = self.api().set_fmu_state.ok_or_else(|| missing("fmi2SetFMUstate"))?;
-        let raw = self.raw(s)?;
+        let raw = self.states.raw(s)?;
         // SAFETY: a live instance and one of its states.
         check(unsafe { set(self.c, raw) })
     }
@@ -887,8 +910,8 @@ impl Instance2 {
     /// fmi2FreeFMUstate of `s` (which is then no state of this instance).
     pub fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error> {
         let free = self.api().free_fmu_state.ok_or_else(|| missing("fmi2FreeFMUstate"))?;
-        let mut raw = self.raw(&s)?;
-        self.states[s.0] = None;
+        let mut raw = self.states.raw(&s)?;
+        self.states.forget(&s);
         // SAFETY: a live instance and one of its states, freed once.
         check(unsafe { free(self.c, &mut raw) })
     }
@@ -899,7 +922,7 @@ impl Instance2 {
             .serialized_size
             .ok_or_else(|| missing("fmi2SerializedFMUstateSize"))?;
         let serialize = self.api().serialize.ok_or_else(|| missing("fmi2SerializeFMUstate"))?;
-        let raw = self.raw(s)?;
+        let raw = self.states.raw(s)?;
         let mut size = 0usize;
         // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
         check(unsafe { size_of(self.c, raw, &mut size) })?;
@@ -916,6 +939,6 @@ impl Instance2 {
         let mut s: fmi2FMUstate = std::ptr::null_mut();
         // SAFETY: a live instance; `bytes` is readable for its length.
         check(unsafe { deserialize(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s) })?;
-        self.keep(s)
+        self.states.keep(s)
     }
 }

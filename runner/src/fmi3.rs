@@ -11,7 +11,7 @@
 
 #![allow(non_upper_case_globals, non_camel_case_types)]
 
-use crate::fmi2::{Fmi2Error, FmuState, Scratch, scratch};
+use crate::fmi2::{Fmi2Error, FmuState, Scratch, Slots, scratch};
 use fmi_description::Causality;
 use fmi_description::fmi2 as d2;
 use fmi_description::fmi3 as d3;
@@ -394,7 +394,7 @@ impl Fmi3Import {
         Ok(Instance3 {
             library: self.library.clone(),
             c,
-            states: Vec::new(),
+            states: Slots::default(),
             experiment: (None, 0.0, None),
             int64: self.int64.clone(),
             _env: env,
@@ -452,7 +452,7 @@ unsafe extern "C" fn log_message(
 pub struct Instance3 {
     library: Arc<Library>,
     c: fmi3Instance,
-    states: Vec<Option<fmi3FMUState>>,
+    states: Slots,
     /// tolerance, start and stop time of `setup_experiment`, for fmi3EnterInitializationMode.
     experiment: (Option<f64>, f64, Option<f64>),
     int64: Arc<HashSet<u32>>,
@@ -464,7 +464,7 @@ unsafe impl Send for Instance3 {}
 
 impl Drop for Instance3 {
     fn drop(&mut self) {
-        for s in self.states.iter_mut().filter_map(|s| s.as_mut()) {
+        for s in self.states.live() {
             // SAFETY: a state this instance took and did not free.
             unsafe { (self.library.api.free_fmu_state)(self.c, s) };
         }
@@ -695,56 +695,32 @@ impl Instance3 {
         let mut s: fmi3FMUState = std::ptr::null_mut();
         // SAFETY: a live instance; `s` is NULL, so the FMU makes a new state.
         check(unsafe { (self.api().get_fmu_state)(self.c, &mut s) })?;
-        self.keep(s)
-    }
-
-    fn keep(&mut self, s: fmi3FMUState) -> Result<FmuState, Fmi2Error> {
-        if s.is_null() {
-            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
-        }
-        match self.states.iter().position(Option::is_none) {
-            Some(i) => {
-                self.states[i] = Some(s);
-                Ok(FmuState(i))
-            }
-            None => {
-                self.states.push(Some(s));
-                Ok(FmuState(self.states.len() - 1))
-            }
-        }
-    }
-
-    fn raw(&self, s: &FmuState) -> Result<fmi3FMUState, Fmi2Error> {
-        self.states
-            .get(s.0)
-            .copied()
-            .flatten()
-            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
+        self.states.keep(s)
     }
 
     pub fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
-        let mut raw = self.raw(s)?;
+        let mut raw = self.states.raw(s)?;
         // SAFETY: a live instance and one of its states.
         check(unsafe { (self.api().get_fmu_state)(self.c, &mut raw) })?;
-        self.states[s.0] = Some(raw);
+        self.states.replace(s, raw);
         Ok(())
     }
 
     pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
-        let raw = self.raw(s)?;
+        let raw = self.states.raw(s)?;
         // SAFETY: a live instance and one of its states.
         check(unsafe { (self.api().set_fmu_state)(self.c, raw) })
     }
 
     pub fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error> {
-        let mut raw = self.raw(&s)?;
-        self.states[s.0] = None;
+        let mut raw = self.states.raw(&s)?;
+        self.states.forget(&s);
         // SAFETY: a live instance and one of its states, freed once.
         check(unsafe { (self.api().free_fmu_state)(self.c, &mut raw) })
     }
 
     pub fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error> {
-        let raw = self.raw(s)?;
+        let raw = self.states.raw(s)?;
         let mut size = 0usize;
         // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
         check(unsafe { (self.api().serialized_size)(self.c, raw, &mut size) })?;
@@ -757,6 +733,6 @@ impl Instance3 {
         let mut s: fmi3FMUState = std::ptr::null_mut();
         // SAFETY: a live instance; `bytes` is readable for its length.
         check(unsafe { (self.api().deserialize)(self.c, bytes.as_ptr(), bytes.len(), &mut s) })?;
-        self.keep(s)
+        self.states.keep(s)
     }
 }
