@@ -171,30 +171,32 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     let mut archive = rustfmu_runner::ssp::Archive::open(req.ssp).map_err(|e| e.message)?;
     let system_name = archive.ssd.name.clone();
     let components: Vec<String> = archive.ssd.components.iter().map(|c| c.name.clone()).collect();
-    // The components' descriptions as written, and the platforms every one of them carries.
+    // The components' descriptions as written, their FMI versions and binary folders.
     let mut xmls = Vec::new();
-    let mut common: Option<Vec<String>> = None;
+    let mut carried: Vec<(String, FmiVersion, Vec<String>)> = Vec::new();
     for c in &components {
         let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
         let xml = model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
-        if fmi_description::fmi_version(&xml).is_ok_and(|v| !v.starts_with("2.")) {
-            return Err(format!(
-                "{shown}: component '{c}' is an FMI 3.0 FMU: a container's components are FMI 2.0 co-simulation FMUs (the runner runs FMI 3.0 ones, a container does not carry them yet)"
-            ));
-        }
+        let version = match fmi_description::fmi_version(&xml) {
+            Ok(v) if v.starts_with("3.") => FmiVersion::V3,
+            _ => FmiVersion::V2,
+        };
+        let folders = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
+        carried.push((c.clone(), version, folders));
         xmls.push((c.clone(), xml));
-        let mine = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
-        common = Some(match common {
-            None => mine,
-            Some(before) => before.into_iter().filter(|f| mine.contains(f)).collect(),
-        });
     }
-    let common = common.unwrap_or_default();
-    if common.is_empty() {
-        return Err(format!(
-            "{shown}: no platform has a binary in every component FMU: a container cannot run anywhere"
-        ));
-    }
+    // Whether every component has a binary for target `t` (in its own version's folder).
+    let lacking = |t: &str| -> Option<String> {
+        let p = crate::target::platform(t).ok()?;
+        carried.iter().find_map(|(c, v, folders)| match p.folder(*v) {
+            Ok(f) if folders.contains(&f) => None,
+            Ok(f) => Some(format!(
+                "component '{c}' has no {f} binary (it has: {})",
+                folders.join(", ")
+            )),
+            Err(e) => Some(format!("component '{c}': {e}")),
+        })
+    };
     // The internal step: --step, else the step the SSD names for a fixed-step master (the
     // OMSimulator annotation `cargo fmu` writes: <oms:FixedStepMaster stepSize=...>).
     let ssd_text = files
@@ -215,7 +217,7 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     drop(sim);
 
     // Which binaries: the targets asked for, else the rustfmu workspace's FMU targets, those
-    // whose FMI 2.0 folder every component has.
+    // every component has a binary for (in its own version's folder).
     let ws = rustfmu_workspace()?;
     let host = crate::target::host_triple()?;
     let wanted: Vec<String> = if req.targets.is_empty() {
@@ -223,38 +225,38 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
             Some(v) => crate::target::parse_targets(v)?,
             None => vec![host.clone()],
         };
-        all.into_iter()
-            .filter(|t| {
-                crate::target::platform(t)
-                    .and_then(|p| p.folder(FmiVersion::V2))
-                    .is_ok_and(|f| common.contains(&f))
-            })
-            .collect()
-    } else {
-        req.targets.to_vec()
-    };
-    let mut binaries: Vec<(String, String, String)> = Vec::new();
-    for t in &wanted {
-        let p = crate::target::platform(t)?;
-        let folder = p.folder(FmiVersion::V2).map_err(|e| format!("target {t}: {e}"))?;
-        if !common.contains(&folder) {
+        let (fit, misfit): (Vec<String>, Vec<String>) = all.into_iter().partition(|t| lacking(t).is_none());
+        if fit.is_empty() {
+            let why: Vec<String> = misfit
+                .iter()
+                .map(|t| format!("{t}: {}", lacking(t).unwrap_or_default()))
+                .collect();
             return Err(format!(
-                "target {t}: not every component has a {folder} binary (all of them have: {})",
-                common.join(", ")
+                "{shown}: no platform has a binary in every component FMU, so a container cannot run anywhere ({})",
+                why.join("; ")
             ));
         }
+        fit
+    } else {
+        for t in req.targets {
+            crate::target::platform(t)?;
+            if let Some(why) = lacking(t) {
+                return Err(format!("target {t}: {why}"));
+            }
+        }
+        req.targets.to_vec()
+    };
+    // (target, FMI 2.0 binary name if FMI 2.0 has a folder for it, FMI 3.0 binary name)
+    let mut binaries: Vec<(String, Option<String>, String)> = Vec::new();
+    for t in &wanted {
+        let p = crate::target::platform(t)?;
         let folder3 = p.folder(FmiVersion::V3).map_err(|e| format!("target {t}: {e}"))?;
         binaries.push((
             t.clone(),
-            format!("binaries/{folder}/{}.{}", spec.model_identifier, p.extension()),
+            p.folder(FmiVersion::V2)
+                .ok()
+                .map(|f| format!("binaries/{f}/{}.{}", spec.model_identifier, p.extension())),
             format!("binaries/{folder3}/{}.{}", spec.model_identifier, p.extension()),
-        ));
-    }
-    if binaries.is_empty() {
-        return Err(format!(
-            "{shown}: none of the targets to build ({}) is a platform every component has ({})",
-            wanted.join(", "),
-            common.join(", ")
         ));
     }
     for t in &wanted {
@@ -288,7 +290,9 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
         let lib = ws.library_for(&krate, t, &host)?;
         let bytes = std::fs::read(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
         built3.push((name3.clone(), t.clone(), bytes.clone()));
-        built.push((name.clone(), t.clone(), bytes));
+        if let Some(name) = name {
+            built.push((name.clone(), t.clone(), bytes));
+        }
     }
     let binaries2 = crate::bundle::merge_universal(built)?;
     let binaries3 = crate::bundle::merge_universal(built3)?;

@@ -564,7 +564,19 @@ impl Spec {
                 }
                 if let Some(t) = &v.declared_type
                     && !types.iter().any(|(n, _)| n == t)
-                    && let Some(block) = element_text(xml, "SimpleType", t)
+                    && let Some(block) = element_text(xml, "SimpleType", t).or_else(|| {
+                        // An FMI 3.0 component's type, in FMI 2.0's form.
+                        [
+                            "Float64Type",
+                            "Int32Type",
+                            "BooleanType",
+                            "StringType",
+                            "EnumerationType",
+                        ]
+                        .iter()
+                        .find_map(|tag| element_text(xml, tag, t))
+                        .and_then(|b| simple_type2(&b))
+                    })
                 {
                     // A SimpleType's unit is a unit too.
                     if let Some(u) = attribute_in(
@@ -704,6 +716,71 @@ fn write_categories_and_experiment(x: &mut String, experiment: (Option<f64>, Opt
         let _ = write!(times, r#" stopTime="{t:?}""#);
     }
     let _ = writeln!(x, "  <DefaultExperiment{times} stepSize=\"{step}\"/>");
+}
+
+/// An FMI 3.0 type definition (`<Float64Type>`, ..., `<EnumerationType>` with its items) in FMI
+/// 2.0's form, `<SimpleType>` around `<Real>`, ..., `<Enumeration>` (None if unreadable).
+fn simple_type2(block: &str) -> Option<String> {
+    use quick_xml::events::Event;
+    let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+    let mut reader = quick_xml::Reader::from_str(block);
+    let mut outer: Option<(String, Vec<(String, String)>)> = None;
+    let mut items: Vec<Vec<(String, String)>> = Vec::new();
+    loop {
+        match reader.read_event().ok()? {
+            Event::Start(e) | Event::Empty(e) => {
+                let name = String::from_utf8(e.name().as_ref().to_vec()).ok()?;
+                let mut attrs = Vec::new();
+                for a in e.attributes() {
+                    let a = a.ok()?;
+                    attrs.push((
+                        String::from_utf8(a.key.as_ref().to_vec()).ok()?,
+                        a.unescape_value().ok()?.into_owned(),
+                    ));
+                }
+                if name == "Item" {
+                    items.push(attrs);
+                } else if outer.is_none() {
+                    outer = Some((name, attrs));
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    let (kind, attrs) = outer?;
+    let inner = match kind.as_str() {
+        "Float64Type" => "Real",
+        "Int32Type" => "Integer",
+        "BooleanType" => "Boolean",
+        "StringType" => "String",
+        "EnumerationType" => "Enumeration",
+        _ => return None,
+    };
+    let (own, rest): (Vec<_>, Vec<_>) = attrs.into_iter().partition(|(k, _)| k == "name" || k == "description");
+    let mut out = String::from("<SimpleType");
+    for (k, v) in &own {
+        let _ = write!(out, r#" {k}="{}""#, esc(v));
+    }
+    let _ = write!(out, ">\n      <{inner}");
+    for (k, v) in &rest {
+        let _ = write!(out, r#" {k}="{}""#, esc(v));
+    }
+    if items.is_empty() {
+        out.push_str("/>");
+    } else {
+        out.push('>');
+        for item in &items {
+            out.push_str("\n        <Item");
+            for (k, v) in item {
+                let _ = write!(out, r#" {k}="{}""#, esc(v));
+            }
+            out.push_str("/>");
+        }
+        let _ = write!(out, "\n      </{inner}>");
+    }
+    out.push_str("\n    </SimpleType>");
+    Some(out)
 }
 
 /// An FMI 2.0 `<SimpleType>` block in FMI 3.0's form: `<Float64Type>`, `<Int32Type>`,

@@ -253,3 +253,28 @@ def test_what_the_fmi3_container_does_not_offer_is_refused_with_the_reason(tmp_p
     s.fmu.exitInitializationMode()
     s.fmu.doStep(0.0, H)
     s.free()
+
+
+def test_a_container_of_fmi3_components_equals_the_one_of_their_fmi2_twins(tmp_path):
+    """target/fmu/fmi3/PendulumLQR.ssp (the FMI 3.0 Pendulum and Controller) as a container, FMI
+    2.0 and 3.0: the same variables (the Controller's EnumerationType as the 2.0 SimpleType it is)
+    and, in fmpy, the same numbers as the containers of the FMI 2.0 components (0)."""
+    out = tmp_path / "PendulumLQR.fmu"
+    r = subprocess.run(
+        [CARGO_FMU, "fmu", "container", FMU_DIR / "fmi3" / "PendulumLQR.ssp", "-o", out,
+         "--target", "x86_64-unknown-linux-gnu"],
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    assert r.returncode == 0, r.stderr[-4000:]
+    for mine, twin in [(out, FMU_DIR / "containers" / "PendulumLQR.fmu"),
+                       (tmp_path / "fmi3" / "PendulumLQR.fmu", container3("PendulumLQR"))]:
+        assert validate_fmu(str(mine)) == []
+        a, b = fmpy.read_model_description(mine), fmpy.read_model_description(twin)
+        assert [(v.name, v.type, v.causality, v.start) for v in a.modelVariables] == [
+            (v.name, v.type, v.causality, v.start) for v in b.modelVariables]
+        rec = [v.name for v in b.modelVariables if v.causality == "output" and v.type in ("Real", "Float64")]
+        ra = fmpy.simulate_fmu(str(mine), stop_time=1.0, step_size=H, output_interval=H, output=rec)
+        rb = fmpy.simulate_fmu(str(twin), stop_time=1.0, step_size=H, output_interval=H, output=rec)
+        assert max(np.max(np.abs(ra[k] - rb[k])) for k in rec) == 0.0
