@@ -85,9 +85,13 @@ mod model {
 }
 use model::__rustfmu_fmi2_exports::*;
 
+/// This test thread's log: the tests run on threads at once, and the last message of a log they
+/// shared could be another test's.
 fn log() -> &'static rustfmu::testing::Log {
-    static LOG: std::sync::OnceLock<&'static rustfmu::testing::Log> = std::sync::OnceLock::new();
-    LOG.get_or_init(rustfmu::testing::Log::leak)
+    thread_local! {
+        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
+    }
+    LOG.with(|l| *l)
 }
 
 /// An instance of `kind` with `misbehave` set, initialized (Model Exchange: in Event Mode).

@@ -119,9 +119,13 @@ fn the_fmi2_description_lists_each_element_as_a_scalar_of_structured_name() {
     assert_eq!(d.fmi2_element(16), None);
 }
 
+/// This test thread's log: the tests run on threads at once, and the last message of a log they
+/// shared could be another test's.
 fn log() -> &'static rustfmu::testing::Log {
-    static LOG: std::sync::OnceLock<&'static rustfmu::testing::Log> = std::sync::OnceLock::new();
-    LOG.get_or_init(rustfmu::testing::Log::leak)
+    thread_local! {
+        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
+    }
+    LOG.with(|l| *l)
 }
 
 fn instance(name: &std::ffi::CStr) -> fmi2Component {

@@ -54,24 +54,22 @@ mod model {
 }
 use model::__rustfmu_fmi2_exports as e2;
 
-fn log() -> &'static rustfmu::testing::Log {
-    static LOG: std::sync::OnceLock<&'static rustfmu::testing::Log> = std::sync::OnceLock::new();
-    LOG.get_or_init(rustfmu::testing::Log::leak)
+fn last(log: &rustfmu::testing::Log) -> String {
+    log.entries().last().map(|e| e.text.clone()).unwrap_or_default()
 }
 
-fn last() -> String {
-    log().entries().last().map(|e| e.text.clone()).unwrap_or_default()
-}
-
-fn initialized() -> fmi2Component {
-    let c = fmi2_host::cs_instance(e2::fmi2Instantiate, e2::GUID, c"integrator", log());
+/// An initialized instance with a log of its own: the tests run on threads at once, and the last
+/// message of a log they shared could be another test's.
+fn initialized() -> (fmi2Component, &'static rustfmu::testing::Log) {
+    let log = rustfmu::testing::Log::leak();
+    let c = fmi2_host::cs_instance(e2::fmi2Instantiate, e2::GUID, c"integrator", log);
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(e2::fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(e2::fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(e2::fmi2ExitInitializationMode(c), fmi2OK);
     }
-    c
+    (c, log)
 }
 
 fn get(c: fmi2Component, vr: u32) -> f64 {
@@ -83,7 +81,7 @@ fn get(c: fmi2Component, vr: u32) -> f64 {
 
 #[test]
 fn the_step_follows_the_input_derivative_and_ends_at_its_value() {
-    let c = initialized();
+    let (c, _) = initialized();
     // SAFETY: a live instance; locals.
     unsafe {
         assert_eq!(e2::fmi2SetReal(c, &1, 1, &1.0), fmi2OK);
@@ -140,9 +138,9 @@ fn bad_input_derivatives_are_refused_with_the_reason() {
         ),
     ];
     for (why, call) in cases {
-        let c = initialized();
+        let (c, log) = initialized();
         assert_eq!(call(c), fmi2Error, "{why}");
-        assert!(last().contains(why), "'{}' does not say '{why}'", last());
+        assert!(last(log).contains(why), "'{}' does not say '{why}'", last(log));
         // Refused: the step holds the input.
         // SAFETY: a live instance.
         unsafe { e2::fmi2FreeInstance(c) };
@@ -151,7 +149,7 @@ fn bad_input_derivatives_are_refused_with_the_reason() {
 
 #[test]
 fn a_higher_order_is_ignored_with_a_warning() {
-    let c = initialized();
+    let (c, log) = initialized();
     // SAFETY: a live instance; locals (two inputs' worth: u's first and second derivative).
     unsafe {
         assert_eq!(e2::fmi2SetReal(c, &1, 1, &1.0), fmi2OK);
@@ -160,7 +158,7 @@ fn a_higher_order_is_ignored_with_a_warning() {
             e2::fmi2SetRealInputDerivatives(c, vrs.as_ptr(), 2, orders.as_ptr(), values.as_ptr()),
             fmi2Warning
         );
-        assert!(last().contains("order 2 of vr 1 ignored"), "{}", last());
+        assert!(last(log).contains("order 2 of vr 1 ignored"), "{}", last(log));
         assert_eq!(e2::fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
     }
     // The first derivative was taken: x = 0.75 as without the second.
