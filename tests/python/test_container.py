@@ -210,6 +210,27 @@ def test_internal_steps_cut_a_long_communication_step(tmp_path):
     assert np.max(np.abs(a - b)) <= 1e-15
 
 
+def test_an_internal_step_below_the_resolution_of_time_is_discarded_before_anything_moves(tmp_path):
+    """From t = 2.2e14 s (a float's resolution there: 0.03 s) a step of 25 ms is 26 internal steps
+    of 0.97 ms that cannot advance a component's time: fmi2Discard with the reason, the last
+    successful time the step's start, the outputs as before (the conformance check's random
+    sequences found the fmi2Error a component gave there)."""
+    messages = []
+    s = Slave("PendulumLQR", tmp_path, logging=True, messages=messages)
+    fmu, vr = s.fmu, s.vr
+    t0 = 217548152586450.25
+    fmu.setupExperiment(startTime=t0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    before = fmu.getReal([vr["pendulum.alpha1"], vr["controller.M1"]])
+    with pytest.raises(Exception):
+        fmu.doStep(t0, 0.0252)
+    assert any(status == 2 and "too small to advance time" in m for status, _, m in messages), messages
+    assert fmu.getRealStatus(fmpy.fmi2.fmi2LastSuccessfulTime) == t0
+    assert fmu.getReal([vr["pendulum.alpha1"], vr["controller.M1"]]) == before
+    s.free()
+
+
 def test_fmu_state_of_the_container_restores_every_component(tmp_path):
     """Get the state at t = 0.5 s, run on, set it back: the second run from 0.5 s is the first
     bit for bit; and serialized, it continues identically in another instance."""

@@ -1237,6 +1237,20 @@ impl Container {
         }
         let n = n as usize;
         let h = big_h / n as f64;
+        if !(t + h > t && end - h < end) {
+            // Far from 0 the internal step is below the resolution of time: a component would
+            // be asked to step without its time moving. Nothing has moved yet.
+            self.state = State::StepFailed;
+            self.last_successful = t;
+            self.sink.log(
+                fmi2Discard,
+                "logStatusDiscard",
+                &format!(
+                    "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {h} s, too small to advance time there: discarded, nothing stepped (a longer communication step, or a container of a longer internal step)"
+                ),
+            );
+            return Err(fmi2Discard);
+        }
         let saved = self.snapshot();
         let (time0, dirty0) = (self.time, self.dirty);
         for k in 0..n {
