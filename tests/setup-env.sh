@@ -151,6 +151,15 @@ mv "$site/rustfmu_runner$suffix.tmp" "$site/rustfmu_runner$suffix"
   echo "setup-env: the rustfmu_runner module built at $module_lib does not import in .venv" >&2
   exit 1
 }
-step "the runner's Python module (copied from $module_lib)"
+# isolate=True runs each component in a child process of the rustfmu-runner binary, which the
+# module looks for in the environment's scripts folder (or $RUSTFMU_RUNNER, PATH).
+runner_bin=$(dirname "$module_lib")/rustfmu-runner
+if [ ! -f "$runner_bin" ]; then
+  echo "setup-env: cargo build --release -p rustfmu-runner (the children of isolate=True)"
+  (source tests/pyo3-env.sh && cargo build --release -p rustfmu-runner --bin rustfmu-runner)
+fi
+cp "$runner_bin" .venv/bin/rustfmu-runner.tmp
+mv .venv/bin/rustfmu-runner.tmp .venv/bin/rustfmu-runner
+step "the runner's Python module (copied from $module_lib) and .venv/bin/rustfmu-runner"
 fi
 echo "setup-env: ready ($((SECONDS - started)) s)"

@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// A status other than fmi2OK and fmi2Warning (which count as success).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Fmi2Error {
     Discard,
     Error,
@@ -38,6 +38,21 @@ pub enum Fmi2Error {
     Unknown(u32),
     /// The importer's own failure (a NULL state, a missing function): the message.
     Importer(String),
+    /// An isolated component's process is gone (crashed, exited, killed after a timeout): how.
+    Died(String),
+    /// A call of an isolated component that failed and is reported by a later call
+    /// ([`crate::isolate`]: the calls that answer only a status are not waited for).
+    Deferred(Box<Deferred>),
+}
+
+/// A call that failed, reported by the call after it: which, and when.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Deferred {
+    /// The FMI 2.0 name of the call that failed (fmi2DoStep, fmi2SetReal, ...).
+    pub function: &'static str,
+    /// The time it was made at (a step's start; a set: the end of the step before).
+    pub time: Option<f64>,
+    pub error: Fmi2Error,
 }
 
 impl std::fmt::Display for Fmi2Error {
@@ -48,7 +63,11 @@ impl std::fmt::Display for Fmi2Error {
             Fmi2Error::Fatal => write!(f, "fmi2Fatal"),
             Fmi2Error::Pending => write!(f, "fmi2Pending"),
             Fmi2Error::Unknown(s) => write!(f, "status {s}"),
-            Fmi2Error::Importer(m) => write!(f, "{m}"),
+            Fmi2Error::Importer(m) | Fmi2Error::Died(m) => write!(f, "{m}"),
+            Fmi2Error::Deferred(d) => match d.time {
+                Some(t) => write!(f, "{} at t = {t} s: {}", d.function, d.error),
+                None => write!(f, "{}: {}", d.function, d.error),
+            },
         }
     }
 }
@@ -541,6 +560,9 @@ pub enum InstanceCS {
     V3(crate::fmi3::Instance3),
     /// An FMI 2.0 model-exchange instance the runner integrates ([`crate::me`]).
     Me(crate::me::MeInstance),
+    /// Any of the above in a child process ([`crate::isolate`]).
+    #[cfg(target_os = "linux")]
+    Isolated(Box<crate::isolate::Isolated>),
 }
 
 /// Each method of [`InstanceCS`], forwarded to the version's instance.
@@ -554,6 +576,8 @@ macro_rules! forward {
                         InstanceCS::V2(i) => i.$name($($arg),*),
                         InstanceCS::V3(i) => i.$name($($arg),*),
                         InstanceCS::Me(i) => i.$name($($arg),*),
+                        #[cfg(target_os = "linux")]
+                        InstanceCS::Isolated(i) => i.$name($($arg),*),
                     }
                 }
             )*

@@ -258,6 +258,34 @@ impl Fmu {
             .map_err(|e| fail(format!("fmi2Instantiate(fmi2ModelExchange) failed: {e}")))
     }
 
+    /// An instance in a child process of its own ([`crate::isolate`]); `me`: model exchange,
+    /// integrated by the runner in the child.
+    pub fn instantiate_isolated(
+        &self,
+        component: &str,
+        me: bool,
+        isolation: &crate::isolate::Isolation,
+    ) -> Result<InstanceCS, Error> {
+        #[cfg(target_os = "linux")]
+        {
+            let dir = match &self.import {
+                Import::V2(i) => i.dir(),
+                Import::V3(i) => i.dir(),
+            };
+            crate::isolate::Isolated::spawn(isolation, component, &self.label, dir, me)
+                .map(|i| InstanceCS::Isolated(Box::new(i)))
+        }
+        #[cfg(not(target_os = "linux"))]
+        {
+            let _ = (me, isolation);
+            Err(Error::unsupported(
+                Some(component),
+                None,
+                format!("component '{component}': isolation (a child process per component) runs on Linux only"),
+            ))
+        }
+    }
+
     /// The FMI version of the FMU, "2.0" or "3.0".
     pub fn fmi_version(&self) -> &'static str {
         match self.import {

@@ -25,6 +25,7 @@ pub mod fmi2;
 pub mod fmi3;
 pub mod fmu;
 pub mod fmu_log;
+pub mod isolate;
 pub mod me;
 pub mod sim;
 pub mod ssp;
@@ -104,6 +105,29 @@ impl Error {
 
     /// A failed FMI call of `component`.
     pub fn fmi(component: &str, function: &str, err: &crate::fmi2::Fmi2Error, time: Option<f64>, what: &str) -> Error {
+        if let crate::fmi2::Fmi2Error::Deferred(d) = err {
+            // An isolated component's call that failed before this one: report that call.
+            let v3 = function.starts_with("fmi3");
+            let what = if matches!(d.error, crate::fmi2::Fmi2Error::Died(_)) {
+                String::new()
+            } else {
+                format!("reported at {function}")
+            };
+            return Error::fmi(component, crate::sim::fname(v3, d.function), &d.error, d.time, &what);
+        }
+        if let crate::fmi2::Fmi2Error::Died(how) = err {
+            let at = time.map(|t| format!(" at t = {t} s")).unwrap_or_default();
+            return Error {
+                component: Some(component.to_owned()),
+                function: Some(function.to_owned()),
+                status: Some("Fatal".to_owned()),
+                time,
+                ..Error::new(
+                    ErrorKind::Fmi,
+                    format!("component '{component}': {function}{at} did not return: {how}"),
+                )
+            };
+        }
         let status = match err {
             crate::fmi2::Fmi2Error::Discard => "Discard".to_owned(),
             crate::fmi2::Fmi2Error::Error => "Error".to_owned(),

@@ -68,6 +68,27 @@ enum Command {
         /// No progress bar (it is drawn on standard error when that is a terminal).
         #[arg(long)]
         no_progress: bool,
+        /// Each component in a child process of its own: an FMU that crashes, exits or hangs
+        /// fails the run with the component, function and time, not the runner (Linux).
+        #[arg(long)]
+        isolate: bool,
+        /// With --isolate: the longest one FMU call may take, s, before its process is killed.
+        #[arg(long, requires = "isolate")]
+        call_timeout: Option<f64>,
+    },
+    /// Serves one component to the runner that started this process (--isolate).
+    #[command(hide = true)]
+    ServeComponent {
+        #[arg(long)]
+        dir: PathBuf,
+        #[arg(long)]
+        name: String,
+        #[arg(long)]
+        label: String,
+        #[arg(long)]
+        shm: PathBuf,
+        #[arg(long)]
+        model_exchange: bool,
     },
     /// Prints the system: components, evaluation order, parameters, outputs.
     Info { ssp: PathBuf },
@@ -92,6 +113,22 @@ fn parse_set(text: &str) -> Result<(String, Override), String> {
 
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
+        #[cfg(target_os = "linux")]
+        Command::ServeComponent {
+            dir,
+            name,
+            label,
+            shm,
+            model_exchange,
+        } => std::process::exit(rustfmu_runner::isolate::serve(
+            &dir,
+            &name,
+            &label,
+            model_exchange,
+            &shm,
+        )),
+        #[cfg(not(target_os = "linux"))]
+        Command::ServeComponent { .. } => Err("serve-component: isolation runs on Linux only".into()),
         Command::Info { ssp } => {
             let sim = Simulation::from_ssp(&ssp)?;
             println!("system {}", sim.name);
@@ -117,6 +154,8 @@ fn run(cli: Cli) -> Result<(), String> {
             output,
             order,
             no_progress,
+            isolate,
+            call_timeout,
         } => {
             let stop_time = match stop_time {
                 Some(t) => t,
@@ -125,7 +164,18 @@ fn run(cli: Cli) -> Result<(), String> {
                     .stop_time
                     .ok_or("no --stop-time given and the SSD has no DefaultExperiment stopTime")?,
             };
-            let mut sim = Simulation::from_ssp(&ssp)?;
+            let mut sim = if isolate {
+                let worker = rustfmu_runner::isolate::find_worker(None, &[])?;
+                let timeout = match call_timeout {
+                    Some(t) if !(t.is_finite() && t > 0.0) => {
+                        return Err(format!("--call-timeout {t}: a time > 0 in seconds"));
+                    }
+                    t => t.map(std::time::Duration::from_secs_f64),
+                };
+                Simulation::from_ssp_isolated(&ssp, rustfmu_runner::isolate::Isolation { worker, timeout })?
+            } else {
+                Simulation::from_ssp(&ssp)?
+            };
             if order == "jacobi" {
                 sim.scheme = Scheme::Jacobi;
             }

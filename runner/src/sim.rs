@@ -170,7 +170,7 @@ struct Slave {
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
-fn fname(v3: bool, name: &'static str) -> &'static str {
+pub(crate) fn fname(v3: bool, name: &'static str) -> &'static str {
     if !v3 {
         return name;
     }
@@ -278,6 +278,8 @@ pub struct Simulation {
     connections: Vec<Connection>,
     /// The system's own connectors (the runner runs without them; a container exposes them).
     system_connectors: Vec<crate::ssp::SystemConnector>,
+    /// Each component in a child process of its own ([`crate::isolate`]), or None: in this one.
+    isolation: Option<crate::isolate::Isolation>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -285,14 +287,45 @@ fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl F
     move |e| Error::fmi(&slave, &function, &e, time, &what)
 }
 
+/// A component's instance: model exchange (`me`) or co-simulation, here or in a child process.
+fn make_instance(
+    fmu: &Fmu,
+    component: &str,
+    me: bool,
+    isolation: Option<&crate::isolate::Isolation>,
+) -> Result<InstanceCS, Error> {
+    match isolation {
+        Some(iso) => {
+            if me && fmu.description.me.is_none() {
+                // The in-process refusal, with its reason.
+                return fmu.instantiate_me(component);
+            }
+            fmu.instantiate_isolated(component, me, iso)
+        }
+        None if me => fmu.instantiate_me(component),
+        None => fmu.instantiate(component),
+    }
+}
+
 impl Simulation {
     /// The system of an SSP file: every component's FMU read from the archive, its parameter
     /// bindings applied at every run.
     pub fn from_ssp(path: &Path) -> Result<Simulation, Error> {
-        Simulation::from_archive(Archive::open(path)?)
+        Simulation::from_archive(Archive::open(path)?, None)
     }
 
-    fn from_archive(mut archive: Archive) -> Result<Simulation, Error> {
+    /// As [`Simulation::from_ssp`], each component instantiated and called in a child process of
+    /// its own ([`crate::isolate`]): an FMU that crashes or hangs fails the run, not this process.
+    pub fn from_ssp_isolated(path: &Path, isolation: crate::isolate::Isolation) -> Result<Simulation, Error> {
+        Simulation::from_archive(Archive::open(path)?, Some(isolation))
+    }
+
+    /// Whether the components run in child processes.
+    pub fn isolation(&self) -> Option<&crate::isolate::Isolation> {
+        self.isolation.as_ref()
+    }
+
+    fn from_archive(mut archive: Archive, isolation: Option<crate::isolate::Isolation>) -> Result<Simulation, Error> {
         let ssd = archive.ssd.clone();
         let mut fmus: Vec<Fmu> = Vec::new();
         let mut sources: Vec<String> = Vec::new();
@@ -320,8 +353,8 @@ impl Simulation {
             .iter()
             .flat_map(|c| c.parameters.iter().map(|(v, x)| (c.name.clone(), v.clone(), x.clone())))
             .collect();
-        let mut sim =
-            Simulation::new(&ssd.name, fmus, components, &ssd.connections, parameters).map_err(|e| Error {
+        let mut sim = Simulation::new_with(&ssd.name, fmus, components, &ssd.connections, parameters, isolation)
+            .map_err(|e| Error {
                 message: format!("{}: {}", archive.path, e.message),
                 ..e
             })?;
@@ -358,6 +391,18 @@ impl Simulation {
         connections: &[Connection],
         parameters: Vec<(String, String, Value)>,
     ) -> Result<Simulation, Error> {
+        Simulation::new_with(name, fmus, components, connections, parameters, None)
+    }
+
+    /// [`Simulation::new`], the components isolated in child processes with `isolation`.
+    pub fn new_with(
+        name: &str,
+        fmus: Vec<Fmu>,
+        components: Vec<(String, usize)>,
+        connections: &[Connection],
+        parameters: Vec<(String, String, Value)>,
+        isolation: Option<crate::isolate::Isolation>,
+    ) -> Result<Simulation, Error> {
         let mut slaves = Vec::new();
         for (c, f) in &components {
             if c.is_empty() || slaves.iter().any(|s: &Slave| &s.name == c) {
@@ -373,11 +418,7 @@ impl Simulation {
             slaves.push(Slave {
                 name: c.clone(),
                 fmu: *f,
-                instance: Some(if me {
-                    fmu.instantiate_me(c)?
-                } else {
-                    fmu.instantiate(c)?
-                }),
+                instance: Some(make_instance(fmu, c, me, isolation.as_ref())?),
                 v3: fmu.fmi_version() == "3.0",
                 me,
             });
@@ -399,6 +440,7 @@ impl Simulation {
             dbufs: Vec::new(),
             connections: connections.to_vec(),
             system_connectors: Vec::new(),
+            isolation,
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
@@ -412,7 +454,7 @@ impl Simulation {
     /// The system's folder form: `dir/SystemStructure.ssd` and the files it names below `dir`
     /// (an SSP archive unpacked; a container FMU's `resources/system`).
     pub fn from_dir(dir: &Path) -> Result<Simulation, Error> {
-        Simulation::from_archive(Archive::open_dir(dir)?)
+        Simulation::from_archive(Archive::open_dir(dir)?, None)
     }
 
     /// Each component's name and its FMU's description, in the system's order.
@@ -1004,11 +1046,7 @@ impl Simulation {
         for i in 0..self.slaves.len() {
             self.slaves[i].instance = None; // fmi2FreeInstance
             let name = self.slaves[i].name.clone();
-            let inst = if self.slaves[i].me {
-                self.fmu_of(i).instantiate_me(&name)?
-            } else {
-                self.fmu_of(i).instantiate(&name)?
-            };
+            let inst = make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?;
             self.slaves[i].instance = Some(inst);
         }
         self.runs = 0;
@@ -1316,7 +1354,8 @@ impl Simulation {
         if self.slaves[i].me {
             return Ok(());
         }
-        let inst = self.fmu_of(i).instantiate_me(component)?;
+        self.slaves[i].instance = None;
+        let inst = make_instance(self.fmu_of(i), component, true, self.isolation.as_ref())?;
         self.slaves[i].instance = Some(inst);
         self.slaves[i].me = true;
         Ok(())

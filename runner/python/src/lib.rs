@@ -19,7 +19,7 @@
 
 use numpy::PyArray1;
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
 use runner::sim::Failure;
@@ -134,9 +134,23 @@ struct PySystem {
 #[pymethods]
 impl PySystem {
     /// Loads the SSP file `path` (`order`: "gauss-seidel", the default, or "jacobi").
+    ///
+    /// `isolate=True`: each component in a child process of its own (Linux), so that an FMU
+    /// that crashes, aborts, exits or hangs fails the run with an FmiError naming the component,
+    /// the function and the time, and this process lives on (the next run starts the
+    /// components anew). `call_timeout` (s): the longest one FMU call may take before its
+    /// process is killed (default: no limit). `worker`: the rustfmu-runner binary the children
+    /// run (default: $RUSTFMU_RUNNER, this environment's scripts folder, PATH).
     #[new]
-    #[pyo3(signature = (path, order = "gauss-seidel"))]
-    fn new(py: Python<'_>, path: std::path::PathBuf, order: &str) -> PyResult<PySystem> {
+    #[pyo3(signature = (path, order = "gauss-seidel", isolate = false, call_timeout = None, worker = None))]
+    fn new(
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        order: &str,
+        isolate: bool,
+        call_timeout: Option<f64>,
+        worker: Option<std::path::PathBuf>,
+    ) -> PyResult<PySystem> {
         let scheme = match order {
             "gauss-seidel" => Scheme::GaussSeidel,
             "jacobi" => Scheme::Jacobi,
@@ -147,8 +161,38 @@ impl PySystem {
             }
         };
         let shown = path.display().to_string();
+        let isolation = if isolate {
+            if let Some(t) = call_timeout
+                && !(t.is_finite() && t > 0.0)
+            {
+                return Err(PyValueError::new_err(format!(
+                    "call_timeout = {t}: a time > 0 in seconds"
+                )));
+            }
+            let scripts: std::path::PathBuf = py
+                .import("sysconfig")?
+                .call_method1("get_path", ("scripts",))?
+                .extract()?;
+            let worker =
+                runner::isolate::find_worker(worker.as_deref(), &[scripts]).map_err(|e| to_pyerr(py, &e, None))?;
+            Some(runner::isolate::Isolation {
+                worker,
+                timeout: call_timeout.map(std::time::Duration::from_secs_f64),
+            })
+        } else {
+            if call_timeout.is_some() || worker.is_some() {
+                return Err(PyValueError::new_err("call_timeout and worker go with isolate=True"));
+            }
+            None
+        };
         let mut sim = py
-            .detach(move || Simulation::from_ssp(&path).map(Sim))
+            .detach(move || {
+                match isolation {
+                    Some(iso) => Simulation::from_ssp_isolated(&path, iso),
+                    None => Simulation::from_ssp(&path),
+                }
+                .map(Sim)
+            })
             .map_err(|e| to_pyerr(py, &e, None))?;
         sim.0.scheme = scheme;
         Ok(PySystem {

@@ -1,0 +1,182 @@
+"""Isolation in the native runner (issue 26): `System(path, isolate=True)` runs each component in
+a child process of its own (runner/src/isolate.rs). An FMU that crashes (a segmentation fault),
+aborts, exits or hangs fails the run with an FmiError naming the component, the FMI function and
+the time; the runner (this Python process, a Dask worker) lives on, and the next run starts the
+components anew. The crashing FMU is a test FMU made here (`cargo fmu build` of a crate outside
+the workspace), not shipped."""
+
+import subprocess
+import zipfile
+
+import numpy as np
+import pytest
+from conftest import FMU_DIR, USER_TARGET, outside_crate
+
+import rustfmu_runner
+
+CRASHER = '''//! A test FMU that fails on purpose at the first step that ends after `crash_at` (never shipped).
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// y integrates 1 + u; at the step past crash_at: how = 1 a segmentation fault, 2 abort(),
+/// 3 exit(3), 4 a hang, else fmi2Discard
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct Crasher {
+    /// Input u
+    #[variable(vr = 0, input, start = 0.0)]
+    pub u: f64,
+    /// Output y
+    #[variable(vr = 1, output, discrete, initial = exact, start = 0.0, depends = [])]
+    pub y: f64,
+    /// Time after which a step fails
+    #[variable(vr = 2, parameter, fixed, start = 1.0e9, unit = "s")]
+    pub crash_at: f64,
+    /// How it fails
+    #[variable(vr = 3, parameter, fixed, start = 1)]
+    pub how: i32,
+}
+
+impl Model for Crasher {}
+
+impl CoSimulation for Crasher {
+    fn do_step(&mut self, t: f64, h: f64, _ctx: &mut Context) -> Result<(), StepFailure> {
+        if t + h > self.crash_at {
+            match self.how {
+                // SAFETY: none; this FMU exists to crash its host.
+                1 => unsafe { std::ptr::null_mut::<f64>().write_volatile(1.0) },
+                2 => std::process::abort(),
+                3 => std::process::exit(3),
+                4 => loop {
+                    std::thread::sleep(std::time::Duration::from_secs(1))
+                },
+                _ => {
+                    return Err(StepFailure {
+                        reached_time: t,
+                        message: format!("failed on purpose at t = {t}"),
+                    });
+                }
+            }
+        }
+        self.y += h * (1.0 + self.u);
+        Ok(())
+    }
+}
+
+rustfmu::export_fmu!(Crasher);
+'''
+
+SSD = """<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+    xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="1.0" name="Crash">
+  <ssd:System name="Crash">
+    <ssd:Elements>
+      <ssd:Component name="steady" source="resources/Crasher.fmu" type="application/x-fmu-sharedlibrary"/>
+      <ssd:Component name="crasher" source="resources/Crasher.fmu" type="application/x-fmu-sharedlibrary"/>
+    </ssd:Elements>
+    <ssd:Connections>
+      <ssd:Connection startElement="steady" startConnector="y" endElement="crasher" endConnector="u"/>
+    </ssd:Connections>
+  </ssd:System>
+</ssd:SystemStructureDescription>"""
+
+
+@pytest.fixture(scope="module")
+def crash_ssp(tmp_path_factory):
+    crate, env = outside_crate("crasher", fresh=True)
+    (crate / "src" / "lib.rs").write_text(CRASHER)
+    out = subprocess.run(["cargo", "fmu", "build", "--fmi-version", "2"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-4000:]
+    fmu = USER_TARGET / "fmu" / "Crasher.fmu"
+    path = tmp_path_factory.mktemp("isolation") / "Crash.ssp"
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("SystemStructure.ssd", SSD)
+        z.writestr("resources/Crasher.fmu", fmu.read_bytes())
+    return str(path)
+
+
+def expect_failure(system, start, match):
+    with pytest.raises(rustfmu_runner.FmuError) as e:
+        system.run(1.0, 0.01, start=start)
+    assert e.value.component == "crasher", str(e.value)
+    assert e.value.function == "fmi2DoStep", str(e.value)
+    # The step that crosses crash_at = 0.5 s starts at 0.5 - 0.01 < t <= 0.5.
+    assert 0.48 < e.value.time <= 0.5, str(e.value)
+    assert match in str(e.value), str(e.value)
+    return e.value
+
+
+@pytest.mark.parametrize(
+    "how, match",
+    [
+        (1, "died of signal 11 (SIGSEGV, a segmentation fault)"),
+        (2, "died of signal 6 (SIGABRT, an abort)"),
+        (3, "exited with status 3"),
+    ],
+)
+def test_a_crashing_fmu_fails_the_run_with_component_function_and_time_and_the_runner_lives_on(crash_ssp, how, match):
+    """Segmentation fault, abort(), exit(3) in fmi2DoStep at t = 0.5 s: an FmiError with the
+    component, fmi2DoStep and the step's time; the same System then runs again, the crashed
+    process replaced, and equals an in-process run."""
+    system = rustfmu_runner.System(crash_ssp, isolate=True)
+    err = expect_failure(system, {"crasher.crash_at": 0.5, "crasher.how": how}, match)
+    assert "did not return" in str(err) and "the process of component 'crasher'" in str(err)
+    again = system.run(1.0, 0.01)
+    here = rustfmu_runner.System(crash_ssp).run(1.0, 0.01)
+    for k in here:
+        assert np.array_equal(again[k], here[k]), k
+
+
+def test_a_hanging_fmu_is_killed_after_the_call_timeout(crash_ssp):
+    system = rustfmu_runner.System(crash_ssp, isolate=True, call_timeout=0.5)
+    expect_failure(system, {"crasher.crash_at": 0.5, "crasher.how": 4}, "did not return within 0.5 s: its process was killed")
+    assert system.run(0.2, 0.01)["crasher.y"][-1] > 0
+
+
+def test_an_fmi_failure_of_an_isolated_component_is_reported_as_in_process(crash_ssp):
+    """fmi2DoStep's status comes back with the next call (the step is not waited for): the
+    error still names fmi2DoStep, its time and status, and the FMU's own message, as in-process."""
+    start = {"crasher.crash_at": 0.5, "crasher.how": 5}
+    errors = []
+    for isolate in (False, True):
+        with pytest.raises(rustfmu_runner.FmuError) as e:
+            rustfmu_runner.System(crash_ssp, isolate=isolate).run(1.0, 0.01, start=start)
+        errors.append(e.value)
+    here, there = errors
+    for err in errors:
+        assert (err.component, err.function, err.status) == ("crasher", "fmi2DoStep", "Discard"), str(err)
+        assert "failed on purpose" in str(err), str(err)
+    assert here.time == there.time
+
+
+@pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
+def test_isolated_components_give_the_in_process_result_bit_for_bit(name):
+    """Every output of both systems, 2 s at 1 ms; with FMU state, rollback (tolerance=) and the
+    first-order hold too."""
+    path = str(FMU_DIR / f"{name}.ssp")
+    here, there = rustfmu_runner.System(path), rustfmu_runner.System(path, isolate=True)
+    for kwargs in ({}, {"tolerance": 1e-3}, {"input_derivatives": True}):
+        a, b = here.run(2.0, 1e-3, **kwargs), there.run(2.0, 1e-3, **kwargs)
+        assert a.keys() == b.keys()
+        for k in a:
+            assert np.array_equal(a[k], b[k]), (kwargs, k)
+
+
+def test_isolation_options_are_checked():
+    path = str(FMU_DIR / "PendulumLQR.ssp")
+    with pytest.raises(ValueError, match="call_timeout"):
+        rustfmu_runner.System(path, isolate=True, call_timeout=-1.0)
+    with pytest.raises(ValueError, match="isolate=True"):
+        rustfmu_runner.System(path, call_timeout=1.0)
+    with pytest.raises(rustfmu_runner.VariableError, match="not a file"):
+        rustfmu_runner.System(path, isolate=True, worker="/nonexistent/rustfmu-runner")
+
+
+def test_the_command_line_isolates_too(crash_ssp, tmp_path):
+    runner = FMU_DIR.parent / "release" / "rustfmu-runner"
+    r = subprocess.run(
+        [runner, "run", crash_ssp, "--stop-time", "1", "--step", "0.01", "--isolate", "--no-progress",
+         "--set", "crasher.crash_at=0.5", "--set", "crasher.how=1", "-o", tmp_path / "out.csv"],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert r.returncode == 1
+    assert "component 'crasher': fmi2DoStep at t = 0.5 s did not return" in r.stderr and "SIGSEGV" in r.stderr, r.stderr
