@@ -284,7 +284,8 @@ def run_study(
 
     `scheduler`: address of an existing Dask scheduler ("tcp://host:8786"); None starts a
     LocalCluster of `n_workers` workers with `threads_per_worker` threads (processes or threads).
-    `master`: "native" (the SSP runner in-process, the default) or "fmpy" (the reference).
+    `master`: "native" (the SSP runner in-process, the default), "isolated" (the same, each FMU
+    in a child process) or "fmpy" (the reference).
     """
     from tqdm import tqdm
 

@@ -619,6 +619,18 @@ forward! {
     fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error>;
 }
 
+impl InstanceCS {
+    /// Waits for every call made so far (an isolated instance sends the calls that answer only
+    /// a status with the next one that answers values): their failure, if any, now.
+    pub fn sync(&mut self) -> Result<(), Fmi2Error> {
+        match self {
+            #[cfg(target_os = "linux")]
+            InstanceCS::Isolated(i) => i.sync(),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// An FMI 2.0 co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
 pub struct Instance2 {
     library: Arc<Library>,

@@ -633,6 +633,16 @@ mod linux {
             self.collect(|_| Ok(()))
         }
 
+        /// Sends what is written and waits for it: a failure of a call before now.
+        pub fn sync(&mut self) -> Result<(), Fmi2Error> {
+            self.flush_wait()?;
+            if !self.pending.is_empty() {
+                self.publish()?;
+                self.collect(|_| Ok(()))?;
+            }
+            Ok(())
+        }
+
         /// A call that answers only a status, sent with the next call that answers (or at once).
         fn post(
             &mut self,

@@ -863,6 +863,14 @@ impl Simulation {
             Setter::Boolean(x) => ("fmi2SetBoolean", inst.set_boolean(&vr, &[i32::from(*x)]).map(|_| ())),
             Setter::String(s) => ("fmi2SetString", inst.set_string(&vr, std::slice::from_ref(s))),
         };
+        // An isolated component answers a set with its next call: wait here, so that a refused
+        // parameter or start value is reported with its name and value.
+        let r = r.and_then(|_| {
+            inst.sync().map_err(|e| match e {
+                Fmi2Error::Deferred(d) => d.error,
+                e => e,
+            })
+        });
         r.map_err(|err| Error {
             variable: Some(variable.clone()),
             ..Error::fmi(&name, fname(v3, function), &err, None, &format!("{variable} = {value}"))

@@ -180,3 +180,51 @@ def test_the_command_line_isolates_too(crash_ssp, tmp_path):
     )
     assert r.returncode == 1
     assert "component 'crasher': fmi2DoStep at t = 0.5 s did not return" in r.stderr and "SIGSEGV" in r.stderr, r.stderr
+
+
+def _run_crash_system(ssp, how):
+    """A Dask task: the crash system, isolated, in the worker; returns (pid, error text)."""
+    import os
+
+    import rustfmu_runner as rf
+
+    try:
+        rf.System(ssp, isolate=True).run(1.0, 0.01, start={"crasher.crash_at": 0.5, "crasher.how": how})
+        return os.getpid(), None
+    except rf.FmuError as e:
+        return os.getpid(), str(e)
+
+
+def test_a_dask_worker_lives_on_when_an_isolated_fmu_crashes(crash_ssp):
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster, Client(cluster) as client:
+        pid1, err1 = client.submit(_run_crash_system, crash_ssp, 1, pure=False).result(timeout=120)
+        pid2, err2 = client.submit(_run_crash_system, crash_ssp, 2, pure=False).result(timeout=120)
+        pid3, err3 = client.submit(_run_crash_system, crash_ssp, 5, pure=False).result(timeout=120)
+    assert "SIGSEGV" in err1 and "SIGABRT" in err2 and "failed on purpose" in err3, (err1, err2, err3)
+    assert pid1 == pid2 == pid3, "the worker was restarted"
+
+
+def test_the_parameter_study_with_isolated_fmus_gives_the_in_process_rows(tmp_path):
+    """examples/parameter_study.py --master isolated: the small study of test_parameter_study on a
+    LocalCluster of two workers, each FMU in a child process: the rows of the in-process runs (the
+    failed run's FMI status, function and the FMU's message too)."""
+    import pandas as pd
+    from test_parameter_study import COMPARED, paths, runner, small_study
+
+    here = runner.run_sequential(small_study(), paths(), fresh=True, out=tmp_path / "here.csv")
+    assert here
+    report = runner.run_study(small_study(), tmp_path / "isolated.csv", paths(), n_workers=2, threads_per_worker=1, progress=False, master="isolated")
+    assert report.executed == len(small_study()), str(report)
+    a = pd.read_csv(tmp_path / "here.csv").set_index("run_id").sort_index()
+    b = pd.read_csv(tmp_path / "isolated.csv").set_index("run_id").sort_index()
+    assert list(a.index) == list(b.index)
+    assert set(b["master"]) == {"isolated"}
+    for c in COMPARED:
+        if c == "error":
+            continue
+        for rid, x, y in zip(a.index, a[c], b[c]):
+            assert x == y or (isinstance(x, float) and isinstance(y, float) and np.isnan(x) and np.isnan(y)), (c, rid, x, y)
+    failed = b[b["status"] == "failed"]
+    assert len(failed) == 1 and "-0.5 for 'm1' (vr 20) is outside (0, inf)" in failed["error"].iloc[0], failed["error"].to_dict()
