@@ -9,7 +9,9 @@ Every run is one task on a Dask LocalCluster (--workers, --threads); --scheduler
 runs the same study on an existing cluster. --master native (the default) runs each closed loop
 in-process in the native SSP runner (the rustfmu_runner module, tests/setup-env.sh builds it);
 --master isolated the same with each FMU in a child process (an FMU that crashes or hangs fails
-its own run's row with component, function and time; the worker goes on); --master fmpy in the
+its own run's row with component, function and time; the worker goes on), --master
+isolated-system with the whole loop in one child process (the same errors, at the in-process
+cost per step); --master fmpy in the
 fmpy master, the reference: all give the same rows.
 Rows go to <out>/<study>.csv as runs finish; running
 the same command again skips the runs already there (resume). The PNG is drawn at the end.
@@ -43,7 +45,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--band", type=float, default=Criteria.band, help="settled when |alpha1|, |alpha2| stay within this, rad")
     p.add_argument("--hold", type=float, default=Criteria.hold, help="stabilized when settled at least this long before the end, s")
     p.add_argument("--retry-failed", action="store_true", help="on resume, run again the runs that failed")
-    p.add_argument("--master", choices=("native", "isolated", "fmpy"), default="native", help="native: the SSP runner in-process (default); isolated: the same, each FMU in a child process (a crash or hang fails its run's row, not the worker); fmpy: the fmpy master (the reference)")
+    p.add_argument("--master", choices=("native", "isolated", "isolated-system", "fmpy"), default="native", help="native: the SSP runner in-process (default); isolated: the same, each FMU in a child process (a crash or hang fails its run's row, not the worker); isolated-system: the whole loop in one child process (the same, at the in-process cost per step); fmpy: the fmpy master (the reference)")
     p.add_argument("--no-progress", action="store_true")
 
 

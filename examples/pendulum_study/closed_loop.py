@@ -49,7 +49,7 @@ from cosim.master import Fmu, Loop, System
 from cosim.systems import read_ssp, ssp_path
 
 #: The masters a study can run on: the native runner (default) and the fmpy master (the reference).
-MASTERS = ("native", "isolated", "fmpy")
+MASTERS = ("native", "isolated", "isolated-system", "fmpy")
 
 #: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
 #: (`paper/systems.toml` describes them: components, parameter values, connections).
@@ -165,9 +165,10 @@ class NativeClosedLoop:
     `ClosedLoop`. An FMU failure is returned as a row with the FMI status and function, the
     FMUs' messages in the error text, as there."""
 
-    def __init__(self, system: str, ssp: str, isolate: bool = False):
-        """`isolate`: each FMU in a child process (an FMU that crashes or hangs fails its run's
-        row, the worker lives on; `call_timeout` 60 s per FMU call)."""
+    def __init__(self, system: str, ssp: str, isolate: str | None = None):
+        """`isolate`: "component" (each FMU in a child process) or "system" (the whole loop in
+        one): an FMU that crashes or hangs fails its run's row, the worker lives on
+        (`call_timeout` 60 s per FMU call)."""
         import rustfmu_runner
 
         self._rf = rustfmu_runner
@@ -175,7 +176,7 @@ class NativeClosedLoop:
         self.id = next(ClosedLoop._ids)
         self.broken = False
         self.runs = 0
-        self.sim = rustfmu_runner.System(str(ssp), isolate=True, call_timeout=60.0) if isolate else rustfmu_runner.System(str(ssp))
+        self.sim = rustfmu_runner.System(str(ssp), isolate=isolate, call_timeout=60.0) if isolate else rustfmu_runner.System(str(ssp))
         motors = [name for name, ident in self.sim.components if ident == "DCMotor"]
         if motors:
             self._torque = [f"{m}.tau" for m in motors]
@@ -309,7 +310,8 @@ class FmuSet:
     """The FMU files of a study and a pool of closed loops per system: a loop is taken for a run
     and given back after it, so each thread of a worker instantiates each FMU once and later
     runs reuse it with fmi2Reset. `master`: "native" (`NativeClosedLoop` on the SSP files next
-    to the Pendulum FMU, the default), "isolated" (the same, each FMU in a child process) or "fmpy" (`ClosedLoop`; each FMU file extracted once into
+    to the Pendulum FMU, the default), "isolated" (the same, each FMU in a child process),
+    "isolated-system" (the whole loop in one child process) or "fmpy" (`ClosedLoop`; each FMU file extracted once into
     `workdir`)."""
 
     def __init__(self, paths: dict[str, str], workdir: str | None = None, systems: dict[str, System] | None = None, master: str = "native"):
@@ -333,9 +335,10 @@ class FmuSet:
                 return free.pop()
         if system not in self.systems:
             raise ValueError(f"unknown system '{system}', expected one of {sorted(self.systems)}")
-        if self.master in ("native", "isolated"):
+        if self.master in ("native", "isolated", "isolated-system"):
             ssp = str(ssp_path(SSP_SYSTEMS[system], self.paths["Pendulum"]))
-            return NativeClosedLoop(system, ssp, isolate=self.master == "isolated")
+            isolate = {"native": None, "isolated": "component", "isolated-system": "system"}[self.master]
+            return NativeClosedLoop(system, ssp, isolate=isolate)
         return ClosedLoop(system, self.systems[system], self.fmus)
 
     def checkin(self, loop) -> None:

@@ -572,6 +572,7 @@ macro_rules! forward {
             $(
                 $(#[$doc])*
                 pub fn $name(&mut self $(, $arg: $ty)*) -> $ret {
+                    crate::isolate::crumb(self as *const InstanceCS as usize, stringify!($name));
                     match self {
                         InstanceCS::V2(i) => i.$name($($arg),*),
                         InstanceCS::V3(i) => i.$name($($arg),*),

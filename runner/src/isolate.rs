@@ -27,7 +27,59 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 #[cfg(target_os = "linux")]
-pub use linux::{Isolated, serve};
+pub use linux::{Isolated, SystemInfo, SystemProcess, crumb, crumb_time, serve, serve_system};
+
+/// Where an isolated system's child is (nothing outside one; Linux only).
+#[cfg(not(target_os = "linux"))]
+#[inline]
+pub fn crumb(_instance: usize, _method: &'static str) {}
+
+/// The time of the calls that follow (an isolated system's child).
+#[cfg(not(target_os = "linux"))]
+#[inline]
+pub fn crumb_time(_t: f64) {}
+
+/// Isolation needs Linux (shared memory and futexes): elsewhere a system cannot be started.
+#[cfg(not(target_os = "linux"))]
+pub struct SystemProcess(SystemInfo);
+
+/// What a system's child tells about the system it loaded.
+#[cfg(not(target_os = "linux"))]
+#[derive(Debug, Clone)]
+pub struct SystemInfo {
+    pub name: String,
+    pub evaluation_order: Vec<String>,
+    pub components: Vec<(String, String)>,
+    pub outputs: Vec<String>,
+    pub parameters: Vec<String>,
+}
+
+#[cfg(not(target_os = "linux"))]
+impl SystemProcess {
+    pub fn spawn(_iso: Isolation, ssp: &Path, _jacobi: bool) -> Result<SystemProcess, Error> {
+        Err(Error::unsupported(
+            None,
+            None,
+            format!("{}: isolation (child processes) runs on Linux only", ssp.display()),
+        ))
+    }
+    pub fn info(&self) -> &SystemInfo {
+        &self.0
+    }
+    pub fn run(&mut self, _opts: &crate::RunOptions) -> Result<crate::RunResult, crate::sim::Failure> {
+        unreachable!("never spawned")
+    }
+}
+
+/// How much of the system a child process holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Granularity {
+    /// Each component in a process of its own: one FMU cannot touch another's memory.
+    Component,
+    /// The whole system (every FMU and the master) in one process per run of it: the runner
+    /// lives on, a crash is reported at the component, function and time it happened in.
+    System,
+}
 
 /// How the components of a system are isolated.
 #[derive(Debug, Clone)]
@@ -89,12 +141,12 @@ mod linux {
     use std::fs::OpenOptions;
     use std::path::{Path, PathBuf};
     use std::process::{Child, Command, Stdio};
-    use std::sync::atomic::{AtomicU32, Ordering::*};
+    use std::sync::atomic::{AtomicPtr, AtomicU32, AtomicU64, Ordering::*};
     use std::time::{Duration, Instant};
 
     // The shared memory: a header, then the request and the answer areas. The file is sparse: only
     // the pages written are memory.
-    const AREA: usize = 32 << 20;
+    const AREA: usize = 256 << 20;
     const REQ_OFF: usize = 4096;
     const RESP_OFF: usize = REQ_OFF + AREA;
     const SIZE: usize = RESP_OFF + AREA;
@@ -122,7 +174,17 @@ mod linux {
         resp_len: AtomicU32,
         /// The index of the call of the batch the child is in (what a crash is reported at).
         current: AtomicU32,
+        /// A whole system's child: the FMI calls it made (a hang: this stops moving), the
+        /// address of the instance called last and its method (32 bytes of its name), and the
+        /// time the master is at.
+        calls: AtomicU32,
+        crumb_instance: AtomicU64,
+        crumb_method: [AtomicU64; 4],
+        crumb_time: AtomicU64,
     }
+
+    /// Where the instances' names are (a system's child; `addr u64, v3 u8, len u32, name`).
+    const NAMES_OFF: usize = 1024;
 
     struct Shared {
         map: memmap2::MmapMut,
@@ -1233,5 +1295,479 @@ mod linux {
             }
         }
         0
+    }
+
+    // -----------------------------------------------------------------------------------------
+    // A whole system in one child process.
+
+    /// The child's shared header, for the crumbs of [`crumb`] (null: not a system's child).
+    static CRUMB: AtomicPtr<Header> = AtomicPtr::new(std::ptr::null_mut());
+
+    /// Before each call of an [`InstanceCS`]: which instance and method, in a system's child
+    /// (a relaxed store of a few words; nothing elsewhere).
+    #[inline]
+    pub fn crumb(instance: usize, method: &'static str) {
+        let h = CRUMB.load(Relaxed);
+        if h.is_null() {
+            return;
+        }
+        // SAFETY: set once to the header of a mapping that lives as long as the process.
+        let h = unsafe { &*h };
+        h.crumb_instance.store(instance as u64, Relaxed);
+        let mut words = [0u64; 4];
+        for (i, b) in method.bytes().take(32).enumerate() {
+            words[i / 8] |= u64::from(b) << (8 * (i % 8));
+        }
+        for (w, x) in h.crumb_method.iter().zip(words) {
+            w.store(x, Relaxed);
+        }
+        h.calls.fetch_add(1, Release);
+    }
+
+    /// The communication point the master is at (a system's child).
+    #[inline]
+    pub fn crumb_time(t: f64) {
+        let h = CRUMB.load(Relaxed);
+        if !h.is_null() {
+            // SAFETY: as in crumb.
+            unsafe { &*h }.crumb_time.store(t.to_bits(), Relaxed);
+        }
+    }
+
+    /// The FMI 2.0 function of an [`InstanceCS`] method.
+    fn fmi_function(method: &str) -> &'static str {
+        match method {
+            "set_debug_logging" => "fmi2SetDebugLogging",
+            "setup_experiment" => "fmi2SetupExperiment",
+            "enter_initialization_mode" => "fmi2EnterInitializationMode",
+            "exit_initialization_mode" => "fmi2ExitInitializationMode",
+            "terminate" => "fmi2Terminate",
+            "reset" => "fmi2Reset",
+            "do_step" => "fmi2DoStep",
+            "get_real" => "fmi2GetReal",
+            "get_integer" => "fmi2GetInteger",
+            "get_boolean" => "fmi2GetBoolean",
+            "get_string" => "fmi2GetString",
+            "set_real" => "fmi2SetReal",
+            "set_integer" => "fmi2SetInteger",
+            "set_boolean" => "fmi2SetBoolean",
+            "set_string" => "fmi2SetString",
+            "get_fmu_state" | "update_fmu_state" => "fmi2GetFMUstate",
+            "set_fmu_state" => "fmi2SetFMUstate",
+            "free_fmu_state" => "fmi2FreeFMUstate",
+            "serialize_fmu_state" => "fmi2SerializeFMUstate",
+            "deserialize_fmu_state" => "fmi2DeSerializeFMUstate",
+            "get_output_derivatives" => "fmi2GetRealOutputDerivatives",
+            "set_input_derivatives" => "fmi2SetRealInputDerivatives",
+            "get_directional_derivative" => "fmi2GetDirectionalDerivative",
+            _ => "an FMI function",
+        }
+    }
+
+    /// What a system's child tells about the system it loaded.
+    #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+    pub struct SystemInfo {
+        pub name: String,
+        pub evaluation_order: Vec<String>,
+        pub components: Vec<(String, String)>,
+        pub outputs: Vec<String>,
+        pub parameters: Vec<String>,
+    }
+
+    /// What a system's child answers a run with (the values follow as f64).
+    #[derive(serde::Serialize, serde::Deserialize)]
+    struct RunAnswer {
+        error: Option<Error>,
+        /// The result, or the partial one; `time` and `values` travel as raw f64 after this.
+        result: crate::RunResult,
+        n_time: usize,
+        n_values: usize,
+    }
+
+    /// A request to a system's child.
+    #[derive(serde::Serialize, serde::Deserialize)]
+    enum SystemRequest {
+        Run(crate::RunOptions),
+        Quit,
+    }
+
+    /// A system whose FMUs and master run in a child process (`rustfmu-runner serve-system`):
+    /// [`SystemProcess::run`] is [`crate::Simulation::run`] there. A child that dies or hangs
+    /// fails the run with the component, function and time it was in; the next run starts a
+    /// new one.
+    pub struct SystemProcess {
+        iso: Isolation,
+        ssp: PathBuf,
+        jacobi: bool,
+        info: SystemInfo,
+        live: Option<(Child, Shared, u32)>,
+    }
+
+    impl Drop for SystemProcess {
+        fn drop(&mut self) {
+            self.stop();
+        }
+    }
+
+    fn json_into(shm: &mut [u8], value: &impl serde::Serialize) -> Result<usize, String> {
+        let text = serde_json::to_vec(value).map_err(|e| e.to_string())?;
+        if text.len() + 8 > shm.len() {
+            return Err(format!("more than {} MiB to pass between processes", AREA >> 20));
+        }
+        shm[..8].copy_from_slice(&(text.len() as u64).to_ne_bytes());
+        shm[8..8 + text.len()].copy_from_slice(&text);
+        Ok(8 + text.len())
+    }
+
+    fn json_from<T: serde::de::DeserializeOwned>(shm: &[u8]) -> Result<(T, usize), String> {
+        let n = u64::from_ne_bytes(shm[..8].try_into().unwrap()) as usize;
+        let v = serde_json::from_slice(&shm[8..8 + n]).map_err(|e| e.to_string())?;
+        Ok((v, 8 + n))
+    }
+
+    impl SystemProcess {
+        /// Starts the child of the SSP file `ssp` (`jacobi`: that evaluation order).
+        pub fn spawn(iso: Isolation, ssp: &Path, jacobi: bool) -> Result<SystemProcess, Error> {
+            let (child, shm) = Self::start(&iso, ssp, jacobi)?;
+            let (info, _) = json_from::<Result<SystemInfo, Error>>(&shm.map[RESP_OFF..]).map_err(|e| {
+                Error::io(format!(
+                    "{}: the system's process answered no description: {e}",
+                    ssp.display()
+                ))
+            })?;
+            let mut p = SystemProcess {
+                iso,
+                ssp: ssp.to_path_buf(),
+                jacobi,
+                info: SystemInfo {
+                    name: String::new(),
+                    evaluation_order: Vec::new(),
+                    components: Vec::new(),
+                    outputs: Vec::new(),
+                    parameters: Vec::new(),
+                },
+                live: Some((child, shm, 1)),
+            };
+            p.info = info?;
+            Ok(p)
+        }
+
+        /// The child started and its system loaded (the answer to batch 1 in the answer area).
+        fn start(iso: &Isolation, ssp: &Path, jacobi: bool) -> Result<(Child, Shared), Error> {
+            let fail = |m: String| Error::io(format!("{}: isolated: {m}", ssp.display()));
+            let (file, path) = shm_file().map_err(fail)?;
+            let shm = Shared {
+                map: map(&file).map_err(fail)?,
+            };
+            // Batch 1: load the system (answered with its description).
+            shm.header().req.store(1, SeqCst);
+            let mut cmd = Command::new(&iso.worker);
+            cmd.arg("serve-system")
+                .arg("--ssp")
+                .arg(ssp)
+                .arg("--shm")
+                .arg(&path)
+                .stdin(Stdio::null());
+            if jacobi {
+                cmd.arg("--jacobi");
+            }
+            let mut child = cmd.spawn().map_err(|e| {
+                let _ = std::fs::remove_file(&path);
+                fail(format!("cannot start {}: {e}", iso.worker.display()))
+            })?;
+            let r = wait_done(&shm, &mut child, 1, None);
+            let _ = std::fs::remove_file(&path);
+            if let Err(how) = r {
+                return Err(fail(format!("its process {how} while loading the system")));
+            }
+            Ok((child, shm))
+        }
+
+        pub fn info(&self) -> &SystemInfo {
+            &self.info
+        }
+
+        fn stop(&mut self) {
+            if let Some((mut child, mut shm, seq)) = self.live.take() {
+                if let Ok(n) = json_into(shm.req(), &SystemRequest::Quit) {
+                    publish_raw(&shm, seq + 1, n);
+                    let until = Instant::now() + Duration::from_secs(5);
+                    while Instant::now() < until {
+                        if let Ok(Some(_)) = child.try_wait() {
+                            return;
+                        }
+                        std::thread::sleep(Duration::from_micros(200));
+                    }
+                }
+                let _ = child.kill();
+                let _ = child.wait();
+            }
+        }
+
+        /// One run in the child ([`crate::Simulation::run`]).
+        pub fn run(&mut self, opts: &crate::RunOptions) -> Result<crate::RunResult, crate::sim::Failure> {
+            let failure = |error: Error| crate::sim::Failure {
+                error,
+                partial: crate::RunResult {
+                    names: opts.record.clone(),
+                    ..Default::default()
+                },
+            };
+            if self.live.is_none() {
+                let (child, shm) = Self::start(&self.iso, &self.ssp, self.jacobi).map_err(failure)?;
+                self.live = Some((child, shm, 1));
+            }
+            let (child, shm, seq) = self.live.as_mut().expect("started");
+            let n = json_into(shm.req(), &SystemRequest::Run(opts.clone())).map_err(|e| failure(Error::usage(e)))?;
+            *seq += 1;
+            publish_raw(shm, *seq, n);
+            if let Err(how) = wait_done(shm, child, *seq, self.iso.timeout) {
+                // The component, function and time of the crumbs.
+                let h = shm.header();
+                let addr = h.crumb_instance.load(Acquire);
+                let mut method = Vec::new();
+                for w in &h.crumb_method {
+                    method.extend(w.load(Acquire).to_le_bytes());
+                }
+                let method = String::from_utf8_lossy(&method).trim_end_matches('\0').to_owned();
+                let t = f64::from_bits(h.crumb_time.load(Acquire));
+                let (component, v3) = name_of(&shm.map[NAMES_OFF..REQ_OFF], addr).unwrap_or(("?".to_owned(), false));
+                let function = crate::sim::fname(v3, fmi_function(&method));
+                let pid = child.id();
+                let _ = child.kill();
+                let _ = child.wait();
+                self.live = None;
+                let error = Error::fmi(
+                    &component,
+                    function,
+                    &Fmi2Error::Died(format!("the process of the system (pid {pid}) {how}")),
+                    Some(t),
+                    "",
+                );
+                return Err(failure(error));
+            }
+            let resp = &shm.map[RESP_OFF..];
+            let (answer, at) = json_from::<RunAnswer>(resp).map_err(|e| failure(Error::io(e)))?;
+            let at = at.div_ceil(8) * 8;
+            let floats = |from: usize, n: usize| -> Vec<f64> {
+                resp[from..from + 8 * n]
+                    .chunks_exact(8)
+                    .map(|c| f64::from_ne_bytes(c.try_into().unwrap()))
+                    .collect()
+            };
+            let mut result = answer.result;
+            result.time = floats(at, answer.n_time);
+            result.values = floats(at + 8 * answer.n_time, answer.n_values);
+            match answer.error {
+                None => Ok(result),
+                Some(error) => Err(crate::sim::Failure { error, partial: result }),
+            }
+        }
+    }
+
+    fn publish_raw(shm: &Shared, seq: u32, len: usize) {
+        let h = shm.header();
+        h.req_len.store(len as u32, Relaxed);
+        h.req.store(seq, SeqCst);
+        if h.child_sleeps.load(SeqCst) == 1 {
+            futex_wake(&h.req);
+        }
+    }
+
+    /// Waits for the child to answer batch `seq`; Err: how it died or hung. `hang`: the
+    /// longest a single FMI call may take (from the crumbs' call count).
+    fn wait_done(shm: &Shared, child: &mut Child, seq: u32, hang: Option<Duration>) -> Result<(), String> {
+        let h = shm.header();
+        let mut last_calls = h.calls.load(Acquire);
+        let mut since = Instant::now();
+        loop {
+            if h.done.load(Acquire) == seq {
+                return Ok(());
+            }
+            h.parent_sleeps.store(1, SeqCst);
+            let done = h.done.load(SeqCst);
+            if done != seq {
+                futex_wait(&h.done, done, Duration::from_millis(5));
+            }
+            h.parent_sleeps.store(0, SeqCst);
+            if h.done.load(Acquire) == seq {
+                return Ok(());
+            }
+            if let Ok(Some(status)) = child.try_wait() {
+                return Err(describe_exit(status));
+            }
+            let calls = h.calls.load(Acquire);
+            if calls != last_calls {
+                last_calls = calls;
+                since = Instant::now();
+            } else if let Some(limit) = hang
+                && since.elapsed() > limit
+            {
+                return Err(format!(
+                    "did not return within {} s: the process was killed",
+                    limit.as_secs_f64()
+                ));
+            }
+        }
+    }
+
+    /// The component whose instance is at `addr` in the child (its names table).
+    fn name_of(table: &[u8], addr: u64) -> Option<(String, bool)> {
+        let mut r = R { buf: table, at: 0 };
+        let n = r.u32();
+        for _ in 0..n {
+            let a = u64::from_ne_bytes(r.bytes(8).try_into().ok()?);
+            let v3 = r.u8() != 0;
+            let name = String::from_utf8_lossy(r.blob()).into_owned();
+            if a == addr {
+                return Some((name, v3));
+            }
+        }
+        None
+    }
+
+    /// `rustfmu-runner serve-system`: loads the SSP file and runs it for the parent that started
+    /// this process, until it says quit or goes away. Returns the process's exit code.
+    pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool) -> i32 {
+        // SAFETY: prctl with constant arguments: killed with the parent.
+        unsafe {
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+        }
+        let parent = std::os::unix::process::parent_id();
+        let file = match OpenOptions::new().read(true).write(true).open(shm) {
+            Ok(f) => f,
+            Err(e) => {
+                eprintln!("rustfmu-runner serve-system: cannot open {}: {e}", shm.display());
+                return 2;
+            }
+        };
+        let mut shm = match map(&file) {
+            Ok(map) => Shared { map },
+            Err(e) => {
+                eprintln!("rustfmu-runner serve-system: {e}");
+                return 2;
+            }
+        };
+        drop(file);
+        let answer = |shm: &mut Shared, seq: u32, len: usize| {
+            let h = shm.header();
+            h.resp_len.store(len as u32, Relaxed);
+            h.done.store(seq, SeqCst);
+            if h.parent_sleeps.load(SeqCst) == 1 {
+                futex_wake(&h.done);
+            }
+        };
+        let sim = crate::Simulation::from_ssp(ssp);
+        let mut sim = match sim {
+            Ok(mut sim) => {
+                if jacobi {
+                    sim.scheme = crate::Scheme::Jacobi;
+                }
+                sim
+            }
+            Err(e) => {
+                let n = json_into(shm.resp(), &Err::<SystemInfo, Error>(e)).unwrap_or(0);
+                answer(&mut shm, 1, n);
+                return 1;
+            }
+        };
+        // The names of the instances by their addresses, for the parent's report of a crash.
+        {
+            let mut entries = Vec::new();
+            for (i, (name, _)) in sim.components().iter().enumerate() {
+                entries.push((name.to_string(), i));
+            }
+            let table = &mut shm.map[NAMES_OFF..REQ_OFF];
+            let mut w = W { buf: table, at: 4 };
+            let mut n = 0u32;
+            for (name, i) in entries {
+                let v3 = sim.is_fmi3(i);
+                let addr = sim.instance_mut(i) as *const InstanceCS as u64;
+                if w.bytes(&addr.to_ne_bytes())
+                    .and_then(|_| w.u8(v3 as u8))
+                    .and_then(|_| w.blob(name.as_bytes()))
+                    .is_err()
+                {
+                    break;
+                }
+                n += 1;
+            }
+            table[..4].copy_from_slice(&n.to_ne_bytes());
+        }
+        CRUMB.store(shm.map.as_mut_ptr() as *mut Header, Release);
+        let info = SystemInfo {
+            name: sim.name.clone(),
+            evaluation_order: sim.evaluation_order().iter().map(|s| s.to_string()).collect(),
+            components: sim
+                .components()
+                .iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect(),
+            outputs: sim.outputs(),
+            parameters: sim.parameters().iter().map(|s| s.to_string()).collect(),
+        };
+        let n = json_into(shm.resp(), &Ok::<SystemInfo, Error>(info)).unwrap_or(0);
+        answer(&mut shm, 1, n);
+        let mut done = 1u32;
+        loop {
+            let h = shm.header();
+            if h.req.load(Acquire) == done {
+                h.child_sleeps.store(1, SeqCst);
+                if h.req.load(SeqCst) == done {
+                    futex_wait(&h.req, done, Duration::from_millis(100));
+                }
+                h.child_sleeps.store(0, SeqCst);
+                if std::os::unix::process::parent_id() != parent {
+                    return 3;
+                }
+                continue;
+            }
+            let seq = h.req.load(Acquire);
+            let request = json_from::<SystemRequest>(&shm.map[REQ_OFF..]);
+            let opts = match request {
+                Ok((SystemRequest::Run(opts), _)) => opts,
+                _ => return 0,
+            };
+            let (error, mut result) = match sim.run(&opts, &mut |_, _| {}) {
+                Ok(r) => (None, r),
+                Err(f) => (Some(f.error), f.partial),
+            };
+            let time = std::mem::take(&mut result.time);
+            let values = std::mem::take(&mut result.values);
+            let ans = RunAnswer {
+                error,
+                result,
+                n_time: time.len(),
+                n_values: values.len(),
+            };
+            let resp = shm.resp();
+            let len = match json_into(resp, &ans) {
+                Ok(at) => {
+                    let at = at.div_ceil(8) * 8;
+                    let need = at + 8 * (time.len() + values.len());
+                    if need > resp.len() {
+                        let too_big = RunAnswer {
+                            error: Some(Error::usage(format!(
+                                "the run's {} values are more than the {} MiB an isolated system passes back: record fewer variables or a shorter run",
+                                time.len() + values.len(),
+                                AREA >> 20
+                            ))),
+                            result: crate::RunResult::default(),
+                            n_time: 0,
+                            n_values: 0,
+                        };
+                        json_into(resp, &too_big).unwrap_or(0)
+                    } else {
+                        for (k, x) in time.iter().chain(values.iter()).enumerate() {
+                            resp[at + 8 * k..at + 8 * k + 8].copy_from_slice(&x.to_ne_bytes());
+                        }
+                        need
+                    }
+                }
+                Err(_) => 0,
+            };
+            done = seq;
+            answer(&mut shm, done, len);
+        }
     }
 }

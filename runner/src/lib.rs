@@ -35,7 +35,7 @@ pub use sim::{Adaptive, Override, RunOptions, RunResult, Scheme, Simulation};
 use std::fmt;
 
 /// What kind of problem an [`Error`] reports.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum ErrorKind {
     /// A file that cannot be read, or an SSD/SSV/modelDescription.xml that cannot be parsed.
     Io,
@@ -51,7 +51,7 @@ pub enum ErrorKind {
 
 /// An error of the runner: always a message naming the component (and variable or function)
 /// concerned; for a failed FMI call also the function, the status and the time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Error {
     pub kind: ErrorKind,
     pub component: Option<String>,

@@ -68,13 +68,24 @@ enum Command {
         /// No progress bar (it is drawn on standard error when that is a terminal).
         #[arg(long)]
         no_progress: bool,
-        /// Each component in a child process of its own: an FMU that crashes, exits or hangs
-        /// fails the run with the component, function and time, not the runner (Linux).
-        #[arg(long)]
-        isolate: bool,
+        /// Child processes (Linux): `component` (the default of a bare --isolate) each FMU in a
+        /// process of its own, `system` every FMU and the master in one. An FMU that crashes,
+        /// exits or hangs fails the run with the component, function and time, not the runner.
+        #[arg(long, num_args = 0..=1, default_missing_value = "component", value_parser = ["component", "system"])]
+        isolate: Option<String>,
         /// With --isolate: the longest one FMU call may take, s, before its process is killed.
         #[arg(long, requires = "isolate")]
         call_timeout: Option<f64>,
+    },
+    /// Runs a whole system for the runner that started this process (--isolate system).
+    #[command(hide = true)]
+    ServeSystem {
+        #[arg(long)]
+        ssp: PathBuf,
+        #[arg(long)]
+        shm: PathBuf,
+        #[arg(long)]
+        jacobi: bool,
     },
     /// Serves one component to the runner that started this process (--isolate).
     #[command(hide = true)]
@@ -92,6 +103,12 @@ enum Command {
     },
     /// Prints the system: components, evaluation order, parameters, outputs.
     Info { ssp: PathBuf },
+}
+
+/// Where a run is made: here, or (--isolate system) in a child process.
+enum Backend {
+    Here(Simulation),
+    Process(rustfmu_runner::isolate::SystemProcess),
 }
 
 fn main() {
@@ -129,6 +146,12 @@ fn run(cli: Cli) -> Result<(), String> {
         )),
         #[cfg(not(target_os = "linux"))]
         Command::ServeComponent { .. } => Err("serve-component: isolation runs on Linux only".into()),
+        #[cfg(target_os = "linux")]
+        Command::ServeSystem { ssp, shm, jacobi } => {
+            std::process::exit(rustfmu_runner::isolate::serve_system(&ssp, &shm, jacobi))
+        }
+        #[cfg(not(target_os = "linux"))]
+        Command::ServeSystem { .. } => Err("serve-system: isolation runs on Linux only".into()),
         Command::Info { ssp } => {
             let sim = Simulation::from_ssp(&ssp)?;
             println!("system {}", sim.name);
@@ -164,21 +187,37 @@ fn run(cli: Cli) -> Result<(), String> {
                     .stop_time
                     .ok_or("no --stop-time given and the SSD has no DefaultExperiment stopTime")?,
             };
-            let mut sim = if isolate {
-                let worker = rustfmu_runner::isolate::find_worker(None, &[])?;
-                let timeout = match call_timeout {
-                    Some(t) if !(t.is_finite() && t > 0.0) => {
-                        return Err(format!("--call-timeout {t}: a time > 0 in seconds"));
-                    }
-                    t => t.map(std::time::Duration::from_secs_f64),
-                };
-                Simulation::from_ssp_isolated(&ssp, rustfmu_runner::isolate::Isolation { worker, timeout })?
-            } else {
-                Simulation::from_ssp(&ssp)?
+            let timeout = match call_timeout {
+                Some(t) if !(t.is_finite() && t > 0.0) => {
+                    return Err(format!("--call-timeout {t}: a time > 0 in seconds"));
+                }
+                t => t.map(std::time::Duration::from_secs_f64),
             };
-            if order == "jacobi" {
+            let isolation = match &isolate {
+                Some(_) => Some(rustfmu_runner::isolate::Isolation {
+                    worker: rustfmu_runner::isolate::find_worker(None, &[])?,
+                    timeout,
+                }),
+                None => None,
+            };
+            let mut system = match (isolate.as_deref(), isolation) {
+                (Some("system"), Some(iso)) => Backend::Process(rustfmu_runner::isolate::SystemProcess::spawn(
+                    iso,
+                    &ssp,
+                    order == "jacobi",
+                )?),
+                (_, Some(iso)) => Backend::Here(Simulation::from_ssp_isolated(&ssp, iso)?),
+                _ => Backend::Here(Simulation::from_ssp(&ssp)?),
+            };
+            if let Backend::Here(sim) = &mut system
+                && order == "jacobi"
+            {
                 sim.scheme = Scheme::Jacobi;
             }
+            let (name, outputs) = match &system {
+                Backend::Here(sim) => (sim.name.clone(), sim.outputs()),
+                Backend::Process(p) => (p.info().name.clone(), p.info().outputs.clone()),
+            };
             let mut opts = RunOptions::new(stop_time, step);
             opts.input_derivatives = input_derivatives;
             opts.adaptive = tolerance.map(|tolerance| rustfmu_runner::Adaptive {
@@ -188,7 +227,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 error_on: error_on.clone(),
             });
             opts.overrides = set.iter().map(|s| parse_set(s)).collect::<Result<_, _>>()?;
-            opts.record = if record.is_empty() { sim.outputs() } else { record };
+            opts.record = if record.is_empty() { outputs } else { record };
             let n = if opts.adaptive.is_some() {
                 1000
             } else {
@@ -205,11 +244,14 @@ fn run(cli: Cli) -> Result<(), String> {
                     .progress_chars("=> "),
             );
             let every = (n / 200).max(1) as usize;
-            let result = sim.run(&opts, &mut |k, _| {
-                if k % every == 0 {
-                    bar.set_position(k as u64 + 1);
-                }
-            });
+            let result = match &mut system {
+                Backend::Here(sim) => sim.run(&opts, &mut |k, _| {
+                    if k % every == 0 {
+                        bar.set_position(k as u64 + 1);
+                    }
+                }),
+                Backend::Process(p) => p.run(&opts),
+            };
             bar.finish_and_clear();
             let result = result.map_err(|f| f.error.message)?;
             if let Some(note) = &result.note {
@@ -249,7 +291,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     "rustfmu-runner: {} rows x {} variables of {} to {}",
                     result.time.len(),
                     m,
-                    sim.name,
+                    name,
                     p.display()
                 );
             }

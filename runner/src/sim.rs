@@ -42,7 +42,7 @@ pub enum Scheme {
 }
 
 /// A per-run value for "component.variable", converted to the variable's type.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Override {
     Real(f64),
     Integer(i64),
@@ -52,7 +52,7 @@ pub enum Override {
 }
 
 /// One run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RunOptions {
     /// s; the run makes n = round(stop_time / step) steps.
     pub stop_time: f64,
@@ -80,7 +80,7 @@ pub struct RunOptions {
 /// between 1/5 and 2 times, within [min_step, max_step]. Needs every component to get and set its
 /// FMU state and to take variable steps; otherwise the run is made with fixed steps and
 /// [`RunResult::note`] says why.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Adaptive {
     pub tolerance: f64,
     /// s (default: the run's `step` / 1000).
@@ -107,7 +107,7 @@ impl RunOptions {
 }
 
 /// What a run recorded: one row per communication point.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunResult {
     pub names: Vec<String>,
     /// s
@@ -820,6 +820,11 @@ impl Simulation {
     }
 
     /// The components: (instance name, the FMU's model identifier).
+    /// Whether component `i` (in [`Simulation::components`] order) is an FMI 3.0 FMU.
+    pub fn is_fmi3(&self, i: usize) -> bool {
+        self.slaves[i].v3
+    }
+
     pub fn components(&self) -> Vec<(&str, &str)> {
         self.slaves
             .iter()
@@ -906,6 +911,7 @@ impl Simulation {
     /// Sets every connected input from its output, as [`Simulation::scheme`] says (and, with
     /// [`Simulation::input_derivatives`], their first derivatives).
     pub fn propagate(&mut self, t: f64) -> Result<(), Error> {
+        crate::isolate::crumb_time(t);
         self.propagate_values(t)?;
         if self.input_derivatives {
             self.propagate_derivatives(t)?;
@@ -1170,6 +1176,7 @@ impl Simulation {
     /// fmi2DoStep(t, h, no_set_prior) of every instance, in the system's order; `no_set_prior =
     /// false` when an FMU state of before this point may be set afterwards (a rollback).
     pub fn do_step_with(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
+        crate::isolate::crumb_time(t);
         for s in &mut self.slaves {
             s.instance
                 .as_mut()

@@ -105,6 +105,7 @@ def expect_failure(system, start, match):
     return e.value
 
 
+@pytest.mark.parametrize("granularity", ["component", "system"])
 @pytest.mark.parametrize(
     "how, match",
     [
@@ -113,22 +114,26 @@ def expect_failure(system, start, match):
         (3, "exited with status 3"),
     ],
 )
-def test_a_crashing_fmu_fails_the_run_with_component_function_and_time_and_the_runner_lives_on(crash_ssp, how, match):
-    """Segmentation fault, abort(), exit(3) in fmi2DoStep at t = 0.5 s: an FmiError with the
+def test_a_crashing_fmu_fails_the_run_with_component_function_and_time_and_the_runner_lives_on(crash_ssp, how, match, granularity):
+    """Segmentation fault, abort(), exit(3) in fmi2DoStep at t = 0.5 s: an FmuError with the
     component, fmi2DoStep and the step's time; the same System then runs again, the crashed
-    process replaced, and equals an in-process run."""
-    system = rustfmu_runner.System(crash_ssp, isolate=True)
+    process replaced, and equals an in-process run. Each FMU in a process of its own, or the
+    whole system in one (the component found from the last call the child made)."""
+    system = rustfmu_runner.System(crash_ssp, isolate=granularity)
     err = expect_failure(system, {"crasher.crash_at": 0.5, "crasher.how": how}, match)
-    assert "did not return" in str(err) and "the process of component 'crasher'" in str(err)
+    owner = "component 'crasher'" if granularity == "component" else "the system"
+    assert "did not return" in str(err) and f"the process of {owner}" in str(err), str(err)
+    assert err.status == "Fatal"
     again = system.run(1.0, 0.01)
     here = rustfmu_runner.System(crash_ssp).run(1.0, 0.01)
     for k in here:
         assert np.array_equal(again[k], here[k]), k
 
 
-def test_a_hanging_fmu_is_killed_after_the_call_timeout(crash_ssp):
-    system = rustfmu_runner.System(crash_ssp, isolate=True, call_timeout=0.5)
-    expect_failure(system, {"crasher.crash_at": 0.5, "crasher.how": 4}, "did not return within 0.5 s: its process was killed")
+@pytest.mark.parametrize("granularity", ["component", "system"])
+def test_a_hanging_fmu_is_killed_after_the_call_timeout(crash_ssp, granularity):
+    system = rustfmu_runner.System(crash_ssp, isolate=granularity, call_timeout=0.5)
+    expect_failure(system, {"crasher.crash_at": 0.5, "crasher.how": 4}, "did not return within 0.5 s")
     assert system.run(0.2, 0.01)["crasher.y"][-1] > 0
 
 
@@ -137,23 +142,26 @@ def test_an_fmi_failure_of_an_isolated_component_is_reported_as_in_process(crash
     error still names fmi2DoStep, its time and status, and the FMU's own message, as in-process."""
     start = {"crasher.crash_at": 0.5, "crasher.how": 5}
     errors = []
-    for isolate in (False, True):
+    for isolate in (False, "component", "system"):
         with pytest.raises(rustfmu_runner.FmuError) as e:
             rustfmu_runner.System(crash_ssp, isolate=isolate).run(1.0, 0.01, start=start)
         errors.append(e.value)
-    here, there = errors
     for err in errors:
         assert (err.component, err.function, err.status) == ("crasher", "fmi2DoStep", "Discard"), str(err)
         assert "failed on purpose" in str(err), str(err)
-    assert here.time == there.time
+        assert err.time == errors[0].time
+    # The whole system's child runs the in-process master: the same error, word for word.
+    assert str(errors[2]) == str(errors[0])
 
 
+@pytest.mark.parametrize("granularity", ["component", "system"])
 @pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
-def test_isolated_components_give_the_in_process_result_bit_for_bit(name):
+def test_isolated_components_give_the_in_process_result_bit_for_bit(name, granularity):
     """Every output of both systems, 2 s at 1 ms; with FMU state, rollback (tolerance=) and the
     first-order hold too."""
     path = str(FMU_DIR / f"{name}.ssp")
-    here, there = rustfmu_runner.System(path), rustfmu_runner.System(path, isolate=True)
+    here, there = rustfmu_runner.System(path), rustfmu_runner.System(path, isolate=granularity)
+    assert (there.outputs, there.components, there.evaluation_order) == (here.outputs, here.components, here.evaluation_order)
     for kwargs in ({}, {"tolerance": 1e-3}, {"input_derivatives": True}):
         a, b = here.run(2.0, 1e-3, **kwargs), there.run(2.0, 1e-3, **kwargs)
         assert a.keys() == b.keys()
@@ -167,6 +175,8 @@ def test_isolation_options_are_checked():
         rustfmu_runner.System(path, isolate=True, call_timeout=-1.0)
     with pytest.raises(ValueError, match="isolate=True"):
         rustfmu_runner.System(path, call_timeout=1.0)
+    with pytest.raises(ValueError, match="component"):
+        rustfmu_runner.System(path, isolate="everything")
     with pytest.raises(rustfmu_runner.VariableError, match="not a file"):
         rustfmu_runner.System(path, isolate=True, worker="/nonexistent/rustfmu-runner")
 
@@ -206,8 +216,9 @@ def test_a_dask_worker_lives_on_when_an_isolated_fmu_crashes(crash_ssp):
     assert pid1 == pid2 == pid3, "the worker was restarted"
 
 
-def test_the_parameter_study_with_isolated_fmus_gives_the_in_process_rows(tmp_path):
-    """examples/parameter_study.py --master isolated: the small study of test_parameter_study on a
+@pytest.mark.parametrize("master", ["isolated", "isolated-system"])
+def test_the_parameter_study_with_isolated_fmus_gives_the_in_process_rows(tmp_path, master):
+    """examples/parameter_study.py --master isolated / isolated-system: the small study of test_parameter_study on a
     LocalCluster of two workers, each FMU in a child process: the rows of the in-process runs (the
     failed run's FMI status, function and the FMU's message too)."""
     import pandas as pd
@@ -215,12 +226,12 @@ def test_the_parameter_study_with_isolated_fmus_gives_the_in_process_rows(tmp_pa
 
     here = runner.run_sequential(small_study(), paths(), fresh=True, out=tmp_path / "here.csv")
     assert here
-    report = runner.run_study(small_study(), tmp_path / "isolated.csv", paths(), n_workers=2, threads_per_worker=1, progress=False, master="isolated")
+    report = runner.run_study(small_study(), tmp_path / "isolated.csv", paths(), n_workers=2, threads_per_worker=1, progress=False, master=master)
     assert report.executed == len(small_study()), str(report)
     a = pd.read_csv(tmp_path / "here.csv").set_index("run_id").sort_index()
     b = pd.read_csv(tmp_path / "isolated.csv").set_index("run_id").sort_index()
     assert list(a.index) == list(b.index)
-    assert set(b["master"]) == {"isolated"}
+    assert set(b["master"]) == {master}
     for c in COMPARED:
         if c == "error":
             continue

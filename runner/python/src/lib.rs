@@ -46,8 +46,12 @@ create_exception!(
     "An FMI call that failed during a run."
 );
 
-/// The simulation, used by one thread at a time (behind the `Mutex`).
-struct Sim(Simulation);
+/// The simulation, used by one thread at a time (behind the `Mutex`): here, or (isolate =
+/// "system") in a child process.
+enum Sim {
+    Here(Simulation),
+    Process(runner::isolate::SystemProcess),
+}
 
 // SAFETY: the FMU instances (raw pointers into the FMUs' libraries) are only ever called with
 // the Mutex held, so by one thread at a time; FMI 2.0 requires no more than that of an instance.
@@ -135,22 +139,38 @@ struct PySystem {
 impl PySystem {
     /// Loads the SSP file `path` (`order`: "gauss-seidel", the default, or "jacobi").
     ///
-    /// `isolate=True`: each component in a child process of its own (Linux), so that an FMU
-    /// that crashes, aborts, exits or hangs fails the run with an FmiError naming the component,
-    /// the function and the time, and this process lives on (the next run starts the
-    /// components anew). `call_timeout` (s): the longest one FMU call may take before its
+    /// `isolate=True` (or "component"): each component in a child process of its own (Linux),
+    /// so that an FMU that crashes, aborts, exits or hangs fails the run with an FmuError naming
+    /// the component, the function and the time, and this process lives on (the next run starts
+    /// the components anew); `isolate="system"`: every FMU and the master in one child process
+    /// (the same errors, at the in-process cost per step; an FMU can reach the others' memory). `call_timeout` (s): the longest one FMU call may take before its
     /// process is killed (default: no limit). `worker`: the rustfmu-runner binary the children
     /// run (default: $RUSTFMU_RUNNER, this environment's scripts folder, PATH).
     #[new]
-    #[pyo3(signature = (path, order = "gauss-seidel", isolate = false, call_timeout = None, worker = None))]
+    #[pyo3(signature = (path, order = "gauss-seidel", isolate = None, call_timeout = None, worker = None))]
     fn new(
         py: Python<'_>,
         path: std::path::PathBuf,
         order: &str,
-        isolate: bool,
+        isolate: Option<&Bound<'_, PyAny>>,
         call_timeout: Option<f64>,
         worker: Option<std::path::PathBuf>,
     ) -> PyResult<PySystem> {
+        // isolate: False/None, True or "component" (each FMU in a process), "system" (one).
+        let granularity = match isolate {
+            None => None,
+            Some(v) if v.is_instance_of::<PyBool>() => v.extract::<bool>()?.then_some("component"),
+            Some(v) => match v.extract::<String>().ok().as_deref() {
+                Some("component") => Some("component"),
+                Some("system") => Some("system"),
+                _ => {
+                    return Err(PyValueError::new_err(format!(
+                        "isolate = {v}: False, True (= \"component\"), \"component\" or \"system\""
+                    )));
+                }
+            },
+        };
+        let isolate = granularity.is_some();
         let scheme = match order {
             "gauss-seidel" => Scheme::GaussSeidel,
             "jacobi" => Scheme::Jacobi,
@@ -185,28 +205,49 @@ impl PySystem {
             }
             None
         };
-        let mut sim = py
-            .detach(move || {
-                match isolation {
-                    Some(iso) => Simulation::from_ssp_isolated(&path, iso),
-                    None => Simulation::from_ssp(&path),
+        let jacobi = scheme == Scheme::Jacobi;
+        let sim = py
+            .detach(move || match (granularity, isolation) {
+                (Some("system"), Some(iso)) => {
+                    runner::isolate::SystemProcess::spawn(iso, &path, jacobi).map(Sim::Process)
                 }
-                .map(Sim)
+                (_, Some(iso)) => Simulation::from_ssp_isolated(&path, iso).map(Sim::Here),
+                _ => Simulation::from_ssp(&path).map(Sim::Here),
             })
             .map_err(|e| to_pyerr(py, &e, None))?;
-        sim.0.scheme = scheme;
+        let (name, evaluation_order, components, outputs, parameters) = match &sim {
+            Sim::Here(sim) => (
+                sim.name.clone(),
+                sim.evaluation_order().iter().map(|s| s.to_string()).collect(),
+                sim.components()
+                    .iter()
+                    .map(|(a, b)| (a.to_string(), b.to_string()))
+                    .collect(),
+                sim.outputs(),
+                sim.parameters().iter().map(|s| s.to_string()).collect(),
+            ),
+            Sim::Process(p) => {
+                let i = p.info();
+                (
+                    i.name.clone(),
+                    i.evaluation_order.clone(),
+                    i.components.clone(),
+                    i.outputs.clone(),
+                    i.parameters.clone(),
+                )
+            }
+        };
+        let mut sim = sim;
+        if let Sim::Here(s) = &mut sim {
+            s.scheme = scheme;
+        }
         Ok(PySystem {
             path: shown,
-            name: sim.0.name.clone(),
-            evaluation_order: sim.0.evaluation_order().iter().map(|s| s.to_string()).collect(),
-            components: sim
-                .0
-                .components()
-                .iter()
-                .map(|(a, b)| (a.to_string(), b.to_string()))
-                .collect(),
-            outputs: sim.0.outputs(),
-            parameters: sim.0.parameters().iter().map(|s| s.to_string()).collect(),
+            name,
+            evaluation_order,
+            components,
+            outputs,
+            parameters,
             last_run: Mutex::new(None),
             inner: Mutex::new(sim),
         })
@@ -272,7 +313,10 @@ impl PySystem {
         }
         let inner = &self.inner;
         let result: Result<RunResult, Failure> = py.detach(|| match inner.lock() {
-            Ok(mut sim) => sim.0.run(&opts, &mut |_, _| {}),
+            Ok(mut sim) => match &mut *sim {
+                Sim::Here(sim) => sim.run(&opts, &mut |_, _| {}),
+                Sim::Process(p) => p.run(&opts),
+            },
             Err(_) => Err(Failure::from(Error::usage(
                 "the system is unusable: an earlier run panicked while holding it",
             ))),
