@@ -16,6 +16,7 @@ cargo test --release --workspace --bench fmu_step
 bin=$(cd "${CARGO_TARGET_DIR:-target}/release" && pwd)
 "$bin/perf-report" --rounds 1
 "$bin/composed-loop" --seconds 0.1 --repeat 1
+"$bin/isolation-cost" --seconds 0.1 --repeat 1
 "$PY" bench/python/work_precision.py --quick
 RUSTFMU_COMPOSED_LOOP="$bin/composed-loop" "$PY" bench/python/composed_loop.py --quick
 "$PY" bench/python/study_throughput.py --quick
