@@ -558,7 +558,7 @@ impl Slots {
 pub enum InstanceCS {
     V2(Instance2),
     V3(crate::fmi3::Instance3),
-    /// An FMI 2.0 model-exchange instance the runner integrates ([`crate::me`]).
+    /// A model-exchange instance (FMI 2.0 or 3.0) the runner integrates ([`crate::me`]).
     Me(crate::me::MeInstance),
     /// Any of the above in a child process ([`crate::isolate`]).
     #[cfg(target_os = "linux")]

@@ -48,6 +48,43 @@ type InstantiateCS = unsafe extern "C" fn(
     fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance;
 type InstanceFunction = unsafe extern "C" fn(fmi3Instance) -> fmi3Status;
+type InstantiateME = unsafe extern "C" fn(
+    fmi3String,
+    fmi3String,
+    fmi3String,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3InstanceEnvironment,
+    fmi3LogMessageCallback,
+) -> fmi3Instance;
+type SetTime = unsafe extern "C" fn(fmi3Instance, fmi3Float64) -> fmi3Status;
+type SetStates = unsafe extern "C" fn(fmi3Instance, *const fmi3Float64, usize) -> fmi3Status;
+type GetVector = unsafe extern "C" fn(fmi3Instance, *mut fmi3Float64, usize) -> fmi3Status;
+type Completed = unsafe extern "C" fn(fmi3Instance, fmi3Boolean, *mut fmi3Boolean, *mut fmi3Boolean) -> fmi3Status;
+type UpdateDiscreteStates = unsafe extern "C" fn(
+    fmi3Instance,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Boolean,
+    *mut fmi3Float64,
+) -> fmi3Status;
+
+/// The model-exchange functions (a binary without them runs as co-simulation only).
+struct MeApi {
+    instantiate: InstantiateME,
+    set_time: SetTime,
+    set_continuous_states: SetStates,
+    get_derivatives: GetVector,
+    get_event_indicators: GetVector,
+    get_continuous_states: GetVector,
+    get_nominals: GetVector,
+    completed_integrator_step: Completed,
+    enter_event_mode: InstanceFunction,
+    update_discrete_states: UpdateDiscreteStates,
+    enter_continuous_time_mode: InstanceFunction,
+}
 type EnterInit =
     unsafe extern "C" fn(fmi3Instance, fmi3Boolean, fmi3Float64, fmi3Float64, fmi3Boolean, fmi3Float64) -> fmi3Status;
 type DoStep = unsafe extern "C" fn(
@@ -88,7 +125,7 @@ type Deserialize = unsafe extern "C" fn(fmi3Instance, *const fmi3Byte, usize, *m
 
 /// The functions of an FMI 3.0 co-simulation binary the runner calls.
 struct Api {
-    instantiate: InstantiateCS,
+    instantiate: Option<InstantiateCS>,
     free_instance: unsafe extern "C" fn(fmi3Instance),
     set_debug_logging: SetDebugLogging,
     enter_initialization_mode: EnterInit,
@@ -105,8 +142,8 @@ struct Api {
     set_int64: Set<i64>,
     set_boolean: Set<bool>,
     set_string: Set<fmi3String>,
-    do_step: DoStep,
-    get_output_derivatives: OutputDerivatives,
+    do_step: Option<DoStep>,
+    get_output_derivatives: Option<OutputDerivatives>,
     get_directional_derivative: DirectionalDerivative,
     get_fmu_state: GetState,
     set_fmu_state: SetState,
@@ -114,6 +151,7 @@ struct Api {
     serialized_size: StateSize,
     serialize: Serialize,
     deserialize: Deserialize,
+    me: Option<MeApi>,
 }
 
 /// A loaded FMI 3.0 binary.
@@ -137,8 +175,31 @@ impl Library {
                         .map_err(|e| format!("{}: no function {} ({e})", path.display(), $name))?
                 };
             }
+            // Optional: the functions of the interface an FMU may not offer (FMI 3.0 asks every
+            // binary to export every function; some exporters leave out what they do not offer).
+            macro_rules! opt {
+                ($name:literal) => {
+                    lib.get(concat!($name, "\0").as_bytes()).ok().map(|s| *s)
+                };
+            }
+            let me = (|| {
+                Some(MeApi {
+                    instantiate: opt!("fmi3InstantiateModelExchange")?,
+                    set_time: opt!("fmi3SetTime")?,
+                    set_continuous_states: opt!("fmi3SetContinuousStates")?,
+                    get_derivatives: opt!("fmi3GetContinuousStateDerivatives")?,
+                    get_event_indicators: opt!("fmi3GetEventIndicators")?,
+                    get_continuous_states: opt!("fmi3GetContinuousStates")?,
+                    get_nominals: opt!("fmi3GetNominalsOfContinuousStates")?,
+                    completed_integrator_step: opt!("fmi3CompletedIntegratorStep")?,
+                    enter_event_mode: opt!("fmi3EnterEventMode")?,
+                    update_discrete_states: opt!("fmi3UpdateDiscreteStates")?,
+                    enter_continuous_time_mode: opt!("fmi3EnterContinuousTimeMode")?,
+                })
+            })();
             Api {
-                instantiate: f!("fmi3InstantiateCoSimulation"),
+                me,
+                instantiate: opt!("fmi3InstantiateCoSimulation"),
                 free_instance: f!("fmi3FreeInstance"),
                 set_debug_logging: f!("fmi3SetDebugLogging"),
                 enter_initialization_mode: f!("fmi3EnterInitializationMode"),
@@ -155,8 +216,8 @@ impl Library {
                 set_int64: f!("fmi3SetInt64"),
                 set_boolean: f!("fmi3SetBoolean"),
                 set_string: f!("fmi3SetString"),
-                do_step: f!("fmi3DoStep"),
-                get_output_derivatives: f!("fmi3GetOutputDerivatives"),
+                do_step: opt!("fmi3DoStep"),
+                get_output_derivatives: opt!("fmi3GetOutputDerivatives"),
                 get_directional_derivative: f!("fmi3GetDirectionalDerivative"),
                 get_fmu_state: f!("fmi3GetFMUState"),
                 set_fmu_state: f!("fmi3SetFMUState"),
@@ -254,6 +315,26 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
             })
         })
         .collect();
+    let derivatives = d
+        .derivatives
+        .iter()
+        .filter_map(|u| {
+            Some(d2::Unknown {
+                index: index(u.vr)?,
+                dependencies: u
+                    .dependencies
+                    .as_ref()
+                    .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
+            })
+        })
+        .collect();
+    let me = d.me.as_ref().map(|me| d2::ModelExchange {
+        model_identifier: me.model_identifier.clone(),
+        can_get_and_set_fmu_state: me.can_get_and_set_fmu_state,
+        can_serialize_fmu_state: me.can_serialize_fmu_state,
+        provides_directional_derivative: me.provides_directional_derivatives,
+        completed_integrator_step_not_needed: false,
+    });
     let cs = d.cs.as_ref().map(|cs| d2::CoSimulation {
         model_identifier: cs.model_identifier.clone(),
         can_get_and_set_fmu_state: cs.can_get_and_set_fmu_state,
@@ -271,16 +352,16 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         description: d.description.clone(),
         version: d.version.clone(),
         generation_tool: d.generation_tool.clone(),
-        number_of_event_indicators: 0,
+        number_of_event_indicators: d.event_indicators.len(),
         cs,
-        me: None,
+        me,
         enumerations: Vec::new(),
         log_categories: d.log_categories.clone(),
         default_experiment: d.default_experiment.clone(),
         variables,
         model_structure: d2::ModelStructure {
             outputs,
-            derivatives: Vec::new(),
+            derivatives,
             initial_unknowns: Vec::new(),
             errors: d.errors.clone(),
         },
@@ -372,8 +453,13 @@ impl Fmi3Import {
         });
         // SAFETY: valid C strings; the environment outlives the instance (dropped after
         // fmi3FreeInstance).
+        let instantiate = self
+            .library
+            .api
+            .instantiate
+            .ok_or("the binary has no fmi3InstantiateCoSimulation")?;
         let c = unsafe {
-            (self.library.api.instantiate)(
+            instantiate(
                 name_c.as_ptr(),
                 self.token.as_ptr(),
                 self.resource_path.as_ptr(),
@@ -399,6 +485,143 @@ impl Fmi3Import {
             int64: self.int64.clone(),
             _env: env,
         })
+    }
+}
+
+impl Fmi3Import {
+    /// fmi3InstantiateModelExchange(name, ...) with the runner's logger (for [`crate::me`]).
+    pub fn instantiate_me(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
+        let me =
+            self.library.api.me.as_ref().ok_or(
+                "the binary lacks the model-exchange functions (fmi3InstantiateModelExchange, fmi3SetTime, ...)",
+            )?;
+        let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
+        let env = Box::new(Env {
+            instance: name_c.clone(),
+        });
+        // SAFETY: valid C strings; the environment outlives the instance (dropped after
+        // fmi3FreeInstance).
+        let c = unsafe {
+            (me.instantiate)(
+                name_c.as_ptr(),
+                self.token.as_ptr(),
+                self.resource_path.as_ptr(),
+                visible,
+                logging_on,
+                &*env as *const Env as *mut c_void,
+                Some(log_message),
+            )
+        };
+        if c.is_null() {
+            return Err("fmi3InstantiateModelExchange returned NULL".into());
+        }
+        Ok(Instance3 {
+            library: self.library.clone(),
+            c,
+            states: Slots::default(),
+            experiment: (None, 0.0, None),
+            int64: self.int64.clone(),
+            _env: env,
+        })
+    }
+}
+
+/// The model-exchange calls of an FMI 3.0 instance, as [`crate::fmi2::Instance2`]'s.
+impl Instance3 {
+    fn me(&self) -> Result<&MeApi, Fmi2Error> {
+        self.library
+            .api
+            .me
+            .as_ref()
+            .ok_or_else(|| Fmi2Error::Importer("the FMU has no model-exchange functions".into()))
+    }
+
+    pub fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        let f = self.me()?.set_time;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c, t) })
+    }
+
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.set_continuous_states;
+        // SAFETY: a live model-exchange instance; `x` holds its states.
+        check(unsafe { f(self.c, x.as_ptr(), x.len()) })
+    }
+
+    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_derivatives;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, dx.as_mut_ptr(), dx.len()) })
+    }
+
+    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), Fmi2Error> {
+        if z.is_empty() {
+            return Ok(());
+        }
+        let f = self.me()?.get_event_indicators;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, z.as_mut_ptr(), z.len()) })
+    }
+
+    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_continuous_states;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
+    }
+
+    pub fn get_nominals(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
+        let f = self.me()?.get_nominals;
+        // SAFETY: as set_continuous_states.
+        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
+    }
+
+    /// (enterEventMode, terminateSimulation).
+    pub fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error> {
+        let f = self.me()?.completed_integrator_step;
+        let (mut event, mut terminate) = (false, false);
+        // SAFETY: a live model-exchange instance; the outputs point to locals.
+        check(unsafe { f(self.c, no_set_prior, &mut event, &mut terminate) })?;
+        Ok((event, terminate))
+    }
+
+    pub fn enter_event_mode(&mut self) -> Result<(), Fmi2Error> {
+        let f = self.me()?.enter_event_mode;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c) })
+    }
+
+    /// fmi3UpdateDiscreteStates, its answers as FMI 2.0's event info.
+    pub fn new_discrete_states(&mut self) -> Result<rustfmu::fmi2::abi::fmi2EventInfo, Fmi2Error> {
+        let f = self.me()?.update_discrete_states;
+        let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
+            (false, false, false, false, false, 0.0);
+        // SAFETY: a live model-exchange instance; the outputs point to locals.
+        check(unsafe {
+            f(
+                self.c,
+                &mut update,
+                &mut terminate,
+                &mut nominals,
+                &mut values,
+                &mut defined,
+                &mut next,
+            )
+        })?;
+        let b = |x: bool| rustfmu::fmi2::abi::fmi2Boolean::from(x);
+        Ok(rustfmu::fmi2::abi::fmi2EventInfo {
+            newDiscreteStatesNeeded: b(update),
+            terminateSimulation: b(terminate),
+            nominalsOfContinuousStatesChanged: b(nominals),
+            valuesOfContinuousStatesChanged: b(values),
+            nextEventTimeDefined: b(defined),
+            nextEventTime: next,
+        })
+    }
+
+    pub fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error> {
+        let f = self.me()?.enter_continuous_time_mode;
+        // SAFETY: a live model-exchange instance.
+        check(unsafe { f(self.c) })
     }
 }
 
@@ -536,7 +759,10 @@ impl Instance3 {
         let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
         // SAFETY: a live instance; the four outputs point to locals.
         check(unsafe {
-            (self.api().do_step)(
+            (self
+                .api()
+                .do_step
+                .ok_or_else(|| Fmi2Error::Importer("the binary has no fmi3DoStep".into()))?)(
                 self.c,
                 t,
                 h,
@@ -565,7 +791,10 @@ impl Instance3 {
         let orders = vec![1i32; vrs.len()];
         // SAFETY: a live instance; the arrays hold vrs.len() elements.
         check(unsafe {
-            (self.api().get_output_derivatives)(
+            (self
+                .api()
+                .get_output_derivatives
+                .ok_or_else(|| Fmi2Error::Importer("the binary has no fmi3GetOutputDerivatives".into()))?)(
                 self.c,
                 vrs.as_ptr(),
                 vrs.len(),

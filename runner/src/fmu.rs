@@ -109,12 +109,12 @@ impl Fmu {
                 ),
             ));
         };
-        if description.cs.is_none() && (description.me.is_none() || int64.is_some()) {
+        if description.cs.is_none() && description.me.is_none() {
             return Err(Error::unsupported(
                 Some(component),
                 None,
                 format!(
-                    "component '{component}' ({label}): neither an FMI 2.0 / 3.0 co-simulation FMU nor an FMI 2.0 model-exchange one (the runner integrates FMI 2.0 model exchange only)"
+                    "component '{component}' ({label}): neither a co-simulation nor a model-exchange FMU (scheduled execution only)"
                 ),
             ));
         }
@@ -242,20 +242,22 @@ impl Fmu {
                 format!("component '{component}' ({}): {m}", self.model_identifier()),
             )
         };
-        let Import::V2(import) = &self.import else {
-            return Err(fail(
-                "an FMI 3.0 FMU: the runner integrates FMI 2.0 model-exchange FMUs only".into(),
-            ));
-        };
         if self.description.me.is_none() {
             return Err(fail("no <ModelExchange> in its modelDescription.xml".into()));
         }
         let nx = self.description.model_structure.derivatives.len();
         let nz = self.description.number_of_event_indicators;
-        import
-            .instantiate_me(component, false, false)
-            .map(|i| InstanceCS::Me(crate::me::MeInstance::new(i, nx, nz)))
-            .map_err(|e| fail(format!("fmi2Instantiate(fmi2ModelExchange) failed: {e}")))
+        let inner = match &self.import {
+            Import::V2(import) => import
+                .instantiate_me(component, false, false)
+                .map(crate::me::MeInner::V2)
+                .map_err(|e| fail(format!("fmi2Instantiate(fmi2ModelExchange) failed: {e}")))?,
+            Import::V3(import) => import
+                .instantiate_me(component, false, false)
+                .map(crate::me::MeInner::V3)
+                .map_err(|e| fail(format!("fmi3InstantiateModelExchange failed: {e}")))?,
+        };
+        Ok(InstanceCS::Me(crate::me::MeInstance::new(inner, nx, nz)))
     }
 
     /// An instance in a child process of its own ([`crate::isolate`]); `me`: model exchange,

@@ -1,4 +1,4 @@
-//! A model-exchange FMU (FMI 2.0) as a co-simulation component: the runner integrates it over
+//! A model-exchange FMU (FMI 2.0 or 3.0) as a co-simulation component: the runner integrates it over
 //! each communication step with its own integrator, so a system can hold an FMU exported
 //! without co-simulation (or one the SSD asks to run as `implementation="ModelExchange"`).
 //!
@@ -18,7 +18,65 @@
 //! fmi2EnterContinuousTimeMode, and the states read back.
 
 use crate::fmi2::{Fmi2Error, FmuState, Instance2};
-use rustfmu::fmi2::abi::fmi2False;
+use crate::fmi3::Instance3;
+use rustfmu::fmi2::abi::{fmi2EventInfo, fmi2False};
+
+/// The model-exchange instance integrated: FMI 2.0's, or FMI 3.0's (fmi3UpdateDiscreteStates
+/// answered as fmi2NewDiscreteStates' event info; its Event Mode after initialization as FMI
+/// 2.0's).
+pub enum MeInner {
+    V2(Instance2),
+    V3(Instance3),
+}
+
+macro_rules! me_forward {
+    ($( fn $name:ident(&mut self $(, $arg:ident: $ty:ty)*) -> $ret:ty; )*) => {
+        impl MeInner {
+            $(
+                pub fn $name(&mut self $(, $arg: $ty)*) -> $ret {
+                    match self {
+                        MeInner::V2(i) => i.$name($($arg),*),
+                        MeInner::V3(i) => i.$name($($arg),*),
+                    }
+                }
+            )*
+        }
+    };
+}
+
+me_forward! {
+    fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error>;
+    fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error>;
+    fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn terminate(&mut self) -> Result<(), Fmi2Error>;
+    fn reset(&mut self) -> Result<(), Fmi2Error>;
+    fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error>;
+    fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error>;
+    fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_nominals(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error>;
+    fn enter_event_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn new_discrete_states(&mut self) -> Result<fmi2EventInfo, Fmi2Error>;
+    fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
+    fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
+    fn get_string(&mut self, vrs: &[u32], out: &mut [std::ffi::CString]) -> Result<(), Fmi2Error>;
+    fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
+    fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
+    fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
+    fn set_string(&mut self, vrs: &[u32], values: &[std::ffi::CString]) -> Result<(), Fmi2Error>;
+    fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error>;
+    fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error>;
+    fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
+    fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
+    fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error>;
+    fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error>;
+    fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error>;
+}
 
 // Dormand–Prince 5(4) tableau.
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
@@ -84,9 +142,9 @@ struct Clock {
     h: f64,
 }
 
-/// An FMI 2.0 model-exchange instance stepped as a co-simulation one.
+/// A model-exchange instance (FMI 2.0 or 3.0) stepped as a co-simulation one.
 pub struct MeInstance {
-    inner: Instance2,
+    inner: MeInner,
     nx: usize,
     nz: usize,
     rtol: f64,
@@ -109,7 +167,7 @@ fn importer(m: String) -> Fmi2Error {
 
 impl MeInstance {
     /// `nx` continuous states, `nz` event indicators (the description's).
-    pub fn new(inner: Instance2, nx: usize, nz: usize) -> MeInstance {
+    pub fn new(inner: MeInner, nx: usize, nz: usize) -> MeInstance {
         MeInstance {
             inner,
             nx,
@@ -205,7 +263,7 @@ impl MeInstance {
     }
 
     /// dx/dt at (t, x) into `out`.
-    fn rhs(inner: &mut Instance2, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error> {
+    fn rhs(inner: &mut MeInner, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error> {
         inner.set_time(t)?;
         if !x.is_empty() {
             inner.set_continuous_states(x)?;

@@ -107,13 +107,64 @@ def test_rollback_restores_the_runners_integrator_with_the_fmu_state(tmp_path):
         assert np.max(np.abs(a[x] - b[x][::2])) <= 1e-14 * scale, x
 
 
-def test_model_exchange_the_runner_cannot_integrate_is_refused(tmp_path):
-    path = tmp_path / "fmi3-me.ssp"
+def fmi3_pendulum_lqr_as_model_exchange(tmp_path, strip_me=False) -> str:
+    """target/fmu/fmi3/PendulumLQR.ssp with its (FMI 3.0) Pendulum marked implementation="ModelExchange";
+    `strip_me`: and its modelDescription.xml without <ModelExchange>."""
+    import io
+
+    path = tmp_path / f"fmi3-me{int(strip_me)}.ssp"
     with zipfile.ZipFile(FMU_DIR / "fmi3" / "PendulumLQR.ssp") as src, zipfile.ZipFile(path, "w") as dst:
         for item in src.infolist():
             data = src.read(item.filename)
             if item.filename == "SystemStructure.ssd":
                 data = data.replace(b'<ssd:Component name="pendulum" ', b'<ssd:Component name="pendulum" implementation="ModelExchange" ')
+            elif item.filename.endswith("Pendulum.fmu") and strip_me:
+                out = io.BytesIO()
+                with zipfile.ZipFile(io.BytesIO(data)) as f, zipfile.ZipFile(out, "w") as g:
+                    for i in f.infolist():
+                        d = f.read(i.filename)
+                        if i.filename == "modelDescription.xml":
+                            d, n = re.subn(rb"<ModelExchange[^>]*/>", b"", d)
+                            assert n == 1
+                        g.writestr(i, d)
+                data = out.getvalue()
             dst.writestr(item, data)
-    with pytest.raises(rustfmu_runner.RunnerError, match="an FMI 3.0 FMU: the runner integrates FMI 2.0 model-exchange FMUs only"):
-        rustfmu_runner.System(str(path))
+    return str(path)
+
+
+def test_an_fmi3_model_exchange_component_equals_its_co_simulation(tmp_path):
+    """The FMI 3.0 Pendulum integrated by the runner (fmi3InstantiateModelExchange,
+    fmi3GetContinuousStateDerivatives, fmi3UpdateDiscreteStates, ...): equal to its own
+    co-simulation to 1e-12, and to the FMI 2.0 Pendulum integrated by the runner bit for bit."""
+    a = rustfmu_runner.System(str(FMU_DIR / "fmi3" / "PendulumLQR.ssp")).run(2.0, 1e-3)
+    b = rustfmu_runner.System(fmi3_pendulum_lqr_as_model_exchange(tmp_path)).run(2.0, 1e-3)
+    c = rustfmu_runner.System(as_model_exchange("PendulumLQR", "pendulum", tmp_path)).run(2.0, 1e-3)
+    for k in a:
+        scale = max(1.0, np.max(np.abs(a[k])))
+        assert np.max(np.abs(a[k] - b[k])) <= 1e-12 * scale, k
+        assert np.array_equal(b[k], c[k]), k
+
+
+def test_an_fmi3_model_exchange_only_fmu_bounces_as_the_fmi2_one(tmp_path):
+    """FMI 3.0 BouncingBall.fmu without <CoSimulation>: state events located and handled through
+    FMI 3.0's event mode, equal to the FMI 2.0 ball integrated by the runner."""
+    import io
+
+    out = io.BytesIO()
+    with zipfile.ZipFile(FMU_DIR / "fmi3" / "BouncingBall.fmu") as f, zipfile.ZipFile(out, "w") as g:
+        for i in f.infolist():
+            d = f.read(i.filename)
+            if i.filename == "modelDescription.xml":
+                d, n = re.subn(rb"<CoSimulation[^>]*/>", b"", d)
+                assert n == 1
+            g.writestr(i, d)
+    v3 = rustfmu_runner.System(ball(tmp_path, fmu_bytes=out.getvalue())).run(3.0, 1e-2)
+    v2 = rustfmu_runner.System(ball(tmp_path, fmu_bytes=without_co_simulation())).run(3.0, 1e-2)
+    for k in ["ball.h", "ball.v"]:
+        assert np.max(np.abs(v3[k] - v2[k])) <= 1e-12, k
+    assert np.sum(np.diff(np.sign(v3["ball.v"])) > 0) >= 3
+
+
+def test_model_exchange_the_runner_cannot_integrate_is_refused(tmp_path):
+    with pytest.raises(rustfmu_runner.RunnerError, match="no <ModelExchange> in its modelDescription.xml"):
+        rustfmu_runner.System(fmi3_pendulum_lqr_as_model_exchange(tmp_path, strip_me=True))
