@@ -156,8 +156,38 @@ mod linux {
     /// isolation-cost`): a child that spins takes the cores the others need (18 s per run with
     /// 200 us of spinning), one that sleeps at once pays a futex wake per call (2.7 s); yielding
     /// 50 us while the parent spins up to 1 ms: 0.43 s.
-    const PARENT_SPIN: Duration = Duration::from_micros(1000);
-    const CHILD_YIELD: Duration = Duration::from_micros(50);
+    /// Waiting for the other side: spin (the parent) or yield the core (a child) for up to a
+    /// limit, then sleep on the futex. The limit adapts (as an adaptive mutex's): a wait that
+    /// ended within it doubles it, one that had to sleep halves it. On an idle machine a round
+    /// trip is a few µs and the limits grow (a sleeping process takes ~50 µs or more to wake);
+    /// on a loaded one the other side is often not running, spinning takes the core it needs, and
+    /// the limits fall to nothing (futex only). PendulumMotors, 4 FMUs in 4 processes on 2 cores
+    /// (`cargo run --release -p rustfmu-bench --bin isolation-cost`): fixed limits of 1 ms
+    /// (parent) and 50 µs (children) gave 0.43 s per run idle but 8000x the in-process cost
+    /// while a build ran; futex only, 96 µs per step loaded and 270 µs idle.
+    #[derive(Clone, Copy)]
+    struct Patience {
+        limit: Duration,
+        min: Duration,
+        max: Duration,
+    }
+
+    impl Patience {
+        const fn new(start_us: u64, max_us: u64) -> Patience {
+            Patience {
+                limit: Duration::from_micros(start_us),
+                min: Duration::from_micros(1),
+                max: Duration::from_micros(max_us),
+            }
+        }
+        fn waited(&mut self, slept: bool) {
+            self.limit = if slept {
+                (self.limit / 2).max(self.min)
+            } else {
+                (self.limit * 2).min(self.max)
+            };
+        }
+    }
 
     #[repr(C)]
     struct Header {
@@ -422,6 +452,19 @@ mod linux {
         time: Option<f64>,
         /// The process is gone: every call fails with this.
         dead: Option<String>,
+        /// How long to spin for an answer before sleeping.
+        patience: Patience,
+        /// Read-ahead of Real values: what the last fmi2GetReal answered (value reference,
+        /// value), valid until any call but a read; the value references read since the last
+        /// step (`reads`) and in the step before (`ahead`), which the first read of a step asks
+        /// for too. A system reads a component's connected outputs and then its recorded ones:
+        /// one round trip instead of two where nothing is set between (FMI 2.0, 2.1.7: a read
+        /// changes nothing).
+        cache: Vec<(u32, f64)>,
+        cache_valid: bool,
+        reads: Vec<u32>,
+        ahead: Vec<u32>,
+        ask: Vec<u32>,
     }
 
     impl Drop for Isolated {
@@ -523,6 +566,12 @@ mod linux {
                 seq: 0,
                 time: None,
                 dead: None,
+                patience: Patience::new(50, 1000),
+                cache: Vec::new(),
+                cache_valid: false,
+                reads: Vec::new(),
+                ahead: Vec::new(),
+                ask: Vec::new(),
             };
             // The child opens the file before it answers: then it can go.
             let r = iso_inst.call(HELLO, None, |_| Ok(()), |_| Ok(()));
@@ -545,6 +594,12 @@ mod linux {
             time: Option<f64>,
             args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
         ) -> Result<(), Fmi2Error> {
+            if !matches!(
+                op,
+                GET_REAL | GET_INTEGER | GET_BOOLEAN | GET_STRING | OUTPUT_DERIVATIVES | DIRECTIONAL | SERIALIZE
+            ) {
+                self.cache_valid = false;
+            }
             let start = 4 + self.pending_len;
             let mut w = W {
                 buf: self.shm.req(),
@@ -577,16 +632,19 @@ mod linux {
         fn wait(&mut self) -> Result<(), Fmi2Error> {
             let begun = Instant::now();
             let mut checked = begun;
+            let mut slept = false;
             loop {
                 let h = self.shm.header();
                 if h.done.load(Acquire) == self.seq {
+                    self.patience.waited(slept);
                     return Ok(());
                 }
                 let waited = begun.elapsed();
-                if waited < PARENT_SPIN {
+                if waited < self.patience.limit {
                     std::hint::spin_loop();
                     continue;
                 }
+                slept = true;
                 h.parent_sleeps.store(1, SeqCst);
                 let done = h.done.load(SeqCst);
                 if done != self.seq {
@@ -793,6 +851,8 @@ mod linux {
         }
 
         pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+            std::mem::swap(&mut self.ahead, &mut self.reads);
+            self.reads.clear();
             self.post(DO_STEP, Some(t), true, |w| {
                 w.f64(t)?;
                 w.f64(h)?;
@@ -804,15 +864,66 @@ mod linux {
 
         pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
             Self::lengths(vrs.len(), out.len())?;
-            self.call(
+            if self.dead.is_none() && self.outstanding.is_empty() && self.pending.is_empty() && self.cache_valid {
+                let cached = |vr: &u32| self.cache.iter().find(|(v, _)| v == vr).map(|(_, x)| *x);
+                if vrs.iter().all(|vr| cached(vr).is_some()) {
+                    for (x, vr) in out.iter_mut().zip(vrs) {
+                        *x = cached(vr).unwrap_or(f64::NAN);
+                    }
+                    return Ok(());
+                }
+            }
+            for vr in vrs {
+                if !self.reads.contains(vr) {
+                    self.reads.push(*vr);
+                }
+            }
+            // This read and what the step before read after it.
+            let mut ask = std::mem::take(&mut self.ask);
+            ask.clear();
+            ask.extend_from_slice(vrs);
+            ask.extend(self.ahead.iter().filter(|v| !vrs.contains(v)));
+            let extra = ask.len() > vrs.len();
+            let mut cache = std::mem::take(&mut self.cache);
+            cache.clear();
+            let r = self.call(
                 GET_REAL,
                 self.time,
-                |w| w.u32s(vrs),
+                |w| w.u32s(&ask),
                 |r| {
-                    out.iter_mut().for_each(|x| *x = r.f64());
+                    for vr in &ask {
+                        cache.push((*vr, r.f64()));
+                    }
                     Ok(())
                 },
-            )
+            );
+            let r = match r {
+                // A value reference of the read-ahead the FMU refuses now: the read alone.
+                Err(Fmi2Error::Error) if extra => {
+                    cache.clear();
+                    self.call(
+                        GET_REAL,
+                        self.time,
+                        |w| w.u32s(vrs),
+                        |r| {
+                            for vr in vrs {
+                                cache.push((*vr, r.f64()));
+                            }
+                            Ok(())
+                        },
+                    )
+                }
+                r => r,
+            };
+            self.ask = ask;
+            if r.is_ok() {
+                for (x, (_, v)) in out.iter_mut().zip(&cache) {
+                    *x = *v;
+                }
+            }
+            self.cache_valid = r.is_ok();
+            self.cache = cache;
+            r
         }
 
         pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
@@ -1077,18 +1188,22 @@ mod linux {
         let (mut vrs, mut vrs2, mut reals, mut ints) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut strings: Vec<CString> = Vec::new();
         let mut quit = false;
+        let mut patience = Patience::new(50, 200);
         while !quit {
             // Wait for the next batch.
             let begun = Instant::now();
+            let mut slept = false;
             loop {
                 let h = shm.header();
                 if h.req.load(Acquire) != done {
+                    patience.waited(slept);
                     break;
                 }
                 let waited = begun.elapsed();
-                if waited < CHILD_YIELD {
+                if waited < patience.limit {
                     std::thread::yield_now();
                 } else {
+                    slept = true;
                     h.child_sleeps.store(1, SeqCst);
                     if h.req.load(SeqCst) == done {
                         futex_wait(&h.req, done, Duration::from_millis(100));
