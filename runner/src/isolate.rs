@@ -458,8 +458,9 @@ mod linux {
         /// value), valid until any call but a read; the value references read since the last
         /// step (`reads`) and in the step before (`ahead`), which the first read of a step asks
         /// for too. A system reads a component's connected outputs and then its recorded ones:
-        /// one round trip instead of two where nothing is set between (FMI 2.0, 2.1.7: a read
-        /// changes nothing).
+        /// one round trip instead of two where nothing is set or stepped between (the values an
+        /// FMU gives depend on its inputs, parameters, states and time, none of which a read
+        /// changes).
         cache: Vec<(u32, f64)>,
         cache_valid: bool,
         reads: Vec<u32>,
