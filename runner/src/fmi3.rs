@@ -302,32 +302,22 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         });
     }
     let index = |vr: u32| variables.iter().position(|x: &d2::Variable| x.vr == vr).map(|i| i + 1);
-    let outputs = d
-        .outputs
-        .iter()
-        .filter_map(|u| {
-            Some(d2::Unknown {
-                index: index(u.vr)?,
-                dependencies: u
-                    .dependencies
-                    .as_ref()
-                    .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
+    // ModelStructure's elements in FMI 2.0's form: indices into the variables kept.
+    let unknowns = |list: &[d3::Unknown]| -> Vec<d2::Unknown> {
+        list.iter()
+            .filter_map(|u| {
+                Some(d2::Unknown {
+                    index: index(u.vr)?,
+                    dependencies: u
+                        .dependencies
+                        .as_ref()
+                        .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
+                })
             })
-        })
-        .collect();
-    let derivatives = d
-        .derivatives
-        .iter()
-        .filter_map(|u| {
-            Some(d2::Unknown {
-                index: index(u.vr)?,
-                dependencies: u
-                    .dependencies
-                    .as_ref()
-                    .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
-            })
-        })
-        .collect();
+            .collect()
+    };
+    let outputs = unknowns(&d.outputs);
+    let derivatives = unknowns(&d.derivatives);
     let me = d.me.as_ref().map(|me| d2::ModelExchange {
         model_identifier: me.model_identifier.clone(),
         can_get_and_set_fmu_state: me.can_get_and_set_fmu_state,

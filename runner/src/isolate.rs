@@ -927,10 +927,11 @@ mod linux {
             r
         }
 
-        pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        /// fmi2GetInteger or fmi2GetBoolean (`op`): 32-bit values.
+        fn get_i32s(&mut self, op: u8, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
             Self::lengths(vrs.len(), out.len())?;
             self.call(
-                GET_INTEGER,
+                op,
                 self.time,
                 |w| w.u32s(vrs),
                 |r| {
@@ -940,17 +941,12 @@ mod linux {
             )
         }
 
+        pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+            self.get_i32s(GET_INTEGER, vrs, out)
+        }
+
         pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-            Self::lengths(vrs.len(), out.len())?;
-            self.call(
-                GET_BOOLEAN,
-                self.time,
-                |w| w.u32s(vrs),
-                |r| {
-                    out.iter_mut().for_each(|x| *x = r.u32() as i32);
-                    Ok(())
-                },
-            )
+            self.get_i32s(GET_BOOLEAN, vrs, out)
         }
 
         pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {

@@ -56,19 +56,24 @@ def ball(tmp_path, impl="", fmu_bytes=None) -> str:
     return str(out)
 
 
-def without_co_simulation() -> bytes:
-    """BouncingBall.fmu whose modelDescription.xml offers model exchange only."""
+def without(fmu: bytes, element: bytes) -> bytes:
+    """The FMU archive `fmu` with the (empty) element `element` taken out of its modelDescription.xml."""
     import io
 
     out = io.BytesIO()
-    with zipfile.ZipFile(FMU_DIR / "BouncingBall.fmu") as f, zipfile.ZipFile(out, "w") as g:
+    with zipfile.ZipFile(io.BytesIO(fmu)) as f, zipfile.ZipFile(out, "w") as g:
         for i in f.infolist():
             d = f.read(i.filename)
             if i.filename == "modelDescription.xml":
-                d, n = re.subn(rb"<CoSimulation[^>]*/>", b"", d)
+                d, n = re.subn(rb"<" + element + rb"[^>]*/>", b"", d)
                 assert n == 1
             g.writestr(i, d)
     return out.getvalue()
+
+
+def without_co_simulation() -> bytes:
+    """BouncingBall.fmu whose modelDescription.xml offers model exchange only."""
+    return without((FMU_DIR / "BouncingBall.fmu").read_bytes(), b"CoSimulation")
 
 
 def test_state_events_of_a_model_exchange_fmu_are_located_and_handled(tmp_path):
@@ -110,8 +115,6 @@ def test_rollback_restores_the_runners_integrator_with_the_fmu_state(tmp_path):
 def fmi3_pendulum_lqr_as_model_exchange(tmp_path, strip_me=False) -> str:
     """target/fmu/fmi3/PendulumLQR.ssp with its (FMI 3.0) Pendulum marked implementation="ModelExchange";
     `strip_me`: and its modelDescription.xml without <ModelExchange>."""
-    import io
-
     path = tmp_path / f"fmi3-me{int(strip_me)}.ssp"
     with zipfile.ZipFile(FMU_DIR / "fmi3" / "PendulumLQR.ssp") as src, zipfile.ZipFile(path, "w") as dst:
         for item in src.infolist():
@@ -119,15 +122,7 @@ def fmi3_pendulum_lqr_as_model_exchange(tmp_path, strip_me=False) -> str:
             if item.filename == "SystemStructure.ssd":
                 data = data.replace(b'<ssd:Component name="pendulum" ', b'<ssd:Component name="pendulum" implementation="ModelExchange" ')
             elif item.filename.endswith("Pendulum.fmu") and strip_me:
-                out = io.BytesIO()
-                with zipfile.ZipFile(io.BytesIO(data)) as f, zipfile.ZipFile(out, "w") as g:
-                    for i in f.infolist():
-                        d = f.read(i.filename)
-                        if i.filename == "modelDescription.xml":
-                            d, n = re.subn(rb"<ModelExchange[^>]*/>", b"", d)
-                            assert n == 1
-                        g.writestr(i, d)
-                data = out.getvalue()
+                data = without(data, b"ModelExchange")
             dst.writestr(item, data)
     return str(path)
 
@@ -148,17 +143,8 @@ def test_an_fmi3_model_exchange_component_equals_its_co_simulation(tmp_path):
 def test_an_fmi3_model_exchange_only_fmu_bounces_as_the_fmi2_one(tmp_path):
     """FMI 3.0 BouncingBall.fmu without <CoSimulation>: state events located and handled through
     FMI 3.0's event mode, equal to the FMI 2.0 ball integrated by the runner."""
-    import io
-
-    out = io.BytesIO()
-    with zipfile.ZipFile(FMU_DIR / "fmi3" / "BouncingBall.fmu") as f, zipfile.ZipFile(out, "w") as g:
-        for i in f.infolist():
-            d = f.read(i.filename)
-            if i.filename == "modelDescription.xml":
-                d, n = re.subn(rb"<CoSimulation[^>]*/>", b"", d)
-                assert n == 1
-            g.writestr(i, d)
-    v3 = rustfmu_runner.System(ball(tmp_path, fmu_bytes=out.getvalue())).run(3.0, 1e-2)
+    me_only = without((FMU_DIR / "fmi3" / "BouncingBall.fmu").read_bytes(), b"CoSimulation")
+    v3 = rustfmu_runner.System(ball(tmp_path, fmu_bytes=me_only)).run(3.0, 1e-2)
     v2 = rustfmu_runner.System(ball(tmp_path, fmu_bytes=without_co_simulation())).run(3.0, 1e-2)
     for k in ["ball.h", "ball.v"]:
         assert np.max(np.abs(v3[k] - v2[k])) <= 1e-12, k
