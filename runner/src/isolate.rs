@@ -157,14 +157,14 @@ mod linux {
     /// 200 us of spinning), one that sleeps at once pays a futex wake per call (2.7 s); yielding
     /// 50 us while the parent spins up to 1 ms: 0.43 s.
     /// Waiting for the other side: spin (the parent) or yield the core (a child) for up to a
-    /// limit, then sleep on the futex. The limit adapts (as an adaptive mutex's): a wait that
-    /// ended within it doubles it, one that had to sleep halves it. On an idle machine a round
-    /// trip is a few µs and the limits grow (a sleeping process takes ~50 µs or more to wake);
-    /// on a loaded one the other side is often not running, spinning takes the core it needs, and
-    /// the limits fall to nothing (futex only). PendulumMotors, 4 FMUs in 4 processes on 2 cores
+    /// limit (50 µs at first, at most 200 µs), then sleep on the futex. The limit adapts (as an
+    /// adaptive mutex's): a wait that ended within it doubles it, one that had to sleep halves
+    /// it. On an idle machine a round trip is a few µs and a sleeping process takes ~30-100 µs to
+    /// wake; on a loaded one the other side is often not running and spinning takes the core it
+    /// needs. PendulumMotors, 4 FMUs in 4 processes on 2 cores, per 10 s run against in-process
     /// (`cargo run --release -p rustfmu-bench --bin isolation-cost`): fixed limits of 1 ms
-    /// (parent) and 50 µs (children) gave 0.43 s per run idle but 8000x the in-process cost
-    /// while a build ran; futex only, 96 µs per step loaded and 270 µs idle.
+    /// (parent) and 50 µs (children) 28x idle but 8000x while a build ran; futex only 60-130x
+    /// idle; these 40-71x idle and 48-70x beside two CPU-bound processes (one run of six 433x).
     #[derive(Clone, Copy)]
     struct Patience {
         limit: Duration,
@@ -567,7 +567,7 @@ mod linux {
                 seq: 0,
                 time: None,
                 dead: None,
-                patience: Patience::new(50, 1000),
+                patience: Patience::new(50, 200),
                 cache: Vec::new(),
                 cache_valid: false,
                 reads: Vec::new(),
