@@ -1154,14 +1154,29 @@ mod linux {
 
     static COLLECTOR: Collector = Collector;
 
+    /// A child's watchdog: the process ends (`_exit`, even inside a hanging FMU call) within
+    /// 100 ms of its parent's end. Not PR_SET_PDEATHSIG: that fires when the parent *thread*
+    /// that started the child ends, and a Dask worker's task threads come and go while the
+    /// System lives on. Returns the parent's pid.
+    fn watch_parent() -> u32 {
+        let parent = std::os::unix::process::parent_id();
+        std::thread::spawn(move || {
+            loop {
+                std::thread::sleep(Duration::from_millis(100));
+                if std::os::unix::process::parent_id() != parent {
+                    // SAFETY: ends the process at once, without atexit handlers (an FMU's thread
+                    // may hold what they would need).
+                    unsafe { libc::_exit(3) };
+                }
+            }
+        });
+        parent
+    }
+
     /// `rustfmu-runner serve-component`: serves one component for the parent that started it, until
     /// it says quit or goes away. Returns the process's exit code.
     pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> i32 {
-        // SAFETY: prctl with constant arguments: killed with the parent.
-        unsafe {
-            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-        }
-        let parent = std::os::unix::process::parent_id();
+        let parent = watch_parent();
         let _ = log::set_logger(&COLLECTOR);
         log::set_max_level(log::LevelFilter::Trace);
         let file = match OpenOptions::new().read(true).write(true).open(shm) {
@@ -1741,11 +1756,7 @@ mod linux {
     /// `rustfmu-runner serve-system`: loads the SSP file and runs it for the parent that started
     /// this process, until it says quit or goes away. Returns the process's exit code.
     pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool) -> i32 {
-        // SAFETY: prctl with constant arguments: killed with the parent.
-        unsafe {
-            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
-        }
-        let parent = std::os::unix::process::parent_id();
+        let parent = watch_parent();
         let file = match OpenOptions::new().read(true).write(true).open(shm) {
             Ok(f) => f,
             Err(e) => {

@@ -239,3 +239,54 @@ def test_the_parameter_study_with_isolated_fmus_gives_the_in_process_rows(tmp_pa
             assert x == y or (isinstance(x, float) and isinstance(y, float) and np.isnan(x) and np.isnan(y)), (c, rid, x, y)
     failed = b[b["status"] == "failed"]
     assert len(failed) == 1 and "-0.5 for 'm1' (vr 20) is outside (0, inf)" in failed["error"].iloc[0], failed["error"].to_dict()
+
+
+def _children_of(pid):
+    kids = []
+    for p in __import__("pathlib").Path("/proc").iterdir():
+        if p.name.isdigit():
+            try:
+                fields = (p / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                kids.append(int(p.name))
+    return kids
+
+
+@pytest.mark.parametrize("granularity", ["component", "system"])
+def test_the_children_end_when_the_runner_is_killed(granularity, tmp_path):
+    """A runner killed (SIGKILL: no destructor runs) leaves no child behind: each child watches its
+    parent and ends within 100 ms of it, also from inside an FMU call that hangs."""
+    import os
+    import signal
+    import sys
+    import time
+
+    script = tmp_path / "runner.py"
+    script.write_text(
+        "import sys, time, rustfmu_runner\n"
+        f"s = rustfmu_runner.System({str(FMU_DIR / 'PendulumLQR.ssp')!r}, isolate={granularity!r})\n"
+        "s.run(0.1, 1e-3)\n"
+        "print('ready', flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "ready"
+        kids = _children_of(p.pid)
+        assert len(kids) == (2 if granularity == "component" else 1), kids
+    finally:
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait()
+    def running(k):
+        try:
+            return open(f"/proc/{k}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"
+        except OSError:
+            return False
+
+    deadline = time.time() + 5
+    while time.time() < deadline and any(running(k) for k in kids):
+        time.sleep(0.05)
+    alive = [k for k in kids if running(k)]
+    assert not alive, f"children {alive} outlived the runner"
