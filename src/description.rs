@@ -273,6 +273,11 @@ pub struct Fmi3Extras {
     /// An array's `<Dimension start="..">`s, outermost first (`[[f64; 4]; 2]`: `[2, 4]`);
     /// empty for a scalar. The values are in row-major order.
     pub dimensions: &'static [u32],
+    /// An array's sizes set by structural parameters (FMI 3.0 `<Dimension valueReference="..">`):
+    /// per dimension, the value reference of the UInt64 structural parameter that sets its length
+    /// ([`NOT_SIZED`] for a fixed length); empty when every length is fixed. `dimensions` are then
+    /// the capacities (the Rust array's lengths): the parameter's value is at most that.
+    pub sized_by: &'static [u32],
     /// A Clock's declaration (`<Clock>`'s attributes); `None` for every other variable.
     pub clock: Option<ClockDecl>,
     /// A clocked variable's clocks (FMI 3.0 `clocks`), by name: it is set and read while one of
@@ -362,6 +367,7 @@ impl Fmi3Extras {
         max_size: None,
         mime_type: "",
         dimensions: &[],
+        sized_by: &[],
         clock: None,
         clocks: &[],
     };
@@ -391,6 +397,12 @@ impl Variable {
             i += 1;
         }
         n
+    }
+
+    /// Whether a structural parameter sets one of the array's lengths (then its number of
+    /// elements is a run-time value: `Instance::element_count`).
+    pub const fn is_sized(&self) -> bool {
+        !self.fmi3.sized_by.is_empty()
     }
 
     /// Whether the variable is an array (FMI 3.0 `<Dimension>`s).
@@ -678,6 +690,31 @@ impl ModelDescription {
         let mut i = 0;
         while i < self.variables.len() {
             if self.variables[i].is_array() {
+                return true;
+            }
+            i += 1;
+        }
+        false
+    }
+
+    /// Whether some variable is a structural parameter (FMI 3.0): then the FMU has
+    /// Configuration Mode (`fmi3EnterConfigurationMode`).
+    pub const fn has_structural_parameters(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if let Causality::StructuralParameter = self.variables[i].causality {
+                return true;
+            }
+            i += 1;
+        }
+        false
+    }
+
+    /// Whether some array's length is set by a structural parameter.
+    pub const fn has_sized_arrays(&self) -> bool {
+        let mut i = 0;
+        while i < self.variables.len() {
+            if self.variables[i].is_sized() {
                 return true;
             }
             i += 1;
@@ -1245,6 +1282,39 @@ impl Enc<'_> {
                 i += 1;
             }
         }
+        // The arrays sized by structural parameters: only where there are some, so the other
+        // encodings are those before.
+        let mut sized = 0u32;
+        let mut i = 0;
+        while i < d.variables.len() {
+            if d.variables[i].in_version(version) && d.variables[i].is_sized() {
+                sized += 1;
+            }
+            i += 1;
+        }
+        if sized > 0 {
+            self.u8(SIZED_TAG);
+            self.u32(sized);
+            let (mut i, mut at) = (0, 0u32);
+            while i < d.variables.len() {
+                let v = &d.variables[i];
+                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                    at += v.element_count() as u32;
+                } else if v.in_version(version) {
+                    if v.is_sized() {
+                        self.u32(at);
+                        self.u32(v.fmi3.sized_by.len() as u32);
+                        let mut k = 0;
+                        while k < v.fmi3.sized_by.len() {
+                            self.u32(v.fmi3.sized_by[k]);
+                            k += 1;
+                        }
+                    }
+                    at += 1;
+                }
+                i += 1;
+            }
+        }
         // canInterpolateInputs: only where it is true, so the other encodings are those before.
         if interfaces.can_interpolate_inputs {
             self.u8(INTERPOLATES_INPUTS_TAG);
@@ -1307,6 +1377,10 @@ const TERMINALS_TAG: u8 = 0xE3;
 const CLOCKS_TAG: u8 = 0xE4;
 /// Marks a co-simulation step that follows input derivatives (canInterpolateInputs), last.
 const INTERPOLATES_INPUTS_TAG: u8 = 0xE5;
+/// Marks the block of arrays sized by structural parameters, after the clocks.
+const SIZED_TAG: u8 = 0xE6;
+/// [`Fmi3Extras::sized_by`] of a dimension of fixed length.
+pub const NOT_SIZED: u32 = u32::MAX;
 
 const fn write(d: &ModelDescription, interfaces: Interfaces, buf: &mut [u8]) -> usize {
     let mut body = Enc { buf, pos: 0 };
@@ -1737,6 +1811,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 max_size,
                 mime_type,
                 dimensions,
+                sized_by: &[],
                 clock: None,
                 clocks: &[],
             };
@@ -1767,6 +1842,19 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 .ok_or_else(|| format!("the clocks of variable {at}, beyond the variables"))?;
             v.fmi3.clock = clock;
             v.fmi3.clocks = clocks;
+        }
+    }
+    if d.at < d.b.len() && d.b[d.at] == SIZED_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let n_dims = d.count()?;
+            let sized_by = leak_slice((0..n_dims).map(|_| d.u32()).collect::<Result<Vec<_>, _>>()?);
+            let v = variables
+                .get_mut(at)
+                .ok_or_else(|| format!("the sizes of variable {at}, beyond the variables"))?;
+            v.fmi3.sized_by = sized_by;
         }
     }
     if d.at < d.b.len() && d.b[d.at] == INTERPOLATES_INPUTS_TAG {

@@ -259,7 +259,9 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
     t: f64,
     h: f64,
 ) -> Result<(), StepFailure> {
-    let tol = model.tolerances(ctx);
+    // Entries of the state vector a structural parameter hides keep still (core::structural).
+    let mask = crate::core::structural::active_mask(&*model);
+    let tol = crate::core::structural::scaled_tolerances(model.tolerances(ctx), mask.as_ref());
     let end = t + h;
     let n = M::INDICATORS.len();
     let mut now = t;
@@ -305,7 +307,9 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                 |t, x| {
                     M::set_states_of(&mut c, x);
                     model_ref.derivatives(t, &mut c);
-                    M::derivatives_of(&c)
+                    let mut dx = M::derivatives_of(&c);
+                    crate::core::structural::hide(&mut dx, mask.as_ref());
+                    dx
                 },
                 |step| {
                     let t_end = step.t0 + step.s0 + step.h;

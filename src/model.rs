@@ -189,6 +189,9 @@ pub trait Variables: Sized {
     type States: StateVector;
     /// Value references of the continuous states, in the order of `ModelStructure/Derivatives`.
     const STATES: &'static [u32];
+    /// For each entry of the state vector, its element in its variable: 0 for a scalar state,
+    /// `j` for element `j` of an array state (whose value reference `STATES` repeats).
+    const STATE_ELEMENTS: &'static [u32];
     /// Value references of their derivatives, in the same order.
     const DERIVATIVES: &'static [u32];
     /// Nominal values of the states (their `nominal`, else 1).
@@ -201,6 +204,9 @@ pub trait Variables: Sized {
     fn store_continuous(&mut self, c: &Self::Continuous<f64>);
     /// The field of `c` that holds variable `vr`, if `vr` is one of them.
     fn continuous_slot<D: Copy>(c: &mut Self::Continuous<D>, vr: u32) -> Option<&mut D>;
+    /// Element `i` (row-major, of the whole capacity) of the variable `vr` of the equations'
+    /// struct: of an array, or of a scalar (`i` = 0).
+    fn continuous_element<D: Copy>(c: &mut Self::Continuous<D>, vr: u32, i: usize) -> Option<&mut D>;
     /// Whether `vr` is a known of the equations (an input or a state) rather than computed.
     fn is_known(vr: u32) -> bool;
     fn states(&self) -> Self::States;
@@ -478,7 +484,10 @@ impl Context<'_> {
                     .into(),
             });
         }
-        let tol = model.tolerances(self);
+        // A structural parameter may hide entries of the state vector (a sized array state):
+        // they keep still, and the error norm is the visible entries' (core::structural).
+        let mask = crate::core::structural::active_mask(&*model);
+        let tol = crate::core::structural::scaled_tolerances(model.tolerances(self), mask.as_ref());
         let Some(solver) = self.solver.as_deref_mut() else {
             return Err(StepFailure {
                 reached_time: t,
@@ -494,7 +503,9 @@ impl Context<'_> {
                 M::set_states_of(&mut c, x);
                 slope_inputs(&mut c, &*model, slopes, t - t0);
                 model.derivatives(t, &mut c);
-                M::derivatives_of(&c)
+                let mut dx = M::derivatives_of(&c);
+                crate::core::structural::hide(&mut dx, mask.as_ref());
+                dx
             },
             t,
             h,

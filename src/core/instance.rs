@@ -121,6 +121,10 @@ pub struct Instance<M: CoSimulation> {
     /// step from t_c and leaves it at u + du h; a derivative holds until it is set again (0 ends
     /// it) or fmi2Reset, whatever order the importer sets values and derivatives in.
     pub input_slopes: Vec<(u32, f64)>,
+    /// The state fmi3EnterConfigurationMode was called in (fmi3ExitConfigurationMode returns to it).
+    pub(crate) reconfigured_from: State,
+    /// The model before the first structural parameter of a reconfiguration was set.
+    pub(crate) before_configuration: Option<Box<M>>,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -205,6 +209,8 @@ impl<M: CoSimulation> Instance<M> {
             evaluated_tick: None,
             tick_before: None,
             input_slopes: Vec::new(),
+            reconfigured_from: State::Instantiated,
+            before_configuration: None,
             early_return_allowed: false,
             step_event: false,
             intermediate_update: None,
@@ -629,7 +635,7 @@ impl<M: CoSimulation> Instance<M> {
             let Some(d) = M::declaration(*vr, T::TYPE) else {
                 return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE));
             };
-            let n = d.element_count();
+            let n = super::structural::element_count(&self.sim.model, d);
             let Some(slots) = out.get_mut(at..at + n) else {
                 return self.error(&format!(
                     "{function}: the values array ends before the elements of '{}'",
@@ -640,7 +646,8 @@ impl<M: CoSimulation> Instance<M> {
                 let value = if d.causality == Causality::Independent {
                     Some(Value::Real(self.sim.time))
                 } else if d.is_array() {
-                    self.sim.model.get_element(*vr, i)
+                    let k = super::structural::storage_index(&self.sim.model, d, i);
+                    self.sim.model.get_element(*vr, k)
                 } else {
                     self.sim.model.get(*vr)
                 };
@@ -724,7 +731,7 @@ impl<M: CoSimulation> Instance<M> {
         if M::DESCRIPTION.has_clocks() && decl.is_clocked() {
             self.clocked_access(function, decl, false)?;
         }
-        if self.sim.state != State::Instantiated || decl.has_start() {
+        if !matches!(self.sim.state, State::Instantiated | State::ConfigurationMode) || decl.has_start() {
             return Ok(());
         }
         let (name, vr) = Self::name_and_vr(decl, element);
@@ -878,6 +885,12 @@ impl<M: CoSimulation> Instance<M> {
         if decl.variability == Variability::Constant {
             return false;
         }
+        if decl.causality == Causality::StructuralParameter
+            || matches!(self.sim.state, State::ConfigurationMode | State::ReconfigurationMode)
+        {
+            // Structural parameters are set in (Re)configuration Mode, and nothing else is there.
+            return self.settable_in_configuration(decl);
+        }
         match self.sim.state {
             State::Instantiated => initial_exact_or_approx || decl.causality == Causality::Input,
             State::InitializationMode => {
@@ -917,6 +930,21 @@ impl<M: CoSimulation> Instance<M> {
         if self.settable(decl) {
             return Ok(());
         }
+        if decl.causality == Causality::StructuralParameter
+            || matches!(self.sim.state, State::ConfigurationMode | State::ReconfigurationMode)
+        {
+            return Err(self.error(&format!(
+                "{function}: '{}' (vr {}, causality {:?}, variability {:?}) cannot be set in state {}: structural \
+                 parameters are set in Configuration Mode (fixed and tunable ones, after fmi3EnterConfigurationMode \
+                 in Instantiated) and Reconfiguration Mode (tunable ones, from Step Mode or model exchange's Event \
+                 Mode), and nothing else is set there",
+                decl.name,
+                decl.value_reference,
+                decl.causality,
+                decl.variability,
+                self.terms.state_name(self.sim.state)
+            )));
+        }
         let (name, vr) = Self::name_and_vr(decl, element);
         Err(self.error(&format!(
             "{function}: '{name}' (vr {vr}, causality {:?}, variability {:?}) cannot be set in state {:?}",
@@ -928,6 +956,10 @@ impl<M: CoSimulation> Instance<M> {
         let decl = self.lookup(function, vr, value.api_type())?;
         self.check_settable(function, decl)?;
         match refusal(&self.sim.model, decl, value) {
+            None if const { M::DESCRIPTION.has_structural_parameters() } => {
+                self.check_structural(function, decl, value)?;
+                Ok(decl)
+            }
             None => Ok(decl),
             Some(Refusal::Rule(why)) => Err(self.error(&format!("{function}: {why}; refused, value unchanged"))),
             Some(Refusal::Model(why)) => Err(self.error(&format!("{function}: {why}"))),
@@ -995,6 +1027,9 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
+        if const { M::DESCRIPTION.has_structural_parameters() } {
+            self.keep_before_configuration();
+        }
         if !any_array::<M>(vrs) && !any_fmi2_element::<M>(self.version, vrs) {
             // One value per value reference, checked in place: no allocation on the hot path
             // (fmi2SetReal before every step; tests/hot_path_does_not_allocate.rs).
@@ -1029,6 +1064,9 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
     /// reaches Int64 and Enumeration variables in one call): all or none.
     pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        if const { M::DESCRIPTION.has_structural_parameters() } {
+            self.keep_before_configuration();
+        }
         if any_fmi2_element::<M>(self.version, vrs) {
             return self.set_fmi2_elements(function, vrs, values);
         }
@@ -1056,7 +1094,7 @@ impl<M: CoSimulation> Instance<M> {
         let mut at = 0;
         let mut spans = Vec::with_capacity(vrs.len());
         for vr in vrs {
-            let n = M::variable_index(*vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count());
+            let n = super::structural::count_of(&self.sim.model, *vr);
             let Some(elements) = values.get(at..at + n) else {
                 return self.error(&format!(
                     "{function}: the values array ends before the elements of value reference {vr}"
@@ -1078,10 +1116,12 @@ impl<M: CoSimulation> Instance<M> {
         }
         let previous = (parameter_changed && self.between_steps()).then(|| self.sim.model.clone());
         for (vr, at, n) in spans {
-            let is_array = M::variable_index(vr).is_some_and(|i| M::DESCRIPTION.variables[i].is_array());
+            let decl = M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]);
+            let is_array = decl.is_some_and(|d| d.is_array());
             for (i, value) in values[at..at + n].iter().enumerate() {
-                if is_array {
-                    self.sim.model.set_element(vr, i, *value);
+                if let (true, Some(d)) = (is_array, decl) {
+                    let k = super::structural::storage_index(&self.sim.model, d, i);
+                    self.sim.model.set_element(vr, k, *value);
                 } else {
                     self.sim.model.set(vr, *value);
                 }
@@ -1538,7 +1578,7 @@ impl<M: CoSimulation> Instance<M> {
         if self.sim.state == State::InitializationMode {
             return self.initialize_model(function, false);
         }
-        if !self.sim.stale_outputs || self.sim.state == State::Instantiated {
+        if !self.sim.stale_outputs || matches!(self.sim.state, State::Instantiated | State::ConfigurationMode) {
             return Ok(());
         }
         let before = self.sim.model.continuous::<f64>();
@@ -1721,7 +1761,7 @@ impl<M: CoSimulation> Instance<M> {
 
     #[inline]
     fn check_states_len(&self, function: &str, n: usize) -> Outcome {
-        if n == <M::States as StateVector>::LEN {
+        if n == super::structural::number_of_states(&self.sim.model) {
             return Ok(());
         }
         Err(self.wrong_states_len(function, n))
@@ -1730,19 +1770,52 @@ impl<M: CoSimulation> Instance<M> {
     #[cold]
     fn wrong_states_len(&self, function: &str, n: usize) -> Status {
         self.error(&format!(
-            "{function}: nx = {n}, but {} has {} continuous states (numberOfContinuousStates)",
+            "{function}: nx = {n}, but {} has {} continuous states (numberOfContinuousStates{})",
             M::DESCRIPTION.model_identifier,
-            <M::States as StateVector>::LEN
+            super::structural::number_of_states(&self.sim.model),
+            if const { M::DESCRIPTION.has_sized_arrays() } {
+                ", with the structural parameters as they are now"
+            } else {
+                ""
+            }
         ))
     }
 
-    fn state_name(i: usize) -> &'static str {
-        let vr = M::STATES[i];
-        M::DESCRIPTION
-            .variables
-            .iter()
-            .find(|v| v.value_reference == vr)
-            .map_or("?", |v| v.name)
+    /// The entry of the state vector that is the importer's state `i`.
+    #[inline]
+    fn state_entry(&self, i: usize) -> usize {
+        if !const { M::DESCRIPTION.has_sized_arrays() } {
+            return i;
+        }
+        super::structural::active_states(&self.sim.model).nth(i).unwrap_or(i)
+    }
+
+    /// The name of the importer's state `i` (an element of an array state: `x[2]`).
+    fn state_name(&self, i: usize) -> std::borrow::Cow<'static, str> {
+        Self::entry_name(self.state_entry(i))
+    }
+
+    /// The name of entry `k` of the whole state vector.
+    fn entry_name(k: usize) -> std::borrow::Cow<'static, str> {
+        let vr = M::STATES[k];
+        match M::variable_index(vr).map(|j| &M::DESCRIPTION.variables[j]) {
+            Some(v) if v.is_array() => v.element_name(M::STATE_ELEMENTS[k] as usize).into(),
+            Some(v) => v.name.into(),
+            None => "?".into(),
+        }
+    }
+
+    /// The importer's state vector (or derivatives, nominals) from the whole one: the entries
+    /// it sees ([`super::structural::active_states`]).
+    #[inline]
+    fn gather(&self, full: &[f64], out: &mut [f64]) {
+        if !const { M::DESCRIPTION.has_sized_arrays() } {
+            out.copy_from_slice(full);
+            return;
+        }
+        for (slot, k) in out.iter_mut().zip(super::structural::active_states(&self.sim.model)) {
+            *slot = full[k];
+        }
     }
 
     pub fn set_continuous_states(&mut self, function: &str, x: &[f64]) -> Status {
@@ -1752,12 +1825,23 @@ impl<M: CoSimulation> Instance<M> {
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return self.error(&format!(
                 "{function}: x[{i}] ('{}') = {} is not a finite number; refused, states unchanged",
-                Self::state_name(i),
+                self.state_name(i),
                 x[i]
             ));
         }
-        let mut states = <M::States as StateVector>::zeros();
-        states.as_mut_slice().copy_from_slice(x);
+        let mut states = if const { M::DESCRIPTION.has_sized_arrays() } {
+            self.sim.model.states()
+        } else {
+            <M::States as StateVector>::zeros()
+        };
+        if const { M::DESCRIPTION.has_sized_arrays() } {
+            let entries: Vec<usize> = super::structural::active_states(&self.sim.model).collect();
+            for (k, v) in entries.into_iter().zip(x) {
+                states.as_mut_slice()[k] = *v;
+            }
+        } else {
+            states.as_mut_slice().copy_from_slice(x);
+        }
         self.sim.model.set_states(&states);
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
@@ -1773,7 +1857,8 @@ impl<M: CoSimulation> Instance<M> {
         {
             return status;
         }
-        x.copy_from_slice(self.sim.model.states().as_slice());
+        let full = self.sim.model.states();
+        self.gather(full.as_slice(), x);
         OK
     }
 
@@ -1781,7 +1866,7 @@ impl<M: CoSimulation> Instance<M> {
         if let Err(status) = self.check_states_len(function, x.len()) {
             return status;
         }
-        x.copy_from_slice(M::NOMINALS);
+        self.gather(M::NOMINALS, x);
         OK
     }
 
@@ -1831,9 +1916,13 @@ impl<M: CoSimulation> Instance<M> {
         if self.sim.stale_derivatives {
             let mut c = self.sim.model.continuous::<f64>();
             self.sim.model.derivatives(self.sim.time, &mut c);
-            let d = M::derivatives_of(&c);
+            let mut d = M::derivatives_of(&c);
+            if const { M::DESCRIPTION.has_sized_arrays() } {
+                let mask = super::structural::active_mask(&self.sim.model);
+                super::structural::hide(&mut d, mask.as_ref());
+            }
             if let Some(i) = d.as_slice().iter().position(|v| !v.is_finite()) {
-                let what = format!("the derivative of '{}' is {}", Self::state_name(i), d.as_slice()[i]);
+                let what = format!("the derivative of '{}' is {}", Self::entry_name(i), d.as_slice()[i]);
                 return self.not_finite(function, &what);
             }
             self.derivatives = d;
@@ -1843,7 +1932,8 @@ impl<M: CoSimulation> Instance<M> {
             let c = self.sim.model.continuous::<f64>();
             self.derivatives = M::derivatives_of(&c);
         }
-        dx.copy_from_slice(self.derivatives.as_slice());
+        let d = self.derivatives;
+        self.gather(d.as_slice(), dx);
         OK
     }
 
@@ -1889,8 +1979,8 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.model.derivatives(t, &mut c);
         let x_dot = M::derivatives_of(&c);
         let mut d = self.sim.model.continuous::<Dual64>();
-        for (vr, rate) in M::STATES.iter().zip(x_dot.as_slice()) {
-            if let Some(slot) = M::continuous_slot(&mut d, *vr) {
+        for ((vr, k), rate) in M::STATES.iter().zip(M::STATE_ELEMENTS).zip(x_dot.as_slice()) {
+            if let Some(slot) = M::continuous_element(&mut d, *vr, *k as usize) {
                 slot.eps = *rate;
             }
         }
@@ -1914,7 +2004,10 @@ impl<M: CoSimulation> Instance<M> {
     /// fmi2GetDirectionalDerivative: dv_unknown = (d unknowns / d knowns) dv_known, exact, by
     /// running the equations once on dual numbers seeded with dv_known. Knowns: the
     /// continuous states (model exchange) and the Real inputs; unknowns: what the equations
-    /// compute (derivatives, outputs, locals), or a known itself.
+    /// compute (derivatives, outputs, locals), or a known itself. An array (FMI 3.0) counts
+    /// each of its elements: `dv_known` holds one value per element of the knowns, row-major,
+    /// `dv_unknown` one per element of the unknowns (the counting of FMI 3.0's nSeed and
+    /// nSensitivity; a sized array's elements within its lengths now).
     pub fn directional_derivative(
         &mut self,
         unknowns: &[u32],
@@ -1924,9 +2017,9 @@ impl<M: CoSimulation> Instance<M> {
     ) -> Status {
         let f = self.terms.name(Function::GetDirectionalDerivative);
         use num_dual::Dual64;
-        let probe = self.sim.model.continuous::<f64>();
-        let mut probe = probe;
-        for (vr, dv) in knowns.iter().zip(dv_known) {
+        let mut probe = self.sim.model.continuous::<f64>();
+        let mut at = 0;
+        for vr in knowns {
             let Some(decl) = M::declaration(*vr, VarType::Real) else {
                 return self.error(&format!(
                     "{f}: known value reference {vr} is not a Real variable of {}",
@@ -1936,7 +2029,7 @@ impl<M: CoSimulation> Instance<M> {
             let is_state = M::STATES.contains(vr);
             let allowed = decl.causality == Causality::Input && decl.variability == Variability::Continuous
                 || (is_state && self.model_exchange);
-            if !allowed || M::continuous_slot(&mut probe, *vr).is_none() {
+            if !allowed || M::continuous_element(&mut probe, *vr, 0).is_none() {
                 return self.error(&format!(
                     "{f}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}",
                     decl.name,
@@ -1944,12 +2037,21 @@ impl<M: CoSimulation> Instance<M> {
                     if self.model_exchange { " and the continuous states" } else { "" }
                 ));
             }
-            if !dv.is_finite() {
-                return self.error(&format!(
-                    "{f}: dvKnown for '{}' (vr {vr}) = {dv} is not finite",
-                    decl.name
-                ));
+            let n = super::structural::element_count(&self.sim.model, decl);
+            for (i, dv) in dv_known.iter().skip(at).take(n).enumerate() {
+                if !dv.is_finite() {
+                    let what = if decl.is_array() {
+                        format!(" element {i}")
+                    } else {
+                        String::new()
+                    };
+                    return self.error(&format!(
+                        "{f}: dvKnown for '{}'{what} (vr {vr}) = {dv} is not finite",
+                        decl.name
+                    ));
+                }
             }
+            at += n;
         }
         for vr in unknowns {
             let Some(decl) = M::declaration(*vr, VarType::Real) else {
@@ -1961,7 +2063,7 @@ impl<M: CoSimulation> Instance<M> {
             // A discrete output is held between events: its derivative with respect to the
             // continuous knowns is 0 (answered below: it has no slot in the equations).
             let held = decl.causality == Causality::Output && decl.variability == Variability::Discrete;
-            if !held && M::continuous_slot(&mut probe, *vr).is_none() {
+            if !held && M::continuous_element(&mut probe, *vr, 0).is_none() {
                 return self.error(&format!(
                     "{f}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
                     decl.name
@@ -1973,22 +2075,37 @@ impl<M: CoSimulation> Instance<M> {
         {
             return status;
         }
-        let mut c = self.sim.model.continuous::<Dual64>();
-        for (vr, dv) in knowns.iter().zip(dv_known) {
-            if let Some(slot) = M::continuous_slot(&mut c, *vr) {
-                slot.eps += *dv;
+        let model = &self.sim.model;
+        let elements = |vr: u32| {
+            let decl = M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]);
+            let n = decl.map_or(1, |d| super::structural::element_count(model, d));
+            (0..n).map(move |i| decl.map_or(i, |d| super::structural::storage_index(model, d, i)))
+        };
+        let mut c = model.continuous::<Dual64>();
+        let mut seed = dv_known.iter();
+        for vr in knowns {
+            for k in elements(*vr) {
+                let dv = seed.next().copied().unwrap_or(0.0);
+                if let Some(slot) = M::continuous_element(&mut c, *vr, k) {
+                    slot.eps += dv;
+                }
             }
         }
         let t = Dual64::from(self.sim.time);
-        self.sim.model.derivatives(t, &mut c);
-        self.sim.model.outputs(t, &mut c);
-        for (i, vr) in unknowns.iter().enumerate() {
-            let d = M::continuous_slot(&mut c, *vr).map_or(0.0, |d| d.eps);
-            if !d.is_finite() {
-                let name = M::declaration(*vr, VarType::Real).map_or("?", |v| v.name);
-                return self.not_finite(f, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
+        model.derivatives(t, &mut c);
+        model.outputs(t, &mut c);
+        let mut out = dv_unknown.iter_mut();
+        for vr in unknowns {
+            for k in elements(*vr) {
+                let d = M::continuous_element(&mut c, *vr, k).map_or(0.0, |d| d.eps);
+                if !d.is_finite() {
+                    let name = M::declaration(*vr, VarType::Real).map_or("?", |v| v.name);
+                    return self.not_finite(f, &format!("the derivative of '{name}' (vr {vr}) is {d}"));
+                }
+                if let Some(slot) = out.next() {
+                    *slot = d;
+                }
             }
-            dv_unknown[i] = d;
         }
         OK
     }

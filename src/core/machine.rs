@@ -24,6 +24,11 @@ listed_enum! {
         Fatal,
         EventMode,
         ContinuousTimeMode,
+        /// FMI 3.0: structural parameters are set (from Instantiated, back to it).
+        ConfigurationMode,
+        /// FMI 3.0: tunable structural parameters are set (from Step Mode or, in model
+        /// exchange, Event Mode, back to it).
+        ReconfigurationMode,
     }
 }
 
@@ -41,6 +46,8 @@ impl State {
             State::Fatal => "Fatal",
             State::EventMode => "EventMode",
             State::ContinuousTimeMode => "ContinuousTimeMode",
+            State::ConfigurationMode => "ConfigurationMode",
+            State::ReconfigurationMode => "ReconfigurationMode",
         }
     }
 }
@@ -58,8 +65,19 @@ const ERROR: u16 = bit(State::Error);
 const FATAL: u16 = bit(State::Fatal);
 const EVENT: u16 = bit(State::EventMode);
 const CONTINUOUS: u16 = bit(State::ContinuousTimeMode);
-const ANY_BUT_FATAL: u16 =
-    INSTANTIATED | INIT | STEP_COMPLETE | STEP_FAILED | STEP_CANCELED | TERMINATED | ERROR | EVENT | CONTINUOUS;
+const CONFIGURATION: u16 = bit(State::ConfigurationMode);
+const RECONFIGURATION: u16 = bit(State::ReconfigurationMode);
+const ANY_BUT_FATAL: u16 = INSTANTIATED
+    | INIT
+    | STEP_COMPLETE
+    | STEP_FAILED
+    | STEP_CANCELED
+    | TERMINATED
+    | ERROR
+    | EVENT
+    | CONTINUOUS
+    | CONFIGURATION
+    | RECONFIGURATION;
 
 /// The functions whose legality depends on the state, with the states each is allowed in,
 /// from the standard's tables in sections 3.2.3 and 4.2.4 (as the Reference-FMUs encode them).
@@ -114,6 +132,11 @@ pub enum Call {
     SetInterval,
     /// FMI 3.0 only: fmi3SetShiftDecimal (Initialization Mode).
     SetShift,
+    /// FMI 3.0 only: fmi3EnterConfigurationMode (Instantiated; Step Mode; model exchange's
+    /// Event Mode).
+    EnterConfigurationMode,
+    /// FMI 3.0 only: fmi3ExitConfigurationMode.
+    ExitConfigurationMode,
 }
 
 impl Call {
@@ -155,7 +178,9 @@ impl Call {
             | Call::GetClock
             | Call::GetInterval
             | Call::SetInterval
-            | Call::SetShift => 0,
+            | Call::SetShift
+            | Call::EnterConfigurationMode
+            | Call::ExitConfigurationMode => 0,
         }
     }
 
@@ -170,7 +195,6 @@ impl Call {
     #[inline]
     pub const fn allowed_in3(self) -> u16 {
         match self {
-            Call::GetValues => INSTANTIATED | Call::GetValues.allowed_in(),
             // From Step Mode too: co-simulation with event mode (the instance checks that it
             // was made with eventModeUsed).
             Call::EnterEventMode => CONTINUOUS | STEP_COMPLETE,
@@ -188,6 +212,16 @@ impl Call {
             Call::GetClock => INIT | EVENT,
             Call::GetInterval | Call::SetInterval => INIT | EVENT,
             Call::SetShift => INIT,
+            // Structural parameters (FMI 3.0, 3.2 and 4.2): Configuration Mode from Instantiated,
+            // Reconfiguration Mode from Step Mode (co-simulation) or Event Mode (model exchange:
+            // the instance checks the interface); the getters and setters work there (which
+            // variables may be set: `Instance::settable`).
+            Call::EnterConfigurationMode => INSTANTIATED | STEP_COMPLETE | EVENT,
+            // An FMU state is not taken or restored in the middle of a configuration.
+            Call::FmuState => ANY_BUT_FATAL & !(CONFIGURATION | RECONFIGURATION),
+            Call::ExitConfigurationMode => CONFIGURATION | RECONFIGURATION,
+            Call::GetValues => INSTANTIATED | CONFIGURATION | RECONFIGURATION | Call::GetValues.allowed_in(),
+            Call::SetValues | Call::SetDiscreteValues => CONFIGURATION | RECONFIGURATION | self.allowed_in(),
             // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
             // fmi3GetStatus in FMI 3.0.
             Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,
@@ -245,7 +279,7 @@ pub const fn contains(mask: u16, state: State) -> bool {
 
 /// The states of `mask`, in `terms`' names, for a message.
 pub fn state_names(terms: &Terms, mask: u16) -> String {
-    const ALL: [State; 10] = [
+    const ALL: [State; 12] = [
         State::Instantiated,
         State::InitializationMode,
         State::EventMode,
@@ -253,6 +287,8 @@ pub fn state_names(terms: &Terms, mask: u16) -> String {
         State::StepComplete,
         State::StepFailed,
         State::StepCanceled,
+        State::ConfigurationMode,
+        State::ReconfigurationMode,
         State::Terminated,
         State::Error,
         State::Fatal,

@@ -35,6 +35,7 @@ pub mod resources;
 pub mod shared;
 pub mod snapshots;
 pub mod state;
+pub mod structural;
 mod trampolines;
 
 use std::os::raw::c_uint;

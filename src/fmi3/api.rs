@@ -353,7 +353,7 @@ fn arrays<'a, M: CoSimulation, T>(
     values: Option<T>,
 ) -> Result<(&'a [u32], T), fmi3Status> {
     match (vrs, values) {
-        (Some(vrs), Some(values)) if n_values == value_count::<M>(vrs) => Ok((vrs, values)),
+        (Some(vrs), Some(values)) if n_values == value_count::<M>(&inst.sim.model, vrs) => Ok((vrs, values)),
         (Some(vrs), Some(_)) if !M::DESCRIPTION.has_arrays() => Err(inst.error(&format!(
             "{function}: nValues = {n_values}, but nValueReferences = {} (every variable of this FMU is a scalar)",
             vrs.len()
@@ -361,7 +361,7 @@ fn arrays<'a, M: CoSimulation, T>(
         (Some(vrs), Some(_)) => Err(inst.error(&format!(
             "{function}: nValues = {n_values}, but the {} value references have {} values (an array counts each element)",
             vrs.len(),
-            value_count::<M>(vrs)
+            value_count::<M>(&inst.sim.model, vrs)
         ))),
         _ => Err(inst.error(&format!(
             "{function}: valueReferences or values is NULL with nValueReferences = {}, nValues = {n_values}",
@@ -372,18 +372,17 @@ fn arrays<'a, M: CoSimulation, T>(
 
 /// How many values the variables of `vrs` have (FMI 3.0's nValues): one per scalar, every
 /// element of an array (an unknown value reference counts one; it is refused afterwards).
-fn value_count<M: CoSimulation>(vrs: &[u32]) -> usize {
+/// A sized array's elements within its lengths now (the structural parameters' values).
+fn value_count<M: CoSimulation>(model: &M, vrs: &[u32]) -> usize {
     if !const { M::DESCRIPTION.has_arrays() } {
         return vrs.len();
     }
-    vrs.iter()
-        .map(|vr| M::variable_index(*vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count()))
-        .sum()
+    vrs.iter().map(|vr| count_of::<M>(model, *vr)).sum()
 }
 
 /// The number of values of one value reference (1 for a scalar or an unknown one).
-fn count_of<M: CoSimulation>(vr: u32) -> usize {
-    M::variable_index(vr).map_or(1, |i| M::DESCRIPTION.variables[i].element_count())
+fn count_of<M: CoSimulation>(model: &M, vr: u32) -> usize {
+    crate::core::structural::count_of(model, vr)
 }
 
 /// Refuses a value reference whose variable is declared with another 3.0 type: Int32 is
@@ -506,7 +505,7 @@ pub unsafe fn get_float64<M: CoSimulation>(
         )),
         Some(time) if vrs.contains(&time) => {
             let others: Vec<u32> = vrs.iter().copied().filter(|v| *v != time).collect();
-            let mut got = vec![0.0; value_count::<M>(&others)];
+            let mut got = vec![0.0; value_count::<M>(&inst.sim.model, &others)];
             let status = inst.get_values(F, &others, &mut got);
             if status != fmi3OK {
                 return status;
@@ -520,7 +519,7 @@ pub unsafe fn get_float64<M: CoSimulation>(
                     }
                     continue;
                 }
-                for _ in 0..count_of::<M>(*vr) {
+                for _ in 0..count_of::<M>(&inst.sim.model, *vr) {
                     if let Some(slot) = slots.next() {
                         *slot = got.next().unwrap_or(f64::NAN);
                     }
@@ -618,8 +617,8 @@ pub unsafe fn get_int64<M: CoSimulation>(
                 .collect()
         };
         let (e_vrs, i_vrs) = (pick(true), pick(false));
-        let mut e_got = vec![0i32; value_count::<M>(&e_vrs)];
-        let mut i_got = vec![0i64; value_count::<M>(&i_vrs)];
+        let mut e_got = vec![0i32; value_count::<M>(&inst.sim.model, &e_vrs)];
+        let mut i_got = vec![0i64; value_count::<M>(&inst.sim.model, &i_vrs)];
         let status = inst.get_values(F, &e_vrs, &mut e_got);
         if status != fmi3OK {
             return status;
@@ -631,7 +630,7 @@ pub unsafe fn get_int64<M: CoSimulation>(
         let (mut e_got, mut i_got) = (e_got.into_iter(), i_got.into_iter());
         let mut slots = out.iter_mut();
         for (vr, e) in vrs.iter().zip(enums) {
-            for _ in 0..count_of::<M>(*vr) {
+            for _ in 0..count_of::<M>(&inst.sim.model, *vr) {
                 if let Some(o) = slots.next() {
                     *o = if e {
                         e_got.next().map(i64::from).unwrap_or_default()
@@ -663,7 +662,7 @@ pub unsafe fn set_int64<M: CoSimulation>(
         let mut list = Vec::with_capacity(values.len());
         let mut given = values.iter();
         for (vr, e) in vrs.iter().zip(enums) {
-            for v in given.by_ref().take(count_of::<M>(*vr)) {
+            for v in given.by_ref().take(count_of::<M>(&inst.sim.model, *vr)) {
                 if !e {
                     list.push(Value::Int64(*v));
                     continue;
@@ -1029,6 +1028,37 @@ pub unsafe fn evaluate_discrete_states<M: CoSimulation>(c: fmi3Instance) -> fmi3
     )
 }
 
+const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
+
+/// fmi3EnterConfigurationMode of an FMU with structural parameters (one without has none: the
+/// export refuses the call with the reason).
+pub unsafe fn enter_configuration_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
+    const F: &str = "fmi3EnterConfigurationMode";
+    if !const { M::DESCRIPTION.has_structural_parameters() } {
+        // SAFETY: this function's contract.
+        return unsafe { not_provided::<M>(c, F, NO_CONFIGURATION) };
+    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::EnterConfigurationMode, F, |inst| {
+        inst.enter_configuration_mode(F)
+    })
+}
+
+/// fmi3ExitConfigurationMode.
+pub unsafe fn exit_configuration_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
+    const F: &str = "fmi3ExitConfigurationMode";
+    if !const { M::DESCRIPTION.has_structural_parameters() } {
+        // SAFETY: this function's contract.
+        return unsafe { not_provided::<M>(c, F, NO_CONFIGURATION) };
+    }
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let component = unsafe { Component::<M>::from_handle(c) };
+    with_instance(component, Call::ExitConfigurationMode, F, |inst| {
+        inst.exit_configuration_mode(F)
+    })
+}
+
 pub unsafe fn enter_step_mode<M: CoSimulation>(c: fmi3Instance) -> fmi3Status {
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
@@ -1118,7 +1148,8 @@ pub unsafe fn get_number_of_continuous_states<M: CoSimulation>(c: fmi3Instance, 
         // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
         match unsafe { n.as_mut() } {
             Some(n) => {
-                *n = <M::States as crate::StateVector>::LEN;
+                // With the structural parameters as they are now (a sized array state).
+                *n = crate::core::structural::number_of_states(&inst.sim.model);
                 fmi3OK
             }
             None => inst.error(&format!("{F}: nContinuousStates is NULL")),
@@ -1229,18 +1260,37 @@ unsafe fn derivative<M: CoSimulation>(
     (sensitivity, n_sensitivity): (*mut fmi3Float64, usize),
     compute: impl FnOnce(&mut Instance<M>, &[u32], &[u32], &[f64], &mut [f64]) -> fmi3Status,
 ) -> fmi3Status {
-    let ((seed_of, n_seed_of), (sensitivity_of, n_sensitivity_of)) = if adjoint {
-        (("nUnknowns", n_unknowns), ("nKnowns", n_knowns))
-    } else {
-        (("nKnowns", n_knowns), ("nUnknowns", n_unknowns))
-    };
     // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
     let component = unsafe { Component::<M>::from_handle(c) };
     with_instance(component, Call::GetDirectionalDerivative, function, |inst| {
+        // An array counts each of its elements (FMI 3.0, 2.2.11: nSeed and nSensitivity are
+        // the numbers of elements of the knowns and unknowns).
+        let (n_unknown_values, n_known_values) = if const { M::DESCRIPTION.has_arrays() } {
+            // SAFETY: as below.
+            let count = |vrs: *const fmi3ValueReference, n: usize| match unsafe { slice(vrs, n) } {
+                Some(vrs) => value_count::<M>(&inst.sim.model, vrs),
+                None => n,
+            };
+            (count(unknowns, n_unknowns), count(knowns, n_knowns))
+        } else {
+            (n_unknowns, n_knowns)
+        };
+        let ((seed_of, n_seed_of), (sensitivity_of, n_sensitivity_of)) = if adjoint {
+            (
+                ("the unknowns' values", n_unknown_values),
+                ("the knowns' values", n_known_values),
+            )
+        } else {
+            (
+                ("the knowns' values", n_known_values),
+                ("the unknowns' values", n_unknown_values),
+            )
+        };
         if n_seed != n_seed_of || n_sensitivity != n_sensitivity_of {
             return inst.error(&format!(
-                "{function}: nSeed = {n_seed} must equal {seed_of} = {n_seed_of} and nSensitivity = \
-                 {n_sensitivity} must equal {sensitivity_of} = {n_sensitivity_of} (every variable is a scalar)"
+                "{function}: nSeed = {n_seed} must equal the number of {seed_of} = {n_seed_of} and nSensitivity = \
+                 {n_sensitivity} that of {sensitivity_of} = {n_sensitivity_of} (nUnknowns = {n_unknowns}, nKnowns = \
+                 {n_knowns}; an array counts each element)"
             ));
         }
         // SAFETY: `slice` and `slice_mut` check NULL; the contract makes each array as long as
@@ -1275,7 +1325,7 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     n_sensitivity: usize,
 ) -> fmi3Status {
     let compute = |inst: &mut Instance<M>, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]| {
-        let mut got = vec![0.0; unknowns.len()];
+        let mut got = vec![0.0; out.len()];
         let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
         if status == fmi3OK {
             out.copy_from_slice(&got);
@@ -1315,9 +1365,10 @@ pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
         if let Some((i, s)) = seed.iter().enumerate().find(|(_, s)| !s.is_finite()) {
             return inst.error(&format!("{F}: seed[{i}] = {s} is not finite"));
         }
-        let mut result = vec![0.0; knowns.len()];
-        let mut unit = vec![0.0; knowns.len()];
-        let mut column = vec![0.0; unknowns.len()];
+        // Element counts (an array counts each element): `derivative` checked them.
+        let mut result = vec![0.0; out.len()];
+        let mut unit = vec![0.0; out.len()];
+        let mut column = vec![0.0; seed.len()];
         // Checks the references even when there is no known (no column is computed then).
         if knowns.is_empty() {
             let status = inst.directional_derivative(unknowns, knowns, &[], &mut column);
@@ -1325,7 +1376,7 @@ pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
                 return status;
             }
         }
-        for j in 0..knowns.len() {
+        for j in 0..unit.len() {
             unit.fill(0.0);
             unit[j] = 1.0;
             let status = inst.directional_derivative(unknowns, knowns, &unit, &mut column);

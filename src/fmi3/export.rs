@@ -478,6 +478,12 @@ macro_rules! export_fmi3 {
                     api3::get_number_of_event_indicators::<__RustfmuModel>(instance, n);
                 fmi3GetNumberOfContinuousStates(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
                     api3::get_number_of_continuous_states::<__RustfmuModel>(instance, n);
+                // Configuration Mode: an FMU without structural parameters refuses both with the
+                // reason (`enter_configuration_mode`).
+                fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::enter_configuration_mode::<__RustfmuModel>(instance);
+                fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
+                    api3::exit_configuration_mode::<__RustfmuModel>(instance);
                 fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status =>
                     api3::enter_step_mode::<__RustfmuModel>(instance);
                 fmi3GetOutputDerivatives(
@@ -603,12 +609,9 @@ macro_rules! export_fmi3 {
                 fmi3GetUInt64, fmi3SetUInt64(fmi3UInt64);
             }
             const NO_FRACTIONS: &str = "its clocks have supportsFraction = false: use the Decimal functions";
-            const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there is no configuration mode";
             // The functions of the features this FMU does not have, each with the reason.
             $crate::__rustfmu_fmi3_refusals! {
                 not_provided for __RustfmuModel:
-                fmi3EnterConfigurationMode() => NO_CONFIGURATION;
-                fmi3ExitConfigurationMode() => NO_CONFIGURATION;
                 fmi3GetIntervalFraction(
                     _valueReferences: *const fmi3ValueReference,
                     _nValueReferences: usize,

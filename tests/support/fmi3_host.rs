@@ -65,3 +65,35 @@ pub fn instance(instantiate: InstantiateCs, token: &str, name: &str) -> (fmi3Ins
     assert!(!c.is_null(), "instantiation failed: {:?}", log.0.lock().unwrap());
     (c, log)
 }
+
+/// The signature of `fmi3InstantiateModelExchange`.
+pub type InstantiateMe = unsafe extern "C" fn(
+    *const c_char,
+    *const c_char,
+    *const c_char,
+    bool,
+    bool,
+    *mut c_void,
+    fmi3LogMessageCallback,
+) -> fmi3Instance;
+
+/// A model-exchange instance named `name` of the model whose `instantiate` and `token` these are.
+#[allow(dead_code)]
+pub fn me_instance(instantiate: InstantiateMe, token: &str, name: &str) -> (fmi3Instance, &'static Log) {
+    let log: &'static Log = Box::leak(Box::default());
+    let (token, name) = (CString::new(token).unwrap(), CString::new(name).unwrap());
+    // SAFETY: valid strings and a logger whose environment outlives the instance.
+    let c = unsafe {
+        instantiate(
+            name.as_ptr(),
+            token.as_ptr(),
+            null(),
+            false,
+            false,
+            log as *const Log as *mut c_void,
+            Some(collect),
+        )
+    };
+    assert!(!c.is_null(), "instantiation failed: {:?}", log.0.lock().unwrap());
+    (c, log)
+}

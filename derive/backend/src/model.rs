@@ -77,6 +77,9 @@ struct Var {
     clock: Option<ClockAttr>,
     /// A clocked variable's clocks (`clocks = [..]`).
     clocks: Vec<(String, Span)>,
+    /// An array's lengths set by structural parameters (`dims = [n, m]`, one name per
+    /// dimension); empty: the Rust array's lengths.
+    sized_by: Vec<(String, Span)>,
     description: String,
 }
 
@@ -186,6 +189,7 @@ struct VarAttr {
     mime_type: Option<LitStr>,
     clock: Option<(ClockAttr, Span)>,
     clocks: Option<Vec<(String, Span)>>,
+    dims: Option<Vec<(String, Span)>>,
 }
 
 /// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
@@ -243,6 +247,7 @@ impl Parse for VarAttr {
             match k.as_str() {
                 "parameter" => set_c(&mut a, Causality::Parameter)?,
                 "calculated_parameter" => set_c(&mut a, Causality::CalculatedParameter)?,
+                "structural_parameter" => set_c(&mut a, Causality::StructuralParameter)?,
                 "input" => set_c(&mut a, Causality::Input)?,
                 "output" => set_c(&mut a, Causality::Output)?,
                 "local" => set_c(&mut a, Causality::Local)?,
@@ -373,6 +378,10 @@ impl Parse for VarAttr {
                     once(a.clocks.is_some())?;
                     a.clocks = Some(names_list(input)?);
                 }
+                "dims" => {
+                    once(a.dims.is_some())?;
+                    a.dims = Some(names_list(input)?);
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -383,9 +392,9 @@ impl Parse for VarAttr {
                         key.span(),
                         format!(
                             "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
-                             calculated_parameter, local, independent, constant, fixed, tunable, discrete, \
+                             calculated_parameter, structural_parameter, local, independent, constant, fixed, tunable, discrete, \
                              continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator, \
-                             fmi3_only, max_size, mime_type, clock(..), clocks"
+                             fmi3_only, max_size, mime_type, clock(..), clocks, dims"
                         ),
                     ));
                 }
@@ -490,7 +499,7 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
     let (causality, _) = a.causality.ok_or_else(|| {
         Error::new(
             attr.span(),
-            "every variable needs a causality: input, output, parameter, calculated_parameter, local or independent",
+            "every variable needs a causality: input, output, parameter, calculated_parameter, structural_parameter, local or independent",
         )
     })?;
     let variability = match a.variability {
@@ -595,14 +604,15 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         mime_type: a.mime_type,
         clock: a.clock.map(|(c, _)| c),
         clocks: a.clocks.unwrap_or_default(),
+        sized_by: a.dims.unwrap_or_default(),
         description: crate::doc_text(&field.attrs),
     };
     if let Some(span) = var.event_indicator
-        && !in_equations(&var)
+        && (!in_equations(&var) || !var.dims.is_empty())
     {
         return Err(Error::new(
             span,
-            "an event indicator is a continuous Real (f64) input, output or local variable: a state or \
+            "an event indicator is a continuous scalar Real (f64) input, output or local variable: a state or \
              a value the equations compute, whose change of sign (z > 0 to z <= 0 or back) is a state event",
         ));
     }
@@ -965,7 +975,12 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
     let mut names: BTreeMap<&str, &Var> = BTreeMap::new();
     let mut vrs: BTreeMap<u32, &Var> = BTreeMap::new();
     for v in vars {
-        if !v.kind.in_fmi2() && v.kind != Kind::Clock && !v.fmi3_only && model.fmi3_only.is_none() {
+        if !v.kind.in_fmi2()
+            && v.kind != Kind::Clock
+            && v.causality != Causality::StructuralParameter
+            && !v.fmi3_only
+            && model.fmi3_only.is_none()
+        {
             let ty = &v.ty;
             return Err(Error::new(
                 v.span,
@@ -1109,8 +1124,27 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                 }
                 Some(state)
                     if state.kind == Kind::Real
-                        && state.dims.is_empty()
-                        && state.variability == Variability::Continuous => {}
+                        && state.dims.len() <= 1
+                        && state.variability == Variability::Continuous =>
+                {
+                    // An array state: its derivative is an array of its shape, sized alike.
+                    let same_shape = state.dims.len() == v.dims.len()
+                        && state
+                            .dims
+                            .iter()
+                            .zip(&v.dims)
+                            .all(|(a, b)| quote!(#a).to_string() == quote!(#b).to_string())
+                        && state.sized_by.iter().map(|s| &s.0).eq(v.sized_by.iter().map(|s| &s.0));
+                    if !same_shape {
+                        return Err(Error::new(
+                            *span,
+                            format!(
+                                "'{}' is the derivative of '{d}': it has its shape (the same array lengths and `dims`)",
+                                v.name
+                            ),
+                        ));
+                    }
+                }
                 Some(_) => {
                     return Err(Error::new(
                         *span,
@@ -1124,9 +1158,83 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
                     ));
                 }
             }
-            if v.kind != Kind::Real || !v.dims.is_empty() || v.variability != Variability::Continuous {
-                return Err(Error::new(v.span, "a derivative is a continuous scalar Real variable"));
+            if v.kind != Kind::Real || v.dims.len() > 1 || v.variability != Variability::Continuous {
+                return Err(Error::new(
+                    v.span,
+                    "a derivative is a continuous Real variable, a scalar or a one-dimensional array ([f64; N])",
+                ));
             }
+        }
+        if v.causality == Causality::StructuralParameter {
+            if model.fmi3_only.is_none() {
+                return Err(Error::new(
+                    v.span,
+                    format!(
+                        "'{}' is a structural parameter: FMI 2.0 has none, so the model is FMI 3.0 only: \
+                         #[fmu(fmi3_only)] on the struct, and rustfmu::export_fmi3! instead of export_fmu!",
+                        v.name
+                    ),
+                ));
+            }
+            if !v.dims.is_empty() || !v.clocks.is_empty() {
+                return Err(Error::new(v.span, "a structural parameter is a scalar, not clocked"));
+            }
+        }
+        if !v.sized_by.is_empty() {
+            if v.sized_by.len() != v.dims.len() {
+                return Err(Error::new(
+                    v.sized_by[0].1,
+                    format!(
+                        "`dims` names one structural parameter per dimension of the array: '{}' has {} dimension(s), `dims` {}",
+                        v.name,
+                        v.dims.len(),
+                        v.sized_by.len()
+                    ),
+                ));
+            }
+            for (p, span) in &v.sized_by {
+                match by_name(p) {
+                    Some(x) if x.causality == Causality::StructuralParameter && x.kind == Kind::UInt64 => {
+                        if x.max.is_none() {
+                            return Err(Error::new(
+                                *span,
+                                format!(
+                                    "'{p}' sets a length of '{}': it declares `max` (at most the Rust array's length, \
+                                     the capacity)",
+                                    v.name
+                                ),
+                            ));
+                        }
+                    }
+                    Some(_) => {
+                        return Err(Error::new(
+                            *span,
+                            format!(
+                                "'{}' is sized by '{p}', which is not a u64 structural parameter (FMI 3.0, 2.4.7.6: a \
+                                 <Dimension valueReference> names a structural parameter of type UInt64)",
+                                v.name
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(Error::new(
+                            *span,
+                            format!("'{}' is sized by '{p}', which is not declared", v.name),
+                        ));
+                    }
+                }
+            }
+        }
+        if in_equations(v) && !v.dims.is_empty() && model.fmi3_only.is_none() && !v.fmi3_only {
+            return Err(Error::new(
+                v.span,
+                format!(
+                    "'{}' is an array in the equations (a continuous input, output, state, derivative or local): \
+                     the runtime offers those in FMI 3.0 only (FMI 2.0's structured names are for arrays outside the \
+                     equations); declare the model #[fmu(fmi3_only)] (rustfmu::export_fmi3!)",
+                    v.name
+                ),
+            ));
         }
         if (v.kind == Kind::Clock || !v.clocks.is_empty()) && model.fmi3_only.is_none() {
             return Err(Error::new(
@@ -1223,8 +1331,7 @@ fn is_state(vars: &[Var], v: &Var) -> bool {
 
 /// The variables of the equations' struct: continuous Reals that are not parameters.
 fn in_equations(v: &Var) -> bool {
-    v.dims.is_empty()
-        && v.kind == Kind::Real
+    v.kind == Kind::Real
         && v.variability == Variability::Continuous
         && matches!(v.causality, Causality::Input | Causality::Output | Causality::Local)
 }
@@ -1355,6 +1462,16 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
     };
     let mime_type = v.mime_type.as_ref().map(|m| m.value()).unwrap_or_default();
     let dims = &v.dims;
+    // The value references of the structural parameters that set the lengths (checked).
+    let sized_by: Vec<u32> = v
+        .sized_by
+        .iter()
+        .map(|(p, _)| {
+            vars.iter()
+                .find(|x| x.name == *p || x.field == p)
+                .map_or(u32::MAX, |x| x.vr)
+        })
+        .collect();
     let elem = &v.elem;
     let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
     let description = &v.description;
@@ -1454,6 +1571,7 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
                 max_size: #max_size,
                 mime_type: #mime_type,
                 dimensions: &[#((#dims) as u32),*],
+                sized_by: &[#(#sized_by),*],
                 clock: #clock,
                 clocks: &[#(#clocks),*],
             },
@@ -1771,10 +1889,19 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
         let vis = &input.vis;
         let cont_ident = Ident::new(&format!("{ident}Continuous"), ident.span());
         let cont: Vec<&Var> = vars.iter().filter(|v| in_equations(v)).collect();
+        // An array of the equations is an array of D of its lengths (its capacity, when a
+        // structural parameter sets them: the model's loops run to the parameter's value).
+        let d_type = |v: &Var| match v.dims.as_slice() {
+            [] => quote!(D),
+            [n] => quote!([D; #n]),
+            [n, m] => quote!([[D; #m]; #n]),
+            _ => unreachable!("two dimensions at most"),
+        };
         let cont_fields = cont.iter().map(|v| {
             let f = &v.field;
             let doc = format!("'{}' (vr {})", v.name, v.vr);
-            quote!(#[doc = #doc] pub #f: D)
+            let ty = d_type(v);
+            quote!(#[doc = #doc] pub #f: #ty)
         });
         let cont_doc = format!(
             "The continuous variables of [`{ident}`] in the number type `D` (generated by `#[derive(Model)]`): what its equations are given (inputs, states) and compute (derivatives, outputs, locals)."
@@ -1790,28 +1917,161 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     .expect("checked")
             })
             .collect();
-        let n_states = states.len();
-        let state_vrs = states.iter().map(|v| v.vr);
-        let deriv_vrs = derivs.iter().map(|v| v.vr);
-        let nominals = states.iter().map(|v| match &v.nominal {
-            Some(e) => quote!((#e) as f64),
-            None => quote!(1.0),
+        // The state vector: each scalar state one entry, each array state its elements (all of
+        // its capacity; the runtime gives the importer the first `n` of a sized one).
+        let len_of = |v: &Var| match v.dims.first() {
+            Some(n) => quote!((#n)),
+            None => quote!(1usize),
+        };
+        let lens: Vec<TokenStream> = states.iter().map(|v| len_of(v)).collect();
+        let n_states = quote!(0usize #(+ #lens)*);
+        // A const array of the state vector's length, element k of state variable i given by
+        // `each(i)` (a const expression of `j`, the element's index).
+        let per_element = |ty: TokenStream, zero: TokenStream, each: &dyn Fn(usize) -> TokenStream| {
+            let fills = (0..states.len()).map(|i| {
+                let (len, value) = (&lens[i], each(i));
+                quote!({
+                    let mut j = 0usize;
+                    while j < #len {
+                        a[k] = #value;
+                        k += 1;
+                        j += 1;
+                    }
+                })
+            });
+            quote!(&{
+                let mut a: [#ty; #n_states] = [#zero; #n_states];
+                let mut k = 0usize;
+                #(#fills)*
+                let _ = k;
+                a
+            })
+        };
+        // Scalar states only (every model before arrays could be states): the lists as literals.
+        let scalar_states = states.iter().all(|v| v.dims.is_empty());
+        let state_vrs = per_element(quote!(u32), quote!(0u32), &|i| {
+            let vr = states[i].vr;
+            quote!({ let _ = j; #vr })
         });
-        let state_fields: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
-        let deriv_fields: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
-        let state_idx: Vec<usize> = (0..n_states).collect();
+        let state_elements = per_element(quote!(u32), quote!(0u32), &|_| quote!(j as u32));
+        let deriv_vrs = per_element(quote!(u32), quote!(0u32), &|i| {
+            let vr = derivs[i].vr;
+            quote!({ let _ = j; #vr })
+        });
+        let nominals = per_element(quote!(f64), quote!(0.0f64), &|i| {
+            let nominal = match &states[i].nominal {
+                Some(e) => quote!((#e) as f64),
+                None => quote!(1.0),
+            };
+            quote!({ let _ = j; #nominal })
+        });
+        // Copies between the state vector and the fields: `x[k]` and a field's element.
+        let copy_out = |from: TokenStream, vars: &[&Var]| {
+            let parts = vars.iter().map(|v| {
+                let f = &v.field;
+                if v.dims.is_empty() {
+                    quote!(x[k] = #from.#f; k += 1;)
+                } else {
+                    quote!(for e in #from.#f.iter() { x[k] = *e; k += 1; })
+                }
+            });
+            quote!({
+                let mut x = [0.0f64; #n_states];
+                let mut k = 0usize;
+                #(#parts)*
+                let _ = k;
+                x
+            })
+        };
+        let copy_in = |to: TokenStream| {
+            let parts = states.iter().map(|v| {
+                let f = &v.field;
+                if v.dims.is_empty() {
+                    quote!(#to.#f = x[k]; k += 1;)
+                } else {
+                    quote!(for e in #to.#f.iter_mut() { *e = x[k]; k += 1; })
+                }
+            });
+            quote!({
+                let mut k = 0usize;
+                #(#parts)*
+                let _ = k;
+            })
+        };
+        let (
+            state_vrs,
+            state_elements,
+            deriv_vrs,
+            nominals,
+            states_self,
+            states_c,
+            derivs_c,
+            set_states_self,
+            set_states_c,
+        ) = if scalar_states {
+            let (svrs, dvrs) = (states.iter().map(|v| v.vr), derivs.iter().map(|v| v.vr));
+            let zeros = states.iter().map(|_| 0u32);
+            let noms = states.iter().map(|v| match &v.nominal {
+                Some(e) => quote!((#e) as f64),
+                None => quote!(1.0),
+            });
+            let sf: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
+            let df: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
+            let idx: Vec<usize> = (0..states.len()).collect();
+            (
+                quote!(&[#(#svrs),*]),
+                quote!(&[#(#zeros),*]),
+                quote!(&[#(#dvrs),*]),
+                quote!(&[#(#noms),*]),
+                quote!([#(self.#sf),*]),
+                quote!([#(c.#sf),*]),
+                quote!([#(c.#df),*]),
+                quote!(#(self.#sf = x[#idx];)*),
+                quote!(#(c.#sf = x[#idx];)*),
+            )
+        } else {
+            (
+                state_vrs,
+                state_elements,
+                deriv_vrs,
+                nominals,
+                copy_out(quote!(self), &states),
+                copy_out(quote!(c), &states),
+                copy_out(quote!(c), &derivs),
+                copy_in(quote!(self)),
+                copy_in(quote!(c)),
+            )
+        };
+        let n_states = if scalar_states {
+            let n = states.len();
+            quote!(#n)
+        } else {
+            n_states
+        };
         let known = |v: &Var| v.causality == Causality::Input || is_state(&vars, v);
         let cont_gather = cont.iter().map(|v| {
             let f = &v.field;
-            quote!(#f: <D as ::core::convert::From<f64>>::from(self.#f))
+            match v.dims.len() {
+                0 => quote!(#f: <D as ::core::convert::From<f64>>::from(self.#f)),
+                1 => quote!(#f: self.#f.map(<D as ::core::convert::From<f64>>::from)),
+                _ => quote!(#f: self.#f.map(|row| row.map(<D as ::core::convert::From<f64>>::from))),
+            }
         });
         let cont_store = cont.iter().filter(|v| !known(v)).map(|v| {
             let f = &v.field;
             quote!(self.#f = c.#f;)
         });
-        let cont_slots = cont.iter().map(|v| {
+        let cont_slots = cont.iter().filter(|v| v.dims.is_empty()).map(|v| {
             let (f, vr) = (&v.field, v.vr);
             quote!(#vr => ::core::option::Option::Some(&mut c.#f))
+        });
+        let cont_element_slots = cont.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            match v.dims.len() {
+                0 => quote!(#vr if i == 0 => ::core::option::Option::Some(&mut c.#f)),
+                1 => quote!(#vr => c.#f.get_mut(i)),
+                _ => quote!(#vr => c.#f.as_flattened_mut().get_mut(i)),
+            }
         });
         let known_vrs: Vec<u32> = cont.iter().filter(|v| known(v)).map(|v| v.vr).collect();
         let known_check = if known_vrs.is_empty() {
@@ -1863,6 +2123,34 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             )
         });
 
+        // A structural parameter's max is at most the length of every array dimension it sets
+        // (the Rust array's: its capacity). Lengths may be constants: the compiler checks.
+        let capacity_checks = vars.iter().flat_map(|v| {
+            v.sized_by.iter().zip(&v.dims).filter_map(|((p, span), cap)| {
+                let i = vars.iter().position(|x| x.name == *p || x.field == p)?;
+                // (A sizing variable that is no structural parameter with a max has its own
+                // compile error.)
+                if vars[i].causality != Causality::StructuralParameter || vars[i].max.is_none() {
+                    return None;
+                }
+                let message = format!(
+                    "'{p}' sets a length of '{}', whose Rust array holds fewer elements along that dimension than \
+                     '{p}''s max: make max at most the array's length",
+                    v.name
+                );
+                Some(quote_spanned!(*span =>
+                    #[allow(clippy::unnecessary_cast)]
+                    const _: () = ::core::assert!(
+                        match <#ident as #rt::Variables>::DESCRIPTION.variables[#i].max {
+                            ::core::option::Option::Some(b) => b.value <= (#cap) as f64,
+                            ::core::option::Option::None => false,
+                        },
+                        #message
+                    );
+                ))
+            })
+        });
+        let capacity_checks: Vec<TokenStream> = capacity_checks.collect();
         let manifest = meta.manifest.as_ref().map(|p| {
             let p = p.display().to_string();
             quote!(
@@ -1880,12 +2168,14 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                 pub _number_type: ::core::marker::PhantomData<D>,
             }
 
+            #[allow(unused_mut, unused_assignments, clippy::identity_op)]
             impl #rt::Variables for #ident {
                 type Continuous<D: ::core::marker::Copy> = #cont_ident<D>;
                 type States = [f64; #n_states];
-                const STATES: &'static [u32] = &[#(#state_vrs),*];
-                const DERIVATIVES: &'static [u32] = &[#(#deriv_vrs),*];
-                const NOMINALS: &'static [f64] = &[#(#nominals),*];
+                const STATES: &'static [u32] = #state_vrs;
+                const STATE_ELEMENTS: &'static [u32] = #state_elements;
+                const DERIVATIVES: &'static [u32] = #deriv_vrs;
+                const NOMINALS: &'static [f64] = #nominals;
 
                 #[inline]
                 fn continuous<D: #rt::Real>(&self) -> #cont_ident<D> {
@@ -1903,6 +2193,15 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                     let _ = &c;
                     match vr {
                         #(#cont_slots,)*
+                        _ => ::core::option::Option::None,
+                    }
+                }
+
+                #[inline]
+                fn continuous_element<D: ::core::marker::Copy>(c: &mut #cont_ident<D>, vr: u32, i: usize) -> ::core::option::Option<&mut D> {
+                    let _ = (&c, i);
+                    match vr {
+                        #(#cont_element_slots,)*
                         _ => ::core::option::Option::None,
                     }
                 }
@@ -1925,31 +2224,31 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
 
                 #[inline]
                 fn states(&self) -> [f64; #n_states] {
-                    [#(self.#state_fields),*]
+                    #states_self
                 }
 
                 #[inline]
                 fn set_states(&mut self, x: &[f64; #n_states]) {
                     let _ = x;
-                    #(self.#state_fields = x[#state_idx];)*
+                    #set_states_self
                 }
 
                 #[inline]
                 fn states_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
                     let _ = c;
-                    [#(c.#state_fields),*]
+                    #states_c
                 }
 
                 #[inline]
                 fn set_states_of(c: &mut #cont_ident<f64>, x: &[f64; #n_states]) {
                     let _ = (&c, x);
-                    #(c.#state_fields = x[#state_idx];)*
+                    #set_states_c
                 }
 
                 #[inline]
                 fn derivatives_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
                     let _ = c;
-                    [#(c.#deriv_fields),*]
+                    #derivs_c
                 }
 
                 const DESCRIPTION: #rt::description::ModelDescription = #rt::description::ModelDescription {
@@ -2071,6 +2370,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             #(#value_checks)*
             #(#enum_checks)*
             #(#element_checks)*
+            #(#capacity_checks)*
             #manifest
         })
     };
