@@ -190,16 +190,19 @@ struct Description {
     real_vrs: Vec<u32>,
     /// FMI 3.0 with clocks: co-simulation needs eventModeUsed (the smoke run then handles Event Mode).
     clocks: bool,
+    /// What is wrong with the description itself ([`array_problems`]).
+    problems: Vec<String>,
 }
 
 fn read_description(xml: &str) -> Result<Description, String> {
-    let (version, cs, guid, real_vrs, clocks) = match fmi_description::parse(xml)? {
+    let (version, cs, guid, real_vrs, clocks, problems) = match fmi_description::parse(xml)? {
         ModelDescription::Fmi2(d) => (
             FmiVersion::V2,
             d.cs.as_ref().map(|cs| cs.model_identifier.clone()),
             d.guid.clone(),
             d.vrs_of_type(fmi2::Type::Real),
             false,
+            Vec::new(),
         ),
         // FMI 3.0: every scalar Float64 (one value each; the arrays' elements are the
         // conformance suite's to read).
@@ -214,6 +217,7 @@ fn read_description(xml: &str) -> Result<Description, String> {
                 .map(|v| v.vr)
                 .collect(),
             d.variables.iter().any(|v| v.ty == fmi3::Type::Clock),
+            array_problems(&d),
         ),
     };
     match cs {
@@ -223,9 +227,73 @@ fn read_description(xml: &str) -> Result<Description, String> {
             guid,
             real_vrs,
             clocks,
+            problems,
         }),
         _ => Err("no <CoSimulation modelIdentifier=...>".into()),
     }
+}
+
+/// The length of an FMI 3.0 array's dimension at the start: a fixed one, or the start value of
+/// the variable its `valueReference` names; `Err` says what is wrong with that variable.
+fn dimension_length(d: &fmi3::ModelDescription, dim: &fmi3::Dimension) -> Result<u64, String> {
+    let vr = match *dim {
+        fmi3::Dimension::Fixed(n) => return Ok(n),
+        fmi3::Dimension::Parameter(vr) => vr,
+    };
+    let p = d
+        .by_vr(vr)
+        .ok_or_else(|| format!("<Dimension valueReference=\"{vr}\"> names no variable"))?;
+    if p.ty != fmi3::Type::UInt64
+        || !(p.causality == Causality::StructuralParameter || p.variability == fmi_description::Variability::Constant)
+    {
+        return Err(format!(
+            "<Dimension valueReference=\"{vr}\"> names '{}', a {} {}; a length is set by a UInt64 structuralParameter \
+             or constant (FMI 3.0, 2.4.7.6)",
+            p.name,
+            p.causality.name(),
+            p.ty.name()
+        ));
+    }
+    p.start
+        .as_deref()
+        .and_then(|s| s.trim().parse::<u64>().ok())
+        .ok_or_else(|| format!("'{}', which sets a length (vr {vr}), has no UInt64 start value", p.name))
+}
+
+/// What is wrong with the arrays of an FMI 3.0 description: a `<Dimension valueReference>` that
+/// names no UInt64 structural parameter (or constant), or a `start` list whose length is
+/// neither 1 (every element's) nor the number of elements at the start lengths (those of the
+/// structural parameters at their start values).
+pub fn array_problems(d: &fmi3::ModelDescription) -> Vec<String> {
+    let mut problems = Vec::new();
+    for v in d.variables.iter().filter(|v| v.array) {
+        let lengths: Result<Vec<u64>, String> = v.dimensions.iter().map(|dim| dimension_length(d, dim)).collect();
+        let lengths = match lengths {
+            Ok(l) => l,
+            Err(e) => {
+                problems.push(format!("variable '{}' (vr {}): {e}", v.name, v.vr));
+                continue;
+            }
+        };
+        // A String's or Binary's start values are <Start> children (the reader keeps the first).
+        if matches!(v.ty, fmi3::Type::String | fmi3::Type::Binary) {
+            continue;
+        }
+        let count = lengths.iter().try_fold(1u64, |n, &k| n.checked_mul(k));
+        if let (Some(start), Some(count)) = (&v.start, count) {
+            let given = start.split_whitespace().count() as u64;
+            if given != 1 && given != count {
+                let shape: Vec<String> = lengths.iter().map(u64::to_string).collect();
+                problems.push(format!(
+                    "variable '{}' (vr {}): {given} start values for {count} elements (the lengths at the start: {})",
+                    v.name,
+                    v.vr,
+                    shape.join(" x ")
+                ));
+            }
+        }
+    }
+    problems
 }
 
 /// What is wrong with `terminalsAndIcons.xml` against the model description (FMI 3.0, 2.4.9):
@@ -313,6 +381,7 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
     }
     let xml = archive::read_model_description(&mut zip)?;
     let d = read_description(&xml)?;
+    problems.extend(d.problems.iter().cloned());
     // Every binary of a platform this FMI version names: `binaries/<folder>/<id>.<ext>`.
     let names = zip.entry_names();
     let binaries: Vec<(String, String)> = crate::target::known_folders(d.version)
@@ -1353,7 +1422,8 @@ pub fn info(fmu: &Path) -> Result<String, String> {
             out.push_str(&experiment(&d.default_experiment));
             interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
             interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
-            // An array's type with its dimensions: Float64[2,4].
+            // An array's type with its dimensions: Float64[2,4]; a length set by a structural
+            // parameter by the parameter's name: Float64[n,n].
             d.variables
                 .iter()
                 .map(|v| {
@@ -1361,9 +1431,13 @@ pub fn info(fmu: &Path) -> Result<String, String> {
                         let dims: Vec<String> = v
                             .dimensions
                             .iter()
-                            .map(|d| match d {
+                            .map(|dim| match dim {
                                 fmi3::Dimension::Fixed(n) => n.to_string(),
-                                fmi3::Dimension::Parameter(vr) => format!("vr {vr}"),
+                                // Set by a structural parameter: its name (Float64[n,n]).
+                                fmi3::Dimension::Parameter(vr) => match d.by_vr(*vr) {
+                                    Some(p) => p.name.clone(),
+                                    None => format!("vr {vr}"),
+                                },
                             })
                             .collect();
                         format!("{}[{}]", v.ty.name(), dims.join(","))
@@ -1620,6 +1694,54 @@ mod terminal_tests {
         assert_eq!(
             terminal_problems(&good.replace("3.0", "2.0"), MD),
             ["terminalsAndIcons.xml: fmiVersion is not 3.x"]
+        );
+    }
+}
+
+#[cfg(test)]
+mod array_tests {
+    use super::array_problems;
+    use fmi_description::fmi3::ModelDescription;
+
+    /// A description with a structural parameter `n` (start 2), a Float64 parameter `k` and
+    /// the array `a` (its attributes after `valueReference`, its `<Dimension>`s).
+    fn problems(a: &str, dims: &str) -> Vec<String> {
+        let xml = format!(
+            r#"<fmiModelDescription fmiVersion="3.0" modelName="M" instantiationToken="{{x}}">
+  <CoSimulation modelIdentifier="M"/>
+  <ModelVariables>
+    <UInt64 name="n" valueReference="1" causality="structuralParameter" variability="fixed" start="2"/>
+    <Float64 name="k" valueReference="2" causality="parameter" variability="fixed" start="2"/>
+    <Float64 name="a" valueReference="3" {a}>{dims}</Float64>
+  </ModelVariables>
+</fmiModelDescription>"#
+        );
+        array_problems(&ModelDescription::parse(&xml).unwrap())
+    }
+
+    #[test]
+    fn a_length_is_set_by_a_uint64_structural_parameter_and_the_start_lists_the_start_size() {
+        let p = r#"causality="parameter" variability="fixed""#;
+        // n x 3 at the start: 2 x 3 = 6 values, or one for all.
+        let sized = r#"<Dimension valueReference="1"/><Dimension start="3"/>"#;
+        assert!(problems(&format!(r#"{p} start="1 2 3 4 5 6""#), sized).is_empty());
+        assert!(problems(&format!(r#"{p} start="7""#), sized).is_empty());
+        assert_eq!(
+            problems(&format!(r#"{p} start="1 2 3""#), sized),
+            ["variable 'a' (vr 3): 3 start values for 6 elements (the lengths at the start: 2 x 3)"]
+        );
+        // A fixed array counts the same way.
+        assert!(!problems(&format!(r#"{p} start="1 2 3""#), r#"<Dimension start="2"/>"#).is_empty());
+        // No start (an output): nothing to count.
+        assert!(problems(r#"causality="output""#, sized).is_empty());
+        // A length set by a Float64 parameter, or by no variable.
+        let by_k = problems(&format!(r#"{p} start="1""#), r#"<Dimension valueReference="2"/>"#);
+        assert_eq!(by_k.len(), 1);
+        assert!(by_k[0].contains("names 'k', a parameter Float64"), "{by_k:?}");
+        let by_none = problems(&format!(r#"{p} start="1""#), r#"<Dimension valueReference="9"/>"#);
+        assert_eq!(
+            by_none,
+            ["variable 'a' (vr 3): <Dimension valueReference=\"9\"> names no variable"]
         );
     }
 }

@@ -6,8 +6,8 @@ use fmi_standard::TypeKind;
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use rustfmu::description::{
-    Bound, Causality, FmiVersion, Initial, Interfaces, ModelDescription, RUNTIME_LOG_CATEGORIES, Start, VarType,
-    Variable,
+    Bound, Causality, FmiVersion, Initial, Interfaces, ModelDescription, NOT_SIZED, RUNTIME_LOG_CATEGORIES, Start,
+    VarType, Variable,
 };
 use std::collections::BTreeSet;
 
@@ -16,10 +16,11 @@ pub fn real_text(x: f64) -> String {
     format!("{x:?}")
 }
 
-/// Checks a decoded description against the rules of FMI 2.0 section 2.2.7 once more (the
-/// derive macro enforces them at compile time; a description from elsewhere is re-checked), with
-/// the same rules (`fmi-standard`) the derive uses.
-pub fn check_description(d: &ModelDescription) -> Result<(), String> {
+/// Checks a decoded description against the rules of FMI 2.0 section 2.2.7 (FMI 3.0: 2.4.7)
+/// once more (the derive macro enforces them at compile time; a description from elsewhere is
+/// re-checked), with the same rules (`fmi-standard`) the derive uses. Structural parameters and
+/// the arrays they size are FMI 3.0's only.
+pub fn check_description(d: &ModelDescription, version: FmiVersion) -> Result<(), String> {
     let decls = d.variables;
     for name in d.event_indicators {
         match d.by_name(name) {
@@ -59,12 +60,17 @@ pub fn check_description(d: &ModelDescription) -> Result<(), String> {
         if v.var_type == VarType::Enumeration && v.enumeration.is_none() {
             return Err(format!("{at}: an Enumeration variable without its type"));
         }
-        if !v.causality.in_fmi2() {
-            // The declarations have no structural parameters; FMI 2.0 has none either.
-            return Err(format!(
-                "{at}: causality {:?} is not written by this exporter",
-                v.causality
-            ));
+        if version == FmiVersion::V2 && !v.causality.in_fmi2() {
+            // FMI 2.0 has no structural parameters (a model with some is FMI 3.0 only).
+            return Err(format!("{at}: causality {:?} is FMI 3.0's only", v.causality));
+        }
+        if v.is_sized() {
+            if version == FmiVersion::V2 {
+                return Err(format!(
+                    "{at}: an array sized by structural parameters is FMI 3.0's only"
+                ));
+            }
+            array_sizes(d, v).map_err(|e| format!("{at}: {e}"))?;
         }
         if !fmi_standard::legal_variability(v.causality, v.variability) {
             return Err(format!(
@@ -246,6 +252,103 @@ fn default_experiment(w: &mut Xml, d: &ModelDescription) -> Result<(), String> {
     Ok(())
 }
 
+/// An FMI 3.0 array's lengths at the start: per dimension, the capacity (its `<Dimension
+/// start>`), or for one set by a structural parameter that parameter's start value. Checks what
+/// the sizes rest on: one entry of `sized_by` per dimension, each naming a UInt64 structural
+/// parameter (FMI 3.0, 2.4.7.6) whose start and `max` are within the capacity, and a start of
+/// the whole capacity where the array has one.
+pub fn array_sizes(d: &ModelDescription, v: &Variable) -> Result<Vec<usize>, String> {
+    let capacities = v.fmi3.dimensions;
+    if !v.is_sized() {
+        return Ok(capacities.iter().map(|&n| n as usize).collect());
+    }
+    if v.fmi3.sized_by.len() != capacities.len() {
+        return Err(format!(
+            "{} dimension(s), {} structural parameter entries (one per dimension)",
+            capacities.len(),
+            v.fmi3.sized_by.len()
+        ));
+    }
+    let mut sizes = Vec::with_capacity(capacities.len());
+    for (&capacity, &vr) in capacities.iter().zip(v.fmi3.sized_by) {
+        if vr == NOT_SIZED {
+            sizes.push(capacity as usize);
+            continue;
+        }
+        let p = d
+            .variables
+            .iter()
+            .find(|p| p.value_reference == vr)
+            .ok_or_else(|| format!("a length is set by value reference {vr}, which is no variable"))?;
+        if p.var_type != VarType::UInt64 || p.causality != Causality::StructuralParameter {
+            return Err(format!(
+                "a length is set by '{}' (vr {vr}), which is not a UInt64 structural parameter (FMI 3.0, 2.4.7.6)",
+                p.name
+            ));
+        }
+        let Start::UInt64(start) = p.start else {
+            return Err(format!("'{}', which sets a length, has no UInt64 start value", p.name));
+        };
+        match p.max {
+            Some(max) if max.value <= capacity as f64 => {}
+            Some(max) => {
+                return Err(format!(
+                    "'{}' sets a length of capacity {capacity} with max {}",
+                    p.name,
+                    real_text(max.value)
+                ));
+            }
+            None => {
+                return Err(format!("'{}' sets a length of capacity {capacity} without max", p.name));
+            }
+        }
+        if start > u64::from(capacity) {
+            return Err(format!(
+                "'{}' starts at {start}, beyond the capacity {capacity} of the length it sets",
+                p.name
+            ));
+        }
+        sizes.push(start as usize);
+    }
+    if let Start::Array(items) = v.start
+        && items.len() != v.element_count()
+    {
+        return Err(format!(
+            "{} start values for a capacity of {} elements",
+            items.len(),
+            v.element_count()
+        ));
+    }
+    Ok(sizes)
+}
+
+/// The start values an FMI 3.0 array lists: those of the elements within `sizes` (the lengths
+/// at the start, [`array_sizes`]), in row-major order, taken from `items`, the start values of
+/// the whole capacity (`capacities`) in row-major order. With every length at its capacity:
+/// all of them.
+fn active_items<'a>(items: &'a [Start], capacities: &[u32], sizes: &[usize]) -> Vec<&'a Start> {
+    let count: usize = sizes.iter().product();
+    let mut out = Vec::with_capacity(count);
+    let mut index = vec![0usize; sizes.len()];
+    for _ in 0..count {
+        // The element's place in the capacity's row-major storage.
+        let at = index
+            .iter()
+            .zip(capacities)
+            .fold(0usize, |at, (&i, &c)| at * c as usize + i);
+        out.extend(items.get(at));
+        // The next index, the last dimension fastest.
+        for k in (0..sizes.len()).rev() {
+            index[k] += 1;
+            if index[k] < sizes[k] {
+                break;
+            }
+            index[k] = 0;
+        }
+    }
+    out
+}
+
 /// `modelDescription.xml` (FMI 2.0) of a description, in the element order of the XSD.
 pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<String, String> {
     if interfaces.version != FmiVersion::V2 {
@@ -255,7 +358,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
             interfaces.version.text()
         ));
     }
-    check_description(d)?;
+    check_description(d, FmiVersion::V2)?;
     let decls = d.variables;
     if let Some(v) = decls.iter().find(|v| !v.var_type.in_fmi2()) {
         return Err(format!(
@@ -522,7 +625,7 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             interfaces.version.text()
         ));
     }
-    check_description(d)?;
+    check_description(d, FmiVersion::V3)?;
     let decls = d.variables;
     let time_vr = d.time_value_reference();
     if !d.declares_independent() && decls.iter().any(|v| v.value_reference == time_vr) {
@@ -688,9 +791,14 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             // A String's and a Binary's start is a child element.
             Start::String(_) | Start::Binary(_) | Start::Array(_) | Start::None => None,
         };
-        // An array's start: its elements' in row-major order, separated by spaces.
+        // An array's start: its elements' in row-major order, separated by spaces; of an array
+        // sized by structural parameters, those of the elements at the parameters' start values.
         let start = match v.start {
-            Start::Array(items) => Some(items.iter().filter_map(scalar_text).collect::<Vec<_>>().join(" ")),
+            Start::Array(items) => {
+                let sizes = array_sizes(d, v).map_err(|e| format!("variable '{}': {e}", v.name))?;
+                let items = active_items(items, v.fmi3.dimensions, &sizes);
+                Some(items.into_iter().filter_map(scalar_text).collect::<Vec<_>>().join(" "))
+            }
             ref one => scalar_text(one),
         };
         // In FMI 3.0 `derivative` is the value reference of the state, not an index.
@@ -782,8 +890,14 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             }
             _ if v.is_array() => {
                 open(&mut w, element, &attrs)?;
-                for n in v.fmi3.dimensions {
-                    empty(&mut w, "Dimension", &[("start", &n.to_string())])?;
+                // A fixed length, or the value reference of the structural parameter that sets it.
+                for (k, n) in v.fmi3.dimensions.iter().enumerate() {
+                    match v.fmi3.sized_by.get(k) {
+                        Some(&vr) if vr != NOT_SIZED => {
+                            empty(&mut w, "Dimension", &[("valueReference", &vr.to_string())])?
+                        }
+                        _ => empty(&mut w, "Dimension", &[("start", &n.to_string())])?,
+                    }
                 }
                 close(&mut w, element)?;
             }
@@ -1280,6 +1394,171 @@ mod tests {
             "{xml}"
         );
         assert!(xml.contains("variableNamingConvention=\"flat\""), "{xml}");
+    }
+
+    // ---- arrays sized by structural parameters (FMI 3.0) ---------------------------------
+
+    /// A UInt64 structural parameter of start `start`, at most 3.
+    const fn size(name: &'static str, vr: u32, start: u64) -> Variable {
+        Variable {
+            start: Start::UInt64(start),
+            min: Some(Bound {
+                value: 0.0,
+                exclusive: false,
+            }),
+            max: Some(Bound {
+                value: 3.0,
+                exclusive: false,
+            }),
+            ..v3(
+                name,
+                vr,
+                VarType::UInt64,
+                Causality::StructuralParameter,
+                Variability::Tunable,
+            )
+        }
+    }
+
+    /// 1 ..= 12, the start of a capacity of 3 x 4 (row-major: row i holds 4i+1 ..= 4i+4).
+    const TWELVE: &[Start] = &[
+        Start::Real(1.0),
+        Start::Real(2.0),
+        Start::Real(3.0),
+        Start::Real(4.0),
+        Start::Real(5.0),
+        Start::Real(6.0),
+        Start::Real(7.0),
+        Start::Real(8.0),
+        Start::Real(9.0),
+        Start::Real(10.0),
+        Start::Real(11.0),
+        Start::Real(12.0),
+    ];
+
+    /// A parameter array of capacity `dims` sized by `sized_by`, start [`TWELVE`]'s first.
+    const fn sized(name: &'static str, vr: u32, dims: &'static [u32], sized_by: &'static [u32]) -> Variable {
+        Variable {
+            start: Start::Array(TWELVE),
+            fmi3: rustfmu::description::Fmi3Extras {
+                only: true,
+                dimensions: dims,
+                sized_by,
+                ..rustfmu::description::Fmi3Extras::NONE
+            },
+            ..v3(name, vr, VarType::Real, Causality::Parameter, Variability::Tunable)
+        }
+    }
+
+    const SIZED_VARS: &[Variable] = &[
+        size("m", 1, 2),
+        size("n", 2, 3),
+        // [m, n] of capacity [3, 4]: the first 2 rows, the first 3 columns of each.
+        sized("A", 3, &[3, 4], &[1, 2]),
+        // [n, 4] of capacity [3, 4]: the first 3 rows, all 4 columns.
+        sized("B", 4, &[3, 4], &[2, NOT_SIZED]),
+        // [m] of capacity 3 (the start: TWELVE's first 3).
+        Variable {
+            start: Start::Array(TWELVE.split_at(3).0),
+            ..sized("u", 5, &[3], &[1])
+        },
+        // An output: no start.
+        Variable {
+            start: Start::None,
+            causality: Causality::Output,
+            variability: Variability::Continuous,
+            ..sized("y", 6, &[3], &[2])
+        },
+    ];
+
+    fn sized3(vars: &'static [Variable]) -> Result<String, String> {
+        let d = ModelDescription { variables: vars, ..LAG };
+        fmi3(&d, Interfaces::BOTH_FMI3, "{token}")
+    }
+
+    /// The text of the array element that has `name="<name>"`, up to its end tag.
+    fn array_element<'a>(xml: &'a str, name: &str) -> &'a str {
+        let at = xml
+            .find(&format!("name=\"{name}\""))
+            .unwrap_or_else(|| panic!("no {name} in {xml}"));
+        let start = xml[..at].rfind('<').unwrap();
+        let end = at + xml[at..].find("</Float64>").unwrap() + "</Float64>".len();
+        &xml[start..end]
+    }
+
+    #[test]
+    fn a_sized_array_names_its_structural_parameters_and_starts_at_their_start_sizes() {
+        let xml = sized3(SIZED_VARS).unwrap();
+        assert_eq!(
+            element(&xml, "m"),
+            r#"<UInt64 name="m" valueReference="1" causality="structuralParameter" variability="tunable" min="0" max="3" start="2"/>"#
+        );
+        // 2 x 3 of the 3 x 4 storage, row-major: (0,0..3), (1,0..3).
+        assert_eq!(
+            array_element(&xml, "A"),
+            "<Float64 name=\"A\" valueReference=\"3\" causality=\"parameter\" variability=\"tunable\" start=\"1.0 2.0 3.0 5.0 6.0 7.0\">\n      \
+             <Dimension valueReference=\"1\"/>\n      <Dimension valueReference=\"2\"/>\n    </Float64>"
+        );
+        // A fixed length beside a sized one: <Dimension start>.
+        assert_eq!(
+            array_element(&xml, "B"),
+            "<Float64 name=\"B\" valueReference=\"4\" causality=\"parameter\" variability=\"tunable\" \
+             start=\"1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0 11.0 12.0\">\n      \
+             <Dimension valueReference=\"2\"/>\n      <Dimension start=\"4\"/>\n    </Float64>"
+        );
+        assert!(array_element(&xml, "u").contains(r#"start="1.0 2.0">"#), "{xml}");
+        assert!(!array_element(&xml, "y").contains("start="), "{xml}");
+        // What validation reads back: every length set by a UInt64 structural parameter, and as
+        // many start values as elements at the start lengths.
+        let d = fmi_description::fmi3::ModelDescription::parse(&xml).unwrap();
+        assert_eq!(crate::validate::array_problems(&d), Vec::<String>::new());
+    }
+
+    #[test]
+    fn a_sized_array_needs_a_uint64_structural_parameter_within_its_capacity() {
+        // Sized by a parameter that is no structural parameter.
+        const NOT_STRUCTURAL: &[Variable] = &[
+            Variable {
+                causality: Causality::Parameter,
+                ..size("m", 1, 2)
+            },
+            sized("A", 3, &[3, 4], &[1, NOT_SIZED]),
+        ];
+        let e = sized3(NOT_STRUCTURAL).unwrap_err();
+        assert!(
+            e.contains("'m' (vr 1), which is not a UInt64 structural parameter"),
+            "{e}"
+        );
+        // A max beyond the capacity (3 rows).
+        const BEYOND: &[Variable] = &[
+            Variable {
+                max: Some(Bound {
+                    value: 4.0,
+                    exclusive: false,
+                }),
+                ..size("m", 1, 2)
+            },
+            sized("A", 3, &[3, 4], &[1, NOT_SIZED]),
+        ];
+        let e = sized3(BEYOND).unwrap_err();
+        assert!(e.contains("capacity 3 with max 4"), "{e}");
+        // Start values for other than the capacity.
+        const SHORT: &[Variable] = &[
+            size("m", 1, 2),
+            Variable {
+                start: Start::Array(TWELVE.split_at(6).0),
+                ..sized("A", 3, &[3, 4], &[1, NOT_SIZED])
+            },
+        ];
+        let e = sized3(SHORT).unwrap_err();
+        assert!(e.contains("6 start values for a capacity of 12 elements"), "{e}");
+        // FMI 2.0 has no structural parameters.
+        let d = ModelDescription {
+            variables: SIZED_VARS,
+            ..LAG
+        };
+        let e = fmi2(&d, Interfaces::BOTH, "{guid}").unwrap_err();
+        assert!(e.contains("FMI 3.0's only"), "{e}");
     }
 
     #[test]
