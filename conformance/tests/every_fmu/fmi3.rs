@@ -78,6 +78,11 @@ fn fmi3_a_null_instance_is_refused_by_every_function() {
 }
 
 #[test]
+fn fmi3_structural_parameters_are_set_in_configuration_mode_and_size_the_arrays() {
+    on_every_fmu("fmi3_structural_parameters_are_set_in_configuration_mode_and_size_the_arrays");
+}
+
+#[test]
 fn fmi3_model_exchange_states_and_derivatives_are_consistent() {
     on_every_fmu("fmi3_model_exchange_states_and_derivatives_are_consistent");
 }

@@ -19,6 +19,7 @@ pub mod model_exchange;
 pub mod native;
 pub mod random_sequences;
 pub mod state_machine;
+pub mod structural;
 pub mod table;
 pub mod types;
 
@@ -59,6 +60,9 @@ crate::checks::registry! {
             fmi3_reset_from_every_state_then_a_rerun_is_bit_identical,
             fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state,
             fmi3_a_null_instance_is_refused_by_every_function,
+        };
+        StateMachine: structural::{
+            fmi3_structural_parameters_are_set_in_configuration_mode_and_size_the_arrays,
         };
         ModelExchange: model_exchange::{
             fmi3_model_exchange_states_and_derivatives_are_consistent,
