@@ -1835,8 +1835,7 @@ impl<M: CoSimulation> Instance<M> {
             <M::States as StateVector>::zeros()
         };
         if const { M::DESCRIPTION.has_sized_arrays() } {
-            let entries: Vec<usize> = super::structural::active_states(&self.sim.model).collect();
-            for (k, v) in entries.into_iter().zip(x) {
+            for (k, v) in super::structural::active_states(&self.sim.model).zip(x) {
                 states.as_mut_slice()[k] = *v;
             }
         } else {
