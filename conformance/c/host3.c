@@ -2,9 +2,11 @@
  * Co-Simulation (and Model Exchange where it has continuous states to integrate), frees it and
  * dlcloses, so that valgrind memcheck sees a whole run.
  *
- * Usage: host3 <binary.so> <instantiationToken> <resourcePath> <steps> <h> <nStates|-1> <vr,vr,...> [vr=value ...]
+ * Usage: host3 <binary.so> <instantiationToken> <resourcePath> <steps> <h> <nStates|-1> <vr[:n],vr[:n],...> [vr=value[,value...] ...]
  *   CS: instantiate, set the given Float64 values, initialize at t = 0, <steps> fmi3DoStep of
  *   <h> (checking lastSuccessfulTime and the flags), read the listed Float64s, terminate, free.
+ *   An array counts its elements (FMI 3.0: nValues is every element): `vr:n` reads n values of
+ *   vr, `vr=a,b,c` sets three; nStates is every element of the state arrays.
  *   ME (nStates >= 0): instantiate, set the values, initialize, event iteration, then <steps>
  *   explicit-Euler steps of <h> through fmi3GetContinuousStates / Derivatives / SetTime /
  *   SetContinuousStates / CompletedIntegratorStep, terminate, free.
@@ -72,16 +74,25 @@ typedef fmi3Status (*SetTime)(fmi3Instance, double);
 typedef fmi3Status (*Completed)(fmi3Instance, bool, bool *, bool *);
 typedef fmi3Status (*Count)(fmi3Instance, size_t *);
 
-static size_t parse_vrs(const char *list, fmi3ValueReference **out) {
+/* "vr[:n],vr[:n],...": the value references, and the number of values they hold (n, else 1). */
+static size_t parse_vrs(const char *list, fmi3ValueReference **out, size_t *values) {
     size_t n = 0, cap = 16;
     *out = malloc(cap * sizeof **out);
+    *values = 0;
     const char *p = list;
     while (*p) {
         char *end;
         unsigned long v = strtoul(p, &end, 10);
         if (end == p) break;
+        unsigned long count = 1;
+        if (*end == ':') {
+            const char *q = end + 1;
+            count = strtoul(q, &end, 10);
+            if (end == q) break;
+        }
         if (n == cap) *out = realloc(*out, (cap *= 2) * sizeof **out);
         (*out)[n++] = (fmi3ValueReference)v;
+        *values += count;
         p = *end == ',' ? end + 1 : end;
     }
     return n;
@@ -107,16 +118,27 @@ int main(int argc, char **argv) {
     double h = atof(argv[5]);
     long nx = atol(argv[6]);
     fmi3ValueReference *vrs;
-    size_t nv = parse_vrs(argv[7], &vrs);
-    double *values = calloc(nv ? nv : 1, sizeof *values);
+    size_t nv_values = 0;
+    size_t nv = parse_vrs(argv[7], &vrs, &nv_values);
+    double *values = calloc(nv_values ? nv_values : 1, sizeof *values);
     int nset = argc - 8;
     fmi3ValueReference *set_vrs = calloc(nset ? nset : 1, sizeof *set_vrs);
-    double *set_vals = calloc(nset ? nset : 1, sizeof *set_vals);
+    size_t nset_values = 0, set_cap = 16;
+    double *set_vals = calloc(set_cap, sizeof *set_vals);
     for (int i = 0; i < nset; i++) {
         char *eq = strchr(argv[8 + i], '=');
         if (!eq) { fprintf(stderr, "bad vr=value: %s\n", argv[8 + i]); return 2; }
         set_vrs[i] = (fmi3ValueReference)strtoul(argv[8 + i], NULL, 10);
-        set_vals[i] = atof(eq + 1);
+        const char *p = eq + 1;
+        for (;;) {
+            char *end;
+            double x = strtod(p, &end);
+            if (end == p) { fprintf(stderr, "bad vr=value: %s\n", argv[8 + i]); return 2; }
+            if (nset_values == set_cap) set_vals = realloc(set_vals, (set_cap *= 2) * sizeof *set_vals);
+            set_vals[nset_values++] = x;
+            if (*end != ',') break;
+            p = end + 1;
+        }
     }
     void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) { fprintf(stderr, "dlopen: %s\n", dlerror()); return 1; }
@@ -144,7 +166,7 @@ int main(int argc, char **argv) {
     bool event_mode = getenv("HOST_EVENT_MODE") != NULL;
     fmi3Instance c = instantiate_cs("host3", token, res, false, false, event_mode, false, NULL, 0, &messages, logger, NULL);
     if (!c) { fprintf(stderr, "fmi3InstantiateCoSimulation returned NULL: %s\n", last); return 1; }
-    CHECK(set_f64(c, set_vrs, nset, set_vals, nset));
+    CHECK(set_f64(c, set_vrs, nset, set_vals, nset_values));
     CHECK(enter_init(c, false, 0.0, 0.0, false, 0.0));
     CHECK(exit_init(c));
     if (event_mode) {
@@ -172,14 +194,14 @@ int main(int argc, char **argv) {
             return 1;
         }
         t += h;
-        CHECK(get_f64(c, vrs, nv, values, nv));
+        CHECK(get_f64(c, vrs, nv, values, nv_values));
         if (trace) {
             char tag[32];
             snprintf(tag, sizeof tag, "trace %d", i);
-            print_bits(tag, values, nv);
+            print_bits(tag, values, nv_values);
         }
     }
-    print_bits("final", values, nv);
+    print_bits("final", values, nv_values);
     CHECK(terminate(c));
     free_instance(c);
 
@@ -191,7 +213,7 @@ int main(int argc, char **argv) {
         CHECK(n_states(m, &n));
         if ((long)n != nx) { fprintf(stderr, "fmi3GetNumberOfContinuousStates: %zu, expected %ld\n", n, nx); return 1; }
         double *x = calloc(n ? n : 1, sizeof *x), *dx = calloc(n ? n : 1, sizeof *dx);
-        CHECK(set_f64(m, set_vrs, nset, set_vals, nset));
+        CHECK(set_f64(m, set_vrs, nset, set_vals, nset_values));
         CHECK(enter_init(m, false, 0.0, 0.0, false, 0.0));
         CHECK(exit_init(m));
         bool need = true, term = false, nom = false, vals = false, next_defined = false;
@@ -216,8 +238,8 @@ int main(int argc, char **argv) {
                 CHECK(enter_ctm(m));
             }
         }
-        CHECK(get_f64(m, vrs, nv, values, nv));
-        print_bits("me-final", values, nv);
+        CHECK(get_f64(m, vrs, nv, values, nv_values));
+        print_bits("me-final", values, nv_values);
         CHECK(terminate(m));
         free_instance(m);
         free(x);

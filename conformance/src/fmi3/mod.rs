@@ -11,8 +11,11 @@ pub mod standard;
 pub mod types;
 
 use crate::archive::{self, PrivateDir};
+use fmi_description::fmi3::Dimension;
 pub use fmi_description::fmi3::{ModelDescription as Description, Type, Variable};
+use fmi_description::{Causality, Variability};
 pub use standard::State;
+use std::collections::BTreeMap;
 use std::ffi::{CStr, CString, c_char};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -24,6 +27,10 @@ pub const PLATFORM: &str = "x86_64-linux";
 /// The FMI 3.0 platform tuple of this platform (FMI 3.0 section 2.5.1.1).
 #[cfg(windows)]
 pub const PLATFORM: &str = "x86_64-windows";
+
+/// The value of every UInt64 structural parameter and constant a `<Dimension valueReference>`
+/// may name, by value reference: what sizes the arrays (FMI 3.0, 2.4.7.2).
+pub type Sizes = BTreeMap<u32, u64>;
 
 /// One FMI 3.0 FMU, unpacked into a private folder and loaded.
 pub struct Fmu3 {
@@ -37,6 +44,8 @@ pub struct Fmu3 {
     pub api: api::Api,
     /// Whether the serialized states are this exporter's format ([`Fmu3::state_format`]).
     own: std::sync::OnceLock<Result<(), String>>,
+    /// [`Fmu3::start_sizes`], read once.
+    sizes: std::sync::OnceLock<Sizes>,
     _dirs: (PrivateDir, PrivateDir),
 }
 
@@ -109,6 +118,7 @@ impl Fmu3 {
             md,
             api,
             own: std::sync::OnceLock::new(),
+            sizes: std::sync::OnceLock::new(),
             _dirs: u.dirs,
         })
     }
@@ -156,6 +166,105 @@ impl Fmu3 {
     pub fn can_snapshot(&self, me: bool) -> bool {
         let i = if me { self.md.me.as_ref() } else { self.md.cs.as_ref() };
         i.is_some_and(|i| i.can_get_and_set_fmu_state && i.can_serialize_fmu_state)
+    }
+
+    /// Every scalar UInt64 structural parameter and constant with its start value: the sizes of
+    /// the arrays until an importer sets a structural parameter in Configuration Mode, which
+    /// only the structural-parameter check does (every other check counts elements with these).
+    pub fn start_sizes(&self) -> &Sizes {
+        self.sizes.get_or_init(|| {
+            self.md
+                .variables
+                .iter()
+                .filter(|v| {
+                    v.ty == Type::UInt64
+                        && !v.array
+                        && (v.causality == Causality::StructuralParameter || v.variability == Variability::Constant)
+                })
+                .filter_map(|v| Some((v.vr, v.start.as_deref()?.trim().parse().ok()?)))
+                .collect()
+        })
+    }
+
+    /// The lengths of a variable's dimensions under `sizes`, outermost first (none for a scalar).
+    pub fn dims_at(&self, v: &Variable, sizes: &Sizes) -> Vec<u64> {
+        v.dimensions
+            .iter()
+            .map(|d| match d {
+                Dimension::Fixed(k) => *k,
+                Dimension::Parameter(vr) => *sizes.get(vr).unwrap_or_else(|| {
+                    panic!(
+                        "{}: '{}' has <Dimension valueReference=\"{vr}\">, which names no UInt64 structural parameter or constant with a start value",
+                        self.id, v.name
+                    )
+                }),
+            })
+            .collect()
+    }
+
+    /// The number of values of a variable under `sizes`: the product of its dimensions' lengths
+    /// (row-major, the count nValues of the getters and setters gives it); 1 for a scalar.
+    pub fn count_at(&self, v: &Variable, sizes: &Sizes) -> usize {
+        self.dims_at(v, sizes).iter().product::<u64>() as usize
+    }
+
+    /// [`Fmu3::count_at`] with the structural parameters at their starts ([`Fmu3::start_sizes`]).
+    pub fn element_count(&self, v: &Variable) -> usize {
+        self.count_at(v, self.start_sizes())
+    }
+
+    /// The element count of the variable a `<ModelStructure>` entry names (1 where it names none).
+    fn entry_count(&self, vr: u32, sizes: &Sizes) -> usize {
+        self.md.by_vr(vr).map_or(1, |v| self.count_at(v, sizes))
+    }
+
+    /// The number of continuous states under `sizes`: every element of each
+    /// `<ContinuousStateDerivative>`'s variable (a state array counts each element).
+    pub fn nx_at(&self, sizes: &Sizes) -> usize {
+        self.md.derivatives.iter().map(|u| self.entry_count(u.vr, sizes)).sum()
+    }
+
+    /// The number of continuous states with the structural parameters at their starts: what
+    /// fmi3GetNumberOfContinuousStates must say, and nContinuousStates of the vector functions.
+    pub fn n_states_declared(&self) -> usize {
+        self.nx_at(self.start_sizes())
+    }
+
+    /// The number of event indicators with the structural parameters at their starts: every
+    /// element of each `<EventIndicator>`'s variable.
+    pub fn n_event_indicators_declared(&self) -> usize {
+        let sizes = self.start_sizes();
+        self.md
+            .event_indicators
+            .iter()
+            .map(|u| self.entry_count(u.vr, sizes))
+            .sum()
+    }
+
+    /// The continuous states (state, derivative) in the order of `<ContinuousStateDerivative>`:
+    /// the order of the state vector, each expanded to its elements there.
+    pub fn states(&self) -> Result<Vec<(&Variable, &Variable)>, String> {
+        let md = &self.md;
+        Ok(md
+            .continuous_states()?
+            .iter()
+            .map(|(x, d)| (md.by_vr(*x).unwrap(), md.by_vr(*d).unwrap()))
+            .collect())
+    }
+
+    /// Where each continuous state starts in the state vector (start sizes), with its element
+    /// count: (state, derivative, offset, count), in the order of the state vector.
+    pub fn state_slots(&self) -> Result<Vec<(&Variable, &Variable, usize, usize)>, String> {
+        let mut at = 0;
+        Ok(self
+            .states()?
+            .into_iter()
+            .map(|(x, d)| {
+                let n = self.element_count(x);
+                at += n;
+                (x, d, at - n, n)
+            })
+            .collect())
     }
 
     /// The default experiment's step, else 1e-3 s.
@@ -540,12 +649,23 @@ impl<'a> Inst<'a> {
         )
     }
 
+    /// fmi3GetFloat64 of scalars: one value per value reference.
     pub fn get_f64(&self, vrs: &[u32]) -> (fmi3Status, Vec<f64>) {
-        let mut v = vec![0.0; vrs.len()];
+        self.get_f64_n(vrs, vrs.len())
+    }
+    /// fmi3GetFloat64 with `n` values (an array's elements count each, row-major, one variable
+    /// after the other).
+    pub fn get_f64_n(&self, vrs: &[u32], n: usize) -> (fmi3Status, Vec<f64>) {
+        let mut v = vec![0.0; n];
         let s = self.call("fmi3GetFloat64", |c| unsafe {
             (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr(), v.len())
         });
         (s, v)
+    }
+    /// fmi3GetFloat64 of every element of the variables (scalars and arrays, start sizes).
+    pub fn get_f64_of(&self, vars: &[&Variable]) -> (fmi3Status, Vec<f64>) {
+        let vrs: Vec<u32> = vars.iter().map(|v| v.vr).collect();
+        self.get_f64_n(&vrs, vars.iter().map(|v| self.fmu.element_count(v)).sum())
     }
     pub fn set_f64(&self, vrs: &[u32], v: &[f64]) -> fmi3Status {
         self.call("fmi3SetFloat64", |c| unsafe {
@@ -620,8 +740,9 @@ impl<'a> Inst<'a> {
     }
 
     /// Every Float64 value (bit patterns), then every value of the other numeric types and
-    /// Booleans (their C bytes) and every Binary (its length and bytes), for comparing runs.
-    /// Clocked variables are left out: they are read at their clocks' ticks only.
+    /// Booleans (their C bytes), every element of the arrays (those a structural parameter sizes
+    /// at its start) and every Binary (its length and bytes), for comparing runs. Clocked
+    /// variables are left out: they are read at their clocks' ticks only.
     pub fn observe(&self) -> Vec<u64> {
         let vrs: Vec<u32> = self
             .fmu
@@ -640,8 +761,7 @@ impl<'a> Inst<'a> {
         );
         let mut out = crate::bits(&v);
         for var in self.fmu.md.variables.iter().filter(|v| {
-            v.fixed_count().is_some()
-                && (v.array || v.ty != Type::Float64)
+            (v.array || v.ty != Type::Float64)
                 && !matches!(v.ty, Type::String | Type::Clock)
                 && v.clocks.is_empty()
                 && v.causality != fmi_description::Causality::Independent
@@ -668,11 +788,11 @@ impl<'a> Inst<'a> {
         out
     }
 
-    /// The value of a variable of any type but String and Clock (every element of a fixed-size
-    /// array, row-major), read with its type's getter, as its C bytes (native order; a Binary's
-    /// bytes).
+    /// The value of a variable of any type but String and Clock (every element of an array,
+    /// row-major, the structural parameters at their starts: [`Fmu3::element_count`]), read with
+    /// its type's getter, as its C bytes (native order; a Binary's bytes).
     pub fn get_raw(&self, v: &Variable) -> (fmi3Status, Vec<u8>) {
-        self.get_raw_n(v, v.fixed_count().unwrap_or(1) as usize)
+        self.get_raw_n(v, self.fmu.element_count(v))
     }
 
     /// [`Inst::get_raw`] with `n` as nValues (which may be wrong on purpose).
@@ -849,22 +969,34 @@ impl Drop for Inst<'_> {
 }
 
 /// One explicit-Euler step of an ME instance in continuous-time mode, handling a step event
-/// (CompletedIntegratorStep asks for event mode) as an importer must.
+/// (CompletedIntegratorStep asks for event mode) as an importer must; nx is every element of the
+/// state arrays at the structural parameters' starts ([`Fmu3::n_states_declared`]).
 pub fn euler_step(inst: &mut Inst, h: f64) {
+    let nx = inst.fmu.n_states_declared();
+    euler_step_n(inst, nx, h);
+}
+
+/// [`euler_step`] with `nx` continuous states (the structural-parameter check's, whose sizes
+/// are not the starts).
+pub fn euler_step_n(inst: &mut Inst, nx: usize, h: f64) {
     let api = inst.api();
     let id = &inst.fmu.id;
-    let n = inst.fmu.md.derivatives.len();
-    let (s, x) = inst.vector("fmi3GetContinuousStates", api.get_continuous_states, n);
-    assert_eq!(s, fmi3OK, "{id}: fmi3GetContinuousStates: {}", inst.log_text());
+    let (s, x) = inst.vector("fmi3GetContinuousStates", api.get_continuous_states, nx);
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{id}: fmi3GetContinuousStates (nx = {nx}): {}",
+        inst.log_text()
+    );
     let (s, dx) = inst.vector(
         "fmi3GetContinuousStateDerivatives",
         api.get_continuous_state_derivatives,
-        n,
+        nx,
     );
     assert_eq!(
         s,
         fmi3OK,
-        "{id}: fmi3GetContinuousStateDerivatives: {}",
+        "{id}: fmi3GetContinuousStateDerivatives (nx = {nx}): {}",
         inst.log_text()
     );
     let t = inst.time + h;
@@ -877,10 +1009,10 @@ pub fn euler_step(inst: &mut Inst, h: f64) {
     );
     assert_eq!(
         inst.call("fmi3SetContinuousStates", |c| unsafe {
-            (api.set_continuous_states)(c, x1.as_ptr(), n)
+            (api.set_continuous_states)(c, x1.as_ptr(), nx)
         }),
         fmi3OK,
-        "{id}: fmi3SetContinuousStates: {}",
+        "{id}: fmi3SetContinuousStates (nx = {nx}): {}",
         inst.log_text()
     );
     inst.time = t;
@@ -900,15 +1032,33 @@ pub fn euler_step(inst: &mut Inst, h: f64) {
     if enter == 1 {
         assert_eq!(
             inst.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) }),
-            fmi3OK
+            fmi3OK,
+            "{id}: fmi3EnterEventMode: {}",
+            inst.log_text()
         );
         inst.event_iteration();
         assert_eq!(
             inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
                 (api.enter_continuous_time_mode)(c)
             }),
-            fmi3OK
+            fmi3OK,
+            "{id}: fmi3EnterContinuousTimeMode: {}",
+            inst.log_text()
         );
+    }
+}
+
+/// Float values from a getter's bytes (Float64, or Float32 widened).
+pub fn floats(ty: Type, bytes: &[u8]) -> Vec<f64> {
+    match ty {
+        Type::Float32 => bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_ne_bytes(c.try_into().unwrap()) as f64)
+            .collect(),
+        _ => bytes
+            .chunks_exact(8)
+            .map(|c| f64::from_ne_bytes(c.try_into().unwrap()))
+            .collect(),
     }
 }
 

@@ -5,32 +5,32 @@ use super::*;
 // ---------------------------------------------------------------------------------------------
 // Directional and adjoint derivatives
 
-pub(super) fn unknowns(fmu: &Fmu3, me: bool) -> Vec<u32> {
+/// The unknowns of the derivatives: the derivatives of the continuous states (ME), then the
+/// Float64 outputs (not clocked), arrays included (each element a row of the Jacobian).
+pub(super) fn unknowns(fmu: &Fmu3, me: bool) -> Vec<&Variable> {
     let mut list = vec![];
     if me {
-        list.extend(fmu.md.derivatives.iter().map(|u| u.vr));
+        list.extend(fmu.md.derivatives.iter().filter_map(|u| fmu.md.by_vr(u.vr)));
     }
     list.extend(
         fmu.md
             .outputs
             .iter()
-            .map(|u| u.vr)
+            .filter_map(|u| fmu.md.by_vr(u.vr))
             // (Clocked outputs are read at their ticks only, not where derivatives are taken.)
-            .filter(|vr| {
-                fmu.md
-                    .by_vr(*vr)
-                    .is_some_and(|v| v.ty == Type::Float64 && v.clocks.is_empty())
-            }),
+            .filter(|v| v.ty == Type::Float64 && v.clocks.is_empty()),
     );
     list
 }
 
-pub(super) fn knowns(fmu: &Fmu3, me: bool) -> Vec<u32> {
+/// The knowns: the continuous states (ME), then the continuous Float64 inputs, arrays included
+/// (each element a column of the Jacobian).
+pub(super) fn knowns(fmu: &Fmu3, me: bool) -> Vec<&Variable> {
     let mut list = vec![];
     if me {
-        list.extend(fmu.md.continuous_states().unwrap_or_default().iter().map(|p| p.0));
+        list.extend(fmu.states().unwrap_or_default().iter().map(|p| p.0));
     }
-    list.extend(float_inputs(fmu).iter().map(|v| v.vr));
+    list.extend(float_inputs(fmu));
     list
 }
 
@@ -45,6 +45,15 @@ fn dependencies(fmu: &Fmu3, me: bool, unknown: u32) -> Option<Vec<u32>> {
         .and_then(|u| u.dependencies.clone())
 }
 
+/// Each value of the variables, one after the other (an array's elements row-major, at the
+/// structural parameters' starts): (the variable's index, the element's index in it).
+fn elements(fmu: &Fmu3, vars: &[&Variable]) -> Vec<(usize, usize)> {
+    vars.iter()
+        .enumerate()
+        .flat_map(|(k, v)| (0..fmu.element_count(v)).map(move |e| (k, e)))
+        .collect()
+}
+
 fn derivatives_check(fmu: &Fmu3, me: bool) {
     let i = if me { fmu.md.me.as_ref() } else { fmu.md.cs.as_ref() };
     let Some(i) = i else {
@@ -53,16 +62,32 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
     if !i.provides_directional_derivatives {
         skip_not_declared("providesDirectionalDerivatives");
     }
-    let (u, k) = (unknowns(fmu, me), knowns(fmu, me));
-    if u.is_empty() || k.is_empty() {
+    let (u_vars, k_vars) = (unknowns(fmu, me), knowns(fmu, me));
+    // nSeed and nSensitivity count every element of the knowns and unknowns (FMI 3.0, 2.3.11).
+    let (ue, ke) = (elements(fmu, &u_vars), elements(fmu, &k_vars));
+    if ue.is_empty() || ke.is_empty() {
         // A co-simulation FMU without continuous Real inputs has no knowns (BouncingBall).
+        let elements = if (ue.len(), ke.len()) == (u_vars.len(), k_vars.len()) {
+            String::new()
+        } else {
+            format!("; their elements {} and {}", ue.len(), ke.len())
+        };
         skip_not_declared(format!(
-            "a Real unknown and known to differentiate (unknowns {}, knowns {})",
-            u.len(),
-            k.len()
+            "a Real unknown and known to differentiate (unknowns {}, knowns {}{elements})",
+            u_vars.len(),
+            k_vars.len()
         ));
     }
-    let states = fmu.md.continuous_states().unwrap_or_default();
+    let u: Vec<u32> = u_vars.iter().map(|v| v.vr).collect();
+    let k: Vec<u32> = k_vars.iter().map(|v| v.vr).collect();
+    let (u_names, k_names) = (element_labels(fmu, &u_vars), element_labels(fmu, &k_vars));
+    // The state vector: where each state's elements are in it (ME).
+    let slots = if me {
+        fmu.state_slots().unwrap_or_else(|e| panic!("{}: {e}", fmu.id))
+    } else {
+        vec![]
+    };
+    let nx = fmu.n_states_declared();
     let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
     excite(&inst);
     inst.initialize();
@@ -70,10 +95,10 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         inst.step(fmu.step_size());
     }
     let api = &fmu.api;
-    let (nu, nk) = (u.len(), k.len());
-    // J by columns (directional) and by rows (adjoint).
+    let (nu, nk) = (ue.len(), ke.len());
+    // J by columns (directional) and by rows (adjoint), over the elements.
     let mut jd = vec![vec![0.0; nk]; nu];
-    for (j, _) in k.iter().enumerate() {
+    for j in 0..nk {
         let mut seed = vec![0.0; nk];
         seed[j] = 1.0;
         let mut sens = vec![f64::NAN; nu];
@@ -81,9 +106,9 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             (api.get_directional_derivative)(
                 c,
                 u.as_ptr(),
-                nu,
+                u.len(),
                 k.as_ptr(),
-                nk,
+                k.len(),
                 seed.as_ptr(),
                 nk,
                 sens.as_mut_ptr(),
@@ -93,8 +118,11 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         assert_eq!(
             s,
             fmi3OK,
-            "{}: fmi3GetDirectionalDerivative: {}",
+            "{}: fmi3GetDirectionalDerivative by {} (nUnknowns = {}, nKnowns = {}, nSeed = {nk}, nSensitivity = {nu}): {}",
             fmu.id,
+            k_names[j],
+            u.len(),
+            k.len(),
             inst.log_text()
         );
         for r in 0..nu {
@@ -111,16 +139,25 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
                 (api.get_adjoint_derivative)(
                     c,
                     u.as_ptr(),
-                    nu,
+                    u.len(),
                     k.as_ptr(),
-                    nk,
+                    k.len(),
                     seed.as_ptr(),
                     nu,
                     sens.as_mut_ptr(),
                     nk,
                 )
             });
-            assert_eq!(s, fmi3OK, "{}: fmi3GetAdjointDerivative: {}", fmu.id, inst.log_text());
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{}: fmi3GetAdjointDerivative of {} (nUnknowns = {}, nKnowns = {}, nSeed = {nu}, nSensitivity = {nk}): {}",
+                fmu.id,
+                u_names[r],
+                u.len(),
+                k.len(),
+                inst.log_text()
+            );
             ja[r] = sens;
         }
         for r in 0..nu {
@@ -130,56 +167,79 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
                     (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
                     "{}: d{}/d{}: directional {a}, adjoint {b}: the adjoint must be the transpose",
                     fmu.id,
-                    u[r],
-                    k[j]
+                    u_names[r],
+                    k_names[j]
                 );
             }
         }
     } else {
         info("providesAdjointDerivatives is false: the adjoint is not compared");
     }
-    // Finite differences: perturb each known, read the unknowns.
-    // The unknowns: derivatives through fmi3GetContinuousStateDerivatives (ME), the rest
+    // Finite differences: perturb each element of each known, read every element of the
+    // unknowns. The derivatives through fmi3GetContinuousStateDerivatives (ME), the rest
     // through fmi3GetFloat64.
     let read = |inst: &Inst| -> Vec<f64> {
-        let (s, mut all) = inst.get_f64(&u);
+        let (s, mut all) = inst.get_f64_n(&u, nu);
         assert_eq!(s, fmi3OK, "{}: reading the unknowns: {}", fmu.id, inst.log_text());
         if me {
             let (s, dx) = inst.vector(
                 "fmi3GetContinuousStateDerivatives",
                 api.get_continuous_state_derivatives,
-                states.len(),
+                nx,
             );
-            assert_eq!(s, fmi3OK);
-            for (r, vr) in u.iter().enumerate() {
-                if let Some(si) = states.iter().position(|p| p.1 == *vr) {
-                    all[r] = dx[si];
+            assert_eq!(
+                s,
+                fmi3OK,
+                "{}: fmi3GetContinuousStateDerivatives (nx = {nx}): {}",
+                fmu.id,
+                inst.log_text()
+            );
+            for (r, (var, e)) in ue.iter().enumerate() {
+                if let Some(slot) = slots.iter().find(|p| p.1.vr == u[*var]) {
+                    all[r] = dx[slot.2 + e];
                 }
             }
         }
         all
     };
     let (_, base_x) = if me {
-        inst.vector("x", api.get_continuous_states, states.len())
+        inst.vector("fmi3GetContinuousStates", api.get_continuous_states, nx)
     } else {
         (fmi3OK, vec![])
     };
-    let (_, base_k) = inst.get_f64(&k);
+    let (s, base_k) = inst.get_f64_n(&k, nk);
+    assert_eq!(s, fmi3OK, "{}: reading the knowns: {}", fmu.id, inst.log_text());
+    // Where each known's elements start in `base_k`.
+    let k_start: Vec<usize> = (0..k.len())
+        .map(|var| ke.iter().position(|p| p.0 == var).unwrap_or(0))
+        .collect();
     let set = |inst: &Inst, j: usize, value: f64| {
-        let vr = k[j];
-        if let Some(si) = states.iter().position(|p| p.0 == vr).filter(|_| me) {
+        let (var, e) = ke[j];
+        let vr = k[var];
+        if let Some(slot) = slots.iter().find(|p| p.0.vr == vr) {
             let mut x = base_x.clone();
-            x[si] = value;
+            x[slot.2 + e] = value;
             assert_eq!(
-                inst.call("sx", |c| unsafe { (api.set_continuous_states)(c, x.as_ptr(), x.len()) }),
-                fmi3OK
+                inst.call("fmi3SetContinuousStates", |c| unsafe {
+                    (api.set_continuous_states)(c, x.as_ptr(), x.len())
+                }),
+                fmi3OK,
+                "{}: setting state {} = {value}: {}",
+                fmu.id,
+                k_names[j],
+                inst.log_text()
             );
         } else {
+            // The known's every element, the one perturbed among them.
+            let n = fmu.element_count(k_vars[var]);
+            let mut x = base_k[k_start[var]..k_start[var] + n].to_vec();
+            x[e] = value;
             assert_eq!(
-                inst.set_f64(&[vr], &[value]),
+                inst.set_f64(&[vr], &x),
                 fmi3OK,
-                "{}: setting known {vr} = {value}: {}",
+                "{}: setting known {} = {value}: {}",
                 fmu.id,
+                k_names[j],
                 inst.log_text()
             );
         }
@@ -200,13 +260,14 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         let (d1, d2) = (fd(e), fd(e / 10.0));
         for r in 0..nu {
             let a = jd[r][j];
-            if let Some(deps) = dependencies(fmu, me, u[r])
-                && !deps.contains(&k[j])
+            let (uv, kv) = (u[ue[r].0], k[ke[j].0]);
+            if let Some(deps) = dependencies(fmu, me, uv)
+                && !deps.contains(&kv)
             {
                 assert_eq!(
                     a, 0.0,
-                    "{}: d{}/d{} = {a}, but <ModelStructure> declares no dependency",
-                    fmu.id, u[r], k[j]
+                    "{}: d{}/d{} = {a}, but <ModelStructure> declares no dependency of vr {uv} on vr {kv}",
+                    fmu.id, u_names[r], k_names[j]
                 );
             }
             let tol = |x: f64| 1e-4 * (1.0 + x.abs());
@@ -218,44 +279,60 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
                 (a - d1[r]).abs() <= tol(d1[r]),
                 "{}: d{}/d{}: fmi3GetDirectionalDerivative {a}, central finite difference {} ({})",
                 fmu.id,
-                u[r],
-                k[j],
+                u_names[r],
+                k_names[j],
                 d1[r],
                 if me { "ME" } else { "CS" }
             );
             compared += 1;
         }
     }
+    let arrays = u_vars.iter().chain(&k_vars).filter(|v| v.array).count();
     info(format!(
-        "{compared} of {} partial derivatives compared with finite differences ({kinks} left out where two step sizes disagree)",
-        nu * nk
+        "{compared} of {} partial derivatives compared with finite differences ({kinks} left out where two step sizes disagree){}",
+        nu * nk,
+        if arrays > 0 {
+            format!(
+                "; {} unknown(s) and {} known(s) with {nu} and {nk} elements ({arrays} arrays)",
+                u.len(),
+                k.len()
+            )
+        } else {
+            String::new()
+        }
     ));
-    // Bad arguments: nSeed != nKnowns, unknown vr, NULL seed.
+    // Bad arguments: nSeed != the knowns' elements, nSensitivity != the unknowns', an unknown
+    // vr, a NULL seed.
+    let (nuv, nkv) = (u.len(), k.len());
     let seed = vec![1.0; nk + 1];
     let mut sens = vec![0.0; nu + 1];
-    refused(&inst, "fmi3GetDirectionalDerivative(nSeed = nKnowns + 1)", |c| unsafe {
-        (api.get_directional_derivative)(
-            c,
-            u.as_ptr(),
-            nu,
-            k.as_ptr(),
-            nk,
-            seed.as_ptr(),
-            nk + 1,
-            sens.as_mut_ptr(),
-            nu,
-        )
-    });
     refused(
         &inst,
-        "fmi3GetDirectionalDerivative(nSensitivity = nUnknowns + 1)",
+        "fmi3GetDirectionalDerivative(nSeed = the knowns' elements + 1)",
         |c| unsafe {
             (api.get_directional_derivative)(
                 c,
                 u.as_ptr(),
-                nu,
+                nuv,
                 k.as_ptr(),
-                nk,
+                nkv,
+                seed.as_ptr(),
+                nk + 1,
+                sens.as_mut_ptr(),
+                nu,
+            )
+        },
+    );
+    refused(
+        &inst,
+        "fmi3GetDirectionalDerivative(nSensitivity = the unknowns' elements + 1)",
+        |c| unsafe {
+            (api.get_directional_derivative)(
+                c,
+                u.as_ptr(),
+                nuv,
+                k.as_ptr(),
+                nkv,
                 seed.as_ptr(),
                 nk,
                 sens.as_mut_ptr(),
@@ -263,6 +340,29 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             )
         },
     );
+    if nu != nuv || nk != nkv {
+        // nSeed and nSensitivity counting variables, not elements (an importer's mistake with
+        // arrays): refused.
+        refused(
+            &inst,
+            &format!(
+                "fmi3GetDirectionalDerivative(nSeed = nKnowns = {nkv}, nSensitivity = nUnknowns = {nuv}: the arrays' elements are {nk} and {nu})"
+            ),
+            |c| unsafe {
+                (api.get_directional_derivative)(
+                    c,
+                    u.as_ptr(),
+                    nuv,
+                    k.as_ptr(),
+                    nkv,
+                    seed.as_ptr(),
+                    nkv,
+                    sens.as_mut_ptr(),
+                    nuv,
+                )
+            },
+        );
+    }
     let bad = [fmu.md.unknown_vr()];
     refused(
         &inst,
@@ -273,7 +373,7 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
                 bad.as_ptr(),
                 1,
                 k.as_ptr(),
-                nk,
+                nkv,
                 seed.as_ptr(),
                 nk,
                 sens.as_mut_ptr(),
@@ -282,19 +382,19 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         },
     );
     refused(&inst, "fmi3GetDirectionalDerivative(seed = NULL)", |c| unsafe {
-        (api.get_directional_derivative)(c, u.as_ptr(), nu, k.as_ptr(), nk, null(), nk, sens.as_mut_ptr(), nu)
+        (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, null(), nk, sens.as_mut_ptr(), nu)
     });
     if i.provides_adjoint_derivatives {
         refused(
             &inst,
-            "fmi3GetAdjointDerivative(nSeed = nKnowns: the adjoint's seed has nUnknowns)",
+            "fmi3GetAdjointDerivative(nSeed = the knowns' elements: the adjoint's seed has the unknowns')",
             |c| unsafe {
                 (api.get_adjoint_derivative)(
                     c,
                     u.as_ptr(),
-                    nu,
+                    nuv,
                     k.as_ptr(),
-                    nk,
+                    nkv,
                     seed.as_ptr(),
                     if nk == nu { nu + 1 } else { nk },
                     sens.as_mut_ptr(),

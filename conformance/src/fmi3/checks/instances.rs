@@ -19,8 +19,9 @@ pub fn fmi3_interleaved_instances_and_instances_on_threads_match_a_single_run(fm
         let mut c = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
         excite(&a);
         excite(&c);
-        for (vr, v) in excitation(fmu) {
-            assert_eq!(b.set_f64(&[vr], &[-v]), fmi3OK);
+        for (v, x) in excitation(fmu) {
+            let minus: Vec<f64> = x.iter().map(|x| -x).collect();
+            assert_eq!(b.set_f64(&[v.vr], &minus), fmi3OK, "{}: {}", fmu.id, b.log_text());
         }
         a.initialize();
         b.initialize();

@@ -23,10 +23,9 @@ pub mod structural;
 pub mod table;
 pub mod types;
 
-use super::Type;
 use super::standard::{State, settable_in};
 use super::types::*;
-use super::{Fmu3, Inst, euler_step};
+use super::{Fmu3, Inst, Type, Variable, euler_step};
 use crate::outcome::{info, limitation, skip, skip_not_declared};
 use fmi_description::{Causality, Initial, Variability};
 use std::ffi::CString;
@@ -156,35 +155,90 @@ fn in_state(fmu: &Fmu3, me: bool, state: State) -> Inst<'_> {
     i
 }
 
-fn float_inputs(fmu: &Fmu3) -> Vec<&super::Variable> {
+/// The continuous Float64 inputs (not clocked): the scalars, then the arrays (each element a
+/// value, the structural parameters at their starts).
+fn float_inputs(fmu: &Fmu3) -> Vec<&Variable> {
+    let continuous_input = |v: &&Variable| v.causality == Causality::Input && v.variability == Variability::Continuous;
     fmu.md
         .of_type(Type::Float64)
-        .filter(|v| v.causality == Causality::Input && v.variability == Variability::Continuous)
+        .filter(continuous_input)
+        .chain(
+            fmu.md
+                .variables
+                .iter()
+                .filter(|v| v.ty == Type::Float64 && v.array && v.clocks.is_empty())
+                .filter(continuous_input),
+        )
         .collect()
 }
 
-/// A moderate excitation of every continuous Float64 input (inside min/max).
-fn excitation(fmu: &Fmu3) -> Vec<(u32, f64)> {
+/// A name for each value of the variables, one after the other: the name of a scalar, the name
+/// and the 1-based indices of each element of an array, row-major (`A[2,1]`), at the start sizes.
+fn element_labels(fmu: &Fmu3, vars: &[&Variable]) -> Vec<String> {
+    let mut out = vec![];
+    for v in vars {
+        if !v.array {
+            out.push(v.name.clone());
+            continue;
+        }
+        let dims = fmu.dims_at(v, fmu.start_sizes());
+        for k in 0..fmu.element_count(v) {
+            let (mut rest, mut index) = (k as u64, vec![0; dims.len()]);
+            for (d, n) in dims.iter().enumerate().rev() {
+                index[d] = rest % n + 1;
+                rest /= n;
+            }
+            let index: Vec<String> = index.iter().map(u64::to_string).collect();
+            out.push(format!("{}[{}]", v.name, index.join(",")));
+        }
+    }
+    out
+}
+
+/// A moderate excitation of every continuous Float64 input (inside min/max): 0.1, 0.2, ... one
+/// after the other over the inputs of [`float_inputs`] and their elements.
+fn excitation(fmu: &Fmu3) -> Vec<(&Variable, Vec<f64>)> {
+    let mut k = 0;
     float_inputs(fmu)
-        .iter()
-        .enumerate()
-        .map(|(k, v)| {
-            let mut x = 0.1 * (k as f64 + 1.0);
-            if let Some(lo) = v.min {
-                x = x.max(lo);
-            }
-            if let Some(hi) = v.max {
-                x = x.min(hi);
-            }
-            (v.vr, x)
+        .into_iter()
+        .map(|v| {
+            let values = (0..fmu.element_count(v))
+                .map(|_| {
+                    k += 1;
+                    let mut x = 0.1 * k as f64;
+                    if let Some(lo) = v.min {
+                        x = x.max(lo);
+                    }
+                    if let Some(hi) = v.max {
+                        x = x.min(hi);
+                    }
+                    x
+                })
+                .collect();
+            (v, values)
         })
         .collect()
 }
 
+/// Sets the [`excitation`] (one fmi3SetFloat64 of every input's elements).
 fn excite(inst: &Inst) {
-    let (vrs, vals): (Vec<u32>, Vec<f64>) = excitation(inst.fmu).into_iter().unzip();
+    set_excitation(inst, true);
+}
+
+/// [`excite`] of the scalar inputs only (the structural-parameter check sets the arrays with
+/// the sizes it gave them).
+fn excite_scalars(inst: &Inst) {
+    set_excitation(inst, false);
+}
+
+fn set_excitation(inst: &Inst, arrays: bool) {
+    let (vrs, vals): (Vec<u32>, Vec<Vec<f64>>) = excitation(inst.fmu)
+        .into_iter()
+        .filter(|(v, _)| arrays || !v.array)
+        .map(|(v, x)| (v.vr, x))
+        .unzip();
     assert_eq!(
-        inst.set_f64(&vrs, &vals),
+        inst.set_f64(&vrs, &vals.concat()),
         fmi3OK,
         "{}: setting the inputs: {}",
         inst.fmu.id,
@@ -227,7 +281,7 @@ fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) 
 
 /// The scalar variables of element `ty` that have a start value in the description (FMI 3.0,
 /// 2.4.7.4: inputs, and initial exact or approx; never the independent variable).
-fn with_start(fmu: &Fmu3, ty: Type) -> impl Iterator<Item = &super::Variable> {
+fn with_start(fmu: &Fmu3, ty: Type) -> impl Iterator<Item = &Variable> {
     fmu.md.of_type(ty).filter(|v| {
         !v.array
             && v.causality != Causality::Independent

@@ -5,16 +5,22 @@ use super::*;
 // ---------------------------------------------------------------------------------------------
 // Model exchange
 
+/// fmi3GetNumberOfContinuousStates is the number of elements of the `<ContinuousStateDerivative>`s'
+/// variables (an array counts each element, at the structural parameters' starts), and
+/// fmi3GetNumberOfEventIndicators that of the `<EventIndicator>`s; over five Euler steps the
+/// state and derivative vectors are the state and derivative variables' elements in that
+/// order, the nominals are finite and positive, and the same states give the same derivatives.
 pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
     me_only(fmu);
-    let states = fmu.md.continuous_states().unwrap_or_else(|e| panic!("{}: {e}", fmu.id));
+    let states = fmu.states().unwrap_or_else(|e| panic!("{}: {e}", fmu.id));
     let mut i = Inst::me(fmu);
     let api = &fmu.api;
     let n = i.n_states();
+    let nx = fmu.n_states_declared();
     assert_eq!(
         n,
-        states.len(),
-        "{}: fmi3GetNumberOfContinuousStates says {n}, <ModelStructure> lists {} <ContinuousStateDerivative>",
+        nx,
+        "{}: fmi3GetNumberOfContinuousStates says {n}, the {} <ContinuousStateDerivative> of <ModelStructure> have {nx} elements (with the structural parameters at their starts)",
         fmu.id,
         states.len()
     );
@@ -23,13 +29,16 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
         i.call("n", |c| unsafe { (api.get_number_of_event_indicators)(c, &mut ne) }),
         fmi3OK
     );
+    let nz = fmu.n_event_indicators_declared();
     assert_eq!(
         ne,
-        fmu.md.event_indicators.len(),
-        "{}: fmi3GetNumberOfEventIndicators says {ne}, <ModelStructure> lists {} <EventIndicator>",
+        nz,
+        "{}: fmi3GetNumberOfEventIndicators says {ne}, the {} <EventIndicator> of <ModelStructure> have {nz} elements",
         fmu.id,
         fmu.md.event_indicators.len()
     );
+    let state_vars: Vec<&Variable> = states.iter().map(|p| p.0).collect();
+    let derivative_vars: Vec<&Variable> = states.iter().map(|p| p.1).collect();
     excite(&i);
     i.initialize();
     for step in 0..5 {
@@ -41,18 +50,26 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
             n,
         );
         assert_eq!(s, fmi3OK);
-        let (_, xs) = i.get_f64(&states.iter().map(|p| p.0).collect::<Vec<_>>());
-        let (_, ds) = i.get_f64(&states.iter().map(|p| p.1).collect::<Vec<_>>());
+        let (s, xs) = i.get_f64_of(&state_vars);
+        assert_eq!(s, fmi3OK, "{}: fmi3GetFloat64 of the states: {}", fmu.id, i.log_text());
+        let (s, ds) = i.get_f64_of(&derivative_vars);
+        assert_eq!(
+            s,
+            fmi3OK,
+            "{}: fmi3GetFloat64 of the derivatives: {}",
+            fmu.id,
+            i.log_text()
+        );
         assert_eq!(
             crate::bits(&x),
             crate::bits(&xs),
-            "{}: step {step}: fmi3GetContinuousStates differs from fmi3GetFloat64 of the state variables",
+            "{}: step {step}: fmi3GetContinuousStates {x:?} differs from fmi3GetFloat64 of the state variables' elements {xs:?}",
             fmu.id
         );
         assert_eq!(
             crate::bits(&dx),
             crate::bits(&ds),
-            "{}: step {step}: fmi3GetContinuousStateDerivatives differs from fmi3GetFloat64 of the derivative variables",
+            "{}: step {step}: fmi3GetContinuousStateDerivatives {dx:?} differs from fmi3GetFloat64 of the derivative variables' elements {ds:?}",
             fmu.id
         );
         let (s, nom) = i.vector(
@@ -144,7 +161,7 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
         assert_eq!(s, fmi3OK, "{id}: fmi3EnterContinuousTimeMode: {}", i.log_text());
     };
     enter_ct(&i);
-    let nz = fmu.md.event_indicators.len();
+    let nz = fmu.n_event_indicators_declared();
     let mut count = usize::MAX;
     let s = i.call("fmi3GetNumberOfEventIndicators", |c| unsafe {
         (api.get_number_of_event_indicators)(c, &mut count)
@@ -166,7 +183,7 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
         );
         z
     };
-    let n = fmu.md.derivatives.len();
+    let n = fmu.n_states_declared();
     let mut z = indicators(&i);
     let (mut events, mut time_events, mut steps) = (0usize, 0usize, 0usize);
     while i.time < stop - 0.5 * h {
@@ -319,7 +336,14 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
             break;
         }
     }
-    let (s, values) = i.get_f64(&fmu.md.vrs_of_type(Type::Float64));
+    // Every Float64 value (every element of the arrays) finite.
+    let floats: Vec<&Variable> = fmu
+        .md
+        .variables
+        .iter()
+        .filter(|v| v.ty == Type::Float64 && v.clocks.is_empty())
+        .collect();
+    let (s, values) = i.get_f64_of(&floats);
     assert_eq!(s, fmi3OK, "{id}: {}", i.log_text());
     assert!(values.iter().all(|v| v.is_finite()), "{id}: {values:?}");
     if handed == 0 {

@@ -86,6 +86,13 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
         let mut state = State::Instantiated;
         let mut saved: Option<(Vec<u8>, State, f64)> = None;
         let inputs = float_inputs(fmu);
+        // Every Float64 but the clocked ones, every element of the arrays.
+        let all_f64: Vec<&Variable> = fmu
+            .md
+            .variables
+            .iter()
+            .filter(|v| v.ty == Type::Float64 && v.clocks.is_empty())
+            .collect();
         let h = fmu.step_size();
         // After an fmi3Error the standard puts the FMU in Terminated (checked on its own by
         // fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_state):
@@ -95,7 +102,7 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
         for (k, op) in ops.iter().enumerate() {
             if errored && !matches!(op, Op::Reset | Op::RestoreState) {
                 let s = match op {
-                    Op::GetAll => inst.get_f64(&fmu.md.vrs_of_type(Type::Float64)).0,
+                    Op::GetAll => inst.get_f64_of(&all_f64).0,
                     Op::EnterInit => inst.enter_init(0.0),
                     Op::ExitInit => inst.exit_init(),
                     Op::Step if me => inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
@@ -158,11 +165,12 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
                 Op::EnterCtm => inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
                     (api.enter_continuous_time_mode)(c)
                 }),
+                // (An array input: every element set to the value.)
                 Op::SetInput(x) => match inputs.get(*x as usize % inputs.len().max(1)) {
-                    Some(v) => inst.set_f64(&[v.vr], &[(*x as f64 - 128.0) / 256.0]),
+                    Some(v) => inst.set_f64(&[v.vr], &vec![(*x as f64 - 128.0) / 256.0; fmu.element_count(v)]),
                     None => inst.set_f64(&[], &[]),
                 },
-                Op::GetAll => inst.get_f64(&fmu.md.vrs_of_type(Type::Float64)).0,
+                Op::GetAll => inst.get_f64_of(&all_f64).0,
                 Op::Terminate => inst.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) }),
                 Op::Reset => {
                     inst.time = 0.0;

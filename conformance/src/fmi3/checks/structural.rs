@@ -10,15 +10,10 @@
 //! nowhere else, nothing else is set there, values outside min/max are refused.
 
 use super::*;
-use crate::fmi3::Variable;
+use crate::fmi3::{Sizes, Variable, euler_step_n, floats};
 use crate::outcome::NOT_DECLARED;
 use fmi_description::fmi3::Dimension;
-use std::collections::BTreeMap;
 use std::ffi::c_void;
-
-/// The value of every UInt64 structural parameter and constant a `<Dimension valueReference>`
-/// may name, by value reference.
-type Sizes = BTreeMap<u32, u64>;
 
 /// A UInt64 structural parameter the check changes.
 struct Param<'a> {
@@ -113,20 +108,6 @@ fn exit_config(inst: &Inst) -> fmi3Status {
     })
 }
 
-/// Float values from a getter's bytes (Float64 or Float32).
-fn floats(ty: Type, bytes: &[u8]) -> Vec<f64> {
-    match ty {
-        Type::Float32 => bytes
-            .chunks_exact(4)
-            .map(|c| f32::from_ne_bytes(c.try_into().unwrap()) as f64)
-            .collect(),
-        _ => bytes
-            .chunks_exact(8)
-            .map(|c| f64::from_ne_bytes(c.try_into().unwrap()))
-            .collect(),
-    }
-}
-
 impl<'a> Setup<'a> {
     fn new(fmu: &'a Fmu3, me: bool) -> Setup<'a> {
         let id = &fmu.id;
@@ -140,17 +121,8 @@ impl<'a> Setup<'a> {
                 Dimension::Fixed(_) => None,
             })
             .collect();
-        let mut base = Sizes::new();
-        for v in fmu
-            .md
-            .variables
-            .iter()
-            .filter(|v| v.ty == Type::UInt64 && v.variability == Variability::Constant && !v.array)
-        {
-            if let Some(x) = parse_u64(v) {
-                base.insert(v.vr, x);
-            }
-        }
+        // The constants' values, and the structural parameters' starts (checked below).
+        let mut base = fmu.start_sizes().clone();
         let mut params = vec![];
         for v in fmu
             .md
@@ -240,24 +212,12 @@ impl<'a> Setup<'a> {
 
     /// The lengths of a variable's dimensions under `sizes` (none for a scalar).
     fn dims(&self, v: &Variable, sizes: &Sizes) -> Vec<u64> {
-        v.dimensions
-            .iter()
-            .map(|d| match d {
-                Dimension::Fixed(k) => *k,
-                Dimension::Parameter(vr) => *sizes.get(vr).unwrap_or_else(|| {
-                    panic!(
-                        "{}: '{}' has <Dimension valueReference=\"{vr}\">, which names no UInt64 structural parameter or constant",
-                        self.id(),
-                        v.name
-                    )
-                }),
-            })
-            .collect()
+        self.fmu.dims_at(v, sizes)
     }
 
     /// The number of values of a variable under `sizes` (the product of its lengths; 1 for a scalar).
     fn count(&self, v: &Variable, sizes: &Sizes) -> usize {
-        self.dims(v, sizes).iter().product::<u64>() as usize
+        self.fmu.count_at(v, sizes)
     }
 
     /// The structural parameters' values, for messages ("m = 2, n = 4").
@@ -301,7 +261,7 @@ impl<'a> Setup<'a> {
         inst.initialize();
         if self.me {
             let nx = self.nx(&self.new);
-            euler(&mut inst, nx, self.fmu.step_size());
+            euler_step_n(&mut inst, nx, self.fmu.step_size());
             self.ok(
                 &inst,
                 inst.call("fmi3EnterEventMode", |c| unsafe { (inst.api().enter_event_mode)(c) }),
@@ -450,9 +410,9 @@ impl<'a> Setup<'a> {
     }
 
     /// The continuous Float inputs sized by structural parameters, set with their counts under
-    /// `sizes` (0.1, 0.2, ... inside min/max), and the scalar ones ([`excite`]).
+    /// `sizes` (0.1, 0.2, ... inside min/max), and the scalar ones ([`excite_scalars`]).
     fn set_inputs(&self, inst: &Inst, sizes: &Sizes) {
-        excite(inst);
+        excite_scalars(inst);
         for v in self
             .arrays
             .iter()
@@ -492,17 +452,12 @@ impl<'a> Setup<'a> {
 
     /// The continuous states (state, derivative) in the order of `<ContinuousStateDerivative>`.
     fn states(&self) -> Vec<(&'a Variable, &'a Variable)> {
-        let md = &self.fmu.md;
-        md.continuous_states()
-            .unwrap_or_else(|e| panic!("{}: {e}", self.id()))
-            .iter()
-            .map(|(x, d)| (md.by_vr(*x).unwrap(), md.by_vr(*d).unwrap()))
-            .collect()
+        self.fmu.states().unwrap_or_else(|e| panic!("{}: {e}", self.id()))
     }
 
     /// The number of continuous states under `sizes`: each state's element count.
     fn nx(&self, sizes: &Sizes) -> usize {
-        self.states().iter().map(|(x, _)| self.count(x, sizes)).sum()
+        self.fmu.nx_at(sizes)
     }
 
     /// Model exchange under `sizes`: fmi3GetNumberOfContinuousStates is [`Setup::nx`]; the
@@ -701,64 +656,6 @@ impl<'a> Setup<'a> {
     }
 }
 
-/// One explicit-Euler step with nx states (as [`euler_step`], whose nx is the number of
-/// `<ContinuousStateDerivative>`, not of their elements).
-fn euler(inst: &mut Inst, nx: usize, h: f64) {
-    let api = inst.api();
-    let id = inst.fmu.id.clone();
-    let (s, x) = inst.vector("fmi3GetContinuousStates", api.get_continuous_states, nx);
-    assert_eq!(
-        s,
-        fmi3OK,
-        "{id}: fmi3GetContinuousStates (nx = {nx}): {}",
-        inst.log_text()
-    );
-    let (s, dx) = inst.vector(
-        "fmi3GetContinuousStateDerivatives",
-        api.get_continuous_state_derivatives,
-        nx,
-    );
-    assert_eq!(
-        s,
-        fmi3OK,
-        "{id}: fmi3GetContinuousStateDerivatives (nx = {nx}): {}",
-        inst.log_text()
-    );
-    let t = inst.time + h;
-    let x1: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + h * d).collect();
-    let s = inst.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t) });
-    assert_eq!(s, fmi3OK, "{id}: fmi3SetTime({t}): {}", inst.log_text());
-    let s = inst.call("fmi3SetContinuousStates", |c| unsafe {
-        (api.set_continuous_states)(c, x1.as_ptr(), nx)
-    });
-    assert_eq!(
-        s,
-        fmi3OK,
-        "{id}: fmi3SetContinuousStates (nx = {nx}): {}",
-        inst.log_text()
-    );
-    inst.time = t;
-    let (mut enter, mut term) = (7u8, 7u8);
-    let s = inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-        (api.completed_integrator_step)(c, true, &mut enter, &mut term)
-    });
-    assert_eq!(
-        (s, term),
-        (fmi3OK, 0),
-        "{id}: fmi3CompletedIntegratorStep at t = {t}: {}",
-        inst.log_text()
-    );
-    if enter == 1 {
-        let s = inst.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) });
-        assert_eq!(s, fmi3OK, "{id}: fmi3EnterEventMode: {}", inst.log_text());
-        inst.event_iteration();
-        let s = inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-            (api.enter_continuous_time_mode)(c)
-        });
-        assert_eq!(s, fmi3OK, "{id}: fmi3EnterContinuousTimeMode: {}", inst.log_text());
-    }
-}
-
 /// What one interface's run counted, for the report.
 #[derive(Default)]
 struct Counts {
@@ -810,7 +707,7 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
         let nx = st.me_vectors(&inst, &st.new, "after initialization with the new sizes");
         st.jacobian(&inst, nx);
         for k in 0..5 {
-            euler(&mut inst, nx, h);
+            euler_step_n(&mut inst, nx, h);
             n.steps += 1;
             st.me_vectors(&inst, &st.new, &format!("after Euler step {}", k + 1));
             n.reads += st.read_arrays(&inst, &st.new, true, &format!("after Euler step {}", k + 1));
@@ -847,7 +744,7 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
             st.ok(&inst, s, "fmi3EnterContinuousTimeMode after Reconfiguration Mode");
             st.jacobian(&inst, nx);
             for k in 0..3 {
-                euler(&mut inst, nx, h);
+                euler_step_n(&mut inst, nx, h);
                 n.steps += 1;
                 st.me_vectors(
                     &inst,

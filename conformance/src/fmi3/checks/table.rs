@@ -255,7 +255,9 @@ impl F {
                 i.vector(name, api.$f, $n).0
             };
         }
-        let n_states = i.fmu.md.derivatives.len();
+        // nContinuousStates and nEventIndicators count every element of the state and indicator
+        // arrays (the structural parameters at their starts).
+        let n_states = i.fmu.n_states_declared();
         // SAFETY (every call): the standard's functions with valid pointers of the lengths
         // passed, on a live instance (or NULL, which the FMU must refuse).
         match self {
@@ -375,7 +377,7 @@ impl F {
                 })
             }
             F::GetContinuousStateDerivatives => vector!(get_continuous_state_derivatives, n_states),
-            F::GetEventIndicators => vector!(get_event_indicators, i.fmu.md.event_indicators.len()),
+            F::GetEventIndicators => vector!(get_event_indicators, i.fmu.n_event_indicators_declared()),
             F::GetContinuousStates => vector!(get_continuous_states, n_states),
             F::GetNominalsOfContinuousStates => vector!(get_nominals_of_continuous_states, n_states),
             F::GetNumberOfEventIndicators => {
@@ -419,11 +421,15 @@ fn vr_list(fmu: &Fmu3, ty: Type) -> Vec<u32> {
     first_of(fmu, ty).into_iter().collect()
 }
 
-/// The Derivative call with valid arguments: one unknown (an output, else a derivative), one
-/// known (a continuous input, else a state in ME), or none.
+/// The Derivative call with valid arguments: one unknown (a derivative in ME, else an output),
+/// one known (a state in ME, else a continuous input), or none; nSeed and nSensitivity count
+/// their elements (an array's every element).
 fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
-    let (u, k) = derivative_pair(i.fmu, i.me);
-    let (nu, nk) = (u.len(), k.len());
+    let (u_var, k_var) = derivative_pair(i.fmu, i.me);
+    let elements = |v: &[&Variable]| v.iter().map(|v| i.fmu.element_count(v)).sum::<usize>();
+    let (nu, nk) = (elements(&u_var), elements(&k_var));
+    let u: Vec<u32> = u_var.iter().map(|v| v.vr).collect();
+    let k: Vec<u32> = k_var.iter().map(|v| v.vr).collect();
     let seed = vec![1.0; if adjoint { nu } else { nk }];
     let mut sens = vec![0.0; if adjoint { nk } else { nu }];
     let f = if adjoint {
@@ -435,9 +441,9 @@ fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
         f(
             c,
             u.as_ptr(),
-            nu,
+            u.len(),
             k.as_ptr(),
-            nk,
+            k.len(),
             seed.as_ptr(),
             seed.len(),
             sens.as_mut_ptr(),
@@ -446,7 +452,7 @@ fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
     })
 }
 
-fn derivative_pair(fmu: &Fmu3, me: bool) -> (Vec<u32>, Vec<u32>) {
+fn derivative_pair(fmu: &Fmu3, me: bool) -> (Vec<&Variable>, Vec<&Variable>) {
     let (u, k) = (unknowns(fmu, me), knowns(fmu, me));
     if u.is_empty() || k.is_empty() {
         return (vec![], vec![]);

@@ -126,14 +126,12 @@ fn another(v: &Variable, now: &[u8]) -> Option<Vec<u8>> {
     }
 }
 
-/// The scalar variables the check reads: every type but String and Clock, not the independent
-/// one, not clocked ones (read at their clocks' ticks only: the clock check's).
+/// The variables the check reads: every type but String and Clock, not the independent one,
+/// not clocked ones (read at their clocks' ticks only: the clock check's); arrays with every
+/// element (those a structural parameter sizes at its start: [`Fmu3::element_count`]).
 fn scalars(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
     fmu.md.variables.iter().filter(|v| {
-        v.fixed_count().is_some()
-            && v.clocks.is_empty()
-            && !matches!(v.ty, Type::String | Type::Clock)
-            && v.causality != Causality::Independent
+        v.clocks.is_empty() && !matches!(v.ty, Type::String | Type::Clock) && v.causality != Causality::Independent
     })
 }
 
@@ -260,9 +258,9 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
             counts[3] += 1;
         }
         // 6. An array read with nValues one short of its elements: refused.
-        for v in scalars(fmu).filter(|v| v.array && v.fixed_count().is_some_and(|n| n > 1)) {
+        for v in scalars(fmu).filter(|v| v.array && fmu.element_count(v) > 1) {
             let inst = in_state(fmu, me, state);
-            let n = v.fixed_count().unwrap_or(1) as usize;
+            let n = fmu.element_count(v);
             let (s, _) = inst.get_raw_n(v, n - 1);
             assert_eq!(
                 s,
