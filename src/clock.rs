@@ -108,6 +108,12 @@ impl Clock {
         (self.interval, fresh)
     }
 
+    /// Whether an interval was given since the importer last read it.
+    #[doc(hidden)]
+    pub fn __fresh(&self) -> bool {
+        self.fresh
+    }
+
     /// Whether `interval` differs from the last one reported (periodic clocks); it is reported now.
     #[doc(hidden)]
     pub fn __report(&mut self, interval: f64) -> bool {

@@ -359,6 +359,9 @@ pub struct ClockDecl {
     pub shift: f64,
     /// `canBeDeactivated`.
     pub can_be_deactivated: bool,
+    /// `priority` (`clock(.., priority = N)`; required by Scheduled Execution): 0 is the
+    /// highest.
+    pub priority: Option<u32>,
 }
 
 impl Fmi3Extras {
@@ -480,6 +483,8 @@ pub struct Interfaces {
     /// the Real inputs given with fmi2SetRealInputDerivatives
     /// ([`crate::CoSimulation::INTERPOLATES_INPUTS`]).
     pub can_interpolate_inputs: bool,
+    /// FMI 3.0 Scheduled Execution (`<ScheduledExecution>`, `#[fmu(scheduled_execution)]`).
+    pub scheduled_execution: bool,
 }
 
 impl Interfaces {
@@ -488,6 +493,7 @@ impl Interfaces {
         model_exchange: false,
         version: FmiVersion::V2,
         can_interpolate_inputs: false,
+        scheduled_execution: false,
     };
     /// Model exchange and co-simulation in one binary: what `export_fmi2!` exports.
     pub const BOTH: Interfaces = Interfaces {
@@ -495,6 +501,7 @@ impl Interfaces {
         model_exchange: true,
         version: FmiVersion::V2,
         can_interpolate_inputs: false,
+        scheduled_execution: false,
     };
     /// ... and what `export_fmi3!` exports.
     pub const BOTH_FMI3: Interfaces = Interfaces {
@@ -502,6 +509,7 @@ impl Interfaces {
         model_exchange: true,
         version: FmiVersion::V3,
         can_interpolate_inputs: false,
+        scheduled_execution: false,
     };
 }
 
@@ -1319,6 +1327,40 @@ impl Enc<'_> {
         if interfaces.can_interpolate_inputs {
             self.u8(INTERPOLATES_INPUTS_TAG);
         }
+        // The clocks' priorities (FMI 3.0): only where a clock has one, so the other encodings
+        // are those before.
+        let mut prioritized = 0u32;
+        let mut i = 0;
+        while i < d.variables.len() {
+            if d.variables[i].in_version(version)
+                && let Some(ClockDecl { priority: Some(_), .. }) = d.variables[i].fmi3.clock
+            {
+                prioritized += 1;
+            }
+            i += 1;
+        }
+        if prioritized > 0 {
+            self.u8(PRIORITIES_TAG);
+            self.u32(prioritized);
+            let (mut i, mut at) = (0, 0u32);
+            while i < d.variables.len() {
+                let v = &d.variables[i];
+                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                    at += v.element_count() as u32;
+                } else if v.in_version(version) {
+                    if let Some(ClockDecl { priority: Some(p), .. }) = v.fmi3.clock {
+                        self.u32(at);
+                        self.u32(p);
+                    }
+                    at += 1;
+                }
+                i += 1;
+            }
+        }
+        // Scheduled Execution: only where it is offered.
+        if interfaces.scheduled_execution {
+            self.u8(SCHEDULED_EXECUTION_TAG);
+        }
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
         if let FmiVersion::V3 = interfaces.version {
@@ -1379,6 +1421,10 @@ const CLOCKS_TAG: u8 = 0xE4;
 const INTERPOLATES_INPUTS_TAG: u8 = 0xE5;
 /// Marks the block of arrays sized by structural parameters, after the clocks.
 const SIZED_TAG: u8 = 0xE6;
+/// Marks the clocks' priorities.
+const PRIORITIES_TAG: u8 = 0xE7;
+/// Marks an FMU that offers Scheduled Execution.
+const SCHEDULED_EXECUTION_TAG: u8 = 0xE8;
 /// [`Fmi3Extras::sized_by`] of a dimension of fixed length.
 pub const NOT_SIZED: u32 = u32::MAX;
 
@@ -1719,6 +1765,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         model_exchange: d.u8()? != 0,
         version: FmiVersion::V2,
         can_interpolate_inputs: false,
+        scheduled_execution: false,
     };
     let default_experiment = if d.u8()? == 0 {
         None
@@ -1834,6 +1881,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                     interval_parameter: d.str()?,
                     shift: d.f64()?,
                     can_be_deactivated: d.u8()? != 0,
+                    priority: None,
                 })
             };
             let clocks = d.names()?.unwrap_or(&[]);
@@ -1860,6 +1908,22 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     if d.at < d.b.len() && d.b[d.at] == INTERPOLATES_INPUTS_TAG {
         d.u8()?;
         interfaces.can_interpolate_inputs = true;
+    }
+    if d.at < d.b.len() && d.b[d.at] == PRIORITIES_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let p = d.u32()?;
+            match variables.get_mut(at).and_then(|v| v.fmi3.clock.as_mut()) {
+                Some(c) => c.priority = Some(p),
+                None => return Err(format!("a priority for variable {at}, which is no Clock")),
+            }
+        }
+    }
+    if d.at < d.b.len() && d.b[d.at] == SCHEDULED_EXECUTION_TAG {
+        d.u8()?;
+        interfaces.scheduled_execution = true;
     }
     if d.at + 1 == d.b.len() {
         match d.u8()? {

@@ -228,6 +228,8 @@ pub trait Variables: Sized {
     const FMI3_ONLY: bool = false;
     /// Whether the FMU offers Co-Simulation (`#[fmu(model_exchange_only)]` says no).
     const CO_SIMULATION: bool = true;
+    /// Whether the FMU offers FMI 3.0 Scheduled Execution (`#[fmu(scheduled_execution)]`).
+    const SCHEDULED_EXECUTION: bool = false;
 
     /// The index in [`DESCRIPTION`](Self::DESCRIPTION)`.variables` of the variable with value
     /// reference `vr`. `#[derive(Model)]` generates a `match`; this default (for hand-written

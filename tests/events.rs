@@ -313,6 +313,7 @@ fn a_co_simulation_only_model_offers_no_model_exchange() {
         model_exchange: model::OnlyCs::MODEL_EXCHANGE,
         version: FmiVersion::V2,
         can_interpolate_inputs: false,
+        scheduled_execution: false,
     };
     let (_, decoded) = decode(&encode_to_vec(&model::OnlyCs::DESCRIPTION, interfaces)).unwrap();
     assert!(decoded.co_simulation && !decoded.model_exchange);

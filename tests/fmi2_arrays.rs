@@ -62,6 +62,7 @@ const V2: Interfaces = Interfaces {
     model_exchange: true,
     version: FmiVersion::V2,
     can_interpolate_inputs: false,
+    scheduled_execution: false,
 };
 
 #[test]

@@ -173,6 +173,7 @@ fn the_description_says_it_can_interpolate_inputs() {
     use rustfmu::description::{Interfaces, decode, encode_to_vec};
     let both = Interfaces {
         can_interpolate_inputs: <model::Integrator as rustfmu::CoSimulation>::INTERPOLATES_INPUTS,
+        scheduled_execution: false,
         ..Interfaces::BOTH
     };
     let (_, back) = decode(&encode_to_vec(&model::Integrator::DESCRIPTION, both)).unwrap();

@@ -121,6 +121,8 @@ pub struct ClockAttrs {
     pub interval_decimal: Option<f64>,
     pub shift_decimal: Option<f64>,
     pub can_be_deactivated: bool,
+    /// `priority` (Scheduled Execution: 0 the highest; required there for input clocks).
+    pub priority: Option<u32>,
 }
 
 impl Variable {
@@ -190,6 +192,9 @@ pub struct ModelDescription {
     pub me: Option<Interface>,
     /// Whether it has `<ScheduledExecution>`.
     pub se: bool,
+    /// The `<ScheduledExecution>` element's attributes (modelIdentifier, canGetAndSetFMUState,
+    /// canSerializeFMUState), where it has one.
+    pub se_interface: Option<Interface>,
     pub log_categories: Vec<String>,
     pub default_experiment: DefaultExperiment,
     pub variables: Vec<Variable>,
@@ -276,6 +281,7 @@ impl ModelDescription {
                         interval_decimal: e.number("intervalDecimal"),
                         shift_decimal: e.number("shiftDecimal"),
                         can_be_deactivated: e.string("canBeDeactivated").as_deref() == Some("true"),
+                        priority: e.number("priority"),
                     }),
                     clocks: e
                         .string("clocks")
@@ -296,7 +302,10 @@ impl ModelDescription {
                 }
                 b"CoSimulation" => d.cs = Some(interface()),
                 b"ModelExchange" => d.me = Some(interface()),
-                b"ScheduledExecution" => d.se = true,
+                b"ScheduledExecution" => {
+                    d.se = true;
+                    d.se_interface = Some(interface());
+                }
                 b"ModelVariables" => in_variables = !empty,
                 b"Category" => d.log_categories.push(e.string("name").unwrap_or_default()),
                 b"DefaultExperiment" => d.default_experiment = DefaultExperiment::read(&e),

@@ -114,6 +114,7 @@ mod tests {
             model_exchange: true,
             version: FmiVersion::V2,
             can_interpolate_inputs: false,
+            scheduled_execution: false,
         };
         let html = index_html(&d, "", both, &["linux64".into(), "win64".into()], None);
         assert!(
@@ -126,6 +127,7 @@ mod tests {
             model_exchange: false,
             version: FmiVersion::V3,
             can_interpolate_inputs: false,
+            scheduled_execution: false,
         };
         let html = index_html(&d, "", cs3, &["x86_64-linux".into()], Some("<svg></svg>"));
         assert!(html.contains("FMI 3.0 FMU for co-simulation"), "{html}");

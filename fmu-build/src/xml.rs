@@ -708,6 +708,19 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             ],
         )?;
     }
+    if interfaces.scheduled_execution {
+        // Partitions activated with fmi3ActivateModelPartition in Clock Activation Mode; FMU
+        // states there (no directional derivatives: they are not offered between activations).
+        empty(
+            &mut w,
+            "ScheduledExecution",
+            &[
+                ("modelIdentifier", d.model_identifier),
+                ("canGetAndSetFMUState", "true"),
+                ("canSerializeFMUState", "true"),
+            ],
+        )?;
+    }
     unit_definitions(&mut w, d)?;
 
     let enums = d.enumerations();
@@ -862,6 +875,7 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             Some(c) => (c.interval.map(real_text), (c.shift != 0.0).then(|| real_text(c.shift))),
             None => (None, None),
         };
+        let priority = v.fmi3.clock.and_then(|c| c.priority).map(|p| p.to_string());
         if let Some(c) = v.fmi3.clock {
             attrs.push(("intervalVariability", c.interval_variability.text()));
             if let Some(i) = &interval {
@@ -872,6 +886,9 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             }
             if c.can_be_deactivated {
                 attrs.push(("canBeDeactivated", "true"));
+            }
+            if let Some(p) = &priority {
+                attrs.push(("priority", p));
             }
         }
         let element = v.var_type.fmi3_name();

@@ -14,7 +14,7 @@ use std::cell::UnsafeCell;
 use std::ffi::CStr;
 use std::os::raw::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -38,6 +38,19 @@ pub struct Component<M: CoSimulation> {
     /// whatever its switches, so later set-debug-logging calls do not matter to it.
     pub(crate) refusals: Logger,
     pub(crate) instance: UnsafeCell<Instance<M>>,
+    /// Scheduled Execution only: calls into the instance from different threads (a scheduler
+    /// that would preempt one partition by another) wait for each other here instead of being
+    /// refused; a nested call on the thread that holds it (from the importer's clockUpdate
+    /// callback) goes through. No preemption inside an instance: the runtime serializes.
+    pub(crate) serial: Option<std::sync::Mutex<()>>,
+    /// The thread holding `serial` (its mark, [`this_thread`]); 0: none.
+    pub(crate) owner: AtomicUsize,
+}
+
+/// A number that identifies the calling thread while it lives (the address of a thread-local).
+fn this_thread() -> usize {
+    thread_local!(static MARK: u8 = const { 0 });
+    MARK.with(|m| m as *const u8 as usize)
 }
 
 impl<M: CoSimulation> Component<M> {
@@ -55,9 +68,60 @@ impl<M: CoSimulation> Component<M> {
         unsafe { (c as *const Self).as_ref() }
     }
 
+    /// Runs `f` while this thread holds the instance's `serial` lock (Scheduled Execution: a
+    /// call from another thread waits until `f` is done); directly when the instance has none,
+    /// or when this thread holds it already.
+    pub(crate) fn exclusive<R>(&self, f: impl FnOnce() -> R) -> R {
+        let Some(serial) = &self.serial else {
+            return f();
+        };
+        let me = this_thread();
+        if self.owner.load(Ordering::Acquire) == me {
+            return f();
+        }
+        let _lock = serial.lock().unwrap_or_else(|e| e.into_inner());
+        self.owner.store(me, Ordering::Release);
+        // Released also when `f` unwinds (it does not: its callers catch panics).
+        struct Release<'a>(&'a AtomicUsize);
+        impl Drop for Release<'_> {
+            fn drop(&mut self) {
+                self.0.store(0, Ordering::Release);
+            }
+        }
+        let _release = Release(&self.owner);
+        f()
+    }
+
     /// Runs `f` on the instance after the state check for `call`: refused while another call
     /// is inside the instance, under `catch_unwind` (a panic makes the instance fatal).
     pub(crate) fn run(&self, call: Call, function: &str, f: impl FnOnce(&mut Instance<M>) -> Status) -> Status {
+        self.exclusive(|| self.run_checked(call, function, f))
+    }
+
+    /// Runs `f` on the instance without a state check (the runtime's own step after a callback
+    /// to the importer returned): not while another call is inside (then it is not run: false),
+    /// under `catch_unwind`.
+    pub(crate) fn run_internal(&self, function: &str, f: impl FnOnce(&mut Instance<M>)) -> bool {
+        self.exclusive(|| {
+            if self.busy.swap(true, Ordering::Acquire) {
+                return false;
+            }
+            let instance = self.instance.get();
+            // SAFETY: this call set `busy`, so no other reference to the instance exists until it
+            // clears it below.
+            let result = catch_unwind(AssertUnwindSafe(|| f(unsafe { &mut *instance })));
+            if let Err(payload) = result {
+                let what = panic_text(&*payload);
+                // SAFETY: as above; the closure's borrow ended with the unwind.
+                let inst = unsafe { &mut *instance };
+                let _ = catch_unwind(AssertUnwindSafe(|| inst.fatal(function, &what)));
+            }
+            self.busy.store(false, Ordering::Release);
+            true
+        })
+    }
+
+    fn run_checked(&self, call: Call, function: &str, f: impl FnOnce(&mut Instance<M>) -> Status) -> Status {
         if self.busy.swap(true, Ordering::Acquire) {
             self.refusals.log(
                 ERROR,

@@ -125,6 +125,14 @@ pub struct Instance<M: CoSimulation> {
     pub(crate) reconfigured_from: State,
     /// The model before the first structural parameter of a reconfiguration was set.
     pub(crate) before_configuration: Option<Box<M>>,
+    /// FMI 3.0 Scheduled Execution (fmi3InstantiateScheduledExecution): Clock Activation Mode
+    /// after initialization, partitions activated with fmi3ActivateModelPartition; the
+    /// model-exchange and co-simulation functions are refused.
+    pub scheduled: bool,
+    /// ... and the importer's clockUpdate callback, if it gave one: called by the C layer after
+    /// an activation that ticked an output clock or gave a countdown clock its interval, once the
+    /// call has left the instance (the importer calls back into it from the callback).
+    pub clock_update: Option<std::rc::Rc<dyn Fn()>>,
 }
 
 /// Whether one of `vrs` is an array variable (then each has its element count of values). A
@@ -215,6 +223,8 @@ impl<M: CoSimulation> Instance<M> {
             step_event: false,
             intermediate_update: None,
             returned_early: false,
+            scheduled: false,
+            clock_update: None,
         }
     }
 
@@ -257,9 +267,12 @@ impl<M: CoSimulation> Instance<M> {
     #[inline(always)]
     pub fn check_state(&self, call: Call, function: &str) -> Outcome {
         let right_interface = match call.interface() {
-            Some(model_exchange) => model_exchange == self.model_exchange || self.cs_event_mode_call(call),
+            Some(model_exchange) => {
+                !self.scheduled && (model_exchange == self.model_exchange || self.cs_event_mode_call(call))
+            }
             None => true,
-        } && (call != Call::EnterStepMode || self.event_mode_used);
+        } && (call != Call::EnterStepMode || self.event_mode_used)
+            && (call != Call::ActivateModelPartition || self.scheduled);
         if right_interface && contains(call.allowed(self.version), self.sim.state) {
             return Ok(());
         }
@@ -275,6 +288,41 @@ impl<M: CoSimulation> Instance<M> {
     /// Why `call` is refused here, logged.
     #[cold]
     fn refuse_call(&self, call: Call, function: &str) -> Status {
+        let interface = || {
+            if self.scheduled {
+                "scheduled execution"
+            } else if self.model_exchange {
+                "model exchange"
+            } else {
+                "co-simulation"
+            }
+        };
+        if self.scheduled
+            && let Some(model_exchange) = call.interface()
+        {
+            return self.error(&format!(
+                "{function} is a {} function; this instance was instantiated for scheduled execution \
+                 (fmi3InstantiateScheduledExecution: partitions are activated with fmi3ActivateModelPartition)",
+                if model_exchange {
+                    "model-exchange"
+                } else {
+                    "co-simulation"
+                }
+            ));
+        }
+        if call == Call::ActivateModelPartition && !self.scheduled {
+            return self.error(&format!(
+                "{function} is a scheduled-execution function; this instance was instantiated for {}",
+                interface()
+            ));
+        }
+        if self.scheduled && call == Call::SetClock {
+            return self.error(&format!(
+                "{function}: in scheduled execution the importer activates an input clock with \
+                 fmi3ActivateModelPartition (state {})",
+                self.terms.state_name(self.sim.state)
+            ));
+        }
         if !self.model_exchange
             && !self.event_mode_used
             && self.version == Version::Fmi3
@@ -410,6 +458,14 @@ impl<M: CoSimulation> Instance<M> {
             initial: true,
             ..EventClock::default()
         };
+        if self.scheduled {
+            // Scheduled Execution: no event iteration at the start; the partitions run when the
+            // importer activates them.
+            self.sim.events.initial = false;
+            self.sim.state = State::ClockActivationMode;
+            self.event(|| format!("initialized at t = {}: Clock Activation Mode", self.sim.start_time));
+            return OK;
+        }
         if !self.model_exchange && !self.event_mode_used {
             // Co-simulation without event mode: the event iteration at the start runs here
             // (Model Exchange and FMI 3.0's event mode: the importer's first
@@ -769,6 +825,11 @@ impl<M: CoSimulation> Instance<M> {
         let names = || clocks.iter().map(|c| format!("'{c}'")).collect::<Vec<_>>().join(", ");
         match self.sim.state {
             State::Instantiated | State::InitializationMode => Ok(()),
+            // Scheduled Execution: a partition's clocked inputs are set before its activation and
+            // its clocked outputs read after it (FMI 3.0, 5.2: between activations, and in the
+            // clockUpdate callback).
+            State::ClockActivationMode => Ok(()),
+            State::ClockUpdateMode if !setting => Ok(()),
             State::EventMode if clocks.iter().any(|c| self.clock_active(c)) => {
                 if setting && self.evaluated_tick.is_some() {
                     return Err(self.error(&format!(
@@ -896,7 +957,7 @@ impl<M: CoSimulation> Instance<M> {
             State::InitializationMode => {
                 decl.causality == Causality::Input || decl.effective_initial() == Some(Initial::Exact)
             }
-            State::StepComplete | State::EventMode => {
+            State::StepComplete | State::EventMode | State::ClockActivationMode => {
                 decl.causality == Causality::Input
                     || (decl.causality == Causality::Parameter && decl.variability == Variability::Tunable)
             }
@@ -1545,13 +1606,27 @@ pub struct EventInfo {
 impl<M: CoSimulation> Instance<M> {
     /// Where a tunable parameter may change: between co-simulation steps, or at an event.
     fn between_steps(&self) -> bool {
-        matches!(self.sim.state, State::StepComplete | State::EventMode)
+        matches!(
+            self.sim.state,
+            State::StepComplete | State::EventMode | State::ClockActivationMode
+        )
     }
 
     /// Whether `state` belongs to the interface this instance was made for (an FMU state of a
     /// model-exchange instance restored into a co-simulation one would leave it in a state
     /// its interface does not have).
     pub fn state_fits(&self, state: State) -> bool {
+        let scheduled_only = matches!(state, State::ClockActivationMode | State::ClockUpdateMode);
+        if self.scheduled {
+            return scheduled_only
+                || matches!(
+                    state,
+                    State::Instantiated | State::InitializationMode | State::Terminated | State::Error
+                );
+        }
+        if scheduled_only {
+            return false;
+        }
         let me_only = match state {
             State::ContinuousTimeMode => true,
             State::EventMode => !self.event_mode_used,
@@ -1719,6 +1794,91 @@ impl<M: CoSimulation> Instance<M> {
                 ))
             }
         }
+    }
+
+    /// fmi3ActivateModelPartition (Scheduled Execution, FMI 3.0 5.2): the input clock
+    /// `clock_reference` ticks at `activation_time`: the instance's time moves there, the model's
+    /// `update` runs once with that clock active, and the input clock is inactive again. `Ok(true)`:
+    /// the activation ticked an output clock or gave a countdown (or changing) clock a new
+    /// interval, so the importer is to be told (its clockUpdate callback; the output clocks stay
+    /// ticked until [`Instance::end_clock_update`]).
+    pub fn activate_model_partition(&mut self, function: &str, clock_reference: u32, t: f64) -> Result<bool, Status> {
+        use crate::description::IntervalVariability as I;
+        let Some(decl) = M::variable_index(clock_reference).map(|i| &M::DESCRIPTION.variables[i]) else {
+            return Err(self.error(&format!(
+                "{function}: clockReference {clock_reference} is no variable of this FMU"
+            )));
+        };
+        if decl.fmi3.clock.is_none() || decl.causality != Causality::Input {
+            return Err(self.error(&format!(
+                "{function}: clockReference {clock_reference} ('{}') is {}: a model partition is activated by its \
+                 input Clock",
+                decl.name,
+                if decl.fmi3.clock.is_some() {
+                    "an output Clock (the FMU ticks it)".to_string()
+                } else {
+                    format!("a {} variable, not a Clock", self.type_name(decl.var_type))
+                }
+            )));
+        }
+        if !t.is_finite() || t < self.sim.time {
+            return Err(self.error(&format!(
+                "{function}: activationTime = {t} for '{}': a finite time not before the instance's time {}",
+                decl.name, self.sim.time
+            )));
+        }
+        // Output clocks an earlier activation ticked (without a clockUpdate callback the importer
+        // read them after that call) end with this one.
+        self.sim.model.deactivate_clocks();
+        let before_time = self.sim.time;
+        if t != self.sim.time {
+            self.sim.time = t;
+            self.sim.stale_derivatives = true;
+            self.sim.stale_outputs = true;
+        }
+        if let Some(k) = self.sim.model.clock_mut(clock_reference) {
+            k.__set_active(true);
+        }
+        self.trace(|| {
+            format!(
+                "{function}(clockReference = {clock_reference} ('{}'), activationTime = {t})",
+                decl.name
+            )
+        });
+        let mut info = EventInfo::default();
+        let status = self.event_iteration(function, &mut info, false);
+        if let Some(k) = self.sim.model.clock_mut(clock_reference) {
+            k.__set_active(false);
+        }
+        if status != OK {
+            // The model is as before the round (`event_iteration`); so is the time.
+            self.sim.time = before_time;
+            return Err(status);
+        }
+        self.sim.last_successful_time = t;
+        if info.terminate_simulation {
+            self.sim.terminate_requested = true;
+        }
+        // What the importer is to hear of: an output clock that ticked, a model-timed clock's
+        // new interval (not taken: fmi3GetIntervalDecimal reports it).
+        let notify = M::DESCRIPTION.variables.iter().any(|v| match v.fmi3.clock {
+            Some(c) => {
+                let k = self.sim.model.clock(v.value_reference);
+                (v.causality == Causality::Output && k.is_some_and(|k| k.ticked()))
+                    || (matches!(c.interval_variability, I::Countdown | I::Changing) && k.is_some_and(|k| k.__fresh()))
+            }
+            None => false,
+        });
+        Ok(notify)
+    }
+
+    /// After the importer's clockUpdate callback returned: back to Clock Activation Mode (unless a
+    /// call from the callback ended elsewhere), the output clocks inactive.
+    pub fn end_clock_update(&mut self) {
+        if self.sim.state == State::ClockUpdateMode {
+            self.sim.state = State::ClockActivationMode;
+        }
+        self.sim.model.deactivate_clocks();
     }
 
     /// fmi3EnterStepMode (co-simulation with event mode): the events handled, stepping resumes.

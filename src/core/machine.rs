@@ -29,6 +29,13 @@ listed_enum! {
         /// FMI 3.0: tunable structural parameters are set (from Step Mode or, in model
         /// exchange, Event Mode, back to it).
         ReconfigurationMode,
+        /// FMI 3.0 Scheduled Execution: between the activations of model partitions
+        /// (fmi3ActivateModelPartition), after fmi3ExitInitializationMode.
+        ClockActivationMode,
+        /// FMI 3.0 Scheduled Execution: while the importer's clockUpdate callback runs (a
+        /// partition ticked an output clock or gave a countdown clock its interval); the
+        /// importer reads the clocks, intervals and outputs from inside it.
+        ClockUpdateMode,
     }
 }
 
@@ -48,6 +55,8 @@ impl State {
             State::ContinuousTimeMode => "ContinuousTimeMode",
             State::ConfigurationMode => "ConfigurationMode",
             State::ReconfigurationMode => "ReconfigurationMode",
+            State::ClockActivationMode => "ClockActivationMode",
+            State::ClockUpdateMode => "ClockUpdateMode",
         }
     }
 }
@@ -67,6 +76,8 @@ const EVENT: u16 = bit(State::EventMode);
 const CONTINUOUS: u16 = bit(State::ContinuousTimeMode);
 const CONFIGURATION: u16 = bit(State::ConfigurationMode);
 const RECONFIGURATION: u16 = bit(State::ReconfigurationMode);
+const CLOCK_ACTIVATION: u16 = bit(State::ClockActivationMode);
+const CLOCK_UPDATE: u16 = bit(State::ClockUpdateMode);
 const ANY_BUT_FATAL: u16 = INSTANTIATED
     | INIT
     | STEP_COMPLETE
@@ -77,7 +88,9 @@ const ANY_BUT_FATAL: u16 = INSTANTIATED
     | EVENT
     | CONTINUOUS
     | CONFIGURATION
-    | RECONFIGURATION;
+    | RECONFIGURATION
+    | CLOCK_ACTIVATION
+    | CLOCK_UPDATE;
 
 /// The functions whose legality depends on the state, with the states each is allowed in,
 /// from the standard's tables in sections 3.2.3 and 4.2.4 (as the Reference-FMUs encode them).
@@ -137,6 +150,8 @@ pub enum Call {
     EnterConfigurationMode,
     /// FMI 3.0 only: fmi3ExitConfigurationMode.
     ExitConfigurationMode,
+    /// FMI 3.0 Scheduled Execution only: fmi3ActivateModelPartition (Clock Activation Mode).
+    ActivateModelPartition,
 }
 
 impl Call {
@@ -180,7 +195,8 @@ impl Call {
             | Call::SetInterval
             | Call::SetShift
             | Call::EnterConfigurationMode
-            | Call::ExitConfigurationMode => 0,
+            | Call::ExitConfigurationMode
+            | Call::ActivateModelPartition => 0,
         }
     }
 
@@ -209,8 +225,9 @@ impl Call {
             // Mode; their intervals and shifts are read in Initialization and Event Mode, set in
             // Initialization Mode (a tunable clock's interval also in Event Mode).
             Call::SetClock => EVENT,
-            Call::GetClock => INIT | EVENT,
-            Call::GetInterval | Call::SetInterval => INIT | EVENT,
+            // In Scheduled Execution also between activations and in the clockUpdate callback.
+            Call::GetClock | Call::GetInterval => INIT | EVENT | CLOCK_ACTIVATION | CLOCK_UPDATE,
+            Call::SetInterval => INIT | EVENT | CLOCK_ACTIVATION,
             Call::SetShift => INIT,
             // Structural parameters (FMI 3.0, 3.2 and 4.2): Configuration Mode from Instantiated,
             // Reconfiguration Mode from Step Mode (co-simulation) or Event Mode (model exchange:
@@ -218,13 +235,30 @@ impl Call {
             // variables may be set: `Instance::settable`).
             Call::EnterConfigurationMode => INSTANTIATED | STEP_COMPLETE | EVENT,
             // An FMU state is not taken or restored in the middle of a configuration.
-            Call::FmuState => ANY_BUT_FATAL & !(CONFIGURATION | RECONFIGURATION),
+            // Nor inside the clockUpdate callback of a partition's activation.
+            Call::FmuState => ANY_BUT_FATAL & !(CONFIGURATION | RECONFIGURATION | CLOCK_UPDATE),
             Call::ExitConfigurationMode => CONFIGURATION | RECONFIGURATION,
-            Call::GetValues => INSTANTIATED | CONFIGURATION | RECONFIGURATION | Call::GetValues.allowed_in(),
-            Call::SetValues | Call::SetDiscreteValues => CONFIGURATION | RECONFIGURATION | self.allowed_in(),
+            Call::GetValues => {
+                INSTANTIATED
+                    | CONFIGURATION
+                    | RECONFIGURATION
+                    | CLOCK_ACTIVATION
+                    | CLOCK_UPDATE
+                    | Call::GetValues.allowed_in()
+            }
+            Call::SetValues | Call::SetDiscreteValues => {
+                CONFIGURATION | RECONFIGURATION | CLOCK_ACTIVATION | self.allowed_in()
+            }
             // No fmi3SetupExperiment, fmi3SetRealInputDerivatives, fmi3CancelStep or
             // fmi3GetStatus in FMI 3.0.
             Call::SetupExperiment | Call::SetRealInputDerivatives | Call::CancelStep | Call::GetStatus => 0,
+            // Scheduled Execution (FMI 3.0, chapter 5): Clock Activation Mode after
+            // initialization; Clock Update Mode while the importer's clockUpdate callback runs
+            // (`Instance::check_state` refuses the model-exchange and co-simulation functions to
+            // scheduled instances, and fmi3ActivateModelPartition to the others).
+            Call::ActivateModelPartition => CLOCK_ACTIVATION,
+            Call::Terminate => CLOCK_ACTIVATION | self.allowed_in(),
+            Call::Reset => ANY_BUT_FATAL & !CLOCK_UPDATE,
             _ => self.allowed_in(),
         }
     }
@@ -279,7 +313,7 @@ pub const fn contains(mask: u16, state: State) -> bool {
 
 /// The states of `mask`, in `terms`' names, for a message.
 pub fn state_names(terms: &Terms, mask: u16) -> String {
-    const ALL: [State; 12] = [
+    const ALL: [State; 14] = [
         State::Instantiated,
         State::InitializationMode,
         State::EventMode,
@@ -289,6 +323,8 @@ pub fn state_names(terms: &Terms, mask: u16) -> String {
         State::StepCanceled,
         State::ConfigurationMode,
         State::ReconfigurationMode,
+        State::ClockActivationMode,
+        State::ClockUpdateMode,
         State::Terminated,
         State::Error,
         State::Fatal,

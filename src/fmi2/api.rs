@@ -136,6 +136,8 @@ pub unsafe fn instantiate<M: CoSimulation>(
             busy: AtomicBool::new(false),
             refusals: inst.logger.clone(),
             instance: UnsafeCell::new(inst),
+            serial: None,
+            owner: std::sync::atomic::AtomicUsize::new(0),
         })) as fmi2Component
     }));
     made.unwrap_or(ptr::null_mut())

@@ -36,6 +36,7 @@ macro_rules! export_fmi2 {
                 model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
                 version: $crate::description::FmiVersion::V2,
                 can_interpolate_inputs: <__RustfmuModel as $crate::CoSimulation>::INTERPOLATES_INPUTS,
+                scheduled_execution: false,
             };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);

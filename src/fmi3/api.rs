@@ -57,6 +57,7 @@ unsafe fn instantiate<M: CoSimulation>(
     refusal: Option<String>,
     event_mode: (bool, bool),
     intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
+    scheduled: Option<Option<std::rc::Rc<dyn Fn()>>>,
 ) -> fmi3Instance {
     let made = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: NUL-terminated strings from the importer, or NULL.
@@ -74,7 +75,14 @@ unsafe fn instantiate<M: CoSimulation>(
             logger.log(fmi3Error, Category::StatusError, &format!("{function}: {why}"));
             ptr::null_mut()
         };
-        if let Some(why) = refusal.or_else(|| crate::fmi2::api::offered::<M>(model_exchange)) {
+        let offered = || {
+            if scheduled.is_some() {
+                None
+            } else {
+                crate::fmi2::api::offered::<M>(model_exchange)
+            }
+        };
+        if let Some(why) = refusal.or_else(offered) {
             return refuse(why);
         }
         match name.as_deref() {
@@ -100,6 +108,11 @@ unsafe fn instantiate<M: CoSimulation>(
         let mut inst = Instance::<M>::new(&TERMS, logger, own_token, model_exchange);
         (inst.event_mode_used, inst.early_return_allowed) = event_mode;
         inst.intermediate_update = intermediate_update;
+        let serial = scheduled.is_some().then(|| std::sync::Mutex::new(()));
+        if let Some(clock_update) = scheduled {
+            inst.scheduled = true;
+            inst.clock_update = clock_update;
+        }
         inst.resources = resources.as_deref().and_then(resource_dir).filter(|d| d.is_dir());
         inst.event(|| match resources.as_deref().map(|r| (r, resource_dir(r))) {
             Some((_, Some(dir))) if dir.is_dir() => format!("resourcePath is {}", dir.display()),
@@ -110,6 +123,8 @@ unsafe fn instantiate<M: CoSimulation>(
             busy: AtomicBool::new(false),
             refusals: inst.logger.clone(),
             instance: UnsafeCell::new(inst),
+            serial,
+            owner: std::sync::atomic::AtomicUsize::new(0),
         })) as fmi3Instance
     }));
     made.unwrap_or(ptr::null_mut())
@@ -141,6 +156,7 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
             true,
             None,
             (false, false),
+            None,
             None,
         )
     }
@@ -230,37 +246,114 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
             refusal,
             (event_mode_used, event_mode_used && early_return_allowed),
             intermediate,
+            None,
         )
     }
 }
 
-/// Scheduled execution is not offered (no `<ScheduledExecution>` element): NULL, with the
-/// reason through the importer's logger when it gave one.
+/// fmi3InstantiateScheduledExecution: an instance for Scheduled Execution (FMI 3.0, chapter 5)
+/// when the model declares it (`#[fmu(scheduled_execution)]`, `<ScheduledExecution>`); else NULL,
+/// with the reason through the importer's logger. `lockPreemption` and `unlockPreemption` are
+/// not called: the runtime serializes the calls into one instance (a call from another thread
+/// waits until the one inside is done), so nothing inside an instance is preempted.
 pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
+    own_token: &'static str,
+    description: &'static [u8],
     instance_name: fmi3String,
+    token: fmi3String,
+    resource_path: fmi3String,
+    logging_on: fmi3Boolean,
     environment: fmi3InstanceEnvironment,
     log_message: fmi3LogMessageCallback,
+    clock_update: fmi3ClockUpdateCallback,
 ) -> fmi3Instance {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: a NUL-terminated string from the importer, or NULL.
-        let name = unsafe { text(instance_name) };
-        let logger = Logger::new(
-            Callback::Message(log_message),
+    if !M::SCHEDULED_EXECUTION {
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            // SAFETY: a NUL-terminated string from the importer, or NULL.
+            let name = unsafe { text(instance_name) };
+            let logger = Logger::new(
+                Callback::Message(log_message),
+                environment,
+                name.as_deref().unwrap_or(""),
+                true,
+                M::DESCRIPTION.log_categories,
+            );
+            logger.log(
+                fmi3Error,
+                Category::StatusError,
+                &format!(
+                    "fmi3InstantiateScheduledExecution: {} offers no scheduled execution (not declared \
+                     #[fmu(scheduled_execution)]; modelDescription.xml has no <ScheduledExecution> element)",
+                    M::DESCRIPTION.model_identifier
+                ),
+            );
+        }));
+        return ptr::null_mut();
+    }
+    let notify = clock_update.map(|callback| {
+        // SAFETY: the importer's callback with its own environment pointer, as the standard's
+        // signature has it.
+        std::rc::Rc::new(move || unsafe { callback(environment) }) as std::rc::Rc<dyn Fn()>
+    });
+    // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
+    unsafe {
+        instantiate::<M>(
+            "fmi3InstantiateScheduledExecution",
+            own_token,
+            description,
+            instance_name,
+            token,
+            resource_path,
+            logging_on,
             environment,
-            name.as_deref().unwrap_or(""),
-            true,
-            M::DESCRIPTION.log_categories,
-        );
-        logger.log(
-            fmi3Error,
-            Category::StatusError,
-            &format!(
-                "fmi3InstantiateScheduledExecution: {} offers model exchange and co-simulation, not scheduled execution",
-                M::DESCRIPTION.model_identifier
-            ),
-        );
-    }));
-    ptr::null_mut()
+            log_message,
+            false,
+            None,
+            (false, false),
+            None,
+            Some(notify),
+        )
+    }
+}
+
+/// fmi3ActivateModelPartition (Scheduled Execution): the partition of input clock
+/// `clock_reference` runs at `activation_time` (`Instance::activate_model_partition`). When it
+/// ticked an output clock or gave a countdown clock its interval, the importer's clockUpdate
+/// callback is called after the call has left the instance, in Clock Update Mode: from inside it
+/// the importer reads fmi3GetClock, fmi3GetIntervalDecimal and the variables; when it returns, the
+/// instance is back in Clock Activation Mode and the output clocks are inactive. Another thread's
+/// call waits until all of this is done.
+pub unsafe fn activate_model_partition<M: CoSimulation>(
+    c: fmi3Instance,
+    clock_reference: fmi3ValueReference,
+    activation_time: fmi3Float64,
+) -> fmi3Status {
+    const F: &str = "fmi3ActivateModelPartition";
+    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
+    let Some(component) = (unsafe { Component::<M>::from_handle(c) }) else {
+        return fmi3Error;
+    };
+    component.exclusive(|| {
+        let mut notify = None;
+        let status = component.run(Call::ActivateModelPartition, F, |inst| {
+            match inst.activate_model_partition(F, clock_reference, activation_time) {
+                Ok(true) => {
+                    if let Some(callback) = &inst.clock_update {
+                        inst.sim.state = State::ClockUpdateMode;
+                        notify = Some(callback.clone());
+                    }
+                    fmi3OK
+                }
+                Ok(false) => fmi3OK,
+                Err(status) => status,
+            }
+        });
+        if let Some(callback) = notify {
+            let _ = catch_unwind(AssertUnwindSafe(|| callback()));
+            component.run_internal(F, |inst| inst.end_clock_update());
+        }
+        status
+    })
 }
 
 pub unsafe fn set_debug_logging<M: CoSimulation>(
@@ -1764,7 +1857,9 @@ unsafe fn set_interval_or_shift<M: CoSimulation>(
                         v.name, v.value_reference
                     ));
                 }
-                if inst.sim.state == State::EventMode && (shift || decl.interval_variability == I::Fixed) {
+                if matches!(inst.sim.state, State::EventMode | State::ClockActivationMode)
+                    && (shift || decl.interval_variability == I::Fixed)
+                {
                     return inst.error(&format!(
                         "{function}: '{}' (vr {}): a {} clock's {what} is set in Initialization Mode only; nothing changed",
                         v.name,

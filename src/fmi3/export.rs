@@ -81,6 +81,7 @@ macro_rules! export_fmi3 {
                 version: $crate::description::FmiVersion::V3,
                 // FMI 3.0 has no input derivatives.
                 can_interpolate_inputs: false,
+                scheduled_execution: <__RustfmuModel as $crate::Variables>::SCHEDULED_EXECUTION,
             };
             const LEN: usize =
                 $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
@@ -161,21 +162,33 @@ macro_rules! export_fmi3 {
                     );
                 fmi3InstantiateScheduledExecution(
                     instanceName: fmi3String,
-                    _instantiationToken: fmi3String,
-                    _resourcePath: fmi3String,
+                    instantiationToken: fmi3String,
+                    resourcePath: fmi3String,
                     _visible: fmi3Boolean,
-                    _loggingOn: fmi3Boolean,
+                    loggingOn: fmi3Boolean,
                     instanceEnvironment: fmi3InstanceEnvironment,
                     logMessage: fmi3LogMessageCallback,
-                    _clockUpdate: fmi3ClockUpdateCallback,
+                    clockUpdate: fmi3ClockUpdateCallback,
                     _lockPreemption: fmi3LockPreemptionCallback,
                     _unlockPreemption: fmi3UnlockPreemptionCallback,
                 ) -> fmi3Instance =>
                     api3::instantiate_scheduled_execution::<__RustfmuModel>(
+                        TOKEN,
+                        &DESCRIPTION,
                         instanceName,
+                        instantiationToken,
+                        resourcePath,
+                        loggingOn,
                         instanceEnvironment,
                         logMessage,
+                        clockUpdate,
                     );
+                fmi3ActivateModelPartition(
+                    instance: fmi3Instance,
+                    clockReference: fmi3ValueReference,
+                    activationTime: fmi3Float64,
+                ) -> fmi3Status =>
+                    api3::activate_model_partition::<__RustfmuModel>(instance, clockReference, activationTime);
                 fmi3FreeInstance(instance: fmi3Instance) =>
                     shared::free_instance::<__RustfmuModel>(&TERMS, instance);
                 fmi3EnterInitializationMode(
@@ -637,10 +650,6 @@ macro_rules! export_fmi3 {
                     _counters: *const fmi3UInt64,
                     _resolutions: *const fmi3UInt64,
                 ) => NO_FRACTIONS;
-                fmi3ActivateModelPartition(
-                    _clockReference: fmi3ValueReference,
-                    _activationTime: fmi3Float64,
-                ) => "Scheduled Execution is not offered (no <ScheduledExecution> element)";
             }
         }
     };

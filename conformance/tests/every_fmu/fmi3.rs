@@ -83,6 +83,11 @@ fn fmi3_structural_parameters_are_set_in_configuration_mode_and_size_the_arrays(
 }
 
 #[test]
+fn fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates() {
+    on_every_fmu("fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates");
+}
+
+#[test]
 fn fmi3_model_exchange_states_and_derivatives_are_consistent() {
     on_every_fmu("fmi3_model_exchange_states_and_derivatives_are_consistent");
 }

@@ -93,6 +93,8 @@ struct ClockAttr {
     interval: Option<ClockInterval>,
     shift: Option<Expr>,
     can_be_deactivated: bool,
+    /// `priority = N` (FMI 3.0 `priority`; every clock of a Scheduled Execution model has one).
+    priority: Option<(u32, Span)>,
 }
 
 #[derive(Clone)]
@@ -107,6 +109,7 @@ impl Parse for ClockAttr {
         let mut interval = None;
         let mut shift = None;
         let mut can_be_deactivated = false;
+        let mut priority = None;
         while !input.is_empty() {
             let key: Ident = input.parse()?;
             let k = key.to_string();
@@ -136,13 +139,18 @@ impl Parse for ClockAttr {
                     shift = Some(input.parse()?);
                 }
                 "can_be_deactivated" => can_be_deactivated = true,
+                "priority" => {
+                    input.parse::<Token![=]>()?;
+                    let n: syn::LitInt = input.parse()?;
+                    priority = Some((n.base10_parse::<u32>()?, n.span()));
+                }
                 other => {
                     return Err(Error::new(
                         key.span(),
                         format!(
                             "unknown clock declaration `{other}`; known: constant, fixed, tunable, changing, countdown, \
                              triggered (its intervalVariability), interval = <seconds or a parameter>, shift = <seconds>, \
-                             can_be_deactivated"
+                             can_be_deactivated, priority = <0 highest>"
                         ),
                     ));
                 }
@@ -163,6 +171,7 @@ impl Parse for ClockAttr {
             interval,
             shift,
             can_be_deactivated,
+            priority,
         })
     }
 }
@@ -748,6 +757,8 @@ struct ModelAttr {
     interfaces: Option<(bool, bool, Span)>,
     /// `fmi3_only`: the model has no FMI 2.0 export.
     fmi3_only: Option<Span>,
+    /// `scheduled_execution`: the FMU offers FMI 3.0 Scheduled Execution too.
+    scheduled_execution: Option<Span>,
     units: Vec<(String, Base, Span)>,
     categories: Vec<(String, String, Span)>,
     terminals: Vec<TerminalAttr>,
@@ -789,6 +800,11 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 }
                 let cs_only = meta.path.is_ident("co_simulation_only");
                 m.interfaces = Some((!cs_only, cs_only, meta.path.span()));
+            } else if meta.path.is_ident("scheduled_execution") {
+                if m.scheduled_execution.is_some() {
+                    return Err(meta.error("scheduled_execution is given twice"));
+                }
+                m.scheduled_execution = Some(meta.path.span());
             } else if meta.path.is_ident("fmi3_only") {
                 if m.fmi3_only.is_some() {
                     return Err(meta.error("fmi3_only is given twice"));
@@ -911,7 +927,7 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 }
                 m.terminals.push(t);
             } else {
-                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, fmi3_only, unit(..), log_category(..), terminal(..)"));
+                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, fmi3_only, scheduled_execution, unit(..), log_category(..), terminal(..)"));
             }
             Ok(())
         })?;
@@ -950,6 +966,36 @@ fn number(e: &Expr) -> Result<f64> {
 }
 
 fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
+    if let Some(span) = model.scheduled_execution {
+        // FMI 3.0, chapter 5: the importer activates the model partitions of the input clocks,
+        // in the order of their priorities.
+        if model.fmi3_only.is_none() {
+            return Err(Error::new(
+                span,
+                "scheduled_execution is FMI 3.0: the model is #[fmu(fmi3_only)] (rustfmu::export_fmi3!)",
+            ));
+        }
+        let clocks: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Clock).collect();
+        if !clocks.iter().any(|v| v.causality == Causality::Input) {
+            return Err(Error::new(
+                span,
+                "scheduled_execution needs an input clock: each input clock's activation \
+                 (fmi3ActivateModelPartition) runs a model partition",
+            ));
+        }
+        for v in &clocks {
+            if v.clock.as_ref().is_some_and(|c| c.priority.is_none()) {
+                return Err(Error::new(
+                    v.span,
+                    format!(
+                        "'{}': every clock of a scheduled_execution model has a priority: clock(.., priority = N), \
+                         0 the highest",
+                        v.name
+                    ),
+                ));
+            }
+        }
+    }
     for t in &model.terminals {
         let mut seen = Vec::new();
         for (variable, member, _, span) in &t.members {
@@ -1526,12 +1572,17 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
                 None => quote!(0.0),
             };
             let can = c.can_be_deactivated;
+            let priority = match c.priority {
+                Some((p, _)) => quote!(::core::option::Option::Some(#p)),
+                None => quote!(::core::option::Option::None),
+            };
             quote!(::core::option::Option::Some(#rt::description::ClockDecl {
                 interval_variability: #iv,
                 interval: #interval,
                 interval_parameter: #parameter,
                 shift: #shift,
                 can_be_deactivated: #can,
+                priority: #priority,
             }))
         }
         None => quote!(::core::option::Option::None),
@@ -2091,6 +2142,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             None => (true, true),
         };
         let model_fmi3_only = model.fmi3_only.is_some();
+        let offers_se = model.scheduled_execution.is_some();
         let terminal_tokens = model.terminals.iter().map(|t| {
             let (name, kind, rule, description) = (&t.name, &t.kind, &t.matching_rule, &t.description);
             let members = t.members.iter().map(|(variable, member, kind, _)| {
@@ -2210,6 +2262,7 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
                 const MODEL_EXCHANGE: bool = #offers_me;
                 const FMI3_ONLY: bool = #model_fmi3_only;
                 const CO_SIMULATION: bool = #offers_cs;
+                const SCHEDULED_EXECUTION: bool = #offers_se;
 
                 #[inline]
                 fn indicators_of<D: ::core::marker::Copy>(c: &#cont_ident<D>, z: &mut [D]) {

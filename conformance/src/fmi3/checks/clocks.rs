@@ -19,6 +19,9 @@ struct Ticking {
     periodic: Option<(f64, f64)>,
     aperiodic: Option<f64>,
     triggered: bool,
+    /// A countdown clock: it ticks once per interval the FMU gives (a changing one keeps
+    /// ticking at its last interval).
+    countdown: bool,
     last: Option<f64>,
 }
 
@@ -79,6 +82,7 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
             periodic: None,
             aperiodic: None,
             triggered: iv == "triggered",
+            countdown: iv == "countdown",
             last: None,
         };
         if matches!(iv, "constant" | "fixed" | "tunable") {
@@ -128,8 +132,10 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
     out
 }
 
-/// An FMU state taken at a tick: its bytes, the time, each clock's last tick, the tick's number.
-type TickState = (Vec<u8>, f64, Vec<Option<f64>>, usize);
+/// An FMU state taken at a tick: its bytes, the time, each clock's last tick and the interval
+/// the FMU last gave an aperiodic one (what the importer knows of its schedule then), the
+/// tick's number.
+type TickState = (Vec<u8>, f64, Vec<(Option<f64>, Option<f64>)>, usize);
 
 /// One run of `ticks` ticks: the clocked values read at each tick (bit patterns). `snapshot_at`:
 /// take an FMU state after that tick; `restore`: start from that state instead.
@@ -172,8 +178,8 @@ fn run(
             inst.log_text()
         );
         inst.time = *t;
-        for (c, l) in clocks.iter_mut().zip(lasts) {
-            c.last = *l;
+        for (c, (l, h)) in clocks.iter_mut().zip(lasts) {
+            (c.last, c.aperiodic) = (*l, *h);
         }
         first = k + 1;
     }
@@ -343,6 +349,10 @@ fn run(
                 clocks[*i].name
             );
             clocks[*i].last = Some(t);
+            if clocks[*i].countdown {
+                // Ticked: the next tick waits for a new interval.
+                clocks[*i].aperiodic = None;
+            }
         }
         for c in clocks.iter_mut().filter(|c| c.periodic.is_none() && !c.triggered) {
             let (s, h, q) = interval(&inst, c.vr);
@@ -360,7 +370,12 @@ fn run(
             }
         }
         if snapshot_at == Some(k) {
-            snap = Some((inst.snapshot(), t, clocks.iter().map(|c| c.last).collect(), k));
+            snap = Some((
+                inst.snapshot(),
+                t,
+                clocks.iter().map(|c| (c.last, c.aperiodic)).collect(),
+                k,
+            ));
         }
     }
     (seen, snap)

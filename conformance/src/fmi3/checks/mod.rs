@@ -18,6 +18,7 @@ pub mod memory;
 pub mod model_exchange;
 pub mod native;
 pub mod random_sequences;
+pub mod scheduled_execution;
 pub mod state_machine;
 pub mod structural;
 pub mod table;
@@ -71,6 +72,9 @@ crate::checks::registry! {
         };
         ModelExchange: clocks::{
             fmi3_clocks_tick_where_their_intervals_say_and_clocked_variables_are_read_at_the_ticks,
+        };
+        StateMachine: scheduled_execution::{
+            fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates,
         };
         DirectionalDerivatives: directional_derivatives::{
             fmi3_co_simulation_directional_derivatives_match_finite_differences_and_the_adjoint_is_the_transpose,

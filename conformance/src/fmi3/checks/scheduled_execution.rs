@@ -1,0 +1,753 @@
+//! FMI 3.0 Scheduled Execution (chapter 5): the suite is a scheduler. It instantiates the FMU
+//! with fmi3InstantiateScheduledExecution and a clockUpdate callback, reads the periodic input
+//! clocks' intervals in Initialization Mode, then activates the model partitions with
+//! fmi3ActivateModelPartition in time order (priority order at equal times, 0 first): the
+//! periodic input clocks at their ticks, the countdown and changing clocks where an interval was
+//! signalled, the triggered ones at times it chooses. From inside the clockUpdate callback (Clock
+//! Update Mode) it asks fmi3GetClock of every output clock and fmi3GetIntervalDecimal of every
+//! countdown or changing input clock, as the standard's importer does. Checked: the intervals as
+//! the description declares them; every activation and read fmi3OK; no ticking output clock or
+//! new interval left unsignalled; the refusals (fmi3ActivateModelPartition before Clock
+//! Activation Mode, of an output clock, of an unknown value reference, at a time before the
+//! current one; the Co-Simulation and Model Exchange functions); the same clocked values on a
+//! rerun and after an FMU state restored into a new instance.
+
+use super::*;
+use crate::fmi3::{LogSink, Variable, api, c_size};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+const NOT_YET_KNOWN: u32 = 0;
+const UNCHANGED: u32 = 1;
+const CHANGED: u32 = 2;
+
+/// Activations at most (a tiny interval must not make the check run forever).
+const MAX_ACTIVATIONS: usize = 2000;
+
+/// What the clockUpdate callback saw in one call (Clock Update Mode).
+#[derive(Debug, Clone, Default)]
+struct Update {
+    /// The time of the activation it was called in; whether it was called inside one.
+    time: f64,
+    inside: bool,
+    /// fmi3GetClock of each output clock: (vr, status, value).
+    outs: Vec<(u32, fmi3Status, u8)>,
+    /// The variables of each ticking output clock: (vr, status, bytes).
+    values: Vec<(u32, fmi3Status, Vec<u8>)>,
+    /// fmi3GetIntervalDecimal of each countdown/changing input clock: (vr, status, interval,
+    /// qualifier).
+    intervals: Vec<(u32, fmi3Status, f64, u32)>,
+}
+
+/// What the callback of one instance needs and records.
+struct Probe {
+    fmu: usize,
+    instance: AtomicUsize,
+    inside: AtomicBool,
+    now: Mutex<f64>,
+    updates: Mutex<Vec<Update>>,
+}
+
+/// The probes of the live instances, by their environment (the log sink's address).
+static PROBES: Mutex<Vec<(usize, Arc<Probe>)>> = Mutex::new(Vec::new());
+
+fn probe_of(env: usize) -> Option<Arc<Probe>> {
+    PROBES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .iter()
+        .find(|(e, _)| *e == env)
+        .map(|(_, p)| p.clone())
+}
+
+fn output_clocks(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
+    fmu.md
+        .variables
+        .iter()
+        .filter(|v| v.ty == Type::Clock && v.causality == Causality::Output)
+}
+
+fn variability(v: &Variable) -> &str {
+    v.clock.as_ref().map_or("", |c| c.interval_variability.as_str())
+}
+
+/// The input clocks whose interval the FMU gives (countdown, changing).
+fn aperiodic(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
+    fmu.md.variables.iter().filter(|v| {
+        v.ty == Type::Clock && v.causality == Causality::Input && matches!(variability(v), "countdown" | "changing")
+    })
+}
+
+/// The variables a clock clocks that the suite reads (scalars and fixed-size arrays, no String
+/// or Binary).
+fn clocked_by(fmu: &Fmu3, clock: u32) -> impl Iterator<Item = &Variable> {
+    fmu.md.variables.iter().filter(move |v| {
+        v.clocks.contains(&clock) && v.fixed_count().is_some() && !matches!(v.ty, Type::String | Type::Binary)
+    })
+}
+
+/// A getter call without [`Inst::call`] (nothing here may panic: it runs in the callback).
+///
+/// # Safety
+///
+/// `c` is a live instance of `api`'s FMU.
+unsafe fn get_plain(api: &api::Api, c: fmi3Instance, v: &Variable) -> (fmi3Status, Vec<u8>) {
+    let n = v.fixed_count().unwrap_or(1) as usize;
+    let mut words = vec![0u64; n.max(1)];
+    let p = words.as_mut_ptr();
+    let vr = &v.vr;
+    // SAFETY: one value reference and an 8-byte aligned buffer for `n` values of any type.
+    let s = unsafe {
+        match v.ty {
+            Type::Float32 => (api.get_float32)(c, vr, 1, p as Values, n),
+            Type::Float64 => (api.get_float64)(c, vr, 1, p as *mut f64, n),
+            Type::Int8 => (api.get_int8)(c, vr, 1, p as Values, n),
+            Type::UInt8 => (api.get_uint8)(c, vr, 1, p as Values, n),
+            Type::Int16 => (api.get_int16)(c, vr, 1, p as Values, n),
+            Type::UInt16 => (api.get_uint16)(c, vr, 1, p as Values, n),
+            Type::Int32 => (api.get_int32)(c, vr, 1, p as *mut i32, n),
+            Type::UInt32 => (api.get_uint32)(c, vr, 1, p as Values, n),
+            Type::Int64 | Type::Enumeration => (api.get_int64)(c, vr, 1, p as *mut i64, n),
+            Type::UInt64 => (api.get_uint64)(c, vr, 1, p as Values, n),
+            Type::Boolean => (api.get_boolean)(c, vr, 1, p as *mut u8, n),
+            Type::String | Type::Binary | Type::Clock => fmi3Error,
+        }
+    };
+    let bytes = words
+        .iter()
+        .flat_map(|w| w.to_ne_bytes())
+        .take(n * c_size(v.ty))
+        .collect();
+    (s, bytes)
+}
+
+/// The importer's fmi3ClockUpdateCallback: Clock Update Mode. Asks fmi3GetClock of every output
+/// clock (and reads the variables of those that tick) and fmi3GetIntervalDecimal of every
+/// countdown or changing input clock; records it all in the instance's [`Probe`].
+unsafe extern "C" fn clock_update(env: fmi3InstanceEnvironment) {
+    let _ = std::panic::catch_unwind(|| {
+        let Some(p) = probe_of(env as usize) else {
+            return;
+        };
+        // SAFETY: the Fmu3 of the check, alive as long as its instances (and their probes).
+        let fmu = unsafe { &*(p.fmu as *const Fmu3) };
+        let c = p.instance.load(Ordering::Acquire) as fmi3Instance;
+        let mut u = Update {
+            time: *p.now.lock().unwrap_or_else(|e| e.into_inner()),
+            inside: p.inside.load(Ordering::Acquire),
+            ..Update::default()
+        };
+        if !c.is_null() {
+            let api = &fmu.api;
+            for oc in output_clocks(fmu) {
+                let mut on = 7u8;
+                // SAFETY: a live instance, one value reference, one value.
+                let s = unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) };
+                u.outs.push((oc.vr, s, on));
+                if s == fmi3OK && on == 1 {
+                    for v in clocked_by(fmu, oc.vr) {
+                        // SAFETY: a live instance.
+                        let (s, bytes) = unsafe { get_plain(api, c, v) };
+                        u.values.push((v.vr, s, bytes));
+                    }
+                }
+            }
+            for ic in aperiodic(fmu) {
+                let (mut h, mut q) = (f64::NAN, 99u32);
+                // SAFETY: a live instance, one value reference, one value each.
+                let s = unsafe { (api.get_interval_decimal)(c, &ic.vr, 1, &mut h, &mut q) };
+                u.intervals.push((ic.vr, s, h, q));
+            }
+        }
+        p.updates.lock().unwrap_or_else(|e| e.into_inner()).push(u);
+    });
+}
+
+/// A Scheduled Execution instance with the callback, and its probe.
+struct Se<'a> {
+    inst: Inst<'a>,
+    probe: Arc<Probe>,
+}
+
+impl Drop for Se<'_> {
+    fn drop(&mut self) {
+        let env = self.inst.sink.env() as usize;
+        PROBES
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|(e, _)| *e != env);
+    }
+}
+
+/// fmi3InstantiateScheduledExecution with the log and clockUpdate callbacks (no preemption
+/// callbacks: the suite preempts nothing); NULL as None.
+fn instantiate(fmu: &Fmu3, callback: bool) -> Option<(fmi3Instance, Box<LogSink>)> {
+    let sink = Box::<LogSink>::default();
+    let name = CString::new("se").unwrap();
+    let token = CString::new(fmu.md.token.as_str()).unwrap();
+    let res = CString::new(fmu.resource_path()).unwrap();
+    crate::outcome::breadcrumb("fmi3InstantiateScheduledExecution");
+    // SAFETY: valid strings and callbacks; the sink outlives the instance.
+    let c = unsafe {
+        (fmu.api.instantiate_scheduled_execution)(
+            name.as_ptr(),
+            token.as_ptr(),
+            res.as_ptr(),
+            false,
+            false,
+            sink.env(),
+            Some(crate::fmi3::log_message),
+            if callback { Some(clock_update) } else { None },
+            None,
+            None,
+        )
+    };
+    (!c.is_null()).then_some((c, sink))
+}
+
+fn se(fmu: &Fmu3) -> Se<'_> {
+    let (c, sink) =
+        instantiate(fmu, true).unwrap_or_else(|| panic!("{}: fmi3InstantiateScheduledExecution returned NULL", fmu.id));
+    let probe = Arc::new(Probe {
+        fmu: fmu as *const Fmu3 as usize,
+        instance: AtomicUsize::new(c as usize),
+        inside: AtomicBool::new(false),
+        now: Mutex::new(0.0),
+        updates: Mutex::new(vec![]),
+    });
+    PROBES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push((sink.env() as usize, probe.clone()));
+    Se {
+        inst: Inst {
+            fmu,
+            c,
+            me: false,
+            sink,
+            time: 0.0,
+            auto_events: false,
+        },
+        probe,
+    }
+}
+
+impl Se<'_> {
+    fn activate(&self, vr: u32, t: f64) -> fmi3Status {
+        *self.probe.now.lock().unwrap() = t;
+        self.probe.inside.store(true, Ordering::Release);
+        let s = self.inst.call("fmi3ActivateModelPartition", |c| unsafe {
+            (self.inst.api().activate_model_partition)(c, vr, t)
+        });
+        self.probe.inside.store(false, Ordering::Release);
+        s
+    }
+    fn updates(&self) -> usize {
+        self.probe.updates.lock().unwrap().len()
+    }
+}
+
+fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
+    let (mut h, mut q) = (f64::NAN, 99u32);
+    let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
+        (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
+    });
+    (s, h, q)
+}
+
+/// An input clock the scheduler activates.
+#[derive(Debug, Clone)]
+struct Input {
+    vr: u32,
+    name: String,
+    priority: u32,
+    variability: String,
+    /// A periodic clock's (shift, interval), read in Initialization Mode.
+    periodic: Option<(f64, f64)>,
+}
+
+/// The scheduler's own state: the pending activations (time, priority, clock) and the last
+/// interval of each changing clock.
+#[derive(Debug, Clone, Default)]
+struct Queue {
+    pending: Vec<(f64, u32, u32)>,
+    last_interval: Vec<(u32, f64)>,
+    done: usize,
+}
+
+impl Queue {
+    fn push(&mut self, t: f64, priority: u32, vr: u32, stop: f64) {
+        if t < stop - 1e-12 {
+            self.pending.push((t, priority, vr));
+        }
+    }
+    /// The earliest pending activation; the highest priority (smallest number) at equal times.
+    fn pop(&mut self) -> Option<(f64, u32, u32)> {
+        let i = (0..self.pending.len()).min_by(|a, b| {
+            let (x, y) = (self.pending[*a], self.pending[*b]);
+            x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).then(a.cmp(b))
+        })?;
+        Some(self.pending.remove(i))
+    }
+}
+
+fn stop_time(fmu: &Fmu3) -> f64 {
+    fmu.md
+        .default_experiment
+        .stop_time()
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .unwrap_or(10.0)
+}
+
+/// Enters and exits Initialization Mode, reading the input clocks (periodic ones' intervals and
+/// shifts, checked against the description) in between.
+fn initialize(s: &mut Se) -> Vec<Input> {
+    let inst = &mut s.inst;
+    let fmu = inst.fmu;
+    let id = &fmu.id;
+    assert_eq!(
+        inst.enter_init(0.0),
+        fmi3OK,
+        "{id}: fmi3EnterInitializationMode: {}",
+        inst.log_text()
+    );
+    let mut out = vec![];
+    for v in fmu
+        .md
+        .variables
+        .iter()
+        .filter(|v| v.ty == Type::Clock && v.causality == Causality::Input)
+    {
+        let c = v.clock.as_ref().expect("a Clock's attributes");
+        let priority = c.priority.unwrap_or_else(|| {
+            panic!(
+                "{id}: input clock '{}' has no priority (FMI 3.0, 2.4.7.6: required for Scheduled Execution)",
+                v.name
+            )
+        });
+        let iv = c.interval_variability.as_str();
+        let mut input = Input {
+            vr: v.vr,
+            name: v.name.clone(),
+            priority,
+            variability: iv.to_string(),
+            periodic: None,
+        };
+        if matches!(iv, "constant" | "fixed" | "tunable") {
+            let (st, h, q) = interval(inst, v.vr);
+            assert_eq!(
+                st,
+                fmi3OK,
+                "{id}: fmi3GetIntervalDecimal of '{}' in Initialization Mode: {}",
+                v.name,
+                inst.log_text()
+            );
+            assert!(h.is_finite() && h > 0.0, "{id}: the interval of '{}' is {h}", v.name);
+            assert!(
+                q == UNCHANGED || q == CHANGED,
+                "{id}: '{}': qualifier {q} for a periodic clock in Initialization Mode",
+                v.name
+            );
+            if let Some(d) = c.interval_decimal
+                && matches!(iv, "constant" | "fixed")
+            {
+                assert_eq!(
+                    h, d,
+                    "{id}: the interval of {iv} clock '{}' is not its intervalDecimal",
+                    v.name
+                );
+            }
+            if iv == "constant" {
+                assert_eq!(q, UNCHANGED, "{id}: a constant clock's interval is unchanged");
+            }
+            let mut shift = f64::NAN;
+            let st = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
+                (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
+            });
+            assert_eq!(
+                st,
+                fmi3OK,
+                "{id}: fmi3GetShiftDecimal of '{}': {}",
+                v.name,
+                inst.log_text()
+            );
+            assert!(
+                shift.is_finite() && shift >= 0.0,
+                "{id}: the shift of '{}' is {shift}",
+                v.name
+            );
+            if matches!(iv, "constant" | "fixed") {
+                assert_eq!(
+                    shift,
+                    c.shift_decimal.unwrap_or(0.0),
+                    "{id}: the shift of '{}' is not its shiftDecimal",
+                    v.name
+                );
+            }
+            input.periodic = Some((shift, h));
+        }
+        out.push(input);
+    }
+    assert_eq!(
+        inst.call("fmi3ExitInitializationMode", |c| unsafe {
+            (inst.api().exit_initialization_mode)(c)
+        }),
+        fmi3OK,
+        "{id}: fmi3ExitInitializationMode: {}",
+        inst.log_text()
+    );
+    out
+}
+
+/// The first schedule: each periodic clock at its ticks, each triggered one at 0, a quarter, a
+/// half and four fifths of the stop time (countdown and changing clocks wait for an interval).
+fn first_schedule(inputs: &[Input], stop: f64) -> Queue {
+    let mut q = Queue::default();
+    for c in inputs {
+        if let Some((shift, h)) = c.periodic {
+            let mut k = 0u32;
+            while shift + k as f64 * h < stop - 1e-12 && (k as usize) < MAX_ACTIVATIONS {
+                q.push(shift + k as f64 * h, c.priority, c.vr, stop);
+                k += 1;
+            }
+        } else if c.variability == "triggered" {
+            for f in [0.0, 0.25, 0.5, 0.8] {
+                q.push(f * stop, c.priority, c.vr, stop);
+            }
+        }
+    }
+    q
+}
+
+/// What one run read: per activation, the time, the clock, the clocked values and what the
+/// callback saw (bit patterns).
+type Trace = Vec<(u64, u32, Vec<u8>)>;
+/// An FMU state after an activation: its bytes, the scheduler's queue, the activation's number.
+type Snapshot = (Vec<u8>, Queue, usize);
+
+/// One run of the schedule; `snapshot_at`: an FMU state after that activation (and the queue);
+/// `restore`: continue from such a state in this new instance.
+fn run(fmu: &Fmu3, snapshot_at: Option<usize>, restore: Option<&Snapshot>) -> (Trace, Option<Snapshot>, usize) {
+    let id = &fmu.id;
+    let stop = stop_time(fmu);
+    let mut s = se(fmu);
+    let inputs = initialize(&mut s);
+    let mut q = first_schedule(&inputs, stop);
+    if let Some((bytes, queue, _)) = restore {
+        assert_eq!(
+            s.inst.restore(bytes),
+            fmi3OK,
+            "{id}: fmi3SetFMUState of a state taken in Clock Activation Mode: {}",
+            s.inst.log_text()
+        );
+        q = queue.clone();
+    }
+    let by_vr = |vr: u32| inputs.iter().find(|c| c.vr == vr).expect("an input clock");
+    let mut trace = vec![];
+    let mut snap = None;
+    let mut callbacks = 0;
+    while let Some((t, _, vr)) = q.pop() {
+        assert!(
+            q.done < MAX_ACTIVATIONS,
+            "{id}: more than {MAX_ACTIVATIONS} activations before {stop} s"
+        );
+        let clock = by_vr(vr);
+        // The clock's clocked Float64 inputs: a value that changes from activation to activation.
+        for v in clocked_by(fmu, vr).filter(|v| v.causality == Causality::Input && v.ty == Type::Float64 && !v.array) {
+            let x = 0.01 * ((q.done % 7) as f64 + 1.0);
+            assert_eq!(
+                s.inst.set_f64(&[v.vr], &[x]),
+                fmi3OK,
+                "{id}: setting clocked input '{}' before its partition: {}",
+                v.name,
+                s.inst.log_text()
+            );
+        }
+        let before = s.updates();
+        let st = s.activate(vr, t);
+        assert_eq!(
+            st,
+            fmi3OK,
+            "{id}: fmi3ActivateModelPartition('{}', {t}): {}",
+            clock.name,
+            s.inst.log_text()
+        );
+        s.inst.time = t;
+        let mut values = vec![];
+        for v in clocked_by(fmu, vr) {
+            let (st, bytes) = s.inst.get_raw(v);
+            assert_eq!(
+                st,
+                fmi3OK,
+                "{id}: reading '{}' after the activation of its clock '{}' at {t}: {}",
+                v.name,
+                clock.name,
+                s.inst.log_text()
+            );
+            values.extend(bytes);
+        }
+        // What the callback saw during this activation.
+        let new: Vec<Update> = s.probe.updates.lock().unwrap()[before..].to_vec();
+        callbacks += new.len();
+        for u in &new {
+            assert!(
+                u.inside && u.time == t,
+                "{id}: clockUpdate was called outside fmi3ActivateModelPartition (activation of '{}' at {t})",
+                clock.name
+            );
+            for (ovr, st, on) in &u.outs {
+                assert!(
+                    *st == fmi3OK && *on <= 1,
+                    "{id}: fmi3GetClock of output clock {ovr} in Clock Update Mode (t = {t}): status {}, value {on}: {}",
+                    status_name(*st),
+                    s.inst.log_text()
+                );
+                values.push(*on);
+            }
+            for (v, st, bytes) in &u.values {
+                assert_eq!(
+                    *st,
+                    fmi3OK,
+                    "{id}: reading {v} (clocked by a ticking output clock) in Clock Update Mode (t = {t}): {}",
+                    s.inst.log_text()
+                );
+                values.extend(bytes);
+            }
+            for (ivr, st, h, qual) in &u.intervals {
+                let name = &by_vr(*ivr).name;
+                assert!(
+                    *st == fmi3OK && [NOT_YET_KNOWN, UNCHANGED, CHANGED].contains(qual),
+                    "{id}: fmi3GetIntervalDecimal of '{name}' in Clock Update Mode (t = {t}): status {}, qualifier {qual}: {}",
+                    status_name(*st),
+                    s.inst.log_text()
+                );
+                values.extend(h.to_bits().to_le_bytes());
+                values.push(*qual as u8);
+                if *qual == CHANGED {
+                    assert!(
+                        h.is_finite() && *h > 0.0,
+                        "{id}: '{name}' was given the interval {h} at {t}"
+                    );
+                    let c = by_vr(*ivr);
+                    if c.variability == "changing" {
+                        q.pending.retain(|p| p.2 != *ivr);
+                        q.last_interval.retain(|l| l.0 != *ivr);
+                        q.last_interval.push((*ivr, *h));
+                    }
+                    q.push(t + h, c.priority, *ivr, stop);
+                }
+            }
+        }
+        // Nothing left unsignalled: a ticking output clock or a new interval seen now, in
+        // Clock Activation Mode, without a callback in this activation.
+        let api = s.inst.api();
+        for oc in output_clocks(fmu) {
+            let mut on = 7u8;
+            let st = s
+                .inst
+                .call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
+            assert!(
+                st == fmi3OK && on <= 1,
+                "{id}: fmi3GetClock of output clock '{}' in Clock Activation Mode (t = {t}): status {}, value {on}: {}",
+                oc.name,
+                status_name(st),
+                s.inst.log_text()
+            );
+            assert!(
+                !(on == 1 && new.is_empty()),
+                "{id}: output clock '{}' ticks after the activation of '{}' at {t}, but clockUpdate was not called",
+                oc.name,
+                clock.name
+            );
+        }
+        for ic in aperiodic(fmu) {
+            let (st, h, qual) = interval(&s.inst, ic.vr);
+            assert_eq!(
+                st,
+                fmi3OK,
+                "{id}: fmi3GetIntervalDecimal of '{}' in Clock Activation Mode (t = {t}): {}",
+                ic.name,
+                s.inst.log_text()
+            );
+            assert!(
+                !(qual == CHANGED && new.is_empty()),
+                "{id}: '{}' was given the interval {h} at {t}, but clockUpdate was not called",
+                ic.name
+            );
+        }
+        // A changing clock keeps ticking at its last interval.
+        if clock.variability == "changing"
+            && !q.pending.iter().any(|p| p.2 == vr)
+            && let Some((_, h)) = q.last_interval.iter().find(|l| l.0 == vr)
+        {
+            let h = *h;
+            q.push(t + h, clock.priority, vr, stop);
+        }
+        trace.push((t.to_bits(), vr, values));
+        q.done += 1;
+        if snapshot_at == Some(q.done - 1) {
+            snap = Some((s.inst.snapshot(), q.clone(), q.done - 1));
+        }
+    }
+    (trace, snap, callbacks)
+}
+
+/// A fresh instance, initialized (Clock Activation Mode), and its input clocks.
+fn ready(fmu: &Fmu3) -> (Se<'_>, Vec<Input>) {
+    let mut s = se(fmu);
+    let inputs = initialize(&mut s);
+    (s, inputs)
+}
+
+fn expect_error(s: &Se, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) {
+    let st = s.inst.call(what, f);
+    assert_eq!(
+        st,
+        fmi3Error,
+        "{}: {what}: expected fmi3Error, got {}",
+        s.inst.fmu.id,
+        status_name(st)
+    );
+}
+
+fn refusals(fmu: &Fmu3) -> usize {
+    let id = &fmu.id;
+    let api = &fmu.api;
+    let first_input = fmu
+        .md
+        .variables
+        .iter()
+        .find(|v| v.ty == Type::Clock && v.causality == Causality::Input)
+        .unwrap_or_else(|| panic!("{id}: <ScheduledExecution> without an input clock"));
+    let vr = first_input.vr;
+    let mut n = 0;
+    // In Instantiated and in Initialization Mode.
+    {
+        let s = se(fmu);
+        expect_error(&s, "fmi3ActivateModelPartition in Instantiated", |c| unsafe {
+            (api.activate_model_partition)(c, vr, 0.0)
+        });
+        n += 1;
+    }
+    {
+        let mut s = se(fmu);
+        assert_eq!(s.inst.enter_init(0.0), fmi3OK, "{id}: {}", s.inst.log_text());
+        expect_error(&s, "fmi3ActivateModelPartition in Initialization Mode", |c| unsafe {
+            (api.activate_model_partition)(c, vr, 0.0)
+        });
+        n += 1;
+    }
+    // An output clock, an unknown value reference.
+    if let Some(oc) = output_clocks(fmu).next() {
+        let (s, _) = ready(fmu);
+        expect_error(
+            &s,
+            &format!("fmi3ActivateModelPartition of output clock '{}'", oc.name),
+            |c| unsafe { (api.activate_model_partition)(c, oc.vr, 0.0) },
+        );
+        n += 1;
+    }
+    {
+        let (s, _) = ready(fmu);
+        let unknown = fmu.md.unknown_vr();
+        expect_error(
+            &s,
+            &format!("fmi3ActivateModelPartition of unknown value reference {unknown}"),
+            |c| unsafe { (api.activate_model_partition)(c, unknown, 0.0) },
+        );
+        n += 1;
+    }
+    // A time before the current one: the schedule up to its first activation after 0, then the
+    // same clock half way back.
+    {
+        let (s, inputs) = ready(fmu);
+        let mut q = first_schedule(&inputs, stop_time(fmu));
+        let mut earlier = None;
+        while let Some((t, _, cvr)) = q.pop() {
+            assert_eq!(
+                s.activate(cvr, t),
+                fmi3OK,
+                "{id}: activation at {t}: {}",
+                s.inst.log_text()
+            );
+            if t > 0.0 {
+                earlier = Some((cvr, t));
+                break;
+            }
+        }
+        if let Some((cvr, t)) = earlier {
+            expect_error(
+                &s,
+                &format!("fmi3ActivateModelPartition at {} after one at {t}", t / 2.0),
+                |c| unsafe { (api.activate_model_partition)(c, cvr, t / 2.0) },
+            );
+            n += 1;
+        } else {
+            limitation("fmi3ActivateModelPartition at an earlier time: no activation after 0 in the schedule");
+        }
+    }
+    // The Co-Simulation and Model Exchange functions.
+    {
+        let (s, _) = ready(fmu);
+        let (mut a, mut b, mut c3, mut last) = (9u8, 9u8, 9u8, f64::NAN);
+        expect_error(&s, "fmi3DoStep on a Scheduled Execution instance", |c| unsafe {
+            (api.do_step)(c, 0.0, fmu.step_size(), true, &mut a, &mut b, &mut c3, &mut last)
+        });
+        n += 1;
+    }
+    {
+        let (s, _) = ready(fmu);
+        expect_error(&s, "fmi3EnterEventMode on a Scheduled Execution instance", |c| unsafe {
+            (api.enter_event_mode)(c)
+        });
+        n += 1;
+    }
+    n
+}
+
+pub fn fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates(fmu: &Fmu3) {
+    let id = &fmu.id;
+    if !fmu.md.se {
+        // Not offered: NULL (with a message) is the expected answer; an instance is legal too.
+        if let Some((c, _sink)) = instantiate(fmu, false) {
+            // SAFETY: the instance just made, freed once.
+            unsafe { (fmu.api.free_instance)(c) };
+        }
+        skip_not_declared("<ScheduledExecution>");
+    }
+    let (a, _, callbacks) = run(fmu, None, None);
+    assert!(!a.is_empty(), "{id}: the schedule activated nothing");
+    let k = a.len() / 2;
+    let can = fmu
+        .md
+        .se_interface
+        .as_ref()
+        .is_some_and(|i| i.can_get_and_set_fmu_state && i.can_serialize_fmu_state);
+    let (b, snap, _) = run(fmu, can.then_some(k), None);
+    assert_eq!(
+        a, b,
+        "{id}: two runs of the same schedule read different clocked values"
+    );
+    info(format!(
+        "{} activations over {} s in time and priority order, the clocked values read after each and identical on a rerun; {callbacks} clockUpdate calls, each asking the output clocks and the countdown/changing intervals from inside the activation",
+        a.len(),
+        stop_time(fmu)
+    ));
+    if let Some(snap) = snap {
+        let (c, _, _) = run(fmu, None, Some(&snap));
+        assert_eq!(
+            &a[k + 1..],
+            &c[..],
+            "{id}: after an FMU state taken after activation {k} and restored into a new instance, other clocked values"
+        );
+        info(format!(
+            "an FMU state taken after activation {k} and restored into a new instance continues bit-identically"
+        ));
+    } else {
+        limitation("FMU state: <ScheduledExecution> does not declare canGetAndSetFMUState and canSerializeFMUState");
+    }
+    let n = refusals(fmu);
+    info(format!(
+        "{n} refusals with fmi3Error, each on a new instance: fmi3ActivateModelPartition in Instantiated, in Initialization Mode, of an output clock, of an unknown value reference, at an earlier time; fmi3DoStep and fmi3EnterEventMode"
+    ));
+}
