@@ -491,7 +491,11 @@ impl Context<'_> {
         // model without one takes the closure without the mask (its step cost 200 instructions
         // more with it: bench/callgrind.sh).
         let sized = const { M::DESCRIPTION.has_sized_arrays() };
-        let mask = if sized { crate::core::structural::active_mask(&*model) } else { None };
+        let mask = if sized {
+            crate::core::structural::active_mask(&*model)
+        } else {
+            None
+        };
         let tol = if sized {
             crate::core::structural::scaled_tolerances(model.tolerances(self), mask.as_ref())
         } else {

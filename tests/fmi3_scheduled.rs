@@ -331,7 +331,17 @@ fn the_state_machine_and_the_refusals() {
         // The refusal inside ended the run (FMI 3.0: fmi3Error leads to Terminated).
         assert_eq!(state(c), Some(State::Terminated));
         free(c);
+    } // fmi3FreeInstance from the callback would pull the instance from under the activation that
+    // called it: refused, and the instance goes on.
+    let (c, p) = scheduled_with(Some(nested_free));
+    init(c);
+    for t in [0.0, 0.0, 0.0] {
+        assert_eq!(activate(c, 2, t), fmi3OK);
     }
+    assert!(last(p).contains("called from the clockUpdate callback"), "{}", last(p));
+    assert_eq!(state(c), Some(State::ClockActivationMode));
+    assert_eq!(activate(c, 2, 1.0), fmi3OK);
+    free(c);
 }
 
 unsafe extern "C" fn nested_state(env: *mut c_void) {
@@ -341,6 +351,13 @@ unsafe extern "C" fn nested_state(env: *mut c_void) {
     // SAFETY: the live instance; a local.
     let status = unsafe { fmi3GetFMUState(p.instance.load(Ordering::Acquire), &mut s) };
     assert_eq!(status, fmi3Error);
+}
+
+unsafe extern "C" fn nested_free(env: *mut c_void) {
+    // SAFETY: env is the leaked &Probe given at instantiation.
+    let p = unsafe { &*(env as *const Probe) };
+    // SAFETY: the live instance (the runtime refuses to free it from here).
+    unsafe { fmi3FreeInstance(p.instance.load(Ordering::Acquire)) };
 }
 
 unsafe extern "C" fn nested_activation(env: *mut c_void) {

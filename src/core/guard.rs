@@ -45,6 +45,10 @@ pub struct Component<M: CoSimulation> {
     pub(crate) serial: Option<std::sync::Mutex<()>>,
     /// The thread holding `serial` (its mark, [`this_thread`]); 0: none.
     pub(crate) owner: AtomicUsize,
+    /// Scheduled Execution: the importer's clockUpdate callback is running (called by
+    /// fmi3ActivateModelPartition, which still has the instance to finish afterwards): the
+    /// instance is not freed from inside it.
+    pub(crate) in_callback: AtomicBool,
 }
 
 /// A number that identifies the calling thread while it lives (the address of a thread-local).

@@ -34,6 +34,20 @@ pub unsafe fn free_instance<M: CoSimulation>(terms: &'static Terms, c: Handle) {
         // SAFETY: returned by an instantiation function as a Box<Component<M>> and not freed
         // (the standard forbids using a freed instance).
         let component = unsafe { &*(c as *const Component<M>) };
+        if component.in_callback.load(Ordering::Acquire) {
+            // From the importer's clockUpdate callback: fmi3ActivateModelPartition still has the
+            // instance to finish when the callback returns.
+            component.refusals.log(
+                ERROR,
+                Category::StatusError,
+                &format!(
+                    "{}: called from the clockUpdate callback (Clock Update Mode), inside fmi3ActivateModelPartition; \
+                     the instance is not freed",
+                    terms.name(Function::FreeInstance)
+                ),
+            );
+            return;
+        }
         if component.busy.swap(true, Ordering::Acquire) {
             // Freeing it now would pull the instance from under the call that is running.
             component.refusals.log(

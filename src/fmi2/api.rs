@@ -138,6 +138,7 @@ pub unsafe fn instantiate<M: CoSimulation>(
             instance: UnsafeCell::new(inst),
             serial: None,
             owner: std::sync::atomic::AtomicUsize::new(0),
+            in_callback: AtomicBool::new(false),
         })) as fmi2Component
     }));
     made.unwrap_or(ptr::null_mut())

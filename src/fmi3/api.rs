@@ -125,6 +125,7 @@ unsafe fn instantiate<M: CoSimulation>(
             instance: UnsafeCell::new(inst),
             serial,
             owner: std::sync::atomic::AtomicUsize::new(0),
+            in_callback: AtomicBool::new(false),
         })) as fmi3Instance
     }));
     made.unwrap_or(ptr::null_mut())
@@ -349,7 +350,9 @@ pub unsafe fn activate_model_partition<M: CoSimulation>(
             }
         });
         if let Some(callback) = notify {
+            component.in_callback.store(true, std::sync::atomic::Ordering::Release);
             let _ = catch_unwind(AssertUnwindSafe(|| callback()));
+            component.in_callback.store(false, std::sync::atomic::Ordering::Release);
             component.run_internal(F, |inst| inst.end_clock_update());
         }
         status
