@@ -568,6 +568,24 @@ pub struct TerminalMember {
     pub kind: &'static str,
 }
 
+/// Whether some variable of `$d` satisfies the condition (a `const fn` cannot take a closure:
+/// the loop is written once here).
+macro_rules! any_variable {
+    ($d:expr, |$v:ident| $cond:expr) => {{
+        let mut i = 0;
+        let mut found = false;
+        while i < $d.variables.len() {
+            let $v = &$d.variables[i];
+            if $cond {
+                found = true;
+                break;
+            }
+            i += 1;
+        }
+        found
+    }};
+}
+
 impl ModelDescription {
     pub fn variable(&self, vr: u32, ty: VarType) -> Option<&'static Variable> {
         self.variables
@@ -614,29 +632,14 @@ impl ModelDescription {
 
     /// Whether some variable exists in FMI 3.0 only (a type 2.0 lacks, an array, `fmi3_only`).
     pub const fn has_fmi3_only(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if !self.variables[i].in_version(FmiVersion::V2) {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| !v.in_version(FmiVersion::V2))
     }
 
     /// Whether some array variable is in the FMI 2.0 description (as its elements, scalars of
     /// structured names: [`Variable::element_name`]). (`const`: the FMI 2.0 functions of a model
     /// without one never look for elements.)
     pub const fn has_fmi2_arrays(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            let v = &self.variables[i];
-            if v.is_array() && v.in_version(FmiVersion::V2) {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| v.is_array() && v.in_version(FmiVersion::V2))
     }
 
     /// FMI 2.0's view of an array: the array variable (its index in `variables`) and the
@@ -682,64 +685,29 @@ impl ModelDescription {
     /// Whether some variable is a Clock. (`const`: the clock functions of a model without one
     /// refuse every call at compile time.)
     pub const fn has_clocks(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if self.variables[i].fmi3.clock.is_some() {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| v.fmi3.clock.is_some())
     }
 
     /// Whether some variable is an array (FMI 3.0 `<Dimension>`s). (`const`: the runtime takes
     /// the scalar-only paths of a model without arrays at compile time.)
     pub const fn has_arrays(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if self.variables[i].is_array() {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| v.is_array())
     }
 
     /// Whether some variable is a structural parameter (FMI 3.0): then the FMU has
     /// Configuration Mode (`fmi3EnterConfigurationMode`).
     pub const fn has_structural_parameters(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if let Causality::StructuralParameter = self.variables[i].causality {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| matches!(v.causality, Causality::StructuralParameter))
     }
 
     /// Whether some array's length is set by a structural parameter.
     pub const fn has_sized_arrays(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if self.variables[i].is_sized() {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| v.is_sized())
     }
 
     /// Whether the model declares its independent variable itself (else FMI 3.0 adds `time`).
     pub const fn declares_independent(&self) -> bool {
-        let mut i = 0;
-        while i < self.variables.len() {
-            if let Causality::Independent = self.variables[i].causality {
-                return true;
-            }
-            i += 1;
-        }
-        false
+        any_variable!(self, |v| matches!(v.causality, Causality::Independent))
     }
 
     /// Whether `v` is a continuous state: some variable is declared its derivative.
