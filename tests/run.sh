@@ -96,6 +96,15 @@ echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU, FMI 2.0 and 3.0
 for fmu in "${fmus[@]}"; do fmutool -input "$fmu" -check && n=$((n + 1)) || record "fmutool -check $fmu" 0 1; done
 record "fmutool -check" "$n" 0
 
+echo "== independent importers (../shared/independent/: fmusim, fmusim-rs, fmuCheck) on every FMU"
+# tests/independent/README.md: validation, every interface, fmuCheck's step sizes, results against
+# fmpy and beside the C Reference-FMUs; one record per tool and FMU.
+st=0
+python tests/independent/run.py --records "$logs/independent.tsv" || st=$?
+nf=0
+while IFS=$'\t' read -r name p f; do record "$name" "$p" "$f"; nf=$((nf + f)); done < <(cat "$logs/independent.tsv" 2>/dev/null)
+[ "$st" -eq 0 ] || [ "$nf" -ne 0 ] || record "independent importers (exit $st)" 0 1
+
 echo "== cargo fmu check (black-box conformance suite) on every FMU, FMI 2.0 and 3.0"
 for fmu in "${fmus[@]}"; do
   name=${fmu#target/fmu/}
