@@ -55,6 +55,7 @@ unsafe fn instantiate<M: CoSimulation>(
     log_message: fmi3LogMessageCallback,
     model_exchange: bool,
     refusal: Option<String>,
+    warning: Option<String>,
     event_mode: (bool, bool),
     intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
     scheduled: Option<Option<std::rc::Rc<dyn Fn()>>>,
@@ -104,6 +105,9 @@ unsafe fn instantiate<M: CoSimulation>(
                 ));
             }
             Some(_) => {}
+        }
+        if let Some(what) = warning {
+            logger.log(fmi3Warning, Category::StatusWarning, &format!("{function}: {what}"));
         }
         let mut inst = Instance::<M>::new(&TERMS, logger, own_token, model_exchange);
         (inst.event_mode_used, inst.early_return_allowed) = event_mode;
@@ -156,6 +160,7 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
             log_message,
             true,
             None,
+            None,
             (false, false),
             None,
             None,
@@ -173,7 +178,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     logging_on: fmi3Boolean,
     event_mode_used: fmi3Boolean,
     early_return_allowed: fmi3Boolean,
-    _required_intermediate_variables: *const fmi3ValueReference,
+    required_intermediate_variables: *const fmi3ValueReference,
     n_required_intermediate_variables: usize,
     environment: fmi3InstanceEnvironment,
     log_message: fmi3LogMessageCallback,
@@ -191,13 +196,34 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     // as one while another runs). With earlyReturnAllowed the importer may ask the step to return
     // early (canReturnEarly = true): at the time it names if that is later in the step, else at the
     // internal step's end it was told. So no required intermediate variable can be honoured.
-    let refusal = if n_required_intermediate_variables > 0 {
-        Some(format!(
-            "{n_required_intermediate_variables} requiredIntermediateVariables given, but no variable of {} is declared \
-             intermediateUpdate=\"true\" (its intermediate update only reports the time and takes early-return requests)",
+    // FMI 3.0 (2.3.1) has the importer list only variables declared intermediateUpdate="true";
+    // one that lists others (fmusim's --intermediate-update lists every output) is told in the
+    // log which it will not get there, and the instance is made all the same: refusing would
+    // make the FMU unusable for an option that costs the importer nothing to lose (issue 49).
+    let warning = (n_required_intermediate_variables > 0).then(|| {
+        // SAFETY: NULL or nRequiredIntermediateVariables value references (the contract).
+        let listed = unsafe { slice(required_intermediate_variables, n_required_intermediate_variables) };
+        let names = match listed {
+            Some(vrs) => vrs
+                .iter()
+                .map(
+                    |&vr| match M::DESCRIPTION.variables.iter().find(|v| v.value_reference == vr) {
+                        Some(v) => format!("'{}' (vr {vr})", v.name),
+                        None => format!("vr {vr} (no such variable)"),
+                    },
+                )
+                .collect::<Vec<_>>()
+                .join(", "),
+            None => "(the array is NULL)".to_string(),
+        };
+        format!(
+            "{n_required_intermediate_variables} requiredIntermediateVariables given: {names}; no variable of {} is \
+             declared intermediateUpdate=\"true\", so none of them is updated in Intermediate Update Mode (its \
+             intermediate update reports the time and takes early-return requests); instantiating all the same",
             M::DESCRIPTION.model_identifier
-        ))
-    } else if M::DESCRIPTION.has_clocks() && !event_mode_used {
+        )
+    });
+    let refusal = if M::DESCRIPTION.has_clocks() && !event_mode_used {
         // FMI 3.0, 4.2.1 (eventModeUsed): "For FMUs that have clocks, eventModeUsed == fmi3True
         // is required." The importer activates the clocks in Event Mode.
         Some(format!(
@@ -245,6 +271,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
             log_message,
             false,
             refusal,
+            warning,
             (event_mode_used, event_mode_used && early_return_allowed),
             intermediate,
             None,
@@ -309,6 +336,7 @@ pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
             environment,
             log_message,
             false,
+            None,
             None,
             (false, false),
             None,
