@@ -3,7 +3,7 @@
 //! finds and handles state and time events inside a communication step
 //! ([`integrate_with_events`]).
 
-use crate::model::{CoSimulation, Context, EventClock, Model, StateVector, StepFailure};
+use crate::model::{CoSimulation, Context, EventClock, Model, ReturnAtEvents, StateVector, StepFailure};
 
 /// What a model is told at an event, and what it answers ([`Model::update`]).
 ///
@@ -132,7 +132,9 @@ pub fn update_round<M: CoSimulation>(
     crate::core::instance::evaluate(model, time);
     let states = model.states();
     let pending = clock.next_event_time;
-    let time_event = pending.is_some_and(|te| due(te, time));
+    // Due: reached up to round-off, or marked due by the step that ended within round-off
+    // before it (EventClock::time_event_due).
+    let time_event = pending.is_some_and(|te| clock.time_event_due || due(te, time));
     // A due time event happens at the time it was scheduled for: the importer's time may differ
     // from it in the last bits (communication points summed up), the model's sample times must not.
     let time = match pending {
@@ -170,6 +172,8 @@ pub fn update_round<M: CoSimulation>(
         Some(te) if due(te, time) => None,
         other => other,
     };
+    // The time event marked due is handled (rescheduled or over).
+    clock.time_event_due = false;
     clock.count += 1;
     crate::core::instance::evaluate(model, time);
     if let Some(what) = crate::core::instance::non_finite(model) {
@@ -282,6 +286,16 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
     // A time the importer asked to return early at, in the intermediate update (FMI 3.0
     // co-simulation), not reached yet.
     let mut early_return: Option<f64> = None;
+    // The integrator's `max_steps` bounds the whole communication step, every stretch between
+    // its events together, not each stretch: with at most MAX_EVENTS_PER_STEP events too, one
+    // call's work has a bound whatever the parameters (docs/performance.md, "Bounded steps").
+    let (budget, steps_at_start) = ctx.solver.as_deref().map_or((0, 0), |s| {
+        (s.max_steps, s.stats.accepted_steps + s.stats.rejected_steps)
+    });
+    // The model, its clock and the time right after the last event handled in this step: where
+    // a step refused for chattering leaves the instance (a consistent state, not one inside the
+    // storm).
+    let mut after_event: Option<(M, EventClock, f64)> = None;
     loop {
         // The time event inside this step, if any; one within round-off of the step's end
         // happens at its end.
@@ -299,6 +313,19 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         indicators(model, now, &x, &mut z_now);
         let mut c = model.continuous::<f64>();
         let solver = ctx.solver.as_deref_mut().expect("checked by the caller");
+        let used = solver.stats.accepted_steps + solver.stats.rejected_steps - steps_at_start;
+        if target > now && used >= budget {
+            crate::core::instance::evaluate(model, now);
+            return fail(
+                ctx,
+                clock,
+                now,
+                format!(
+                    "gave up after {used} internal steps of the integrator in one communication step, at t = {now}"
+                ),
+            );
+        }
+        solver.max_steps = budget - used;
         let model_ref = &*model;
         let event_tol = model.event_tolerance(now);
         let outcome = if target > now {
@@ -384,6 +411,9 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         } else {
             Ok(None)
         };
+        if let Some(s) = ctx.solver.as_deref_mut() {
+            s.max_steps = budget;
+        }
         let (reached, state_event) = match outcome {
             Ok(Some(at)) => (now + at, stopped_early.is_none()),
             Ok(None) => (target, false),
@@ -391,7 +421,14 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                 let reached = e.time();
                 model.set_states(&x);
                 crate::core::instance::evaluate(model, reached);
-                return fail(ctx, clock, reached, e.to_string());
+                let message = match e {
+                    // Its count is what was left of the step's budget: say the budget.
+                    crate::solver::OdeError::TooManySteps { t, .. } => format!(
+                        "gave up after {budget} internal steps of the integrator in one communication step, at t = {t} s"
+                    ),
+                    e => e.to_string(),
+                };
+                return fail(ctx, clock, reached, message);
             }
         };
         model.set_states(&x);
@@ -400,6 +437,11 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             early_return = Some(tr.max(now));
         }
         let time_event_now = time_event.is_some_and(|te| reached >= te.min(end));
+        // A time event reached only up to round-off (the step's end a few ulps before it): due
+        // all the same, at its scheduled time (update_round).
+        if time_event_now {
+            clock.time_event_due = true;
+        }
         if !state_event && !time_event_now && early_return.is_some_and(|tr| now >= tr) && now < end {
             // The early return the importer asked for in the intermediate update: the step ends
             // here, at an accepted state (FMI 3.0, 4.2.2).
@@ -411,10 +453,14 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             ctx.refreshed = true;
             return Ok(());
         }
-        if (state_event || time_event_now) && ctx.return_at_events {
-            // FMI 3.0 event mode with early return: stop here, the event unhandled; the
-            // importer enters Event Mode (a time event within round-off of the step's end is at
-            // the end).
+        let to_importer = match ctx.return_at_events {
+            ReturnAtEvents::Never => false,
+            ReturnAtEvents::AtStepEnd => now >= end,
+            ReturnAtEvents::Each => true,
+        };
+        if (state_event || time_event_now) && to_importer {
+            // FMI 3.0 event mode: stop here, the event unhandled; the importer enters Event Mode
+            // (a time event within round-off of the step's end is at the end, and marked due).
             crate::core::instance::evaluate(model, now);
             clock.stopped_at = Some(now);
             if let Some(c) = ctx.events.as_deref_mut() {
@@ -426,17 +472,22 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         if state_event || time_event_now {
             events += 1;
             if events > MAX_EVENTS_PER_STEP {
+                // Back to right after the last event handled: a consistent state (the one here
+                // lies past an indicator's zero, the event unhandled), the time reached.
+                let chattering_at = now;
+                if let Some((m, c, at)) = after_event.take() {
+                    (*model, clock, now) = (m, c, at);
+                }
                 crate::core::instance::evaluate(model, now);
                 return fail(
                     ctx,
                     clock,
                     now,
-                    format!("more than {MAX_EVENTS_PER_STEP} events in one step (chattering at t = {now})"),
+                    format!(
+                        "more than {MAX_EVENTS_PER_STEP} events in one step (chattering at t = {chattering_at}); \
+                         the step ends after the last event handled, at t = {now}"
+                    ),
                 );
-            }
-            // A time event within round-off of the step's end is handled at the end.
-            if time_event_now && let Some(te) = clock.next_event_time.filter(|te| !due(*te, now)) {
-                clock.next_event_time = Some(te.min(now));
             }
             let solver_ctx = Context::outside_step(ctx.start_time, ctx.tolerance, ctx.logger, ctx.resources, false);
             match iterate(model, &solver_ctx, now, &mut clock) {
@@ -457,6 +508,13 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             }
             if let Some(solver) = ctx.solver.as_deref_mut() {
                 solver.restart();
+            }
+            match &mut after_event {
+                Some((m, c, at)) => {
+                    m.clone_from(model);
+                    (*c, *at) = (clock, now);
+                }
+                None => after_event = Some((model.clone(), clock, now)),
             }
         }
         if now >= end {

@@ -355,9 +355,8 @@ pub struct Context<'a> {
     /// The pending time event and the termination request, in a communication step (the
     /// runtime's integrator handles the model's events inside the step).
     pub(crate) events: Option<&'a mut EventClock>,
-    /// FMI 3.0 event mode with early return: the step stops at the first event and leaves it to
-    /// the importer ([`EventClock::stopped_at`]).
-    pub(crate) return_at_events: bool,
+    /// Which events the step leaves to the importer's Event Mode ([`EventClock::stopped_at`]).
+    pub(crate) return_at_events: ReturnAtEvents,
     /// FMI 3.0 co-simulation's intermediate update: called at the end of every accepted step of
     /// the integrator with its time; `Some(t_r)` when the importer asks the step to return
     /// early at `t_r` ([`EventClock::returned_early_at`]).
@@ -377,6 +376,22 @@ fn slope_inputs<M: Variables>(c: &mut M::Continuous<f64>, model: &M, slopes: &[(
     }
 }
 
+/// Which events a co-simulation step leaves to the importer's Event Mode (FMI 3.0, 4.2.1:
+/// `eventModeUsed`, `earlyReturnAllowed`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum ReturnAtEvents {
+    /// None: every event is handled inside the step (FMI 2.0; FMI 3.0 without event mode).
+    #[default]
+    Never,
+    /// Event mode without early return: the step cannot end before its end, so the events
+    /// strictly inside it are handled inside it; an event at its end (a time event within
+    /// round-off of it, a state event located there) is left unhandled with
+    /// `eventHandlingNeeded = true`, for the importer's Event Mode at the communication point.
+    AtStepEnd,
+    /// Event mode with early return: the step stops at the first event, unhandled.
+    Each,
+}
+
 /// The runtime's part of a model's events, kept in the FMU state: the time event the model asked
 /// for, whether the event iteration at initialization is still running, and the event counter.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -389,6 +404,11 @@ pub struct EventClock {
     pub count: u64,
     /// The model asked to end the simulation ([`crate::Event::terminate`]).
     pub terminated: bool,
+    /// The pending time event is due although the instance's time may lie a few round-offs
+    /// before it: a communication step ended within round-off of it (an importer that keeps
+    /// its time as `t += h`). The next event iteration handles it as the time event, at its
+    /// scheduled time, and clears this; no later step takes it as pending again (issue 49).
+    pub time_event_due: bool,
     /// The step stopped at this event, unhandled, for the importer's Event Mode (FMI 3.0 event
     /// mode with early return); taken by the runtime after the step.
     #[serde(skip)]
@@ -412,7 +432,7 @@ impl Context<'_> {
             refreshed: false,
             model_exchange: false,
             events: None,
-            return_at_events: false,
+            return_at_events: ReturnAtEvents::Never,
             intermediate: None,
             input_slopes: &[],
         }
@@ -436,7 +456,7 @@ impl Context<'_> {
             refreshed: false,
             model_exchange,
             events: None,
-            return_at_events: false,
+            return_at_events: ReturnAtEvents::Never,
             intermediate: None,
             input_slopes: &[],
         }
@@ -454,7 +474,7 @@ impl Context<'_> {
             refreshed: false,
             model_exchange: false,
             events: None,
-            return_at_events: false,
+            return_at_events: ReturnAtEvents::Never,
             intermediate: None,
             input_slopes: &[],
         }

@@ -6,7 +6,7 @@ use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};
 use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version, WARNING};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
-use crate::model::{CoSimulation, Context, EventClock, StateVector};
+use crate::model::{CoSimulation, Context, EventClock, ReturnAtEvents, StateVector};
 use crate::solver::Dopri5;
 use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
@@ -1336,7 +1336,11 @@ impl<M: CoSimulation> Instance<M> {
             refreshed: false,
             model_exchange: self.model_exchange,
             events: Some(&mut self.sim.events),
-            return_at_events: self.event_mode_used && self.early_return_allowed,
+            return_at_events: match (self.event_mode_used, self.early_return_allowed) {
+                (true, true) => ReturnAtEvents::Each,
+                (true, false) => ReturnAtEvents::AtStepEnd,
+                (false, _) => ReturnAtEvents::Never,
+            },
             intermediate: self.intermediate_update.as_deref_mut(),
             input_slopes: &self.input_slopes,
         };
@@ -1381,13 +1385,14 @@ impl<M: CoSimulation> Instance<M> {
                 OK
             }
             (Ok(()), None) if stopped_at.is_some() => {
-                // FMI 3.0 event mode with early return: the step ends at the event, which the
-                // importer handles in Event Mode.
+                // FMI 3.0 event mode: the step ends at the event (with early return, at the
+                // first one; without, only at one at the step's end), which the importer
+                // handles in Event Mode.
                 let at = stopped_at.unwrap_or(end).clamp(t, end);
                 self.sim.time = at;
                 self.sim.last_successful_time = at;
                 self.step_event = true;
-                self.event(|| format!("{f}: an event at t = {at}: returning for the importer to handle it"));
+                self.event(|| format!("{f}: an event at t = {at}: left for the importer to handle in Event Mode"));
                 OK
             }
             (Ok(()), None) => {
