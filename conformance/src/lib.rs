@@ -472,3 +472,63 @@ pub fn random_sequences() -> u32 {
         n => n,
     }
 }
+
+/// The environment variable that fixes the seed of the random checks (the random call
+/// sequences of both FMI versions): a number from 0 to 2^64 - 1. Without it a seed is drawn;
+/// either way every random check prints it ([`seed_note`]), and the same seed with the same
+/// number of sequences ([`random_sequences`]) makes the same calls.
+pub const SEED_VAR: &str = "RUSTFMU_SEED";
+
+static SEED: OnceLock<u64> = OnceLock::new();
+
+/// `$RUSTFMU_SEED` ([`SEED_VAR`]): `None` when it is not set, an error when it is no u64.
+pub fn seed_from_env() -> Result<Option<u64>, String> {
+    match std::env::var(SEED_VAR) {
+        Ok(v) => v
+            .trim()
+            .parse()
+            .map(Some)
+            .map_err(|_| format!("{SEED_VAR}={v:?} is not a seed (a number from 0 to 2^64 - 1)")),
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(e) => Err(format!("{SEED_VAR}: {e}")),
+    }
+}
+
+/// The seed of the random checks in this process: `$RUSTFMU_SEED`, else one drawn once (from
+/// the system's entropy, by proptest's RNG) and kept for the process. [`runner::run`] resolves
+/// it once for a run and hands it to every worker in `$RUSTFMU_SEED`, so all of a run's checks
+/// share it. Panics when `$RUSTFMU_SEED` is set but is no u64.
+pub fn seed() -> u64 {
+    *SEED.get_or_init(|| match seed_from_env() {
+        Ok(Some(seed)) => seed,
+        Ok(None) => {
+            use proptest::prelude::Rng;
+            use proptest::test_runner::{Config, RngSeed, TestRunner};
+            let config = Config {
+                rng_seed: RngSeed::Random,
+                failure_persistence: None,
+                ..Config::default()
+            };
+            TestRunner::new(config).rng().next_u64()
+        }
+        Err(e) => panic!("{e}"),
+    })
+}
+
+/// A proptest configuration whose RNG is seeded from [`seed`] (proptest's own seeding:
+/// `RngSeed::Fixed`, its ChaCha RNG): the same seed generates the same cases.
+pub fn seeded(config: proptest::test_runner::Config) -> proptest::test_runner::Config {
+    proptest::test_runner::Config {
+        rng_seed: proptest::test_runner::RngSeed::Fixed(seed()),
+        ..config
+    }
+}
+
+/// What a random check prints in its report and in its failure message: the seed and how to run
+/// the same sequences again.
+pub fn seed_note() -> String {
+    let (seed, n) = (seed(), random_sequences());
+    format!(
+        "random seed {seed}; rerun with {SEED_VAR}={seed} PROPTEST_CASES={n} (cargo test), or {SEED_VAR}={seed} and --random-sequences {n} (fmu-check, cargo fmu check), to repeat these sequences"
+    )
+}

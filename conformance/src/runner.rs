@@ -266,6 +266,33 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             return report;
         }
     }
+    // One seed for the run's random checks, named at the head of the report and handed to every
+    // worker ($RUSTFMU_SEED as given, else drawn here): a worker that dies still has its seed
+    // printed.
+    let seed = if selected.iter().any(|c| c.group == Group::RandomSequences) {
+        match crate::seed_from_env() {
+            Ok(_) => {
+                let seed = crate::seed();
+                report.about.push(format!(
+                    "random call sequences: seed {seed} ({}); rerun with {}={seed} (and the same --random-sequences) to repeat them",
+                    if std::env::var_os(crate::SEED_VAR).is_some() {
+                        "from $RUSTFMU_SEED"
+                    } else {
+                        "drawn for this run"
+                    },
+                    crate::SEED_VAR
+                ));
+                Some(seed)
+            }
+            Err(e) => {
+                report.load_error = Some(e);
+                skip_all(&mut report, "the FMU cannot be checked");
+                return report;
+            }
+        }
+    } else {
+        None
+    };
     let base = opts.temp_dir.clone().unwrap_or_else(std::env::temp_dir);
     let run_dir = match PrivateDir::new_in(&base) {
         Ok(d) => d,
@@ -276,7 +303,12 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         }
     };
     // Loaded once in a worker: a binary that does not load (or crashes on load) fails here.
-    let probe = run_worker(opts, run_dir.path(), &["probe".into(), fmu_path.display().to_string()]);
+    let probe = run_worker(
+        opts,
+        run_dir.path(),
+        &["probe".into(), fmu_path.display().to_string()],
+        seed,
+    );
     match probe.result.clone() {
         Some(r) if r.outcome == Outcome::Pass => {
             report.about.extend(r.info);
@@ -311,7 +343,19 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         for a in &opts.worker_args_prefix {
             args.extend(["--self-arg".to_string(), a.clone()]);
         }
-        let w = run_worker(opts, run_dir.path(), &args);
+        let w = run_worker(opts, run_dir.path(), &args, seed);
+        // A random check whose worker died wrote no report: its failure names the seed.
+        let seed_note = match seed {
+            Some(s) if group == Group::RandomSequences => format!(
+                "\n(random seed {s}; rerun with {}={s} and --random-sequences {} to repeat the sequences)",
+                crate::SEED_VAR,
+                match opts.random_sequences {
+                    0 => crate::random_sequences(),
+                    n => n,
+                }
+            ),
+            _ => String::new(),
+        };
         let mut c = CheckReport {
             name: name.to_string(),
             group,
@@ -328,7 +372,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             }
             (Some(r), Some(_)) => {
                 c.outcome = Outcome::Fail(format!(
-                    "the check ended ({}), but then its process {}",
+                    "the check ended ({}), but then its process {}{seed_note}",
                     match &r.outcome {
                         Outcome::Pass => "passed".to_string(),
                         Outcome::Fail(m) => format!("failed: {m}"),
@@ -337,7 +381,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                     w.describe_crash()
                 ))
             }
-            (None, _) => c.outcome = Outcome::Fail(format!("the check's process {}", w.describe_crash())),
+            (None, _) => c.outcome = Outcome::Fail(format!("the check's process {}{seed_note}", w.describe_crash())),
         }
         progress(&c);
         report.checks.push(c);
@@ -440,7 +484,8 @@ fn drain(mut pipe: impl Read + Send + 'static) -> Arc<Mutex<(Vec<u8>, bool)>> {
     buf
 }
 
-fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
+/// Runs a worker; `seed`: the random checks' seed, passed in `$RUSTFMU_SEED`.
+fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Option<u64>) -> WorkerRun {
     #[cfg(unix)]
     use std::os::unix::process::{CommandExt, ExitStatusExt};
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -452,6 +497,9 @@ fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String]) -> WorkerRun {
     cmd.args(&opts.worker_args_prefix).args(args);
     if opts.as_foreign {
         cmd.arg("--as-foreign");
+    }
+    if let Some(seed) = seed {
+        cmd.env(crate::SEED_VAR, seed.to_string());
     }
     cmd.arg("--tmp")
         .arg(run_dir)

@@ -148,6 +148,7 @@ fn fmi3_interleaved_instances_and_instances_on_threads_match_a_single_run() {
 
 #[test]
 fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent() {
+    crate::random_sequences::announce_seed("fmi3_random_call_sequences_never_crash_and_keep_status_consistent");
     on_every_fmu("fmi3_random_call_sequences_never_crash_and_keep_status_consistent");
 }
 

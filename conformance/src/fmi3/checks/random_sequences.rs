@@ -1,4 +1,5 @@
-//! FMI 3.0 random call sequences against a model of the state machine.
+//! FMI 3.0 random call sequences against a model of the state machine, generated from the seed
+//! [`crate::seed`] (`$RUSTFMU_SEED`, else drawn), which the report and a failure message print.
 
 use super::*;
 
@@ -51,6 +52,8 @@ fn model(state: State, me: bool, cs_events: bool, op: Op) -> Option<State> {
 pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &Fmu3) {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, TestRunner};
+    // First, so that the report shows the seed whatever happens next.
+    info(crate::seed_note());
     let cases = crate::random_sequences().clamp(1, 2000) / 4 + 1;
     let op = prop_oneof![
         Just(Op::EnterInit),
@@ -69,11 +72,13 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
         Just(Op::BadSet),
     ];
     let strategy = (any::<bool>(), proptest::collection::vec(op, 1..40));
-    let mut runner = TestRunner::new(Config {
+    // The RNG seeded from crate::seed ($RUSTFMU_SEED, else drawn once per process): the same
+    // seed and number of sequences repeat the same calls.
+    let mut runner = TestRunner::new(crate::seeded(Config {
         cases,
         failure_persistence: None,
         ..Config::default()
-    });
+    }));
     let result = runner.run(&strategy, |(me_pick, ops)| {
         let me = match (fmu.md.cs.is_some(), fmu.md.me.is_some()) {
             (true, true) => me_pick,
@@ -261,7 +266,7 @@ pub fn fmi3_random_call_sequences_never_crash_and_keep_status_consistent(fmu: &F
         Ok(())
     });
     if let Err(e) = result {
-        panic!("{}: random call sequence: {e}", fmu.id);
+        panic!("{}: random call sequence: {e}\n{}", fmu.id, crate::seed_note());
     }
     info(format!("{cases} random call sequences"));
 }
