@@ -20,3 +20,4 @@ bin=$(cd "${CARGO_TARGET_DIR:-target}/release" && pwd)
 "$PY" bench/python/work_precision.py --quick
 RUSTFMU_COMPOSED_LOOP="$bin/composed-loop" "$PY" bench/python/composed_loop.py --quick
 "$PY" bench/python/study_throughput.py --quick
+"$PY" bench/python/step_bound.py --quick

@@ -252,6 +252,41 @@ fn side(z: f64) -> bool {
     z > 0.0
 }
 
+/// Where a step refused at one of its bounds (MAX_EVENTS_PER_STEP, the integrator's budget)
+/// ends: right after the last event it handled (`last`), a consistent state the model's own
+/// `update` left (inside an event storm the state at the bound is mid-storm), else at `now`
+/// with the model's states `x` (an accepted state of the integrator). Answers that time.
+fn back_to_last_event<M: CoSimulation>(
+    model: &mut M,
+    clock: &mut EventClock,
+    last: Option<(M, EventClock, f64)>,
+    now: f64,
+    x: &M::States,
+) -> f64 {
+    let at = match last {
+        Some((m, c, at)) => {
+            (*model, *clock) = (m, c);
+            at
+        }
+        None => {
+            model.set_states(x);
+            now
+        }
+    };
+    crate::core::instance::evaluate(model, at);
+    at
+}
+
+/// Why a step that reached its integrator budget ends where it ends.
+fn over_budget(steps: u64, at: f64, ends: f64) -> String {
+    let ends = if ends < at {
+        format!("; the step ends after the last event handled, at t = {ends}")
+    } else {
+        String::new()
+    };
+    format!("gave up after {steps} internal steps of the integrator in one communication step, at t = {at}{ends}")
+}
+
 /// [`Context::integrate`] for a model with events: integrates from `t` over `h`, stopping at
 /// every state event (a change of domain of an event indicator, located on the integrator's
 /// continuous extension by the Illinois method to [`CoSimulation::event_tolerance`]; the state
@@ -315,15 +350,9 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         let solver = ctx.solver.as_deref_mut().expect("checked by the caller");
         let used = solver.stats.accepted_steps + solver.stats.rejected_steps - steps_at_start;
         if target > now && used >= budget {
-            crate::core::instance::evaluate(model, now);
-            return fail(
-                ctx,
-                clock,
-                now,
-                format!(
-                    "gave up after {used} internal steps of the integrator in one communication step, at t = {now}"
-                ),
-            );
+            let (at, x) = (now, model.states());
+            now = back_to_last_event(model, &mut clock, after_event.take(), now, &x);
+            return fail(ctx, clock, now, over_budget(used, at, now));
         }
         solver.max_steps = budget - used;
         let model_ref = &*model;
@@ -417,18 +446,16 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         let (reached, state_event) = match outcome {
             Ok(Some(at)) => (now + at, stopped_early.is_none()),
             Ok(None) => (target, false),
+            Err(crate::solver::OdeError::TooManySteps { t: at, .. }) => {
+                // Its count is what was left of the step's budget: say the budget.
+                now = back_to_last_event(model, &mut clock, after_event.take(), at, &x);
+                return fail(ctx, clock, now, over_budget(budget, at, now));
+            }
             Err(e) => {
                 let reached = e.time();
                 model.set_states(&x);
                 crate::core::instance::evaluate(model, reached);
-                let message = match e {
-                    // Its count is what was left of the step's budget: say the budget.
-                    crate::solver::OdeError::TooManySteps { t, .. } => format!(
-                        "gave up after {budget} internal steps of the integrator in one communication step, at t = {t} s"
-                    ),
-                    e => e.to_string(),
-                };
-                return fail(ctx, clock, reached, message);
+                return fail(ctx, clock, reached, e.to_string());
             }
         };
         model.set_states(&x);
@@ -472,13 +499,9 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         if state_event || time_event_now {
             events += 1;
             if events > MAX_EVENTS_PER_STEP {
-                // Back to right after the last event handled: a consistent state (the one here
-                // lies past an indicator's zero, the event unhandled), the time reached.
-                let chattering_at = now;
-                if let Some((m, c, at)) = after_event.take() {
-                    (*model, clock, now) = (m, c, at);
-                }
-                crate::core::instance::evaluate(model, now);
+                // The state here lies past an indicator's zero, the event unhandled.
+                let (chattering_at, x) = (now, model.states());
+                now = back_to_last_event(model, &mut clock, after_event.take(), now, &x);
                 return fail(
                     ctx,
                     clock,

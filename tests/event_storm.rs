@@ -5,9 +5,9 @@
 //! and one fmi2DoStep took 25–32 s to reach the runtime's 100,000 events, then answered
 //! fmi2Discard with h = -3.8e168 and v = -5.8e181: the ball far below the floor, inside the
 //! storm. Now a step stops at `MAX_EVENTS_PER_STEP` events and at the integrator's `max_steps`
-//! for the whole step, and a step refused for chattering ends right after the last event it
+//! for the whole step, and a step refused at either bound ends right after the last event it
 //! handled: every variable finite, the ball on or above the floor, `lastSuccessfulTime` that
-//! event's time. (What one such call costs is measured by `bench/event-storm.sh`, not here:
+//! event's time. (What one such call costs is measured by `bench/python/step_bound.py`, not here:
 //! tests assert behaviour.)
 
 use rustfmu::__private::abi::*;
