@@ -12,6 +12,10 @@ bash tests/setup-env.sh
 export PATH="$PWD/.venv/bin:$PATH"
 # pyo3 (the runner's Python module) against the venv, as an extension module, in every cargo call.
 source tests/pyo3-env.sh
+# One seed for every random test of the run (the conformance suite's random call sequences, the
+# FMU fuzzer); RUSTFMU_SEED=<it> bash tests/run.sh repeats them (issue 49).
+export RUSTFMU_SEED="${RUSTFMU_SEED:-$(od -An -N8 -tu8 /dev/urandom | tr -d ' ')}"
+echo "== random seed: RUSTFMU_SEED=$RUSTFMU_SEED (rerun with it to repeat the random tests)"
 logs=$(mktemp -d)
 summary=()
 failed=0
@@ -186,6 +190,7 @@ step "benchmarks still run (quick mode)" bash bench/quick.sh
 echo
 echo "== Summary"
 for s in "${summary[@]}"; do echo "$s"; done
+echo "random seed: RUSTFMU_SEED=$RUSTFMU_SEED"
 echo "time: $((SECONDS - run_started)) s in all (the setup included)"
 echo "total: $total_pass passed, $total_fail failed"
 exit "$failed"

@@ -15,7 +15,8 @@
 //! logged message of that status.
 //!
 //! `RUSTFMU_FUZZ_SECONDS` (default 3) is the time box, `RUSTFMU_FUZZ_SEED` (64 hex digits) the
-//! seed of a run to repeat; the test prints both and the number of cases
+//! seed of a run to repeat (else `RUSTFMU_SEED`, the u64 tests/run.sh exports for every random
+//! test of a run, else the clock); the test prints both and the number of cases
 //! (`cargo test --release -p fmu-build --test packages fuzz_fmus -- --nocapture`).
 
 use crate::common::{Fmu, Log};
@@ -568,6 +569,14 @@ fn seed() -> [u8; 32] {
         }
         return seed;
     }
+    // The run's one seed (tests/run.sh exports it and prints it; the conformance suite's random
+    // call sequences take it too).
+    if let Ok(s) = std::env::var("RUSTFMU_SEED") {
+        let s: u64 = s.trim().parse().expect("RUSTFMU_SEED: a u64");
+        let mut seed = [0u8; 32];
+        seed[..8].copy_from_slice(&s.to_le_bytes());
+        return seed;
+    }
     let nanos = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .unwrap()
@@ -586,6 +595,12 @@ fn no_call_sequence_crashes_hangs_or_returns_a_non_finite_value_under_fmi2ok() {
         .unwrap_or(3.0);
     let seed = seed();
     let seed_hex: String = seed.iter().map(|b| format!("{b:02x}")).collect();
+    // Straight to stderr, past the harness's capture: in every log, even if an FMU kills the
+    // process before the test ends.
+    let _ = std::io::Write::write_all(
+        &mut std::io::stderr(),
+        format!("fuzz: seed {seed_hex} (repeat with RUSTFMU_FUZZ_SEED={seed_hex})\n").as_bytes(),
+    );
     watchdog(seed_hex.clone());
     let fmus = [Fmu::load("Pendulum"), Fmu::load("Controller"), Fmu::load("DCMotor")];
     let pool = pool(&fmus);
