@@ -85,14 +85,23 @@ def test_the_fmi3_description_has_every_type_as_the_reference_fmus():
         ("Int64_input", "Int64"),
         ("UInt64_input", "UInt64"),
         ("Boolean_input", "Boolean"),
-        ("String_parameter", "String"),
+        ("String_input", "String"),
+        ("String_output", "String"),
         ("Binary_input", "Binary"),
         ("Enumeration_input", "Enumeration"),
     ]:
         assert types[name] == ty, name
-    # value references as the Reference-FMUs' (v0.0.41)
+    # value references as the Reference-FMUs' (v0.0.41, whose String_input and String_output
+    # replaced the String_parameter of before and moved Binary and Enumeration by one)
     vr = vrs(md)
-    assert [vr["Float32_continuous_input"], vr["Int8_input"], vr["UInt64_output"], vr["Binary_input"], vr["Enumeration_output"]] == [1, 11, 26, 30, 33]
+    assert [vr["Float32_continuous_input"], vr["Int8_input"], vr["UInt64_output"], vr["String_input"],
+            vr["String_output"], vr["Binary_input"], vr["Enumeration_output"]] == [1, 11, 26, 29, 30, 31, 34]
+    by_name = {v.name: v for v in md.modelVariables}
+    assert (by_name["String_input"].causality, by_name["String_input"].variability, by_name["String_input"].start) == (
+        "input", "discrete", "Set me!")
+    assert (by_name["String_output"].causality, by_name["String_output"].variability) == ("output", "discrete")
+    out = next(u for u in md.outputs if u.variable.name == "String_output")
+    assert [d.name for d in out.dependencies] == ["String_input"]
     binary = next(v for v in md.modelVariables if v.name == "Binary_input")
     assert binary.start in (b"foo", "666f6f")
 
@@ -125,7 +134,11 @@ def test_every_type_goes_through_at_its_extremes(feedthrough3, interface):
         # Int64 and Enumeration in one fmi3GetInt64
         inst.setInt64([vr["Int64_input"], vr["Enumeration_input"]], [-5, 2])
         assert inst.getInt64([vr["Int64_output"], vr["Enumeration_output"]]) == [-5, 2]
-        assert inst.getString([vr["String_parameter"]]) == ["Set me!"]
+        # the String output follows its input (as the Reference's calculateValues)
+        assert inst.getString([vr["String_input"], vr["String_output"]]) == ["Set me!", "Set me!"]
+        for text in ["", "héllo, wörld", "x" * 10_000, "Set me!"]:
+            inst.setString([vr["String_input"]], [text])
+            assert inst.getString([vr["String_input"], vr["String_output"]]) == [text, text]
     finally:
         inst.terminate()
         inst.freeInstance()
@@ -145,7 +158,8 @@ def test_refusals_change_nothing(feedthrough3):
             lambda: inst.getInt32([vr["UInt32_input"]]),
             lambda: inst.getFloat64([vr["Float32_continuous_input"]]),
             lambda: inst.getInt32([vr["Enumeration_input"]]),
-            lambda: inst.getBinary([vr["String_parameter"]]),
+            lambda: inst.getBinary([vr["String_input"]]),
+            lambda: inst.setString([vr["String_output"]], ["x"]),
             # not finite
             lambda: inst.setFloat32([vr["Float32_continuous_input"]], [float("nan")]),
             lambda: inst.setFloat32([vr["Float32_continuous_input"], vr["Float32_discrete_input"]], [1.0, float("inf")]),
@@ -185,12 +199,14 @@ def test_the_fmu_state_holds_every_type(feedthrough3):
         inst.setFloat32([vr["Float32_discrete_input"]], [F32_PI])
         inst.setBinary([vr["Binary_input"]], [b"\x01\x02\x00\x03"])
         inst.setInt64([vr["Enumeration_input"]], [2])
+        inst.setString([vr["String_input"]], ["kept"])
         state = inst.getFMUState()
         serialized = inst.serializeFMUState(state)
         inst.setUInt64([vr["UInt64_input"]], [1])
         inst.setFloat32([vr["Float32_discrete_input"]], [0.0])
         inst.setBinary([vr["Binary_input"]], [b""])
         inst.setInt64([vr["Enumeration_input"]], [1])
+        inst.setString([vr["String_input"]], ["changed"])
         inst.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.1)
         for restore in (lambda: inst.setFMUState(state), lambda: inst.setFMUState(inst.deserializeFMUState(serialized))):
             restore()
@@ -198,6 +214,7 @@ def test_the_fmu_state_holds_every_type(feedthrough3):
             assert inst.getFloat32([vr["Float32_discrete_output"]]) == [F32_PI]
             assert inst.getBinary([vr["Binary_output"]]) == [b"\x01\x02\x00\x03"]
             assert inst.getInt64([vr["Enumeration_output"]]) == [2]
+            assert inst.getString([vr["String_output"]]) == ["kept"]
         inst.freeFMUState(state)
     finally:
         inst.terminate()
@@ -230,7 +247,7 @@ def test_the_fmi2_feedthrough_has_the_fmi2_types_only_and_refuses_the_others():
     assert names == [
         "Float64_fixed_parameter", "Float64_tunable_parameter", "Float64_continuous_input",
         "Float64_continuous_output", "Float64_discrete_input", "Float64_discrete_output",
-        "Int32_input", "Int32_output", "Boolean_input", "Boolean_output", "String_parameter",
+        "Int32_input", "Int32_output", "Boolean_input", "Boolean_output", "String_input", "String_output",
         "Enumeration_input", "Enumeration_output",
     ]
     unzipdir = extract(path)
@@ -239,8 +256,13 @@ def test_the_fmi2_feedthrough_has_the_fmi2_types_only_and_refuses_the_others():
         inst.instantiate()
         inst.enterInitializationMode()
         inst.exitInitializationMode()
-        inst.setInteger([19, 32], [-4, 2])
-        assert inst.getInteger([20, 33]) == [-4, 2]
+        inst.setInteger([19, 33], [-4, 2])
+        assert inst.getInteger([20, 34]) == [-4, 2]
+        # String_input (29) and String_output (30), as the Reference-FMUs' v0.0.41
+        # (fmpy's FMI 2.0 getString answers bytes)
+        assert inst.getString([29, 30]) == [b"Set me!", b"Set me!"]
+        inst.setString([29], ["abc"])
+        assert inst.getString([30]) == [b"abc"]
         # vr 1 is the Float32 input of the FMI 3.0 description only
         with pytest.raises(FMICallException):
             inst.getReal([1])

@@ -1,8 +1,10 @@
 //! The Reference-FMUs' Feedthrough (modelica/Reference-FMUs, `Feedthrough/`, v0.0.41) written
 //! with rustfmu: the same model identifier, variable names, types, value references,
 //! causalities, variabilities and start values. Every output equals its input, for every
-//! variable type of FMI 3.0 (Float32 .. UInt64, Boolean, Binary, Enumeration); two Float64
-//! parameters and a String parameter are only stored.
+//! variable type of FMI 3.0 (Float32 .. UInt64, Boolean, String, Binary, Enumeration); two
+//! Float64 parameters are only stored. (Before v0.0.41 the Reference had a `String_parameter`
+//! at value reference 29 and the Binary and Enumeration variables at 30 .. 33; v0.0.41 has
+//! `String_input` (29) and `String_output` (30), which moved them to 31 .. 34.)
 //!
 //! FMI 2.0 gets what FMI 2.0 has, as the Reference-FMUs' own FMI 2.0 Feedthrough: the Float64,
 //! Int32, Boolean, String and Enumeration variables. The others (and `time`, which FMI 2.0 does
@@ -92,17 +94,19 @@ pub struct Feedthrough {
     #[variable(vr = 28, output, discrete, depends = [Boolean_input], initial_depends = [Boolean_input])]
     pub Boolean_output: bool,
 
-    #[variable(vr = 29, parameter, fixed, start = "Set me!")]
-    pub String_parameter: String,
+    #[variable(vr = 29, input, discrete, start = "Set me!")]
+    pub String_input: String,
+    #[variable(vr = 30, output, discrete, depends = [String_input], initial_depends = [String_input])]
+    pub String_output: String,
 
-    #[variable(vr = 30, input, discrete, start = b"foo", fmi3_only)]
+    #[variable(vr = 31, input, discrete, start = b"foo", fmi3_only)]
     pub Binary_input: Vec<u8>,
-    #[variable(vr = 31, output, discrete, depends = [Binary_input], initial_depends = [Binary_input], fmi3_only)]
+    #[variable(vr = 32, output, discrete, depends = [Binary_input], initial_depends = [Binary_input], fmi3_only)]
     pub Binary_output: Vec<u8>,
 
-    #[variable(vr = 32, input, discrete, start = Choice::Option1)]
+    #[variable(vr = 33, input, discrete, start = Choice::Option1)]
     pub Enumeration_input: Choice,
-    #[variable(vr = 33, output, discrete, depends = [Enumeration_input], initial_depends = [Enumeration_input])]
+    #[variable(vr = 34, output, discrete, depends = [Enumeration_input], initial_depends = [Enumeration_input])]
     pub Enumeration_output: Choice,
 }
 
@@ -121,6 +125,7 @@ impl Model for Feedthrough {
         self.Int64_output = self.Int64_input;
         self.UInt64_output = self.UInt64_input;
         self.Boolean_output = self.Boolean_input;
+        self.String_output.clone_from(&self.String_input);
         self.Binary_output.clone_from(&self.Binary_input);
         self.Enumeration_output = self.Enumeration_input;
     }
