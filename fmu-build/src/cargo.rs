@@ -12,8 +12,10 @@
 use cargo_metadata::{Metadata, MetadataCommand, Package};
 use rustfmu::description::FmiVersion;
 use std::collections::BTreeSet;
+use std::io::{BufRead, IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One crate to build into an FMU.
 #[derive(Debug, Clone)]
@@ -392,18 +394,126 @@ pub fn build(
                 cmd
             }
         };
-        let status = cmd
-            .current_dir(&ws.root)
-            .args(&args)
-            .envs(env.iter().cloned())
-            .status()
-            .map_err(|e| format!("cannot run {}: {e}", cmd.get_program().to_string_lossy()))?;
+        cmd.current_dir(&ws.root).args(&args).envs(env.iter().cloned());
+        let program = cmd.get_program().to_string_lossy().into_owned();
+        let cannot_run = |e: std::io::Error| format!("cannot run {program}: {e}");
+        let status = if zig.is_some() && triple.is_some_and(|t| t.contains("-apple-darwin")) {
+            // rustc's xcrun warning means nothing here: cargo's messages through a filter.
+            if std::io::stderr().is_terminal() && std::env::var_os("CARGO_TERM_COLOR").is_none() {
+                cmd.env("CARGO_TERM_COLOR", "always");
+            }
+            let mut child = cmd.stderr(Stdio::piped()).spawn().map_err(cannot_run)?;
+            let mut from = std::io::BufReader::new(child.stderr.take().expect("stderr is piped"));
+            let left_out = without_xcrun_warning(&mut from, &mut std::io::stderr()).unwrap_or_else(|_| {
+                // Our stderr failed: read the rest, so that cargo never waits on a full pipe.
+                let _ = std::io::copy(&mut from, &mut std::io::sink());
+                0
+            });
+            if left_out > 0 && !XCRUN_EXPLAINED.swap(true, Ordering::Relaxed) {
+                eprintln!("{XCRUN_NOTE}");
+            }
+            child.wait().map_err(cannot_run)?
+        } else {
+            cmd.status().map_err(cannot_run)?
+        };
         if !status.success() {
             let on = triple.map(|t| format!(" for {t}")).unwrap_or_default();
             return Err(format!("cargo rustc of {}{on} failed ({status})", c.package));
         }
     }
     Ok(())
+}
+
+/// The start of rustc's warning when it cannot ask `xcrun` for Apple's SDK, which it prints at
+/// every link of a macOS library on a machine without Xcode (and cargo again for every library it
+/// did not rebuild): ``warning: invoking `"xcrun" "--sdk" "macosx" "--show-sdk-path"` to find
+/// MacOSX.sdk failed: No such file or directory (os error 2)``, with notes and help below it.
+const XCRUN_WARNING: &str =
+    "warning: invoking `\"xcrun\" \"--sdk\" \"macosx\" \"--show-sdk-path\"` to find MacOSX.sdk failed";
+
+/// What `cargo fmu` says, once, in place of rustc's xcrun warning.
+const XCRUN_NOTE: &str = "fmu: rustc's warning that `xcrun --sdk macosx --show-sdk-path` failed was left out of the macOS \
+                          builds: it looks for Apple's SDK, which zig does not need to link a macOS library on a machine \
+                          that is not a Mac (zig carries the stubs of macOS's system libraries); `cargo fmu validate` \
+                          checks every macOS binary (docs/platforms.md)";
+
+/// Whether [`XCRUN_NOTE`] was printed.
+static XCRUN_EXPLAINED: AtomicBool = AtomicBool::new(false);
+
+/// A line of cargo's output without its colours (ANSI escape sequences `ESC [ ... letter`).
+fn plain(line: &[u8]) -> String {
+    let text = String::from_utf8_lossy(line);
+    let mut out = String::with_capacity(text.len());
+    let mut chars = text.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            for d in chars.by_ref() {
+                if d.is_ascii_alphabetic() {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Copies cargo's messages from `from` to `to`, line by line, leaving out rustc's xcrun warning
+/// ([`XCRUN_WARNING`], its indented notes and the empty line that ends it) and cargo's
+/// "`crate` (lib) generated 1 warning" after it when that warning was the only one. Every other
+/// line, warnings included, is copied as it is. Returns how many warnings it left out.
+fn without_xcrun_warning(from: &mut impl BufRead, to: &mut impl Write) -> std::io::Result<usize> {
+    // Where a line is: in the warning, or right after an empty line of it (the empty line that
+    // ends it, or one between paragraphs of a help, whose lines are indented by 10 spaces, as
+    // "  = help: ", where cargo's own lines are indented by at most 7).
+    #[derive(PartialEq)]
+    enum At {
+        Outside,
+        Within,
+        AfterEmpty,
+    }
+    let mut at = At::Outside;
+    let mut left_out = 0;
+    // Warnings left out since cargo's last "generated" line.
+    let mut since_summary = 0;
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        if from.read_until(b'\n', &mut line)? == 0 {
+            break;
+        }
+        let text = plain(&line);
+        let indented = |n: usize| text.len() > n && text.bytes().take(n).all(|b| b == b' ');
+        match at {
+            At::Within if text.trim_end_matches(['\n', '\r']).is_empty() => {
+                at = At::AfterEmpty;
+                continue;
+            }
+            At::Within if text.starts_with(' ') => continue,
+            At::AfterEmpty if indented(10) => {
+                at = At::Within;
+                continue;
+            }
+            _ => at = At::Outside,
+        }
+        if text.starts_with(XCRUN_WARNING) {
+            at = At::Within;
+            left_out += 1;
+            since_summary += 1;
+            continue;
+        }
+        if text.starts_with("warning: `") && text.contains(" generated ") {
+            let only_it = since_summary > 0 && text.trim_end().ends_with(" generated 1 warning");
+            since_summary = 0;
+            if only_it {
+                continue;
+            }
+        }
+        to.write_all(&line)?;
+        to.flush()?;
+    }
+    Ok(left_out)
 }
 
 /// Copies the library cargo just built (`target/fmu-release/lib<name>.so`) to
@@ -428,6 +538,41 @@ pub fn keep_library(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// rustc 1.95's warning as cargo prints it (coloured, as on a terminal, and plain), between
+    /// other messages that stay.
+    #[test]
+    fn the_xcrun_warning_and_only_it_is_left_out() {
+        let warning = "warning: invoking `\"xcrun\" \"--sdk\" \"macosx\" \"--show-sdk-path\"` to find MacOSX.sdk failed: \
+                       No such file or directory (os error 2)\n  |\n  = note: the SDK is needed by the linker to know where \
+                       to find symbols in system libraries and for embedding the SDK version in the final object file\n  = \
+                       help: pass the path to the SDK using the SDKROOT environment variable\n  = help: the SDK can be \
+                       downloaded and extracted from https://developer.apple.com/download/all/?q=xcode (requires an Apple \
+                       ID).\n          \n          The full Xcode bundle should contain the SDK in \
+                       Xcode.app/Contents/Developer/Platforms/MacOSX.platform/Developer/SDKs/MacOSX.sdk.\n\n";
+        let coloured = warning.replacen("warning:", "\u{1b}[1m\u{1b}[33mwarning\u{1b}[0m\u{1b}[1m:", 1);
+        let other = "warning: unused variable: `x`\n --> src/lib.rs:1:5\n  |\n1 | let x = 1;\n  |     ^\n\n";
+        let input = format!(
+            "   Compiling pendulum-fmu v0.1.0\n{warning}warning: `pendulum-fmu` (lib) generated 1 warning\n\
+             {coloured}{other}warning: `dc-motor-fmu` (lib) generated 2 warnings\n\
+             \u{1b}[1m\u{1b}[32m    Finished\u{1b}[0m `fmu-release` profile\n"
+        );
+        let mut out = Vec::new();
+        let n = without_xcrun_warning(&mut input.as_bytes(), &mut out).unwrap();
+        assert_eq!(n, 2);
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            format!(
+                "   Compiling pendulum-fmu v0.1.0\n{other}warning: `dc-motor-fmu` (lib) generated 2 warnings\n\
+                 \u{1b}[1m\u{1b}[32m    Finished\u{1b}[0m `fmu-release` profile\n"
+            )
+        );
+        // Nothing to leave out: every byte as it came.
+        let mut out = Vec::new();
+        let text = format!("{other}warning: `x` (lib) generated 1 warning\nno newline at the end");
+        assert_eq!(without_xcrun_warning(&mut text.as_bytes(), &mut out).unwrap(), 0);
+        assert_eq!(out, text.as_bytes());
+    }
 
     #[test]
     fn fmi_versions_are_read_from_the_metadata() {
