@@ -127,7 +127,6 @@ fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
 
 /// Writes the container FMUs of `req.ssp` (one per FMI version asked); returns their paths.
 pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
-    let shown = req.ssp.display().to_string();
     let sim = Simulation::from_ssp(req.ssp).map_err(|e| e.message)?;
     let name = rustfmu_runner::container::identifier(&sim.name);
     let out = match req.out {
@@ -167,99 +166,85 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
         }
     }
 
-    let files = entries(req.ssp)?;
-    let mut archive = rustfmu_runner::ssp::Archive::open(req.ssp).map_err(|e| e.message)?;
-    let system_name = archive.ssd.name.clone();
-    let components: Vec<String> = archive.ssd.components.iter().map(|c| c.name.clone()).collect();
-    // The components' descriptions as written, their FMI versions and binary folders.
-    let mut xmls = Vec::new();
-    let mut carried: Vec<(String, FmiVersion, Vec<String>)> = Vec::new();
-    for c in &components {
-        let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
-        let xml = model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
-        let version = match fmi_description::fmi_version(&xml) {
-            Ok(v) if v.starts_with("3.") => FmiVersion::V3,
-            _ => FmiVersion::V2,
-        };
-        let folders = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
-        carried.push((c.clone(), version, folders));
-        xmls.push((c.clone(), xml));
-    }
-    // Whether every component has a binary for target `t` (in its own version's folder).
-    let lacking = |t: &str| -> Option<String> {
-        let p = crate::target::platform(t).ok()?;
-        carried.iter().find_map(|(c, v, folders)| match p.folder(*v) {
-            Ok(f) if folders.contains(&f) => None,
-            Ok(f) => Some(format!(
-                "component '{c}' has no {f} binary (it has: {})",
-                folders.join(", ")
-            )),
-            Err(e) => Some(format!("component '{c}': {e}")),
-        })
+    let main = System::read(req.ssp, sim, req.step)?;
+    // The FMI 3.0 container of FMI 2.0 components is made of their FMI 3.0 twins where `cargo
+    // fmu build` wrote them: FMI 2.0 names no folder for aarch64 Linux, so FMI 2.0 components
+    // carry no aarch64-linux binary, and a container of them could not run there.
+    let twin = if req.versions.contains(&FmiVersion::V3) && main.has_fmi2_component() {
+        fmi3_twin(req.ssp, &main)?
+    } else {
+        None
     };
-    // The internal step: --step, else the step the SSD names for a fixed-step master (the
-    // OMSimulator annotation `cargo fmu` writes: <oms:FixedStepMaster stepSize=...>).
-    let ssd_text = files
-        .iter()
-        .find(|(n, _)| n == "SystemStructure.ssd")
-        .map(|(_, b)| String::from_utf8_lossy(b).into_owned())
-        .unwrap_or_default();
-    let step = match req.step {
-        Some(h) => h,
-        None => fixed_step_of(&ssd_text).ok_or_else(|| {
-            format!("{shown}: the SSD names no fixed step size (oms:FixedStepMaster stepSize): give the container's internal step with --step")
-        })?,
+    let system_of = |v: FmiVersion| match (v, &twin) {
+        (FmiVersion::V3, Some(t)) => t,
+        _ => &main,
     };
-    let spec = Spec::new(&sim, step).map_err(|e| e.message)?;
-    let experiment = (archive.ssd.start_time, archive.ssd.stop_time);
-    let xml2 = spec.model_description(&sim, &system_name, &xmls, experiment);
-    let xml3 = spec.model_description3(&sim, &system_name, &xmls, experiment);
-    drop(sim);
 
     // Which binaries: the targets asked for, else the rustfmu workspace's FMU targets, those
-    // every component has a binary for (in its own version's folder).
+    // every component has a binary for (in its own version's folder), for each version apart.
     let ws = rustfmu_workspace()?;
     let host = crate::target::host_triple()?;
-    let wanted: Vec<String> = if req.targets.is_empty() {
+    let platform = crate::target::platform;
+    // Whether version `v` has a folder for target `t`, and if so why its system cannot run
+    // there (a component without a binary for it): Ok(None) = it can.
+    let misfit = |v: FmiVersion, t: &str| -> Result<Option<String>, String> {
+        Ok(match platform(t)?.folder(v) {
+            Ok(_) => system_of(v).lacking(t),
+            Err(_) => Some(format!("FMI {} names no folder for it", v.text())),
+        })
+    };
+    // (target, the versions whose container gets its binary)
+    let mut wanted: Vec<(String, Vec<FmiVersion>)> = Vec::new();
+    if req.targets.is_empty() {
         let all = match ws.fmu_metadata.get("targets") {
             Some(v) => crate::target::parse_targets(v)?,
             None => vec![host.clone()],
         };
-        let (fit, misfit): (Vec<String>, Vec<String>) = all.into_iter().partition(|t| lacking(t).is_none());
-        if fit.is_empty() {
-            let why: Vec<String> = misfit
-                .iter()
-                .map(|t| format!("{t}: {}", lacking(t).unwrap_or_default()))
-                .collect();
-            return Err(format!(
-                "{shown}: no platform has a binary in every component FMU, so a container cannot run anywhere ({})",
-                why.join("; ")
-            ));
-        }
-        fit
-    } else {
-        for t in req.targets {
-            crate::target::platform(t)?;
-            if let Some(why) = lacking(t) {
-                return Err(format!("target {t}: {why}"));
+        for v in req.versions {
+            let mut why = Vec::new();
+            for t in &all {
+                match misfit(*v, t)? {
+                    None => match wanted.iter_mut().find(|(w, _)| w == t) {
+                        Some((_, vs)) => vs.push(*v),
+                        None => wanted.push((t.clone(), vec![*v])),
+                    },
+                    Some(e) => why.push(format!("{t}: {e}")),
+                }
+            }
+            if !wanted.iter().any(|(_, vs)| vs.contains(v)) {
+                return Err(format!(
+                    "{}: no platform has a binary in every component FMU, so a container cannot run anywhere ({})",
+                    system_of(*v).shown,
+                    why.join("; ")
+                ));
             }
         }
-        req.targets.to_vec()
-    };
-    // (target, FMI 2.0 binary name if FMI 2.0 has a folder for it, FMI 3.0 binary name)
-    let mut binaries: Vec<(String, Option<String>, String)> = Vec::new();
-    for t in &wanted {
-        let p = crate::target::platform(t)?;
-        let folder3 = p.folder(FmiVersion::V3).map_err(|e| format!("target {t}: {e}"))?;
-        binaries.push((
-            t.clone(),
-            p.folder(FmiVersion::V2)
-                .ok()
-                .map(|f| format!("binaries/{f}/{}.{}", spec.model_identifier, p.extension())),
-            format!("binaries/{folder3}/{}.{}", spec.model_identifier, p.extension()),
-        ));
+        // In the workspace's order of targets.
+        wanted.sort_by_key(|(t, _)| all.iter().position(|a| a == t));
+    } else {
+        for t in req.targets {
+            let p = platform(t)?;
+            p.folder(FmiVersion::V3).map_err(|e| format!("target {t}: {e}"))?;
+            let mut versions = Vec::new();
+            for v in req.versions {
+                if p.folder(*v).is_err() {
+                    continue;
+                }
+                if let Some(why) = system_of(*v).lacking(t) {
+                    return Err(format!("target {t}: {why}"));
+                }
+                versions.push(*v);
+            }
+            if versions.is_empty() {
+                return Err(format!(
+                    "target {t}: FMI {} names no folder for it",
+                    req.versions.iter().map(|v| v.text()).collect::<Vec<_>>().join(" and ")
+                ));
+            }
+            wanted.push((t.clone(), versions));
+        }
     }
-    for t in &wanted {
+    for (t, _) in &wanted {
         crate::target::preflight(t, &host, req.python)?;
     }
     let krate = FmuCrate {
@@ -271,7 +256,7 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
         fmi_versions: None,
         targets: None,
     };
-    let zig = if wanted.iter().any(|t| crate::target::uses_zig(t, &host)) {
+    let zig = if wanted.iter().any(|(t, _)| crate::target::uses_zig(t, &host)) {
         Some(crate::target::Zig::find(req.python)?)
     } else {
         None
@@ -279,57 +264,208 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     // One binary serves both versions (it exports the fmi2* and the fmi3* functions).
     let mut built: Vec<(String, String, Vec<u8>)> = Vec::new();
     let mut built3: Vec<(String, String, Vec<u8>)> = Vec::new();
-    for (t, name, name3) in &binaries {
+    for (t, versions) in &wanted {
+        let p = platform(t)?;
         let triple = (t != &host).then_some(t.as_str());
         let linker = if crate::target::uses_zig(t, &host) {
             zig.as_ref()
         } else {
             None
         };
+        let started = std::time::Instant::now();
         cargo::build(&ws, std::slice::from_ref(&krate), triple, &host, linker)?;
+        eprintln!(
+            "fmu: the container's binary for {t}: {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
         let lib = ws.library_for(&krate, t, &host)?;
         let bytes = std::fs::read(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
-        built3.push((name3.clone(), t.clone(), bytes.clone()));
-        if let Some(name) = name {
-            built.push((name.clone(), t.clone(), bytes));
+        for v in versions {
+            let folder = p.folder(*v).map_err(|e| format!("target {t}: {e}"))?;
+            let name = format!("binaries/{folder}/{}.{}", main.spec.model_identifier, p.extension());
+            match v {
+                FmiVersion::V2 => built.push((name, t.clone(), bytes.clone())),
+                FmiVersion::V3 => built3.push((name, t.clone(), bytes.clone())),
+            }
         }
     }
     let binaries2 = crate::bundle::merge_universal(built)?;
     let binaries3 = crate::bundle::merge_universal(built3)?;
-    let sources: Vec<String> = archive
-        .ssd
-        .components
-        .iter()
-        .map(|c| c.source.trim_start_matches("./").to_owned())
-        .collect();
     let mut written = Vec::new();
     for (version, out) in &outs {
+        let system = system_of(*version);
         let (xml, binaries) = match version {
-            FmiVersion::V2 => (&xml2, &binaries2),
-            FmiVersion::V3 => (&xml3, &binaries3),
+            FmiVersion::V2 => (&system.xml2, &binaries2),
+            FmiVersion::V3 => (&system.xml3, &binaries3),
         };
         let package = Package {
             xml,
             binaries,
-            spec: &spec,
-            files: &files,
-            sources: &sources,
-            system_name: &system_name,
-            components: &components,
+            spec: &system.spec,
+            files: &system.files,
+            sources: &system.sources,
+            system_name: &system.system_name,
+            components: &system.components,
         };
-        write_fmu(out, &package, &shown)?;
+        write_fmu(out, &package, &system.shown)?;
         eprintln!(
-            "fmu: wrote {} (FMI {}; {} variables: {} components of {shown}, internal step {} s; binaries: {})",
+            "fmu: wrote {} (FMI {}; {} variables: {} components of {}, internal step {} s; binaries: {})",
             out.display(),
             version.text(),
-            spec.variables.len(),
-            components.len(),
-            spec.step,
+            system.spec.variables.len(),
+            system.components.len(),
+            system.shown,
+            system.spec.step,
             binaries.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
         );
         written.push(out.clone());
     }
     Ok(written)
+}
+
+/// One SSP file read for a container: what its FMUs are written from.
+struct System {
+    /// The SSP file, as shown to the user.
+    shown: String,
+    spec: Spec,
+    /// The container's modelDescription.xml in FMI 2.0 and in FMI 3.0.
+    xml2: String,
+    xml3: String,
+    /// The SSP archive's files.
+    files: Vec<(String, Vec<u8>)>,
+    /// The component FMUs' names among them.
+    sources: Vec<String>,
+    system_name: String,
+    components: Vec<String>,
+    /// Each component's FMI version and the binary folders its FMU has.
+    carried: Vec<(String, FmiVersion, Vec<String>)>,
+}
+
+impl System {
+    /// Reads `ssp` (`sim`: its simulation, already read); the internal step is `step`, else the
+    /// step the SSD names for a fixed-step master (the OMSimulator annotation `cargo fmu` writes:
+    /// `<oms:FixedStepMaster stepSize=...>`).
+    fn read(ssp: &Path, sim: Simulation, step: Option<f64>) -> Result<System, String> {
+        let shown = ssp.display().to_string();
+        let files = entries(ssp)?;
+        let mut archive = rustfmu_runner::ssp::Archive::open(ssp).map_err(|e| e.message)?;
+        let system_name = archive.ssd.name.clone();
+        let components: Vec<String> = archive.ssd.components.iter().map(|c| c.name.clone()).collect();
+        // The components' descriptions as written, their FMI versions and binary folders.
+        let mut xmls = Vec::new();
+        let mut carried = Vec::new();
+        for c in &components {
+            let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
+            let xml = model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
+            let version = match fmi_description::fmi_version(&xml) {
+                Ok(v) if v.starts_with("3.") => FmiVersion::V3,
+                _ => FmiVersion::V2,
+            };
+            let folders = platforms_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
+            carried.push((c.clone(), version, folders));
+            xmls.push((c.clone(), xml));
+        }
+        let ssd_text = files
+            .iter()
+            .find(|(n, _)| n == "SystemStructure.ssd")
+            .map(|(_, b)| String::from_utf8_lossy(b).into_owned())
+            .unwrap_or_default();
+        let step = match step {
+            Some(h) => h,
+            None => fixed_step_of(&ssd_text).ok_or_else(|| {
+                format!("{shown}: the SSD names no fixed step size (oms:FixedStepMaster stepSize): give the container's internal step with --step")
+            })?,
+        };
+        let spec = Spec::new(&sim, step).map_err(|e| e.message)?;
+        let experiment = (archive.ssd.start_time, archive.ssd.stop_time);
+        let xml2 = spec.model_description(&sim, &system_name, &xmls, experiment);
+        let xml3 = spec.model_description3(&sim, &system_name, &xmls, experiment);
+        let sources = archive
+            .ssd
+            .components
+            .iter()
+            .map(|c| c.source.trim_start_matches("./").to_owned())
+            .collect();
+        Ok(System {
+            shown,
+            spec,
+            xml2,
+            xml3,
+            files,
+            sources,
+            system_name,
+            components,
+            carried,
+        })
+    }
+
+    /// Why the system cannot run on target `t`: a component without a binary for it (in its
+    /// own version's folder); `None` if it can.
+    fn lacking(&self, t: &str) -> Option<String> {
+        let p = match crate::target::platform(t) {
+            Ok(p) => p,
+            Err(e) => return Some(e),
+        };
+        self.carried.iter().find_map(|(c, v, folders)| match p.folder(*v) {
+            Ok(f) if folders.contains(&f) => None,
+            Ok(f) => Some(format!(
+                "component '{c}' has no {f} binary (it has: {})",
+                folders.join(", ")
+            )),
+            Err(e) => Some(format!("component '{c}': {e}")),
+        })
+    }
+
+    fn has_fmi2_component(&self) -> bool {
+        self.carried.iter().any(|(_, v, _)| *v == FmiVersion::V2)
+    }
+}
+
+/// The FMI 3.0 twin of `ssp`, which `cargo fmu build` writes beside every SSP file of FMI 2.0
+/// FMUs (`fmi3/<file>.ssp`: the same system of the same crates' FMI 3.0 FMUs), read, if there is
+/// one and it is the same system as `main` (the container's variables alike but for the FMI 3.0
+/// names of the types): the FMI 3.0 container is made of it. None (and a line saying why) if it
+/// differs.
+fn fmi3_twin(ssp: &Path, main: &System) -> Result<Option<System>, String> {
+    let Some(file) = ssp.file_name() else {
+        return Ok(None);
+    };
+    let path = ssp.with_file_name("fmi3").join(file);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let sim = Simulation::from_ssp(&path).map_err(|e| e.message)?;
+    let twin = System::read(&path, sim, Some(main.spec.step))?;
+    let key = |s: &System| -> Vec<(String, String, String, String, Option<String>)> {
+        s.spec
+            .variables
+            .iter()
+            .map(|e| {
+                (
+                    e.name.clone(),
+                    e.ty.clone(),
+                    e.causality.clone(),
+                    e.variability.clone(),
+                    e.start.clone(),
+                )
+            })
+            .collect()
+    };
+    if twin.has_fmi2_component() || twin.spec.model_identifier != main.spec.model_identifier || key(&twin) != key(main)
+    {
+        eprintln!(
+            "fmu: {} is not the same system of FMI 3.0 FMUs as {} (another name, an FMI 2.0 component or other \
+             variables): the FMI 3.0 container is made of {}'s components",
+            twin.shown, main.shown, main.shown
+        );
+        return Ok(None);
+    }
+    eprintln!(
+        "fmu: the FMI 3.0 container is made of {}, the same system of FMI 3.0 FMUs (FMI 2.0 names no folder \
+         for some of their platforms, aarch64 Linux)",
+        twin.shown
+    );
+    Ok(Some(twin))
 }
 
 /// What goes into one container FMU.
