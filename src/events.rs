@@ -545,6 +545,14 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         }
     }
     crate::core::instance::evaluate(model, end);
+    if events > 0 && ctx.return_at_events == ReturnAtEvents::AtStepEnd {
+        // Event mode without early return: the events inside the step were handled there (the
+        // FMI guide's "mitigative internal event handling": the step cannot end before its end,
+        // and a bounce put off to it would let the ball through the floor); the importer is
+        // told at the step's end all the same (eventHandlingNeeded), so that its Event Mode
+        // sees the discrete changes at the communication point (issue 49).
+        clock.stopped_at = Some(end);
+    }
     if let Some(c) = ctx.events.as_deref_mut() {
         *c = clock;
     }

@@ -384,9 +384,10 @@ pub(crate) enum ReturnAtEvents {
     #[default]
     Never,
     /// Event mode without early return: the step cannot end before its end, so the events
-    /// strictly inside it are handled inside it; an event at its end (a time event within
-    /// round-off of it, a state event located there) is left unhandled with
-    /// `eventHandlingNeeded = true`, for the importer's Event Mode at the communication point.
+    /// strictly inside it are handled inside it, and the step ends with `eventHandlingNeeded =
+    /// true` for the importer's Event Mode at the communication point; an event at its end (a
+    /// time event within round-off of it, a state event located there) is left unhandled for
+    /// that Event Mode.
     AtStepEnd,
     /// Event mode with early return: the step stops at the first event, unhandled.
     Each,

@@ -468,8 +468,9 @@ fn update3(c: fmi3::fmi3Instance, log: Log3) -> Option<f64> {
     }
 }
 
-/// The events each step handed to the importer (eventHandlingNeeded), and what it saw.
-fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize) {
+/// What the importer saw, how many steps ended with eventHandlingNeeded, and in how many of
+/// those Event Modes the sample happened (rather than inside the step before).
+fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize, usize) {
     use fmi3::*;
     let (c, log) = instance3(Some(cs), ts, mode);
     if cs != Cs3::NoEventMode {
@@ -478,7 +479,7 @@ fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize) {
         assert_eq!(unsafe { fmi3EnterStepMode(c) }, fmi3OK, "{}", last3(log));
     }
     let mut t = 0.0;
-    let mut handed = 0;
+    let (mut handed, mut sampled_in_event_mode) = (0, 0);
     let mut seen = Seen::new();
     for &point in points {
         // With early return the step may end before the point: go on from where it ended.
@@ -508,9 +509,13 @@ fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize) {
             }
             if event {
                 handed += 1;
+                let before = read3(c, t).1;
                 // SAFETY: a live instance.
                 assert_eq!(unsafe { fmi3EnterEventMode(c) }, fmi3OK, "{}", last3(log));
                 update3(c, log);
+                if read3(c, t).1 > before {
+                    sampled_in_event_mode += 1;
+                }
                 // SAFETY: a live instance.
                 assert_eq!(unsafe { fmi3EnterStepMode(c) }, fmi3OK, "{}", last3(log));
             }
@@ -519,7 +524,7 @@ fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize) {
     }
     // SAFETY: a live instance, freed once.
     unsafe { fmi3FreeInstance(c) };
-    (seen, handed)
+    (seen, handed, sampled_in_event_mode)
 }
 
 /// FMI 3.0 model exchange, as [`run_me2`].
@@ -582,7 +587,7 @@ fn clocks() -> Vec<Clock> {
 fn every_interface(label: &str, ts: f64, mode: i32, points: &[f64]) {
     check(&format!("{label}: FMI 2.0 CS"), ts, &run_cs2(ts, mode, points));
     for cs in [Cs3::NoEventMode, Cs3::EventMode, Cs3::EarlyReturn] {
-        let (seen, handed) = run_cs3(cs, ts, mode, points);
+        let (seen, handed, _) = run_cs3(cs, ts, mode, points);
         check(&format!("{label}: FMI 3.0 CS {cs:?}"), ts, &seen);
         if cs == Cs3::NoEventMode {
             assert_eq!(handed, 0);
@@ -648,24 +653,33 @@ fn steps_that_end_on_an_event_one_ulp_before_it_and_one_ulp_after_it() {
 }
 
 #[test]
-fn event_mode_without_early_return_hands_only_the_event_at_the_steps_end_to_the_importer() {
-    // FMI 3.0 (4.2.1, fmi3DoStep): "eventHandlingNeeded = fmi3True indicates that an event was
-    // encountered by the FMU at lastSuccessfulTime and the importer has to enter Event Mode".
-    // Without early return the step cannot end before its end: an event inside it is handled
-    // there, one at its end (within round-off: t += h) is left for the importer's Event Mode.
-    // Stair with h = 0.5: the events at 1, 2, ... end every other step.
+fn event_mode_without_early_return_ends_each_step_with_an_event_in_event_mode() {
+    // Without early return the step cannot end before its end. An event inside it is handled
+    // there (the FMI guide's "mitigative internal event handling"; the Reference-FMUs do so too)
+    // and the step ends with eventHandlingNeeded, so that the importer's Event Mode sees the
+    // discrete changes at the communication point (the FMI guide: "It will indicate the event as
+    // usual through eventHandlingNeeded"); an event at the step's end (within round-off: t += h)
+    // is left unhandled for that Event Mode (FMI 3.0, fmi3DoStep: "an event was encountered by
+    // the FMU at lastSuccessfulTime"). Stair with h = 0.5: the seconds end every other step.
     let points = Clock::Summed(0.5).points(9.0);
-    let (seen, handed) = run_cs3(Cs3::EventMode, 1.0, 1, &points);
+    let (seen, handed, in_event_mode) = run_cs3(Cs3::EventMode, 1.0, 1, &points);
     check("Stair, h = 0.5, event mode", 1.0, &seen);
-    assert_eq!(handed, 9, "one event handed to the importer per second");
+    assert_eq!((handed, in_event_mode), (9, 9), "each second at a step's end, counted in Event Mode");
     // h = 0.3: the seconds fall inside the steps (0.9 -> 1.2, ...), except 3, 6, 9 at their
     // ends (0.3 summed ten times is 3.0000000000000004: within round-off).
     let points = Clock::Summed(0.3).points(9.0);
-    let (seen, handed) = run_cs3(Cs3::EventMode, 1.0, 1, &points);
+    let (seen, handed, in_event_mode) = run_cs3(Cs3::EventMode, 1.0, 1, &points);
     check("Stair, h = 0.3, event mode", 1.0, &seen);
-    assert_eq!(handed, 3, "the seconds at a step's end: 3, 6, 9");
-    // With early return every event is handed over, each where it is.
-    let (seen, handed) = run_cs3(Cs3::EarlyReturn, 1.0, 1, &points);
+    assert_eq!(
+        (handed, in_event_mode),
+        (9, 3),
+        "every step with a second ends in Event Mode; 3, 6 and 9 are counted there"
+    );
+    // Without event mode nothing is handed over; with early return every event, where it is.
+    let (seen, handed, _) = run_cs3(Cs3::NoEventMode, 1.0, 1, &points);
+    check("Stair, h = 0.3, no event mode", 1.0, &seen);
+    assert_eq!(handed, 0);
+    let (seen, handed, in_event_mode) = run_cs3(Cs3::EarlyReturn, 1.0, 1, &points);
     check("Stair, h = 0.3, early return", 1.0, &seen);
-    assert_eq!(handed, 9);
+    assert_eq!((handed, in_event_mode), (9, 9));
 }

@@ -1386,13 +1386,13 @@ impl<M: CoSimulation> Instance<M> {
             }
             (Ok(()), None) if stopped_at.is_some() => {
                 // FMI 3.0 event mode: the step ends at the event (with early return, at the
-                // first one; without, only at one at the step's end), which the importer
-                // handles in Event Mode.
+                // first one; without, at its end, after the events inside it were handled
+                // there), which the importer handles in Event Mode.
                 let at = stopped_at.unwrap_or(end).clamp(t, end);
                 self.sim.time = at;
                 self.sim.last_successful_time = at;
                 self.step_event = true;
-                self.event(|| format!("{f}: an event at t = {at}: left for the importer to handle in Event Mode"));
+                self.event(|| format!("{f}: eventHandlingNeeded at t = {at}, for the importer's Event Mode"));
                 OK
             }
             (Ok(()), None) => {
