@@ -664,7 +664,11 @@ fn event_mode_without_early_return_ends_each_step_with_an_event_in_event_mode() 
     let points = Clock::Summed(0.5).points(9.0);
     let (seen, handed, in_event_mode) = run_cs3(Cs3::EventMode, 1.0, 1, &points);
     check("Stair, h = 0.5, event mode", 1.0, &seen);
-    assert_eq!((handed, in_event_mode), (9, 9), "each second at a step's end, counted in Event Mode");
+    assert_eq!(
+        (handed, in_event_mode),
+        (9, 9),
+        "each second at a step's end, counted in Event Mode"
+    );
     // h = 0.3: the seconds fall inside the steps (0.9 -> 1.2, ...), except 3, 6, 9 at their
     // ends (0.3 summed ten times is 3.0000000000000004: within round-off).
     let points = Clock::Summed(0.3).points(9.0);
