@@ -11,7 +11,9 @@
 //! tests assert behaviour.)
 
 use rustfmu::__private::abi::*;
-use std::ffi::CString;
+
+#[path = "support/fmi2_host.rs"]
+mod fmi2_host;
 
 mod model {
     use rustfmu::prelude::*;
@@ -76,25 +78,15 @@ fn log() -> &'static rustfmu::testing::Log {
 
 /// A co-simulation ball with gravity `g`, initialized.
 fn ball(g: f64) -> fmi2Component {
-    let guid = CString::new(GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    let c = fmi2_host::cs_instance(fmi2Instantiate, GUID, c"ball", log());
+    // SAFETY: a live instance, one value.
     unsafe {
-        let c = fmi2Instantiate(
-            c"ball".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            rustfmu::testing::callbacks(log()),
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2SetReal(c, &5, 1, &g), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
-        c
     }
+    c
 }
 
 fn reals(c: fmi2Component) -> [f64; 6] {
