@@ -202,6 +202,10 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             targets,
         } => {
             let versions = parse_version_choice(&fmi_versions)?;
+            // Before a build of minutes, not after it as "invalid: <a good FMU>".
+            if let Some(py) = &python {
+                crate::validate::fmpy_ready(py)?;
+            }
             build_versions(
                 manifest_path.as_deref(),
                 &packages,
@@ -212,7 +216,12 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             )
             .map(|_| ())
         }
-        Cmd::Validate { fmus, python } => validate_all(&fmus, python.as_deref(), true),
+        Cmd::Validate { fmus, python } => {
+            if let Some(py) = &python {
+                crate::validate::fmpy_ready(py)?;
+            }
+            validate_all(&fmus, python.as_deref(), true)
+        }
         Cmd::Check {
             fmu,
             filter,

@@ -1346,6 +1346,31 @@ pub fn smoke_run(so: &Path, guid: &str, real_vrs: &[u32], resources: &Path) -> V
 /// stderr, a line each, forwarded by [`smoke_run_in_child`].
 pub const NOTE: &str = "fmu: note: ";
 
+/// Whether `python` (`--python`) can run fmpy's validator: an interpreter without fmpy is the
+/// environment's problem, said as such before anything is built or judged, not an invalid FMU.
+pub fn fmpy_ready(python: &Path) -> Result<(), String> {
+    let p = python.display();
+    let out = std::process::Command::new(python)
+        .arg("-c")
+        .arg("import fmpy.validation")
+        .output()
+        .map_err(|e| format!("--python {p}: cannot run this interpreter: {e}"))?;
+    if out.status.success() {
+        return Ok(());
+    }
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let why = stderr
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("no message")
+        .trim();
+    Err(format!(
+        "--python {p}: this interpreter cannot import fmpy ({why}), which runs fmpy's validator on the FMUs; \
+         install it there (`{p} -m pip install fmpy`), give an interpreter that has it, or leave out --python"
+    ))
+}
+
 /// fmpy's validator, run with the given Python.
 pub fn fmpy_validate(python: &Path, fmu: &Path) -> Vec<String> {
     let script = "import sys\nfrom fmpy.validation import validate_fmu\np = validate_fmu(sys.argv[1])\nprint('\\n'.join(p))\nsys.exit(1 if p else 0)";

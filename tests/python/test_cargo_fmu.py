@@ -756,3 +756,32 @@ def test_every_initial_unknown_of_the_project_fmus_lists_its_dependencies():
     assert deps["alpha1"] == ["alpha1_0"] and deps["omega2"] == ["omega2_0"], deps
     assert deps["der(alpha1)"] == ["omega1_0"], deps
     assert "M1" in deps["der(omega1)"] and "m1" in deps["der(omega1)"], deps
+
+
+def test_a_python_without_fmpy_is_named_as_such_not_the_fmu_it_was_to_validate(tmp_path):
+    """Issue 52, item 6: `--python` naming an interpreter without fmpy printed fmpy's traceback
+    and then "error: invalid: PiClock.fmu", blaming a good FMU. Now `cargo fmu validate` and
+    `cargo fmu build` say, before anything is judged or built, that the interpreter cannot import
+    fmpy, name it and how to install it."""
+    import sys
+
+    from conftest import FMU_DIR, fmu3
+
+    bare = tmp_path / "bare"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(bare)], check=True, timeout=300)
+    python = bare / "bin" / "python"
+    assert subprocess.run([python, "-c", "import fmpy"], capture_output=True).returncode != 0
+    cargo_fmu = FMU_DIR.parent / "release" / "cargo-fmu"
+    good = fmu3("StateSpace")
+    for args in (["validate", "--python", str(python), good], ["build", "--python", str(python)]):
+        out = subprocess.run([cargo_fmu, "fmu", *args], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert out.returncode != 0, out.stderr
+        assert f"--python {python}: this interpreter cannot import fmpy (ModuleNotFoundError: No module named 'fmpy')" \
+            in out.stderr, out.stderr
+        assert f"`{python} -m pip install fmpy`" in out.stderr, out.stderr
+        assert "invalid" not in out.stderr and "Traceback" not in out.stderr, out.stderr
+        assert "Compiling" not in out.stderr and "packaged" not in out.stderr, out.stderr
+    # The interpreter with fmpy still validates.
+    out = subprocess.run([cargo_fmu, "fmu", "validate", "--python", sys.executable, good], capture_output=True,
+                         text=True, timeout=600)
+    assert out.returncode == 0 and "is valid" in out.stderr, out.stderr
