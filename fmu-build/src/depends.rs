@@ -37,13 +37,13 @@ pub struct Report {
 
 /// A known of model exchange: a continuous state or a continuous Real input.
 #[derive(Clone, Copy)]
-enum Known<'a> {
+pub(crate) enum Known<'a> {
     State(&'a Variable),
     Input(&'a Variable),
 }
 
 impl<'a> Known<'a> {
-    fn var(&self) -> &'a Variable {
+    pub(crate) fn var(&self) -> &'a Variable {
         match self {
             Known::State(v) | Known::Input(v) => v,
         }
@@ -52,7 +52,7 @@ impl<'a> Known<'a> {
 
 /// The states in the order of the state vector: the variables the derivatives are of, in the
 /// order the derivatives are declared (the order of `<Derivatives>` and of the runtime's vector).
-fn states(d: &ModelDescription) -> Vec<&Variable> {
+pub(crate) fn states(d: &ModelDescription) -> Vec<&Variable> {
     d.variables
         .iter()
         .filter_map(|der| der.derivative_of)
@@ -64,13 +64,16 @@ fn is_continuous_real(v: &Variable) -> bool {
     v.var_type == VarType::Real && v.variability == Variability::Continuous
 }
 
-/// The unknowns: the derivatives, then the continuous Real outputs (each once).
+/// The unknowns: the derivatives, then the continuous Real outputs, then the event indicators
+/// (each once). FMI 2.0 lists no dependencies of its event indicators, but the same declaration
+/// is FMI 3.0's `<EventIndicator dependencies>`: an event indicator is a continuous Real the
+/// equations compute, so its directional derivatives are as exact as an output's.
 fn unknowns(d: &ModelDescription) -> Vec<&Variable> {
     let mut out: Vec<&Variable> = d.variables.iter().filter(|v| v.derivative_of.is_some()).collect();
     for v in d
         .variables
         .iter()
-        .filter(|v| v.causality == Causality::Output && is_continuous_real(v))
+        .filter(|v| (v.causality == Causality::Output && is_continuous_real(v)) || d.event_indicators.contains(&v.name))
     {
         if !out.iter().any(|u| u.value_reference == v.value_reference) {
             out.push(v);
@@ -91,10 +94,10 @@ fn knowns(d: &ModelDescription) -> Vec<Known<'_>> {
 }
 
 /// A deterministic generator (splitmix64): the same points in every build.
-struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 
 impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -107,7 +110,7 @@ impl Rng {
 /// A value spread around `center` (by up to `scale` times its magnitude, at least `scale`) and
 /// kept inside the variable's bounds (an exclusive bound by a margin). Small spreads keep a model
 /// inside its limits (a saturated output shows no dependency on what it saturates).
-fn spread_by(rng: &mut Rng, v: &Variable, center: f64, scale: f64) -> f64 {
+pub(crate) fn spread_by(rng: &mut Rng, v: &Variable, center: f64, scale: f64) -> f64 {
     let width = center.abs().max(1.0) * scale;
     let mut x = center + rng.uniform(-0.5, 0.5) * width;
     let (lo, hi) = (v.min.map(|b| b.value), v.max.map(|b| b.value));
@@ -167,7 +170,7 @@ fn parameters(d: &ModelDescription) -> Vec<&Variable> {
         .collect()
 }
 
-fn start_of(v: &Variable) -> f64 {
+pub(crate) fn start_of(v: &Variable) -> f64 {
     match v.start {
         Start::Real(x) if x.is_finite() => x,
         _ => 0.0,
@@ -176,16 +179,16 @@ fn start_of(v: &Variable) -> f64 {
 
 /// One unknown's declaration against what the points showed (`seen[j]`: known `names[j]` moved
 /// it): both checks read it the same way.
-struct Comparison<'a> {
+pub(crate) struct Comparison<'a> {
     /// The knowns it moved with.
-    found: Vec<&'a str>,
+    pub(crate) found: Vec<&'a str>,
     /// The indices of those the declaration leaves out.
-    missing: Vec<usize>,
+    pub(crate) missing: Vec<usize>,
     /// The declared knowns no point showed.
-    unseen: Vec<&'a str>,
+    pub(crate) unseen: Vec<&'a str>,
 }
 
-fn compare<'a, T>(declared: Option<&[&str]>, names: &[&'a str], seen: &[Option<T>]) -> Comparison<'a> {
+pub(crate) fn compare<'a, T>(declared: Option<&[&str]>, names: &[&'a str], seen: &[Option<T>]) -> Comparison<'a> {
     let mut c = Comparison {
         found: vec![],
         missing: vec![],
@@ -206,29 +209,86 @@ fn compare<'a, T>(declared: Option<&[&str]>, names: &[&'a str], seen: &[Option<T
 }
 
 /// `depends = [a, b]` as written in the declaration.
-fn list(names: &[&str]) -> String {
+pub(crate) fn list(names: &[&str]) -> String {
     format!("[{}]", names.join(", "))
+}
+
+/// How the checks reach a model: through FMI 2.0 ([`Api`]) or, for a library without FMI 2.0,
+/// FMI 3.0 ([`crate::depends_fmi3::Api3`]). Each call works on a fresh instance.
+pub(crate) trait Probe {
+    /// The directional derivative's C function, for messages.
+    fn derivative_function(&self) -> &'static str;
+
+    /// Whether the probe sets and reads `v` (the FMI 3.0 probe leaves arrays out).
+    fn reaches(&self, _v: &Variable) -> bool {
+        true
+    }
+
+    /// The model-exchange Jacobian of `unknowns` with respect to `knowns` (rows: unknowns) at
+    /// one point: `parameters` set before initialization, the states and the inputs spread by
+    /// `scale` around their initial and start values.
+    fn jacobian(
+        &self,
+        d: &ModelDescription,
+        unknowns: &[&Variable],
+        knowns: &[Known],
+        parameters: &[(&Variable, f64)],
+        scale: f64,
+        rng: &mut Rng,
+    ) -> Result<Vec<Vec<f64>>, String>;
+
+    /// The values of the initial unknowns after Initialization Mode with the knowns set to
+    /// `values`.
+    fn initial_values(&self, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String>;
+}
+
+impl Probe for Api {
+    fn derivative_function(&self) -> &'static str {
+        "fmi2GetDirectionalDerivative"
+    }
+
+    fn jacobian(
+        &self,
+        d: &ModelDescription,
+        unknowns: &[&Variable],
+        knowns: &[Known],
+        parameters: &[(&Variable, f64)],
+        scale: f64,
+        rng: &mut Rng,
+    ) -> Result<Vec<Vec<f64>>, String> {
+        columns(self, d, unknowns, knowns, parameters, scale, rng)
+    }
+
+    fn initial_values(&self, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String> {
+        initial_values(self, knowns, values, unknowns)
+    }
 }
 
 /// Checks the declared dependencies of the library at `so` (a rustfmu model whose declarations
 /// are `d`) through FMI 2.0 model exchange. `guid` and `resource_uri` as for fmi2Instantiate.
 pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) -> Report {
+    match Api::load(so, true, guid, resource_uri) {
+        Ok(api) => check_with(&api, d),
+        Err(e) => Report {
+            notes: vec![format!("`depends` was not checked: {e}")],
+            ..Report::default()
+        },
+    }
+}
+
+/// [`check`] through any [`Probe`].
+pub(crate) fn check_with(api: &dyn Probe, d: &ModelDescription) -> Report {
     let mut report = Report::default();
-    let unknowns = unknowns(d);
-    let knowns = knowns(d);
+    let mut unknowns = unknowns(d);
+    unknowns.retain(|v| api.reaches(v));
+    let mut knowns = knowns(d);
+    knowns.retain(|k| api.reaches(k.var()));
     if unknowns.is_empty() || knowns.is_empty() {
         return report;
     }
     // seen[u][k]: a point where ∂unknown u / ∂known k was not 0, and its value.
     let mut seen: Vec<Vec<Option<f64>>> = vec![vec![None; knowns.len()]; unknowns.len()];
     let mut checked_points = 0;
-    let api = match Api::load(so, true, guid, resource_uri) {
-        Ok(api) => api,
-        Err(e) => {
-            report.notes.push(format!("`depends` was not checked: {e}"));
-            return report;
-        }
-    };
     let mut rng = Rng(0x0005_eed0_fde9_e0d5);
     let parameters = parameters(d);
     for point in 0..POINTS {
@@ -243,7 +303,7 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
             };
             // Every other point close to the initial state and the start values of the inputs.
             let scale = if point % 2 == 1 { 1e-3 } else { 1.0 };
-            jacobian = columns(&api, d, &unknowns, &knowns, &drawn, scale, &mut rng);
+            jacobian = api.jacobian(d, &unknowns, &knowns, &drawn, scale, &mut rng);
             if jacobian.is_ok() || drawn.is_empty() {
                 break;
             }
@@ -273,6 +333,8 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
     for (i, u) in unknowns.iter().enumerate() {
         let what = if u.derivative_of.is_some() {
             "derivative"
+        } else if d.event_indicators.contains(&u.name) && u.causality != Causality::Output {
+            "event indicator"
         } else {
             "output"
         };
@@ -292,13 +354,14 @@ pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) ->
             let (name, value) = (names[j], seen[i][j].unwrap_or_default());
             report.problems.push(format!(
                 "{what} '{}' depends on {} '{name}' (∂{}/∂{name} = {value:e} at a random point, by \
-                 fmi2GetDirectionalDerivative), which its `depends = {}` leaves out: add '{name}' to it",
+                 {}), which its `depends = {}` leaves out: add '{name}' to it",
                 u.name,
                 match knowns[j] {
                     Known::State(_) => "the state",
                     Known::Input(_) => "the input",
                 },
                 u.name,
+                api.derivative_function(),
                 list(declared)
             ));
         }
@@ -511,7 +574,7 @@ fn columns(
     })
 }
 
-fn said(log: &fmi_conformance::logger::LogSink) -> String {
+pub(crate) fn said(log: &fmi_conformance::logger::LogSink) -> String {
     log.take().into_iter().map(|e| e.text).collect::<Vec<_>>().join("; ")
 }
 
@@ -533,7 +596,7 @@ fn is_number(v: &Variable) -> bool {
 }
 
 /// One known's value, as set before Initialization Mode.
-fn start_number(v: &Variable) -> f64 {
+pub(crate) fn start_number(v: &Variable) -> f64 {
     match v.start {
         Start::Real(x) if x.is_finite() => x,
         Start::Integer(i) => i as f64,
@@ -544,7 +607,7 @@ fn start_number(v: &Variable) -> f64 {
 
 /// The value a known is moved to: a small step inside its bounds (a Real), the other Boolean,
 /// the next enumeration item, an Integer by one.
-fn perturbed(v: &Variable, x: f64) -> f64 {
+pub(crate) fn perturbed(v: &Variable, x: f64) -> f64 {
     match v.var_type {
         VarType::Boolean => 1.0 - x,
         VarType::Enumeration if v.enumeration.is_some_and(|e| e.items.len() > 1) => {
@@ -606,26 +669,34 @@ fn initial_values(api: &Api, knowns: &[&Variable], values: &[f64], unknowns: &[&
 /// Booleans to the other value, enumerations to the next item; String knowns are not moved (a
 /// dependency on them is not checked).
 pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str, co_simulation: bool) -> Report {
+    // Co-simulation where the library has it: the InitialUnknowns are the same for both
+    // interfaces, and co-simulation accepts every parameter model exchange does (not the other
+    // way round: a sampled controller).
+    match Api::load(so, !co_simulation, guid, resource_uri) {
+        Ok(api) => check_initial_with(&api, d),
+        Err(e) => Report {
+            notes: vec![format!("`initial_depends` was not checked: {e}")],
+            ..Report::default()
+        },
+    }
+}
+
+/// [`check_initial`] through any [`Probe`].
+pub(crate) fn check_initial_with(api: &dyn Probe, d: &ModelDescription) -> Report {
     let mut report = Report::default();
     let unknowns: Vec<&Variable> = d
         .variables
         .iter()
-        .filter(|v| is_initial_unknown(d, v) && is_number(v))
+        .filter(|v| is_initial_unknown(d, v) && is_number(v) && api.reaches(v))
         .collect();
-    let knowns: Vec<&Variable> = d.variables.iter().filter(|v| is_settable_known(v)).collect();
+    let knowns: Vec<&Variable> = d
+        .variables
+        .iter()
+        .filter(|v| is_settable_known(v) && api.reaches(v))
+        .collect();
     if unknowns.is_empty() {
         return report;
     }
-    // Co-simulation where the library has it: the InitialUnknowns are the same for both
-    // interfaces, and co-simulation accepts every parameter model exchange does (not the other
-    // way round: a sampled controller).
-    let api = match Api::load(so, !co_simulation, guid, resource_uri) {
-        Ok(api) => api,
-        Err(e) => {
-            report.notes.push(format!("`initial_depends` was not checked: {e}"));
-            return report;
-        }
-    };
     // seen[u][k]: how known k moved unknown u, at the first point it did.
     let mut seen: Vec<Vec<Option<String>>> = vec![vec![None; knowns.len()]; unknowns.len()];
     let mut checked_points = 0;
@@ -641,7 +712,7 @@ pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: 
                 let scale = if point % 2 == 1 { 1e-3 } else { 1.0 };
                 base = knowns.iter().map(|v| draw_by(&mut rng, v, scale)).collect();
             }
-            at_base = initial_values(&api, &knowns, &base, &unknowns);
+            at_base = api.initial_values(&knowns, &base, &unknowns);
             if at_base.is_ok() || point == 0 || attempt + 1 == DRAWS {
                 break;
             }
@@ -660,7 +731,7 @@ pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: 
         for (j, k) in knowns.iter().enumerate() {
             let mut moved = base.clone();
             moved[j] = perturbed(k, base[j]);
-            match initial_values(&api, &knowns, &moved, &unknowns) {
+            match api.initial_values(&knowns, &moved, &unknowns) {
                 Ok(values) => {
                     for (i, (&a, &b)) in at_base.iter().zip(&values).enumerate() {
                         if a.to_bits() != b.to_bits() && seen[i][j].is_none() {

@@ -11,6 +11,7 @@ pub mod cargo;
 pub mod cli;
 pub mod container;
 pub mod depends;
+pub mod depends_fmi3;
 pub mod docs;
 pub mod new;
 pub mod plot;

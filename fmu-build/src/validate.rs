@@ -1220,6 +1220,43 @@ pub fn smoke_run3(so: &Path, token: &str, real_vrs: &[u32], resources: &Path, ev
             ));
         }
     }
+    // The declared `depends` against the model (a rustfmu library carries its declarations):
+    // through FMI 3.0 where the library has no FMI 2.0 (whose smoke run checks them otherwise),
+    // and the clocked outputs' always (FMI 3.0 only has clocks).
+    if problems.is_empty()
+        && let Ok(binary) = std::fs::read(so)
+        && let Ok(lib3) = crate::bundle::read_library(&binary, FmiVersion::V3)
+    {
+        let path = format!("{}{}", resources.display(), std::path::MAIN_SEPARATOR);
+        let has_fmi2 = crate::bundle::read_library(&binary, FmiVersion::V2).is_ok();
+        let reports = if has_fmi2 {
+            crate::depends_fmi3::Api3::load(
+                so,
+                &lib3.description,
+                token,
+                &path,
+                lib3.interfaces.model_exchange,
+                lib3.interfaces.co_simulation,
+            )
+            .map(|api| vec![crate::depends_fmi3::check_clocked(&api, &lib3.description)])
+            .unwrap_or_default()
+        } else {
+            crate::depends_fmi3::check_all(
+                so,
+                &lib3.description,
+                token,
+                &path,
+                lib3.interfaces.model_exchange,
+                lib3.interfaces.co_simulation,
+            )
+        };
+        for report in reports {
+            for note in &report.notes {
+                eprintln!("{NOTE}{note}");
+            }
+            problems.extend(report.problems);
+        }
+    }
     problems
 }
 

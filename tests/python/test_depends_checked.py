@@ -1,0 +1,134 @@
+"""Issue 52, item 1: every `depends` of every crate checked at build time, whichever FMI versions
+it exports. An event indicator declared `depends = []` built, validated and passed both checks
+while its FMI 3.0 description said `<EventIndicator dependencies=""/>` although z depends on the
+temperature; in an FMI-3.0-only crate no `depends` was checked at all (the build's probe ran
+through FMI 2.0): a clocked output declared without the input it is computed from, and a
+derivative without its state, passed `cargo fmu build`. The build now refuses each, naming the
+variable, what it depends on and what to add; the right declarations build without a problem."""
+
+import subprocess
+
+from conftest import outside_crate
+
+THERMOSTAT = '''//! A thermostat with hysteresis: the heater is on below t_low and off above t_high.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A heated room and its thermostat
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct Thermostat {
+    /// Room temperature
+    #[variable(vr = 1, name = "T", output, continuous, initial = exact, start = 15.0, depends = [T])]
+    pub temp: f64,
+    /// dT/dt
+    #[variable(vr = 2, name = "der(T)", local, derivative_of = temp, depends = [T], initial_depends = [T])]
+    pub der_temp: f64,
+    /// The switching function: T minus the threshold the heater switches at next
+    #[variable(vr = 3, name = "z", local, continuous, event_indicator, depends = DEPENDS)]
+    pub z: f64,
+    /// The heater is on
+    pub on: bool,
+}
+
+impl Model for Thermostat {
+    fn derivatives<D: Real>(&self, _t: D, v: &mut ThermostatContinuous<D>) {
+        let heat = if self.on { 2.0 } else { 0.0 };
+        v.der_temp = (v.temp - 10.0) * -0.1 + heat;
+    }
+
+    fn outputs<D: Real>(&self, _t: D, v: &mut ThermostatContinuous<D>) {
+        let threshold = if self.on { 22.0 } else { 18.0 };
+        v.z = v.temp - threshold;
+    }
+
+    fn update(&mut self, _event: &mut Event) -> Result<(), String> {
+        if self.on && self.temp >= 22.0 {
+            self.on = false;
+        } else if !self.on && self.temp <= 18.0 {
+            self.on = true;
+        }
+        Ok(())
+    }
+}
+
+impl CoSimulation for Thermostat {}
+
+rustfmu::export_fmu!(Thermostat);
+'''
+
+SAMPLED_GAIN = '''//! FMI 3.0 only: a gain sampled by a periodic clock, and a first-order lag of its held output.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A sampled gain and a lag
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+#[fmu(fmi3_only)]
+pub struct SampledGain {
+    /// Ticks every 0.1 s
+    #[variable(vr = 1, input, clock(fixed, interval = 0.1))]
+    pub sample: Clock,
+    /// Input, read at the ticks
+    #[variable(vr = 4, input, discrete, clocks = [sample], start = 0.0)]
+    pub u: f64,
+    /// 2 u, computed at the tick from the input of the same tick
+    #[variable(vr = 5, output, discrete, clocks = [sample], depends = Y_DEPENDS)]
+    pub y: f64,
+    /// The lag of the held y
+    #[variable(vr = 6, output, continuous, initial = exact, start = 0.0, depends = [z])]
+    pub z: f64,
+    /// dz/dt = y - z
+    #[variable(vr = 7, name = "der(z)", local, continuous, derivative_of = z, depends = Z_DEPENDS)]
+    pub der_z: f64,
+}
+
+impl Model for SampledGain {
+    fn derivatives<D: Real>(&self, _t: D, v: &mut SampledGainContinuous<D>) {
+        v.der_z = v.z * -1.0 + self.y;
+    }
+
+    fn update(&mut self, _event: &mut Event) -> Result<(), String> {
+        if self.sample.is_active() {
+            self.y = 2.0 * self.u;
+        }
+        Ok(())
+    }
+}
+
+impl CoSimulation for SampledGain {}
+
+rustfmu::export_fmi3!(SampledGain);
+'''
+
+
+def build(name, source, fmi3_only=False):
+    crate, env = outside_crate(name, fresh=True)
+    (crate / "src" / "lib.rs").write_text(source)
+    if fmi3_only:
+        toml = (crate / "Cargo.toml").read_text()
+        toml = toml.replace("[package.metadata.fmu]\n", '[package.metadata.fmu]\nfmi-versions = ["3.0"]\n')
+        (crate / "Cargo.toml").write_text(toml)
+    return subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+
+
+def test_an_event_indicator_declared_without_its_state_is_refused_by_the_build():
+    out = build("thermostat-depends", THERMOSTAT.replace("DEPENDS", "[]"))
+    assert out.returncode != 0, out.stderr[-4000:]
+    assert ("event indicator 'z' depends on the state 'T'" in out.stderr
+            and "`depends = []` leaves out: add 'T'" in out.stderr), out.stderr[-4000:]
+    out = build("thermostat-depends", THERMOSTAT.replace("DEPENDS", "[T]"))
+    assert out.returncode == 0, out.stderr[-4000:]
+    assert "leaves out" not in out.stderr, out.stderr[-4000:]
+
+
+def test_an_fmi3_only_crate_has_its_depends_checked_through_fmi3_clocked_outputs_too():
+    wrong = SAMPLED_GAIN.replace("Y_DEPENDS", "[]").replace("Z_DEPENDS", "[]")
+    out = build("sampled-gain-depends", wrong, fmi3_only=True)
+    assert out.returncode != 0, out.stderr[-4000:]
+    assert ("clocked output 'y' depends at its tick on the input 'u'" in out.stderr
+            and "`depends = []` leaves out: add 'u'" in out.stderr), out.stderr[-4000:]
+    assert ("derivative 'der(z)' depends on the state 'z'" in out.stderr
+            and "by fmi3GetDirectionalDerivative" in out.stderr), out.stderr[-4000:]
+    right = SAMPLED_GAIN.replace("Y_DEPENDS", "[u]").replace("Z_DEPENDS", "[z]")
+    out = build("sampled-gain-depends", right, fmi3_only=True)
+    assert out.returncode == 0, out.stderr[-4000:]
+    assert "leaves out" not in out.stderr, out.stderr[-4000:]
