@@ -531,12 +531,32 @@ pub fn build_versions(
     if let Some((_, Err(e))) = outcomes.iter().find(|(_, o)| o.is_err()) {
         return Err(e.clone());
     }
+    // Versions a crate's library does not implement, where nobody asked for them by name (no
+    // --fmi-version, no fmi-versions in its Cargo.toml): built as the library says, with a note.
+    let mut not_implemented: BTreeSet<(String, FmiVersion)> = BTreeSet::new();
     for (t, mine) in &jobs {
         for (c, versions) in mine {
             for v in versions {
+                if not_implemented.contains(&(c.package.clone(), *v)) {
+                    continue;
+                }
                 let kept = cargo::keep_library(&ws, c, *v, t, &host)?;
-                check_built_version(c, *v, &kept)?;
-                libraries.push((c.clone(), *v, t.clone(), kept));
+                match check_built_version(c, *v, &kept) {
+                    Err(e) if asked.is_some() || c.fmi_versions.is_some() => return Err(e),
+                    Err(_) => {
+                        eprintln!(
+                            "fmu: note: {} implements FMI {} only (it calls rustfmu::export_fmi{}!): FMI {} is not built; \
+                             `fmi-versions = [\"{}\"]` in [package.metadata.fmu] of its Cargo.toml says so and silences this note",
+                            c.package,
+                            other_version(*v).text(),
+                            &other_version(*v).text()[..1],
+                            v.text(),
+                            other_version(*v).text()
+                        );
+                        not_implemented.insert((c.package.clone(), *v));
+                    }
+                    Ok(()) => libraries.push((c.clone(), *v, t.clone(), kept)),
+                }
             }
         }
     }
@@ -546,6 +566,9 @@ pub fn build_versions(
     let mut built = Vec::new();
     for (c, versions, _) in &plan {
         for version in versions {
+            if not_implemented.contains(&(c.package.clone(), *version)) {
+                continue;
+            }
             let mut mine: Vec<(String, PathBuf)> = Vec::new();
             for (lc, lv, t, library) in &libraries {
                 if lc.package == c.package && lv == version {
@@ -575,6 +598,14 @@ pub fn build_versions(
     Ok(built)
 }
 
+/// The version that is not `v`.
+fn other_version(v: FmiVersion) -> FmiVersion {
+    match v {
+        FmiVersion::V2 => FmiVersion::V3,
+        FmiVersion::V3 => FmiVersion::V2,
+    }
+}
+
 /// A crate and the FMI versions one target's build of it is packaged for.
 type CrateVersions = (FmuCrate, Vec<FmiVersion>);
 
@@ -592,10 +623,18 @@ fn check_built_version(c: &FmuCrate, version: FmiVersion, library: &Path) -> Res
         FmiVersion::V2 => ("rustfmu::export_fmi2!", "2.0"),
         FmiVersion::V3 => ("rustfmu::export_fmi3!", "3.0"),
     };
+    // A model with FMI 3.0-only declarations (clocks, arrays, `#[fmu(fmi3_only)]`) cannot call
+    // export_fmu!: the hint says so instead of suggesting a compile error.
+    let fmi3_only = got == FmiVersion::V3 && has[0].description.has_fmi3_only();
+    let both = if fmi3_only {
+        "The model declares what FMI 2.0 does not have (clocks, arrays or #[fmu(fmi3_only)]), so it is FMI 3.0 only: "
+            .to_string()
+    } else {
+        "Call `rustfmu::export_fmu!(YourModel)` instead (both versions from one line, in one binary), or ".to_string()
+    };
     Err(format!(
         "{}: FMI {} was asked for, but the library implements FMI {} only: the crate calls `{called}` itself. \
-         Call `rustfmu::export_fmu!(YourModel)` instead (both versions from one line, in one binary), \
-         or build FMI {other} only: `fmi-versions = [\"{other}\"]` in [package.metadata.fmu] of its \
+         {both}build FMI {other} only: `fmi-versions = [\"{other}\"]` in [package.metadata.fmu] of its \
          Cargo.toml, or `cargo fmu build --fmi-version {}`",
         c.package,
         version.text(),
