@@ -354,12 +354,12 @@ class _Run:
                 continue
             self._set(name, self._value_at(source, t), f"input at t = {t}")
 
-    def _record(self, t, active=frozenset(), read_unclocked=True):
+    def _record(self, t, active=frozenset()):
         """Read what can be read now (unclocked outputs; clocked ones whose clock is active) and
         add a row."""
         for name in self.output:
             by = self._clocked_by(self.var[name])
-            if (by and set(by) & active) or (not by and read_unclocked):
+            if not by or set(by) & active:
                 self.held[name] = self._get(name)
         self.rows.append((t, *[self.held[name] for name in self.output]))
 
