@@ -694,6 +694,12 @@ impl ModelDescription {
         any_variable!(self, |v| v.is_array())
     }
 
+    /// Whether some Binary variable has a `maxSize`. (`const`: a model without one skips the
+    /// check of what it wrote into its Binaries at compile time.)
+    pub const fn has_max_sizes(&self) -> bool {
+        any_variable!(self, |v| v.fmi3.max_size.is_some())
+    }
+
     /// Whether some variable is a structural parameter (FMI 3.0): then the FMU has
     /// Configuration Mode (`fmi3EnterConfigurationMode`).
     pub const fn has_structural_parameters(&self) -> bool {

@@ -197,6 +197,29 @@ fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, interna
     )
 }
 
+/// The first Binary variable into which the model wrote more bytes than its `maxSize`,
+/// described for a message. Checked wherever the model's code ran (initialization, the
+/// equations, a step, an event's update, a parameter change): the call that ran it fails with
+/// fmi3Error and the model keeps the values it had before, so no Binary longer than its
+/// `maxSize` leaves the FMU, in `fmi3GetBinary` or in an FMU state (the setter refuses one
+/// from the importer).
+#[inline]
+pub fn oversized_binary<M: CoSimulation>(model: &M) -> Option<String> {
+    if !const { M::DESCRIPTION.has_max_sizes() } {
+        return None;
+    }
+    M::DESCRIPTION.variables.iter().find_map(|v| {
+        let max = v.fmi3.max_size?;
+        let n = model.get_binary(v.value_reference)?.len();
+        (n > max as usize).then(|| {
+            format!(
+                "'{}' (vr {}) holds {n} bytes, more than its maxSize = {max}",
+                v.name, v.value_reference
+            )
+        })
+    })
+}
+
 type Outcome = Result<(), Status>;
 
 impl<M: CoSimulation> Instance<M> {
@@ -428,10 +451,12 @@ impl<M: CoSimulation> Instance<M> {
             .model
             .initialize(&ctx)
             .map(|()| evaluate(&mut self.sim.model, self.sim.start_time))
-            .and_then(|()| match non_finite(&self.sim.model) {
-                None => Ok(()),
-                Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
-            });
+            .and_then(
+                |()| match non_finite(&self.sim.model).or_else(|| oversized_binary(&self.sim.model)) {
+                    None => Ok(()),
+                    Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
+                },
+            );
         match outcome {
             Ok(()) => {
                 self.sim.init_dirty = false;
@@ -1209,6 +1234,20 @@ impl<M: CoSimulation> Instance<M> {
         if let Err(status) = self.up_to_date(function) {
             return status;
         }
+        // Every place the model's code runs checks what it wrote (`oversized_binary`); this is
+        // the last word, should a value have come in another way.
+        for vr in vrs {
+            let decl = M::variable_index(*vr).map(|i| &M::DESCRIPTION.variables[i]);
+            if let (Some(d), Some(max)) = (decl, decl.and_then(|d| d.fmi3.max_size))
+                && let Some(n) = self.sim.model.get_binary(*vr).map(<[u8]>::len)
+                && n > max as usize
+            {
+                return self.error(&format!(
+                    "{function}: '{}' (vr {vr}) holds {n} bytes, more than its maxSize = {max}; nothing returned",
+                    d.name
+                ));
+            }
+        }
         self.binaries.clear();
         for vr in vrs {
             self.binaries
@@ -1267,11 +1306,11 @@ impl<M: CoSimulation> Instance<M> {
                 self.resources.as_deref(),
                 self.model_exchange,
             );
-            let outcome = self
-                .sim
-                .model
-                .parameters_changed(&ctx)
-                .and_then(|()| non_finite(&self.sim.model).map_or(Ok(()), Err));
+            let outcome = self.sim.model.parameters_changed(&ctx).and_then(|()| {
+                non_finite(&self.sim.model)
+                    .or_else(|| oversized_binary(&self.sim.model))
+                    .map_or(Ok(()), Err)
+            });
             if let Err(why) = outcome {
                 self.sim.model = previous;
                 return self.error(&format!(
@@ -1327,6 +1366,7 @@ impl<M: CoSimulation> Instance<M> {
         self.before_step.clone_from(&self.sim.model);
         let before_solver = self.sim.solver;
         let before_events = self.sim.events;
+        let terminate_before = self.sim.terminate_requested;
         let mut ctx = Context {
             start_time: self.sim.start_time,
             tolerance: self.sim.tolerance,
@@ -1357,6 +1397,18 @@ impl<M: CoSimulation> Instance<M> {
                 Err(failure) => failure.reached_time,
             };
             evaluate(&mut self.sim.model, reached);
+        }
+        if let Some(what) = oversized_binary(&self.sim.model) {
+            // A mistake in the model's code, which a smaller step would repeat: refused, not discarded.
+            std::mem::swap(&mut self.sim.model, &mut self.before_step);
+            self.sim.solver = before_solver;
+            self.sim.events = before_events;
+            self.sim.terminate_requested = terminate_before;
+            self.sim.stale_derivatives = true;
+            self.sim.stale_outputs = true;
+            return self.error(&format!(
+                "{f}: the step from t = {t} left {what}; refused, every variable is back at its value at t = {t}"
+            ));
         }
         self.sim.stale_derivatives = false;
         self.sim.stale_outputs = false;
@@ -1662,7 +1714,20 @@ impl<M: CoSimulation> Instance<M> {
             return Ok(());
         }
         let before = self.sim.model.continuous::<f64>();
+        // What `calculate` writes into a Binary is no continuous value: a model with a `maxSize`
+        // keeps a whole copy to go back to.
+        let before_binaries = const { M::DESCRIPTION.has_max_sizes() }.then(|| self.sim.model.clone());
         evaluate(&mut self.sim.model, self.sim.time);
+        if let Some(what) = oversized_binary(&self.sim.model) {
+            if let Some(model) = before_binaries {
+                self.sim.model = model;
+            }
+            return Err(self.error(&format!(
+                "{function}: at t = {}, the equations left {what} (computed from the current states, inputs and \
+                 parameters); nothing returned",
+                self.sim.time
+            )));
+        }
         if let Some(what) = non_finite(&self.sim.model) {
             self.sim.model.store_continuous(&before);
             return Err(self.not_finite(function, &what));
@@ -1752,6 +1817,10 @@ impl<M: CoSimulation> Instance<M> {
         } else {
             crate::events::update_round(&mut self.sim.model, &ctx, time, &mut self.sim.events)
         };
+        let outcome = outcome.and_then(|round| match oversized_binary(&self.sim.model) {
+            None => Ok(round),
+            Some(what) => Err(format!("the update left {what}")),
+        });
         match outcome {
             Ok(round) => {
                 self.sim.stale_derivatives = false;

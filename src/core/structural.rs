@@ -181,7 +181,10 @@ impl<M: CoSimulation> Instance<M> {
             self.resources.as_deref(),
             self.model_exchange,
         );
-        if let Err(why) = self.sim.model.parameters_changed(&ctx) {
+        let outcome = self.sim.model.parameters_changed(&ctx).and_then(|()| {
+            super::instance::oversized_binary(&self.sim.model).map_or(Ok(()), |what| Err(format!("it left {what}")))
+        });
+        if let Err(why) = outcome {
             self.sim.model = *before;
             return self.error(&format!(
                 "{function}: the new structural parameters were refused: {why}; they are as before"

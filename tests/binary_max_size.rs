@@ -1,0 +1,222 @@
+//! Issue 52, item 2: what the model writes into a Binary is checked against its `maxSize` right
+//! after the model's code ran (initialization, the equations when an output is read, a step, an
+//! event's update), and the call that ran it fails with the variable's name and both sizes; the
+//! model keeps its last good values, so `fmi3GetBinary` never hands out more than `maxSize`
+//! bytes and an FMU state taken afterwards is one the FMU accepts again.
+
+use rustfmu::__private::abi3::*;
+use support::Log;
+
+#[path = "support/fmi3_host.rs"]
+mod support;
+use std::ptr::{null, null_mut};
+
+mod model {
+    use rustfmu::prelude::*;
+
+    /// A frame of `n` bytes (computed from the input), and a latch of `m` bytes written at events.
+    #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+    #[fmu(fmi3_only)]
+    pub struct Frames {
+        /// how many bytes the equations write into the frame
+        #[variable(vr = 1, input, discrete, start = 4)]
+        pub n: u8,
+        /// the frame: n bytes 0xAB
+        #[variable(vr = 2, output, discrete, max_size = 4, depends = [n])]
+        pub frame: Vec<u8>,
+        /// how many bytes an event writes into the latch
+        #[variable(vr = 3, input, discrete, start = 0)]
+        pub m: u8,
+        /// the latch: m bytes 1, written at events
+        #[variable(vr = 4, output, discrete, max_size = 2, depends = [m])]
+        pub latch: Vec<u8>,
+    }
+
+    impl Model for Frames {
+        fn calculate(&mut self, _t: f64) {
+            self.frame = vec![0xAB; usize::from(self.n)];
+        }
+        fn update(&mut self, _event: &mut Event) -> Result<(), String> {
+            self.latch = vec![1; usize::from(self.m)];
+            Ok(())
+        }
+    }
+
+    impl CoSimulation for Frames {}
+
+    rustfmu::export_fmi3!(Frames);
+}
+use model::__rustfmu_fmi3_exports::*;
+
+fn cs() -> (fmi3Instance, &'static Log) {
+    support::instance(fmi3InstantiateCoSimulation, TOKEN, "frames")
+}
+
+fn me() -> (fmi3Instance, &'static Log) {
+    support::me_instance(fmi3InstantiateModelExchange, TOKEN, "frames")
+}
+
+fn init(c: fmi3Instance) {
+    // SAFETY: a live instance.
+    unsafe {
+        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
+        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
+    }
+}
+
+fn set_u8(c: fmi3Instance, vr: u32, value: u8) -> fmi3Status {
+    // SAFETY: one value.
+    unsafe { fmi3SetUInt8(c, &vr, 1, &value, 1) }
+}
+
+/// fmi3GetBinary of one variable: the status and, under OK, the bytes.
+fn get_binary(c: fmi3Instance, vr: u32) -> (fmi3Status, Option<Vec<u8>>) {
+    let (mut size, mut p) = (0usize, null::<u8>());
+    // SAFETY: one value reference, one size and one pointer slot; the bytes are copied before
+    // the next call on the instance.
+    unsafe {
+        let status = fmi3GetBinary(c, &vr, 1, &mut size, &mut p, 1);
+        let bytes = (status == fmi3OK).then(|| std::slice::from_raw_parts(p, size).to_vec());
+        (status, bytes)
+    }
+}
+
+/// The message names the variable, what the model wrote and what may be written.
+fn assert_names(log: &Log, what: &str) {
+    let last = log.last();
+    assert!(
+        last.contains(what),
+        "expected a message with {what:?}, the log says: {last}"
+    );
+}
+
+/// The instance's FMU state, serialized and deserialized again (as an importer keeps it), is
+/// accepted by fmi3SetFMUState.
+fn state_round_trips(c: fmi3Instance, log: &Log) {
+    // SAFETY (every call): a live instance, buffers of the sizes passed.
+    unsafe {
+        let mut state: fmi3FMUState = null_mut();
+        assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{}", log.last());
+        let mut size = 0usize;
+        assert_eq!(fmi3SerializedFMUStateSize(c, state, &mut size), fmi3OK);
+        let mut bytes = vec![0u8; size];
+        assert_eq!(fmi3SerializeFMUState(c, state, bytes.as_mut_ptr(), size), fmi3OK);
+        let mut restored: fmi3FMUState = null_mut();
+        assert_eq!(
+            fmi3DeserializeFMUState(c, bytes.as_ptr(), size, &mut restored),
+            fmi3OK,
+            "{}",
+            log.last()
+        );
+        assert_eq!(fmi3SetFMUState(c, restored), fmi3OK, "{}", log.last());
+        assert_eq!(fmi3FreeFMUState(c, &mut restored), fmi3OK);
+        assert_eq!(fmi3FreeFMUState(c, &mut state), fmi3OK);
+    }
+}
+
+#[test]
+fn a_frame_within_its_max_size_is_read_and_its_state_round_trips() {
+    let (c, log) = cs();
+    init(c);
+    assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 4])));
+    assert_eq!(set_u8(c, 1, 3), fmi3OK);
+    assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 3])));
+    state_round_trips(c, log);
+    assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 3])));
+    // SAFETY: a live instance.
+    unsafe { fmi3FreeInstance(c) };
+}
+
+#[test]
+fn the_read_that_ran_the_equations_is_refused_and_never_hands_out_the_longer_frame() {
+    let (c, log) = cs();
+    init(c);
+    assert_eq!(set_u8(c, 1, 8), fmi3OK);
+    let (status, bytes) = get_binary(c, 2);
+    assert_eq!(status, fmi3Error, "fmi3GetBinary gave {bytes:?}");
+    assert_names(log, "fmi3GetBinary");
+    assert_names(log, "'frame' (vr 2) holds 8 bytes, more than its maxSize = 4");
+    // The model kept its last good values: the FMU state taken now is one it accepts again
+    // (FMI 3.0, 2.3.1: after fmi3Error the instance is Terminated, where states may be taken).
+    state_round_trips(c, log);
+    // Reset and back: the frame is as the start values make it.
+    // SAFETY: a live instance.
+    unsafe { assert_eq!(fmi3Reset(c), fmi3OK) };
+    init(c);
+    assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 4])));
+    // SAFETY: a live instance.
+    unsafe { fmi3FreeInstance(c) };
+}
+
+#[test]
+fn the_step_that_wrote_the_longer_frame_is_refused() {
+    let (c, log) = cs();
+    init(c);
+    assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 4])));
+    assert_eq!(set_u8(c, 1, 8), fmi3OK);
+    let (mut event, mut terminate, mut early, mut reached) = (false, false, false, 0.0);
+    // SAFETY: a live instance; the output arguments are locals.
+    let status = unsafe { fmi3DoStep(c, 0.0, 0.5, true, &mut event, &mut terminate, &mut early, &mut reached) };
+    assert_eq!(status, fmi3Error);
+    assert_names(log, "fmi3DoStep");
+    assert_names(log, "'frame' (vr 2) holds 8 bytes, more than its maxSize = 4");
+    state_round_trips(c, log);
+    // The state taken now holds the frame of before the step; it is never longer than 4.
+    let (status, bytes) = get_binary(c, 2);
+    assert!(bytes.as_ref().is_none_or(|b| b.len() <= 4), "{status}: {bytes:?}");
+    // SAFETY: a live instance.
+    unsafe { fmi3FreeInstance(c) };
+}
+
+#[test]
+fn the_initialization_that_wrote_the_longer_frame_is_refused() {
+    let (c, log) = cs();
+    // SAFETY: a live instance.
+    unsafe {
+        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
+        assert_eq!(set_u8(c, 1, 5), fmi3OK);
+        assert_eq!(fmi3ExitInitializationMode(c), fmi3Error);
+        assert_names(log, "fmi3ExitInitializationMode");
+        assert_names(log, "'frame' (vr 2) holds 5 bytes, more than its maxSize = 4");
+        fmi3FreeInstance(c);
+    }
+}
+
+#[test]
+fn the_event_update_that_wrote_the_longer_latch_is_refused() {
+    let (c, log) = me();
+    // SAFETY (every call): a live instance, output arguments that are locals.
+    unsafe {
+        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
+        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
+        let mut flags = [false; 5];
+        let mut next = 0.0;
+        let [discrete, terminate, nominals, values, defined] = &mut flags;
+        assert_eq!(
+            fmi3UpdateDiscreteStates(c, discrete, terminate, nominals, values, defined, &mut next),
+            fmi3OK
+        );
+        assert_eq!(fmi3EnterContinuousTimeMode(c), fmi3OK);
+        assert_eq!(fmi3EnterEventMode(c), fmi3OK);
+        assert_eq!(set_u8(c, 3, 2), fmi3OK);
+        let [discrete, terminate, nominals, values, defined] = &mut flags;
+        assert_eq!(
+            fmi3UpdateDiscreteStates(c, discrete, terminate, nominals, values, defined, &mut next),
+            fmi3OK
+        );
+        assert_eq!(get_binary(c, 4), (fmi3OK, Some(vec![1; 2])));
+        assert_eq!(set_u8(c, 3, 3), fmi3OK);
+        let [discrete, terminate, nominals, values, defined] = &mut flags;
+        assert_eq!(
+            fmi3UpdateDiscreteStates(c, discrete, terminate, nominals, values, defined, &mut next),
+            fmi3Error
+        );
+        assert_names(log, "fmi3UpdateDiscreteStates");
+        assert_names(log, "'latch' (vr 4) holds 3 bytes, more than its maxSize = 2");
+        // The model is as before the event: the latch of two bytes.
+        state_round_trips(c, log);
+        let (_, bytes) = get_binary(c, 4);
+        assert!(bytes.as_ref().is_none_or(|b| b.len() <= 2), "{bytes:?}");
+        fmi3FreeInstance(c);
+    }
+}
