@@ -220,7 +220,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             if let Some(py) = &python {
                 crate::validate::fmpy_ready(py)?;
             }
-            validate_all(&fmus, python.as_deref(), true)
+            validate_all(&fmus, python.as_deref(), false)
         }
         Cmd::Check {
             fmu,
@@ -291,6 +291,19 @@ fn check(
         return Ok(());
     }
     let fmu = fmu.ok_or("which FMU? `cargo fmu check X.fmu`")?;
+    // An FMU `cargo fmu build` found invalid was moved aside (see `quarantine`): say so.
+    if !fmu.exists()
+        && let (Some(dir), Some(name)) = (fmu.parent(), fmu.file_name())
+        && dir.join("invalid").join(name).exists()
+    {
+        return Err(format!(
+            "{}: no such file: `cargo fmu build` found this FMU invalid and moved it to {} (its problems are in \
+             the build's output; `cargo fmu validate {}` lists them again)",
+            fmu.display(),
+            dir.join("invalid").join(name).display(),
+            dir.join("invalid").join(name).display()
+        ));
+    }
     let exe = std::env::current_exe().map_err(|e| format!("cannot find my own executable: {e}"))?;
     let mut opts = RunOptions::new(exe, vec![CHECK_WORKER.into()]);
     opts.filter = filter;
@@ -586,7 +599,7 @@ pub fn build_versions(
             built.push(p.fmu);
         }
     }
-    validate_all(&built, python, false)?;
+    validate_all(&built, python, true)?;
     if all && packages.is_empty() {
         // Every target's library carries the same description (bundle::package checked it):
         // the second of a crate and version finds its file already written.
@@ -732,7 +745,11 @@ fn committed_descriptions(
 
 /// `report_glibc`: also say the oldest glibc each Linux binary loads with (`cargo fmu validate`;
 /// `cargo fmu build` keeps its output to the verdicts).
-fn validate_all(fmus: &[PathBuf], python: Option<&Path>, report_glibc: bool) -> Result<(), String> {
+/// `built`: the FMUs `cargo fmu build` just made (else the user's files of `cargo fmu validate`):
+/// an invalid one is moved out of the FMU folder into its `invalid/` folder, so that nothing
+/// (`cargo fmu check`, an SSP file, a user's importer) takes it for a good one.
+fn validate_all(fmus: &[PathBuf], python: Option<&Path>, built: bool) -> Result<(), String> {
+    let report_glibc = !built;
     if fmus.is_empty() {
         return Err("no FMU file given".into());
     }
@@ -771,12 +788,43 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>, report_glibc: bool) -> 
                 eprintln!("fmu: {}: {p}", f.display());
             }
             failures.push(f.display().to_string());
+            if built {
+                failures.extend(quarantine(f));
+            }
         }
     }
     if failures.is_empty() {
         Ok(())
     } else {
         Err(format!("invalid: {}", failures.join(", ")))
+    }
+}
+
+/// Moves a built FMU that failed validation to `invalid/` beside it (replacing an older one
+/// there); what went wrong, when it cannot be moved (then it is removed, or said to be left).
+fn quarantine(fmu: &Path) -> Option<String> {
+    let dir = fmu.parent()?.join("invalid");
+    let to = dir.join(fmu.file_name()?);
+    let moved = std::fs::create_dir_all(&dir).and_then(|()| std::fs::rename(fmu, &to));
+    match moved {
+        Ok(()) => {
+            eprintln!(
+                "fmu: moved the invalid {} to {} (kept for inspection; no tool takes it from there)",
+                fmu.display(),
+                to.display()
+            );
+            None
+        }
+        Err(e) => match std::fs::remove_file(fmu) {
+            Ok(()) => {
+                eprintln!("fmu: removed the invalid {} (it could not be moved: {e})", fmu.display());
+                None
+            }
+            Err(e2) => Some(format!(
+                "(the invalid {} is left in place: it could neither be moved ({e}) nor removed ({e2}))",
+                fmu.display()
+            )),
+        },
     }
 }
 

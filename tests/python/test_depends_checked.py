@@ -132,3 +132,37 @@ def test_an_fmi3_only_crate_has_its_depends_checked_through_fmi3_clocked_outputs
     out = build("sampled-gain-depends", right, fmi3_only=True)
     assert out.returncode == 0, out.stderr[-4000:]
     assert "leaves out" not in out.stderr, out.stderr[-4000:]
+
+
+def test_an_fmi3_only_crate_builds_without_fmi_versions_and_an_invalid_fmu_is_moved_aside():
+    """Issue 52, item 6: `#[fmu(fmi3_only)]` also needed `fmi-versions = ["3.0"]` in Cargo.toml,
+    and the hint said to call `export_fmu!` (a compile error for a clocked model); an FMU that
+    failed validation stayed in target/fmu/ and `cargo fmu check` then ran on it without a word.
+    Now a library that implements FMI 3.0 only is built as FMI 3.0 with a note when nobody asked
+    for a version; asked for FMI 2.0, the hint does not suggest export_fmu!; an FMU the build
+    finds invalid is moved to `invalid/`, and `cargo fmu check` on its old path says why."""
+    from conftest import USER_TARGET
+    # Its own model identifier: the crates share one target folder.
+    source = SAMPLED_GAIN.replace("SampledGain", "VersionsGain")
+    right = source.replace("Y_DEPENDS", "[u]").replace("Z_DEPENDS", "[z]")
+    crate, env = outside_crate("sampled-gain-versions", fresh=True)
+    (crate / "src" / "lib.rs").write_text(right)
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-4000:]
+    assert "implements FMI 3.0 only" in out.stderr and 'fmi-versions = [\\"3.0\\"]' not in out.stderr, out.stderr[-4000:]
+    assert (USER_TARGET / "fmu" / "fmi3" / "VersionsGain.fmu").exists()
+    out = subprocess.run(["cargo", "fmu", "build", "--fmi-version", "2"], cwd=crate, env=env, capture_output=True,
+                         text=True, timeout=1800)
+    assert out.returncode != 0
+    assert "FMI 3.0 only" in out.stderr and "export_fmu!" not in out.stderr.split("asked for")[-1], out.stderr[-3000:]
+    # An invalid FMU (a depends left out) is moved aside.
+    wrong = source.replace("Y_DEPENDS", "[]").replace("Z_DEPENDS", "[z]")
+    (crate / "src" / "lib.rs").write_text(wrong)
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode != 0
+    fmu = USER_TARGET / "fmu" / "fmi3" / "VersionsGain.fmu"
+    assert not fmu.exists(), out.stderr[-3000:]
+    assert (fmu.parent / "invalid" / "VersionsGain.fmu").exists(), out.stderr[-3000:]
+    out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode != 0 and "found this FMU invalid and moved it to" in out.stderr, out.stderr[-3000:]
