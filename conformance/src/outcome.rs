@@ -51,6 +51,17 @@ pub fn skip(reason: impl Into<String>) -> ! {
 /// the FMU's choice, not a gap of the suite, and the workspace's strict runs accept it.
 pub const NOT_DECLARED: &str = "not declared by the FMU: ";
 
+/// How a limitation starts when the FMU declares what a part of the check is about, but its run
+/// (the default experiment, within the check's step budget) never made it happen: an event
+/// indicator that never changed domain. The model's behaviour, not a gap of the suite: the
+/// workspace's strict runs accept it as they accept [`NOT_DECLARED`].
+pub const NOT_EXERCISED: &str = "not exercised by the run: ";
+
+/// The longest run (in steps) of the checks that simulate the default experiment: its stop
+/// time, cut to this many steps (at the check's step size) so that a check stays within its
+/// timeout.
+pub const MAX_RUN_STEPS: f64 = 50_000.0;
+
 /// Ends the check as skipped because the FMU does not declare `what` (see [`NOT_DECLARED`]).
 pub fn skip_not_declared(what: impl std::fmt::Display) -> ! {
     skip(format!("{NOT_DECLARED}{what}"))

@@ -166,3 +166,31 @@ def test_an_fmi3_only_crate_builds_without_fmi_versions_and_an_invalid_fmu_is_mo
     out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
                          timeout=600)
     assert out.returncode != 0 and "found this FMU invalid and moved it to" in out.stderr, out.stderr[-3000:]
+
+
+def test_the_event_checks_run_the_default_experiment_and_see_events_after_two_seconds():
+    """Issue 52, item 6: the event checks simulated about 2 s whatever the default experiment
+    said, and reported "not declared by the FMU: events" for an FMU that declares an event
+    indicator. A thermostat that cools from 25 to the 18 degree threshold at t = 10 ln(15/8) =
+    6.3 s, with a default experiment of 20 s: `cargo fmu check` now sees its events in FMI 2.0
+    and 3.0 (model exchange, and co-simulation in event mode), and no check says "not declared"
+    about events."""
+    from conftest import USER_TARGET
+    source = (THERMOSTAT.replace("DEPENDS", "[T]").replace("Thermostat", "SlowThermostat")
+              .replace("start = 15.0", "start = 25.0"))
+    crate, env = outside_crate("slow-thermostat", fresh=True)
+    (crate / "src" / "lib.rs").write_text(source)
+    toml = (crate / "Cargo.toml").read_text()
+    assert "stop-time = 1.0," in toml, toml
+    toml = toml.replace("stop-time = 1.0,", "stop-time = 20.0,")
+    (crate / "Cargo.toml").write_text(toml)
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-4000:]
+    for fmu in (USER_TARGET / "fmu" / "SlowThermostat.fmu", USER_TARGET / "fmu" / "fmi3" / "SlowThermostat.fmu"):
+        out = subprocess.run(["cargo", "fmu", "check", str(fmu), "--filter", "events", "--random-sequences", "1"],
+                             cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+        assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
+        assert "not declared by the FMU: events" not in out.stdout, out.stdout[-4000:]
+        assert "never changed domain" not in out.stdout, out.stdout[-4000:]
+        events = [int(n) for n in __import__("re").findall(r"(\d+) events(?:,| handed)", out.stdout)]
+        assert events and max(events) >= 1, out.stdout[-4000:]

@@ -255,10 +255,9 @@ fn on_every<F: Loaded>(check: &Check) {
             // A part not tested because the FMU declares nothing it is about (no Real input to
             // differentiate by) is the FMU's choice, as a skip for that reason is.
             Outcome::Pass
-                if findings
-                    .limitations
-                    .iter()
-                    .all(|l| l.starts_with(crate::outcome::NOT_DECLARED)) => {}
+                if findings.limitations.iter().all(|l| {
+                    l.starts_with(crate::outcome::NOT_DECLARED) || l.starts_with(crate::outcome::NOT_EXERCISED)
+                }) => {}
             Outcome::Pass => failures.push(format!(
                 "{id}: {name} tested only partly: {}",
                 findings.limitations.join("; ")

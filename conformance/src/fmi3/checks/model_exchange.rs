@@ -138,7 +138,7 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
 }
 
 /// The events of an importer's run through the FMI 3.0 calls (explicit Euler up to the default
-/// experiment's stop time, at most 2 s, stepping onto every time event and entering Event Mode
+/// experiment's stop time, at most [`crate::outcome::MAX_RUN_STEPS`] steps, stepping onto every time event and entering Event Mode
 /// where an event indicator changes domain): every announced time event is reached and followed
 /// by a later one (or none), the event iteration settles within 100 rounds, the indicators are a
 /// function of time and states (the same states set again give them bit for bit), and
@@ -146,7 +146,12 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
 pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu3) {
     me_only(fmu);
     let h = fmu.step_size().min(1e-3);
-    let stop = fmu.md.default_experiment.stop_time().unwrap_or(1.0).clamp(h, 2.0);
+    let stop = fmu
+        .md
+        .default_experiment
+        .stop_time()
+        .unwrap_or(1.0)
+        .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
     let id = &fmu.id;
     let mut i = Inst::me(fmu);
     excite(&i);
@@ -256,10 +261,17 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
             );
         }
     }
-    if events == 0 {
+    if events == 0 && nz == 0 {
         limitation(format!(
-            "{}events: no event in {stop} s ({nz} event indicators, no time event)",
+            "{}events: no event indicator, no time event in {stop} s",
             crate::outcome::NOT_DECLARED
+        ));
+    } else if events == 0 {
+        limitation(format!(
+            "{}events: none in {stop} s of explicit Euler from the start values (the default experiment's \
+             stop time, at most {} steps): the {nz} event indicators never changed domain",
+            crate::outcome::NOT_EXERCISED,
+            crate::outcome::MAX_RUN_STEPS
         ));
     }
     info(format!(
@@ -284,7 +296,12 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
     }
     let id = &fmu.id;
     let h = fmu.step_size();
-    let stop = fmu.md.default_experiment.stop_time().unwrap_or(1.0).clamp(h, 2.0);
+    let stop = fmu
+        .md
+        .default_experiment
+        .stop_time()
+        .unwrap_or(1.0)
+        .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
     let mut i = Inst::cs_event_mode(fmu);
     excite(&i);
     assert_eq!(i.enter_init(0.0), fmi3OK, "{id}: {}", i.log_text());
@@ -346,8 +363,16 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
     let (s, values) = i.get_f64_of(&floats);
     assert_eq!(s, fmi3OK, "{id}: {}", i.log_text());
     assert!(values.iter().all(|v| v.is_finite()), "{id}: {values:?}");
-    if handed == 0 {
+    if handed == 0 && fmu.n_event_indicators_declared() == 0 {
         limitation(format!("{}events: none in {stop} s", crate::outcome::NOT_DECLARED));
+    } else if handed == 0 {
+        limitation(format!(
+            "{}events: none in {stop} s (the default experiment's stop time, at most {} steps): the {} \
+             event indicators never changed domain",
+            crate::outcome::NOT_EXERCISED,
+            crate::outcome::MAX_RUN_STEPS,
+            fmu.n_event_indicators_declared()
+        ));
     }
     info(format!(
         "{steps} steps of {h} s in event mode: {handed} events handed to the importer"
