@@ -390,11 +390,13 @@ fn clocked_knowns(d: &ModelDescription) -> Vec<&Variable> {
 }
 
 /// Checks the `depends` of the clocked outputs: at a few random points (inputs drawn around their
-/// start values) every input clock is activated in the Event Mode after initialization, the
-/// inputs set and the discrete states updated; each input moved on its own, in a fresh instance.
-/// An output that moved depends on that input. An output computed from an earlier tick (a
-/// sampled controller's delay) depends on no input at its tick: a declared input never seen is
-/// a note, not a problem.
+/// start values) every input clock is activated twice in the Event Mode after initialization
+/// (two super-dense ticks), the inputs set and the discrete states updated each time; each input
+/// moved on its own at the second tick, in a fresh instance. An output that moved depends on
+/// that input: a problem where the declaration leaves it out. A dependency seen at the first
+/// tick only (a sampled controller whose first command uses the first sample, where later ones
+/// hold the previous) is a note. An output computed from an earlier tick (a delay) depends on
+/// no input at its tick.
 pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
     let mut report = Report::default();
     let outputs: Vec<&Variable> = d
@@ -408,42 +410,57 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
         })
         .collect();
     let inputs = clocked_knowns(d);
-    let clocks: Vec<u32> = d
+    let input_clocks: Vec<&Variable> = d
         .variables
         .iter()
         .filter(|v| v.var_type == VarType::Clock && v.causality == Causality::Input)
-        .map(|v| v.value_reference)
+        .collect();
+    let clocks: Vec<u32> = input_clocks.iter().map(|v| v.value_reference).collect();
+    // The outputs of the input clocks' ticks (an output clock's variables are readable only when
+    // the model ticks it: not checked here).
+    let outputs: Vec<&Variable> = outputs
+        .into_iter()
+        .filter(|v| v.fmi3.clocks.iter().all(|c| input_clocks.iter().any(|k| k.name == *c)))
         .collect();
     if outputs.is_empty() || inputs.is_empty() || clocks.is_empty() {
         return report;
     }
-    let tick = |values: &[f64]| -> Result<Vec<f64>, String> {
-        api.with_instance(api.model_exchange, |c, ok| {
-            // SAFETY: `c` is live; every array passed has the length passed with it.
-            unsafe {
-                api.initialize(c, ok, &[])?;
-                ok(
-                    (api.fmi.set_clock)(c, clocks.as_ptr(), clocks.len(), vec![true; clocks.len()].as_ptr()),
-                    "fmi3SetClock of the input clocks",
-                )?;
-                for (v, &x) in inputs.iter().zip(values) {
-                    ok(api.set(c, v, x), &format!("setting the input '{}' to {x}", v.name))?;
-                }
-                // The clocked outputs of the tick, read while their clocks are active (FMI 3.0,
-                // 5.2.2: before fmi3UpdateDiscreteStates ends the tick).
-                let values: Vec<f64> = outputs
-                    .iter()
-                    .map(|v| {
-                        api.get(c, v)
-                            .or_else(|s| ok(s, &format!("getting '{}' at the tick", v.name)).map(|_| f64::NAN))
-                    })
-                    .collect::<Result<_, _>>()?;
-                api.update_discrete_states(c, ok)?;
-                Ok(values)
+    // One tick: the input clocks activated, the inputs set, the clocked outputs read while their
+    // clocks are active (FMI 3.0, 5.2.2: before fmi3UpdateDiscreteStates ends the tick).
+    let one_tick = |c: fmi3Instance, ok: Ok, values: &[f64]| -> Result<Vec<f64>, String> {
+        // SAFETY: `c` is live; every array passed has the length passed with it.
+        unsafe {
+            ok(
+                (api.fmi.set_clock)(c, clocks.as_ptr(), clocks.len(), vec![true; clocks.len()].as_ptr()),
+                "fmi3SetClock of the input clocks",
+            )?;
+            for (v, &x) in inputs.iter().zip(values) {
+                ok(api.set(c, v, x), &format!("setting the input '{}' to {x}", v.name))?;
             }
+            let out: Vec<f64> = outputs
+                .iter()
+                .map(|v| {
+                    api.get(c, v)
+                        .or_else(|s| ok(s, &format!("getting '{}' at the tick", v.name)).map(|_| f64::NAN))
+                })
+                .collect::<Result<_, _>>()?;
+            api.update_discrete_states(c, ok)?;
+            Ok(out)
+        }
+    };
+    // Two ticks after initialization (the second in the same Event Mode, a later super-dense
+    // instant): the outputs of each. A model may treat its first tick apart (no earlier sample
+    // to hold yet): the second shows what every later tick does.
+    let two_ticks = |first: &[f64], second: &[f64]| -> Result<(Vec<f64>, Vec<f64>), String> {
+        api.with_instance(api.model_exchange, |c, ok| {
+            // SAFETY: `c` is live, in Instantiated.
+            unsafe { api.initialize(c, ok, &[])? };
+            Ok((one_tick(c, ok, first)?, one_tick(c, ok, second)?))
         })
     };
+    // seen[u][k]: how input k moved output u at a later tick; first[u][k]: at the first tick.
     let mut seen: Vec<Vec<Option<String>>> = vec![vec![None; inputs.len()]; outputs.len()];
+    let mut first: Vec<Vec<Option<String>>> = vec![vec![None; inputs.len()]; outputs.len()];
     let mut rng = Rng(0x0c10_c4ed_de9e_d5);
     let mut checked_points = 0;
     for point in 0..CLOCKED_POINTS {
@@ -459,7 +476,7 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
                 }
             })
             .collect();
-        let at_base = match tick(&base) {
+        let at_base = match two_ticks(&base, &base) {
             Ok(values) => values,
             Err(e) => {
                 report.notes.push(format!(
@@ -473,14 +490,13 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
         for (j, v) in inputs.iter().enumerate() {
             let mut moved = base.clone();
             moved[j] = crate::depends::perturbed(v, base[j]);
-            match tick(&moved) {
-                Ok(values) => {
-                    for (i, (&a, &b)) in at_base.iter().zip(&values).enumerate() {
+            let how = |a: f64, b: f64| format!("{} = {} gave {a}, {} = {} gave {b}", v.name, base[j], v.name, moved[j]);
+            // A later tick: the first one with the base inputs, the second with this one moved.
+            match two_ticks(&base, &moved) {
+                Ok((_, values)) => {
+                    for (i, (&a, &b)) in at_base.1.iter().zip(&values).enumerate() {
                         if a.to_bits() != b.to_bits() && seen[i][j].is_none() {
-                            seen[i][j] = Some(format!(
-                                "{} = {} gave {a}, {} = {} gave {b}",
-                                v.name, base[j], v.name, moved[j]
-                            ));
+                            seen[i][j] = Some(how(a, b));
                         }
                     }
                 }
@@ -488,6 +504,14 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
                     "the clocked dependency check could not move '{}' from {} to {}: {e}",
                     v.name, base[j], moved[j]
                 )),
+            }
+            // The first tick.
+            if let Ok((values, _)) = two_ticks(&moved, &moved) {
+                for (i, (&a, &b)) in at_base.0.iter().zip(&values).enumerate() {
+                    if a.to_bits() != b.to_bits() && first[i][j].is_none() {
+                        first[i][j] = Some(how(a, b));
+                    }
+                }
             }
         }
     }
@@ -508,6 +532,26 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
             .copied()
             .filter(|n| !d.variables.iter().any(|v| v.name == *n && v.var_type == VarType::Clock))
             .collect();
+        // Only at the first tick: said, not refused (a model may compute its first command from
+        // the first sample, where later ticks hold the previous one).
+        let at_first = crate::depends::compare(u.depends_on, &names, &first[i]);
+        let only_first: Vec<usize> = at_first
+            .missing
+            .iter()
+            .copied()
+            .filter(|j| !c.missing.contains(j))
+            .collect();
+        if !only_first.is_empty() {
+            report.notes.push(format!(
+                "clocked output '{}' depends at the first tick after initialization on {} ({}), which its \
+                 `depends = {}` leaves out; later ticks do not: a direct feedthrough at the first tick only, \
+                 which an importer reading the description does not expect",
+                u.name,
+                crate::depends::list(&only_first.iter().map(|j| names[*j]).collect::<Vec<_>>()),
+                first[i][only_first[0]].as_deref().unwrap_or_default(),
+                crate::depends::list(&written)
+            ));
+        }
         for j in c.missing {
             report.problems.push(format!(
                 "clocked output '{}' depends at its tick on the input '{}' ({} for '{}'), which its \

@@ -68,4 +68,6 @@ pub(crate) fn doc_text(attrs: &[syn::Attribute]) -> String {
 }
 
 #[cfg(test)]
+mod docs_tests;
+#[cfg(test)]
 mod tests;

@@ -103,6 +103,31 @@ enum ClockInterval {
     Parameter(String, Span),
 }
 
+/// Every key `clock(...)` accepts (as [`VARIABLE_KEYS`]): an intervalVariability, then its settings.
+pub(crate) const CLOCK_KEYS: &[&str] = &[
+    "constant",
+    "fixed",
+    "tunable",
+    "changing",
+    "countdown",
+    "triggered",
+    "interval",
+    "shift",
+    "can_be_deactivated",
+    "priority",
+];
+
+fn unknown_clock_key(span: Span, key: &str) -> Error {
+    Error::new(
+        span,
+        format!(
+            "unknown clock declaration `{key}`; known: {} (constant .. triggered: its intervalVariability; \
+             interval = <seconds or a parameter>, shift = <seconds>, priority = <0 highest>)",
+            CLOCK_KEYS.join(", ")
+        ),
+    )
+}
+
 impl Parse for ClockAttr {
     fn parse(input: ParseStream) -> Result<Self> {
         let mut variability = None;
@@ -113,6 +138,9 @@ impl Parse for ClockAttr {
         while !input.is_empty() {
             let key: Ident = input.parse()?;
             let k = key.to_string();
+            if !has_key(CLOCK_KEYS, &k) {
+                return Err(unknown_clock_key(key.span(), &k));
+            }
             match k.as_str() {
                 "constant" | "fixed" | "tunable" | "changing" | "countdown" | "triggered" => {
                     if variability.is_some() {
@@ -144,16 +172,7 @@ impl Parse for ClockAttr {
                     let n: syn::LitInt = input.parse()?;
                     priority = Some((n.base10_parse::<u32>()?, n.span()));
                 }
-                other => {
-                    return Err(Error::new(
-                        key.span(),
-                        format!(
-                            "unknown clock declaration `{other}`; known: constant, fixed, tunable, changing, countdown, \
-                             triggered (its intervalVariability), interval = <seconds or a parameter>, shift = <seconds>, \
-                             can_be_deactivated, priority = <0 highest>"
-                        ),
-                    ));
-                }
+                other => return Err(unknown_clock_key(key.span(), other)),
             }
             if input.is_empty() {
                 break;
@@ -220,12 +239,74 @@ fn name_or_ident(input: ParseStream) -> Result<(String, Span)> {
     }
 }
 
+/// Every key `#[variable(...)]` accepts, in the order the "unknown declaration" error lists them;
+/// a key with a parenthesized list is written `key(..)`. The parser takes no other key, and
+/// docs/declarations.md's table lists exactly these (`docs_tests.rs`).
+pub(crate) const VARIABLE_KEYS: &[&str] = &[
+    "vr",
+    "name",
+    "input",
+    "output",
+    "parameter",
+    "calculated_parameter",
+    "structural_parameter",
+    "local",
+    "independent",
+    "constant",
+    "fixed",
+    "tunable",
+    "discrete",
+    "continuous",
+    "initial",
+    "start",
+    "unit",
+    "min",
+    "max",
+    "nominal",
+    "depends",
+    "initial_depends",
+    "derivative_of",
+    "event_indicator",
+    "fmi3_only",
+    "max_size",
+    "mime_type",
+    "clock(..)",
+    "clocks",
+    "dims",
+];
+
+/// Every key `#[fmu(...)]` on a model struct accepts (as [`VARIABLE_KEYS`]).
+pub(crate) const FMU_KEYS: &[&str] = &[
+    "identifier",
+    "description",
+    "co_simulation_only",
+    "model_exchange_only",
+    "fmi3_only",
+    "scheduled_execution",
+    "unit(..)",
+    "log_category(..)",
+    "terminal(..)",
+];
+
+/// Whether `keys` has `key`, written bare or as `key(..)`.
+pub(crate) fn has_key(keys: &[&str], key: &str) -> bool {
+    keys.iter().any(|k| k.strip_suffix("(..)").unwrap_or(k) == key)
+}
+
+/// "unknown declaration `x`; known: a, b, ..": one message for each list of keys.
+pub(crate) fn unknown_key(span: Span, what: &str, key: &str, keys: &[&str]) -> Error {
+    Error::new(span, format!("unknown {what} `{key}`; known: {}", keys.join(", ")))
+}
+
 impl Parse for VarAttr {
     fn parse(input: ParseStream) -> Result<Self> {
         let mut a = VarAttr::default();
         while !input.is_empty() {
             let key: Ident = input.call(syn::ext::IdentExt::parse_any)?;
             let k = key.to_string();
+            if !has_key(VARIABLE_KEYS, &k) {
+                return Err(unknown_key(key.span(), "declaration", &k, VARIABLE_KEYS));
+            }
             let once = |taken: bool| -> Result<()> {
                 if taken {
                     Err(Error::new(key.span(), format!("`{k}` is given twice")))
@@ -396,17 +477,7 @@ impl Parse for VarAttr {
                     input.parse::<Token![=]>()?;
                     a.derivative_of = Some(name_or_ident(input)?);
                 }
-                other => {
-                    return Err(Error::new(
-                        key.span(),
-                        format!(
-                            "unknown declaration `{other}`; known: vr, name, input, output, parameter, \
-                             calculated_parameter, structural_parameter, local, independent, constant, fixed, tunable, discrete, \
-                             continuous, initial, start, unit, min, max, nominal, depends, initial_depends, derivative_of, event_indicator, \
-                             fmi3_only, max_size, mime_type, clock(..), clocks, dims"
-                        ),
-                    ));
-                }
+                other => return Err(unknown_key(key.span(), "declaration", other, VARIABLE_KEYS)),
             }
             if input.is_empty() {
                 break;
@@ -417,7 +488,7 @@ impl Parse for VarAttr {
     }
 }
 
-const TYPES: &str = "f64 (Float64/Real), i32 (Int32/Integer), bool (Boolean), String, a #[derive(FmuEnum)] enum \
+pub(crate) const TYPES: &str = "f64 (Float64/Real), i32 (Int32/Integer), bool (Boolean), String, a #[derive(FmuEnum)] enum \
      (Enumeration), and FMI 3.0 only: f32 (Float32), i8, u8, i16, u16, u32, i64, u64 (Int8 .. UInt64), Vec<u8> (Binary)";
 
 /// A field type's element type and lengths: `[[f64; 4]; 2]` is `f64` and `[2, 4]`; a scalar
@@ -779,6 +850,10 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
     let mut m = ModelAttr::default();
     for attr in attrs.iter().filter(|a| a.path().is_ident("fmu")) {
         attr.parse_nested_meta(|meta| {
+            let key = meta.path.get_ident().map(|i| i.to_string()).unwrap_or_default();
+            if !has_key(FMU_KEYS, &key) {
+                return Err(unknown_key(meta.path.span(), "#[fmu] attribute", &key, FMU_KEYS));
+            }
             if meta.path.is_ident("identifier") {
                 let s: LitStr = meta.value()?.parse()?;
                 let v = s.value();
@@ -927,7 +1002,7 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                 }
                 m.terminals.push(t);
             } else {
-                return Err(meta.error("unknown #[fmu] attribute; known: identifier, description, co_simulation_only, model_exchange_only, fmi3_only, scheduled_execution, unit(..), log_category(..), terminal(..)"));
+                return Err(unknown_key(meta.path.span(), "#[fmu] attribute", &key, FMU_KEYS));
             }
             Ok(())
         })?;
