@@ -276,11 +276,19 @@ pub fn package(
     // The default experiment as a picture, run on this machine's library (none when no library
     // of this machine was built: a cross build alone).
     let here = crate::target::this_machine();
+    let starts = krate
+        .documentation_start
+        .clone()
+        .map_err(|e| format!("{}: [package.metadata.fmu] {e}", krate.package))?;
     let picture = libraries
         .iter()
         .find(|(triple, _)| crate::target::platform(triple).ok() == here)
-        .map(|(_, library)| crate::plot::picture(library, krate.resources.as_deref()));
+        .map(|(_, library)| crate::plot::picture(library, krate.resources.as_deref(), &starts));
     let picture = match picture {
+        // A documentation-start the model cannot take is the crate's mistake: said as an error.
+        Some(Err(e)) if e.contains("documentation-start") => {
+            return Err(format!("{}: [package.metadata.fmu] {e}", krate.package));
+        }
         Some(Ok(svg)) => Some(svg),
         Some(Err(e)) => {
             eprintln!("fmu: note: {id}: documentation/index.html shows no default experiment: {e}");

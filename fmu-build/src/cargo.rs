@@ -32,6 +32,28 @@ pub struct FmuCrate {
     /// `[package.metadata.fmu] targets`: `None` when not given (the host only), else the
     /// triples named, or what is wrong with the entry.
     pub targets: Option<Result<Vec<String>, String>>,
+    /// `[package.metadata.fmu] documentation-start = { name = value, .. }`: start values the
+    /// documentation page's run of the default experiment sets (a model whose own start values
+    /// are an equilibrium would plot flat lines), or what is wrong with the entry.
+    pub documentation_start: Result<Vec<(String, f64)>, String>,
+}
+
+/// `documentation-start = { alpha1_0 = 0.1, on = true }`: variable names and numbers (a Boolean
+/// as true or false).
+pub fn parse_documentation_start(value: &serde_json::Value) -> Result<Vec<(String, f64)>, String> {
+    let table = value
+        .as_object()
+        .ok_or("documentation-start must be a table of start values such as { alpha1_0 = 0.1 }")?;
+    table
+        .iter()
+        .map(|(name, v)| {
+            let x = v
+                .as_f64()
+                .or_else(|| v.as_bool().map(|b| b as u8 as f64))
+                .ok_or_else(|| format!("documentation-start: {name} = {v} is not a number or a Boolean"))?;
+            Ok((name.clone(), x))
+        })
+        .collect()
 }
 
 /// `"2.0"`, `"3.0"` (also `"2"`, `"3"`) as an FMI version.
@@ -116,6 +138,9 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         resources,
         fmi_versions: meta.and_then(|m| m.get("fmi-versions")).map(parse_fmi_versions),
         targets: meta.and_then(|m| m.get("targets")).map(crate::target::parse_targets),
+        documentation_start: meta
+            .and_then(|m| m.get("documentation-start"))
+            .map_or(Ok(vec![]), parse_documentation_start),
     }
 }
 

@@ -137,7 +137,12 @@ enum Cmd {
     },
     /// Internal: the default experiment's picture for `build`, in a child process (SVG on stdout).
     #[command(hide = true, name = "__plot")]
-    Plot { library: PathBuf, resource_uri: String },
+    Plot {
+        library: PathBuf,
+        resource_uri: String,
+        /// `name=value`: the crate's documentation-start.
+        starts: Vec<String>,
+    },
     /// Internal: the smoke run of `validate`, in a child process.
     #[command(hide = true, name = "__smoke-run")]
     SmokeRun {
@@ -245,8 +250,20 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             let ws = cargo::workspace(manifest_path.as_deref())?;
             write_ssp(&ws, systems.as_deref(), fmu_dir.as_deref())
         }
-        Cmd::Plot { library, resource_uri } => {
-            print!("{}", crate::plot::default_experiment_svg(&library, &resource_uri)?);
+        Cmd::Plot {
+            library,
+            resource_uri,
+            starts,
+        } => {
+            let starts: Vec<(String, f64)> = starts
+                .iter()
+                .filter_map(|s| s.split_once('='))
+                .map(|(n, v)| Ok((n.to_string(), v.parse::<f64>().map_err(|e| format!("{n}={v}: {e}"))?)))
+                .collect::<Result<_, String>>()?;
+            print!(
+                "{}",
+                crate::plot::default_experiment_svg(&library, &resource_uri, &starts)?
+            );
             Ok(())
         }
         Cmd::SmokeRun {
@@ -817,7 +834,10 @@ fn quarantine(fmu: &Path) -> Option<String> {
         }
         Err(e) => match std::fs::remove_file(fmu) {
             Ok(()) => {
-                eprintln!("fmu: removed the invalid {} (it could not be moved: {e})", fmu.display());
+                eprintln!(
+                    "fmu: removed the invalid {} (it could not be moved: {e})",
+                    fmu.display()
+                );
                 None
             }
             Err(e2) => Some(format!(

@@ -255,6 +255,7 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
         resources: None,
         fmi_versions: None,
         targets: None,
+        documentation_start: Ok(vec![]),
     };
     let zig = if wanted.iter().any(|(t, _)| crate::target::uses_zig(t, &host)) {
         Some(crate::target::Zig::find(req.python)?)

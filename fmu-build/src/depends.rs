@@ -411,7 +411,7 @@ impl Api {
     ///
     /// # Safety
     /// `c` is a live instance of this library.
-    unsafe fn set(&self, c: fmi2Component, v: &Variable, x: f64) -> fmi2Status {
+    pub(crate) unsafe fn set(&self, c: fmi2Component, v: &Variable, x: f64) -> fmi2Status {
         let vr = [v.value_reference];
         // SAFETY: one value reference, one value.
         unsafe {

@@ -32,7 +32,38 @@ pub struct Run {
 
 /// Simulates the default experiment of the rustfmu library at `so` (description `d`) through
 /// FMI 2.0 co-simulation and records its Real outputs (at most [`POINTS`] times).
-pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) -> Result<Run, String> {
+pub fn simulate(
+    so: &Path,
+    d: &ModelDescription,
+    guid: &str,
+    resource_uri: &str,
+    starts: &[(String, f64)],
+) -> Result<Run, String> {
+    // The crate's documentation-start values: each names a variable the run may set before
+    // initialization (an input, or a parameter or state with initial = exact).
+    let mut set: Vec<(&Variable, f64)> = Vec::new();
+    for (name, x) in starts {
+        let v = d
+            .variables
+            .iter()
+            .find(|v| v.name == *name)
+            .ok_or_else(|| format!("documentation-start: the model has no variable '{name}'"))?;
+        let settable = v.causality == Causality::Input
+            || (v.effective_initial() == Some(rustfmu::description::Initial::Exact)
+                && v.variability != rustfmu::description::Variability::Constant);
+        if !settable
+            || !matches!(
+                v.var_type,
+                VarType::Real | VarType::Integer | VarType::Boolean | VarType::Enumeration
+            )
+        {
+            return Err(format!(
+                "documentation-start: '{name}' cannot be set before initialization (an input, or a Real, Integer, \
+                 Boolean or enumeration variable with initial = exact that is not a constant, can)"
+            ));
+        }
+        set.push((v, *x));
+    }
     let outputs: Vec<&Variable> = d
         .variables
         .iter()
@@ -76,6 +107,12 @@ pub fn simulate(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str)
     api.with_instance_at(start, Some(stop), |c, ok| {
         // SAFETY: `c` is live; every array passed has the length passed with it.
         unsafe {
+            for (v, x) in &set {
+                ok(
+                    api.set(c, v, *x),
+                    &format!("setting '{}' to {x} (documentation-start)", v.name),
+                )?;
+            }
             ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
             ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
             let mut run = Run {
@@ -261,17 +298,23 @@ pub fn svg(run: &Run, title: &str) -> String {
 
 /// The default experiment of the library at `so` as an SVG (the smoke run's child does this;
 /// `Err` says why there is no picture).
-pub fn default_experiment_svg(so: &Path, resource_uri: &str) -> Result<String, String> {
+pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, f64)]) -> Result<String, String> {
     let binary = std::fs::read(so).map_err(|e| format!("{}: {e}", so.display()))?;
     let me = crate::bundle::read_library(&binary, rustfmu::description::FmiVersion::V2)
         .map_err(|_| "the library has no FMI 2.0 interface to run it through".to_string())?;
     if !me.interfaces.co_simulation {
         return Err("the library has no co-simulation interface to run it through".into());
     }
-    let run = simulate(so, &me.description, &me.guid, resource_uri)?;
+    let run = simulate(so, &me.description, &me.guid, resource_uri, starts)?;
     let e = me.description.default_experiment.unwrap_or_default();
+    let from = if starts.is_empty() {
+        String::new()
+    } else {
+        let list: Vec<String> = starts.iter().map(|(n, x)| format!("{n} = {}", label(*x))).collect();
+        format!(", from {}", list.join(", "))
+    };
     let title = format!(
-        "{}: the default experiment, {} s to {} s",
+        "{}: the default experiment, {} s to {} s{from}",
         me.description.model_identifier,
         label(e.start_time.unwrap_or(0.0)),
         label(run.times.last().copied().unwrap_or(0.0))
@@ -282,7 +325,7 @@ pub fn default_experiment_svg(so: &Path, resource_uri: &str) -> Result<String, S
 /// The picture of the library at `so`, made in a child process (this program run as `__plot`)
 /// when this program is `cargo fmu`, else here; once per library and process (the FMI 2.0 and
 /// 3.0 packages of one build share it). `resources`: the crate's `resources/` folder, if any.
-pub fn picture(so: &Path, resources: Option<&Path>) -> Result<String, String> {
+pub fn picture(so: &Path, resources: Option<&Path>, starts: &[(String, f64)]) -> Result<String, String> {
     use std::collections::HashMap;
     use std::sync::Mutex;
     static MADE: Mutex<Option<HashMap<std::path::PathBuf, Result<String, String>>>> = Mutex::new(None);
@@ -309,6 +352,7 @@ pub fn picture(so: &Path, resources: Option<&Path>) -> Result<String, String> {
                 .arg("__plot")
                 .arg(so)
                 .arg(&uri)
+                .args(starts.iter().map(|(n, x)| format!("{n}={x:?}")))
                 .output()
             {
                 Ok(out) if out.status.success() => Ok(String::from_utf8_lossy(&out.stdout).into_owned()),
@@ -320,7 +364,7 @@ pub fn picture(so: &Path, resources: Option<&Path>) -> Result<String, String> {
                 Err(e) => Err(format!("cannot start {}: {e}", exe.display())),
             }
         }
-        _ => default_experiment_svg(so, &uri),
+        _ => default_experiment_svg(so, &uri, starts),
     };
     let _ = std::fs::remove_dir(&empty);
     if let Ok(mut m) = MADE.lock() {

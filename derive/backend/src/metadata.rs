@@ -51,8 +51,9 @@ pub fn read() -> Result<Metadata, String> {
     let at = |key: &str| format!("{}: [package.metadata.fmu] {key}", path.display());
     // Read here: what goes into the description. Read by cargo fmu: documentation, resources,
     // fmi-versions (which FMI versions `cargo fmu build` makes), targets (the Rust target
-    // triples whose binaries go into the FMU).
-    const KNOWN: [&str; 10] = [
+    // triples whose binaries go into the FMU), documentation-start (the start values of the
+    // documentation page's run).
+    const KNOWN: [&str; 11] = [
         "author",
         "version",
         "copyright",
@@ -63,6 +64,7 @@ pub fn read() -> Result<Metadata, String> {
         "resources",
         "fmi-versions",
         "targets",
+        "documentation-start",
     ];
     if let Some(table) = fmu.as_table() {
         for key in table.keys() {

@@ -194,3 +194,29 @@ def test_the_event_checks_run_the_default_experiment_and_see_events_after_two_se
         assert "never changed domain" not in out.stdout, out.stdout[-4000:]
         events = [int(n) for n in __import__("re").findall(r"(\d+) events(?:,| handed)", out.stdout)]
         assert events and max(events) >= 1, out.stdout[-4000:]
+
+
+def test_a_crate_says_which_start_values_its_documentation_page_runs_from():
+    """Issue 52, item 6: the documentation page plots the default experiment from the start
+    values; the Pendulum's are the upright equilibrium, so its page showed ten flat lines. A crate
+    now names start values for the page's run (`documentation-start` in [package.metadata.fmu]):
+    the thermostat from 25 degrees plots a falling T (the title says where it starts); a name
+    the model does not have stops the build with a message naming it."""
+    import re
+    import zipfile
+    from conftest import USER_TARGET
+    source = THERMOSTAT.replace("DEPENDS", "[T]").replace("Thermostat", "PageThermostat")
+    crate, env = outside_crate("page-thermostat", fresh=True)
+    (crate / "src" / "lib.rs").write_text(source)
+    toml = (crate / "Cargo.toml").read_text()
+    (crate / "Cargo.toml").write_text(toml.replace("[package.metadata.fmu]\n",
+                                                   "[package.metadata.fmu]\ndocumentation-start = { T = 25.0 }\n"))
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-4000:]
+    with zipfile.ZipFile(USER_TARGET / "fmu" / "PageThermostat.fmu") as z:
+        page = z.read("documentation/index.html").decode()
+    assert "from T = 25" in page, page[:3000]
+    (crate / "Cargo.toml").write_text(toml.replace("[package.metadata.fmu]\n",
+                                                   "[package.metadata.fmu]\ndocumentation-start = { Tx = 25.0 }\n"))
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode != 0 and "documentation-start: the model has no variable 'Tx'" in out.stderr, out.stderr[-3000:]
