@@ -211,6 +211,30 @@ pub struct BaseUnit {
 pub struct Unit {
     pub name: &'static str,
     pub base: BaseUnit,
+    /// The unit's `<DisplayUnit>`s that the description carries (those a variable or an alias
+    /// shows its value in, and those the model declares).
+    pub display_units: &'static [DisplayUnit],
+}
+
+/// A `<DisplayUnit>` of a [`Unit`]: a value `v` in the unit is shown as `factor · v + offset`,
+/// or, `inverse` (FMI 3.0 only), as `factor / v` (FMI 2.0, 2.2.2; FMI 3.0, 2.4.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DisplayUnit {
+    pub name: &'static str,
+    pub factor: f64,
+    pub offset: f64,
+    pub inverse: bool,
+}
+
+/// Another name of a variable (FMI 3.0 `<Alias>`; in FMI 2.0 a `<ScalarVariable>` of the same
+/// value reference): the same value, read and written through the same value reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Alias {
+    pub name: &'static str,
+    /// Empty for none (the variable's own is meant).
+    pub description: &'static str,
+    /// The display unit the alias shows the value in (a float variable's only); empty for none.
+    pub display_unit: &'static str,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -241,6 +265,11 @@ pub struct Variable {
     pub start: Start,
     /// Unit name, declared in [`ModelDescription::units`]; empty for none.
     pub unit: &'static str,
+    /// The display unit the value is shown in by default, one of the unit's
+    /// [`Unit::display_units`]; empty for none.
+    pub display_unit: &'static str,
+    /// The variable's other names.
+    pub aliases: &'static [Alias],
     pub description: &'static str,
     pub min: Option<Bound>,
     pub max: Option<Bound>,
@@ -1335,10 +1364,99 @@ impl Enc<'_> {
         if interfaces.scheduled_execution {
             self.u8(SCHEDULED_EXECUTION_TAG);
         }
+        // Display units and aliases: only where there are some, so the other encodings are
+        // those before.
+        self.display_units_and_aliases(d, version);
         // FMI 3.0 binaries end with the version; FMI 2.0 encodings (and so their GUIDs) are
         // those of the releases before FMI 3.0 existed.
         if let FmiVersion::V3 = interfaces.version {
             self.u8(3);
+        }
+    }
+}
+
+impl Enc<'_> {
+    /// The block of display units and aliases ([`DISPLAY_TAG`]): the units' display units (by
+    /// the unit's index), then each variable's display unit and aliases (by its index in the
+    /// version's variables; in FMI 2.0 an array's display unit is each element's, and an array
+    /// has no aliases there). Left out where the model declares none.
+    const fn display_units_and_aliases(&mut self, d: &ModelDescription, version: FmiVersion) {
+        let mut units = 0u32;
+        let mut i = 0;
+        while i < d.units.len() {
+            if !d.units[i].display_units.is_empty() {
+                units += 1;
+            }
+            i += 1;
+        }
+        let mut entries = 0u32;
+        let mut i = 0;
+        while i < d.variables.len() {
+            let v = &d.variables[i];
+            if v.in_version(version) {
+                if v.is_array() && matches!(version, FmiVersion::V2) {
+                    if !v.display_unit.is_empty() {
+                        entries += v.element_count() as u32;
+                    }
+                } else if !v.display_unit.is_empty() || !v.aliases.is_empty() {
+                    entries += 1;
+                }
+            }
+            i += 1;
+        }
+        if units == 0 && entries == 0 {
+            return;
+        }
+        self.u8(DISPLAY_TAG);
+        self.u32(units);
+        let mut i = 0;
+        while i < d.units.len() {
+            let du = d.units[i].display_units;
+            if !du.is_empty() {
+                self.u32(i as u32);
+                self.u32(du.len() as u32);
+                let mut k = 0;
+                while k < du.len() {
+                    self.str(du[k].name);
+                    self.f64(du[k].factor);
+                    self.f64(du[k].offset);
+                    self.u8(du[k].inverse as u8);
+                    k += 1;
+                }
+            }
+            i += 1;
+        }
+        self.u32(entries);
+        let (mut i, mut at) = (0, 0u32);
+        while i < d.variables.len() {
+            let v = &d.variables[i];
+            if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                let mut k = 0;
+                while k < v.element_count() {
+                    if !v.display_unit.is_empty() {
+                        self.u32(at);
+                        self.str(v.display_unit);
+                        self.u32(0);
+                    }
+                    at += 1;
+                    k += 1;
+                }
+            } else if v.in_version(version) {
+                if !v.display_unit.is_empty() || !v.aliases.is_empty() {
+                    self.u32(at);
+                    self.str(v.display_unit);
+                    self.u32(v.aliases.len() as u32);
+                    let mut k = 0;
+                    while k < v.aliases.len() {
+                        self.str(v.aliases[k].name);
+                        self.str(v.aliases[k].description);
+                        self.str(v.aliases[k].display_unit);
+                        k += 1;
+                    }
+                }
+                at += 1;
+            }
+            i += 1;
         }
     }
 }
@@ -1399,6 +1517,8 @@ const SIZED_TAG: u8 = 0xE6;
 const PRIORITIES_TAG: u8 = 0xE7;
 /// Marks an FMU that offers Scheduled Execution.
 const SCHEDULED_EXECUTION_TAG: u8 = 0xE8;
+/// Marks the block of display units and aliases, after Scheduled Execution.
+const DISPLAY_TAG: u8 = 0xE9;
 /// [`Fmi3Extras::sized_by`] of a dimension of fixed length.
 pub const NOT_SIZED: u32 = u32::MAX;
 
@@ -1704,6 +1824,8 @@ impl Dec<'_> {
             initial,
             start,
             unit,
+            display_unit: "",
+            aliases: &[],
             description,
             min,
             max,
@@ -1768,6 +1890,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 factor: d.f64()?,
                 offset: d.f64()?,
             },
+            display_units: &[],
         });
     }
     let n = d.count()?;
@@ -1898,6 +2021,47 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     if d.at < d.b.len() && d.b[d.at] == SCHEDULED_EXECUTION_TAG {
         d.u8()?;
         interfaces.scheduled_execution = true;
+    }
+    // The last byte of an FMI 3.0 encoding is its version tag, never this block's tag.
+    if d.at + 1 < d.b.len() && d.b[d.at] == DISPLAY_TAG {
+        d.u8()?;
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let k = d.count()?;
+            let mut list = Vec::with_capacity(k);
+            for _ in 0..k {
+                list.push(DisplayUnit {
+                    name: d.str()?,
+                    factor: d.f64()?,
+                    offset: d.f64()?,
+                    inverse: d.u8()? != 0,
+                });
+            }
+            let u = units
+                .get_mut(at)
+                .ok_or_else(|| format!("display units of unit {at}, beyond the units"))?;
+            u.display_units = leak_slice(list);
+        }
+        let n = d.count()?;
+        for _ in 0..n {
+            let at = d.u32()? as usize;
+            let display_unit = d.str()?;
+            let k = d.count()?;
+            let mut aliases = Vec::with_capacity(k);
+            for _ in 0..k {
+                aliases.push(Alias {
+                    name: d.str()?,
+                    description: d.str()?,
+                    display_unit: d.str()?,
+                });
+            }
+            let v = variables
+                .get_mut(at)
+                .ok_or_else(|| format!("the display unit and aliases of variable {at}, beyond the variables"))?;
+            v.display_unit = display_unit;
+            v.aliases = leak_slice(aliases);
+        }
     }
     if d.at + 1 == d.b.len() {
         match d.u8()? {

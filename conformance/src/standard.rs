@@ -106,6 +106,22 @@ pub fn initial(causality: Causality, variability: Variability, written: Option<I
     })
 }
 
+/// Whether `v` is an alias of a variable listed before it in `all`: the same value reference and
+/// the same C type (FMI 2.0, 2.2.7: a value reference is unique per base type "with exception of
+/// variables that have identical values (such variables are also called alias variables)"). The
+/// FMU sees one variable through all the names of an alias set, so where it may be set is checked
+/// once, on the first of them; that an importer must not set the others where their own
+/// attributes forbid it is the importer's part.
+pub fn aliases_an_earlier(all: &[Variable], v: &Variable) -> bool {
+    let c_type = |t: Type| match t {
+        Type::Enumeration => Type::Integer,
+        other => other,
+    };
+    all.iter()
+        .take_while(|o| !std::ptr::eq(*o, v))
+        .any(|o| o.vr == v.vr && c_type(o.ty) == c_type(v.ty))
+}
+
 /// Whether FMI 2.0 (section 4.2.4, the conditions on fmi2SetXXX in the co-simulation state
 /// table) lets an importer set this variable in the state of that name. Written here from
 /// the standard, independently of the runtime's own rule.

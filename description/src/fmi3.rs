@@ -107,11 +107,41 @@ pub struct Variable {
     pub dimensions: Vec<Dimension>,
     pub declared_type: Option<String>,
     pub unit: Option<String>,
+    /// `displayUnit`: one of the `<DisplayUnit>`s of its unit.
+    pub display_unit: Option<String>,
     pub description: Option<String>,
+    /// The `<Alias>` children: other names of the variable (FMI 3.0, 2.4.7.3).
+    pub aliases: Vec<Alias>,
     /// `clocks`: the value references of the clocks of a clocked variable (empty: not clocked).
     pub clocks: Vec<u32>,
     /// A Clock's `intervalVariability`, `intervalDecimal`, `shiftDecimal`, `canBeDeactivated`.
     pub clock: Option<ClockAttrs>,
+}
+
+/// An `<Alias>` of a variable.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Alias {
+    pub name: String,
+    pub description: Option<String>,
+    pub display_unit: Option<String>,
+}
+
+/// A `<Unit>` of `<UnitDefinitions>`: its name and its `<DisplayUnit>`s (the base units are not
+/// read).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Unit {
+    pub name: String,
+    pub display_units: Vec<DisplayUnit>,
+}
+
+/// A `<DisplayUnit>`: a value `v` of its unit is shown as `factor · v + offset`, or, `inverse`,
+/// as `factor / v`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DisplayUnit {
+    pub name: String,
+    pub factor: f64,
+    pub offset: f64,
+    pub inverse: bool,
 }
 
 /// The attributes of a `<Clock>` (FMI 3.0, 2.4.7.6).
@@ -197,6 +227,8 @@ pub struct ModelDescription {
     pub se_interface: Option<Interface>,
     pub log_categories: Vec<String>,
     pub default_experiment: DefaultExperiment,
+    /// `<UnitDefinitions>`.
+    pub units: Vec<Unit>,
     pub variables: Vec<Variable>,
     pub outputs: Vec<Unknown>,
     pub derivatives: Vec<Unknown>,
@@ -275,7 +307,9 @@ impl ModelDescription {
                     dimensions: Vec::new(),
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),
+                    display_unit: e.string("displayUnit"),
                     description: e.string("description"),
+                    aliases: Vec::new(),
                     clock: (ty == Type::Clock).then(|| ClockAttrs {
                         interval_variability: e.string("intervalVariability").unwrap_or_default(),
                         interval_decimal: e.number("intervalDecimal"),
@@ -312,6 +346,29 @@ impl ModelDescription {
                 b"Start" => {
                     if let Some(i) = open {
                         d.variables[i].start = e.string("value");
+                    }
+                }
+                b"Alias" => {
+                    if let Some(i) = open {
+                        d.variables[i].aliases.push(Alias {
+                            name: e.string("name").unwrap_or_default(),
+                            description: e.string("description"),
+                            display_unit: e.string("displayUnit"),
+                        });
+                    }
+                }
+                b"Unit" if !in_variables => d.units.push(Unit {
+                    name: e.string("name").unwrap_or_default(),
+                    display_units: Vec::new(),
+                }),
+                b"DisplayUnit" => {
+                    if let Some(u) = d.units.last_mut() {
+                        u.display_units.push(DisplayUnit {
+                            name: e.string("name").unwrap_or_default(),
+                            factor: e.number("factor").unwrap_or(1.0),
+                            offset: e.number("offset").unwrap_or(0.0),
+                            inverse: e.string("inverse").as_deref() == Some("true"),
+                        });
                     }
                 }
                 b"Dimension" => {
@@ -546,6 +603,65 @@ mod tests {
         assert_eq!(
             ModelDescription::parse(&none).unwrap_err(),
             "modelDescription.xml: neither <CoSimulation> nor <ModelExchange>"
+        );
+    }
+
+    #[test]
+    fn aliases_and_display_units_are_read() {
+        // The Reference-FMUs' BouncingBall's h (v0.0.41), its unit and its alias in feet.
+        let xml = r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="B" instantiationToken="{t}">
+  <CoSimulation modelIdentifier="B"/>
+  <UnitDefinitions>
+    <Unit name="m"><BaseUnit m="1"/><DisplayUnit name="ft" factor="3.280839895"/></Unit>
+    <Unit name="S"><BaseUnit kg="-1" m="-2" s="3" A="2"/><DisplayUnit name="Ohm" inverse="true"/></Unit>
+  </UnitDefinitions>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent"/>
+    <Float64 name="h" valueReference="1" causality="output" unit="m" displayUnit="ft">
+      <Alias name="h_ft" description="Position in feet" displayUnit="ft"/>
+      <Alias name="height"/>
+    </Float64>
+    <Float64 name="v" valueReference="3" causality="output"/>
+  </ModelVariables>
+  <ModelStructure><Output valueReference="1"/><Output valueReference="3"/></ModelStructure>
+</fmiModelDescription>"#;
+        let d = ModelDescription::parse(xml).unwrap();
+        let h = d.by_vr(1).unwrap();
+        assert_eq!(h.display_unit.as_deref(), Some("ft"));
+        assert_eq!(
+            h.aliases,
+            [
+                Alias {
+                    name: "h_ft".into(),
+                    description: Some("Position in feet".into()),
+                    display_unit: Some("ft".into()),
+                },
+                Alias {
+                    name: "height".into(),
+                    description: None,
+                    display_unit: None,
+                },
+            ]
+        );
+        assert!(d.by_vr(3).unwrap().aliases.is_empty(), "the next variable has none");
+        let units: Vec<_> = d
+            .units
+            .iter()
+            .map(|u| (u.name.as_str(), u.display_units.clone()))
+            .collect();
+        let shown = |name: &str, factor, inverse| DisplayUnit {
+            name: name.into(),
+            factor,
+            offset: 0.0,
+            inverse,
+        };
+        assert_eq!(
+            units,
+            [
+                ("m", vec![shown("ft", 3.280839895, false)]),
+                ("S", vec![shown("Ohm", 1.0, true)])
+            ]
         );
     }
 }

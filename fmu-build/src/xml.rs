@@ -126,6 +126,54 @@ pub fn check_description(d: &ModelDescription, version: FmiVersion) -> Result<()
             return Err(format!("{at}: derivative of '{state}', which is not declared"));
         }
     }
+    check_display_units_and_aliases(d, version)
+}
+
+/// The display units and aliases once more: a unit's display units have distinct names, an
+/// inverse one (FMI 3.0 only) has no offset; a variable and its aliases show their value in a
+/// display unit of the variable's unit; alias names are unique among variables and aliases.
+fn check_display_units_and_aliases(d: &ModelDescription, version: FmiVersion) -> Result<(), String> {
+    for u in d.units {
+        for (i, du) in u.display_units.iter().enumerate() {
+            let at = format!("display unit '{}' of unit '{}'", du.name, u.name);
+            if u.display_units[..i].iter().any(|o| o.name == du.name) {
+                return Err(format!("{at}: declared twice"));
+            }
+            if du.inverse && version == FmiVersion::V2 {
+                return Err(format!("{at}: inverse, which FMI 2.0 has not"));
+            }
+            if du.inverse && du.offset != 0.0 {
+                return Err(format!("{at}: inverse with an offset (FMI 3.0, 2.4.3)"));
+            }
+            if !du.factor.is_finite() || du.factor == 0.0 || !du.offset.is_finite() {
+                return Err(format!("{at}: factor and offset are finite numbers, the factor not 0"));
+            }
+        }
+    }
+    let mut names: BTreeSet<&str> = d.variables.iter().map(|v| v.name).collect();
+    for v in d.variables {
+        let shows = |du: &str, who: &str| -> Result<(), String> {
+            if du.is_empty() {
+                return Ok(());
+            }
+            match d.units.iter().find(|u| u.name == v.unit && !v.unit.is_empty()) {
+                Some(u) if u.display_units.iter().any(|x| x.name == du) => Ok(()),
+                _ => Err(format!(
+                    "{who}: display unit '{du}' is no display unit of the variable's unit '{}'",
+                    v.unit
+                )),
+            }
+        };
+        let at = format!("variable '{}' (vr {})", v.name, v.value_reference);
+        shows(v.display_unit, &at)?;
+        for a in v.aliases {
+            let who = format!("alias '{}' of {at}", a.name);
+            if !names.insert(a.name) {
+                return Err(format!("{who}: the name of another variable or alias"));
+            }
+            shows(a.display_unit, &who)?;
+        }
+    }
     Ok(())
 }
 
@@ -212,6 +260,21 @@ fn unit_definitions(w: &mut Xml, d: &ModelDescription) -> Result<(), String> {
             }
             let attrs: Vec<(&str, &str)> = texts.iter().map(|(k, v)| (*k, v.as_str())).collect();
             empty(w, "BaseUnit", &attrs)?;
+            // display = factor · value + offset (FMI 3.0 also: inverse, factor / value).
+            for du in unit.display_units {
+                let (factor, offset) = (real_text(du.factor), real_text(du.offset));
+                let mut attrs = vec![("name", du.name)];
+                if du.factor != 1.0 {
+                    attrs.push(("factor", &factor));
+                }
+                if du.offset != 0.0 {
+                    attrs.push(("offset", &offset));
+                }
+                if du.inverse {
+                    attrs.push(("inverse", "true"));
+                }
+                empty(w, "DisplayUnit", &attrs)?;
+            }
             close(w, "Unit")?;
         }
         close(w, "UnitDefinitions")?;
@@ -529,6 +592,9 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         }
         if v.var_type == VarType::Real && !v.unit.is_empty() {
             type_attrs.push(("unit", v.unit));
+            if !v.display_unit.is_empty() {
+                type_attrs.push(("displayUnit", v.display_unit));
+            }
         }
         if let Some(min) = &min {
             type_attrs.push(("min", min));
@@ -545,6 +611,7 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
         empty(&mut w, &format!("{:?}", v.var_type), &type_attrs)?;
         close(&mut w, "ScalarVariable")?;
     }
+    fmi2_aliases(&mut w, decls)?;
     close(&mut w, "ModelVariables")?;
 
     let index_of = |name: &str| decls.iter().position(|d| d.name == name).map(|i| i + 1);
@@ -610,6 +677,82 @@ pub fn fmi2(d: &ModelDescription, interfaces: Interfaces, guid: &str) -> Result<
     let mut text = String::from_utf8(w.into_inner()).map_err(io)?;
     text.push('\n');
     Ok(text)
+}
+
+/// The aliases in FMI 2.0: after the declared variables (whose indices stay as they are), one
+/// `<ScalarVariable>` per alias with the value reference, type, variability, unit and bounds of
+/// its variable. FMI 2.0 (2.2.7) has an alias set share one value reference; at most one of the
+/// set may be set by the importer and at most one carry a start value (a constant's aliases all
+/// carry its value), and every output is listed in `<Outputs>`: so an alias is a `local` whose
+/// `initial` is the default, calculated (a constant's: exact, with the constant's value).
+fn fmi2_aliases(w: &mut Xml, decls: &[Variable]) -> Result<(), String> {
+    let mut index = decls.len();
+    for v in decls {
+        for a in v.aliases {
+            index += 1;
+            w.write_event(Event::Comment(quick_xml::events::BytesText::new(&format!(
+                " index {index} "
+            ))))
+            .map_err(io)?;
+            let vr = v.value_reference.to_string();
+            let variability = lower_camel(v.variability);
+            let description = if a.description.is_empty() {
+                v.description.trim()
+            } else {
+                a.description
+            };
+            let attrs = [
+                ("name", a.name),
+                ("valueReference", vr.as_str()),
+                ("description", description),
+                ("causality", "local"),
+                ("variability", variability.as_str()),
+            ];
+            open(w, "ScalarVariable", &attrs)?;
+            let mut type_attrs: Vec<(&str, String)> = Vec::new();
+            if let Some(e) = v.enumeration {
+                type_attrs.push(("declaredType", e.name.to_string()));
+            }
+            if v.var_type == VarType::Real && !v.unit.is_empty() {
+                type_attrs.push(("unit", v.unit.to_string()));
+                if !a.display_unit.is_empty() {
+                    type_attrs.push(("displayUnit", a.display_unit.to_string()));
+                }
+            }
+            let integer = matches!(v.var_type, VarType::Integer | VarType::Enumeration);
+            let bound_text = |b: Bound, is_min: bool| {
+                let x = bound_value(b, is_min);
+                if integer {
+                    (if is_min { x.ceil() } else { x.floor() } as i64).to_string()
+                } else {
+                    real_text(x)
+                }
+            };
+            if let Some(b) = v.min {
+                type_attrs.push(("min", bound_text(b, true)));
+            }
+            if let Some(b) = v.max {
+                type_attrs.push(("max", bound_text(b, false)));
+            }
+            if let Some(n) = v.nominal {
+                type_attrs.push(("nominal", real_text(n)));
+            }
+            if v.variability == rustfmu::description::Variability::Constant {
+                let start = match v.start {
+                    Start::Real(x) => real_text(x),
+                    Start::Integer(x) => x.to_string(),
+                    Start::Boolean(x) => x.to_string(),
+                    Start::String(s) => s.to_string(),
+                    _ => String::new(),
+                };
+                type_attrs.push(("start", start));
+            }
+            let type_attrs: Vec<(&str, &str)> = type_attrs.iter().map(|(k, v)| (*k, v.as_str())).collect();
+            empty(w, &format!("{:?}", v.var_type), &type_attrs)?;
+            close(w, "ScalarVariable")?;
+        }
+    }
+    Ok(())
 }
 
 /// `modelDescription.xml` (FMI 3.0) of a description, in the element order of the FMI 3.0 XSD
@@ -825,6 +968,9 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
         };
         if v.var_type.is_float() && !v.unit.is_empty() {
             attrs.push(("unit", v.unit));
+            if !v.display_unit.is_empty() {
+                attrs.push(("displayUnit", v.display_unit));
+            }
         }
         let max_size = v.fmi3.max_size.map(|m| m.to_string());
         if v.var_type == VarType::Binary {
@@ -892,34 +1038,39 @@ pub fn fmi3(d: &ModelDescription, interfaces: Interfaces, token: &str) -> Result
             }
         }
         let element = v.var_type.fmi3_name();
-        match v.start {
-            Start::String(s) if v.has_start() => {
-                open(&mut w, element, &attrs)?;
-                empty(&mut w, "Start", &[("value", s)])?;
-                close(&mut w, element)?;
-            }
-            Start::Binary(b) if v.has_start() => {
-                // xs:hexBinary
-                let hex: String = b.iter().map(|x| format!("{x:02x}")).collect();
-                open(&mut w, element, &attrs)?;
-                empty(&mut w, "Start", &[("value", &hex)])?;
-                close(&mut w, element)?;
-            }
-            _ if v.is_array() => {
-                open(&mut w, element, &attrs)?;
-                // A fixed length, or the value reference of the structural parameter that sets it.
-                for (k, n) in v.fmi3.dimensions.iter().enumerate() {
-                    match v.fmi3.sized_by.get(k) {
-                        Some(&vr) if vr != NOT_SIZED => {
-                            empty(&mut w, "Dimension", &[("valueReference", &vr.to_string())])?
-                        }
-                        _ => empty(&mut w, "Dimension", &[("start", &n.to_string())])?,
-                    }
-                }
-                close(&mut w, element)?;
-            }
-            _ => empty(&mut w, element, &attrs)?,
+        // The children, in the schema's order: <Dimension>s, <Start>s, <Alias>es.
+        let start_child = match v.start {
+            Start::String(s) if v.has_start() => Some(s.to_string()),
+            // xs:hexBinary
+            Start::Binary(b) if v.has_start() => Some(b.iter().map(|x| format!("{x:02x}")).collect()),
+            _ => None,
+        };
+        if start_child.is_none() && !v.is_array() && v.aliases.is_empty() {
+            empty(&mut w, element, &attrs)?;
+            continue;
         }
+        open(&mut w, element, &attrs)?;
+        // A fixed length, or the value reference of the structural parameter that sets it.
+        for (k, n) in v.fmi3.dimensions.iter().enumerate() {
+            match v.fmi3.sized_by.get(k) {
+                Some(&vr) if vr != NOT_SIZED => empty(&mut w, "Dimension", &[("valueReference", &vr.to_string())])?,
+                _ => empty(&mut w, "Dimension", &[("start", &n.to_string())])?,
+            }
+        }
+        if let Some(value) = &start_child {
+            empty(&mut w, "Start", &[("value", value)])?;
+        }
+        for a in v.aliases {
+            let mut alias = vec![("name", a.name)];
+            if !a.description.is_empty() {
+                alias.push(("description", a.description));
+            }
+            if !a.display_unit.is_empty() {
+                alias.push(("displayUnit", a.display_unit));
+            }
+            empty(&mut w, "Alias", &alias)?;
+        }
+        close(&mut w, element)?;
     }
     close(&mut w, "ModelVariables")?;
 
@@ -1030,6 +1181,8 @@ mod tests {
             initial: None,
             start: Start::Integer(5),
             unit: "",
+            display_unit: "",
+            aliases: &[],
             description: "",
             min,
             max,
@@ -1169,6 +1322,8 @@ mod tests {
             initial: None,
             start: Start::None,
             unit: "",
+            display_unit: "",
+            aliases: &[],
             description: "",
             min: None,
             max: None,
@@ -1275,6 +1430,7 @@ mod tests {
                 factor: 1.0,
                 offset: 0.0,
             },
+            display_units: &[],
         }],
         log_categories: &[],
         variables: LAG_VARS,
@@ -1591,5 +1747,271 @@ mod tests {
             "{xml2}"
         );
         assert!(xml2.contains("Messages that come with fmi2Error"), "{xml2}");
+    }
+}
+
+/// Display units and aliases through the encoding (as `cargo fmu` reads them from a library) into
+/// both files.
+#[cfg(test)]
+mod alias_tests {
+    use super::*;
+    use rustfmu::description::{Alias, BaseUnit, DisplayUnit, Fmi3Extras, Unit, Variability, decode, encode_to_vec};
+
+    const M: BaseUnit = BaseUnit {
+        kg: 0,
+        m: 1,
+        s: 0,
+        a: 0,
+        k: 0,
+        mol: 0,
+        cd: 0,
+        rad: 0,
+        factor: 1.0,
+        offset: 0.0,
+    };
+
+    const fn real(name: &'static str, vr: u32, causality: Causality, variability: Variability) -> Variable {
+        Variable {
+            name,
+            value_reference: vr,
+            var_type: VarType::Real,
+            causality,
+            variability,
+            initial: None,
+            start: Start::None,
+            unit: "m",
+            display_unit: "",
+            aliases: &[],
+            description: "",
+            min: None,
+            max: None,
+            nominal: None,
+            depends_on: None,
+            initial_depends_on: None,
+            derivative_of: None,
+            enumeration: None,
+            fmi3: Fmi3Extras::NONE,
+        }
+    }
+
+    const VARS: &[Variable] = &[
+        Variable {
+            initial: Some(Initial::Exact),
+            start: Start::Real(1.0),
+            description: "Position of the ball",
+            aliases: &[Alias {
+                name: "h_ft",
+                description: "Position in feet",
+                display_unit: "ft",
+            }],
+            ..real("h", 1, Causality::Output, Variability::Continuous)
+        },
+        Variable {
+            start: Start::Real(2.5),
+            display_unit: "ft",
+            description: "Length",
+            aliases: &[Alias {
+                name: "l2",
+                description: "",
+                display_unit: "",
+            }],
+            ..real("l", 2, Causality::Local, Variability::Constant)
+        },
+    ];
+
+    const BALL: ModelDescription = ModelDescription {
+        model_identifier: "Ball",
+        description: "",
+        author: "",
+        version: "",
+        copyright: "",
+        license: "",
+        generation_tool: "test",
+        default_experiment: None,
+        units: &[Unit {
+            name: "m",
+            base: M,
+            display_units: &[DisplayUnit {
+                name: "ft",
+                factor: 3.280839895,
+                offset: 0.0,
+                inverse: false,
+            }],
+        }],
+        log_categories: &[],
+        variables: VARS,
+        internal_state: "",
+        event_indicators: &[],
+        terminals: &[],
+    };
+
+    /// The description as `cargo fmu` gets it from a library of that version.
+    fn decoded(interfaces: Interfaces) -> (ModelDescription, Interfaces) {
+        decode(&encode_to_vec(&BALL, interfaces)).unwrap()
+    }
+
+    #[test]
+    fn the_encoding_carries_display_units_and_aliases() {
+        for interfaces in [Interfaces::BOTH, Interfaces::BOTH_FMI3] {
+            let (d, back) = decoded(interfaces);
+            assert_eq!(back, interfaces);
+            assert_eq!(d.units, BALL.units);
+            assert_eq!(d.variables, BALL.variables);
+        }
+        // Without display units and aliases, no trace of them: the encodings (and GUIDs) of the
+        // models that declare none are those before they existed.
+        const PLAIN_VARS: [Variable; 2] = [
+            Variable {
+                aliases: &[],
+                ..VARS[0]
+            },
+            Variable {
+                display_unit: "",
+                aliases: &[],
+                ..VARS[1]
+            },
+        ];
+        const PLAIN_UNITS: [Unit; 1] = [Unit {
+            display_units: &[],
+            ..BALL.units[0]
+        }];
+        let plain = ModelDescription {
+            units: &PLAIN_UNITS,
+            variables: &PLAIN_VARS,
+            ..BALL
+        };
+        let with = encode_to_vec(&BALL, Interfaces::BOTH);
+        let without = encode_to_vec(&plain, Interfaces::BOTH);
+        // The header (magic, format, payload length: 32 bytes) aside, the same bytes up to the
+        // display units' block.
+        assert!(with.len() > without.len());
+        assert_eq!(
+            &with[32..without.len()],
+            &without[32..],
+            "the encoding before the display units' block"
+        );
+    }
+
+    #[test]
+    fn fmi3_writes_the_display_unit_the_alias_and_the_variables_display_unit() {
+        let (d, i) = decoded(Interfaces::BOTH_FMI3);
+        let xml = fmi3(&d, i, "{token}").unwrap();
+        assert!(
+            xml.contains(
+                "<Unit name=\"m\">\n      <BaseUnit m=\"1\"/>\n      <DisplayUnit name=\"ft\" factor=\"3.280839895\"/>\n    </Unit>"
+            ),
+            "{xml}"
+        );
+        assert!(
+            xml.contains(
+                "initial=\"exact\" unit=\"m\" start=\"1.0\">\n      <Alias name=\"h_ft\" description=\"Position in feet\" displayUnit=\"ft\"/>\n    </Float64>"
+            ),
+            "{xml}"
+        );
+        assert!(
+            xml.contains("unit=\"m\" displayUnit=\"ft\" start=\"2.5\">\n      <Alias name=\"l2\"/>"),
+            "{xml}"
+        );
+    }
+
+    #[test]
+    fn fmi2_writes_each_alias_as_a_local_of_the_same_value_reference_after_the_variables() {
+        let (d, i) = decoded(Interfaces::BOTH);
+        let xml = fmi2(&d, i, "{guid}").unwrap();
+        assert!(
+            xml.contains("<DisplayUnit name=\"ft\" factor=\"3.280839895\"/>"),
+            "{xml}"
+        );
+        assert!(
+            xml.contains("<Real unit=\"m\" displayUnit=\"ft\" start=\"2.5\"/>"),
+            "{xml}"
+        );
+        // After the two variables: indices 3 and 4, h's and l's value references; the constant's
+        // alias carries the constant's value, the other no start.
+        assert!(
+            xml.contains(
+                "<!-- index 3 -->\n    <ScalarVariable name=\"h_ft\" valueReference=\"1\" description=\"Position in feet\" \
+                 causality=\"local\" variability=\"continuous\">\n      <Real unit=\"m\" displayUnit=\"ft\"/>"
+            ),
+            "{xml}"
+        );
+        assert!(
+            xml.contains(
+                "<!-- index 4 -->\n    <ScalarVariable name=\"l2\" valueReference=\"2\" description=\"Length\" \
+                 causality=\"local\" variability=\"constant\">\n      <Real unit=\"m\" start=\"2.5\"/>"
+            ),
+            "{xml}"
+        );
+        // The outputs are the declared ones only.
+        assert!(
+            xml.contains("<Outputs>\n      <Unknown index=\"1\"/>\n    </Outputs>"),
+            "{xml}"
+        );
+    }
+
+    #[test]
+    fn wrong_display_units_and_aliases_are_refused_naming_them() {
+        const CLASH: [Variable; 2] = [
+            VARS[0],
+            Variable {
+                aliases: &[Alias {
+                    name: "h",
+                    description: "",
+                    display_unit: "",
+                }],
+                ..VARS[1]
+            },
+        ];
+        let e = fmi3(
+            &ModelDescription {
+                variables: &CLASH,
+                ..BALL
+            },
+            Interfaces::BOTH_FMI3,
+            "t",
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("alias 'h' of variable 'l' (vr 2): the name of another variable or alias"),
+            "{e}"
+        );
+        const UNKNOWN: [Variable; 1] = [Variable {
+            display_unit: "yd",
+            ..VARS[1]
+        }];
+        let e = fmi2(
+            &ModelDescription {
+                variables: &UNKNOWN,
+                ..BALL
+            },
+            Interfaces::BOTH,
+            "g",
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("display unit 'yd' is no display unit of the variable's unit 'm'"),
+            "{e}"
+        );
+        const INVERSE: [Unit; 1] = [Unit {
+            display_units: &[DisplayUnit {
+                inverse: true,
+                ..BALL.units[0].display_units[0]
+            }],
+            ..BALL.units[0]
+        }];
+        let d = ModelDescription {
+            units: &INVERSE,
+            ..BALL
+        };
+        let e = fmi2(&d, Interfaces::BOTH, "g").unwrap_err();
+        assert!(
+            e.contains("display unit 'ft' of unit 'm': inverse, which FMI 2.0 has not"),
+            "{e}"
+        );
+        assert!(
+            fmi3(&d, Interfaces::BOTH_FMI3, "t")
+                .unwrap()
+                .contains("inverse=\"true\"")
+        );
     }
 }

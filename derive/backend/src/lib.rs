@@ -68,6 +68,8 @@ pub(crate) fn doc_text(attrs: &[syn::Attribute]) -> String {
 }
 
 #[cfg(test)]
+mod alias_tests;
+#[cfg(test)]
 mod docs_tests;
 #[cfg(test)]
 mod tests;

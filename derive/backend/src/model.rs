@@ -81,6 +81,52 @@ struct Var {
     /// dimension); empty: the Rust array's lengths.
     sized_by: Vec<(String, Span)>,
     description: String,
+    /// `display_unit = ".."`: the display unit the value is shown in by default.
+    display_unit: Option<LitStr>,
+    /// `alias = ".."` / `alias(name = .., description = .., display_unit = ..)`, in order.
+    aliases: Vec<AliasAttr>,
+}
+
+/// One `alias(...)` (or `alias = ".."`) of a variable: another name of the same value.
+struct AliasAttr {
+    name: LitStr,
+    description: String,
+    display_unit: Option<LitStr>,
+}
+
+impl Parse for AliasAttr {
+    fn parse(input: ParseStream) -> Result<Self> {
+        let (mut name, mut description, mut display_unit) = (None, String::new(), None);
+        while !input.is_empty() {
+            let key: Ident = input.parse()?;
+            input.parse::<Token![=]>()?;
+            let value: LitStr = input.parse()?;
+            match key.to_string().as_str() {
+                "name" if name.is_none() => name = Some(value),
+                "description" => description = value.value(),
+                "display_unit" if display_unit.is_none() => display_unit = Some(value),
+                "name" | "display_unit" => {
+                    return Err(Error::new(key.span(), format!("`{key}` is given twice")));
+                }
+                other => {
+                    return Err(Error::new(
+                        key.span(),
+                        format!("unknown alias declaration `{other}`; known: name, description, display_unit"),
+                    ));
+                }
+            }
+            if input.is_empty() {
+                break;
+            }
+            input.parse::<Token![,]>()?;
+        }
+        let name = name.ok_or_else(|| Error::new(input.span(), "an alias needs `name = \"...\"`"))?;
+        Ok(AliasAttr {
+            name,
+            description,
+            display_unit,
+        })
+    }
 }
 
 /// `clock(constant | fixed | tunable | changing | countdown | triggered, interval = .., shift = ..,
@@ -218,6 +264,8 @@ struct VarAttr {
     clock: Option<(ClockAttr, Span)>,
     clocks: Option<Vec<(String, Span)>>,
     dims: Option<Vec<(String, Span)>>,
+    display_unit: Option<LitStr>,
+    aliases: Vec<AliasAttr>,
 }
 
 /// `= [a, "b.c", d]`: the names of `depends` and `initial_depends`.
@@ -273,6 +321,8 @@ pub(crate) const VARIABLE_KEYS: &[&str] = &[
     "clock(..)",
     "clocks",
     "dims",
+    "display_unit",
+    "alias(..)",
 ];
 
 /// Every key `#[fmu(...)]` on a model struct accepts (as [`VARIABLE_KEYS`]).
@@ -286,6 +336,7 @@ pub(crate) const FMU_KEYS: &[&str] = &[
     "unit(..)",
     "log_category(..)",
     "terminal(..)",
+    "display_unit(..)",
 ];
 
 /// Whether `keys` has `key`, written bare or as `key(..)`.
@@ -472,6 +523,27 @@ impl Parse for VarAttr {
                     once(a.dims.is_some())?;
                     a.dims = Some(names_list(input)?);
                 }
+                "display_unit" => {
+                    once(a.display_unit.is_some())?;
+                    input.parse::<Token![=]>()?;
+                    a.display_unit = Some(input.parse()?);
+                }
+                // `alias = "h_ft"`, or `alias(name = "h_ft", description = "..", display_unit = "ft")`;
+                // once per alias.
+                "alias" => {
+                    if input.peek(Token![=]) {
+                        input.parse::<Token![=]>()?;
+                        a.aliases.push(AliasAttr {
+                            name: input.parse()?,
+                            description: String::new(),
+                            display_unit: None,
+                        });
+                    } else {
+                        let content;
+                        syn::parenthesized!(content in input);
+                        a.aliases.push(content.parse()?);
+                    }
+                }
                 "derivative_of" => {
                     once(a.derivative_of.is_some())?;
                     input.parse::<Token![=]>()?;
@@ -646,6 +718,36 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
             "only Float64 (f64) and Float32 (f32) variables have a unit",
         ));
     }
+    if let Some(du) = a
+        .display_unit
+        .as_ref()
+        .or_else(|| a.aliases.iter().find_map(|x| x.display_unit.as_ref()))
+    {
+        if !kind.is_float() {
+            return Err(Error::new(
+                du.span(),
+                "only Float64 (f64) and Float32 (f32) variables (and their aliases) have a display unit",
+            ));
+        }
+        if a.unit.is_none() {
+            return Err(Error::new(
+                du.span(),
+                format!(
+                    "display unit '{}' needs the variable's `unit`: a display unit shows a value of its unit \
+                     (FMI 3.0, 2.4.7.4: \"If displayUnit is defined a unit must also be defined\")",
+                    du.value()
+                ),
+            ));
+        }
+    }
+    if let Some(alias) = a.aliases.first()
+        && !dims.is_empty()
+    {
+        return Err(Error::new(
+            alias.name.span(),
+            "aliases are declared on scalar variables only (an array's alias would be one alias per element in FMI 2.0)",
+        ));
+    }
     if a.nominal.is_some() && !kind.is_float() {
         return Err(Error::new(
             span,
@@ -686,6 +788,8 @@ fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var> {
         clocks: a.clocks.unwrap_or_default(),
         sized_by: a.dims.unwrap_or_default(),
         description: crate::doc_text(&field.attrs),
+        display_unit: a.display_unit,
+        aliases: a.aliases,
     };
     if let Some(span) = var.event_indicator
         && (!in_equations(&var) || !var.dims.is_empty())
@@ -831,6 +935,9 @@ struct ModelAttr {
     /// `scheduled_execution`: the FMU offers FMI 3.0 Scheduled Execution too.
     scheduled_execution: Option<Span>,
     units: Vec<(String, Base, Span)>,
+    /// `display_unit(unit = .., name = .., factor = .., offset = .., inverse)`: (unit, name,
+    /// conversion, span).
+    display_units: Vec<(String, String, units::Display, Span)>,
     categories: Vec<(String, String, Span)>,
     terminals: Vec<TerminalAttr>,
 }
@@ -925,6 +1032,57 @@ fn parse_model_attr(attrs: &[syn::Attribute]) -> Result<ModelAttr> {
                     return Err(Error::new(span, format!("unit '{name}' is declared twice")));
                 }
                 m.units.push((name, base, span));
+            } else if meta.path.is_ident("display_unit") {
+                let span = meta.path.span();
+                let (mut unit, mut name) = (None, None);
+                let mut d = units::Display {
+                    factor: 1.0,
+                    offset: 0.0,
+                    inverse: false,
+                };
+                meta.parse_nested_meta(|u| {
+                    let key = u.path.get_ident().map(|i| i.to_string()).unwrap_or_default();
+                    match key.as_str() {
+                        "unit" => unit = Some(u.value()?.parse::<LitStr>()?.value()),
+                        "name" => name = Some(u.value()?.parse::<LitStr>()?.value()),
+                        "factor" | "offset" => {
+                            let e: Expr = u.value()?.parse()?;
+                            let x = number(&e)?;
+                            if !x.is_finite() || (key == "factor" && x == 0.0) {
+                                return Err(Error::new(e.span(), format!("a display unit's {key} is a finite number{}", if key == "factor" { ", not 0" } else { "" })));
+                            }
+                            if key == "factor" {
+                                d.factor = x;
+                            } else {
+                                d.offset = x;
+                            }
+                        }
+                        "inverse" => d.inverse = true,
+                        _ => {
+                            return Err(u.error(format!(
+                                "unknown display unit attribute `{key}`; known: unit, name, factor, offset, inverse"
+                            )));
+                        }
+                    }
+                    Ok(())
+                })?;
+                let unit = unit.ok_or_else(|| Error::new(span, "a display unit names its unit: `unit = \"m\"`"))?;
+                let name = name.ok_or_else(|| Error::new(span, "a display unit needs `name = \"...\"`"))?;
+                if d.inverse && d.offset != 0.0 {
+                    return Err(Error::new(
+                        span,
+                        "an inverse display unit has no offset (FMI 3.0, 2.4.3: inverse = true only with offset = 0)",
+                    ));
+                }
+                if m.display_units.iter().any(|(u, n, _, _)| *u == unit && *n == name)
+                    || units::default_display_unit(&unit, &name).is_some()
+                {
+                    return Err(Error::new(
+                        span,
+                        format!("display unit '{name}' of unit '{unit}' is declared twice (or is built in)"),
+                    ));
+                }
+                m.display_units.push((unit, name, d, span));
             } else if meta.path.is_ident("log_category") {
                 let span = meta.path.span();
                 let (mut name, mut description) = (None, String::new());
@@ -1438,6 +1596,130 @@ fn check_declarations(vars: &[Var], model: &ModelAttr) -> Result<()> {
             }
         }
     }
+    check_display_units_and_aliases(vars, model)
+}
+
+/// Whether unit `unit` is one the model may use: the runtime's or declared on the struct.
+fn unit_known(model: &ModelAttr, unit: &str) -> bool {
+    units::default_unit(unit).is_some() || model.units.iter().any(|(n, _, _)| *n == unit)
+}
+
+/// The conversion of display unit `name` of unit `unit`: declared on the struct, or built in.
+fn display_unit_of(model: &ModelAttr, unit: &str, name: &str) -> Option<units::Display> {
+    model
+        .display_units
+        .iter()
+        .find(|(u, n, _, _)| *u == unit && *n == name)
+        .map(|(_, _, d, _)| *d)
+        .or_else(|| units::default_display_unit(unit, name))
+}
+
+/// The display units (`#[fmu(display_unit(..))]`, `display_unit = ".."`) and the aliases: each
+/// display unit belongs to a unit the model may use, each one a variable shows its value in is a
+/// display unit of the variable's own unit, and an alias's name is no other variable's or
+/// alias's.
+fn check_display_units_and_aliases(vars: &[Var], model: &ModelAttr) -> Result<()> {
+    for (unit, name, d, span) in &model.display_units {
+        if !unit_known(model, unit) {
+            return Err(Error::new(
+                *span,
+                format!(
+                    "display unit '{name}' is of unit '{unit}', which is not declared: declare it with \
+                     #[fmu(unit(name = \"{unit}\", ..))] or use one of the runtime's units"
+                ),
+            ));
+        }
+        if d.inverse && model.fmi3_only.is_none() {
+            return Err(Error::new(
+                *span,
+                format!(
+                    "display unit '{name}' is inverse, which FMI 2.0 has not: the model is #[fmu(fmi3_only)], \
+                     or the display unit not inverse"
+                ),
+            ));
+        }
+    }
+    let check = |v: &Var, du: &LitStr| -> Result<()> {
+        let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
+        let name = du.value();
+        if display_unit_of(model, &unit, &name).is_some() {
+            return Ok(());
+        }
+        let elsewhere: Vec<String> = model
+            .display_units
+            .iter()
+            .map(|(u, n, _, _)| (u.as_str(), n.as_str()))
+            .chain(units::DEFAULT_DISPLAY_UNITS.iter().map(|(u, n, _)| (*u, *n)))
+            .filter(|(_, n)| *n == name)
+            .map(|(u, _)| format!("'{u}'"))
+            .collect();
+        let own: Vec<&str> = model
+            .display_units
+            .iter()
+            .filter(|(u, _, _, _)| *u == unit)
+            .map(|(_, n, _, _)| n.as_str())
+            .chain(
+                units::DEFAULT_DISPLAY_UNITS
+                    .iter()
+                    .filter(|(u, _, _)| *u == unit)
+                    .map(|(_, n, _)| *n),
+            )
+            .collect();
+        let known = if own.is_empty() {
+            "it has none yet".to_string()
+        } else {
+            format!("its display units are {}", own.join(", "))
+        };
+        Err(Error::new(
+            du.span(),
+            if elsewhere.is_empty() {
+                format!(
+                    "'{}': display unit '{name}' is not declared for unit '{unit}' ({known}): declare it on the \
+                     struct with #[fmu(display_unit(unit = \"{unit}\", name = \"{name}\", factor = .., offset = ..))]",
+                    v.name
+                )
+            } else {
+                format!(
+                    "'{}': display unit '{name}' is a display unit of {}, not of '{unit}' (the variable's unit; \
+                     {known}): a display unit shows a value of its own unit's quantity",
+                    v.name,
+                    elsewhere.join(", ")
+                )
+            },
+        ))
+    };
+    let mut names: BTreeMap<String, String> = vars.iter().map(|v| (v.name.clone(), v.name.clone())).collect();
+    for v in vars {
+        if let Some(du) = &v.display_unit {
+            check(v, du)?;
+        }
+        for a in &v.aliases {
+            let name = a.name.value();
+            if name.is_empty() {
+                return Err(Error::new(a.name.span(), "an alias's name cannot be empty"));
+            }
+            if let Some(owner) = names.get(&name) {
+                return Err(Error::new(
+                    a.name.span(),
+                    if *owner == name {
+                        format!(
+                            "alias '{name}' of '{}' is the name of a variable: names are unique among variables and aliases",
+                            v.name
+                        )
+                    } else {
+                        format!(
+                            "alias '{name}' of '{}' is already an alias of '{owner}': names are unique among variables and aliases",
+                            v.name
+                        )
+                    },
+                ));
+            }
+            names.insert(name, v.name.clone());
+            if let Some(du) = &a.display_unit {
+                check(v, du)?;
+            }
+        }
+    }
     Ok(())
 }
 
@@ -1595,6 +1877,12 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
         .collect();
     let elem = &v.elem;
     let unit = v.unit.as_ref().map(|u| u.value()).unwrap_or_default();
+    let display_unit = v.display_unit.as_ref().map(|u| u.value()).unwrap_or_default();
+    let aliases = v.aliases.iter().map(|a| {
+        let (name, description) = (a.name.value(), &a.description);
+        let du = a.display_unit.as_ref().map(|u| u.value()).unwrap_or_default();
+        quote!(#rt::description::Alias { name: #name, description: #description, display_unit: #du })
+    });
     let description = &v.description;
     let bound = |b: &Option<(Expr, bool)>| match b {
         Some((e, exclusive)) => quote!(::core::option::Option::Some(#rt::description::Bound {
@@ -1684,6 +1972,8 @@ fn variable_tokens(rt: &TokenStream, v: &Var, vars: &[Var]) -> TokenStream {
             initial: #initial,
             start: #start,
             unit: #unit,
+            display_unit: #display_unit,
+            aliases: &[#(#aliases),*],
             description: #description,
             min: #min,
             max: #max,
@@ -1838,9 +2128,34 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
         let unit_tokens = used.iter().map(|(name, b)| {
             let [kg, m, s, a, k, mol, cd, rad] = b.exps;
             let (factor, offset) = (b.factor, b.offset);
+            // The unit's display units: those declared on the struct, then the built-in ones
+            // that a variable or an alias of the unit shows its value in.
+            let mut shown: Vec<(String, units::Display)> = model
+                .display_units
+                .iter()
+                .filter(|(u, _, _, _)| u == name)
+                .map(|(_, n, d, _)| (n.clone(), *d))
+                .collect();
+            for (u, n, d) in units::DEFAULT_DISPLAY_UNITS {
+                let used_by = |v: &Var| {
+                    v.unit.as_ref().is_some_and(|x| x.value() == *u)
+                        && v.display_unit
+                            .iter()
+                            .chain(v.aliases.iter().filter_map(|a| a.display_unit.as_ref()))
+                            .any(|du| du.value() == *n)
+                };
+                if u == name && vars.iter().any(used_by) {
+                    shown.push((n.to_string(), *d));
+                }
+            }
+            let display_tokens = shown.iter().map(|(n, d)| {
+                let (factor, offset, inverse) = (d.factor, d.offset, d.inverse);
+                quote!(#rt::description::DisplayUnit { name: #n, factor: #factor, offset: #offset, inverse: #inverse })
+            });
             quote!(#rt::description::Unit {
                 name: #name,
                 base: #rt::description::BaseUnit { kg: #kg, m: #m, s: #s, a: #a, k: #k, mol: #mol, cd: #cd, rad: #rad, factor: #factor, offset: #offset },
+                display_units: &[#(#display_tokens),*],
             })
         });
         let category_tokens = model
@@ -1878,7 +2193,11 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
             };
             quote!(#f: #value)
         });
-        let other_fields = others.iter().map(|f| quote!(#f: ::core::default::Default::default()));
+        let other_fields = others.iter().map(|f| {
+            let ty = fields.named.iter().find(|x| x.ident.as_ref() == Some(f)).map(|x| &x.ty);
+            let value = crate::long_arrays::default_value(ty);
+            quote!(#f: #value)
+        });
         let numeric: Vec<&Var> = vars
             .iter()
             .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary | Kind::Clock) && v.dims.is_empty())

@@ -92,6 +92,43 @@ pub fn default_unit(name: &str) -> Option<Base> {
     DEFAULT_UNITS.iter().find(|(n, _)| *n == name).map(|(_, b)| *b)
 }
 
+/// A display unit of a unit: a value `v` in the unit is shown as `factor · v + offset`, or, with
+/// `inverse` (FMI 3.0 only, and then without offset), as `factor / v`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Display {
+    pub factor: f64,
+    pub offset: f64,
+    pub inverse: bool,
+}
+
+const fn shown(factor: f64, offset: f64) -> Display {
+    Display {
+        factor,
+        offset,
+        inverse: false,
+    }
+}
+
+/// The display units every model may show a runtime unit's values in without declaring them:
+/// (unit, display unit, conversion). A model declares further ones with
+/// `#[fmu(display_unit(unit = "m", name = "ft", factor = 3.280839895))]`. The description carries
+/// one of these only where a variable or an alias uses it.
+pub const DEFAULT_DISPLAY_UNITS: &[(&str, &str, Display)] = &[
+    ("rad", "deg", shown(180.0 / std::f64::consts::PI, 0.0)),
+    ("rad/s", "deg/s", shown(180.0 / std::f64::consts::PI, 0.0)),
+    ("rad/s", "rpm", shown(30.0 / std::f64::consts::PI, 0.0)),
+    ("m/s", "km/h", shown(3.6, 0.0)),
+    ("K", "degC", shown(1.0, -273.15)),
+];
+
+/// The built-in display unit `name` of unit `unit`.
+pub fn default_display_unit(unit: &str, name: &str) -> Option<Display> {
+    DEFAULT_DISPLAY_UNITS
+        .iter()
+        .find(|(u, n, _)| *u == unit && *n == name)
+        .map(|(_, _, d)| *d)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,6 +1,7 @@
 //! The Reference-FMUs' BouncingBall (modelica/Reference-FMUs, `BouncingBall/`) written with
 //! rustfmu: the same model identifier, variable names, value references, causalities,
-//! variabilities, start values and units; the equations written here from its description.
+//! variabilities, start values and units, and its alias `h_ft` of `h` shown in feet; the
+//! equations written here from its description.
 //!
 //! A ball falls from h = 1 m under gravity g; where it reaches the floor (the event indicator h
 //! changes sign) it bounces back with its speed times the coefficient of restitution e; once the
@@ -16,12 +17,14 @@ use serde::{Deserialize, Serialize};
 
 /// This model calculates the trajectory, over time, of a ball dropped from a height of 1 m
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+#[fmu(display_unit(unit = "m", name = "ft", factor = 3.280839895))]
 pub struct BouncingBall {
     /// Simulation time
     #[variable(vr = 0, independent)]
     pub time: f64,
     /// Position of the ball
-    #[variable(vr = 1, output, continuous, initial = exact, start = 1.0, unit = "m", depends = [h], event_indicator)]
+    #[variable(vr = 1, output, continuous, initial = exact, start = 1.0, unit = "m", depends = [h], event_indicator,
+               alias(name = "h_ft", description = "Position in feet", display_unit = "ft"))]
     pub h: f64,
     /// Derivative of h
     #[variable(vr = 2, name = "der(h)", local, derivative_of = h, unit = "m/s", depends = [v], initial_depends = [v])]
