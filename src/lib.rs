@@ -49,6 +49,7 @@
 
 extern crate self as rustfmu;
 
+mod big_array;
 mod clock;
 pub mod description;
 mod events;
@@ -57,6 +58,7 @@ pub mod solver;
 pub mod testing;
 mod value;
 
+pub use big_array::{BigArray, BigMatrix};
 pub use clock::Clock;
 pub use events::{Event, MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
 pub use model::{

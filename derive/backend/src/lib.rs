@@ -12,6 +12,7 @@
 mod enums;
 mod metadata;
 mod model;
+mod long_arrays;
 mod units;
 
 use proc_macro2::TokenStream;
@@ -20,7 +21,12 @@ use proc_macro2::TokenStream;
 /// `compile_error!`s where the declarations are wrong.
 pub fn derive_model(input: TokenStream) -> TokenStream {
     match syn::parse2::<syn::DeriveInput>(input) {
-        Ok(input) => model::expand(input).unwrap_or_else(|e| e.to_compile_error()),
+        Ok(input) => {
+            // First the arrays serde cannot serialize: its own errors about them say less.
+            let mut out = long_arrays::checks(&input);
+            out.extend(model::expand(input).unwrap_or_else(|e| e.to_compile_error()));
+            out
+        }
         Err(e) => e.to_compile_error(),
     }
 }
