@@ -313,6 +313,11 @@ impl<'a> Instance<'a> {
             self.fmu.id,
             self.log_text()
         );
+        self.me_initialize_at_start()
+    }
+
+    /// [`Self::me_initialize`] with every input at its start value.
+    pub fn me_initialize_at_start(&mut self) -> fmi2EventInfo {
         self.me_to_event_mode();
         let info = self.event_iteration();
         assert_eq!(

@@ -1300,8 +1300,57 @@ pub fn model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu)
         .stop_time()
         .unwrap_or(1.0)
         .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
+    // The default experiment from the start values first (what the FMU's user runs); where no
+    // event happens there and the FMU has inputs, again with the inputs moved off their start
+    // values (a model whose events depend on an input).
+    let mut run = events_run(fmu, h, stop, false);
+    let mut how = "from the start values";
+    if run.events == 0 && !crate::instance::excitation(fmu).is_empty() {
+        run = events_run(fmu, h, stop, true);
+        how = "with the inputs moved off their start values (none happened from the start values)";
+    }
+    let EventsRun {
+        steps,
+        events,
+        time_events,
+        indicators,
+    } = run;
+    if events == 0 && indicators == 0 {
+        limitation(format!(
+            "{NOT_DECLARED}events: no event indicator, no time event in {stop} s"
+        ));
+    } else if events == 0 {
+        limitation(format!(
+            "{}events: none in {stop} s of explicit Euler from the start values, nor with the inputs moved off \
+             them (the default experiment's stop time, at most {} steps): the {indicators} event indicators never \
+             changed domain",
+            crate::outcome::NOT_EXERCISED,
+            crate::outcome::MAX_RUN_STEPS,
+        ));
+    }
+    info(format!(
+        "{steps} explicit-Euler steps to t = {stop} {how}: {events} events, {time_events} of them time events, \
+         {indicators} event indicators"
+    ));
+}
+
+/// What one run of [`model_exchange_events_are_reached_settle_and_follow_the_states`] saw.
+struct EventsRun {
+    steps: usize,
+    events: usize,
+    time_events: usize,
+    indicators: usize,
+}
+
+/// One run of [`model_exchange_events_are_reached_settle_and_follow_the_states`] to `stop`, its
+/// inputs at their start values or (`excited`) moved off them.
+fn events_run(fmu: &Fmu, h: f64, stop: f64, excited: bool) -> EventsRun {
     let mut inst = Instance::new_me(fmu);
-    let info0 = inst.me_initialize();
+    let info0 = if excited {
+        inst.me_initialize()
+    } else {
+        inst.me_initialize_at_start()
+    };
     let mut euler = Euler::new(&inst, h, &info0);
     let (s, z) = inst.get_event_indicators();
     assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
@@ -1365,24 +1414,12 @@ pub fn model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu)
     }
     assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
     assert_eq!(inst.terminate(), fmi2OK, "{}", inst.log_text());
-    if euler.events == 0 && z.is_empty() {
-        limitation(format!(
-            "{NOT_DECLARED}events: no event indicator, no time event in {stop} s"
-        ));
-    } else if euler.events == 0 {
-        limitation(format!(
-            "{}events: none in {stop} s of explicit Euler from the start values (the default experiment's \
-             stop time, at most {} steps): the {} event indicators never changed domain",
-            crate::outcome::NOT_EXERCISED,
-            crate::outcome::MAX_RUN_STEPS,
-            z.len()
-        ));
+    EventsRun {
+        steps: n,
+        events: euler.events,
+        time_events,
+        indicators: z.len(),
     }
-    info(format!(
-        "{n} explicit-Euler steps to t = {stop}: {} events, {time_events} of them time events, {} event indicators",
-        euler.events,
-        z.len()
-    ));
 }
 
 /// The calls that continue a run from a saved state: in EventMode the event iteration first.

@@ -110,7 +110,22 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
     let h = fmu.step_size().min(1e-3);
     let steps = 200;
     let me = run(fmu, true, steps, h);
-    let last: Vec<f64> = me.last().unwrap().iter().map(|b| f64::from_bits(*b)).collect();
+    // The Float64 values lead what `observe` records (their elements counted); the raw bytes of
+    // the other types follow, which are no f64 to test for finiteness (an Int64 -5 is a NaN's
+    // bits).
+    let n_float64: usize = fmu
+        .md
+        .of_type(Type::Float64)
+        .filter(|v| v.clocks.is_empty())
+        .map(|v| fmu.element_count(v))
+        .sum();
+    let last: Vec<f64> = me
+        .last()
+        .unwrap()
+        .iter()
+        .take(n_float64)
+        .map(|b| f64::from_bits(*b))
+        .collect();
     assert!(
         last.iter().all(|v| v.is_finite()),
         "{}: non-finite values after {steps} Euler steps of {h}: {last:?}",
@@ -138,7 +153,9 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
 }
 
 /// The events of an importer's run through the FMI 3.0 calls (explicit Euler up to the default
-/// experiment's stop time, at most [`crate::outcome::MAX_RUN_STEPS`] steps, stepping onto every time event and entering Event Mode
+/// experiment's stop time, at most [`crate::outcome::MAX_RUN_STEPS`] steps, from the start values
+/// and, where no event happens there, again with the inputs moved off them; stepping onto every
+/// time event and entering Event Mode
 /// where an event indicator changes domain): every announced time event is reached and followed
 /// by a later one (or none), the event iteration settles within 100 rounds, the indicators are a
 /// function of time and states (the same states set again give them bit for bit), and
@@ -152,9 +169,60 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
         .stop_time()
         .unwrap_or(1.0)
         .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
+    // The default experiment from the start values first (what the FMU's user runs); where no
+    // event happens there and the FMU has inputs, again with the inputs moved off their start
+    // values (a model whose events depend on an input).
+    let mut run = me_events_run(fmu, h, stop, false);
+    let mut how = "from the start values";
+    if run.events == 0 && !excitation(fmu).is_empty() {
+        run = me_events_run(fmu, h, stop, true);
+        how = "with the inputs moved off their start values (none happened from the start values)";
+    }
+    let EventsRun {
+        steps,
+        events,
+        time_events,
+        indicators: nz,
+        end,
+    } = run;
+    if events == 0 && nz == 0 {
+        limitation(format!(
+            "{}events: no event indicator, no time event in {stop} s",
+            crate::outcome::NOT_DECLARED
+        ));
+    } else if events == 0 {
+        limitation(format!(
+            "{}events: none in {stop} s of explicit Euler from the start values, nor with the inputs moved off \
+             them (the default experiment's stop time, at most {} steps): the {nz} event indicators never \
+             changed domain",
+            crate::outcome::NOT_EXERCISED,
+            crate::outcome::MAX_RUN_STEPS
+        ));
+    }
+    info(format!(
+        "{steps} explicit-Euler steps up to t = {end} {how}: {events} events, {time_events} of them time events, \
+         {nz} event indicators"
+    ));
+}
+
+/// What one run of the events checks saw (`handed`: of co-simulation, the events handed to the
+/// importer, in `events`).
+struct EventsRun {
+    steps: usize,
+    events: usize,
+    time_events: usize,
+    indicators: usize,
+    end: f64,
+}
+
+/// One run of [`fmi3_model_exchange_events_are_reached_settle_and_follow_the_states`] to
+/// `stop`, its inputs at their start values or (`excited`) moved off them.
+fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
     let id = &fmu.id;
     let mut i = Inst::me(fmu);
-    excite(&i);
+    if excited {
+        excite(&i);
+    }
     assert_eq!(i.enter_init(0.0), fmi3OK, "{id}: {}", i.log_text());
     assert_eq!(i.exit_init(), fmi3OK, "{id}: {}", i.log_text());
     let api = i.api();
@@ -261,28 +329,19 @@ pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: 
             );
         }
     }
-    if events == 0 && nz == 0 {
-        limitation(format!(
-            "{}events: no event indicator, no time event in {stop} s",
-            crate::outcome::NOT_DECLARED
-        ));
-    } else if events == 0 {
-        limitation(format!(
-            "{}events: none in {stop} s of explicit Euler from the start values (the default experiment's \
-             stop time, at most {} steps): the {nz} event indicators never changed domain",
-            crate::outcome::NOT_EXERCISED,
-            crate::outcome::MAX_RUN_STEPS
-        ));
+    EventsRun {
+        steps,
+        events,
+        time_events,
+        indicators: nz,
+        end: i.time,
     }
-    info(format!(
-        "{steps} explicit-Euler steps up to t = {}: {events} events, {time_events} of them time events, {nz} event indicators",
-        i.time
-    ));
 }
 
 /// Co-simulation with event mode (`hasEventMode="true"`; instantiated with eventModeUsed and
 /// earlyReturnAllowed), as an importer runs it up to the default experiment's stop time (at most
-/// 2 s): after initialization the instance is in Event Mode (fmi3UpdateDiscreteStates settles,
+/// [`crate::outcome::MAX_RUN_STEPS`] steps; from the start values, and where no event happens
+/// there, again with the inputs moved off them): after initialization the instance is in Event Mode (fmi3UpdateDiscreteStates settles,
 /// fmi3EnterStepMode); every fmi3DoStep completes, or returns at an event with
 /// eventHandlingNeeded, earlyReturn exactly when it stopped before the step's end, and
 /// lastSuccessfulTime within the step; the event is then handled in Event Mode and stepping
@@ -294,7 +353,6 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
     if !cs.has_event_mode {
         skip_not_declared("hasEventMode");
     }
-    let id = &fmu.id;
     let h = fmu.step_size();
     let stop = fmu
         .md
@@ -302,8 +360,37 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
         .stop_time()
         .unwrap_or(1.0)
         .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
+    let mut run = cs_events_run(fmu, h, stop, false);
+    let mut how = "from the start values";
+    if run.events == 0 && !excitation(fmu).is_empty() {
+        run = cs_events_run(fmu, h, stop, true);
+        how = "with the inputs moved off their start values (none happened from the start values)";
+    }
+    let (handed, steps) = (run.events, run.steps);
+    if handed == 0 && fmu.n_event_indicators_declared() == 0 {
+        limitation(format!("{}events: none in {stop} s", crate::outcome::NOT_DECLARED));
+    } else if handed == 0 {
+        limitation(format!(
+            "{}events: none in {stop} s from the start values, nor with the inputs moved off them (the default \
+             experiment's stop time, at most {} steps): the {} event indicators never changed domain",
+            crate::outcome::NOT_EXERCISED,
+            crate::outcome::MAX_RUN_STEPS,
+            fmu.n_event_indicators_declared()
+        ));
+    }
+    info(format!(
+        "{steps} steps of {h} s in event mode {how}: {handed} events handed to the importer"
+    ));
+}
+
+/// One run of [`fmi3_co_simulation_event_mode_hands_the_events_to_the_importer`] to `stop`, its
+/// inputs at their start values or (`excited`) moved off them.
+fn cs_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
+    let id = &fmu.id;
     let mut i = Inst::cs_event_mode(fmu);
-    excite(&i);
+    if excited {
+        excite(&i);
+    }
     assert_eq!(i.enter_init(0.0), fmi3OK, "{id}: {}", i.log_text());
     assert_eq!(i.exit_init(), fmi3OK, "{id}: {}", i.log_text());
     let api = i.api();
@@ -363,18 +450,11 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
     let (s, values) = i.get_f64_of(&floats);
     assert_eq!(s, fmi3OK, "{id}: {}", i.log_text());
     assert!(values.iter().all(|v| v.is_finite()), "{id}: {values:?}");
-    if handed == 0 && fmu.n_event_indicators_declared() == 0 {
-        limitation(format!("{}events: none in {stop} s", crate::outcome::NOT_DECLARED));
-    } else if handed == 0 {
-        limitation(format!(
-            "{}events: none in {stop} s (the default experiment's stop time, at most {} steps): the {} \
-             event indicators never changed domain",
-            crate::outcome::NOT_EXERCISED,
-            crate::outcome::MAX_RUN_STEPS,
-            fmu.n_event_indicators_declared()
-        ));
+    EventsRun {
+        steps,
+        events: handed,
+        time_events: 0,
+        indicators: fmu.n_event_indicators_declared(),
+        end: i.time,
     }
-    info(format!(
-        "{steps} steps of {h} s in event mode: {handed} events handed to the importer"
-    ));
 }
