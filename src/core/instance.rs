@@ -2237,10 +2237,12 @@ impl<M: CoSimulation> Instance<M> {
     /// fmi2GetDirectionalDerivative: dv_unknown = (d unknowns / d knowns) dv_known, exact, by
     /// running the equations once on dual numbers seeded with dv_known. Knowns: the
     /// continuous states (model exchange) and the Real inputs; unknowns: what the equations
-    /// compute (derivatives, outputs, locals), or a known itself. An array (FMI 3.0) counts
-    /// each of its elements: `dv_known` holds one value per element of the knowns, row-major,
-    /// `dv_unknown` one per element of the unknowns (the counting of FMI 3.0's nSeed and
-    /// nSensitivity; a sized array's elements within its lengths now).
+    /// compute (derivatives, outputs, locals), or a known itself. In Initialization Mode also
+    /// the InitialUnknowns with respect to the knowns of that mode (inputs, parameters and
+    /// start values with initial = exact: `super::initial_derivatives`). An array (FMI 3.0)
+    /// counts each of its elements: `dv_known` holds one value per element of the knowns,
+    /// row-major, `dv_unknown` one per element of the unknowns (the counting of FMI 3.0's nSeed
+    /// and nSensitivity; a sized array's elements within its lengths now).
     pub fn directional_derivative(
         &mut self,
         unknowns: &[u32],
@@ -2251,9 +2253,10 @@ impl<M: CoSimulation> Instance<M> {
         let f = self.terms.name(Function::GetDirectionalDerivative);
         use num_dual::Dual64;
         let mut probe = self.sim.model.continuous::<f64>();
+        let initialization = self.sim.state == State::InitializationMode;
         let mut at = 0;
         for vr in knowns {
-            let Some(decl) = M::declaration(*vr, VarType::Real) else {
+            let Some((decl, n)) = self.derivative_declaration(*vr, initialization) else {
                 return self.error(&format!(
                     "{f}: known value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
@@ -2262,15 +2265,22 @@ impl<M: CoSimulation> Instance<M> {
             let is_state = M::STATES.contains(vr);
             let allowed = decl.causality == Causality::Input && decl.variability == Variability::Continuous
                 || (is_state && self.model_exchange);
-            if !allowed || M::continuous_element(&mut probe, *vr, 0).is_none() {
+            let allowed = allowed && M::continuous_element(&mut probe, *vr, 0).is_some()
+                || initialization && Self::is_initial_known(decl);
+            if !allowed {
                 return self.error(&format!(
-                    "{f}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}",
+                    "{f}: '{}' (vr {vr}) is not a known of the equations in {}: the knowns are the continuous Real inputs{}{}",
                     decl.name,
                     if self.model_exchange { "model exchange" } else { "co-simulation" },
-                    if self.model_exchange { " and the continuous states" } else { "" }
+                    if self.model_exchange { " and the continuous states" } else { "" },
+                    if initialization {
+                        ", and in Initialization Mode the Real inputs and the Real variables with initial = exact \
+                         (parameters, start values) the InitialUnknowns depend on"
+                    } else {
+                        ""
+                    }
                 ));
             }
-            let n = super::structural::element_count(&self.sim.model, decl);
             for (i, dv) in dv_known.iter().skip(at).take(n).enumerate() {
                 if !dv.is_finite() {
                     let what = if decl.is_array() {
@@ -2287,7 +2297,7 @@ impl<M: CoSimulation> Instance<M> {
             at += n;
         }
         for vr in unknowns {
-            let Some(decl) = M::declaration(*vr, VarType::Real) else {
+            let Some((decl, _)) = self.derivative_declaration(*vr, initialization) else {
                 return self.error(&format!(
                     "{f}: unknown value reference {vr} is not a Real variable of {}",
                     M::DESCRIPTION.model_identifier
@@ -2296,17 +2306,20 @@ impl<M: CoSimulation> Instance<M> {
             // A discrete output is held between events: its derivative with respect to the
             // continuous knowns is 0 (answered below: it has no slot in the equations).
             let held = decl.causality == Causality::Output && decl.variability == Variability::Discrete;
-            if !held && M::continuous_element(&mut probe, *vr, 0).is_none() {
+            let initial_unknown = initialization && M::DESCRIPTION.is_initial_unknown(decl);
+            if !held && !initial_unknown && M::continuous_element(&mut probe, *vr, 0).is_none() {
                 return self.error(&format!(
-                    "{f}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous): no derivative",
-                    decl.name
+                    "{f}: '{}' (vr {vr}) is not computed by the equations (a parameter, or not continuous){}: no derivative",
+                    decl.name,
+                    if initialization { " nor an InitialUnknown" } else { "" }
                 ));
             }
         }
-        if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(f, false)
-        {
-            return status;
+        if initialization {
+            if let Err(status) = self.initialize_model(f, false) {
+                return status;
+            }
+            return self.initial_directional_derivative(f, unknowns, knowns, dv_known, dv_unknown);
         }
         let model = &self.sim.model;
         let elements = |vr: u32| {

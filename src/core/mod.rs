@@ -28,6 +28,7 @@ macro_rules! listed_enum {
 }
 
 pub mod guard;
+mod initial_derivatives;
 pub mod instance;
 pub mod logging;
 pub mod machine;

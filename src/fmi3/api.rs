@@ -1436,7 +1436,8 @@ unsafe fn derivative<M: CoSimulation>(
     })
 }
 
-/// fmi3GetDirectionalDerivative: sensitivity = J seed, exact (dual numbers).
+/// fmi3GetDirectionalDerivative: sensitivity = J seed, exact (dual numbers); in Initialization
+/// Mode the InitialUnknowns' over the knowns of that mode (`core::initial_derivatives`).
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
     c: fmi3Instance,
     unknowns: *const fmi3ValueReference,
@@ -1472,7 +1473,8 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
 }
 
 /// fmi3GetAdjointDerivative: sensitivity = Jᵀ seed, J = d unknowns / d knowns, exact: each
-/// column of J from one run of the equations on dual numbers (one per known).
+/// column of J from one run of the equations on dual numbers (one per known); in
+/// Initialization Mode each column as fmi3GetDirectionalDerivative gives it there.
 pub unsafe fn get_adjoint_derivative<M: CoSimulation>(
     c: fmi3Instance,
     unknowns: *const fmi3ValueReference,
