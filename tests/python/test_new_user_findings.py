@@ -220,3 +220,84 @@ def test_a_crate_says_which_start_values_its_documentation_page_runs_from():
                                                    "[package.metadata.fmu]\ndocumentation-start = { Tx = 25.0 }\n"))
     out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode != 0 and "documentation-start: the model has no variable 'Tx'" in out.stderr, out.stderr[-3000:]
+
+
+INPUT_THERMOSTAT = '''//! A thermostat whose room temperature is an input, and a counter of its switches as Int64.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A heated room, its thermostat and a switch counter
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+#[fmu(fmi3_only)]
+pub struct InputThermostat {
+    /// Room temperature (outside the heated body)
+    #[variable(vr = 0, name = "T_room", input, continuous, start = 10.0)]
+    pub t_room: f64,
+    /// Body temperature
+    #[variable(vr = 1, name = "T", output, continuous, initial = exact, start = 15.0, depends = [T])]
+    pub temp: f64,
+    /// dT/dt
+    #[variable(vr = 2, name = "der(T)", local, derivative_of = temp, depends = [T, T_room], initial_depends = [T, T_room])]
+    pub der_temp: f64,
+    /// T minus the threshold the heater switches at next
+    #[variable(vr = 3, name = "z", local, continuous, event_indicator, depends = [T])]
+    pub z: f64,
+    /// Minus one, then minus the number of switches (an Int64 whose bits are a NaN's)
+    #[variable(vr = 4, output, discrete, initial = exact, start = -5, depends = [])]
+    pub count: i64,
+    /// The heater is on
+    pub on: bool,
+}
+
+impl Model for InputThermostat {
+    fn derivatives<D: Real>(&self, _t: D, v: &mut InputThermostatContinuous<D>) {
+        let heat = if self.on { 2.0 } else { 0.0 };
+        v.der_temp = (v.temp - v.t_room) * -0.1 + heat;
+    }
+
+    fn outputs<D: Real>(&self, _t: D, v: &mut InputThermostatContinuous<D>) {
+        let threshold = if self.on { 22.0 } else { 18.0 };
+        v.z = v.temp - threshold;
+    }
+
+    fn update(&mut self, _event: &mut Event) -> Result<(), String> {
+        if self.on && self.temp >= 22.0 {
+            self.on = false;
+            self.count -= 1;
+        } else if !self.on && self.temp <= 18.0 {
+            self.on = true;
+            self.count -= 1;
+        }
+        Ok(())
+    }
+}
+
+impl CoSimulation for InputThermostat {}
+
+rustfmu::export_fmi3!(InputThermostat);
+'''
+
+
+def test_the_checks_see_events_that_depend_on_an_input_and_read_an_int64_as_an_int64():
+    """Found by the new user's trial of issue 52: (1) the event checks moved every input off its
+    start value before the run and then reported "none in 40 s ... from the start values" for a
+    thermostat whose room temperature is an input (from the start values it switches 8 times);
+    (2) the model-exchange Euler check read the variables of other types as f64 bits and failed
+    an FMU whose Int64 output is -5 ("non-finite values ... NaN"). The event checks now run from
+    the start values first (and with the inputs moved only where no event happened there); the
+    finiteness check reads the Float64 values only."""
+    from conftest import USER_TARGET
+    crate, env = outside_crate("input-thermostat", fresh=True)
+    (crate / "src" / "lib.rs").write_text(INPUT_THERMOSTAT)
+    toml = (crate / "Cargo.toml").read_text()
+    (crate / "Cargo.toml").write_text(toml.replace("stop-time = 1.0,", "stop-time = 40.0,"))
+    out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
+    assert out.returncode == 0, out.stderr[-4000:]
+    fmu = USER_TARGET / "fmu" / "fmi3" / "InputThermostat.fmu"
+    out = subprocess.run(["cargo", "fmu", "check", str(fmu), "--random-sequences", "20"], cwd=crate, env=env,
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stdout[-5000:] + out.stderr[-2000:]
+    assert "never changed domain" not in out.stdout, out.stdout[-5000:]
+    assert "from the start values: " in out.stdout and "events handed to the importer" in out.stdout, out.stdout[-5000:]
+    me = __import__("re").search(r"up to t = \S+ from the start values: (\d+) events", out.stdout)
+    assert me and int(me.group(1)) >= 2, out.stdout[-5000:]
