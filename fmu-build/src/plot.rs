@@ -300,8 +300,9 @@ pub fn svg(run: &Run, title: &str) -> String {
 /// `Err` says why there is no picture).
 pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, f64)]) -> Result<String, String> {
     let binary = std::fs::read(so).map_err(|e| format!("{}: {e}", so.display()))?;
-    let me = crate::bundle::read_library(&binary, rustfmu::description::FmiVersion::V2)
-        .map_err(|_| "the library has no FMI 2.0 interface to run it through".to_string())?;
+    let me = crate::bundle::read_library(&binary, rustfmu::description::FmiVersion::V2).map_err(|_| {
+        "the page's run goes through FMI 2.0 co-simulation, and the library implements FMI 3.0 only".to_string()
+    })?;
     if !me.interfaces.co_simulation {
         return Err("the library has no co-simulation interface to run it through".into());
     }
@@ -356,10 +357,12 @@ pub fn picture(so: &Path, resources: Option<&Path>, starts: &[(String, f64)]) ->
                 .output()
             {
                 Ok(out) if out.status.success() => Ok(String::from_utf8_lossy(&out.stdout).into_owned()),
+                // The child's last line, without its "cargo-fmu: error: " (a missing picture is a
+                // note of the build, not an error).
                 Ok(out) => Err(String::from_utf8_lossy(&out.stderr)
                     .lines()
                     .last()
-                    .map(str::to_string)
+                    .map(|l| l.split_once(": error: ").map_or(l, |(_, m)| m).to_string())
                     .unwrap_or_else(|| format!("the default experiment's run ended with {}", out.status))),
                 Err(e) => Err(format!("cannot start {}: {e}", exe.display())),
             }
