@@ -291,7 +291,7 @@ impl<'a> Instance<'a> {
                 self.log_text()
             );
             check_event_info(self.fmu, &info, self.time);
-            if info.newDiscreteStatesNeeded == fmi2False {
+            if info.newDiscreteStatesNeeded == fmi2False || info.terminateSimulation == fmi2True {
                 return info;
             }
         }
@@ -411,11 +411,9 @@ pub fn check_event_info(fmu: &Fmu, info: &fmi2EventInfo, now: f64) {
             fmu.id
         );
     }
-    assert_eq!(
-        info.terminateSimulation, fmi2False,
-        "{}: fmi2NewDiscreteStates at t = {now} asks to terminate the simulation ({info:?})",
-        fmu.id
-    );
+    // terminateSimulation = fmi2True is the model ending the simulation (FMI 2.0, 3.2.2:
+    // fmi2NewDiscreteStates "terminateSimulation ... the simulation should be terminated"): legal;
+    // the run stops there ([`Euler::terminated`]).
     if info.nextEventTimeDefined == fmi2True {
         assert!(
             info.nextEventTime.is_finite() && info.nextEventTime >= now,
@@ -437,6 +435,10 @@ pub struct Euler {
     indicators: Vec<f64>,
     /// Events handled so far.
     pub events: usize,
+    /// The model asked to end the simulation (fmi2CompletedIntegratorStep or
+    /// fmi2NewDiscreteStates with terminateSimulation): the run ends there, the instance in
+    /// EventMode or ContinuousTimeMode (fmi2Terminate is legal from both).
+    pub terminated: bool,
 }
 
 impl Euler {
@@ -455,6 +457,7 @@ impl Euler {
             next_event: (info.nextEventTimeDefined == fmi2True).then_some(info.nextEventTime),
             indicators,
             events: 0,
+            terminated: info.terminateSimulation == fmi2True,
         }
     }
 
@@ -490,10 +493,11 @@ impl Euler {
             "{id}: fmi2CompletedIntegratorStep at t = {t1}: {}",
             inst.log_text()
         );
-        assert!(
-            !done.terminate_simulation,
-            "{id}: fmi2CompletedIntegratorStep at t = {t1} asks to terminate the simulation"
-        );
+        if done.terminate_simulation {
+            self.terminated = true;
+            self.next_event = None;
+            return;
+        }
         let (s, z) = inst.get_event_indicators();
         assert_eq!(
             s,
@@ -512,6 +516,11 @@ impl Euler {
                 inst.log_text()
             );
             let info = inst.event_iteration();
+            if info.terminateSimulation == fmi2True {
+                self.terminated = true;
+                self.next_event = None;
+                return;
+            }
             assert_eq!(
                 inst.enter_continuous_time_mode(),
                 fmi2OK,
