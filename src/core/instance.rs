@@ -1625,15 +1625,19 @@ pub fn check_restored<M: CoSimulation>(sim: &Sim<M>) -> Result<(), String> {
     Ok(())
 }
 
-/// `[min, max]` with exclusive ends as `(`/`)`, for messages.
+/// `[min, max]` with exclusive ends as `(`/`)`, for messages; an undeclared end of an integer
+/// type is the type's own (`[0, 200]` for a UInt8 with max = 200, not `(-inf, 200]`).
 fn range_text(v: &Variable) -> String {
-    let lo = match v.min {
-        Some(b) => format!("{}{}", if b.exclusive { "(" } else { "[" }, b.value),
-        None => "(-inf".into(),
+    let own = v.var_type.integer_range();
+    let lo = match (v.min, own) {
+        (Some(b), _) => format!("{}{}", if b.exclusive { "(" } else { "[" }, b.value),
+        (None, Some((lo, _))) => format!("[{lo}"),
+        (None, None) => "(-inf".into(),
     };
-    let hi = match v.max {
-        Some(b) => format!("{}{}", b.value, if b.exclusive { ")" } else { "]" }),
-        None => "inf)".into(),
+    let hi = match (v.max, own) {
+        (Some(b), _) => format!("{}{}", b.value, if b.exclusive { ")" } else { "]" }),
+        (None, Some((_, hi))) => format!("{hi}]"),
+        (None, None) => "inf)".into(),
     };
     format!("{lo}, {hi}")
 }
