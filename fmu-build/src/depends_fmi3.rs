@@ -461,7 +461,7 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
     // seen[u][k]: how input k moved output u at a later tick; first[u][k]: at the first tick.
     let mut seen: Vec<Vec<Option<String>>> = vec![vec![None; inputs.len()]; outputs.len()];
     let mut first: Vec<Vec<Option<String>>> = vec![vec![None; inputs.len()]; outputs.len()];
-    let mut rng = Rng(0x0c10_c4ed_de9e_d5);
+    let mut rng = Rng(0x000c_10c4_edde_9ed5);
     let mut checked_points = 0;
     for point in 0..CLOCKED_POINTS {
         let base: Vec<f64> = inputs
