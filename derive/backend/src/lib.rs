@@ -10,9 +10,9 @@
 //! non-input, an undeclared unit, a start value where the standard forbids one.
 
 mod enums;
+mod long_arrays;
 mod metadata;
 mod model;
-mod long_arrays;
 mod units;
 
 use proc_macro2::TokenStream;
