@@ -45,7 +45,8 @@ pub(crate) fn checks(input: &DeriveInput) -> TokenStream {
         let message = |what: &str| {
             format!(
                 "'{name}' ({shape}) is an array {what}, and serde (de)serializes arrays of at most {SERDE_MAX} (the FMU \
-                 state serializes the model): add {attribute} to the field"
+                 state serializes the model): add {attribute} to the field (serde's errors about `Serialize`/`Deserialize` \
+                 for this array that follow have the same cause)"
             )
         };
         let numbers: Option<Vec<usize>> = lengths.iter().map(literal_length).collect();
