@@ -574,14 +574,28 @@ pub fn build_versions(
                 match check_built_version(c, *v, &kept) {
                     Err(e) if asked.is_some() || c.fmi_versions.is_some() => return Err(e),
                     Err(_) => {
+                        let got = other_version(*v);
+                        // A model that could export both is told how; an FMI 3.0-only one is not
+                        // (export_fmu! would not compile for it).
+                        let fmi3_only = std::fs::read(&kept)
+                            .ok()
+                            .and_then(|b| crate::bundle::library_versions(&b).ok())
+                            .is_some_and(|has| has.iter().any(|me| me.description.has_fmi3_only()));
+                        let both = if fmi3_only {
+                            String::new()
+                        } else {
+                            "`rustfmu::export_fmu!(YourModel)` exports both versions from one binary; ".into()
+                        };
                         eprintln!(
                             "fmu: note: {} implements FMI {} only (it calls rustfmu::export_fmi{}!): FMI {} is not built; \
-                             `fmi-versions = [\"{}\"]` in [package.metadata.fmu] of its Cargo.toml says so and silences this note",
+                             {both}`fmi-versions = [\"{}\"]` in [package.metadata.fmu] of its Cargo.toml says FMI {} only \
+                             and silences this note",
                             c.package,
-                            other_version(*v).text(),
-                            &other_version(*v).text()[..1],
+                            got.text(),
+                            &got.text()[..1],
                             v.text(),
-                            other_version(*v).text()
+                            got.text(),
+                            got.text()
                         );
                         not_implemented.insert((c.package.clone(), *v));
                     }

@@ -195,13 +195,24 @@ def test_cargo_fmu_build_makes_the_versions_asked_for(user_crate):
 
 
 def test_a_crate_that_calls_export_fmi2_is_told_to_call_export_fmu(user_crate):
+    """A crate that calls `export_fmi2!` gets what its library implements, FMI 2.0, with a note
+    naming `export_fmu!` (both versions) and `fmi-versions` (issue 52: the tool can see which
+    versions a library implements; a default build no longer fails on it). Asked for FMI 3.0 by
+    name, the build fails and says how to get it."""
     crate, _, env = user_crate
     lib = crate / "src" / "lib.rs"
     src = lib.read_text()
     assert "rustfmu::export_fmu!(GainLag);" in src, src
+    fmu3 = FMUS / "fmi3" / "GainLag.fmu"
     try:
         lib.write_text(src.replace("rustfmu::export_fmu!(GainLag);", "rustfmu::export_fmi2!(GainLag);"))
-        bad = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+        fmu3.unlink(missing_ok=True)
+        out = run(["cargo", "fmu", "build"], crate, env)
+        assert ("implements FMI 2.0 only (it calls rustfmu::export_fmi2!): FMI 3.0 is not built" in out.stderr
+                and "export_fmu!(YourModel)` exports both versions" in out.stderr), out.stderr[-3000:]
+        assert (FMUS / "GainLag.fmu").exists() and not fmu3.exists()
+        bad = subprocess.run(["cargo", "fmu", "build", "--fmi-version", "3"], cwd=crate, env=env, capture_output=True,
+                             text=True, timeout=900)
         assert bad.returncode != 0 and "export_fmu!" in bad.stderr and "export_fmi2!" in bad.stderr, bad.stderr
         # Only FMI 2.0 asked for: it builds.
         run(["cargo", "fmu", "build", "--fmi-version", "2"], crate, env)
