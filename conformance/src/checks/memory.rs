@@ -56,7 +56,9 @@ pub fn ten_thousand_instantiate_free_cycles_leave_memory_flat(fmu: &Fmu) {
 
 /// 500 cycles to warm up, then 10,000 of `cycle(false)` (instantiate/free) and of `cycle(true)`
 /// (instantiate, run, FMU state, free): the resident set may grow by 320 KiB at most each time
-/// (a leak of 32 bytes per cycle would exceed it). Shared by the FMI 2.0 and 3.0 checks.
+/// (a leak of 32 bytes per cycle would exceed it); a growth over that is measured once more
+/// and fails only if it repeats (a leak does, a one-time growth of the allocator does not).
+/// Shared by the FMI 2.0 and 3.0 checks.
 ///
 /// An FMU whose cycle is slow (a container FMU unpacks and loads its components at every
 /// fmi2Instantiate: about 30 ms) gets as many cycles as fit in [`BUDGET`] seconds per kind, at
@@ -83,17 +85,33 @@ pub fn cycles_leave_memory_flat(id: &str, mut cycle: impl FnMut(bool)) {
             cycle(full);
         }
         let slack = (SLACK * cycles / CYCLES).max(128 * 1024);
-        let before = rss();
-        for _ in 0..cycles {
-            cycle(full);
-        }
-        let after = rss();
         let what = if full {
             "instantiate/run/state/free"
         } else {
             "instantiate/free"
         };
-        info(format!("{cycles} {what} cycles: RSS {before} -> {after} bytes"));
+        let mut measure = || {
+            let before = rss();
+            for _ in 0..cycles {
+                cycle(full);
+            }
+            let after = rss();
+            info(format!("{cycles} {what} cycles: RSS {before} -> {after} bytes"));
+            after.saturating_sub(before)
+        };
+        let grew = measure();
+        // A leak grows the resident set again in every run of the cycles; the allocator or the
+        // dynamic loader may grow it once (CI saw 54 pages once in 6002 container cycles, then
+        // none). So a growth over the slack is measured once more, and fails only if it repeats.
+        let grew = if grew > slack {
+            let again = measure();
+            info(format!(
+                "the RSS grew by {grew} bytes, over the {slack} allowed: {cycles} more cycles grew it by {again}"
+            ));
+            again
+        } else {
+            grew
+        };
         if cycles < CYCLES {
             limitation(format!(
                 "a {what} cycle takes {:.1} ms: {cycles} cycles ran, not {CYCLES} (a leak under {} bytes per cycle goes unseen)",
@@ -102,9 +120,8 @@ pub fn cycles_leave_memory_flat(id: &str, mut cycle: impl FnMut(bool)) {
             ));
         }
         assert!(
-            after <= before + slack,
-            "{id}: RSS grew by {} bytes over {cycles} {what} cycles (allowed {slack})",
-            after - before
+            grew <= slack,
+            "{id}: RSS grew by {grew} bytes over {cycles} {what} cycles (allowed {slack}), in a second run of the cycles as in the first: a leak"
         );
     }
 }
