@@ -44,28 +44,24 @@
 //! instance while another call is inside it; the GUID; `catch_unwind` at every entry point. The declaration attributes are documented in
 //! `docs/declarations.md` and on [`macro@Model`].
 
-// `unsafe` only at the C boundary, each block with the reason it is sound.
-#![deny(clippy::undocumented_unsafe_blocks)]
-
 extern crate self as rustfmu;
 
 mod big_array;
 mod clock;
 pub mod description;
-mod events;
 mod model;
 pub mod solver;
+mod step;
 pub mod testing;
 mod value;
 
 pub use big_array::{BigArray, BigMatrix};
 pub use clock::Clock;
-pub use events::{Event, MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
-pub use model::{
-    CoSimulation, Context, EventClock, Model, Real, Standalone, StateVector, StepFailure, StepView, Variables,
-};
+pub use model::{CoSimulation, Context, Event, EventClock, Model, Real, StateVector, StepFailure, StepView, Variables};
 pub use num_dual;
 pub use rustfmu_derive::{FmuEnum, Model};
+pub use step::events::{MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
+pub use step::standalone::Standalone;
 pub use value::{FmiType, FmuEnum, Value};
 
 #[doc(hidden)]

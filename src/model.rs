@@ -13,7 +13,6 @@
 //!   with an exact step of its own supplies it instead.
 
 use crate::description::{ModelDescription, Variable};
-pub use crate::events::Event;
 use crate::solver::{Dopri5, Tolerances};
 use crate::value::Value;
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
@@ -267,11 +266,11 @@ pub trait Variables: Sized {
         false
     }
     /// The Clock variable `vr` (FMI 3.0).
-    fn clock(&self, _vr: u32) -> Option<&crate::Clock> {
+    fn clock(&self, _vr: u32) -> Option<&crate::clock::Clock> {
         None
     }
     /// The Clock variable `vr`, to activate or deactivate it.
-    fn clock_mut(&mut self, _vr: u32) -> Option<&mut crate::Clock> {
+    fn clock_mut(&mut self, _vr: u32) -> Option<&mut crate::clock::Clock> {
         None
     }
     /// Deactivates every clock (after the event's update).
@@ -287,6 +286,14 @@ pub trait Variables: Sized {
                 && self.get(v.value_reference).is_some_and(|x| !x.is_finite())
         })
     }
+}
+
+/// Where [`Context::log`] sends a message: the importer's logger (the runtime implements it).
+pub(crate) trait Log {
+    /// Whether a message under `category` would reach the importer.
+    fn wants_named(&self, category: &str) -> bool;
+    /// Logs `message` under `category` (a declared or a runtime category), with status OK.
+    fn log_named(&self, category: &str, message: &str);
 }
 
 /// What the runtime tells a model, and how a model logs: the experiment's start time and
@@ -344,7 +351,7 @@ pub trait Variables: Sized {
 pub struct Context<'a> {
     pub(crate) start_time: f64,
     pub(crate) tolerance: Option<f64>,
-    pub(crate) logger: Option<&'a crate::core::logging::Logger>,
+    pub(crate) logger: Option<&'a dyn Log>,
     pub(crate) resources: Option<&'a std::path::Path>,
     /// The integrator's memory, in a communication step.
     pub(crate) solver: Option<&'a mut Dopri5>,
@@ -363,17 +370,6 @@ pub struct Context<'a> {
     pub(crate) intermediate: Option<&'a mut (dyn FnMut(f64) -> Option<f64> + 'static)>,
     /// FMI 2.0 input derivatives: (input, du/dt); over a step from t the input is u + du (t' - t).
     pub(crate) input_slopes: &'a [(u32, f64)],
-}
-
-/// The inputs of `c` with a derivative in `slopes` at `dt` after the step's start: u + du dt,
-/// u the value the model holds (set by the importer at the step's start).
-#[inline]
-fn slope_inputs<M: Variables>(c: &mut M::Continuous<f64>, model: &M, slopes: &[(u32, f64)], dt: f64) {
-    for &(vr, s) in slopes {
-        if let (Some(Value::Real(u)), Some(slot)) = (model.get(vr), M::continuous_slot(c, vr)) {
-            *slot = u + s * dt;
-        }
-    }
 }
 
 /// Which events a co-simulation step leaves to the importer's Event Mode (FMI 3.0, 4.2.1:
@@ -403,7 +399,7 @@ pub struct EventClock {
     pub initial: bool,
     /// Events handled so far (state and time events, and the initial one), for logs and tests.
     pub count: u64,
-    /// The model asked to end the simulation ([`crate::Event::terminate`]).
+    /// The model asked to end the simulation ([`Event::terminate`]).
     pub terminated: bool,
     /// The pending time event is due although the instance's time may lie a few round-offs
     /// before it: a communication step ended within round-off of it (an importer that keeps
@@ -444,7 +440,7 @@ impl Context<'_> {
     pub(crate) fn outside_step<'a>(
         start_time: f64,
         tolerance: Option<f64>,
-        logger: Option<&'a crate::core::logging::Logger>,
+        logger: Option<&'a dyn Log>,
         resources: Option<&'a std::path::Path>,
         model_exchange: bool,
     ) -> Context<'a> {
@@ -479,124 +475,6 @@ impl Context<'_> {
             intermediate: None,
             input_slopes: &[],
         }
-    }
-
-    /// Integrates the model's [`Model::derivatives`] from `t` over `h` with the runtime's
-    /// Dormand-Prince 5(4) integrator, at [`CoSimulation::tolerances`], the inputs held; then
-    /// computes its outputs at the end. What [`CoSimulation::do_step`] does unless a model
-    /// supplies its own step.
-    ///
-    /// A model with events ([`Model::update`] with event indicators or time events) has them
-    /// handled inside the step: the integrator stops at every sign change of an event indicator
-    /// (located on its dense output to [`CoSimulation::event_tolerance`]) and at every time
-    /// event, the model's [`Model::update`] runs (event iteration included), and the
-    /// integration restarts from the new state.
-    pub fn integrate<M: CoSimulation>(&mut self, model: &mut M, t: f64, h: f64) -> Result<(), StepFailure> {
-        if !M::INDICATORS.is_empty()
-            || self.events.as_ref().is_some_and(|e| e.next_event_time.is_some())
-            || self.intermediate.is_some()
-        {
-            return crate::events::integrate_with_events(self, model, t, h);
-        }
-        let slopes = self.input_slopes;
-        if !slopes.is_empty() && self.events.as_ref().is_some_and(|e| e.next_event_time.is_some()) {
-            return Err(StepFailure {
-                reached_time: t,
-                message: "input derivatives over a step with a pending time event are not supported: the step that \
-                          handles time events holds the inputs"
-                    .into(),
-            });
-        }
-        // A structural parameter may hide entries of the state vector (a sized array state):
-        // they keep still, and the error norm is the visible entries' (core::structural). A
-        // model without one takes the closure without the mask (its step cost 200 instructions
-        // more with it: bench/callgrind.sh).
-        let sized = const { M::DESCRIPTION.has_sized_arrays() };
-        let mask = if sized {
-            crate::core::structural::active_mask(&*model)
-        } else {
-            None
-        };
-        let tol = if sized {
-            crate::core::structural::scaled_tolerances(model.tolerances(self), mask.as_ref())
-        } else {
-            model.tolerances(self)
-        };
-        let Some(solver) = self.solver.as_deref_mut() else {
-            return Err(StepFailure {
-                reached_time: t,
-                message: "no integrator in this context (use Context::standalone_with_solver)".into(),
-            });
-        };
-        let t0 = t;
-        let mut c = model.continuous::<f64>();
-        let mut x = M::states_of(&c);
-        let result = if sized {
-            <M::States as StateVector>::integrate(
-                solver,
-                |t, x| {
-                    M::set_states_of(&mut c, x);
-                    slope_inputs(&mut c, &*model, slopes, t - t0);
-                    model.derivatives(t, &mut c);
-                    let mut dx = M::derivatives_of(&c);
-                    crate::core::structural::hide(&mut dx, mask.as_ref());
-                    dx
-                },
-                t,
-                h,
-                &mut x,
-                tol,
-            )
-        } else {
-            <M::States as StateVector>::integrate(
-                solver,
-                |t, x| {
-                    M::set_states_of(&mut c, x);
-                    slope_inputs(&mut c, &*model, slopes, t - t0);
-                    model.derivatives(t, &mut c);
-                    M::derivatives_of(&c)
-                },
-                t,
-                h,
-                &mut x,
-                tol,
-            )
-        };
-        // The last right-hand side evaluated is, after a successful integration, the one at the
-        // final state (Dormand-Prince's last stage): its derivatives are already in `c`.
-        let fresh = M::states_of(&c)
-            .as_slice()
-            .iter()
-            .zip(x.as_slice())
-            .all(|(a, b)| a.to_bits() == b.to_bits());
-        M::set_states_of(&mut c, &x);
-        let reached = match &result {
-            Ok(()) => t + h,
-            Err(e) => e.time(),
-        };
-        if !slopes.is_empty() {
-            // The inputs at the step's end: there they now have these values.
-            slope_inputs(&mut c, &*model, slopes, reached - t0);
-            for &(vr, s) in slopes {
-                if let Some(Value::Real(u)) = model.get(vr) {
-                    model.set(vr, Value::Real(u + s * (reached - t0)));
-                }
-            }
-        }
-        if !fresh || !slopes.is_empty() {
-            model.derivatives(reached, &mut c);
-        }
-        model.outputs(reached, &mut c);
-        model.store_continuous(&c);
-        model.set_states(&x);
-        // And what the model computes outside the equations, from the step's end (as
-        // `evaluate` does; before, a step left those values where the last get had put them).
-        model.calculate(reached);
-        self.refreshed = true;
-        result.map_err(|e| StepFailure {
-            reached_time: e.time(),
-            message: e.to_string(),
-        })
     }
 
     /// The FMU's unpacked `resources/` folder (what `[package.metadata.fmu] resources` packaged),
@@ -690,6 +568,109 @@ pub struct StepFailure {
     pub reached_time: f64,
     /// What went wrong, for the importer's log.
     pub message: String,
+}
+
+/// What a model is told at an event, and what it answers ([`Model::update`]).
+///
+/// ```
+/// use rustfmu::prelude::*;
+/// use rustfmu::Variables;
+/// use serde::{Deserialize, Serialize};
+///
+/// /// Counts seconds: a time event every `period`.
+/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+/// pub struct Ticker {
+///     /// Ticks so far
+///     #[variable(vr = 0, output, discrete, initial = exact, start = 0)]
+///     pub ticks: i32,
+///     /// Time between ticks
+///     #[variable(vr = 1, parameter, fixed, start = 1.0, unit = "s", min > 0.0)]
+///     pub period: f64,
+/// }
+///
+/// impl Model for Ticker {
+///     fn update(&mut self, event: &mut Event) -> Result<(), String> {
+///         if event.time_event() {
+///             self.ticks += 1;
+///         }
+///         // The first tick one period after the start, then every period.
+///         event.schedule(event.time() + self.period);
+///         Ok(())
+///     }
+/// }
+/// impl CoSimulation for Ticker {}
+///
+/// let mut m = Ticker::start();
+/// let mut clock = rustfmu::EventClock { initial: true, ..Default::default() };
+/// let round = rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 0.0, &mut clock).unwrap();
+/// assert_eq!((m.ticks, clock.next_event_time, round.again), (0, Some(1.0), false));
+/// rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 1.0, &mut clock).unwrap();
+/// assert_eq!((m.ticks, clock.next_event_time), (1, Some(2.0)));
+/// ```
+pub struct Event<'e, 'c> {
+    pub(crate) time: f64,
+    pub(crate) initial: bool,
+    pub(crate) time_event: bool,
+    pub(crate) next_event_time: Option<f64>,
+    pub(crate) scheduled: bool,
+    pub(crate) again: bool,
+    pub(crate) terminate: Option<String>,
+    pub(crate) ctx: &'e Context<'c>,
+}
+
+impl Event<'_, '_> {
+    /// The time of the event: for a time event, the time it was scheduled for (the importer's
+    /// time may differ from it by round-off).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The event iteration right after initialization (Model Exchange: the first
+    /// fmi2NewDiscreteStates / fmi3UpdateDiscreteStates; Co-Simulation: at the end of
+    /// initialization). A sampled model schedules its first sample here.
+    pub fn initial(&self) -> bool {
+        self.initial
+    }
+
+    /// Whether the time event the model scheduled is due now (rather than, or as well as, a
+    /// state event).
+    pub fn time_event(&self) -> bool {
+        self.time_event
+    }
+
+    /// The time event scheduled now (before this call: the one pending, if any).
+    pub fn next_event_time(&self) -> Option<f64> {
+        self.next_event_time
+    }
+
+    /// Asks for a time event at `t` (after [`time`](Self::time)); it replaces the one pending.
+    /// A time event that is due and not rescheduled is over after this event.
+    pub fn schedule(&mut self, t: f64) {
+        self.next_event_time = Some(t);
+        self.scheduled = true;
+    }
+
+    /// Cancels the pending time event.
+    pub fn unschedule(&mut self) {
+        self.next_event_time = None;
+        self.scheduled = true;
+    }
+
+    /// Asks for another round of the event iteration at the same time (FMI's
+    /// newDiscreteStatesNeeded): the update runs again with the values this round left.
+    pub fn iterate(&mut self) {
+        self.again = true;
+    }
+
+    /// Ends the simulation (FMI's terminateSimulation), with the reason, which is logged.
+    pub fn terminate(&mut self, reason: impl Into<String>) {
+        self.terminate = Some(reason.into());
+    }
+
+    /// The runtime's context: start time, tolerance, resources, logging.
+    pub fn context(&self) -> &Context<'_> {
+        self.ctx
+    }
 }
 
 /// A model. The runtime owns the FMI state machine, argument checks (types, finiteness,
@@ -829,73 +810,5 @@ pub trait CoSimulation: Model {
     /// default 1e-12 s, or 1e-15 of the time where that is larger.
     fn event_tolerance(&self, t: f64) -> f64 {
         1e-12_f64.max(1e-15 * t.abs())
-    }
-}
-
-/// A model run outside any FMU the way the runtime runs it: its integrator memory, time, and
-/// the equations evaluated after initialization and after every step. For tests and
-/// benchmarks that call a model directly; results equal the FMU's to the bit.
-#[derive(Debug, Clone)]
-pub struct Standalone<M> {
-    pub model: M,
-    pub solver: Dopri5,
-    pub time: f64,
-    pub start_time: f64,
-    pub tolerance: Option<f64>,
-    /// The model's pending time event and event count.
-    pub events: EventClock,
-}
-
-impl<M: CoSimulation> Standalone<M> {
-    /// `model` (start values as set) at `start_time`, with the importer's `tolerance`.
-    pub fn new(model: M, start_time: f64, tolerance: Option<f64>) -> Self {
-        Standalone {
-            model,
-            solver: Dopri5::default(),
-            time: start_time,
-            start_time,
-            tolerance,
-            events: EventClock::default(),
-        }
-    }
-
-    /// What fmi2ExitInitializationMode does: [`Model::initialize`], then the equations.
-    pub fn initialize(&mut self) -> Result<(), String> {
-        let ctx = Context::standalone(self.start_time, self.tolerance);
-        self.model.initialize(&ctx)?;
-        self.solver.restart();
-        self.time = self.start_time;
-        self.refresh();
-        self.events = EventClock {
-            initial: true,
-            ..EventClock::default()
-        };
-        let outcome = crate::events::iterate(&mut self.model, &ctx, self.time, &mut self.events);
-        self.events.initial = false;
-        outcome.map(|_| ())
-    }
-
-    /// Recomputes what the equations compute (after inputs were changed by hand).
-    pub fn refresh(&mut self) {
-        crate::core::instance::evaluate(&mut self.model, self.time);
-    }
-
-    /// What fmi2DoStep does: [`CoSimulation::do_step`] from the current time over `h`, then
-    /// the outputs.
-    pub fn do_step(&mut self, h: f64) -> Result<(), StepFailure> {
-        let t = self.time;
-        let mut ctx = Context::standalone_with_solver(self.start_time, self.tolerance, &mut self.solver);
-        ctx.events = Some(&mut self.events);
-        let outcome = self.model.do_step(t, h, &mut ctx);
-        let refreshed = ctx.refreshed;
-        let reached = match &outcome {
-            Ok(()) => t + h,
-            Err(f) => f.reached_time,
-        };
-        if !refreshed {
-            crate::core::instance::evaluate(&mut self.model, reached);
-        }
-        self.time = reached;
-        outcome
     }
 }

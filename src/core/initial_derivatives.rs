@@ -21,10 +21,11 @@
 //! tests/initial_unknowns_derivatives.rs). Not exact in the dual numbers' sense: that needs
 //! `initialize` and the parameters on dual numbers, which the model contract does not ask.
 
-use super::instance::{Instance, evaluate, non_finite};
+use super::instance::Instance;
 use super::{OK, Status, Version};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
 use crate::model::{CoSimulation, Context};
+use crate::step::{evaluate, non_finite};
 use crate::value::Value;
 use num_dual::Dual64;
 
@@ -61,7 +62,7 @@ impl<M: CoSimulation> Instance<M> {
             return (decl.var_type == VarType::Real).then_some((decl, 1));
         }
         let decl = M::declaration(vr, VarType::Real)?;
-        Some((decl, super::structural::element_count(&self.sim.model, decl)))
+        Some((decl, crate::step::structural::element_count(&self.sim.model, decl)))
     }
 
     /// The elements (value reference, declaration, storage index) of `vrs`, in the order of the
@@ -71,11 +72,11 @@ impl<M: CoSimulation> Instance<M> {
         let mut out = Vec::new();
         for vr in vrs {
             if let Some((decl, k)) = self.fmi2_element(*vr) {
-                let k = super::structural::storage_index(model, decl, k);
+                let k = crate::step::structural::storage_index(model, decl, k);
                 out.push((decl.value_reference, decl, k));
             } else if let Some(decl) = M::declaration(*vr, VarType::Real) {
-                for i in 0..super::structural::element_count(model, decl) {
-                    out.push((*vr, decl, super::structural::storage_index(model, decl, i)));
+                for i in 0..crate::step::structural::element_count(model, decl) {
+                    out.push((*vr, decl, crate::step::structural::storage_index(model, decl, i)));
                 }
             }
         }

@@ -8,6 +8,7 @@ use super::{DISCARD, ERROR, FATAL, Function, OK, Status, Terms, Version, WARNING
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
 use crate::model::{CoSimulation, Context, EventClock, ReturnAtEvents, StateVector};
 use crate::solver::Dopri5;
+use crate::step::{evaluate, non_finite, oversized_binary};
 use crate::value::{FmiType, Value};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -168,59 +169,17 @@ fn with_article(name: &str) -> String {
     format!("{article} {name}")
 }
 
-/// The first Real variable the model computes (output, local, calculated parameter), or the
-/// first part of its internal state, that is not finite, described for a message. The one
-/// check every value computed by a model passes before it may leave under OK: after
-/// initialization, after every step and parameter change, and on every deserialized state
-/// (inputs and parameters pass the setters' checks when they are set).
-#[inline]
-pub fn non_finite<M: CoSimulation>(model: &M) -> Option<String> {
-    match (model.non_finite_computed(), model.check_internal_state()) {
-        (None, Ok(())) => None,
-        (index, internal) => Some(describe_non_finite(model, index, internal)),
-    }
-}
-
-#[cold]
-fn describe_non_finite<M: CoSimulation>(model: &M, index: Option<usize>, internal: Result<(), String>) -> String {
-    if let Some(i) = index {
-        let v = &M::DESCRIPTION.variables[i];
-        let x = model
-            .get(v.value_reference)
-            .and_then(|x| x.as_f64())
-            .unwrap_or(f64::NAN);
-        return format!("'{}' (vr {}) = {x} is not a finite number", v.name, v.value_reference);
-    }
-    format!(
-        "the model's internal state is unusable: {}",
-        internal.err().unwrap_or_default()
-    )
-}
-
-/// The first Binary variable into which the model wrote more bytes than its `maxSize`,
-/// described for a message. Checked wherever the model's code ran (initialization, the
-/// equations, a step, an event's update, a parameter change): the call that ran it fails with
-/// fmi3Error and the model keeps the values it had before, so no Binary longer than its
-/// `maxSize` leaves the FMU, in `fmi3GetBinary` or in an FMU state (the setter refuses one
-/// from the importer).
-#[inline]
-pub fn oversized_binary<M: CoSimulation>(model: &M) -> Option<String> {
-    if !const { M::DESCRIPTION.has_max_sizes() } {
-        return None;
-    }
-    M::DESCRIPTION.variables.iter().find_map(|v| {
-        let max = v.fmi3.max_size?;
-        let n = model.get_binary(v.value_reference)?.len();
-        (n > max as usize).then(|| {
-            format!(
-                "'{}' (vr {}) holds {n} bytes, more than its maxSize = {max}",
-                v.name, v.value_reference
-            )
-        })
-    })
-}
-
 type Outcome = Result<(), Status>;
+
+/// A model's [`Context::log`](crate::Context::log) goes to the importer's logger.
+impl crate::model::Log for Logger {
+    fn wants_named(&self, category: &str) -> bool {
+        Logger::wants_named(self, category)
+    }
+    fn log_named(&self, category: &str, message: &str) {
+        Logger::log_named(self, category, message)
+    }
+}
 
 impl<M: CoSimulation> Instance<M> {
     pub fn new(terms: &'static Terms, logger: Logger, guid: &'static str, model_exchange: bool) -> Self {
@@ -716,7 +675,7 @@ impl<M: CoSimulation> Instance<M> {
             let Some(d) = M::declaration(*vr, T::TYPE) else {
                 return self.error(&format!("{function}: value reference {vr} has no {:?} value", T::TYPE));
             };
-            let n = super::structural::element_count(&self.sim.model, d);
+            let n = crate::step::structural::element_count(&self.sim.model, d);
             let Some(slots) = out.get_mut(at..at + n) else {
                 return self.error(&format!(
                     "{function}: the values array ends before the elements of '{}'",
@@ -727,7 +686,7 @@ impl<M: CoSimulation> Instance<M> {
                 let value = if d.causality == Causality::Independent {
                     Some(Value::Real(self.sim.time))
                 } else if d.is_array() {
-                    let k = super::structural::storage_index(&self.sim.model, d, i);
+                    let k = crate::step::structural::storage_index(&self.sim.model, d, i);
                     self.sim.model.get_element(*vr, k)
                 } else {
                     self.sim.model.get(*vr)
@@ -1180,7 +1139,7 @@ impl<M: CoSimulation> Instance<M> {
         let mut at = 0;
         let mut spans = Vec::with_capacity(vrs.len());
         for vr in vrs {
-            let n = super::structural::count_of(&self.sim.model, *vr);
+            let n = crate::step::structural::count_of(&self.sim.model, *vr);
             let Some(elements) = values.get(at..at + n) else {
                 return self.error(&format!(
                     "{function}: the values array ends before the elements of value reference {vr}"
@@ -1206,7 +1165,7 @@ impl<M: CoSimulation> Instance<M> {
             let is_array = decl.is_some_and(|d| d.is_array());
             for (i, value) in values[at..at + n].iter().enumerate() {
                 if let (true, Some(d)) = (is_array, decl) {
-                    let k = super::structural::storage_index(&self.sim.model, d, i);
+                    let k = crate::step::structural::storage_index(&self.sim.model, d, i);
                     self.sim.model.set_element(vr, k, *value);
                 } else {
                     self.sim.model.set(vr, *value);
@@ -1642,17 +1601,6 @@ fn range_text(v: &Variable) -> String {
     format!("{lo}, {hi}")
 }
 
-/// Runs the model's equations on `f64` at time `t`: derivatives, then outputs, and stores what
-/// they computed. The caller checks the result ([`non_finite`]).
-#[inline]
-pub fn evaluate<M: CoSimulation>(model: &mut M, t: f64) {
-    let mut c = model.continuous::<f64>();
-    model.derivatives(t, &mut c);
-    model.outputs(t, &mut c);
-    model.store_continuous(&c);
-    model.calculate(t);
-}
-
 /// What the new-discrete-states function reports (`fmi2EventInfo`'s fields; fmi3UpdateDiscreteStates'
 /// output arguments).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -1811,15 +1759,15 @@ impl<M: CoSimulation> Instance<M> {
         );
         let time = self.sim.time;
         let outcome = if all_rounds {
-            crate::events::iterate(&mut self.sim.model, &ctx, time, &mut self.sim.events).map(|(changed, terminate)| {
-                crate::events::Round {
+            crate::step::events::iterate(&mut self.sim.model, &ctx, time, &mut self.sim.events).map(
+                |(changed, terminate)| crate::step::events::Round {
                     again: false,
                     terminate,
                     states_changed: changed,
-                }
-            })
+                },
+            )
         } else {
-            crate::events::update_round(&mut self.sim.model, &ctx, time, &mut self.sim.events)
+            crate::step::events::update_round(&mut self.sim.model, &ctx, time, &mut self.sim.events)
         };
         let outcome = outcome.and_then(|round| match oversized_binary(&self.sim.model) {
             None => Ok(round),
@@ -1999,7 +1947,7 @@ impl<M: CoSimulation> Instance<M> {
 
     #[inline]
     fn check_states_len(&self, function: &str, n: usize) -> Outcome {
-        if n == super::structural::number_of_states(&self.sim.model) {
+        if n == crate::step::structural::number_of_states(&self.sim.model) {
             return Ok(());
         }
         Err(self.wrong_states_len(function, n))
@@ -2010,7 +1958,7 @@ impl<M: CoSimulation> Instance<M> {
         self.error(&format!(
             "{function}: nx = {n}, but {} has {} continuous states (numberOfContinuousStates{})",
             M::DESCRIPTION.model_identifier,
-            super::structural::number_of_states(&self.sim.model),
+            crate::step::structural::number_of_states(&self.sim.model),
             if const { M::DESCRIPTION.has_sized_arrays() } {
                 ", with the structural parameters as they are now"
             } else {
@@ -2025,7 +1973,9 @@ impl<M: CoSimulation> Instance<M> {
         if !const { M::DESCRIPTION.has_sized_arrays() } {
             return i;
         }
-        super::structural::active_states(&self.sim.model).nth(i).unwrap_or(i)
+        crate::step::structural::active_states(&self.sim.model)
+            .nth(i)
+            .unwrap_or(i)
     }
 
     /// The name of the importer's state `i` (an element of an array state: `x[2]`).
@@ -2044,14 +1994,17 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// The importer's state vector (or derivatives, nominals) from the whole one: the entries
-    /// it sees ([`super::structural::active_states`]).
+    /// it sees ([`crate::step::structural::active_states`]).
     #[inline]
     fn gather(&self, full: &[f64], out: &mut [f64]) {
         if !const { M::DESCRIPTION.has_sized_arrays() } {
             out.copy_from_slice(full);
             return;
         }
-        for (slot, k) in out.iter_mut().zip(super::structural::active_states(&self.sim.model)) {
+        for (slot, k) in out
+            .iter_mut()
+            .zip(crate::step::structural::active_states(&self.sim.model))
+        {
             *slot = full[k];
         }
     }
@@ -2073,7 +2026,7 @@ impl<M: CoSimulation> Instance<M> {
             <M::States as StateVector>::zeros()
         };
         if const { M::DESCRIPTION.has_sized_arrays() } {
-            for (k, v) in super::structural::active_states(&self.sim.model).zip(x) {
+            for (k, v) in crate::step::structural::active_states(&self.sim.model).zip(x) {
                 states.as_mut_slice()[k] = *v;
             }
         } else {
@@ -2155,8 +2108,8 @@ impl<M: CoSimulation> Instance<M> {
             self.sim.model.derivatives(self.sim.time, &mut c);
             let mut d = M::derivatives_of(&c);
             if const { M::DESCRIPTION.has_sized_arrays() } {
-                let mask = super::structural::active_mask(&self.sim.model);
-                super::structural::hide(&mut d, mask.as_ref());
+                let mask = crate::step::structural::active_mask(&self.sim.model);
+                crate::step::structural::hide(&mut d, mask.as_ref());
             }
             if let Some(i) = d.as_slice().iter().position(|v| !v.is_finite()) {
                 let what = format!("the derivative of '{}' is {}", Self::entry_name(i), d.as_slice()[i]);
@@ -2328,8 +2281,8 @@ impl<M: CoSimulation> Instance<M> {
         let model = &self.sim.model;
         let elements = |vr: u32| {
             let decl = M::variable_index(vr).map(|i| &M::DESCRIPTION.variables[i]);
-            let n = decl.map_or(1, |d| super::structural::element_count(model, d));
-            (0..n).map(move |i| decl.map_or(i, |d| super::structural::storage_index(model, d, i)))
+            let n = decl.map_or(1, |d| crate::step::structural::element_count(model, d));
+            (0..n).map(move |i| decl.map_or(i, |d| crate::step::structural::storage_index(model, d, i)))
         };
         let mut c = model.continuous::<Dual64>();
         let mut seed = dv_known.iter();

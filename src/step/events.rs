@@ -1,112 +1,9 @@
-//! Events: what a model's [`Model::update`] is told ([`Event`]), one round of the event
-//! iteration as both interfaces run it ([`update_round`]), and the co-simulation step that
-//! finds and handles state and time events inside a communication step
-//! ([`integrate_with_events`]).
+//! Events as the runtime runs them: one round of the event iteration as both interfaces run it
+//! ([`update_round`]), the whole iteration ([`iterate`]), and the co-simulation step that finds
+//! and handles state and time events inside a communication step ([`integrate_with_events`]).
+//! What a model's [`crate::Model::update`] is told is [`crate::Event`], in the model's room.
 
-use crate::model::{CoSimulation, Context, EventClock, Model, ReturnAtEvents, StateVector, StepFailure};
-
-/// What a model is told at an event, and what it answers ([`Model::update`]).
-///
-/// ```
-/// use rustfmu::prelude::*;
-/// use rustfmu::Variables;
-/// use serde::{Deserialize, Serialize};
-///
-/// /// Counts seconds: a time event every `period`.
-/// #[derive(Model, Debug, Clone, Serialize, Deserialize)]
-/// pub struct Ticker {
-///     /// Ticks so far
-///     #[variable(vr = 0, output, discrete, initial = exact, start = 0)]
-///     pub ticks: i32,
-///     /// Time between ticks
-///     #[variable(vr = 1, parameter, fixed, start = 1.0, unit = "s", min > 0.0)]
-///     pub period: f64,
-/// }
-///
-/// impl Model for Ticker {
-///     fn update(&mut self, event: &mut Event) -> Result<(), String> {
-///         if event.time_event() {
-///             self.ticks += 1;
-///         }
-///         // The first tick one period after the start, then every period.
-///         event.schedule(event.time() + self.period);
-///         Ok(())
-///     }
-/// }
-/// impl CoSimulation for Ticker {}
-///
-/// let mut m = Ticker::start();
-/// let mut clock = rustfmu::EventClock { initial: true, ..Default::default() };
-/// let round = rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 0.0, &mut clock).unwrap();
-/// assert_eq!((m.ticks, clock.next_event_time, round.again), (0, Some(1.0), false));
-/// rustfmu::update_round(&mut m, &Context::standalone(0.0, None), 1.0, &mut clock).unwrap();
-/// assert_eq!((m.ticks, clock.next_event_time), (1, Some(2.0)));
-/// ```
-pub struct Event<'e, 'c> {
-    time: f64,
-    initial: bool,
-    time_event: bool,
-    next_event_time: Option<f64>,
-    scheduled: bool,
-    again: bool,
-    terminate: Option<String>,
-    ctx: &'e Context<'c>,
-}
-
-impl Event<'_, '_> {
-    /// The time of the event: for a time event, the time it was scheduled for (the importer's
-    /// time may differ from it by round-off).
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-
-    /// The event iteration right after initialization (Model Exchange: the first
-    /// fmi2NewDiscreteStates / fmi3UpdateDiscreteStates; Co-Simulation: at the end of
-    /// initialization). A sampled model schedules its first sample here.
-    pub fn initial(&self) -> bool {
-        self.initial
-    }
-
-    /// Whether the time event the model scheduled is due now (rather than, or as well as, a
-    /// state event).
-    pub fn time_event(&self) -> bool {
-        self.time_event
-    }
-
-    /// The time event scheduled now (before this call: the one pending, if any).
-    pub fn next_event_time(&self) -> Option<f64> {
-        self.next_event_time
-    }
-
-    /// Asks for a time event at `t` (after [`time`](Self::time)); it replaces the one pending.
-    /// A time event that is due and not rescheduled is over after this event.
-    pub fn schedule(&mut self, t: f64) {
-        self.next_event_time = Some(t);
-        self.scheduled = true;
-    }
-
-    /// Cancels the pending time event.
-    pub fn unschedule(&mut self) {
-        self.next_event_time = None;
-        self.scheduled = true;
-    }
-
-    /// Asks for another round of the event iteration at the same time (FMI's
-    /// newDiscreteStatesNeeded): the update runs again with the values this round left.
-    pub fn iterate(&mut self) {
-        self.again = true;
-    }
-
-    /// Ends the simulation (FMI's terminateSimulation), with the reason, which is logged.
-    pub fn terminate(&mut self, reason: impl Into<String>) {
-        self.terminate = Some(reason.into());
-    }
-
-    /// The runtime's context: start time, tolerance, resources, logging.
-    pub fn context(&self) -> &Context<'_> {
-        self.ctx
-    }
-}
+use crate::model::{CoSimulation, Context, Event, EventClock, Model, ReturnAtEvents, StateVector, StepFailure};
 
 /// What one round of the event iteration answered.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -129,7 +26,7 @@ pub fn update_round<M: CoSimulation>(
     time: f64,
     clock: &mut EventClock,
 ) -> Result<Round, String> {
-    crate::core::instance::evaluate(model, time);
+    super::evaluate(model, time);
     let states = model.states();
     let pending = clock.next_event_time;
     // Due: reached up to round-off, or marked due by the step that ended within round-off
@@ -175,8 +72,8 @@ pub fn update_round<M: CoSimulation>(
     // The time event marked due is handled (rescheduled or over).
     clock.time_event_due = false;
     clock.count += 1;
-    crate::core::instance::evaluate(model, time);
-    if let Some(what) = crate::core::instance::non_finite(model) {
+    super::evaluate(model, time);
+    if let Some(what) = super::non_finite(model) {
         return Err(format!("after the update, {what}"));
     }
     let states_changed = model
@@ -273,7 +170,7 @@ fn back_to_last_event<M: CoSimulation>(
             now
         }
     };
-    crate::core::instance::evaluate(model, at);
+    super::evaluate(model, at);
     at
 }
 
@@ -299,8 +196,8 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
     h: f64,
 ) -> Result<(), StepFailure> {
     // Entries of the state vector a structural parameter hides keep still (core::structural).
-    let mask = crate::core::structural::active_mask(&*model);
-    let tol = crate::core::structural::scaled_tolerances(model.tolerances(ctx), mask.as_ref());
+    let mask = super::structural::active_mask(&*model);
+    let tol = super::structural::scaled_tolerances(model.tolerances(ctx), mask.as_ref());
     let end = t + h;
     let n = M::INDICATORS.len();
     let mut now = t;
@@ -366,7 +263,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                     M::set_states_of(&mut c, x);
                     model_ref.derivatives(t, &mut c);
                     let mut dx = M::derivatives_of(&c);
-                    crate::core::structural::hide(&mut dx, mask.as_ref());
+                    super::structural::hide(&mut dx, mask.as_ref());
                     dx
                 },
                 |step| {
@@ -456,7 +353,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             Err(e) => {
                 let reached = e.time();
                 model.set_states(&x);
-                crate::core::instance::evaluate(model, reached);
+                super::evaluate(model, reached);
                 return fail(ctx, clock, reached, e.to_string());
             }
         };
@@ -474,7 +371,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         if !state_event && !time_event_now && early_return.is_some_and(|tr| now >= tr) && now < end {
             // The early return the importer asked for in the intermediate update: the step ends
             // here, at an accepted state (FMI 3.0, 4.2.2).
-            crate::core::instance::evaluate(model, now);
+            super::evaluate(model, now);
             clock.returned_early_at = Some(now);
             if let Some(c) = ctx.events.as_deref_mut() {
                 *c = clock;
@@ -490,7 +387,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         if (state_event || time_event_now) && to_importer {
             // FMI 3.0 event mode: stop here, the event unhandled; the importer enters Event Mode
             // (a time event within round-off of the step's end is at the end, and marked due).
-            crate::core::instance::evaluate(model, now);
+            super::evaluate(model, now);
             clock.stopped_at = Some(now);
             if let Some(c) = ctx.events.as_deref_mut() {
                 *c = clock;
@@ -527,7 +424,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                     );
                 }
                 Err(why) => {
-                    crate::core::instance::evaluate(model, now);
+                    super::evaluate(model, now);
                     return fail(ctx, clock, now, format!("the event at t = {now} failed: {why}"));
                 }
             }
@@ -546,7 +443,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
             break;
         }
     }
-    crate::core::instance::evaluate(model, end);
+    super::evaluate(model, end);
     if events > 0 && ctx.return_at_events == ReturnAtEvents::AtStepEnd {
         // Event mode without early return: the events inside the step were handled there (the
         // FMI guide's "mitigative internal event handling": the step cannot end before its end,
