@@ -30,6 +30,7 @@ pub mod instance;
 pub mod logger;
 pub mod me;
 pub mod outcome;
+pub mod registry;
 pub mod runner;
 pub mod standard;
 pub mod state;
@@ -213,7 +214,7 @@ impl Fmu {
 
 /// What the suite loads and checks: an FMI 2.0 FMU ([`Fmu`]) or an FMI 3.0 one ([`fmi3::Fmu3`]).
 /// One machinery over both: [`all`] loads the packaged FMUs of a version,
-/// [`checks::Check::run_on`] runs a check of that version on one, [`checks::on_every_fmu`] runs a
+/// [`registry::Check::run_on`] runs a check of that version on one, [`checks::on_every_fmu`] runs a
 /// check on every packaged FMU of its version, and the runner's worker loads a file as its
 /// version's kind.
 pub trait Loaded: Sized + Sync + 'static {
@@ -232,8 +233,6 @@ pub trait Loaded: Sized + Sync + 'static {
     fn packaged_dir() -> PathBuf;
     /// Every packaged FMU of this version ([`packaged_dir`](Loaded::packaged_dir)), loaded once.
     fn packaged() -> &'static [Self];
-    /// The check function of `run` when it is a check of this version.
-    fn check_fn(run: checks::Run) -> Option<fn(&Self)>;
 }
 
 impl Loaded for Fmu {
@@ -256,12 +255,6 @@ impl Loaded for Fmu {
     fn packaged() -> &'static [Self] {
         static ALL: OnceLock<Vec<Fmu>> = OnceLock::new();
         ALL.get_or_init(load_packaged)
-    }
-    fn check_fn(run: checks::Run) -> Option<fn(&Self)> {
-        match run {
-            checks::Run::Fmi2(f) => Some(f),
-            checks::Run::Fmi3(_) => None,
-        }
     }
 }
 

@@ -16,6 +16,7 @@
 use crate::archive::PrivateDir;
 use crate::checks::{Check, Group, all_checks, find};
 use crate::outcome::{self, Findings, Outcome};
+use crate::registry::Checked;
 use crate::{Fmu, Fmu3, Loaded, Version, Worker};
 use std::fmt::Write as _;
 use std::io::Read;
@@ -827,7 +828,7 @@ fn file_version(path: &Path) -> Version {
 }
 
 /// The worker's `probe`: loads the FMU; its info lines say what it is.
-fn probe<F: Loaded>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) -> ExitCode) -> ExitCode {
+fn probe<F: Checked>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) -> ExitCode) -> ExitCode {
     let f = match F::load(fmu, tmp) {
         Ok(f) => f,
         Err(e) => return write(Outcome::Fail(e), Findings::default()),
@@ -859,7 +860,7 @@ fn probe<F: Loaded>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) ->
 }
 
 /// The worker's `check`: loads the FMU and runs the check on it.
-fn check_in_worker<F: Loaded>(
+fn check_in_worker<F: Checked>(
     check: &Check,
     fmu: &Path,
     tmp: &Path,

@@ -12,122 +12,10 @@ pub mod native;
 pub mod random_sequences;
 pub mod state_machine;
 
-use crate::outcome::{Findings, Outcome, capture};
-use crate::{Fmu, Fmu3, Loaded, Version};
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Group {
-    Calls,
-    StateMachine,
-    FmuState,
-    Instances,
-    Memory,
-    RandomSequences,
-    Native,
-    ModelExchange,
-    DirectionalDerivatives,
-}
-
-impl Group {
-    pub const ALL: [Group; 9] = [
-        Group::Calls,
-        Group::StateMachine,
-        Group::FmuState,
-        Group::Instances,
-        Group::Memory,
-        Group::RandomSequences,
-        Group::Native,
-        Group::ModelExchange,
-        Group::DirectionalDerivatives,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Group::Calls => "calls",
-            Group::StateMachine => "state machine",
-            Group::FmuState => "FMU state",
-            Group::Instances => "instances/threads",
-            Group::Memory => "memory",
-            Group::RandomSequences => "random sequences",
-            Group::Native => "native C host/valgrind",
-            Group::ModelExchange => "model exchange",
-            Group::DirectionalDerivatives => "directional derivatives",
-        }
-    }
-}
-
-impl std::fmt::Display for Group {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// A check's function, of the FMI version it checks.
-#[derive(Clone, Copy)]
-pub enum Run {
-    Fmi2(fn(&Fmu)),
-    Fmi3(fn(&Fmu3)),
-}
-
-/// A named check.
-#[derive(Clone, Copy)]
-pub struct Check {
-    pub name: &'static str,
-    pub group: Group,
-    pub run: Run,
-}
-
-impl std::fmt::Debug for Check {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} ({})", self.name, self.group)
-    }
-}
-
-impl Check {
-    /// The FMI version of the FMUs this check checks.
-    pub fn version(&self) -> Version {
-        match self.run {
-            Run::Fmi2(_) => Version::Fmi2,
-            Run::Fmi3(_) => Version::Fmi3,
-        }
-    }
-
-    /// Runs the check on `fmu` in this process (panics are caught). Panics when the check is
-    /// of the other FMI version.
-    pub fn run_on<F: Loaded>(&self, fmu: &F) -> (Outcome, Findings) {
-        let run = F::check_fn(self.run)
-            .unwrap_or_else(|| panic!("{} checks {:?} FMUs, not {:?}", self.name, self.version(), F::VERSION));
-        capture(|| run(fmu))
-    }
-
-    /// Whether a filter selects this check: a substring of its name or of its group's name.
-    pub fn matches(&self, filter: &str) -> bool {
-        self.name.contains(filter) || self.group.name().contains(filter)
-    }
-
-    /// Its line in `fmu-check --list`: `group / name`, with `FMI 3.0: ` before an FMI 3.0 check.
-    pub fn list_line(&self) -> String {
-        match self.version() {
-            Version::Fmi2 => format!("{} / {}", self.group, self.name),
-            Version::Fmi3 => format!("FMI 3.0: {} / {}", self.group, self.name),
-        }
-    }
-}
-
-/// `const NAME = version { group: module::{check, ...}; ... }`: the checks of one FMI version
-/// (the FMI 2.0 ones here, the FMI 3.0 ones in [`crate::fmi3::checks`]), by group, in report
-/// order; [`all_checks`] lists both.
-macro_rules! registry {
-    ($(#[$doc:meta])* const $list:ident = $version:ident {$($group:ident: $module:ident::{$($name:ident),* $(,)?};)*}) => {
-        $(#[$doc])*
-        pub(crate) const $list: &[$crate::checks::Check] = &[$($($crate::checks::Check {
-            name: stringify!($name),
-            group: $crate::checks::Group::$group,
-            run: $crate::checks::Run::$version($module::$name),
-        },)*)*];
-    };
-}
-pub(crate) use registry;
+use crate::outcome::Outcome;
+pub use crate::registry::{Check, Group, Run};
+use crate::registry::{Checked, registry};
+use crate::{Fmu, Fmu3, Version};
 
 /// Every check of both versions, in report order: the FMI 2.0 ones, then the FMI 3.0 ones.
 pub fn all_checks() -> &'static [Check] {
@@ -242,7 +130,7 @@ pub fn on_every_fmu(name: &str) {
     }
 }
 
-fn on_every<F: Loaded>(check: &Check) {
+fn on_every<F: Checked>(check: &Check) {
     let name = check.name;
     let mut failures = vec![];
     for fmu in crate::all::<F>() {

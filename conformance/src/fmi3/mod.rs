@@ -1095,12 +1095,6 @@ impl crate::Loaded for Fmu3 {
         static ALL: std::sync::OnceLock<Vec<Fmu3>> = std::sync::OnceLock::new();
         ALL.get_or_init(crate::load_packaged)
     }
-    fn check_fn(run: crate::checks::Run) -> Option<fn(&Self)> {
-        match run {
-            crate::checks::Run::Fmi3(f) => Some(f),
-            crate::checks::Run::Fmi2(_) => None,
-        }
-    }
 }
 
 /// The bytes of one value of a scalar type in the C API (Enumerations are Int64).

@@ -1,7 +1,7 @@
-//! The FMI 3.0 checks, by concern, as the FMI 2.0 ones in [`crate::checks`] (whose registry,
-//! [`crate::checks::all_checks`], lists both). Each is a `fn(&Fmu3)` that returns when the FMU
-//! passed and panics with what was expected and what came instead when it did not (skips and
-//! limitations as in [`crate::outcome`]). Written from the FMI 3.0 standard: the state machine
+//! The FMI 3.0 checks, by concern, as the FMI 2.0 ones in [`crate::checks`] (whose
+//! [`crate::checks::all_checks`] lists both; what a check is: [`crate::registry`]). Each is a
+//! `fn(&Fmu3)` that returns when the FMU passed and panics with what was expected and what came
+//! instead when it did not (skips and limitations as in [`crate::outcome`]). Written from the FMI 3.0 standard: the state machine
 //! of section 4.2.x / 3.2.x (Co-Simulation, Model Exchange; its table is [`table`]), the
 //! function descriptions of section 2.3, the model description of section 2.4; nothing here
 //! knows rustfmu or a particular model.
@@ -32,7 +32,7 @@ use fmi_description::{Causality, Initial, Variability};
 use std::ffi::CString;
 use std::ptr::{null, null_mut};
 
-crate::checks::registry! {
+crate::registry::registry! {
     /// The FMI 3.0 checks.
     const FMI3 = Fmi3 {
         Native: native::{
