@@ -11,7 +11,7 @@ initial state and where it departs from the paper:
   applied), currents, and the joint torques they deliver against the torques the controller asks.
 
 Figures 7 and 8 start from alpha1 = 0.1, alpha2 = -0.05 rad (the systems' values in
-paper/systems.toml), not from the paper's "zero initial conditions": from rest upright the FMUs
+holonomic/systems.toml), not from the paper's "zero initial conditions": from rest upright the FMUs
 stay there exactly, since nothing disturbs them (the paper attributes its deviations "only to
 gravity", which does not move a pendulum at rest at its equilibrium). The master evaluates the
 controller at the state of the same communication point (docs/composition.md), h = 1 ms.

@@ -18,7 +18,7 @@ mod fmi2_host;
 mod model {
     use rustfmu::prelude::*;
 
-    /// The Reference-FMUs' BouncingBall, as examples/reference-fmus/bouncing_ball has it.
+    /// The Reference-FMUs' BouncingBall, as reference-fmus/bouncing_ball has it.
     #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
     pub struct Ball {
         /// Height

@@ -4,7 +4,7 @@
 
 The loop (FMU instances, parameter and start values of every type, connections) comes from the
 Rust table, `cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json`, which
-derives it from the systems of `paper/systems.toml`, the same description `fmu-build` writes as
+derives it from the systems of `holonomic/systems.toml`, the same description `fmu-build` writes as
 `target/fmu/<system>.ssp`. Masters, all fixed step h = 1 ms, Jacobi (outputs at t read, inputs
 set, every FMU steps), the order fmpy.ssp and libcosim use, so that all make the same calls:
 

@@ -4,7 +4,7 @@
 //! - where the packaged FMUs are ([`fmu_path`]),
 //! - an FMU loaded through the `fmi` crate's importer, its variables looked up by name in its
 //!   modelDescription.xml ([`Fmu`]),
-//! - the composed loops, derived from the systems of `paper/systems.toml` ([`topology`]),
+//! - the composed loops, derived from the systems of `holonomic/systems.toml` ([`topology`]),
 //! - a native co-simulation master that runs it without allocating per step ([`master`]),
 //! - the fixed-step RK4 that the work-precision table sets against the plant's integrator
 //!   ([`rk4`]).

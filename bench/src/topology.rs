@@ -1,5 +1,5 @@
 //! The composed loops the benchmarks run, derived from the one description of the systems in
-//! `paper/systems.toml` (the file `fmu-build` writes as `target/fmu/<system>.ssp`), read and
+//! `holonomic/systems.toml` (the file `fmu-build` writes as `target/fmu/<system>.ssp`), read and
 //! checked against the packaged FMUs by [`fmu_build::systems`]: the FMU instances, every
 //! parameter and start value (Real, Integer, Boolean; an Enumeration as its Integer), and the
 //! connections. Names are resolved against each FMU's modelDescription.xml when a master starts.
@@ -18,7 +18,7 @@ use rustfmu::Value;
 use std::sync::OnceLock;
 
 /// The systems file, relative to the workspace root.
-pub const SYSTEMS_FILE: &str = "paper/systems.toml";
+pub const SYSTEMS_FILE: &str = "holonomic/systems.toml";
 
 /// The plant's state, in the order of eq. (12).
 pub const STATE: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];

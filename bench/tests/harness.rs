@@ -30,7 +30,7 @@ fn direct_and_c_api_steps_compute_the_same_swing() {
 }
 
 /// The composed loop the benchmarks time is the real one: Controller, two DC motors and the
-/// plant, with the parameters of `paper/systems.toml`, stand the pendulum up.
+/// plant, with the parameters of `holonomic/systems.toml`, stand the pendulum up.
 #[test]
 fn full_loop_stands_the_pendulum_up_in_the_native_master() {
     let mut master = Master::new(topology::full()).unwrap_or_else(|e| panic!("{e}"));

@@ -1,7 +1,7 @@
 """The paper's two composed systems, read from the SSP files `fmu-build` writes, and the linear
 closed loop they are checked against.
 
-The systems are described once, as data (`paper/systems.toml`): `fmu-build` writes them as
+The systems are described once, as data (`holonomic/systems.toml`): `fmu-build` writes them as
 `target/fmu/PendulumLQR.ssp` and `target/fmu/PendulumMotors.ssp`. This module reads the
 `SystemStructure.ssd` inside them (components with their FMU, parameter bindings with their
 types and values, connections) and writes none of those values itself:

@@ -52,7 +52,7 @@ from cosim.systems import read_ssp, ssp_path
 MASTERS = ("native", "isolated", "isolated-system", "fmpy")
 
 #: The study's names of the systems -> the SSP files fmu-build writes next to the FMUs
-#: (`paper/systems.toml` describes them: components, parameter values, connections).
+#: (`holonomic/systems.toml` describes them: components, parameter values, connections).
 SSP_SYSTEMS = {"torque": "PendulumLQR", "motors": "PendulumMotors"}
 
 

@@ -296,7 +296,7 @@ mod tests {
     }
 
     /// The fixtures are the SSDs of the paper's systems file, reviewed by hand: any change to
-    /// the writer or to paper/systems.toml shows here first.
+    /// the writer or to holonomic/systems.toml shows here first.
     #[test]
     fn the_ssd_of_each_paper_system_is_the_reference() {
         let systems = paper_systems();

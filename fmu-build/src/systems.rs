@@ -34,7 +34,7 @@
 //!
 //! ```toml
 //! [workspace.metadata.fmu]
-//! systems = ["paper/systems.toml"]
+//! systems = ["holonomic/systems.toml"]
 //! ```
 
 use serde::Deserialize;
@@ -640,7 +640,7 @@ pub(crate) mod testing {
     }
 
     pub fn paper_systems() -> Systems {
-        Systems::load(&workspace_root().join("paper/systems.toml")).unwrap_or_else(|e| panic!("{e}"))
+        Systems::load(&workspace_root().join("holonomic/systems.toml")).unwrap_or_else(|e| panic!("{e}"))
     }
 
     pub fn xml(id: &str) -> String {
@@ -775,7 +775,7 @@ mod tests {
         let e = s.check(&fmus()).unwrap_err();
         assert!(
             e.contains("connection controller.M1 -> pendulum.alpha1")
-                && e.contains("paper/systems.toml")
+                && e.contains("holonomic/systems.toml")
                 && e.contains("'PendulumLQR'")
                 && e.contains("pendulum.alpha1 is output Real"),
             "expected the file, the system and the bad connection named, got: {e}"
@@ -891,7 +891,7 @@ mod tests {
     fn an_unknown_system_is_reported_with_the_names_there_are() {
         let e = paper_systems().get("Nope").unwrap_err();
         assert!(
-            e.contains("'Nope'") && e.contains("PendulumLQR, PendulumMotors") && e.contains("paper/systems.toml"),
+            e.contains("'Nope'") && e.contains("PendulumLQR, PendulumMotors") && e.contains("holonomic/systems.toml"),
             "expected the unknown name and the list of systems, got: {e}"
         );
     }
@@ -973,7 +973,7 @@ mod tests {
     #[test]
     fn the_workspace_names_its_systems_file() {
         let root = workspace_root();
-        assert_eq!(workspace_files(&root).unwrap(), [root.join("paper/systems.toml")]);
+        assert_eq!(workspace_files(&root).unwrap(), [root.join("holonomic/systems.toml")]);
     }
 
     #[test]

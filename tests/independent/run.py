@@ -11,7 +11,7 @@ target/fmu/*.fmu (FMI 2.0), target/fmu/fmi3/*.fmu (FMI 3.0) and target/fmu/conta
   also with --event-mode-used, and with --event-mode-used --early-return-allowed) at the default
   experiment;
 - each result against our own fmpy run of the same FMU (tolerances below), and side by side with
-  the C Reference-FMUs for the models re-made in examples/reference-fmus/.
+  the C Reference-FMUs for the models re-made in reference-fmus/.
 
 Any warning, error, crash, timeout or disagreement beyond tolerance fails. Prints one line per
 tool and FMU, then `independent importers: N passed, N failed`; exits 1 on any failure.
@@ -40,7 +40,7 @@ ROOT = Path(__file__).resolve().parents[2]
 IND = Path("../shared/independent")
 BIN = IND / "bin"
 REFERENCE_FMUS = IND / "reference-fmus"
-# The models re-made in examples/reference-fmus/, packaged with the Reference-FMUs' identifiers.
+# The models re-made in reference-fmus/, packaged with the Reference-FMUs' identifiers.
 REMADE = {"BouncingBall", "Dahlquist", "Feedthrough", "Stair", "VanDerPol", "StateSpace", "Clocks"}
 
 TIMEOUT = 60  # seconds per tool run

@@ -1,5 +1,5 @@
 """Issue 24: events. The Reference-FMUs' event models written with rustfmu
-(examples/reference-fmus/): BouncingBall (a state event at the floor) and Stair (time events
+(reference-fmus/): BouncingBall (a state event at the floor) and Stair (time events
 every second), and the plain Dahlquist and VanDerPol, in fmpy's Model Exchange (CVode, Euler) and
 Co-Simulation (the runtime's integrator, which locates state events on its dense output), FMI 2.0
 and 3.0, against the analytic answers."""

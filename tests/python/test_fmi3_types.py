@@ -1,5 +1,5 @@
 """Issue 25: every FMI 3.0 variable type. The Reference-FMUs' Feedthrough written with rustfmu
-(examples/reference-fmus/feedthrough): every input set and read back through its output with
+(reference-fmus/feedthrough): every input set and read back through its output with
 the type's own getter and setter, at the type's extremes, in fmpy's FMI 3.0 Co-Simulation and
 Model Exchange; a wrong type, a non-item Enumeration value and NaN refused with nothing changed;
 Binary values of every size (empty, with NUL bytes, 64 KiB); the FMU state round trip with every

@@ -1,5 +1,5 @@
 """FMI 3.0 Scheduled Execution (FMI 3.0, chapter 5) in fmpy: the Reference-FMUs' Clocks written
-with rustfmu (examples/reference-fmus/clocks) run by a small scheduler written here on fmpy's
+with rustfmu (reference-fmus/clocks) run by a small scheduler written here on fmpy's
 FMU3ScheduledExecution, instantiated with a real clockUpdate callback (fmpy's own instantiate
 installs a no-op). Over 10 s: inClock1 every second (its interval read with
 fmi3GetIntervalDecimal), inClock2 at 0, 1, 8 and 9 (input2 = 7 set before the tick at 8),

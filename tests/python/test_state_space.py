@@ -1,5 +1,5 @@
 """Issue 25: structural parameters, Configuration Mode and arrays in the equations. The
-Reference-FMUs' StateSpace written with rustfmu (examples/reference-fmus/state_space, FMI 3.0
+Reference-FMUs' StateSpace written with rustfmu (reference-fmus/state_space, FMI 3.0
 only): dx/dt = A x + B u, y = C x + D u, x(0) = x0, with m inputs, n states and r outputs set
 in Configuration Mode. Through fmpy's FMU3Slave and FMU3Model: the sizes change in
 Configuration Mode (and again in Reconfiguration Mode), the outputs equal an independent

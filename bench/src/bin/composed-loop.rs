@@ -3,7 +3,7 @@
 //!     cargo run --release -p rustfmu-bench --bin composed-loop -- [--topology NAME] [--seconds 10] [--step 1e-3] [--repeat 5] [--jacobi]
 //!     cargo run --release -p rustfmu-bench --bin composed-loop -- --topology-json
 //!
-//! Topologies (`bench/src/topology.rs`, from the systems of `paper/systems.toml`): `full` (the
+//! Topologies (`bench/src/topology.rs`, from the systems of `holonomic/systems.toml`): `full` (the
 //! default: Controller, two DC motors, Pendulum) and `controller-plant` (Controller, Pendulum).
 
 use clap::Parser;

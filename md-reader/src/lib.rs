@@ -23,11 +23,11 @@
 //!   </ModelVariables>
 //!   <ModelStructure><Outputs><Unknown index="1"/></Outputs></ModelStructure>
 //! </fmiModelDescription>"#;
-//! let fmi_description::ModelDescription::Fmi2(d) = fmi_description::parse(xml).unwrap() else {
+//! let md_reader::ModelDescription::Fmi2(d) = md_reader::parse(xml).unwrap() else {
 //!     panic!("an FMI 2.0 description")
 //! };
 //! assert_eq!(d.model_identifier(), "M");
-//! assert_eq!(d.variables[0].causality, fmi_description::Causality::Output);
+//! assert_eq!(d.variables[0].causality, md_reader::Causality::Output);
 //! ```
 
 mod common;
