@@ -3,7 +3,9 @@
 //! and handles state and time events inside a communication step ([`integrate_with_events`]).
 //! What a model's [`crate::Model::update`] is told is [`crate::Event`], in the model's room.
 
-use crate::model::{CoSimulation, Context, Event, EventClock, Model, ReturnAtEvents, StateVector, StepFailure};
+use crate::model::{
+    CoSimulation, Context, Event, EventClock, Model, ReturnAtEvents, StateVector, StepFailure, StepView,
+};
 
 /// What one round of the event iteration answered.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -149,6 +151,54 @@ fn side(z: f64) -> bool {
     z > 0.0
 }
 
+/// Where indicator `i` changes its domain within an accepted step of the integrator, `z` its
+/// values at the step's start and end: the Illinois method on the step's continuous extension,
+/// over [a, b] with the indicator on its old side at a and on its new side at b, until b - a is
+/// within `event_tol`. Answers b, the local time where the indicator is on its new side.
+fn locate<M: Model>(
+    model: &M,
+    step: &StepView<'_, M::States>,
+    i: usize,
+    z: (f64, f64),
+    event_tol: f64,
+    z_probe: &mut [f64],
+) -> f64 {
+    let old = side(z.0);
+    let (mut a, mut b) = (step.s0, step.s0 + step.h);
+    let (mut za, mut zb) = z;
+    let mut last_kept = 0i8;
+    let tol_s = event_tol.max(4.0 * f64::EPSILON * (step.t0 + b).abs());
+    while b - a > tol_s {
+        let mut s = if zb != za {
+            b - zb * (b - a) / (zb - za)
+        } else {
+            0.5 * (a + b)
+        };
+        if !(s > a && s < b) {
+            s = 0.5 * (a + b);
+        }
+        let xs = step.at(s);
+        indicators(model, step.t0 + s, &xs, z_probe);
+        let zs = z_probe[i];
+        if side(zs) == old {
+            a = s;
+            za = zs;
+            if last_kept == -1 {
+                zb *= 0.5;
+            }
+            last_kept = -1;
+        } else {
+            b = s;
+            zb = zs;
+            if last_kept == 1 {
+                za *= 0.5;
+            }
+            last_kept = 1;
+        }
+    }
+    b
+}
+
 /// Where a step refused at one of its bounds (MAX_EVENTS_PER_STEP, the integrator's budget)
 /// ends: right after the last event it handled (`last`), a consistent state the model's own
 /// `update` left (inside an event storm the state at the bound is mid-storm), else at `now`
@@ -189,6 +239,11 @@ fn over_budget(steps: u64, at: f64, ends: f64) -> String {
 /// continuous extension by the Illinois method to [`CoSimulation::event_tolerance`]; the state
 /// is taken where the indicator is already on its new side) and at every time event, where
 /// the event iteration runs and the integrator restarts.
+///
+/// One function of ~230 lines on purpose: one loop over the stretches between events, whose
+/// every exit (an event for the importer, an early return, a refusal at a bound, the end) must
+/// leave the model, its event clock and the integrator's budget consistent together; the pieces
+/// without that state are apart ([`locate`], [`indicators`], [`back_to_last_event`]).
 pub(crate) fn integrate_with_events<M: CoSimulation>(
     ctx: &mut Context,
     model: &mut M,
@@ -272,41 +327,7 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
                     let crossed = (0..n).filter(|&i| side(z_now[i]) != side(z_end[i]));
                     let mut first: Option<f64> = None;
                     for i in crossed {
-                        // Illinois on the continuous extension: [a, b] with the indicator on its
-                        // old side at a, on its new side at b.
-                        let old = side(z_now[i]);
-                        let (mut a, mut b) = (step.s0, step.s0 + step.h);
-                        let (mut za, mut zb) = (z_now[i], z_end[i]);
-                        let mut last_kept = 0i8;
-                        let tol_s = event_tol.max(4.0 * f64::EPSILON * (step.t0 + b).abs());
-                        while b - a > tol_s {
-                            let mut s = if zb != za {
-                                b - zb * (b - a) / (zb - za)
-                            } else {
-                                0.5 * (a + b)
-                            };
-                            if !(s > a && s < b) {
-                                s = 0.5 * (a + b);
-                            }
-                            let xs = step.at(s);
-                            indicators(model_ref, step.t0 + s, &xs, &mut z_probe);
-                            let zs = z_probe[i];
-                            if side(zs) == old {
-                                a = s;
-                                za = zs;
-                                if last_kept == -1 {
-                                    zb *= 0.5;
-                                }
-                                last_kept = -1;
-                            } else {
-                                b = s;
-                                zb = zs;
-                                if last_kept == 1 {
-                                    za *= 0.5;
-                                }
-                                last_kept = 1;
-                            }
-                        }
+                        let b = locate(model_ref, step, i, (z_now[i], z_end[i]), event_tol, &mut z_probe);
                         first = Some(first.map_or(b, |f| f.min(b)));
                     }
                     match first {
