@@ -96,81 +96,13 @@ pub struct StepView<'a, X> {
     pub s0: f64,
     pub h: f64,
     pub end: X,
-    dense: &'a dyn Fn(f64) -> X,
+    pub(crate) dense: &'a dyn Fn(f64) -> X,
 }
 
 impl<X> StepView<'_, X> {
     /// The state at local time `s` within the step (the integrator's dense output).
     pub fn at(&self, s: f64) -> X {
         (self.dense)(s)
-    }
-}
-
-impl<const N: usize> StateVector for [f64; N] {
-    const LEN: usize = N;
-    #[inline]
-    fn as_slice(&self) -> &[f64] {
-        self
-    }
-    #[inline]
-    fn as_mut_slice(&mut self) -> &mut [f64] {
-        self
-    }
-    #[inline]
-    fn zeros() -> Self {
-        [0.0; N]
-    }
-    #[inline]
-    fn integrate<F: FnMut(f64, &Self) -> Self>(
-        solver: &mut Dopri5,
-        mut f: F,
-        t0: f64,
-        span: f64,
-        x: &mut Self,
-        tol: Tolerances,
-    ) -> Result<(), crate::solver::OdeError> {
-        let mut v = nalgebra::SVector::<f64, N>::from(*x);
-        let result = solver.integrate(
-            |t, v: &nalgebra::SVector<f64, N>| nalgebra::SVector::from(f(t, &(*v).into())),
-            t0,
-            span,
-            &mut v,
-            tol,
-        );
-        *x = v.into();
-        result
-    }
-    #[inline]
-    fn integrate_until<F: FnMut(f64, &Self) -> Self, S: FnMut(&StepView<'_, Self>) -> Option<(f64, Self)>>(
-        solver: &mut Dopri5,
-        mut f: F,
-        mut stop: S,
-        t0: f64,
-        span: f64,
-        x: &mut Self,
-        tol: Tolerances,
-    ) -> Result<Option<f64>, crate::solver::OdeError> {
-        let mut v = nalgebra::SVector::<f64, N>::from(*x);
-        let result = solver.integrate_until(
-            |t, v: &nalgebra::SVector<f64, N>| nalgebra::SVector::from(f(t, &(*v).into())),
-            t0,
-            span,
-            &mut v,
-            tol,
-            |step: &crate::solver::DenseStep<'_, N>| {
-                let dense = |s: f64| -> [f64; N] { step.at(s).into() };
-                stop(&StepView {
-                    t0: step.t0,
-                    s0: step.s0,
-                    h: step.h,
-                    end: (*step.end()).into(),
-                    dense: &dense,
-                })
-                .map(|(s, x)| (s, nalgebra::SVector::from(x)))
-            },
-        );
-        *x = v.into();
-        result
     }
 }
 

@@ -10,6 +10,7 @@
 //!   locates and handles state and time events inside a communication step;
 //! - [`structural`]: the lengths structural parameters give, and the integrator's mask of the
 //!   state entries they hide;
+//! - `state_vector`: the state vector `[f64; N]` on the integrator ([`crate::StateVector`]);
 //! - [`standalone`]: a model run the way the runtime runs it, without an FMU (tests, benchmarks).
 //!
 //! Arrows point down only: [`crate::core`] and the C layers use this room; this room uses
@@ -18,6 +19,7 @@
 pub mod events;
 mod integrate;
 pub mod standalone;
+mod state_vector;
 pub mod structural;
 
 use crate::model::CoSimulation;
