@@ -22,55 +22,15 @@
 
 #![allow(non_upper_case_globals)]
 
+use crate::common::{Scratch, Slots, lengths, scratch};
 use rustfmu::fmi2::abi::*;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// A status other than fmi2OK and fmi2Warning (which count as success).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Fmi2Error {
-    Discard,
-    Error,
-    Fatal,
-    Pending,
-    /// A status code the standard does not define.
-    Unknown(u32),
-    /// The importer's own failure (a NULL state, a missing function): the message.
-    Importer(String),
-    /// An isolated component's process is gone (crashed, exited, killed after a timeout): how.
-    Died(String),
-    /// A call of an isolated component that failed and is reported by a later call
-    /// ([`crate::isolate`]: the calls that answer only a status are not waited for).
-    Deferred(Box<Deferred>),
-}
-
-/// A call that failed, reported by the call after it: which, and when.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Deferred {
-    /// The FMI 2.0 name of the call that failed (fmi2DoStep, fmi2SetReal, ...).
-    pub function: &'static str,
-    /// The time it was made at (a step's start; a set: the end of the step before).
-    pub time: Option<f64>,
-    pub error: Fmi2Error,
-}
-
-impl std::fmt::Display for Fmi2Error {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Fmi2Error::Discard => write!(f, "fmi2Discard"),
-            Fmi2Error::Error => write!(f, "fmi2Error"),
-            Fmi2Error::Fatal => write!(f, "fmi2Fatal"),
-            Fmi2Error::Pending => write!(f, "fmi2Pending"),
-            Fmi2Error::Unknown(s) => write!(f, "status {s}"),
-            Fmi2Error::Importer(m) | Fmi2Error::Died(m) => write!(f, "{m}"),
-            Fmi2Error::Deferred(d) => match d.time {
-                Some(t) => write!(f, "{} at t = {t} s: {}", d.function, d.error),
-                None => write!(f, "{}: {}", d.function, d.error),
-            },
-        }
-    }
-}
+// The error and the FMU states are the runner's common types ([`crate::common`]); named here too,
+// where an importer of FMI 2.0 FMUs looks for them.
+pub use crate::common::{Deferred, Fmi2Error, FmuState};
 
 fn check(status: fmi2Status) -> Result<(), Fmi2Error> {
     match status {
@@ -235,35 +195,6 @@ impl Library {
         };
         Ok(Library { api, _lib: lib })
     }
-}
-
-/// A folder this process made (an FMU unpacked), removed with everything in it when dropped.
-pub(crate) struct Scratch(pub(crate) PathBuf);
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// A fresh folder under the system's temporary folder.
-pub(crate) fn scratch() -> Result<Scratch, String> {
-    use std::sync::atomic::{AtomicU64, Ordering};
-    static NEXT: AtomicU64 = AtomicU64::new(0);
-    let base = std::env::temp_dir();
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
-    for _ in 0..100 {
-        let n = NEXT.fetch_add(1, Ordering::Relaxed);
-        let dir = base.join(format!("rustfmu-runner-{}-{nanos:x}-{n}", std::process::id()));
-        match std::fs::create_dir(&dir) {
-            Ok(()) => return Ok(Scratch(dir)),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(format!("cannot make a folder in {}: {e}", base.display())),
-        }
-    }
-    Err(format!("cannot make a fresh folder in {}", base.display()))
 }
 
 /// The FMI 2.0 platform folder of the machine this runs on.
@@ -502,136 +433,6 @@ unsafe extern "C" fn forward(
     });
 }
 
-/// An FMU state of an [`InstanceCS`] (an index into its states).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FmuState(pub(crate) usize);
-
-/// The FMU states an instance took (its C pointers; None: freed), handed out as [`FmuState`]
-/// indices; the same for FMI 2.0 and 3.0 instances.
-#[derive(Default)]
-pub(crate) struct Slots(Vec<Option<*mut c_void>>);
-
-impl Slots {
-    /// A new state's index (a freed slot reused).
-    pub(crate) fn keep(&mut self, s: *mut c_void) -> Result<FmuState, Fmi2Error> {
-        if s.is_null() {
-            return Err(Fmi2Error::Importer("the FMU gave a NULL FMU state".into()));
-        }
-        match self.0.iter().position(Option::is_none) {
-            Some(i) => {
-                self.0[i] = Some(s);
-                Ok(FmuState(i))
-            }
-            None => {
-                self.0.push(Some(s));
-                Ok(FmuState(self.0.len() - 1))
-            }
-        }
-    }
-
-    /// The C pointer of `s`, if it is one of these states.
-    pub(crate) fn raw(&self, s: &FmuState) -> Result<*mut c_void, Fmi2Error> {
-        self.0
-            .get(s.0)
-            .copied()
-            .flatten()
-            .ok_or_else(|| Fmi2Error::Importer(format!("FMU state {} is not one of this instance's", s.0)))
-    }
-
-    pub(crate) fn replace(&mut self, s: &FmuState, raw: *mut c_void) {
-        self.0[s.0] = Some(raw);
-    }
-
-    /// Forgets `s` (freed by the caller).
-    pub(crate) fn forget(&mut self, s: &FmuState) {
-        self.0[s.0] = None;
-    }
-
-    /// Every live state, to free them all.
-    pub(crate) fn live(&mut self) -> impl Iterator<Item = &mut *mut c_void> {
-        self.0.iter_mut().filter_map(|s| s.as_mut())
-    }
-}
-
-/// A co-simulation instance of an FMI 2.0 or an FMI 3.0 FMU ([`crate::fmi3`]), with FMI 2.0's
-/// view of its values and statuses; freed when dropped (its FMU states first).
-pub enum InstanceCS {
-    V2(Instance2),
-    V3(crate::fmi3::Instance3),
-    /// A model-exchange instance (FMI 2.0 or 3.0) the runner integrates ([`crate::me`]).
-    Me(crate::me::MeInstance),
-    /// Any of the above in a child process ([`crate::isolate`]).
-    #[cfg(target_os = "linux")]
-    Isolated(Box<crate::isolate::Isolated>),
-}
-
-/// Each method of [`InstanceCS`], forwarded to the version's instance.
-macro_rules! forward {
-    ($( $(#[$doc:meta])* fn $name:ident(&mut self $(, $arg:ident: $ty:ty)*) -> $ret:ty; )*) => {
-        impl InstanceCS {
-            $(
-                $(#[$doc])*
-                pub fn $name(&mut self $(, $arg: $ty)*) -> $ret {
-                    crate::isolate::crumb(self as *const InstanceCS as usize, stringify!($name));
-                    match self {
-                        InstanceCS::V2(i) => i.$name($($arg),*),
-                        InstanceCS::V3(i) => i.$name($($arg),*),
-                        InstanceCS::Me(i) => i.$name($($arg),*),
-                        #[cfg(target_os = "linux")]
-                        InstanceCS::Isolated(i) => i.$name($($arg),*),
-                    }
-                }
-            )*
-        }
-    };
-}
-
-forward! {
-    fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error>;
-    /// FMI 3.0: kept for fmi3EnterInitializationMode.
-    fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error>;
-    fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
-    fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
-    fn terminate(&mut self) -> Result<(), Fmi2Error>;
-    fn reset(&mut self) -> Result<(), Fmi2Error>;
-    fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error>;
-    fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
-    fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
-    fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
-    fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error>;
-    fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
-    fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
-    fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
-    fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error>;
-    /// A new FMU state of this instance.
-    fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error>;
-    /// The existing state `s` overwritten with the current one.
-    fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
-    fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
-    /// Frees `s` (then no state of this instance).
-    fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error>;
-    fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error>;
-    fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error>;
-    /// First time derivatives of outputs (FMI 2.0 fmi2GetRealOutputDerivatives, FMI 3.0
-    /// fmi3GetOutputDerivatives; order 1).
-    fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
-    /// First time derivatives of inputs (FMI 2.0 only: canInterpolateInputs).
-    fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
-    fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error>;
-}
-
-impl InstanceCS {
-    /// Waits for every call made so far (an isolated instance sends the calls that answer only
-    /// a status with the next one that answers values): their failure, if any, now.
-    pub fn sync(&mut self) -> Result<(), Fmi2Error> {
-        match self {
-            #[cfg(target_os = "linux")]
-            InstanceCS::Isolated(i) => i.sync(),
-            _ => Ok(()),
-        }
-    }
-}
-
 /// An FMI 2.0 co-simulation instance; fmi2FreeInstance when dropped (its FMU states freed first).
 pub struct Instance2 {
     library: Arc<Library>,
@@ -692,25 +493,7 @@ impl Instance2 {
         })
     }
 
-    pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().enter_initialization_mode)(self.c) })
-    }
-
-    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().exit_initialization_mode)(self.c) })
-    }
-
-    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().terminate)(self.c) })
-    }
-
-    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().reset)(self.c) })
-    }
+    crate::common::calls!(instance: enter_initialization_mode, exit_initialization_mode, terminate, reset);
 
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
         let step = self.api().do_step.ok_or_else(|| missing("fmi2DoStep"))?;
@@ -720,7 +503,7 @@ impl Instance2 {
 
     /// First time derivatives (order 1) of the outputs `vrs` (fmi2GetRealOutputDerivatives).
     pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
+        lengths(vrs.len(), out.len())?;
         let f = self
             .api()
             .get_output_derivatives
@@ -732,7 +515,7 @@ impl Instance2 {
 
     /// First time derivatives of the inputs `vrs` (fmi2SetRealInputDerivatives, order 1).
     pub fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
+        lengths(vrs.len(), values.len())?;
         let f = self
             .api()
             .set_input_derivatives
@@ -750,8 +533,8 @@ impl Instance2 {
         seed: &[f64],
         out: &mut [f64],
     ) -> Result<(), Fmi2Error> {
-        Self::lengths(knowns.len(), seed.len())?;
-        Self::lengths(unknowns.len(), out.len())?;
+        lengths(knowns.len(), seed.len())?;
+        lengths(unknowns.len(), out.len())?;
         let f = self
             .api()
             .get_directional_derivative
@@ -777,44 +560,9 @@ impl Instance2 {
             .ok_or_else(|| missing("model-exchange functions"))
     }
 
-    pub fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error> {
-        let f = self.me()?.set_time;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c, t) })
-    }
-
-    pub fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.set_continuous_states;
-        // SAFETY: a live model-exchange instance; `x` holds its states.
-        check(unsafe { f(self.c, x.as_ptr(), x.len()) })
-    }
-
-    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_derivatives;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, dx.as_mut_ptr(), dx.len()) })
-    }
-
-    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), Fmi2Error> {
-        if z.is_empty() {
-            return Ok(());
-        }
-        let f = self.me()?.get_event_indicators;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, z.as_mut_ptr(), z.len()) })
-    }
-
-    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_continuous_states;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
-    }
-
-    pub fn get_nominals(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_nominals;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
-    }
+    crate::common::calls!(me time, states and indicators);
+    crate::common::calls!(me vectors: get_derivatives, get_continuous_states, get_nominals);
+    crate::common::calls!(me: enter_event_mode, enter_continuous_time_mode);
 
     /// fmi2CompletedIntegratorStep: (enterEventMode, terminateSimulation).
     pub fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error> {
@@ -823,12 +571,6 @@ impl Instance2 {
         // SAFETY: a live model-exchange instance; the outputs point to locals.
         check(unsafe { f(self.c, fmi2Boolean::from(no_set_prior), &mut event, &mut terminate) })?;
         Ok((event != fmi2False, terminate != fmi2False))
-    }
-
-    pub fn enter_event_mode(&mut self) -> Result<(), Fmi2Error> {
-        let f = self.me()?.enter_event_mode;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c) })
     }
 
     pub fn new_discrete_states(&mut self) -> Result<fmi2EventInfo, Fmi2Error> {
@@ -846,40 +588,26 @@ impl Instance2 {
         Ok(info)
     }
 
-    pub fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error> {
-        let f = self.me()?.enter_continuous_time_mode;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c) })
-    }
-
-    fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {
-        if vrs == values {
-            Ok(())
-        } else {
-            Err(Fmi2Error::Importer(format!("{vrs} value references, {values} values")))
-        }
-    }
-
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
+        lengths(vrs.len(), out.len())?;
         // SAFETY: a live instance; both arrays hold vrs.len() elements.
         check(unsafe { (self.api().get_real)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
     }
 
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
+        lengths(vrs.len(), out.len())?;
         // SAFETY: as get_real.
         check(unsafe { (self.api().get_integer)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
     }
 
     pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
+        lengths(vrs.len(), out.len())?;
         // SAFETY: as get_real.
         check(unsafe { (self.api().get_boolean)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) })
     }
 
     pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
+        lengths(vrs.len(), out.len())?;
         let mut ptrs: Vec<fmi2String> = vec![std::ptr::null(); vrs.len()];
         // SAFETY: as get_real; the FMU's strings are copied before the next call.
         check(unsafe { (self.api().get_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_mut_ptr()) })?;
@@ -894,25 +622,25 @@ impl Instance2 {
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
+        lengths(vrs.len(), values.len())?;
         // SAFETY: a live instance; both arrays hold vrs.len() elements.
         check(unsafe { (self.api().set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
+        lengths(vrs.len(), values.len())?;
         // SAFETY: as set_real.
         check(unsafe { (self.api().set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
+        lengths(vrs.len(), values.len())?;
         // SAFETY: as set_real.
         check(unsafe { (self.api().set_boolean)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) })
     }
 
     pub fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
+        lengths(vrs.len(), values.len())?;
         let ptrs: Vec<fmi2String> = values.iter().map(|s| s.as_ptr()).collect();
         // SAFETY: as set_real.
         check(unsafe { (self.api().set_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_ptr()) })
@@ -964,6 +692,7 @@ impl Instance2 {
         // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
         check(unsafe { size_of(self.c, raw, &mut size) })?;
         let mut out = vec![0u8; size];
+        // SAFETY: as above; `out` holds the `size` bytes the FMU asked for.
         check(unsafe { serialize(self.c, raw, out.as_mut_ptr() as *mut fmi2Byte, size) })?;
         Ok(out)
     }

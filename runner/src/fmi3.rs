@@ -11,15 +11,15 @@
 
 #![allow(non_upper_case_globals, non_camel_case_types)]
 
-use crate::fmi2::{Fmi2Error, FmuState, Scratch, Slots, scratch};
-use fmi_description::Causality;
-use fmi_description::fmi2 as d2;
-use fmi_description::fmi3 as d3;
+use crate::common::{Fmi2Error, FmuState, Scratch, Slots, lengths, scratch};
 use rustfmu::fmi3::abi::*;
 use std::collections::HashSet;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+mod view;
+pub use view::{Fmi3Parts, as_fmi2};
 
 fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
     match status {
@@ -248,121 +248,6 @@ pub fn platform_folder() -> Option<String> {
     Some(format!("{arch}-{os}"))
 }
 
-/// An FMI 3.0 description read as the runner's FMI 2.0 one, and what was left out of it.
-pub struct Fmi3Parts {
-    pub description: d2::ModelDescription,
-    /// Value references of the Enumeration variables (fmi3GetInt64 / fmi3SetInt64).
-    pub int64: HashSet<u32>,
-    /// (name, FMI 3.0 type) of the variables the runner does not read: other types, arrays.
-    pub skipped: Vec<(String, String)>,
-}
-
-/// The FMI 3.0 description `d` as the FMI 2.0 one the runner reads (see the module).
-pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
-    let mut variables = Vec::new();
-    let mut int64 = HashSet::new();
-    let mut skipped = Vec::new();
-    for v in &d.variables {
-        let ty = match v.ty {
-            d3::Type::Float64 => Some(d2::Type::Real),
-            d3::Type::Int32 => Some(d2::Type::Integer),
-            d3::Type::Enumeration => Some(d2::Type::Enumeration),
-            d3::Type::Boolean => Some(d2::Type::Boolean),
-            d3::Type::String => Some(d2::Type::String),
-            _ => None,
-        };
-        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && v.clocks.is_empty()) else {
-            if v.causality != Causality::Independent {
-                let what = if v.dimensions.is_empty() && !v.array {
-                    format!("{:?}", v.ty)
-                } else {
-                    format!("{:?} array", v.ty)
-                };
-                skipped.push((v.name.clone(), what));
-            }
-            continue;
-        };
-        if ty == d2::Type::Enumeration {
-            int64.insert(v.vr);
-        }
-        variables.push(d2::Variable {
-            name: v.name.clone(),
-            vr: v.vr,
-            ty,
-            causality: v.causality,
-            variability: v.variability,
-            declared_initial: v.declared_initial,
-            start: v.start.clone(),
-            min: v.min,
-            max: v.max,
-            derivative: None,
-            declared_type: v.declared_type.clone(),
-            unit: v.unit.clone(),
-            description: v.description.clone(),
-        });
-    }
-    let index = |vr: u32| variables.iter().position(|x: &d2::Variable| x.vr == vr).map(|i| i + 1);
-    // ModelStructure's elements in FMI 2.0's form: indices into the variables kept.
-    let unknowns = |list: &[d3::Unknown]| -> Vec<d2::Unknown> {
-        list.iter()
-            .filter_map(|u| {
-                Some(d2::Unknown {
-                    index: index(u.vr)?,
-                    dependencies: u
-                        .dependencies
-                        .as_ref()
-                        .map(|deps| deps.iter().filter_map(|&k| index(k)).collect()),
-                })
-            })
-            .collect()
-    };
-    let outputs = unknowns(&d.outputs);
-    let derivatives = unknowns(&d.derivatives);
-    let me = d.me.as_ref().map(|me| d2::ModelExchange {
-        model_identifier: me.model_identifier.clone(),
-        can_get_and_set_fmu_state: me.can_get_and_set_fmu_state,
-        can_serialize_fmu_state: me.can_serialize_fmu_state,
-        provides_directional_derivative: me.provides_directional_derivatives,
-        completed_integrator_step_not_needed: false,
-    });
-    let cs = d.cs.as_ref().map(|cs| d2::CoSimulation {
-        model_identifier: cs.model_identifier.clone(),
-        can_get_and_set_fmu_state: cs.can_get_and_set_fmu_state,
-        can_serialize_fmu_state: cs.can_serialize_fmu_state,
-        provides_directional_derivative: cs.provides_directional_derivatives,
-        can_handle_variable_step: cs.can_handle_variable_step,
-        can_interpolate_inputs: false,
-        max_output_derivative_order: cs.max_output_derivative_order,
-        can_run_asynchronuously: false,
-    });
-    let description = d2::ModelDescription {
-        fmi_version: d.fmi_version.clone(),
-        model_name: d.model_name.clone(),
-        guid: d.token.clone(),
-        description: d.description.clone(),
-        version: d.version.clone(),
-        generation_tool: d.generation_tool.clone(),
-        number_of_event_indicators: d.event_indicators.len(),
-        cs,
-        me,
-        enumerations: Vec::new(),
-        log_categories: d.log_categories.clone(),
-        default_experiment: d.default_experiment.clone(),
-        variables,
-        model_structure: d2::ModelStructure {
-            outputs,
-            derivatives,
-            initial_unknowns: Vec::new(),
-            errors: d.errors.clone(),
-        },
-    };
-    Fmi3Parts {
-        description,
-        int64,
-        skipped,
-    }
-}
-
 /// An FMI 3.0 FMU ready to instantiate: its folder and binary.
 pub struct Fmi3Import {
     dir: PathBuf,
@@ -435,19 +320,31 @@ impl Fmi3Import {
         &self.dir
     }
 
+    /// The instance `c` this import's library made, with its environment.
+    fn instance(&self, c: fmi3Instance, env: Box<Env>) -> Instance3 {
+        Instance3 {
+            library: self.library.clone(),
+            c,
+            states: Slots::default(),
+            experiment: (None, 0.0, None),
+            int64: self.int64.clone(),
+            _env: env,
+        }
+    }
+
     /// fmi3InstantiateCoSimulation(name, ...) without event mode, with the runner's logger.
     pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(Env {
             instance: name_c.clone(),
         });
-        // SAFETY: valid C strings; the environment outlives the instance (dropped after
-        // fmi3FreeInstance).
         let instantiate = self
             .library
             .api
             .instantiate
             .ok_or("the binary has no fmi3InstantiateCoSimulation")?;
+        // SAFETY: valid C strings; the environment outlives the instance (dropped after
+        // fmi3FreeInstance).
         let c = unsafe {
             instantiate(
                 name_c.as_ptr(),
@@ -467,14 +364,7 @@ impl Fmi3Import {
         if c.is_null() {
             return Err("fmi3InstantiateCoSimulation returned NULL".into());
         }
-        Ok(Instance3 {
-            library: self.library.clone(),
-            c,
-            states: Slots::default(),
-            experiment: (None, 0.0, None),
-            int64: self.int64.clone(),
-            _env: env,
-        })
+        Ok(self.instance(c, env))
     }
 }
 
@@ -505,14 +395,7 @@ impl Fmi3Import {
         if c.is_null() {
             return Err("fmi3InstantiateModelExchange returned NULL".into());
         }
-        Ok(Instance3 {
-            library: self.library.clone(),
-            c,
-            states: Slots::default(),
-            experiment: (None, 0.0, None),
-            int64: self.int64.clone(),
-            _env: env,
-        })
+        Ok(self.instance(c, env))
     }
 }
 
@@ -526,44 +409,9 @@ impl Instance3 {
             .ok_or_else(|| Fmi2Error::Importer("the FMU has no model-exchange functions".into()))
     }
 
-    pub fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error> {
-        let f = self.me()?.set_time;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c, t) })
-    }
-
-    pub fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.set_continuous_states;
-        // SAFETY: a live model-exchange instance; `x` holds its states.
-        check(unsafe { f(self.c, x.as_ptr(), x.len()) })
-    }
-
-    pub fn get_derivatives(&mut self, dx: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_derivatives;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, dx.as_mut_ptr(), dx.len()) })
-    }
-
-    pub fn get_event_indicators(&mut self, z: &mut [f64]) -> Result<(), Fmi2Error> {
-        if z.is_empty() {
-            return Ok(());
-        }
-        let f = self.me()?.get_event_indicators;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, z.as_mut_ptr(), z.len()) })
-    }
-
-    pub fn get_continuous_states(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_continuous_states;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
-    }
-
-    pub fn get_nominals(&mut self, x: &mut [f64]) -> Result<(), Fmi2Error> {
-        let f = self.me()?.get_nominals;
-        // SAFETY: as set_continuous_states.
-        check(unsafe { f(self.c, x.as_mut_ptr(), x.len()) })
-    }
+    crate::common::calls!(me time, states and indicators);
+    crate::common::calls!(me vectors: get_derivatives, get_continuous_states, get_nominals);
+    crate::common::calls!(me: enter_event_mode, enter_continuous_time_mode);
 
     /// (enterEventMode, terminateSimulation).
     pub fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error> {
@@ -572,12 +420,6 @@ impl Instance3 {
         // SAFETY: a live model-exchange instance; the outputs point to locals.
         check(unsafe { f(self.c, no_set_prior, &mut event, &mut terminate) })?;
         Ok((event, terminate))
-    }
-
-    pub fn enter_event_mode(&mut self) -> Result<(), Fmi2Error> {
-        let f = self.me()?.enter_event_mode;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c) })
     }
 
     /// fmi3UpdateDiscreteStates, its answers as FMI 2.0's event info.
@@ -606,12 +448,6 @@ impl Instance3 {
             nextEventTimeDefined: b(defined),
             nextEventTime: next,
         })
-    }
-
-    pub fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error> {
-        let f = self.me()?.enter_continuous_time_mode;
-        // SAFETY: a live model-exchange instance.
-        check(unsafe { f(self.c) })
     }
 }
 
@@ -686,14 +522,6 @@ impl Drop for Instance3 {
     }
 }
 
-fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {
-    if vrs == values {
-        Ok(())
-    } else {
-        Err(Fmi2Error::Importer(format!("{vrs} value references, {values} values")))
-    }
-}
-
 impl Instance3 {
     fn api(&self) -> &Api {
         &self.library.api
@@ -730,20 +558,7 @@ impl Instance3 {
         })
     }
 
-    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().exit_initialization_mode)(self.c) })
-    }
-
-    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().terminate)(self.c) })
-    }
-
-    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
-        // SAFETY: a live instance.
-        check(unsafe { (self.api().reset)(self.c) })
-    }
+    crate::common::calls!(instance: exit_initialization_mode, terminate, reset);
 
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
         let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
@@ -944,6 +759,7 @@ impl Instance3 {
         // SAFETY: a live instance and one of its states; the buffer holds `size` bytes.
         check(unsafe { (self.api().serialized_size)(self.c, raw, &mut size) })?;
         let mut out = vec![0u8; size];
+        // SAFETY: as above; `out` holds the `size` bytes the FMU asked for.
         check(unsafe { (self.api().serialize)(self.c, raw, out.as_mut_ptr(), size) })?;
         Ok(out)
     }

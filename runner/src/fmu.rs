@@ -3,8 +3,9 @@
 //! variables by name (an FMI 3.0 FMU's as the FMI 2.0 ones they are: [`crate::fmi3::as_fmi2`]).
 
 use crate::Error;
-use crate::fmi2::{Fmi2Import, InstanceCS};
+use crate::fmi2::Fmi2Import;
 use crate::fmi3::Fmi3Import;
+use crate::instance::InstanceCS;
 use fmi_description::Causality;
 use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
 use std::io::{Cursor, Read};

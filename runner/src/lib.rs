@@ -20,11 +20,13 @@
 // exceptions, a study's row): 144 bytes, on the cold path only.
 #![allow(clippy::result_large_err)]
 
+pub mod common;
 pub mod container;
 pub mod fmi2;
 pub mod fmi3;
 pub mod fmu;
 pub mod fmu_log;
+pub mod instance;
 pub mod isolate;
 pub mod me;
 pub mod sim;

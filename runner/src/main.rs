@@ -128,6 +128,8 @@ fn parse_set(text: &str) -> Result<(String, Override), String> {
     Ok((key.trim().to_owned(), Override::Text(value.trim().to_owned())))
 }
 
+// ~170 lines: one match over the subcommands, each arm the plain sequence of its steps (read,
+// run, write); nothing in it is shared between arms.
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         #[cfg(target_os = "linux")]

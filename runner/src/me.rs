@@ -17,7 +17,8 @@
 //! fmi2EnterEventMode, fmi2NewDiscreteStates until no new discrete states are needed,
 //! fmi2EnterContinuousTimeMode, and the states read back.
 
-use crate::fmi2::{Fmi2Error, FmuState, Instance2};
+use crate::common::{Fmi2Error, FmuState, dispatch_with};
+use crate::fmi2::Instance2;
 use crate::fmi3::Instance3;
 use rustfmu::fmi2::abi::{fmi2EventInfo, fmi2False};
 
@@ -29,27 +30,11 @@ pub enum MeInner {
     V3(Instance3),
 }
 
-macro_rules! me_forward {
-    ($( fn $name:ident(&mut self $(, $arg:ident: $ty:ty)*) -> $ret:ty; )*) => {
-        impl MeInner {
-            $(
-                pub fn $name(&mut self $(, $arg: $ty)*) -> $ret {
-                    match self {
-                        MeInner::V2(i) => i.$name($($arg),*),
-                        MeInner::V3(i) => i.$name($($arg),*),
-                    }
-                }
-            )*
-        }
-    };
-}
-
-me_forward! {
-    fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error>;
+dispatch_with! {
+    values_and_states;
+    MeInner { V2, V3 }
     fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error>;
-    fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
     fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
-    fn terminate(&mut self) -> Result<(), Fmi2Error>;
     fn reset(&mut self) -> Result<(), Fmi2Error>;
     fn set_time(&mut self, t: f64) -> Result<(), Fmi2Error>;
     fn set_continuous_states(&mut self, x: &[f64]) -> Result<(), Fmi2Error>;
@@ -61,21 +46,6 @@ me_forward! {
     fn enter_event_mode(&mut self) -> Result<(), Fmi2Error>;
     fn new_discrete_states(&mut self) -> Result<fmi2EventInfo, Fmi2Error>;
     fn enter_continuous_time_mode(&mut self) -> Result<(), Fmi2Error>;
-    fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
-    fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
-    fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error>;
-    fn get_string(&mut self, vrs: &[u32], out: &mut [std::ffi::CString]) -> Result<(), Fmi2Error>;
-    fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
-    fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
-    fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error>;
-    fn set_string(&mut self, vrs: &[u32], values: &[std::ffi::CString]) -> Result<(), Fmi2Error>;
-    fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), Fmi2Error>;
-    fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error>;
-    fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
-    fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error>;
-    fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error>;
-    fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error>;
-    fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error>;
 }
 
 // Dormand–Prince 5(4) tableau.
@@ -142,6 +112,17 @@ struct Clock {
     h: f64,
 }
 
+impl Clock {
+    /// At `t`, no event ahead known, the first step size still to be chosen.
+    fn at(t: f64) -> Clock {
+        Clock {
+            t,
+            next_event: None,
+            h: 0.0,
+        }
+    }
+}
+
 /// A model-exchange instance (FMI 2.0 or 3.0) stepped as a co-simulation one.
 pub struct MeInstance {
     inner: MeInner,
@@ -165,6 +146,12 @@ fn importer(m: String) -> Fmi2Error {
     Fmi2Error::Importer(m)
 }
 
+// What the integration leaves as it is: the values, the partial derivatives, logging.
+dispatch_with! {
+    values;
+    MeInstance.inner
+}
+
 impl MeInstance {
     /// `nx` continuous states, `nz` event indicators (the description's).
     pub fn new(inner: MeInner, nx: usize, nz: usize) -> MeInstance {
@@ -173,11 +160,7 @@ impl MeInstance {
             nx,
             nz,
             rtol: 1e-6,
-            clock: Clock {
-                t: 0.0,
-                next_event: None,
-                h: 0.0,
-            },
+            clock: Clock::at(0.0),
             x: vec![0.0; nx],
             nominal: vec![1.0; nx],
             z: vec![0.0; nz],
@@ -187,22 +170,10 @@ impl MeInstance {
         }
     }
 
-    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error> {
-        self.inner.set_debug_logging(on, categories)
-    }
-
     pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error> {
         self.rtol = tolerance.filter(|t| *t > 0.0 && t.is_finite()).unwrap_or(1e-6);
-        self.clock = Clock {
-            t: start,
-            next_event: None,
-            h: 0.0,
-        };
+        self.clock = Clock::at(start);
         self.inner.setup_experiment(tolerance, start, stop)
-    }
-
-    pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
-        self.inner.enter_initialization_mode()
     }
 
     /// Leaves initialization, settles the discrete states at the start (the event iteration),
@@ -214,16 +185,8 @@ impl MeInstance {
         self.read_back()
     }
 
-    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
-        self.inner.terminate()
-    }
-
     pub fn reset(&mut self) -> Result<(), Fmi2Error> {
-        self.clock = Clock {
-            t: 0.0,
-            next_event: None,
-            h: 0.0,
-        };
+        self.clock = Clock::at(0.0);
         self.inner.reset()
     }
 
@@ -412,31 +375,6 @@ impl MeInstance {
         Ok(())
     }
 
-    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
-        self.inner.get_real(vrs, out)
-    }
-    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        self.inner.get_integer(vrs, out)
-    }
-    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        self.inner.get_boolean(vrs, out)
-    }
-    pub fn get_string(&mut self, vrs: &[u32], out: &mut [std::ffi::CString]) -> Result<(), Fmi2Error> {
-        self.inner.get_string(vrs, out)
-    }
-    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        self.inner.set_real(vrs, values)
-    }
-    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        self.inner.set_integer(vrs, values)
-    }
-    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        self.inner.set_boolean(vrs, values)
-    }
-    pub fn set_string(&mut self, vrs: &[u32], values: &[std::ffi::CString]) -> Result<(), Fmi2Error> {
-        self.inner.set_string(vrs, values)
-    }
-
     /// Not offered: the runner's integration has no output derivatives of its own.
     pub fn get_output_derivatives(&mut self, _vrs: &[u32], _out: &mut [f64]) -> Result<(), Fmi2Error> {
         Err(importer(
@@ -450,14 +388,13 @@ impl MeInstance {
         ))
     }
 
-    pub fn get_directional_derivative(
-        &mut self,
-        unknowns: &[u32],
-        knowns: &[u32],
-        seed: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), Fmi2Error> {
-        self.inner.get_directional_derivative(unknowns, knowns, seed, out)
+    /// The integrator's clock kept with the FMU state `s`.
+    fn clock_of(&self, s: &FmuState) -> Result<Clock, Fmi2Error> {
+        self.saved
+            .get(s.0)
+            .copied()
+            .flatten()
+            .ok_or_else(|| importer(format!("FMU state {} is not one of this instance's", s.0)))
     }
 
     fn remember(&mut self, s: &FmuState) {
@@ -480,12 +417,7 @@ impl MeInstance {
     }
 
     pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
-        let clock = self
-            .saved
-            .get(s.0)
-            .copied()
-            .flatten()
-            .ok_or_else(|| importer(format!("FMU state {} is not one of this instance's", s.0)))?;
+        let clock = self.clock_of(s)?;
         self.inner.set_fmu_state(s)?;
         self.clock = clock;
         self.read_back()
@@ -499,12 +431,7 @@ impl MeInstance {
     }
 
     pub fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error> {
-        let clock = self
-            .saved
-            .get(s.0)
-            .copied()
-            .flatten()
-            .ok_or_else(|| importer(format!("FMU state {} is not one of this instance's", s.0)))?;
+        let clock = self.clock_of(s)?;
         let mut bytes = self.inner.serialize_fmu_state(s)?;
         bytes.extend_from_slice(TRAILER);
         bytes.extend_from_slice(&clock.t.to_le_bytes());

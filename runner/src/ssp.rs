@@ -144,6 +144,10 @@ pub fn parse_ssv(file: &str, xml: &str) -> Result<Vec<(String, Value)>, Error> {
 }
 
 /// Parses `SystemStructure.ssd`; `read` returns another file of the archive (a `.ssv`).
+// Long (~330 lines) because it is one pass of quick-xml events over the document: each arm of
+// its match is one SSD element, checked where it stands (its parents are the state of the pass),
+// and the refusals name the element and the attribute; split into functions, every arm would
+// take the whole state.
 pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>) -> Result<Ssd, Error> {
     const FILE: &str = "SystemStructure.ssd";
     let mut reader = Reader::from_str(xml);

@@ -5,33 +5,32 @@
 //! access type of an Enumeration), Boolean, String; after them the independent variable `time`
 //! (value reference: the number of the others), read with fmi3GetFloat64.
 
+use crate::export::exports;
 use crate::*;
 use rustfmu::fmi3::abi::*;
+
+mod refusals;
 
 fn with3(c: fmi3Instance, function: &str, f: impl FnOnce(&mut Container) -> Outcome) -> fmi3Status {
     with(c, function, f) as fmi3Status
 }
 
-#[unsafe(no_mangle)]
-pub extern "C" fn fmi3GetVersion() -> *const c_char {
-    VERSION.as_ptr()
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetDebugLogging(
-    instance: fmi3Instance,
-    loggingOn: fmi3Boolean,
-    nCategories: usize,
-    categories: *const fmi3String,
-) -> fmi3Status {
-    const F: &str = "fmi3SetDebugLogging";
-    with3(instance, F, |me| {
-        if nCategories > 0 && categories.is_null() {
-            me.check(Call::SetDebugLogging, F)?;
-            return Err(me.error(&format!("{F}: {nCategories} categories in a NULL array")));
-        }
-        me.set_debug_logging(F, loggingOn, slice(categories, nCategories))
-    })
+exports! {
+    fmi3GetVersion() -> *const c_char =>
+        VERSION.as_ptr();
+    fmi3SetDebugLogging(
+        instance: fmi3Instance,
+        loggingOn: fmi3Boolean,
+        nCategories: usize,
+        categories: *const fmi3String,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            if nCategories > 0 && categories.is_null() {
+                me.check(Call::SetDebugLogging, F)?;
+                return Err(me.error(&format!("{F}: {nCategories} categories in a NULL array")));
+            }
+            me.set_debug_logging(F, loggingOn, slice(categories, nCategories))
+        });
 }
 
 /// Logs `message` through an FMI 3.0 logger that has no instance (yet).
@@ -43,63 +42,100 @@ fn log_to(logger: fmi3LogMessageCallback, environment: fmi3InstanceEnvironment, 
     sink.log(fmi2Error, "logStatusError", message);
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3InstantiateModelExchange(
-    _instanceName: fmi3String,
-    _instantiationToken: fmi3String,
-    _resourcePath: fmi3String,
-    _visible: fmi3Boolean,
-    _loggingOn: fmi3Boolean,
-    instanceEnvironment: fmi3InstanceEnvironment,
-    logMessage: fmi3LogMessageCallback,
-) -> fmi3Instance {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        log_to(
-            logMessage,
+exports! {
+    fmi3InstantiateModelExchange(
+        _instanceName: fmi3String,
+        _instantiationToken: fmi3String,
+        _resourcePath: fmi3String,
+        _visible: fmi3Boolean,
+        _loggingOn: fmi3Boolean,
+        instanceEnvironment: fmi3InstanceEnvironment,
+        logMessage: fmi3LogMessageCallback,
+    ) -> fmi3Instance =>
+        no_instance(logMessage, instanceEnvironment, "fmi3InstantiateModelExchange: a container is a co-simulation FMU only (no <ModelExchange> element)");
+    fmi3InstantiateScheduledExecution(
+        _instanceName: fmi3String,
+        _instantiationToken: fmi3String,
+        _resourcePath: fmi3String,
+        _visible: fmi3Boolean,
+        _loggingOn: fmi3Boolean,
+        instanceEnvironment: fmi3InstanceEnvironment,
+        logMessage: fmi3LogMessageCallback,
+        _clockUpdate: fmi3ClockUpdateCallback,
+        _lockPreemption: fmi3LockPreemptionCallback,
+        _unlockPreemption: fmi3UnlockPreemptionCallback,
+    ) -> fmi3Instance =>
+        no_instance(logMessage, instanceEnvironment, "fmi3InstantiateScheduledExecution: a container is a co-simulation FMU only (no <ScheduledExecution> element)");
+    fmi3InstantiateCoSimulation(
+        instanceName: fmi3String,
+        instantiationToken: fmi3String,
+        resourcePath: fmi3String,
+        _visible: fmi3Boolean,
+        loggingOn: fmi3Boolean,
+        eventModeUsed: fmi3Boolean,
+        _earlyReturnAllowed: fmi3Boolean,
+        _requiredIntermediateVariables: *const fmi3ValueReference,
+        nRequiredIntermediateVariables: usize,
+        instanceEnvironment: fmi3InstanceEnvironment,
+        logMessage: fmi3LogMessageCallback,
+        _intermediateUpdate: fmi3IntermediateUpdateCallback,
+    ) -> fmi3Instance =>
+        instantiate_cs3(
+            instanceName,
+            instantiationToken,
+            resourcePath,
+            loggingOn,
+            eventModeUsed,
+            nRequiredIntermediateVariables,
             instanceEnvironment,
-            "fmi3InstantiateModelExchange: a container is a co-simulation FMU only (no <ModelExchange> element)",
-        )
-    }));
+            logMessage,
+        );
+    fmi3FreeInstance(instance: fmi3Instance) =>
+        free_instance(instance);
+    fmi3EnterInitializationMode(
+        instance: fmi3Instance,
+        toleranceDefined: fmi3Boolean,
+        tolerance: fmi3Float64,
+        startTime: fmi3Float64,
+        stopTimeDefined: fmi3Boolean,
+        stopTime: fmi3Float64,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.check(Call::EnterInitializationMode, F)?;
+            me.setup(
+                F,
+                toleranceDefined.then_some(tolerance),
+                startTime,
+                stopTimeDefined.then_some(stopTime),
+            )?;
+            me.enter_initialization_mode(F)
+        });
+    fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.exit_initialization_mode(F)
+        });
+    fmi3Terminate(instance: fmi3Instance) -> fmi3Status =>
+        with3(instance, F, |me| me.terminate(F));
+    fmi3Reset(instance: fmi3Instance) -> fmi3Status =>
+        with3(instance, F, |me| me.reset(F));
+}
+
+/// An instantiation of an interface a container does not have: refused in the importer's log.
+fn no_instance(logger: fmi3LogMessageCallback, environment: fmi3InstanceEnvironment, message: &str) -> fmi3Instance {
+    let _ = catch_unwind(AssertUnwindSafe(|| log_to(logger, environment, message)));
     std::ptr::null_mut()
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
-    _instanceName: fmi3String,
-    _instantiationToken: fmi3String,
-    _resourcePath: fmi3String,
-    _visible: fmi3Boolean,
-    _loggingOn: fmi3Boolean,
-    instanceEnvironment: fmi3InstanceEnvironment,
-    logMessage: fmi3LogMessageCallback,
-    _clockUpdate: fmi3ClockUpdateCallback,
-    _lockPreemption: fmi3LockPreemptionCallback,
-    _unlockPreemption: fmi3UnlockPreemptionCallback,
-) -> fmi3Instance {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        log_to(
-            logMessage,
-            instanceEnvironment,
-            "fmi3InstantiateScheduledExecution: a container is a co-simulation FMU only (no <ScheduledExecution> element)",
-        )
-    }));
-    std::ptr::null_mut()
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
+/// fmi3InstantiateCoSimulation: without event mode or intermediate update.
+fn instantiate_cs3(
     instanceName: fmi3String,
     instantiationToken: fmi3String,
     resourcePath: fmi3String,
-    _visible: fmi3Boolean,
     loggingOn: fmi3Boolean,
     eventModeUsed: fmi3Boolean,
-    _earlyReturnAllowed: fmi3Boolean,
-    _requiredIntermediateVariables: *const fmi3ValueReference,
     nRequiredIntermediateVariables: usize,
     instanceEnvironment: fmi3InstanceEnvironment,
     logMessage: fmi3LogMessageCallback,
-    _intermediateUpdate: fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance {
     const F: &str = "fmi3InstantiateCoSimulation";
     let r = catch_unwind(AssertUnwindSafe(|| {
@@ -146,50 +182,6 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     }
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-    free_instance(instance)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterInitializationMode(
-    instance: fmi3Instance,
-    toleranceDefined: fmi3Boolean,
-    tolerance: fmi3Float64,
-    startTime: fmi3Float64,
-    stopTimeDefined: fmi3Boolean,
-    stopTime: fmi3Float64,
-) -> fmi3Status {
-    const F: &str = "fmi3EnterInitializationMode";
-    with3(instance, F, |me| {
-        me.check(Call::EnterInitializationMode, F)?;
-        me.setup(
-            F,
-            toleranceDefined.then_some(tolerance),
-            startTime,
-            stopTimeDefined.then_some(stopTime),
-        )?;
-        me.enter_initialization_mode(F)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
-    with3(instance, "fmi3ExitInitializationMode", |me| {
-        me.exit_initialization_mode("fmi3ExitInitializationMode")
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
-    with3(instance, "fmi3Terminate", |me| me.terminate("fmi3Terminate"))
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3Reset(instance: fmi3Instance) -> fmi3Status {
-    with3(instance, "fmi3Reset", |me| me.reset("fmi3Reset"))
-}
-
 /// The value references and the number of values of a getter or setter: NULL arrays and
 /// nValues other than nValueReferences (every variable of a container is a scalar) refused.
 fn arrays<'a, T>(
@@ -231,139 +223,129 @@ fn get3<T: Scalar>(
     })
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetFloat64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *mut fmi3Float64,
-    nValues: usize,
-) -> fmi3Status {
-    get3(
-        instance,
-        "fmi3GetFloat64",
-        Type::Real,
-        "Float64",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, v, out| i.get_real(v, out),
-        |x| x.is_finite(),
-        Some,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetInt32(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *mut fmi3Int32,
-    nValues: usize,
-) -> fmi3Status {
-    get3(
-        instance,
-        "fmi3GetInt32",
-        Type::Integer,
-        "Int32",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, v, out| i.get_integer(v, out),
-        |_| true,
-        |_| None,
-    )
-}
-
-/// An Enumeration's values (its FMI 3.0 access type is Int64; the components' are fmi2Integer).
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *mut fmi3Int64,
-    nValues: usize,
-) -> fmi3Status {
-    get3(
-        instance,
-        "fmi3GetInt64",
-        Type::Enumeration,
-        "Int64 (an Enumeration)",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, v, out| {
-            let mut ints = vec![0i32; v.len()];
-            i.get_integer(v, &mut ints)?;
-            for (o, x) in out.iter_mut().zip(ints) {
-                *o = i64::from(x);
-            }
-            Ok(())
-        },
-        |_| true,
-        |_| None,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetBoolean(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *mut fmi3Boolean,
-    nValues: usize,
-) -> fmi3Status {
-    get3(
-        instance,
-        "fmi3GetBoolean",
-        Type::Boolean,
-        "Boolean",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, v, out| {
-            let mut ints = vec![0i32; v.len()];
-            i.get_boolean(v, &mut ints)?;
-            for (o, x) in out.iter_mut().zip(ints) {
-                *o = x != 0;
-            }
-            Ok(())
-        },
-        |_| true,
-        |_| None,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetString(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *mut fmi3String,
-    nValues: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3GetString";
-    with3(instance, F, |me| {
-        me.check(Call::GetValues, F)?;
-        let vrs = arrays(
-            me,
+exports! {
+    fmi3GetFloat64(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *mut fmi3Float64,
+        nValues: usize,
+    ) -> fmi3Status =>
+        get3(
+            instance,
             F,
+            Type::Real,
+            "Float64",
             valueReferences,
             nValueReferences,
-            values as *const fmi3String,
+            values,
             nValues,
-        )?;
-        me.get_strings(F, vrs)?;
-        let out = slice_mut(values, nValueReferences);
-        for (k, s) in me.strings.iter().enumerate() {
-            out[k] = s.as_ptr();
-        }
-        Ok(fmi2OK)
-    })
+            |i, v, out| i.get_real(v, out),
+            |x| x.is_finite(),
+            Some,
+        );
+    fmi3GetInt32(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *mut fmi3Int32,
+        nValues: usize,
+    ) -> fmi3Status =>
+        get3(
+            instance,
+            F,
+            Type::Integer,
+            "Int32",
+            valueReferences,
+            nValueReferences,
+            values,
+            nValues,
+            |i, v, out| i.get_integer(v, out),
+            |_| true,
+            |_| None,
+        );
+}
+
+// An Enumeration's values (its FMI 3.0 access type is Int64; the components' are fmi2Integer).
+exports! {
+    fmi3GetInt64(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *mut fmi3Int64,
+        nValues: usize,
+    ) -> fmi3Status =>
+        get3(
+            instance,
+            F,
+            Type::Enumeration,
+            "Int64 (an Enumeration)",
+            valueReferences,
+            nValueReferences,
+            values,
+            nValues,
+            |i, v, out| {
+                let mut ints = vec![0i32; v.len()];
+                i.get_integer(v, &mut ints)?;
+                for (o, x) in out.iter_mut().zip(ints) {
+                    *o = i64::from(x);
+                }
+                Ok(())
+            },
+            |_| true,
+            |_| None,
+        );
+    fmi3GetBoolean(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *mut fmi3Boolean,
+        nValues: usize,
+    ) -> fmi3Status =>
+        get3(
+            instance,
+            F,
+            Type::Boolean,
+            "Boolean",
+            valueReferences,
+            nValueReferences,
+            values,
+            nValues,
+            |i, v, out| {
+                let mut ints = vec![0i32; v.len()];
+                i.get_boolean(v, &mut ints)?;
+                for (o, x) in out.iter_mut().zip(ints) {
+                    *o = x != 0;
+                }
+                Ok(())
+            },
+            |_| true,
+            |_| None,
+        );
+    fmi3GetString(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *mut fmi3String,
+        nValues: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.check(Call::GetValues, F)?;
+            let vrs = arrays(
+                me,
+                F,
+                valueReferences,
+                nValueReferences,
+                values as *const fmi3String,
+                nValues,
+            )?;
+            me.get_strings(F, vrs)?;
+            let out = slice_mut(values, nValueReferences);
+            for (k, s) in me.strings.iter().enumerate() {
+                out[k] = s.as_ptr();
+            }
+            Ok(fmi2OK)
+        });
 }
 
 fn set3<T: Scalar>(
@@ -384,321 +366,154 @@ fn set3<T: Scalar>(
     })
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFloat64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *const fmi3Float64,
-    nValues: usize,
-) -> fmi3Status {
-    set3(
-        instance,
-        "fmi3SetFloat64",
-        Type::Real,
-        "Float64",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |x| Some(*x),
-        |i, v, x| i.set_real(&[v], &[x]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetInt32(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *const fmi3Int32,
-    nValues: usize,
-) -> fmi3Status {
-    set3(
-        instance,
-        "fmi3SetInt32",
-        Type::Integer,
-        "Int32",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |x| Some(f64::from(*x)),
-        |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *const fmi3Int64,
-    nValues: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3SetInt64";
-    with3(instance, F, |me| {
-        let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
-        let given = slice(values, nValueReferences);
-        // The components' Enumerations are fmi2Integer: a value outside 32 bits is no item.
-        let mut narrow = Vec::with_capacity(given.len());
-        for (k, &x) in given.iter().enumerate() {
-            match i32::try_from(x) {
-                Ok(x) => narrow.push(x),
-                Err(_) => {
-                    me.check(Call::SetDiscreteValues, F)?;
-                    me.port(vrs[k], Type::Enumeration, "Int64 (an Enumeration)", F)?;
-                    return Err(me.error(&format!(
-                        "{F}: '{}' (vr {}) = {x} is no item of its enumeration; nothing set",
-                        me.name(vrs[k]),
-                        vrs[k]
-                    )));
-                }
-            }
-        }
-        me.set_values(
+exports! {
+    fmi3SetFloat64(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *const fmi3Float64,
+        nValues: usize,
+    ) -> fmi3Status =>
+        set3(
+            instance,
             F,
-            Type::Enumeration,
-            "Int64 (an Enumeration)",
-            vrs,
-            &narrow,
-            |x| Some(f64::from(*x)),
-            |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
-        )
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetBoolean(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *const fmi3Boolean,
-    nValues: usize,
-) -> fmi3Status {
-    set3(
-        instance,
-        "fmi3SetBoolean",
-        Type::Boolean,
-        "Boolean",
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |_| None,
-        |i, v, x| i.set_boolean(&[v], &[i32::from(x)]).map(|_| ()),
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetString(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    values: *const fmi3String,
-    nValues: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3SetString";
-    with3(instance, F, |me| {
-        let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
-        me.set_strings(F, vrs, slice(values, nValueReferences))
-    })
-}
-
-/// A getter or setter of a type no variable of a container has: every value reference refused
-/// (it is no variable, or a variable of another type); none at all is fine.
-fn no_such_type(me: &Container, call: Call, function: &str, asked: &str, vrs: &[u32]) -> Outcome {
-    me.check(call, function)?;
-    match vrs.first() {
-        None => Ok(fmi2OK),
-        Some(&vr) => {
-            let Some(p) = me.ports.get(vr as usize) else {
-                return Err(me.error(&format!(
-                    "{function}: value reference {vr} is not a variable of {} (0 .. {})",
-                    me.spec.model_identifier,
-                    me.ports.len().saturating_sub(1)
-                )));
-            };
-            Err(me.error(&format!(
-                "{function}: '{}' (vr {vr}) is {}, not {asked} (a container's variables are its components' FMI 2.0 types)",
-                me.name(vr),
-                type_name(Version::Fmi3, p.ty)
-            )))
-        }
-    }
-}
-
-macro_rules! no_such_types {
-    ($($get:ident, $set:ident, $ty:ty, $name:literal;)*) => {$(
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $get(
-            instance: fmi3Instance,
-            valueReferences: *const fmi3ValueReference,
-            nValueReferences: usize,
-            values: *mut $ty,
-            nValues: usize,
-        ) -> fmi3Status {
-            with3(instance, stringify!($get), |me| {
-                let vrs = arrays(me, stringify!($get), valueReferences, nValueReferences, values as *const $ty, nValues)?;
-                no_such_type(me, Call::GetValues, stringify!($get), $name, vrs)
-            })
-        }
-
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $set(
-            instance: fmi3Instance,
-            valueReferences: *const fmi3ValueReference,
-            nValueReferences: usize,
-            values: *const $ty,
-            nValues: usize,
-        ) -> fmi3Status {
-            with3(instance, stringify!($set), |me| {
-                let vrs = arrays(me, stringify!($set), valueReferences, nValueReferences, values, nValues)?;
-                no_such_type(me, Call::SetDiscreteValues, stringify!($set), $name, vrs)
-            })
-        }
-    )*};
-}
-
-no_such_types! {
-    fmi3GetFloat32, fmi3SetFloat32, fmi3Float32, "Float32";
-    fmi3GetInt8, fmi3SetInt8, fmi3Int8, "Int8";
-    fmi3GetUInt8, fmi3SetUInt8, fmi3UInt8, "UInt8";
-    fmi3GetInt16, fmi3SetInt16, fmi3Int16, "Int16";
-    fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, "UInt16";
-    fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, "UInt32";
-    fmi3GetUInt64, fmi3SetUInt64, fmi3UInt64, "UInt64";
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetBinary(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    _valueSizes: *mut usize,
-    values: *mut fmi3Binary,
-    nValues: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3GetBinary";
-    with3(instance, F, |me| {
-        let vrs = arrays(
-            me,
-            F,
+            Type::Real,
+            "Float64",
             valueReferences,
             nValueReferences,
-            values as *const fmi3Binary,
+            values,
             nValues,
-        )?;
-        no_such_type(me, Call::GetValues, F, "Binary", vrs)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetBinary(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: usize,
-    _valueSizes: *const usize,
-    values: *const fmi3Binary,
-    nValues: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3SetBinary";
-    with3(instance, F, |me| {
-        let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
-        no_such_type(me, Call::SetDiscreteValues, F, "Binary", vrs)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3DoStep(
-    instance: fmi3Instance,
-    currentCommunicationPoint: fmi3Float64,
-    communicationStepSize: fmi3Float64,
-    _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
-    eventHandlingNeeded: *mut fmi3Boolean,
-    terminateSimulation: *mut fmi3Boolean,
-    earlyReturn: *mut fmi3Boolean,
-    lastSuccessfulTime: *mut fmi3Float64,
-) -> fmi3Status {
-    const F: &str = "fmi3DoStep";
-    with3(instance, F, |me| {
-        if eventHandlingNeeded.is_null()
-            || terminateSimulation.is_null()
-            || earlyReturn.is_null()
-            || lastSuccessfulTime.is_null()
-        {
-            me.check(Call::DoStep, F)?;
-            return Err(me.error(&format!(
-                "{F}: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must not be NULL"
-            )));
-        }
-        let r = me.do_step(F, currentCommunicationPoint, communicationStepSize);
-        unsafe {
-            *eventHandlingNeeded = false;
-            *terminateSimulation = false;
-            *earlyReturn = false;
-            *lastSuccessfulTime = me.last_successful;
-        }
-        r
-    })
+            |x| Some(*x),
+            |i, v, x| i.set_real(&[v], &[x]).map(|_| ()),
+        );
+    fmi3SetInt32(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *const fmi3Int32,
+        nValues: usize,
+    ) -> fmi3Status =>
+        set3(
+            instance,
+            F,
+            Type::Integer,
+            "Int32",
+            valueReferences,
+            nValueReferences,
+            values,
+            nValues,
+            |x| Some(f64::from(*x)),
+            |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
+        );
+    fmi3SetInt64(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *const fmi3Int64,
+        nValues: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
+            let given = slice(values, nValueReferences);
+            // The components' Enumerations are fmi2Integer: a value outside 32 bits is no item.
+            let mut narrow = Vec::with_capacity(given.len());
+            for (k, &x) in given.iter().enumerate() {
+                match i32::try_from(x) {
+                    Ok(x) => narrow.push(x),
+                    Err(_) => {
+                        me.check(Call::SetDiscreteValues, F)?;
+                        me.port(vrs[k], Type::Enumeration, "Int64 (an Enumeration)", F)?;
+                        return Err(me.error(&format!(
+                            "{F}: '{}' (vr {}) = {x} is no item of its enumeration; nothing set",
+                            me.name(vrs[k]),
+                            vrs[k]
+                        )));
+                    }
+                }
+            }
+            me.set_values(
+                F,
+                Type::Enumeration,
+                "Int64 (an Enumeration)",
+                vrs,
+                &narrow,
+                |x| Some(f64::from(*x)),
+                |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
+            )
+        });
+    fmi3SetBoolean(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *const fmi3Boolean,
+        nValues: usize,
+    ) -> fmi3Status =>
+        set3(
+            instance,
+            F,
+            Type::Boolean,
+            "Boolean",
+            valueReferences,
+            nValueReferences,
+            values,
+            nValues,
+            |_| None,
+            |i, v, x| i.set_boolean(&[v], &[i32::from(x)]).map(|_| ()),
+        );
+    fmi3SetString(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        values: *const fmi3String,
+        nValues: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
+            me.set_strings(F, vrs, slice(values, nValueReferences))
+        });
 }
 
 // FMU states.
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status {
-    with3(instance, "fmi3GetFMUState", |me| {
-        me.get_fmu_state("fmi3GetFMUState", FMUState)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status {
-    with3(instance, "fmi3SetFMUState", |me| {
-        me.set_fmu_state("fmi3SetFMUState", FMUState)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status {
-    with3(instance, "fmi3FreeFMUState", |me| {
-        me.free_fmu_state("fmi3FreeFMUState", FMUState)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
-    instance: fmi3Instance,
-    FMUState: fmi3FMUState,
-    size: *mut usize,
-) -> fmi3Status {
-    with3(instance, "fmi3SerializedFMUStateSize", |me| {
-        me.serialized_size("fmi3SerializedFMUStateSize", FMUState, size)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SerializeFMUState(
-    instance: fmi3Instance,
-    FMUState: fmi3FMUState,
-    serializedState: *mut fmi3Byte,
-    size: usize,
-) -> fmi3Status {
-    with3(instance, "fmi3SerializeFMUState", |me| {
-        me.serialize_state("fmi3SerializeFMUState", FMUState, serializedState, size)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3DeserializeFMUState(
-    instance: fmi3Instance,
-    serializedState: *const fmi3Byte,
-    size: usize,
-    FMUState: *mut fmi3FMUState,
-) -> fmi3Status {
-    with3(instance, "fmi3DeserializeFMUState", |me| {
-        me.deserialize_state("fmi3DeserializeFMUState", serializedState, size, FMUState)
-    })
+exports! {
+    fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.get_fmu_state(F, FMUState)
+        });
+    fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.set_fmu_state(F, FMUState)
+        });
+    fmi3FreeFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.free_fmu_state(F, FMUState)
+        });
+    fmi3SerializedFMUStateSize(
+        instance: fmi3Instance,
+        FMUState: fmi3FMUState,
+        size: *mut usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.serialized_size(F, FMUState, size)
+        });
+    fmi3SerializeFMUState(
+        instance: fmi3Instance,
+        FMUState: fmi3FMUState,
+        serializedState: *mut fmi3Byte,
+        size: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.serialize_state(F, FMUState, serializedState, size)
+        });
+    fmi3DeserializeFMUState(
+        instance: fmi3Instance,
+        serializedState: *const fmi3Byte,
+        size: usize,
+        FMUState: *mut fmi3FMUState,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.deserialize_state(F, serializedState, size, FMUState)
+        });
 }
 
 // Variable dependencies (FMI 3.0, 2.3.9): those of <ModelStructure>.
@@ -757,349 +572,63 @@ impl Container {
     }
 }
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetNumberOfVariableDependencies(
-    instance: fmi3Instance,
-    dependent: fmi3ValueReference,
-    nDependencies: *mut usize,
-) -> fmi3Status {
-    const F: &str = "fmi3GetNumberOfVariableDependencies";
-    with3(instance, F, |me| {
-        me.check(Call::SetDebugLogging, F)?;
-        if nDependencies.is_null() {
-            return Err(me.error(&format!("{F}: nDependencies is NULL")));
-        }
-        let deps = me.dependencies(F, dependent)?;
-        unsafe { *nDependencies = deps.len() };
-        Ok(fmi2OK)
-    })
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetVariableDependencies(
-    instance: fmi3Instance,
-    dependent: fmi3ValueReference,
-    elementIndicesOfDependent: *mut usize,
-    independents: *mut fmi3ValueReference,
-    elementIndicesOfIndependents: *mut usize,
-    dependencyKinds: *mut fmi3DependencyKind,
-    nDependencies: usize,
-) -> fmi3Status {
-    const F: &str = "fmi3GetVariableDependencies";
-    with3(instance, F, |me| {
-        me.check(Call::SetDebugLogging, F)?;
-        let deps = me.dependencies(F, dependent)?;
-        if nDependencies != deps.len() {
-            return Err(me.error(&format!(
-                "{F}: nDependencies = {nDependencies}, but '{}' (vr {dependent}) has {} (fmi3GetNumberOfVariableDependencies)",
-                me.name(dependent),
-                deps.len()
-            )));
-        }
-        let n = deps.len();
-        if n > 0
-            && (elementIndicesOfDependent.is_null()
-                || independents.is_null()
-                || elementIndicesOfIndependents.is_null()
-                || dependencyKinds.is_null())
-        {
-            return Err(me.error(&format!("{F}: an output array is NULL with nDependencies = {n}")));
-        }
-        let (e_dep, ind, e_ind, kinds) = (
-            slice_mut(elementIndicesOfDependent, n),
-            slice_mut(independents, n),
-            slice_mut(elementIndicesOfIndependents, n),
-            slice_mut(dependencyKinds, n),
-        );
-        for (k, vr) in deps.into_iter().enumerate() {
-            // Every variable is a scalar (element index 0); the kind is not analysed further
-            // than "depends" (the components' FMI 2.0 dependenciesKind are not composed).
-            e_dep[k] = 0;
-            ind[k] = vr;
-            e_ind[k] = 0;
-            kinds[k] = fmi3Dependent;
-        }
-        Ok(fmi2OK)
-    })
-}
-
-// What a container does not offer: each function says why.
-
-fn not_offered(instance: fmi3Instance, function: &str, why: &str) -> fmi3Status {
-    with3(instance, function, |me| Err(me.error(&format!("{function}: {why}"))))
-}
-
-const NO_EVENT_MODE: &str = "a container has no event mode (hasEventMode = false)";
-const NO_MODEL_EXCHANGE: &str = "a container is a co-simulation FMU only (no <ModelExchange> element)";
-const NO_CLOCKS: &str = "a container has no clocks";
-const NO_DERIVATIVES: &str = "a container gives no directional or adjoint derivatives (providesDirectionalDerivatives = false, providesAdjointDerivatives = false)";
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status {
-    not_offered(instance, "fmi3EnterEventMode", NO_EVENT_MODE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status {
-    not_offered(
-        instance,
-        "fmi3EnterStepMode",
-        "a container leaves Initialization Mode into Step Mode itself (it has no event mode)",
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status {
-    not_offered(instance, "fmi3EvaluateDiscreteStates", NO_EVENT_MODE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
-    instance: fmi3Instance,
-    _discreteStatesNeedUpdate: *mut fmi3Boolean,
-    _terminateSimulation: *mut fmi3Boolean,
-    _nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
-    _valuesOfContinuousStatesChanged: *mut fmi3Boolean,
-    _nextEventTimeDefined: *mut fmi3Boolean,
-    _nextEventTime: *mut fmi3Float64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3UpdateDiscreteStates", NO_EVENT_MODE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status {
-    not_offered(
-        instance,
-        "fmi3EnterConfigurationMode",
-        "a container has no structural parameters, so there is no configuration mode",
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status {
-    not_offered(
-        instance,
-        "fmi3ExitConfigurationMode",
-        "a container has no structural parameters, so there is no configuration mode",
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetDirectionalDerivative(
-    instance: fmi3Instance,
-    _unknowns: *const fmi3ValueReference,
-    _nUnknowns: usize,
-    _knowns: *const fmi3ValueReference,
-    _nKnowns: usize,
-    _seed: *const fmi3Float64,
-    _nSeed: usize,
-    _sensitivity: *mut fmi3Float64,
-    _nSensitivity: usize,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetDirectionalDerivative", NO_DERIVATIVES)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetAdjointDerivative(
-    instance: fmi3Instance,
-    _unknowns: *const fmi3ValueReference,
-    _nUnknowns: usize,
-    _knowns: *const fmi3ValueReference,
-    _nKnowns: usize,
-    _seed: *const fmi3Float64,
-    _nSeed: usize,
-    _sensitivity: *mut fmi3Float64,
-    _nSensitivity: usize,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetAdjointDerivative", NO_DERIVATIVES)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetOutputDerivatives(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _orders: *const fmi3Int32,
-    _values: *mut fmi3Float64,
-    _nValues: usize,
-) -> fmi3Status {
-    not_offered(
-        instance,
-        "fmi3GetOutputDerivatives",
-        "a container gives no output derivatives (maxOutputDerivativeOrder = 0)",
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status {
-    not_offered(instance, "fmi3EnterContinuousTimeMode", NO_MODEL_EXCHANGE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
-    instance: fmi3Instance,
-    _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
-    _enterEventMode: *mut fmi3Boolean,
-    _terminateSimulation: *mut fmi3Boolean,
-) -> fmi3Status {
-    not_offered(instance, "fmi3CompletedIntegratorStep", NO_MODEL_EXCHANGE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetTime(instance: fmi3Instance, _time: fmi3Float64) -> fmi3Status {
-    not_offered(instance, "fmi3SetTime", NO_MODEL_EXCHANGE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetContinuousStates(
-    instance: fmi3Instance,
-    _continuousStates: *const fmi3Float64,
-    _nContinuousStates: usize,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetContinuousStates", NO_MODEL_EXCHANGE)
-}
-
-macro_rules! model_exchange_vectors {
-    ($($name:ident;)*) => {$(
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status {
-            not_offered(instance, stringify!($name), NO_MODEL_EXCHANGE)
-        }
-    )*};
-}
-
-model_exchange_vectors! {
-    fmi3GetContinuousStateDerivatives;
-    fmi3GetEventIndicators;
-    fmi3GetContinuousStates;
-    fmi3GetNominalsOfContinuousStates;
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(instance: fmi3Instance, _n: *mut usize) -> fmi3Status {
-    not_offered(instance, "fmi3GetNumberOfEventIndicators", NO_MODEL_EXCHANGE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(instance: fmi3Instance, _n: *mut usize) -> fmi3Status {
-    not_offered(instance, "fmi3GetNumberOfContinuousStates", NO_MODEL_EXCHANGE)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetClock(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _values: *const fmi3Clock,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetClock", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetClock(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _values: *mut fmi3Clock,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetClock", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetIntervalDecimal(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _intervals: *mut fmi3Float64,
-    _qualifiers: *mut fmi3IntervalQualifier,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetIntervalDecimal", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetIntervalFraction(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _counters: *mut fmi3UInt64,
-    _resolutions: *mut fmi3UInt64,
-    _qualifiers: *mut fmi3IntervalQualifier,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetIntervalFraction", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetShiftDecimal(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _shifts: *mut fmi3Float64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetShiftDecimal", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetShiftFraction(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _counters: *mut fmi3UInt64,
-    _resolutions: *mut fmi3UInt64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3GetShiftFraction", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetIntervalDecimal(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _intervals: *const fmi3Float64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetIntervalDecimal", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetIntervalFraction(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _counters: *const fmi3UInt64,
-    _resolutions: *const fmi3UInt64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetIntervalFraction", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetShiftDecimal(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _shifts: *const fmi3Float64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetShiftDecimal", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetShiftFraction(
-    instance: fmi3Instance,
-    _valueReferences: *const fmi3ValueReference,
-    _nValueReferences: usize,
-    _counters: *const fmi3UInt64,
-    _resolutions: *const fmi3UInt64,
-) -> fmi3Status {
-    not_offered(instance, "fmi3SetShiftFraction", NO_CLOCKS)
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3ActivateModelPartition(
-    instance: fmi3Instance,
-    _clockReference: fmi3ValueReference,
-    _activationTime: fmi3Float64,
-) -> fmi3Status {
-    not_offered(
-        instance,
-        "fmi3ActivateModelPartition",
-        "a container is a co-simulation FMU only (no <ScheduledExecution> element)",
-    )
+exports! {
+    fmi3GetNumberOfVariableDependencies(
+        instance: fmi3Instance,
+        dependent: fmi3ValueReference,
+        nDependencies: *mut usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.check(Call::SetDebugLogging, F)?;
+            if nDependencies.is_null() {
+                return Err(me.error(&format!("{F}: nDependencies is NULL")));
+            }
+            let deps = me.dependencies(F, dependent)?;
+            put(nDependencies, deps.len());
+            Ok(fmi2OK)
+        });
+    fmi3GetVariableDependencies(
+        instance: fmi3Instance,
+        dependent: fmi3ValueReference,
+        elementIndicesOfDependent: *mut usize,
+        independents: *mut fmi3ValueReference,
+        elementIndicesOfIndependents: *mut usize,
+        dependencyKinds: *mut fmi3DependencyKind,
+        nDependencies: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            me.check(Call::SetDebugLogging, F)?;
+            let deps = me.dependencies(F, dependent)?;
+            if nDependencies != deps.len() {
+                return Err(me.error(&format!(
+                    "{F}: nDependencies = {nDependencies}, but '{}' (vr {dependent}) has {} (fmi3GetNumberOfVariableDependencies)",
+                    me.name(dependent),
+                    deps.len()
+                )));
+            }
+            let n = deps.len();
+            if n > 0
+                && (elementIndicesOfDependent.is_null()
+                    || independents.is_null()
+                    || elementIndicesOfIndependents.is_null()
+                    || dependencyKinds.is_null())
+            {
+                return Err(me.error(&format!("{F}: an output array is NULL with nDependencies = {n}")));
+            }
+            let (e_dep, ind, e_ind, kinds) = (
+                slice_mut(elementIndicesOfDependent, n),
+                slice_mut(independents, n),
+                slice_mut(elementIndicesOfIndependents, n),
+                slice_mut(dependencyKinds, n),
+            );
+            for (k, vr) in deps.into_iter().enumerate() {
+                // Every variable is a scalar (element index 0); the kind is not analysed further
+                // than "depends" (the components' FMI 2.0 dependenciesKind are not composed).
+                e_dep[k] = 0;
+                ind[k] = vr;
+                e_ind[k] = 0;
+                kinds[k] = fmi3Dependent;
+            }
+            Ok(fmi2OK)
+        });
 }

@@ -35,8 +35,15 @@
     clippy::too_many_arguments
 )]
 
+mod export;
 pub mod fmi2;
 pub mod fmi3;
+mod instantiate;
+mod state;
+mod values;
+
+use instantiate::{Request, each, each_raw, free_instance, instantiate, resources_of_path, resources_of_uri};
+use values::{Held, Scalar};
 
 use fmi_description::fmi2::Type;
 use fmi_description::{Causality, Variability};
@@ -48,8 +55,9 @@ use rustfmu::fmi2::abi::{
     fmi2CallbackLogger, fmi2ComponentEnvironment, fmi2Discard, fmi2Error, fmi2Fatal, fmi2OK, fmi2Status, fmi2Warning,
 };
 use rustfmu::fmi3::abi::{fmi3InstanceEnvironment, fmi3LogMessageCallback};
+use rustfmu_runner::common::{Fmi2Error, FmuState};
 use rustfmu_runner::container::{LOG_CATEGORIES, SPEC_FILE, SYSTEM_FOLDER, Spec};
-use rustfmu_runner::fmi2::{Fmi2Error, FmuState, InstanceCS};
+use rustfmu_runner::instance::InstanceCS;
 use rustfmu_runner::{Error, Simulation};
 use std::cell::Cell;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -90,6 +98,8 @@ impl Sink {
                 name,
             } => {
                 // "%s": a message is never a format.
+                // SAFETY: the importer's logger with its own environment, given at instantiation
+                // (FMI 2.0, 2.1.5); every string is NUL-terminated and lives through the call.
                 unsafe {
                     f(
                         *environment,
@@ -104,7 +114,11 @@ impl Sink {
             Logger::V3 {
                 logger: Some(f),
                 environment,
-            } => unsafe { f(*environment, status, category.as_ptr(), message.as_ptr()) },
+            } => {
+                // SAFETY: the importer's logger with its own environment, given at
+                // instantiation (FMI 3.0, 2.3.1); the strings are NUL-terminated.
+                unsafe { f(*environment, status, category.as_ptr(), message.as_ptr()) }
+            }
             _ => {}
         }
     }
@@ -137,6 +151,8 @@ impl log::Log for Forward {
         CURRENT.with(|c| {
             let sink = c.get();
             if !sink.is_null() {
+                // SAFETY: CURRENT holds a sink only while a `Using` of it lives (a call of the
+                // container's, on this thread), and the sink outlives the call.
                 let sink = unsafe { &*sink };
                 sink.log(status, "logAll", &format!("[{}] {}", record.target(), record.args()));
             }
@@ -507,26 +523,51 @@ impl Container {
     }
 }
 
+// The C boundary: each raw pointer an importer passes is converted here, once. Every exported
+// function is called by an importer that keeps the standard's promises about its arguments (FMI
+// 2.0, 2.1.3; FMI 3.0, 2.2.2): an array is valid for the count passed with it, a string is
+// NUL-terminated, an output points to writable memory, for the duration of the call. A NULL
+// pointer is what an importer may still pass by mistake: refused (or read as nothing) here.
+
+/// The importer's array `p` of `n` elements (empty if NULL or `n` is 0).
 fn slice<'a, T>(p: *const T, n: usize) -> &'a [T] {
     if n == 0 || p.is_null() {
         &[]
     } else {
+        // SAFETY: non-NULL, and valid for `n` elements for the call (the boundary's promise above).
         unsafe { std::slice::from_raw_parts(p, n) }
     }
 }
 
+/// The importer's output array `p` of `n` elements (empty if NULL or `n` is 0).
 fn slice_mut<'a, T>(p: *mut T, n: usize) -> &'a mut [T] {
     if n == 0 || p.is_null() {
         &mut []
     } else {
+        // SAFETY: non-NULL, and writable for `n` elements for the call (the boundary's promise).
         unsafe { std::slice::from_raw_parts_mut(p, n) }
     }
 }
 
+/// Writes `value` to the importer's output `p` (nothing if it is NULL: the callers refuse that
+/// with a message first).
+fn put<T>(p: *mut T, value: T) {
+    if let Some(out) = slice_mut(p, 1).first_mut() {
+        *out = value;
+    }
+}
+
+/// What the importer's pointer `p` points to (None: NULL).
+fn read<T: Copy>(p: *const T) -> Option<T> {
+    slice(p, 1).first().copied()
+}
+
+/// The importer's string `p` (None: NULL).
 fn text(p: *const c_char) -> Option<String> {
     if p.is_null() {
         None
     } else {
+        // SAFETY: non-NULL and NUL-terminated (the boundary's promise).
         Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
     }
 }
@@ -536,8 +577,11 @@ fn with(c: *mut c_void, function: &str, f: impl FnOnce(&mut Container) -> Outcom
     if c.is_null() {
         return fmi2Error;
     }
+    // SAFETY: a non-NULL handle is one this library returned from an instantiation and has not
+    // freed (the importer's promise); the importer calls one instance from one thread at a time.
     let container = unsafe { &mut *(c as *mut Container) };
     let sink: *const Sink = &*container.sink;
+    // SAFETY: the container's boxed sink, which lives as long as the container.
     let _using = Using::new(unsafe { &*sink });
     match catch_unwind(AssertUnwindSafe(|| f(container))) {
         Ok(Ok(s)) | Ok(Err(s)) => {
@@ -555,6 +599,7 @@ fn with(c: *mut c_void, function: &str, f: impl FnOnce(&mut Container) -> Outcom
                 .map(|s| s.to_string())
                 .or_else(|| panic.downcast_ref::<String>().cloned())
                 .unwrap_or_default();
+            // SAFETY: as above: the sink outlives this call.
             let sink = unsafe { &*sink };
             sink.log(
                 fmi2Fatal,
@@ -566,1133 +611,6 @@ fn with(c: *mut c_void, function: &str, f: impl FnOnce(&mut Container) -> Outcom
         }
     }
 }
-
-/// What an instantiation function was given, in either version.
-struct Request<'a> {
-    version: Version,
-    function: &'a str,
-    name: Option<String>,
-    /// The GUID (2.0) or instantiation token (3.0).
-    token: Option<String>,
-    /// The resources folder (from 2.0's URI or 3.0's path), or why there is none.
-    resources: Result<std::path::PathBuf, String>,
-    logging_on: bool,
-}
-
-/// A new container, or None (the reason logged).
-fn instantiate(sink: Box<Sink>, req: Request) -> Option<Box<Container>> {
-    let function = req.function;
-    let _using = Using::new(&sink);
-    let fail = |m: String| {
-        sink.log(fmi2Error, "logStatusError", &format!("{function}: {m}"));
-        None
-    };
-    let name = req.name.unwrap_or_default();
-    if name.is_empty() {
-        return fail("instanceName is NULL or empty".into());
-    }
-    let dir = match req.resources {
-        Ok(d) => d,
-        Err(e) => return fail(e),
-    };
-    let spec_path = dir.join(SPEC_FILE);
-    let spec = match std::fs::read_to_string(&spec_path)
-        .map_err(|e| format!("{}: {e}", spec_path.display()))
-        .and_then(|t| Spec::from_toml(&t))
-    {
-        Ok(s) => s,
-        Err(e) => return fail(e),
-    };
-    let token = match req.version {
-        Version::Fmi2 => "fmuGUID",
-        Version::Fmi3 => "instantiationToken",
-    };
-    let given = req.token.unwrap_or_default();
-    if given != spec.guid {
-        return fail(format!(
-            "{token} '{given}' is not this container's ({}): the modelDescription.xml and the resources are of different builds",
-            spec.guid
-        ));
-    }
-    let mut sim = match Simulation::from_dir(&dir.join(SYSTEM_FOLDER)) {
-        Ok(s) => s,
-        Err(e) => return fail(e.message),
-    };
-    let mut ports = Vec::with_capacity(spec.variables.len() + 1);
-    let mut also = Vec::with_capacity(spec.variables.len() + 1);
-    {
-        let descriptions = sim.component_descriptions();
-        for e in &spec.variables {
-            // The further inputs a system input sets: the same type, the bounds of all of them.
-            let (mut min, mut max) = (None::<f64>, None::<f64>);
-            let mut more = Vec::new();
-            for (c, name) in &e.also {
-                let target = descriptions
-                    .iter()
-                    .position(|(n, _)| n == c)
-                    .and_then(|ci| Some((ci, descriptions[ci].1.variable(name)?)));
-                let Some((ci, v)) = target.filter(|(_, v)| v.ty == e.ty() && v.causality == Causality::Input) else {
-                    return fail(format!(
-                        "{SPEC_FILE}: '{}': '{c}.{name}' is not an input of its type in the system",
-                        e.name
-                    ));
-                };
-                min = match (min, v.min) {
-                    (Some(a), Some(b)) => Some(a.max(b)),
-                    (a, b) => a.or(b),
-                };
-                max = match (max, v.max) {
-                    (Some(a), Some(b)) => Some(a.min(b)),
-                    (a, b) => a.or(b),
-                };
-                more.push((ci, v.vr));
-            }
-            let Some(ci) = descriptions.iter().position(|(c, _)| *c == e.component) else {
-                return fail(format!(
-                    "{SPEC_FILE}: '{}': the system has no component '{}'",
-                    e.name, e.component
-                ));
-            };
-            let Some(v) = descriptions[ci].1.variable(&e.variable) else {
-                return fail(format!(
-                    "{SPEC_FILE}: '{}': component '{}' has no variable '{}'",
-                    e.name, e.component, e.variable
-                ));
-            };
-            if v.ty != e.ty() || v.causality != e.causality() {
-                return fail(format!(
-                    "{SPEC_FILE}: '{}' is not the component's variable of that type and causality",
-                    e.name
-                ));
-            }
-            ports.push(Port {
-                component: ci,
-                vr: v.vr,
-                ty: v.ty,
-                causality: v.causality,
-                variability: v.variability,
-                min: match (v.min, min) {
-                    (Some(a), Some(b)) => Some(a.max(b)),
-                    (a, b) => a.or(b),
-                },
-                max: match (v.max, max) {
-                    (Some(a), Some(b)) => Some(a.min(b)),
-                    (a, b) => a.or(b),
-                },
-            });
-            also.push(more);
-        }
-    }
-    if req.version == Version::Fmi3 {
-        // FMI 3.0's independent variable, after the spec's (value reference: their count).
-        ports.push(Port {
-            component: TIME,
-            vr: 0,
-            ty: Type::Real,
-            causality: Causality::Independent,
-            variability: Variability::Continuous,
-            min: None,
-            max: None,
-        });
-        also.push(Vec::new());
-    }
-    if req.logging_on {
-        for i in 0..sim.len() {
-            let _ = sim.instance_mut(i).set_debug_logging(true, &[]);
-        }
-    }
-    if let Err(e) = sim.apply_starts() {
-        return fail(format!("the system's parameter set: {}", e.message));
-    }
-    drop(_using);
-    let c = Box::new(Container {
-        id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-        version: req.version,
-        sink,
-        spec,
-        ports,
-        also,
-        sim,
-        state: State::Instantiated,
-        time: 0.0,
-        dirty: true,
-        stop_time: None,
-        last_successful: 0.0,
-        strings: Vec::new(),
-        held: Vec::new(),
-        held_strings: Vec::new(),
-        free: Vec::new(),
-        rollback: None,
-    });
-    c.debug(&format!(
-        "instantiated: {} components, {} variables, internal step {} s",
-        c.sim.len(),
-        c.spec.variables.len(),
-        c.spec.step
-    ));
-    Some(c)
-}
-
-/// Frees a container (its FMU states stay valid through their bytes; the importer frees them).
-fn free_instance(c: *mut c_void) {
-    if c.is_null() {
-        return;
-    }
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        let container = unsafe { Box::from_raw(c as *mut Container) };
-        let _using = Using::new(&container.sink);
-        drop(container);
-    }));
-}
-
-/// Calls `f` on every component, in order; the first failure stops it and is returned.
-fn each_raw(
-    me: &mut Container,
-    function: &str,
-    f: impl Fn(&mut InstanceCS) -> Result<(), Fmi2Error>,
-) -> Result<(), Error> {
-    for i in 0..me.sim.len() {
-        if let Err(e) = f(me.sim.instance_mut(i)) {
-            let name = me.sim.component_descriptions()[i].0.to_owned();
-            let t = me.time;
-            return Err(Error::fmi(&name, function, &e, Some(t), ""));
-        }
-    }
-    Ok(())
-}
-
-/// Calls `f` on every component, in order; the first failure stops it.
-fn each(
-    me: &mut Container,
-    function: &str,
-    f: impl Fn(&mut InstanceCS) -> Result<(), Fmi2Error>,
-) -> Result<(), Status> {
-    for i in 0..me.sim.len() {
-        if let Err(e) = f(me.sim.instance_mut(i)) {
-            let name = me.sim.component_descriptions()[i].0.to_owned();
-            let t = me.time;
-            let e = Error::fmi(&name, function, &e, Some(t), "");
-            return Err(me.failed(function, e));
-        }
-    }
-    Ok(())
-}
-
-/// A value set before initialization (FMI 3.0 reads it back in Instantiated, where the FMI 2.0
-/// components cannot be read).
-#[derive(Clone, Debug)]
-pub(crate) enum Held {
-    Number(f64),
-    Integer(i64),
-    Boolean(bool),
-}
-
-/// A value of a getter's or setter's type: read from a start value of the spec, or from a value
-/// set before initialization.
-pub(crate) trait Scalar: Sized + Copy {
-    fn from_start(text: &str) -> Option<Self>;
-    fn held(self) -> Held;
-    fn from_held(h: &Held) -> Option<Self>;
-}
-
-impl Scalar for f64 {
-    fn from_start(text: &str) -> Option<f64> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Number(self)
-    }
-    fn from_held(h: &Held) -> Option<f64> {
-        match h {
-            Held::Number(x) => Some(*x),
-            _ => None,
-        }
-    }
-}
-impl Scalar for i32 {
-    fn from_start(text: &str) -> Option<i32> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Integer(i64::from(self))
-    }
-    fn from_held(h: &Held) -> Option<i32> {
-        match h {
-            Held::Integer(x) => i32::try_from(*x).ok(),
-            _ => None,
-        }
-    }
-}
-impl Scalar for i64 {
-    fn from_start(text: &str) -> Option<i64> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Integer(self)
-    }
-    fn from_held(h: &Held) -> Option<i64> {
-        match h {
-            Held::Integer(x) => Some(*x),
-            _ => None,
-        }
-    }
-}
-impl Scalar for bool {
-    fn from_start(text: &str) -> Option<bool> {
-        match text.trim() {
-            "true" | "1" => Some(true),
-            "false" | "0" => Some(false),
-            _ => None,
-        }
-    }
-    fn held(self) -> Held {
-        Held::Boolean(self)
-    }
-    fn from_held(h: &Held) -> Option<bool> {
-        match h {
-            Held::Boolean(x) => Some(*x),
-            _ => None,
-        }
-    }
-}
-
-impl Container {
-    fn set_debug_logging(&mut self, function: &str, on: bool, categories: &[*const c_char]) -> Outcome {
-        self.check(Call::SetDebugLogging, function)?;
-        for &p in categories {
-            match text(p) {
-                Some(n) if LOG_CATEGORIES.iter().any(|(c, _)| *c == n) => {}
-                Some(n) => {
-                    let known: Vec<&str> = LOG_CATEGORIES.iter().map(|(c, _)| *c).collect();
-                    return Err(self.error(&format!(
-                        "{function}: unknown log category '{n}' (this FMU's: {})",
-                        known.join(", ")
-                    )));
-                }
-                None => return Err(self.error(&format!("{function}: a category is NULL"))),
-            }
-        }
-        self.sink.logging_on.set(on);
-        for i in 0..self.sim.len() {
-            let _ = self.sim.instance_mut(i).set_debug_logging(on, &[]);
-        }
-        Ok(fmi2OK)
-    }
-
-    /// The experiment's tolerance, start and stop time, checked and handed to every component
-    /// (fmi2SetupExperiment; the first half of fmi3EnterInitializationMode).
-    fn setup(&mut self, function: &str, tol: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Status> {
-        if !start.is_finite() {
-            return Err(self.error(&format!("{function}: startTime = {start}")));
-        }
-        if let Some(tol) = tol
-            && !(tol.is_finite() && tol > 0.0)
-        {
-            return Err(self.error(&format!("{function}: tolerance = {tol} must be finite and > 0")));
-        }
-        if let Some(s) = stop
-            && !(s.is_finite() && s >= start)
-        {
-            return Err(self.error(&format!(
-                "{function}: stopTime = {s} must be finite and not before startTime = {start}"
-            )));
-        }
-        for i in 0..self.sim.len() {
-            let r = self.sim.instance_mut(i).setup_experiment(tol, start, stop);
-            if let Err(e) = r {
-                let name = self.sim.component_descriptions()[i].0.to_owned();
-                let e = Error::fmi(&name, "fmi2SetupExperiment", &e, None, "");
-                return Err(self.refused(function, e));
-            }
-        }
-        self.time = start;
-        self.last_successful = start;
-        self.stop_time = stop;
-        Ok(())
-    }
-
-    fn enter_initialization_mode(&mut self, function: &str) -> Outcome {
-        let saved = self.snapshot();
-        if let Err(e) = each_raw(self, "fmi2EnterInitializationMode", |i| i.enter_initialization_mode()) {
-            return Err(self.undo(function, e, saved));
-        }
-        self.state = State::InitializationMode;
-        self.dirty = true;
-        Ok(fmi2OK)
-    }
-
-    fn exit_initialization_mode(&mut self, function: &str) -> Outcome {
-        self.check(Call::ExitInitializationMode, function)?;
-        let saved = self.snapshot();
-        // As the runner: the connections once per component, then every component leaves.
-        for _ in 0..self.sim.len() {
-            let t = self.time;
-            if let Err(e) = self.sim.propagate(t) {
-                return Err(self.undo(function, e, saved));
-            }
-        }
-        if let Err(e) = each_raw(self, "fmi2ExitInitializationMode", |i| i.exit_initialization_mode()) {
-            return Err(self.undo(function, e, saved));
-        }
-        self.state = State::StepComplete;
-        self.dirty = true;
-        Ok(fmi2OK)
-    }
-
-    fn terminate(&mut self, function: &str) -> Outcome {
-        self.check(Call::Terminate, function)?;
-        each(self, "fmi2Terminate", |i| i.terminate())?;
-        self.state = State::Terminated;
-        Ok(fmi2OK)
-    }
-
-    fn reset(&mut self, function: &str) -> Outcome {
-        self.check(Call::Reset, function)?;
-        each(self, "fmi2Reset", |i| i.reset())?;
-        if let Err(e) = self.sim.apply_starts() {
-            return Err(self.failed(function, e));
-        }
-        self.state = State::Instantiated;
-        self.time = 0.0;
-        self.last_successful = 0.0;
-        self.stop_time = None;
-        self.dirty = true;
-        self.held.clear();
-        self.held_strings.clear();
-        Ok(fmi2OK)
-    }
-
-    /// Keeps a value set in Instantiated, to be read back there.
-    fn hold(&mut self, vr: u32, h: Held) {
-        let n = self.ports.len();
-        self.held.resize(n, None);
-        self.held[vr as usize] = Some(h);
-    }
-
-    /// The ports of `vrs`, each checked to be of type `ty`.
-    fn ports_of(&self, vrs: &[u32], ty: Type, asked: &str, function: &str) -> Result<Vec<Port>, Status> {
-        vrs.iter().map(|&v| self.port(v, ty, asked, function)).collect()
-    }
-
-    /// A value before initialization (FMI 3.0 getters in Instantiated): the one set since
-    /// instantiation (or reset), else the spec's start value.
-    fn start_of<T: Scalar>(&self, vr: u32, p: &Port, function: &str) -> Result<T, Status> {
-        if let Some(Some(h)) = self.held.get(vr as usize)
-            && let Some(x) = T::from_held(h)
-        {
-            return Ok(x);
-        }
-        let e = (p.component != TIME).then(|| &self.spec.variables[vr as usize]);
-        match e.and_then(|e| e.start.as_deref()).and_then(T::from_start) {
-            Some(x) => Ok(x),
-            None => Err(self.error(&format!(
-                "{function}: '{}' (vr {vr}) has no start value: it is known after initialization begins",
-                self.name(vr)
-            ))),
-        }
-    }
-
-    /// Reads `vrs` of type `ty` into `out` (one value per value reference) with `get`; `time`
-    /// gives the independent variable's value in the getter's type (FMI 3.0 Float64 only).
-    fn get_values<T: Scalar>(
-        &mut self,
-        function: &str,
-        ty: Type,
-        asked: &str,
-        vrs: &[u32],
-        out: &mut [T],
-        get: impl Fn(&mut InstanceCS, &[u32], &mut [T]) -> Result<(), Fmi2Error>,
-        finite: impl Fn(&T) -> bool,
-        time: impl Fn(f64) -> Option<T>,
-    ) -> Outcome {
-        self.check(Call::GetValues, function)?;
-        let ports = self.ports_of(vrs, ty, asked, function)?;
-        let nvr = vrs.len();
-        if self.state == State::Instantiated {
-            // FMI 3.0 only (2.0's table refuses it): the start values.
-            for k in 0..nvr {
-                out[k] = match (ports[k].component, time(self.time)) {
-                    (TIME, Some(t)) => t,
-                    _ => self.start_of(vrs[k], &ports[k], function)?,
-                };
-            }
-            return Ok(fmi2OK);
-        }
-        if nvr > 0 {
-            self.settle(function)?;
-        }
-        // One call per run of variables of the same component.
-        let mut i = 0;
-        let mut component_vrs = Vec::with_capacity(nvr);
-        while i < nvr {
-            let c = ports[i].component;
-            let j = i + ports[i..].iter().take_while(|p| p.component == c).count();
-            if c == TIME {
-                let t = time(self.time).expect("time is Float64");
-                out[i..j].fill(t);
-                i = j;
-                continue;
-            }
-            component_vrs.clear();
-            component_vrs.extend(ports[i..j].iter().map(|p| p.vr));
-            let r = get(self.sim.instance_mut(c), &component_vrs, &mut out[i..j]);
-            self.component_call(function, vrs[i], r)?;
-            i = j;
-        }
-        for k in 0..nvr {
-            if !finite(&out[k]) {
-                return Err(self.error(&format!(
-                    "{function}: '{}' (vr {}) is not a finite number",
-                    self.name(vrs[k]),
-                    vrs[k]
-                )));
-            }
-        }
-        Ok(fmi2OK)
-    }
-
-    /// Reads the String variables `vrs` into `self.strings`.
-    fn get_strings(&mut self, function: &str, vrs: &[u32]) -> Outcome {
-        self.check(Call::GetValues, function)?;
-        let ports = self.ports_of(vrs, Type::String, "String", function)?;
-        let mut strings = Vec::with_capacity(vrs.len());
-        if self.state == State::Instantiated {
-            for &vr in vrs {
-                if let Some(Some(s)) = self.held_strings.get(vr as usize) {
-                    strings.push(s.clone());
-                    continue;
-                }
-                match self.spec.variables[vr as usize].start.as_deref() {
-                    Some(s) => strings.push(CString::new(s).unwrap_or_default()),
-                    None => {
-                        return Err(self.error(&format!(
-                            "{function}: '{}' (vr {vr}) has no start value: it is known after initialization begins",
-                            self.name(vr)
-                        )));
-                    }
-                }
-            }
-            self.strings = strings;
-            return Ok(fmi2OK);
-        }
-        if !vrs.is_empty() {
-            self.settle(function)?;
-        }
-        for (k, p) in ports.iter().enumerate() {
-            let mut s = vec![CString::default()];
-            let r = self.sim.instance_mut(p.component).get_string(&[p.vr], &mut s);
-            self.component_call(function, vrs[k], r)?;
-            strings.push(s.pop().unwrap_or_default());
-        }
-        self.strings = strings;
-        Ok(fmi2OK)
-    }
-
-    /// Sets `vrs` of type `ty`: every value reference and value checked first (all or nothing).
-    fn set_values<T: Scalar>(
-        &mut self,
-        function: &str,
-        ty: Type,
-        asked: &str,
-        vrs: &[u32],
-        values: &[T],
-        number: impl Fn(&T) -> Option<f64>,
-        set: impl Fn(&mut InstanceCS, u32, T) -> Result<(), Fmi2Error>,
-    ) -> Outcome {
-        let call = if ty == Type::Real {
-            Call::SetValues
-        } else {
-            Call::SetDiscreteValues
-        };
-        self.check(call, function)?;
-        let mut ports = Vec::with_capacity(vrs.len());
-        for (k, &v) in vrs.iter().enumerate() {
-            let p = self.port(v, ty, asked, function)?;
-            self.settable(v, &p, function)?;
-            if let Some(x) = number(&values[k]) {
-                let name = self.name(v);
-                if !x.is_finite() {
-                    return Err(self.error(&format!(
-                        "{function}: '{name}' (vr {v}) = {x}: not a finite number; nothing set"
-                    )));
-                }
-                if p.min.is_some_and(|m| x < m) || p.max.is_some_and(|m| x > m) {
-                    return Err(self.error(&format!(
-                        "{function}: '{name}' (vr {v}) = {x} is outside [{}, {}]; nothing set",
-                        p.min.map_or("-inf".into(), |m| m.to_string()),
-                        p.max.map_or("inf".into(), |m| m.to_string())
-                    )));
-                }
-            }
-            ports.push(p);
-        }
-        for (k, p) in ports.iter().enumerate() {
-            let r = set(self.sim.instance_mut(p.component), p.vr, values[k]);
-            self.component_call(function, vrs[k], r)?;
-            for i in 0..self.also[vrs[k] as usize].len() {
-                let (c, vr) = self.also[vrs[k] as usize][i];
-                let r = set(self.sim.instance_mut(c), vr, values[k]);
-                self.component_call(function, vrs[k], r)?;
-            }
-            if self.state == State::Instantiated {
-                self.hold(vrs[k], values[k].held());
-            }
-        }
-        if !vrs.is_empty() {
-            self.dirty = true;
-        }
-        Ok(fmi2OK)
-    }
-
-    /// Sets the String variables `vrs` (all or nothing).
-    fn set_strings(&mut self, function: &str, vrs: &[u32], values: &[*const c_char]) -> Outcome {
-        self.check(Call::SetDiscreteValues, function)?;
-        let mut sets = Vec::with_capacity(vrs.len());
-        for (k, &v) in vrs.iter().enumerate() {
-            let p = self.port(v, Type::String, "String", function)?;
-            self.settable(v, &p, function)?;
-            if values[k].is_null() {
-                return Err(self.error(&format!(
-                    "{function}: '{}' (vr {v}): the value is NULL; nothing set",
-                    self.name(v)
-                )));
-            }
-            sets.push((p, unsafe { CStr::from_ptr(values[k]) }.to_owned()));
-        }
-        for (k, (p, s)) in sets.iter().enumerate() {
-            let r = self
-                .sim
-                .instance_mut(p.component)
-                .set_string(&[p.vr], std::slice::from_ref(s));
-            self.component_call(function, vrs[k], r)?;
-            for i in 0..self.also[vrs[k] as usize].len() {
-                let (c, vr) = self.also[vrs[k] as usize][i];
-                let r = self.sim.instance_mut(c).set_string(&[vr], std::slice::from_ref(s));
-                self.component_call(function, vrs[k], r)?;
-            }
-            if self.state == State::Instantiated {
-                let n = self.ports.len();
-                self.held_strings.resize(n, None);
-                self.held_strings[vrs[k] as usize] = Some(s.clone());
-            }
-        }
-        if !vrs.is_empty() {
-            self.dirty = true;
-        }
-        Ok(fmi2OK)
-    }
-
-    /// A communication step from `t` by `big_h`: n internal steps of the components.
-    fn do_step(&mut self, function: &str, t: f64, big_h: f64) -> Outcome {
-        self.check(Call::DoStep, function)?;
-        if !(big_h > 0.0 && big_h.is_finite()) {
-            return Err(self.error(&format!(
-                "{function}: communicationStepSize = {big_h} must be finite and > 0; time stays {}",
-                self.time
-            )));
-        }
-        // As the FMU runtime: a tolerance for importers that sum their steps.
-        let tol = 1e-8 * self.time.abs().max(1.0) + 4.0 * f64::EPSILON * big_h;
-        if !t.is_finite() || (t - self.time).abs() > tol {
-            return Err(self.error(&format!(
-                "{function}: currentCommunicationPoint = {t} does not match the container's time {}",
-                self.time
-            )));
-        }
-        let end = t + big_h;
-        if end <= t {
-            return Err(self.error(&format!(
-                "{function}: communicationStepSize = {big_h} is too small to advance time from {t}"
-            )));
-        }
-        if let Some(stop) = self.stop_time
-            && end > stop + 1e-8 * stop.abs().max(big_h)
-        {
-            let given = match self.version {
-                Version::Fmi2 => "fmi2SetupExperiment",
-                Version::Fmi3 => "fmi3EnterInitializationMode",
-            };
-            return Err(self.error(&format!(
-                "{function}: the step from {t} by {big_h} ends after stopTime = {stop} set in {given}"
-            )));
-        }
-        let ratio = big_h / self.spec.step;
-        let n = if (ratio - ratio.round()).abs() <= 1e-9 * ratio.max(1.0) {
-            ratio.round().max(1.0)
-        } else {
-            ratio.ceil().max(1.0)
-        };
-        if n > MAX_INTERNAL_STEPS {
-            self.state = State::StepFailed;
-            self.last_successful = t;
-            self.sink.log(
-                fmi2Discard,
-                "logStatusDiscard",
-                &format!(
-                    "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {} s, more than {MAX_INTERNAL_STEPS}: discarded, nothing stepped",
-                    self.spec.step
-                ),
-            );
-            return Err(fmi2Discard);
-        }
-        let n = n as usize;
-        let h = big_h / n as f64;
-        if !(t + h > t && end - h < end) {
-            // Far from 0 the internal step is below the resolution of time: a component would
-            // be asked to step without its time moving. Nothing has moved yet.
-            self.state = State::StepFailed;
-            self.last_successful = t;
-            self.sink.log(
-                fmi2Discard,
-                "logStatusDiscard",
-                &format!(
-                    "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {h} s, too small to advance time there: discarded, nothing stepped (a longer communication step, or a container of a longer internal step)"
-                ),
-            );
-            return Err(fmi2Discard);
-        }
-        let saved = self.snapshot();
-        let (time0, dirty0) = (self.time, self.dirty);
-        for k in 0..n {
-            let tk = t + k as f64 * h;
-            self.time = tk;
-            if k > 0 {
-                self.dirty = true;
-            }
-            let r = if self.dirty {
-                self.sim.propagate(tk).map(|_| self.dirty = false)
-            } else {
-                Ok(())
-            };
-            let last = k + 1 == n;
-            let r = r.and_then(|_| self.sim.do_step_with(tk, h, false)).and_then(|_| {
-                // The connections at the step's end, inside the step (undone with it): what the
-                // runner does before it reads the outputs.
-                if last {
-                    self.sim.propagate(end).map(|_| self.dirty = false)
-                } else {
-                    Ok(())
-                }
-            });
-            if let Err(e) = r {
-                let discard = e.status.as_deref() == Some("Discard");
-                let status = self.undo(function, e, saved);
-                if saved && self.state != State::Error && self.state != State::Fatal {
-                    // Back at the step's start: nothing of it happened.
-                    (self.time, self.dirty) = (time0, dirty0);
-                    self.last_successful = time0;
-                    if discard {
-                        self.state = State::StepFailed;
-                    }
-                } else {
-                    self.last_successful = tk;
-                    if discard && self.state != State::Fatal {
-                        self.state = State::StepFailed;
-                    }
-                }
-                return Err(status);
-            }
-        }
-        self.last_successful = end;
-        self.time = end;
-        Ok(fmi2OK)
-    }
-}
-
-// FMU states (the same in both versions: FMI 3.0 renamed FMUstate to FMUState).
-impl Container {
-    fn can_state(&self, function: &str) -> Result<(), Status> {
-        if self.all_components(|cs| cs.can_get_and_set_fmu_state) {
-            Ok(())
-        } else {
-            Err(self.error(&format!(
-                "{function}: a component cannot get and set its FMU state (canGetAndSetFMUstate = false)"
-            )))
-        }
-    }
-
-    fn can_serialize(&self, function: &str) -> Result<(), Status> {
-        self.can_state(function)?;
-        if self.all_components(|cs| cs.can_serialize_fmu_state) {
-            Ok(())
-        } else {
-            Err(self.error(&format!(
-                "{function}: a component cannot serialize its FMU state (canSerializeFMUstate = false)"
-            )))
-        }
-    }
-
-    /// The state `state` points to, if it is a live state of this container (any instance).
-    fn saved(&self, state: *mut c_void, function: &str) -> Result<&'static mut Saved, Status> {
-        let live = !state.is_null() && states().contains(&(state as usize));
-        if !live {
-            return Err(self.error(&format!(
-                "{function}: {state:?} is not an FMU state of a live container (never given, or freed)"
-            )));
-        }
-        let saved = unsafe { &mut *(state as *mut Saved) };
-        if saved.guid != self.spec.guid {
-            return Err(self.error(&format!(
-                "{function}: the FMU state is one of the container {}, not of this one ({})",
-                saved.guid, self.spec.guid
-            )));
-        }
-        Ok(saved)
-    }
-
-    fn component_refused(&mut self, function: &str, i: usize, e: Fmi2Error) -> Status {
-        let name = self.sim.component_descriptions()[i].0.to_owned();
-        let t = self.time;
-        let e = Error::fmi(&name, function, &e, Some(t), "");
-        self.refused(function, e)
-    }
-
-    /// Every component's current FMU state, in `slots` (updated) or in new ones.
-    fn take_components(&mut self, function: &str, slots: Option<Vec<FmuState>>) -> Result<Vec<FmuState>, Status> {
-        match slots {
-            Some(slots) => {
-                for (i, slot) in slots.iter().enumerate() {
-                    if let Err(e) = self.sim.instance_mut(i).update_fmu_state(slot) {
-                        self.free.push(slots);
-                        return Err(self.component_refused(function, i, e));
-                    }
-                }
-                Ok(slots)
-            }
-            None => {
-                let mut slots = Vec::with_capacity(self.sim.len());
-                for i in 0..self.sim.len() {
-                    match self.sim.instance_mut(i).get_fmu_state() {
-                        Ok(s) => slots.push(s),
-                        Err(e) => return Err(self.component_refused(function, i, e)),
-                    }
-                }
-                Ok(slots)
-            }
-        }
-    }
-
-    /// The serialized form of every component's state in `slots` (None where one cannot).
-    fn serialize_components(&mut self, function: &str, slots: &[FmuState]) -> Result<Option<Vec<Vec<u8>>>, Status> {
-        if !self.all_components(|cs| cs.can_serialize_fmu_state) {
-            return Ok(None);
-        }
-        let mut out = Vec::with_capacity(slots.len());
-        for (i, slot) in slots.iter().enumerate() {
-            match self.sim.instance_mut(i).serialize_fmu_state(slot) {
-                Ok(b) => out.push(b),
-                Err(e) => return Err(self.component_refused(function, i, e)),
-            }
-        }
-        Ok(Some(out))
-    }
-
-    fn get_fmu_state(&mut self, function: &str, state: *mut *mut c_void) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        self.can_state(function)?;
-        if state.is_null() {
-            return Err(self.error(&format!("{function}: the FMU state pointer is NULL")));
-        }
-        let existing = unsafe { *state };
-        if !existing.is_null() {
-            // With *FMUstate != NULL: that state is overwritten.
-            let saved = self.saved(existing, function)?;
-            let mine = saved.owner == self.id;
-            let slots = if mine {
-                Some(std::mem::take(&mut saved.components))
-            } else {
-                self.free.pop()
-            };
-            let components = self.take_components(function, slots)?;
-            let bytes = self.serialize_components(function, &components)?;
-            saved.owner = self.id;
-            saved.components = components;
-            saved.bytes = bytes;
-            saved.time = self.time;
-            saved.state = self.state;
-            saved.dirty = self.dirty;
-            saved.last_successful = self.last_successful;
-            saved.stop_time = self.stop_time;
-            return Ok(fmi2OK);
-        }
-        let slots = self.free.pop();
-        let components = self.take_components(function, slots)?;
-        let bytes = self.serialize_components(function, &components)?;
-        let p = Box::into_raw(Box::new(Saved {
-            owner: self.id,
-            guid: self.spec.guid.clone(),
-            components,
-            bytes,
-            time: self.time,
-            state: self.state,
-            dirty: self.dirty,
-            last_successful: self.last_successful,
-            stop_time: self.stop_time,
-        }));
-        states().push(p as usize);
-        unsafe { *state = p as *mut c_void };
-        Ok(fmi2OK)
-    }
-
-    fn set_fmu_state(&mut self, function: &str, state: *mut c_void) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        self.can_state(function)?;
-        let saved = self.saved(state, function)?;
-        if saved.owner == self.id {
-            for i in 0..self.sim.len() {
-                if let Err(e) = self.sim.instance_mut(i).set_fmu_state(&saved.components[i]) {
-                    return Err(self.component_refused(function, i, e));
-                }
-            }
-        } else {
-            // Another instance's state: taken up from its serialized form.
-            let Some(bytes) = &saved.bytes else {
-                return Err(self.error(&format!(
-                    "{function}: the FMU state is another instance's, and a component cannot serialize its state to carry it over"
-                )));
-            };
-            for (i, b) in bytes.iter().enumerate() {
-                let r = self.sim.instance_mut(i).deserialize_fmu_state(b);
-                let slot = match r {
-                    Ok(slot) => slot,
-                    Err(e) => return Err(self.component_refused(function, i, e)),
-                };
-                let set = self.sim.instance_mut(i).set_fmu_state(&slot);
-                let _ = self.sim.instance_mut(i).free_fmu_state(slot);
-                if let Err(e) = set {
-                    return Err(self.component_refused(function, i, e));
-                }
-            }
-        }
-        self.time = saved.time;
-        self.state = saved.state;
-        self.dirty = saved.dirty;
-        self.last_successful = saved.last_successful;
-        self.stop_time = saved.stop_time;
-        Ok(fmi2OK)
-    }
-
-    fn free_fmu_state(&mut self, function: &str, state: *mut *mut c_void) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        if state.is_null() || unsafe { *state }.is_null() {
-            return Ok(fmi2OK);
-        }
-        let p = unsafe { *state };
-        let saved = self.saved(p, function)?;
-        {
-            let mut live = states();
-            live.retain(|s| *s != p as usize);
-            if live.is_empty() {
-                // No heap block left behind when the library is unloaded (valgrind).
-                *live = Vec::new();
-            }
-        }
-        let saved = unsafe { Box::from_raw(saved as *mut Saved) };
-        if saved.owner == self.id {
-            self.free.push(saved.components);
-        }
-        unsafe { *state = std::ptr::null_mut() };
-        Ok(fmi2OK)
-    }
-
-    fn serialized_size(&mut self, function: &str, state: *mut c_void, size: *mut usize) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        self.can_serialize(function)?;
-        let saved = self.saved(state, function)?;
-        if size.is_null() {
-            return Err(self.error(&format!("{function}: size is NULL")));
-        }
-        let bytes = serialize(self, saved, function)?;
-        unsafe { *size = bytes.len() };
-        Ok(fmi2OK)
-    }
-
-    fn serialize_state(&mut self, function: &str, state: *mut c_void, bytes: *mut u8, size: usize) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        self.can_serialize(function)?;
-        let saved = self.saved(state, function)?;
-        let data = serialize(self, saved, function)?;
-        if bytes.is_null() || size < data.len() {
-            return Err(self.error(&format!(
-                "{function}: the buffer holds {size} bytes, the state needs {} (the serialized size)",
-                data.len()
-            )));
-        }
-        slice_mut(bytes, data.len()).copy_from_slice(&data);
-        Ok(fmi2OK)
-    }
-
-    fn deserialize_state(&mut self, function: &str, bytes: *const u8, size: usize, state: *mut *mut c_void) -> Outcome {
-        self.check(Call::FmuState, function)?;
-        self.can_serialize(function)?;
-        if state.is_null() || (bytes.is_null() && size > 0) {
-            return Err(self.error(&format!("{function}: NULL pointer")));
-        }
-        let data = slice(bytes, size);
-        let parsed = parse_state(self, data).map_err(|e| self.error(&format!("{function}: {e}; nothing changed")))?;
-        let mut components = Vec::with_capacity(parsed.parts.len());
-        for (i, part) in parsed.parts.iter().enumerate() {
-            match self.sim.instance_mut(i).deserialize_fmu_state(part) {
-                Ok(s) => components.push(s),
-                Err(e) => return Err(self.component_refused(function, i, e)),
-            }
-        }
-        let p = Box::into_raw(Box::new(Saved {
-            owner: self.id,
-            guid: self.spec.guid.clone(),
-            components,
-            bytes: Some(parsed.parts),
-            time: parsed.time,
-            state: parsed.state,
-            dirty: parsed.dirty,
-            last_successful: parsed.last_successful,
-            stop_time: parsed.stop_time,
-        }));
-        states().push(p as usize);
-        unsafe { *state = p as *mut c_void };
-        Ok(fmi2OK)
-    }
-}
-
-/// A serialized container state: this magic, the container's GUID, time, last successful time,
-/// mode, the stop time (a flag and the value), then each component's serialized state with its length.
-const MAGIC: &[u8; 8] = b"RFMUCNT2";
-
-fn serialize(me: &Container, saved: &Saved, function: &str) -> Result<Vec<u8>, Status> {
-    let Some(parts) = &saved.bytes else {
-        return Err(me.error(&format!("{function}: a component cannot serialize its FMU state")));
-    };
-    let mut out = Vec::new();
-    out.extend_from_slice(MAGIC);
-    let guid = me.spec.guid.as_bytes();
-    out.extend_from_slice(&(guid.len() as u32).to_le_bytes());
-    out.extend_from_slice(guid);
-    out.extend_from_slice(&saved.time.to_le_bytes());
-    out.extend_from_slice(&saved.last_successful.to_le_bytes());
-    out.push(saved.state as u8);
-    out.push(u8::from(saved.dirty));
-    out.push(u8::from(saved.stop_time.is_some()));
-    out.extend_from_slice(&saved.stop_time.unwrap_or(0.0).to_le_bytes());
-    out.extend_from_slice(&(parts.len() as u32).to_le_bytes());
-    for part in parts {
-        out.extend_from_slice(&(part.len() as u64).to_le_bytes());
-        out.extend_from_slice(part);
-    }
-    Ok(out)
-}
-
-/// A serialized container state read back (the components' parts not yet checked: each
-/// component checks its own).
-struct Parsed {
-    time: f64,
-    last_successful: f64,
-    stop_time: Option<f64>,
-    state: State,
-    dirty: bool,
-    parts: Vec<Vec<u8>>,
-}
-
-fn parse_state(me: &Container, data: &[u8]) -> Result<Parsed, String> {
-    let mut at = 0usize;
-    let mut take = |n: usize| -> Result<&[u8], String> {
-        let end = at.checked_add(n).ok_or("a length past the end")?;
-        let s = data
-            .get(at..end)
-            .ok_or_else(|| format!("the state is {} bytes long, it names {end}", data.len()))?;
-        at = end;
-        Ok(s)
-    };
-    if take(8)? != MAGIC {
-        return Err("not a serialized container state (its first bytes)".into());
-    }
-    let n = u32::from_le_bytes(take(4)?.try_into().expect("4")) as usize;
-    let guid = take(n)?;
-    if guid != me.spec.guid.as_bytes() {
-        return Err(format!(
-            "a state of the container '{}', not of this one ({})",
-            String::from_utf8_lossy(guid),
-            me.spec.guid
-        ));
-    }
-    let time = f64::from_le_bytes(take(8)?.try_into().expect("8"));
-    let last_successful = f64::from_le_bytes(take(8)?.try_into().expect("8"));
-    let code = take(1)?[0];
-    let state = [
-        State::Instantiated,
-        State::InitializationMode,
-        State::StepComplete,
-        State::StepFailed,
-        State::Terminated,
-        State::Error,
-    ]
-    .into_iter()
-    .find(|s| *s as u8 == code)
-    .ok_or_else(|| format!("mode code {code} is not one of a container"))?;
-    let dirty = match take(1)?[0] {
-        0 => false,
-        1 => true,
-        x => return Err(format!("flag {x} is not 0 or 1")),
-    };
-    let has_stop = match take(1)?[0] {
-        0 => false,
-        1 => true,
-        x => return Err(format!("flag {x} is not 0 or 1")),
-    };
-    let stop = f64::from_le_bytes(take(8)?.try_into().expect("8"));
-    let stop_time = has_stop.then_some(stop);
-    let count = u32::from_le_bytes(take(4)?.try_into().expect("4")) as usize;
-    if count != me.sim.len() {
-        return Err(format!(
-            "the state has {count} components, the container {}",
-            me.sim.len()
-        ));
-    }
-    let mut parts = Vec::with_capacity(count);
-    for _ in 0..count {
-        let len = u64::from_le_bytes(take(8)?.try_into().expect("8"));
-        let len = usize::try_from(len).map_err(|_| format!("a component's length {len}"))?;
-        parts.push(take(len)?.to_vec());
-    }
-    if at != data.len() {
-        return Err(format!("{} bytes after the state", data.len() - at));
-    }
-    if !time.is_finite() || !last_successful.is_finite() || !stop.is_finite() {
-        return Err(format!(
-            "time {time}, last successful time {last_successful}, stop time {stop}"
-        ));
-    }
-    Ok(Parsed {
-        time,
-        last_successful,
-        stop_time,
-        state,
-        dirty,
-        parts,
-    })
-}
-
-/// The resources folder of a `file:` URI (FMI 2.0's fmuResourceLocation).
-fn resources_of_uri(uri: Option<String>) -> Result<std::path::PathBuf, String> {
-    let Some(uri) = uri else {
-        return Err("fmuResourceLocation is NULL: the container's system is in its resources".into());
-    };
-    rustfmu::core::resources::resource_dir(&uri)
-        .ok_or_else(|| format!("fmuResourceLocation '{uri}' is not a file: URI of a folder"))
-}
-
-/// The resources folder of FMI 3.0's resourcePath (a native absolute path).
-fn resources_of_path(path: Option<String>) -> Result<std::path::PathBuf, String> {
-    let Some(path) = path else {
-        return Err("resourcePath is NULL: the container's system is in its resources".into());
-    };
-    let p = Path::new(&path);
-    if p.is_absolute() {
-        Ok(p.to_path_buf())
-    } else {
-        Err(format!("resourcePath '{path}' is not an absolute path"))
-    }
-}
-
 /// Keeps `c_void` in the ABI's imports used on every platform.
 #[doc(hidden)]
 pub type Opaque = c_void;

@@ -1,0 +1,330 @@
+//! What an FMI 3.0 container refuses, each function saying why: the getters and setters of the
+//! types it has no variable of, and the functions of the interfaces and modes it does not have
+//! (model exchange, scheduled execution, event mode, configuration mode, clocks, derivatives).
+
+use super::*;
+
+/// A getter or setter of a type no variable of a container has: every value reference refused
+/// (it is no variable, or a variable of another type); none at all is fine.
+fn no_such_type(me: &Container, call: Call, function: &str, asked: &str, vrs: &[u32]) -> Outcome {
+    me.check(call, function)?;
+    match vrs.first() {
+        None => Ok(fmi2OK),
+        Some(&vr) => {
+            let Some(p) = me.ports.get(vr as usize) else {
+                return Err(me.error(&format!(
+                    "{function}: value reference {vr} is not a variable of {} (0 .. {})",
+                    me.spec.model_identifier,
+                    me.ports.len().saturating_sub(1)
+                )));
+            };
+            Err(me.error(&format!(
+                "{function}: '{}' (vr {vr}) is {}, not {asked} (a container's variables are its components' FMI 2.0 types)",
+                me.name(vr),
+                type_name(Version::Fmi3, p.ty)
+            )))
+        }
+    }
+}
+
+/// The getter and setter rows of each type a container has no variable of.
+macro_rules! no_such_types {
+    ($($get:ident, $set:ident, $ty:ty, $name:literal;)*) => {
+        exports! {
+            $(
+                $get(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *mut $ty,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    with3(instance, F, |me| {
+                        let vrs = arrays(me, F, valueReferences, nValueReferences, values as *const $ty, nValues)?;
+                        no_such_type(me, Call::GetValues, F, $name, vrs)
+                    });
+                $set(
+                    instance: fmi3Instance,
+                    valueReferences: *const fmi3ValueReference,
+                    nValueReferences: usize,
+                    values: *const $ty,
+                    nValues: usize,
+                ) -> fmi3Status =>
+                    with3(instance, F, |me| {
+                        let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
+                        no_such_type(me, Call::SetDiscreteValues, F, $name, vrs)
+                    });
+            )*
+        }
+    };
+}
+
+no_such_types! {
+    fmi3GetFloat32, fmi3SetFloat32, fmi3Float32, "Float32";
+    fmi3GetInt8, fmi3SetInt8, fmi3Int8, "Int8";
+    fmi3GetUInt8, fmi3SetUInt8, fmi3UInt8, "UInt8";
+    fmi3GetInt16, fmi3SetInt16, fmi3Int16, "Int16";
+    fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, "UInt16";
+    fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, "UInt32";
+    fmi3GetUInt64, fmi3SetUInt64, fmi3UInt64, "UInt64";
+}
+
+exports! {
+    fmi3GetBinary(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        _valueSizes: *mut usize,
+        values: *mut fmi3Binary,
+        nValues: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            let vrs = arrays(
+                me,
+                F,
+                valueReferences,
+                nValueReferences,
+                values as *const fmi3Binary,
+                nValues,
+            )?;
+            no_such_type(me, Call::GetValues, F, "Binary", vrs)
+        });
+    fmi3SetBinary(
+        instance: fmi3Instance,
+        valueReferences: *const fmi3ValueReference,
+        nValueReferences: usize,
+        _valueSizes: *const usize,
+        values: *const fmi3Binary,
+        nValues: usize,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
+            no_such_type(me, Call::SetDiscreteValues, F, "Binary", vrs)
+        });
+    fmi3DoStep(
+        instance: fmi3Instance,
+        currentCommunicationPoint: fmi3Float64,
+        communicationStepSize: fmi3Float64,
+        _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
+        eventHandlingNeeded: *mut fmi3Boolean,
+        terminateSimulation: *mut fmi3Boolean,
+        earlyReturn: *mut fmi3Boolean,
+        lastSuccessfulTime: *mut fmi3Float64,
+    ) -> fmi3Status =>
+        with3(instance, F, |me| {
+            if eventHandlingNeeded.is_null()
+                || terminateSimulation.is_null()
+                || earlyReturn.is_null()
+                || lastSuccessfulTime.is_null()
+            {
+                me.check(Call::DoStep, F)?;
+                return Err(me.error(&format!(
+                    "{F}: eventHandlingNeeded, terminateSimulation, earlyReturn and lastSuccessfulTime must not be NULL"
+                )));
+            }
+            let r = me.do_step(F, currentCommunicationPoint, communicationStepSize);
+            put(eventHandlingNeeded, false);
+            put(terminateSimulation, false);
+            put(earlyReturn, false);
+            put(lastSuccessfulTime, me.last_successful);
+            r
+        });
+}
+
+// What a container does not offer: each function says why.
+
+fn not_offered(instance: fmi3Instance, function: &str, why: &str) -> fmi3Status {
+    with3(instance, function, |me| Err(me.error(&format!("{function}: {why}"))))
+}
+
+const NO_EVENT_MODE: &str = "a container has no event mode (hasEventMode = false)";
+const NO_MODEL_EXCHANGE: &str = "a container is a co-simulation FMU only (no <ModelExchange> element)";
+const NO_CLOCKS: &str = "a container has no clocks";
+const NO_DERIVATIVES: &str = "a container gives no directional or adjoint derivatives (providesDirectionalDerivatives = false, providesAdjointDerivatives = false)";
+
+exports! {
+    fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(instance, F, NO_EVENT_MODE);
+    fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(
+            instance,
+            F,
+            "a container leaves Initialization Mode into Step Mode itself (it has no event mode)",
+        );
+    fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(instance, F, NO_EVENT_MODE);
+    fmi3UpdateDiscreteStates(
+        instance: fmi3Instance,
+        _discreteStatesNeedUpdate: *mut fmi3Boolean,
+        _terminateSimulation: *mut fmi3Boolean,
+        _nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
+        _valuesOfContinuousStatesChanged: *mut fmi3Boolean,
+        _nextEventTimeDefined: *mut fmi3Boolean,
+        _nextEventTime: *mut fmi3Float64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_EVENT_MODE);
+    fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(
+            instance,
+            F,
+            "a container has no structural parameters, so there is no configuration mode",
+        );
+    fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(
+            instance,
+            F,
+            "a container has no structural parameters, so there is no configuration mode",
+        );
+    fmi3GetDirectionalDerivative(
+        instance: fmi3Instance,
+        _unknowns: *const fmi3ValueReference,
+        _nUnknowns: usize,
+        _knowns: *const fmi3ValueReference,
+        _nKnowns: usize,
+        _seed: *const fmi3Float64,
+        _nSeed: usize,
+        _sensitivity: *mut fmi3Float64,
+        _nSensitivity: usize,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_DERIVATIVES);
+    fmi3GetAdjointDerivative(
+        instance: fmi3Instance,
+        _unknowns: *const fmi3ValueReference,
+        _nUnknowns: usize,
+        _knowns: *const fmi3ValueReference,
+        _nKnowns: usize,
+        _seed: *const fmi3Float64,
+        _nSeed: usize,
+        _sensitivity: *mut fmi3Float64,
+        _nSensitivity: usize,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_DERIVATIVES);
+    fmi3GetOutputDerivatives(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _orders: *const fmi3Int32,
+        _values: *mut fmi3Float64,
+        _nValues: usize,
+    ) -> fmi3Status =>
+        not_offered(
+            instance,
+            F,
+            "a container gives no output derivatives (maxOutputDerivativeOrder = 0)",
+        );
+    fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3CompletedIntegratorStep(
+        instance: fmi3Instance,
+        _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
+        _enterEventMode: *mut fmi3Boolean,
+        _terminateSimulation: *mut fmi3Boolean,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3SetTime(instance: fmi3Instance, _time: fmi3Float64) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3SetContinuousStates(
+        instance: fmi3Instance,
+        _continuousStates: *const fmi3Float64,
+        _nContinuousStates: usize,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetContinuousStateDerivatives(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetEventIndicators(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetContinuousStates(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetNominalsOfContinuousStates(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetNumberOfEventIndicators(instance: fmi3Instance, _n: *mut usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3GetNumberOfContinuousStates(instance: fmi3Instance, _n: *mut usize) -> fmi3Status =>
+        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    fmi3SetClock(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _values: *const fmi3Clock,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3GetClock(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _values: *mut fmi3Clock,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3GetIntervalDecimal(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _intervals: *mut fmi3Float64,
+        _qualifiers: *mut fmi3IntervalQualifier,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3GetIntervalFraction(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _counters: *mut fmi3UInt64,
+        _resolutions: *mut fmi3UInt64,
+        _qualifiers: *mut fmi3IntervalQualifier,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3GetShiftDecimal(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _shifts: *mut fmi3Float64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3GetShiftFraction(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _counters: *mut fmi3UInt64,
+        _resolutions: *mut fmi3UInt64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3SetIntervalDecimal(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _intervals: *const fmi3Float64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3SetIntervalFraction(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _counters: *const fmi3UInt64,
+        _resolutions: *const fmi3UInt64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3SetShiftDecimal(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _shifts: *const fmi3Float64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3SetShiftFraction(
+        instance: fmi3Instance,
+        _valueReferences: *const fmi3ValueReference,
+        _nValueReferences: usize,
+        _counters: *const fmi3UInt64,
+        _resolutions: *const fmi3UInt64,
+    ) -> fmi3Status =>
+        not_offered(instance, F, NO_CLOCKS);
+    fmi3ActivateModelPartition(
+        instance: fmi3Instance,
+        _clockReference: fmi3ValueReference,
+        _activationTime: fmi3Float64,
+    ) -> fmi3Status =>
+        not_offered(
+            instance,
+            F,
+            "a container is a co-simulation FMU only (no <ScheduledExecution> element)",
+        );
+}

@@ -1,0 +1,53 @@
+//! [`InstanceCS`]: a co-simulation component as the master sees it, whichever importer (FMI 2.0,
+//! FMI 3.0), whether the runner integrates it (model exchange) and whether it runs in a child
+//! process; above all of them, so that none imports it.
+
+use crate::common::{Fmi2Error, dispatch_with};
+
+/// A co-simulation instance of an FMI 2.0 or an FMI 3.0 FMU ([`crate::fmi3`]), with FMI 2.0's
+/// view of its values and statuses; freed when dropped (its FMU states first).
+pub enum InstanceCS {
+    V2(crate::fmi2::Instance2),
+    V3(crate::fmi3::Instance3),
+    /// A model-exchange instance (FMI 2.0 or 3.0) the runner integrates ([`crate::me`]).
+    Me(crate::me::MeInstance),
+    /// Any of the above in a child process ([`crate::isolate`]).
+    #[cfg(target_os = "linux")]
+    Isolated(Box<crate::isolate::Isolated>),
+}
+
+// Each method forwarded to the instance's own, after the crumb an isolated system's child
+// leaves before every call (what a crash or hang is reported at).
+dispatch_with! {
+    values_and_states;
+    InstanceCS {
+        V2,
+        V3,
+        Me,
+        #[cfg(target_os = "linux")]
+        Isolated,
+    }
+    hook crate::isolate::crumb;
+    /// FMI 3.0: kept for fmi3EnterInitializationMode.
+    fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error>;
+    fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error>;
+    fn reset(&mut self) -> Result<(), Fmi2Error>;
+    fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error>;
+    /// First time derivatives of outputs (FMI 2.0 fmi2GetRealOutputDerivatives, FMI 3.0
+    /// fmi3GetOutputDerivatives; order 1).
+    fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error>;
+    /// First time derivatives of inputs (FMI 2.0 only: canInterpolateInputs).
+    fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
+}
+
+impl InstanceCS {
+    /// Waits for every call made so far (an isolated instance sends the calls that answer only
+    /// a status with the next one that answers values): their failure, if any, now.
+    pub fn sync(&mut self) -> Result<(), Fmi2Error> {
+        match self {
+            #[cfg(target_os = "linux")]
+            InstanceCS::Isolated(i) => i.sync(),
+            _ => Ok(()),
+        }
+    }
+}

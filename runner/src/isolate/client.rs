@@ -1,0 +1,640 @@
+//! [`Isolated`]: a component's instance in a child process, the parent's side of the wire
+//! ([`super::wire`]): calls batched, the ones that answer only a status not waited for.
+
+use super::options::Isolation;
+use super::wire::*;
+use crate::common::{Deferred, Fmi2Error, FmuState};
+use crate::{Error, ErrorKind};
+use std::ffi::CString;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::Ordering::*;
+use std::time::{Duration, Instant};
+
+/// A component's instance in a child process.
+pub struct Isolated {
+    component: String,
+    shm: Shared,
+    child: Child,
+    timeout: Option<Duration>,
+    /// The calls written to the request area and not yet published: (op, time).
+    pending: Vec<(u8, Option<f64>)>,
+    /// Bytes of `pending` in the request area (after the batch's call count).
+    pending_len: usize,
+    /// A published batch not yet waited for (its calls), and its sequence number.
+    outstanding: Vec<(u8, Option<f64>)>,
+    seq: u32,
+    /// The time of the last step's end (a set's time in messages).
+    time: Option<f64>,
+    /// The process is gone: every call fails with this.
+    dead: Option<String>,
+    /// How long to spin for an answer before sleeping.
+    patience: Patience,
+    /// Read-ahead of Real values: what the last fmi2GetReal answered (value reference,
+    /// value), valid until any call but a read; the value references read since the last
+    /// step (`reads`) and in the step before (`ahead`), which the first read of a step asks
+    /// for too. A system reads a component's connected outputs and then its recorded ones:
+    /// one round trip instead of two where nothing is set or stepped between (the values an
+    /// FMU gives depend on its inputs, parameters, states and time, none of which a read
+    /// changes).
+    cache: Vec<(u32, f64)>,
+    cache_valid: bool,
+    reads: Vec<u32>,
+    ahead: Vec<u32>,
+    ask: Vec<u32>,
+}
+
+impl Drop for Isolated {
+    fn drop(&mut self) {
+        if self.dead.is_none() && self.flush_wait().is_ok() {
+            // fmi2FreeInstance in the child, then its exit.
+            if self.push(QUIT, None, |_| Ok(())).is_ok() && self.publish().is_ok() {
+                let until = Instant::now() + Duration::from_secs(5);
+                while Instant::now() < until {
+                    if let Ok(Some(_)) = self.child.try_wait() {
+                        return;
+                    }
+                    std::thread::sleep(Duration::from_micros(200));
+                }
+            }
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Isolated {
+    /// Starts the child process of `component` (its FMU unpacked in `dir`) and instantiates it
+    /// there (`me`: model exchange, integrated by the runner in the child).
+    pub fn spawn(iso: &Isolation, component: &str, label: &str, dir: &Path, me: bool) -> Result<Isolated, Error> {
+        let fail = |m: String| Error {
+            component: Some(component.to_owned()),
+            function: Some("fmi2Instantiate".into()),
+            ..Error::new(
+                ErrorKind::Fmi,
+                format!("component '{component}' ({label}), isolated: {m}"),
+            )
+        };
+        let (file, path) = shm_file().map_err(&fail)?;
+        let map = map(&file).map_err(&fail)?;
+        let mut cmd = Command::new(&iso.worker);
+        cmd.arg("serve-component")
+            .arg("--dir")
+            .arg(dir)
+            .arg("--name")
+            .arg(component)
+            .arg("--label")
+            .arg(label)
+            .arg("--shm")
+            .arg(&path)
+            .stdin(Stdio::null());
+        if me {
+            cmd.arg("--model-exchange");
+        }
+        let child = cmd.spawn();
+        let child = match child {
+            Ok(c) => c,
+            Err(e) => {
+                let _ = std::fs::remove_file(&path);
+                return Err(fail(format!("cannot start {}: {e}", iso.worker.display())));
+            }
+        };
+        let mut iso_inst = Isolated {
+            component: component.to_owned(),
+            shm: Shared { map },
+            child,
+            timeout: iso.timeout.map(|t| t.max(Duration::from_secs(10))),
+            pending: Vec::new(),
+            pending_len: 0,
+            outstanding: Vec::new(),
+            seq: 0,
+            time: None,
+            dead: None,
+            patience: Patience::new(50, 200),
+            cache: Vec::new(),
+            cache_valid: false,
+            reads: Vec::new(),
+            ahead: Vec::new(),
+            ask: Vec::new(),
+        };
+        // The child opens the file before it answers: then it can go.
+        let r = iso_inst.call(HELLO, None, |_| Ok(()), |_| Ok(()));
+        let _ = std::fs::remove_file(&path);
+        iso_inst.timeout = iso.timeout;
+        r.map_err(|e| {
+            let e = match e {
+                Fmi2Error::Deferred(d) => d.error,
+                e => e,
+            };
+            fail(e.to_string())
+        })?;
+        Ok(iso_inst)
+    }
+
+    /// Appends a call to the batch being written.
+    fn push(
+        &mut self,
+        op: u8,
+        time: Option<f64>,
+        args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+    ) -> Result<(), Fmi2Error> {
+        if !matches!(
+            op,
+            GET_REAL | GET_INTEGER | GET_BOOLEAN | GET_STRING | OUTPUT_DERIVATIVES | DIRECTIONAL | SERIALIZE
+        ) {
+            self.cache_valid = false;
+        }
+        let start = 4 + self.pending_len;
+        let mut w = W {
+            buf: self.shm.req(),
+            at: start,
+        };
+        w.u8(op)?;
+        args(&mut w)?;
+        self.pending_len = w.at - 4;
+        self.pending.push((op, time));
+        Ok(())
+    }
+
+    /// Publishes the batch written (the child starts on it).
+    fn publish(&mut self) -> Result<(), Fmi2Error> {
+        let n = self.pending.len() as u32;
+        self.shm.req()[..4].copy_from_slice(&n.to_ne_bytes());
+        let h = self.shm.header();
+        h.req_len.store((4 + self.pending_len) as u32, Relaxed);
+        self.seq = self.seq.wrapping_add(1);
+        h.req.store(self.seq, SeqCst);
+        if h.child_sleeps.load(SeqCst) == 1 {
+            futex_wake(&h.req);
+        }
+        self.outstanding = std::mem::take(&mut self.pending);
+        self.pending_len = 0;
+        Ok(())
+    }
+
+    /// Waits for the published batch; Err: the process died or hung.
+    fn wait(&mut self) -> Result<(), Fmi2Error> {
+        let begun = Instant::now();
+        let mut checked = begun;
+        let mut slept = false;
+        loop {
+            let h = self.shm.header();
+            if h.done.load(Acquire) == self.seq {
+                self.patience.waited(slept);
+                return Ok(());
+            }
+            let waited = begun.elapsed();
+            if waited < self.patience.limit {
+                std::hint::spin_loop();
+                continue;
+            }
+            slept = true;
+            h.parent_sleeps.store(1, SeqCst);
+            let done = h.done.load(SeqCst);
+            if done != self.seq {
+                futex_wait(&h.done, done, Duration::from_millis(2));
+            }
+            h.parent_sleeps.store(0, SeqCst);
+            if checked.elapsed() >= Duration::from_millis(2) || waited > Duration::from_millis(20) {
+                checked = Instant::now();
+                if self.shm.header().done.load(Acquire) == self.seq {
+                    return Ok(());
+                }
+                if let Ok(Some(status)) = self.child.try_wait() {
+                    return Err(self.died(describe_exit(status)));
+                }
+                if let Some(limit) = self.timeout
+                    && waited > limit
+                {
+                    let _ = self.child.kill();
+                    let _ = self.child.wait();
+                    return Err(self.died(format!(
+                        "it did not return within {} s: its process was killed",
+                        limit.as_secs_f64()
+                    )));
+                }
+            }
+        }
+    }
+
+    /// The process is gone, in the call the child was in.
+    fn died(&mut self, how: String) -> Fmi2Error {
+        let i = self.shm.header().current.load(Acquire) as usize;
+        let (op, time) = self.outstanding.get(i).copied().unwrap_or((QUIT, None));
+        let message = format!(
+            "the process of component '{}' (pid {}) {how}",
+            self.component,
+            self.child.id()
+        );
+        self.dead = Some(message.clone());
+        self.outstanding.clear();
+        self.pending.clear();
+        self.pending_len = 0;
+        Fmi2Error::Deferred(Box::new(Deferred {
+            function: function_of(op),
+            time,
+            error: Fmi2Error::Died(message),
+        }))
+    }
+
+    /// Waits for the outstanding batch (if any) and reads its answer's failure and messages;
+    /// `last` reads the values of its last call.
+    fn collect(&mut self, last: impl FnOnce(&mut R) -> Result<(), Fmi2Error>) -> Result<(), Fmi2Error> {
+        if self.outstanding.is_empty() {
+            return Ok(());
+        }
+        self.wait()?;
+        let calls = std::mem::take(&mut self.outstanding);
+        let len = self.shm.header().resp_len.load(Acquire) as usize;
+        let buf = &self.shm.resp()[..len];
+        let mut r = R { buf, at: 0 };
+        // The FMUs' messages, to this process's logger as an in-process FMU's.
+        for _ in 0..r.u32() {
+            let level = match r.u8() {
+                1 => log::Level::Warn,
+                2 => log::Level::Trace,
+                3 => log::Level::Error,
+                _ => log::Level::Info,
+            };
+            let target = String::from_utf8_lossy(r.blob()).into_owned();
+            let text = String::from_utf8_lossy(r.blob()).into_owned();
+            log::logger().log(
+                &log::Record::builder()
+                    .args(format_args!("{text}"))
+                    .level(level)
+                    .module_path(Some("logger"))
+                    .target(&target)
+                    .build(),
+            );
+        }
+        let failed = r.u32();
+        if failed != u32::MAX {
+            let error = r.err();
+            let i = failed as usize;
+            if i + 1 == calls.len()
+                && !matches!(
+                    calls[i].0,
+                    DO_STEP | SET_REAL | SET_INTEGER | SET_BOOLEAN | SET_STRING | INPUT_DERIVATIVES
+                )
+            {
+                return Err(error);
+            }
+            let (op, time) = calls.get(i).copied().unwrap_or((QUIT, None));
+            return Err(Fmi2Error::Deferred(Box::new(Deferred {
+                function: function_of(op),
+                time,
+                error,
+            })));
+        }
+        last(&mut r)
+    }
+
+    /// Waits for what was sent before (its failure is this call's), then sends nothing.
+    fn flush_wait(&mut self) -> Result<(), Fmi2Error> {
+        if let Some(m) = &self.dead {
+            return Err(Fmi2Error::Died(m.clone()));
+        }
+        self.collect(|_| Ok(()))
+    }
+
+    /// Sends what is written and waits for it: a failure of a call before now.
+    pub fn sync(&mut self) -> Result<(), Fmi2Error> {
+        self.flush_wait()?;
+        if !self.pending.is_empty() {
+            self.publish()?;
+            self.collect(|_| Ok(()))?;
+        }
+        Ok(())
+    }
+
+    /// A call that answers only a status, sent with the next call that answers (or at once).
+    fn post(
+        &mut self,
+        op: u8,
+        time: Option<f64>,
+        now: bool,
+        args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+    ) -> Result<(), Fmi2Error> {
+        self.flush_wait()?;
+        self.push(op, time, args)?;
+        if now {
+            self.publish()?;
+        }
+        Ok(())
+    }
+
+    /// A call waited for: sent with the calls before it; `answer` reads its values.
+    fn call(
+        &mut self,
+        op: u8,
+        time: Option<f64>,
+        args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+        answer: impl FnOnce(&mut R) -> Result<(), Fmi2Error>,
+    ) -> Result<(), Fmi2Error> {
+        self.flush_wait()?;
+        self.push(op, time, args)?;
+        self.publish()?;
+        self.collect(answer)
+    }
+
+    fn lengths(a: usize, b: usize) -> Result<(), Fmi2Error> {
+        if a == b {
+            Ok(())
+        } else {
+            Err(Fmi2Error::Importer(format!("{a} value references for {b} values")))
+        }
+    }
+
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), Fmi2Error> {
+        self.call(
+            SET_DEBUG_LOGGING,
+            None,
+            |w| {
+                w.u8(on as u8)?;
+                w.u32(categories.len() as u32)?;
+                categories.iter().try_for_each(|c| w.blob(c.as_bytes()))
+            },
+            |_| Ok(()),
+        )
+    }
+
+    pub fn setup_experiment(&mut self, tolerance: Option<f64>, start: f64, stop: Option<f64>) -> Result<(), Fmi2Error> {
+        self.time = Some(start);
+        self.call(
+            SETUP_EXPERIMENT,
+            Some(start),
+            |w| {
+                w.f64(tolerance.unwrap_or(f64::NAN))?;
+                w.f64(start)?;
+                w.f64(stop.unwrap_or(f64::NAN))
+            },
+            |_| Ok(()),
+        )
+    }
+
+    pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        self.call(ENTER_INIT, self.time, |_| Ok(()), |_| Ok(()))
+    }
+
+    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        self.call(EXIT_INIT, self.time, |_| Ok(()), |_| Ok(()))
+    }
+
+    pub fn terminate(&mut self) -> Result<(), Fmi2Error> {
+        self.call(TERMINATE, self.time, |_| Ok(()), |_| Ok(()))
+    }
+
+    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
+        self.time = None;
+        self.call(RESET, None, |_| Ok(()), |_| Ok(()))
+    }
+
+    pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        std::mem::swap(&mut self.ahead, &mut self.reads);
+        self.reads.clear();
+        self.post(DO_STEP, Some(t), true, |w| {
+            w.f64(t)?;
+            w.f64(h)?;
+            w.u8(no_set_prior as u8)
+        })?;
+        self.time = Some(t + h);
+        Ok(())
+    }
+
+    pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        if self.dead.is_none() && self.outstanding.is_empty() && self.pending.is_empty() && self.cache_valid {
+            let cached = |vr: &u32| self.cache.iter().find(|(v, _)| v == vr).map(|(_, x)| *x);
+            if vrs.iter().all(|vr| cached(vr).is_some()) {
+                for (x, vr) in out.iter_mut().zip(vrs) {
+                    *x = cached(vr).unwrap_or(f64::NAN);
+                }
+                return Ok(());
+            }
+        }
+        for vr in vrs {
+            if !self.reads.contains(vr) {
+                self.reads.push(*vr);
+            }
+        }
+        // This read and what the step before read after it.
+        let mut ask = std::mem::take(&mut self.ask);
+        ask.clear();
+        ask.extend_from_slice(vrs);
+        ask.extend(self.ahead.iter().filter(|v| !vrs.contains(v)));
+        let extra = ask.len() > vrs.len();
+        let mut cache = std::mem::take(&mut self.cache);
+        cache.clear();
+        let r = self.call(
+            GET_REAL,
+            self.time,
+            |w| w.u32s(&ask),
+            |r| {
+                for vr in &ask {
+                    cache.push((*vr, r.f64()));
+                }
+                Ok(())
+            },
+        );
+        let r = match r {
+            // A value reference of the read-ahead the FMU refuses now: the read alone.
+            Err(Fmi2Error::Error) if extra => {
+                cache.clear();
+                self.call(
+                    GET_REAL,
+                    self.time,
+                    |w| w.u32s(vrs),
+                    |r| {
+                        for vr in vrs {
+                            cache.push((*vr, r.f64()));
+                        }
+                        Ok(())
+                    },
+                )
+            }
+            r => r,
+        };
+        self.ask = ask;
+        if r.is_ok() {
+            for (x, (_, v)) in out.iter_mut().zip(&cache) {
+                *x = *v;
+            }
+        }
+        self.cache_valid = r.is_ok();
+        self.cache = cache;
+        r
+    }
+
+    /// fmi2GetInteger or fmi2GetBoolean (`op`): 32-bit values.
+    fn get_i32s(&mut self, op: u8, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        self.call(
+            op,
+            self.time,
+            |w| w.u32s(vrs),
+            |r| {
+                out.iter_mut().for_each(|x| *x = r.u32() as i32);
+                Ok(())
+            },
+        )
+    }
+
+    pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        self.get_i32s(GET_INTEGER, vrs, out)
+    }
+
+    pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+        self.get_i32s(GET_BOOLEAN, vrs, out)
+    }
+
+    pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        self.call(
+            GET_STRING,
+            self.time,
+            |w| w.u32s(vrs),
+            |r| {
+                out.iter_mut().for_each(|x| *x = r.cstring());
+                Ok(())
+            },
+        )
+    }
+
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        self.post(SET_REAL, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.f64s(values)
+        })
+    }
+
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        self.post(SET_INTEGER, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.i32s(values)
+        })
+    }
+
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        self.post(SET_BOOLEAN, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.i32s(values)
+        })
+    }
+
+    pub fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        self.post(SET_STRING, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.u32(values.len() as u32)?;
+            values.iter().try_for_each(|s| w.blob(s.as_bytes()))
+        })
+    }
+
+    fn state_call(&mut self, op: u8, s: Option<&FmuState>) -> Result<FmuState, Fmi2Error> {
+        let mut got = 0;
+        let idx = s.map_or(u32::MAX, |s| s.0 as u32);
+        self.call(
+            op,
+            self.time,
+            |w| w.u32(idx),
+            |r| {
+                got = r.u32() as usize;
+                Ok(())
+            },
+        )?;
+        Ok(FmuState(got))
+    }
+
+    pub fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error> {
+        self.state_call(GET_STATE, None)
+    }
+
+    pub fn update_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        self.state_call(UPDATE_STATE, Some(s)).map(|_| ())
+    }
+
+    pub fn set_fmu_state(&mut self, s: &FmuState) -> Result<(), Fmi2Error> {
+        self.state_call(SET_STATE, Some(s)).map(|_| ())
+    }
+
+    pub fn free_fmu_state(&mut self, s: FmuState) -> Result<(), Fmi2Error> {
+        self.state_call(FREE_STATE, Some(&s)).map(|_| ())
+    }
+
+    pub fn serialize_fmu_state(&mut self, s: &FmuState) -> Result<Vec<u8>, Fmi2Error> {
+        let mut bytes = Vec::new();
+        let idx = s.0 as u32;
+        self.call(
+            SERIALIZE,
+            self.time,
+            |w| w.u32(idx),
+            |r| {
+                bytes = r.blob().to_vec();
+                Ok(())
+            },
+        )?;
+        Ok(bytes)
+    }
+
+    pub fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error> {
+        let mut got = 0;
+        self.call(
+            DESERIALIZE,
+            self.time,
+            |w| w.blob(bytes),
+            |r| {
+                got = r.u32() as usize;
+                Ok(())
+            },
+        )?;
+        Ok(FmuState(got))
+    }
+
+    pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), out.len())?;
+        self.call(
+            OUTPUT_DERIVATIVES,
+            self.time,
+            |w| w.u32s(vrs),
+            |r| {
+                out.iter_mut().for_each(|x| *x = r.f64());
+                Ok(())
+            },
+        )
+    }
+
+    pub fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), values.len())?;
+        self.post(INPUT_DERIVATIVES, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.f64s(values)
+        })
+    }
+
+    pub fn get_directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), Fmi2Error> {
+        Self::lengths(knowns.len(), seed.len())?;
+        Self::lengths(unknowns.len(), out.len())?;
+        self.call(
+            DIRECTIONAL,
+            self.time,
+            |w| {
+                w.u32s(unknowns)?;
+                w.u32s(knowns)?;
+                w.f64s(seed)
+            },
+            |r| {
+                out.iter_mut().for_each(|x| *x = r.f64());
+                Ok(())
+            },
+        )
+    }
+}

@@ -1,0 +1,306 @@
+//! The child's side of one isolated component (`rustfmu-runner serve-component`): the FMU
+//! loaded and instantiated, each call of a batch answered, the FMUs' messages sent back.
+
+use super::wire::*;
+use crate::common::{Fmi2Error, FmuState};
+use crate::instance::InstanceCS;
+use std::ffi::CString;
+use std::path::Path;
+use std::sync::atomic::Ordering::*;
+use std::time::{Duration, Instant};
+
+// ---------------------------------------------------------------------------------------------
+// The child's side.
+
+/// The FMUs' messages of the current batch: (level, instance, text).
+static MESSAGES: std::sync::Mutex<Vec<(u8, String, String)>> = std::sync::Mutex::new(Vec::new());
+
+struct Collector;
+
+impl log::Log for Collector {
+    fn enabled(&self, _: &log::Metadata) -> bool {
+        true
+    }
+    fn log(&self, record: &log::Record) {
+        if record.module_path() != Some("logger") {
+            return;
+        }
+        let level = match record.level() {
+            log::Level::Warn => 1,
+            log::Level::Trace => 2,
+            log::Level::Error => 3,
+            _ => 0,
+        };
+        if let Ok(mut m) = MESSAGES.lock() {
+            m.push((level, record.target().to_owned(), record.args().to_string()));
+        }
+    }
+    fn flush(&self) {}
+}
+
+static COLLECTOR: Collector = Collector;
+
+/// A child's watchdog: the process ends (`_exit`, even inside a hanging FMU call) within
+/// 100 ms of its parent's end. Not PR_SET_PDEATHSIG: that fires when the parent *thread*
+/// that started the child ends, and a Dask worker's task threads come and go while the
+/// System lives on. Returns the parent's pid.
+pub(super) fn watch_parent() -> u32 {
+    let parent = std::os::unix::process::parent_id();
+    std::thread::spawn(move || {
+        loop {
+            std::thread::sleep(Duration::from_millis(100));
+            if std::os::unix::process::parent_id() != parent {
+                // SAFETY: ends the process at once, without atexit handlers (an FMU's thread
+                // may hold what they would need).
+                unsafe { libc::_exit(3) };
+            }
+        }
+    });
+    parent
+}
+
+/// `rustfmu-runner serve-component`: serves one component for the parent that started it, until
+/// it says quit or goes away. Returns the process's exit code.
+// ~250 lines: the child's loop, one arm per call code of the wire ([`super::wire`]), each a few
+// lines that decode the arguments in place, call the instance and encode the answer into the
+// same reused buffers; the arms stay beside each other so that the codes are read in one place.
+pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> i32 {
+    let parent = watch_parent();
+    let _ = log::set_logger(&COLLECTOR);
+    log::set_max_level(log::LevelFilter::Trace);
+    let mut shm = match Shared::open(shm) {
+        Ok(shm) => shm,
+        Err(e) => {
+            eprintln!("rustfmu-runner serve-component: {e}");
+            return 2;
+        }
+    };
+    let mut done = 0u32;
+    let mut inst: Option<InstanceCS> = None;
+    let mut fmu: Option<crate::fmu::Fmu> = None;
+    let (mut vrs, mut vrs2, mut reals, mut ints) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut strings: Vec<CString> = Vec::new();
+    let mut quit = false;
+    let mut patience = Patience::new(50, 200);
+    while !quit {
+        // Wait for the next batch.
+        let begun = Instant::now();
+        let mut slept = false;
+        loop {
+            let h = shm.header();
+            if h.req.load(Acquire) != done {
+                patience.waited(slept);
+                break;
+            }
+            let waited = begun.elapsed();
+            if waited < patience.limit {
+                std::thread::yield_now();
+            } else {
+                slept = true;
+                h.child_sleeps.store(1, SeqCst);
+                if h.req.load(SeqCst) == done {
+                    futex_wait(&h.req, done, Duration::from_millis(100));
+                }
+                h.child_sleeps.store(0, SeqCst);
+                if std::os::unix::process::parent_id() != parent {
+                    return 3;
+                }
+            }
+        }
+        let seq = shm.header().req.load(Acquire);
+        let len = shm.header().req_len.load(Acquire) as usize;
+        // The batch is copied out: the answer is written while it is read (small: a step's calls).
+        let batch = shm.req()[..len].to_vec();
+        let mut r = R { buf: &batch, at: 0 };
+        let n = r.u32();
+        let mut failed: Option<(u32, Fmi2Error)> = None;
+        // The answer's values (of the last call), written after the messages below.
+        let mut values: Vec<u8> = Vec::new();
+        for i in 0..n {
+            shm.header().current.store(i, Release);
+            let op = r.u8();
+            values.clear();
+            let result: Result<(), Fmi2Error> = (|| {
+                if op == HELLO {
+                    let f =
+                        crate::fmu::Fmu::from_dir(component, label, dir).map_err(|e| Fmi2Error::Importer(e.message))?;
+                    let i = if me {
+                        f.instantiate_me(component)
+                    } else {
+                        f.instantiate(component)
+                    }
+                    .map_err(|e| Fmi2Error::Importer(e.message))?;
+                    inst = Some(i);
+                    fmu = Some(f);
+                    return Ok(());
+                }
+                if op == QUIT {
+                    inst = None;
+                    fmu = None;
+                    quit = true;
+                    return Ok(());
+                }
+                let inst = inst
+                    .as_mut()
+                    .ok_or_else(|| Fmi2Error::Importer("not instantiated".into()))?;
+                let put_f64s =
+                    |values: &mut Vec<u8>, xs: &[f64]| xs.iter().for_each(|x| values.extend(x.to_ne_bytes()));
+                match op {
+                    SET_DEBUG_LOGGING => {
+                        let on = r.u8() != 0;
+                        let k = r.u32();
+                        let cats: Vec<String> =
+                            (0..k).map(|_| String::from_utf8_lossy(r.blob()).into_owned()).collect();
+                        let cats: Vec<&str> = cats.iter().map(String::as_str).collect();
+                        inst.set_debug_logging(on, &cats)
+                    }
+                    SETUP_EXPERIMENT => {
+                        let (tol, start, stop) = (r.f64(), r.f64(), r.f64());
+                        let opt = |x: f64| (!x.is_nan()).then_some(x);
+                        inst.setup_experiment(opt(tol), start, opt(stop))
+                    }
+                    ENTER_INIT => inst.enter_initialization_mode(),
+                    EXIT_INIT => inst.exit_initialization_mode(),
+                    TERMINATE => inst.terminate(),
+                    RESET => inst.reset(),
+                    DO_STEP => {
+                        let (t, h, nsp) = (r.f64(), r.f64(), r.u8() != 0);
+                        inst.do_step(t, h, nsp)
+                    }
+                    GET_REAL | OUTPUT_DERIVATIVES => {
+                        r.u32s_into(&mut vrs);
+                        reals.clear();
+                        reals.resize(vrs.len(), 0.0);
+                        if op == GET_REAL {
+                            inst.get_real(&vrs, &mut reals)?;
+                        } else {
+                            inst.get_output_derivatives(&vrs, &mut reals)?;
+                        }
+                        put_f64s(&mut values, &reals);
+                        Ok(())
+                    }
+                    GET_INTEGER | GET_BOOLEAN => {
+                        r.u32s_into(&mut vrs);
+                        ints.clear();
+                        ints.resize(vrs.len(), 0);
+                        if op == GET_INTEGER {
+                            inst.get_integer(&vrs, &mut ints)?;
+                        } else {
+                            inst.get_boolean(&vrs, &mut ints)?;
+                        }
+                        ints.iter().for_each(|x| values.extend(x.to_ne_bytes()));
+                        Ok(())
+                    }
+                    GET_STRING => {
+                        r.u32s_into(&mut vrs);
+                        strings.clear();
+                        strings.resize(vrs.len(), CString::default());
+                        inst.get_string(&vrs, &mut strings)?;
+                        for s in &strings {
+                            values.extend((s.as_bytes().len() as u32).to_ne_bytes());
+                            values.extend(s.as_bytes());
+                        }
+                        Ok(())
+                    }
+                    SET_REAL | INPUT_DERIVATIVES => {
+                        r.u32s_into(&mut vrs);
+                        r.f64s_into(&mut reals);
+                        if op == SET_REAL {
+                            inst.set_real(&vrs, &reals)
+                        } else {
+                            inst.set_input_derivatives(&vrs, &reals)
+                        }
+                    }
+                    SET_INTEGER | SET_BOOLEAN => {
+                        r.u32s_into(&mut vrs);
+                        r.i32s_into(&mut ints);
+                        if op == SET_INTEGER {
+                            inst.set_integer(&vrs, &ints)
+                        } else {
+                            inst.set_boolean(&vrs, &ints)
+                        }
+                    }
+                    SET_STRING => {
+                        r.u32s_into(&mut vrs);
+                        let k = r.u32();
+                        strings.clear();
+                        strings.extend((0..k).map(|_| r.cstring()));
+                        inst.set_string(&vrs, &strings)
+                    }
+                    GET_STATE | UPDATE_STATE | SET_STATE | FREE_STATE => {
+                        let idx = r.u32() as usize;
+                        let s = FmuState(idx);
+                        let got = match op {
+                            GET_STATE => inst.get_fmu_state()?.0,
+                            UPDATE_STATE => inst.update_fmu_state(&s).map(|_| idx)?,
+                            SET_STATE => inst.set_fmu_state(&s).map(|_| idx)?,
+                            _ => inst.free_fmu_state(s).map(|_| idx)?,
+                        };
+                        values.extend((got as u32).to_ne_bytes());
+                        Ok(())
+                    }
+                    SERIALIZE => {
+                        let s = FmuState(r.u32() as usize);
+                        let bytes = inst.serialize_fmu_state(&s)?;
+                        values.extend((bytes.len() as u32).to_ne_bytes());
+                        values.extend(bytes);
+                        Ok(())
+                    }
+                    DESERIALIZE => {
+                        let bytes = r.blob();
+                        let s = inst.deserialize_fmu_state(bytes)?;
+                        values.extend((s.0 as u32).to_ne_bytes());
+                        Ok(())
+                    }
+                    DIRECTIONAL => {
+                        r.u32s_into(&mut vrs);
+                        r.u32s_into(&mut vrs2);
+                        let mut seed = Vec::new();
+                        r.f64s_into(&mut seed);
+                        reals.clear();
+                        reals.resize(vrs.len(), 0.0);
+                        inst.get_directional_derivative(&vrs, &vrs2, &seed, &mut reals)?;
+                        put_f64s(&mut values, &reals);
+                        Ok(())
+                    }
+                    other => Err(Fmi2Error::Importer(format!("isolation: unknown call {other}"))),
+                }
+            })();
+            if let Err(e) = result {
+                failed = Some((i, e));
+                break;
+            }
+        }
+        // The answer: messages, failure, values.
+        let messages = std::mem::take(&mut *MESSAGES.lock().unwrap_or_else(|e| e.into_inner()));
+        let resp = shm.resp();
+        let mut w = W { buf: resp, at: 0 };
+        let _ = (|| -> Result<(), Fmi2Error> {
+            w.u32(messages.len() as u32)?;
+            for (level, target, text) in &messages {
+                w.u8(*level)?;
+                w.blob(target.as_bytes())?;
+                w.blob(text.as_bytes())?;
+            }
+            match &failed {
+                Some((i, e)) => {
+                    w.u32(*i)?;
+                    w.err(e)
+                }
+                None => {
+                    w.u32(u32::MAX)?;
+                    w.bytes(&values)
+                }
+            }
+        })();
+        let at = w.at as u32;
+        let h = shm.header();
+        h.resp_len.store(at, Relaxed);
+        done = seq;
+        h.done.store(done, SeqCst);
+        if h.parent_sleeps.load(SeqCst) == 1 {
+            futex_wake(&h.done);
+        }
+    }
+    0
+}

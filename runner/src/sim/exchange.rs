@@ -1,0 +1,307 @@
+//! A communication point's exchange and the calls around it: the connections propagated (values
+//! and, where the FMUs take them, input derivatives), initialization, a step of every component,
+//! termination.
+
+use super::*;
+
+impl Simulation {
+    /// Sets every connected input from its output, as [`Simulation::scheme`] says (and, with
+    /// [`Simulation::input_derivatives`], their first derivatives).
+    pub fn propagate(&mut self, t: f64) -> Result<(), Error> {
+        crate::isolate::crumb_time(t);
+        self.propagate_values(t)?;
+        if self.input_derivatives {
+            self.propagate_derivatives(t)?;
+        }
+        Ok(())
+    }
+
+    /// The first-order hold of [`Simulation::input_derivatives`].
+    pub(super) fn propagate_derivatives(&mut self, t: f64) -> Result<(), Error> {
+        if self.dbufs.len() != self.reads.len() {
+            self.dbufs = self.reads.iter().map(|r| vec![0.0; r.vrs.len()]).collect();
+        }
+        for _sweep in 0..2 {
+            for i in 0..self.steps.len() {
+                let c = self.steps[i].0;
+                let Some(r) = self.read_of[c] else { continue };
+                let fmu = &self.fmus[self.slaves[c].fmu].description;
+                let own = fmu.cs.as_ref().is_some_and(|cs| cs.max_output_derivative_order >= 1) && !self.slaves[c].me;
+                let directional = fmu.cs.as_ref().is_some_and(|cs| cs.provides_directional_derivative);
+                let vrs = self.reads[r].vrs.clone();
+                let mut dy = vec![0.0; vrs.len()];
+                let s = &mut self.slaves[c];
+                let inst = s.instance.as_mut().expect("instantiated");
+                if own {
+                    inst.get_output_derivatives(&vrs, &mut dy).map_err(|e| {
+                        Error::fmi(
+                            &s.name,
+                            fname(s.v3, "fmi2GetRealOutputDerivatives"),
+                            &e,
+                            Some(t),
+                            "first-order hold",
+                        )
+                    })?;
+                }
+                // The chain rule through the component's feedthrough: J du of its connected inputs.
+                let (knowns, du) = self.input_derivative_values(c);
+                if directional && du.iter().any(|x| *x != 0.0) {
+                    let ft = &self.fmus[self.slaves[c].fmu].feedthrough;
+                    if knowns.iter().any(|k| ft.contains(k)) {
+                        let mut jdu = vec![0.0; vrs.len()];
+                        let s = &mut self.slaves[c];
+                        s.instance
+                            .as_mut()
+                            .expect("instantiated")
+                            .get_directional_derivative(&vrs, &knowns, &du, &mut jdu)
+                            .map_err(|e| {
+                                Error::fmi(
+                                    &s.name,
+                                    fname(s.v3, "fmi2GetDirectionalDerivative"),
+                                    &e,
+                                    Some(t),
+                                    "first-order hold",
+                                )
+                            })?;
+                        for (a, b) in dy.iter_mut().zip(jdu) {
+                            *a += b;
+                        }
+                    }
+                }
+                if let Some((k, x)) = dy.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                    return Err(Error::fmi(
+                        &self.slaves[c].name,
+                        "fmi2GetRealOutputDerivatives",
+                        &crate::fmi2::Fmi2Error::Importer(format!(
+                            "the derivative of value reference {} is {x}",
+                            vrs[k]
+                        )),
+                        Some(t),
+                        "first-order hold",
+                    ));
+                }
+                self.dbufs[r] = dy;
+            }
+        }
+        for c in 0..self.slaves.len() {
+            let interpolates = !self.slaves[c].v3
+                && !self.slaves[c].me
+                && self.fmus[self.slaves[c].fmu]
+                    .description
+                    .cs
+                    .as_ref()
+                    .is_some_and(|cs| cs.can_interpolate_inputs);
+            if !interpolates {
+                continue;
+            }
+            let (vrs, du) = self.input_derivative_values(c);
+            if vrs.is_empty() {
+                continue;
+            }
+            let s = &mut self.slaves[c];
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .set_input_derivatives(&vrs, &du)
+                .map_err(|e| Error::fmi(&s.name, "fmi2SetRealInputDerivatives", &e, Some(t), "first-order hold"))?;
+        }
+        Ok(())
+    }
+
+    /// The connected inputs of component `c` and their derivatives (its sources' current ones).
+    pub(super) fn input_derivative_values(&self, c: usize) -> (Vec<u32>, Vec<f64>) {
+        let mut vrs = Vec::new();
+        let mut du = Vec::new();
+        for w in self.writes.iter().filter(|w| w.port.slave == c) {
+            let src = self.dbufs.get(w.source);
+            for (j, vr) in w.port.vrs.iter().enumerate() {
+                vrs.push(*vr);
+                du.push(src.map_or(0.0, |d| d[w.idx[j]]));
+            }
+        }
+        (vrs, du)
+    }
+
+    /// Sets every connected input from its output, as [`Simulation::scheme`] says.
+    pub(super) fn propagate_values(&mut self, t: f64) -> Result<(), Error> {
+        match self.scheme {
+            Scheme::GaussSeidel => {
+                for i in 0..self.steps.len() {
+                    for j in 0..self.steps[i].1.len() {
+                        let w = self.steps[i].1[j];
+                        self.write(w, t)?;
+                    }
+                    if let Some(r) = self.read_of[self.steps[i].0] {
+                        self.read(r, t)?;
+                    }
+                }
+                for j in 0..self.late.len() {
+                    let w = self.late[j];
+                    self.write(w, t)?;
+                }
+            }
+            Scheme::Jacobi => {
+                for r in 0..self.reads.len() {
+                    self.read(r, t)?;
+                }
+                for w in 0..self.writes.len() {
+                    self.write(w, t)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Instantiates every FMU again (after fmi2Fatal).
+    pub(super) fn reinstantiate(&mut self) -> Result<(), Error> {
+        for i in 0..self.slaves.len() {
+            self.slaves[i].instance = None; // fmi2FreeInstance
+            let name = self.slaves[i].name.clone();
+            let inst = make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?;
+            self.slaves[i].instance = Some(inst);
+        }
+        self.runs = 0;
+        self.broken = false;
+        Ok(())
+    }
+
+    /// Steps 1-3 of a run (see the module): (re)starts every instance at t = 0 for a run to
+    /// `stop_time`, with `overrides` on top of the system's values.
+    pub fn initialize(&mut self, stop_time: f64, overrides: &[(String, Override)]) -> Result<(), Error> {
+        let values = self.start_values(overrides)?;
+        self.initialize_with(stop_time, &values)
+    }
+
+    /// The system's values with `overrides` on top, resolved.
+    pub(super) fn start_values(
+        &self,
+        overrides: &[(String, Override)],
+    ) -> Result<Vec<(String, Target, Setter)>, Error> {
+        let mut values = self.starts.clone();
+        for (key, value) in overrides {
+            let target = self.resolve_qualified(key)?;
+            let setter = self.override_setter(key, target.ty, value)?;
+            match values.iter_mut().find(|(k, _, _)| k == key) {
+                Some(slot) => slot.2 = setter,
+                None => values.push((key.clone(), target, setter)),
+            }
+        }
+        Ok(values)
+    }
+
+    pub(super) fn initialize_with(&mut self, stop_time: f64, values: &[(String, Target, Setter)]) -> Result<(), Error> {
+        if self.broken {
+            self.reinstantiate()?;
+        }
+        // No derivatives in Initialization Mode (FMI 2.0, 4.2.4): the first-order hold begins
+        // at the first communication point.
+        let derivatives = std::mem::replace(&mut self.input_derivatives, false);
+        let result = self.initialize_inner(stop_time, values);
+        self.input_derivatives = derivatives;
+        if let Err(e) = &result {
+            self.note(e);
+        }
+        result
+    }
+
+    pub(super) fn note(&mut self, e: &Error) {
+        if e.status.as_deref() == Some("Fatal") {
+            self.broken = true;
+        }
+    }
+
+    pub(super) fn initialize_inner(
+        &mut self,
+        stop_time: f64,
+        values: &[(String, Target, Setter)],
+    ) -> Result<(), Error> {
+        if self.runs > 0 {
+            for i in 0..self.slaves.len() {
+                let name = self.slaves[i].name.clone();
+                self.instance(i)
+                    .reset()
+                    .map_err(fmi_err(&name, fname(self.slaves[i].v3, "fmi2Reset"), None, ""))?;
+            }
+        }
+        self.runs += 1;
+        for (key, target, value) in values {
+            self.set(key, *target, value)?;
+        }
+        for i in 0..self.slaves.len() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i)
+                .setup_experiment(None, 0.0, Some(stop_time))
+                .map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2SetupExperiment"),
+                    None,
+                    "",
+                ))?;
+        }
+        for i in 0..self.slaves.len() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i).enter_initialization_mode().map_err(fmi_err(
+                &name,
+                fname(self.slaves[i].v3, "fmi2EnterInitializationMode"),
+                None,
+                "",
+            ))?;
+        }
+        for _ in 0..self.slaves.len() {
+            self.propagate(0.0)?;
+        }
+        for i in 0..self.slaves.len() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i).exit_initialization_mode().map_err(fmi_err(
+                &name,
+                fname(self.slaves[i].v3, "fmi2ExitInitializationMode"),
+                None,
+                "",
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// One communication step from `t` to `t + h`: propagate, then fmi2DoStep of every instance.
+    pub fn step(&mut self, t: f64, h: f64) -> Result<(), Error> {
+        let r = self.propagate(t).and_then(|_| self.do_step(t, h));
+        if let Err(e) = &r {
+            self.note(e);
+        }
+        r
+    }
+
+    /// fmi2DoStep(t, h) of every instance, in the system's order (noSetFMUStatePriorToCurrentPoint
+    /// = true: nothing is set back before this point).
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), Error> {
+        self.do_step_with(t, h, true)
+    }
+
+    /// fmi2DoStep(t, h, no_set_prior) of every instance, in the system's order; `no_set_prior =
+    /// false` when an FMU state of before this point may be set afterwards (a rollback).
+    pub fn do_step_with(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
+        crate::isolate::crumb_time(t);
+        for s in &mut self.slaves {
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .do_step(t, h, no_set_prior)
+                .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s")))?;
+        }
+        Ok(())
+    }
+
+    /// fmi2Terminate of every instance.
+    pub fn terminate(&mut self) -> Result<(), Error> {
+        for i in 0..self.slaves.len() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i).terminate().map_err(fmi_err(
+                &name,
+                fname(self.slaves[i].v3, "fmi2Terminate"),
+                None,
+                "",
+            ))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,369 @@
+//! A run: initialization, the communication steps (fixed, or error-controlled with FMU states
+//! kept to step again), the recorded rows.
+
+use super::*;
+
+impl Simulation {
+    pub(super) fn record_groups(&self, record: &[String]) -> Result<Vec<RecordGroup>, Error> {
+        let mut groups: Vec<RecordGroup> = Vec::new();
+        for (col, key) in record.iter().enumerate() {
+            let t = self.resolve_qualified(key)?;
+            let kind = match t.ty {
+                Type::Real => Kind::Real,
+                Type::Integer | Type::Enumeration => Kind::Integer,
+                Type::Boolean => Kind::Boolean,
+                Type::String => {
+                    let (c, v) = key.split_once('.').unwrap_or((key, ""));
+                    return Err(Error::variable(
+                        c,
+                        v,
+                        format!("{key} is a String: it cannot be recorded"),
+                    ));
+                }
+            };
+            let i = match groups.iter().position(|g| g.slave == t.slave && g.kind == kind) {
+                Some(i) => i,
+                None => {
+                    groups.push(RecordGroup {
+                        slave: t.slave,
+                        kind,
+                        vrs: Vec::new(),
+                        reals: Vec::new(),
+                        ints: Vec::new(),
+                        columns: Vec::new(),
+                    });
+                    groups.len() - 1
+                }
+            };
+            groups[i].vrs.push(t.vr);
+            groups[i].columns.push(col);
+        }
+        for g in &mut groups {
+            g.reals = vec![0.0; g.vrs.len()];
+            g.ints = vec![0; g.vrs.len()];
+        }
+        Ok(groups)
+    }
+
+    /// One run (see the module): returns the recorded variables at every communication point,
+    /// or the failure with what was recorded up to it. `progress(k, n)` is called at every
+    /// communication point k = 0..n.
+    pub fn run(&mut self, opts: &RunOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<RunResult, Failure> {
+        if !(opts.step > 0.0 && opts.step.is_finite()) {
+            return Err(Error::usage(format!("step = {} s: must be a positive number", opts.step)).into());
+        }
+        if !(opts.stop_time >= 0.0 && opts.stop_time.is_finite()) {
+            return Err(Error::usage(format!("stop time = {} s: must be a number >= 0", opts.stop_time)).into());
+        }
+        let n = (opts.stop_time / opts.step).round() as usize;
+        crate::fmu_log::install();
+        crate::fmu_log::clear();
+        self.run_inner(opts, n, progress).map_err(|mut f| {
+            let log = crate::fmu_log::take();
+            if !log.is_empty() {
+                f.error.message = format!("{} | FMU log: {}", f.error.message, log.join(" / "));
+            }
+            f
+        })
+    }
+
+    pub(super) fn run_inner(
+        &mut self,
+        opts: &RunOptions,
+        n: usize,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<RunResult, Failure> {
+        if opts.input_derivatives && self.scheme == Scheme::Jacobi {
+            return Err(Error::usage(
+                "input derivatives (a first-order hold) follow the Gauss-Seidel order: not with the Jacobi scheme",
+            )
+            .into());
+        }
+        self.input_derivatives = opts.input_derivatives;
+        self.dbufs.clear();
+        let values = self.start_values(&opts.overrides)?;
+        let mut groups = self.record_groups(&opts.record)?;
+        let mut stops = Vec::new();
+        for (key, limit) in &opts.stop_when_above {
+            let col = opts.record.iter().position(|r| r == key).ok_or_else(|| {
+                let (c, v) = key.split_once('.').unwrap_or((key, ""));
+                Error::variable(
+                    c,
+                    v,
+                    format!("stop condition on {key}: it must be one of the recorded variables"),
+                )
+            })?;
+            stops.push((col, *limit));
+        }
+        let m = opts.record.len();
+        let mut result = RunResult {
+            names: opts.record.clone(),
+            time: Vec::with_capacity(n + 1),
+            values: Vec::with_capacity((n + 1) * m),
+            stopped: false,
+            fmu_steps: 0,
+            rejected: 0,
+            note: None,
+        };
+        if let Some(a) = &opts.adaptive {
+            match self.why_fixed_steps() {
+                None => return self.run_adaptive(opts, a, &values, &mut groups, &stops, result, progress),
+                Some(why) => result.note = Some(why),
+            }
+        }
+        if let Err(error) = self.initialize_with(n as f64 * opts.step, &values) {
+            return Err(Failure { error, partial: result });
+        }
+        let mut row = vec![0.0; m];
+        for k in 0..=n {
+            let t = k as f64 * opts.step;
+            let r = self
+                .propagate(t)
+                .and_then(|_| self.read_record(&mut groups, &mut row, t));
+            if let Err(error) = r {
+                self.note(&error);
+                return Err(Failure { error, partial: result });
+            }
+            result.time.push(t);
+            result.values.extend_from_slice(&row);
+            progress(k, n);
+            if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
+                result.stopped = k < n;
+                break;
+            }
+            if k == n {
+                break;
+            }
+            if let Err(error) = self.do_step(t, opts.step) {
+                self.note(&error);
+                return Err(Failure { error, partial: result });
+            }
+            result.fmu_steps += 1;
+        }
+        if let Err(error) = self.terminate() {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
+        }
+        Ok(result)
+    }
+
+    /// Why this system cannot take error-controlled steps (None: it can).
+    pub fn why_fixed_steps(&self) -> Option<String> {
+        for s in &self.slaves {
+            let d = &self.fmus[s.fmu].description;
+            if s.me {
+                // The runner's own integration takes any step; the FMU's state must be settable.
+                if !d.me.as_ref().is_some_and(|me| me.can_get_and_set_fmu_state) {
+                    return Some(format!(
+                        "fixed steps: component '{}' cannot get and set its FMU state (canGetAndSetFMUstate = false), so a step cannot be made again",
+                        s.name
+                    ));
+                }
+                continue;
+            }
+            let Some(cs) = d.cs.as_ref() else {
+                return Some(format!("fixed steps: component '{}' is no co-simulation FMU", s.name));
+            };
+            if !cs.can_get_and_set_fmu_state {
+                return Some(format!(
+                    "fixed steps: component '{}' cannot get and set its FMU state (canGetAndSetFMUstate = false), so a step cannot be made again",
+                    s.name
+                ));
+            }
+            if !cs.can_handle_variable_step {
+                return Some(format!(
+                    "fixed steps: component '{}' cannot take steps of varying size (canHandleVariableCommunicationStepSize = false)",
+                    s.name
+                ));
+            }
+        }
+        None
+    }
+
+    /// Every component's FMU state into `slots` (taken anew, or updated).
+    pub(super) fn save_states(&mut self, slots: &mut Vec<FmuState>, t: f64) -> Result<(), Error> {
+        if slots.is_empty() {
+            for i in 0..self.slaves.len() {
+                let name = self.slaves[i].name.clone();
+                let st = self.instance(i).get_fmu_state().map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
+                    Some(t),
+                    "",
+                ))?;
+                slots.push(st);
+            }
+        } else {
+            for (i, slot) in slots.iter().enumerate() {
+                let name = self.slaves[i].name.clone();
+                self.instance(i).update_fmu_state(slot).map_err(fmi_err(
+                    &name,
+                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
+                    Some(t),
+                    "",
+                ))?;
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn load_states(&mut self, slots: &[FmuState], t: f64) -> Result<(), Error> {
+        for (i, slot) in slots.iter().enumerate() {
+            let name = self.slaves[i].name.clone();
+            self.instance(i).set_fmu_state(slot).map_err(fmi_err(
+                &name,
+                fname(self.slaves[i].v3, "fmi2SetFMUstate"),
+                Some(t),
+                "rolling back a rejected step",
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// What the error is estimated on: the `watched` variables, read now, or (none watched)
+    /// every connected output as the last propagation read them.
+    pub(super) fn estimated(&mut self, watched: &[Target], out: &mut Vec<f64>, t: f64) -> Result<(), Error> {
+        out.clear();
+        if watched.is_empty() {
+            for r in &self.reads {
+                out.extend_from_slice(&r.buf);
+            }
+            return Ok(());
+        }
+        let mut x = [0.0];
+        for w in watched {
+            let s = &mut self.slaves[w.slave];
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .get_real(&[w.vr], &mut x)
+                .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2GetReal"), &e, Some(t), "error estimate"))?;
+            out.push(x[0]);
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn run_adaptive(
+        &mut self,
+        opts: &RunOptions,
+        a: &Adaptive,
+        values: &[(String, Target, Setter)],
+        groups: &mut [RecordGroup],
+        stops: &[(usize, f64)],
+        mut result: RunResult,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<RunResult, Failure> {
+        let stop = opts.stop_time;
+        let min_step = a.min_step.unwrap_or(opts.step / 1000.0);
+        let max_step = a.max_step.unwrap_or(stop / 10.0).max(min_step);
+        if !(a.tolerance > 0.0 && a.tolerance.is_finite() && min_step > 0.0 && min_step.is_finite()) {
+            return Err(Error::usage(format!(
+                "error-controlled steps: tolerance = {}, min_step = {min_step}: both must be positive numbers",
+                a.tolerance
+            ))
+            .into());
+        }
+        let mut watched = Vec::with_capacity(a.error_on.len());
+        for key in &a.error_on {
+            let target = self.resolve_qualified(key)?;
+            if target.ty != Type::Real {
+                let (c, v) = key.split_once('.').unwrap_or((key, ""));
+                return Err(Error::variable(c, v, format!("error_on {key}: not a Real variable")).into());
+            }
+            watched.push(target);
+        }
+        if let Err(error) = self.initialize_with(stop, values) {
+            return Err(Failure { error, partial: result });
+        }
+        let scale = 1000usize;
+        let m = opts.record.len();
+        let mut row = vec![0.0; m];
+        let (mut whole, mut halves) = (Vec::new(), Vec::new());
+        let mut slots: Vec<FmuState> = Vec::new();
+        let mut t = 0.0f64;
+        let mut h = opts.step.clamp(min_step, max_step);
+        let outcome: Result<(), Error> = (|| {
+            loop {
+                self.propagate(t)?;
+                self.read_record(groups, &mut row, t)?;
+                result.time.push(t);
+                result.values.extend_from_slice(&row);
+                progress(((t / stop.max(f64::MIN_POSITIVE)) * scale as f64) as usize, scale);
+                if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
+                    result.stopped = t < stop;
+                    return Ok(());
+                }
+                if t >= stop {
+                    return Ok(());
+                }
+                loop {
+                    // The last step ends at the stop time (a remainder under a tenth of a step joins it).
+                    let mut step = h.min(stop - t);
+                    if stop - (t + step) < 0.1 * step {
+                        step = stop - t;
+                    }
+                    self.save_states(&mut slots, t)?;
+                    self.do_step_with(t, step, false)?;
+                    self.propagate(t + step)?;
+                    self.estimated(&watched, &mut whole, t + step)?;
+                    self.load_states(&slots, t)?;
+                    let mid = t + step / 2.0;
+                    self.do_step_with(t, step / 2.0, false)?;
+                    self.propagate(mid)?;
+                    self.do_step_with(mid, t + step - mid, false)?;
+                    self.propagate(t + step)?;
+                    self.estimated(&watched, &mut halves, t + step)?;
+                    result.fmu_steps += 3;
+                    let err = whole
+                        .iter()
+                        .zip(&halves)
+                        .map(|(w, b)| (w - b).abs() / (a.tolerance * (1.0 + b.abs())))
+                        .fold(0.0f64, f64::max);
+                    let grow = if err > 0.0 { 0.9 / err.sqrt() } else { 2.0 };
+                    if err <= 1.0 || step <= min_step * (1.0 + 1e-9) {
+                        t = if step == stop - t { stop } else { t + step };
+                        h = (step * grow.clamp(0.2, 2.0)).clamp(min_step, max_step);
+                        break;
+                    }
+                    result.rejected += 1;
+                    self.load_states(&slots, t)?;
+                    h = (step * grow.clamp(0.2, 0.9)).max(min_step);
+                }
+            }
+        })();
+        for (i, slot) in slots.into_iter().enumerate() {
+            let _ = self.instance(i).free_fmu_state(slot);
+        }
+        if let Err(error) = outcome {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
+        }
+        if let Err(error) = self.terminate() {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
+        }
+        Ok(result)
+    }
+
+    pub(super) fn read_record(&mut self, groups: &mut [RecordGroup], row: &mut [f64], t: f64) -> Result<(), Error> {
+        for g in groups.iter_mut() {
+            let s = &mut self.slaves[g.slave];
+            let inst = s.instance.as_mut().expect("instantiated");
+            let (f, r) = match g.kind {
+                Kind::Real => ("fmi2GetReal", inst.get_real(&g.vrs, &mut g.reals)),
+                Kind::Integer => ("fmi2GetInteger", inst.get_integer(&g.vrs, &mut g.ints)),
+                Kind::Boolean => ("fmi2GetBoolean", inst.get_boolean(&g.vrs, &mut g.ints)),
+            };
+            r.map_err(|e| Error::fmi(&s.name, fname(s.v3, f), &e, Some(t), "recorded variables"))?;
+            for (j, c) in g.columns.iter().enumerate() {
+                row[*c] = match g.kind {
+                    Kind::Real => g.reals[j],
+                    Kind::Integer => f64::from(g.ints[j]),
+                    Kind::Boolean => f64::from(u8::from(g.ints[j] != 0)),
+                };
+            }
+        }
+        Ok(())
+    }
+}
