@@ -5,7 +5,7 @@
 //! one of ([`dispatch!`]).
 
 use std::ffi::c_void;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A status other than fmi2OK and fmi2Warning (which count as success).
 #[derive(Debug, Clone, PartialEq)]
@@ -50,6 +50,33 @@ impl std::fmt::Display for Fmi2Error {
             },
         }
     }
+}
+
+/// Loads the FMU binary at `path` (both importers).
+pub(crate) fn load_binary(path: &Path) -> Result<libloading::Library, String> {
+    // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
+    // importer trusts the FMU it was given.
+    unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))
+}
+
+/// The function `name` of the binary `lib` (loaded from `path`), or why there is none.
+///
+/// # Safety
+/// `T` is the type of that function (the standard's header gives it).
+pub(crate) unsafe fn symbol<T: Copy>(lib: &libloading::Library, path: &Path, name: &str) -> Result<T, String> {
+    // SAFETY: the caller's promise: `T` is the function's type.
+    unsafe { lib.get::<T>(format!("{name}\0").as_bytes()) }
+        .map(|s| *s)
+        .map_err(|e| format!("{}: no function {name} ({e})", path.display()))
+}
+
+/// The function `name` of the binary `lib`, if it exports it.
+///
+/// # Safety
+/// As [`symbol`].
+pub(crate) unsafe fn optional<T: Copy>(lib: &libloading::Library, name: &str) -> Option<T> {
+    // SAFETY: as in `symbol`.
+    unsafe { lib.get::<T>(format!("{name}\0").as_bytes()) }.ok().map(|s| *s)
 }
 
 /// The lengths of a call's value references and values, which must agree.

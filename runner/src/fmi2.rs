@@ -22,7 +22,7 @@
 
 #![allow(non_upper_case_globals)]
 
-use crate::common::{Scratch, Slots, lengths, scratch};
+use crate::common::{Scratch, Slots, lengths, load_binary, optional, scratch, symbol};
 use rustfmu::fmi2::abi::*;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
@@ -133,64 +133,50 @@ pub struct Library {
 
 impl Library {
     fn load(path: &Path) -> Result<Library, String> {
-        // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
-        // importer trusts the FMU it was given.
-        let lib =
-            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+        let lib = load_binary(path)?;
         // SAFETY: each symbol is an FMI 2.0 function of the type the standard's header gives.
         let api = unsafe {
-            macro_rules! f {
-                ($name:literal) => {
-                    *lib.get(concat!($name, "\0").as_bytes())
-                        .map_err(|e| format!("{}: no function {} ({e})", path.display(), $name))?
-                };
-            }
-            macro_rules! opt {
-                ($name:literal) => {
-                    lib.get(concat!($name, "\0").as_bytes()).ok().map(|s| *s)
-                };
-            }
             Api {
-                instantiate: f!("fmi2Instantiate"),
-                free_instance: f!("fmi2FreeInstance"),
-                set_debug_logging: f!("fmi2SetDebugLogging"),
-                setup_experiment: f!("fmi2SetupExperiment"),
-                enter_initialization_mode: f!("fmi2EnterInitializationMode"),
-                exit_initialization_mode: f!("fmi2ExitInitializationMode"),
-                terminate: f!("fmi2Terminate"),
-                reset: f!("fmi2Reset"),
-                get_real: f!("fmi2GetReal"),
-                get_integer: f!("fmi2GetInteger"),
-                get_boolean: f!("fmi2GetBoolean"),
-                get_string: f!("fmi2GetString"),
-                set_real: f!("fmi2SetReal"),
-                set_integer: f!("fmi2SetInteger"),
-                set_boolean: f!("fmi2SetBoolean"),
-                set_string: f!("fmi2SetString"),
-                do_step: opt!("fmi2DoStep"),
-                get_output_derivatives: opt!("fmi2GetRealOutputDerivatives"),
-                set_input_derivatives: opt!("fmi2SetRealInputDerivatives"),
-                get_directional_derivative: opt!("fmi2GetDirectionalDerivative"),
+                instantiate: symbol(&lib, path, "fmi2Instantiate")?,
+                free_instance: symbol(&lib, path, "fmi2FreeInstance")?,
+                set_debug_logging: symbol(&lib, path, "fmi2SetDebugLogging")?,
+                setup_experiment: symbol(&lib, path, "fmi2SetupExperiment")?,
+                enter_initialization_mode: symbol(&lib, path, "fmi2EnterInitializationMode")?,
+                exit_initialization_mode: symbol(&lib, path, "fmi2ExitInitializationMode")?,
+                terminate: symbol(&lib, path, "fmi2Terminate")?,
+                reset: symbol(&lib, path, "fmi2Reset")?,
+                get_real: symbol(&lib, path, "fmi2GetReal")?,
+                get_integer: symbol(&lib, path, "fmi2GetInteger")?,
+                get_boolean: symbol(&lib, path, "fmi2GetBoolean")?,
+                get_string: symbol(&lib, path, "fmi2GetString")?,
+                set_real: symbol(&lib, path, "fmi2SetReal")?,
+                set_integer: symbol(&lib, path, "fmi2SetInteger")?,
+                set_boolean: symbol(&lib, path, "fmi2SetBoolean")?,
+                set_string: symbol(&lib, path, "fmi2SetString")?,
+                do_step: optional(&lib, "fmi2DoStep"),
+                get_output_derivatives: optional(&lib, "fmi2GetRealOutputDerivatives"),
+                set_input_derivatives: optional(&lib, "fmi2SetRealInputDerivatives"),
+                get_directional_derivative: optional(&lib, "fmi2GetDirectionalDerivative"),
                 me: (|| {
                     Some(MeApi {
-                        set_time: opt!("fmi2SetTime")?,
-                        set_continuous_states: opt!("fmi2SetContinuousStates")?,
-                        get_derivatives: opt!("fmi2GetDerivatives")?,
-                        get_event_indicators: opt!("fmi2GetEventIndicators")?,
-                        get_continuous_states: opt!("fmi2GetContinuousStates")?,
-                        get_nominals: opt!("fmi2GetNominalsOfContinuousStates")?,
-                        completed_integrator_step: opt!("fmi2CompletedIntegratorStep")?,
-                        enter_event_mode: opt!("fmi2EnterEventMode")?,
-                        new_discrete_states: opt!("fmi2NewDiscreteStates")?,
-                        enter_continuous_time_mode: opt!("fmi2EnterContinuousTimeMode")?,
+                        set_time: optional(&lib, "fmi2SetTime")?,
+                        set_continuous_states: optional(&lib, "fmi2SetContinuousStates")?,
+                        get_derivatives: optional(&lib, "fmi2GetDerivatives")?,
+                        get_event_indicators: optional(&lib, "fmi2GetEventIndicators")?,
+                        get_continuous_states: optional(&lib, "fmi2GetContinuousStates")?,
+                        get_nominals: optional(&lib, "fmi2GetNominalsOfContinuousStates")?,
+                        completed_integrator_step: optional(&lib, "fmi2CompletedIntegratorStep")?,
+                        enter_event_mode: optional(&lib, "fmi2EnterEventMode")?,
+                        new_discrete_states: optional(&lib, "fmi2NewDiscreteStates")?,
+                        enter_continuous_time_mode: optional(&lib, "fmi2EnterContinuousTimeMode")?,
                     })
                 })(),
-                get_fmu_state: opt!("fmi2GetFMUstate"),
-                set_fmu_state: opt!("fmi2SetFMUstate"),
-                free_fmu_state: opt!("fmi2FreeFMUstate"),
-                serialized_size: opt!("fmi2SerializedFMUstateSize"),
-                serialize: opt!("fmi2SerializeFMUstate"),
-                deserialize: opt!("fmi2DeSerializeFMUstate"),
+                get_fmu_state: optional(&lib, "fmi2GetFMUstate"),
+                set_fmu_state: optional(&lib, "fmi2SetFMUstate"),
+                free_fmu_state: optional(&lib, "fmi2FreeFMUstate"),
+                serialized_size: optional(&lib, "fmi2SerializedFMUstateSize"),
+                serialize: optional(&lib, "fmi2SerializeFMUstate"),
+                deserialize: optional(&lib, "fmi2DeSerializeFMUstate"),
             }
         };
         Ok(Library { api, _lib: lib })

@@ -11,7 +11,7 @@
 
 #![allow(non_upper_case_globals, non_camel_case_types)]
 
-use crate::common::{Fmi2Error, FmuState, Scratch, Slots, lengths, scratch};
+use crate::common::{Fmi2Error, FmuState, Scratch, Slots, lengths, load_binary, optional, scratch, symbol};
 use rustfmu::fmi3::abi::*;
 use std::collections::HashSet;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -162,69 +162,55 @@ struct Library {
 
 impl Library {
     fn load(path: &Path) -> Result<Library, String> {
-        // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
-        // importer trusts the FMU it was given.
-        let lib =
-            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+        let lib = load_binary(path)?;
         // SAFETY: each symbol is an FMI 3.0 function of the type fmi3FunctionTypes.h gives
         // (every one is exported by an FMI 3.0 binary: FMI 3.0, 2.3.1).
         let api = unsafe {
-            macro_rules! f {
-                ($name:literal) => {
-                    *lib.get(concat!($name, "\0").as_bytes())
-                        .map_err(|e| format!("{}: no function {} ({e})", path.display(), $name))?
-                };
-            }
             // Optional: the functions of the interface an FMU may not offer (FMI 3.0 asks every
             // binary to export every function; some exporters leave out what they do not offer).
-            macro_rules! opt {
-                ($name:literal) => {
-                    lib.get(concat!($name, "\0").as_bytes()).ok().map(|s| *s)
-                };
-            }
             let me = (|| {
                 Some(MeApi {
-                    instantiate: opt!("fmi3InstantiateModelExchange")?,
-                    set_time: opt!("fmi3SetTime")?,
-                    set_continuous_states: opt!("fmi3SetContinuousStates")?,
-                    get_derivatives: opt!("fmi3GetContinuousStateDerivatives")?,
-                    get_event_indicators: opt!("fmi3GetEventIndicators")?,
-                    get_continuous_states: opt!("fmi3GetContinuousStates")?,
-                    get_nominals: opt!("fmi3GetNominalsOfContinuousStates")?,
-                    completed_integrator_step: opt!("fmi3CompletedIntegratorStep")?,
-                    enter_event_mode: opt!("fmi3EnterEventMode")?,
-                    update_discrete_states: opt!("fmi3UpdateDiscreteStates")?,
-                    enter_continuous_time_mode: opt!("fmi3EnterContinuousTimeMode")?,
+                    instantiate: optional(&lib, "fmi3InstantiateModelExchange")?,
+                    set_time: optional(&lib, "fmi3SetTime")?,
+                    set_continuous_states: optional(&lib, "fmi3SetContinuousStates")?,
+                    get_derivatives: optional(&lib, "fmi3GetContinuousStateDerivatives")?,
+                    get_event_indicators: optional(&lib, "fmi3GetEventIndicators")?,
+                    get_continuous_states: optional(&lib, "fmi3GetContinuousStates")?,
+                    get_nominals: optional(&lib, "fmi3GetNominalsOfContinuousStates")?,
+                    completed_integrator_step: optional(&lib, "fmi3CompletedIntegratorStep")?,
+                    enter_event_mode: optional(&lib, "fmi3EnterEventMode")?,
+                    update_discrete_states: optional(&lib, "fmi3UpdateDiscreteStates")?,
+                    enter_continuous_time_mode: optional(&lib, "fmi3EnterContinuousTimeMode")?,
                 })
             })();
             Api {
                 me,
-                instantiate: opt!("fmi3InstantiateCoSimulation"),
-                free_instance: f!("fmi3FreeInstance"),
-                set_debug_logging: f!("fmi3SetDebugLogging"),
-                enter_initialization_mode: f!("fmi3EnterInitializationMode"),
-                exit_initialization_mode: f!("fmi3ExitInitializationMode"),
-                terminate: f!("fmi3Terminate"),
-                reset: f!("fmi3Reset"),
-                get_float64: f!("fmi3GetFloat64"),
-                get_int32: f!("fmi3GetInt32"),
-                get_int64: f!("fmi3GetInt64"),
-                get_boolean: f!("fmi3GetBoolean"),
-                get_string: f!("fmi3GetString"),
-                set_float64: f!("fmi3SetFloat64"),
-                set_int32: f!("fmi3SetInt32"),
-                set_int64: f!("fmi3SetInt64"),
-                set_boolean: f!("fmi3SetBoolean"),
-                set_string: f!("fmi3SetString"),
-                do_step: opt!("fmi3DoStep"),
-                get_output_derivatives: opt!("fmi3GetOutputDerivatives"),
-                get_directional_derivative: f!("fmi3GetDirectionalDerivative"),
-                get_fmu_state: f!("fmi3GetFMUState"),
-                set_fmu_state: f!("fmi3SetFMUState"),
-                free_fmu_state: f!("fmi3FreeFMUState"),
-                serialized_size: f!("fmi3SerializedFMUStateSize"),
-                serialize: f!("fmi3SerializeFMUState"),
-                deserialize: f!("fmi3DeserializeFMUState"),
+                instantiate: optional(&lib, "fmi3InstantiateCoSimulation"),
+                free_instance: symbol(&lib, path, "fmi3FreeInstance")?,
+                set_debug_logging: symbol(&lib, path, "fmi3SetDebugLogging")?,
+                enter_initialization_mode: symbol(&lib, path, "fmi3EnterInitializationMode")?,
+                exit_initialization_mode: symbol(&lib, path, "fmi3ExitInitializationMode")?,
+                terminate: symbol(&lib, path, "fmi3Terminate")?,
+                reset: symbol(&lib, path, "fmi3Reset")?,
+                get_float64: symbol(&lib, path, "fmi3GetFloat64")?,
+                get_int32: symbol(&lib, path, "fmi3GetInt32")?,
+                get_int64: symbol(&lib, path, "fmi3GetInt64")?,
+                get_boolean: symbol(&lib, path, "fmi3GetBoolean")?,
+                get_string: symbol(&lib, path, "fmi3GetString")?,
+                set_float64: symbol(&lib, path, "fmi3SetFloat64")?,
+                set_int32: symbol(&lib, path, "fmi3SetInt32")?,
+                set_int64: symbol(&lib, path, "fmi3SetInt64")?,
+                set_boolean: symbol(&lib, path, "fmi3SetBoolean")?,
+                set_string: symbol(&lib, path, "fmi3SetString")?,
+                do_step: optional(&lib, "fmi3DoStep"),
+                get_output_derivatives: optional(&lib, "fmi3GetOutputDerivatives"),
+                get_directional_derivative: symbol(&lib, path, "fmi3GetDirectionalDerivative")?,
+                get_fmu_state: symbol(&lib, path, "fmi3GetFMUState")?,
+                set_fmu_state: symbol(&lib, path, "fmi3SetFMUState")?,
+                free_fmu_state: symbol(&lib, path, "fmi3FreeFMUState")?,
+                serialized_size: symbol(&lib, path, "fmi3SerializedFMUStateSize")?,
+                serialize: symbol(&lib, path, "fmi3SerializeFMUState")?,
+                deserialize: symbol(&lib, path, "fmi3DeserializeFMUState")?,
             }
         };
         Ok(Library { api, _lib: lib })

@@ -97,12 +97,7 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                 std::thread::yield_now();
             } else {
                 slept = true;
-                h.child_sleeps.store(1, SeqCst);
-                if h.req.load(SeqCst) == done {
-                    futex_wait(&h.req, done, Duration::from_millis(100));
-                }
-                h.child_sleeps.store(0, SeqCst);
-                if std::os::unix::process::parent_id() != parent {
+                if !h.child_sleep(done, parent) {
                     return 3;
                 }
             }

@@ -338,12 +338,7 @@ pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool) -> i32 {
     loop {
         let h = shm.header();
         if h.req.load(Acquire) == done {
-            h.child_sleeps.store(1, SeqCst);
-            if h.req.load(SeqCst) == done {
-                futex_wait(&h.req, done, Duration::from_millis(100));
-            }
-            h.child_sleeps.store(0, SeqCst);
-            if std::os::unix::process::parent_id() != parent {
+            if !h.child_sleep(done, parent) {
                 return 3;
             }
             continue;

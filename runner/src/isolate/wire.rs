@@ -78,6 +78,19 @@ pub(super) struct Header {
     pub(super) crumb_time: AtomicU64,
 }
 
+impl Header {
+    /// A child with nothing to do: sleeps on `req` (up to 100 ms) while it is still the batch
+    /// `done`; false when the parent `parent` is gone (the child then exits).
+    pub(super) fn child_sleep(&self, done: u32, parent: u32) -> bool {
+        self.child_sleeps.store(1, SeqCst);
+        if self.req.load(SeqCst) == done {
+            futex_wait(&self.req, done, Duration::from_millis(100));
+        }
+        self.child_sleeps.store(0, SeqCst);
+        std::os::unix::process::parent_id() == parent
+    }
+}
+
 /// Where the instances' names are (a system's child; `addr u64, v3 u8, len u32, name`).
 pub(super) const NAMES_OFF: usize = 1024;
 
