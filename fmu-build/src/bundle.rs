@@ -6,7 +6,8 @@
 //! `binaries/x86_64-windows/<id>.dll`, ...: [`crate::target`]), all carrying the same description.
 
 use crate::cargo::FmuCrate;
-use rustfmu::description::{self, FmiVersion, Interfaces, ModelDescription};
+use crate::library::{SelfDescription, model_description, read_library};
+use rustfmu::description::FmiVersion;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use zip::write::SimpleFileOptions;
@@ -50,44 +51,6 @@ pub fn fmu_path(fmu_dir: &Path, version: FmiVersion, model_identifier: &str) -> 
         FmiVersion::V2 => fmu_dir.join(format!("{model_identifier}.fmu")),
         FmiVersion::V3 => fmu_dir.join("fmi3").join(format!("{model_identifier}.fmu")),
     }
-}
-
-/// `modelDescription.xml` of a built library, in the version the library implements.
-pub fn model_description(me: &SelfDescription) -> Result<String, String> {
-    match me.interfaces.version {
-        FmiVersion::V2 => crate::xml::fmi2(&me.description, me.interfaces, &me.guid),
-        FmiVersion::V3 => crate::xml::fmi3(&me.description, me.interfaces, &me.guid),
-    }
-}
-
-/// What a built library says about itself.
-pub struct SelfDescription {
-    pub description: ModelDescription,
-    pub interfaces: Interfaces,
-    pub guid: String,
-}
-
-/// Reads the description of FMI `version` a rustfmu library carries.
-pub fn read_library(binary: &[u8], version: FmiVersion) -> Result<SelfDescription, String> {
-    self_description(description::find_encoded_for(binary, version)?)
-}
-
-/// Every description a rustfmu library carries: one per FMI version it implements (both for
-/// `export_fmu!`), in the order they appear.
-pub fn library_versions(binary: &[u8]) -> Result<Vec<SelfDescription>, String> {
-    description::find_all_encoded(binary)?
-        .into_iter()
-        .map(self_description)
-        .collect()
-}
-
-fn self_description(encoded: &[u8]) -> Result<SelfDescription, String> {
-    let (d, interfaces) = description::decode(encoded)?;
-    Ok(SelfDescription {
-        description: d,
-        interfaces,
-        guid: description::guid_string(encoded),
-    })
 }
 
 /// What was packaged.

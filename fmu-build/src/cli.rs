@@ -430,6 +430,10 @@ fn has_folder(triple: &str, version: FmiVersion) -> bool {
 /// asked for; and each
 /// crate and version packaged with the binaries of all its targets: FMI 2.0 as
 /// `target/fmu/<id>.fmu`, FMI 3.0 as `target/fmu/fmi3/<id>.fmu`.
+///
+/// One function of ~210 lines, kept whole: its phases (the plan, the preflight, the parallel
+/// builds, the notes on versions, the packaging) run in order and hand each other the plan, the
+/// jobs and the built libraries; each phase is marked by a comment.
 pub fn build_versions(
     manifest_path: Option<&Path>,
     packages: &[String],
@@ -579,7 +583,7 @@ pub fn build_versions(
                         // (export_fmu! would not compile for it).
                         let fmi3_only = std::fs::read(&kept)
                             .ok()
-                            .and_then(|b| crate::bundle::library_versions(&b).ok())
+                            .and_then(|b| crate::library::library_versions(&b).ok())
                             .is_some_and(|has| has.iter().any(|me| me.description.has_fmi3_only()));
                         let both = if fmi3_only {
                             String::new()
@@ -658,7 +662,7 @@ type CrateVersions = (FmuCrate, Vec<FmiVersion>);
 fn check_built_version(c: &FmuCrate, version: FmiVersion, library: &Path) -> Result<(), String> {
     let binary = std::fs::read(library).map_err(|e| format!("{}: {e}", library.display()))?;
     let has =
-        crate::bundle::library_versions(&binary).map_err(|e| format!("{}: {}: {e}", c.package, library.display()))?;
+        crate::library::library_versions(&binary).map_err(|e| format!("{}: {}: {e}", c.package, library.display()))?;
     if has.iter().any(|me| me.interfaces.version == version) {
         return Ok(());
     }
@@ -741,12 +745,12 @@ fn committed_descriptions(
     for (library, version) in &libraries {
         let binary = std::fs::read(library)
             .map_err(|e| format!("{}: {e} (build first: cargo fmu build --workspace)", library.display()))?;
-        let all = crate::bundle::library_versions(&binary).map_err(|e| format!("{}: {e}", library.display()))?;
+        let all = crate::library::library_versions(&binary).map_err(|e| format!("{}: {e}", library.display()))?;
         for me in all
             .into_iter()
             .filter(|me| version.is_none_or(|v| v == me.interfaces.version))
         {
-            let xml = crate::bundle::model_description(&me)?;
+            let xml = crate::library::model_description(&me)?;
             let folder = match me.interfaces.version {
                 FmiVersion::V2 => dir.clone(),
                 FmiVersion::V3 => dir.join("fmi3"),

@@ -126,6 +126,10 @@ fn rustfmu_workspace() -> Result<cargo::Workspace, String> {
 }
 
 /// Writes the container FMUs of `req.ssp` (one per FMI version asked); returns their paths.
+///
+/// One function of ~200 lines, kept whole: reading the system, building the container's binary
+/// for every target and packaging each version run in order on the same request, targets and
+/// binaries; each step is marked by a comment.
 pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
     let sim = Simulation::from_ssp(req.ssp).map_err(|e| e.message)?;
     let name = rustfmu_runner::container::identifier(&sim.name);

@@ -12,10 +12,7 @@
 //! written from the same declarations. Knowns that are not continuous Reals (Integer, Boolean or
 //! discrete inputs) have no directional derivative: a `depends` on them is not checked.
 
-use fmi_conformance::fmi2::*;
 use rustfmu::description::{Causality, Initial, ModelDescription, Start, VarType, Variability, Variable};
-use std::ffi::CString;
-use std::path::Path;
 
 /// Random points of the check. The first has the parameters at their start values; at the
 /// others every parameter is drawn too (a Boolean or enumeration parameter that switches a
@@ -33,6 +30,42 @@ pub struct Report {
     /// Declared dependencies never seen, unknowns without `depends`, points that could not be
     /// checked: printed, not failed.
     pub notes: Vec<String>,
+}
+
+impl Report {
+    /// A check that could not run: a note saying why, and no problem.
+    pub(crate) fn not_run(note: String) -> Report {
+        Report {
+            notes: vec![note],
+            ..Report::default()
+        }
+    }
+
+    /// What random point `point` (from 0) gave, or `None` with a note that `check` skipped it.
+    pub(crate) fn or_skip<T>(&mut self, check: &str, point: usize, at_point: Result<T, String>) -> Option<T> {
+        at_point
+            .map_err(|e| {
+                self.notes
+                    .push(format!("{check} skipped random point {}: {e}", point + 1))
+            })
+            .ok()
+    }
+}
+
+/// Known `j` moved: for each unknown `i` whose value differs from `at_base` in any bit, the
+/// first such difference is noted in `seen[i][j]` as `how` says it.
+pub(crate) fn note_moved(
+    seen: &mut [Vec<Option<String>>],
+    j: usize,
+    at_base: &[f64],
+    values: &[f64],
+    how: impl Fn(f64, f64) -> String,
+) {
+    for (i, (&a, &b)) in at_base.iter().zip(values).enumerate() {
+        if a.to_bits() != b.to_bits() && seen[i][j].is_none() {
+            seen[i][j] = Some(how(a, b));
+        }
+    }
 }
 
 /// A known of model exchange: a continuous state or a continuous Real input.
@@ -213,7 +246,7 @@ pub(crate) fn list(names: &[&str]) -> String {
     format!("[{}]", names.join(", "))
 }
 
-/// How the checks reach a model: through FMI 2.0 ([`Api`]) or, for a library without FMI 2.0,
+/// How the checks reach a model: through FMI 2.0 (`depends_fmi2::Api`) or, for a library without FMI 2.0,
 /// FMI 3.0 ([`crate::depends_fmi3::Api3`]). Each call works on a fresh instance.
 pub(crate) trait Probe {
     /// The directional derivative's C function, for messages.
@@ -242,41 +275,7 @@ pub(crate) trait Probe {
     fn initial_values(&self, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String>;
 }
 
-impl Probe for Api {
-    fn derivative_function(&self) -> &'static str {
-        "fmi2GetDirectionalDerivative"
-    }
-
-    fn jacobian(
-        &self,
-        d: &ModelDescription,
-        unknowns: &[&Variable],
-        knowns: &[Known],
-        parameters: &[(&Variable, f64)],
-        scale: f64,
-        rng: &mut Rng,
-    ) -> Result<Vec<Vec<f64>>, String> {
-        columns(self, d, unknowns, knowns, parameters, scale, rng)
-    }
-
-    fn initial_values(&self, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String> {
-        initial_values(self, knowns, values, unknowns)
-    }
-}
-
-/// Checks the declared dependencies of the library at `so` (a rustfmu model whose declarations
-/// are `d`) through FMI 2.0 model exchange. `guid` and `resource_uri` as for fmi2Instantiate.
-pub fn check(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str) -> Report {
-    match Api::load(so, true, guid, resource_uri) {
-        Ok(api) => check_with(&api, d),
-        Err(e) => Report {
-            notes: vec![format!("`depends` was not checked: {e}")],
-            ..Report::default()
-        },
-    }
-}
-
-/// [`check`] through any [`Probe`].
+/// The check of `depends` through any [`Probe`] (FMI 2.0: `depends_fmi2::check`).
 pub(crate) fn check_with(api: &dyn Probe, d: &ModelDescription) -> Report {
     let mut report = Report::default();
     let mut unknowns = unknowns(d);
@@ -308,20 +307,16 @@ pub(crate) fn check_with(api: &dyn Probe, d: &ModelDescription) -> Report {
                 break;
             }
         }
-        match jacobian {
-            Ok(jacobian) => {
-                checked_points += 1;
-                for (i, row) in jacobian.iter().enumerate() {
-                    for (j, &value) in row.iter().enumerate() {
-                        if value != 0.0 && seen[i][j].is_none() {
-                            seen[i][j] = Some(value);
-                        }
-                    }
+        let Some(jacobian) = report.or_skip("the dependency check", point, jacobian) else {
+            continue;
+        };
+        checked_points += 1;
+        for (i, row) in jacobian.iter().enumerate() {
+            for (j, &value) in row.iter().enumerate() {
+                if value != 0.0 && seen[i][j].is_none() {
+                    seen[i][j] = Some(value);
                 }
             }
-            Err(e) => report
-                .notes
-                .push(format!("the dependency check skipped random point {}: {e}", point + 1)),
         }
     }
     if checked_points == 0 {
@@ -378,204 +373,34 @@ pub(crate) fn check_with(api: &dyn Probe, d: &ModelDescription) -> Report {
     report
 }
 
-/// A loaded rustfmu library for the checks (and the default experiment's plot): the conformance
-/// suite's table of FMI 2.0 functions ([`fmi_conformance::Api`]), the interface instances are
-/// made for, and fmi2Instantiate's GUID and resource location.
-pub(crate) struct Api {
-    pub(crate) fmi: fmi_conformance::Api,
-    /// Model exchange when asked for (and exported), else co-simulation.
-    kind: fmi2Type,
-    guid: CString,
-    location: CString,
-}
-
-impl Api {
-    pub(crate) fn load(so: &Path, model_exchange: bool, guid: &str, resource_uri: &str) -> Result<Api, String> {
-        let fmi = fmi_conformance::Api::load(so)?;
-        if model_exchange && let Err(e) = &fmi.me {
-            return Err(format!("the library has no model exchange: {e}"));
-        }
-        Ok(Api {
-            fmi,
-            kind: if model_exchange {
-                fmi2ModelExchange
-            } else {
-                fmi2CoSimulation
-            },
-            guid: CString::new(guid).unwrap_or_default(),
-            location: CString::new(resource_uri).unwrap_or_default(),
-        })
-    }
-
-    /// Sets a Real, Integer, enumeration or Boolean variable (a Boolean from 0 or 1).
-    ///
-    /// # Safety
-    /// `c` is a live instance of this library.
-    pub(crate) unsafe fn set(&self, c: fmi2Component, v: &Variable, x: f64) -> fmi2Status {
-        let vr = [v.value_reference];
-        // SAFETY: one value reference, one value.
-        unsafe {
-            match v.var_type {
-                VarType::Real => (self.fmi.set_real)(c, vr.as_ptr(), 1, [x].as_ptr()),
-                VarType::Boolean => (self.fmi.set_boolean)(
-                    c,
-                    vr.as_ptr(),
-                    1,
-                    [if x != 0.0 { fmi2True } else { fmi2False }].as_ptr(),
-                ),
-                _ => (self.fmi.set_integer)(c, vr.as_ptr(), 1, [x as i32].as_ptr()),
-            }
-        }
-    }
-
-    /// Runs `body` on a fresh instance set up for t = 0, freeing it afterwards.
-    fn with_instance<T>(
-        &self,
-        body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
-    ) -> Result<T, String> {
-        self.with_instance_at(0.0, None, body)
-    }
-
-    /// [`Self::with_instance`] set up for `start` (and a stop time, when given).
-    pub(crate) fn with_instance_at<T>(
-        &self,
-        start: f64,
-        stop: Option<f64>,
-        body: impl FnOnce(fmi2Component, &dyn Fn(fmi2Status, &str) -> Result<(), String>) -> Result<T, String>,
-    ) -> Result<T, String> {
-        // The log and the callbacks outlive the instance (freed below).
-        let log = Box::new(fmi_conformance::logger::LogSink::default());
-        let callbacks = Box::new(fmi_conformance::logger::callbacks(log.env()));
-        let name = CString::new("fmu-build-depends").unwrap();
-        // SAFETY: every string is NUL-terminated and outlives the call; so do the callbacks.
-        let c = unsafe {
-            (self.fmi.instantiate)(
-                name.as_ptr(),
-                self.kind,
-                self.guid.as_ptr(),
-                self.location.as_ptr(),
-                &*callbacks,
-                fmi2False,
-                fmi2False,
-            )
-        };
-        if c.is_null() {
-            return Err(format!("fmi2Instantiate returned NULL: {}", said(&log)));
-        }
-        let ok = |s: fmi2Status, what: &str| {
-            if s == fmi2OK {
-                Ok(())
-            } else {
-                Err(format!("{what} answered status {s}: {}", said(&log)))
-            }
-        };
-        // SAFETY: `c` is a live instance of this library until the free below.
-        let result = ok(
-            unsafe {
-                (self.fmi.setup_experiment)(
-                    c,
-                    fmi2False,
-                    0.0,
-                    start,
-                    if stop.is_some() { fmi2True } else { fmi2False },
-                    stop.unwrap_or(start),
-                )
-            },
-            "fmi2SetupExperiment",
-        )
-        .and_then(|_| body(c, &ok));
-        // SAFETY: as above; not used afterwards.
-        unsafe { (self.fmi.free_instance)(c) };
-        result
-    }
-}
-
-/// The model-exchange Jacobian of the unknowns with respect to the knowns at one random point
-/// (rows: unknowns), from a fresh instance.
-fn columns(
-    api: &Api,
-    d: &ModelDescription,
+/// The Jacobian of `unknowns` with respect to `knowns` (rows: unknowns), a column per known:
+/// `column(known, out)` asks the model for the directional derivative of every unknown with
+/// respect to `known` into `out` (one place per unknown). Each value must be finite.
+pub(crate) fn by_columns(
+    probe: &dyn Probe,
     unknowns: &[&Variable],
     knowns: &[Known],
-    parameters: &[(&Variable, f64)],
-    scale: f64,
-    rng: &mut Rng,
+    mut column: impl FnMut(&Variable, &mut [f64]) -> Result<(), String>,
 ) -> Result<Vec<Vec<f64>>, String> {
-    let n_states = knowns.iter().filter(|k| matches!(k, Known::State(_))).count();
-    let inputs: Vec<&Variable> = knowns
-        .iter()
-        .filter_map(|k| match k {
-            Known::Input(v) => Some(*v),
-            Known::State(_) => None,
-        })
-        .collect();
-    let me = api
-        .fmi
-        .me
-        .as_ref()
-        .map_err(|e| format!("the library has no model exchange: {e}"))?;
-    let (enter_continuous, get_states, set_states) = (
-        me.enter_continuous_time_mode,
-        me.get_continuous_states,
-        me.set_continuous_states,
-    );
-    api.with_instance(|c, ok| {
-        // SAFETY: `c` is live; every array passed has the length passed with it.
-        unsafe {
-            for (v, x) in parameters {
-                ok(api.set(c, v, *x), &format!("setting the parameter '{}' to {x}", v.name))?;
+    let function = probe.derivative_function();
+    let mut jacobian = vec![vec![0.0; knowns.len()]; unknowns.len()];
+    for (j, k) in knowns.iter().enumerate() {
+        let mut values = vec![f64::NAN; unknowns.len()];
+        column(k.var(), &mut values)?;
+        for (i, value) in values.into_iter().enumerate() {
+            if !value.is_finite() {
+                // fmi2OK or fmi3OK: the status of the function's version.
+                return Err(format!(
+                    "{function} answered {}OK with ∂{}/∂{} = {value}",
+                    &function[..4],
+                    unknowns[i].name,
+                    k.var().name
+                ));
             }
-            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
-            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
-            ok(enter_continuous(c), "fmi2EnterContinuousTimeMode")?;
-            let mut x = vec![0.0; n_states];
-            ok(get_states(c, x.as_mut_ptr(), x.len()), "fmi2GetContinuousStates")?;
-            let states: Vec<&Variable> = states(d);
-            for (j, xj) in x.iter_mut().enumerate() {
-                *xj = spread_by(rng, states[j], *xj, scale);
-            }
-            ok(set_states(c, x.as_ptr(), x.len()), "fmi2SetContinuousStates")?;
-            let vrs: Vec<u32> = inputs.iter().map(|v| v.value_reference).collect();
-            let values: Vec<f64> = inputs.iter().map(|v| spread_by(rng, v, start_of(v), scale)).collect();
-            ok(
-                (api.fmi.set_real)(c, vrs.as_ptr(), vrs.len(), values.as_ptr()),
-                "fmi2SetReal of the inputs",
-            )?;
-            let u_vrs: Vec<u32> = unknowns.iter().map(|v| v.value_reference).collect();
-            let mut jacobian = vec![vec![0.0; knowns.len()]; unknowns.len()];
-            for (j, k) in knowns.iter().enumerate() {
-                let k_vr = [k.var().value_reference];
-                let mut column = vec![f64::NAN; u_vrs.len()];
-                ok(
-                    (api.fmi.get_directional_derivative)(
-                        c,
-                        u_vrs.as_ptr(),
-                        u_vrs.len(),
-                        k_vr.as_ptr(),
-                        1,
-                        [1.0].as_ptr(),
-                        column.as_mut_ptr(),
-                    ),
-                    &format!("fmi2GetDirectionalDerivative with respect to '{}'", k.var().name),
-                )?;
-                for (i, value) in column.into_iter().enumerate() {
-                    if !value.is_finite() {
-                        return Err(format!(
-                            "fmi2GetDirectionalDerivative answered fmi2OK with ∂{}/∂{} = {value}",
-                            unknowns[i].name,
-                            k.var().name
-                        ));
-                    }
-                    jacobian[i][j] = value;
-                }
-            }
-            Ok(jacobian)
+            jacobian[i][j] = value;
         }
-    })
-}
-
-pub(crate) fn said(log: &fmi_conformance::logger::LogSink) -> String {
-    log.take().into_iter().map(|e| e.text).collect::<Vec<_>>().join("; ")
+    }
+    Ok(jacobian)
 }
 
 fn is_initial_unknown(d: &ModelDescription, v: &Variable) -> bool {
@@ -627,61 +452,7 @@ pub(crate) fn perturbed(v: &Variable, x: f64) -> f64 {
     }
 }
 
-/// The values of the initial unknowns after Initialization Mode with the knowns set to `values`.
-fn initial_values(api: &Api, knowns: &[&Variable], values: &[f64], unknowns: &[&Variable]) -> Result<Vec<f64>, String> {
-    api.with_instance(|c, ok| {
-        // SAFETY: `c` is live; every array passed has the length passed with it.
-        unsafe {
-            for (v, &x) in knowns.iter().zip(values) {
-                ok(api.set(c, v, x), &format!("setting '{}' to {x}", v.name))?;
-            }
-            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
-            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
-            let mut out = Vec::with_capacity(unknowns.len());
-            for v in unknowns {
-                let vr = [v.value_reference];
-                if v.var_type == VarType::Real {
-                    let mut x = [0.0];
-                    ok(
-                        (api.fmi.get_real)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
-                        &format!("fmi2GetReal of '{}'", v.name),
-                    )?;
-                    out.push(x[0]);
-                } else {
-                    let mut x = [0];
-                    ok(
-                        (api.fmi.get_integer)(c, vr.as_ptr(), 1, x.as_mut_ptr()),
-                        &format!("fmi2GetInteger of '{}'", v.name),
-                    )?;
-                    out.push(x[0] as f64);
-                }
-            }
-            Ok(out)
-        }
-    })
-}
-
-/// Checks the declared `initial_depends` of the library at `so` (a rustfmu model whose
-/// declarations are `d`): at a few random points (Real knowns spread around their start values,
-/// inside their bounds; Booleans and enumerations drawn), each known of Initialization Mode is
-/// moved a little on its own, in a fresh instance, and the initial unknowns read after
-/// Initialization Mode. An unknown that moved depends on that known. Integer knowns move by one,
-/// Booleans to the other value, enumerations to the next item; String knowns are not moved (a
-/// dependency on them is not checked).
-pub fn check_initial(so: &Path, d: &ModelDescription, guid: &str, resource_uri: &str, co_simulation: bool) -> Report {
-    // Co-simulation where the library has it: the InitialUnknowns are the same for both
-    // interfaces, and co-simulation accepts every parameter model exchange does (not the other
-    // way round: a sampled controller).
-    match Api::load(so, !co_simulation, guid, resource_uri) {
-        Ok(api) => check_initial_with(&api, d),
-        Err(e) => Report {
-            notes: vec![format!("`initial_depends` was not checked: {e}")],
-            ..Report::default()
-        },
-    }
-}
-
-/// [`check_initial`] through any [`Probe`].
+/// The check of `initial_depends` through any [`Probe`] (FMI 2.0: `depends_fmi2::check_initial`).
 pub(crate) fn check_initial_with(api: &dyn Probe, d: &ModelDescription) -> Report {
     let mut report = Report::default();
     let unknowns: Vec<&Variable> = d
@@ -717,31 +488,17 @@ pub(crate) fn check_initial_with(api: &dyn Probe, d: &ModelDescription) -> Repor
                 break;
             }
         }
-        let at_base = match at_base {
-            Ok(values) => values,
-            Err(e) => {
-                report.notes.push(format!(
-                    "the initial dependency check skipped random point {}: {e}",
-                    point + 1
-                ));
-                continue;
-            }
+        let Some(at_base) = report.or_skip("the initial dependency check", point, at_base) else {
+            continue;
         };
         checked_points += 1;
         for (j, k) in knowns.iter().enumerate() {
             let mut moved = base.clone();
             moved[j] = perturbed(k, base[j]);
             match api.initial_values(&knowns, &moved, &unknowns) {
-                Ok(values) => {
-                    for (i, (&a, &b)) in at_base.iter().zip(&values).enumerate() {
-                        if a.to_bits() != b.to_bits() && seen[i][j].is_none() {
-                            seen[i][j] = Some(format!(
-                                "{} = {} gave {a}, {} = {} gave {b}",
-                                k.name, base[j], k.name, moved[j]
-                            ));
-                        }
-                    }
-                }
+                Ok(values) => note_moved(&mut seen, j, &at_base, &values, |a, b| {
+                    format!("{} = {} gave {a}, {} = {} gave {b}", k.name, base[j], k.name, moved[j])
+                }),
                 // The model refuses the moved value: whatever it initializes depends on it.
                 Err(e) => report.notes.push(format!(
                     "the initial dependency check could not move '{}' from {} to {}: {e}",

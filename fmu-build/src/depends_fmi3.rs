@@ -8,7 +8,7 @@
 //! Arrays are left out of these checks (their lengths may be structural parameters): a
 //! `depends` naming an array, or of one, is not checked here.
 
-use crate::depends::{Known, Probe, Report, Rng, spread_by, start_of, states};
+use crate::depends::{Known, Probe, Report, Rng, by_columns, note_moved, spread_by, start_of, states};
 use fmi_conformance::fmi3::api::Api as Fmi3;
 use fmi_conformance::fmi3::types::{fmi3Instance, fmi3Status};
 use fmi_conformance::fmi3::{LogSink, log_message};
@@ -163,31 +163,26 @@ impl Api3 {
             VarType::Real => {
                 let mut x = [0.0];
                 // SAFETY: one value reference, one value.
-                (unsafe { (f.get_float64)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) }, x[0])
+                let status = unsafe { (f.get_float64)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) };
+                (status, x[0])
             }
             VarType::Integer => {
                 let mut x = [0];
                 // SAFETY: one value reference, one value.
-                (
-                    unsafe { (f.get_int32)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) },
-                    x[0] as f64,
-                )
+                let status = unsafe { (f.get_int32)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) };
+                (status, x[0] as f64)
             }
             VarType::Int64 | VarType::Enumeration => {
                 let mut x = [0];
                 // SAFETY: one value reference, one value.
-                (
-                    unsafe { (f.get_int64)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) },
-                    x[0] as f64,
-                )
+                let status = unsafe { (f.get_int64)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) };
+                (status, x[0] as f64)
             }
             VarType::Boolean => {
                 let mut x = [0u8];
                 // SAFETY: one value reference, one value (fmi3Boolean is C bool, one byte).
-                (
-                    unsafe { (f.get_boolean)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) },
-                    x[0] as f64,
-                )
+                let status = unsafe { (f.get_boolean)(c, vr.as_ptr(), 1, x.as_mut_ptr(), 1) };
+                (status, x[0] as f64)
             }
             VarType::Float32 => (
                 any(f.get_float32, &mut bytes),
@@ -222,21 +217,19 @@ impl Api3 {
         for _ in 0..100 {
             let (mut again, mut terminate, mut nominals, mut values, mut defined) = (0u8, 0u8, 0u8, 0u8, 0u8);
             let mut next = 0.0;
-            // SAFETY: every output points to a local of its type.
-            ok(
-                unsafe {
-                    (self.fmi.update_discrete_states)(
-                        c,
-                        &mut again,
-                        &mut terminate,
-                        &mut nominals,
-                        &mut values,
-                        &mut defined,
-                        &mut next,
-                    )
-                },
-                "fmi3UpdateDiscreteStates",
-            )?;
+            // SAFETY: `c` is live (the caller's promise); every output points to a local of its type.
+            let status = unsafe {
+                (self.fmi.update_discrete_states)(
+                    c,
+                    &mut again,
+                    &mut terminate,
+                    &mut nominals,
+                    &mut values,
+                    &mut defined,
+                    &mut next,
+                )
+            };
+            ok(status, "fmi3UpdateDiscreteStates")?;
             if terminate != 0 {
                 return Err("fmi3UpdateDiscreteStates asked to terminate".into());
             }
@@ -323,36 +316,22 @@ impl Probe for Api3 {
                     }
                 }
                 let u_vrs: Vec<u32> = unknowns.iter().map(|v| v.value_reference).collect();
-                let mut jacobian = vec![vec![0.0; knowns.len()]; unknowns.len()];
-                for (j, k) in knowns.iter().enumerate() {
-                    let k_vr = [k.var().value_reference];
-                    let mut column = vec![f64::NAN; u_vrs.len()];
+                by_columns(self, unknowns, knowns, |k, column| {
                     ok(
                         (self.fmi.get_directional_derivative)(
                             c,
                             u_vrs.as_ptr(),
                             u_vrs.len(),
-                            k_vr.as_ptr(),
+                            [k.value_reference].as_ptr(),
                             1,
                             [1.0].as_ptr(),
                             1,
                             column.as_mut_ptr(),
                             column.len(),
                         ),
-                        &format!("fmi3GetDirectionalDerivative with respect to '{}'", k.var().name),
-                    )?;
-                    for (i, value) in column.into_iter().enumerate() {
-                        if !value.is_finite() {
-                            return Err(format!(
-                                "fmi3GetDirectionalDerivative answered fmi3OK with ∂{}/∂{} = {value}",
-                                unknowns[i].name,
-                                k.var().name
-                            ));
-                        }
-                        jacobian[i][j] = value;
-                    }
-                }
-                Ok(jacobian)
+                        &format!("fmi3GetDirectionalDerivative with respect to '{}'", k.name),
+                    )
+                })
             }
         })
     }
@@ -397,6 +376,9 @@ fn clocked_knowns(d: &ModelDescription) -> Vec<&Variable> {
 /// tick only (a sampled controller whose first command uses the first sample, where later ones
 /// hold the previous) is a note. An output computed from an earlier tick (a delay) depends on
 /// no input at its tick.
+///
+/// One function of ~170 lines, kept whole: the tick closures, the points and the report all
+/// read the outputs, inputs and clocks it selects first.
 pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
     let mut report = Report::default();
     let outputs: Vec<&Variable> = d
@@ -476,15 +458,8 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
                 }
             })
             .collect();
-        let at_base = match two_ticks(&base, &base) {
-            Ok(values) => values,
-            Err(e) => {
-                report.notes.push(format!(
-                    "the clocked dependency check skipped random point {}: {e}",
-                    point + 1
-                ));
-                continue;
-            }
+        let Some(at_base) = report.or_skip("the clocked dependency check", point, two_ticks(&base, &base)) else {
+            continue;
         };
         checked_points += 1;
         for (j, v) in inputs.iter().enumerate() {
@@ -493,13 +468,7 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
             let how = |a: f64, b: f64| format!("{} = {} gave {a}, {} = {} gave {b}", v.name, base[j], v.name, moved[j]);
             // A later tick: the first one with the base inputs, the second with this one moved.
             match two_ticks(&base, &moved) {
-                Ok((_, values)) => {
-                    for (i, (&a, &b)) in at_base.1.iter().zip(&values).enumerate() {
-                        if a.to_bits() != b.to_bits() && seen[i][j].is_none() {
-                            seen[i][j] = Some(how(a, b));
-                        }
-                    }
-                }
+                Ok((_, values)) => note_moved(&mut seen, j, &at_base.1, &values, how),
                 Err(e) => report.notes.push(format!(
                     "the clocked dependency check could not move '{}' from {} to {}: {e}",
                     v.name, base[j], moved[j]
@@ -507,11 +476,7 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
             }
             // The first tick.
             if let Ok((values, _)) = two_ticks(&moved, &moved) {
-                for (i, (&a, &b)) in at_base.0.iter().zip(&values).enumerate() {
-                    if a.to_bits() != b.to_bits() && first[i][j].is_none() {
-                        first[i][j] = Some(how(a, b));
-                    }
-                }
+                note_moved(&mut first, j, &at_base.0, &values, how);
             }
         }
     }
@@ -568,26 +533,19 @@ pub(crate) fn check_clocked(api: &Api3, d: &ModelDescription) -> Report {
     report
 }
 
-/// Every check of [`crate::depends`] through FMI 3.0, and the clocked outputs' `depends`.
-pub fn check_all(
-    so: &Path,
-    d: &ModelDescription,
-    token: &str,
-    resource_path: &str,
-    model_exchange: bool,
-    co_simulation: bool,
-) -> Vec<Report> {
-    let api = match Api3::load(so, d, token, resource_path, model_exchange, co_simulation) {
+/// Every check of [`crate::depends`] through FMI 3.0, and the clocked outputs' `depends`, on a
+/// library [`Api3::load`] loaded (or a note of why it did not).
+pub(crate) fn check_all(api: Result<Api3, String>, d: &ModelDescription) -> Vec<Report> {
+    let api = match api {
         Ok(api) => api,
         Err(e) => {
-            return vec![Report {
-                notes: vec![format!("`depends` was not checked through FMI 3.0: {e}")],
-                ..Report::default()
-            }];
+            return vec![Report::not_run(format!(
+                "`depends` was not checked through FMI 3.0: {e}"
+            ))];
         }
     };
     let mut reports = vec![crate::depends::check_initial_with(&api, d)];
-    if model_exchange {
+    if api.model_exchange {
         reports.push(crate::depends::check_with(&api, d));
     }
     reports.push(check_clocked(&api, d));

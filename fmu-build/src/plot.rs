@@ -7,7 +7,7 @@
 //! legend (about 100 lines), where `plotters` would add its font and rendering crates to every
 //! `cargo fmu` build for it.
 
-use crate::depends::Api;
+use crate::depends_fmi2::Api;
 use fmi_conformance::fmi2::fmi2True;
 use rustfmu::description::{Causality, ModelDescription, VarType, Variable};
 use std::path::Path;
@@ -300,7 +300,7 @@ pub fn svg(run: &Run, title: &str) -> String {
 /// `Err` says why there is no picture).
 pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, f64)]) -> Result<String, String> {
     let binary = std::fs::read(so).map_err(|e| format!("{}: {e}", so.display()))?;
-    let me = crate::bundle::read_library(&binary, rustfmu::description::FmiVersion::V2).map_err(|_| {
+    let me = crate::library::read_library(&binary, rustfmu::description::FmiVersion::V2).map_err(|_| {
         "the page's run goes through FMI 2.0 co-simulation, and the library implements FMI 3.0 only".to_string()
     })?;
     if !me.interfaces.co_simulation {
@@ -341,10 +341,10 @@ pub fn picture(so: &Path, resources: Option<&Path>, starts: &[(String, f64)]) ->
     // A crate without resources/ gets an empty folder, as an importer gives one.
     let empty = std::env::temp_dir().join(format!("cargo-fmu-no-resources-{}", std::process::id()));
     let uri = match resources {
-        Some(dir) => crate::validate::file_uri(dir),
+        Some(dir) => crate::library::file_uri(dir),
         None => {
             std::fs::create_dir_all(&empty).map_err(|e| format!("{}: {e}", empty.display()))?;
-            crate::validate::file_uri(&empty)
+            crate::library::file_uri(&empty)
         }
     };
     let made = match std::env::current_exe() {

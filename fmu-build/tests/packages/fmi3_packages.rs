@@ -46,7 +46,7 @@ fn every_fmu_is_packaged_in_both_versions_and_valid() {
             .collect();
         assert_eq!(exports, standard, "{id}");
         // One description of each version, in the linker's order.
-        let mut versions: Vec<FmiVersion> = fmu_build::bundle::library_versions(&so3)
+        let mut versions: Vec<FmiVersion> = fmu_build::library::library_versions(&so3)
             .unwrap()
             .iter()
             .map(|me| me.interfaces.version)

@@ -386,130 +386,131 @@ impl Run<'_> {
     fn op(&mut self, op: &Op, pool: &Pool, k: usize) -> Result<(), TestCaseError> {
         let (fmu, c) = (self.fmu, self.c);
         self.current = op.clone();
-        // SAFETY (every call below): c is a live instance of fmu, arrays hold as many elements
-        // as passed, and the FMU-state pointers are opaque values the FMU must check.
-        match op {
-            Op::SetReal(i, x) => {
-                let vr = self.pick(*i, VarType::Real);
-                self.call("fmi2SetReal", |_| unsafe { (fmu.set_real)(c, &vr, 1, x) })?;
-            }
-            Op::SetRealAt(vr, x) => {
-                self.call("fmi2SetReal", |_| unsafe { (fmu.set_real)(c, vr, 1, x) })?;
-            }
-            Op::SetInteger(i, x) => {
-                let vr = self.pick(*i, VarType::Integer);
-                self.call("fmi2SetInteger", |_| unsafe { (fmu.set_integer)(c, &vr, 1, x) })?;
-            }
-            Op::SetBoolean(i, x) => {
-                let vr = self.pick(*i, VarType::Boolean);
-                self.call("fmi2SetBoolean", |_| unsafe { (fmu.set_boolean)(c, &vr, 1, x) })?;
-            }
-            Op::Step(t, h) => {
-                let t = t.unwrap_or_else(|| self.time());
-                self.call("fmi2DoStep", |_| unsafe { (fmu.do_step)(c, t, *h, fmi2True) })?;
-            }
-            Op::GetState => {
-                let mut s: fmi2FMUstate = std::ptr::null_mut();
-                if self.call("fmi2GetFMUstate", |_| unsafe { (fmu.get_state)(c, &mut s) })? == fmi2OK {
-                    self.own.push(s);
+        // One block for the whole match: every FMI call below is made in it, through a closure
+        // that `call` runs at once.
+        // SAFETY: c is a live instance of fmu, arrays hold as many elements as passed, and the
+        // FMU-state pointers are opaque values the FMU must check.
+        unsafe {
+            match op {
+                Op::SetReal(i, x) => {
+                    let vr = self.pick(*i, VarType::Real);
+                    self.call("fmi2SetReal", |_| (fmu.set_real)(c, &vr, 1, x))?;
                 }
-            }
-            Op::SetState(p) => {
-                let s = self.pointer(p, pool, k);
-                self.call("fmi2SetFMUstate", |_| unsafe { (fmu.set_state)(c, s) })?;
-            }
-            Op::FreeState(p) => {
-                let mut s = self.pointer(p, pool, k);
-                let before = s;
-                if self.call("fmi2FreeFMUstate", |_| unsafe { (fmu.free_state)(c, &mut s) })? == fmi2OK {
-                    prop_assert!(
-                        self.own.contains(&before),
-                        "{}: fmi2FreeFMUstate freed {before:?}, which is not its own live state",
-                        fmu.name
-                    );
-                    self.own.retain(|o| *o != before);
-                    self.freed.push(before);
+                Op::SetRealAt(vr, x) => {
+                    self.call("fmi2SetReal", |_| (fmu.set_real)(c, vr, 1, x))?;
                 }
-            }
-            Op::SerializeState(p) => {
-                let s = self.pointer(p, pool, k);
-                let mut n = 0usize;
-                let sized = self.call("fmi2SerializedFMUstateSize", |_| unsafe {
-                    (fmu.state_size)(c, s, &mut n)
-                })?;
-                let mut buf = vec![0u8; if sized == fmi2OK { n } else { 64 }];
-                let len = buf.len();
-                self.call("fmi2SerializeFMUstate", |_| unsafe {
-                    (fmu.serialize)(c, s, buf.as_mut_ptr() as *mut fmi2Byte, len)
-                })?;
-            }
-            Op::Deserialize(b) => {
-                let bytes = match b {
-                    Bytes::Random(v) => v.clone(),
-                    Bytes::Foreign(i) => {
-                        let others: Vec<&Vec<u8>> = pool
-                            .serialized
-                            .iter()
-                            .filter(|(f, _)| *f != k)
-                            .map(|(_, b)| b)
-                            .collect();
-                        others[i % others.len()].clone()
+                Op::SetInteger(i, x) => {
+                    let vr = self.pick(*i, VarType::Integer);
+                    self.call("fmi2SetInteger", |_| (fmu.set_integer)(c, &vr, 1, x))?;
+                }
+                Op::SetBoolean(i, x) => {
+                    let vr = self.pick(*i, VarType::Boolean);
+                    self.call("fmi2SetBoolean", |_| (fmu.set_boolean)(c, &vr, 1, x))?;
+                }
+                Op::Step(t, h) => {
+                    let t = t.unwrap_or_else(|| self.time());
+                    self.call("fmi2DoStep", |_| (fmu.do_step)(c, t, *h, fmi2True))?;
+                }
+                Op::GetState => {
+                    let mut s: fmi2FMUstate = std::ptr::null_mut();
+                    if self.call("fmi2GetFMUstate", |_| (fmu.get_state)(c, &mut s))? == fmi2OK {
+                        self.own.push(s);
                     }
-                    Bytes::Mutated { flips, reseal } => {
-                        let mut own = std::ptr::null_mut();
-                        let mut v = Vec::new();
-                        // A snapshot of the instance as it is now, taken without the checks.
-                        unsafe {
-                            let mut n = 0;
-                            if (fmu.get_state)(c, &mut own) == fmi2OK && (fmu.state_size)(c, own, &mut n) == fmi2OK {
-                                v = vec![0u8; n];
-                                (fmu.serialize)(c, own, v.as_mut_ptr() as *mut fmi2Byte, n);
-                            }
-                            (fmu.free_state)(c, &mut own);
-                        }
-                        self.log.take_texts();
-                        if !v.is_empty() {
-                            for (at, x) in flips {
-                                let n = v.len();
-                                v[at % n] ^= x;
-                            }
-                            if *reseal && v.len() > 4 {
-                                let n = v.len() - 4;
-                                let crc = crc32fast::hash(&v[..n]);
-                                v[n..].copy_from_slice(&crc.to_le_bytes());
-                            }
-                        }
-                        v
-                    }
-                };
-                let mut s: fmi2FMUstate = std::ptr::null_mut();
-                let status = self.call("fmi2DeSerializeFMUstate", |_| unsafe {
-                    (fmu.deserialize)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
-                })?;
-                if status == fmi2OK {
-                    self.own.push(s);
-                    // A state that was accepted must also be usable.
-                    self.call("fmi2SetFMUstate", |_| unsafe { (fmu.set_state)(c, s) })?;
                 }
-            }
-            Op::Setup(tol, t0, stop) => {
-                let (td, tv) = (tol.is_some() as fmi2Boolean, tol.unwrap_or(0.0));
-                let (sd, sv) = (stop.is_some() as fmi2Boolean, stop.unwrap_or(0.0));
-                self.call("fmi2SetupExperiment", |_| unsafe {
-                    (fmu.setup)(c, td, tv, *t0, sd, sv)
-                })?;
-            }
-            Op::EnterInit => {
-                self.call("fmi2EnterInitializationMode", |_| unsafe { (fmu.enter_init)(c) })?;
-            }
-            Op::ExitInit => {
-                self.call("fmi2ExitInitializationMode", |_| unsafe { (fmu.exit_init)(c) })?;
-            }
-            Op::Terminate => {
-                self.call("fmi2Terminate", |_| unsafe { (fmu.terminate)(c) })?;
-            }
-            Op::Reset => {
-                self.call("fmi2Reset", |_| unsafe { (fmu.reset)(c) })?;
+                Op::SetState(p) => {
+                    let s = self.pointer(p, pool, k);
+                    self.call("fmi2SetFMUstate", |_| (fmu.set_state)(c, s))?;
+                }
+                Op::FreeState(p) => {
+                    let mut s = self.pointer(p, pool, k);
+                    let before = s;
+                    if self.call("fmi2FreeFMUstate", |_| (fmu.free_state)(c, &mut s))? == fmi2OK {
+                        prop_assert!(
+                            self.own.contains(&before),
+                            "{}: fmi2FreeFMUstate freed {before:?}, which is not its own live state",
+                            fmu.name
+                        );
+                        self.own.retain(|o| *o != before);
+                        self.freed.push(before);
+                    }
+                }
+                Op::SerializeState(p) => {
+                    let s = self.pointer(p, pool, k);
+                    let mut n = 0usize;
+                    let sized = self.call("fmi2SerializedFMUstateSize", |_| (fmu.state_size)(c, s, &mut n))?;
+                    let mut buf = vec![0u8; if sized == fmi2OK { n } else { 64 }];
+                    let len = buf.len();
+                    self.call("fmi2SerializeFMUstate", |_| {
+                        (fmu.serialize)(c, s, buf.as_mut_ptr() as *mut fmi2Byte, len)
+                    })?;
+                }
+                Op::Deserialize(b) => {
+                    let bytes = match b {
+                        Bytes::Random(v) => v.clone(),
+                        Bytes::Foreign(i) => {
+                            let others: Vec<&Vec<u8>> = pool
+                                .serialized
+                                .iter()
+                                .filter(|(f, _)| *f != k)
+                                .map(|(_, b)| b)
+                                .collect();
+                            others[i % others.len()].clone()
+                        }
+                        Bytes::Mutated { flips, reseal } => {
+                            let mut own = std::ptr::null_mut();
+                            let mut v = Vec::new();
+                            // A snapshot of the instance as it is now, taken without the checks.
+                            {
+                                let mut n = 0;
+                                if (fmu.get_state)(c, &mut own) == fmi2OK && (fmu.state_size)(c, own, &mut n) == fmi2OK
+                                {
+                                    v = vec![0u8; n];
+                                    (fmu.serialize)(c, own, v.as_mut_ptr() as *mut fmi2Byte, n);
+                                }
+                                (fmu.free_state)(c, &mut own);
+                            }
+                            self.log.take_texts();
+                            if !v.is_empty() {
+                                for (at, x) in flips {
+                                    let n = v.len();
+                                    v[at % n] ^= x;
+                                }
+                                if *reseal && v.len() > 4 {
+                                    let n = v.len() - 4;
+                                    let crc = crc32fast::hash(&v[..n]);
+                                    v[n..].copy_from_slice(&crc.to_le_bytes());
+                                }
+                            }
+                            v
+                        }
+                    };
+                    let mut s: fmi2FMUstate = std::ptr::null_mut();
+                    let status = self.call("fmi2DeSerializeFMUstate", |_| {
+                        (fmu.deserialize)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
+                    })?;
+                    if status == fmi2OK {
+                        self.own.push(s);
+                        // A state that was accepted must also be usable.
+                        self.call("fmi2SetFMUstate", |_| (fmu.set_state)(c, s))?;
+                    }
+                }
+                Op::Setup(tol, t0, stop) => {
+                    let (td, tv) = (tol.is_some() as fmi2Boolean, tol.unwrap_or(0.0));
+                    let (sd, sv) = (stop.is_some() as fmi2Boolean, stop.unwrap_or(0.0));
+                    self.call("fmi2SetupExperiment", |_| (fmu.setup)(c, td, tv, *t0, sd, sv))?;
+                }
+                Op::EnterInit => {
+                    self.call("fmi2EnterInitializationMode", |_| (fmu.enter_init)(c))?;
+                }
+                Op::ExitInit => {
+                    self.call("fmi2ExitInitializationMode", |_| (fmu.exit_init)(c))?;
+                }
+                Op::Terminate => {
+                    self.call("fmi2Terminate", |_| (fmu.terminate)(c))?;
+                }
+                Op::Reset => {
+                    self.call("fmi2Reset", |_| (fmu.reset)(c))?;
+                }
             }
         }
         Ok(())
