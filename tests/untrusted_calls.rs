@@ -360,7 +360,10 @@ fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     // SAFETY: a live instance and a valid out pointer.
     assert_eq!(
-        unsafe { rustfmu::__private::shared::get_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, c, &mut s) },
+        unsafe {
+            let other = rustfmu::core::guard::component(c);
+            rustfmu::__private::shared::get_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, other, &mut s)
+        },
         fmi2OK
     );
     (c, s)
@@ -420,7 +423,11 @@ fn a_state_of_another_model_is_refused_by_every_state_function() {
     // SAFETY: s is the Other instance's live state, freed once by it.
     unsafe {
         assert_eq!(
-            rustfmu::__private::shared::free_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, other, &mut s),
+            rustfmu::__private::shared::free_fmu_state::<other::Other>(
+                &rustfmu::fmi2::TERMS,
+                rustfmu::core::guard::component(other),
+                &mut s
+            ),
             fmi2OK
         );
         rustfmu::__private::shared::free_instance::<other::Other>(&rustfmu::fmi2::TERMS, other);
@@ -620,27 +627,27 @@ fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
     use rustfmu::__private::api;
     use stateless::Gain;
     let (c, log) = generic_instance::<Gain>(stateless::GUID, c"gain");
+    use rustfmu::__private::shared::{Transition, transition};
     // SAFETY: a live instance, arrays of the lengths passed.
     unsafe {
-        assert_eq!(
-            api::setup_experiment::<Gain>(c, fmi2False, 0.0, 0.0, fmi2False, 0.0),
-            fmi2OK
-        );
-        assert_eq!(api::enter_initialization_mode::<Gain>(c), fmi2OK);
-        assert_eq!(api::exit_initialization_mode::<Gain>(c), fmi2OK);
+        let g = rustfmu::core::guard::component::<Gain>(c);
+        let terms = &rustfmu::fmi2::TERMS;
+        assert_eq!(api::setup_experiment::<Gain>(g, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+        assert_eq!(transition::<Gain>(terms, Transition::EnterInitializationMode, g), fmi2OK);
+        assert_eq!(transition::<Gain>(terms, Transition::ExitInitializationMode, g), fmi2OK);
         let mut t = 0.0;
         for k in 0..100 {
             let u = [k as f64 * 0.5];
             assert_eq!(
-                api::set::<Gain, f64>(c, "fmi2SetReal", [0u32].as_ptr(), 1, u.as_ptr()),
+                api::set::<Gain, f64>(g, "fmi2SetReal", [0u32].as_ptr(), 1, u.as_ptr()),
                 fmi2OK
             );
-            let s = api::do_step::<Gain>(c, t, 0.01, fmi2True);
+            let s = api::do_step::<Gain>(g, t, 0.01, fmi2True);
             assert_eq!(s, fmi2OK, "fmi2DoStep at t = {t}: {:?}", log.take_texts());
             t += 0.01;
             let mut y = [f64::NAN];
             assert_eq!(
-                api::get::<Gain, f64>(c, "fmi2GetReal", [2u32].as_ptr(), 1, y.as_mut_ptr()),
+                api::get::<Gain, f64>(g, "fmi2GetReal", [2u32].as_ptr(), 1, y.as_mut_ptr()),
                 fmi2OK
             );
             assert_eq!(y, [2.0 * u[0]], "y after the step at t = {t}");

@@ -1,5 +1,5 @@
 //! What every C entry point of both versions runs through: the instance handle the importer
-//! holds ([`Component`], converted once by the unsafe `Component::from_handle`), then, in safe
+//! holds ([`Component`], converted once by the unsafe [`component`]), then, in safe
 //! code, the NULL check, the re-entrancy refusal, the state check and `catch_unwind`
 //! (`with_instance`, `Component::run`); and the conversions of the importer's other
 //! pointers into slices and text (`slice`, `slice_mut`, `text`), each an `unsafe fn`
@@ -15,6 +15,10 @@ use std::ffi::CStr;
 use std::os::raw::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// The importer's instance handle (`fmi2Component`, `fmi3Instance`) and FMU state handle
+/// (`fmi2FMUstate`, `fmi3FMUState`): both `void *` in both versions.
+pub type Handle = *mut c_void;
 
 pub(crate) fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
@@ -51,6 +55,23 @@ pub struct Component<M: CoSimulation> {
     pub(crate) in_callback: AtomicBool,
 }
 
+/// The component behind the importer's instance handle; `None` for NULL (which cannot be
+/// logged to: [`with_instance`] answers it with an error status). The one conversion of the
+/// handle: each exported function's row calls it in its one `unsafe` block
+/// ([`crate::core::trampolines`]), and hands the runtime function the result.
+///
+/// # Safety
+/// `c` is NULL or a handle that this library's instantiation function returned for model `M`
+/// and that was not freed since (what the standard allows an importer to pass), and it is not
+/// freed while the reference lives (the call it came with).
+#[doc(hidden)]
+#[inline(always)]
+pub unsafe fn component<'a, M: CoSimulation>(c: Handle) -> Option<&'a Component<M>> {
+    // SAFETY: the caller's promise: NULL (`as_ref` gives `None`) or a live Box<Component<M>>.
+    // Only shared: a call already inside holds the instance, which is in the UnsafeCell.
+    unsafe { (c as *const Component<M>).as_ref() }
+}
+
 /// A number that identifies the calling thread while it lives (the address of a thread-local).
 fn this_thread() -> usize {
     thread_local!(static MARK: u8 = const { 0 });
@@ -58,18 +79,17 @@ fn this_thread() -> usize {
 }
 
 impl<M: CoSimulation> Component<M> {
-    /// The component behind the importer's instance handle; `None` for NULL (which cannot be
-    /// logged to: the callers answer it with an error status).
-    ///
-    /// # Safety
-    /// `c` is NULL or a handle that this library's instantiation function returned for model
-    /// `M` and that was not freed since: what the standard allows an importer to pass.
-    #[inline]
-    pub(crate) unsafe fn from_handle<'a>(c: *mut c_void) -> Option<&'a Self> {
-        // SAFETY: the caller's promise: NULL (`as_ref` gives `None`) or a live
-        // Box<Component<M>>. Only shared: a call already inside holds the instance, which is in
-        // the UnsafeCell.
-        unsafe { (c as *const Self).as_ref() }
+    /// A new instance, boxed, as the handle the instantiation functions hand out (freed by
+    /// `shared::free_instance`); `serialized` for Scheduled Execution (see `serial`).
+    pub(crate) fn into_handle(inst: Instance<M>, serialized: bool) -> Handle {
+        Box::into_raw(Box::new(Component {
+            busy: AtomicBool::new(false),
+            refusals: inst.logger.clone(),
+            instance: UnsafeCell::new(inst),
+            serial: serialized.then(|| std::sync::Mutex::new(())),
+            owner: AtomicUsize::new(0),
+            in_callback: AtomicBool::new(false),
+        })) as Handle
     }
 
     /// Runs `f` while this thread holds the instance's `serial` lock (Scheduled Execution: a
@@ -170,7 +190,7 @@ impl<M: CoSimulation> Component<M> {
     }
 }
 
-/// Runs `f` on the instance of `component` (from `Component::from_handle`) after the state
+/// Runs `f` on the instance of `component` (from [`component`]) after the state
 /// check for `call`; a NULL instance cannot be logged to: the answer is an error status.
 #[inline]
 pub(crate) fn with_instance<M: CoSimulation>(
@@ -237,7 +257,7 @@ pub(crate) unsafe fn text<'a>(s: *const c_char) -> Option<std::borrow::Cow<'a, s
 /// call is inside it).
 ///
 /// # Safety
-/// `c` is NULL or a live instance of model `M` (as for `Component::from_handle`), and no
+/// `c` is NULL or a live instance of model `M` (as for [`component`]), and no
 /// call is inside it.
 pub unsafe fn state_of<M: CoSimulation>(c: *mut c_void) -> Option<State> {
     // SAFETY: as in `with_instance`; no call is inside (the caller's promise).

@@ -9,8 +9,8 @@
 //! mutex, and one per library: every FMU's binary links its own copy of the runtime. Only the
 //! FMU state functions touch it; a step never does.
 
+use super::guard::Handle;
 use super::instance::Sim;
-use super::shared::Handle;
 use super::{Function, Terms};
 use crate::model::CoSimulation;
 use std::any::TypeId;

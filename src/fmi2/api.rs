@@ -21,12 +21,11 @@ use crate::core::instance::{EventInfo, Instance};
 use crate::core::logging::{Callback, Category, Logger};
 use crate::core::machine::Call;
 use crate::core::resources::resource_dir;
+use crate::core::shared;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
-use std::cell::UnsafeCell;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::ptr;
-use std::sync::atomic::AtomicBool;
 
 pub fn get_types_platform() -> fmi2String {
     TYPES_PLATFORM.as_ptr()
@@ -132,29 +131,20 @@ pub unsafe fn instantiate<M: CoSimulation>(
             Some(None) => format!("resourceLocation {resources:?} is not a file URI (the model sees no resources)"),
             None => "resourceLocation is NULL (the model sees no resources)".into(),
         });
-        Box::into_raw(Box::new(Component {
-            busy: AtomicBool::new(false),
-            refusals: inst.logger.clone(),
-            instance: UnsafeCell::new(inst),
-            serial: None,
-            owner: std::sync::atomic::AtomicUsize::new(0),
-            in_callback: AtomicBool::new(false),
-        })) as fmi2Component
+        Component::into_handle(inst, false)
     }));
     made.unwrap_or(ptr::null_mut())
 }
 
-pub unsafe fn setup_experiment<M: CoSimulation>(
-    c: fmi2Component,
+pub fn setup_experiment<M: CoSimulation>(
+    c: Option<&Component<M>>,
     tolerance_defined: fmi2Boolean,
     tolerance: fmi2Real,
     start_time: fmi2Real,
     stop_time_defined: fmi2Boolean,
     stop_time: fmi2Real,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetupExperiment, "fmi2SetupExperiment", |inst| {
+    with_instance(c, Call::SetupExperiment, "fmi2SetupExperiment", |inst| {
         inst.trace(|| {
             format!(
                 "fmi2SetupExperiment(toleranceDefined = {tolerance_defined}, tolerance = {tolerance}, \
@@ -169,55 +159,71 @@ pub unsafe fn setup_experiment<M: CoSimulation>(
     })
 }
 
-macro_rules! simple_call {
-    ($fn_name:ident, $call:ident, $c_name:literal, $method:ident) => {
-        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-            // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-            let component = unsafe { Component::<M>::from_handle(c) };
-            with_instance(component, Call::$call, $c_name, |inst| {
-                inst.trace(|| concat!($c_name, "()").to_string());
-                inst.$method()
-            })
-        }
-    };
-}
-
-simple_call!(
-    enter_initialization_mode,
-    EnterInitializationMode,
-    "fmi2EnterInitializationMode",
-    enter_initialization_mode
-);
-simple_call!(
-    exit_initialization_mode,
-    ExitInitializationMode,
-    "fmi2ExitInitializationMode",
-    exit_initialization_mode
-);
-simple_call!(terminate, Terminate, "fmi2Terminate", terminate);
-simple_call!(reset, Reset, "fmi2Reset", reset);
-
-pub unsafe fn get<M: CoSimulation, T: FmiType + Copy>(
-    c: fmi2Component,
+/// What every 2.0 getter does before its type's own part: the instance and the state check
+/// (`with_instance`), the two arrays' NULL checks; `read` then fills `value` for the value
+/// references. Each getter below is its type's conversion only.
+///
+/// # Safety
+/// The getter's contract: `vr` and `value` NULL or `nvr` elements, `value` writable.
+#[inline(always)]
+unsafe fn getter<M: CoSimulation, T>(
+    c: Option<&Component<M>>,
     function: &'static str,
-    vr: *const fmi2ValueReference,
-    nvr: usize,
+    (vr, nvr): (*const fmi2ValueReference, usize),
     value: *mut T,
+    read: impl FnOnce(&mut Instance<M>, &[u32], &mut [T]) -> fmi2Status,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, function, |inst| {
+    with_instance(c, Call::GetValues, function, |inst| {
         // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
         // `nvr` elements each.
         match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
-            (Some(vrs), Some(out)) => inst.get_values(function, vrs, out),
+            (Some(vrs), Some(out)) => read(inst, vrs, out),
             _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
         }
     })
 }
 
+/// What every 2.0 setter does before its type's own part (as [`getter`]); `call` is the state
+/// table's row: Reals may be set where continuous inputs may, the other types where discrete
+/// ones may.
+///
+/// # Safety
+/// The setter's contract: `vr` and `value` NULL or `nvr` elements.
+#[inline(always)]
+unsafe fn setter<M: CoSimulation, T>(
+    c: Option<&Component<M>>,
+    call: Call,
+    function: &'static str,
+    (vr, nvr): (*const fmi2ValueReference, usize),
+    value: *const T,
+    write: impl FnOnce(&mut Instance<M>, &[u32], &[T]) -> fmi2Status,
+) -> fmi2Status {
+    with_instance(c, call, function, |inst| {
+        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
+        // each.
+        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
+            (Some(vrs), Some(values)) => write(inst, vrs, values),
+            _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
+        }
+    })
+}
+
+/// fmi2GetReal, fmi2GetInteger: the C array is the Rust type's.
+pub unsafe fn get<M: CoSimulation, T: FmiType + Copy>(
+    c: Option<&Component<M>>,
+    function: &'static str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut T,
+) -> fmi2Status {
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [T]| inst.get_values(function, vrs, out);
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter(c, function, (vr, nvr), value, read) }
+}
+
+/// fmi2SetReal, fmi2SetInteger.
 pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     function: &'static str,
     vr: *const fmi2ValueReference,
     nvr: usize,
@@ -228,118 +234,86 @@ pub unsafe fn set<M: CoSimulation, T: FmiType + Copy>(
     } else {
         Call::SetDiscreteValues
     };
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, call, function, |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
-        // each.
-        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
-            (Some(vrs), Some(values)) => inst.set_values(function, vrs, values),
-            _ => inst.error(&format!("{function}: vr or value is NULL with nvr = {nvr}")),
-        }
-    })
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[T]| inst.set_values(function, vrs, values);
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter(c, call, function, (vr, nvr), value, write) }
 }
 
 /// Booleans cross the ABI as `fmi2Boolean` (int): converted to and from `bool` here.
 pub unsafe fn get_boolean<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, "fmi2GetBoolean", |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
-        // `nvr` elements each.
-        match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
-            (Some(vrs), Some(out)) => {
-                // One call for all references, so that they are all checked before anything
-                // is computed (one call per reference initialized the model, then refused
-                // the next reference).
-                let mut values = vec![false; vrs.len()];
-                let status = inst.get_values("fmi2GetBoolean", vrs, &mut values);
-                if status == fmi2OK {
-                    for (o, v) in out.iter_mut().zip(values) {
-                        *o = if v { fmi2True } else { fmi2False };
-                    }
-                }
-                status
+    const F: &str = "fmi2GetBoolean";
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [fmi2Boolean]| {
+        // One call for all references, so that they are all checked before anything is
+        // computed (one call per reference initialized the model, then refused the next
+        // reference).
+        let mut values = vec![false; vrs.len()];
+        let status = inst.get_values(F, vrs, &mut values);
+        if status == fmi2OK {
+            for (o, v) in out.iter_mut().zip(values) {
+                *o = if v { fmi2True } else { fmi2False };
             }
-            _ => inst.error(&format!("fmi2GetBoolean: vr or value is NULL with nvr = {nvr}")),
         }
-    })
+        status
+    };
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter(c, F, (vr, nvr), value, read) }
 }
 
 pub unsafe fn set_boolean<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, "fmi2SetBoolean", |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
-        // each.
-        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
-            (Some(vrs), Some(values)) => {
-                let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
-                inst.set_values("fmi2SetBoolean", vrs, &values)
-            }
-            _ => inst.error(&format!("fmi2SetBoolean: vr or value is NULL with nvr = {nvr}")),
-        }
-    })
+    const F: &str = "fmi2SetBoolean";
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[fmi2Boolean]| {
+        let values: Vec<bool> = values.iter().map(|v| *v != fmi2False).collect();
+        inst.set_values(F, vrs, &values)
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter(c, Call::SetDiscreteValues, F, (vr, nvr), value, write) }
 }
 
 pub unsafe fn get_string<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetValues, "fmi2GetString", |inst| {
-        // SAFETY: `slice` and `slice_mut` check NULL; the contract makes `vr` and `value` hold
-        // `nvr` elements each.
-        match unsafe { (slice(vr, nvr), slice_mut(value, nvr)) } {
-            (Some(vrs), Some(out)) => inst.get_strings(vrs, out),
-            _ => inst.error(&format!("fmi2GetString: vr or value is NULL with nvr = {nvr}")),
-        }
-    })
+    let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [fmi2String]| inst.get_strings(vrs, out);
+    // SAFETY: this function's contract is `getter`'s.
+    unsafe { getter(c, "fmi2GetString", (vr, nvr), value, read) }
 }
 
 pub unsafe fn set_string<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetDiscreteValues, "fmi2SetString", |inst| {
-        // SAFETY: `slice` checks NULL; the contract makes `vr` and `value` hold `nvr` elements
-        // each.
-        match unsafe { (slice(vr, nvr), slice(value, nvr)) } {
-            (Some(vrs), Some(values)) => {
-                let mut texts = Vec::with_capacity(values.len());
-                for (i, p) in values.iter().enumerate() {
-                    // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
-                    match unsafe { text(*p) } {
-                        Some(t) => texts.push(t.into_owned()),
-                        None => return inst.error(&format!("fmi2SetString: value[{i}] is NULL")),
-                    }
-                }
-                inst.set_strings(vrs, &texts)
+    const F: &str = "fmi2SetString";
+    let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[fmi2String]| {
+        let mut texts = Vec::with_capacity(values.len());
+        for (i, p) in values.iter().enumerate() {
+            // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
+            match unsafe { text(*p) } {
+                Some(t) => texts.push(t.into_owned()),
+                None => return inst.error(&format!("{F}: value[{i}] is NULL")),
             }
-            _ => inst.error(&format!("fmi2SetString: vr or value is NULL with nvr = {nvr}")),
         }
-    })
+        inst.set_strings(vrs, &texts)
+    };
+    // SAFETY: this function's contract is `setter`'s.
+    unsafe { setter(c, Call::SetDiscreteValues, F, (vr, nvr), value, write) }
 }
 
 pub unsafe fn get_directional_derivative<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     unknown_refs: *const fmi2ValueReference,
     n_unknown: usize,
     known_refs: *const fmi2ValueReference,
@@ -348,9 +322,7 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     dv_unknown: *mut fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2GetDirectionalDerivative";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetDirectionalDerivative, F, |inst| {
+    with_instance(c, Call::GetDirectionalDerivative, F, |inst| {
         // SAFETY: `slice` and `slice_mut` check NULL; the contract makes the unknowns' arrays
         // hold `nUnknown` elements and the knowns' `nKnown`.
         let (Some(unknowns), Some(knowns), Some(dv), Some(out)) = (unsafe {
@@ -369,88 +341,35 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
     })
 }
 
-/// The model-exchange functions without arguments besides the instance.
-macro_rules! me_transition {
-    ($fn_name:ident, $call:ident, $name:literal, $method:ident) => {
-        pub unsafe fn $fn_name<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-            // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-            let component = unsafe { Component::<M>::from_handle(c) };
-            with_instance(component, Call::$call, $name, |inst| inst.$method())
+/// fmi2NewDiscreteStates: the event iteration's answers in the importer's `fmi2EventInfo`.
+pub unsafe fn new_discrete_states<M: CoSimulation>(c: Option<&Component<M>>, info: *mut fmi2EventInfo) -> fmi2Status {
+    // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `info` writable.
+    let info = unsafe { info.as_mut() };
+    let b = |v: bool| if v { fmi2True } else { fmi2False };
+    let write = info.map(|info| {
+        move |e: &EventInfo| {
+            *info = fmi2EventInfo {
+                newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
+                terminateSimulation: b(e.terminate_simulation),
+                nominalsOfContinuousStatesChanged: b(e.nominals_changed),
+                valuesOfContinuousStatesChanged: b(e.values_changed),
+                nextEventTimeDefined: b(e.next_event_time.is_some()),
+                nextEventTime: e.next_event_time.unwrap_or(0.0),
+            }
         }
-    };
-}
-me_transition!(enter_event_mode, EnterEventMode, "fmi2EnterEventMode", enter_event_mode);
-me_transition!(
-    enter_continuous_time_mode,
-    EnterContinuousTimeMode,
-    "fmi2EnterContinuousTimeMode",
-    enter_continuous_time_mode
-);
-
-pub unsafe fn new_discrete_states<M: CoSimulation>(c: fmi2Component, info: *mut fmi2EventInfo) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::NewDiscreteStates, "fmi2NewDiscreteStates", |inst| {
-        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `info` writable.
-        let Some(info) = (unsafe { info.as_mut() }) else {
-            return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
-        };
-        let mut e = EventInfo::default();
-        let status = inst.new_discrete_states(&mut e);
-        let b = |v: bool| if v { fmi2True } else { fmi2False };
-        *info = fmi2EventInfo {
-            newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
-            terminateSimulation: b(e.terminate_simulation),
-            nominalsOfContinuousStatesChanged: b(e.nominals_changed),
-            valuesOfContinuousStatesChanged: b(e.values_changed),
-            nextEventTimeDefined: b(e.next_event_time.is_some()),
-            nextEventTime: e.next_event_time.unwrap_or(0.0),
-        };
-        status
-    })
-}
-
-pub unsafe fn completed_integrator_step<M: CoSimulation>(
-    c: fmi2Component,
-    _no_set_fmu_state_prior: fmi2Boolean,
-    enter_event_mode: *mut fmi2Boolean,
-    terminate_simulation: *mut fmi2Boolean,
-) -> fmi2Status {
-    const F: &str = "fmi2CompletedIntegratorStep";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::CompletedIntegratorStep, F, |inst| {
-        if enter_event_mode.is_null() || terminate_simulation.is_null() {
-            return inst.error(&format!("{F}: enterEventMode or terminateSimulation is NULL"));
-        }
-        let (status, event, terminate) = inst.completed_integrator_step();
-        // SAFETY: neither is NULL (checked above); the contract makes both writable. Written
-        // through the raw pointers, which may even be the same one.
-        unsafe {
-            *enter_event_mode = if event { fmi2True } else { fmi2False };
-            *terminate_simulation = if terminate { fmi2True } else { fmi2False };
-        }
-        status
-    })
-}
-
-pub unsafe fn set_time<M: CoSimulation>(c: fmi2Component, time: fmi2Real) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetTime, "fmi2SetTime", |inst| inst.set_time(time))
+    });
+    shared::new_discrete_states(&TERMS, c, write, "fmi2EventInfo is NULL")
 }
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     order: *const fmi2Integer,
     value: *const fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2SetRealInputDerivatives";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::SetRealInputDerivatives, F, |inst| {
+    with_instance(c, Call::SetRealInputDerivatives, F, |inst| {
         if nvr == 0 {
             return fmi2OK;
         }
@@ -471,16 +390,14 @@ pub unsafe fn set_real_input_derivatives<M: CoSimulation>(
 /// `c` is NULL or a live instance of this library; `vr`, `order` and `value` NULL or `nvr`
 /// long, `value` writable.
 pub unsafe fn get_real_output_derivatives<M: CoSimulation>(
-    c: fmi2Component,
+    c: Option<&Component<M>>,
     vr: *const fmi2ValueReference,
     nvr: usize,
     order: *const fmi2Integer,
     value: *mut fmi2Real,
 ) -> fmi2Status {
     const F: &str = "fmi2GetRealOutputDerivatives";
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetRealOutputDerivatives, F, |inst| {
+    with_instance(c, Call::GetRealOutputDerivatives, F, |inst| {
         // SAFETY: the arrays are NULL or nvr long (this function's contract).
         match unsafe { (slice(vr, nvr), slice(order, nvr), slice_mut(value, nvr)) } {
             (Some(vrs), Some(orders), Some(out)) => inst.output_derivatives(F, vrs, orders, out),
@@ -489,122 +406,64 @@ pub unsafe fn get_real_output_derivatives<M: CoSimulation>(
     })
 }
 
-pub unsafe fn do_step<M: CoSimulation>(
-    c: fmi2Component,
+pub fn do_step<M: CoSimulation>(
+    c: Option<&Component<M>>,
     current_communication_point: fmi2Real,
     communication_step_size: fmi2Real,
     _no_set_fmu_state_prior_to_current_point: fmi2Boolean,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::DoStep, "fmi2DoStep", |inst| {
+    with_instance(c, Call::DoStep, "fmi2DoStep", |inst| {
         inst.do_step(current_communication_point, communication_step_size)
     })
 }
 
-pub unsafe fn cancel_step<M: CoSimulation>(c: fmi2Component) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::CancelStep, "fmi2CancelStep", |_| {
+pub fn cancel_step<M: CoSimulation>(c: Option<&Component<M>>) -> fmi2Status {
+    with_instance(c, Call::CancelStep, "fmi2CancelStep", |_| {
         unreachable!("CancelStep is allowed in no state of a synchronous FMU")
     })
 }
 
-pub unsafe fn get_status<M: CoSimulation>(
-    c: fmi2Component,
+/// The fmi2GetXStatus functions: `answer` gives the status `kind` of the function's type if this
+/// FMU has it (written to `value`); else fmi2Discard with the reason.
+pub unsafe fn get_status<M: CoSimulation, T>(
+    c: Option<&Component<M>>,
+    function: &'static str,
     kind: fmi2StatusKind,
-    value: *mut fmi2Status,
+    value: *mut T,
+    answer: fn(&Instance<M>, fmi2StatusKind) -> Option<T>,
 ) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetStatus, "fmi2GetStatus", |inst| {
-        if value.is_null() {
-            return inst.error("fmi2GetStatus: value is NULL");
-        }
-        status_unavailable(inst, "fmi2GetStatus", kind)
-    })
-}
-
-pub unsafe fn get_real_status<M: CoSimulation>(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Real,
-) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetStatus, "fmi2GetRealStatus", |inst| {
+    with_instance(c, Call::GetStatus, function, |inst| {
         // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `value` writable.
-        match unsafe { value.as_mut() } {
-            Some(v) => real_status(inst, kind, v),
-            None => inst.error("fmi2GetRealStatus: value is NULL"),
-        }
-    })
-}
-
-pub unsafe fn get_integer_status<M: CoSimulation>(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Integer,
-) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetStatus, "fmi2GetIntegerStatus", |inst| {
-        if value.is_null() {
-            return inst.error("fmi2GetIntegerStatus: value is NULL");
-        }
-        status_unavailable(inst, "fmi2GetIntegerStatus", kind)
-    })
-}
-
-pub unsafe fn get_boolean_status<M: CoSimulation>(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2Boolean,
-) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetStatus, "fmi2GetBooleanStatus", |inst| {
-        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `value` writable.
-        match unsafe { value.as_mut() } {
-            Some(v) => boolean_status(inst, kind, v),
-            None => inst.error("fmi2GetBooleanStatus: value is NULL"),
-        }
-    })
-}
-
-pub unsafe fn get_string_status<M: CoSimulation>(
-    c: fmi2Component,
-    kind: fmi2StatusKind,
-    value: *mut fmi2String,
-) -> fmi2Status {
-    // SAFETY: `c` is NULL or a live instance of this library (this function's contract).
-    let component = unsafe { Component::<M>::from_handle(c) };
-    with_instance(component, Call::GetStatus, "fmi2GetStringStatus", |inst| {
-        if value.is_null() {
-            return inst.error("fmi2GetStringStatus: value is NULL");
-        }
-        status_unavailable(inst, "fmi2GetStringStatus", kind)
-    })
-}
-
-fn real_status<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind, value: &mut f64) -> fmi2Status {
-    if kind == fmi2LastSuccessfulTime {
-        *value = inst.sim.last_successful_time;
-        return fmi2OK;
-    }
-    status_unavailable(inst, "fmi2GetRealStatus", kind)
-}
-
-fn boolean_status<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind, value: &mut fmi2Boolean) -> fmi2Status {
-    if kind == fmi2Terminated {
-        *value = if inst.sim.terminate_requested {
-            fmi2True
-        } else {
-            fmi2False
+        let Some(value) = (unsafe { value.as_mut() }) else {
+            return inst.error(&format!("{function}: value is NULL"));
         };
-        return fmi2OK;
-    }
-    status_unavailable(inst, "fmi2GetBooleanStatus", kind)
+        match answer(inst, kind) {
+            Some(v) => {
+                *value = v;
+                fmi2OK
+            }
+            None => status_unavailable(inst, function, kind),
+        }
+    })
+}
+
+/// fmi2GetRealStatus's one status: the time the last step reached.
+pub fn last_successful_time<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind) -> Option<fmi2Real> {
+    (kind == fmi2LastSuccessfulTime).then_some(inst.sim.last_successful_time)
+}
+
+/// fmi2GetBooleanStatus's one status: whether the model asked to end the simulation.
+pub fn terminated<M: CoSimulation>(inst: &Instance<M>, kind: fmi2StatusKind) -> Option<fmi2Boolean> {
+    (kind == fmi2Terminated).then_some(if inst.sim.terminate_requested {
+        fmi2True
+    } else {
+        fmi2False
+    })
+}
+
+/// The status functions of the other types: there is no such status here.
+pub fn unavailable<M: CoSimulation, T>(_: &Instance<M>, _: fmi2StatusKind) -> Option<T> {
+    None
 }
 
 /// The standard's answer for a status this FMU does not have: fmi2Discard.

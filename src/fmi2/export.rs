@@ -18,6 +18,7 @@ macro_rules! export_fmi2 {
             use $crate::__private::abi::*;
             use $crate::__private::api;
             use $crate::__private::{TERMS2 as TERMS, shared};
+            use $crate::core::guard::component;
             type __RustfmuModel = $model;
             const _: () = assert!(
                 !<__RustfmuModel as $crate::Variables>::FMI3_ONLY,
@@ -70,7 +71,7 @@ macro_rules! export_fmi2 {
                 ) -> fmi2Status =>
                     shared::set_debug_logging::<__RustfmuModel>(
                         &TERMS,
-                        c,
+                        component(c),
                         loggingOn != fmi2False,
                         nCategories,
                         categories,
@@ -106,7 +107,7 @@ macro_rules! export_fmi2 {
                     stopTime: fmi2Real,
                 ) -> fmi2Status =>
                     api::setup_experiment::<__RustfmuModel>(
-                        c,
+                        component(c),
                         toleranceDefined,
                         tolerance,
                         startTime,
@@ -114,91 +115,91 @@ macro_rules! export_fmi2 {
                         stopTime,
                     );
                 fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status =>
-                    api::enter_initialization_mode::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterInitializationMode, component(c));
                 fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status =>
-                    api::exit_initialization_mode::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::ExitInitializationMode, component(c));
                 fmi2Terminate(c: fmi2Component) -> fmi2Status =>
-                    api::terminate::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Terminate, component(c));
                 fmi2Reset(c: fmi2Component) -> fmi2Status =>
-                    api::reset::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Reset, component(c));
                 fmi2GetReal(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *mut fmi2Real,
                 ) -> fmi2Status =>
-                    api::get::<__RustfmuModel, f64>(c, "fmi2GetReal", vr, nvr, value);
+                    api::get::<__RustfmuModel, f64>(component(c), "fmi2GetReal", vr, nvr, value);
                 fmi2GetInteger(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *mut fmi2Integer,
                 ) -> fmi2Status =>
-                    api::get::<__RustfmuModel, i32>(c, "fmi2GetInteger", vr, nvr, value);
+                    api::get::<__RustfmuModel, i32>(component(c), "fmi2GetInteger", vr, nvr, value);
                 fmi2GetBoolean(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *mut fmi2Boolean,
                 ) -> fmi2Status =>
-                    api::get_boolean::<__RustfmuModel>(c, vr, nvr, value);
+                    api::get_boolean::<__RustfmuModel>(component(c), vr, nvr, value);
                 fmi2GetString(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *mut fmi2String,
                 ) -> fmi2Status =>
-                    api::get_string::<__RustfmuModel>(c, vr, nvr, value);
+                    api::get_string::<__RustfmuModel>(component(c), vr, nvr, value);
                 fmi2SetReal(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *const fmi2Real,
                 ) -> fmi2Status =>
-                    api::set::<__RustfmuModel, f64>(c, "fmi2SetReal", vr, nvr, value);
+                    api::set::<__RustfmuModel, f64>(component(c), "fmi2SetReal", vr, nvr, value);
                 fmi2SetInteger(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *const fmi2Integer,
                 ) -> fmi2Status =>
-                    api::set::<__RustfmuModel, i32>(c, "fmi2SetInteger", vr, nvr, value);
+                    api::set::<__RustfmuModel, i32>(component(c), "fmi2SetInteger", vr, nvr, value);
                 fmi2SetBoolean(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *const fmi2Boolean,
                 ) -> fmi2Status =>
-                    api::set_boolean::<__RustfmuModel>(c, vr, nvr, value);
+                    api::set_boolean::<__RustfmuModel>(component(c), vr, nvr, value);
                 fmi2SetString(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
                     nvr: usize,
                     value: *const fmi2String,
                 ) -> fmi2Status =>
-                    api::set_string::<__RustfmuModel>(c, vr, nvr, value);
+                    api::set_string::<__RustfmuModel>(component(c), vr, nvr, value);
                 fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
-                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
                 fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status =>
-                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
                 fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
-                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate);
+                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
                 fmi2SerializedFMUstateSize(c: fmi2Component, FMUstate: fmi2FMUstate, size: *mut usize) -> fmi2Status =>
-                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, c, FMUstate, size);
+                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, component(c), FMUstate, size);
                 fmi2SerializeFMUstate(
                     c: fmi2Component,
                     FMUstate: fmi2FMUstate,
                     serializedState: *mut fmi2Byte,
                     size: usize,
                 ) -> fmi2Status =>
-                    shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, c, FMUstate, serializedState, size);
+                    shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate, serializedState, size);
                 fmi2DeSerializeFMUstate(
                     c: fmi2Component,
                     serializedState: *const fmi2Byte,
                     size: usize,
                     FMUstate: *mut fmi2FMUstate,
                 ) -> fmi2Status =>
-                    shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, c, serializedState, size, FMUstate);
+                    shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, component(c), serializedState, size, FMUstate);
                 fmi2GetDirectionalDerivative(
                     c: fmi2Component,
                     vUnknown_ref: *const fmi2ValueReference,
@@ -209,7 +210,7 @@ macro_rules! export_fmi2 {
                     dvUnknown: *mut fmi2Real,
                 ) -> fmi2Status =>
                     api::get_directional_derivative::<__RustfmuModel>(
-                        c,
+                        component(c),
                         vUnknown_ref,
                         nUnknown,
                         vKnown_ref,
@@ -218,45 +219,46 @@ macro_rules! export_fmi2 {
                         dvUnknown,
                     );
                 fmi2EnterEventMode(c: fmi2Component) -> fmi2Status =>
-                    api::enter_event_mode::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterEventMode, component(c));
                 fmi2NewDiscreteStates(c: fmi2Component, fmi2eventInfo: *mut fmi2EventInfo) -> fmi2Status =>
-                    api::new_discrete_states::<__RustfmuModel>(c, fmi2eventInfo);
+                    api::new_discrete_states::<__RustfmuModel>(component(c), fmi2eventInfo);
                 fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status =>
-                    api::enter_continuous_time_mode::<__RustfmuModel>(c);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterContinuousTimeMode, component(c));
                 fmi2CompletedIntegratorStep(
                     c: fmi2Component,
                     noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
                     enterEventMode: *mut fmi2Boolean,
                     terminateSimulation: *mut fmi2Boolean,
                 ) -> fmi2Status =>
-                    api::completed_integrator_step::<__RustfmuModel>(
-                        c,
+                    shared::completed_integrator_step::<__RustfmuModel, fmi2Boolean>(
+                        &TERMS,
+                        component(c),
                         noSetFMUStatePriorToCurrentPoint,
                         enterEventMode,
                         terminateSimulation,
                     );
                 fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status =>
-                    api::set_time::<__RustfmuModel>(c, time);
+                    shared::set_time::<__RustfmuModel>(&TERMS, component(c), time);
                 fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, c, x, nx);
+                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, component(c), x, nx);
                 fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, c, derivatives, nx);
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, component(c), derivatives, nx);
                 fmi2GetEventIndicators(c: fmi2Component, eventIndicators: *mut fmi2Real, ni: usize) -> fmi2Status =>
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::EventIndicators,
-                        c,
+                        component(c),
                         eventIndicators,
                         ni,
                     );
                 fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, c, x, nx);
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, component(c), x, nx);
                 fmi2GetNominalsOfContinuousStates(
                     c: fmi2Component,
                     x_nominal: *mut fmi2Real,
                     nx: usize,
                 ) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, c, x_nominal, nx);
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, component(c), x_nominal, nx);
                 fmi2SetRealInputDerivatives(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
@@ -264,7 +266,7 @@ macro_rules! export_fmi2 {
                     order: *const fmi2Integer,
                     value: *const fmi2Real,
                 ) -> fmi2Status =>
-                    api::set_real_input_derivatives::<__RustfmuModel>(c, vr, nvr, order, value);
+                    api::set_real_input_derivatives::<__RustfmuModel>(component(c), vr, nvr, order, value);
                 fmi2GetRealOutputDerivatives(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
@@ -272,7 +274,7 @@ macro_rules! export_fmi2 {
                     order: *const fmi2Integer,
                     value: *mut fmi2Real,
                 ) -> fmi2Status =>
-                    api::get_real_output_derivatives::<__RustfmuModel>(c, vr, nvr, order, value);
+                    api::get_real_output_derivatives::<__RustfmuModel>(component(c), vr, nvr, order, value);
                 fmi2DoStep(
                     c: fmi2Component,
                     currentCommunicationPoint: fmi2Real,
@@ -280,23 +282,23 @@ macro_rules! export_fmi2 {
                     noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
                 ) -> fmi2Status =>
                     api::do_step::<__RustfmuModel>(
-                        c,
+                        component(c),
                         currentCommunicationPoint,
                         communicationStepSize,
                         noSetFMUStatePriorToCurrentPoint,
                     );
                 fmi2CancelStep(c: fmi2Component) -> fmi2Status =>
-                    api::cancel_step::<__RustfmuModel>(c);
+                    api::cancel_step::<__RustfmuModel>(component(c));
                 fmi2GetStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status =>
-                    api::get_status::<__RustfmuModel>(c, s, value);
+                    api::get_status::<__RustfmuModel, fmi2Status>(component(c), "fmi2GetStatus", s, value, api::unavailable);
                 fmi2GetRealStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status =>
-                    api::get_real_status::<__RustfmuModel>(c, s, value);
+                    api::get_status::<__RustfmuModel, fmi2Real>(component(c), "fmi2GetRealStatus", s, value, api::last_successful_time);
                 fmi2GetIntegerStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Integer) -> fmi2Status =>
-                    api::get_integer_status::<__RustfmuModel>(c, s, value);
+                    api::get_status::<__RustfmuModel, fmi2Integer>(component(c), "fmi2GetIntegerStatus", s, value, api::unavailable);
                 fmi2GetBooleanStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Boolean) -> fmi2Status =>
-                    api::get_boolean_status::<__RustfmuModel>(c, s, value);
+                    api::get_status::<__RustfmuModel, fmi2Boolean>(component(c), "fmi2GetBooleanStatus", s, value, api::terminated);
                 fmi2GetStringStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status =>
-                    api::get_string_status::<__RustfmuModel>(c, s, value);
+                    api::get_status::<__RustfmuModel, fmi2String>(component(c), "fmi2GetStringStatus", s, value, api::unavailable);
             }
         }
         pub use __rustfmu_fmi2_exports::*;

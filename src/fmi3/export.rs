@@ -20,7 +20,7 @@ macro_rules! __rustfmu_fmi3_refusals {
                     nValues: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
                     $crate::__private::api3::get_typed::<$model, $t>(
-                        instance,
+                        component(instance),
                         stringify!($get),
                         valueReferences,
                         nValueReferences,
@@ -35,7 +35,7 @@ macro_rules! __rustfmu_fmi3_refusals {
                     nValues: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
                     $crate::__private::api3::set_typed::<$model, $t>(
-                        instance,
+                        component(instance),
                         stringify!($set),
                         valueReferences,
                         nValueReferences,
@@ -52,7 +52,7 @@ macro_rules! __rustfmu_fmi3_refusals {
             $(
                 $name(instance: $crate::__private::abi3::fmi3Instance, $($arg: $ty),*)
                     -> $crate::__private::abi3::fmi3Status =>
-                    $crate::__private::api3::not_provided::<$model>(instance, stringify!($name), $why);
+                    $crate::__private::api3::not_provided::<$model>(component(instance), stringify!($name), $why);
             )*
         }
     };
@@ -73,6 +73,7 @@ macro_rules! export_fmi3 {
             use $crate::__private::abi3::*;
             use $crate::__private::api3;
             use $crate::__private::{TERMS3 as TERMS, shared};
+            use $crate::core::guard::component;
             type __RustfmuModel = $model;
 
             const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
@@ -109,7 +110,7 @@ macro_rules! export_fmi3 {
                     nCategories: usize,
                     categories: *const fmi3String,
                 ) -> fmi3Status =>
-                    api3::set_debug_logging::<__RustfmuModel>(instance, loggingOn, nCategories, categories);
+                    shared::set_debug_logging::<__RustfmuModel>(&TERMS, component(instance), loggingOn, nCategories, categories);
                 fmi3InstantiateModelExchange(
                     instanceName: fmi3String,
                     instantiationToken: fmi3String,
@@ -188,7 +189,7 @@ macro_rules! export_fmi3 {
                     clockReference: fmi3ValueReference,
                     activationTime: fmi3Float64,
                 ) -> fmi3Status =>
-                    api3::activate_model_partition::<__RustfmuModel>(instance, clockReference, activationTime);
+                    api3::activate_model_partition::<__RustfmuModel>(component(instance), clockReference, activationTime);
                 fmi3FreeInstance(instance: fmi3Instance) =>
                     shared::free_instance::<__RustfmuModel>(&TERMS, instance);
                 fmi3EnterInitializationMode(
@@ -200,7 +201,7 @@ macro_rules! export_fmi3 {
                     stopTime: fmi3Float64,
                 ) -> fmi3Status =>
                     api3::enter_initialization_mode::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         toleranceDefined,
                         tolerance,
                         startTime,
@@ -208,13 +209,13 @@ macro_rules! export_fmi3 {
                         stopTime,
                     );
                 fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::exit_initialization_mode::<__RustfmuModel>(instance);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::ExitInitializationMode, component(instance));
                 fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::enter_event_mode::<__RustfmuModel>(instance);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterEventMode, component(instance));
                 fmi3Terminate(instance: fmi3Instance) -> fmi3Status =>
-                    api3::terminate::<__RustfmuModel>(instance);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Terminate, component(instance));
                 fmi3Reset(instance: fmi3Instance) -> fmi3Status =>
-                    api3::reset::<__RustfmuModel>(instance);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Reset, component(instance));
                 fmi3GetFloat64(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -222,7 +223,7 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3Float64,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::get_float64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3GetInt32(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -230,7 +231,7 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3Int32,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::get_int32::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3GetInt64(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -238,7 +239,7 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3Int64,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::get_int64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3GetBoolean(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -246,7 +247,7 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3Boolean,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::get_boolean::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3GetString(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -254,7 +255,7 @@ macro_rules! export_fmi3 {
                     values: *mut fmi3String,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::get_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::get_string::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3SetFloat64(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -262,7 +263,7 @@ macro_rules! export_fmi3 {
                     values: *const fmi3Float64,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_float64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::set_float64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3SetInt32(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -270,7 +271,7 @@ macro_rules! export_fmi3 {
                     values: *const fmi3Int32,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_int32::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::set_int32::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3SetInt64(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -278,7 +279,7 @@ macro_rules! export_fmi3 {
                     values: *const fmi3Int64,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_int64::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::set_int64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3SetBoolean(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -286,7 +287,7 @@ macro_rules! export_fmi3 {
                     values: *const fmi3Boolean,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_boolean::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::set_boolean::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3SetString(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -294,7 +295,7 @@ macro_rules! export_fmi3 {
                     values: *const fmi3String,
                     nValues: usize,
                 ) -> fmi3Status =>
-                    api3::set_string::<__RustfmuModel>(instance, valueReferences, nValueReferences, values, nValues);
+                    api3::set_string::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
                 fmi3GetBinary(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -304,7 +305,7 @@ macro_rules! export_fmi3 {
                     nValues: usize,
                 ) -> fmi3Status =>
                     api3::get_binary::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         valueReferences,
                         nValueReferences,
                         valueSizes,
@@ -320,7 +321,7 @@ macro_rules! export_fmi3 {
                     nValues: usize,
                 ) -> fmi3Status =>
                     api3::set_binary::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         valueReferences,
                         nValueReferences,
                         valueSizes,
@@ -328,17 +329,17 @@ macro_rules! export_fmi3 {
                         nValues,
                     );
                 fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
-                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
                 fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status =>
-                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
                 fmi3FreeFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
-                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, instance, FMUState);
+                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
                 fmi3SerializedFMUStateSize(
                     instance: fmi3Instance,
                     FMUState: fmi3FMUState,
                     size: *mut usize,
                 ) -> fmi3Status =>
-                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, instance, FMUState, size);
+                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, component(instance), FMUState, size);
                 fmi3SerializeFMUState(
                     instance: fmi3Instance,
                     FMUState: fmi3FMUState,
@@ -347,7 +348,7 @@ macro_rules! export_fmi3 {
                 ) -> fmi3Status =>
                     shared::serialize_fmu_state::<__RustfmuModel>(
                         &TERMS,
-                        instance,
+                        component(instance),
                         FMUState,
                         serializedState.cast(),
                         size,
@@ -360,7 +361,7 @@ macro_rules! export_fmi3 {
                 ) -> fmi3Status =>
                     shared::deserialize_fmu_state::<__RustfmuModel>(
                         &TERMS,
-                        instance,
+                        component(instance),
                         serializedState.cast(),
                         size,
                         FMUState,
@@ -376,8 +377,9 @@ macro_rules! export_fmi3 {
                     sensitivity: *mut fmi3Float64,
                     nSensitivity: usize,
                 ) -> fmi3Status =>
-                    api3::get_directional_derivative::<__RustfmuModel>(
-                        instance,
+                    api3::get_derivative::<__RustfmuModel>(
+                        false,
+                        component(instance),
                         unknowns,
                         nUnknowns,
                         knowns,
@@ -398,8 +400,9 @@ macro_rules! export_fmi3 {
                     sensitivity: *mut fmi3Float64,
                     nSensitivity: usize,
                 ) -> fmi3Status =>
-                    api3::get_adjoint_derivative::<__RustfmuModel>(
-                        instance,
+                    api3::get_derivative::<__RustfmuModel>(
+                        true,
+                        component(instance),
                         unknowns,
                         nUnknowns,
                         knowns,
@@ -410,7 +413,7 @@ macro_rules! export_fmi3 {
                         nSensitivity,
                     );
                 fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status =>
-                    api3::evaluate_discrete_states::<__RustfmuModel>(instance);
+                    api3::evaluate_discrete_states::<__RustfmuModel>(component(instance));
                 fmi3UpdateDiscreteStates(
                     instance: fmi3Instance,
                     discreteStatesNeedUpdate: *mut fmi3Boolean,
@@ -421,7 +424,7 @@ macro_rules! export_fmi3 {
                     nextEventTime: *mut fmi3Float64,
                 ) -> fmi3Status =>
                     api3::update_discrete_states::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         discreteStatesNeedUpdate,
                         terminateSimulation,
                         nominalsOfContinuousStatesChanged,
@@ -430,33 +433,34 @@ macro_rules! export_fmi3 {
                         nextEventTime,
                     );
                 fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::enter_continuous_time_mode::<__RustfmuModel>(instance);
+                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterContinuousTimeMode, component(instance));
                 fmi3CompletedIntegratorStep(
                     instance: fmi3Instance,
                     noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
                     enterEventMode: *mut fmi3Boolean,
                     terminateSimulation: *mut fmi3Boolean,
                 ) -> fmi3Status =>
-                    api3::completed_integrator_step::<__RustfmuModel>(
-                        instance,
+                    shared::completed_integrator_step::<__RustfmuModel, fmi3Boolean>(
+                        &TERMS,
+                        component(instance),
                         noSetFMUStatePriorToCurrentPoint,
                         enterEventMode,
                         terminateSimulation,
                     );
                 fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status =>
-                    api3::set_time::<__RustfmuModel>(instance, time);
+                    shared::set_time::<__RustfmuModel>(&TERMS, component(instance), time);
                 fmi3SetContinuousStates(
                     instance: fmi3Instance,
                     continuousStates: *const fmi3Float64,
                     nContinuousStates: usize,
                 ) -> fmi3Status =>
-                    api3::set_continuous_states::<__RustfmuModel>(instance, continuousStates, nContinuousStates);
+                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, component(instance), continuousStates, nContinuousStates);
                 fmi3GetContinuousStateDerivatives(
                     instance: fmi3Instance,
                     derivatives: *mut fmi3Float64,
                     n: usize,
                 ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, instance, derivatives, n);
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, component(instance), derivatives, n);
                 fmi3GetEventIndicators(
                     instance: fmi3Instance,
                     eventIndicators: *mut fmi3Float64,
@@ -465,7 +469,7 @@ macro_rules! export_fmi3 {
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::EventIndicators,
-                        instance,
+                        component(instance),
                         eventIndicators,
                         n,
                     );
@@ -477,7 +481,7 @@ macro_rules! export_fmi3 {
                     shared::get_vector::<__RustfmuModel>(
                         &TERMS,
                         shared::Vector::ContinuousStates,
-                        instance,
+                        component(instance),
                         continuousStates,
                         n,
                     );
@@ -486,19 +490,19 @@ macro_rules! export_fmi3 {
                     nominals: *mut fmi3Float64,
                     n: usize,
                 ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, instance, nominals, n);
+                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, component(instance), nominals, n);
                 fmi3GetNumberOfEventIndicators(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
-                    api3::get_number_of_event_indicators::<__RustfmuModel>(instance, n);
+                    api3::get_number_of_event_indicators::<__RustfmuModel>(component(instance), n);
                 fmi3GetNumberOfContinuousStates(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
-                    api3::get_number_of_continuous_states::<__RustfmuModel>(instance, n);
+                    api3::get_number_of_continuous_states::<__RustfmuModel>(component(instance), n);
                 // Configuration Mode: an FMU without structural parameters refuses both with the
                 // reason (`enter_configuration_mode`).
                 fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::enter_configuration_mode::<__RustfmuModel>(instance);
+                    api3::enter_configuration_mode::<__RustfmuModel>(component(instance));
                 fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::exit_configuration_mode::<__RustfmuModel>(instance);
+                    api3::exit_configuration_mode::<__RustfmuModel>(component(instance));
                 fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status =>
-                    api3::enter_step_mode::<__RustfmuModel>(instance);
+                    api3::enter_step_mode::<__RustfmuModel>(component(instance));
                 fmi3GetOutputDerivatives(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -508,7 +512,7 @@ macro_rules! export_fmi3 {
                     nValues: usize,
                 ) -> fmi3Status =>
                     api3::get_output_derivatives::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         valueReferences,
                         nValueReferences,
                         orders,
@@ -520,7 +524,7 @@ macro_rules! export_fmi3 {
                     dependent: fmi3ValueReference,
                     nDependencies: *mut usize,
                 ) -> fmi3Status =>
-                    api3::get_number_of_variable_dependencies::<__RustfmuModel>(instance, dependent, nDependencies);
+                    api3::get_number_of_variable_dependencies::<__RustfmuModel>(component(instance), dependent, nDependencies);
                 fmi3GetVariableDependencies(
                     instance: fmi3Instance,
                     dependent: fmi3ValueReference,
@@ -531,7 +535,7 @@ macro_rules! export_fmi3 {
                     nDependencies: usize,
                 ) -> fmi3Status =>
                     api3::get_variable_dependencies::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         dependent,
                         elementIndicesOfDependent,
                         independents,
@@ -550,7 +554,7 @@ macro_rules! export_fmi3 {
                     lastSuccessfulTime: *mut fmi3Float64,
                 ) -> fmi3Status =>
                     api3::do_step::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         currentCommunicationPoint,
                         communicationStepSize,
                         noSetFMUStatePriorToCurrentPoint,
@@ -566,14 +570,14 @@ macro_rules! export_fmi3 {
                     nValueReferences: usize,
                     values: *const fmi3Clock,
                 ) -> fmi3Status =>
-                    api3::set_clock::<__RustfmuModel>(instance, valueReferences, nValueReferences, values);
+                    api3::set_clock::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values);
                 fmi3GetClock(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
                     nValueReferences: usize,
                     values: *mut fmi3Clock,
                 ) -> fmi3Status =>
-                    api3::get_clock::<__RustfmuModel>(instance, valueReferences, nValueReferences, values);
+                    api3::get_clock::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values);
                 fmi3GetIntervalDecimal(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
@@ -582,7 +586,7 @@ macro_rules! export_fmi3 {
                     qualifiers: *mut fmi3IntervalQualifier,
                 ) -> fmi3Status =>
                     api3::get_interval_decimal::<__RustfmuModel>(
-                        instance,
+                        component(instance),
                         valueReferences,
                         nValueReferences,
                         intervals,
@@ -594,21 +598,21 @@ macro_rules! export_fmi3 {
                     nValueReferences: usize,
                     shifts: *mut fmi3Float64,
                 ) -> fmi3Status =>
-                    api3::get_shift_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, shifts);
+                    api3::get_shift_decimal::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, shifts);
                 fmi3SetIntervalDecimal(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
                     nValueReferences: usize,
                     intervals: *const fmi3Float64,
                 ) -> fmi3Status =>
-                    api3::set_interval_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, intervals);
+                    api3::set_interval_decimal::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, intervals);
                 fmi3SetShiftDecimal(
                     instance: fmi3Instance,
                     valueReferences: *const fmi3ValueReference,
                     nValueReferences: usize,
                     shifts: *const fmi3Float64,
                 ) -> fmi3Status =>
-                    api3::set_shift_decimal::<__RustfmuModel>(instance, valueReferences, nValueReferences, shifts);
+                    api3::set_shift_decimal::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, shifts);
             }
             // The getters and setters of the FMI 3.0 types without a 2.0 counterpart.
             $crate::__rustfmu_fmi3_refusals! {
