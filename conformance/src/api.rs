@@ -169,6 +169,7 @@ macro_rules! load {
 /// Loading runs the binary's initializers.
 pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
     #[cfg(unix)]
+    // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
     let lib = unsafe {
         libloading::os::unix::Library::open(
             Some(so),
@@ -177,6 +178,7 @@ pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
     }
     .map(libloading::Library::from);
     #[cfg(not(unix))]
+    // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
     let lib = unsafe { libloading::Library::new(so) };
     lib.map_err(|e| format!("{}: {e}", so.display()))
 }

@@ -49,15 +49,10 @@ pub const ME_REACHABLE: [MeState; 5] = [
     Terminated,
 ];
 
-const ALL_BUT_FATAL: &[MeState] = &[
-    Instantiated,
-    InitializationMode,
-    EventMode,
-    ContinuousTimeMode,
-    Terminated,
-    Error,
-];
-const GETTERS: &[MeState] = &[InitializationMode, EventMode, ContinuousTimeMode, Terminated, Error];
+/// Every model-exchange state but Fatal (the last).
+const ALL_BUT_FATAL: &[MeState] = ME_STATES.split_at(6).0;
+/// Every model-exchange state but Instantiated (the first) and Fatal.
+const GETTERS: &[MeState] = ALL_BUT_FATAL.split_at(1).1;
 
 /// The functions of the co-simulation interface only: an instance of fmuType
 /// fmi2ModelExchange must refuse them in every state.

@@ -62,6 +62,28 @@ pub const NOT_EXERCISED: &str = "not exercised by the run: ";
 /// timeout.
 pub const MAX_RUN_STEPS: f64 = 50_000.0;
 
+/// The stop time of a run of the default experiment at step size `h`: its stop time (1 s where
+/// it has none), at least one step, at most [`MAX_RUN_STEPS`] steps.
+pub fn run_stop(stop_time: Option<f64>, h: f64) -> f64 {
+    stop_time.unwrap_or(1.0).clamp(h, MAX_RUN_STEPS * h)
+}
+
+/// The run the event checks (of both versions) report on: `run(false)`, from the start values
+/// first (what the FMU's user runs); where it saw no event (`events`) and the FMU has inputs to
+/// move (`excitable`), `run(true)`, with the inputs moved off their start values (a model whose
+/// events depend on an input). The run, and how it was made, for the report.
+pub fn event_run<R>(excitable: bool, events: impl Fn(&R) -> usize, run: impl Fn(bool) -> R) -> (R, &'static str) {
+    let first = run(false);
+    if events(&first) == 0 && excitable {
+        (
+            run(true),
+            "with the inputs moved off their start values (none happened from the start values)",
+        )
+    } else {
+        (first, "from the start values")
+    }
+}
+
 /// Ends the check as skipped because the FMU does not declare `what` (see [`NOT_DECLARED`]).
 pub fn skip_not_declared(what: impl std::fmt::Display) -> ! {
     skip(format!("{NOT_DECLARED}{what}"))

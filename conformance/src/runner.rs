@@ -231,6 +231,8 @@ pub fn run(fmu_path: &Path, opts: &RunOptions) -> Report {
 }
 
 /// As [`run`], calling `progress` with each check's report as soon as it is done.
+// Over ~150 lines: the parent's loop over the checks (spawn, time out, collect), whose locals serve
+// every branch.
 pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&CheckReport)) -> Report {
     // FMI 3.0 files get the FMI 3.0 checks; everything else the FMI 2.0 ones.
     let version = file_version(fmu_path);
@@ -586,9 +588,9 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
                 break;
             }
             Ok(None) if clock.elapsed() > opts.timeout => {
+                #[cfg(unix)]
                 // SAFETY: kill(2) on the process group of a child not yet reaped (its id is
                 // still ours); SIGKILL ends the worker and whatever it started.
-                #[cfg(unix)]
                 unsafe {
                     kill(-(child.id() as i32), SIGKILL)
                 };

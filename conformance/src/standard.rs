@@ -41,23 +41,10 @@ pub const STATES: [State; 8] = [
 /// failed: only an FMU whose serialized state the suite can rewrite is put there on purpose.
 pub const REACHABLE: [State; 4] = [Instantiated, InitializationMode, StepComplete, Terminated];
 
-pub const ALL_BUT_FATAL: &[State] = &[
-    Instantiated,
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    StepCanceled,
-    Terminated,
-    Error,
-];
-pub const GETTERS: &[State] = &[
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    StepCanceled,
-    Terminated,
-    Error,
-];
+/// Every state but Fatal (the last).
+pub const ALL_BUT_FATAL: &[State] = STATES.split_at(7).0;
+/// Every state but Instantiated (the first) and Fatal.
+pub const GETTERS: &[State] = ALL_BUT_FATAL.split_at(1).1;
 pub const SETTERS: &[State] = &[Instantiated, InitializationMode, StepComplete];
 pub const STATUS: &[State] = &[StepComplete, StepFailed, Terminated];
 

@@ -1,6 +1,7 @@
 //! Every function of the FMI 3.0 C API (`fmi3Functions.h`), looked up in a loaded `.so` the way
 //! an importer does (`dlopen` + `dlsym`), with the standard's C signatures.
 
+use super::Type;
 use super::types::*;
 use std::os::raw::{c_char, c_uint, c_void};
 use std::path::Path;
@@ -130,6 +131,33 @@ api! {
 }
 
 impl Api {
+    /// The getter of `ty` (an Enumeration through fmi3GetInt64) for one value reference, into
+    /// `n` values at `p`; fmi3Error, with no call, for String, Binary and Clock, whose getters
+    /// take other arguments.
+    ///
+    /// # Safety
+    /// `c` is a live instance of this library (or NULL), and `p` holds `n` values of `ty`,
+    /// aligned for it (8-byte aligned words hold any of them).
+    pub unsafe fn get_values(&self, c: fmi3Instance, ty: Type, vr: &u32, p: *mut u64, n: usize) -> fmi3Status {
+        // SAFETY: the caller's contract; each getter is the standard's signature of that type.
+        unsafe {
+            match ty {
+                Type::Float32 => (self.get_float32)(c, vr, 1, p as Values, n),
+                Type::Float64 => (self.get_float64)(c, vr, 1, p as *mut f64, n),
+                Type::Int8 => (self.get_int8)(c, vr, 1, p as Values, n),
+                Type::UInt8 => (self.get_uint8)(c, vr, 1, p as Values, n),
+                Type::Int16 => (self.get_int16)(c, vr, 1, p as Values, n),
+                Type::UInt16 => (self.get_uint16)(c, vr, 1, p as Values, n),
+                Type::Int32 => (self.get_int32)(c, vr, 1, p as *mut i32, n),
+                Type::UInt32 => (self.get_uint32)(c, vr, 1, p as Values, n),
+                Type::Int64 | Type::Enumeration => (self.get_int64)(c, vr, 1, p as *mut i64, n),
+                Type::UInt64 => (self.get_uint64)(c, vr, 1, p as Values, n),
+                Type::Boolean => (self.get_boolean)(c, vr, 1, p as *mut u8, n),
+                Type::String | Type::Binary | Type::Clock => fmi3Error,
+            }
+        }
+    }
+
     /// Unloads the library (`dlclose`).
     pub fn unload(self) -> Result<(), String> {
         self.library.close().map_err(|e| e.to_string())
