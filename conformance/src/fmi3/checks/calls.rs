@@ -11,6 +11,7 @@ pub fn fmi3_get_version_is_3_0(fmu: &Fmu3) {
     // SAFETY: no arguments; returns a static string.
     let v = unsafe { (fmu.api.get_version)() };
     assert!(!v.is_null(), "{}: fmi3GetVersion returned NULL", fmu.id);
+    // SAFETY: not NULL (asserted), and fmi3GetVersion returns a NUL-terminated static string.
     let v = unsafe { std::ffi::CStr::from_ptr(v) }.to_string_lossy().into_owned();
     assert!(
         v.starts_with("3."),
@@ -34,6 +35,7 @@ type Instantiate<'a> = dyn Fn(
     ) -> fmi3Instance
     + 'a;
 
+// Over ~150 lines: raw instantiations of each interface, each beside the free of what it returned.
 pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null(fmu: &Fmu3) {
     let api = &fmu.api;
     let res = CString::new(fmu.resource_path()).unwrap();
@@ -45,6 +47,8 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
         let res = res.as_ptr();
         interfaces.push((
             "fmi3InstantiateCoSimulation",
+            // SAFETY: the strings are live CStrings or NULL (the cases the FMU must refuse), the NULL
+            // required-intermediate-variables array comes with a count of 0, `env` outlives the instance.
             Box::new(move |n, t, event_mode, log, env| unsafe {
                 (api.instantiate_co_simulation)(n, t, res, false, false, event_mode, false, null(), 0, env, log, None)
             }),
@@ -54,6 +58,8 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
         let res = res.as_ptr();
         interfaces.push((
             "fmi3InstantiateModelExchange",
+            // SAFETY: the strings are live CStrings or NULL (the cases the FMU must refuse); `env` outlives the
+            // instance.
             Box::new(move |n, t, _, log, env| unsafe {
                 (api.instantiate_model_exchange)(n, t, res, false, false, env, log)
             }),
@@ -70,6 +76,7 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             crate::outcome::breadcrumb(&format!("{what} with {case}"));
             let c = inst(n, t, false, log, sink.env());
             if !c.is_null() {
+                // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
                 unsafe { (api.free_instance)(c) };
                 panic!("{}: {what} with {case} returned an instance; expected NULL", fmu.id);
             }
@@ -83,6 +90,7 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             "{}: {what} without a logMessage callback returned NULL (it may be NULL: FMI 3.0 section 2.3.1)",
             fmu.id
         );
+        // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
         unsafe { (api.free_instance)(c) };
         let c = inst(name.as_ptr(), token.as_ptr(), fmu.has_clocks(), log, sink.env());
         assert!(
@@ -91,11 +99,14 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             fmu.id,
             sink.take()
         );
+        // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
         unsafe { (api.free_instance)(c) };
     }
     if let Some(cs) = &fmu.md.cs {
         if !cs.has_event_mode {
             let sink = crate::fmi3::LogSink::default();
+            // SAFETY: live CStrings, the NULL array with a count of 0, and a sink that outlives the instance
+            // (freed below).
             let c = unsafe {
                 (api.instantiate_co_simulation)(
                     name.as_ptr(),
@@ -113,6 +124,7 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
                 )
             };
             if !c.is_null() {
+                // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
                 unsafe { (api.free_instance)(c) };
                 panic!(
                     "{}: fmi3InstantiateCoSimulation with eventModeUsed = true returned an instance, but <CoSimulation> has no hasEventMode=\"true\": expected NULL",
@@ -121,6 +133,8 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             }
         }
         let sink = crate::fmi3::LogSink::default();
+        // SAFETY: resourcePath NULL on purpose (the FMU may refuse it); the other strings are live CStrings,
+        // the NULL array comes with a count of 0, and the sink outlives the instance.
         let c = unsafe {
             (api.instantiate_co_simulation)(
                 c"nores".as_ptr(),
@@ -149,10 +163,13 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             );
             info("instantiation needs the FMU's resources: resourcePath = NULL refused with a message".to_string());
         } else {
+            // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
             unsafe { (api.free_instance)(c) };
         }
     }
     if !fmu.md.se {
+        // SAFETY: live CStrings and NULL callbacks (allowed: the FMU must refuse the call anyway, having no
+        // <ScheduledExecution>); the environment NULL is never dereferenced by us.
         let c = unsafe {
             (api.instantiate_scheduled_execution)(
                 name.as_ptr(),
@@ -168,6 +185,7 @@ pub fn fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_wit
             )
         };
         if !c.is_null() {
+            // SAFETY: `c` is the non-NULL instance just returned, freed once and not used again.
             unsafe { (api.free_instance)(c) };
             panic!(
                 "{}: fmi3InstantiateScheduledExecution returned an instance, but there is no <ScheduledExecution>",
@@ -185,6 +203,8 @@ pub fn fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fm
     }
 }
 
+// Over ~150 lines: a list of bad calls of a few lines each, on one instance whose state each
+// refusal must leave as it was.
 fn bad_arguments(fmu: &Fmu3, me: bool) {
     let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
     excite(&inst);
@@ -197,26 +217,40 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
     let f = floats[0];
     let mut out = vec![0.0f64; 4];
     // NULL arrays with n > 0.
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetFloat64(vrs = NULL, n = 1)", |c| unsafe {
         (api.get_float64)(c, null(), 1, out.as_mut_ptr(), 1)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetFloat64(values = NULL, n = 1)", |c| unsafe {
         (api.get_float64)(c, &f, 1, null_mut(), 1)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3SetFloat64(vrs = NULL, n = 1)", |c| unsafe {
         (api.set_float64)(c, null(), 1, [0.0].as_ptr(), 1)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3SetFloat64(values = NULL, n = 1)", |c| unsafe {
         (api.set_float64)(c, &f, 1, null(), 1)
     });
     // nValues != nValueReferences (every variable is a scalar).
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetFloat64(n = 1, nValues = 2)", |c| unsafe {
         (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 2)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetFloat64(n = 1, nValues = 0)", |c| unsafe {
         (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 0)
     });
     // Unknown value references, and a known one with an unknown one (all-or-nothing).
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, &format!("fmi3GetFloat64([{unknown}])"), |c| unsafe {
         (api.get_float64)(c, &unknown, 1, out.as_mut_ptr(), 1)
     });
@@ -231,12 +265,16 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
         };
         let vrs = [u.vr, unknown];
         let good = vec![0.5; n + 1];
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         refused(&inst, "fmi3SetFloat64([an input, an unknown vr])", |c| unsafe {
             (api.set_float64)(c, vrs.as_ptr(), 2, good.as_ptr(), n + 1)
         });
         if n > 0 {
             for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
                 let x = with_last(bad);
+                // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of
+                // the lengths passed.
                 refused(&inst, &format!("fmi3SetFloat64({} = {x:?})", u.name), |c| unsafe {
                     (api.set_float64)(c, &u.vr, 1, x.as_ptr(), n)
                 });
@@ -246,6 +284,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                 refused(
                     &inst,
                     &format!("fmi3SetFloat64({} = {x:?} > max {hi})", u.name),
+                    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live
+                    // locals of the lengths passed.
                     |c| unsafe { (api.set_float64)(c, &u.vr, 1, x.as_ptr(), n) },
                 );
             }
@@ -254,6 +294,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                 refused(
                     &inst,
                     &format!("fmi3SetFloat64({} = {x:?} < min {lo})", u.name),
+                    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live
+                    // locals of the lengths passed.
                     |c| unsafe { (api.set_float64)(c, &u.vr, 1, x.as_ptr(), n) },
                 );
             }
@@ -267,6 +309,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                             "fmi3SetFloat64 of the array '{}' ({n} elements) with nValues = {m}",
                             u.name
                         ),
+                        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live
+                        // locals of the lengths passed.
                         |c| unsafe { (api.set_float64)(c, &u.vr, 1, x.as_ptr(), m) },
                     );
                 }
@@ -279,6 +323,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                 let vrs = [inputs[0].vr, inputs[1].vr];
                 let mut x = vec![0.25; n + m];
                 x[n + m - 1] = f64::NAN;
+                // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of
+                // the lengths passed.
                 refused(&inst, "fmi3SetFloat64([input = 0.25, input = NaN])", |c| unsafe {
                     (api.set_float64)(c, vrs.as_ptr(), 2, x.as_ptr(), n + m)
                 });
@@ -290,6 +336,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
             refused(
                 &inst,
                 &format!("fmi3SetFloat64({} = {x:?}: NaN in the first element)", u.name),
+                // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of
+                // the lengths passed.
                 |c| unsafe { (api.set_float64)(c, &u.vr, 1, x.as_ptr(), n) },
             );
         }
@@ -308,24 +356,36 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
         ("fmi3GetUInt32", api.get_uint32),
         ("fmi3GetUInt64", api.get_uint64),
     ] {
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         refused(&inst, &format!("{name} of a Float64 (vr {f})"), |c| unsafe {
             g(c, &f, 1, p, 1)
         });
     }
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetInt32 of a Float64", |c| unsafe {
         (api.get_int32)(c, &f, 1, buf.as_mut_ptr() as *mut i32, 1)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetInt64 of a Float64", |c| unsafe {
         (api.get_int64)(c, &f, 1, buf.as_mut_ptr() as *mut i64, 1)
     });
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetBoolean of a Float64", |c| unsafe {
         (api.get_boolean)(c, &f, 1, buf.as_mut_ptr() as *mut u8, 1)
     });
     let mut s: fmi3String = null();
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetString of a Float64", |c| unsafe {
         (api.get_string)(c, &f, 1, &mut s, 1)
     });
     let (mut size, mut bin) = (0usize, null::<u8>());
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetBinary of a Float64", |c| unsafe {
         (api.get_binary)(c, &f, 1, &mut size, &mut bin, 1)
     });
@@ -334,6 +394,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
         refused(
             &inst,
             &format!("fmi3GetFloat64 of the Int32 '{}'", i32v.name),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe { (api.get_float64)(c, &i32v.vr, 1, &mut x, 1) },
         );
     }
@@ -342,6 +404,8 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
         refused(
             &inst,
             &format!("fmi3GetInt32 of the Boolean '{}'", b.name),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe { (api.get_int32)(c, &b.vr, 1, &mut x, 1) },
         );
     }
@@ -353,9 +417,13 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                 "fmi3GetInt32 of the Enumeration '{}' (FMI 3.0: Enumerations are Int64)",
                 e.name
             ),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe { (api.get_int32)(c, &e.vr, 1, &mut x, 1) },
         );
         let mut y = 0i64;
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = inst.call("fmi3GetInt64 of an Enumeration", |c| unsafe {
             (api.get_int64)(c, &e.vr, 1, &mut y, 1)
         });
@@ -382,10 +450,13 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
                 "fmi3SetFloat64 of '{}' ({}, {}) in {state:?}",
                 v.name, v.causality, v.variability
             ),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe { (api.set_float64)(c, &v.vr, 1, &0.125, 1) },
         );
     }
     // Zero values with NULL arrays are fine.
+    // SAFETY: a live instance; NULL arrays come with a count of 0, which the standard allows.
     let s = inst.call("fmi3GetFloat64(NULL, 0, NULL, 0)", |c| unsafe {
         (api.get_float64)(c, null(), 0, null_mut(), 0)
     });
@@ -400,21 +471,31 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
     if me {
         let n = fmu.n_states_declared();
         let mut v = vec![0.0; n + 2];
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         refused(&inst, "fmi3GetContinuousStates(nContinuousStates + 1)", |c| unsafe {
             (api.get_continuous_states)(c, v.as_mut_ptr(), n + 1)
         });
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         refused(&inst, "fmi3SetContinuousStates(nContinuousStates + 1)", |c| unsafe {
             (api.set_continuous_states)(c, v.as_ptr(), n + 1)
         });
         if n > 0 {
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             refused(&inst, "fmi3GetContinuousStateDerivatives(NULL)", |c| unsafe {
                 (api.get_continuous_state_derivatives)(c, null_mut(), n)
             });
             let nan = vec![f64::NAN; n];
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             refused(&inst, "fmi3SetContinuousStates(NaN...)", |c| unsafe {
                 (api.set_continuous_states)(c, nan.as_ptr(), n)
             });
         }
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         refused(&inst, "fmi3SetTime(NaN)", |c| unsafe { (api.set_time)(c, f64::NAN) });
     }
 }
@@ -465,22 +546,38 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         let mut x = 0.0;
                         // the value it has (where readable), else its start, else 0
                         let got = state != State::Instantiated
+                            // SAFETY: the standard's function from the library the FMU keeps
+                            // loaded, on this instance's live handle; each pointer we pass is to a
+                            // live local of at least the length passed (or is an FMU state, the
+                            // FMU's own handle).
                             && inst.call("get", |c| unsafe { (api.get_float64)(c, &v.vr, 1, &mut x, 1) }) == fmi3OK;
                         if !got {
                             x = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0.0);
                         }
+                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                        // this instance's live handle; each pointer we pass is to a live local of
+                        // at least the length passed (or is an FMU state, the FMU's own handle).
                         inst.call("fmi3SetFloat64", |c| unsafe { (api.set_float64)(c, &v.vr, 1, &x, 1) })
                     }
                     Type::Int32 => {
                         let x: i32 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0);
+                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                        // this instance's live handle; each pointer we pass is to a live local of
+                        // at least the length passed (or is an FMU state, the FMU's own handle).
                         inst.call("fmi3SetInt32", |c| unsafe { (api.set_int32)(c, &v.vr, 1, &x, 1) })
                     }
                     Type::Enumeration => {
                         let x: i64 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(1);
+                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                        // this instance's live handle; each pointer we pass is to a live local of
+                        // at least the length passed (or is an FMU state, the FMU's own handle).
                         inst.call("fmi3SetInt64", |c| unsafe { (api.set_int64)(c, &v.vr, 1, &x, 1) })
                     }
                     _ => {
                         let x = v.start.as_deref() == Some("true");
+                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                        // this instance's live handle; each pointer we pass is to a live local of
+                        // at least the length passed (or is an FMU state, the FMU's own handle).
                         inst.call("fmi3SetBoolean", |c| unsafe { (api.set_boolean)(c, &v.vr, 1, &x, 1) })
                     }
                 };
@@ -568,6 +665,9 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
                         .parse()
                         .unwrap_or_else(|e| panic!("{id}: start '{start}' of {}: {e}", v.name));
                     let mut got: [$t; 1] = [0];
+                    // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                    // this instance's live handle; each pointer we pass is to a live local of at
+                    // least the length passed (or is an FMU state, the FMU's own handle).
                     let s = inst.call($name, |c| unsafe { (api.$get)(c, &v.vr, 1, got.as_mut_ptr(), 1) });
                     assert_eq!(
                         (s, got[0]),
@@ -586,6 +686,8 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         for v in with_start(fmu, Type::Boolean) {
             let want = matches!(v.start.as_deref(), Some("true" | "1"));
             let mut got = [2u8];
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetBoolean", |c| unsafe {
                 (api.get_boolean)(c, &v.vr, 1, got.as_mut_ptr(), 1)
             });
@@ -600,6 +702,8 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         }
         for v in with_start(fmu, Type::String) {
             let mut got = [null::<std::ffi::c_char>()];
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetString", |c| unsafe {
                 (api.get_string)(c, &v.vr, 1, got.as_mut_ptr(), 1)
             });
@@ -718,15 +822,14 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
         refused(
             &other,
             &format!("fmi3SetFloat64 of the independent variable '{}'", t.name),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe { (api.set_float64)(c, &t.vr, 1, &1.0, 1) },
         );
         assert_eq!(i.exit_init(), fmi3OK);
         if me {
             i.event_iteration();
-            assert_eq!(
-                i.call("ctm", |c| unsafe { (api.enter_continuous_time_mode)(c) }),
-                fmi3OK
-            );
+            assert_eq!(i.unary("ctm", api.enter_continuous_time_mode), fmi3OK);
         }
         let h = fmu.step_size();
         for _ in 0..3 {
@@ -774,6 +877,8 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     let t = i.time;
     for bad in [0.0, -h, f64::NAN, f64::INFINITY] {
         let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = i.call("fmi3DoStep(bad h)", |c| unsafe {
             (api.do_step)(c, t, bad, true, &mut a, &mut b, &mut c2, &mut last)
         });
@@ -791,6 +896,8 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     excite(&j);
     j.initialize();
     let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = j.call("fmi3DoStep(wrong currentCommunicationPoint)", |c| unsafe {
         (api.do_step)(c, 1.0 + 10.0 * h, h, true, &mut a, &mut b, &mut c2, &mut last)
     });
@@ -802,6 +909,7 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     // null output pointers with valid step
     let mut k = Inst::cs(fmu);
     k.initialize();
+    // SAFETY: NULL output pointers on purpose: the FMU must not write through them; we never read them.
     let s = k.call("fmi3DoStep(NULL outputs)", |c| unsafe {
         (api.do_step)(c, 0.0, h, true, null_mut(), null_mut(), null_mut(), null_mut())
     });
@@ -861,7 +969,7 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
         fmu.id,
         big.log_text()
     );
-    let t = big.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) });
+    let t = big.unary("fmi3Terminate", api.terminate);
     assert_eq!(
         t,
         fmi3OK,
@@ -886,6 +994,8 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         .map(|c| CString::new(c.as_str()).unwrap())
         .collect();
     let ptrs: Vec<fmi3String> = cats.iter().map(|c| c.as_ptr()).collect();
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = i.call("fmi3SetDebugLogging(true, declared categories)", |c| unsafe {
         (api.set_debug_logging)(c, true, ptrs.len(), ptrs.as_ptr())
     });
@@ -897,6 +1007,7 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         fmu.md.log_categories,
         i.log_text()
     );
+    // SAFETY: a live instance; a NULL category array with a count of 0, which the standard allows.
     let s = i.call("fmi3SetDebugLogging(true, none)", |c| unsafe {
         (api.set_debug_logging)(c, true, 0, null())
     });
@@ -908,6 +1019,8 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         i.log_text()
     );
     let bad = [c"noSuchCategory".as_ptr()];
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = i.call("fmi3SetDebugLogging(unknown)", |c| unsafe {
         (api.set_debug_logging)(c, true, 1, bad.as_ptr())
     });
@@ -918,6 +1031,7 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         fmu.id,
         status_name(s)
     );
+    // SAFETY: NULL categories with a count of 1 on purpose: the FMU must refuse without reading them.
     let s = i.call("fmi3SetDebugLogging(NULL, 1)", |c| unsafe {
         (api.set_debug_logging)(c, true, 1, null())
     });
@@ -928,6 +1042,7 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         fmu.id,
         status_name(s)
     );
+    // SAFETY: a live instance; a NULL category array with a count of 0, which the standard allows.
     let s = i.call("fmi3SetDebugLogging(false)", |c| unsafe {
         (api.set_debug_logging)(c, false, 0, null())
     });
@@ -1139,6 +1254,8 @@ impl crate::checks::calls::OutputDerivatives for Inst<'_> {
     fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String> {
         let api = self.api();
         let mut out = vec![f64::NAN; vrs.len()];
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = self.call("fmi3GetOutputDerivatives", |c| unsafe {
             (api.get_output_derivatives)(c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr(), out.len())
         });

@@ -52,6 +52,8 @@ impl Ticking {
 
 fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
     let (mut h, mut q) = (f64::NAN, 99u32);
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
         (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
     });
@@ -110,6 +112,8 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
                 );
             }
             let mut shift = f64::NAN;
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
                 (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
             });
@@ -139,6 +143,8 @@ type TickState = (Vec<u8>, f64, Vec<(Option<f64>, Option<f64>)>, usize);
 
 /// One run of `ticks` ticks: the clocked values read at each tick (bit patterns). `snapshot_at`:
 /// take an FMU state after that tick; `restore`: start from that state instead.
+// Over ~150 lines: one run against one instance, whose schedule, time and values are this
+// function's locals from the first tick to the snapshot.
 fn run(
     fmu: &Fmu3,
     me: bool,
@@ -161,9 +167,7 @@ fn run(
     );
     let mut clocks = clocks(&inst);
     assert_eq!(
-        inst.call("fmi3ExitInitializationMode", |c| unsafe {
-            (api.exit_initialization_mode)(c)
-        }),
+        inst.unary("fmi3ExitInitializationMode", api.exit_initialization_mode),
         fmi3OK,
         "{id}: {}",
         inst.log_text()
@@ -195,9 +199,7 @@ fn run(
             let next = if next.is_finite() { next } else { t + fmu.step_size() };
             if me {
                 assert_eq!(
-                    inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-                        (api.enter_continuous_time_mode)(c)
-                    }),
+                    inst.unary("fmi3EnterContinuousTimeMode", api.enter_continuous_time_mode),
                     fmi3OK
                 );
                 while inst.time < next - 1e-12 {
@@ -205,10 +207,12 @@ fn run(
                     euler_step(&mut inst, h);
                 }
                 inst.time = next;
+                // SAFETY: a live instance; each pointer is to a live local of the length passed, or
+                // is an FMU state.
                 assert_eq!(inst.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, next) }), fmi3OK);
             } else {
                 assert_eq!(
-                    inst.call("fmi3EnterStepMode", |c| unsafe { (api.enter_step_mode)(c) }),
+                    inst.unary("fmi3EnterStepMode", api.enter_step_mode),
                     fmi3OK,
                     "{id}: {}",
                     inst.log_text()
@@ -221,21 +225,15 @@ fn run(
                         inst.time = last;
                     }
                     if flags[0] == 1 && inst.time < next - 1e-12 {
-                        assert_eq!(
-                            inst.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) }),
-                            fmi3OK
-                        );
+                        assert_eq!(inst.unary("fmi3EnterEventMode", api.enter_event_mode), fmi3OK);
                         inst.event_iteration();
-                        assert_eq!(
-                            inst.call("fmi3EnterStepMode", |c| unsafe { (api.enter_step_mode)(c) }),
-                            fmi3OK
-                        );
+                        assert_eq!(inst.unary("fmi3EnterStepMode", api.enter_step_mode), fmi3OK);
                     }
                 }
                 inst.time = next;
             }
             assert_eq!(
-                inst.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) }),
+                inst.unary("fmi3EnterEventMode", api.enter_event_mode),
                 fmi3OK,
                 "{id}: {}",
                 inst.log_text()
@@ -249,6 +247,8 @@ fn run(
         for &i in &due {
             let vr = clocks[i].vr;
             assert_eq!(
+                // SAFETY: a live instance; each pointer is to a live local of the length passed, or
+                // is an FMU state.
                 inst.call("fmi3SetClock", |c| unsafe { (api.set_clock)(c, &vr, 1, &true) }),
                 fmi3OK,
                 "{id}: fmi3SetClock('{}') at its tick t = {t}: {}",
@@ -300,6 +300,8 @@ fn run(
             .filter(|v| v.ty == Type::Clock && v.causality == Causality::Output)
         {
             let mut on = 7u8;
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
             assert!(
                 s == fmi3OK && on <= 1,
@@ -342,6 +344,8 @@ fn run(
         for i in &due {
             let vr = clocks[*i].vr;
             let mut on = 7u8;
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &vr, 1, &mut on) });
             assert!(
                 s == fmi3OK && on == 0,

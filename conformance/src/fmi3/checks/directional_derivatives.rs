@@ -54,6 +54,8 @@ fn elements(fmu: &Fmu3, vars: &[&Variable]) -> Vec<(usize, usize)> {
         .collect()
 }
 
+// Over ~150 lines: the comparisons of one initialized instance, in sequence, sharing its knowns,
+// unknowns and seeds.
 fn derivatives_check(fmu: &Fmu3, me: bool) {
     let i = if me { fmu.md.me.as_ref() } else { fmu.md.cs.as_ref() };
     let Some(i) = i else {
@@ -102,19 +104,7 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         let mut seed = vec![0.0; nk];
         seed[j] = 1.0;
         let mut sens = vec![f64::NAN; nu];
-        let s = inst.call("fmi3GetDirectionalDerivative", |c| unsafe {
-            (api.get_directional_derivative)(
-                c,
-                u.as_ptr(),
-                u.len(),
-                k.as_ptr(),
-                k.len(),
-                seed.as_ptr(),
-                nk,
-                sens.as_mut_ptr(),
-                nu,
-            )
-        });
+        let s = inst.derivative(false, &u, &k, &seed, &mut sens);
         assert_eq!(
             s,
             fmi3OK,
@@ -135,19 +125,7 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             let mut seed = vec![0.0; nu];
             seed[r] = 1.0;
             let mut sens = vec![f64::NAN; nk];
-            let s = inst.call("fmi3GetAdjointDerivative", |c| unsafe {
-                (api.get_adjoint_derivative)(
-                    c,
-                    u.as_ptr(),
-                    u.len(),
-                    k.as_ptr(),
-                    k.len(),
-                    seed.as_ptr(),
-                    nu,
-                    sens.as_mut_ptr(),
-                    nk,
-                )
-            });
+            let s = inst.derivative(true, &u, &k, &seed, &mut sens);
             assert_eq!(
                 s,
                 fmi3OK,
@@ -182,18 +160,7 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         let (s, mut all) = inst.get_f64_n(&u, nu);
         assert_eq!(s, fmi3OK, "{}: reading the unknowns: {}", fmu.id, inst.log_text());
         if me {
-            let (s, dx) = inst.vector(
-                "fmi3GetContinuousStateDerivatives",
-                api.get_continuous_state_derivatives,
-                nx,
-            );
-            assert_eq!(
-                s,
-                fmi3OK,
-                "{}: fmi3GetContinuousStateDerivatives (nx = {nx}): {}",
-                fmu.id,
-                inst.log_text()
-            );
+            let dx = inst.derivatives_ok(nx);
             for (r, (var, e)) in ue.iter().enumerate() {
                 if let Some(slot) = slots.iter().find(|p| p.1.vr == u[*var]) {
                     all[r] = dx[slot.2 + e];
@@ -220,6 +187,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             let mut x = base_x.clone();
             x[slot.2 + e] = value;
             assert_eq!(
+                // SAFETY: a live instance; each pointer is to a live local of the length passed, or
+                // is an FMU state.
                 inst.call("fmi3SetContinuousStates", |c| unsafe {
                     (api.set_continuous_states)(c, x.as_ptr(), x.len())
                 }),
@@ -309,6 +278,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
     refused(
         &inst,
         "fmi3GetDirectionalDerivative(nSeed = the knowns' elements + 1)",
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         |c| unsafe {
             (api.get_directional_derivative)(
                 c,
@@ -326,6 +297,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
     refused(
         &inst,
         "fmi3GetDirectionalDerivative(nSensitivity = the unknowns' elements + 1)",
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         |c| unsafe {
             (api.get_directional_derivative)(
                 c,
@@ -348,6 +321,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             &format!(
                 "fmi3GetDirectionalDerivative(nSeed = nKnowns = {nkv}, nSensitivity = nUnknowns = {nuv}: the arrays' elements are {nk} and {nu})"
             ),
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe {
                 (api.get_directional_derivative)(
                     c,
@@ -367,6 +342,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
     refused(
         &inst,
         "fmi3GetDirectionalDerivative(unknown vr as unknown)",
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         |c| unsafe {
             (api.get_directional_derivative)(
                 c,
@@ -381,6 +358,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             )
         },
     );
+    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
+    // passed.
     refused(&inst, "fmi3GetDirectionalDerivative(seed = NULL)", |c| unsafe {
         (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, null(), nk, sens.as_mut_ptr(), nu)
     });
@@ -388,6 +367,8 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         refused(
             &inst,
             "fmi3GetAdjointDerivative(nSeed = the knowns' elements: the adjoint's seed has the unknowns')",
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+            // lengths passed.
             |c| unsafe {
                 (api.get_adjoint_derivative)(
                     c,

@@ -36,6 +36,8 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         // get/set through a pointer
         let mut st: fmi3FMUState = null_mut();
         assert_eq!(
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             a.call("fmi3GetFMUState", |c| unsafe { (api.get_fmu_state)(c, &mut st) }),
             fmi3OK
         );
@@ -47,6 +49,8 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             })
             .collect();
         assert_eq!(
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             a.call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) }),
             fmi3OK,
             "{}: fmi3SetFMUState: {}",
@@ -70,6 +74,8 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         // importers use it: a state is a copy of the FMU's state, not of one instance).
         let mut other = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
         assert_eq!(
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             other.call("fmi3SetFMUState (of another instance)", |c| unsafe {
                 (api.set_fmu_state)(c, st)
             }),
@@ -93,12 +99,15 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         drop(other);
         // Overwriting a state with fmi3GetFMUState on the same pointer.
         assert_eq!(
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             a.call("fmi3GetFMUState (update)", |c| unsafe {
                 (api.get_fmu_state)(c, &mut st)
             }),
             fmi3OK
         );
         assert_eq!(
+            // SAFETY: a live instance; `st` is the state it returned, freed once (it sets `st` to NULL).
             a.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) }),
             fmi3OK
         );
@@ -133,8 +142,12 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         );
         // size and serialize with a too small buffer
         let mut st: fmi3FMUState = null_mut();
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         assert_eq!(a.call("get", |c| unsafe { (api.get_fmu_state)(c, &mut st) }), fmi3OK);
         let mut small = vec![0u8; bytes.len().saturating_sub(1)];
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = a.call("fmi3SerializeFMUState(size - 1)", |c| unsafe {
             (api.serialize_fmu_state)(c, st, small.as_mut_ptr(), small.len())
         });
@@ -145,6 +158,8 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             fmu.id,
             status_name(s)
         );
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         assert_eq!(a.call("free", |c| unsafe { (api.free_fmu_state)(c, &mut st) }), fmi3OK);
     }
     if tested == 0 {
@@ -175,10 +190,14 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     }
     let attempt = |what: &str, b: &[u8], strict: bool| {
         let mut st: fmi3FMUState = null_mut();
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = a.call(what, |c| unsafe {
             (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), &mut st)
         });
         if s == fmi3OK {
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let _ = a.call("free", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
         }
         assert!(
@@ -205,6 +224,8 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     }
     // NULL buffer with a size
     let mut st: fmi3FMUState = null_mut();
+    // SAFETY: NULL bytes with a non-zero size on purpose: the FMU must refuse without reading them;
+    // `st` is a live local.
     let s = a.call("fmi3DeserializeFMUState(NULL, n)", |c| unsafe {
         (api.deserialize_fmu_state)(c, null(), bytes.len(), &mut st)
     });

@@ -64,5 +64,7 @@ pub fn fmi3_interleaved_instances_and_instances_on_threads_match_a_single_run(fm
     info("3 interleaved instances and 4 threads, per interface, bit-identical");
 }
 
-// Inst holds raw pointers; the runs on threads each make their own instance.
+// SAFETY: an Fmu3 is its description, its folders and the library's function pointers, which
+// any thread may call; what holds raw pointers is the Inst, and the runs on threads each make
+// their own instance.
 unsafe impl Sync for Fmu3 {}

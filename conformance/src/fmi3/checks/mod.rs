@@ -141,16 +141,14 @@ fn in_state(fmu: &Fmu3, me: bool, state: State) -> Inst<'_> {
         i.event_iteration();
         if state == State::ContinuousTimeMode {
             assert_eq!(
-                i.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-                    (api.enter_continuous_time_mode)(c)
-                }),
+                i.unary("fmi3EnterContinuousTimeMode", api.enter_continuous_time_mode),
                 fmi3OK
             );
         }
     }
     if state == State::Terminated {
         assert_eq!(
-            i.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) }),
+            i.unary("fmi3Terminate", api.terminate),
             fmi3OK,
             "{id}: fmi3Terminate: {}",
             i.log_text()

@@ -26,6 +26,8 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
     );
     let mut ne = usize::MAX;
     assert_eq!(
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         i.call("n", |c| unsafe { (api.get_number_of_event_indicators)(c, &mut ne) }),
         fmi3OK
     );
@@ -85,6 +87,8 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
         );
         // deterministic: the same states give the same derivatives
         assert_eq!(
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             i.call("sx", |c| unsafe { (api.set_continuous_states)(c, x.as_ptr(), n) }),
             fmi3OK
         );
@@ -163,21 +167,12 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
 pub fn fmi3_model_exchange_events_are_reached_settle_and_follow_the_states(fmu: &Fmu3) {
     me_only(fmu);
     let h = fmu.step_size().min(1e-3);
-    let stop = fmu
-        .md
-        .default_experiment
-        .stop_time()
-        .unwrap_or(1.0)
-        .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
-    // The default experiment from the start values first (what the FMU's user runs); where no
-    // event happens there and the FMU has inputs, again with the inputs moved off their start
-    // values (a model whose events depend on an input).
-    let mut run = me_events_run(fmu, h, stop, false);
-    let mut how = "from the start values";
-    if run.events == 0 && !excitation(fmu).is_empty() {
-        run = me_events_run(fmu, h, stop, true);
-        how = "with the inputs moved off their start values (none happened from the start values)";
-    }
+    let stop = crate::outcome::run_stop(fmu.md.default_experiment.stop_time(), h);
+    let (run, how) = crate::outcome::event_run(
+        !excitation(fmu).is_empty(),
+        |r: &EventsRun| r.events,
+        |excited| me_events_run(fmu, h, stop, excited),
+    );
     let EventsRun {
         steps,
         events,
@@ -228,14 +223,14 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
     let api = i.api();
     let (_, mut next) = i.event_iteration_timed();
     let enter_ct = |i: &Inst| {
-        let s = i.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-            (api.enter_continuous_time_mode)(c)
-        });
+        let s = i.unary("fmi3EnterContinuousTimeMode", api.enter_continuous_time_mode);
         assert_eq!(s, fmi3OK, "{id}: fmi3EnterContinuousTimeMode: {}", i.log_text());
     };
     enter_ct(&i);
     let nz = fmu.n_event_indicators_declared();
     let mut count = usize::MAX;
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = i.call("fmi3GetNumberOfEventIndicators", |c| unsafe {
         (api.get_number_of_event_indicators)(c, &mut count)
     });
@@ -276,13 +271,19 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         );
         assert_eq!([s, s2], [fmi3OK; 2], "{id}: at t = {}: {}", i.time, i.log_text());
         let x1: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + (t1 - i.time) * d).collect();
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = i.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t1) });
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {
             (api.set_continuous_states)(c, x1.as_ptr(), n)
         });
         assert_eq!([s, s2], [fmi3OK; 2], "{id}: at t = {t1}: {}", i.log_text());
         i.time = t1;
         let (mut enter, mut term) = (7u8, 7u8);
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = i.call("fmi3CompletedIntegratorStep", |c| unsafe {
             (api.completed_integrator_step)(c, true, &mut enter, &mut term)
         });
@@ -298,7 +299,7 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         if due.is_some() || state_event || enter == 1 {
             events += 1;
             time_events += usize::from(due.is_some());
-            let s = i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) });
+            let s = i.unary("fmi3EnterEventMode", api.enter_event_mode);
             assert_eq!(s, fmi3OK, "{id}: fmi3EnterEventMode at t = {t1}: {}", i.log_text());
             let (flags, after) = i.event_iteration_timed();
             if flags[1] == 1 {
@@ -317,6 +318,8 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         }
         if steps % 50 == 0 && nz > 0 {
             let (s, x) = i.vector("fmi3GetContinuousStates", api.get_continuous_states, n);
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {
                 (api.set_continuous_states)(c, x.as_ptr(), n)
             });
@@ -354,18 +357,12 @@ pub fn fmi3_co_simulation_event_mode_hands_the_events_to_the_importer(fmu: &Fmu3
         skip_not_declared("hasEventMode");
     }
     let h = fmu.step_size();
-    let stop = fmu
-        .md
-        .default_experiment
-        .stop_time()
-        .unwrap_or(1.0)
-        .clamp(h, crate::outcome::MAX_RUN_STEPS * h);
-    let mut run = cs_events_run(fmu, h, stop, false);
-    let mut how = "from the start values";
-    if run.events == 0 && !excitation(fmu).is_empty() {
-        run = cs_events_run(fmu, h, stop, true);
-        how = "with the inputs moved off their start values (none happened from the start values)";
-    }
+    let stop = crate::outcome::run_stop(fmu.md.default_experiment.stop_time(), h);
+    let (run, how) = crate::outcome::event_run(
+        !excitation(fmu).is_empty(),
+        |r: &EventsRun| r.events,
+        |excited| cs_events_run(fmu, h, stop, excited),
+    );
     let (handed, steps) = (run.events, run.steps);
     if handed == 0 && fmu.n_event_indicators_declared() == 0 {
         limitation(format!("{}events: none in {stop} s", crate::outcome::NOT_DECLARED));
@@ -395,7 +392,7 @@ fn cs_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
     assert_eq!(i.exit_init(), fmi3OK, "{id}: {}", i.log_text());
     let api = i.api();
     let step_mode = |i: &Inst| {
-        let s = i.call("fmi3EnterStepMode", |c| unsafe { (api.enter_step_mode)(c) });
+        let s = i.unary("fmi3EnterStepMode", api.enter_step_mode);
         assert_eq!(s, fmi3OK, "{id}: fmi3EnterStepMode at t = {}: {}", i.time, i.log_text());
     };
     i.event_iteration();
@@ -426,7 +423,7 @@ fn cs_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
             );
             i.time = last;
             handed += 1;
-            let s = i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) });
+            let s = i.unary("fmi3EnterEventMode", api.enter_event_mode);
             assert_eq!(s, fmi3OK, "{id}: fmi3EnterEventMode at t = {last}: {}", i.log_text());
             let (flags, _) = i.event_iteration_timed();
             if flags[1] == 1 {

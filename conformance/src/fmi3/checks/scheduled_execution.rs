@@ -96,23 +96,9 @@ unsafe fn get_plain(api: &api::Api, c: fmi3Instance, v: &Variable) -> (fmi3Statu
     let mut words = vec![0u64; n.max(1)];
     let p = words.as_mut_ptr();
     let vr = &v.vr;
-    // SAFETY: one value reference and an 8-byte aligned buffer for `n` values of any type.
-    let s = unsafe {
-        match v.ty {
-            Type::Float32 => (api.get_float32)(c, vr, 1, p as Values, n),
-            Type::Float64 => (api.get_float64)(c, vr, 1, p as *mut f64, n),
-            Type::Int8 => (api.get_int8)(c, vr, 1, p as Values, n),
-            Type::UInt8 => (api.get_uint8)(c, vr, 1, p as Values, n),
-            Type::Int16 => (api.get_int16)(c, vr, 1, p as Values, n),
-            Type::UInt16 => (api.get_uint16)(c, vr, 1, p as Values, n),
-            Type::Int32 => (api.get_int32)(c, vr, 1, p as *mut i32, n),
-            Type::UInt32 => (api.get_uint32)(c, vr, 1, p as Values, n),
-            Type::Int64 | Type::Enumeration => (api.get_int64)(c, vr, 1, p as *mut i64, n),
-            Type::UInt64 => (api.get_uint64)(c, vr, 1, p as Values, n),
-            Type::Boolean => (api.get_boolean)(c, vr, 1, p as *mut u8, n),
-            Type::String | Type::Binary | Type::Clock => fmi3Error,
-        }
-    };
+    // SAFETY: `c` is a live instance of `api`'s FMU (this function's contract); `words` holds `n`
+    // values of any of the types, 8-byte aligned.
+    let s = unsafe { api.get_values(c, v.ty, vr, p, n) };
     let bytes = words
         .iter()
         .flat_map(|w| w.to_ne_bytes())
@@ -236,6 +222,8 @@ impl Se<'_> {
     fn activate(&self, vr: u32, t: f64) -> fmi3Status {
         *self.probe.now.lock().unwrap() = t;
         self.probe.inside.store(true, Ordering::Release);
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         let s = self.inst.call("fmi3ActivateModelPartition", |c| unsafe {
             (self.inst.api().activate_model_partition)(c, vr, t)
         });
@@ -249,6 +237,8 @@ impl Se<'_> {
 
 fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
     let (mut h, mut q) = (f64::NAN, 99u32);
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
         (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
     });
@@ -361,6 +351,8 @@ fn initialize(s: &mut Se) -> Vec<Input> {
                 assert_eq!(q, UNCHANGED, "{id}: a constant clock's interval is unchanged");
             }
             let mut shift = f64::NAN;
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let st = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
                 (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
             });
@@ -389,9 +381,7 @@ fn initialize(s: &mut Se) -> Vec<Input> {
         out.push(input);
     }
     assert_eq!(
-        inst.call("fmi3ExitInitializationMode", |c| unsafe {
-            (inst.api().exit_initialization_mode)(c)
-        }),
+        inst.unary("fmi3ExitInitializationMode", inst.api().exit_initialization_mode),
         fmi3OK,
         "{id}: fmi3ExitInitializationMode: {}",
         inst.log_text()
@@ -427,6 +417,8 @@ type Snapshot = (Vec<u8>, Queue, usize);
 
 /// One run of the schedule; `snapshot_at`: an FMU state after that activation (and the queue);
 /// `restore`: continue from such a state in this new instance.
+// Over ~150 lines: one run of the schedule against one instance, whose queue, time and trace are
+// this function's locals from the first activation to the snapshot.
 fn run(fmu: &Fmu3, snapshot_at: Option<usize>, restore: Option<&Snapshot>) -> (Trace, Option<Snapshot>, usize) {
     let id = &fmu.id;
     let stop = stop_time(fmu);
@@ -545,6 +537,8 @@ fn run(fmu: &Fmu3, snapshot_at: Option<usize>, restore: Option<&Snapshot>) -> (T
             let mut on = 7u8;
             let st = s
                 .inst
+                // SAFETY: a live instance; each pointer is to a live local of the length passed, or
+                // is an FMU state.
                 .call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
             assert!(
                 st == fmi3OK && on <= 1,
@@ -624,6 +618,7 @@ fn refusals(fmu: &Fmu3) -> usize {
     // In Instantiated and in Initialization Mode.
     {
         let s = se(fmu);
+        // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
         expect_error(&s, "fmi3ActivateModelPartition in Instantiated", |c| unsafe {
             (api.activate_model_partition)(c, vr, 0.0)
         });
@@ -632,6 +627,7 @@ fn refusals(fmu: &Fmu3) -> usize {
     {
         let mut s = se(fmu);
         assert_eq!(s.inst.enter_init(0.0), fmi3OK, "{id}: {}", s.inst.log_text());
+        // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
         expect_error(&s, "fmi3ActivateModelPartition in Initialization Mode", |c| unsafe {
             (api.activate_model_partition)(c, vr, 0.0)
         });
@@ -643,6 +639,7 @@ fn refusals(fmu: &Fmu3) -> usize {
         expect_error(
             &s,
             &format!("fmi3ActivateModelPartition of output clock '{}'", oc.name),
+            // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
             |c| unsafe { (api.activate_model_partition)(c, oc.vr, 0.0) },
         );
         n += 1;
@@ -653,6 +650,7 @@ fn refusals(fmu: &Fmu3) -> usize {
         expect_error(
             &s,
             &format!("fmi3ActivateModelPartition of unknown value reference {unknown}"),
+            // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
             |c| unsafe { (api.activate_model_partition)(c, unknown, 0.0) },
         );
         n += 1;
@@ -679,6 +677,7 @@ fn refusals(fmu: &Fmu3) -> usize {
             expect_error(
                 &s,
                 &format!("fmi3ActivateModelPartition at {} after one at {t}", t / 2.0),
+                // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
                 |c| unsafe { (api.activate_model_partition)(c, cvr, t / 2.0) },
             );
             n += 1;
@@ -690,6 +689,7 @@ fn refusals(fmu: &Fmu3) -> usize {
     {
         let (s, _) = ready(fmu);
         let (mut a, mut b, mut c3, mut last) = (9u8, 9u8, 9u8, f64::NAN);
+        // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
         expect_error(&s, "fmi3DoStep on a Scheduled Execution instance", |c| unsafe {
             (api.do_step)(c, 0.0, fmu.step_size(), true, &mut a, &mut b, &mut c3, &mut last)
         });
@@ -697,6 +697,7 @@ fn refusals(fmu: &Fmu3) -> usize {
     }
     {
         let (s, _) = ready(fmu);
+        // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
         expect_error(&s, "fmi3EnterEventMode on a Scheduled Execution instance", |c| unsafe {
             (api.enter_event_mode)(c)
         });

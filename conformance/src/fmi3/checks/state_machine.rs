@@ -50,6 +50,8 @@ fn state_table(fmu: &Fmu3, me: bool) {
         }
     }
     // The C API also says fmi3GetVersion works without an instance and FreeInstance(NULL) is a no-op.
+    // SAFETY: fmi3FreeInstance(NULL) must be a no-op (FMI 3.0 section 2.3.1); nothing of ours is
+    // passed.
     unsafe { (fmu.api.free_instance)(null_mut()) };
     assert!(
         failures.is_empty(),
@@ -140,7 +142,7 @@ pub fn fmi3_reset_from_every_state_then_a_rerun_is_bit_identical(fmu: &Fmu3) {
                 excite(&i);
                 i.step(h);
             }
-            let s = i.call("fmi3Reset", |c| unsafe { (fmu.api.reset)(c) });
+            let s = i.unary("fmi3Reset", fmu.api.reset);
             assert_eq!(s, fmi3OK, "{}: fmi3Reset in {state:?}: {}", fmu.id, i.log_text());
             i.time = 0.0;
             excite(&i);
@@ -194,7 +196,7 @@ pub fn fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_s
             ));
         }
         let s = if me {
-            i.call("fmi3EnterEventMode", |c| unsafe { (api.enter_event_mode)(c) })
+            i.unary("fmi3EnterEventMode", api.enter_event_mode)
         } else {
             i.do_step(h).0
         };
@@ -205,7 +207,7 @@ pub fn fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_s
                 status_name(s)
             ));
         }
-        let s = i.call("fmi3Terminate", |c| unsafe { (api.terminate)(c) });
+        let s = i.unary("fmi3Terminate", api.terminate);
         if s != fmi3Error {
             failures.push(format!(
                 "{what}: fmi3Terminate after an fmi3Error answered {}: the FMU is Terminated then",
@@ -227,7 +229,7 @@ pub fn fmi3_after_fmi3_error_the_instance_is_terminated_until_reset_or_set_fmu_s
             j.step(h);
         }
         // Back: fmi3Reset, then a whole run.
-        let s = i.call("fmi3Reset", |c| unsafe { (api.reset)(c) });
+        let s = i.unary("fmi3Reset", api.reset);
         assert_eq!(
             s,
             fmi3OK,

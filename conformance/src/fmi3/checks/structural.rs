@@ -84,6 +84,8 @@ fn readable_in_instantiated(v: &Variable) -> bool {
 
 fn get_u64(inst: &Inst, vr: u32) -> (fmi3Status, u64) {
     let mut x = 0xdead_beef_u64;
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     let s = inst.call("fmi3GetUInt64", |c| unsafe {
         (inst.api().get_uint64)(c, &vr, 1, &mut x as *mut u64 as Values, 1)
     });
@@ -91,21 +93,19 @@ fn get_u64(inst: &Inst, vr: u32) -> (fmi3Status, u64) {
 }
 
 fn set_u64(inst: &Inst, vr: u32, x: u64) -> fmi3Status {
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     inst.call("fmi3SetUInt64", |c| unsafe {
         (inst.api().set_uint64)(c, &vr, 1, &x as *const u64 as *const c_void, 1)
     })
 }
 
 fn enter_config(inst: &Inst) -> fmi3Status {
-    inst.call("fmi3EnterConfigurationMode", |c| unsafe {
-        (inst.api().enter_configuration_mode)(c)
-    })
+    inst.unary("fmi3EnterConfigurationMode", inst.api().enter_configuration_mode)
 }
 
 fn exit_config(inst: &Inst) -> fmi3Status {
-    inst.call("fmi3ExitConfigurationMode", |c| unsafe {
-        (inst.api().exit_configuration_mode)(c)
-    })
+    inst.unary("fmi3ExitConfigurationMode", inst.api().exit_configuration_mode)
 }
 
 impl<'a> Setup<'a> {
@@ -264,7 +264,7 @@ impl<'a> Setup<'a> {
             euler_step_n(&mut inst, nx, self.fmu.step_size());
             self.ok(
                 &inst,
-                inst.call("fmi3EnterEventMode", |c| unsafe { (inst.api().enter_event_mode)(c) }),
+                inst.unary("fmi3EnterEventMode", inst.api().enter_event_mode),
                 "fmi3EnterEventMode",
             );
         } else {
@@ -539,19 +539,7 @@ impl<'a> Setup<'a> {
         let knowns: Vec<u32> = states.iter().map(|p| p.0.vr).collect();
         let directional = |seed: &[f64]| {
             let mut out = vec![f64::NAN; nx];
-            let s = inst.call("fmi3GetDirectionalDerivative", |c| unsafe {
-                (api.get_directional_derivative)(
-                    c,
-                    unknowns.as_ptr(),
-                    unknowns.len(),
-                    knowns.as_ptr(),
-                    knowns.len(),
-                    seed.as_ptr(),
-                    nx,
-                    out.as_mut_ptr(),
-                    nx,
-                )
-            });
+            let s = inst.derivative(false, &unknowns, &knowns, seed, &mut out);
             self.ok(
                 inst,
                 s,
@@ -566,6 +554,8 @@ impl<'a> Setup<'a> {
         let (s, x0) = inst.vector("fmi3GetContinuousStates", api.get_continuous_states, nx);
         self.ok(inst, s, "fmi3GetContinuousStates");
         let derivatives = |x: &[f64]| {
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3SetContinuousStates", |c| unsafe {
                 (api.set_continuous_states)(c, x.as_ptr(), nx)
             });
@@ -604,19 +594,7 @@ impl<'a> Setup<'a> {
                 let mut seed = vec![0.0; nx];
                 seed[r] = 1.0;
                 let mut out = vec![f64::NAN; nx];
-                let s = inst.call("fmi3GetAdjointDerivative", |c| unsafe {
-                    (api.get_adjoint_derivative)(
-                        c,
-                        unknowns.as_ptr(),
-                        unknowns.len(),
-                        knowns.as_ptr(),
-                        knowns.len(),
-                        seed.as_ptr(),
-                        nx,
-                        out.as_mut_ptr(),
-                        nx,
-                    )
-                });
+                let s = inst.derivative(true, &unknowns, &knowns, &seed, &mut out);
                 self.ok(
                     inst,
                     s,
@@ -664,6 +642,8 @@ struct Counts {
     steps: usize,
 }
 
+// Over ~150 lines: one instance through a sequence of structural changes, each step depending on
+// the sizes the one before set.
 fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     let st = Setup::new(fmu, me);
     let which = st.which();
@@ -700,9 +680,7 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     st.ok(&inst, inst.exit_init(), "fmi3ExitInitializationMode");
     if me {
         inst.event_iteration();
-        let s = inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-            (fmu.api.enter_continuous_time_mode)(c)
-        });
+        let s = inst.unary("fmi3EnterContinuousTimeMode", fmu.api.enter_continuous_time_mode);
         st.ok(&inst, s, "fmi3EnterContinuousTimeMode");
         let nx = st.me_vectors(&inst, &st.new, "after initialization with the new sizes");
         st.jacobian(&inst, nx);
@@ -725,7 +703,7 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     let tunable = st.tunables().count() > 0;
     if tunable {
         if me {
-            let s = inst.call("fmi3EnterEventMode", |c| unsafe { (fmu.api.enter_event_mode)(c) });
+            let s = inst.unary("fmi3EnterEventMode", fmu.api.enter_event_mode);
             st.ok(&inst, s, "fmi3EnterEventMode");
         }
         st.reconfigure(&inst);
@@ -738,9 +716,7 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
         if me {
             let nx = st.me_vectors(&inst, &again, "in Event Mode after Reconfiguration Mode");
             inst.event_iteration();
-            let s = inst.call("fmi3EnterContinuousTimeMode", |c| unsafe {
-                (fmu.api.enter_continuous_time_mode)(c)
-            });
+            let s = inst.unary("fmi3EnterContinuousTimeMode", fmu.api.enter_continuous_time_mode);
             st.ok(&inst, s, "fmi3EnterContinuousTimeMode after Reconfiguration Mode");
             st.jacobian(&inst, nx);
             for k in 0..3 {
@@ -865,6 +841,8 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     let inst = st.fresh();
     st.ok(&inst, enter_config(&inst), "fmi3EnterConfigurationMode");
     st.refused(&inst, "fmi3EnterInitializationMode in Configuration Mode", |i| {
+        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
+        // lengths passed.
         i.call("fmi3EnterInitializationMode", |c| unsafe {
             (fmu.api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
         })

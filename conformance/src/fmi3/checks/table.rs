@@ -218,35 +218,44 @@ state_table! {
 
 impl F {
     /// A valid call of this function on the instance (NULL arrays of length 0 where the
-    /// function takes value references and there is nothing to pass); its status.
+    /// function takes value references and there is nothing to pass); its status. One arm per
+    /// function of the standard, as the state table above has one row per function: kept whole
+    /// (not split below ~150 lines) so that each function's valid call reads beside the others.
     pub fn call(self, i: &Inst) -> fmi3Status {
         let api = i.api();
         let name = self.name();
+        /// `i.call(name, |c| <a call>)`, every call of this table being valid.
+        macro_rules! valid {
+            (|$c:ident| $call:expr) => {
+                // SAFETY: a function of the library `i.fmu` keeps loaded, with the standard's
+                // signature, called with pointers to live locals of the lengths passed (or NULL
+                // with a length of 0), on this live instance (or NULL, which the FMU must refuse).
+                i.call(name, |$c| unsafe { $call })
+            };
+        }
         /// A getter of one readable variable of that type.
         macro_rules! get {
             ($f:ident, $ty:expr, $t:ty) => {{
                 let v = readable(i.fmu, $ty);
                 let mut out: Vec<$t> = vec![Default::default(); v.len()];
-                i.call(name, |c| unsafe {
-                    (api.$f)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len())
-                })
+                valid!(|c| (api.$f)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len()))
             }};
         }
         /// A getter of no variable.
         macro_rules! none {
             ($f:ident) => {
-                i.call(name, |c| unsafe { (api.$f)(c, null(), 0, null_mut(), 0) })
+                valid!(|c| (api.$f)(c, null(), 0, null_mut(), 0))
             };
         }
         /// A setter of no variable.
         macro_rules! none_set {
             ($f:ident) => {
-                i.call(name, |c| unsafe { (api.$f)(c, null(), 0, null(), 0) })
+                valid!(|c| (api.$f)(c, null(), 0, null(), 0))
             };
         }
         macro_rules! unary {
             ($f:ident) => {
-                i.call(name, |c| unsafe { (api.$f)(c) })
+                i.unary(name, api.$f)
             };
         }
         /// A model-exchange vector of `n` values.
@@ -258,13 +267,9 @@ impl F {
         // nContinuousStates and nEventIndicators count every element of the state and indicator
         // arrays (the structural parameters at their starts).
         let n_states = i.fmu.n_states_declared();
-        // SAFETY (every call): the standard's functions with valid pointers of the lengths
-        // passed, on a live instance (or NULL, which the FMU must refuse).
         match self {
-            F::SetDebugLogging => i.call(name, |c| unsafe { (api.set_debug_logging)(c, false, 0, null()) }),
-            F::EnterInitializationMode => i.call(name, |c| unsafe {
-                (api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
-            }),
+            F::SetDebugLogging => valid!(|c| (api.set_debug_logging)(c, false, 0, null())),
+            F::EnterInitializationMode => valid!(|c| (api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)),
             F::ExitInitializationMode => unary!(exit_initialization_mode),
             F::EnterEventMode => unary!(enter_event_mode),
             F::Terminate => unary!(terminate),
@@ -276,9 +281,7 @@ impl F {
             F::GetString => {
                 let v = readable(i.fmu, Type::String);
                 let mut out = vec![null(); v.len()];
-                i.call(name, |c| unsafe {
-                    (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len())
-                })
+                valid!(|c| (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len()))
             }
             F::GetFloat32 => none!(get_float32),
             F::GetInt8 => none!(get_int8),
@@ -287,9 +290,7 @@ impl F {
             F::GetUInt16 => none!(get_uint16),
             F::GetUInt32 => none!(get_uint32),
             F::GetUInt64 => none!(get_uint64),
-            F::GetBinary => i.call(name, |c| unsafe {
-                (api.get_binary)(c, null(), 0, null_mut(), null_mut(), 0)
-            }),
+            F::GetBinary => valid!(|c| (api.get_binary)(c, null(), 0, null_mut(), null_mut(), 0)),
             F::SetFloat64 => none_set!(set_float64),
             F::SetInt32 => none_set!(set_int32),
             F::SetInt64 => none_set!(set_int64),
@@ -302,26 +303,25 @@ impl F {
             F::SetUInt16 => none_set!(set_uint16),
             F::SetUInt32 => none_set!(set_uint32),
             F::SetUInt64 => none_set!(set_uint64),
-            F::SetBinary => i.call(name, |c| unsafe { (api.set_binary)(c, null(), 0, null(), null(), 0) }),
-            F::GetClock => i.call(name, |c| unsafe { (api.get_clock)(c, null(), 0, null_mut()) }),
-            F::SetClock => i.call(name, |c| unsafe { (api.set_clock)(c, null(), 0, null()) }),
+            F::SetBinary => valid!(|c| (api.set_binary)(c, null(), 0, null(), null(), 0)),
+            F::GetClock => valid!(|c| (api.get_clock)(c, null(), 0, null_mut())),
+            F::SetClock => valid!(|c| (api.set_clock)(c, null(), 0, null())),
             F::GetNumberOfVariableDependencies => {
                 let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
                 let mut n = 0;
-                i.call(name, |c| unsafe {
-                    (api.get_number_of_variable_dependencies)(c, vr, &mut n)
-                })
+                valid!(|c| (api.get_number_of_variable_dependencies)(c, vr, &mut n))
             }
             F::GetVariableDependencies => {
                 let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
-                i.call(name, |c| unsafe {
-                    (api.get_variable_dependencies)(c, vr, null_mut(), null_mut(), null_mut(), null_mut(), 0)
-                })
+                valid!(|c| (api.get_variable_dependencies)(c, vr, null_mut(), null_mut(), null_mut(), null_mut(), 0))
             }
             F::GetFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                let s = i.call(name, |c| unsafe { (api.get_fmu_state)(c, &mut st) });
+                let s = valid!(|c| (api.get_fmu_state)(c, &mut st));
                 if s == fmi3OK {
+                    // SAFETY: the standard's function from the library the FMU keeps loaded, on
+                    // this instance's live handle; each pointer we pass is to a live local of at
+                    // least the length passed (or is an FMU state, the FMU's own handle).
                     let f = i.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
                     assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState of a state just taken", i.fmu.id);
                 }
@@ -329,35 +329,27 @@ impl F {
             }
             F::FreeFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                i.call(name, |c| unsafe { (api.free_fmu_state)(c, &mut st) })
+                valid!(|c| (api.free_fmu_state)(c, &mut st))
             }
             F::GetDirectionalDerivative => derivative_call(i, false),
             F::GetAdjointDerivative => derivative_call(i, true),
             F::EnterConfigurationMode => unary!(enter_configuration_mode),
             F::ExitConfigurationMode => unary!(exit_configuration_mode),
-            F::GetIntervalDecimal => i.call(name, |c| unsafe {
-                (api.get_interval_decimal)(c, null(), 0, null_mut(), null_mut())
-            }),
-            F::GetIntervalFraction => i.call(name, |c| unsafe {
-                (api.get_interval_fraction)(c, null(), 0, null_mut(), null_mut(), null_mut())
-            }),
-            F::GetShiftDecimal => i.call(name, |c| unsafe { (api.get_shift_decimal)(c, null(), 0, null_mut()) }),
-            F::GetShiftFraction => i.call(name, |c| unsafe {
-                (api.get_shift_fraction)(c, null(), 0, null_mut(), null_mut())
-            }),
-            F::SetIntervalDecimal => i.call(name, |c| unsafe { (api.set_interval_decimal)(c, null(), 0, null()) }),
-            F::SetIntervalFraction => i.call(name, |c| unsafe {
-                (api.set_interval_fraction)(c, null(), 0, null(), null())
-            }),
-            F::SetShiftDecimal => i.call(name, |c| unsafe { (api.set_shift_decimal)(c, null(), 0, null()) }),
-            F::SetShiftFraction => i.call(name, |c| unsafe {
-                (api.set_shift_fraction)(c, null(), 0, null(), null())
-            }),
+            F::GetIntervalDecimal => valid!(|c| (api.get_interval_decimal)(c, null(), 0, null_mut(), null_mut())),
+            F::GetIntervalFraction => {
+                valid!(|c| (api.get_interval_fraction)(c, null(), 0, null_mut(), null_mut(), null_mut()))
+            }
+            F::GetShiftDecimal => valid!(|c| (api.get_shift_decimal)(c, null(), 0, null_mut())),
+            F::GetShiftFraction => valid!(|c| (api.get_shift_fraction)(c, null(), 0, null_mut(), null_mut())),
+            F::SetIntervalDecimal => valid!(|c| (api.set_interval_decimal)(c, null(), 0, null())),
+            F::SetIntervalFraction => valid!(|c| (api.set_interval_fraction)(c, null(), 0, null(), null())),
+            F::SetShiftDecimal => valid!(|c| (api.set_shift_decimal)(c, null(), 0, null())),
+            F::SetShiftFraction => valid!(|c| (api.set_shift_fraction)(c, null(), 0, null(), null())),
             F::EvaluateDiscreteStates => unary!(evaluate_discrete_states),
             F::UpdateDiscreteStates => {
                 let mut f = [0u8; 5];
                 let mut t = 0.0;
-                i.call(name, |c| unsafe {
+                valid!(|c| {
                     let [a, b, cc, d, e] = &mut f;
                     (api.update_discrete_states)(c, a, b, cc, d, e, &mut t)
                 })
@@ -365,16 +357,12 @@ impl F {
             F::EnterContinuousTimeMode => unary!(enter_continuous_time_mode),
             F::CompletedIntegratorStep => {
                 let (mut a, mut b) = (0u8, 0u8);
-                i.call(name, |c| unsafe {
-                    (api.completed_integrator_step)(c, true, &mut a, &mut b)
-                })
+                valid!(|c| (api.completed_integrator_step)(c, true, &mut a, &mut b))
             }
-            F::SetTime => i.call(name, |c| unsafe { (api.set_time)(c, 0.0) }),
+            F::SetTime => valid!(|c| (api.set_time)(c, 0.0)),
             F::SetContinuousStates => {
                 let x = vec![0.0; n_states];
-                i.call(name, |c| unsafe {
-                    (api.set_continuous_states)(c, x.as_ptr(), n_states)
-                })
+                valid!(|c| (api.set_continuous_states)(c, x.as_ptr(), n_states))
             }
             F::GetContinuousStateDerivatives => vector!(get_continuous_state_derivatives, n_states),
             F::GetEventIndicators => vector!(get_event_indicators, i.fmu.n_event_indicators_declared()),
@@ -382,29 +370,32 @@ impl F {
             F::GetNominalsOfContinuousStates => vector!(get_nominals_of_continuous_states, n_states),
             F::GetNumberOfEventIndicators => {
                 let mut n = 0;
-                i.call(name, |c| unsafe { (api.get_number_of_event_indicators)(c, &mut n) })
+                valid!(|c| (api.get_number_of_event_indicators)(c, &mut n))
             }
             F::GetNumberOfContinuousStates => {
                 let mut n = 0;
-                i.call(name, |c| unsafe { (api.get_number_of_continuous_states)(c, &mut n) })
+                valid!(|c| (api.get_number_of_continuous_states)(c, &mut n))
             }
             F::EnterStepMode => unary!(enter_step_mode),
             F::GetOutputDerivatives => {
                 let v = vr_list(i.fmu, Type::Float64);
                 let orders = vec![1i32; v.len()];
                 let mut out = vec![0.0; v.len()];
-                i.call(name, |c| unsafe {
-                    (api.get_output_derivatives)(c, v.as_ptr(), v.len(), orders.as_ptr(), out.as_mut_ptr(), out.len())
-                })
+                valid!(|c| (api.get_output_derivatives)(
+                    c,
+                    v.as_ptr(),
+                    v.len(),
+                    orders.as_ptr(),
+                    out.as_mut_ptr(),
+                    out.len()
+                ))
             }
             F::DoStep => {
                 let (mut a, mut b, mut d, mut t) = (0u8, 0u8, 0u8, 0.0);
                 let h = i.fmu.step_size();
-                i.call(name, |c| unsafe {
-                    (api.do_step)(c, 0.0, h, true, &mut a, &mut b, &mut d, &mut t)
-                })
+                valid!(|c| (api.do_step)(c, 0.0, h, true, &mut a, &mut b, &mut d, &mut t))
             }
-            F::ActivateModelPartition => i.call(name, |c| unsafe { (api.activate_model_partition)(c, 0, 0.0) }),
+            F::ActivateModelPartition => valid!(|c| (api.activate_model_partition)(c, 0, 0.0)),
         }
     }
 }
@@ -437,6 +428,8 @@ fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
     } else {
         i.api().get_directional_derivative
     };
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
     i.call("fmi3Get*Derivative", |c| unsafe {
         f(
             c,

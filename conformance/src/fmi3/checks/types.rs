@@ -135,6 +135,8 @@ fn scalars(fmu: &Fmu3) -> impl Iterator<Item = &Variable> {
     })
 }
 
+// Over ~150 lines: one pass over the standard's types on one instance, each type's reads, writes
+// and refusals in turn.
 pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_bounds(fmu: &Fmu3) {
     let id = &fmu.id;
     let mut counts = [0usize; 6]; // starts, round trips, bounds, maxSize, wrong types, short nValues
@@ -366,6 +368,8 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
                 None => knowns.clone(),
             };
             let mut count = usize::MAX;
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
                 (api.get_number_of_variable_dependencies)(c, u.vr, &mut count)
             });
@@ -382,6 +386,8 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
                 vec![9usize; count],
                 vec![99u32; count],
             );
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
             let s = inst.call("fmi3GetVariableDependencies", |c| unsafe {
                 (api.get_variable_dependencies)(
                     c,
