@@ -88,6 +88,7 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     }
     // Re-using an existing FMUstate: fmi2GetFMUstate overwrites it in place.
     let (before, old_ptr) = (inst.observe(), saved);
+    // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
     assert_eq!(unsafe { (fmu.api.get_fmu_state)(inst.c, &mut saved) }, fmi2OK);
     assert_eq!(
         saved, old_ptr,

@@ -116,6 +116,8 @@ fn settable<'a>(inst: &Instance<'a>, ty: Type, s: State) -> (Vec<u32>, Vec<&'a c
     (vars.iter().map(|v| v.vr).collect(), vars)
 }
 
+// One row per function (a table, as the standard's): kept in one function, over ~150 lines, so that
+// each function's answers, next state and call read in one place.
 fn cases() -> Vec<Case> {
     vec![
         Case {

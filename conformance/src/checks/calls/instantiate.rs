@@ -1,0 +1,196 @@
+//! fmi2Instantiate: wrong, NULL or empty GUIDs and names, unknown types, missing callbacks, every
+//! resource-location form.
+
+#![allow(non_upper_case_globals)] // fmi2OK etc. are the standard's names, matched on
+
+use super::says;
+use crate::Fmu;
+use crate::fmi2::*;
+use crate::instance::{Args, Instance, step_size};
+use crate::outcome::info;
+use std::ptr;
+
+pub fn instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message(fmu: &Fmu) {
+    for guid in [Some("{00000000-0000-0000-0000-000000000000}"), Some(""), None] {
+        let args = Args {
+            guid: guid.map(String::from),
+            ..Args::valid(fmu)
+        };
+        let log = Instance::with(fmu, &args)
+            .err()
+            .unwrap_or_else(|| panic!("{}: GUID {guid:?} accepted", fmu.id));
+        assert!(
+            says(fmu, &log, fmi2Error, &["GUID"]),
+            "{}: GUID {guid:?}: no message about the GUID: {log:?}",
+            fmu.id
+        );
+    }
+}
+
+pub fn instantiate_refuses_a_null_or_empty_instance_name_with_a_message(fmu: &Fmu) {
+    for name in [Some(""), None] {
+        let args = Args {
+            name: name.map(String::from),
+            ..Args::valid(fmu)
+        };
+        let log = Instance::with(fmu, &args)
+            .err()
+            .unwrap_or_else(|| panic!("{}: name {name:?} accepted", fmu.id));
+        assert!(
+            says(fmu, &log, fmi2Error, &["instanceName"]),
+            "{}: name {name:?}: {log:?}",
+            fmu.id
+        );
+    }
+}
+
+/// fmi2ModelExchange is refused unless the FMU declares `<ModelExchange>` (then it is
+/// accepted); an unknown fmuType always.
+pub fn instantiate_refuses_model_exchange_and_unknown_types_with_a_message(fmu: &Fmu) {
+    for (ty, word) in [(fmi2ModelExchange, "fmi2ModelExchange"), (7, "fmuType")] {
+        if ty == fmi2ModelExchange && fmu.md.me.is_some() {
+            // Declared: fmi2ModelExchange must be accepted (the model-exchange checks go on).
+            let args = Args {
+                fmu_type: ty,
+                ..Args::valid(fmu)
+            };
+            if let Err(log) = Instance::with(fmu, &args) {
+                panic!(
+                    "{}: the FMU declares <ModelExchange>, but fmi2Instantiate(fmi2ModelExchange) refused: {log:?}",
+                    fmu.id
+                );
+            }
+            continue;
+        }
+        let args = Args {
+            fmu_type: ty,
+            ..Args::valid(fmu)
+        };
+        let log = Instance::with(fmu, &args)
+            .err()
+            .unwrap_or_else(|| panic!("{}: fmuType {ty} accepted", fmu.id));
+        assert!(
+            log.iter().any(|e| e.text.contains(word)) || says(fmu, &log, fmi2Error, &[word]),
+            "{}: fmuType {ty}: {log:?}",
+            fmu.id
+        );
+    }
+}
+
+pub fn instantiate_without_callbacks_or_logger_returns_null_without_crashing(fmu: &Fmu) {
+    let guid = std::ffi::CString::new(fmu.md.guid.as_str()).unwrap();
+    let no_logger = fmi2CallbackFunctions {
+        logger: None,
+        allocateMemory: None,
+        freeMemory: None,
+        stepFinished: None,
+        componentEnvironment: ptr::null_mut(),
+    };
+    for callbacks in [ptr::null(), &no_logger as *const _] {
+        // SAFETY: valid strings; the callbacks are NULL or have a NULL logger.
+        let c = unsafe {
+            (fmu.api.instantiate)(
+                c"x".as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                ptr::null(),
+                callbacks,
+                fmi2False,
+                fmi2True,
+            )
+        };
+        assert!(c.is_null(), "{}: instantiated without a logger", fmu.id);
+    }
+}
+
+pub fn instantiate_accepts_every_resource_location_form_and_a_missing_folder(fmu: &Fmu) {
+    // The FMU's own unpacked resources/, and a copy of it under a name that needs encoding.
+    let abs = fmu.dir.join("resources");
+    let dir = fmu.dir.join("resources with space%");
+    copy_tree(&abs, &dir).unwrap_or_else(|e| panic!("{}: copying resources/: {e}", fmu.id));
+    let encoded = format!(
+        "file://{}",
+        dir.display().to_string().replace('%', "%25").replace(' ', "%20")
+    );
+    assert!(encoded.ends_with("resources%20with%20space%25"));
+    // (location, whether it holds the FMU's resources)
+    let locations = [
+        (Some(format!("file://{}", abs.display())), true),
+        (Some(format!("file:{}", abs.display())), true),
+        (Some(format!("file://localhost{}", abs.display())), true),
+        (Some(encoded), true),
+        (Some(format!("file://{}/no/such/folder", fmu.dir.display())), false),
+        (Some("http://example.org/resources".into()), false),
+        (Some(String::new()), false),
+        (None, false),
+    ];
+    let mut needs_them = vec![];
+    for (loc, has_files) in locations {
+        let args = Args {
+            resources: loc.clone(),
+            ..Args::valid(fmu)
+        };
+        let mut inst = match Instance::with(fmu, &args) {
+            Ok(inst) => inst,
+            // An FMU that reads its resources when it is instantiated (a container FMU, whose
+            // system is there) cannot be made without them: NULL with an fmi2Error message
+            // naming what is missing is its answer. With its files, refusing is a failure.
+            Err(log) if !has_files && log.iter().any(|e| e.status == fmi2Error) => {
+                needs_them.push(format!("{loc:?} (at fmi2Instantiate)"));
+                continue;
+            }
+            Err(log) => panic!("{}: resourceLocation {loc:?} refused: {log:?}", fmu.id),
+        };
+        if has_files {
+            inst.initialize();
+            assert_eq!(
+                inst.step(step_size(fmu)),
+                fmi2OK,
+                "{}: after resourceLocation {loc:?}",
+                fmu.id
+            );
+            continue;
+        }
+        // Without its files a model that reads them cannot initialize: an fmi2Error with a
+        // message is its right answer (the standard only says a missing folder is no reason
+        // to refuse the instance); anything else must run as usual.
+        let s = [inst.setup(0.0, None), inst.enter_init(), inst.exit_init()];
+        if s.iter().all(|s| *s == fmi2OK) {
+            assert_eq!(
+                inst.step(step_size(fmu)),
+                fmi2OK,
+                "{}: after resourceLocation {loc:?}",
+                fmu.id
+            );
+        } else {
+            let log = inst.log();
+            assert!(
+                s.iter().all(|s| *s == fmi2OK || *s == fmi2Error) && log.iter().any(|e| e.status == fmi2Error),
+                "{}: initialization with resourceLocation {loc:?} answered {s:?} with no fmi2Error message: {log:?}",
+                fmu.id
+            );
+            needs_them.push(format!("{loc:?}"));
+        }
+    }
+    if !needs_them.is_empty() {
+        info(format!(
+            "initialization needs the FMU's resources: refused with a message for {}",
+            needs_them.join(", ")
+        ));
+    }
+}
+
+/// Copies the folder `from` (files and sub-folders) to `to`.
+pub(super) fn copy_tree(from: &std::path::Path, to: &std::path::Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for e in std::fs::read_dir(from)? {
+        let e = e?;
+        let target = to.join(e.file_name());
+        if e.file_type()?.is_dir() {
+            copy_tree(&e.path(), &target)?;
+        } else {
+            std::fs::copy(e.path(), target)?;
+        }
+    }
+    Ok(())
+}

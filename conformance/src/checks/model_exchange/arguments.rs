@@ -1,0 +1,376 @@
+//! Refusals: the model-exchange functions on a co-simulation instance and on a NULL component,
+//! bad arguments, and each variable set only where the standard allows it.
+
+#![allow(non_upper_case_globals)] // fmi2OK etc. are the standard's names, matched on
+
+use super::{advanced, me_observe, refusal_logged, set_function, start_states};
+use crate::fmi2::*;
+use crate::instance::{Instance, status_name};
+use crate::me::{self, MeState::*, needs_me};
+use crate::outcome::{limitation, skip_not_declared};
+use crate::standard::REACHABLE;
+use crate::state::{STATES, State};
+use crate::{Fmu, Type};
+use std::ptr;
+
+/// The model-exchange functions, for [`one_me_call`].
+pub(super) const ME_CALLS: usize = 10;
+
+pub fn a_co_simulation_instance_refuses_every_model_exchange_function(fmu: &Fmu) {
+    if fmu.api.me.is_err() {
+        if fmu.md.me.is_some() {
+            needs_me(fmu);
+        }
+        skip_not_declared("<ModelExchange>, and the binary does not export the model-exchange functions");
+    }
+    let own = fmu.own_state_format();
+    if !own {
+        limitation(
+            "called only in Instantiated, InitializationMode, StepComplete and Terminated; the state after each call is not observed",
+        );
+    }
+    let mut failures = vec![];
+    for s in STATES.into_iter().filter(|s| own || REACHABLE.contains(s)) {
+        for k in 0..ME_CALLS {
+            // One call per fresh instance: an FMU that wrongly accepts one must not spoil the
+            // next.
+            let mut inst = crate::checks::state_machine::instance_in(fmu, s);
+            let before = if s != State::Fatal { inst.fingerprint() } else { None };
+            let (function, status) = one_me_call(&mut inst, k);
+            let log = inst.log();
+            let at = format!("{}: {function} in co-simulation state {s:?}", fmu.id);
+            if status != fmi2Error {
+                failures.push(format!(
+                    "{at}: expected fmi2Error, got {}; log {log:?}",
+                    status_name(status)
+                ));
+            } else if !refusal_logged(&inst, &log, function) {
+                failures.push(format!(
+                    "{at}: refused without an fmi2Error message naming the function: {log:?}"
+                ));
+            }
+            if s != State::Fatal && status == fmi2Error {
+                if before.is_some() && inst.fingerprint() != before {
+                    failures.push(format!("{at}: refused, but the FMU state changed"));
+                }
+                if own && inst.machine_state() != s {
+                    failures.push(format!("{at}: refused, but the state machine left {s:?}"));
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+/// The k-th model-exchange function with valid arguments: (name, status).
+pub(super) fn one_me_call(inst: &mut Instance, k: usize) -> (&'static str, fmi2Status) {
+    let x = start_states(inst.fmu);
+    let t = inst.time;
+    match k {
+        0 => ("fmi2EnterEventMode", inst.enter_event_mode()),
+        1 => ("fmi2NewDiscreteStates", inst.new_discrete_states().0),
+        2 => ("fmi2EnterContinuousTimeMode", inst.enter_continuous_time_mode()),
+        3 => ("fmi2CompletedIntegratorStep", inst.completed_integrator_step().status),
+        4 => ("fmi2SetTime", inst.set_time(t)),
+        5 => ("fmi2SetContinuousStates", inst.set_continuous_states(&x)),
+        6 => ("fmi2GetDerivatives", inst.get_derivatives().0),
+        7 => ("fmi2GetEventIndicators", inst.get_event_indicators().0),
+        8 => ("fmi2GetContinuousStates", inst.get_continuous_states().0),
+        _ => ("fmi2GetNominalsOfContinuousStates", inst.get_nominals().0),
+    }
+}
+
+/// Fails unless the last call was refused with fmi2Error and a logged message (naming the
+/// function, on this exporter's FMUs).
+pub(super) fn refused(inst: &Instance, function: &str, what: &str, status: fmi2Status) {
+    let log = inst.log();
+    assert_eq!(
+        status,
+        fmi2Error,
+        "{}: {function} with {what}: expected fmi2Error, got {}; log {log:?}",
+        inst.fmu.id,
+        status_name(status)
+    );
+    assert!(
+        refusal_logged(inst, &log, function),
+        "{}: {function} with {what}: refused without an fmi2Error message naming the function: {log:?}",
+        inst.fmu.id
+    );
+}
+
+pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fmu) {
+    let me = needs_me(fmu);
+    let (mut inst, _) = advanced(fmu, 10);
+    let (nx, ni) = (inst.nx(), inst.ni());
+    let c = inst.c;
+    type Vector = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
+    let getters: [(&str, Vector, usize); 4] = [
+        ("fmi2GetContinuousStates", me.get_continuous_states, nx),
+        ("fmi2GetDerivatives", me.get_derivatives, nx),
+        (
+            "fmi2GetNominalsOfContinuousStates",
+            me.get_nominals_of_continuous_states,
+            nx,
+        ),
+        ("fmi2GetEventIndicators", me.get_event_indicators, ni),
+    ];
+    let reference = me_observe(&inst);
+    let check_unchanged = |inst: &mut Instance, what: &str, before: &Option<Vec<u8>>| {
+        assert_eq!(
+            &inst.fingerprint(),
+            before,
+            "{}: {what}: refused, but the FMU state changed",
+            fmu.id
+        );
+        assert_eq!(
+            me_observe(inst),
+            reference,
+            "{}: after the refused {what}, the instance shows other values",
+            fmu.id
+        );
+    };
+    let mut sizes: Vec<usize> = vec![];
+    for (function, f, n) in getters {
+        // Wrong lengths, with a buffer of that length; NULL with the right length.
+        sizes.clear();
+        sizes.extend([n + 1, n + 7]);
+        if n > 0 {
+            sizes.push(n - 1);
+        }
+        for m in sizes.iter().copied() {
+            let before = inst.fingerprint();
+            let mut buf = vec![0.0; m];
+            // SAFETY: a buffer of m elements.
+            let s = unsafe { f(c, buf.as_mut_ptr(), m) };
+            let what = format!("n = {m} (the FMU has {n})");
+            refused(&inst, function, &what, s);
+            check_unchanged(&mut inst, &format!("{function}({what})"), &before);
+        }
+        let before = inst.fingerprint();
+        let m = n.max(1);
+        // SAFETY: NULL with n > 0, which the FMU must refuse.
+        let s = unsafe { f(c, ptr::null_mut(), m) };
+        refused(&inst, function, &format!("NULL and n = {m}"), s);
+        check_unchanged(&mut inst, &format!("{function}(NULL, {m})"), &before);
+    }
+    // fmi2SetContinuousStates: lengths, NULL, non-finite values (each position).
+    let (_, x) = inst.get_continuous_states();
+    let mut bad_states: Vec<(String, Vec<f64>, bool)> = vec![
+        (
+            format!("n = {} (the FMU has {nx})", nx + 1),
+            [&x[..], &[0.0]].concat(),
+            false,
+        ),
+        (format!("NULL and n = {}", nx.max(1)), vec![], true),
+    ];
+    if nx > 0 {
+        bad_states.push((
+            format!("n = {} (the FMU has {nx})", nx - 1),
+            x[..nx - 1].to_vec(),
+            false,
+        ));
+    }
+    for j in 0..nx {
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut y = x.clone();
+            y[j] = v;
+            bad_states.push((format!("x[{j}] = {v}"), y, false));
+        }
+    }
+    for (what, y, null) in bad_states {
+        let before = inst.fingerprint();
+        let (p, n) = if null {
+            (ptr::null(), nx.max(1))
+        } else {
+            (y.as_ptr(), y.len())
+        };
+        // SAFETY: an array of n elements, or NULL on purpose.
+        let s = unsafe { (me.set_continuous_states)(c, p, n) };
+        refused(&inst, "fmi2SetContinuousStates", &what, s);
+        check_unchanged(&mut inst, &format!("fmi2SetContinuousStates({what})"), &before);
+    }
+    // fmi2SetTime: not finite.
+    let t = inst.time;
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let before = inst.fingerprint();
+        let s = inst.set_time(v);
+        refused(&inst, "fmi2SetTime", &format!("time = {v}"), s);
+        check_unchanged(&mut inst, &format!("fmi2SetTime({v})"), &before);
+    }
+    inst.time = t;
+    // fmi2CompletedIntegratorStep: NULL out pointers.
+    let (mut a, mut b) = (0, 0);
+    for (what, pa, pb) in [
+        ("enterEventMode NULL", ptr::null_mut(), &mut b as *mut fmi2Boolean),
+        ("terminateSimulation NULL", &mut a as *mut fmi2Boolean, ptr::null_mut()),
+    ] {
+        let before = inst.fingerprint();
+        // SAFETY: NULL on purpose, a valid pointer otherwise.
+        let s = unsafe { (me.completed_integrator_step)(c, fmi2False, pa, pb) };
+        refused(&inst, "fmi2CompletedIntegratorStep", what, s);
+        check_unchanged(&mut inst, &format!("fmi2CompletedIntegratorStep({what})"), &before);
+    }
+    // fmi2NewDiscreteStates(NULL), in EventMode.
+    assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
+    inst.log();
+    let before = inst.fingerprint();
+    // What the valid call answers without the refused one before it: on a twin instance.
+    let (mut twin, _) = advanced(fmu, 10);
+    assert_eq!(twin.enter_event_mode(), fmi2OK, "{}", twin.log_text());
+    let (s_ref, info_ref) = twin.new_discrete_states();
+    // SAFETY: NULL on purpose.
+    let s = unsafe { (me.new_discrete_states)(c, ptr::null_mut()) };
+    refused(&inst, "fmi2NewDiscreteStates", "eventInfo NULL", s);
+    assert_eq!(
+        inst.fingerprint(),
+        before,
+        "{}: fmi2NewDiscreteStates(NULL) changed the FMU state",
+        fmu.id
+    );
+    let (s, info) = inst.new_discrete_states();
+    assert_eq!(
+        (s, info),
+        (s_ref, info_ref),
+        "{}: fmi2NewDiscreteStates after the refused one answers otherwise",
+        fmu.id
+    );
+    if before.is_none() {
+        limitation(
+            "<ModelExchange> does not declare canGetAndSetFMUstate and canSerializeFMUstate: the FMU state is not compared",
+        );
+    }
+}
+
+pub fn model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu) {
+    needs_me(fmu);
+    let mut failures = vec![];
+    for state in [Instantiated, InitializationMode, EventMode, ContinuousTimeMode] {
+        for v in fmu
+            .md
+            .variables
+            .iter()
+            // An alias is checked through the first variable of its set.
+            .filter(|v| v.ty != Type::String && !crate::standard::aliases_an_earlier(&fmu.md.variables, v))
+        {
+            let mut inst = me::instance_in(fmu, state);
+            let before = inst.fingerprint();
+            let s = match v.ty {
+                Type::Real => inst.set_real(&[v.vr], &[v.start_real().unwrap_or(0.0)]),
+                Type::Integer | Type::Enumeration => inst.set_integer(&[v.vr], &[v.start_integer().unwrap_or(0)]),
+                Type::Boolean => inst.set_boolean(&[v.vr], &[v.start_boolean().unwrap_or(false)]),
+                Type::String => unreachable!(),
+            };
+            let log = inst.log();
+            let want = crate::standard::settable_in_me(v, &format!("{state:?}"));
+            let at = format!(
+                "{}: set '{}' ({:?} {} {}, initial {:?}) in model-exchange state {state:?}",
+                fmu.id,
+                v.name,
+                v.ty,
+                v.causality,
+                v.variability,
+                crate::standard::initial(v.causality, v.variability, v.declared_initial)
+            );
+            if want && s != fmi2OK {
+                failures.push(format!(
+                    "{at}: allowed by the standard, got {}: {log:?}",
+                    status_name(s)
+                ));
+            }
+            if !want {
+                let function_allowed = me::allowed_states(set_function(v.ty)).contains(&state);
+                if s != fmi2Error {
+                    failures.push(format!("{at}: not allowed, got {}", status_name(s)));
+                } else if function_allowed && !inst.says(&log, fmi2Error, &[&format!("'{}'", v.name)]) {
+                    failures.push(format!("{at}: the refusal does not name the variable: {log:?}"));
+                } else if !log.iter().any(|e| e.status == fmi2Error) {
+                    failures.push(format!("{at}: refused without a message"));
+                }
+                if inst.fingerprint() != before {
+                    failures.push(format!("{at}: refused, but the FMU state changed"));
+                }
+            }
+            // A settable Real refuses NaN and infinities.
+            if want && v.ty == Type::Real {
+                for bad in [f64::NAN, f64::INFINITY] {
+                    let before = inst.fingerprint();
+                    let s = inst.set_real(&[v.vr], &[bad]);
+                    let log = inst.log();
+                    if s != fmi2Error || !log.iter().any(|e| e.status == fmi2Error) {
+                        failures.push(format!(
+                            "{at}: = {bad}: expected fmi2Error with a message, got {}",
+                            status_name(s)
+                        ));
+                    }
+                    if inst.fingerprint() != before {
+                        failures.push(format!("{at}: = {bad} refused, but the FMU state changed"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+pub fn model_exchange_functions_refuse_a_null_component(fmu: &Fmu) {
+    let Ok(me) = &fmu.api.me else {
+        if fmu.md.me.is_some() {
+            needs_me(fmu);
+        }
+        skip_not_declared("<ModelExchange>, and the binary does not export the model-exchange functions")
+    };
+    let c: fmi2Component = ptr::null_mut();
+    let mut v = [0.0; 4];
+    let mut info = fmi2EventInfo {
+        newDiscreteStatesNeeded: 0,
+        terminateSimulation: 0,
+        nominalsOfContinuousStatesChanged: 0,
+        valuesOfContinuousStatesChanged: 0,
+        nextEventTimeDefined: 0,
+        nextEventTime: 0.0,
+    };
+    let (mut a, mut b) = (0, 0);
+    let n = fmu.md.number_of_continuous_states().min(4);
+    let ni = fmu.md.number_of_event_indicators.min(4);
+    crate::outcome::breadcrumb("model-exchange functions with a NULL component");
+    // SAFETY: every function must check the component before touching anything.
+    let answers = unsafe {
+        [
+            ("fmi2EnterEventMode", (me.enter_event_mode)(c)),
+            ("fmi2NewDiscreteStates", (me.new_discrete_states)(c, &mut info)),
+            ("fmi2EnterContinuousTimeMode", (me.enter_continuous_time_mode)(c)),
+            (
+                "fmi2CompletedIntegratorStep",
+                (me.completed_integrator_step)(c, 0, &mut a, &mut b),
+            ),
+            ("fmi2SetTime", (me.set_time)(c, 0.0)),
+            ("fmi2SetContinuousStates", (me.set_continuous_states)(c, v.as_ptr(), n)),
+            ("fmi2GetDerivatives", (me.get_derivatives)(c, v.as_mut_ptr(), n)),
+            (
+                "fmi2GetEventIndicators",
+                (me.get_event_indicators)(c, v.as_mut_ptr(), ni),
+            ),
+            (
+                "fmi2GetContinuousStates",
+                (me.get_continuous_states)(c, v.as_mut_ptr(), n),
+            ),
+            (
+                "fmi2GetNominalsOfContinuousStates",
+                (me.get_nominals_of_continuous_states)(c, v.as_mut_ptr(), n),
+            ),
+        ]
+    };
+    for (f, s) in answers {
+        assert_eq!(s, fmi2Error, "{}: {f}(NULL, ...) answered {}", fmu.id, status_name(s));
+    }
+}
