@@ -1,42 +1,44 @@
-//! For code that hosts an FMU's FMI 2.0 C functions in its own process: a model crate's tests
-//! and benchmarks (the crate's `rlib` linked in, `fmi2Instantiate` called directly), and tools
-//! that load an FMU's binary. The callbacks an instance needs, with a logger that records what
-//! the FMU logs or one that drops it. One copy of the C-variadic logger for all of them.
+//! For code that hosts an FMU's C functions in its own process: the tests and benchmarks of this
+//! workspace (a model's `rlib` linked in, its `fmi2Instantiate` or `fmi3Instantiate...` called
+//! directly), and tools that load an FMU's binary. One host for both versions: [`fmi2`] (the
+//! callbacks, with the one copy of the C-variadic logger) and [`fmi3`] (a logger through the
+//! instance environment), both recording into the same [`Log`]; and an allocator that counts,
+//! for tests that a hot path allocates nothing.
 //!
 //! ```
-//! use rustfmu::testing::{Log, callbacks};
+//! use rustfmu::testing::{Log, fmi2};
 //!
 //! let log = Log::leak();
-//! let functions = callbacks(log); // for fmi2Instantiate(..., functions, ...)
+//! let functions = fmi2::callbacks(log); // for fmi2Instantiate(..., functions, ...)
 //! assert!(functions.logger.is_some());
 //! // What the FMU logged, as (status, text):
 //! assert!(log.texts().is_empty());
 //! ```
 //!
-//! Why the logger is sound: FMI 2.0's logger is C-variadic (`message` is a printf format). A
-//! rustfmu FMU always logs with the format `"%s"` and the text as the one variadic argument; on
-//! every ABI this project builds for (x86-64 System V and Windows, AArch64 Linux) a variadic
-//! argument that follows the fixed ones is passed where a fixed sixth pointer argument would
-//! be, so a function with six fixed arguments reads it. The recording logger reads the text
-//! only when the format is exactly `"%s"` and records any other format as it is. On Apple
-//! silicon variadic arguments go on the stack: there it records the format, never the argument. The FMI
-//! conformance suite (`conformance/`) keeps a logger of its own on purpose: it must not
+//! The FMI conformance suite (`conformance/`) keeps a logger of its own on purpose: it must not
 //! trust anything of the runtime it checks.
 
-use crate::fmi2::abi::*;
-use std::ffi::{CStr, c_char};
+pub mod fmi2;
+pub mod fmi3;
+
+/// The FMI 2.0 callbacks, where most hosts of this workspace look for them.
+pub use fmi2::{callbacks, silent_callbacks};
+
+use std::ffi::{CStr, c_char, c_uint};
 use std::sync::Mutex;
 
 /// One message the FMU logged.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LogEntry {
-    pub status: fmi2Status,
+    /// An `fmi2Status` or an `fmi3Status` (the same numbers, both `c_uint`).
+    pub status: c_uint,
     pub category: String,
-    /// The message: the `"%s"` argument, or the format itself when it is another one.
+    /// The message (FMI 2.0: the `"%s"` argument, or the format itself when it is another one).
     pub text: String,
 }
 
-/// What an instance logged, reached through its `componentEnvironment`.
+/// What an instance logged, reached through its `componentEnvironment` (FMI 2.0) or its
+/// instance environment (FMI 3.0).
 #[derive(Debug, Default)]
 pub struct Log {
     entries: Mutex<Vec<LogEntry>>,
@@ -65,13 +67,23 @@ impl Log {
     }
 
     /// Every message so far as (status, text).
-    pub fn texts(&self) -> Vec<(fmi2Status, String)> {
+    pub fn texts(&self) -> Vec<(c_uint, String)> {
         self.lock().iter().map(|e| (e.status, e.text.clone())).collect()
     }
 
     /// Every message so far as (status, text), removed from the log.
-    pub fn take_texts(&self) -> Vec<(fmi2Status, String)> {
+    pub fn take_texts(&self) -> Vec<(c_uint, String)> {
         self.take().into_iter().map(|e| (e.status, e.text)).collect()
+    }
+
+    /// The text of every message so far.
+    pub fn messages(&self) -> Vec<String> {
+        self.lock().iter().map(|e| e.text.clone()).collect()
+    }
+
+    /// The text of the last message, or "".
+    pub fn last(&self) -> String {
+        self.lock().last().map(|e| e.text.clone()).unwrap_or_default()
     }
 
     /// Forgets what was logged.
@@ -85,6 +97,15 @@ impl Log {
     }
 }
 
+/// This thread's log (leaked, one per thread): the tests of a binary run on threads at once, and
+/// the last message of a log they shared could be another test's.
+pub fn thread_log() -> &'static Log {
+    thread_local! {
+        static LOG: &'static Log = Log::leak();
+    }
+    LOG.with(|l| *l)
+}
+
 /// The text of a C string the FMU passed (empty for NULL).
 ///
 /// # Safety
@@ -95,132 +116,6 @@ unsafe fn text(s: *const c_char) -> String {
     }
     // SAFETY: not NULL, and NUL-terminated and alive by the caller's contract (the FMU's).
     unsafe { CStr::from_ptr(s) }.to_string_lossy().into_owned()
-}
-
-/// The recording logger with its variadic argument read as a fixed one (see the module's
-/// documentation). Never unwinds into the FMU: nothing here panics.
-unsafe extern "C" fn record(
-    env: fmi2ComponentEnvironment,
-    _instance: fmi2String,
-    status: fmi2Status,
-    category: fmi2String,
-    message: fmi2String,
-    argument: *const c_char,
-) {
-    if env.is_null() {
-        return;
-    }
-    // SAFETY: the strings are the FMU's, valid for the call; the argument is read only when the
-    // format says there is one string argument.
-    let (category, format) = unsafe { (text(category), text(message)) };
-    let text = if format == "%s" && !cfg!(all(target_vendor = "apple", target_arch = "aarch64")) {
-        // SAFETY: as above: "%s" means the first variadic argument is a string.
-        unsafe { self::text(argument) }
-    } else {
-        format
-    };
-    // SAFETY: `callbacks` is the only way this function gets to an FMU, and it passes a
-    // `&'static Log` as componentEnvironment.
-    let log = unsafe { &*(env as *const Log) };
-    log.lock().push(LogEntry { status, category, text });
-}
-
-unsafe extern "C" fn ignore(
-    _env: fmi2ComponentEnvironment,
-    _instance: fmi2String,
-    _status: fmi2Status,
-    _category: fmi2String,
-    _message: fmi2String,
-) {
-}
-
-type Recorder =
-    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, *const c_char);
-type Ignorer = unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String);
-type Variadic = unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
-
-/// Callbacks whose logger records into `log` (the instance's `componentEnvironment`), without
-/// memory callbacks (FMI 2.0 lets an FMU allocate with its own). Leaked, like the log: they
-/// must outlive the instance.
-pub fn callbacks(log: &'static Log) -> &'static fmi2CallbackFunctions {
-    Box::leak(Box::new(fmi2CallbackFunctions {
-        // SAFETY: same fixed arguments; the sixth is where the ABIs pass the first variadic
-        // argument (module documentation), and `record` reads it only after a "%s".
-        logger: Some(unsafe { std::mem::transmute::<Recorder, Variadic>(record as Recorder) }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: log as *const Log as fmi2ComponentEnvironment,
-    }))
-}
-
-/// Callbacks whose logger drops every message and allocates nothing (benchmarks, and tests
-/// that count allocations).
-pub fn silent_callbacks() -> &'static fmi2CallbackFunctions {
-    Box::leak(Box::new(fmi2CallbackFunctions {
-        // SAFETY: a callee that reads fewer arguments than the caller passes is sound in C's
-        // calling conventions; `ignore` reads none of them.
-        logger: Some(unsafe { std::mem::transmute::<Ignorer, Variadic>(ignore as Ignorer) }),
-        allocateMemory: None,
-        freeMemory: None,
-        stepFinished: None,
-        componentEnvironment: std::ptr::null_mut(),
-    }))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_recording_logger_keeps_status_category_and_text_and_ignores_a_null_environment() {
-        let log = Log::leak();
-        let cb = callbacks(log);
-        let logger = cb.logger.expect("a logger");
-        // SAFETY: the logger called the way an FMU calls it: "%s" and one string.
-        unsafe {
-            logger(
-                cb.componentEnvironment,
-                c"i".as_ptr(),
-                fmi2Warning,
-                c"logAll".as_ptr(),
-                c"%s".as_ptr(),
-                c"hello".as_ptr(),
-            );
-            logger(
-                cb.componentEnvironment,
-                c"i".as_ptr(),
-                fmi2OK,
-                c"logAll".as_ptr(),
-                c"plain".as_ptr(),
-            );
-            logger(
-                std::ptr::null_mut(),
-                c"i".as_ptr(),
-                fmi2OK,
-                c"logAll".as_ptr(),
-                c"%s".as_ptr(),
-                c"lost".as_ptr(),
-            );
-        }
-        assert_eq!(
-            log.entries(),
-            vec![
-                LogEntry {
-                    status: fmi2Warning,
-                    category: "logAll".into(),
-                    text: "hello".into()
-                },
-                LogEntry {
-                    status: fmi2OK,
-                    category: "logAll".into(),
-                    text: "plain".into()
-                },
-            ]
-        );
-        assert_eq!(log.take().len(), 2);
-        assert!(log.texts().is_empty());
-    }
 }
 
 /// A global allocator that counts the heap allocations of the thread that armed it

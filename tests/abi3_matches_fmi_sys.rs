@@ -125,6 +125,7 @@ fn the_fmi3_types_are_the_headers() {
 
 #[test]
 fn the_version_is_3_0() {
+    // SAFETY: fmi3GetVersion returns a static NUL-terminated string.
     let v = unsafe { std::ffi::CStr::from_ptr(fmi3GetVersion()) };
     assert_eq!(v.to_str().unwrap(), "3.0");
     assert!(

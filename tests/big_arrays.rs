@@ -6,10 +6,8 @@
 //! deserialized, restored) with every element.
 
 use rustfmu::__private::abi3::*;
-use support::Log;
+use rustfmu::testing::{Log, fmi3};
 
-#[path = "support/fmi3_host.rs"]
-mod support;
 use std::ptr::null_mut;
 
 mod model {
@@ -114,11 +112,11 @@ fn started(c: fmi3Instance, log: &Log, n: usize) {
 #[test]
 fn a_rod_of_50_and_of_20_cells_follows_its_exact_solution_in_co_simulation() {
     for n in [50, 20] {
-        let (c, log) = support::instance(fmi3InstantiateCoSimulation, TOKEN, "rod");
+        let (c, log) = fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "rod");
         started(c, log, n);
         let (v, lambda) = mode(n);
         let (mut event, mut terminate, mut early, mut reached) = (false, false, false, 0.0);
-        // SAFETY (every call): a live instance, output arguments that are locals.
+        // SAFETY: for every call, a live instance, output arguments that are locals.
         unsafe {
             assert_eq!(fmi3ExitInitializationMode(c), fmi3OK, "{}", log.last());
             for k in 0..10 {
@@ -143,10 +141,10 @@ fn a_rod_of_50_and_of_20_cells_follows_its_exact_solution_in_co_simulation() {
 
 #[test]
 fn model_exchange_has_50_states_and_their_exact_derivatives() {
-    let (c, log) = support::me_instance(fmi3InstantiateModelExchange, TOKEN, "rod");
+    let (c, log) = fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "rod");
     started(c, log, 50);
     let (v, lambda) = mode(50);
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         assert_eq!(fmi3ExitInitializationMode(c), fmi3OK, "{}", log.last());
         let mut count = 0usize;
@@ -163,12 +161,12 @@ fn model_exchange_has_50_states_and_their_exact_derivatives() {
 
 #[test]
 fn the_fmu_state_carries_every_element_of_the_long_arrays() {
-    let (c, log) = support::instance(fmi3InstantiateCoSimulation, TOKEN, "rod");
+    let (c, log) = fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "rod");
     started(c, log, 50);
     let mut weights: Vec<f64> = (0..100).map(|i| 0.5 + i as f64).collect();
     assert_eq!(set(c, 6, &weights), fmi3OK, "{}", log.last());
     let (mut event, mut terminate, mut early, mut reached) = (false, false, false, 0.0);
-    // SAFETY (every call): a live instance, output arguments that are locals, buffers of the
+    // SAFETY: for every call, a live instance, output arguments that are locals, buffers of the
     // sizes passed.
     unsafe {
         assert_eq!(fmi3ExitInitializationMode(c), fmi3OK, "{}", log.last());

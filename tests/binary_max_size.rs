@@ -5,10 +5,8 @@
 //! bytes and an FMU state taken afterwards is one the FMU accepts again.
 
 use rustfmu::__private::abi3::*;
-use support::Log;
+use rustfmu::testing::{Log, fmi3};
 
-#[path = "support/fmi3_host.rs"]
-mod support;
 use std::ptr::{null, null_mut};
 
 mod model {
@@ -49,11 +47,11 @@ mod model {
 use model::__rustfmu_fmi3_exports::*;
 
 fn cs() -> (fmi3Instance, &'static Log) {
-    support::instance(fmi3InstantiateCoSimulation, TOKEN, "frames")
+    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "frames")
 }
 
 fn me() -> (fmi3Instance, &'static Log) {
-    support::me_instance(fmi3InstantiateModelExchange, TOKEN, "frames")
+    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "frames")
 }
 
 fn init(c: fmi3Instance) {
@@ -93,7 +91,7 @@ fn assert_names(log: &Log, what: &str) {
 /// The instance's FMU state, serialized and deserialized again (as an importer keeps it), is
 /// accepted by fmi3SetFMUState.
 fn state_round_trips(c: fmi3Instance, log: &Log) {
-    // SAFETY (every call): a live instance, buffers of the sizes passed.
+    // SAFETY: for every call, a live instance, buffers of the sizes passed.
     unsafe {
         let mut state: fmi3FMUState = null_mut();
         assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{}", log.last());
@@ -185,7 +183,7 @@ fn the_initialization_that_wrote_the_longer_frame_is_refused() {
 #[test]
 fn the_event_update_that_wrote_the_longer_latch_is_refused() {
     let (c, log) = me();
-    // SAFETY (every call): a live instance, output arguments that are locals.
+    // SAFETY: for every call, a live instance, output arguments that are locals.
     unsafe {
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
         assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);

@@ -4,7 +4,7 @@
 //! not later, asks for rounds without end, or ends the simulation).
 
 use rustfmu::__private::abi::*;
-use std::ffi::CString;
+use rustfmu::testing::thread_log as log;
 
 mod model {
     use rustfmu::prelude::*;
@@ -85,30 +85,11 @@ mod model {
 }
 use model::__rustfmu_fmi2_exports::*;
 
-/// This test thread's log: the tests run on threads at once, and the last message of a log they
-/// shared could be another test's.
-fn log() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 /// An instance of `kind` with `misbehave` set, initialized (Model Exchange: in Event Mode).
 fn instance(kind: fmi2Type, misbehave: i32) -> fmi2Component {
-    let guid = CString::new(GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    let c = rustfmu::testing::fmi2::instance(fmi2Instantiate, GUID, kind, c"refill", log());
+    // SAFETY: a live instance; one reference, one value.
     unsafe {
-        let c = fmi2Instantiate(
-            c"refill".as_ptr(),
-            kind,
-            guid.as_ptr(),
-            std::ptr::null(),
-            rustfmu::testing::callbacks(log()),
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2SetInteger(c, &6, 1, &misbehave), fmi2OK);

@@ -8,8 +8,7 @@
 use rustfmu::__private::abi::*;
 use rustfmu::description::{self, FmiVersion, Interfaces, Start, VarType};
 
-#[path = "support/fmi2_host.rs"]
-mod fmi2_host;
+use rustfmu::testing::{fmi2, thread_log as log};
 
 mod model {
     use rustfmu::prelude::*;
@@ -120,30 +119,19 @@ fn the_fmi2_description_lists_each_element_as_a_scalar_of_structured_name() {
     assert_eq!(d.fmi2_element(16), None);
 }
 
-/// This test thread's log: the tests run on threads at once, and the last message of a log they
-/// shared could be another test's.
-fn log() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 fn instance(name: &std::ffi::CStr) -> fmi2Component {
-    fmi2_host::cs_instance(fmi2Instantiate, GUID, name, log())
+    fmi2::cs_instance(fmi2Instantiate, GUID, name, log())
 }
 
 fn last_error(_instance: &str) -> String {
-    log().entries().last().map(|e| e.text.clone()).unwrap_or_default()
+    log().last()
 }
 
 fn reals(c: fmi2Component, vrs: &[u32]) -> Vec<f64> {
     let mut out = vec![f64::NAN; vrs.len()];
     // SAFETY: as many slots as references.
-    assert_eq!(
-        unsafe { fmi2GetReal(c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) },
-        fmi2OK
-    );
+    let status = unsafe { fmi2GetReal(c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr()) };
+    assert_eq!(status, fmi2OK);
     out
 }
 

@@ -6,8 +6,7 @@
 
 use rustfmu::__private::abi::*;
 
-#[path = "support/fmi2_host.rs"]
-mod fmi2_host;
+use rustfmu::testing::{fmi2, thread_log as log};
 
 mod model {
     use rustfmu::prelude::*;
@@ -63,15 +62,8 @@ mod model {
 }
 use model::__rustfmu_fmi2_exports::*;
 
-fn log() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 fn last() -> String {
-    log().entries().last().map(|e| e.text.clone()).unwrap_or_default()
+    log().last()
 }
 
 fn reals(c: fmi2Component, vrs: &[u32]) -> Vec<f64> {
@@ -91,11 +83,11 @@ fn set_reals(c: fmi2Component, vrs: &[u32], values: &[f64]) {
 
 #[test]
 fn the_elements_of_long_arrays_are_fmi2_scalars_and_the_state_carries_them() {
-    let c = fmi2_host::cs_instance(fmi2Instantiate, GUID, c"mixer", log());
+    let c = fmi2::cs_instance(fmi2Instantiate, GUID, c"mixer", log());
     let w: Vec<u32> = (100..200).collect();
     let g: Vec<u32> = (200..280).collect();
     let counts: Vec<u32> = (300..340).collect();
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);

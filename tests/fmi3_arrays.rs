@@ -4,10 +4,7 @@
 //! checked before any is stored (bounds, all or nothing); the FMU state with arrays.
 
 use rustfmu::__private::abi3::*;
-use support::Log;
-
-#[path = "support/fmi3_host.rs"]
-mod support;
+use rustfmu::testing::{Log, fmi3};
 
 mod model {
     use rustfmu::prelude::*;
@@ -70,7 +67,7 @@ fn the_description_has_the_dimensions_and_the_starts_row_major() {
 }
 
 fn instance() -> (fmi3Instance, &'static Log) {
-    support::instance(fmi3InstantiateCoSimulation, TOKEN, "table")
+    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "table")
 }
 
 fn init(c: fmi3Instance) {
@@ -95,7 +92,7 @@ fn gains(c: fmi3Instance) -> [f64; 6] {
 #[test]
 fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() {
     let (c, log) = instance();
-    // SAFETY (every call): arrays of the lengths passed, a live instance.
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // Start values in Instantiated, row-major.
         assert_eq!(gains(c), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
@@ -111,6 +108,7 @@ fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() 
     }
     let (c, log) = instance();
     init(c);
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // Two arrays in one call: counts (4) then flags (2) are different types; counts and
         // gains' neighbours: u16 then the total.
@@ -119,7 +117,7 @@ fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() 
             fmi3SetUInt16(c, &2, 1, counts.as_ptr(), 4),
             fmi3OK,
             "{:?}",
-            log.0.lock().unwrap()
+            log.messages()
         );
         let mut total = 0i64;
         assert_eq!(fmi3GetInt64(c, &5, 1, &mut total, 1), fmi3OK);
@@ -135,13 +133,14 @@ fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() 
         assert!(
             last(log).contains("11 for 'gains' (vr 1) is outside"),
             "{:?}",
-            log.0.lock().unwrap()
+            log.messages()
         );
         assert_eq!(gains(c), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         fmi3FreeInstance(c);
     }
     let (c, _) = instance();
     init(c);
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         let new = [0.5, 1.5, 2.5, -0.5, -1.5, -2.5];
         assert_eq!(fmi3SetFloat64(c, &1, 1, new.as_ptr(), 6), fmi3OK);

@@ -4,9 +4,9 @@
 //! directional and adjoint derivatives, FMU state, and the 3.0 logger's messages.
 
 use rustfmu::__private::abi3::*;
-use std::ffi::{CStr, CString, c_char, c_void};
+use rustfmu::testing::{Log, fmi3};
+use std::ffi::{CStr, CString, c_char};
 use std::ptr::{null, null_mut};
-use std::sync::Mutex;
 
 #[allow(non_snake_case)] // T, the time constant's symbol
 mod model {
@@ -77,34 +77,17 @@ const TIME_VR: u32 = 9;
 /// A refused call: what it is, the call, words its message must contain.
 type Refusal<'a> = (&'a str, &'a dyn Fn() -> fmi3Status, &'a [&'a str]);
 
-#[derive(Default)]
-struct Log {
-    entries: Mutex<Vec<(fmi3Status, String, String)>>,
-}
-
-impl Log {
-    /// The messages so far; every one in FMI 3.0's words (the core words its messages in the
-    /// calling layer's terms, nothing is rewritten after the fact).
-    fn take(&self) -> Vec<(fmi3Status, String, String)> {
-        let entries = std::mem::take(&mut *self.entries.lock().unwrap());
-        for (_, _, message) in &entries {
-            for word in ["fmi2", "GUID", "StepComplete", "StepFailed", "FMUstate"] {
-                assert!(!message.contains(word), "an FMI 3.0 message says {word:?}: {message}");
-            }
+/// The messages so far as (status, category, message), taken from the log; every one in FMI
+/// 3.0's words (the core words its messages in the calling layer's terms, nothing is rewritten
+/// after the fact).
+fn taken(log: &Log) -> Vec<(fmi3Status, String, String)> {
+    let entries: Vec<_> = log.take().into_iter().map(|e| (e.status, e.category, e.text)).collect();
+    for (_, _, message) in &entries {
+        for word in ["fmi2", "GUID", "StepComplete", "StepFailed", "FMUstate"] {
+            assert!(!message.contains(word), "an FMI 3.0 message says {word:?}: {message}");
         }
-        entries
     }
-}
-
-unsafe extern "C" fn collect(env: *mut c_void, status: fmi3Status, category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Log given at instantiation; the strings are the runtime's.
-    let (log, category, message) =
-        unsafe { (&*(env as *const Log), CStr::from_ptr(category), CStr::from_ptr(message)) };
-    log.entries.lock().unwrap().push((
-        status,
-        category.to_string_lossy().into_owned(),
-        message.to_string_lossy().into_owned(),
-    ));
+    entries
 }
 
 fn token() -> CString {
@@ -112,44 +95,11 @@ fn token() -> CString {
 }
 
 fn cs() -> (fmi3Instance, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    // SAFETY: valid strings and a logger whose environment outlives the instance.
-    let c = unsafe {
-        fmi3InstantiateCoSimulation(
-            c"cs".as_ptr(),
-            token().as_ptr(),
-            null(),
-            false,
-            false,
-            false,
-            false,
-            null(),
-            0,
-            log as *const Log as *mut c_void,
-            Some(collect),
-            None,
-        )
-    };
-    assert!(!c.is_null());
-    (c, log)
+    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "cs")
 }
 
 fn me() -> (fmi3Instance, &'static Log) {
-    let log: &'static Log = Box::leak(Box::default());
-    // SAFETY: as above.
-    let c = unsafe {
-        fmi3InstantiateModelExchange(
-            c"me".as_ptr(),
-            token().as_ptr(),
-            null(),
-            false,
-            false,
-            log as *const Log as *mut c_void,
-            Some(collect),
-        )
-    };
-    assert!(!c.is_null());
-    (c, log)
+    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "me")
 }
 
 fn init(c: fmi3Instance) {
@@ -189,7 +139,7 @@ fn step(c: fmi3Instance, t: f64, h: f64) -> Step {
 }
 
 fn logged(log: &Log, status: fmi3Status, words: &[&str]) {
-    let entries = log.take();
+    let entries = taken(log);
     assert!(
         entries
             .iter()
@@ -340,7 +290,7 @@ fn start_values_are_readable_in_instantiated_and_calculated_values_are_not() {
             // A value set in Instantiated is what a get answers there.
             assert_eq!(fmi3SetFloat64(c, [4u32].as_ptr(), 1, [0.25].as_ptr(), 1), fmi3OK);
             assert_eq!(get(c, &[4]), (fmi3OK, vec![0.25]));
-            assert!(log.take().iter().all(|(s, _, _)| *s == fmi3OK));
+            assert!(taken(log).iter().all(|(s, _, _)| *s == fmi3OK));
 
             // y is calculated: no value before initialization. Refused whole (nothing written).
             let (s, v) = get(c, &[0, 3]);
@@ -420,51 +370,32 @@ fn the_state_table_is_fmi_3() {
 
 #[test]
 fn instantiation_refuses_a_wrong_token_a_missing_name_and_event_mode() {
-    let log: &'static Log = Box::leak(Box::default());
-    let env = log as *const Log as *mut c_void;
-    // SAFETY: valid strings or NULL.
+    let log = Log::leak();
+    let how = fmi3::Instantiation::new("x");
+    let c = how.model_exchange(fmi3InstantiateModelExchange, "{nope}", log);
+    assert!(c.is_null());
+    logged(log, fmi3Error, &["instantiationToken '{nope}'"]);
+    // Event mode is offered (hasEventMode="true"): the instance is made.
+    let c = fmi3::Instantiation {
+        event_mode_used: true,
+        ..how
+    }
+    .co_simulation(fmi3InstantiateCoSimulation, TOKEN, log, None);
+    assert!(!c.is_null());
+    // SAFETY: a live instance, freed once.
+    unsafe { fmi3FreeInstance(c) };
+    let c = how.scheduled_execution(fmi3InstantiateScheduledExecution, TOKEN, log, None);
+    assert!(c.is_null());
+    // SAFETY: NULL for the name; valid strings otherwise.
     unsafe {
         let c = fmi3InstantiateModelExchange(
-            c"x".as_ptr(),
-            c"{nope}".as_ptr(),
             null(),
-            false,
-            false,
-            env,
-            Some(collect),
-        );
-        assert!(c.is_null());
-        logged(log, fmi3Error, &["instantiationToken '{nope}'"]);
-        let c = fmi3InstantiateModelExchange(null(), token().as_ptr(), null(), false, false, env, Some(collect));
-        assert!(c.is_null());
-        let c = fmi3InstantiateCoSimulation(
-            c"x".as_ptr(),
             token().as_ptr(),
             null(),
             false,
             false,
-            true,
-            false,
-            null(),
-            0,
-            env,
-            Some(collect),
-            None,
-        );
-        // Event mode is offered (hasEventMode="true"): the instance is made.
-        assert!(!c.is_null());
-        fmi3FreeInstance(c);
-        let c = fmi3InstantiateScheduledExecution(
-            c"x".as_ptr(),
-            token().as_ptr(),
-            null(),
-            false,
-            false,
-            env,
-            Some(collect),
-            None,
-            None,
-            None,
+            fmi3::environment(log),
+            Some(fmi3::logger::<Log>),
         );
         assert!(c.is_null());
         // No logger at all: allowed in FMI 3.0, and the instance works.
@@ -641,7 +572,7 @@ fn messages_speak_fmi_3() {
         assert_eq!(fmi3EnterContinuousTimeMode(c), fmi3OK);
         let mut dx = [0.0; 3];
         assert_eq!(fmi3GetContinuousStateDerivatives(c, dx.as_mut_ptr(), 3), fmi3Error);
-        let entries = log.take();
+        let entries = taken(log);
         assert!(
             entries.iter().any(|(s, cat, m)| *s == fmi3Error
                 && cat == "logStatusError"

@@ -8,9 +8,7 @@
 //! indicator), counting the crossings in the variable it clocks.
 
 use rustfmu::__private::abi3::*;
-use std::ffi::{CStr, CString, c_void};
-use std::ptr::null;
-use std::sync::Mutex;
+use rustfmu::testing::{Log, fmi3};
 
 mod model {
     use rustfmu::prelude::*;
@@ -112,35 +110,18 @@ mod model {
 }
 use model::__rustfmu_fmi3_exports::*;
 
-#[derive(Default)]
-struct Log(Mutex<Vec<String>>);
-
-unsafe extern "C" fn log(env: *mut c_void, _status: fmi3Status, _category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Log given at instantiation; the string is the runtime's.
-    let (l, message) = unsafe { (&*(env as *const Log), CStr::from_ptr(message)) };
-    l.0.lock().unwrap().push(message.to_string_lossy().into_owned());
-}
-
 fn last(l: &Log) -> String {
-    l.0.lock().unwrap().last().cloned().unwrap_or_default()
+    l.last()
 }
 
 /// A model-exchange instance, initialized at t = 0: in Event Mode.
 fn model_exchange() -> (fmi3Instance, &'static Log) {
-    let l: &'static Log = Box::leak(Box::default());
-    let token = CString::new(TOKEN).unwrap();
-    // SAFETY: valid strings and a logger whose environment outlives the instance.
-    let c = unsafe {
-        fmi3InstantiateModelExchange(
-            c"clocked".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            true,
-            l as *const Log as *mut c_void,
-            Some(log),
-        )
-    };
+    let l = Log::leak();
+    let c = fmi3::Instantiation {
+        logging_on: true,
+        ..fmi3::Instantiation::new("clocked")
+    }
+    .model_exchange(fmi3InstantiateModelExchange, TOKEN, l);
     assert!(!c.is_null());
     // SAFETY: a live instance.
     unsafe {
@@ -231,29 +212,34 @@ fn intervals_and_shifts_are_answered_per_interval_variability() {
     assert_eq!(interval(c, 5), (fmi3OK, 0.3, UNCHANGED));
     // SAFETY: a live instance.
     unsafe { fmi3FreeInstance(c) };
-    // (Each closure: SAFETY: a live instance; locals.)
     // A constant clock's and a parameter's interval are not the importer's to set.
     refused(
         true,
         "only fixed and tunable clocks with an intervalDecimal",
+        // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
         |c| unsafe { fmi3SetIntervalDecimal(c, &1, 1, &0.2) },
     );
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(true, "parameter 'Ts'", |c| unsafe {
         fmi3SetIntervalDecimal(c, &2, 1, &0.2)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(true, "a finite time > 0", |c| unsafe {
         fmi3SetIntervalDecimal(c, &4, 1, &-1.0)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "not allowed in state", |c| unsafe {
         fmi3SetShiftDecimal(c, &4, 1, &0.0)
     });
     // Not a clock, a triggered clock's interval, an aperiodic clock's shift, fractions.
     refused(true, "not a Clock", |c| interval(c, 3).0);
     refused(true, "triggered clock", |c| interval(c, 6).0);
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(true, "only periodic clocks", |c| unsafe {
         let mut s = 0.0;
         fmi3GetShiftDecimal(c, &5, 1, &mut s)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(true, "supportsFraction = false", |c| unsafe {
         let (mut n, mut r, mut q) = (0u64, 0u64, 0u32);
         fmi3GetIntervalFraction(c, &1, 1, &mut n, &mut r, &mut q)
@@ -321,14 +307,15 @@ fn clocked_variables_change_at_their_ticks_only_in_model_exchange() {
     unsafe { fmi3FreeInstance(c) };
 
     // The refusals, each on a fresh instance in the Event Mode after initialization.
-    // (Each closure: SAFETY: a live instance; locals.)
     refused(false, "clocked by 'tick', which is not active", |c| get_i32(c, 10).0);
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "clocked by 'sample', which is not active", |c| unsafe {
         fmi3SetFloat64(c, &11, 1, &1.0, 1)
     });
     refused(false, "set the clocked inputs first", |c| {
         assert_eq!(set_clock(c, 2, true), fmi3OK);
         assert_eq!(get_f64(c, 12).0, fmi3OK);
+        // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
         unsafe { fmi3SetFloat64(c, &11, 1, &1.0, 1) }
     });
     refused(false, "set the clocks, then the clocked inputs", |c| {
@@ -339,6 +326,7 @@ fn clocked_variables_change_at_their_ticks_only_in_model_exchange() {
     refused(false, "canBeDeactivated = false", |c| set_clock(c, 1, false));
     // t = 0 is no tick of `slow` (shift 0.05).
     refused(false, "ticks at 0.05 + k * 0.5", |c| set_clock(c, 4, true));
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "not allowed in state", |c| unsafe {
         assert_eq!(fmi3EnterContinuousTimeMode(c), fmi3OK);
         set_clock(c, 1, true)
@@ -379,10 +367,10 @@ fn an_output_clock_ticks_at_the_event_the_model_says_and_its_variables_are_read_
     // SAFETY: a live instance.
     unsafe { fmi3FreeInstance(c) };
     // The importer does not activate an output clock, and reads its variables where it ticks only.
-    // (Each closure: SAFETY: a live instance; locals.)
     refused(false, "is an output clock", |c| set_clock(c, 23, true));
     refused(false, "clocked by 'crossed', which is not active", |c| get_i32(c, 24).0);
     // After the event was evaluated, no input is set in this Event Mode.
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "set after this event was evaluated", |c| unsafe {
         let mut on = false;
         assert_eq!(fmi3GetClock(c, &23, 1, &mut on), fmi3OK);
@@ -417,26 +405,14 @@ fn an_fmu_state_taken_after_a_tick_was_evaluated_restores_to_one_tick() {
 
 #[test]
 fn co_simulation_needs_event_mode_and_ticks_there() {
-    let l: &'static Log = Box::leak(Box::default());
-    let token = CString::new(TOKEN).unwrap();
-    let instantiate = |event_mode: bool| {
-        // SAFETY: valid strings and a logger whose environment outlives the instance.
-        unsafe {
-            fmi3InstantiateCoSimulation(
-                c"clocked".as_ptr(),
-                token.as_ptr(),
-                null(),
-                false,
-                true,
-                event_mode,
-                false,
-                null(),
-                0,
-                l as *const Log as *mut c_void,
-                Some(log),
-                None,
-            )
+    let l = Log::leak();
+    let instantiate = |event_mode_used: bool| {
+        fmi3::Instantiation {
+            logging_on: true,
+            event_mode_used,
+            ..fmi3::Instantiation::new("clocked")
         }
+        .co_simulation(fmi3InstantiateCoSimulation, TOKEN, l, None)
     };
     assert!(instantiate(false).is_null(), "clocks need eventModeUsed");
     assert!(last(l).contains("eventModeUsed = true"), "{}", last(l));

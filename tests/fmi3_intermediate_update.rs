@@ -6,8 +6,9 @@
 //! with `export_fmi3!`: x' = -x, x(0) = 1, so x(t) = e^-t.
 
 use rustfmu::__private::abi3::*;
-use std::ffi::{CStr, CString, c_void};
-use std::ptr::{null, null_mut};
+use rustfmu::testing::{Log, fmi3};
+use std::ffi::c_void;
+use std::ptr::null_mut;
 use std::sync::Mutex;
 
 mod model {
@@ -52,7 +53,7 @@ type Call = (f64, bool, bool, bool, bool);
 /// answers.
 #[derive(Default)]
 struct Host {
-    log: Mutex<Vec<String>>,
+    log: Log,
     calls: Mutex<Vec<Call>>,
     /// Ask for an early return at this time once the callback is called at or after `after`.
     request: Mutex<Option<(f64, f64)>>,
@@ -62,10 +63,10 @@ struct Host {
     nested: Mutex<Option<fmi3Status>>,
 }
 
-unsafe extern "C" fn log(env: *mut c_void, _status: fmi3Status, _category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Host given at instantiation; the string is the runtime's.
-    let (host, message) = unsafe { (&*(env as *const Host), CStr::from_ptr(message)) };
-    host.log.lock().unwrap().push(message.to_string_lossy().into_owned());
+impl fmi3::Host for Host {
+    fn log(&self) -> &Log {
+        &self.log
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -79,7 +80,8 @@ unsafe extern "C" fn intermediate(
     early_return_requested: *mut bool,
     early_return_time: *mut f64,
 ) {
-    // SAFETY: as in `log`; the two outputs are the runtime's locals.
+    // SAFETY: env is the leaked &Host given at instantiation (`instance`); the two outputs are
+    // the runtime's locals.
     let host = unsafe { &*(env as *const Host) };
     host.calls
         .lock()
@@ -103,29 +105,17 @@ unsafe extern "C" fn intermediate(
 }
 
 fn instance(host: &'static Host, early_return_allowed: bool, required: &[u32]) -> fmi3Instance {
-    let token = CString::new(TOKEN).unwrap();
-    // SAFETY: valid strings; the host outlives the instance (leaked).
-    unsafe {
-        fmi3InstantiateCoSimulation(
-            c"decay".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            false,
-            false,
-            early_return_allowed,
-            if required.is_empty() { null() } else { required.as_ptr() },
-            required.len(),
-            host as *const Host as *mut c_void,
-            Some(log),
-            Some(intermediate),
-        )
-    }
+    let how = fmi3::Instantiation {
+        early_return_allowed,
+        required_intermediate_variables: required,
+        ..fmi3::Instantiation::new("decay")
+    };
+    how.co_simulation(fmi3InstantiateCoSimulation, TOKEN, host, Some(intermediate))
 }
 
 fn started(host: &'static Host, early_return_allowed: bool) -> fmi3Instance {
     let c = instance(host, early_return_allowed, &[]);
-    assert!(!c.is_null(), "{:?}", host.log.lock().unwrap());
+    assert!(!c.is_null(), "{:?}", host.log.messages());
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
@@ -174,24 +164,7 @@ fn the_callback_is_told_every_accepted_internal_step_and_the_result_is_unchanged
 
     // The same step without a callback: the same number to the bit.
     let plain = leak();
-    let token = CString::new(TOKEN).unwrap();
-    // SAFETY: as in `instance`, without the intermediate-update callback.
-    let d = unsafe {
-        fmi3InstantiateCoSimulation(
-            c"plain".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            false,
-            false,
-            false,
-            null(),
-            0,
-            plain as *const Host as *mut c_void,
-            Some(log),
-            None,
-        )
-    };
+    let d = fmi3::Instantiation::new("plain").co_simulation(fmi3InstantiateCoSimulation, TOKEN, plain, None);
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(fmi3EnterInitializationMode(d, false, 0.0, 0.0, false, 0.0), fmi3OK);
@@ -219,7 +192,7 @@ fn an_early_return_ends_the_step_at_the_time_asked_for_with_the_state_there() {
         "canReturnEarly with earlyReturnAllowed"
     );
     assert!((x(c) - (-0.37f64).exp()).abs() < 1e-9, "{}", x(c));
-    assert!(host.log.lock().unwrap().is_empty(), "{:?}", host.log.lock().unwrap());
+    assert!(host.log.messages().is_empty(), "{:?}", host.log.messages());
 
     // A time already passed: the step returns at the internal step's end it was told.
     host.calls.lock().unwrap().clear();
@@ -257,12 +230,11 @@ fn a_call_into_the_instance_from_the_callback_is_refused_and_the_step_goes_on() 
     assert_eq!(*host.nested.lock().unwrap(), Some(fmi3Error));
     assert!(
         host.log
-            .lock()
-            .unwrap()
+            .messages()
             .iter()
             .any(|m| m.contains("fmi3GetFloat64: called while a call into this instance is still running")),
         "{:?}",
-        host.log.lock().unwrap()
+        host.log.messages()
     );
     *host.instance.lock().unwrap() = None;
     assert!((x(c) - (-0.5f64).exp()).abs() < 1e-9);
@@ -276,9 +248,9 @@ fn required_intermediate_variables_not_declared_are_named_in_a_warning_and_the_i
     // --intermediate-update lists every output, and the Reference-FMUs accept that (issue 49).
     let host = leak();
     let c = instance(host, true, &[1, 77]);
-    assert!(!c.is_null(), "{:?}", host.log.lock().unwrap());
+    assert!(!c.is_null(), "{:?}", host.log.messages());
     {
-        let log = host.log.lock().unwrap();
+        let log = host.log.messages();
         assert!(
             log.iter().any(|m| m.contains("2 requiredIntermediateVariables given")
                 && m.contains("'x' (vr 1)")

@@ -7,8 +7,9 @@
 
 use rustfmu::__private::abi3::*;
 use rustfmu::core::machine::State;
-use std::ffi::{CStr, CString, c_void};
-use std::ptr::{null, null_mut};
+use rustfmu::testing::{Log, fmi3};
+use std::ffi::c_void;
+use std::ptr::null_mut;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicPtr, Ordering};
 
@@ -83,16 +84,16 @@ type Update = (Option<State>, bool, i32, fmi3Status, (f64, u32));
 /// What the callbacks see: the messages, and what the clockUpdate callback read from inside it.
 #[derive(Default)]
 struct Probe {
-    messages: Mutex<Vec<String>>,
+    log: Log,
     instance: AtomicPtr<c_void>,
     /// Per clockUpdate call.
     updates: Mutex<Vec<Update>>,
 }
 
-unsafe extern "C" fn log(env: *mut c_void, _status: fmi3Status, _category: fmi3String, message: fmi3String) {
-    // SAFETY: env is the leaked &Probe given at instantiation; the string is the runtime's.
-    let (p, message) = unsafe { (&*(env as *const Probe), CStr::from_ptr(message)) };
-    p.messages.lock().unwrap().push(message.to_string_lossy().into_owned());
+impl fmi3::Host for Probe {
+    fn log(&self) -> &Log {
+        &self.log
+    }
 }
 
 unsafe extern "C" fn clock_update(env: *mut c_void) {
@@ -108,27 +109,16 @@ unsafe extern "C" fn clock_update(env: *mut c_void) {
 }
 
 fn last(p: &Probe) -> String {
-    p.messages.lock().unwrap().last().cloned().unwrap_or_default()
+    p.log.last()
 }
 
 fn scheduled_with(callback: fmi3ClockUpdateCallback) -> (fmi3Instance, &'static Probe) {
     let p: &'static Probe = Box::leak(Box::default());
-    let token = CString::new(TOKEN).unwrap();
-    // SAFETY: valid strings and callbacks whose environment outlives the instance.
-    let c = unsafe {
-        fmi3InstantiateScheduledExecution(
-            c"scheduled".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            true,
-            p as *const Probe as *mut c_void,
-            Some(log),
-            callback,
-            None,
-            None,
-        )
+    let how = fmi3::Instantiation {
+        logging_on: true,
+        ..fmi3::Instantiation::new("scheduled")
     };
+    let c = how.scheduled_execution(fmi3InstantiateScheduledExecution, TOKEN, p, callback);
     assert!(!c.is_null(), "{}", last(p));
     p.instance.store(c, Ordering::Release);
     (c, p)
@@ -288,21 +278,26 @@ fn the_state_machine_and_the_refusals() {
     refused(
         false,
         "is a co-simulation function; this instance was instantiated for scheduled execution",
+        // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
         |c| unsafe {
             let (mut a, mut b, mut d, mut t) = (false, false, false, 0.0);
             fmi3DoStep(c, 0.0, 1.0, false, &mut a, &mut b, &mut d, &mut t)
         },
     );
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "is a model-exchange function", |c| unsafe {
         fmi3EnterEventMode(c)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "is a model-exchange function", |c| unsafe {
         let (mut a, mut b, mut d, mut e, mut f, mut g) = (false, false, false, false, false, 0.0);
         fmi3UpdateDiscreteStates(c, &mut a, &mut b, &mut d, &mut e, &mut f, &mut g)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "fmi3ActivateModelPartition", |c| unsafe {
         fmi3SetClock(c, &1, 1, &true)
     });
+    // SAFETY: the fresh live instance `refused` passes; the outputs are locals.
     refused(false, "only fixed and tunable clocks", |c| unsafe {
         fmi3SetIntervalDecimal(c, &1, 1, &0.5)
     });
@@ -324,9 +319,9 @@ fn the_state_machine_and_the_refusals() {
             assert_eq!(activate(c, 2, t), fmi3OK);
         }
         assert!(
-            p.messages.lock().unwrap().iter().any(|m| m.contains(why)),
+            p.log.messages().iter().any(|m| m.contains(why)),
             "{:?}",
-            p.messages.lock().unwrap()
+            p.log.messages()
         );
         // The refusal inside ended the run (FMI 3.0: fmi3Error leads to Terminated).
         assert_eq!(state(c), Some(State::Terminated));
@@ -369,12 +364,14 @@ unsafe extern "C" fn nested_activation(env: *mut c_void) {
 #[test]
 fn model_exchange_and_co_simulation_instances_refuse_the_activation() {
     let p: &'static Probe = Box::leak(Box::default());
-    let token = CString::new(TOKEN).unwrap();
-    let env = p as *const Probe as *mut c_void;
-    // SAFETY: valid strings and callbacks whose environment outlives the instances.
+    let how = fmi3::Instantiation {
+        logging_on: true,
+        ..fmi3::Instantiation::new("me")
+    };
+    let me = how.model_exchange(fmi3InstantiateModelExchange, TOKEN, p);
+    assert!(!me.is_null());
+    // SAFETY: a live instance, freed once.
     unsafe {
-        let me = fmi3InstantiateModelExchange(c"me".as_ptr(), token.as_ptr(), null(), false, true, env, Some(log));
-        assert!(!me.is_null());
         assert_eq!(fmi3EnterInitializationMode(me, false, 0.0, 0.0, false, 0.0), fmi3OK);
         assert_eq!(fmi3ExitInitializationMode(me), fmi3OK);
         assert_eq!(activate(me, 1, 0.0), fmi3Error);
@@ -382,42 +379,30 @@ fn model_exchange_and_co_simulation_instances_refuse_the_activation() {
             last(p).contains("is a scheduled-execution function; this instance was instantiated for model exchange")
         );
         fmi3FreeInstance(me);
-        let cs = fmi3InstantiateCoSimulation(
-            c"cs".as_ptr(),
-            token.as_ptr(),
-            null(),
-            false,
-            true,
-            true,
-            false,
-            null(),
-            0,
-            env,
-            Some(log),
-            None,
-        );
-        assert!(!cs.is_null());
+    }
+    let how = fmi3::Instantiation {
+        logging_on: true,
+        event_mode_used: true,
+        ..fmi3::Instantiation::new("cs")
+    };
+    let cs = how.co_simulation(fmi3InstantiateCoSimulation, TOKEN, p, None);
+    assert!(!cs.is_null());
+    // SAFETY: a live instance, freed once.
+    unsafe {
         assert_eq!(fmi3EnterInitializationMode(cs, false, 0.0, 0.0, false, 0.0), fmi3OK);
         assert_eq!(fmi3ExitInitializationMode(cs), fmi3OK);
         assert_eq!(activate(cs, 1, 0.0), fmi3Error);
         assert!(last(p).contains("instantiated for co-simulation"));
         fmi3FreeInstance(cs);
-        // The token is checked as for the other interfaces.
-        let c = fmi3InstantiateScheduledExecution(
-            c"x".as_ptr(),
-            c"{wrong}".as_ptr(),
-            null(),
-            false,
-            true,
-            env,
-            Some(log),
-            None,
-            None,
-            None,
-        );
-        assert!(c.is_null());
-        assert!(last(p).contains("does not match"));
     }
+    // The token is checked as for the other interfaces.
+    let how = fmi3::Instantiation {
+        logging_on: true,
+        ..fmi3::Instantiation::new("x")
+    };
+    let c = how.scheduled_execution(fmi3InstantiateScheduledExecution, "{wrong}", p, None);
+    assert!(c.is_null());
+    assert!(last(p).contains("does not match"));
 }
 
 #[test]

@@ -7,10 +7,7 @@
 //! elements, co-simulation against the exact solution, reconfiguration, the FMU state.
 
 use rustfmu::__private::abi3::*;
-use support::Log;
-
-#[path = "support/fmi3_host.rs"]
-mod support;
+use rustfmu::testing::{Log, fmi3};
 
 mod model {
     use rustfmu::prelude::*;
@@ -67,11 +64,11 @@ mod model {
 use model::__rustfmu_fmi3_exports::*;
 
 fn cs() -> (fmi3Instance, &'static Log) {
-    support::instance(fmi3InstantiateCoSimulation, TOKEN, "lags")
+    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "lags")
 }
 
 fn me() -> (fmi3Instance, &'static Log) {
-    support::me_instance(fmi3InstantiateModelExchange, TOKEN, "lags")
+    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "lags")
 }
 
 fn get(c: fmi3Instance, vr: u32, n: usize) -> (fmi3Status, Vec<f64>) {
@@ -130,7 +127,7 @@ fn refused(what: &str, make: impl Fn() -> (fmi3Instance, &'static Log), call: im
 
 #[test]
 fn structural_parameters_are_set_in_configuration_mode_and_nothing_else_is() {
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         // In Instantiated: refused, with where it is set.
         refused("structural parameters are set in Configuration Mode", cs, |c| {
@@ -174,7 +171,7 @@ fn structural_parameters_are_set_in_configuration_mode_and_nothing_else_is() {
         init(c);
         assert_eq!(get(c, 3, 3), (fmi3OK, tau.to_vec()));
         // A tunable structural parameter changes in Reconfiguration Mode (from Step Mode).
-        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.0.lock().unwrap());
+        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.messages());
         assert_eq!(set_u64(c, 1, 1), fmi3OK);
         assert_eq!(fmi3ExitConfigurationMode(c), fmi3OK);
         assert_eq!(get(c, 3, 1), (fmi3OK, vec![0.5]));
@@ -200,7 +197,7 @@ fn structural_parameters_are_set_in_configuration_mode_and_nothing_else_is() {
 #[test]
 fn co_simulation_integrates_the_n_lags_and_leaves_the_others_still() {
     let (c, log) = configured(3);
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         init(c);
         let mut t = 0.0;
@@ -218,7 +215,7 @@ fn co_simulation_integrates_the_n_lags_and_leaves_the_others_still() {
         let (_, y) = get(c, 8, 1);
         assert!((y[0] - x.iter().sum::<f64>()).abs() < 1e-14);
         // The lag outside n did not move: seen again after a reconfiguration to n = 4.
-        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.0.lock().unwrap());
+        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.messages());
         assert_eq!(set_u64(c, 1, 4), fmi3OK);
         assert_eq!(fmi3ExitConfigurationMode(c), fmi3OK);
         let (_, x4) = get(c, 6, 4);
@@ -244,7 +241,7 @@ fn model_exchange_has_n_states_and_exact_derivatives_over_the_elements() {
         (c, log)
     };
     let (c, _) = make();
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         let mut n = 0usize;
         assert_eq!(fmi3GetNumberOfContinuousStates(c, &mut n), fmi3OK);
@@ -326,12 +323,12 @@ fn model_exchange_has_n_states_and_exact_derivatives_over_the_elements() {
 #[test]
 fn an_fmu_state_carries_the_structural_parameters() {
     let (c, log) = cs();
-    // SAFETY (every call): a live instance, arrays of the lengths passed.
+    // SAFETY: for every call, a live instance, arrays of the lengths passed.
     unsafe {
         init(c);
         let mut state: fmi3FMUState = std::ptr::null_mut();
-        assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{:?}", log.0.lock().unwrap());
-        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.0.lock().unwrap());
+        assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{:?}", log.messages());
+        assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK, "{:?}", log.messages());
         assert_eq!(set_u64(c, 1, 4), fmi3OK);
         assert_eq!(fmi3ExitConfigurationMode(c), fmi3OK);
         assert_eq!(get(c, 3, 4).0, fmi3OK);

@@ -4,10 +4,8 @@
 //! refused, all or nothing over several values, and the messages say what and where.
 
 use rustfmu::__private::abi3::*;
-use support::Log;
+use rustfmu::testing::{Log, fmi3};
 
-#[path = "support/fmi3_host.rs"]
-mod support;
 use std::ptr::null;
 
 mod model {
@@ -55,7 +53,7 @@ use model::__rustfmu_fmi3_exports::*;
 
 /// An instance after initialization (Step Mode).
 fn instance() -> (fmi3Instance, &'static Log) {
-    let (c, log) = support::instance(fmi3InstantiateCoSimulation, TOKEN, "bounded");
+    let (c, log) = fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "bounded");
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
@@ -71,7 +69,7 @@ fn last(log: &Log) -> String {
 #[test]
 fn integer_bounds_are_exact_and_refusals_change_nothing() {
     let (c, log) = instance();
-    // SAFETY (every call): arrays of the lengths passed, a live instance.
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetInt8(c, &1, 1, &-10, 1), fmi3OK);
         assert_eq!(fmi3SetInt8(c, &1, 1, &11, 1), fmi3Error);
@@ -82,6 +80,7 @@ fn integer_bounds_are_exact_and_refusals_change_nothing() {
         fmi3FreeInstance(c);
     }
     let (c, log) = instance();
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // 2^53 is the bound; 2^53 + 1 (which an f64 comparison would round onto it) is refused.
         assert_eq!(fmi3SetUInt64(c, &2, 1, &(1u64 << 53), 1), fmi3OK);
@@ -98,6 +97,7 @@ fn integer_bounds_are_exact_and_refusals_change_nothing() {
         fmi3FreeInstance(c);
     }
     let (c, log) = instance();
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // all or nothing: a good value, then 0 (the bound is exclusive)
         let vrs = [3u32, 3];
@@ -117,7 +117,7 @@ fn integer_bounds_are_exact_and_refusals_change_nothing() {
 #[test]
 fn a_binary_longer_than_its_max_size_is_refused() {
     let (c, log) = instance();
-    // SAFETY (every call): arrays of the lengths passed, a live instance.
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         let four = [1u8, 0, 2, 3];
         let five = [1u8, 2, 3, 4, 5];
@@ -139,6 +139,7 @@ fn a_binary_longer_than_its_max_size_is_refused() {
         fmi3FreeInstance(c);
     }
     let (c, log) = instance();
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetBinary(c, &4, 1, &3, &null(), 1), fmi3Error);
         assert!(
@@ -149,6 +150,7 @@ fn a_binary_longer_than_its_max_size_is_refused() {
         fmi3FreeInstance(c);
     }
     let (c, _) = instance();
+    // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetBinary(c, &4, 1, &0, &null(), 1), fmi3OK);
         let mut n = 9u16;

@@ -19,10 +19,8 @@ use rustfmu::__private::abi3 as v3;
 use rustfmu::description::{FmiVersion, ModelDescription, VarType, Variable, decode, find_encoded_for, guid_string};
 use std::path::PathBuf;
 
-#[path = "support/fmi2_host.rs"]
-mod fmi2_host;
-#[path = "support/fmi3_host.rs"]
-mod fmi3_host;
+use rustfmu::testing::fmi2;
+use rustfmu::testing::fmi3;
 
 /// A built FMU library and its FMI 2.0 and 3.0 descriptions.
 struct Library {
@@ -174,7 +172,7 @@ impl<'a> Fmi2<'a> {
         let log = rustfmu::testing::Log::leak();
         // SAFETY: the functions of fmi2Functions.h with their signatures; a live instance.
         unsafe {
-            let c = fmi2_host::cs_instance(lib.get("fmi2Instantiate"), &lib.guid, c"initial", log);
+            let c = fmi2::cs_instance(lib.get("fmi2Instantiate"), &lib.guid, c"initial", log);
             assert_eq!(
                 lib.get::<Setup2>("fmi2SetupExperiment")(c, fmi2False, 0.0, 0.0, fmi2False, 0.0),
                 fmi2OK
@@ -214,22 +212,14 @@ impl Host for Fmi2<'_> {
     }
     fn set_integer(&self, vr: u32, n: i32) {
         // SAFETY: as above.
-        assert_eq!(
-            unsafe { (self.set_integer)(self.c, &vr, 1, &n) },
-            fmi2OK,
-            "{}",
-            self.last()
-        );
+        let status = unsafe { (self.set_integer)(self.c, &vr, 1, &n) };
+        assert_eq!(status, fmi2OK, "{}", self.last());
     }
     fn set_boolean(&self, vr: u32, b: bool) {
         let b = b as fmi2Boolean;
         // SAFETY: as above.
-        assert_eq!(
-            unsafe { (self.set_boolean)(self.c, &vr, 1, &b) },
-            fmi2OK,
-            "{}",
-            self.last()
-        );
+        let status = unsafe { (self.set_boolean)(self.c, &vr, 1, &b) };
+        assert_eq!(status, fmi2OK, "{}", self.last());
     }
     fn derivatives(&self, unknown: u32, n: usize, known: u32) -> Result<Vec<f64>, String> {
         assert_eq!(n, 1, "FMI 2.0 has no arrays");
@@ -264,7 +254,7 @@ type Derivative3 = unsafe extern "C" fn(
 /// An FMI 3.0 co-simulation instance in Initialization Mode.
 struct Fmi3<'a> {
     c: v3::fmi3Instance,
-    log: &'static fmi3_host::Log,
+    log: &'static rustfmu::testing::Log,
     set: Floats3,
     get: GetFloats3,
     set_int64: Int64s3,
@@ -278,7 +268,7 @@ impl<'a> Fmi3<'a> {
     fn initialization_mode(lib: &'a Library) -> Fmi3<'a> {
         // SAFETY: the functions of fmi3Functions.h with their signatures; a live instance.
         unsafe {
-            let (c, log) = fmi3_host::instance(lib.get("fmi3InstantiateCoSimulation"), &lib.token, "initial");
+            let (c, log) = fmi3::instance(lib.get("fmi3InstantiateCoSimulation"), &lib.token, "initial");
             assert_eq!(
                 lib.get::<Enter3>("fmi3EnterInitializationMode")(c, false, 0.0, 0.0, false, 0.0),
                 v3::fmi3OK,
@@ -316,21 +306,13 @@ impl Host for Fmi3<'_> {
     fn set_integer(&self, vr: u32, n: i32) {
         let n = n as i64;
         // SAFETY: as above.
-        assert_eq!(
-            unsafe { (self.set_int64)(self.c, &vr, 1, &n, 1) },
-            v3::fmi3OK,
-            "{}",
-            self.log.last()
-        );
+        let status = unsafe { (self.set_int64)(self.c, &vr, 1, &n, 1) };
+        assert_eq!(status, v3::fmi3OK, "{}", self.log.last());
     }
     fn set_boolean(&self, vr: u32, b: bool) {
         // SAFETY: as above.
-        assert_eq!(
-            unsafe { (self.set_boolean)(self.c, &vr, 1, &b, 1) },
-            v3::fmi3OK,
-            "{}",
-            self.log.last()
-        );
+        let status = unsafe { (self.set_boolean)(self.c, &vr, 1, &b, 1) };
+        assert_eq!(status, v3::fmi3OK, "{}", self.log.last());
     }
     /// The directional derivative (an n x 1 Jacobian), whose every element the adjoint one
     /// must repeat bit for bit (its seed a unit vector over the unknown's elements).

@@ -5,8 +5,7 @@
 
 use rustfmu::__private::abi::*;
 
-#[path = "support/fmi2_host.rs"]
-mod fmi2_host;
+use rustfmu::testing::fmi2;
 
 mod model {
     use rustfmu::prelude::*;
@@ -62,7 +61,7 @@ fn last(log: &rustfmu::testing::Log) -> String {
 /// message of a log they shared could be another test's.
 fn initialized() -> (fmi2Component, &'static rustfmu::testing::Log) {
     let log = rustfmu::testing::Log::leak();
-    let c = fmi2_host::cs_instance(e2::fmi2Instantiate, e2::GUID, c"integrator", log);
+    let c = fmi2::cs_instance(e2::fmi2Instantiate, e2::GUID, c"integrator", log);
     // SAFETY: a live instance.
     unsafe {
         assert_eq!(e2::fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
@@ -114,26 +113,30 @@ type Call = Box<dyn Fn(fmi2Component) -> fmi2Status>;
 
 #[test]
 fn bad_input_derivatives_are_refused_with_the_reason() {
-    // (Each call: SAFETY: a live instance; locals.)
     let cases: [(&str, Call); 5] = [
         (
             "0 is not allowed",
+            // SAFETY: the live instance the loop passes; one reference, order and value.
             Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &1, 1, &0, &1.0) }),
         ),
         (
             "is no continuous Real input",
+            // SAFETY: the live instance the loop passes; one reference, order and value.
             Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &2, 1, &1, &1.0) }),
         ),
         (
             "is not finite",
+            // SAFETY: the live instance the loop passes; one reference, order and value.
             Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &1, 1, &1, &f64::NAN) }),
         ),
         (
             "value reference 99",
+            // SAFETY: the live instance the loop passes; one reference, order and value.
             Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, &99, 1, &1, &1.0) }),
         ),
         (
             "is NULL",
+            // SAFETY: the live instance the loop passes; one reference, order and value.
             Box::new(|c| unsafe { e2::fmi2SetRealInputDerivatives(c, std::ptr::null(), 1, &1, &1.0) }),
         ),
     ];

@@ -5,10 +5,10 @@
 
 use rustfmu::__private::abi::*;
 use rustfmu::__private::abi3 as v3;
+use rustfmu::testing::thread_log as log;
 use std::ffi::CString;
 
-#[path = "support/fmi2_host.rs"]
-mod fmi2_host;
+use rustfmu::testing::fmi2;
 
 mod model {
     use rustfmu::prelude::*;
@@ -51,17 +51,8 @@ mod model {
 }
 use model::{__rustfmu_fmi2_exports as e2, __rustfmu_fmi3_exports as e3};
 
-/// This test thread's log: the tests run on threads at once, and the last message of a log they
-/// shared could be another test's.
-fn log() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 fn last() -> String {
-    log().entries().last().map(|e| e.text.clone()).unwrap_or_default()
+    log().last()
 }
 
 fn expected(x: f64, u: f64, t: f64) -> f64 {
@@ -70,7 +61,7 @@ fn expected(x: f64, u: f64, t: f64) -> f64 {
 
 #[test]
 fn fmi2_output_derivatives_are_those_of_the_equations() {
-    let c = fmi2_host::cs_instance(e2::fmi2Instantiate, e2::GUID, c"lag", log());
+    let c = fmi2::cs_instance(e2::fmi2Instantiate, e2::GUID, c"lag", log());
     // SAFETY: a live instance; each array as long as its count.
     unsafe {
         assert_eq!(e2::fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);

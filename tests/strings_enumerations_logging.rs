@@ -2,6 +2,7 @@
 //! model exported into this test binary.
 
 use rustfmu::__private::abi::*;
+use rustfmu::testing::thread_log as log;
 use std::ffi::{CStr, CString};
 
 mod model {
@@ -66,36 +67,18 @@ mod model {
 }
 use model::*;
 
-/// What every instance of this file logs (one log: the tests look for their own messages).
-/// This test thread's log: the tests run on threads at once, and the last message of a log they
-/// shared could be another test's.
-fn log() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 fn instance(logging_on: bool) -> fmi2Component {
     instance_with_resources(logging_on, None)
 }
 
 fn instance_with_resources(logging_on: bool, resources: Option<&std::path::Path>) -> fmi2Component {
-    let callbacks = rustfmu::testing::callbacks(log());
-    let guid = CString::new(model::__rustfmu_fmi2_exports::GUID).unwrap();
     let uri = resources.map(|d| CString::new(format!("file://{}", d.display())).unwrap());
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
-    let c = unsafe {
-        fmi2Instantiate(
-            c"greeter".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            uri.as_ref().map_or(std::ptr::null(), |u| u.as_ptr()),
-            callbacks,
-            fmi2False,
-            if logging_on { fmi2True } else { fmi2False },
-        )
-    };
+    let c = rustfmu::testing::fmi2::Instantiation {
+        resource_location: uri.as_deref(),
+        logging_on,
+        ..rustfmu::testing::fmi2::Instantiation::new(fmi2CoSimulation, c"greeter")
+    }
+    .call(fmi2Instantiate, model::__rustfmu_fmi2_exports::GUID, log());
     assert!(!c.is_null());
     c
 }

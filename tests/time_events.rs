@@ -11,8 +11,7 @@
 //! steps, and steps that end exactly on, one ulp before and one ulp after an event; and compare
 //! every step with the exact schedule.
 
-use std::ffi::{CStr, CString, c_void};
-use std::ptr::null;
+use rustfmu::testing::thread_log as log2;
 
 mod model {
     use rustfmu::prelude::*;
@@ -196,13 +195,6 @@ fn check(what: &str, ts: f64, seen: &Seen) {
 // ---------------------------------------------------------------------------------------------
 // FMI 2.0
 
-fn log2() -> &'static rustfmu::testing::Log {
-    thread_local! {
-        static LOG: &'static rustfmu::testing::Log = rustfmu::testing::Log::leak();
-    }
-    LOG.with(|l| *l)
-}
-
 /// The last message logged on this thread.
 fn last2() -> String {
     log2().texts().last().map(|(_, m)| m.clone()).unwrap_or_default()
@@ -211,19 +203,9 @@ fn last2() -> String {
 /// An FMI 2.0 instance of `kind`, its period and mode set, initialized.
 fn instance2(kind: fmi2::fmi2Type, ts: f64, mode: i32) -> fmi2::fmi2Component {
     use fmi2::*;
-    let guid = CString::new(GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    let c = rustfmu::testing::fmi2::instance(fmi2Instantiate, GUID, kind, c"sampler", log2());
+    // SAFETY: a live instance; one reference, one value.
     unsafe {
-        let c = fmi2Instantiate(
-            c"sampler".as_ptr(),
-            kind,
-            guid.as_ptr(),
-            null(),
-            rustfmu::testing::callbacks(log2()),
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2SetReal(c, &TS, 1, &ts), fmi2OK);
         assert_eq!(fmi2SetInteger(c, &MODE, 1, &mode), fmi2OK);
@@ -325,10 +307,8 @@ fn run_me2(ts: f64, mode: i32, points: &[f64], how: MeLoop) -> Seen {
             t = next;
             let (mut enter, mut terminate) = (fmi2False, fmi2False);
             // SAFETY: a live instance, two writable flags.
-            assert_eq!(
-                unsafe { fmi2CompletedIntegratorStep(c, fmi2True, &mut enter, &mut terminate) },
-                fmi2OK
-            );
+            let status = unsafe { fmi2CompletedIntegratorStep(c, fmi2True, &mut enter, &mut terminate) };
+            assert_eq!(status, fmi2OK);
             // Every event due by now, one Event Mode each (several fall into one long step).
             let mut again = false;
             while reached(
@@ -358,21 +338,10 @@ fn run_me2(ts: f64, mode: i32, points: &[f64], how: MeLoop) -> Seen {
 // ---------------------------------------------------------------------------------------------
 // FMI 3.0
 
-unsafe extern "C" fn log3(
-    env: *mut c_void,
-    _status: fmi3::fmi3Status,
-    _category: fmi3::fmi3String,
-    message: fmi3::fmi3String,
-) {
-    // SAFETY: env is the leaked Vec given at instantiation; the string is the runtime's.
-    let (log, message) = unsafe { (&*(env as *const std::sync::Mutex<Vec<String>>), CStr::from_ptr(message)) };
-    log.lock().unwrap().push(message.to_string_lossy().into_owned());
-}
-
-type Log3 = &'static std::sync::Mutex<Vec<String>>;
+type Log3 = &'static rustfmu::testing::Log;
 
 fn last3(log: Log3) -> String {
-    log.lock().unwrap().last().cloned().unwrap_or_default()
+    log.last()
 }
 
 /// How an FMI 3.0 co-simulation importer is instantiated.
@@ -392,38 +361,17 @@ enum Cs3 {
 
 fn instance3(cs: Option<Cs3>, ts: f64, mode: i32) -> (fmi3::fmi3Instance, Log3) {
     use fmi3::*;
-    let log: Log3 = Box::leak(Box::default());
-    let token = CString::new(TOKEN).unwrap();
-    let env = log as *const std::sync::Mutex<Vec<String>> as *mut c_void;
-    // SAFETY: valid strings; a logger whose environment outlives the instance (leaked).
-    let c = unsafe {
-        match cs {
-            Some(cs) => fmi3InstantiateCoSimulation(
-                c"sampler".as_ptr(),
-                token.as_ptr(),
-                null(),
-                false,
-                false,
-                cs != Cs3::NoEventMode,
-                cs == Cs3::EarlyReturn,
-                null(),
-                0,
-                env,
-                Some(log3),
-                None,
-            ),
-            None => fmi3InstantiateModelExchange(
-                c"sampler".as_ptr(),
-                token.as_ptr(),
-                null(),
-                false,
-                false,
-                env,
-                Some(log3),
-            ),
-        }
+    let log: Log3 = rustfmu::testing::Log::leak();
+    let how = rustfmu::testing::fmi3::Instantiation {
+        event_mode_used: cs.is_some_and(|cs| cs != Cs3::NoEventMode),
+        early_return_allowed: cs == Some(Cs3::EarlyReturn),
+        ..rustfmu::testing::fmi3::Instantiation::new("sampler")
     };
-    assert!(!c.is_null(), "{:?}", log.lock().unwrap());
+    let c = match cs {
+        Some(_) => how.co_simulation(fmi3InstantiateCoSimulation, TOKEN, log, None),
+        None => how.model_exchange(fmi3InstantiateModelExchange, TOKEN, log),
+    };
+    assert!(!c.is_null(), "{:?}", log.messages());
     // SAFETY: a live instance, one value each.
     unsafe {
         assert_eq!(fmi3SetFloat64(c, &TS, 1, &ts, 1), fmi3OK);
@@ -488,8 +436,8 @@ fn run_cs3(cs: Cs3, ts: f64, mode: i32, points: &[f64]) -> (Seen, usize, usize) 
         // With early return the step may end before the point: go on from where it ended.
         while t < point {
             let (mut event, mut terminate, mut early, mut last) = (false, false, false, f64::NAN);
-            // SAFETY: a live instance, four writable outputs.
             let status =
+                // SAFETY: a live instance, four writable outputs.
                 unsafe { fmi3DoStep(c, t, point - t, true, &mut event, &mut terminate, &mut early, &mut last) };
             assert_eq!(status, fmi3OK, "fmi3DoStep({t:?}, {:?}): {}", point - t, last3(log));
             assert!(!terminate);
@@ -550,10 +498,8 @@ fn run_me3(ts: f64, mode: i32, points: &[f64], how: MeLoop) -> Seen {
             t = next;
             let (mut enter, mut terminate) = (false, false);
             // SAFETY: a live instance, two writable flags.
-            assert_eq!(
-                unsafe { fmi3CompletedIntegratorStep(c, true, &mut enter, &mut terminate) },
-                fmi3OK
-            );
+            let status = unsafe { fmi3CompletedIntegratorStep(c, true, &mut enter, &mut terminate) };
+            assert_eq!(status, fmi3OK);
             let mut again = false;
             while reached(how, t, te, again) {
                 again = true;

@@ -92,20 +92,11 @@ fn callbacks(logger: Collector, env: *mut std::ffi::c_void) -> &'static fmi2Call
 /// An instance named `name` and its log; NULL when refused.
 fn instantiate(name: &CStr) -> (fmi2Component, &'static Log) {
     let log = Log::leak();
-    let cb = rustfmu::testing::callbacks(log);
-    let guid = CString::new(probe::__rustfmu_fmi2_exports::GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
-    let c = unsafe {
-        fmi2Instantiate(
-            name.as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            cb,
-            fmi2False,
-            fmi2False,
-        )
-    };
+    let c = rustfmu::testing::fmi2::Instantiation::new(fmi2CoSimulation, name).call(
+        fmi2Instantiate,
+        probe::__rustfmu_fmi2_exports::GUID,
+        log,
+    );
     (c, log)
 }
 
@@ -359,13 +350,11 @@ fn state_of_another_model() -> (fmi2Component, fmi2FMUstate) {
     let (c, _) = generic_instance::<other::Other>(other::GUID, c"other");
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     // SAFETY: a live instance and a valid out pointer.
-    assert_eq!(
-        unsafe {
-            let other = rustfmu::core::guard::component(c);
-            rustfmu::__private::shared::get_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, other, &mut s)
-        },
-        fmi2OK
-    );
+    let status = unsafe {
+        let other = rustfmu::core::guard::component(c);
+        rustfmu::__private::shared::get_fmu_state::<other::Other>(&rustfmu::fmi2::TERMS, other, &mut s)
+    };
+    assert_eq!(status, fmi2OK);
     (c, s)
 }
 
@@ -402,8 +391,8 @@ fn assert_every_state_function_refuses(c: fmi2Component, log: &Log, s: fmi2FMUst
     }
     assert_eq!(serialized(c), before, "{what}: a refused call changed the instance");
     // And it still works.
-    // SAFETY: c is a live instance.
     let mut t = f64::NAN;
+    // SAFETY: c is a live instance; t is a local.
     unsafe {
         assert_eq!(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &mut t), fmi2OK);
         assert_eq!(
@@ -526,39 +515,41 @@ unsafe extern "C" fn reenter(
 fn a_call_into_an_instance_from_inside_a_call_into_it_is_refused() {
     let r: &'static Reentrant = Box::leak(Box::default());
     let cb = callbacks(reenter, r as *const Reentrant as *mut _);
-    let guid = CString::new(probe::__rustfmu_fmi2_exports::GUID).unwrap();
-    // SAFETY: fmi2 calls on a live instance, with arrays of one; the nested ones are the point.
+    // fmi2 calls on the live instance from inside a call into it: the nested ones are the point.
     let nested_calls: [(&str, Nested); 6] = [
+        // SAFETY: the live instance the logger reenters; arrays of one, locals.
         ("fmi2DoStep", |c| unsafe { fmi2DoStep(c, 0.0, 1e-3, fmi2True) }),
+        // SAFETY: the live instance the logger reenters; arrays of one, locals.
         ("fmi2SetReal", |c| unsafe { fmi2SetReal(c, &0, 1, &5.0) }),
         ("fmi2GetReal", |c| {
             let mut y = 0.0;
+            // SAFETY: the live instance the logger reenters; arrays of one, locals.
             unsafe { fmi2GetReal(c, &1, 1, &mut y) }
         }),
         ("fmi2GetFMUstate", |c| {
             let mut s: fmi2FMUstate = std::ptr::null_mut();
+            // SAFETY: the live instance the logger reenters; arrays of one, locals.
             unsafe { fmi2GetFMUstate(c, &mut s) }
         }),
+        // SAFETY: the live instance the logger reenters; arrays of one, locals.
         ("fmi2Reset", |c| unsafe { fmi2Reset(c) }),
         // No status: the steps after it show that the instance was not freed.
         ("fmi2FreeInstance", |c| {
+            // SAFETY: the live instance the logger reenters; refused from inside a call, so it
+            // stays alive (the steps after it show it).
             unsafe { fmi2FreeInstance(c) };
             fmi2Error
         }),
     ];
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+    let how = rustfmu::testing::fmi2::Instantiation {
+        logging_on: true,
+        ..rustfmu::testing::fmi2::Instantiation::new(fmi2CoSimulation, c"probe")
+    };
+    let c = how.call_with(fmi2Instantiate, probe::__rustfmu_fmi2_exports::GUID, cb);
+    assert!(!c.is_null());
+    r.component.store(c, std::sync::atomic::Ordering::SeqCst);
+    // SAFETY: a live instance; arrays of one.
     unsafe {
-        let c = fmi2Instantiate(
-            c"probe".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            cb,
-            fmi2False,
-            fmi2True,
-        );
-        assert!(!c.is_null());
-        r.component.store(c, std::sync::atomic::Ordering::SeqCst);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2SetReal(c, &0, 1, &1.0), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);
