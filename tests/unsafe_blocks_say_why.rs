@@ -25,27 +25,42 @@ fn undocumented_blocks(source: &str) -> Vec<usize> {
     missing
 }
 
-/// Whether `line` has the keyword followed by `{` in its code.
+/// Whether `line` has the keyword followed by `{` in its code: outside a string literal (escaped
+/// quotes and the character literal `'"'` taken into account) and before any `//`.
 fn opens_unsafe_block(line: &str) -> bool {
-    let keyword = "unsafe";
+    const KEYWORD: &str = "unsafe";
     let trimmed = line.trim_start();
     if trimmed.starts_with("//") || trimmed.starts_with("/*") {
         return false;
     }
-    let mut from = 0;
-    while let Some(at) = line[from..].find(keyword).map(|k| from + k) {
-        from = at + keyword.len();
-        let before = &line[..at];
-        let word_start = before
-            .chars()
-            .next_back()
-            .is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
-        let brace_next = line[from..].trim_start().starts_with('{');
-        let in_comment = before.contains("//");
-        let in_string = before.matches('"').count() % 2 == 1;
-        if word_start && brace_next && !in_comment && !in_string {
+    let (mut in_string, mut escaped) = (false, false);
+    let mut i = 0;
+    while i < line.len() {
+        let rest = &line[i..];
+        let c = rest.chars().next().expect("i is below the length");
+        if in_string {
+            match c {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => in_string = false,
+                _ => {}
+            }
+        } else if rest.starts_with("'\"'") {
+            i += 2;
+        } else if c == '"' {
+            in_string = true;
+        } else if rest.starts_with("//") {
+            return false;
+        } else if rest.starts_with(KEYWORD)
+            && line[..i]
+                .chars()
+                .next_back()
+                .is_none_or(|p| !(p.is_alphanumeric() || p == '_'))
+            && rest[KEYWORD.len()..].trim_start().starts_with('{')
+        {
             return true;
         }
+        i += c.len_utf8();
     }
     false
 }
@@ -117,11 +132,13 @@ fn the_check_finds_blocks_and_their_comments_as_clippy_does() {
         "unsafe impl Send for X {}\n",
         "unsafe extern \"C\" fn h() {}\n",
         "let s = \"unsafe { in a string }\";\n",
+        "let t = \"a \\\" quote, then unsafe { in the same string }\";\n",
+        "let q = '\"'; let u = unsafe { f() };\n",
         "// unsafe { in a comment }\n",
         "// a comment that gives no reason\n",
         "unsafe {\n",
         "}\n",
         "let d = not_unsafe { x };\n",
     );
-    assert_eq!(undocumented_blocks(source), vec![7, 14]);
+    assert_eq!(undocumented_blocks(source), vec![7, 13, 16]);
 }
