@@ -1,28 +1,17 @@
 //! Display units and aliases (issue 52, item 7): what `display_unit(..)`, `display_unit = ".."`
 //! and `alias(..)` generate, and each wrong declaration's one error at its place.
 
-use crate::model::{self, Expansion};
-
-fn expand(src: &str) -> Expansion {
-    model::expand_parts(syn::parse_str(src).expect("the test's source parses"))
-}
+use crate::tests::error;
 
 /// The generated code, without spaces (the tokens' text).
 fn generated(src: &str) -> String {
-    let e = expand(src);
-    if let Some(error) = e.error {
-        panic!("unexpected error: {error}");
-    }
-    e.generated.expect("code").to_string().replace(' ', "")
+    crate::tests::generated(src).replace(' ', "")
 }
 
+/// Asserts that `src` gives one error containing `message`.
 #[track_caller]
 fn assert_error(src: &str, message: &str) {
-    let e = expand(src);
-    let error = e.error.unwrap_or_else(|| panic!("no error for:\n{src}"));
-    let all: Vec<_> = error.clone().into_iter().collect();
-    assert_eq!(all.len(), 1, "exactly one error: {all:?}");
-    let text = error.to_string();
+    let text = error(src).to_string();
     assert!(text.contains(message), "message: {text}\nexpected: {message}");
 }
 

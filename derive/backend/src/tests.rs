@@ -24,11 +24,11 @@ fn position(src: &str, needle: &str, nth: usize) -> LineColumn {
     LineColumn { line, column }
 }
 
-fn expand(src: &str) -> Expansion {
+pub(crate) fn expand(src: &str) -> Expansion {
     model::expand_parts(syn::parse_str(src).expect("the test's source parses"))
 }
 
-fn generated(src: &str) -> String {
+pub(crate) fn generated(src: &str) -> String {
     let e = expand(src);
     if let Some(error) = e.error {
         panic!("unexpected error: {error}");
@@ -37,7 +37,7 @@ fn generated(src: &str) -> String {
 }
 
 /// The one error `src` gives.
-fn error(src: &str) -> syn::Error {
+pub(crate) fn error(src: &str) -> syn::Error {
     let e = expand(src);
     let error = e.error.expect("the declaration is wrong");
     let all: Vec<_> = error.clone().into_iter().collect();

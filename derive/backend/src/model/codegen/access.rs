@@ -10,12 +10,50 @@ use syn::{FieldsNamed, Ident};
 
 /// The impl's items from `fn start` on: the model's start, and get and set by value reference.
 pub(crate) fn access_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var], others: &[Ident]) -> TokenStream {
-    // Value reference -> index in DESCRIPTION.variables: a match, not a search per call.
-    let index_arms = vars.iter().enumerate().map(|(i, v)| {
-        let vr = v.vr;
-        quote!(#vr => ::core::option::Option::Some(#i))
-    });
+    let values = value_items(rt, fields, vars, others);
+    let others = string_array_binary_items(rt, vars);
+    let clocks = clock_items(rt, vars);
+    quote!(#values #others #clocks)
+}
 
+/// `match vr { arms.., _ => otherwise }`.
+fn by_vr(arms: impl IntoIterator<Item = TokenStream>, otherwise: TokenStream) -> TokenStream {
+    let arms = arms.into_iter();
+    quote! {
+        match vr {
+            #(#arms,)*
+            _ => #otherwise,
+        }
+    }
+}
+
+/// A getter's answer for a value reference it has not.
+fn none() -> TokenStream {
+    quote!(::core::option::Option::None)
+}
+
+/// An array field as a slice of its elements (row-major), mutable or not.
+fn flat(v: &Var, mutable: bool) -> TokenStream {
+    let f = &v.field;
+    match (v.dims.len(), mutable) {
+        (2, false) => quote!(self.#f.as_flattened()),
+        (2, true) => quote!(self.#f.as_flattened_mut()),
+        (_, false) => quote!(self.#f.as_slice()),
+        (_, true) => quote!(self.#f.as_mut_slice()),
+    }
+}
+
+/// `start`, `variable_index`, and get, set and the finiteness check of the scalar numbers,
+/// Booleans and enumerations.
+fn value_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var], others: &[Ident]) -> TokenStream {
+    // Value reference -> index in DESCRIPTION.variables: a match, not a search per call.
+    let index = by_vr(
+        vars.iter().enumerate().map(|(i, v)| {
+            let vr = v.vr;
+            quote!(#vr => ::core::option::Option::Some(#i))
+        }),
+        none(),
+    );
     let start_fields = vars.iter().map(|v| {
         let f = &v.field;
         if !v.dims.is_empty() {
@@ -49,72 +87,26 @@ pub(crate) fn access_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var],
         .iter()
         .filter(|v| !matches!(v.kind, Kind::Str | Kind::Binary | Kind::Clock) && v.dims.is_empty())
         .collect();
-    let clock_fields: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Clock).collect();
-    let clock_arms = clock_fields.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(&self.#f))
-    });
-    let clock_mut_arms = clock_fields.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(&mut self.#f))
-    });
-    let deactivate = clock_fields.iter().map(|v| {
-        let f = &v.field;
-        quote!(self.#f.__set_active(false);)
-    });
-    let arrays: Vec<&Var> = vars.iter().filter(|v| !v.dims.is_empty()).collect();
-    let flat = |v: &Var, mutable: bool| {
-        let f = &v.field;
-        match (v.dims.len(), mutable) {
-            (2, false) => quote!(self.#f.as_flattened()),
-            (2, true) => quote!(self.#f.as_flattened_mut()),
-            (_, false) => quote!(self.#f.as_slice()),
-            (_, true) => quote!(self.#f.as_mut_slice()),
-        }
-    };
-    let get_elem_arms = arrays.iter().map(|v| {
-        let (vr, flat) = (v.vr, flat(v, false));
-        quote!(#vr => #flat.get(i).and_then(#rt::FmiType::to_value))
-    });
-    let set_elem_arms = arrays.iter().map(|v| {
-        let (vr, flat, elem) = (v.vr, flat(v, true), &v.elem);
-        quote!(#vr => match (#flat.get_mut(i), <#elem as #rt::FmiType>::from_value(value)) {
-            (::core::option::Option::Some(slot), ::core::option::Option::Some(x)) => { *slot = x; true }
-            _ => false,
-        })
-    });
-    let strings: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Str).collect();
-    let binaries: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Binary).collect();
-    let get_bin_arms = binaries.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(self.#f.as_slice()))
-    });
-    let set_bin_arms = binaries.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => { self.#f = ::std::vec::Vec::from(value); true })
-    });
-    let get_arms = numeric.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => #rt::FmiType::to_value(&self.#f))
-    });
-    let set_arms = numeric.iter().map(|v| {
-        let (f, vr, ty) = (&v.field, v.vr, &v.ty);
-        quote!(#vr => match <#ty as #rt::FmiType>::from_value(value) {
-            ::core::option::Option::Some(v) => { self.#f = v; true }
-            ::core::option::Option::None => false,
-        })
-    });
-    let get_str_arms = strings.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
-    });
-    let set_str_arms = strings.iter().map(|v| {
-        let (f, vr) = (&v.field, v.vr);
-        quote!(#vr => { self.#f = ::std::string::String::from(value); true })
-    });
+    let get = by_vr(
+        numeric.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => #rt::FmiType::to_value(&self.#f))
+        }),
+        none(),
+    );
+    let set = by_vr(
+        numeric.iter().map(|v| {
+            let (f, vr, ty) = (&v.field, v.vr, &v.ty);
+            quote!(#vr => match <#ty as #rt::FmiType>::from_value(value) {
+                ::core::option::Option::Some(v) => { self.#f = v; true }
+                ::core::option::Option::None => false,
+            })
+        }),
+        quote!(false),
+    );
     // The Real variables the model computes (inputs and parameters are checked when set): the
     // runtime asks after every step.
-    let computed: Vec<(usize, &Ident)> = vars
+    let finite_checks = vars
         .iter()
         .enumerate()
         .filter(|(_, v)| {
@@ -124,21 +116,19 @@ pub(crate) fn access_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var],
                     Causality::Output | Causality::Local | Causality::CalculatedParameter | Causality::Independent
                 )
         })
-        .map(|(i, v)| (i, &v.field))
-        .collect();
-    let finite_checks = computed.iter().map(|(i, f)| {
-        let v = &vars[*i];
-        if v.dims.is_empty() {
-            quote!(if !self.#f.is_finite() {
-                return ::core::option::Option::Some(#i);
-            })
-        } else {
-            let flat = flat(v, false);
-            quote!(if !#flat.iter().all(|x| x.is_finite()) {
-                return ::core::option::Option::Some(#i);
-            })
-        }
-    });
+        .map(|(i, v)| {
+            let f = &v.field;
+            if v.dims.is_empty() {
+                quote!(if !self.#f.is_finite() {
+                    return ::core::option::Option::Some(#i);
+                })
+            } else {
+                let flat = flat(v, false);
+                quote!(if !#flat.iter().all(|x| x.is_finite()) {
+                    return ::core::option::Option::Some(#i);
+                })
+            }
+        });
     quote! {
         fn start() -> Self {
             Self { #(#start_fields,)* #(#other_fields,)* }
@@ -146,27 +136,18 @@ pub(crate) fn access_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var],
 
         #[inline]
         fn variable_index(vr: u32) -> ::core::option::Option<usize> {
-            match vr {
-                #(#index_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #index
         }
 
         #[inline]
         fn get(&self, vr: u32) -> ::core::option::Option<#rt::Value> {
-            match vr {
-                #(#get_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #get
         }
 
         #[inline]
         fn set(&mut self, vr: u32, value: #rt::Value) -> bool {
             let _ = &value;
-            match vr {
-                #(#set_arms,)*
-                _ => false,
-            }
+            #set
         }
 
         #[inline]
@@ -176,63 +157,116 @@ pub(crate) fn access_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var],
             #(#finite_checks)*
             ::core::option::Option::None
         }
+    }
+}
 
+/// Get and set of strings, array elements and binaries.
+fn string_array_binary_items(rt: &TokenStream, vars: &[Var]) -> TokenStream {
+    let of = |kind: Kind| vars.iter().filter(move |v| v.kind == kind);
+    let get_string = by_vr(
+        of(Kind::Str).map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
+        }),
+        none(),
+    );
+    let set_string = by_vr(
+        of(Kind::Str).map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => { self.#f = ::std::string::String::from(value); true })
+        }),
+        quote!(false),
+    );
+    let arrays: Vec<&Var> = vars.iter().filter(|v| !v.dims.is_empty()).collect();
+    let get_element = by_vr(
+        arrays.iter().map(|v| {
+            let (vr, flat) = (v.vr, flat(v, false));
+            quote!(#vr => #flat.get(i).and_then(#rt::FmiType::to_value))
+        }),
+        none(),
+    );
+    let set_element = by_vr(
+        arrays.iter().map(|v| {
+            let (vr, flat, elem) = (v.vr, flat(v, true), &v.elem);
+            quote!(#vr => match (#flat.get_mut(i), <#elem as #rt::FmiType>::from_value(value)) {
+                (::core::option::Option::Some(slot), ::core::option::Option::Some(x)) => { *slot = x; true }
+                _ => false,
+            })
+        }),
+        quote!(false),
+    );
+    let get_binary = by_vr(
+        of(Kind::Binary).map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(self.#f.as_slice()))
+        }),
+        none(),
+    );
+    let set_binary = by_vr(
+        of(Kind::Binary).map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => { self.#f = ::std::vec::Vec::from(value); true })
+        }),
+        quote!(false),
+    );
+    quote! {
         fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {
-            match vr {
-                #(#get_str_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #get_string
         }
 
         fn set_string(&mut self, vr: u32, value: &str) -> bool {
             let _ = value;
-            match vr {
-                #(#set_str_arms,)*
-                _ => false,
-            }
+            #set_string
         }
 
         fn get_element(&self, vr: u32, i: usize) -> ::core::option::Option<#rt::Value> {
             let _ = i;
-            match vr {
-                #(#get_elem_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #get_element
         }
 
         fn set_element(&mut self, vr: u32, i: usize, value: #rt::Value) -> bool {
             let _ = (i, value);
-            match vr {
-                #(#set_elem_arms,)*
-                _ => false,
-            }
+            #set_element
         }
 
         fn get_binary(&self, vr: u32) -> ::core::option::Option<&[u8]> {
-            match vr {
-                #(#get_bin_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #get_binary
         }
 
         fn set_binary(&mut self, vr: u32, value: &[u8]) -> bool {
             let _ = value;
-            match vr {
-                #(#set_bin_arms,)*
-                _ => false,
-            }
+            #set_binary
         }
+    }
+}
+
+/// The clocks by value reference, and their deactivation.
+fn clock_items(rt: &TokenStream, vars: &[Var]) -> TokenStream {
+    let clocks: Vec<&Var> = vars.iter().filter(|v| v.kind == Kind::Clock).collect();
+    let clock = by_vr(
+        clocks.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(&self.#f))
+        }),
+        none(),
+    );
+    let clock_mut = by_vr(
+        clocks.iter().map(|v| {
+            let (f, vr) = (&v.field, v.vr);
+            quote!(#vr => ::core::option::Option::Some(&mut self.#f))
+        }),
+        none(),
+    );
+    let deactivate = clocks.iter().map(|v| {
+        let f = &v.field;
+        quote!(self.#f.__set_active(false);)
+    });
+    quote! {
         fn clock(&self, vr: u32) -> ::core::option::Option<&#rt::Clock> {
-            match vr {
-                #(#clock_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #clock
         }
         fn clock_mut(&mut self, vr: u32) -> ::core::option::Option<&mut #rt::Clock> {
-            match vr {
-                #(#clock_mut_arms,)*
-                _ => ::core::option::Option::None,
-            }
+            #clock_mut
         }
         fn deactivate_clocks(&mut self) {
             #(#deactivate)*

@@ -20,6 +20,8 @@ pub(crate) struct Equations {
     pub state_items: TokenStream,
 }
 
+// Over 150 lines: most of it is the template of the items it generates, kept whole so that it
+// reads as the code it generates.
 pub(crate) fn equations(rt: &TokenStream, input: &DeriveInput, vars: &[Var]) -> Equations {
     let ident = &input.ident;
     // The equations: every continuous Real that is not a parameter, as a struct generic over

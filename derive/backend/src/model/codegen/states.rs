@@ -23,6 +23,9 @@ pub(crate) struct StateVector {
 
 impl StateVector {
     /// The state vector of `vars`: the states of its derivatives.
+    // About 150 lines: the general lists (of array states, element by element, computed at
+    // compile time) and the literal ones of scalar states side by side, so that the two can be
+    // compared.
     pub fn of(vars: &[Var]) -> StateVector {
         let derivs: Vec<&Var> = vars.iter().filter(|v| v.derivative_of.is_some()).collect();
         let states: Vec<&Var> = derivs
