@@ -132,6 +132,20 @@ pub struct ControllerState {
     pub rate_filter: [f64; 2],
 }
 
+/// What the law reads at one instant, in any number type (f64, or dual numbers for directional
+/// derivatives): its memory, the measurement x = (α1, ω1, α2, ω2) and the references for α1, α2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Knowns<D> {
+    /// ∫ e_i dt [rad·s]
+    pub integral: [D; 2],
+    /// Filtered joint speeds ω_f [rad/s]
+    pub rate_filter: [D; 2],
+    /// The measured state (α1, ω1, α2, ω2)
+    pub x: [D; 4],
+    /// The references for α1, α2
+    pub reference: [D; 2],
+}
+
 /// One sample of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Command {
@@ -176,12 +190,12 @@ impl ControlLaw {
 
     /// The outputs for measurement `x`, references `reference` and memory `s`.
     pub fn command(&self, s: &ControllerState, x: &Vector4<f64>, reference: &Vector2<f64>) -> Command {
-        let (m, u, saturated) = self.command_of(
-            s.integral,
-            s.rate_filter,
-            [x[0], x[1], x[2], x[3]],
-            [reference[0], reference[1]],
-        );
+        let (m, u, saturated) = self.command_of(Knowns {
+            integral: s.integral,
+            rate_filter: s.rate_filter,
+            x: [x[0], x[1], x[2], x[3]],
+            reference: [reference[0], reference[1]],
+        });
         Command {
             m: Vector2::from(m),
             u: Vector2::from(u),
@@ -193,14 +207,8 @@ impl ControlLaw {
     /// stops its integrator). On `f64` the operations are those of eqs. (14), (16) in the order
     /// written; the limits are taken on the value (a limited command does not depend on the
     /// inputs), and where a sum overflows it is recomputed wide (value only).
-    pub fn command_of<D: DualNum<Primitive = f64> + Copy>(
-        &self,
-        integral: [D; 2],
-        rate_filter: [D; 2],
-        x: [D; 4],
-        reference: [D; 2],
-    ) -> ([D; 2], [D; 2], [bool; 2]) {
-        let (demand, limited, volts) = self.demands_of(integral, rate_filter, x, reference);
+    pub fn command_of<D: DualNum<Primitive = f64> + Copy>(&self, k: Knowns<D>) -> ([D; 2], [D; 2], [bool; 2]) {
+        let (demand, limited, volts) = self.demands_of(k);
         let mut saturated = [false; 2];
         let mut u = [D::from(0.0); 2];
         for i in 0..2 {
@@ -218,14 +226,8 @@ impl ControlLaw {
     /// demand before its limit and U_i the voltage before its limit. Positive inside the limits,
     /// ≤ 0 at or beyond one; where one changes sign the law switches (the command is held, the
     /// integrator stops): the event indicators of model exchange.
-    pub fn limit_margins_of<D: DualNum<Primitive = f64> + Copy>(
-        &self,
-        integral: [D; 2],
-        rate_filter: [D; 2],
-        x: [D; 4],
-        reference: [D; 2],
-    ) -> ([D; 2], [D; 2]) {
-        let (demand, _, volts) = self.demands_of(integral, rate_filter, x, reference);
+    pub fn limit_margins_of<D: DualNum<Primitive = f64> + Copy>(&self, k: Knowns<D>) -> ([D; 2], [D; 2]) {
+        let (demand, _, volts) = self.demands_of(k);
         // A demand beyond f64 (a measurement near ±f64::MAX) is as far beyond its limit as f64
         // goes: the margin stays finite, as every value that leaves the FMU must.
         let margin = |v: D, bound: f64| {
@@ -240,13 +242,13 @@ impl ControlLaw {
 
     /// The demands M_i before their limit (eqs. (14), (16)), the limited torques, and the
     /// voltages for those before the voltage limit.
-    fn demands_of<D: DualNum<Primitive = f64> + Copy>(
-        &self,
-        integral: [D; 2],
-        rate_filter: [D; 2],
-        x: [D; 4],
-        reference: [D; 2],
-    ) -> ([D; 2], [D; 2], [D; 2]) {
+    fn demands_of<D: DualNum<Primitive = f64> + Copy>(&self, k: Knowns<D>) -> ([D; 2], [D; 2], [D; 2]) {
+        let Knowns {
+            integral,
+            rate_filter,
+            x,
+            reference,
+        } = k;
         let zero = D::from(0.0);
         let mut m = [zero; 2];
         if self.mode.lqr() {
@@ -296,28 +298,23 @@ impl ControlLaw {
 
     /// The continuous-time memory's rates: (d∫e_i/dt, dω_f,i/dt). Conditional integration: no
     /// growth into a limit, nor beyond the bound that keeps Ki ∫e within ±M_max.
-    pub fn rates_of<D: DualNum<Primitive = f64> + Copy>(
-        &self,
-        integral: [D; 2],
-        rate_filter: [D; 2],
-        x: [D; 4],
-        reference: [D; 2],
-    ) -> ([D; 2], [D; 2]) {
-        let (m, _, saturated) = self.command_of(integral, rate_filter, x, reference);
+    pub fn rates_of<D: DualNum<Primitive = f64> + Copy>(&self, k: Knowns<D>) -> ([D; 2], [D; 2]) {
+        let (m, _, saturated) = self.command_of(k);
         let zero = D::from(0.0);
         let (mut d_integral, mut d_filter) = ([zero; 2], [zero; 2]);
         for i in 0..2 {
-            let e = reference[i] - x[ANGLE[i]];
+            let e = k.reference[i] - k.x[ANGLE[i]];
             let into_limit = saturated[i] && e.re() * m[i].re() > 0.0;
             let bound = (self.m_max / self.pid[i].ki.abs()).min(f64::MAX);
-            let at_bound = (integral[i].re() >= bound && e.re() > 0.0) || (integral[i].re() <= -bound && e.re() < 0.0);
+            let at_bound =
+                (k.integral[i].re() >= bound && e.re() > 0.0) || (k.integral[i].re() <= -bound && e.re() < 0.0);
             // Rates beyond f64 (a measurement near ±f64::MAX) are limited to ±f64::MAX: the
             // memory is bounded anyway, and a rate must not be infinite.
             if self.mode.pid() && !into_limit && !at_bound {
                 d_integral[i] = within_f64(e);
             }
             if self.tf > 0.0 {
-                d_filter[i] = within_f64((x[RATE[i]] - rate_filter[i]) / self.tf);
+                d_filter[i] = within_f64((k.x[RATE[i]] - k.rate_filter[i]) / self.tf);
             }
         }
         (d_integral, d_filter)

@@ -11,7 +11,7 @@
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
-use holonomic::models::controller::{ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
+use holonomic::models::controller::{ControlLaw, ControllerState, DEFAULT_PID, Knowns, Mode, PidGains, lqr_gain};
 use holonomic::models::dc_motor::DcMotorParams;
 use holonomic::models::pendulum::PendulumParams;
 use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
@@ -342,14 +342,14 @@ impl Controller {
     }
 }
 
-/// The equations' view of the law: (integrals, filters, measurement, references).
-fn knowns<D: Copy>(v: &ControllerContinuous<D>) -> ([D; 2], [D; 2], [D; 4], [D; 2]) {
-    (
-        [v.integral1, v.integral2],
-        [v.rate_filter1, v.rate_filter2],
-        [v.alpha1, v.omega1, v.alpha2, v.omega2],
-        [v.alpha1_ref, v.alpha2_ref],
-    )
+/// The equations' view of the law: the memory, the measurement and the references as they are.
+fn knowns<D: Copy>(v: &ControllerContinuous<D>) -> Knowns<D> {
+    Knowns {
+        integral: [v.integral1, v.integral2],
+        rate_filter: [v.rate_filter1, v.rate_filter2],
+        x: [v.alpha1, v.omega1, v.alpha2, v.omega2],
+        reference: [v.alpha1_ref, v.alpha2_ref],
+    }
 }
 
 impl Model for Controller {
@@ -377,13 +377,13 @@ impl Model for Controller {
 
     /// The PID memory in continuous time (model exchange); sampled, it changes at the samples only.
     fn derivatives<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
-        let (integral, filter, x, reference) = knowns(v);
+        let k = knowns(v);
         if self.sampled_events {
-            let zero = integral[0] * 0.0;
+            let zero = k.integral[0] * 0.0;
             [v.der_integral1, v.der_integral2, v.der_rate_filter1, v.der_rate_filter2] = [zero; 4];
             return;
         }
-        let (d_integral, d_filter) = self.law().rates_of(integral, filter, x, reference);
+        let (d_integral, d_filter) = self.law().rates_of(k);
         [v.der_integral1, v.der_integral2] = d_integral;
         [v.der_rate_filter1, v.der_rate_filter2] = d_filter;
     }
@@ -391,23 +391,23 @@ impl Model for Controller {
     /// M and U from the inputs (sampled: from the inputs held at the last communication point)
     /// and the memory: eqs. (14), (16), limited.
     fn outputs<D: Real>(&self, _t: D, v: &mut ControllerContinuous<D>) {
-        let (integral, filter, mut x, mut reference) = knowns(v);
+        let mut k = knowns(v);
         if self.sampled {
-            x = [
+            k.x = [
                 self.alpha1_sample,
                 self.omega1_sample,
                 self.alpha2_sample,
                 self.omega2_sample,
             ]
             .map(D::from);
-            reference = [self.alpha1_ref_sample, self.alpha2_ref_sample].map(D::from);
+            k.reference = [self.alpha1_ref_sample, self.alpha2_ref_sample].map(D::from);
         }
         let law = self.law();
-        let (m, u, _) = law.command_of(integral, filter, x, reference);
+        let (m, u, _) = law.command_of(k);
         [v.M1, v.M2] = m;
         [v.U1, v.U2] = u;
         // The event indicators: where a command reaches or leaves its limit.
-        let (m_margin, u_margin) = law.limit_margins_of(integral, filter, x, reference);
+        let (m_margin, u_margin) = law.limit_margins_of(k);
         [v.M1_margin, v.M2_margin] = m_margin;
         [v.U1_margin, v.U2_margin] = u_margin;
     }
