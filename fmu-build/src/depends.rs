@@ -246,6 +246,17 @@ pub(crate) fn list(names: &[&str]) -> String {
     format!("[{}]", names.join(", "))
 }
 
+/// One random point of the Jacobian check: the Jacobian of `unknowns` with respect to `knowns`,
+/// `parameters` set before initialization, the states and the inputs spread by `scale` around
+/// their initial and start values.
+#[derive(Clone, Copy)]
+pub(crate) struct Point<'a> {
+    pub(crate) unknowns: &'a [&'a Variable],
+    pub(crate) knowns: &'a [Known<'a>],
+    pub(crate) parameters: &'a [(&'a Variable, f64)],
+    pub(crate) scale: f64,
+}
+
 /// How the checks reach a model: through FMI 2.0 (`depends_fmi2::Api`) or, for a library without FMI 2.0,
 /// FMI 3.0 ([`crate::depends_fmi3::Api3`]). Each call works on a fresh instance.
 pub(crate) trait Probe {
@@ -257,18 +268,9 @@ pub(crate) trait Probe {
         true
     }
 
-    /// The model-exchange Jacobian of `unknowns` with respect to `knowns` (rows: unknowns) at
-    /// one point: `parameters` set before initialization, the states and the inputs spread by
-    /// `scale` around their initial and start values.
-    fn jacobian(
-        &self,
-        d: &ModelDescription,
-        unknowns: &[&Variable],
-        knowns: &[Known],
-        parameters: &[(&Variable, f64)],
-        scale: f64,
-        rng: &mut Rng,
-    ) -> Result<Vec<Vec<f64>>, String>;
+    /// The model-exchange Jacobian of the point's unknowns with respect to its knowns (rows:
+    /// unknowns), from a fresh instance.
+    fn jacobian(&self, d: &ModelDescription, at: &Point, rng: &mut Rng) -> Result<Vec<Vec<f64>>, String>;
 
     /// The values of the initial unknowns after Initialization Mode with the knowns set to
     /// `values`.
@@ -302,7 +304,13 @@ pub(crate) fn check_with(api: &dyn Probe, d: &ModelDescription) -> Report {
             };
             // Every other point close to the initial state and the start values of the inputs.
             let scale = if point % 2 == 1 { 1e-3 } else { 1.0 };
-            jacobian = api.jacobian(d, &unknowns, &knowns, &drawn, scale, &mut rng);
+            let at = Point {
+                unknowns: &unknowns,
+                knowns: &knowns,
+                parameters: &drawn,
+                scale,
+            };
+            jacobian = api.jacobian(d, &at, &mut rng);
             if jacobian.is_ok() || drawn.is_empty() {
                 break;
             }

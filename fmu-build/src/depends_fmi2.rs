@@ -4,7 +4,7 @@
 //! default experiment's plot's way into a library ([`crate::plot`]).
 
 use crate::depends::{
-    Known, Probe, Report, Rng, by_columns, check_initial_with, check_with, spread_by, start_of, states,
+    Known, Point, Probe, Report, Rng, by_columns, check_initial_with, check_with, spread_by, start_of, states,
 };
 use fmi_conformance::fmi2::*;
 use rustfmu::description::{ModelDescription, VarType, Variable};
@@ -58,6 +58,28 @@ impl Api {
                 ),
                 _ => (self.fmi.set_integer)(c, vr.as_ptr(), 1, [x as i32].as_ptr()),
             }
+        }
+    }
+
+    /// Sets `values`, then enters and leaves Initialization Mode; a value the model refuses is
+    /// said as `setting(v, x)` says it.
+    ///
+    /// # Safety
+    /// `c` is a live instance of this library, set up (fmi2SetupExperiment) and not initialized.
+    pub(crate) unsafe fn initialize<'v>(
+        &self,
+        c: fmi2Component,
+        ok: &dyn Fn(fmi2Status, &str) -> Result<(), String>,
+        values: impl IntoIterator<Item = (&'v Variable, f64)>,
+        setting: impl Fn(&Variable, f64) -> String,
+    ) -> Result<(), String> {
+        // SAFETY: `c` is live (the caller's promise); each call passes only values.
+        unsafe {
+            for (v, x) in values {
+                ok(self.set(c, v, x), &setting(v, x))?;
+            }
+            ok((self.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
+            ok((self.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")
         }
     }
 
@@ -125,15 +147,13 @@ impl Probe for Api {
         "fmi2GetDirectionalDerivative"
     }
 
-    fn jacobian(
-        &self,
-        d: &ModelDescription,
-        unknowns: &[&Variable],
-        knowns: &[Known],
-        parameters: &[(&Variable, f64)],
-        scale: f64,
-        rng: &mut Rng,
-    ) -> Result<Vec<Vec<f64>>, String> {
+    fn jacobian(&self, d: &ModelDescription, at: &Point, rng: &mut Rng) -> Result<Vec<Vec<f64>>, String> {
+        let Point {
+            unknowns,
+            knowns,
+            parameters,
+            scale,
+        } = *at;
         let n_states = knowns.iter().filter(|k| matches!(k, Known::State(_))).count();
         let inputs: Vec<&Variable> = knowns
             .iter()
@@ -155,14 +175,8 @@ impl Probe for Api {
         self.with_instance(|c, ok| {
             // SAFETY: `c` is live; every array passed has the length passed with it.
             unsafe {
-                for (v, x) in parameters {
-                    ok(
-                        self.set(c, v, *x),
-                        &format!("setting the parameter '{}' to {x}", v.name),
-                    )?;
-                }
-                ok((self.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
-                ok((self.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
+                let setting = |v: &Variable, x: f64| format!("setting the parameter '{}' to {x}", v.name);
+                self.initialize(c, ok, parameters.iter().copied(), setting)?;
                 ok(enter_continuous(c), "fmi2EnterContinuousTimeMode")?;
                 let mut x = vec![0.0; n_states];
                 ok(get_states(c, x.as_mut_ptr(), x.len()), "fmi2GetContinuousStates")?;
@@ -200,11 +214,8 @@ impl Probe for Api {
         self.with_instance(|c, ok| {
             // SAFETY: `c` is live; every array passed has the length passed with it.
             unsafe {
-                for (v, &x) in knowns.iter().zip(values) {
-                    ok(self.set(c, v, x), &format!("setting '{}' to {x}", v.name))?;
-                }
-                ok((self.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
-                ok((self.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
+                let setting = |v: &Variable, x: f64| format!("setting '{}' to {x}", v.name);
+                self.initialize(c, ok, knowns.iter().copied().zip(values.iter().copied()), setting)?;
                 let mut out = Vec::with_capacity(unknowns.len());
                 for v in unknowns {
                     let vr = [v.value_reference];

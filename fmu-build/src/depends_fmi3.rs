@@ -8,7 +8,7 @@
 //! Arrays are left out of these checks (their lengths may be structural parameters): a
 //! `depends` naming an array, or of one, is not checked here.
 
-use crate::depends::{Known, Probe, Report, Rng, by_columns, note_moved, spread_by, start_of, states};
+use crate::depends::{Known, Point, Probe, Report, Rng, by_columns, note_moved, spread_by, start_of, states};
 use fmi_conformance::fmi3::api::Api as Fmi3;
 use fmi_conformance::fmi3::types::{fmi3Instance, fmi3Status};
 use fmi_conformance::fmi3::{LogSink, log_message};
@@ -269,15 +269,13 @@ impl Probe for Api3 {
         !v.is_array()
     }
 
-    fn jacobian(
-        &self,
-        d: &ModelDescription,
-        unknowns: &[&Variable],
-        knowns: &[Known],
-        parameters: &[(&Variable, f64)],
-        scale: f64,
-        rng: &mut Rng,
-    ) -> Result<Vec<Vec<f64>>, String> {
+    fn jacobian(&self, d: &ModelDescription, at: &Point, rng: &mut Rng) -> Result<Vec<Vec<f64>>, String> {
+        let Point {
+            unknowns,
+            knowns,
+            parameters,
+            scale,
+        } = *at;
         if !self.model_exchange {
             return Err("the library has no FMI 3.0 model exchange".into());
         }

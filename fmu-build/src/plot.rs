@@ -107,14 +107,8 @@ pub fn simulate(
     api.with_instance_at(start, Some(stop), |c, ok| {
         // SAFETY: `c` is live; every array passed has the length passed with it.
         unsafe {
-            for (v, x) in &set {
-                ok(
-                    api.set(c, v, *x),
-                    &format!("setting '{}' to {x} (documentation-start)", v.name),
-                )?;
-            }
-            ok((api.fmi.enter_initialization_mode)(c), "fmi2EnterInitializationMode")?;
-            ok((api.fmi.exit_initialization_mode)(c), "fmi2ExitInitializationMode")?;
+            let setting = |v: &Variable, x: f64| format!("setting '{}' to {x} (documentation-start)", v.name);
+            api.initialize(c, ok, set.iter().copied(), setting)?;
             let mut run = Run {
                 times: vec![],
                 curves: outputs
