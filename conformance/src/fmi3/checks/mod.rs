@@ -11,6 +11,7 @@
 
 pub mod calls;
 pub mod clocks;
+pub mod co_simulation;
 pub mod directional_derivatives;
 pub mod fmu_state;
 pub mod instances;
