@@ -5,28 +5,25 @@
 use controller_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::testing::allocations_in;
-use std::ffi::CString;
+use rustfmu::testing::fmi2::{Instantiation, silent_callbacks};
 
 #[global_allocator]
 static ALLOCATOR: rustfmu::testing::CountingAllocator = rustfmu::testing::CountingAllocator;
 
 #[test]
 fn set_real_do_step_get_real_make_no_heap_allocation() {
-    let cb = *rustfmu::testing::silent_callbacks();
-    let name = CString::new("alloc-test").unwrap();
-    let guid = CString::new(controller_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance; arrays of the lengths passed.
+    let c = Instantiation {
+        resource_location: Some(c"file:///tmp"),
+        ..Instantiation::new(fmi2CoSimulation, c"alloc-test")
+    }
+    .call_with(
+        fmi2Instantiate,
+        controller_fmu::__rustfmu_fmi2_exports::GUID,
+        silent_callbacks(),
+    );
+    assert!(!c.is_null());
+    // SAFETY: a live instance; arrays of the lengths passed.
     unsafe {
-        let c = fmi2Instantiate(
-            name.as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            c"file:///tmp".as_ptr(),
-            &cb,
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
         assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
         assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2OK);

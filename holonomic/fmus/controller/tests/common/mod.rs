@@ -7,7 +7,6 @@ use controller_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::Variables;
 use rustfmu::testing::Log;
-use std::ffi::CString;
 
 pub fn vr(name: &str) -> u32 {
     Controller::DESCRIPTION
@@ -31,24 +30,19 @@ impl Fmu {
     /// Instantiated for `interface` (fmi2CoSimulation or fmi2ModelExchange), in initialization mode.
     pub fn instantiate(interface: fmi2Type) -> Fmu {
         let log = Log::leak();
-        let callbacks = rustfmu::testing::callbacks(log);
-        let guid = CString::new(controller_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
-        // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+        let c = rustfmu::testing::fmi2::instance(
+            fmi2Instantiate,
+            controller_fmu::__rustfmu_fmi2_exports::GUID,
+            interface,
+            c"robustness",
+            log,
+        );
+        // SAFETY: a live instance.
         unsafe {
-            let c = fmi2Instantiate(
-                c"robustness".as_ptr(),
-                interface,
-                guid.as_ptr(),
-                std::ptr::null(),
-                callbacks,
-                fmi2False,
-                fmi2False,
-            );
-            assert!(!c.is_null());
             assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
             assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
-            Fmu { c, log, time: 0.0 }
         }
+        Fmu { c, log, time: 0.0 }
     }
 
     pub fn set(&self, values: &[(&str, f64)]) -> fmi2Status {
