@@ -23,9 +23,8 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     /// fmi2DoStep's and fmi3DoStep's arguments: a finite step that advances time, from the
-    /// instance's time, not past the stop time. Inlined into `do_step` always, where it was
-    /// written before: as a call of its own it cost fmi2DoStep instructions (bench/callgrind.sh).
-    #[inline(always)]
+    /// instance's time, not past the stop time.
+    #[inline]
     fn check_step(&self, f: &str, t: f64, h: f64) -> Outcome {
         if !(h.is_finite() && h > 0.0) {
             return Err(self.error(&format!(
