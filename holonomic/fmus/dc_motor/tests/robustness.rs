@@ -6,7 +6,6 @@ use dc_motor_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::Variables;
 use rustfmu::testing::Log;
-use std::ffi::CString;
 
 fn vr(name: &str) -> u32 {
     DcMotor::DESCRIPTION.by_name(name).unwrap().value_reference
@@ -15,23 +14,15 @@ fn vr(name: &str) -> u32 {
 /// An instance in initialization mode, and its log.
 fn instance() -> (fmi2Component, &'static Log) {
     let log = Log::leak();
-    let callbacks = rustfmu::testing::callbacks(log);
-    let guid = CString::new(dc_motor_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
-    // SAFETY: valid strings and callbacks that outlive the instance (leaked).
-    unsafe {
-        let c = fmi2Instantiate(
-            c"robustness".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            std::ptr::null(),
-            callbacks,
-            fmi2False,
-            fmi2False,
-        );
-        assert!(!c.is_null());
-        assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
-        (c, log)
-    }
+    let c = rustfmu::testing::fmi2::cs_instance(
+        fmi2Instantiate,
+        dc_motor_fmu::__rustfmu_fmi2_exports::GUID,
+        c"robustness",
+        log,
+    );
+    // SAFETY: a live instance.
+    assert_eq!(unsafe { fmi2EnterInitializationMode(c) }, fmi2OK);
+    (c, log)
 }
 
 fn set(c: fmi2Component, name: &str, x: f64) -> fmi2Status {

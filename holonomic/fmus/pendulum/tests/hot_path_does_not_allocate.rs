@@ -127,10 +127,8 @@ fn the_count_sees_inside_fmi2_do_step_when_call_logging_allocates() {
     let c = swinging_pendulum(&cb);
     let category = [c"logCalls".as_ptr()];
     // SAFETY: c is a live instance; one category name, NUL-terminated.
-    assert_eq!(
-        unsafe { fmi2SetDebugLogging(c, fmi2True, 1, category.as_ptr()) },
-        fmi2OK
-    );
+    let status = unsafe { fmi2SetDebugLogging(c, fmi2True, 1, category.as_ptr()) };
+    assert_eq!(status, fmi2OK);
     // SAFETY: as above.
     let n = allocations_in(|| assert_eq!(unsafe { fmi2DoStep(c, 0.0, 1e-3, fmi2True) }, fmi2OK));
     assert!(

@@ -7,7 +7,6 @@ use pendulum_fmu::*;
 use rustfmu::__private::abi::*;
 use rustfmu::Variables;
 use rustfmu::testing::Log;
-use std::ffi::CString;
 
 fn vr(name: &str) -> u32 {
     Pendulum::DESCRIPTION
@@ -26,24 +25,18 @@ impl Fmu {
     /// Instantiated, fmi2SetupExperiment(startTime = t0), in initialization mode.
     fn new(t0: f64) -> Fmu {
         let log = Log::leak();
-        let callbacks = rustfmu::testing::callbacks(log);
-        let guid = CString::new(pendulum_fmu::__rustfmu_fmi2_exports::GUID).unwrap();
-        // SAFETY: valid strings and callbacks that outlive the instance (leaked).
+        let c = rustfmu::testing::fmi2::cs_instance(
+            fmi2Instantiate,
+            pendulum_fmu::__rustfmu_fmi2_exports::GUID,
+            c"robustness",
+            log,
+        );
+        // SAFETY: a live instance.
         unsafe {
-            let c = fmi2Instantiate(
-                c"robustness".as_ptr(),
-                fmi2CoSimulation,
-                guid.as_ptr(),
-                std::ptr::null(),
-                callbacks,
-                fmi2False,
-                fmi2False,
-            );
-            assert!(!c.is_null());
             assert_eq!(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
             assert_eq!(fmi2EnterInitializationMode(c), fmi2OK);
-            Fmu { c, log, time: t0 }
         }
+        Fmu { c, log, time: t0 }
     }
 
     fn set(&self, values: &[(&str, f64)]) -> fmi2Status {
