@@ -5,57 +5,36 @@
 
 use rustfmu::__private::abi::*;
 use rustfmu::description::{ModelDescription, decode, find_encoded_for};
-use std::ffi::CString;
 use std::io::Read;
 use std::path::PathBuf;
 
-type Instantiate = unsafe extern "C" fn(
-    fmi2String,
-    fmi2Type,
-    fmi2String,
-    fmi2String,
-    *const fmi2CallbackFunctions,
-    fmi2Boolean,
-    fmi2Boolean,
-) -> fmi2Component;
-type Unary = unsafe extern "C" fn(fmi2Component) -> fmi2Status;
-type Setup = unsafe extern "C" fn(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> fmi2Status;
-type DoStep = unsafe extern "C" fn(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean) -> fmi2Status;
-type GetState = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
-type SetState = unsafe extern "C" fn(fmi2Component, fmi2FMUstate) -> fmi2Status;
-type StateSize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
-type Serialize = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
-type Deserialize = unsafe extern "C" fn(fmi2Component, *const fmi2Byte, usize, *mut fmi2FMUstate) -> fmi2Status;
-type GetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *mut fmi2Real) -> fmi2Status;
-type SetReal = unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Real) -> fmi2Status;
-type SetInteger =
-    unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Integer) -> fmi2Status;
+/// fmi2GetRealStatus (the abi names no type for it).
 type RealStatus = unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut fmi2Real) -> fmi2Status;
 
 /// One FMU's binary, loaded, its description, and the functions the tests call.
 pub struct Fmu {
     pub name: &'static str,
-    pub guid: CString,
+    pub guid: String,
     pub md: ModelDescription,
     pub instantiate: Instantiate,
-    pub free_instance: unsafe extern "C" fn(fmi2Component),
-    pub setup: Setup,
-    pub enter_init: Unary,
-    pub exit_init: Unary,
-    pub terminate: Unary,
-    pub reset: Unary,
-    pub do_step: DoStep,
-    pub get_real: GetReal,
-    pub set_real: SetReal,
-    pub set_integer: SetInteger,
-    pub set_boolean: SetInteger,
+    pub free_instance: fmi2FreeInstanceTYPE,
+    pub setup: fmi2SetupExperimentTYPE,
+    pub enter_init: fmi2ComponentFunctionTYPE,
+    pub exit_init: fmi2ComponentFunctionTYPE,
+    pub terminate: fmi2ComponentFunctionTYPE,
+    pub reset: fmi2ComponentFunctionTYPE,
+    pub do_step: fmi2DoStepTYPE,
+    pub get_real: fmi2GetTYPE<fmi2Real>,
+    pub set_real: fmi2SetTYPE<fmi2Real>,
+    pub set_integer: fmi2SetTYPE<fmi2Integer>,
+    pub set_boolean: fmi2SetTYPE<fmi2Boolean>,
     pub real_status: RealStatus,
-    pub get_state: GetState,
-    pub set_state: SetState,
-    pub free_state: GetState,
-    pub state_size: StateSize,
-    pub serialize: Serialize,
-    pub deserialize: Deserialize,
+    pub get_state: fmi2GetFMUstateTYPE,
+    pub set_state: fmi2SetFMUstateTYPE,
+    pub free_state: fmi2GetFMUstateTYPE,
+    pub state_size: fmi2SerializedFMUstateSizeTYPE,
+    pub serialize: fmi2SerializeFMUstateTYPE,
+    pub deserialize: fmi2DeSerializeFMUstateTYPE,
     _lib: libloading::Library,
 }
 
@@ -117,7 +96,7 @@ impl Fmu {
             }
             Fmu {
                 name,
-                guid: CString::new(guid).unwrap(),
+                guid,
                 md,
                 instantiate: f!(b"fmi2Instantiate"),
                 free_instance: f!(b"fmi2FreeInstance"),
@@ -146,19 +125,11 @@ impl Fmu {
     /// A new instance and its log (leaked: the tests make a bounded number).
     pub fn instance(&self, logging_on: bool) -> (fmi2Component, &'static Log) {
         let log = Log::leak();
-        let callbacks = rustfmu::testing::callbacks(log);
-        // SAFETY: valid strings and callbacks that outlive the instance (leaked).
-        let c = unsafe {
-            (self.instantiate)(
-                c"test".as_ptr(),
-                fmi2CoSimulation,
-                self.guid.as_ptr(),
-                std::ptr::null(),
-                callbacks,
-                fmi2False,
-                logging_on as fmi2Boolean,
-            )
+        let how = Instantiation {
+            logging_on,
+            ..Instantiation::new(fmi2CoSimulation, c"test")
         };
+        let c = how.call(self.instantiate, &self.guid, log);
         assert!(!c.is_null(), "{}: fmi2Instantiate: {:?}", self.name, log.take_texts());
         (c, log)
     }
@@ -181,3 +152,4 @@ impl Fmu {
 
 /// One instance's log, reached through its componentEnvironment.
 pub use rustfmu::testing::Log;
+use rustfmu::testing::fmi2::{Instantiate, Instantiation};
