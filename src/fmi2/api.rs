@@ -21,7 +21,6 @@ use crate::core::instance::{EventInfo, Instance};
 use crate::core::logging::{Callback, Category, Logger};
 use crate::core::machine::Call;
 use crate::core::resources::resource_dir;
-use crate::core::shared;
 use crate::model::CoSimulation;
 use crate::value::FmiType;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -343,22 +342,24 @@ pub unsafe fn get_directional_derivative<M: CoSimulation>(
 
 /// fmi2NewDiscreteStates: the event iteration's answers in the importer's `fmi2EventInfo`.
 pub unsafe fn new_discrete_states<M: CoSimulation>(c: Option<&Component<M>>, info: *mut fmi2EventInfo) -> fmi2Status {
-    // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `info` writable.
-    let info = unsafe { info.as_mut() };
-    let b = |v: bool| if v { fmi2True } else { fmi2False };
-    let write = info.map(|info| {
-        move |e: &EventInfo| {
-            *info = fmi2EventInfo {
-                newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
-                terminateSimulation: b(e.terminate_simulation),
-                nominalsOfContinuousStatesChanged: b(e.nominals_changed),
-                valuesOfContinuousStatesChanged: b(e.values_changed),
-                nextEventTimeDefined: b(e.next_event_time.is_some()),
-                nextEventTime: e.next_event_time.unwrap_or(0.0),
-            }
-        }
-    });
-    shared::new_discrete_states(&TERMS, c, write, "fmi2EventInfo is NULL")
+    with_instance(c, Call::NewDiscreteStates, "fmi2NewDiscreteStates", |inst| {
+        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `info` writable.
+        let Some(info) = (unsafe { info.as_mut() }) else {
+            return inst.error("fmi2NewDiscreteStates: fmi2EventInfo is NULL");
+        };
+        let mut e = EventInfo::default();
+        let status = inst.new_discrete_states(&mut e);
+        let b = |v: bool| if v { fmi2True } else { fmi2False };
+        *info = fmi2EventInfo {
+            newDiscreteStatesNeeded: b(e.new_discrete_states_needed),
+            terminateSimulation: b(e.terminate_simulation),
+            nominalsOfContinuousStatesChanged: b(e.nominals_changed),
+            valuesOfContinuousStatesChanged: b(e.values_changed),
+            nextEventTimeDefined: b(e.next_event_time.is_some()),
+            nextEventTime: e.next_event_time.unwrap_or(0.0),
+        };
+        status
+    })
 }
 
 pub unsafe fn set_real_input_derivatives<M: CoSimulation>(
