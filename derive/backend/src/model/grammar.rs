@@ -102,6 +102,12 @@ pub(crate) fn once<T>(
     Ok(())
 }
 
+/// Sets `slot` to `value` (a key given more than once: the last one counts).
+pub(crate) fn set<T>(slot: &mut T, value: T) -> Result<()> {
+    *slot = value;
+    Ok(())
+}
+
 /// Sets `slot` to `value` (a key that is its own value, as `input` is a causality), unless
 /// another key of the same kind took it: "two causalities: Input and Output; a variable has one".
 pub(crate) fn one_of<T: std::fmt::Debug>(

@@ -3,7 +3,7 @@
 
 use super::grammar::{
     Grammar, Key, Parser, any_ident, assigned, assigned_u32, bound, ident, key_names, name_or_ident, names, nested,
-    once, one_of, unknown_key,
+    once, one_of, set, unknown_key,
 };
 use fmi_standard::{Causality, Initial, Variability};
 use proc_macro2::Span;
@@ -39,11 +39,9 @@ pub(crate) struct VarAttr {
 
 /// Every key of `#[variable(...)]`, in the order the "unknown declaration" error lists them.
 /// docs/declarations.md's table lists exactly these (`docs_tests.rs`).
+#[rustfmt::skip] // a table: one key a line
 const VARIABLE_GRAMMAR: [Key<Parser<VarAttr>>; 32] = [
-    Key {
-        name: "vr",
-        parse: |a, k, i| once(&mut a.vr, k, i, |i| Ok(assigned_u32(i)?.0)),
-    },
+    Key { name: "vr", parse: |a, k, i| once(&mut a.vr, k, i, |i| Ok(assigned_u32(i)?.0)) },
     Key {
         name: "name",
         parse: |a, k, i| {
@@ -56,86 +54,26 @@ const VARIABLE_GRAMMAR: [Key<Parser<VarAttr>>; 32] = [
             })
         },
     },
-    Key {
-        name: "input",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::Input, k, "causalities"),
-    },
-    Key {
-        name: "output",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::Output, k, "causalities"),
-    },
-    Key {
-        name: "parameter",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::Parameter, k, "causalities"),
-    },
-    Key {
-        name: "calculated_parameter",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::CalculatedParameter, k, "causalities"),
-    },
-    Key {
-        name: "structural_parameter",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::StructuralParameter, k, "causalities"),
-    },
-    Key {
-        name: "local",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::Local, k, "causalities"),
-    },
-    Key {
-        name: "independent",
-        parse: |a, k, _| one_of(&mut a.causality, Causality::Independent, k, "causalities"),
-    },
-    Key {
-        name: "constant",
-        parse: |a, k, _| one_of(&mut a.variability, Variability::Constant, k, "variabilities"),
-    },
-    Key {
-        name: "fixed",
-        parse: |a, k, _| one_of(&mut a.variability, Variability::Fixed, k, "variabilities"),
-    },
-    Key {
-        name: "tunable",
-        parse: |a, k, _| one_of(&mut a.variability, Variability::Tunable, k, "variabilities"),
-    },
-    Key {
-        name: "discrete",
-        parse: |a, k, _| one_of(&mut a.variability, Variability::Discrete, k, "variabilities"),
-    },
-    Key {
-        name: "continuous",
-        parse: |a, k, _| one_of(&mut a.variability, Variability::Continuous, k, "variabilities"),
-    },
-    Key {
-        name: "initial",
-        parse: |a, k, i| once(&mut a.initial, k, i, initial),
-    },
-    Key {
-        name: "start",
-        parse: |a, k, i| once(&mut a.start, k, i, assigned),
-    },
-    Key {
-        name: "unit",
-        parse: |a, k, i| once(&mut a.unit, k, i, assigned),
-    },
-    Key {
-        name: "min",
-        parse: |a, k, i| once(&mut a.min, k, i, |i| bound(k, i)),
-    },
-    Key {
-        name: "max",
-        parse: |a, k, i| once(&mut a.max, k, i, |i| bound(k, i)),
-    },
-    Key {
-        name: "nominal",
-        parse: |a, k, i| once(&mut a.nominal, k, i, assigned),
-    },
-    Key {
-        name: "depends",
-        parse: |a, k, i| once(&mut a.depends, k, i, names),
-    },
-    Key {
-        name: "initial_depends",
-        parse: |a, k, i| once(&mut a.initial_depends, k, i, names),
-    },
+    Key { name: "input", parse: |a, k, _| one_of(&mut a.causality, Causality::Input, k, "causalities") },
+    Key { name: "output", parse: |a, k, _| one_of(&mut a.causality, Causality::Output, k, "causalities") },
+    Key { name: "parameter", parse: |a, k, _| one_of(&mut a.causality, Causality::Parameter, k, "causalities") },
+    Key { name: "calculated_parameter", parse: |a, k, _| one_of(&mut a.causality, Causality::CalculatedParameter, k, "causalities") },
+    Key { name: "structural_parameter", parse: |a, k, _| one_of(&mut a.causality, Causality::StructuralParameter, k, "causalities") },
+    Key { name: "local", parse: |a, k, _| one_of(&mut a.causality, Causality::Local, k, "causalities") },
+    Key { name: "independent", parse: |a, k, _| one_of(&mut a.causality, Causality::Independent, k, "causalities") },
+    Key { name: "constant", parse: |a, k, _| one_of(&mut a.variability, Variability::Constant, k, "variabilities") },
+    Key { name: "fixed", parse: |a, k, _| one_of(&mut a.variability, Variability::Fixed, k, "variabilities") },
+    Key { name: "tunable", parse: |a, k, _| one_of(&mut a.variability, Variability::Tunable, k, "variabilities") },
+    Key { name: "discrete", parse: |a, k, _| one_of(&mut a.variability, Variability::Discrete, k, "variabilities") },
+    Key { name: "continuous", parse: |a, k, _| one_of(&mut a.variability, Variability::Continuous, k, "variabilities") },
+    Key { name: "initial", parse: |a, k, i| once(&mut a.initial, k, i, initial) },
+    Key { name: "start", parse: |a, k, i| once(&mut a.start, k, i, assigned) },
+    Key { name: "unit", parse: |a, k, i| once(&mut a.unit, k, i, assigned) },
+    Key { name: "min", parse: |a, k, i| once(&mut a.min, k, i, |i| bound(k, i)) },
+    Key { name: "max", parse: |a, k, i| once(&mut a.max, k, i, |i| bound(k, i)) },
+    Key { name: "nominal", parse: |a, k, i| once(&mut a.nominal, k, i, assigned) },
+    Key { name: "depends", parse: |a, k, i| once(&mut a.depends, k, i, names) },
+    Key { name: "initial_depends", parse: |a, k, i| once(&mut a.initial_depends, k, i, names) },
     Key {
         name: "derivative_of",
         parse: |a, k, i| {
@@ -145,38 +83,14 @@ const VARIABLE_GRAMMAR: [Key<Parser<VarAttr>>; 32] = [
             })
         },
     },
-    Key {
-        name: "event_indicator",
-        parse: |a, k, i| once(&mut a.event_indicator, k, i, |_| Ok(k.span())),
-    },
-    Key {
-        name: "fmi3_only",
-        parse: |a, k, i| once(&mut a.fmi3_only, k, i, |_| Ok(k.span())),
-    },
-    Key {
-        name: "max_size",
-        parse: |a, k, i| once(&mut a.max_size, k, i, assigned),
-    },
-    Key {
-        name: "mime_type",
-        parse: |a, k, i| once(&mut a.mime_type, k, i, assigned),
-    },
-    Key {
-        name: "clock(..)",
-        parse: |a, k, i| once(&mut a.clock, k, i, |i| Ok((nested(i)?, k.span()))),
-    },
-    Key {
-        name: "clocks",
-        parse: |a, k, i| once(&mut a.clocks, k, i, names),
-    },
-    Key {
-        name: "dims",
-        parse: |a, k, i| once(&mut a.dims, k, i, names),
-    },
-    Key {
-        name: "display_unit",
-        parse: |a, k, i| once(&mut a.display_unit, k, i, assigned),
-    },
+    Key { name: "event_indicator", parse: |a, k, i| once(&mut a.event_indicator, k, i, |_| Ok(k.span())) },
+    Key { name: "fmi3_only", parse: |a, k, i| once(&mut a.fmi3_only, k, i, |_| Ok(k.span())) },
+    Key { name: "max_size", parse: |a, k, i| once(&mut a.max_size, k, i, assigned) },
+    Key { name: "mime_type", parse: |a, k, i| once(&mut a.mime_type, k, i, assigned) },
+    Key { name: "clock(..)", parse: |a, k, i| once(&mut a.clock, k, i, |i| Ok((nested(i)?, k.span()))) },
+    Key { name: "clocks", parse: |a, k, i| once(&mut a.clocks, k, i, names) },
+    Key { name: "dims", parse: |a, k, i| once(&mut a.dims, k, i, names) },
+    Key { name: "display_unit", parse: |a, k, i| once(&mut a.display_unit, k, i, assigned) },
     // `alias = "h_ft"`, or `alias(name = "h_ft", description = "..", display_unit = "ft")`; once
     // per alias.
     Key {
@@ -241,6 +155,7 @@ struct AliasKeys {
     display_unit: Option<LitStr>,
 }
 
+#[rustfmt::skip] // a table: one key a line
 const ALIAS_GRAMMAR: [Key<Parser<AliasKeys>>; 3] = [
     Key {
         name: "name",
@@ -249,13 +164,7 @@ const ALIAS_GRAMMAR: [Key<Parser<AliasKeys>>; 3] = [
             once(&mut a.name, k, i, |_| Ok(v))
         },
     },
-    Key {
-        name: "description",
-        parse: |a, _, i| {
-            a.description = assigned::<LitStr>(i)?.value();
-            Ok(())
-        },
-    },
+    Key { name: "description", parse: |a, _, i| set(&mut a.description, assigned::<LitStr>(i)?.value()) },
     Key {
         name: "display_unit",
         parse: |a, k, i| {
@@ -330,31 +239,14 @@ fn interval_variability(c: &mut ClockKeys, key: &Ident, _: ParseStream) -> Resul
 }
 
 /// Every key of `clock(...)` (as [`VARIABLE_KEYS`]): an intervalVariability, then its settings.
+#[rustfmt::skip] // a table: one key a line
 const CLOCK_GRAMMAR: [Key<Parser<ClockKeys>>; 10] = [
-    Key {
-        name: "constant",
-        parse: interval_variability,
-    },
-    Key {
-        name: "fixed",
-        parse: interval_variability,
-    },
-    Key {
-        name: "tunable",
-        parse: interval_variability,
-    },
-    Key {
-        name: "changing",
-        parse: interval_variability,
-    },
-    Key {
-        name: "countdown",
-        parse: interval_variability,
-    },
-    Key {
-        name: "triggered",
-        parse: interval_variability,
-    },
+    Key { name: "constant", parse: interval_variability },
+    Key { name: "fixed", parse: interval_variability },
+    Key { name: "tunable", parse: interval_variability },
+    Key { name: "changing", parse: interval_variability },
+    Key { name: "countdown", parse: interval_variability },
+    Key { name: "triggered", parse: interval_variability },
     Key {
         name: "interval",
         parse: |c, _, input| {
@@ -373,27 +265,9 @@ const CLOCK_GRAMMAR: [Key<Parser<ClockKeys>>; 10] = [
             Ok(())
         },
     },
-    Key {
-        name: "shift",
-        parse: |c, _, i| {
-            c.shift = Some(assigned(i)?);
-            Ok(())
-        },
-    },
-    Key {
-        name: "can_be_deactivated",
-        parse: |c, _, _| {
-            c.can_be_deactivated = true;
-            Ok(())
-        },
-    },
-    Key {
-        name: "priority",
-        parse: |c, _, i| {
-            c.priority = Some(assigned_u32(i)?);
-            Ok(())
-        },
-    },
+    Key { name: "shift", parse: |c, _, i| set(&mut c.shift, Some(assigned(i)?)) },
+    Key { name: "can_be_deactivated", parse: |c, _, _| set(&mut c.can_be_deactivated, true) },
+    Key { name: "priority", parse: |c, _, i| set(&mut c.priority, Some(assigned_u32(i)?)) },
 ];
 
 pub(crate) const CLOCK_KEYS: &[&str] = &key_names(&CLOCK_GRAMMAR);
