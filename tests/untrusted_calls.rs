@@ -623,8 +623,14 @@ fn a_model_without_continuous_states_steps_with_the_default_co_simulation() {
     unsafe {
         let g = rustfmu::core::guard::component::<Gain>(c);
         let terms = &rustfmu::fmi2::TERMS;
-        assert_eq!(api::setup_experiment::<Gain>(g, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
-        assert_eq!(transition::<Gain>(terms, Transition::EnterInitializationMode, g), fmi2OK);
+        assert_eq!(
+            api::setup_experiment::<Gain>(g, fmi2False, 0.0, 0.0, fmi2False, 0.0),
+            fmi2OK
+        );
+        assert_eq!(
+            transition::<Gain>(terms, Transition::EnterInitializationMode, g),
+            fmi2OK
+        );
         assert_eq!(transition::<Gain>(terms, Transition::ExitInitializationMode, g), fmi2OK);
         let mut t = 0.0;
         for k in 0..100 {
