@@ -403,3 +403,75 @@ fn the_manifests_are_read_as_cargo_reads_them() {
     assert!(crates["rustfmu-container"].cdylib && !crates["rustfmu-container"].is_fmu());
     assert!(Path::new(&root()).join("md-reader/Cargo.toml").is_file());
 }
+
+/// The documents a newcomer reads, each a path from the workspace root.
+fn documents() -> Vec<String> {
+    let mut docs = vec!["README.md".to_string(), "ARCHITECTURE.md".to_string()];
+    for dir in ["docs", "conformance", "tests/independent", "bench"] {
+        let Ok(entries) = std::fs::read_dir(root().join(dir)) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.ends_with(".md") {
+                docs.push(format!("{dir}/{name}"));
+            }
+        }
+    }
+    docs.sort();
+    docs
+}
+
+/// The words of `text` that name a source file of this repository: a path with a `/`, ending in
+/// a source or script extension, whose first folder is a top-level folder of the workspace (or
+/// `..`, `./`, `src/`: then read from the document's own folder too). Paths of other projects
+/// (`include/model.h` of the Reference-FMUs) and of generated files (`target/...`) are not ours
+/// and are passed over.
+fn named_paths(text: &str) -> Vec<String> {
+    const EXTENSIONS: [&str; 8] = [".rs", ".toml", ".sh", ".py", ".md", ".c", ".h", ".in"];
+    text.split(|c: char| c.is_whitespace() || "`()[]<>\"',;|*".contains(c))
+        .map(|w| w.trim_end_matches(['.', ':']))
+        .filter(|w| w.contains('/') && EXTENSIONS.iter().any(|e| w.ends_with(e)))
+        .filter(|w| !w.contains("://") && !w.contains('$') && !w.contains('{') && !w.starts_with('/'))
+        .map(|w| w.split(':').next().unwrap_or(w).to_string())
+        .collect()
+}
+
+#[test]
+fn every_source_path_the_documents_name_exists() {
+    let tops: BTreeSet<String> = std::fs::read_dir(root())
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "target" && !n.starts_with('.'))
+        .collect();
+    let mut problems = Vec::new();
+    for doc in documents() {
+        let dir = Path::new(&doc).parent().unwrap_or(Path::new("")).to_path_buf();
+        for (n, line) in read(&doc).lines().enumerate() {
+            for path in named_paths(line) {
+                let first = path.split('/').next().unwrap_or("");
+                let ours = tops.contains(first) || first == ".." || first == ".";
+                if !ours {
+                    continue;
+                }
+                // A crate table's row names its files from the crate's folder (`src/fmi2.rs` on
+                // the row of `runner/container/`): the folders the line names are bases too.
+                let bases = backticked(line)
+                    .into_iter()
+                    .filter(|w| w.ends_with('/') && root().join(w).is_dir())
+                    .map(PathBuf::from)
+                    .chain([PathBuf::new(), dir.clone()]);
+                let exists = bases.into_iter().any(|b| root().join(b).join(&path).exists());
+                if !exists {
+                    problems.push(format!(
+                        "{doc}:{}: names `{path}`, which is not a file of the repository (moved or renamed?)",
+                        n + 1
+                    ));
+                }
+            }
+        }
+    }
+    assert_none(problems);
+}
