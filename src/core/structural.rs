@@ -1,6 +1,6 @@
 //! Configuration Mode (FMI 3.0, 3.2/4.2): where structural parameters are set, and what the
 //! instance does when they change. What their values mean for the arrays and the state vector
-//! (lengths, the integrator's mask) is the step's: [`crate::step::structural`].
+//! (lengths, the integrator's mask) is the step's: `crate::step::structural`.
 
 use super::instance::Instance;
 use super::machine::State;

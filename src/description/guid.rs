@@ -2,7 +2,7 @@
 //! description, computed in const evaluation.
 
 /// `{xxxxxxxx-xxxx-5xxx-yxxx-xxxxxxxxxxxx}`: a name-based SHA-1 UUID (RFC 4122, version 5) of
-/// the encoded description; [`MAGIC`] at its start plays the namespace's part.
+/// the encoded description; `MAGIC` at its start plays the namespace's part.
 pub const fn guid(encoded: &[u8]) -> [u8; 38] {
     let digest = const_sha1::sha1(encoded).as_bytes();
     let mut b = [0u8; 16];

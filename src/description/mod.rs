@@ -9,9 +9,9 @@
 //! Every item here is `const`-constructible: the derive macro writes a `ModelDescription`
 //! literal, and [`encode`] runs in const evaluation.
 //!
-//! One file per concern: the declarations ([`variable`], [`model`]), the const encoder
-//! ([`encode`]), the GUID ([`guid`](mod@guid)), the decoder ([`decode`]), the compile-time
-//! checks of values ([`check`]). Every item is re-exported here, at the paths
+//! One file per concern: the declarations (`variable`, `model`), the const encoder
+//! ([`encode`]), the GUID (`guid`), the decoder ([`decode`]), the compile-time
+//! checks of values (`check`). Every item is re-exported here, at the paths
 //! (`rustfmu::description::X`) the derive's generated code and the tools use.
 
 mod check;

@@ -30,7 +30,7 @@ impl<M: CoSimulation> Standalone<M> {
         }
     }
 
-    /// What fmi2ExitInitializationMode does: [`Model::initialize`], then the equations.
+    /// What fmi2ExitInitializationMode does: `Model::initialize`, then the equations.
     pub fn initialize(&mut self) -> Result<(), String> {
         let ctx = Context::standalone(self.start_time, self.tolerance);
         self.model.initialize(&ctx)?;

@@ -4,13 +4,13 @@
 //!
 //! One `impl Instance` per concern, each in its own file, the lower ones first (each uses only
 //! what is above it in this list): this file, the instance and what every call needs (the state
-//! check, messages, looking up a variable); [`evaluation`], the equations and the initialization
-//! brought up to date before a value leaves; [`events`], Event Mode, clocks and Scheduled
-//! Execution; [`lifecycle`], setup, initialization, terminate and reset; [`get`] and [`set`],
-//! the values of variables (with [`checks`], the rules every value passes); [`co_simulation`],
-//! the communication step; [`model_exchange`], the vectors an importer's integrator reads and
-//! writes; [`derivatives`], directional and output derivatives. The model's own step (the
-//! integrator, event location, the structural mask) is [`crate::step`]'s, below all of this.
+//! check, messages, looking up a variable); `evaluation`, the equations and the initialization
+//! brought up to date before a value leaves; `events`, Event Mode, clocks and Scheduled
+//! Execution; `lifecycle`, setup, initialization, terminate and reset; `get` and `set`,
+//! the values of variables (with `checks`, the rules every value passes); `co_simulation`,
+//! the communication step; `model_exchange`, the vectors an importer's integrator reads and
+//! writes; `derivatives`, directional and output derivatives. The model's own step (the
+//! integrator, event location, the structural mask) is `crate::step`'s, below all of this.
 
 use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};

@@ -1,6 +1,6 @@
 //! The C entry points whose bodies are the same in FMI 2.0 and 3.0, generic over the model:
 //! freeing an instance and debug logging (here), the lifecycle's transitions and model exchange
-//! ([`model_exchange`]), the FMU state ([`fmu_state`]). Each takes the calling layer's
+//! (`model_exchange`), the FMU state (`fmu_state`). Each takes the calling layer's
 //! [`Terms`], so that its messages name the function the importer called; the layers convert
 //! their own argument types (`fmi3Boolean`, `fmi3Byte`) before calling, and the instance handle
 //! is converted once, in the exported function ([`crate::core::guard::component`]).

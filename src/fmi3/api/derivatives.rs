@@ -109,7 +109,7 @@ pub unsafe fn get_variable_dependencies<M: CoSimulation>(
 /// fmi3GetDirectionalDerivative (`adjoint` false) and fmi3GetAdjointDerivative (true): the
 /// instance and the state check, the array lengths (`seed` has one element per known and
 /// `sensitivity` one per unknown for the directional derivative, the other way round for the
-/// adjoint), the four arrays' NULL checks; then [`directional`] or [`adjoint`]. Inlined into
+/// adjoint), the four arrays' NULL checks; then `directional` or `adjoint`. Inlined into
 /// each exported function, so that `adjoint` is a constant there.
 ///
 /// # Safety

@@ -15,8 +15,8 @@
 //! NUL-terminated string, a writable output). Each `unsafe` block says which part of that, and
 //! which check, makes its pointer operation sound.
 //!
-//! One file per concern: instantiation ([`instantiate`]), the typed getters and setters
-//! ([`values`]), dependencies and derivatives ([`derivatives`]), clocks ([`clocks`]); here the
+//! One file per concern: instantiation (`instantiate`), the typed getters and setters
+//! (`values`), dependencies and derivatives (`derivatives`), clocks (`clocks`); here the
 //! lifecycle, the step and the model-exchange functions whose form is 3.0's own.
 #![allow(clippy::missing_safety_doc, clippy::too_many_arguments)]
 
