@@ -152,7 +152,7 @@ pub fn read_model_description_within(archive: &mut Archive, limits: &Limits) -> 
 
 /// Line and column of a byte offset: the description reader's, so that the archive's errors and
 /// the description's count alike.
-pub use fmi_description::line_column;
+pub use md_reader::line_column;
 
 /// Parses the whole document; an error is `line:column: what`.
 pub fn check_well_formed(xml: &str) -> Result<(), String> {

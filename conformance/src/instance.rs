@@ -10,7 +10,7 @@ use crate::logger::{LogEntry, LogSink, callbacks};
 use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
 use crate::standard::State;
 use crate::{Fmu, Type, state};
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::{Causality, Initial, Variability};
 use std::ffi::CString;
 use std::ptr;
 

@@ -14,7 +14,7 @@
 //!   `target/fmu/fmi3`), strictly: there, a limitation or a skip fails.
 //!
 //! Nothing here knows a particular FMU: value references, types, causalities and variabilities
-//! come from each FMU's model description, read by the `fmi-description` crate (the reader
+//! come from each FMU's model description, read by the `md-reader` crate (the reader
 //! `cargo fmu` and the runner use too; it knows the standard, not this exporter). Nothing depends on the exporter either: the C types
 //! are declared from the standard ([`fmi2`]). Where a check can do more on an FMU of this
 //! exporter (whose serialized FMU state it can read and rewrite, see [`state`]), it finds out
@@ -36,11 +36,11 @@ pub mod standard;
 pub mod state;
 
 pub use api::Api;
-pub use fmi_description::Version;
-pub use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
 pub use fmi3::Fmu3;
 pub use instance::Instance;
 pub use logger::LogEntry;
+pub use md_reader::Version;
+pub use md_reader::fmi2::{ModelDescription as Description, Type, Variable};
 
 use archive::PrivateDir;
 
@@ -148,7 +148,7 @@ impl Fmu {
     }
 
     /// The `<CoSimulation>` element ([`Fmu::load`] refuses a description without one).
-    pub fn cs(&self) -> &fmi_description::fmi2::CoSimulation {
+    pub fn cs(&self) -> &md_reader::fmi2::CoSimulation {
         self.md
             .cs
             .as_ref()
@@ -315,7 +315,7 @@ pub(crate) fn binary_and_tool(
 pub fn file_version(path: &Path) -> Result<Version, String> {
     let mut zip = archive::open(path)?;
     let xml = archive::read_model_description(&mut zip)?;
-    let v = fmi_description::fmi_version(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v = md_reader::fmi_version(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
     Version::of(&v).ok_or_else(|| format!("{}: fmiVersion \"{v}\": neither FMI 2.0 nor FMI 3.0", path.display()))
 }
 

@@ -8,7 +8,7 @@
 
 use crate::{Type, Variable};
 use State::*;
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::{Causality, Initial, Variability};
 
 /// A state of the co-simulation state machine. The discriminants are also the numbering of the
 /// state byte in this exporter's serialized FMU state (see [`crate::state`]).

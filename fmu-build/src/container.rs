@@ -362,7 +362,7 @@ impl System {
         for c in &components {
             let bytes = archive.fmu_bytes(c).map_err(|e| e.message)?;
             let xml = model_description_of(&bytes).map_err(|e| format!("{shown}: component '{c}': {e}"))?;
-            let version = match fmi_description::fmi_version(&xml) {
+            let version = match md_reader::fmi_version(&xml) {
                 Ok(v) if v.starts_with("3.") => FmiVersion::V3,
                 _ => FmiVersion::V2,
             };

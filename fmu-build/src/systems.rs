@@ -360,8 +360,8 @@ pub fn workspace_files(workspace_root: &Path) -> Result<Vec<PathBuf>, String> {
         .collect()
 }
 
-pub use fmi_description::fmi2::{Enumeration, ModelDescription as FmuDescription, Type as VarType, Variable};
-pub use fmi_description::{Causality, Variability};
+pub use md_reader::fmi2::{Enumeration, ModelDescription as FmuDescription, Type as VarType, Variable};
+pub use md_reader::{Causality, Variability};
 
 /// `Mode (LQR = 1, PID = 2)`
 fn describe(e: &Enumeration) -> String {

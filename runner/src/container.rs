@@ -18,8 +18,8 @@
 
 use crate::Error;
 use crate::sim::Simulation;
-use fmi_description::fmi2::{ModelDescription as Description, Type};
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::fmi2::{ModelDescription as Description, Type};
+use md_reader::{Causality, Initial, Variability};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 

@@ -7,7 +7,7 @@
 //! Boolean (C `bool`), String; variables of the other types and arrays are left out, named in
 //! [`Fmi3Parts::skipped`] (a connection or parameter naming one is refused with its type).
 //! Written here for the reasons of [`crate::fmi2`]'s header, and because the `fmi` crate's FMI 3.0
-//! description parser refuses FMI 3.0 units; the description is `fmi-description`'s.
+//! description parser refuses FMI 3.0 units; the description is `md-reader`'s.
 
 #![allow(non_upper_case_globals, non_camel_case_types)]
 

@@ -6,11 +6,11 @@ use crate::Error;
 use crate::fmi2::Fmi2Import;
 use crate::fmi3::Fmi3Import;
 use crate::instance::InstanceCS;
-use fmi_description::Causality;
-use fmi_description::fmi2::{ModelDescription as Description, Type, Variable};
+use md_reader::Causality;
+use md_reader::fmi2::{ModelDescription as Description, Type, Variable};
 use std::io::{Cursor, Read};
 
-pub use fmi_description::fmi2::Type as VarType;
+pub use md_reader::fmi2::Type as VarType;
 
 /// The importer of an FMU's version.
 pub enum Import {
@@ -94,9 +94,9 @@ impl Fmu {
             component: Some(component.to_owned()),
             ..Error::io(format!("component '{component}' ({label}): {what}"))
         };
-        let version = fmi_description::fmi_version(xml).map_err(fail)?;
+        let version = md_reader::fmi_version(xml).map_err(fail)?;
         let (description, int64, skipped) = if version.starts_with("3.") {
-            let d3 = fmi_description::fmi3::ModelDescription::parse(xml).map_err(fail)?;
+            let d3 = md_reader::fmi3::ModelDescription::parse(xml).map_err(fail)?;
             let parts = crate::fmi3::as_fmi2(&d3);
             (parts.description, Some(parts.int64), parts.skipped)
         } else if version.starts_with("2.") {

@@ -28,8 +28,8 @@ use crate::fmu::{Fmu, type_name};
 use crate::instance::InstanceCS;
 use crate::ssp::{Archive, Connection};
 use crate::{Error, Value};
-use fmi_description::Causality;
-use fmi_description::fmi2::Type;
+use md_reader::Causality;
+use md_reader::fmi2::Type;
 use std::ffi::CString;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! A variable's `causality`, `variability` and `initial`, and the standard's rules on how they
 //! combine, written once for every crate of the exporter: the derive macro checks declarations
 //! with them, the runtime fills in defaults with them, `cargo fmu` re-checks a description with
-//! them before writing XML, and `fmi-description` reads XML into these types.
+//! them before writing XML, and `md-reader` reads XML into these types.
 //!
 //! The rules are the table "combinations of variability and causality" and the table of
 //! `initial` of FMI 2.0 section 2.2.7 (`ScalarVariable`). FMI 3.0 (section 2.4.7.4) keeps both

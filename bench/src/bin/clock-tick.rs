@@ -105,7 +105,7 @@ fn clocked(ticks: usize) -> Result<f64, String> {
             .map_err(|e| e.to_string())?;
         s
     };
-    let d = fmi_description::fmi3::ModelDescription::parse(&xml)?;
+    let d = md_reader::fmi3::ModelDescription::parse(&xml)?;
     let vr = |name: &str| {
         d.variables
             .iter()

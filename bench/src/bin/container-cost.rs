@@ -52,7 +52,7 @@ fn run() -> Result<(), String> {
         &mut xml,
     )
     .map_err(|e| e.to_string())?;
-    let md = fmi_description::fmi2::ModelDescription::parse(&xml)?;
+    let md = md_reader::fmi2::ModelDescription::parse(&xml)?;
     let h: f64 = md
         .default_experiment
         .step_size
@@ -62,7 +62,7 @@ fn run() -> Result<(), String> {
     let outputs: Vec<(String, u32)> = md
         .variables
         .iter()
-        .filter(|v| v.causality == fmi_description::Causality::Output && v.ty == fmi_description::fmi2::Type::Real)
+        .filter(|v| v.causality == md_reader::Causality::Output && v.ty == md_reader::fmi2::Type::Real)
         .map(|v| (v.name.clone(), v.vr))
         .collect();
     let vrs: Vec<u32> = outputs.iter().map(|(_, vr)| *vr).collect();

@@ -16,7 +16,7 @@ use crate::instance::{Instance, excitation, status_name, step_size};
 use crate::me::{Euler, Rng, needs_me};
 use crate::outcome::{NOT_DECLARED, info, limitation, skip_not_declared};
 use crate::{Fmu, Type, Variable, bits};
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::{Causality, Initial, Variability};
 
 /// Relative (and, below 1, absolute) tolerance of the comparison with finite differences.
 const TOLERANCE: f64 = 1e-5;
@@ -31,7 +31,7 @@ type UnknownVar<'a> = (&'a Variable, Option<&'a Vec<usize>>);
 pub fn unknowns(fmu: &Fmu, me: bool) -> Vec<UnknownVar<'_>> {
     let md = &fmu.md;
     let ms = &md.model_structure;
-    let mut list: Vec<&fmi_description::fmi2::Unknown> = vec![];
+    let mut list: Vec<&md_reader::fmi2::Unknown> = vec![];
     if me {
         list.extend(&ms.derivatives);
     }

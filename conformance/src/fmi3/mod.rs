@@ -11,9 +11,9 @@ pub mod standard;
 pub mod types;
 
 use crate::archive::{self, PrivateDir};
-use fmi_description::fmi3::Dimension;
-pub use fmi_description::fmi3::{ModelDescription as Description, Type, Variable};
-use fmi_description::{Causality, Variability};
+use md_reader::fmi3::Dimension;
+pub use md_reader::fmi3::{ModelDescription as Description, Type, Variable};
+use md_reader::{Causality, Variability};
 pub use standard::State;
 use std::collections::BTreeMap;
 use std::ffi::{CStr, CString, c_char};
@@ -83,7 +83,7 @@ impl Fmu3 {
         let mut zip = archive::open(path)?;
         let xml = archive::read_model_description(&mut zip)?;
         let md = Description::parse(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
-        if fmi_description::Version::of(&md.fmi_version) != Some(fmi_description::Version::Fmi3) {
+        if md_reader::Version::of(&md.fmi_version) != Some(md_reader::Version::Fmi3) {
             return Err(format!(
                 "{}: fmiVersion \"{}\" is not 3.0",
                 path.display(),
@@ -825,7 +825,7 @@ impl<'a> Inst<'a> {
             (v.array || v.ty != Type::Float64)
                 && !matches!(v.ty, Type::String | Type::Clock)
                 && v.clocks.is_empty()
-                && v.causality != fmi_description::Causality::Independent
+                && v.causality != md_reader::Causality::Independent
         }) {
             let (s, bytes) = self.get_raw(var);
             assert_eq!(

@@ -3,7 +3,7 @@
 //! exporter's own table.
 
 use super::Variable;
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::{Causality, Initial, Variability};
 
 /// The states of the FMI 3.0 state machine an importer can bring an instance into (without
 /// event mode, clocks or structural parameters), for ME and CS.

@@ -6,13 +6,13 @@ use super::{
     architecture_problems, array_problems, export_problems, macho_problems, pe_problems, smoke_run_in_child,
     terminal_problems,
 };
-use fmi_description::{ModelDescription, fmi2, fmi3};
+use md_reader::{ModelDescription, fmi2, fmi3};
 use rustfmu::description::FmiVersion;
 use std::collections::BTreeSet;
 use std::path::Path;
 
 /// What validation needs of the packaged description, read by the workspace's one reader
-/// (`fmi_description`). The checks of the archive itself (entry names, the XML's encoding and
+/// (`md_reader`). The checks of the archive itself (entry names, the XML's encoding and
 /// well-formedness, with line and column) are the conformance suite's archive module's, and
 /// the comparison with the description the binary carries compares the raw XML text.
 pub(super) struct Description {
@@ -28,7 +28,7 @@ pub(super) struct Description {
 }
 
 fn read_description(xml: &str) -> Result<Description, String> {
-    let (version, cs, guid, real_vrs, clocks, problems) = match fmi_description::parse(xml)? {
+    let (version, cs, guid, real_vrs, clocks, problems) = match md_reader::parse(xml)? {
         ModelDescription::Fmi2(d) => (
             FmiVersion::V2,
             d.cs.as_ref().map(|cs| cs.model_identifier.clone()),

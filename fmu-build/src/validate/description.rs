@@ -1,7 +1,7 @@
 //! Checks of a packaged description that its reader does not make: the lengths of FMI 3.0
 //! arrays, and `terminalsAndIcons.xml` against the variables.
 
-use fmi_description::{Causality, ModelDescription, fmi3};
+use md_reader::{Causality, ModelDescription, fmi3};
 use std::collections::BTreeSet;
 
 /// The length of an FMI 3.0 array's dimension at the start: a fixed one, or the start value of
@@ -15,7 +15,7 @@ fn dimension_length(d: &fmi3::ModelDescription, dim: &fmi3::Dimension) -> Result
         .by_vr(vr)
         .ok_or_else(|| format!("<Dimension valueReference=\"{vr}\"> names no variable"))?;
     if p.ty != fmi3::Type::UInt64
-        || !(p.causality == Causality::StructuralParameter || p.variability == fmi_description::Variability::Constant)
+        || !(p.causality == Causality::StructuralParameter || p.variability == md_reader::Variability::Constant)
     {
         return Err(format!(
             "<Dimension valueReference=\"{vr}\"> names '{}', a {} {}; a length is set by a UInt64 structuralParameter \
@@ -72,7 +72,7 @@ pub fn array_problems(d: &fmi3::ModelDescription) -> Vec<String> {
 /// `matchingRule`, a member without `variableName` or `variableKind`, or naming no variable.
 pub fn terminal_problems(terminals: &str, model_description: &str) -> Vec<String> {
     use quick_xml::events::Event;
-    let names: BTreeSet<String> = match fmi_description::parse(model_description) {
+    let names: BTreeSet<String> = match md_reader::parse(model_description) {
         Ok(ModelDescription::Fmi3(d)) => d.variables.iter().map(|v| v.name.clone()).collect(),
         _ => return vec!["terminalsAndIcons.xml beside a description that is not FMI 3.0".into()],
     };
@@ -165,7 +165,7 @@ mod terminal_tests {
 #[cfg(test)]
 mod array_tests {
     use super::array_problems;
-    use fmi_description::fmi3::ModelDescription;
+    use md_reader::fmi3::ModelDescription;
 
     /// A description with a structural parameter `n` (start 2), a Float64 parameter `k` and
     /// the array `a` (its attributes after `valueReference`, its `<Dimension>`s).

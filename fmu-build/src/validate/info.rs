@@ -1,7 +1,7 @@
 //! `cargo fmu info`: what an FMU file offers, from its archive and description.
 
 use super::{glibc_requirements, macos_binaries};
-use fmi_description::{Causality, ModelDescription, fmi3};
+use md_reader::{Causality, ModelDescription, fmi3};
 use std::path::Path;
 
 /// `cargo fmu info`: what an FMU file offers, from its archive and description.
@@ -16,7 +16,7 @@ pub fn info(fmu: &Path) -> Result<String, String> {
         }
     }
     let xml = fmi_conformance::archive::read_model_description(&mut zip)?;
-    let md = fmi_description::parse(&xml).map_err(|e| at(&e))?;
+    let md = md_reader::parse(&xml).map_err(|e| at(&e))?;
     let mut out = String::new();
     let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
     let mut interfaces = Vec::new();
@@ -201,7 +201,7 @@ fn head(
 }
 
 /// `cargo fmu info`'s line of the default experiment, its values as written (none without one).
-fn experiment(e: &fmi_description::DefaultExperiment) -> String {
+fn experiment(e: &md_reader::DefaultExperiment) -> String {
     let parts: Vec<String> = [
         ("start", &e.start_time),
         ("stop", &e.stop_time),

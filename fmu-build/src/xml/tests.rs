@@ -507,7 +507,7 @@ fn a_sized_array_names_its_structural_parameters_and_starts_at_their_start_sizes
     assert!(!array_element(&xml, "y").contains("start="), "{xml}");
     // What validation reads back: every length set by a UInt64 structural parameter, and as
     // many start values as elements at the start lengths.
-    let d = fmi_description::fmi3::ModelDescription::parse(&xml).unwrap();
+    let d = md_reader::fmi3::ModelDescription::parse(&xml).unwrap();
     assert_eq!(crate::validate::array_problems(&d), Vec::<String>::new());
 }
 

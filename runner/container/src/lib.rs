@@ -45,8 +45,8 @@ mod values;
 use instantiate::{Request, each, each_raw, free_instance, instantiate, resources_of_path, resources_of_uri};
 use values::{Held, Scalar};
 
-use fmi_description::fmi2::Type;
-use fmi_description::{Causality, Variability};
+use md_reader::fmi2::Type;
+use md_reader::{Causality, Variability};
 use rustfmu::__private::{TERMS2, TERMS3};
 use rustfmu::core::Terms;
 use rustfmu::core::Version;
@@ -515,7 +515,7 @@ impl Container {
         })
     }
 
-    fn all_components(&self, f: fn(&fmi_description::fmi2::CoSimulation) -> bool) -> bool {
+    fn all_components(&self, f: fn(&md_reader::fmi2::CoSimulation) -> bool) -> bool {
         self.sim
             .component_descriptions()
             .iter()

@@ -358,9 +358,8 @@ fn attribute_in(text: &str, name: &str) -> Option<String> {
 /// as "name (modelIdentifier)".
 fn capabilities(sim: &Simulation) -> (bool, bool, Vec<String>) {
     let descriptions = sim.component_descriptions();
-    let all = |f: fn(&fmi_description::fmi2::CoSimulation) -> bool| {
-        descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f))
-    };
+    let all =
+        |f: fn(&md_reader::fmi2::CoSimulation) -> bool| descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f));
     let state = all(|cs| cs.can_get_and_set_fmu_state);
     let serialize = state && all(|cs| cs.can_serialize_fmu_state);
     let names = descriptions

@@ -1,8 +1,8 @@
 //! An FMI 3.0 description as the FMI 2.0 one the runner reads ([`as_fmi2`]; see [`super`]).
 
-use fmi_description::Causality;
-use fmi_description::fmi2 as d2;
-use fmi_description::fmi3 as d3;
+use md_reader::Causality;
+use md_reader::fmi2 as d2;
+use md_reader::fmi3 as d3;
 use std::collections::HashSet;
 
 /// An FMI 3.0 description read as the runner's FMI 2.0 one, and what was left out of it.

@@ -12,7 +12,7 @@ impl Simulation {
     }
 
     /// Each component's name and its FMU's description, in the system's order.
-    pub fn component_descriptions(&self) -> Vec<(&str, &fmi_description::fmi2::ModelDescription)> {
+    pub fn component_descriptions(&self) -> Vec<(&str, &md_reader::fmi2::ModelDescription)> {
         self.slaves
             .iter()
             .map(|s| (s.name.as_str(), &self.fmus[s.fmu].description))

@@ -10,7 +10,7 @@ use crate::outcome::{convention, limitation};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State};
 use crate::{Fmu, Type};
-use fmi_description::{Causality, Initial};
+use md_reader::{Causality, Initial};
 use std::ptr;
 
 pub fn do_step_refuses_a_step_size_that_is_not_finite_and_positive(fmu: &Fmu) {

@@ -9,7 +9,7 @@ use crate::instance::{Instance, excitation, excite, run, status_name, step_size}
 use crate::outcome::info;
 use crate::state::{State, name};
 use crate::{Fmu, Type};
-use fmi_description::{Causality, Variability};
+use md_reader::{Causality, Variability};
 use std::ptr;
 
 pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu) {

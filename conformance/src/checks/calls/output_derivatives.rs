@@ -7,7 +7,7 @@ use crate::fmi2::*;
 use crate::instance::{Instance, excitation, step_size};
 use crate::outcome::{info, skip_not_declared};
 use crate::{Fmu, Type};
-use fmi_description::{Causality, Variability};
+use md_reader::{Causality, Variability};
 
 /// How far a declared output derivative may be from the finite differences of the output: the
 /// second-order one-sided difference (4 y(t+d) - y(t+2d) - 3 y(t)) / 2d, whose error is of order

@@ -10,7 +10,7 @@ use crate::instance::{Instance, excitation};
 use crate::me::{self, Euler, MeState::*, Rng, needs_me};
 use crate::outcome::{NOT_DECLARED, convention, info, limitation, skip_not_declared};
 use crate::{Fmu, Type, bits};
-use fmi_description::Causality;
+use md_reader::Causality;
 
 pub fn model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic(fmu: &Fmu) {
     needs_me(fmu);

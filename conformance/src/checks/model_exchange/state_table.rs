@@ -9,7 +9,7 @@ use crate::instance::{Args, Instance, status_name};
 use crate::me::{self, ME_REACHABLE, ME_STATES, MeState, MeState::*, needs_me};
 use crate::outcome::{info, limitation};
 use crate::{Fmu, Type};
-use fmi_description::Causality;
+use md_reader::Causality;
 use std::ptr;
 
 /// FMU states of a donor model-exchange instance, one per model-exchange state, for the

@@ -6,7 +6,7 @@ use super::co_simulation::{Op, When, execute, note_limitations};
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, status_name};
 use crate::{Fmu, Type};
-use fmi_description::Causality;
+use md_reader::Causality;
 
 /// Sequences that failed once (found by the random run above, shrunk by proptest), kept as
 /// tests of their own for every FMU.

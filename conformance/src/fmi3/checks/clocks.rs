@@ -257,7 +257,7 @@ fn run(
             );
         }
         let active: Vec<u32> = due.iter().map(|i| clocks[*i].vr).collect();
-        let clocked = |v: &&fmi_description::fmi3::Variable| {
+        let clocked = |v: &&md_reader::fmi3::Variable| {
             v.clocks.iter().any(|c| active.contains(c))
                 && v.fixed_count().is_some()
                 && !matches!(v.ty, Type::String | Type::Binary)

@@ -29,7 +29,7 @@ use super::standard::{State, settable_in};
 use super::types::*;
 use super::{Fmu3, Inst, Type, Variable, euler_step};
 use crate::outcome::{info, limitation, skip, skip_not_declared};
-use fmi_description::{Causality, Initial, Variability};
+use md_reader::{Causality, Initial, Variability};
 use std::ffi::CString;
 use std::ptr::{null, null_mut};
 

@@ -12,7 +12,7 @@
 use super::*;
 use crate::fmi3::{Sizes, Variable, euler_step_n, floats};
 use crate::outcome::NOT_DECLARED;
-use fmi_description::fmi3::Dimension;
+use md_reader::fmi3::Dimension;
 use std::ffi::c_void;
 
 /// A UInt64 structural parameter the check changes.
