@@ -1,77 +1,8 @@
-//! The C types of the FMI 2.0 ABI (co-simulation and model exchange) (`fmi2TypesPlatform.h`, `fmi2FunctionTypes.h`),
-//! as an importer declares them. The suite is an importer: it takes nothing from an exporter's
-//! crate, only the standard's definitions.
-#![allow(non_camel_case_types, non_upper_case_globals, non_snake_case)]
+//! The C types of the FMI 2.0 ABI (co-simulation and model exchange) (`fmi2TypesPlatform.h`,
+//! `fmi2FunctionTypes.h`), as an importer declares them. The suite is an importer: it takes
+//! nothing from an exporter's crate, only the standard's definitions, `fmi-standard`'s
+//! (`fmi_standard::fmi2`, which the workspace's tests compare with fmi-sys's bindgen output).
+//! Statuses and enums are plain integers there, not Rust enums: an FMU may answer any value, and
+//! the suite must be able to report it.
 
-use std::os::raw::{c_char, c_int, c_uint, c_void};
-
-pub type fmi2Component = *mut c_void;
-pub type fmi2ComponentEnvironment = *mut c_void;
-pub type fmi2FMUstate = *mut c_void;
-pub type fmi2ValueReference = c_uint;
-pub type fmi2Real = f64;
-pub type fmi2Integer = c_int;
-pub type fmi2Boolean = c_int;
-pub type fmi2Char = c_char;
-pub type fmi2String = *const fmi2Char;
-pub type fmi2Byte = c_char;
-
-pub const fmi2True: fmi2Boolean = 1;
-pub const fmi2False: fmi2Boolean = 0;
-
-/// C enums are `unsigned int` on the supported platforms. Plain integers, not a Rust enum: an
-/// FMU may answer any value, and the suite must be able to report it.
-pub type fmi2Status = c_uint;
-pub const fmi2OK: fmi2Status = 0;
-pub const fmi2Warning: fmi2Status = 1;
-pub const fmi2Discard: fmi2Status = 2;
-pub const fmi2Error: fmi2Status = 3;
-pub const fmi2Fatal: fmi2Status = 4;
-pub const fmi2Pending: fmi2Status = 5;
-
-pub type fmi2Type = c_uint;
-pub const fmi2ModelExchange: fmi2Type = 0;
-pub const fmi2CoSimulation: fmi2Type = 1;
-
-pub type fmi2StatusKind = c_uint;
-pub const fmi2DoStepStatus: fmi2StatusKind = 0;
-pub const fmi2PendingStatus: fmi2StatusKind = 1;
-pub const fmi2LastSuccessfulTime: fmi2StatusKind = 2;
-pub const fmi2Terminated: fmi2StatusKind = 3;
-
-pub type fmi2CallbackLogger = Option<
-    unsafe extern "C" fn(
-        componentEnvironment: fmi2ComponentEnvironment,
-        instanceName: fmi2String,
-        status: fmi2Status,
-        category: fmi2String,
-        message: fmi2String,
-        ...
-    ),
->;
-pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(nobj: usize, size: usize) -> *mut c_void>;
-pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(obj: *mut c_void)>;
-pub type fmi2StepFinished =
-    Option<unsafe extern "C" fn(componentEnvironment: fmi2ComponentEnvironment, status: fmi2Status)>;
-
-#[repr(C)]
-#[derive(Debug, Clone, Copy)]
-pub struct fmi2CallbackFunctions {
-    pub logger: fmi2CallbackLogger,
-    pub allocateMemory: fmi2CallbackAllocateMemory,
-    pub freeMemory: fmi2CallbackFreeMemory,
-    pub stepFinished: fmi2StepFinished,
-    pub componentEnvironment: fmi2ComponentEnvironment,
-}
-
-/// `fmi2EventInfo` (model exchange), filled by fmi2NewDiscreteStates.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct fmi2EventInfo {
-    pub newDiscreteStatesNeeded: fmi2Boolean,
-    pub terminateSimulation: fmi2Boolean,
-    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
-    pub valuesOfContinuousStatesChanged: fmi2Boolean,
-    pub nextEventTimeDefined: fmi2Boolean,
-    pub nextEventTime: fmi2Real,
-}
+pub use fmi_standard::fmi2::*;

@@ -11,12 +11,40 @@
 //! FMI 3.0's other additions around variables (clocks, arrays, `intermediateUpdate`) are not
 //! modelled here: the exporter declares none of them.
 //!
-//! The conformance suite (`fmi-conformance`) does not use this crate for its own checks: it is
+//! The conformance suite (`fmi-conformance`) does not use these rules for its own checks: it is
 //! the check of the exporter and keeps an independent copy written from the standard's text.
 //!
 //! Everything is `const`: the runtime evaluates the defaults in constant expressions.
+//!
+//! The crate also holds what the standard's C headers declare, once for the exporter and the
+//! importers: the ABI's C types ([`fmi2`], [`fmi3`]) and the names of the functions
+//! ([`functions`]). The conformance suite uses these (they are the headers, which the workspace's
+//! tests compare with fmi-sys's bindgen output), never the rules above.
 
 #![no_std]
+
+/// A C enum of the headers, `typedef enum { A, B, ... } T;`, as `pub type T = c_uint;` and
+/// `pub const A: T = 0; pub const B: T = 1; ...` (numbered from 0, as C numbers them).
+/// C enums are `unsigned int` on the supported platforms (what bindgen emits for them); kept as
+/// plain integers, not a Rust enum: the other side (an importer calling the runtime, an FMU
+/// answering the conformance suite) may pass any value, and a Rust enum would make an
+/// out-of-range value undefined behaviour.
+macro_rules! c_enum {
+    ($(#[$doc:meta])* $ty:ident { $($name:ident),* $(,)? }) => {
+        $(#[$doc])*
+        pub type $ty = core::ffi::c_uint;
+        c_enum!(@numbered $ty, 0, $($name,)*);
+    };
+    (@numbered $ty:ident, $n:expr, $first:ident, $($rest:ident,)*) => {
+        pub const $first: $ty = $n;
+        c_enum!(@numbered $ty, $n + 1, $($rest,)*);
+    };
+    (@numbered $ty:ident, $n:expr,) => {};
+}
+
+pub mod fmi2;
+pub mod fmi3;
+pub mod functions;
 
 /// `causality` of a variable (FMI 2.0 section 2.2.7; FMI 3.0 section 2.4.7.4). The
 /// discriminants are the codes of the exporter's encoded description: keep them.
