@@ -446,9 +446,14 @@ impl<'a> Instance<'a> {
             self.fmu.id
         );
         let bytes = state::forge(&self.snapshot(), target);
-        // A helper instance makes and frees the FMU state, so that this works for Fatal too.
-        let mut helper = Instance::new(self.fmu);
-        let (st, mut s) = helper.deserialize(&bytes);
+        self.restore_forged(Instance::new(self.fmu), &bytes);
+    }
+
+    /// Restores `bytes`, a forged copy of this instance's own serialized state, with
+    /// fmi2SetFMUstate. `helper`, an instance of the same kind, makes and frees the FMU state,
+    /// so that this works for Fatal too.
+    pub(crate) fn restore_forged(&mut self, mut helper: Instance, bytes: &[u8]) {
+        let (st, mut s) = helper.deserialize(bytes);
         assert_eq!(
             st,
             fmi2OK,

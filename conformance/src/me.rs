@@ -17,28 +17,19 @@ use crate::outcome::{breadcrumb, breadcrumbs_on, skip, skip_not_declared};
 use crate::{Fmu, state};
 pub use MeState::*;
 
-/// A state of the model-exchange state machine.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum MeState {
-    Instantiated = 0,
-    InitializationMode = 1,
-    EventMode = 2,
-    ContinuousTimeMode = 3,
-    Terminated = 4,
-    Error = 5,
-    Fatal = 6,
-}
-
-/// Every model-exchange state, indexed by its discriminant.
-pub const ME_STATES: [MeState; 7] = [
-    Instantiated,
-    InitializationMode,
-    EventMode,
-    ContinuousTimeMode,
-    Terminated,
-    Error,
-    Fatal,
-];
+crate::standard::state_machine!(
+    /// A state of the model-exchange state machine (discriminants 0 to 6, in this order).
+    MeState,
+    ME_STATES: [
+        Instantiated,
+        InitializationMode,
+        EventMode,
+        ContinuousTimeMode,
+        Terminated,
+        Error,
+        Fatal,
+    ]
+);
 
 /// The states an importer reaches on any FMU by the standard's calls alone.
 pub const ME_REACHABLE: [MeState; 5] = [
@@ -55,18 +46,8 @@ const ALL_BUT_FATAL: &[MeState] = ME_STATES.split_at(6).0;
 const GETTERS: &[MeState] = ALL_BUT_FATAL.split_at(1).1;
 
 /// The functions of the co-simulation interface only: an instance of fmuType
-/// fmi2ModelExchange must refuse them in every state.
-pub const CS_ONLY: [&str; 9] = [
-    "fmi2SetRealInputDerivatives",
-    "fmi2GetRealOutputDerivatives",
-    "fmi2DoStep",
-    "fmi2CancelStep",
-    "fmi2GetStatus",
-    "fmi2GetRealStatus",
-    "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus",
-    "fmi2GetStringStatus",
-];
+/// fmi2ModelExchange must refuse them in every state (`fmi-standard`'s list).
+pub use fmi_standard::functions::FMI2_CS_ONLY_FUNCTIONS as CS_ONLY;
 
 /// Where `function` may be called in a model-exchange instance (FMI 2.0 section 3.2.3). The
 /// functions of co-simulation only: nowhere.
@@ -365,23 +346,7 @@ impl<'a> Instance<'a> {
             .byte(target)
             .unwrap_or_else(|| panic!("{}: no state byte known for {target:?}", self.fmu.id));
         let bytes = state::forge_byte(&self.snapshot(), byte);
-        let mut helper = Instance::new_me(self.fmu);
-        let (st, mut s) = helper.deserialize(&bytes);
-        assert_eq!(
-            st,
-            fmi2OK,
-            "{}: fmi2DeSerializeFMUstate: {}",
-            self.fmu.id,
-            helper.log_text()
-        );
-        assert_eq!(
-            self.set_state(s),
-            fmi2OK,
-            "{}: fmi2SetFMUstate: {}",
-            self.fmu.id,
-            self.log_text()
-        );
-        assert_eq!(helper.free_state(&mut s), fmi2OK);
+        self.restore_forged(Instance::new_me(self.fmu), &bytes);
     }
 }
 

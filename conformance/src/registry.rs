@@ -1,5 +1,5 @@
 //! What a named check is ([`Check`]: a name, a [`Group`], the function of one FMI version) and
-//! the [`registry!`] macro that lists the checks of one version: the room below both versions'
+//! the `registry!` macro that lists the checks of one version: the room below both versions'
 //! check lists ([`crate::checks`] for FMI 2.0, [`crate::fmi3::checks`] for FMI 3.0), so that
 //! neither imports the other's module for it.
 

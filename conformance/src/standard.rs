@@ -10,31 +10,39 @@ use crate::{Type, Variable};
 use State::*;
 use md_reader::{Causality, Initial, Variability};
 
-/// A state of the co-simulation state machine. The discriminants are also the numbering of the
-/// state byte in this exporter's serialized FMU state (see [`crate::state`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum State {
-    Instantiated = 0,
-    InitializationMode = 1,
-    StepComplete = 2,
-    StepFailed = 3,
-    StepCanceled = 4,
-    Terminated = 5,
-    Error = 6,
-    Fatal = 7,
-}
+/// `pub enum $ty` of the states of a state machine, numbered from 0 in the order written, and
+/// `pub const $all`, every state, indexed by its discriminant (co-simulation here, model
+/// exchange in [`crate::me`]).
+macro_rules! state_machine {
+    ($(#[$doc:meta])* $ty:ident, $all:ident: [$($state:ident),* $(,)?]) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum $ty {
+            $($state,)*
+        }
 
-/// Every state, indexed by its discriminant.
-pub const STATES: [State; 8] = [
-    Instantiated,
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    StepCanceled,
-    Terminated,
-    Error,
-    Fatal,
-];
+        /// Every state, indexed by its discriminant.
+        pub const $all: [$ty; [$($ty::$state),*].len()] = [$($ty::$state),*];
+    };
+}
+pub(crate) use state_machine;
+
+state_machine!(
+    /// A state of the co-simulation state machine. The discriminants (0 to 7, in this order) are
+    /// also the numbering of the state byte in this exporter's serialized FMU state (see
+    /// [`crate::state`]).
+    State,
+    STATES: [
+        Instantiated,
+        InitializationMode,
+        StepComplete,
+        StepFailed,
+        StepCanceled,
+        Terminated,
+        Error,
+        Fatal,
+    ]
+);
 
 /// The states an importer reaches on any FMU by the standard's calls alone. StepFailed needs a
 /// step the model cannot do, StepCanceled an asynchronous step, Error and Fatal an FMU that

@@ -61,8 +61,8 @@ pub fn ten_thousand_instantiate_free_cycles_leave_memory_flat(fmu: &Fmu) {
 /// Shared by the FMI 2.0 and 3.0 checks.
 ///
 /// An FMU whose cycle is slow (a container FMU unpacks and loads its components at every
-/// fmi2Instantiate: about 30 ms) gets as many cycles as fit in [`BUDGET`] seconds per kind, at
-/// least [`FEWEST`], with the slack scaled down alike (never under 128 KiB, a few pages of
+/// fmi2Instantiate: about 30 ms) gets as many cycles as fit in `BUDGET` seconds per kind, at
+/// least `FEWEST`, with the slack scaled down alike (never under 128 KiB, a few pages of
 /// allocator noise); the pass is then partial and says how many cycles ran.
 pub fn cycles_leave_memory_flat(id: &str, mut cycle: impl FnMut(bool)) {
     const CYCLES: usize = 10_000;
