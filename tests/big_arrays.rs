@@ -8,7 +8,8 @@
 use rustfmu::__private::abi3::*;
 use rustfmu::testing::{Log, fmi3};
 
-use std::ptr::null_mut;
+#[macro_use]
+mod common;
 
 mod model {
     use rustfmu::prelude::*;
@@ -68,6 +69,8 @@ mod model {
     rustfmu::export_fmi3!(Rod);
 }
 use model::__rustfmu_fmi3_exports::*;
+
+fmi3_serialized_states!();
 
 const A: f64 = 100.0;
 
@@ -175,17 +178,12 @@ fn the_fmu_state_carries_every_element_of_the_long_arrays() {
             fmi3OK
         );
         let at_half = get(c, 4, 50);
-        let mut state: fmi3FMUState = null_mut();
-        assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{}", log.last());
-        let mut size = 0usize;
-        assert_eq!(fmi3SerializedFMUStateSize(c, state, &mut size), fmi3OK);
+        let bytes = serialized_state(c, log);
+        let size = bytes.len();
         assert!(
             size > 200 * 8,
             "a state of {size} bytes cannot hold 200 Float64 elements"
         );
-        let mut bytes = vec![0u8; size];
-        assert_eq!(fmi3SerializeFMUState(c, state, bytes.as_mut_ptr(), size), fmi3OK);
-        assert_eq!(fmi3FreeFMUState(c, &mut state), fmi3OK);
 
         // Move on and change the weights; then back to the deserialized state.
         assert_eq!(
@@ -194,15 +192,7 @@ fn the_fmu_state_carries_every_element_of_the_long_arrays() {
         );
         assert_ne!(get(c, 4, 50), at_half);
         assert_eq!(set(c, 6, &[2.0; 100]), fmi3OK, "{}", log.last());
-        let mut restored: fmi3FMUState = null_mut();
-        assert_eq!(
-            fmi3DeserializeFMUState(c, bytes.as_ptr(), size, &mut restored),
-            fmi3OK,
-            "{}",
-            log.last()
-        );
-        assert_eq!(fmi3SetFMUState(c, restored), fmi3OK, "{}", log.last());
-        assert_eq!(fmi3FreeFMUState(c, &mut restored), fmi3OK);
+        set_serialized_state(c, &bytes, log);
         assert_eq!(get(c, 4, 50), at_half);
         assert_eq!(get(c, 6, 100), weights);
         let y = get(c, 7, 1)[0];

@@ -4,10 +4,14 @@
 //! model keeps its last good values, so `fmi3GetBinary` never hands out more than `maxSize`
 //! bytes and an FMU state taken afterwards is one the FMU accepts again.
 
+use common::assert_names;
 use rustfmu::__private::abi3::*;
-use rustfmu::testing::{Log, fmi3};
+use rustfmu::testing::Log;
 
-use std::ptr::{null, null_mut};
+use std::ptr::null;
+
+#[macro_use]
+mod common;
 
 mod model {
     use rustfmu::prelude::*;
@@ -46,21 +50,7 @@ mod model {
 }
 use model::__rustfmu_fmi3_exports::*;
 
-fn cs() -> (fmi3Instance, &'static Log) {
-    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "frames")
-}
-
-fn me() -> (fmi3Instance, &'static Log) {
-    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "frames")
-}
-
-fn init(c: fmi3Instance) {
-    // SAFETY: a live instance.
-    unsafe {
-        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
-        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
-    }
-}
+fmi3_instances!("frames");
 
 fn set_u8(c: fmi3Instance, vr: u32, value: u8) -> fmi3Status {
     // SAFETY: one value.
@@ -79,43 +69,27 @@ fn get_binary(c: fmi3Instance, vr: u32) -> (fmi3Status, Option<Vec<u8>>) {
     }
 }
 
-/// The message names the variable, what the model wrote and what may be written.
-fn assert_names(log: &Log, what: &str) {
-    let last = log.last();
-    assert!(
-        last.contains(what),
-        "expected a message with {what:?}, the log says: {last}"
+/// The refusal names the function, and the variable with its length and maxSize.
+fn assert_too_long(log: &Log, function: &str, variable: &str, bytes: usize, max_size: usize) {
+    assert_names(log, function);
+    assert_names(
+        log,
+        &format!("{variable} holds {bytes} bytes, more than its maxSize = {max_size}"),
     );
 }
 
 /// The instance's FMU state, serialized and deserialized again (as an importer keeps it), is
 /// accepted by fmi3SetFMUState.
 fn state_round_trips(c: fmi3Instance, log: &Log) {
-    // SAFETY: for every call, a live instance, buffers of the sizes passed.
-    unsafe {
-        let mut state: fmi3FMUState = null_mut();
-        assert_eq!(fmi3GetFMUState(c, &mut state), fmi3OK, "{}", log.last());
-        let mut size = 0usize;
-        assert_eq!(fmi3SerializedFMUStateSize(c, state, &mut size), fmi3OK);
-        let mut bytes = vec![0u8; size];
-        assert_eq!(fmi3SerializeFMUState(c, state, bytes.as_mut_ptr(), size), fmi3OK);
-        let mut restored: fmi3FMUState = null_mut();
-        assert_eq!(
-            fmi3DeserializeFMUState(c, bytes.as_ptr(), size, &mut restored),
-            fmi3OK,
-            "{}",
-            log.last()
-        );
-        assert_eq!(fmi3SetFMUState(c, restored), fmi3OK, "{}", log.last());
-        assert_eq!(fmi3FreeFMUState(c, &mut restored), fmi3OK);
-        assert_eq!(fmi3FreeFMUState(c, &mut state), fmi3OK);
-    }
+    let bytes = serialized_state(c, log);
+    set_serialized_state(c, &bytes, log);
 }
+
+fmi3_serialized_states!();
 
 #[test]
 fn a_frame_within_its_max_size_is_read_and_its_state_round_trips() {
-    let (c, log) = cs();
-    init(c);
+    let (c, log) = initialized();
     assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 4])));
     assert_eq!(set_u8(c, 1, 3), fmi3OK);
     assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 3])));
@@ -127,13 +101,11 @@ fn a_frame_within_its_max_size_is_read_and_its_state_round_trips() {
 
 #[test]
 fn the_read_that_ran_the_equations_is_refused_and_never_hands_out_the_longer_frame() {
-    let (c, log) = cs();
-    init(c);
+    let (c, log) = initialized();
     assert_eq!(set_u8(c, 1, 8), fmi3OK);
     let (status, bytes) = get_binary(c, 2);
     assert_eq!(status, fmi3Error, "fmi3GetBinary gave {bytes:?}");
-    assert_names(log, "fmi3GetBinary");
-    assert_names(log, "'frame' (vr 2) holds 8 bytes, more than its maxSize = 4");
+    assert_too_long(log, "fmi3GetBinary", "'frame' (vr 2)", 8, 4);
     // The model kept its last good values: the FMU state taken now is one it accepts again
     // (FMI 3.0, 2.3.1: after fmi3Error the instance is Terminated, where states may be taken).
     state_round_trips(c, log);
@@ -148,16 +120,14 @@ fn the_read_that_ran_the_equations_is_refused_and_never_hands_out_the_longer_fra
 
 #[test]
 fn the_step_that_wrote_the_longer_frame_is_refused() {
-    let (c, log) = cs();
-    init(c);
+    let (c, log) = initialized();
     assert_eq!(get_binary(c, 2), (fmi3OK, Some(vec![0xAB; 4])));
     assert_eq!(set_u8(c, 1, 8), fmi3OK);
     let (mut event, mut terminate, mut early, mut reached) = (false, false, false, 0.0);
     // SAFETY: a live instance; the output arguments are locals.
     let status = unsafe { fmi3DoStep(c, 0.0, 0.5, true, &mut event, &mut terminate, &mut early, &mut reached) };
     assert_eq!(status, fmi3Error);
-    assert_names(log, "fmi3DoStep");
-    assert_names(log, "'frame' (vr 2) holds 8 bytes, more than its maxSize = 4");
+    assert_too_long(log, "fmi3DoStep", "'frame' (vr 2)", 8, 4);
     state_round_trips(c, log);
     // The state taken now holds the frame of before the step; it is never longer than 4.
     let (status, bytes) = get_binary(c, 2);
@@ -174,8 +144,7 @@ fn the_initialization_that_wrote_the_longer_frame_is_refused() {
         assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
         assert_eq!(set_u8(c, 1, 5), fmi3OK);
         assert_eq!(fmi3ExitInitializationMode(c), fmi3Error);
-        assert_names(log, "fmi3ExitInitializationMode");
-        assert_names(log, "'frame' (vr 2) holds 5 bytes, more than its maxSize = 4");
+        assert_too_long(log, "fmi3ExitInitializationMode", "'frame' (vr 2)", 5, 4);
         fmi3FreeInstance(c);
     }
 }
@@ -209,8 +178,7 @@ fn the_event_update_that_wrote_the_longer_latch_is_refused() {
             fmi3UpdateDiscreteStates(c, discrete, terminate, nominals, values, defined, &mut next),
             fmi3Error
         );
-        assert_names(log, "fmi3UpdateDiscreteStates");
-        assert_names(log, "'latch' (vr 4) holds 3 bytes, more than its maxSize = 2");
+        assert_too_long(log, "fmi3UpdateDiscreteStates", "'latch' (vr 4)", 3, 2);
         // The model is as before the event: the latch of two bytes.
         state_round_trips(c, log);
         let (_, bytes) = get_binary(c, 4);

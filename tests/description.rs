@@ -5,33 +5,43 @@ use rustfmu::Variables;
 use rustfmu::description::{self, Bound, Causality, FmiVersion, Initial, Interfaces, Start, VarType, Variability};
 use rustfmu::prelude::*;
 
-/// A small model.
-#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
-#[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
-#[fmu(log_category(name = "logSolver", description = "what the solver does"))]
-pub struct Small {
-    /// input, with a description
-    /// over two lines
-    #[variable(vr = 0, input, start = 0.0, unit = "furlong/fortnight")]
-    pub u: f64,
-    /// output
-    #[variable(vr = 1, output, depends = [u])]
-    pub y: f64,
-    /// a positive gain
-    #[variable(vr = 2, parameter, tunable, start = 2.0, min > 0.0, max = 10.0)]
-    pub k: f64,
-    /// a mode
-    #[variable(vr = 3, parameter, start = Mode::Fast)]
-    pub mode: Mode,
-    /// a label
-    #[variable(vr = 4, parameter, start = "hello")]
-    pub label: String,
-    /// a counter
-    #[variable(vr = 5, output, initial = exact, start = 0, min = 0)]
-    pub n: i32,
-    /// not a variable: internal state
-    pub memory: Vec<f64>,
+/// `Small` and its twin that differs only in the start value of `u` (the GUID test compares them).
+macro_rules! small_model {
+    ($(#[doc = $doc:tt])* $name:ident, u_start = $u_start:tt) => {
+        $(#[doc = $doc])*
+        #[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+        #[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
+        #[fmu(log_category(name = "logSolver", description = "what the solver does"))]
+        pub struct $name {
+            /// input, with a description
+            /// over two lines
+            #[variable(vr = 0, input, start = $u_start, unit = "furlong/fortnight")]
+            pub u: f64,
+            /// output
+            #[variable(vr = 1, output, depends = [u])]
+            pub y: f64,
+            /// a positive gain
+            #[variable(vr = 2, parameter, tunable, start = 2.0, min > 0.0, max = 10.0)]
+            pub k: f64,
+            /// a mode
+            #[variable(vr = 3, parameter, start = Mode::Fast)]
+            pub mode: Mode,
+            /// a label
+            #[variable(vr = 4, parameter, start = "hello")]
+            pub label: String,
+            /// a counter
+            #[variable(vr = 5, output, initial = exact, start = 0, min = 0)]
+            pub n: i32,
+            /// not a variable: internal state
+            pub memory: Vec<f64>,
+        }
+    };
 }
+
+small_model!(
+    /// A small model.
+    Small, u_start = 0.0
+);
 
 /// How fast.
 #[derive(FmuEnum, Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -62,33 +72,10 @@ fn depends_holds_fmi_names_whether_a_field_or_a_name_is_written() {
     );
 }
 
-/// The same model with another start value of `u`.
-#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
-#[fmu(identifier = "Small", unit(name = "furlong/fortnight", m = 1, s = -1, factor = 1.663e-4))]
-#[fmu(log_category(name = "logSolver", description = "what the solver does"))]
-pub struct SmallOtherStart {
-    /// input, with a description
-    /// over two lines
-    #[variable(vr = 0, input, start = 1.0, unit = "furlong/fortnight")]
-    pub u: f64,
-    /// output
-    #[variable(vr = 1, output, depends = [u])]
-    pub y: f64,
-    /// a positive gain
-    #[variable(vr = 2, parameter, tunable, start = 2.0, min > 0.0, max = 10.0)]
-    pub k: f64,
-    /// a mode
-    #[variable(vr = 3, parameter, start = Mode::Fast)]
-    pub mode: Mode,
-    /// a label
-    #[variable(vr = 4, parameter, start = "hello")]
-    pub label: String,
-    /// a counter
-    #[variable(vr = 5, output, initial = exact, start = 0, min = 0)]
-    pub n: i32,
-    /// not a variable: internal state
-    pub memory: Vec<f64>,
-}
+small_model!(
+    /// The same model with another start value of `u`.
+    SmallOtherStart, u_start = 1.0
+);
 
 const CS: Interfaces = Interfaces::CO_SIMULATION;
 

@@ -3,8 +3,12 @@
 //! row-major start values in the description; nValues counted per element; every element
 //! checked before any is stored (bounds, all or nothing); the FMU state with arrays.
 
+use common::assert_names;
 use rustfmu::__private::abi3::*;
-use rustfmu::testing::{Log, fmi3};
+use rustfmu::testing::Log;
+
+#[macro_use]
+mod common;
 
 mod model {
     use rustfmu::prelude::*;
@@ -66,17 +70,7 @@ fn the_description_has_the_dimensions_and_the_starts_row_major() {
     assert!(d.has_arrays());
 }
 
-fn instance() -> (fmi3Instance, &'static Log) {
-    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "table")
-}
-
-fn init(c: fmi3Instance) {
-    // SAFETY: a live instance.
-    unsafe {
-        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
-        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
-    }
-}
+fmi3_instances!("table");
 
 fn last(log: &Log) -> String {
     log.last()
@@ -91,7 +85,7 @@ fn gains(c: fmi3Instance) -> [f64; 6] {
 
 #[test]
 fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() {
-    let (c, log) = instance();
+    let (c, log) = cs();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // Start values in Instantiated, row-major.
@@ -99,15 +93,10 @@ fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() 
         // nValues must count every element.
         let mut g = [0.0; 6];
         assert_eq!(fmi3GetFloat64(c, &1, 1, g.as_mut_ptr(), 1), fmi3Error);
-        assert!(
-            last(log).contains("nValues = 1, but the 1 value references have 6 values"),
-            "{}",
-            last(log)
-        );
+        assert_names(log, "nValues = 1, but the 1 value references have 6 values");
         fmi3FreeInstance(c);
     }
-    let (c, log) = instance();
-    init(c);
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // Two arrays in one call: counts (4) then flags (2) are different types; counts and
@@ -138,8 +127,7 @@ fn arrays_are_read_and_written_element_by_element_with_n_values_counting_them() 
         assert_eq!(gains(c), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         fmi3FreeInstance(c);
     }
-    let (c, _) = instance();
-    init(c);
+    let (c, _) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         let new = [0.5, 1.5, 2.5, -0.5, -1.5, -2.5];

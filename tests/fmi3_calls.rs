@@ -8,6 +8,9 @@ use rustfmu::testing::{Log, fmi3};
 use std::ffi::{CStr, CString, c_char};
 use std::ptr::{null, null_mut};
 
+#[macro_use]
+mod common;
+
 #[allow(non_snake_case)] // T, the time constant's symbol
 mod model {
     use rustfmu::prelude::*;
@@ -94,21 +97,7 @@ fn token() -> CString {
     CString::new(TOKEN).unwrap()
 }
 
-fn cs() -> (fmi3Instance, &'static Log) {
-    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "cs")
-}
-
-fn me() -> (fmi3Instance, &'static Log) {
-    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "me")
-}
-
-fn init(c: fmi3Instance) {
-    // SAFETY: a live instance.
-    unsafe {
-        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
-        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
-    }
-}
+fmi3_instances!("cs", "me");
 
 fn get(c: fmi3Instance, vrs: &[u32]) -> (fmi3Status, Vec<f64>) {
     let mut v = vec![f64::NAN; vrs.len()];
@@ -172,8 +161,7 @@ fn co_simulation_steps_report_their_outputs_truthfully_and_time_is_a_variable() 
 
 #[test]
 fn time_cannot_be_set_and_a_wrong_n_values_is_refused_with_nothing_changed() {
-    let (c, log) = cs();
-    init(c);
+    let (c, log) = initialized();
     let vr = [TIME_VR];
     // SAFETY: arrays of the given lengths.
     unsafe {
@@ -465,20 +453,21 @@ fn model_exchange_integrates_and_adjoint_is_the_transpose_of_directional() {
         assert_eq!(jac, [[2.0, -2.0], [1.0, 1.0]]);
         let w = [0.7, -1.3];
         let mut adj = [0.0; 2];
-        assert_eq!(
+        // The adjoint of the unknowns der(x), y with the seeds w, for the first n_knowns knowns.
+        let adjoint = |n_knowns: usize, adj: &mut [f64; 2]| {
             fmi3GetAdjointDerivative(
                 c,
                 unknowns.as_ptr(),
                 2,
                 knowns.as_ptr(),
-                2,
+                n_knowns,
                 w.as_ptr(),
                 2,
                 adj.as_mut_ptr(),
-                2
-            ),
-            fmi3OK
-        );
+                2,
+            )
+        };
+        assert_eq!(adjoint(2, &mut adj), fmi3OK);
         for j in 0..2 {
             let expected = jac[0][j] * w[0] + jac[1][j] * w[1];
             assert!((adj[j] - expected).abs() < 1e-15, "{adj:?}");
@@ -501,20 +490,7 @@ fn model_exchange_integrates_and_adjoint_is_the_transpose_of_directional() {
         assert!((get(c, &[TIME_VR]).1[0] - 1.0).abs() < 1e-12);
         assert_eq!(fmi3EnterEventMode(c), fmi3OK);
         // Wrong sizes are refused (nSeed = nUnknowns for the adjoint).
-        assert_eq!(
-            fmi3GetAdjointDerivative(
-                c,
-                unknowns.as_ptr(),
-                2,
-                knowns.as_ptr(),
-                1,
-                w.as_ptr(),
-                2,
-                adj.as_mut_ptr(),
-                2
-            ),
-            fmi3Error
-        );
+        assert_eq!(adjoint(1, &mut adj), fmi3Error);
         // ... and the FMU is Terminated (FMI 3.0, 2.3.1).
         assert_eq!(fmi3Terminate(c), fmi3Error);
         fmi3FreeInstance(c);

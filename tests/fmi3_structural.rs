@@ -7,7 +7,10 @@
 //! elements, co-simulation against the exact solution, reconfiguration, the FMU state.
 
 use rustfmu::__private::abi3::*;
-use rustfmu::testing::{Log, fmi3};
+use rustfmu::testing::Log;
+
+#[macro_use]
+mod common;
 
 mod model {
     use rustfmu::prelude::*;
@@ -63,13 +66,7 @@ mod model {
 }
 use model::__rustfmu_fmi3_exports::*;
 
-fn cs() -> (fmi3Instance, &'static Log) {
-    fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "lags")
-}
-
-fn me() -> (fmi3Instance, &'static Log) {
-    fmi3::me_instance(fmi3InstantiateModelExchange, TOKEN, "lags")
-}
+fmi3_instances!("lags");
 
 fn get(c: fmi3Instance, vr: u32, n: usize) -> (fmi3Status, Vec<f64>) {
     let mut v = vec![f64::NAN; n];
@@ -81,14 +78,6 @@ fn get(c: fmi3Instance, vr: u32, n: usize) -> (fmi3Status, Vec<f64>) {
 fn set_u64(c: fmi3Instance, vr: u32, value: u64) -> fmi3Status {
     // SAFETY: one value.
     unsafe { fmi3SetUInt64(c, &vr, 1, &value, 1) }
-}
-
-fn init(c: fmi3Instance) {
-    // SAFETY: a live instance.
-    unsafe {
-        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
-        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
-    }
 }
 
 #[test]
@@ -339,8 +328,7 @@ fn an_fmu_state_carries_the_structural_parameters() {
         fmi3FreeInstance(c);
         // No FMU state is taken in the middle of a configuration.
         let reconfiguring = || {
-            let (c, log) = cs();
-            init(c);
+            let (c, log) = initialized();
             assert_eq!(fmi3EnterConfigurationMode(c), fmi3OK);
             (c, log)
         };

@@ -3,10 +3,14 @@
 //! refused as the standard says (exact at 2^53 + 1), a Binary longer than its `maxSize`
 //! refused, all or nothing over several values, and the messages say what and where.
 
+use common::assert_names;
 use rustfmu::__private::abi3::*;
-use rustfmu::testing::{Log, fmi3};
+use rustfmu::testing::Log;
 
 use std::ptr::null;
+
+#[macro_use]
+mod common;
 
 mod model {
     use rustfmu::prelude::*;
@@ -51,16 +55,7 @@ mod model {
 }
 use model::__rustfmu_fmi3_exports::*;
 
-/// An instance after initialization (Step Mode).
-fn instance() -> (fmi3Instance, &'static Log) {
-    let (c, log) = fmi3::instance(fmi3InstantiateCoSimulation, TOKEN, "bounded");
-    // SAFETY: a live instance.
-    unsafe {
-        assert_eq!(fmi3EnterInitializationMode(c, false, 0.0, 0.0, false, 0.0), fmi3OK);
-        assert_eq!(fmi3ExitInitializationMode(c), fmi3OK);
-    }
-    (c, log)
-}
+fmi3_instances!("bounded");
 
 fn last(log: &Log) -> String {
     log.last()
@@ -68,35 +63,34 @@ fn last(log: &Log) -> String {
 
 #[test]
 fn integer_bounds_are_exact_and_refusals_change_nothing() {
-    let (c, log) = instance();
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetInt8(c, &1, 1, &-10, 1), fmi3OK);
         assert_eq!(fmi3SetInt8(c, &1, 1, &11, 1), fmi3Error);
-        assert!(last(log).contains("11 for 'small' (vr 1) is outside"), "{}", last(log));
+        assert_names(log, "11 for 'small' (vr 1) is outside");
         let mut x = 0i8;
         assert_eq!(fmi3GetInt8(c, &1, 1, &mut x, 1), fmi3OK);
         assert_eq!(x, -10);
         fmi3FreeInstance(c);
     }
-    let (c, log) = instance();
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // 2^53 is the bound; 2^53 + 1 (which an f64 comparison would round onto it) is refused.
         assert_eq!(fmi3SetUInt64(c, &2, 1, &(1u64 << 53), 1), fmi3OK);
         assert_eq!(fmi3SetUInt64(c, &2, 1, &((1u64 << 53) + 1), 1), fmi3Error);
         // The undeclared lower end is the type's own (issue 52: "(-inf, 200]" for a UInt8).
-        assert!(
-            last(log).contains("9007199254740993 for 'large' (vr 2) is outside [0, 9007199254740992]"),
-            "{}",
-            last(log)
+        assert_names(
+            log,
+            "9007199254740993 for 'large' (vr 2) is outside [0, 9007199254740992]",
         );
         let mut x = 0u64;
         assert_eq!(fmi3GetUInt64(c, &2, 1, &mut x, 1), fmi3OK);
         assert_eq!(x, 1u64 << 53);
         fmi3FreeInstance(c);
     }
-    let (c, log) = instance();
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         // all or nothing: a good value, then 0 (the bound is exclusive)
@@ -116,7 +110,7 @@ fn integer_bounds_are_exact_and_refusals_change_nothing() {
 
 #[test]
 fn a_binary_longer_than_its_max_size_is_refused() {
-    let (c, log) = instance();
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         let four = [1u8, 0, 2, 3];
@@ -130,26 +124,18 @@ fn a_binary_longer_than_its_max_size_is_refused() {
         assert_eq!(fmi3GetUInt16(c, &5, 1, &mut n, 1), fmi3OK);
         assert_eq!(n, 4);
         assert_eq!(fmi3SetBinary(c, &4, 1, &5, &five.as_ptr(), 1), fmi3Error);
-        assert!(
-            last(log).contains("5 bytes for 'frame' (vr 4) exceed its maxSize = 4"),
-            "{}",
-            last(log)
-        );
+        assert_names(log, "5 bytes for 'frame' (vr 4) exceed its maxSize = 4");
         // NULL with a size is refused; NULL with size 0 is the empty value.
         fmi3FreeInstance(c);
     }
-    let (c, log) = instance();
+    let (c, log) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetBinary(c, &4, 1, &3, &null(), 1), fmi3Error);
-        assert!(
-            last(log).contains("values[0] is NULL with valueSizes[0] = 3"),
-            "{}",
-            last(log)
-        );
+        assert_names(log, "values[0] is NULL with valueSizes[0] = 3");
         fmi3FreeInstance(c);
     }
-    let (c, _) = instance();
+    let (c, _) = initialized();
     // SAFETY: for every call, arrays of the lengths passed, a live instance.
     unsafe {
         assert_eq!(fmi3SetBinary(c, &4, 1, &0, &null(), 1), fmi3OK);

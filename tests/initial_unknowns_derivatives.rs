@@ -479,6 +479,19 @@ fn check(lib: &Library, point: &Point, analytic: impl Fn(&dyn Host)) {
     }
 }
 
+/// A derivative (its name, its value) is the formula's value (its name, the value) to the
+/// relative `tolerance`; the error it has is printed (in `fmu`'s name) either way.
+fn assert_relatively_close(
+    fmu: &str,
+    (derivative, got): (&str, f64),
+    (formula, expected): (&str, f64),
+    tolerance: f64,
+) {
+    let error = (got - expected).abs() / expected.abs();
+    eprintln!("{fmu}: {derivative} = {got}, {formula} = {expected}: relative error {error:.1e}");
+    assert!(error <= tolerance, "{derivative} = {got}, {formula} = {expected}");
+}
+
 #[test]
 fn the_pendulums_initial_unknowns_have_the_derivatives_of_their_initialization() {
     let lib = Library::load("Pendulum", "pendulum_fmu");
@@ -492,9 +505,12 @@ fn the_pendulums_initial_unknowns_have_the_derivatives_of_their_initialization()
         // x1 = l1 sin(alpha1): d x1 / d alpha1_0 = l1 cos(alpha1_0).
         let expected = host.get(l1) * host.get(alpha1_0).cos();
         let got = host.derivative(x1, alpha1_0).unwrap();
-        let error = (got - expected).abs() / expected.abs();
-        eprintln!("Pendulum: d x1/d alpha1_0 = {got}, l1 cos(alpha1_0) = {expected}: relative error {error:.1e}");
-        assert!(error <= 1e-12, "d x1/d alpha1_0 = {got}, l1 cos(alpha1_0) = {expected}");
+        assert_relatively_close(
+            "Pendulum",
+            ("d x1/d alpha1_0", got),
+            ("l1 cos(alpha1_0)", expected),
+            1e-12,
+        );
     });
 }
 
@@ -507,10 +523,8 @@ fn the_dc_motors_initial_unknowns_have_the_derivatives_of_their_initialization()
         assert_eq!(host.derivative(tau, i), Ok(host.get(n) * host.get(km)));
         // ... and d tau / d km = n i (a parameter: differences of the initialization).
         let (got, expected) = (host.derivative(tau, km).unwrap(), host.get(n) * host.get(i));
-        let error = (got - expected).abs() / expected.abs();
-        eprintln!("DCMotor: d tau/d km = {got}, n i = {expected}: relative error {error:.1e}");
         // tau (-106 N.m here) is large beside its change: the differences lose digits to it.
-        assert!(error <= 1e-9, "d tau/d km = {got}, n i = {expected}");
+        assert_relatively_close("DCMotor", ("d tau/d km", got), ("n i", expected), 1e-9);
     });
 }
 
