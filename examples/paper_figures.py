@@ -62,6 +62,12 @@ def angles(ax, t, a1, a2, title, style="-", label=""):
     ax.legend(fontsize=8)
 
 
+def over_time(ax, ylabel, title):
+    """The axes of a panel over time: the time axis, `ylabel`, a small `title`."""
+    ax.set(xlabel="time t [s]", ylabel=ylabel, title=title)
+    ax.title.set_fontsize(9)
+
+
 def save(fig, path, title):
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
@@ -102,32 +108,23 @@ def figure8(out, pendulum, controller, motor, fig7):
     ax = axes[0, 1]
     for n in ("alpha1", "alpha2"):
         ax.plot(t, 1e3 * (r[f"pendulum.{n}"] - fig7[f"pendulum.{n}"]), label=f"{n}: Fig. 8 − Fig. 7")
-    ax.set(xlabel="time t [s]", ylabel="[mrad]", title="what the motors change in the angles")
-    ax.title.set_fontsize(9)
-    ax = axes[0, 2]
-    for j in (1, 2):
-        ax.plot(t, r[f"controller.U{j}"], label=f"U{j} commanded")
-        ax.plot(t, r[f"motor{j}.U_applied"], ":", label=f"U{j} applied (±6 V supply)")
-    ax.set(xlabel="time t [s]", ylabel="[V]", title="motor voltages")
-    ax.title.set_fontsize(9)
-    ax = axes[1, 0]
-    for j in (1, 2):
-        ax.plot(t, r[f"motor{j}.i"], label=f"i{j}")
-    ax.set(xlabel="time t [s]", ylabel="[A]", title="armature currents")
-    ax.title.set_fontsize(9)
-    ax = axes[1, 1]
-    for j in (1, 2):
-        ax.plot(t, r[f"motor{j}.tau"], label=f"τ{j} delivered to joint {j}")
-        ax.plot(t, r[f"controller.M{j}"], "--", label=f"M{j} asked by the controller")
-    ax.set(xlabel="time t [s]", ylabel="[N·m]", title="joint torques")
-    ax.title.set_fontsize(9)
-    ax = axes[1, 2]
-    zoom = t <= 0.3
-    for j in (1, 2):
-        ax.plot(t[zoom], r[f"motor{j}.tau"][zoom], label=f"τ{j}")
-        ax.plot(t[zoom], fig7[f"controller.M{j}"][zoom], "--", label=f"M{j} of Figure 7")
-    ax.set(xlabel="time t [s]", ylabel="[N·m]", title="first 0.3 s: torque limited by the 6 V supply vs Figure 7's")
-    ax.title.set_fontsize(9)
+    over_time(ax, "[mrad]", "what the motors change in the angles")
+    # The panels of both joints' signals: (axes, the times shown, curves (run, variable, style,
+    # label) with {j} the joint, ylabel, title).
+    whole, zoom = np.full(t.shape, True), t <= 0.3
+    for ax, shown, curves, ylabel, title in [
+        (axes[0, 2], whole, [(r, "controller.U{j}", "-", "U{j} commanded"), (r, "motor{j}.U_applied", ":", "U{j} applied (±6 V supply)")],
+         "[V]", "motor voltages"),
+        (axes[1, 0], whole, [(r, "motor{j}.i", "-", "i{j}")], "[A]", "armature currents"),
+        (axes[1, 1], whole, [(r, "motor{j}.tau", "-", "τ{j} delivered to joint {j}"), (r, "controller.M{j}", "--", "M{j} asked by the controller")],
+         "[N·m]", "joint torques"),
+        (axes[1, 2], zoom, [(r, "motor{j}.tau", "-", "τ{j}"), (fig7, "controller.M{j}", "--", "M{j} of Figure 7")],
+         "[N·m]", "first 0.3 s: torque limited by the 6 V supply vs Figure 7's"),
+    ]:
+        for j in (1, 2):
+            for run, variable, style, label in curves:
+                ax.plot(t[shown], run[variable.format(j=j)][shown], style, label=label.format(j=j))
+        over_time(ax, ylabel, title)
     for ax in axes.flat[1:]:
         ax.grid(True)
         ax.legend(fontsize=7)

@@ -54,18 +54,10 @@ INTERFACES = ("ModelExchange", "CoSimulation", "ScheduledExecution")
 # fmi3IntervalQualifier
 _UNCHANGED, _CHANGED = 1, 2
 
-# FMI 3.0 type -> (numpy dtype, fmpy's get/set suffix)
-_TYPES = {
-    "Float64": (np.float64, "Float64"),
-    "Float32": (np.float32, "Float32"),
-    "Int8": (np.int8, "Int8"),
-    "UInt8": (np.uint8, "UInt8"),
-    "Int16": (np.int16, "Int16"),
-    "UInt16": (np.uint16, "UInt16"),
-    "Int32": (np.int32, "Int32"),
-    "UInt32": (np.uint32, "UInt32"),
-    "Int64": (np.int64, "Int64"),
-    "UInt64": (np.uint64, "UInt64"),
+# FMI 3.0 type -> (numpy dtype, fmpy's get/set suffix): the numbers' dtypes are numpy's of the
+# same name (Float64 -> np.float64, UInt8 -> np.uint8, ...).
+_NUMBERS = ("Float64", "Float32", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")
+_TYPES = {t: (getattr(np, t.lower()), t) for t in _NUMBERS} | {
     "Enumeration": (np.int64, "Int64"),
     "Boolean": (np.bool_, "Boolean"),
     "String": (object, "String"),

@@ -13,21 +13,24 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 FMU_DIR = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target")) / "fmu"
 
 
+def packaged(relative: str, why: str) -> str:
+    """Path of target/fmu/<relative>, a file `cargo run --release -p fmu-build` writes; fails with
+    that command (and `why`, what to say after it) where it is missing."""
+    path = FMU_DIR / relative
+    if not path.exists():
+        pytest.fail(f"{path} is missing: run `cargo run --release -p fmu-build`{why}")
+    return str(path)
+
+
 def fmu(name: str) -> str:
     """Path of target/fmu/<name>.fmu; fails with the command that builds it."""
-    path = FMU_DIR / f"{name}.fmu"
-    if not path.exists():
-        pytest.fail(f"{path} is missing: run `cargo run --release -p fmu-build` first")
-    return str(path)
+    return packaged(f"{name}.fmu", " first")
 
 
 def fmu3(name: str) -> str:
     """Path of target/fmu/fmi3/<name>.fmu, the FMI 3.0 twin of fmu(name); fails with the command
     that builds it."""
-    path = FMU_DIR / "fmi3" / f"{name}.fmu"
-    if not path.exists():
-        pytest.fail(f"{path} is missing: run `cargo run --release -p fmu-build` first (it packages FMI 2.0 and 3.0)")
-    return str(path)
+    return packaged(f"fmi3/{name}.fmu", " first (it packages FMI 2.0 and 3.0)")
 
 
 @pytest.fixture(scope="session")

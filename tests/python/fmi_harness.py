@@ -4,6 +4,8 @@ import shutil
 import sys
 
 import fmpy
+import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
 from conftest import ROOT
@@ -44,3 +46,19 @@ class LoggedSlave:
         self.fmu.freeInstance()
         self._route.close()
         shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+
+def value_after_a_refused_set(path, name, value):
+    """Sets the parameter `name` to `value` before initialization, which the FMU must refuse with an
+    error naming `name`; returns `name`'s value after initialization (what the FMU kept)."""
+    s = LoggedSlave(path)
+    try:
+        s.fmu.setupExperiment(startTime=0.0)
+        with pytest.raises(FMICallException):
+            s.set(**{name: value})
+        assert any(f"'{name}'" in text for _, _, text in s.errors()), s.messages
+        s.fmu.enterInitializationMode()
+        s.fmu.exitInitializationMode()
+        return s.get(name)[0]
+    finally:
+        s.close()

@@ -542,20 +542,16 @@ def test_a_bouncing_ball_with_an_exact_step_checks_clean_and_bounces_where_the_f
     assert abs(apex - 0.64) < 1e-5, apex
 
 
-SAMPLED_PI = '''//! A PI controller sampled every Ts = 10 ms: at each sample u = kp e + i, then i += ki Ts e.
-use rustfmu::prelude::*;
-use serde::{Deserialize, Serialize};
-
-/// A sampled PI controller
-#[derive(Model, Debug, Clone, Serialize, Deserialize)]
-pub struct SampledPi {
-    /// Reference r
+def sampled_pi_fields(u_doc: str) -> str:
+    """The fields of the two sampled PI controllers (SAMPLED_PI samples in its `do_step`, EVENT_PI
+    on time events): the same variables; `u_doc` describes the command u."""
+    return """    /// Reference r
     #[variable(vr = 0, input, start = 0.0)]
     pub r: f64,
     /// Measurement y
     #[variable(vr = 1, input, start = 0.0)]
     pub y: f64,
-    /// Command u, held between samples
+    /// """ + u_doc + """
     #[variable(vr = 2, output, discrete, initial = exact, start = 0.0, depends = [])]
     pub u: f64,
     /// Integral part i, held between samples
@@ -573,7 +569,17 @@ pub struct SampledPi {
     /// Samples taken
     #[variable(vr = 7, output, discrete, initial = exact, start = 0)]
     pub samples: i32,
-}
+"""
+
+
+SAMPLED_PI = '''//! A PI controller sampled every Ts = 10 ms: at each sample u = kp e + i, then i += ki Ts e.
+use rustfmu::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A sampled PI controller
+#[derive(Model, Debug, Clone, Serialize, Deserialize)]
+pub struct SampledPi {
+''' + sampled_pi_fields("Command u, held between samples") + '''}
 
 impl Model for SampledPi {}
 
@@ -621,31 +627,7 @@ use serde::{Deserialize, Serialize};
 /// A sampled PI controller on time events
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
 pub struct EventPi {
-    /// Reference r
-    #[variable(vr = 0, input, start = 0.0)]
-    pub r: f64,
-    /// Measurement y
-    #[variable(vr = 1, input, start = 0.0)]
-    pub y: f64,
-    /// Command u, set at the samples and held between them
-    #[variable(vr = 2, output, discrete, initial = exact, start = 0.0, depends = [])]
-    pub u: f64,
-    /// Integral part i, held between samples
-    #[variable(vr = 3, local, discrete, initial = exact, start = 0.0)]
-    pub i: f64,
-    /// Proportional gain
-    #[variable(vr = 4, parameter, tunable, start = 2.0, min = 0.0, max = 100.0)]
-    pub kp: f64,
-    /// Integral gain (1/s)
-    #[variable(vr = 5, parameter, tunable, start = 1.0, min = 0.0, max = 100.0)]
-    pub ki: f64,
-    /// Sample period
-    #[variable(vr = 6, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
-    pub ts: f64,
-    /// Samples taken
-    #[variable(vr = 7, output, discrete, initial = exact, start = 0)]
-    pub samples: i32,
-}
+""" + sampled_pi_fields("Command u, set at the samples and held between them") + """}
 
 impl Model for EventPi {
     fn update(&mut self, event: &mut Event) -> Result<(), String> {

@@ -5,6 +5,7 @@ Model Exchange; a wrong type, a non-item Enumeration value and NaN refused with 
 Binary values of every size (empty, with NUL bytes, 64 KiB); the FMU state round trip with every
 type; and the FMI 2.0 Feedthrough, which has FMI 2.0's types only, as the Reference-FMUs' own."""
 
+import contextlib
 import math
 import shutil
 import struct
@@ -70,6 +71,19 @@ def instance(md, unzipdir, interface):
     return inst
 
 
+@contextlib.contextmanager
+def initialized(feedthrough, interface):
+    """The Feedthrough of the fixture instantiated for `interface` ("cs" or "me") and initialized,
+    with its value references by name; terminated and freed when the block ends."""
+    _, md, unzipdir = feedthrough
+    inst = instance(md, unzipdir, interface)
+    try:
+        yield inst, vrs(md)
+    finally:
+        inst.terminate()
+        inst.freeInstance()
+
+
 def test_the_fmi3_description_has_every_type_as_the_reference_fmus():
     md = read_model_description(fmu3("Feedthrough"), validate=True)
     types = {v.name: v.type for v in md.modelVariables}
@@ -108,11 +122,8 @@ def test_the_fmi3_description_has_every_type_as_the_reference_fmus():
 
 @pytest.mark.parametrize("interface", ["cs", "me"])
 def test_every_type_goes_through_at_its_extremes(feedthrough3, interface):
-    _, md, unzipdir = feedthrough3
-    vr = vrs(md)
-    inst = instance(md, unzipdir, interface)
     # (Model Exchange leaves initialization in Event Mode, where discrete inputs are set.)
-    try:
+    with initialized(feedthrough3, interface) as (inst, vr):
         for name, ty, values in SCALARS:
             out = name.replace("input", "output")
             for x in values:
@@ -139,16 +150,10 @@ def test_every_type_goes_through_at_its_extremes(feedthrough3, interface):
         for text in ["", "héllo, wörld", "x" * 10_000, "Set me!"]:
             inst.setString([vr["String_input"]], [text])
             assert inst.getString([vr["String_input"], vr["String_output"]]) == [text, text]
-    finally:
-        inst.terminate()
-        inst.freeInstance()
 
 
 def test_refusals_change_nothing(feedthrough3):
-    _, md, unzipdir = feedthrough3
-    vr = vrs(md)
-    inst = instance(md, unzipdir, "cs")
-    try:
+    with initialized(feedthrough3, "cs") as (inst, vr):
         inst.setInt16([vr["Int16_input"]], [12])
         inst.setFloat32([vr["Float32_continuous_input"]], [0.5])
         inst.setInt64([vr["Enumeration_input"]], [2])
@@ -185,16 +190,10 @@ def test_refusals_change_nothing(feedthrough3):
             inst.setFMUState(before)
         unchanged()
         inst.freeFMUState(before)
-    finally:
-        inst.terminate()
-        inst.freeInstance()
 
 
 def test_the_fmu_state_holds_every_type(feedthrough3):
-    _, md, unzipdir = feedthrough3
-    vr = vrs(md)
-    inst = instance(md, unzipdir, "cs")
-    try:
+    with initialized(feedthrough3, "cs") as (inst, vr):
         inst.setUInt64([vr["UInt64_input"]], [2**64 - 2])
         inst.setFloat32([vr["Float32_discrete_input"]], [F32_PI])
         inst.setBinary([vr["Binary_input"]], [b"\x01\x02\x00\x03"])
@@ -216,9 +215,6 @@ def test_the_fmu_state_holds_every_type(feedthrough3):
             assert inst.getInt64([vr["Enumeration_output"]]) == [2]
             assert inst.getString([vr["String_output"]]) == ["kept"]
         inst.freeFMUState(state)
-    finally:
-        inst.terminate()
-        inst.freeInstance()
 
 
 def test_fmpy_simulates_both_versions_with_start_values_of_every_type():

@@ -109,16 +109,23 @@ def test_an_fmu_error_names_component_variable_function_and_keeps_what_was_recor
     assert len(s.run(0.1, 1e-3, record=["pendulum.alpha1"])["time"]) == 101
 
 
-def rewritten_ssp(tmp_path, name, edit) -> str:
-    """A copy of target/fmu/<name>.ssp with its SystemStructure.ssd passed through `edit`."""
-    out = tmp_path / f"{name}-edited.ssp"
-    with zipfile.ZipFile(ssp(name)) as src, zipfile.ZipFile(out, "w") as dst:
+def rewritten_zip(source, out, edit) -> str:
+    """A copy of the archive `source` (an SSP file, an FMU) at `out`, each member's bytes passed
+    through `edit(name, data)`."""
+    with zipfile.ZipFile(source) as src, zipfile.ZipFile(out, "w") as dst:
         for item in src.infolist():
-            data = src.read(item.filename)
-            if item.filename == "SystemStructure.ssd":
-                data = edit(data.decode()).encode()
-            dst.writestr(item, data)
+            dst.writestr(item, edit(item.filename, src.read(item.filename)))
     return str(out)
+
+
+def rewritten_ssp(tmp_path, name, edit, out_name=None) -> str:
+    """A copy of target/fmu/<name>.ssp (as tmp_path/`out_name`, by default <name>-edited.ssp)
+    with its SystemStructure.ssd passed through `edit`."""
+
+    def ssd(member, data):
+        return edit(data.decode()).encode() if member == "SystemStructure.ssd" else data
+
+    return rewritten_zip(ssp(name), tmp_path / (out_name or f"{name}-edited.ssp"), ssd)
 
 
 def test_an_ssp_it_cannot_run_is_refused_naming_component_and_connector(tmp_path):

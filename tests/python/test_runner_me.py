@@ -9,22 +9,18 @@ import zipfile
 import numpy as np
 import pytest
 from conftest import FMU_DIR
-from test_runner import ssp
+from test_runner import rewritten_ssp, rewritten_zip, ssp
 
 import rustfmu_runner
 
 
 def as_model_exchange(name, component, tmp_path) -> str:
-    out = tmp_path / f"{name}-{component}-me.ssp"
-    with zipfile.ZipFile(ssp(name)) as src, zipfile.ZipFile(out, "w") as dst:
-        for item in src.infolist():
-            data = src.read(item.filename)
-            if item.filename == "SystemStructure.ssd":
-                text, n = re.subn(rf'(<ssd:Component name="{component}" )', r'\1implementation="ModelExchange" ', data.decode())
-                assert n == 1
-                data = text.encode()
-            dst.writestr(item, data)
-    return str(out)
+    def mark(ssd):
+        text, n = re.subn(rf'(<ssd:Component name="{component}" )', r'\1implementation="ModelExchange" ', ssd)
+        assert n == 1
+        return text
+
+    return rewritten_ssp(tmp_path, name, mark, f"{name}-{component}-me.ssp")
 
 
 @pytest.mark.parametrize("name", ["PendulumLQR", "PendulumMotors"])
@@ -115,16 +111,15 @@ def test_rollback_restores_the_runners_integrator_with_the_fmu_state(tmp_path):
 def fmi3_pendulum_lqr_as_model_exchange(tmp_path, strip_me=False) -> str:
     """target/fmu/fmi3/PendulumLQR.ssp with its (FMI 3.0) Pendulum marked implementation="ModelExchange";
     `strip_me`: and its modelDescription.xml without <ModelExchange>."""
-    path = tmp_path / f"fmi3-me{int(strip_me)}.ssp"
-    with zipfile.ZipFile(FMU_DIR / "fmi3" / "PendulumLQR.ssp") as src, zipfile.ZipFile(path, "w") as dst:
-        for item in src.infolist():
-            data = src.read(item.filename)
-            if item.filename == "SystemStructure.ssd":
-                data = data.replace(b'<ssd:Component name="pendulum" ', b'<ssd:Component name="pendulum" implementation="ModelExchange" ')
-            elif item.filename.endswith("Pendulum.fmu") and strip_me:
-                data = without(data, b"ModelExchange")
-            dst.writestr(item, data)
-    return str(path)
+
+    def edit(member, data):
+        if member == "SystemStructure.ssd":
+            return data.replace(b'<ssd:Component name="pendulum" ', b'<ssd:Component name="pendulum" implementation="ModelExchange" ')
+        if member.endswith("Pendulum.fmu") and strip_me:
+            return without(data, b"ModelExchange")
+        return data
+
+    return rewritten_zip(FMU_DIR / "fmi3" / "PendulumLQR.ssp", tmp_path / f"fmi3-me{int(strip_me)}.ssp", edit)
 
 
 def test_an_fmi3_model_exchange_component_equals_its_co_simulation(tmp_path):

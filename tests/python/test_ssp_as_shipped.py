@@ -15,7 +15,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from conftest import FMU_DIR
+from conftest import packaged
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples"))
 
@@ -30,10 +30,7 @@ SETTLED = 1e-2
 
 
 def ssp(name: str) -> str:
-    path = FMU_DIR / f"{name}.ssp"
-    if not path.exists():
-        pytest.fail(f"{path} is missing: run `cargo run --release -p fmu-build` (it writes the SSP files)")
-    return str(path)
+    return packaged(f"{name}.ssp", " (it writes the SSP files)")
 
 
 def file_values(name: str) -> dict:
