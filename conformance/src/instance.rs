@@ -394,13 +394,20 @@ impl<'a> Instance<'a> {
 
     /// Restores a serialized state; panics unless every call answers fmi2OK.
     pub fn restore(&mut self, bytes: &[u8]) {
-        let (st, mut s) = self.deserialize(bytes);
+        let made = self.deserialize(bytes);
+        let mut s = self.set_deserialized(made, None);
+        assert_eq!(self.free_state(&mut s), fmi2OK);
+    }
+
+    /// Sets the FMU state that fmi2DeSerializeFMUstate `made` (on this instance, or on `maker`),
+    /// and gives it back to be freed; panics unless both calls answer fmi2OK.
+    fn set_deserialized(&mut self, (st, s): (Status, fmi2FMUstate), maker: Option<&Instance>) -> fmi2FMUstate {
         assert_eq!(
             st,
             fmi2OK,
             "{}: fmi2DeSerializeFMUstate: {}",
             self.fmu.id,
-            self.log_text()
+            maker.unwrap_or(self).log_text()
         );
         assert_eq!(
             self.set_state(s),
@@ -409,7 +416,7 @@ impl<'a> Instance<'a> {
             self.fmu.id,
             self.log_text()
         );
-        assert_eq!(self.free_state(&mut s), fmi2OK);
+        s
     }
 
     /// The serialized FMU state for before/after comparisons, when the FMU declares it can
@@ -453,21 +460,8 @@ impl<'a> Instance<'a> {
     /// fmi2SetFMUstate. `helper`, an instance of the same kind, makes and frees the FMU state,
     /// so that this works for Fatal too.
     pub(crate) fn restore_forged(&mut self, mut helper: Instance, bytes: &[u8]) {
-        let (st, mut s) = helper.deserialize(bytes);
-        assert_eq!(
-            st,
-            fmi2OK,
-            "{}: fmi2DeSerializeFMUstate: {}",
-            self.fmu.id,
-            helper.log_text()
-        );
-        assert_eq!(
-            self.set_state(s),
-            fmi2OK,
-            "{}: fmi2SetFMUstate: {}",
-            self.fmu.id,
-            self.log_text()
-        );
+        let made = helper.deserialize(bytes);
+        let mut s = self.set_deserialized(made, Some(&helper));
         assert_eq!(helper.free_state(&mut s), fmi2OK);
     }
 

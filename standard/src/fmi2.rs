@@ -71,7 +71,7 @@ pub struct fmi2CallbackFunctions {
 
 /// What fmi2NewDiscreteStates reports (model exchange).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct fmi2EventInfo {
     pub newDiscreteStatesNeeded: fmi2Boolean,
     pub terminateSimulation: fmi2Boolean,

@@ -149,22 +149,18 @@ fn default_variability_is_legal_and_fits_the_type() {
             }
         }
     }
-    assert_eq!(
-        default_variability(Causality::Parameter, TypeKind::Real),
-        Variability::Fixed
-    );
-    assert_eq!(
-        default_variability(Causality::Output, TypeKind::Real),
-        Variability::Continuous
-    );
-    assert_eq!(
-        default_variability(Causality::Output, TypeKind::Other),
-        Variability::Discrete
-    );
-    assert_eq!(
-        default_variability(Causality::Local, TypeKind::Other),
-        Variability::Discrete
-    );
+    for (causality, kind, variability) in [
+        (Causality::Parameter, TypeKind::Real, Variability::Fixed),
+        (Causality::Output, TypeKind::Real, Variability::Continuous),
+        (Causality::Output, TypeKind::Other, Variability::Discrete),
+        (Causality::Local, TypeKind::Other, Variability::Discrete),
+    ] {
+        assert_eq!(
+            default_variability(causality, kind),
+            variability,
+            "{causality} of {kind:?}"
+        );
+    }
 }
 
 #[test]

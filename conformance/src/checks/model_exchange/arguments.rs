@@ -331,14 +331,7 @@ pub fn model_exchange_functions_refuse_a_null_component(fmu: &Fmu) {
     };
     let c: fmi2Component = ptr::null_mut();
     let mut v = [0.0; 4];
-    let mut info = fmi2EventInfo {
-        newDiscreteStatesNeeded: 0,
-        terminateSimulation: 0,
-        nominalsOfContinuousStatesChanged: 0,
-        valuesOfContinuousStatesChanged: 0,
-        nextEventTimeDefined: 0,
-        nextEventTime: 0.0,
-    };
+    let mut info = fmi2EventInfo::default();
     let (mut a, mut b) = (0, 0);
     let n = fmu.md.number_of_continuous_states().min(4);
     let ni = fmu.md.number_of_event_indicators.min(4);

@@ -316,14 +316,7 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
             }
             MeOp::EnterEventMode => ((me.enter_event_mode)(c), Expect::Succeeds, Some(MeState::EventMode)),
             MeOp::NewDiscreteStates { null } => {
-                let mut info = fmi2EventInfo {
-                    newDiscreteStatesNeeded: 0,
-                    terminateSimulation: 0,
-                    nominalsOfContinuousStatesChanged: 0,
-                    valuesOfContinuousStatesChanged: 0,
-                    nextEventTimeDefined: 0,
-                    nextEventTime: 0.0,
-                };
+                let mut info = fmi2EventInfo::default();
                 let p = if *null {
                     ptr::null_mut()
                 } else {
