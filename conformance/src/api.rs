@@ -2,6 +2,7 @@
 //! importer does (`dlopen` + `dlsym`), with the standard's C signatures.
 
 use crate::fmi2::*;
+use std::ffi::CStr;
 use std::path::Path;
 
 pub type Unary = fmi2ComponentFunctionTYPE;
@@ -133,6 +134,34 @@ api! {
     get_integer_status: fmi2GetStatusTYPE<fmi2Integer> = b"fmi2GetIntegerStatus",
     get_boolean_status: fmi2GetStatusTYPE<fmi2Boolean> = b"fmi2GetBooleanStatus",
     get_string_status: fmi2GetStatusTYPE<fmi2String> = b"fmi2GetStringStatus",
+}
+
+impl Api {
+    /// fmi2Instantiate of a co-simulation instance, not visible and without debug logging, by a
+    /// raw call (the probes and runs that do without an [`crate::instance::Instance`]).
+    ///
+    /// # Safety
+    /// `callbacks` (and the environment it names) must outlive the instance.
+    pub unsafe fn instantiate_cs(
+        &self,
+        name: &CStr,
+        guid: &CStr,
+        resources: &CStr,
+        callbacks: &fmi2CallbackFunctions,
+    ) -> fmi2Component {
+        // SAFETY: NUL-terminated strings and callbacks the caller keeps alive.
+        unsafe {
+            (self.instantiate)(
+                name.as_ptr(),
+                fmi2CoSimulation,
+                guid.as_ptr(),
+                resources.as_ptr(),
+                callbacks,
+                fmi2False,
+                fmi2False,
+            )
+        }
+    }
 }
 
 /// Loads an FMU's binary: `dlopen` with RTLD_NOW | RTLD_LOCAL on Unix (a symbol the binary needs

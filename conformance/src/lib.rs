@@ -175,15 +175,7 @@ impl Fmu {
         // SAFETY: the standard's calls with valid arguments on an instance made here.
         unsafe {
             let api = &self.api;
-            let c = (api.instantiate)(
-                c"probe".as_ptr(),
-                fmi2CoSimulation,
-                guid.as_ptr(),
-                res.as_ptr(),
-                &callbacks,
-                fmi2False,
-                fmi2False,
-            );
+            let c = api.instantiate_cs(c"probe", &guid, &res, &callbacks);
             if c.is_null() {
                 return Err("fmi2Instantiate returned NULL".into());
             }

@@ -128,15 +128,7 @@ fn raw_run(api: &Api, md: &Description, resources: &str, steps: usize) -> Result
     let mut out = vec![];
     // SAFETY: the standard's calling sequence on a live instance with valid arguments.
     unsafe {
-        let c = (api.instantiate)(
-            c"unload".as_ptr(),
-            fmi2CoSimulation,
-            guid.as_ptr(),
-            res.as_ptr(),
-            &callbacks,
-            fmi2False,
-            fmi2False,
-        );
+        let c = api.instantiate_cs(c"unload", &guid, &res, &callbacks);
         if c.is_null() {
             return Err(format!("fmi2Instantiate: {:?}", sink.take()));
         }

@@ -7,8 +7,10 @@
 
 use super::*;
 
-const UNCHANGED: u32 = 1;
-const CHANGED: u32 = 2;
+/// The interval qualifiers of fmi3GetIntervalDecimal (`fmi3IntervalQualifier`) the clock checks
+/// (here and in Scheduled Execution) tell apart.
+pub(super) const UNCHANGED: u32 = 1;
+pub(super) const CHANGED: u32 = 2;
 
 /// An input clock the suite activates: its value reference, name, and when it ticks.
 struct Ticking {
@@ -50,7 +52,8 @@ impl Ticking {
     }
 }
 
-fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
+/// fmi3GetIntervalDecimal of one clock: (status, interval, qualifier).
+pub(super) fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
     let (mut h, mut q) = (f64::NAN, 99u32);
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
@@ -58,6 +61,51 @@ fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
         (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
     });
     (s, h, q)
+}
+
+/// fmi3GetIntervalDecimal of the periodic clock `v` in Initialization Mode, checked: fmi3OK, a
+/// finite positive interval, the qualifier unchanged or changed (`when` ends that message).
+pub(super) fn periodic_interval(inst: &Inst, v: &crate::fmi3::Variable, when: &str) -> (f64, u32) {
+    let id = &inst.fmu.id;
+    let (s, h, q) = interval(inst, v.vr);
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{id}: fmi3GetIntervalDecimal of '{}' in Initialization Mode: {}",
+        v.name,
+        inst.log_text()
+    );
+    assert!(h.is_finite() && h > 0.0, "{id}: the interval of '{}' is {h}", v.name);
+    assert!(
+        q == UNCHANGED || q == CHANGED,
+        "{id}: '{}': qualifier {q} for a periodic clock{when}",
+        v.name
+    );
+    (h, q)
+}
+
+/// fmi3GetShiftDecimal of the periodic clock `v`, checked: fmi3OK, finite, not negative.
+pub(super) fn periodic_shift(inst: &Inst, v: &crate::fmi3::Variable) -> f64 {
+    let id = &inst.fmu.id;
+    let mut shift = f64::NAN;
+    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
+    // state.
+    let s = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
+        (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
+    });
+    assert_eq!(
+        s,
+        fmi3OK,
+        "{id}: fmi3GetShiftDecimal of '{}': {}",
+        v.name,
+        inst.log_text()
+    );
+    assert!(
+        shift.is_finite() && shift >= 0.0,
+        "{id}: the shift of '{}' is {shift}",
+        v.name
+    );
+    shift
 }
 
 /// The clocks to tick, their intervals read in Initialization Mode as the standard says.
@@ -88,20 +136,7 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
             last: None,
         };
         if matches!(iv, "constant" | "fixed" | "tunable") {
-            let (s, h, q) = interval(inst, v.vr);
-            assert_eq!(
-                s,
-                fmi3OK,
-                "{id}: fmi3GetIntervalDecimal of '{}' in Initialization Mode: {}",
-                v.name,
-                inst.log_text()
-            );
-            assert!(h.is_finite() && h > 0.0, "{id}: the interval of '{}' is {h}", v.name);
-            assert!(
-                q == UNCHANGED || q == CHANGED,
-                "{id}: '{}': qualifier {q} for a periodic clock",
-                v.name
-            );
+            let (h, q) = periodic_interval(inst, v, "");
             if let Some(d) = c.interval_decimal
                 && iv == "constant"
             {
@@ -111,24 +146,7 @@ fn clocks(inst: &Inst) -> Vec<Ticking> {
                     "{id}: a constant clock's interval is its intervalDecimal, unchanged"
                 );
             }
-            let mut shift = f64::NAN;
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            let s = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
-                (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
-            });
-            assert_eq!(
-                s,
-                fmi3OK,
-                "{id}: fmi3GetShiftDecimal of '{}': {}",
-                v.name,
-                inst.log_text()
-            );
-            assert!(
-                shift.is_finite() && shift >= 0.0,
-                "{id}: the shift of '{}' is {shift}",
-                v.name
-            );
+            let shift = periodic_shift(inst, v);
             t.periodic = Some((shift, h));
         }
         out.push(t);

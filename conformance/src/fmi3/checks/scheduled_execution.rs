@@ -12,14 +12,13 @@
 //! current one; the Co-Simulation and Model Exchange functions); the same clocked values on a
 //! rerun and after an FMU state restored into a new instance.
 
+use super::clocks::{CHANGED, UNCHANGED, interval, periodic_interval, periodic_shift};
 use super::*;
 use crate::fmi3::{LogSink, Variable, api, c_size};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 const NOT_YET_KNOWN: u32 = 0;
-const UNCHANGED: u32 = 1;
-const CHANGED: u32 = 2;
 
 /// Activations at most (a tiny interval must not make the check run forever).
 const MAX_ACTIVATIONS: usize = 2000;
@@ -235,16 +234,6 @@ impl Se<'_> {
     }
 }
 
-fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
-    let (mut h, mut q) = (f64::NAN, 99u32);
-    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
-    // state.
-    let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
-        (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
-    });
-    (s, h, q)
-}
-
 /// An input clock the scheduler activates.
 #[derive(Debug, Clone)]
 struct Input {
@@ -324,20 +313,7 @@ fn initialize(s: &mut Se) -> Vec<Input> {
             periodic: None,
         };
         if matches!(iv, "constant" | "fixed" | "tunable") {
-            let (st, h, q) = interval(inst, v.vr);
-            assert_eq!(
-                st,
-                fmi3OK,
-                "{id}: fmi3GetIntervalDecimal of '{}' in Initialization Mode: {}",
-                v.name,
-                inst.log_text()
-            );
-            assert!(h.is_finite() && h > 0.0, "{id}: the interval of '{}' is {h}", v.name);
-            assert!(
-                q == UNCHANGED || q == CHANGED,
-                "{id}: '{}': qualifier {q} for a periodic clock in Initialization Mode",
-                v.name
-            );
+            let (h, q) = periodic_interval(inst, v, " in Initialization Mode");
             if let Some(d) = c.interval_decimal
                 && matches!(iv, "constant" | "fixed")
             {
@@ -350,24 +326,7 @@ fn initialize(s: &mut Se) -> Vec<Input> {
             if iv == "constant" {
                 assert_eq!(q, UNCHANGED, "{id}: a constant clock's interval is unchanged");
             }
-            let mut shift = f64::NAN;
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            let st = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
-                (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
-            });
-            assert_eq!(
-                st,
-                fmi3OK,
-                "{id}: fmi3GetShiftDecimal of '{}': {}",
-                v.name,
-                inst.log_text()
-            );
-            assert!(
-                shift.is_finite() && shift >= 0.0,
-                "{id}: the shift of '{}' is {shift}",
-                v.name
-            );
+            let shift = periodic_shift(inst, v);
             if matches!(iv, "constant" | "fixed") {
                 assert_eq!(
                     shift,
