@@ -88,6 +88,37 @@ pub(crate) fn lengths(vrs: usize, values: usize) -> Result<(), Fmi2Error> {
     }
 }
 
+/// The arguments of a directional derivative (fmi2GetDirectionalDerivative,
+/// fmi3GetDirectionalDerivative): `out` = J `seed`, J = d(`unknowns`)/d(`knowns`).
+pub struct Directional<'a> {
+    pub unknowns: &'a [u32],
+    pub knowns: &'a [u32],
+    pub seed: &'a [f64],
+    pub out: &'a mut [f64],
+}
+
+impl Directional<'_> {
+    /// The seed as long as the knowns and the output as the unknowns, each pair checked by
+    /// `lengths` (the caller's message).
+    pub(crate) fn check_lengths(&self, lengths: fn(usize, usize) -> Result<(), Fmi2Error>) -> Result<(), Fmi2Error> {
+        lengths(self.knowns.len(), self.seed.len())?;
+        lengths(self.unknowns.len(), self.out.len())
+    }
+
+    /// The C arguments: the unknowns and their number, the knowns and their number, the seed
+    /// (as many as the knowns, once checked) and the output (as many as the unknowns).
+    pub(crate) fn c_args(&mut self) -> (*const u32, usize, *const u32, usize, *const f64, *mut f64) {
+        (
+            self.unknowns.as_ptr(),
+            self.unknowns.len(),
+            self.knowns.as_ptr(),
+            self.knowns.len(),
+            self.seed.as_ptr(),
+            self.out.as_mut_ptr(),
+        )
+    }
+}
+
 /// An FMU state of an [`InstanceCS`] (an index into its states).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FmuState(pub(crate) usize);
@@ -242,7 +273,7 @@ macro_rules! dispatch_with {
             fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), $crate::common::Fmi2Error>;
             fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), $crate::common::Fmi2Error>;
             fn set_string(&mut self, vrs: &[u32], values: &[std::ffi::CString]) -> Result<(), $crate::common::Fmi2Error>;
-            fn get_directional_derivative(&mut self, unknowns: &[u32], knowns: &[u32], seed: &[f64], out: &mut [f64]) -> Result<(), $crate::common::Fmi2Error>;
+            fn get_directional_derivative(&mut self, d: $crate::common::Directional<'_>) -> Result<(), $crate::common::Fmi2Error>;
             fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), $crate::common::Fmi2Error>;
             fn enter_initialization_mode(&mut self) -> Result<(), $crate::common::Fmi2Error>;
             fn terminate(&mut self) -> Result<(), $crate::common::Fmi2Error>;

@@ -22,7 +22,7 @@
 
 #![allow(non_upper_case_globals)]
 
-use crate::common::{Scratch, Slots, lengths, load_binary, optional, scratch, symbol};
+use crate::common::{Directional, Scratch, Slots, lengths, load_binary, optional, scratch, symbol};
 use rustfmu::fmi2::abi::*;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
@@ -64,8 +64,8 @@ struct Api {
     /// Absent from a model-exchange-only FMU.
     do_step: Option<fmi2DoStepTYPE>,
     /// fmi2GetRealOutputDerivatives, fmi2SetRealInputDerivatives (co-simulation, optional).
-    get_output_derivatives: Option<DerivativesGet>,
-    set_input_derivatives: Option<DerivativesSet>,
+    get_output_derivatives: Option<Derivatives<*mut fmi2Real>>,
+    set_input_derivatives: Option<Derivatives<*const fmi2Real>>,
     get_directional_derivative: Option<DirectionalDerivative>,
     /// The model-exchange functions (fmi2FunctionTypes.h): absent from a co-simulation-only FMU.
     me: Option<MeApi>,
@@ -83,22 +83,10 @@ struct Api {
 type VectorGet = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
 type VectorSet = unsafe extern "C" fn(fmi2Component, *const fmi2Real, usize) -> fmi2Status;
 
-/// `fmi2GetRealOutputDerivativesTYPE`, `fmi2SetRealInputDerivativesTYPE`,
-/// `fmi2GetDirectionalDerivativeTYPE`.
-type DerivativesGet = unsafe extern "C" fn(
-    fmi2Component,
-    *const fmi2ValueReference,
-    usize,
-    *const fmi2Integer,
-    *mut fmi2Real,
-) -> fmi2Status;
-type DerivativesSet = unsafe extern "C" fn(
-    fmi2Component,
-    *const fmi2ValueReference,
-    usize,
-    *const fmi2Integer,
-    *const fmi2Real,
-) -> fmi2Status;
+/// `fmi2GetRealOutputDerivativesTYPE` (`P`: `*mut fmi2Real`), `fmi2SetRealInputDerivativesTYPE`
+/// (`*const fmi2Real`), `fmi2GetDirectionalDerivativeTYPE`.
+type Derivatives<P> =
+    unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Integer, P) -> fmi2Status;
 type DirectionalDerivative = unsafe extern "C" fn(
     fmi2Component,
     *const fmi2ValueReference,
@@ -489,54 +477,45 @@ impl Instance2 {
 
     /// First time derivatives (order 1) of the outputs `vrs` (fmi2GetRealOutputDerivatives).
     pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
-        lengths(vrs.len(), out.len())?;
-        let f = self
-            .api()
-            .get_output_derivatives
-            .ok_or_else(|| missing("fmi2GetRealOutputDerivatives"))?;
-        let orders = vec![1 as fmi2Integer; vrs.len()];
-        // SAFETY: a live instance; the arrays hold vrs.len() elements.
-        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr()) })
+        let f = self.api().get_output_derivatives;
+        self.derivatives(f, "fmi2GetRealOutputDerivatives", vrs, out.len(), out.as_mut_ptr())
     }
 
     /// First time derivatives of the inputs `vrs` (fmi2SetRealInputDerivatives, order 1).
     pub fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        lengths(vrs.len(), values.len())?;
-        let f = self
-            .api()
-            .set_input_derivatives
-            .ok_or_else(|| missing("fmi2SetRealInputDerivatives"))?;
+        let f = self.api().set_input_derivatives;
+        self.derivatives(f, "fmi2SetRealInputDerivatives", vrs, values.len(), values.as_ptr())
+    }
+
+    /// The first derivatives (`values`, `n` of them, got or set) of the variables `vrs` by the
+    /// function `f` (`name`, optional).
+    fn derivatives<P>(
+        &self,
+        f: Option<
+            unsafe extern "C" fn(fmi2Component, *const fmi2ValueReference, usize, *const fmi2Integer, P) -> fmi2Status,
+        >,
+        name: &str,
+        vrs: &[u32],
+        n: usize,
+        values: P,
+    ) -> Result<(), Fmi2Error> {
+        lengths(vrs.len(), n)?;
+        let f = f.ok_or_else(|| missing(name))?;
         let orders = vec![1 as fmi2Integer; vrs.len()];
-        // SAFETY: a live instance; the arrays hold vrs.len() elements.
-        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), values.as_ptr()) })
+        // SAFETY: a live instance; the arrays hold vrs.len() elements (`values` too: `n`, checked).
+        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), values) })
     }
 
     /// d(unknowns) = J d(knowns) (fmi2GetDirectionalDerivative).
-    pub fn get_directional_derivative(
-        &mut self,
-        unknowns: &[u32],
-        knowns: &[u32],
-        seed: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), Fmi2Error> {
-        lengths(knowns.len(), seed.len())?;
-        lengths(unknowns.len(), out.len())?;
+    pub fn get_directional_derivative(&mut self, mut d: Directional) -> Result<(), Fmi2Error> {
+        d.check_lengths(lengths)?;
         let f = self
             .api()
             .get_directional_derivative
             .ok_or_else(|| missing("fmi2GetDirectionalDerivative"))?;
-        // SAFETY: a live instance; the arrays hold the lengths passed.
-        check(unsafe {
-            f(
-                self.c,
-                unknowns.as_ptr(),
-                unknowns.len(),
-                knowns.as_ptr(),
-                knowns.len(),
-                seed.as_ptr(),
-                out.as_mut_ptr(),
-            )
-        })
+        let (unknowns, n_unknowns, knowns, n_knowns, seed, out) = d.c_args();
+        // SAFETY: a live instance; the arrays hold the lengths passed (checked).
+        check(unsafe { f(self.c, unknowns, n_unknowns, knowns, n_knowns, seed, out) })
     }
 
     fn me(&self) -> Result<&MeApi, Fmi2Error> {

@@ -11,7 +11,9 @@
 
 #![allow(non_upper_case_globals, non_camel_case_types)]
 
-use crate::common::{Fmi2Error, FmuState, Scratch, Slots, lengths, load_binary, optional, scratch, symbol};
+use crate::common::{
+    Directional, Fmi2Error, FmuState, Scratch, Slots, lengths, load_binary, optional, scratch, symbol,
+};
 use rustfmu::fmi3::abi::*;
 use std::collections::HashSet;
 use std::ffi::{CStr, CString, c_char, c_void};
@@ -601,27 +603,15 @@ impl Instance3 {
         Err(Fmi2Error::Importer("FMI 3.0 has no input derivatives".into()))
     }
 
-    pub fn get_directional_derivative(
-        &mut self,
-        unknowns: &[u32],
-        knowns: &[u32],
-        seed: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), Fmi2Error> {
-        lengths(knowns.len(), seed.len())?;
-        lengths(unknowns.len(), out.len())?;
-        // SAFETY: a live instance; the arrays hold the lengths passed (every variable a scalar).
+    pub fn get_directional_derivative(&mut self, mut d: Directional) -> Result<(), Fmi2Error> {
+        d.check_lengths(lengths)?;
+        let (unknowns, n_unknowns, knowns, n_knowns, seed, out) = d.c_args();
+        let f = self.api().get_directional_derivative;
+        // SAFETY: a live instance; the arrays hold the lengths passed (checked: the seed as many
+        // as the knowns, the output as the unknowns; every variable a scalar).
         check(unsafe {
-            (self.api().get_directional_derivative)(
-                self.c,
-                unknowns.as_ptr(),
-                unknowns.len(),
-                knowns.as_ptr(),
-                knowns.len(),
-                seed.as_ptr(),
-                seed.len(),
-                out.as_mut_ptr(),
-                out.len(),
+            f(
+                self.c, unknowns, n_unknowns, knowns, n_knowns, seed, n_knowns, out, n_unknowns,
             )
         })
     }

@@ -17,38 +17,62 @@ thread_local! {
     static MESSAGES: RefCell<VecDeque<String>> = const { RefCell::new(VecDeque::new()) };
 }
 
-struct Keeper;
+/// The status an FMU's message was logged with (the importers' loggers log each as the `log`
+/// crate's level: fmi2OK Info, fmi2Warning Warn, fmi2Discard Trace, fmi2Error and fmi2Fatal Error).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    Ok,
+    Warning,
+    Discard,
+    Error,
+}
 
-impl log::Log for Keeper {
-    fn enabled(&self, metadata: &log::Metadata) -> bool {
-        metadata.level() <= log::Level::Trace
+/// A `log` crate logger that hands every FMU message (module path "logger", target the instance
+/// name) to its function: (instance, status, message); other records are dropped. The keeper
+/// here, and the isolated child's and the container's loggers.
+pub struct FmuMessages(pub fn(&str, Status, &std::fmt::Arguments));
+
+impl log::Log for FmuMessages {
+    fn enabled(&self, _: &log::Metadata) -> bool {
+        true
     }
 
     fn log(&self, record: &log::Record) {
-        // The fmi crate's C logger shim marks the FMUs' messages with module path "logger".
+        // The importers' C logger shims mark the FMUs' messages with module path "logger".
         if record.module_path() != Some("logger") {
             return;
         }
         let status = match record.level() {
-            log::Level::Info | log::Level::Debug => "OK",
-            log::Level::Warn => "Warning",
-            log::Level::Trace => "Discard",
-            log::Level::Error => "Error",
+            log::Level::Info | log::Level::Debug => Status::Ok,
+            log::Level::Warn => Status::Warning,
+            log::Level::Trace => Status::Discard,
+            log::Level::Error => Status::Error,
         };
-        let text = format!("[{}: {status}] {}", record.target(), record.args());
-        MESSAGES.with(|m| {
-            let mut m = m.borrow_mut();
-            if m.len() == KEEP {
-                m.pop_front();
-            }
-            m.push_back(text);
-        });
+        (self.0)(record.target(), status, record.args());
     }
 
     fn flush(&self) {}
 }
 
-static KEEPER: Keeper = Keeper;
+/// Keeps `message` as "[instance: Status] message", the last [`KEEP`] of this thread.
+fn keep(instance: &str, status: Status, message: &std::fmt::Arguments) {
+    let status = match status {
+        Status::Ok => "OK",
+        Status::Warning => "Warning",
+        Status::Discard => "Discard",
+        Status::Error => "Error",
+    };
+    let text = format!("[{instance}: {status}] {message}");
+    MESSAGES.with(|m| {
+        let mut m = m.borrow_mut();
+        if m.len() == KEEP {
+            m.pop_front();
+        }
+        m.push_back(text);
+    });
+}
+
+static KEEPER: FmuMessages = FmuMessages(keep);
 
 /// Installs the keeper as the `log` crate's logger (once; false when another logger is set).
 pub fn install() -> bool {

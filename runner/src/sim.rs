@@ -23,7 +23,7 @@
 //! All buffers are made when the simulation is built: a communication step allocates nothing
 //! but the recorded row.
 
-use crate::common::{Fmi2Error, FmuState};
+use crate::common::{Directional, Fmi2Error, FmuState};
 use crate::fmu::{Fmu, type_name};
 use crate::instance::InstanceCS;
 use crate::ssp::{Archive, Connection};
@@ -508,15 +508,14 @@ impl Simulation {
                     ));
                 }
             }
-            let causality = |t: Target, name: &str| {
+            let declared = |t: Target, name: &str| {
                 self.fmu_of(t.slave)
                     .description
                     .variables
                     .iter()
                     .find(|v| v.name == name)
-                    .map(|v| v.causality.name())
-                    .unwrap_or_default()
             };
+            let causality = |t: Target, name: &str| declared(t, name).map(|v| v.causality.name()).unwrap_or_default();
             if causality(to, &k.end.1) != Causality::Input.name() {
                 return Err(Error::unsupported(
                     Some(&k.end.0),
@@ -530,14 +529,7 @@ impl Simulation {
                 ));
             }
             // Units: both declared and different is a conversion the runner does not make.
-            let unit = |t: Target, name: &str| {
-                self.fmu_of(t.slave)
-                    .description
-                    .variables
-                    .iter()
-                    .find(|v| v.name == name)
-                    .and_then(|v| v.unit.clone())
-            };
+            let unit = |t: Target, name: &str| declared(t, name).and_then(|v| v.unit.clone());
             if let (Some(a), Some(b)) = (unit(from, &k.start.1), unit(to, &k.end.1))
                 && a != b
             {

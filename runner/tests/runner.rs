@@ -212,34 +212,35 @@ fn tmpdir(name: &str) -> PathBuf {
     d
 }
 
+/// The error of a system whose one component has the description `md` (in a folder of its own,
+/// `dir`), which must be refused (`why`).
+fn refused_with(md: &str, dir: &str, why: &str) -> rustfmu_runner::Error {
+    Simulation::from_ssp(&archive_with(md, &tmpdir(dir))).err().expect(why)
+}
+
 #[test]
 fn an_fmu_the_runner_cannot_import_is_refused_naming_the_component() {
-    let dir = tmpdir("fmi3");
     // FMI 3.0 is read, but this one has no binary for the platform.
-    let path = archive_with(
+    let e = refused_with(
         r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="3.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/><ModelVariables/></fmiModelDescription>"#,
-        &dir,
+        "fmi3",
+        "an FMU without a binary must be refused",
     );
-    let e = Simulation::from_ssp(&path)
-        .err()
-        .expect("an FMU without a binary must be refused");
     assert!(
         e.message.contains("component 'plant3'") && e.message.contains("no binary for this platform"),
         "{e}"
     );
-    let dir4 = tmpdir("fmi4");
-    let path = archive_with(
+    let e = refused_with(
         r#"<?xml version="1.0"?><fmiModelDescription fmiVersion="4.0" modelName="M3" instantiationToken="x"><CoSimulation modelIdentifier="M3"/></fmiModelDescription>"#,
-        &dir4,
+        "fmi4",
+        "an FMI 4.0 FMU must be refused",
     );
-    let e = Simulation::from_ssp(&path)
-        .err()
-        .expect("an FMI 4.0 FMU must be refused");
     assert_eq!(e.kind, ErrorKind::Unsupported);
     assert!(
         e.message.contains("component 'plant3'") && e.message.contains("FMI 4.0"),
         "{e}"
     );
+    let dir = tmpdir("fmi3");
     let e = match Simulation::from_ssp(&dir.join("missing.ssp")) {
         Err(e) => e,
         Ok(_) => panic!("a missing file must be refused"),

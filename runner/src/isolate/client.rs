@@ -3,11 +3,11 @@
 
 use super::options::Isolation;
 use super::wire::*;
-use crate::common::{Deferred, Fmi2Error, FmuState};
+use crate::common::{Deferred, Directional, Fmi2Error, FmuState};
 use crate::{Error, ErrorKind};
 use std::ffi::CString;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Child;
 use std::sync::atomic::Ordering::*;
 use std::time::{Duration, Instant};
 
@@ -77,28 +77,13 @@ impl Isolated {
         };
         let (file, path) = shm_file().map_err(&fail)?;
         let map = map(&file).map_err(&fail)?;
-        let mut cmd = Command::new(&iso.worker);
-        cmd.arg("serve-component")
-            .arg("--dir")
-            .arg(dir)
-            .arg("--name")
-            .arg(component)
-            .arg("--label")
-            .arg(label)
-            .arg("--shm")
-            .arg(&path)
-            .stdin(Stdio::null());
-        if me {
-            cmd.arg("--model-exchange");
-        }
-        let child = cmd.spawn();
-        let child = match child {
-            Ok(c) => c,
-            Err(e) => {
-                let _ = std::fs::remove_file(&path);
-                return Err(fail(format!("cannot start {}: {e}", iso.worker.display())));
-            }
-        };
+        let options = [
+            ("--dir", dir.as_os_str()),
+            ("--name", component.as_ref()),
+            ("--label", label.as_ref()),
+        ];
+        let flag = me.then_some("--model-exchange");
+        let child = start_worker(&iso.worker, "serve-component", &options, &path, flag).map_err(&fail)?;
         let mut iso_inst = Isolated {
             component: component.to_owned(),
             shm: Shared { map },
@@ -465,86 +450,89 @@ impl Isolated {
         r
     }
 
-    /// fmi2GetInteger or fmi2GetBoolean (`op`): 32-bit values.
-    fn get_i32s(&mut self, op: u8, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
+    /// A get (`op`) of the values of `vrs` into `out`, each read from the answer by `read`.
+    fn get_values<T>(
+        &mut self,
+        op: u8,
+        vrs: &[u32],
+        out: &mut [T],
+        read: impl Fn(&mut R) -> T,
+    ) -> Result<(), Fmi2Error> {
         Self::lengths(vrs.len(), out.len())?;
         self.call(
             op,
             self.time,
             |w| w.u32s(vrs),
             |r| {
-                out.iter_mut().for_each(|x| *x = r.u32() as i32);
+                out.iter_mut().for_each(|x| *x = read(r));
                 Ok(())
             },
         )
+    }
+
+    /// A set (`op`) of `n` values of `vrs`, posted (sent with the next call that answers values):
+    /// the value references, then the values `write` writes.
+    fn set_values(
+        &mut self,
+        op: u8,
+        vrs: &[u32],
+        n: usize,
+        write: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+    ) -> Result<(), Fmi2Error> {
+        Self::lengths(vrs.len(), n)?;
+        self.post(op, self.time, false, |w| {
+            w.u32s(vrs)?;
+            write(w)
+        })
     }
 
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        self.get_i32s(GET_INTEGER, vrs, out)
+        self.get_values(GET_INTEGER, vrs, out, |r| r.u32() as i32)
     }
 
     pub fn get_boolean(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
-        self.get_i32s(GET_BOOLEAN, vrs, out)
+        self.get_values(GET_BOOLEAN, vrs, out, |r| r.u32() as i32)
     }
 
     pub fn get_string(&mut self, vrs: &[u32], out: &mut [CString]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
-        self.call(
-            GET_STRING,
-            self.time,
-            |w| w.u32s(vrs),
-            |r| {
-                out.iter_mut().for_each(|x| *x = r.cstring());
-                Ok(())
-            },
-        )
+        self.get_values(GET_STRING, vrs, out, |r| r.cstring())
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
-        self.post(SET_REAL, self.time, false, |w| {
-            w.u32s(vrs)?;
-            w.f64s(values)
-        })
+        self.set_values(SET_REAL, vrs, values.len(), |w| w.f64s(values))
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
-        self.post(SET_INTEGER, self.time, false, |w| {
-            w.u32s(vrs)?;
-            w.i32s(values)
-        })
+        self.set_values(SET_INTEGER, vrs, values.len(), |w| w.i32s(values))
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[i32]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
-        self.post(SET_BOOLEAN, self.time, false, |w| {
-            w.u32s(vrs)?;
-            w.i32s(values)
-        })
+        self.set_values(SET_BOOLEAN, vrs, values.len(), |w| w.i32s(values))
     }
 
     pub fn set_string(&mut self, vrs: &[u32], values: &[CString]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
-        self.post(SET_STRING, self.time, false, |w| {
-            w.u32s(vrs)?;
+        self.set_values(SET_STRING, vrs, values.len(), |w| {
             w.u32(values.len() as u32)?;
             values.iter().try_for_each(|s| w.blob(s.as_bytes()))
         })
     }
 
     fn state_call(&mut self, op: u8, s: Option<&FmuState>) -> Result<FmuState, Fmi2Error> {
-        let mut got = 0;
         let idx = s.map_or(u32::MAX, |s| s.0 as u32);
-        self.call(
-            op,
-            self.time,
-            |w| w.u32(idx),
-            |r| {
-                got = r.u32() as usize;
-                Ok(())
-            },
-        )?;
+        self.state_answer(op, |w| w.u32(idx))
+    }
+
+    /// A call (`op`, its arguments written by `args`) answered with an FMU state of the child's.
+    fn state_answer(
+        &mut self,
+        op: u8,
+        args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+    ) -> Result<FmuState, Fmi2Error> {
+        let mut got = 0;
+        self.call(op, self.time, args, |r| {
+            got = r.u32() as usize;
+            Ok(())
+        })?;
         Ok(FmuState(got))
     }
 
@@ -580,59 +568,29 @@ impl Isolated {
     }
 
     pub fn deserialize_fmu_state(&mut self, bytes: &[u8]) -> Result<FmuState, Fmi2Error> {
-        let mut got = 0;
-        self.call(
-            DESERIALIZE,
-            self.time,
-            |w| w.blob(bytes),
-            |r| {
-                got = r.u32() as usize;
-                Ok(())
-            },
-        )?;
-        Ok(FmuState(got))
+        self.state_answer(DESERIALIZE, |w| w.blob(bytes))
     }
 
     pub fn get_output_derivatives(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), out.len())?;
-        self.call(
-            OUTPUT_DERIVATIVES,
-            self.time,
-            |w| w.u32s(vrs),
-            |r| {
-                out.iter_mut().for_each(|x| *x = r.f64());
-                Ok(())
-            },
-        )
+        self.get_values(OUTPUT_DERIVATIVES, vrs, out, |r| r.f64())
     }
 
     pub fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
-        Self::lengths(vrs.len(), values.len())?;
-        self.post(INPUT_DERIVATIVES, self.time, false, |w| {
-            w.u32s(vrs)?;
-            w.f64s(values)
-        })
+        self.set_values(INPUT_DERIVATIVES, vrs, values.len(), |w| w.f64s(values))
     }
 
-    pub fn get_directional_derivative(
-        &mut self,
-        unknowns: &[u32],
-        knowns: &[u32],
-        seed: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), Fmi2Error> {
-        Self::lengths(knowns.len(), seed.len())?;
-        Self::lengths(unknowns.len(), out.len())?;
+    pub fn get_directional_derivative(&mut self, d: Directional) -> Result<(), Fmi2Error> {
+        d.check_lengths(Self::lengths)?;
         self.call(
             DIRECTIONAL,
             self.time,
             |w| {
-                w.u32s(unknowns)?;
-                w.u32s(knowns)?;
-                w.f64s(seed)
+                w.u32s(d.unknowns)?;
+                w.u32s(d.knowns)?;
+                w.f64s(d.seed)
             },
             |r| {
-                out.iter_mut().for_each(|x| *x = r.f64());
+                d.out.iter_mut().for_each(|x| *x = r.f64());
                 Ok(())
             },
         )

@@ -2,7 +2,8 @@
 //! loaded and instantiated, each call of a batch answered, the FMUs' messages sent back.
 
 use super::wire::*;
-use crate::common::{Fmi2Error, FmuState};
+use crate::common::{Directional, Fmi2Error, FmuState};
+use crate::fmu_log::{FmuMessages, Status};
 use crate::instance::InstanceCS;
 use std::ffi::CString;
 use std::path::Path;
@@ -15,30 +16,20 @@ use std::time::{Duration, Instant};
 /// The FMUs' messages of the current batch: (level, instance, text).
 static MESSAGES: std::sync::Mutex<Vec<(u8, String, String)>> = std::sync::Mutex::new(Vec::new());
 
-struct Collector;
-
-impl log::Log for Collector {
-    fn enabled(&self, _: &log::Metadata) -> bool {
-        true
+/// Collects an FMU's message for the batch's answer, its level as the wire carries it.
+fn collect(instance: &str, status: Status, message: &std::fmt::Arguments) {
+    let level = match status {
+        Status::Ok => 0,
+        Status::Warning => 1,
+        Status::Discard => 2,
+        Status::Error => 3,
+    };
+    if let Ok(mut m) = MESSAGES.lock() {
+        m.push((level, instance.to_owned(), message.to_string()));
     }
-    fn log(&self, record: &log::Record) {
-        if record.module_path() != Some("logger") {
-            return;
-        }
-        let level = match record.level() {
-            log::Level::Warn => 1,
-            log::Level::Trace => 2,
-            log::Level::Error => 3,
-            _ => 0,
-        };
-        if let Ok(mut m) = MESSAGES.lock() {
-            m.push((level, record.target().to_owned(), record.args().to_string()));
-        }
-    }
-    fn flush(&self) {}
 }
 
-static COLLECTOR: Collector = Collector;
+static COLLECTOR: FmuMessages = FmuMessages(collect);
 
 /// A child's watchdog: the process ends (`_exit`, even inside a hanging FMU call) within
 /// 100 ms of its parent's end. Not PR_SET_PDEATHSIG: that fires when the parent *thread*
@@ -162,66 +153,20 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                         let (t, h, nsp) = (r.f64(), r.f64(), r.u8() != 0);
                         inst.do_step(t, h, nsp)
                     }
-                    GET_REAL | OUTPUT_DERIVATIVES => {
-                        r.u32s_into(&mut vrs);
-                        reals.clear();
-                        reals.resize(vrs.len(), 0.0);
-                        if op == GET_REAL {
-                            inst.get_real(&vrs, &mut reals)?;
-                        } else {
-                            inst.get_output_derivatives(&vrs, &mut reals)?;
-                        }
-                        put_f64s(&mut values, &reals);
-                        Ok(())
-                    }
-                    GET_INTEGER | GET_BOOLEAN => {
-                        r.u32s_into(&mut vrs);
-                        ints.clear();
-                        ints.resize(vrs.len(), 0);
-                        if op == GET_INTEGER {
-                            inst.get_integer(&vrs, &mut ints)?;
-                        } else {
-                            inst.get_boolean(&vrs, &mut ints)?;
-                        }
-                        ints.iter().for_each(|x| values.extend(x.to_ne_bytes()));
-                        Ok(())
-                    }
-                    GET_STRING => {
-                        r.u32s_into(&mut vrs);
-                        strings.clear();
-                        strings.resize(vrs.len(), CString::default());
-                        inst.get_string(&vrs, &mut strings)?;
-                        for s in &strings {
-                            values.extend((s.as_bytes().len() as u32).to_ne_bytes());
-                            values.extend(s.as_bytes());
-                        }
-                        Ok(())
-                    }
-                    SET_REAL | INPUT_DERIVATIVES => {
-                        r.u32s_into(&mut vrs);
-                        r.f64s_into(&mut reals);
-                        if op == SET_REAL {
-                            inst.set_real(&vrs, &reals)
-                        } else {
-                            inst.set_input_derivatives(&vrs, &reals)
-                        }
-                    }
-                    SET_INTEGER | SET_BOOLEAN => {
-                        r.u32s_into(&mut vrs);
-                        r.i32s_into(&mut ints);
-                        if op == SET_INTEGER {
-                            inst.set_integer(&vrs, &ints)
-                        } else {
-                            inst.set_boolean(&vrs, &ints)
-                        }
-                    }
-                    SET_STRING => {
-                        r.u32s_into(&mut vrs);
-                        let k = r.u32();
-                        strings.clear();
-                        strings.extend((0..k).map(|_| r.cstring()));
-                        inst.set_string(&vrs, &strings)
-                    }
+                    GET_REAL => answer(&mut r, &mut vrs, &mut reals, &mut values, |v, o| inst.get_real(v, o)),
+                    OUTPUT_DERIVATIVES => answer(&mut r, &mut vrs, &mut reals, &mut values, |v, o| {
+                        inst.get_output_derivatives(v, o)
+                    }),
+                    GET_INTEGER => answer(&mut r, &mut vrs, &mut ints, &mut values, |v, o| inst.get_integer(v, o)),
+                    GET_BOOLEAN => answer(&mut r, &mut vrs, &mut ints, &mut values, |v, o| inst.get_boolean(v, o)),
+                    GET_STRING => answer(&mut r, &mut vrs, &mut strings, &mut values, |v, o| {
+                        inst.get_string(v, o)
+                    }),
+                    SET_REAL => set(&mut r, &mut vrs, &mut reals, |v, x| inst.set_real(v, x)),
+                    INPUT_DERIVATIVES => set(&mut r, &mut vrs, &mut reals, |v, x| inst.set_input_derivatives(v, x)),
+                    SET_INTEGER => set(&mut r, &mut vrs, &mut ints, |v, x| inst.set_integer(v, x)),
+                    SET_BOOLEAN => set(&mut r, &mut vrs, &mut ints, |v, x| inst.set_boolean(v, x)),
+                    SET_STRING => set(&mut r, &mut vrs, &mut strings, |v, x| inst.set_string(v, x)),
                     GET_STATE | UPDATE_STATE | SET_STATE | FREE_STATE => {
                         let idx = r.u32() as usize;
                         let s = FmuState(idx);
@@ -254,7 +199,12 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                         r.f64s_into(&mut seed);
                         reals.clear();
                         reals.resize(vrs.len(), 0.0);
-                        inst.get_directional_derivative(&vrs, &vrs2, &seed, &mut reals)?;
+                        inst.get_directional_derivative(Directional {
+                            unknowns: &vrs,
+                            knowns: &vrs2,
+                            seed: &seed,
+                            out: &mut reals,
+                        })?;
                         put_f64s(&mut values, &reals);
                         Ok(())
                     }
@@ -298,4 +248,72 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
         }
     }
     0
+}
+
+/// A value as the wire carries it: a number in its native bytes, a string with its length first
+/// (the values of a set: their count first).
+trait Value: Clone + Default {
+    /// Into the answer of a get.
+    fn put(&self, values: &mut Vec<u8>);
+    /// The values of a set, read into `out`.
+    fn read_into(r: &mut R<'_>, out: &mut Vec<Self>);
+}
+
+impl Value for f64 {
+    fn put(&self, values: &mut Vec<u8>) {
+        values.extend(self.to_ne_bytes());
+    }
+    fn read_into(r: &mut R<'_>, out: &mut Vec<f64>) {
+        r.f64s_into(out);
+    }
+}
+
+impl Value for i32 {
+    fn put(&self, values: &mut Vec<u8>) {
+        values.extend(self.to_ne_bytes());
+    }
+    fn read_into(r: &mut R<'_>, out: &mut Vec<i32>) {
+        r.i32s_into(out);
+    }
+}
+
+impl Value for CString {
+    fn put(&self, values: &mut Vec<u8>) {
+        values.extend((self.as_bytes().len() as u32).to_ne_bytes());
+        values.extend(self.as_bytes());
+    }
+    fn read_into(r: &mut R<'_>, out: &mut Vec<CString>) {
+        let k = r.u32();
+        out.clear();
+        out.extend((0..k).map(|_| r.cstring()));
+    }
+}
+
+/// A get: its value references read into `vrs`, `out` as many default values, which `get`
+/// overwrites, then written to the answer's `values` (the buffers are kept from call to call).
+fn answer<T: Value>(
+    r: &mut R<'_>,
+    vrs: &mut Vec<u32>,
+    out: &mut Vec<T>,
+    values: &mut Vec<u8>,
+    get: impl FnOnce(&[u32], &mut [T]) -> Result<(), Fmi2Error>,
+) -> Result<(), Fmi2Error> {
+    r.u32s_into(vrs);
+    out.clear();
+    out.resize(vrs.len(), T::default());
+    get(vrs, out)?;
+    out.iter().for_each(|x| x.put(values));
+    Ok(())
+}
+
+/// A set: its value references read into `vrs`, its values into `values`, then `set`.
+fn set<T: Value>(
+    r: &mut R<'_>,
+    vrs: &mut Vec<u32>,
+    values: &mut Vec<T>,
+    set: impl FnOnce(&[u32], &[T]) -> Result<(), Fmi2Error>,
+) -> Result<(), Fmi2Error> {
+    r.u32s_into(vrs);
+    T::read_into(r, values);
+    set(vrs, values)
 }

@@ -8,7 +8,7 @@ use crate::Error;
 use crate::common::Fmi2Error;
 use crate::instance::InstanceCS;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::Child;
 use std::sync::atomic::Ordering::*;
 use std::time::{Duration, Instant};
 
@@ -99,20 +99,9 @@ impl SystemProcess {
         };
         // Batch 1: load the system (answered with its description).
         shm.header().req.store(1, SeqCst);
-        let mut cmd = Command::new(&iso.worker);
-        cmd.arg("serve-system")
-            .arg("--ssp")
-            .arg(ssp)
-            .arg("--shm")
-            .arg(&path)
-            .stdin(Stdio::null());
-        if jacobi {
-            cmd.arg("--jacobi");
-        }
-        let mut child = cmd.spawn().map_err(|e| {
-            let _ = std::fs::remove_file(&path);
-            fail(format!("cannot start {}: {e}", iso.worker.display()))
-        })?;
+        let flag = jacobi.then_some("--jacobi");
+        let mut child =
+            start_worker(&iso.worker, "serve-system", &[("--ssp", ssp.as_os_str())], &path, flag).map_err(fail)?;
         let r = wait_done(&shm, &mut child, 1, None);
         let _ = std::fs::remove_file(&path);
         if let Err(how) = r {

@@ -324,6 +324,29 @@ pub(super) fn function_of(op: u8) -> &'static str {
     }
 }
 
+/// Starts the worker `worker` doing `verb` with its `options` (name, value), `--shm shm` and
+/// `flag` where there is one, its stdin closed; if it cannot start, the shared file `shm` is
+/// removed and the message says why.
+pub(super) fn start_worker(
+    worker: &Path,
+    verb: &str,
+    options: &[(&str, &std::ffi::OsStr)],
+    shm: &Path,
+    flag: Option<&str>,
+) -> Result<std::process::Child, String> {
+    let mut cmd = std::process::Command::new(worker);
+    cmd.arg(verb);
+    for (name, value) in options {
+        cmd.arg(name).arg(value);
+    }
+    cmd.arg("--shm").arg(shm).stdin(std::process::Stdio::null());
+    cmd.args(flag);
+    cmd.spawn().map_err(|e| {
+        let _ = std::fs::remove_file(shm);
+        format!("cannot start {}: {e}", worker.display())
+    })
+}
+
 pub(super) fn shm_file() -> Result<(std::fs::File, PathBuf), String> {
     use std::sync::atomic::AtomicUsize;
     static N: AtomicUsize = AtomicUsize::new(0);

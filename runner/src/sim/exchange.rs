@@ -53,7 +53,12 @@ impl Simulation {
                         s.instance
                             .as_mut()
                             .expect("instantiated")
-                            .get_directional_derivative(&vrs, &knowns, &du, &mut jdu)
+                            .get_directional_derivative(Directional {
+                                unknowns: &vrs,
+                                knowns: &knowns,
+                                seed: &du,
+                                out: &mut jdu,
+                            })
                             .map_err(|e| {
                                 Error::fmi(
                                     &s.name,
@@ -216,50 +221,24 @@ impl Simulation {
         values: &[(String, Target, Setter)],
     ) -> Result<(), Error> {
         if self.runs > 0 {
-            for i in 0..self.slaves.len() {
-                let name = self.slaves[i].name.clone();
-                self.instance(i)
-                    .reset()
-                    .map_err(fmi_err(&name, fname(self.slaves[i].v3, "fmi2Reset"), None, ""))?;
-            }
+            self.each_instance("fmi2Reset", None, "", |_, i| i.reset())?;
         }
         self.runs += 1;
         for (key, target, value) in values {
             self.set(key, *target, value)?;
         }
-        for i in 0..self.slaves.len() {
-            let name = self.slaves[i].name.clone();
-            self.instance(i)
-                .setup_experiment(None, 0.0, Some(stop_time))
-                .map_err(fmi_err(
-                    &name,
-                    fname(self.slaves[i].v3, "fmi2SetupExperiment"),
-                    None,
-                    "",
-                ))?;
-        }
-        for i in 0..self.slaves.len() {
-            let name = self.slaves[i].name.clone();
-            self.instance(i).enter_initialization_mode().map_err(fmi_err(
-                &name,
-                fname(self.slaves[i].v3, "fmi2EnterInitializationMode"),
-                None,
-                "",
-            ))?;
-        }
+        self.each_instance("fmi2SetupExperiment", None, "", |_, i| {
+            i.setup_experiment(None, 0.0, Some(stop_time))
+        })?;
+        self.each_instance("fmi2EnterInitializationMode", None, "", |_, i| {
+            i.enter_initialization_mode()
+        })?;
         for _ in 0..self.slaves.len() {
             self.propagate(0.0)?;
         }
-        for i in 0..self.slaves.len() {
-            let name = self.slaves[i].name.clone();
-            self.instance(i).exit_initialization_mode().map_err(fmi_err(
-                &name,
-                fname(self.slaves[i].v3, "fmi2ExitInitializationMode"),
-                None,
-                "",
-            ))?;
-        }
-        Ok(())
+        self.each_instance("fmi2ExitInitializationMode", None, "", |_, i| {
+            i.exit_initialization_mode()
+        })
     }
 
     /// One communication step from `t` to `t + h`: propagate, then fmi2DoStep of every instance.
@@ -293,14 +272,21 @@ impl Simulation {
 
     /// fmi2Terminate of every instance.
     pub fn terminate(&mut self) -> Result<(), Error> {
+        self.each_instance("fmi2Terminate", None, "", |_, i| i.terminate())
+    }
+
+    /// `call(i, instance)` of every instance, in the system's order; the first that fails stops
+    /// it, reported as `function` (its FMI 2.0 name) of its component at `time`, doing `what`.
+    pub(super) fn each_instance(
+        &mut self,
+        function: &'static str,
+        time: Option<f64>,
+        what: &str,
+        mut call: impl FnMut(usize, &mut InstanceCS) -> Result<(), Fmi2Error>,
+    ) -> Result<(), Error> {
         for i in 0..self.slaves.len() {
             let name = self.slaves[i].name.clone();
-            self.instance(i).terminate().map_err(fmi_err(
-                &name,
-                fname(self.slaves[i].v3, "fmi2Terminate"),
-                None,
-                "",
-            ))?;
+            call(i, self.instance(i)).map_err(fmi_err(&name, fname(self.slaves[i].v3, function), time, what))?;
         }
         Ok(())
     }

@@ -183,41 +183,21 @@ impl Simulation {
     /// Every component's FMU state into `slots` (taken anew, or updated).
     pub(super) fn save_states(&mut self, slots: &mut Vec<FmuState>, t: f64) -> Result<(), Error> {
         if slots.is_empty() {
-            for i in 0..self.slaves.len() {
-                let name = self.slaves[i].name.clone();
-                let st = self.instance(i).get_fmu_state().map_err(fmi_err(
-                    &name,
-                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
-                    Some(t),
-                    "",
-                ))?;
-                slots.push(st);
-            }
+            self.each_instance("fmi2GetFMUstate", Some(t), "", |_, inst| {
+                slots.push(inst.get_fmu_state()?);
+                Ok(())
+            })
         } else {
-            for (i, slot) in slots.iter().enumerate() {
-                let name = self.slaves[i].name.clone();
-                self.instance(i).update_fmu_state(slot).map_err(fmi_err(
-                    &name,
-                    fname(self.slaves[i].v3, "fmi2GetFMUstate"),
-                    Some(t),
-                    "",
-                ))?;
-            }
+            self.each_instance("fmi2GetFMUstate", Some(t), "", |i, inst| {
+                inst.update_fmu_state(&slots[i])
+            })
         }
-        Ok(())
     }
 
     pub(super) fn load_states(&mut self, slots: &[FmuState], t: f64) -> Result<(), Error> {
-        for (i, slot) in slots.iter().enumerate() {
-            let name = self.slaves[i].name.clone();
-            self.instance(i).set_fmu_state(slot).map_err(fmi_err(
-                &name,
-                fname(self.slaves[i].v3, "fmi2SetFMUstate"),
-                Some(t),
-                "rolling back a rejected step",
-            ))?;
-        }
-        Ok(())
+        self.each_instance("fmi2SetFMUstate", Some(t), "rolling back a rejected step", |i, inst| {
+            inst.set_fmu_state(&slots[i])
+        })
     }
 
     /// What the error is estimated on: the `watched` variables, read now, or (none watched)
