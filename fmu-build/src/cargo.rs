@@ -608,13 +608,6 @@ mod tests {
         );
         let three = parse_fmi_versions(&serde_json::json!(["3.0"])).unwrap();
         assert_eq!(three.into_iter().collect::<Vec<_>>(), vec![FmiVersion::V3]);
-        for bad in [
-            serde_json::json!("3.0"),
-            serde_json::json!([]),
-            serde_json::json!(["1.0"]),
-            serde_json::json!([3]),
-        ] {
-            assert!(parse_fmi_versions(&bad).is_err(), "{bad} was accepted");
-        }
+        crate::test_support::refuses_each(parse_fmi_versions, r#"["3.0", [], ["1.0"], [3]]"#);
     }
 }

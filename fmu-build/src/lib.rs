@@ -22,3 +22,15 @@ pub mod systems;
 pub mod target;
 pub mod validate;
 pub mod xml;
+
+/// What the unit tests of several modules share.
+#[cfg(test)]
+pub(crate) mod test_support {
+    /// Each element of the JSON array `bad` refused by `parse` (the one accepted named).
+    pub(crate) fn refuses_each<T, E>(parse: impl Fn(&serde_json::Value) -> Result<T, E>, bad: &str) {
+        let bad: Vec<serde_json::Value> = serde_json::from_str(bad).unwrap();
+        for b in bad {
+            assert!(parse(&b).is_err(), "{b} was accepted");
+        }
+    }
+}

@@ -767,12 +767,18 @@ mod tests {
         assert_eq!(motors.connections[4].to_string(), "controller.U1 -> motor1.U");
     }
 
+    /// Why the paper's system `name` is refused with the connection `extra` added (its own
+    /// connections those `keep` keeps).
+    fn refused_with_connection(name: &str, keep: impl Fn(&Connection) -> bool, extra: &str) -> String {
+        let mut s = paper_systems().get(name).unwrap().clone();
+        s.connections.retain(keep);
+        s.connections.push(extra.parse().unwrap());
+        s.check(&fmus()).unwrap_err()
+    }
+
     #[test]
     fn a_connection_between_two_outputs_is_refused() {
-        let systems = paper_systems();
-        let mut s = systems.get("PendulumLQR").unwrap().clone();
-        s.connections.push("controller.M1 -> pendulum.alpha1".parse().unwrap());
-        let e = s.check(&fmus()).unwrap_err();
+        let e = refused_with_connection("PendulumLQR", |_| true, "controller.M1 -> pendulum.alpha1");
         assert!(
             e.contains("connection controller.M1 -> pendulum.alpha1")
                 && e.contains("holonomic/systems.toml")
@@ -784,12 +790,11 @@ mod tests {
 
     #[test]
     fn a_connection_of_two_types_is_refused() {
-        let systems = paper_systems();
-        let mut s = systems.get("PendulumMotors").unwrap().clone();
-        s.connections.retain(|c| c.to.to_string() != "pendulum.M1");
-        s.connections
-            .push("motor1.tau -> controller.drives_motors".parse().unwrap());
-        let e = s.check(&fmus()).unwrap_err();
+        let e = refused_with_connection(
+            "PendulumMotors",
+            |c| c.to.to_string() != "pendulum.M1",
+            "motor1.tau -> controller.drives_motors",
+        );
         assert!(
             e.contains("motor1.tau -> controller.drives_motors") && e.contains("parameter Boolean"),
             "{e}"
@@ -798,11 +803,7 @@ mod tests {
 
     #[test]
     fn an_input_driven_twice_is_refused() {
-        let systems = paper_systems();
-        let mut s = systems.get("PendulumLQR").unwrap().clone();
-        s.connections
-            .push("pendulum.alpha2 -> controller.alpha1".parse().unwrap());
-        let e = s.check(&fmus()).unwrap_err();
+        let e = refused_with_connection("PendulumLQR", |_| true, "pendulum.alpha2 -> controller.alpha1");
         assert!(
             e.contains("input controller.alpha1 is driven twice") && e.contains("pendulum.alpha2"),
             "{e}"

@@ -21,21 +21,36 @@ pub fn info(fmu: &Path) -> Result<String, String> {
     let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
     let mut interfaces = Vec::new();
     let mut variables = Vec::new();
+    // The head, the experiment and the interfaces, from the fields both versions' descriptions
+    // name alike (the identity: FMI 2.0's GUID, FMI 3.0's instantiation token).
+    macro_rules! head_and_interfaces {
+        ($d:ident, $identity:ident) => {
+            out.push_str(&head(
+                fmu,
+                &$d.fmi_version,
+                &$d.model_name,
+                &$d.version,
+                &$d.$identity,
+                &$d.generation_tool,
+                &$d.description,
+            ));
+            out.push_str(&experiment(&$d.default_experiment));
+            interfaces.extend(
+                $d.me
+                    .as_ref()
+                    .map(|i| format!("ModelExchange ({})", i.model_identifier)),
+            );
+            interfaces.extend(
+                $d.cs
+                    .as_ref()
+                    .map(|i| format!("CoSimulation ({})", i.model_identifier)),
+            );
+        };
+    }
     // (value reference, name, causality, type, unit) of every variable, in order.
     let listed: Vec<(u32, &str, Causality, String, Option<&str>)> = match &md {
         ModelDescription::Fmi2(d) => {
-            out.push_str(&head(
-                fmu,
-                &d.fmi_version,
-                &d.model_name,
-                &d.version,
-                &d.guid,
-                &d.generation_tool,
-                &d.description,
-            ));
-            out.push_str(&experiment(&d.default_experiment));
-            interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
-            interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
+            head_and_interfaces!(d, guid);
             let v = d.variables.iter();
             v.map(|v| {
                 (
@@ -49,18 +64,7 @@ pub fn info(fmu: &Path) -> Result<String, String> {
             .collect()
         }
         ModelDescription::Fmi3(d) => {
-            out.push_str(&head(
-                fmu,
-                &d.fmi_version,
-                &d.model_name,
-                &d.version,
-                &d.token,
-                &d.generation_tool,
-                &d.description,
-            ));
-            out.push_str(&experiment(&d.default_experiment));
-            interfaces.extend(d.me.as_ref().map(|i| format!("ModelExchange ({})", i.model_identifier)));
-            interfaces.extend(d.cs.as_ref().map(|i| format!("CoSimulation ({})", i.model_identifier)));
+            head_and_interfaces!(d, token);
             // An array's type with its dimensions: Float64[2,4]; a length set by a structural
             // parameter by the parameter's name: Float64[n,n].
             d.variables

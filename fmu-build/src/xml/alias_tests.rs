@@ -117,25 +117,24 @@ fn the_encoding_carries_display_units_and_aliases() {
     );
 }
 
+/// Each of `parts` in the written `xml` (shown when one is missing).
+fn assert_writes(xml: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(xml.contains(part), "expected {part:?} in:\n{xml}");
+    }
+}
+
 #[test]
 fn fmi3_writes_the_display_unit_the_alias_and_the_variables_display_unit() {
     let (d, i) = decoded(Interfaces::BOTH_FMI3);
     let xml = fmi3(&d, i, "{token}").unwrap();
-    assert!(
-        xml.contains(
-            "<Unit name=\"m\">\n      <BaseUnit m=\"1\"/>\n      <DisplayUnit name=\"ft\" factor=\"3.280839895\"/>\n    </Unit>"
-        ),
-        "{xml}"
-    );
-    assert!(
-        xml.contains(
-            "initial=\"exact\" unit=\"m\" start=\"1.0\">\n      <Alias name=\"h_ft\" description=\"Position in feet\" displayUnit=\"ft\"/>\n    </Float64>"
-        ),
-        "{xml}"
-    );
-    assert!(
-        xml.contains("unit=\"m\" displayUnit=\"ft\" start=\"2.5\">\n      <Alias name=\"l2\"/>"),
-        "{xml}"
+    assert_writes(
+        &xml,
+        &[
+            "<Unit name=\"m\">\n      <BaseUnit m=\"1\"/>\n      <DisplayUnit name=\"ft\" factor=\"3.280839895\"/>\n    </Unit>",
+            "initial=\"exact\" unit=\"m\" start=\"1.0\">\n      <Alias name=\"h_ft\" description=\"Position in feet\" displayUnit=\"ft\"/>\n    </Float64>",
+            "unit=\"m\" displayUnit=\"ft\" start=\"2.5\">\n      <Alias name=\"l2\"/>",
+        ],
     );
 }
 
@@ -143,34 +142,20 @@ fn fmi3_writes_the_display_unit_the_alias_and_the_variables_display_unit() {
 fn fmi2_writes_each_alias_as_a_local_of_the_same_value_reference_after_the_variables() {
     let (d, i) = decoded(Interfaces::BOTH);
     let xml = fmi2(&d, i, "{guid}").unwrap();
-    assert!(
-        xml.contains("<DisplayUnit name=\"ft\" factor=\"3.280839895\"/>"),
-        "{xml}"
-    );
-    assert!(
-        xml.contains("<Real unit=\"m\" displayUnit=\"ft\" start=\"2.5\"/>"),
-        "{xml}"
-    );
-    // After the two variables: indices 3 and 4, h's and l's value references; the constant's
-    // alias carries the constant's value, the other no start.
-    assert!(
-        xml.contains(
+    assert_writes(
+        &xml,
+        &[
+            "<DisplayUnit name=\"ft\" factor=\"3.280839895\"/>",
+            "<Real unit=\"m\" displayUnit=\"ft\" start=\"2.5\"/>",
+            // After the two variables: indices 3 and 4, h's and l's value references; the constant's
+            // alias carries the constant's value, the other no start.
             "<!-- index 3 -->\n    <ScalarVariable name=\"h_ft\" valueReference=\"1\" description=\"Position in feet\" \
-             causality=\"local\" variability=\"continuous\">\n      <Real unit=\"m\" displayUnit=\"ft\"/>"
-        ),
-        "{xml}"
-    );
-    assert!(
-        xml.contains(
+             causality=\"local\" variability=\"continuous\">\n      <Real unit=\"m\" displayUnit=\"ft\"/>",
             "<!-- index 4 -->\n    <ScalarVariable name=\"l2\" valueReference=\"2\" description=\"Length\" \
-             causality=\"local\" variability=\"constant\">\n      <Real unit=\"m\" start=\"2.5\"/>"
-        ),
-        "{xml}"
-    );
-    // The outputs are the declared ones only.
-    assert!(
-        xml.contains("<Outputs>\n      <Unknown index=\"1\"/>\n    </Outputs>"),
-        "{xml}"
+             causality=\"local\" variability=\"constant\">\n      <Real unit=\"m\" start=\"2.5\"/>",
+            // The outputs are the declared ones only.
+            "<Outputs>\n      <Unknown index=\"1\"/>\n    </Outputs>",
+        ],
     );
 }
 

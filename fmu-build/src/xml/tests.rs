@@ -418,20 +418,15 @@ const fn size(name: &'static str, vr: u32, start: u64) -> Variable {
 }
 
 /// 1 ..= 12, the start of a capacity of 3 x 4 (row-major: row i holds 4i+1 ..= 4i+4).
-const TWELVE: &[Start] = &[
-    Start::Real(1.0),
-    Start::Real(2.0),
-    Start::Real(3.0),
-    Start::Real(4.0),
-    Start::Real(5.0),
-    Start::Real(6.0),
-    Start::Real(7.0),
-    Start::Real(8.0),
-    Start::Real(9.0),
-    Start::Real(10.0),
-    Start::Real(11.0),
-    Start::Real(12.0),
-];
+const TWELVE: &[Start] = &{
+    let mut starts = [Start::Real(0.0); 12];
+    let mut i = 0;
+    while i < 12 {
+        starts[i] = Start::Real((i + 1) as f64);
+        i += 1;
+    }
+    starts
+};
 
 /// A parameter array of capacity `dims` sized by `sized_by`, start [`TWELVE`]'s first.
 const fn sized(name: &'static str, vr: u32, dims: &'static [u32], sized_by: &'static [u32]) -> Variable {
