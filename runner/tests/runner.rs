@@ -333,10 +333,16 @@ fn overrides_apply_per_run_and_a_stop_condition_ends_it() {
 fn an_unknown_variable_or_component_is_named_with_what_exists() {
     let mut sim = motors();
     let mut opts = RunOptions::new(0.01, 1e-3);
-    opts.overrides = vec![("pendulum.alpha9_0".into(), Override::Real(0.2))];
-    let f = sim
-        .run(&opts, &mut |_, _| {})
-        .expect_err("an unknown variable must be refused");
+    // The failure of a run with the one override `key` = `value` (`why` it must fail).
+    let mut refused = |key: &str, value: Override, why: &str| {
+        opts.overrides = vec![(key.into(), value)];
+        sim.run(&opts, &mut |_, _| {}).expect_err(why)
+    };
+    let f = refused(
+        "pendulum.alpha9_0",
+        Override::Real(0.2),
+        "an unknown variable must be refused",
+    );
     assert_eq!(f.error.kind, ErrorKind::Variable);
     assert!(
         f.error
@@ -345,18 +351,20 @@ fn an_unknown_variable_or_component_is_named_with_what_exists() {
             && f.error.message.contains("alpha1_0"),
         "{f}"
     );
-    opts.overrides = vec![("pendulun.alpha1_0".into(), Override::Real(0.2))];
-    let f = sim
-        .run(&opts, &mut |_, _| {})
-        .expect_err("an unknown component must be refused");
+    let f = refused(
+        "pendulun.alpha1_0",
+        Override::Real(0.2),
+        "an unknown component must be refused",
+    );
     assert!(
         f.error.message.contains("no component 'pendulun'") && f.error.message.contains("motor1"),
         "{f}"
     );
-    opts.overrides = vec![("controller.mode".into(), Override::Text("LQR".into()))];
-    let f = sim
-        .run(&opts, &mut |_, _| {})
-        .expect_err("an item name is not an integer");
+    let f = refused(
+        "controller.mode",
+        Override::Text("LQR".into()),
+        "an item name is not an integer",
+    );
     assert!(
         f.error.message.contains("controller.mode") && f.error.message.contains("item's value"),
         "{f}"
