@@ -81,14 +81,9 @@ impl Archive {
             Err(zip::result::ZipError::FileNotFound) => return Ok(None),
             Err(e) => return Err(format!("{}: {name}: {e}", self.path.display())),
         };
-        let mut bytes = vec![];
-        let read = (&mut entry).take(max + 1).read_to_end(&mut bytes);
+        let read = read_at_most(&mut entry, name, max);
         drop(entry);
-        read.map_err(|e| self.at(format!("{name}: {e}")))?;
-        if bytes.len() as u64 > max {
-            return Err(self.at(format!("{name} is longer than the {max} bytes read")));
-        }
-        Ok(Some(bytes))
+        read.map_err(|e| self.at(e)).map(Some)
     }
 
     fn at(&self, e: impl std::fmt::Display) -> String {
@@ -133,13 +128,9 @@ pub fn read_model_description_within(archive: &mut Archive, limits: &Limits) -> 
             "modelDescription.xml has {size} bytes, more than the {max} read"
         )));
     }
-    let mut bytes = vec![];
-    let read = (&mut entry).take(max + 1).read_to_end(&mut bytes);
+    let read = read_at_most(&mut entry, "modelDescription.xml", max);
     drop(entry);
-    read.map_err(|e| archive.at(format!("modelDescription.xml: {e}")))?;
-    if bytes.len() as u64 > max {
-        return Err(archive.at(format!("modelDescription.xml is longer than the {max} bytes read")));
-    }
+    let bytes = read.map_err(|e| archive.at(e))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let valid = e.utf8_error().valid_up_to();
         let prefix = String::from_utf8_lossy(&e.as_bytes()[..valid]).into_owned();
@@ -403,6 +394,19 @@ fn copy_bounded(from: &mut impl Read, to: &mut impl Write, limit: u64) -> Result
         }
         to.write_all(&buf[..k]).map_err(Copy::Io)?;
     }
+}
+
+/// The bytes of the entry `name`, read up to `max` (one more tells a longer entry, refused).
+fn read_at_most(entry: &mut impl Read, name: &str, max: u64) -> Result<Vec<u8>, String> {
+    let mut bytes = vec![];
+    entry
+        .take(max + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("{name}: {e}"))?;
+    if bytes.len() as u64 > max {
+        return Err(format!("{name} is longer than the {max} bytes read"));
+    }
+    Ok(bytes)
 }
 
 #[cfg(test)]

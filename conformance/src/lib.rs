@@ -96,15 +96,7 @@ impl Fmu {
     /// under `parent` and loads its binary. The folders are removed when this is dropped.
     pub fn load(path: &Path, parent: &Path) -> Result<Fmu, String> {
         let mut zip = archive::open(path)?;
-        let xml = archive::read_model_description(&mut zip)?;
-        let md = parse_description(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
-        if md.fmi_version != "2.0" {
-            return Err(format!(
-                "{}: fmiVersion \"{}\": this checker checks FMI 2.0 FMUs",
-                path.display(),
-                md.fmi_version
-            ));
-        }
+        let md = fmi2_description(&mut zip, path, "FMI 2.0 FMUs")?;
         let id = md.model_identifier().to_owned();
         let u = Unpacked::new(path, parent, &mut zip, &id, PLATFORM2)?;
         let api = Api::load(&u.so)?;
@@ -260,18 +252,25 @@ pub(crate) use impl_loaded;
 
 impl_loaded!(Fmu, Fmi2, describe, fmu_dir);
 
-/// The head of the report for an FMI 2.0 file, from the archive alone.
-fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
-    let mut a = archive::open(fmu_path)?;
-    let xml = archive::read_model_description(&mut a)?;
-    let md = parse_description(&xml).map_err(|e| format!("{}: {e}", fmu_path.display()))?;
+/// The model description of the archive at `path`, which must be an FMI 2.0 one (else the
+/// error says that this checker checks `what`).
+fn fmi2_description(zip: &mut archive::Archive, path: &Path, what: &str) -> Result<Description, String> {
+    let xml = archive::read_model_description(zip)?;
+    let md = parse_description(&xml).map_err(|e| format!("{}: {e}", path.display()))?;
     if md.fmi_version != "2.0" {
         return Err(format!(
-            "{}: fmiVersion \"{}\": this checker checks FMI 2.0 and FMI 3.0 FMUs",
-            fmu_path.display(),
+            "{}: fmiVersion \"{}\": this checker checks {what}",
+            path.display(),
             md.fmi_version
         ));
     }
+    Ok(md)
+}
+
+/// The head of the report for an FMI 2.0 file, from the archive alone.
+fn describe(fmu_path: &Path) -> Result<Vec<String>, String> {
+    let mut a = archive::open(fmu_path)?;
+    let md = fmi2_description(&mut a, fmu_path, "FMI 2.0 and FMI 3.0 FMUs")?;
     let so = format!("binaries/{}/{}.{}", PLATFORM2, md.model_identifier(), LIBRARY_EXTENSION);
     let tool = binary_and_tool(a.has_entry(&so), fmu_path, &so, &md.generation_tool)?;
     Ok(vec![format!(

@@ -557,18 +557,23 @@ fn learn_codes(fmu: &Fmu) -> Result<StateCodes, String> {
     };
     let s = inst.setup(0.0, None);
     ok("fmi2SetupExperiment", s, &inst)?;
-    let s = inst.enter_init();
-    ok("fmi2EnterInitializationMode", s, &inst)?;
-    codes.bytes[InitializationMode as usize] = Some(byte(&mut inst)?);
-    let s = inst.exit_init();
-    ok("fmi2ExitInitializationMode", s, &inst)?;
-    codes.bytes[EventMode as usize] = Some(byte(&mut inst)?);
-    let s = inst.enter_continuous_time_mode();
-    ok("fmi2EnterContinuousTimeMode", s, &inst)?;
-    codes.bytes[ContinuousTimeMode as usize] = Some(byte(&mut inst)?);
-    let s = inst.terminate();
-    ok("fmi2Terminate", s, &inst)?;
-    codes.bytes[Terminated as usize] = Some(byte(&mut inst)?);
+    // Each call, and the state it reaches, whose byte is read there.
+    type Call<'i> = fn(&mut Instance<'i>) -> Status;
+    let walk: [(&str, Call<'_>, MeState); 4] = [
+        ("fmi2EnterInitializationMode", Instance::enter_init, InitializationMode),
+        ("fmi2ExitInitializationMode", Instance::exit_init, EventMode),
+        (
+            "fmi2EnterContinuousTimeMode",
+            Instance::enter_continuous_time_mode,
+            ContinuousTimeMode,
+        ),
+        ("fmi2Terminate", Instance::terminate, Terminated),
+    ];
+    for (what, call, state) in walk {
+        let s = call(&mut inst);
+        ok(what, s, &inst)?;
+        codes.bytes[state as usize] = Some(byte(&mut inst)?);
+    }
     let known: Vec<u8> = codes.bytes.iter().flatten().copied().collect();
     if (1..known.len()).any(|i| known[..i].contains(&known[i])) {
         return Err(format!(
