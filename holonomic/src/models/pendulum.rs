@@ -79,7 +79,12 @@ impl PendulumParams {
     /// [ m2 l1 l2 cos(α1−α2)/3    m2 l2²/3 + J2         ]
     /// J is added last, so at J = 0 every entry is the paper's to the bit.
     pub fn mass_matrix<D: DualNum<Primitive = f64> + Copy>(&self, alpha1: D, alpha2: D) -> [[D; 2]; 2] {
-        let c = (alpha1 - alpha2).cos();
+        self.mass_matrix_at((alpha1 - alpha2).cos())
+    }
+
+    /// [`mass_matrix`](Self::mass_matrix) from c = cos(α1 − α2), which `rhs` has already.
+    #[inline]
+    fn mass_matrix_at<D: DualNum<Primitive = f64> + Copy>(&self, c: D) -> [[D; 2]; 2] {
         let m12 = c * (self.m2 * self.l1 * self.l2 / 3.0);
         [
             [D::from((self.m1 + self.m2) * self.l1 * self.l1 / 3.0 + self.j1), m12],
@@ -95,13 +100,15 @@ impl PendulumParams {
     pub fn rhs<D: DualNum<Primitive = f64> + Copy>(&self, x: [D; 4], u: [D; 2]) -> [D; 4] {
         let [alpha1, omega1, alpha2, omega2] = x;
         let [torque1, torque2] = u;
-        let s = (alpha1 - alpha2).sin();
+        // sin and cos of the one angle difference of (6)-(7) side by side, so that they are one
+        // sincos call wherever the compiler inlines this (bench/callgrind.sh).
+        let (s, c) = (alpha1 - alpha2).sin_cos();
         let k = self.m2 * self.l1 * self.l2 / 3.0;
         let gravity1 = alpha1.sin() * (self.m1 * self.g * self.l1 / 2.0 + self.m2 * self.g * self.l1);
         let gravity2 = alpha2.sin() * (self.m2 * self.g * self.l2 / 2.0);
         let r1 = torque1 - omega2 * omega2 * s * k + gravity1; // eq. (6)
         let r2 = torque2 + omega1 * omega1 * s * k + gravity2; // eq. (7)
-        let [[m11, m12], [m21, m22]] = self.mass_matrix(alpha1, alpha2);
+        let [[m11, m12], [m21, m22]] = self.mass_matrix_at(c);
         // 2×2 solve by Cramer's rule: det M = m2 l1² l2² (m1 + m2 sin²(α1−α2)) / 9
         // + J1 m2 l2²/3 + J2 (m1 + m2) l1²/3 + J1 J2 > 0 always (masses and lengths > 0, J ≥ 0).
         let det = m11 * m22 - m12 * m21;
