@@ -305,6 +305,28 @@ exports! {
         });
 }
 
+/// fmi2Get*Status (`function`) into `value`: the status kind this type answers (`known`: the
+/// kind and its value), any other unavailable.
+fn get_status<T>(
+    me: &Container,
+    function: &str,
+    s: fmi2StatusKind,
+    value: *mut T,
+    known: Option<(fmi2StatusKind, T)>,
+) -> Outcome {
+    me.check(Call::GetStatus, function)?;
+    if value.is_null() {
+        return Err(me.error(&format!("{function}: value is NULL")));
+    }
+    match known {
+        Some((kind, answer)) if s == kind => {
+            put(value, answer);
+            Ok(fmi2OK)
+        }
+        _ => status_unavailable(me, function, s),
+    }
+}
+
 /// The standard's answer for a status a container does not have: fmi2Discard, with the reason.
 fn status_unavailable(me: &Container, function: &str, kind: fmi2StatusKind) -> Outcome {
     let what = match kind {
@@ -323,65 +345,15 @@ fn status_unavailable(me: &Container, function: &str, kind: fmi2StatusKind) -> O
 
 exports! {
     fmi2GetStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Status) -> fmi2Status =>
-        with2(c, F, |me| {
-            me.check(Call::GetStatus, F)?;
-            if value.is_null() {
-                return Err(me.error("fmi2GetStatus: value is NULL"));
-            }
-            status_unavailable(me, F, s)
-        });
+        with2(c, F, |me| get_status(me, F, s, value, None));
     fmi2GetRealStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Real) -> fmi2Status =>
-        with2(c, F, |me| {
-            me.check(Call::GetStatus, F)?;
-            if value.is_null() {
-                return Err(me.error("fmi2GetRealStatus: value is NULL"));
-            }
-            if s != fmi2LastSuccessfulTime {
-                return status_unavailable(me, F, s);
-            }
-            put(value, me.last_successful);
-            Ok(fmi2OK)
-        });
-    fmi2GetIntegerStatus(
-        c: fmi2Component,
-        s: fmi2StatusKind,
-        value: *mut fmi2Integer,
-    ) -> fmi2Status =>
-        with2(c, F, |me| {
-            me.check(Call::GetStatus, F)?;
-            if value.is_null() {
-                return Err(me.error("fmi2GetIntegerStatus: value is NULL"));
-            }
-            status_unavailable(me, F, s)
-        });
-    fmi2GetBooleanStatus(
-        c: fmi2Component,
-        s: fmi2StatusKind,
-        value: *mut fmi2Boolean,
-    ) -> fmi2Status =>
-        with2(c, F, |me| {
-            me.check(Call::GetStatus, F)?;
-            if value.is_null() {
-                return Err(me.error("fmi2GetBooleanStatus: value is NULL"));
-            }
-            if s != fmi2Terminated {
-                return status_unavailable(me, F, s);
-            }
-            put(value, fmi2False);
-            Ok(fmi2OK)
-        });
-    fmi2GetStringStatus(
-        c: fmi2Component,
-        s: fmi2StatusKind,
-        value: *mut fmi2String,
-    ) -> fmi2Status =>
-        with2(c, F, |me| {
-            me.check(Call::GetStatus, F)?;
-            if value.is_null() {
-                return Err(me.error("fmi2GetStringStatus: value is NULL"));
-            }
-            status_unavailable(me, F, s)
-        });
+        with2(c, F, |me| get_status(me, F, s, value, Some((fmi2LastSuccessfulTime, me.last_successful))));
+    fmi2GetIntegerStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Integer) -> fmi2Status =>
+        with2(c, F, |me| get_status(me, F, s, value, None));
+    fmi2GetBooleanStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2Boolean) -> fmi2Status =>
+        with2(c, F, |me| get_status(me, F, s, value, Some((fmi2Terminated, fmi2False))));
+    fmi2GetStringStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status =>
+        with2(c, F, |me| get_status(me, F, s, value, None));
     fmi2SetRealInputDerivatives(
         c: fmi2Component,
         _vr: *const fmi2ValueReference,

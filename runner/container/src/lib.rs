@@ -57,6 +57,7 @@ use rustfmu::fmi2::abi::{
 use rustfmu::fmi3::abi::{fmi3InstanceEnvironment, fmi3LogMessageCallback};
 use rustfmu_runner::common::{Fmi2Error, FmuState};
 use rustfmu_runner::container::{LOG_CATEGORIES, SPEC_FILE, SYSTEM_FOLDER, Spec};
+use rustfmu_runner::fmu_log;
 use rustfmu_runner::instance::InstanceCS;
 use rustfmu_runner::{Error, Simulation};
 use std::cell::Cell;
@@ -129,39 +130,27 @@ thread_local! {
     static CURRENT: Cell<*const Sink> = const { Cell::new(std::ptr::null()) };
 }
 
-/// The `log` crate's logger: the runner's importer hands each component's message to it
-/// (module path "logger", target the component's instance name); it goes to the container's
-/// importer.
-struct Forward;
-
-impl log::Log for Forward {
-    fn enabled(&self, _: &log::Metadata) -> bool {
-        true
-    }
-    fn log(&self, record: &log::Record) {
-        if record.module_path() != Some("logger") {
-            return;
+/// A component's message, as the runner's importer hands it to the `log` crate's logger (its
+/// instance name and status), goes to the container's importer.
+fn forward(instance: &str, status: fmu_log::Status, message: &std::fmt::Arguments) {
+    let status = match status {
+        fmu_log::Status::Ok => fmi2OK,
+        fmu_log::Status::Warning => fmi2Warning,
+        fmu_log::Status::Discard => fmi2Discard,
+        fmu_log::Status::Error => fmi2Error,
+    };
+    CURRENT.with(|c| {
+        let sink = c.get();
+        if !sink.is_null() {
+            // SAFETY: CURRENT holds a sink only while a `Using` of it lives (a call of the
+            // container's, on this thread), and the sink outlives the call.
+            let sink = unsafe { &*sink };
+            sink.log(status, "logAll", &format!("[{instance}] {message}"));
         }
-        let status = match record.level() {
-            log::Level::Info | log::Level::Debug => fmi2OK,
-            log::Level::Warn => fmi2Warning,
-            log::Level::Trace => fmi2Discard,
-            log::Level::Error => fmi2Error,
-        };
-        CURRENT.with(|c| {
-            let sink = c.get();
-            if !sink.is_null() {
-                // SAFETY: CURRENT holds a sink only while a `Using` of it lives (a call of the
-                // container's, on this thread), and the sink outlives the call.
-                let sink = unsafe { &*sink };
-                sink.log(status, "logAll", &format!("[{}] {}", record.target(), record.args()));
-            }
-        });
-    }
-    fn flush(&self) {}
+    });
 }
 
-static FORWARD: Forward = Forward;
+static FORWARD: fmu_log::FmuMessages = fmu_log::FmuMessages(forward);
 
 /// Sets `sink` as this thread's for the duration of a call.
 struct Using;
@@ -313,15 +302,21 @@ impl Container {
         self.spec.variables.get(vr as usize).map_or("time", |e| e.name.as_str())
     }
 
-    /// A component's refusal of a call that changed nothing (a setup, an FMU state): logged; the
-    /// container stays where it was, unless the component answered Fatal.
-    fn refused(&mut self, function: &str, e: Error) -> Status {
-        let status = status_of(&e);
+    /// A component's failure `e` in `function`, logged at the time of the container: its status.
+    fn log_failure(&self, function: &str, e: &Error) -> Status {
+        let status = status_of(e);
         self.sink.log(
             status,
             "logStatusError",
             &format!("{function} at t = {}: {}", self.time, e.message),
         );
+        status
+    }
+
+    /// A component's refusal of a call that changed nothing (a setup, an FMU state): logged; the
+    /// container stays where it was, unless the component answered Fatal.
+    fn refused(&mut self, function: &str, e: Error) -> Status {
+        let status = self.log_failure(function, &e);
         if status == fmi2Fatal {
             self.state = State::Fatal;
         }
@@ -332,12 +327,7 @@ impl Container {
     /// the container's state follows the worst status (Error: Error, as some components may have
     /// moved and others not).
     fn failed(&mut self, function: &str, e: Error) -> Status {
-        let status = status_of(&e);
-        self.sink.log(
-            status,
-            "logStatusError",
-            &format!("{function} at t = {}: {}", self.time, e.message),
-        );
+        let status = self.log_failure(function, &e);
         match status {
             fmi2Fatal => self.state = State::Fatal,
             fmi2Error => self.state = State::Error,

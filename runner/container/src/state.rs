@@ -119,20 +119,20 @@ impl Container {
             };
             let components = self.take_components(function, slots)?;
             let bytes = self.serialize_components(function, &components)?;
-            saved.owner = self.id;
-            saved.components = components;
-            saved.bytes = bytes;
-            saved.time = self.time;
-            saved.state = self.state;
-            saved.dirty = self.dirty;
-            saved.last_successful = self.last_successful;
-            saved.stop_time = self.stop_time;
+            // (Its GUID is this container's: `saved` checked it.)
+            *saved = self.saved_now(components, bytes);
             return Ok(fmi2OK);
         }
         let slots = self.free.pop();
         let components = self.take_components(function, slots)?;
         let bytes = self.serialize_components(function, &components)?;
-        let p = Box::into_raw(Box::new(Saved {
+        hand_out(state, self.saved_now(components, bytes))
+    }
+
+    /// An FMU state of the container as it is now, its components' states `components`
+    /// (serialized: `bytes`).
+    fn saved_now(&self, components: Vec<FmuState>, bytes: Option<Vec<Vec<u8>>>) -> Saved {
+        Saved {
             owner: self.id,
             guid: self.spec.guid.clone(),
             components,
@@ -142,10 +142,7 @@ impl Container {
             dirty: self.dirty,
             last_successful: self.last_successful,
             stop_time: self.stop_time,
-        }));
-        states().push(p as usize);
-        put(state, p as *mut c_void);
-        Ok(fmi2OK)
+        }
     }
 
     pub(crate) fn set_fmu_state(&mut self, function: &str, state: *mut c_void) -> Outcome {
@@ -264,21 +261,25 @@ impl Container {
                 Err(e) => return Err(self.component_refused(function, i, e)),
             }
         }
-        let p = Box::into_raw(Box::new(Saved {
-            owner: self.id,
-            guid: self.spec.guid.clone(),
-            components,
-            bytes: Some(parsed.parts),
+        let saved = Saved {
             time: parsed.time,
             state: parsed.state,
             dirty: parsed.dirty,
             last_successful: parsed.last_successful,
             stop_time: parsed.stop_time,
-        }));
-        states().push(p as usize);
-        put(state, p as *mut c_void);
-        Ok(fmi2OK)
+            ..self.saved_now(components, Some(parsed.parts))
+        };
+        hand_out(state, saved)
     }
+}
+
+/// `saved` as a new FMU state of the container, kept in the list of live states and written to
+/// the caller's `state`.
+fn hand_out(state: *mut *mut c_void, saved: Saved) -> Outcome {
+    let p = Box::into_raw(Box::new(saved));
+    states().push(p as usize);
+    put(state, p as *mut c_void);
+    Ok(fmi2OK)
 }
 
 /// A serialized container state: this magic, the container's GUID, time, last successful time,

@@ -20,66 +20,38 @@ pub(crate) trait Scalar: Sized + Copy {
     fn from_held(h: &Held) -> Option<Self>;
 }
 
-impl Scalar for f64 {
-    fn from_start(text: &str) -> Option<f64> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Number(self)
-    }
-    fn from_held(h: &Held) -> Option<f64> {
-        match h {
-            Held::Number(x) => Some(*x),
-            _ => None,
+/// `Scalar` for a type: the `Held` variant it is kept as, the conversions to and from it
+/// (`|x| ...`), and how its start text reads (the number types: `str::parse`).
+macro_rules! scalar {
+    ($ty:ty, $variant:ident, |$x:ident| $to:expr, |$y:ident| $from:expr, $parse:expr) => {
+        impl Scalar for $ty {
+            fn from_start(text: &str) -> Option<$ty> {
+                $parse(text.trim())
+            }
+            fn held(self) -> Held {
+                let $x = self;
+                Held::$variant($to)
+            }
+            fn from_held(h: &Held) -> Option<$ty> {
+                match h {
+                    Held::$variant($y) => $from,
+                    _ => None,
+                }
+            }
         }
-    }
+    };
 }
-impl Scalar for i32 {
-    fn from_start(text: &str) -> Option<i32> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Integer(i64::from(self))
-    }
-    fn from_held(h: &Held) -> Option<i32> {
-        match h {
-            Held::Integer(x) => i32::try_from(*x).ok(),
-            _ => None,
-        }
-    }
-}
-impl Scalar for i64 {
-    fn from_start(text: &str) -> Option<i64> {
-        text.trim().parse().ok()
-    }
-    fn held(self) -> Held {
-        Held::Integer(self)
-    }
-    fn from_held(h: &Held) -> Option<i64> {
-        match h {
-            Held::Integer(x) => Some(*x),
-            _ => None,
-        }
-    }
-}
-impl Scalar for bool {
-    fn from_start(text: &str) -> Option<bool> {
-        match text.trim() {
-            "true" | "1" => Some(true),
-            "false" | "0" => Some(false),
-            _ => None,
-        }
-    }
-    fn held(self) -> Held {
-        Held::Boolean(self)
-    }
-    fn from_held(h: &Held) -> Option<bool> {
-        match h {
-            Held::Boolean(x) => Some(*x),
-            _ => None,
-        }
-    }
-}
+
+scalar!(f64, Number, |x| x, |x| Some(*x), |t: &str| t.parse().ok());
+scalar!(i32, Integer, |x| i64::from(x), |x| i32::try_from(*x).ok(), |t: &str| t
+    .parse()
+    .ok());
+scalar!(i64, Integer, |x| x, |x| Some(*x), |t: &str| t.parse().ok());
+scalar!(bool, Boolean, |x| x, |x| Some(*x), |t: &str| match t {
+    "true" | "1" => Some(true),
+    "false" | "0" => Some(false),
+    _ => None,
+});
 
 impl Container {
     pub(crate) fn set_debug_logging(&mut self, function: &str, on: bool, categories: &[*const c_char]) -> Outcome {
@@ -144,12 +116,40 @@ impl Container {
 
     pub(crate) fn enter_initialization_mode(&mut self, function: &str) -> Outcome {
         let saved = self.snapshot();
-        if let Err(e) = each_raw(self, "fmi2EnterInitializationMode", |i| i.enter_initialization_mode()) {
+        self.every_component_moves(
+            function,
+            saved,
+            State::InitializationMode,
+            "fmi2EnterInitializationMode",
+            |i| i.enter_initialization_mode(),
+        )
+    }
+
+    /// `call` (the FMI 2.0 function `component_function`) of every component, which moves the
+    /// container to `to`; a failure undone to the snapshot `saved` where there is one.
+    fn every_component_moves(
+        &mut self,
+        function: &str,
+        saved: bool,
+        to: State,
+        component_function: &str,
+        call: impl Fn(&mut InstanceCS) -> Result<(), Fmi2Error>,
+    ) -> Outcome {
+        if let Err(e) = each_raw(self, component_function, call) {
             return Err(self.undo(function, e, saved));
         }
-        self.state = State::InitializationMode;
+        self.state = to;
         self.dirty = true;
         Ok(fmi2OK)
+    }
+
+    /// A step from `t` refused before anything moved: the container is in StepFailed at `t`
+    /// (fmi2Discard, with the reason `message`).
+    fn step_discarded(&mut self, t: f64, message: &str) -> Status {
+        self.state = State::StepFailed;
+        self.last_successful = t;
+        self.sink.log(fmi2Discard, "logStatusDiscard", message);
+        fmi2Discard
     }
 
     pub(crate) fn exit_initialization_mode(&mut self, function: &str) -> Outcome {
@@ -162,12 +162,13 @@ impl Container {
                 return Err(self.undo(function, e, saved));
             }
         }
-        if let Err(e) = each_raw(self, "fmi2ExitInitializationMode", |i| i.exit_initialization_mode()) {
-            return Err(self.undo(function, e, saved));
-        }
-        self.state = State::StepComplete;
-        self.dirty = true;
-        Ok(fmi2OK)
+        self.every_component_moves(
+            function,
+            saved,
+            State::StepComplete,
+            "fmi2ExitInitializationMode",
+            |i| i.exit_initialization_mode(),
+        )
     }
 
     pub(crate) fn terminate(&mut self, function: &str) -> Outcome {
@@ -455,33 +456,25 @@ impl Container {
             ratio.ceil().max(1.0)
         };
         if n > MAX_INTERNAL_STEPS {
-            self.state = State::StepFailed;
-            self.last_successful = t;
-            self.sink.log(
-                fmi2Discard,
-                "logStatusDiscard",
+            return Err(self.step_discarded(
+                t,
                 &format!(
                     "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {} s, more than {MAX_INTERNAL_STEPS}: discarded, nothing stepped",
                     self.spec.step
                 ),
-            );
-            return Err(fmi2Discard);
+            ));
         }
         let n = n as usize;
         let h = big_h / n as f64;
         if !(t + h > t && end - h < end) {
             // Far from 0 the internal step is below the resolution of time: a component would
             // be asked to step without its time moving. Nothing has moved yet.
-            self.state = State::StepFailed;
-            self.last_successful = t;
-            self.sink.log(
-                fmi2Discard,
-                "logStatusDiscard",
+            return Err(self.step_discarded(
+                t,
                 &format!(
                     "{function}: a step of {big_h} s from t = {t} is {n} internal steps of {h} s, too small to advance time there: discarded, nothing stepped (a longer communication step, or a container of a longer internal step)"
                 ),
-            );
-            return Err(fmi2Discard);
+            ));
         }
         let saved = self.snapshot();
         let (time0, dirty0) = (self.time, self.dirty);

@@ -137,46 +137,53 @@ fn not_offered(instance: fmi3Instance, function: &str, why: &str) -> fmi3Status 
     with3(instance, function, |me| Err(me.error(&format!("{function}: {why}"))))
 }
 
+/// Rows of functions a container refuses, each row one or more C names of one signature
+/// (after `instance`) and the reason: `name, ...(param: Type, ...) => why;`. After `@vrs`, the
+/// rows of functions whose first parameters are value references and their number (the clocks').
+macro_rules! refusals {
+    (@vrs $($($name:ident),+ ($($param:ident: $ty:ty),* $(,)?) => $why:expr;)*) => {
+        refusals! {
+            $(
+                $($name),+ (_valueReferences: *const fmi3ValueReference, _nValueReferences: usize, $($param: $ty),*)
+                    => $why;
+            )*
+        }
+    };
+    ($($($name:ident),+ ($($params:tt)*) => $why:expr;)*) => {
+        $(refusals!(@row [$($name),+] ($($params)*) $why);)*
+    };
+    (@row [$name:ident $(, $more:ident)*] $params:tt $why:expr) => {
+        refusals!(@one $name $params $why);
+        refusals!(@row [$($more),*] $params $why);
+    };
+    (@row [] $params:tt $why:expr) => {};
+    (@one $name:ident ($($param:ident: $ty:ty),* $(,)?) $why:expr) => {
+        exports! {
+            $name(instance: fmi3Instance, $($param: $ty),*) -> fmi3Status => not_offered(instance, F, $why);
+        }
+    };
+}
+
 const NO_EVENT_MODE: &str = "a container has no event mode (hasEventMode = false)";
 const NO_MODEL_EXCHANGE: &str = "a container is a co-simulation FMU only (no <ModelExchange> element)";
 const NO_CLOCKS: &str = "a container has no clocks";
 const NO_DERIVATIVES: &str = "a container gives no directional or adjoint derivatives (providesDirectionalDerivatives = false, providesAdjointDerivatives = false)";
 
-exports! {
-    fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(instance, F, NO_EVENT_MODE);
-    fmi3EnterStepMode(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(
-            instance,
-            F,
-            "a container leaves Initialization Mode into Step Mode itself (it has no event mode)",
-        );
-    fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(instance, F, NO_EVENT_MODE);
+refusals! {
+    fmi3EnterEventMode() => NO_EVENT_MODE;
+    fmi3EnterStepMode() => "a container leaves Initialization Mode into Step Mode itself (it has no event mode)";
+    fmi3EvaluateDiscreteStates() => NO_EVENT_MODE;
     fmi3UpdateDiscreteStates(
-        instance: fmi3Instance,
         _discreteStatesNeedUpdate: *mut fmi3Boolean,
         _terminateSimulation: *mut fmi3Boolean,
         _nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
         _valuesOfContinuousStatesChanged: *mut fmi3Boolean,
         _nextEventTimeDefined: *mut fmi3Boolean,
         _nextEventTime: *mut fmi3Float64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_EVENT_MODE);
-    fmi3EnterConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(
-            instance,
-            F,
-            "a container has no structural parameters, so there is no configuration mode",
-        );
-    fmi3ExitConfigurationMode(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(
-            instance,
-            F,
-            "a container has no structural parameters, so there is no configuration mode",
-        );
-    fmi3GetDirectionalDerivative(
-        instance: fmi3Instance,
+    ) => NO_EVENT_MODE;
+    fmi3EnterConfigurationMode, fmi3ExitConfigurationMode() =>
+        "a container has no structural parameters, so there is no configuration mode";
+    fmi3GetDirectionalDerivative, fmi3GetAdjointDerivative(
         _unknowns: *const fmi3ValueReference,
         _nUnknowns: usize,
         _knowns: *const fmi3ValueReference,
@@ -185,146 +192,47 @@ exports! {
         _nSeed: usize,
         _sensitivity: *mut fmi3Float64,
         _nSensitivity: usize,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_DERIVATIVES);
-    fmi3GetAdjointDerivative(
-        instance: fmi3Instance,
-        _unknowns: *const fmi3ValueReference,
-        _nUnknowns: usize,
-        _knowns: *const fmi3ValueReference,
-        _nKnowns: usize,
-        _seed: *const fmi3Float64,
-        _nSeed: usize,
-        _sensitivity: *mut fmi3Float64,
-        _nSensitivity: usize,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_DERIVATIVES);
+    ) => NO_DERIVATIVES;
     fmi3GetOutputDerivatives(
-        instance: fmi3Instance,
         _valueReferences: *const fmi3ValueReference,
         _nValueReferences: usize,
         _orders: *const fmi3Int32,
         _values: *mut fmi3Float64,
         _nValues: usize,
-    ) -> fmi3Status =>
-        not_offered(
-            instance,
-            F,
-            "a container gives no output derivatives (maxOutputDerivativeOrder = 0)",
-        );
-    fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
+    ) => "a container gives no output derivatives (maxOutputDerivativeOrder = 0)";
+    fmi3EnterContinuousTimeMode() => NO_MODEL_EXCHANGE;
     fmi3CompletedIntegratorStep(
-        instance: fmi3Instance,
         _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
         _enterEventMode: *mut fmi3Boolean,
         _terminateSimulation: *mut fmi3Boolean,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3SetTime(instance: fmi3Instance, _time: fmi3Float64) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3SetContinuousStates(
-        instance: fmi3Instance,
-        _continuousStates: *const fmi3Float64,
-        _nContinuousStates: usize,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetContinuousStateDerivatives(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetEventIndicators(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetContinuousStates(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetNominalsOfContinuousStates(instance: fmi3Instance, _values: *mut fmi3Float64, _n: usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetNumberOfEventIndicators(instance: fmi3Instance, _n: *mut usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3GetNumberOfContinuousStates(instance: fmi3Instance, _n: *mut usize) -> fmi3Status =>
-        not_offered(instance, F, NO_MODEL_EXCHANGE);
-    fmi3SetClock(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _values: *const fmi3Clock,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3GetClock(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _values: *mut fmi3Clock,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3GetIntervalDecimal(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _intervals: *mut fmi3Float64,
-        _qualifiers: *mut fmi3IntervalQualifier,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3GetIntervalFraction(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _counters: *mut fmi3UInt64,
-        _resolutions: *mut fmi3UInt64,
-        _qualifiers: *mut fmi3IntervalQualifier,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3GetShiftDecimal(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _shifts: *mut fmi3Float64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3GetShiftFraction(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _counters: *mut fmi3UInt64,
-        _resolutions: *mut fmi3UInt64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3SetIntervalDecimal(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _intervals: *const fmi3Float64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3SetIntervalFraction(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _counters: *const fmi3UInt64,
-        _resolutions: *const fmi3UInt64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3SetShiftDecimal(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _shifts: *const fmi3Float64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
-    fmi3SetShiftFraction(
-        instance: fmi3Instance,
-        _valueReferences: *const fmi3ValueReference,
-        _nValueReferences: usize,
-        _counters: *const fmi3UInt64,
-        _resolutions: *const fmi3UInt64,
-    ) -> fmi3Status =>
-        not_offered(instance, F, NO_CLOCKS);
+    ) => NO_MODEL_EXCHANGE;
+    fmi3SetTime(_time: fmi3Float64) => NO_MODEL_EXCHANGE;
+    fmi3SetContinuousStates(_continuousStates: *const fmi3Float64, _nContinuousStates: usize) => NO_MODEL_EXCHANGE;
+    fmi3GetContinuousStateDerivatives,
+    fmi3GetEventIndicators,
+    fmi3GetContinuousStates,
+    fmi3GetNominalsOfContinuousStates(_values: *mut fmi3Float64, _n: usize) => NO_MODEL_EXCHANGE;
+    fmi3GetNumberOfEventIndicators, fmi3GetNumberOfContinuousStates(_n: *mut usize) => NO_MODEL_EXCHANGE;
     fmi3ActivateModelPartition(
-        instance: fmi3Instance,
         _clockReference: fmi3ValueReference,
         _activationTime: fmi3Float64,
-    ) -> fmi3Status =>
-        not_offered(
-            instance,
-            F,
-            "a container is a co-simulation FMU only (no <ScheduledExecution> element)",
-        );
+    ) => "a container is a co-simulation FMU only (no <ScheduledExecution> element)";
+}
+
+refusals! {
+    @vrs
+    fmi3SetClock(_values: *const fmi3Clock) => NO_CLOCKS;
+    fmi3GetClock(_values: *mut fmi3Clock) => NO_CLOCKS;
+    fmi3GetIntervalDecimal(_intervals: *mut fmi3Float64, _qualifiers: *mut fmi3IntervalQualifier) => NO_CLOCKS;
+    fmi3GetIntervalFraction(
+        _counters: *mut fmi3UInt64,
+        _resolutions: *mut fmi3UInt64,
+        _qualifiers: *mut fmi3IntervalQualifier,
+    ) => NO_CLOCKS;
+    fmi3GetShiftDecimal(_shifts: *mut fmi3Float64) => NO_CLOCKS;
+    fmi3GetShiftFraction(_counters: *mut fmi3UInt64, _resolutions: *mut fmi3UInt64) => NO_CLOCKS;
+    fmi3SetIntervalDecimal(_intervals: *const fmi3Float64) => NO_CLOCKS;
+    fmi3SetIntervalFraction, fmi3SetShiftFraction(_counters: *const fmi3UInt64, _resolutions: *const fmi3UInt64) =>
+        NO_CLOCKS;
+    fmi3SetShiftDecimal(_shifts: *const fmi3Float64) => NO_CLOCKS;
 }
