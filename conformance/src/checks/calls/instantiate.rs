@@ -16,14 +16,8 @@ pub fn instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message(fmu: &Fmu) 
             guid: guid.map(String::from),
             ..Args::valid(fmu)
         };
-        let log = Instance::with(fmu, &args)
-            .err()
-            .unwrap_or_else(|| panic!("{}: GUID {guid:?} accepted", fmu.id));
-        assert!(
-            says(fmu, &log, fmi2Error, &["GUID"]),
-            "{}: GUID {guid:?}: no message about the GUID: {log:?}",
-            fmu.id
-        );
+        let what = format!("GUID {guid:?}");
+        refused_with_message(fmu, &args, &what, "GUID", ": no message about the GUID");
     }
 }
 
@@ -33,15 +27,21 @@ pub fn instantiate_refuses_a_null_or_empty_instance_name_with_a_message(fmu: &Fm
             name: name.map(String::from),
             ..Args::valid(fmu)
         };
-        let log = Instance::with(fmu, &args)
-            .err()
-            .unwrap_or_else(|| panic!("{}: name {name:?} accepted", fmu.id));
-        assert!(
-            says(fmu, &log, fmi2Error, &["instanceName"]),
-            "{}: name {name:?}: {log:?}",
-            fmu.id
-        );
+        refused_with_message(fmu, &args, &format!("name {name:?}"), "instanceName", "");
     }
+}
+
+/// fmi2Instantiate with `args` (`what` names the argument tried) must fail, with an fmi2Error
+/// message that says `word` (else the failure says `what`, then `missing`, then the log).
+fn refused_with_message(fmu: &Fmu, args: &Args, what: &str, word: &str, missing: &str) {
+    let log = Instance::with(fmu, args)
+        .err()
+        .unwrap_or_else(|| panic!("{}: {what} accepted", fmu.id));
+    assert!(
+        says(fmu, &log, fmi2Error, &[word]),
+        "{}: {what}{missing}: {log:?}",
+        fmu.id
+    );
 }
 
 /// fmi2ModelExchange is refused unless the FMU declares `<ModelExchange>` (then it is
