@@ -119,18 +119,7 @@ fn pendulum_derivatives(c: &mut Criterion) {
     use fmi::fmi2::instance::{Common, ModelExchange};
     use holonomic::models::pendulum::PendulumParams;
     let mut g = c.benchmark_group("pendulum_derivatives");
-    // States along a swing, so that nothing is computed once for all iterations.
-    let states: Vec<[f64; 4]> = (0..1024)
-        .map(|k| {
-            let t = k as f64 * 1e-3;
-            [
-                0.1 * t.cos(),
-                -0.1 * t.sin(),
-                0.15 * (2.0 * t).cos(),
-                -0.3 * (2.0 * t).sin(),
-            ]
-        })
-        .collect();
+    let states = rustfmu_bench::swing_states();
     let p = PendulumParams::default();
     g.bench_function("direct_rhs", |b| {
         let mut k = 0;

@@ -20,6 +20,38 @@ use fmi::traits::FmiImport;
 use rustfmu::description::VarType;
 use std::path::{Path, PathBuf};
 
+/// The median of `v` (of an even count, the upper of the middle two), as every report binary
+/// gives its repeated timings.
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The end of a report binary's `main`: an error is printed as `<bin>: <error>` on stderr and
+/// ends the process with status 1.
+pub fn exit_on_error(bin: &str, result: Result<(), String>) {
+    if let Err(e) = result {
+        eprintln!("{bin}: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// 1024 states of the Pendulum along a swing, for evaluating the right-hand side at a new state
+/// each time (so that nothing is computed once for all iterations).
+pub fn swing_states() -> Vec<[f64; 4]> {
+    (0..1024)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            [
+                0.1 * t.cos(),
+                -0.1 * t.sin(),
+                0.15 * (2.0 * t).cos(),
+                -0.3 * (2.0 * t).sin(),
+            ]
+        })
+        .collect()
+}
+
 /// The workspace root (the parent of this crate).
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -10,6 +10,13 @@ use rustfmu_bench::topology::{self, Slave, Topology};
 
 const STATES: [&str; 4] = ["alpha1", "omega1", "alpha2", "omega2"];
 
+/// The error of `Master::new` for `topo`, which must refuse it (`what`: the loop's fault).
+fn refusal(topo: Topology, what: &str) -> String {
+    Master::new(topo)
+        .err()
+        .unwrap_or_else(|| panic!("{what} must be refused"))
+}
+
 #[test]
 fn direct_and_c_api_steps_compute_the_same_swing() {
     let mut direct = Direct::new();
@@ -125,9 +132,7 @@ fn every_parameter_of_the_system_reaches_the_loop() {
 fn a_wrong_variable_name_in_the_loop_is_reported_with_the_names_that_exist() {
     let mut topo = topology::controller_plant();
     topo.start_values.push((("pendulum", "torque"), Value::Real(1.0)));
-    let err = Master::new(topo)
-        .err()
-        .expect("a loop naming 'pendulum.torque' must be refused");
+    let err = refusal(topo, "a loop naming 'pendulum.torque'");
     assert!(
         err.contains("no variable 'torque'") && err.contains("M1") && err.contains("alpha1"),
         "the error should name the missing variable and list the existing ones: {err}"
@@ -138,9 +143,7 @@ fn a_wrong_variable_name_in_the_loop_is_reported_with_the_names_that_exist() {
 fn a_start_value_of_the_wrong_type_is_reported() {
     let mut topo = topology::controller_plant();
     topo.start_values.push((("controller", "mode"), Value::Real(1.0)));
-    let err = Master::new(topo)
-        .err()
-        .expect("a Real value for the Enumeration 'mode' must be refused");
+    let err = refusal(topo, "a Real value for the Enumeration 'mode'");
     assert!(
         // The runner names the declared type as modelDescription.xml has it (set through
         // fmi2SetInteger, as an Integer value).
@@ -163,9 +166,7 @@ fn a_missing_fmu_is_reported_with_the_command_that_builds_it() {
         start_values: vec![],
         plant: "X",
     };
-    let err = Master::new(topo)
-        .err()
-        .expect("a loop with an unpackaged FMU must be refused");
+    let err = refusal(topo, "a loop with an unpackaged FMU");
     assert!(
         err.contains("NoSuchFmu.fmu is missing") && err.contains("fmu-build"),
         "the error should name the file and how to build it: {err}"

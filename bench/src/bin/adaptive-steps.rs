@@ -30,16 +30,8 @@ struct Args {
 
 const RECORD: [&str; 2] = ["pendulum.alpha1", "pendulum.alpha2"];
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn main() {
-    if let Err(e) = run() {
-        eprintln!("adaptive-steps: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("adaptive-steps", run());
 }
 
 fn options(seconds: f64, h: f64, tolerance: Option<f64>, on_angles: bool) -> RunOptions {
@@ -124,7 +116,7 @@ fn run() -> Result<(), String> {
             .flat_map(|(k, &t)| (0..m).map(move |c| (k, c, t)))
             .map(|(k, c, t)| (r.values[k * m + c] - at(&reference, c, t)).abs())
             .fold(0.0f64, f64::max);
-        let ms = median(times) * 1e3;
+        let ms = rustfmu_bench::median(times) * 1e3;
         println!(
             "{{\"system\": \"{}\", \"case\": \"{label}\", \"error_rad\": {err:.3e}, \"fmu_steps\": {}, \"rejected\": {}, \"points\": {}, \"ms\": {ms:.2}}}",
             args.system,

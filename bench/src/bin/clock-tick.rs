@@ -45,15 +45,10 @@ fn main() {
         "sampled-2.0" => sampled(args.ticks),
         other => Err(format!("unknown variant '{other}' (clocked, sampled-2.0)")),
     };
-    match result {
-        // The two variants give the same torques (tests/python/test_sampled_controller.py): the
-        // same sum.
-        Ok(sum) => println!("{} ticks, sum of M1: {sum:.17e}", args.ticks),
-        Err(e) => {
-            eprintln!("clock-tick: {e}");
-            std::process::exit(1);
-        }
-    }
+    // The two variants give the same torques (tests/python/test_sampled_controller.py): the same
+    // sum.
+    let printed = result.map(|sum| println!("{} ticks, sum of M1: {sum:.17e}", args.ticks));
+    rustfmu_bench::exit_on_error("clock-tick", printed);
 }
 
 fn sampled(ticks: usize) -> Result<f64, String> {

@@ -36,10 +36,7 @@ struct Args {
 }
 
 fn main() {
-    if let Err(e) = run() {
-        eprintln!("composed-loop: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("composed-loop", run());
 }
 
 fn run() -> Result<(), String> {

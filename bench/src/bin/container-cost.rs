@@ -28,16 +28,8 @@ struct Args {
     fmu_dir: PathBuf,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn main() {
-    if let Err(e) = run() {
-        eprintln!("container-cost: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("container-cost", run());
 }
 
 fn run() -> Result<(), String> {
@@ -112,7 +104,7 @@ fn run() -> Result<(), String> {
             "the container ({last_container}) and the runner ({last_runner}) end apart: not the same run"
         ));
     }
-    let (c, r) = (median(container), median(runner));
+    let (c, r) = (rustfmu_bench::median(container), rustfmu_bench::median(runner));
     println!(
         "{{\"system\": \"{}\", \"seconds\": {}, \"step\": {h}, \"outputs\": {}, \"container_ms\": {:.2}, \"runner_ms\": {:.2}, \"ratio\": {:.3}, \"container_instantiate_ms\": {:.2}}}",
         args.system,
@@ -121,7 +113,7 @@ fn run() -> Result<(), String> {
         c * 1e3,
         r * 1e3,
         c / r,
-        median(instantiate) * 1e3
+        rustfmu_bench::median(instantiate) * 1e3
     );
     Ok(())
 }

@@ -32,16 +32,8 @@ struct Args {
     fmu_dir: PathBuf,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn main() {
-    if let Err(e) = run() {
-        eprintln!("isolation-cost: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("isolation-cost", run());
 }
 
 fn per_run(sim: &mut Simulation, opts: &RunOptions, repeat: usize) -> Result<f64, String> {
@@ -51,7 +43,7 @@ fn per_run(sim: &mut Simulation, opts: &RunOptions, repeat: usize) -> Result<f64
         sim.run(opts, &mut |_, _| {}).map_err(|f| f.error.message)?;
         times.push(t0.elapsed().as_secs_f64());
     }
-    Ok(median(times))
+    Ok(rustfmu_bench::median(times))
 }
 
 fn run() -> Result<(), String> {
@@ -96,7 +88,7 @@ fn run() -> Result<(), String> {
                 times.push(t0.elapsed().as_secs_f64());
             }
             times.remove(0);
-            let c = median(times);
+            let c = rustfmu_bench::median(times);
             line.push(format!(
                 "\"{what}\": {{\"in_process_ms\": {:.2}, \"component_ms\": {:.2}, \"component_ratio\": {:.1}, \"system_ms\": {:.2}, \"system_ratio\": {:.2}, \"in_process_us_per_step\": {:.3}, \"component_us_per_step\": {:.3}}}",
                 a * 1e3,

@@ -25,27 +25,12 @@ struct Subjects {
     me: fmi::fmi2::instance::InstanceME,
 }
 
-/// States along a swing, for evaluating the right-hand side at a new state each time.
-fn swing_states() -> Vec<[f64; 4]> {
-    (0..1024)
-        .map(|k| {
-            let t = k as f64 * 1e-3;
-            [
-                0.1 * t.cos(),
-                -0.1 * t.sin(),
-                0.15 * (2.0 * t).cos(),
-                -0.3 * (2.0 * t).sin(),
-            ]
-        })
-        .collect()
-}
-
 /// Runs `steps` steps of `variant` from the start of the swing; returns seconds per step.
 fn run(s: &mut Subjects, variant: &str, steps: usize) -> Result<f64, String> {
     let h = if variant.ends_with("10ms") { 1e-2 } else { 1e-3 };
     s.direct.restart();
     s.fmi.restart()?;
-    let states = swing_states();
+    let states = rustfmu_bench::swing_states();
     let p = holonomic::models::pendulum::PendulumParams::default();
     let start = Instant::now();
     match variant {
@@ -102,10 +87,7 @@ const VARIANTS: [&str; 6] = [
 ];
 
 fn main() {
-    if let Err(e) = report() {
-        eprintln!("perf-report: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("perf-report", report());
 }
 
 fn stats(mut v: Vec<f64>) -> (f64, f64) {

@@ -10,17 +10,14 @@ use clap::Parser;
 use holonomic::models::pendulum::PendulumParams;
 use nalgebra::{Vector2, Vector4};
 use pendulum_fmu::Pendulum;
-use rustfmu::solver::{Dopri5, Tolerances};
+use rustfmu::solver::{Dopri5, Stats, Tolerances};
 use rustfmu::{Standalone, Variables};
 use rustfmu_bench::rk4;
 use std::hint::black_box;
 use std::time::Instant;
 
 fn main() {
-    if let Err(e) = run() {
-        eprintln!("work-precision: {e}");
-        std::process::exit(1);
-    }
+    rustfmu_bench::exit_on_error("work-precision", run());
 }
 
 /// Median wall time of `f` over enough repetitions to last about 50 ms (at least 3).
@@ -38,6 +35,16 @@ fn median_seconds(mut f: impl FnMut()) -> f64 {
         .collect();
     times.sort_by(f64::total_cmp);
     times[reps / 2]
+}
+
+/// One row: the method, its tolerance, its error at t_end, its counts and its time per simulated
+/// second, as one JSON object.
+fn print_row(method: &str, tol: f64, error: f64, counts: Stats, seconds_per_simulated_second: f64) {
+    println!(
+        "{{\"method\": \"{method}\", \"tol\": {tol:e}, \"error\": {error:e}, \"rhs\": {}, \"accepted\": {}, \
+         \"rejected\": {}, \"seconds_per_simulated_second\": {seconds_per_simulated_second:e}}}",
+        counts.rhs_evaluations, counts.accepted_steps, counts.rejected_steps
+    );
 }
 
 fn max_abs_error(x: &Vector4<f64>, reference: &[f64]) -> f64 {
@@ -74,6 +81,10 @@ fn run() -> Result<(), String> {
 
     for tol in tols {
         let tol_pair = Tolerances { rtol: tol, atol: tol };
+        // A method's row at this tolerance: its state at t_end, its counts, its time for the run.
+        let row = |method: &str, x: &Vector4<f64>, counts: Stats, seconds: f64| {
+            print_row(method, tol, max_abs_error(x, &reference), counts, seconds / t_end);
+        };
         // Dopri5 over [0, t_end] in one call: the integrator alone.
         let one_call = || {
             let mut ode = Dopri5::default();
@@ -85,15 +96,7 @@ fn run() -> Result<(), String> {
         let seconds = median_seconds(|| {
             black_box(one_call().ok());
         });
-        println!(
-            "{{\"method\": \"rustfmu Dopri5, one call\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {}, \
-             \"accepted\": {}, \"rejected\": {}, \"seconds_per_simulated_second\": {:e}}}",
-            max_abs_error(&x, &reference),
-            stats.rhs_evaluations,
-            stats.accepted_steps,
-            stats.rejected_steps,
-            seconds / t_end
-        );
+        row("rustfmu Dopri5, one call", &x, stats, seconds);
         // The FMU's model stepped at h = 1 ms: what the FMU does for an importer.
         let h = 1e-3;
         let n = (t_end / h).round() as usize;
@@ -112,15 +115,7 @@ fn run() -> Result<(), String> {
         let seconds = median_seconds(|| {
             black_box(fmu_run().ok());
         });
-        println!(
-            "{{\"method\": \"rustfmu Pendulum do_step, h = 1 ms\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {}, \
-             \"accepted\": {}, \"rejected\": {}, \"seconds_per_simulated_second\": {:e}}}",
-            max_abs_error(&x, &reference),
-            stats.rhs_evaluations,
-            stats.accepted_steps,
-            stats.rejected_steps,
-            seconds / t_end
-        );
+        row("rustfmu Pendulum do_step, h = 1 ms", &x, stats, seconds);
         // RK4 with as many evaluations as the one-call Dopri5.
         let one_call_rhs = one_call().map_err(|e| e.to_string())?.1.rhs_evaluations;
         let steps = (one_call_rhs / 4).max(1) as usize;
@@ -133,12 +128,12 @@ fn run() -> Result<(), String> {
         let seconds = median_seconds(|| {
             black_box(rk4_run());
         });
-        println!(
-            "{{\"method\": \"RK4 fixed step, equal cost\", \"tol\": {tol:e}, \"error\": {:e}, \"rhs\": {rhs}, \
-             \"accepted\": {steps}, \"rejected\": 0, \"seconds_per_simulated_second\": {:e}}}",
-            max_abs_error(&x, &reference),
-            seconds / t_end
-        );
+        let counts = Stats {
+            rhs_evaluations: rhs,
+            accepted_steps: steps as u64,
+            rejected_steps: 0,
+        };
+        row("RK4 fixed step, equal cost", &x, counts, seconds);
     }
     Ok(())
 }
