@@ -11,6 +11,10 @@
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
+#[macro_use]
+#[path = "../../design_parameters.rs"]
+mod design_parameters;
+
 use holonomic::models::controller::{ControlLaw, ControllerState, DEFAULT_PID, Knowns, Mode, PidGains, lqr_gain};
 use holonomic::models::dc_motor::DcMotorParams;
 use holonomic::models::pendulum::PendulumParams;
@@ -18,295 +22,158 @@ use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
 use rustfmu::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The control law (`mode`).
-#[derive(FmuEnum, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ControlMode {
-    /// Full-state feedback M = -K (x - x_ref), eq. (14)
-    #[fmu(name = "LQR")]
-    Lqr = 1,
-    /// A PID per joint, eq. (16)
-    #[fmu(name = "PID")]
-    Pid = 2,
-    /// LQR and PID added
-    #[fmu(name = "LQR_PID")]
-    LqrPid = 3,
-}
+control_mode!(
+    /// The control law (`mode`).
+);
 
-/// LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
-/// holonomic system', eqs. (14), (16)); torque and motor-voltage outputs
-#[derive(Model, Debug, Clone, Serialize, Deserialize)]
-pub struct Controller {
-    /// Measured angle alpha1 of link 1 from the upward vertical (connect to Pendulum.alpha1)
-    #[variable(vr = 0, input, continuous, start = 0.0, unit = "rad")]
-    pub alpha1: f64,
-    /// Measured angular velocity omega1 of link 1 (connect to Pendulum.omega1)
-    #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
-    pub omega1: f64,
-    /// Measured absolute angle alpha2 of link 2 (connect to Pendulum.alpha2)
-    #[variable(vr = 2, input, continuous, start = 0.0, unit = "rad")]
-    pub alpha2: f64,
-    /// Measured angular velocity omega2 of link 2 (connect to Pendulum.omega2)
-    #[variable(vr = 3, input, continuous, start = 0.0, unit = "rad/s")]
-    pub omega2: f64,
-    /// Reference for alpha1 (0 = upright)
-    #[variable(vr = 4, input, continuous, start = 0.0, unit = "rad")]
-    pub alpha1_ref: f64,
-    /// Reference for alpha2 (0 = upright)
-    #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
-    pub alpha2_ref: f64,
-    /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (with sampled = true, from the inputs held at the last communication point)
-    #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub M1: f64,
-    /// Torque demand M2 for joint 2, limited to +-M_max; as M1
-    #[variable(vr = 11, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub M2: f64,
-    /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; computed like M1
-    #[variable(vr = 12, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
-    pub U1: f64,
-    /// Voltage command U2 for the motor of joint 2, as U1
-    #[variable(vr = 13, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
-    pub U2: f64,
-    /// PID memory of joint 1: the integral of the control error e1 = alpha1_ref - alpha1 (a continuous state in model exchange; advanced at communication points in co-simulation)
-    #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
-    pub integral1: f64,
-    /// PID memory of joint 2: the integral of e2 = alpha2_ref - alpha2
-    #[variable(vr = 15, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
-    pub integral2: f64,
-    /// Filtered speed of joint 1, Tf d(rate_filter1)/dt = omega1 - rate_filter1, starting at the measured omega1 (the derivative term's input; unused when Tf = 0)
-    #[variable(vr = 16, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega1])]
-    pub rate_filter1: f64,
-    /// Filtered speed of joint 2, as rate_filter1
-    #[variable(vr = 17, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega2])]
-    pub rate_filter2: f64,
-    /// d(integral1)/dt = e1, 0 while the command is at a limit in the direction of e1 (anti-windup)
-    #[variable(vr = 80, name = "der(integral1)", local, continuous, unit = "rad", derivative_of = integral1, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
-    pub der_integral1: f64,
-    /// d(integral2)/dt = e2, as der(integral1)
-    #[variable(vr = 81, name = "der(integral2)", local, continuous, unit = "rad", derivative_of = integral2, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
-    pub der_integral2: f64,
-    /// d(rate_filter1)/dt = (omega1 - rate_filter1)/Tf (0 when Tf = 0)
-    #[variable(vr = 82, name = "der(rate_filter1)", local, continuous, unit = "rad/s2", derivative_of = rate_filter1, depends = [omega1, rate_filter1], initial_depends = [])]
-    pub der_rate_filter1: f64,
-    /// d(rate_filter2)/dt = (omega2 - rate_filter2)/Tf (0 when Tf = 0)
-    #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2], initial_depends = [])]
-    pub der_rate_filter2: f64,
-    /// The measurement alpha1 the Controller held at the last communication point (the inputs at the start of the last fmi2DoStep; before the first step, at initialization): with sampled = true the outputs use these
-    #[variable(vr = 90, local, discrete, unit = "rad")]
-    pub alpha1_sample: f64,
-    /// omega1 held at the last communication point, as alpha1_sample
-    #[variable(vr = 91, local, discrete, unit = "rad/s")]
-    pub omega1_sample: f64,
-    /// alpha2 held at the last communication point, as alpha1_sample
-    #[variable(vr = 92, local, discrete, unit = "rad")]
-    pub alpha2_sample: f64,
-    /// omega2 held at the last communication point, as alpha1_sample
-    #[variable(vr = 93, local, discrete, unit = "rad/s")]
-    pub omega2_sample: f64,
-    /// alpha1_ref held at the last communication point, as alpha1_sample
-    #[variable(vr = 94, local, discrete, unit = "rad")]
-    pub alpha1_ref_sample: f64,
-    /// alpha2_ref held at the last communication point, as alpha1_sample
-    #[variable(vr = 95, local, discrete, unit = "rad")]
-    pub alpha2_ref_sample: f64,
-    /// false (default): M, U follow the inputs as they are set (direct feedthrough, the paper's continuous state feedback). true: a digital controller with one sample of computation delay: M, U at a sample instant come from the inputs held at the previous one (alpha1_sample, ...) and the PID memory advances from sample to sample. The samples are the communication points in co-simulation, and every Ts in model exchange (time events)
-    #[variable(vr = 30, parameter, fixed, start = false)]
-    pub sampled: bool,
-    /// Sample period of sampled = true in model exchange (time events at start + k Ts); co-simulation samples at its communication points
-    #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
-    pub Ts: f64,
-    /// Distance of the demand for joint 1 from the torque limit, M_max - |M1 before the limit|: > 0 inside, <= 0 at the limit (an event indicator: where it changes sign, M1 is held and the integrator stops)
-    #[variable(vr = 100, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
-    pub M1_margin: f64,
-    /// M_max - |M2 before the limit|, as M1_margin
-    #[variable(vr = 101, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
-    pub M2_margin: f64,
-    /// Distance of the voltage for joint 1 from the supply limit, U_max - |U1 before the limit| (an event indicator)
-    #[variable(vr = 102, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
-    pub U1_margin: f64,
-    /// U_max - |U2 before the limit|, as U1_margin
-    #[variable(vr = 103, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
-    pub U2_margin: f64,
-    /// Control law: LQR (M = -K (x - x_ref)), PID per joint, or LQR + PID
-    #[variable(vr = 20, parameter, tunable, start = ControlMode::Lqr)]
-    pub mode: ControlMode,
-    /// PID proportional gain of joint 1
-    #[variable(vr = 21, parameter, tunable, start = DEFAULT_PID[0].kp, unit = "N.m/rad", min = 0.0)]
-    pub Kp1: f64,
-    /// PID integral gain of joint 1
-    #[variable(vr = 22, parameter, tunable, start = DEFAULT_PID[0].ki, unit = "N.m/(rad.s)", min = 0.0)]
-    pub Ki1: f64,
-    /// PID derivative gain of joint 1 (acts on the filtered measured speed)
-    #[variable(vr = 23, parameter, tunable, start = DEFAULT_PID[0].kd, unit = "N.m.s/rad", min = 0.0)]
-    pub Kd1: f64,
-    /// PID proportional gain of joint 2
-    #[variable(vr = 24, parameter, tunable, start = DEFAULT_PID[1].kp, unit = "N.m/rad", min = 0.0)]
-    pub Kp2: f64,
-    /// PID integral gain of joint 2
-    #[variable(vr = 25, parameter, tunable, start = DEFAULT_PID[1].ki, unit = "N.m/(rad.s)", min = 0.0)]
-    pub Ki2: f64,
-    /// PID derivative gain of joint 2 (acts on the filtered measured speed)
-    #[variable(vr = 26, parameter, tunable, start = DEFAULT_PID[1].kd, unit = "N.m.s/rad", min = 0.0)]
-    pub Kd2: f64,
-    /// Time constant Tf of the derivative filter Kd s/(Tf s + 1); 0 = no filter
-    #[variable(vr = 27, parameter, tunable, start = 0.01, unit = "s", min = 0.0)]
-    pub Tf: f64,
-    /// Torque limit M_max of M1, M2 (anti-windup: the integrators stop growing into it)
-    #[variable(vr = 28, parameter, tunable, start = 20.0, unit = "N.m", min > 0.0)]
-    pub M_max: f64,
-    /// True when U1, U2 drive the plant through motors: the voltage limit then also stops the integrators
-    #[variable(vr = 29, parameter, fixed, start = false)]
-    pub drives_motors: bool,
-    /// Mass m1 of link 1 of the plant the LQR gain is designed for
-    #[variable(vr = 40, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
-    pub m1: f64,
-    /// Mass m2 of link 2 of the plant the LQR gain is designed for
-    #[variable(vr = 41, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
-    pub m2: f64,
-    /// Length l1 of link 1 of the plant the LQR gain is designed for
-    #[variable(vr = 42, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
-    pub l1: f64,
-    /// Length l2 of link 2 of the plant the LQR gain is designed for
-    #[variable(vr = 43, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
-    pub l2: f64,
-    /// Gravitational acceleration g of the plant the LQR gain is designed for (any finite value)
-    #[variable(vr = 44, parameter, fixed, start = 9.81, unit = "m/s2")]
-    pub g: f64,
-    /// Extra inertia J1 at joint 1 of the plant the LQR gain is designed for (the Pendulum's J1: n^2 J of the motor geared to joint 1)
-    #[variable(vr = 45, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
-    pub J1: f64,
-    /// Extra inertia J2 at joint 2 of the plant the LQR gain is designed for (the Pendulum's J2)
-    #[variable(vr = 46, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
-    pub J2: f64,
-    /// LQR state weight Q(1,1) on alpha1 (Q is diagonal; the paper's Q = C'C gives 1, 0, 1, 0)
-    #[variable(vr = 50, parameter, fixed, start = 1.0, min = 0.0)]
-    pub Q11: f64,
-    /// LQR state weight Q(2,2) on omega1
-    #[variable(vr = 51, parameter, fixed, start = 0.0, min = 0.0)]
-    pub Q22: f64,
-    /// LQR state weight Q(3,3) on alpha2
-    #[variable(vr = 52, parameter, fixed, start = 1.0, min = 0.0)]
-    pub Q33: f64,
-    /// LQR state weight Q(4,4) on omega2
-    #[variable(vr = 53, parameter, fixed, start = 0.0, min = 0.0)]
-    pub Q44: f64,
-    /// LQR input weight R(1,1) on M1 (R is diagonal; the paper's R = I)
-    #[variable(vr = 54, parameter, fixed, start = 1.0, min > 0.0)]
-    pub R11: f64,
-    /// LQR input weight R(2,2) on M2
-    #[variable(vr = 55, parameter, fixed, start = 1.0, min > 0.0)]
-    pub R22: f64,
-    /// Armature resistance R of the motors the voltages are computed for
-    #[variable(vr = 60, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
-    pub motor_R: f64,
-    /// Torque constant km of the motors (> 0: U divides by it)
-    #[variable(vr = 61, parameter, fixed, start = 0.00449, unit = "N.m/A", min > 0.0)]
-    pub motor_km: f64,
-    /// Back-EMF constant kb of the motors
-    #[variable(vr = 62, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
-    pub motor_kb: f64,
-    /// Viscous friction B of the motors, at the rotor (compensated in U)
-    #[variable(vr = 63, parameter, fixed, start = 9.0946, unit = "N.m.s/rad", min = 0.0)]
-    pub motor_B: f64,
-    /// Gear ratio n of the motors (rotor speed / joint speed)
-    #[variable(vr = 64, parameter, fixed, start = 1.0, min > 0.0)]
-    pub gear_ratio: f64,
-    /// Supply voltage: U1, U2 are limited to +-U_max
-    #[variable(vr = 65, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
-    pub U_max: f64,
-    /// LQR gain K(1,1), computed at initialization by solving the Riccati equation for the plant linearized upright (paper eq. (14): 14.0666)
-    #[variable(vr = 70, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K11: f64,
-    /// LQR gain K(1,2) (paper: 2.8816)
-    #[variable(vr = 71, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K12: f64,
-    /// LQR gain K(1,3) (paper: 1.1348)
-    #[variable(vr = 72, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K13: f64,
-    /// LQR gain K(1,4) (paper: 1.0010)
-    #[variable(vr = 73, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K14: f64,
-    /// LQR gain K(2,1) (paper: -3.1814)
-    #[variable(vr = 74, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K21: f64,
-    /// LQR gain K(2,2) (paper: 0.1161)
-    #[variable(vr = 75, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K22: f64,
-    /// LQR gain K(2,3) (paper: 4.8456)
-    #[variable(vr = 76, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K23: f64,
-    /// LQR gain K(2,4) (paper: 0.9957)
-    #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K24: f64,
-    /// LQR gain K of eq. (14) as one 2 x 4 matrix (row i: the torque M_i; columns alpha1,
-    /// omega1, alpha2, omega2; mixed units, N.m/rad and N.m.s/rad): K11 .. K24 as one array (FMI
-    /// 3.0: one variable with <Dimension>s 2 and 4; FMI 2.0: the scalars K[1,1] .. K[2,4], value
-    /// references 110 .. 117)
-    #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K: [[f64; 4]; 2],
-    /// Sampled in model exchange: the memory changes at the samples only (time events).
-    pub sampled_events: bool,
-    /// The measurement at the last sample instant (alpha1, omega1, alpha2, omega2, alpha1_ref,
-    /// alpha2_ref), which the next sample uses (the one sample of delay).
-    pub pending: [f64; 6],
-    /// Samples taken since initialization (model exchange).
-    pub samples_taken: u64,
+with_design_parameters! {
+    controller;
+    /// LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
+    /// holonomic system', eqs. (14), (16)); torque and motor-voltage outputs
+    #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+    pub struct Controller {
+        /// Measured angle alpha1 of link 1 from the upward vertical (connect to Pendulum.alpha1)
+        #[variable(vr = 0, input, continuous, start = 0.0, unit = "rad")]
+        pub alpha1: f64,
+        /// Measured angular velocity omega1 of link 1 (connect to Pendulum.omega1)
+        #[variable(vr = 1, input, continuous, start = 0.0, unit = "rad/s")]
+        pub omega1: f64,
+        /// Measured absolute angle alpha2 of link 2 (connect to Pendulum.alpha2)
+        #[variable(vr = 2, input, continuous, start = 0.0, unit = "rad")]
+        pub alpha2: f64,
+        /// Measured angular velocity omega2 of link 2 (connect to Pendulum.omega2)
+        #[variable(vr = 3, input, continuous, start = 0.0, unit = "rad/s")]
+        pub omega2: f64,
+        /// Reference for alpha1 (0 = upright)
+        #[variable(vr = 4, input, continuous, start = 0.0, unit = "rad")]
+        pub alpha1_ref: f64,
+        /// Reference for alpha2 (0 = upright)
+        #[variable(vr = 5, input, continuous, start = 0.0, unit = "rad")]
+        pub alpha2_ref: f64,
+        /// Torque demand M1 for joint 1, limited to +-M_max: -K (x - x_ref) and/or the PID, from the inputs and the PID memory as they are (with sampled = true, from the inputs held at the last communication point)
+        #[variable(vr = 10, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub M1: f64,
+        /// Torque demand M2 for joint 2, limited to +-M_max; as M1
+        #[variable(vr = 11, output, continuous, unit = "N.m", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub M2: f64,
+        /// Voltage command U1 for the motor of joint 1: U = R/(n km) (M1 + n^2 B omega1) + n kb omega1, limited to +-U_max; computed like M1
+        #[variable(vr = 12, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
+        pub U1: f64,
+        /// Voltage command U2 for the motor of joint 2, as U1
+        #[variable(vr = 13, output, continuous, unit = "V", depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
+        pub U2: f64,
+        /// PID memory of joint 1: the integral of the control error e1 = alpha1_ref - alpha1 (a continuous state in model exchange; advanced at communication points in co-simulation)
+        #[variable(vr = 14, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
+        pub integral1: f64,
+        /// PID memory of joint 2: the integral of e2 = alpha2_ref - alpha2
+        #[variable(vr = 15, local, continuous, initial = exact, start = 0.0, unit = "rad.s")]
+        pub integral2: f64,
+        /// Filtered speed of joint 1, Tf d(rate_filter1)/dt = omega1 - rate_filter1, starting at the measured omega1 (the derivative term's input; unused when Tf = 0)
+        #[variable(vr = 16, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega1])]
+        pub rate_filter1: f64,
+        /// Filtered speed of joint 2, as rate_filter1
+        #[variable(vr = 17, local, continuous, initial = calculated, unit = "rad/s", initial_depends = [omega2])]
+        pub rate_filter2: f64,
+        /// d(integral1)/dt = e1, 0 while the command is at a limit in the direction of e1 (anti-windup)
+        #[variable(vr = 80, name = "der(integral1)", local, continuous, unit = "rad", derivative_of = integral1, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, mode, Kp1, Ki1, Kd1, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
+        pub der_integral1: f64,
+        /// d(integral2)/dt = e2, as der(integral1)
+        #[variable(vr = 81, name = "der(integral2)", local, continuous, unit = "rad", derivative_of = integral2, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2], initial_depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, mode, Kp2, Ki2, Kd2, M_max, drives_motors, m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22, motor_R, motor_km, motor_kb, motor_B, gear_ratio, U_max])]
+        pub der_integral2: f64,
+        /// d(rate_filter1)/dt = (omega1 - rate_filter1)/Tf (0 when Tf = 0)
+        #[variable(vr = 82, name = "der(rate_filter1)", local, continuous, unit = "rad/s2", derivative_of = rate_filter1, depends = [omega1, rate_filter1], initial_depends = [])]
+        pub der_rate_filter1: f64,
+        /// d(rate_filter2)/dt = (omega2 - rate_filter2)/Tf (0 when Tf = 0)
+        #[variable(vr = 83, name = "der(rate_filter2)", local, continuous, unit = "rad/s2", derivative_of = rate_filter2, depends = [omega2, rate_filter2], initial_depends = [])]
+        pub der_rate_filter2: f64,
+        /// The measurement alpha1 the Controller held at the last communication point (the inputs at the start of the last fmi2DoStep; before the first step, at initialization): with sampled = true the outputs use these
+        #[variable(vr = 90, local, discrete, unit = "rad")]
+        pub alpha1_sample: f64,
+        /// omega1 held at the last communication point, as alpha1_sample
+        #[variable(vr = 91, local, discrete, unit = "rad/s")]
+        pub omega1_sample: f64,
+        /// alpha2 held at the last communication point, as alpha1_sample
+        #[variable(vr = 92, local, discrete, unit = "rad")]
+        pub alpha2_sample: f64,
+        /// omega2 held at the last communication point, as alpha1_sample
+        #[variable(vr = 93, local, discrete, unit = "rad/s")]
+        pub omega2_sample: f64,
+        /// alpha1_ref held at the last communication point, as alpha1_sample
+        #[variable(vr = 94, local, discrete, unit = "rad")]
+        pub alpha1_ref_sample: f64,
+        /// alpha2_ref held at the last communication point, as alpha1_sample
+        #[variable(vr = 95, local, discrete, unit = "rad")]
+        pub alpha2_ref_sample: f64,
+        /// false (default): M, U follow the inputs as they are set (direct feedthrough, the paper's continuous state feedback). true: a digital controller with one sample of computation delay: M, U at a sample instant come from the inputs held at the previous one (alpha1_sample, ...) and the PID memory advances from sample to sample. The samples are the communication points in co-simulation, and every Ts in model exchange (time events)
+        #[variable(vr = 30, parameter, fixed, start = false)]
+        pub sampled: bool,
+        /// Sample period of sampled = true in model exchange (time events at start + k Ts); co-simulation samples at its communication points
+        #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
+        pub Ts: f64,
+        /// Distance of the demand for joint 1 from the torque limit, M_max - |M1 before the limit|: > 0 inside, <= 0 at the limit (an event indicator: where it changes sign, M1 is held and the integrator stops)
+        #[variable(vr = 100, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+        pub M1_margin: f64,
+        /// M_max - |M2 before the limit|, as M1_margin
+        #[variable(vr = 101, local, continuous, unit = "N.m", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+        pub M2_margin: f64,
+        /// Distance of the voltage for joint 1 from the supply limit, U_max - |U1 before the limit| (an event indicator)
+        #[variable(vr = 102, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral1, rate_filter1])]
+        pub U1_margin: f64,
+        /// U_max - |U2 before the limit|, as U1_margin
+        #[variable(vr = 103, local, continuous, unit = "V", event_indicator, depends = [alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref, integral2, rate_filter2])]
+        pub U2_margin: f64,
+    }
+    // The design parameters (`mode` .. `U_max`, ../../design_parameters.rs), then:
+    {
+        /// LQR gain K(1,1), computed at initialization by solving the Riccati equation for the plant linearized upright (paper eq. (14): 14.0666)
+        #[variable(vr = 70, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K11: f64,
+        /// LQR gain K(1,2) (paper: 2.8816)
+        #[variable(vr = 71, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K12: f64,
+        /// LQR gain K(1,3) (paper: 1.1348)
+        #[variable(vr = 72, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K13: f64,
+        /// LQR gain K(1,4) (paper: 1.0010)
+        #[variable(vr = 73, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K14: f64,
+        /// LQR gain K(2,1) (paper: -3.1814)
+        #[variable(vr = 74, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K21: f64,
+        /// LQR gain K(2,2) (paper: 0.1161)
+        #[variable(vr = 75, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K22: f64,
+        /// LQR gain K(2,3) (paper: 4.8456)
+        #[variable(vr = 76, calculated_parameter, fixed, unit = "N.m/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K23: f64,
+        /// LQR gain K(2,4) (paper: 0.9957)
+        #[variable(vr = 77, calculated_parameter, fixed, unit = "N.m.s/rad", initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K24: f64,
+        /// LQR gain K of eq. (14) as one 2 x 4 matrix (row i: the torque M_i; columns alpha1,
+        /// omega1, alpha2, omega2; mixed units, N.m/rad and N.m.s/rad): K11 .. K24 as one array (FMI
+        /// 3.0: one variable with <Dimension>s 2 and 4; FMI 2.0: the scalars K[1,1] .. K[2,4], value
+        /// references 110 .. 117)
+        #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K: [[f64; 4]; 2],
+        /// Sampled in model exchange: the memory changes at the samples only (time events).
+        pub sampled_events: bool,
+        /// The measurement at the last sample instant (alpha1, omega1, alpha2, omega2, alpha1_ref,
+        /// alpha2_ref), which the next sample uses (the one sample of delay).
+        pub pending: [f64; 6],
+        /// Samples taken since initialization (model exchange).
+        pub samples_taken: u64,
+    }
 }
 
 impl Controller {
-    fn plant(&self) -> PendulumParams {
-        let v = self;
-        PendulumParams {
-            m1: v.m1,
-            m2: v.m2,
-            l1: v.l1,
-            l2: v.l2,
-            g: v.g,
-            j1: v.J1,
-            j2: v.J2,
-        }
-    }
-
     fn k(&self) -> SMatrix<f64, 2, 4> {
         let v = self;
         SMatrix::<f64, 2, 4>::new(v.K11, v.K12, v.K13, v.K14, v.K21, v.K22, v.K23, v.K24)
     }
 
-    /// The control law of the parameters. Their domains are declared and enforced by the
-    /// runtime, so every parameter set that reaches here is one the law can use.
+    /// The control law of the parameters (`law_with_gain`) with the gain K11 .. K24.
     fn law(&self) -> ControlLaw {
-        let v = self;
-        ControlLaw {
-            mode: match v.mode {
-                ControlMode::Lqr => Mode::Lqr,
-                ControlMode::Pid => Mode::Pid,
-                ControlMode::LqrPid => Mode::LqrPid,
-            },
-            k: self.k(),
-            pid: [
-                PidGains {
-                    kp: v.Kp1,
-                    ki: v.Ki1,
-                    kd: v.Kd1,
-                },
-                PidGains {
-                    kp: v.Kp2,
-                    ki: v.Ki2,
-                    kd: v.Kd2,
-                },
-            ],
-            tf: v.Tf,
-            m_max: v.M_max,
-            motor: DcMotorParams {
-                r: v.motor_R,
-                km: v.motor_km,
-                kb: v.motor_kb,
-                b: v.motor_B,
-                gear_ratio: v.gear_ratio,
-                u_max: v.U_max,
-                ..DcMotorParams::default()
-            },
-            drives_motors: v.drives_motors,
-        }
+        self.law_with_gain(self.k())
     }
 
     fn measurement(&self) -> (Vector4<f64>, Vector2<f64>) {

@@ -14,6 +14,10 @@
 
 #![allow(non_snake_case)] // the paper's symbols: M1, U1, K11, ...
 
+#[macro_use]
+#[path = "../../design_parameters.rs"]
+mod design_parameters;
+
 use holonomic::models::controller::{ControlLaw, ControllerState, DEFAULT_PID, Mode, PidGains, lqr_gain};
 use holonomic::models::dc_motor::DcMotorParams;
 use holonomic::models::pendulum::PendulumParams;
@@ -21,207 +25,73 @@ use nalgebra::{Matrix2, Matrix4, SMatrix, Vector2, Vector4};
 use rustfmu::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// The control law (`mode`), as the Controller's.
-#[derive(FmuEnum, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ControlMode {
-    /// Full-state feedback M = -K (x - x_ref), eq. (14)
-    #[fmu(name = "LQR")]
-    Lqr = 1,
-    /// A PID per joint, eq. (16)
-    #[fmu(name = "PID")]
-    Pid = 2,
-    /// LQR and PID added
-    #[fmu(name = "LQR_PID")]
-    LqrPid = 3,
-}
+control_mode!(
+    /// The control law (`mode`), as the Controller's.
+);
 
-/// Digital LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
-/// holonomic system', eqs. (14), (16)), sampled at the ticks of the clock `sample` (every Ts)
-#[derive(Model, Debug, Clone, Serialize, Deserialize)]
-#[fmu(fmi3_only)]
-pub struct SampledController {
-    /// The sample clock: ticks at start + k Ts (the importer activates it in Event Mode)
-    #[variable(vr = 200, input, clock(fixed, interval = Ts))]
-    pub sample: Clock,
-    /// Sample period Ts: the interval of `sample`
-    #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
-    pub Ts: f64,
-    /// Measured angle alpha1 at the tick (connect to Pendulum.alpha1)
-    #[variable(vr = 0, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
-    pub alpha1: f64,
-    /// Measured angular velocity omega1 at the tick
-    #[variable(vr = 1, input, discrete, clocks = [sample], start = 0.0, unit = "rad/s")]
-    pub omega1: f64,
-    /// Measured absolute angle alpha2 at the tick
-    #[variable(vr = 2, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
-    pub alpha2: f64,
-    /// Measured angular velocity omega2 at the tick
-    #[variable(vr = 3, input, discrete, clocks = [sample], start = 0.0, unit = "rad/s")]
-    pub omega2: f64,
-    /// Reference for alpha1 at the tick (0 = upright)
-    #[variable(vr = 4, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
-    pub alpha1_ref: f64,
-    /// Reference for alpha2 at the tick (0 = upright)
-    #[variable(vr = 5, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
-    pub alpha2_ref: f64,
-    /// Torque demand M1, limited to +-M_max, from the measurement of the previous tick (held between ticks)
-    #[variable(vr = 10, output, discrete, clocks = [sample], unit = "N.m", depends = [])]
-    pub M1: f64,
-    /// Torque demand M2, as M1
-    #[variable(vr = 11, output, discrete, clocks = [sample], unit = "N.m", depends = [])]
-    pub M2: f64,
-    /// Voltage command U1 for the motor of joint 1, limited to +-U_max, as M1
-    #[variable(vr = 12, output, discrete, clocks = [sample], unit = "V", depends = [])]
-    pub U1: f64,
-    /// Voltage command U2, as U1
-    #[variable(vr = 13, output, discrete, clocks = [sample], unit = "V", depends = [])]
-    pub U2: f64,
-    /// Control law
-    #[variable(vr = 20, parameter, fixed, start = ControlMode::Lqr)]
-    pub mode: ControlMode,
-    /// PID gains of joint 1: proportional
-    #[variable(vr = 21, parameter, fixed, start = DEFAULT_PID[0].kp, unit = "N.m/rad", min = 0.0)]
-    pub Kp1: f64,
-    /// integral
-    #[variable(vr = 22, parameter, fixed, start = DEFAULT_PID[0].ki, unit = "N.m/(rad.s)", min = 0.0)]
-    pub Ki1: f64,
-    /// derivative (on the filtered measured speed)
-    #[variable(vr = 23, parameter, fixed, start = DEFAULT_PID[0].kd, unit = "N.m.s/rad", min = 0.0)]
-    pub Kd1: f64,
-    /// PID gains of joint 2: proportional
-    #[variable(vr = 24, parameter, fixed, start = DEFAULT_PID[1].kp, unit = "N.m/rad", min = 0.0)]
-    pub Kp2: f64,
-    /// integral
-    #[variable(vr = 25, parameter, fixed, start = DEFAULT_PID[1].ki, unit = "N.m/(rad.s)", min = 0.0)]
-    pub Ki2: f64,
-    /// derivative
-    #[variable(vr = 26, parameter, fixed, start = DEFAULT_PID[1].kd, unit = "N.m.s/rad", min = 0.0)]
-    pub Kd2: f64,
-    /// Time constant Tf of the derivative filter; 0 = no filter
-    #[variable(vr = 27, parameter, fixed, start = 0.01, unit = "s", min = 0.0)]
-    pub Tf: f64,
-    /// Torque limit M_max
-    #[variable(vr = 28, parameter, fixed, start = 20.0, unit = "N.m", min > 0.0)]
-    pub M_max: f64,
-    /// True when U1, U2 drive the plant through motors (the voltage limit stops the integrators)
-    #[variable(vr = 29, parameter, fixed, start = false)]
-    pub drives_motors: bool,
-    /// The plant the LQR gain is designed for: mass m1 of link 1
-    #[variable(vr = 40, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
-    pub m1: f64,
-    /// mass m2 of link 2
-    #[variable(vr = 41, parameter, fixed, start = 0.5, unit = "kg", min > 0.0)]
-    pub m2: f64,
-    /// length l1 of link 1
-    #[variable(vr = 42, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
-    pub l1: f64,
-    /// length l2 of link 2
-    #[variable(vr = 43, parameter, fixed, start = 1.0, unit = "m", min > 0.0)]
-    pub l2: f64,
-    /// gravitational acceleration g
-    #[variable(vr = 44, parameter, fixed, start = 9.81, unit = "m/s2")]
-    pub g: f64,
-    /// extra inertia J1 at joint 1
-    #[variable(vr = 45, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
-    pub J1: f64,
-    /// extra inertia J2 at joint 2
-    #[variable(vr = 46, parameter, fixed, start = 0.0, unit = "kg.m2", min = 0.0)]
-    pub J2: f64,
-    /// LQR weights (diagonal Q, R; the paper's Q = C'C, R = I): Q(1,1)
-    #[variable(vr = 50, parameter, fixed, start = 1.0, min = 0.0)]
-    pub Q11: f64,
-    /// Q(2,2)
-    #[variable(vr = 51, parameter, fixed, start = 0.0, min = 0.0)]
-    pub Q22: f64,
-    /// Q(3,3)
-    #[variable(vr = 52, parameter, fixed, start = 1.0, min = 0.0)]
-    pub Q33: f64,
-    /// Q(4,4)
-    #[variable(vr = 53, parameter, fixed, start = 0.0, min = 0.0)]
-    pub Q44: f64,
-    /// R(1,1)
-    #[variable(vr = 54, parameter, fixed, start = 1.0, min > 0.0)]
-    pub R11: f64,
-    /// R(2,2)
-    #[variable(vr = 55, parameter, fixed, start = 1.0, min > 0.0)]
-    pub R22: f64,
-    /// The motors the voltages are computed for: armature resistance R
-    #[variable(vr = 60, parameter, fixed, start = 2.22, unit = "Ohm", min > 0.0)]
-    pub motor_R: f64,
-    /// torque constant km
-    #[variable(vr = 61, parameter, fixed, start = 0.00449, unit = "N.m/A", min > 0.0)]
-    pub motor_km: f64,
-    /// back-EMF constant kb
-    #[variable(vr = 62, parameter, fixed, start = 0.00448, unit = "V.s/rad", min = 0.0)]
-    pub motor_kb: f64,
-    /// viscous friction B at the rotor
-    #[variable(vr = 63, parameter, fixed, start = 9.0946, unit = "N.m.s/rad", min = 0.0)]
-    pub motor_B: f64,
-    /// gear ratio n (rotor speed / joint speed)
-    #[variable(vr = 64, parameter, fixed, start = 1.0, min > 0.0)]
-    pub gear_ratio: f64,
-    /// supply voltage limit U_max
-    #[variable(vr = 65, parameter, fixed, start = 6.0, unit = "V", min > 0.0)]
-    pub U_max: f64,
-    /// LQR gain K of eq. (14), 2 x 4, computed at initialization (row i: the torque M_i)
-    #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
-    pub K: [[f64; 4]; 2],
-    /// The PID memory (integrals, derivative filters), advanced at the ticks.
-    pub memory: ControllerState,
-    /// The measurement of the last tick (alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref),
-    /// which the next tick's outputs use (the one sample of delay).
-    pub pending: [f64; 6],
-    /// Ticks since initialization.
-    pub ticks: u64,
+with_design_parameters! {
+    sampled;
+    /// Digital LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
+    /// holonomic system', eqs. (14), (16)), sampled at the ticks of the clock `sample` (every Ts)
+    #[derive(Model, Debug, Clone, Serialize, Deserialize)]
+    #[fmu(fmi3_only)]
+    pub struct SampledController {
+        /// The sample clock: ticks at start + k Ts (the importer activates it in Event Mode)
+        #[variable(vr = 200, input, clock(fixed, interval = Ts))]
+        pub sample: Clock,
+        /// Sample period Ts: the interval of `sample`
+        #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]
+        pub Ts: f64,
+        /// Measured angle alpha1 at the tick (connect to Pendulum.alpha1)
+        #[variable(vr = 0, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
+        pub alpha1: f64,
+        /// Measured angular velocity omega1 at the tick
+        #[variable(vr = 1, input, discrete, clocks = [sample], start = 0.0, unit = "rad/s")]
+        pub omega1: f64,
+        /// Measured absolute angle alpha2 at the tick
+        #[variable(vr = 2, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
+        pub alpha2: f64,
+        /// Measured angular velocity omega2 at the tick
+        #[variable(vr = 3, input, discrete, clocks = [sample], start = 0.0, unit = "rad/s")]
+        pub omega2: f64,
+        /// Reference for alpha1 at the tick (0 = upright)
+        #[variable(vr = 4, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
+        pub alpha1_ref: f64,
+        /// Reference for alpha2 at the tick (0 = upright)
+        #[variable(vr = 5, input, discrete, clocks = [sample], start = 0.0, unit = "rad")]
+        pub alpha2_ref: f64,
+        /// Torque demand M1, limited to +-M_max, from the measurement of the previous tick (held between ticks)
+        #[variable(vr = 10, output, discrete, clocks = [sample], unit = "N.m", depends = [])]
+        pub M1: f64,
+        /// Torque demand M2, as M1
+        #[variable(vr = 11, output, discrete, clocks = [sample], unit = "N.m", depends = [])]
+        pub M2: f64,
+        /// Voltage command U1 for the motor of joint 1, limited to +-U_max, as M1
+        #[variable(vr = 12, output, discrete, clocks = [sample], unit = "V", depends = [])]
+        pub U1: f64,
+        /// Voltage command U2, as U1
+        #[variable(vr = 13, output, discrete, clocks = [sample], unit = "V", depends = [])]
+        pub U2: f64,
+    }
+    // The design parameters (`mode` .. `U_max`, ../../design_parameters.rs), then:
+    {
+        /// LQR gain K of eq. (14), 2 x 4, computed at initialization (row i: the torque M_i)
+        #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
+        pub K: [[f64; 4]; 2],
+        /// The PID memory (integrals, derivative filters), advanced at the ticks.
+        pub memory: ControllerState,
+        /// The measurement of the last tick (alpha1, omega1, alpha2, omega2, alpha1_ref, alpha2_ref),
+        /// which the next tick's outputs use (the one sample of delay).
+        pub pending: [f64; 6],
+        /// Ticks since initialization.
+        pub ticks: u64,
+    }
 }
 
 impl SampledController {
-    fn plant(&self) -> PendulumParams {
-        PendulumParams {
-            m1: self.m1,
-            m2: self.m2,
-            l1: self.l1,
-            l2: self.l2,
-            g: self.g,
-            j1: self.J1,
-            j2: self.J2,
-        }
-    }
-
-    /// The law of the parameters (their domains are declared and enforced by the runtime).
+    /// The control law of the parameters (`law_with_gain`) with the gain K.
     fn law(&self) -> ControlLaw {
-        ControlLaw {
-            mode: match self.mode {
-                ControlMode::Lqr => Mode::Lqr,
-                ControlMode::Pid => Mode::Pid,
-                ControlMode::LqrPid => Mode::LqrPid,
-            },
-            k: SMatrix::<f64, 2, 4>::from_fn(|i, j| self.K[i][j]),
-            pid: [
-                PidGains {
-                    kp: self.Kp1,
-                    ki: self.Ki1,
-                    kd: self.Kd1,
-                },
-                PidGains {
-                    kp: self.Kp2,
-                    ki: self.Ki2,
-                    kd: self.Kd2,
-                },
-            ],
-            tf: self.Tf,
-            m_max: self.M_max,
-            motor: DcMotorParams {
-                r: self.motor_R,
-                km: self.motor_km,
-                kb: self.motor_kb,
-                b: self.motor_B,
-                gear_ratio: self.gear_ratio,
-                u_max: self.U_max,
-                ..DcMotorParams::default()
-            },
-            drives_motors: self.drives_motors,
-        }
+        self.law_with_gain(SMatrix::<f64, 2, 4>::from_fn(|i, j| self.K[i][j]))
     }
 
     /// The clocked inputs as they are: (x, x_ref).
