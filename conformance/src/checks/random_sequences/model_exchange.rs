@@ -231,23 +231,15 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
                 let bad = (*null && !v.is_empty()) || x.iter().any(|x| !x.is_finite());
                 (s, if bad { Expect::Refused } else { Expect::Anything }, None)
             }
-            MeOp::SetInteger { values } => {
+            // fmi2Integer and fmi2Boolean are both C ints: one arm, the op's setter.
+            MeOp::SetInteger { values } | MeOp::SetBoolean { values } => {
+                let set = match op {
+                    MeOp::SetInteger { .. } => api.set_integer,
+                    _ => api.set_boolean,
+                };
                 let v: Vec<u32> = values.iter().map(|(x, _)| resolve(fmu, *x)).collect();
                 let x: Vec<i32> = values.iter().map(|(_, x)| *x).collect();
-                (
-                    (api.set_integer)(c, v.as_ptr(), v.len(), x.as_ptr()),
-                    Expect::Anything,
-                    None,
-                )
-            }
-            MeOp::SetBoolean { values } => {
-                let v: Vec<u32> = values.iter().map(|(x, _)| resolve(fmu, *x)).collect();
-                let x: Vec<i32> = values.iter().map(|(_, x)| *x).collect();
-                (
-                    (api.set_boolean)(c, v.as_ptr(), v.len(), x.as_ptr()),
-                    Expect::Anything,
-                    None,
-                )
+                (set(c, v.as_ptr(), v.len(), x.as_ptr()), Expect::Anything, None)
             }
             MeOp::GetState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
