@@ -75,6 +75,19 @@ pub struct StateSpace {
     pub der_x: [f64; MAX],
 }
 
+/// A row of [P Q] times [x; u]: sum_j P_j x_j + sum_j Q_j u_j, over the states and inputs given
+/// (the first n and m), in that order: row i of dx/dt with A, B, of y with C, D.
+fn row_times<D: Real>(p: &[f64; MAX], x: &[D], q: &[f64; MAX], u: &[D]) -> D {
+    let mut sum = D::from(0.0);
+    for (j, &xj) in x.iter().enumerate() {
+        sum += xj * p[j];
+    }
+    for (j, &uj) in u.iter().enumerate() {
+        sum += uj * q[j];
+    }
+    sum
+}
+
 impl StateSpace {
     fn sizes(&self) -> (usize, usize, usize) {
         (self.m as usize, self.n as usize, self.r as usize)
@@ -92,14 +105,7 @@ impl Model for StateSpace {
     fn derivatives<D: Real>(&self, _t: D, v: &mut StateSpaceContinuous<D>) {
         let (m, n, _) = self.sizes();
         for i in 0..n {
-            let mut dx = D::from(0.0);
-            for j in 0..n {
-                dx += v.x[j] * self.a[i][j];
-            }
-            for j in 0..m {
-                dx += v.u[j] * self.b[i][j];
-            }
-            v.der_x[i] = dx;
+            v.der_x[i] = row_times(&self.a[i], &v.x[..n], &self.b[i], &v.u[..m]);
         }
     }
 
@@ -107,14 +113,7 @@ impl Model for StateSpace {
     fn outputs<D: Real>(&self, _t: D, v: &mut StateSpaceContinuous<D>) {
         let (m, n, r) = self.sizes();
         for i in 0..r {
-            let mut y = D::from(0.0);
-            for j in 0..n {
-                y += v.x[j] * self.c[i][j];
-            }
-            for j in 0..m {
-                y += v.u[j] * self.d[i][j];
-            }
-            v.y[i] = y;
+            v.y[i] = row_times(&self.c[i], &v.x[..n], &self.d[i], &v.u[..m]);
         }
     }
 }
