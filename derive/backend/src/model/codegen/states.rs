@@ -22,10 +22,9 @@ pub(crate) struct StateVector {
 }
 
 impl StateVector {
-    /// The state vector of `vars`: the states of its derivatives.
-    // About 150 lines: the general lists (of array states, element by element, computed at
-    // compile time) and the literal ones of scalar states side by side, so that the two can be
-    // compared.
+    /// The state vector of `vars`: the states of its derivatives. The general lists (of array
+    /// states, element by element, computed at compile time); scalar states have literal ones
+    /// (`scalar`).
     pub fn of(vars: &[Var]) -> StateVector {
         let derivs: Vec<&Var> = vars.iter().filter(|v| v.derivative_of.is_some()).collect();
         let states: Vec<&Var> = derivs
@@ -65,8 +64,9 @@ impl StateVector {
                 a
             })
         };
-        // Scalar states only (every model before arrays could be states): the lists as literals.
-        let scalar_states = states.iter().all(|v| v.dims.is_empty());
+        if states.iter().all(|v| v.dims.is_empty()) {
+            return StateVector::scalar(&states, &derivs);
+        }
         let state_vrs = per_element(quote!(u32), quote!(0u32), &|i| {
             let vr = states[i].vr;
             quote!({ let _ = j; #vr })
@@ -116,56 +116,12 @@ impl StateVector {
                 let _ = k;
             })
         };
-        let (
-            state_vrs,
-            state_elements,
-            deriv_vrs,
-            nominals,
-            states_self,
-            states_c,
-            derivs_c,
-            set_states_self,
-            set_states_c,
-        ) = if scalar_states {
-            let (svrs, dvrs) = (states.iter().map(|v| v.vr), derivs.iter().map(|v| v.vr));
-            let zeros = states.iter().map(|_| 0u32);
-            let noms = states.iter().map(|v| match &v.nominal {
-                Some(e) => quote!((#e) as f64),
-                None => quote!(1.0),
-            });
-            let sf: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
-            let df: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
-            let idx: Vec<usize> = (0..states.len()).collect();
-            (
-                quote!(&[#(#svrs),*]),
-                quote!(&[#(#zeros),*]),
-                quote!(&[#(#dvrs),*]),
-                quote!(&[#(#noms),*]),
-                quote!([#(self.#sf),*]),
-                quote!([#(c.#sf),*]),
-                quote!([#(c.#df),*]),
-                quote!(#(self.#sf = x[#idx];)*),
-                quote!(#(c.#sf = x[#idx];)*),
-            )
-        } else {
-            (
-                state_vrs,
-                state_elements,
-                deriv_vrs,
-                nominals,
-                copy_out(quote!(self), &states),
-                copy_out(quote!(c), &states),
-                copy_out(quote!(c), &derivs),
-                copy_in(quote!(self)),
-                copy_in(quote!(c)),
-            )
-        };
-        let n_states = if scalar_states {
-            let n = states.len();
-            quote!(#n)
-        } else {
-            n_states
-        };
+        let (states_self, states_c, derivs_c) = (
+            copy_out(quote!(self), &states),
+            copy_out(quote!(c), &states),
+            copy_out(quote!(c), &derivs),
+        );
+        let (set_states_self, set_states_c) = (copy_in(quote!(self)), copy_in(quote!(c)));
         StateVector {
             n_states,
             state_vrs,
@@ -177,6 +133,96 @@ impl StateVector {
             derivs_c,
             set_states_self,
             set_states_c,
+        }
+    }
+
+    /// The state vector of scalar states only (every model before arrays could be states): the
+    /// lists as literals, the copies one assignment per state.
+    fn scalar(states: &[&Var], derivs: &[&Var]) -> StateVector {
+        let n = states.len();
+        let (svrs, dvrs) = (states.iter().map(|v| v.vr), derivs.iter().map(|v| v.vr));
+        let zeros = states.iter().map(|_| 0u32);
+        let noms = states.iter().map(|v| match &v.nominal {
+            Some(e) => quote!((#e) as f64),
+            None => quote!(1.0),
+        });
+        let sf: Vec<&Ident> = states.iter().map(|v| &v.field).collect();
+        let df: Vec<&Ident> = derivs.iter().map(|v| &v.field).collect();
+        let idx: Vec<usize> = (0..states.len()).collect();
+        StateVector {
+            n_states: quote!(#n),
+            state_vrs: quote!(&[#(#svrs),*]),
+            state_elements: quote!(&[#(#zeros),*]),
+            deriv_vrs: quote!(&[#(#dvrs),*]),
+            nominals: quote!(&[#(#noms),*]),
+            states_self: quote!([#(self.#sf),*]),
+            states_c: quote!([#(c.#sf),*]),
+            derivs_c: quote!([#(c.#df),*]),
+            set_states_self: quote!(#(self.#sf = x[#idx];)*),
+            set_states_c: quote!(#(c.#sf = x[#idx];)*),
+        }
+    }
+
+    /// The impl's type `States` and the state vector's lists (value references, element
+    /// indices, derivatives' value references, nominals).
+    pub fn lists(&self) -> TokenStream {
+        let StateVector {
+            n_states,
+            state_vrs,
+            state_elements,
+            deriv_vrs,
+            nominals,
+            ..
+        } = self;
+        quote! {
+            type States = [f64; #n_states];
+            const STATES: &'static [u32] = #state_vrs;
+            const STATE_ELEMENTS: &'static [u32] = #state_elements;
+            const DERIVATIVES: &'static [u32] = #deriv_vrs;
+            const NOMINALS: &'static [f64] = #nominals;
+        }
+    }
+
+    /// The impl's copies between the state vector and the model or the struct `cont_ident`.
+    pub fn copies(&self, cont_ident: &Ident) -> TokenStream {
+        let StateVector {
+            n_states,
+            states_self,
+            states_c,
+            derivs_c,
+            set_states_self,
+            set_states_c,
+            ..
+        } = self;
+        quote! {
+            #[inline]
+            fn states(&self) -> [f64; #n_states] {
+                #states_self
+            }
+
+            #[inline]
+            fn set_states(&mut self, x: &[f64; #n_states]) {
+                let _ = x;
+                #set_states_self
+            }
+
+            #[inline]
+            fn states_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
+                let _ = c;
+                #states_c
+            }
+
+            #[inline]
+            fn set_states_of(c: &mut #cont_ident<f64>, x: &[f64; #n_states]) {
+                let _ = (&c, x);
+                #set_states_c
+            }
+
+            #[inline]
+            fn derivatives_of(c: &#cont_ident<f64>) -> [f64; #n_states] {
+                let _ = c;
+                #derivs_c
+            }
         }
     }
 }
