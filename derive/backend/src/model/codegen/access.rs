@@ -163,20 +163,26 @@ fn value_items(rt: &TokenStream, fields: &FieldsNamed, vars: &[Var], others: &[I
 /// Get and set of strings, array elements and binaries.
 fn string_array_binary_items(rt: &TokenStream, vars: &[Var]) -> TokenStream {
     let of = |kind: Kind| vars.iter().filter(move |v| v.kind == kind);
-    let get_string = by_vr(
-        of(Kind::Str).map(|v| {
-            let (f, vr) = (&v.field, v.vr);
-            quote!(#vr => ::core::option::Option::Some(self.#f.as_str()))
-        }),
-        none(),
-    );
-    let set_string = by_vr(
-        of(Kind::Str).map(|v| {
-            let (f, vr) = (&v.field, v.vr);
-            quote!(#vr => { self.#f = ::std::string::String::from(value); true })
-        }),
-        quote!(false),
-    );
+    // The getter and the setter of the fields of `kind`: `read` is the method that reads one,
+    // `from` what makes one of the value given.
+    let accessors = |kind: Kind, read: TokenStream, from: TokenStream| {
+        let get = by_vr(
+            of(kind).map(|v| {
+                let (f, vr) = (&v.field, v.vr);
+                quote!(#vr => ::core::option::Option::Some(self.#f.#read()))
+            }),
+            none(),
+        );
+        let set = by_vr(
+            of(kind).map(|v| {
+                let (f, vr) = (&v.field, v.vr);
+                quote!(#vr => { self.#f = #from(value); true })
+            }),
+            quote!(false),
+        );
+        (get, set)
+    };
+    let (get_string, set_string) = accessors(Kind::Str, quote!(as_str), quote!(::std::string::String::from));
     let arrays: Vec<&Var> = vars.iter().filter(|v| !v.dims.is_empty()).collect();
     let get_element = by_vr(
         arrays.iter().map(|v| {
@@ -195,20 +201,7 @@ fn string_array_binary_items(rt: &TokenStream, vars: &[Var]) -> TokenStream {
         }),
         quote!(false),
     );
-    let get_binary = by_vr(
-        of(Kind::Binary).map(|v| {
-            let (f, vr) = (&v.field, v.vr);
-            quote!(#vr => ::core::option::Option::Some(self.#f.as_slice()))
-        }),
-        none(),
-    );
-    let set_binary = by_vr(
-        of(Kind::Binary).map(|v| {
-            let (f, vr) = (&v.field, v.vr);
-            quote!(#vr => { self.#f = ::std::vec::Vec::from(value); true })
-        }),
-        quote!(false),
-    );
+    let (get_binary, set_binary) = accessors(Kind::Binary, quote!(as_slice), quote!(::std::vec::Vec::from));
     quote! {
         fn get_string(&self, vr: u32) -> ::core::option::Option<&str> {
             #get_string
