@@ -8,6 +8,7 @@ use super::fmu_attr::ModelAttr;
 use super::variable_attr::{ClockAttr, ClockInterval};
 use crate::units;
 use fmi_standard::{Causality, Initial, Variability};
+use proc_macro2::Span;
 use quote::quote;
 use std::collections::BTreeMap;
 use syn::{Error, LitStr, Result};
@@ -162,24 +163,16 @@ fn depends(v: &Var, vars: &[Var], _: &ModelAttr) -> Result<()> {
             ));
         }
         for (d, span) in deps {
-            match by_name(vars, d) {
-                Some(dep) if dep.causality == Causality::Input || is_state(vars, dep) => {}
-                Some(dep) => {
-                    return Err(Error::new(
-                        *span,
-                        format!(
-                            "'{}' depends on '{d}', which is neither an input nor a continuous state (it is a {:?}); \
-                             `depends` lists the knowns it is computed from: inputs and states",
-                            v.name, dep.causality
-                        ),
-                    ));
-                }
-                None => {
-                    return Err(Error::new(
-                        *span,
-                        format!("'{}' depends on '{d}', which is not declared", v.name),
-                    ));
-                }
+            let dep = declared(vars, d, *span, || format!("'{}' depends on", v.name))?;
+            if dep.causality != Causality::Input && !is_state(vars, dep) {
+                return Err(Error::new(
+                    *span,
+                    format!(
+                        "'{}' depends on '{d}', which is neither an input nor a continuous state (it is a {:?}); \
+                         `depends` lists the knowns it is computed from: inputs and states",
+                        v.name, dep.causality
+                    ),
+                ));
             }
         }
     }
@@ -205,32 +198,30 @@ fn initial_depends(v: &Var, vars: &[Var], _: &ModelAttr) -> Result<()> {
             ));
         }
         for (d, span) in deps {
-            match by_name(vars, d) {
-                Some(dep)
-                    if dep.causality == Causality::Input
-                        || dep.causality == Causality::Independent
-                        || effective(dep) == Some(Initial::Exact) => {}
-                Some(dep) => {
-                    return Err(Error::new(
-                        *span,
-                        format!(
-                            "'{}' initially depends on '{d}', which is not known in Initialization Mode (it is a \
-                             {:?} whose initial is not exact); `initial_depends` lists inputs and variables with \
-                             initial = exact, parameters among them",
-                            v.name, dep.causality
-                        ),
-                    ));
-                }
-                None => {
-                    return Err(Error::new(
-                        *span,
-                        format!("'{}' initially depends on '{d}', which is not declared", v.name),
-                    ));
-                }
+            let dep = declared(vars, d, *span, || format!("'{}' initially depends on", v.name))?;
+            let known = dep.causality == Causality::Input
+                || dep.causality == Causality::Independent
+                || effective(dep) == Some(Initial::Exact);
+            if !known {
+                return Err(Error::new(
+                    *span,
+                    format!(
+                        "'{}' initially depends on '{d}', which is not known in Initialization Mode (it is a \
+                         {:?} whose initial is not exact); `initial_depends` lists inputs and variables with \
+                         initial = exact, parameters among them",
+                        v.name, dep.causality
+                    ),
+                ));
             }
         }
     }
     Ok(())
+}
+
+/// The variable `name` (at `span`) that a declaration refers to: declared, else the error
+/// "`says` '`name`', which is not declared".
+fn declared<'a>(vars: &'a [Var], name: &str, span: Span, says: impl FnOnce() -> String) -> Result<&'a Var> {
+    by_name(vars, name).ok_or_else(|| Error::new(span, format!("{} '{name}', which is not declared", says())))
 }
 
 /// A derivative: of a continuous Real state (one per state), of the state's shape.
@@ -342,35 +333,26 @@ fn sized_by(v: &Var, vars: &[Var], _: &ModelAttr) -> Result<()> {
             ));
         }
         for (p, span) in &v.sized_by {
-            match by_name(vars, p) {
-                Some(x) if x.causality == Causality::StructuralParameter && x.kind == Kind::UInt64 => {
-                    if x.max.is_none() {
-                        return Err(Error::new(
-                            *span,
-                            format!(
-                                "'{p}' sets a length of '{}': it declares `max` (at most the Rust array's length, \
-                                 the capacity)",
-                                v.name
-                            ),
-                        ));
-                    }
-                }
-                Some(_) => {
-                    return Err(Error::new(
-                        *span,
-                        format!(
-                            "'{}' is sized by '{p}', which is not a u64 structural parameter (FMI 3.0, 2.4.7.6: a \
-                             <Dimension valueReference> names a structural parameter of type UInt64)",
-                            v.name
-                        ),
-                    ));
-                }
-                None => {
-                    return Err(Error::new(
-                        *span,
-                        format!("'{}' is sized by '{p}', which is not declared", v.name),
-                    ));
-                }
+            let x = declared(vars, p, *span, || format!("'{}' is sized by", v.name))?;
+            if x.causality != Causality::StructuralParameter || x.kind != Kind::UInt64 {
+                return Err(Error::new(
+                    *span,
+                    format!(
+                        "'{}' is sized by '{p}', which is not a u64 structural parameter (FMI 3.0, 2.4.7.6: a \
+                         <Dimension valueReference> names a structural parameter of type UInt64)",
+                        v.name
+                    ),
+                ));
+            }
+            if x.max.is_none() {
+                return Err(Error::new(
+                    *span,
+                    format!(
+                        "'{p}' sets a length of '{}': it declares `max` (at most the Rust array's length, \
+                         the capacity)",
+                        v.name
+                    ),
+                ));
             }
         }
     }
@@ -411,20 +393,11 @@ fn clock_needs_fmi3(v: &Var, _: &[Var], model: &ModelAttr) -> Result<()> {
 /// The clocks of `clocks = [..]`: declared Clocks.
 fn clocked_by(v: &Var, vars: &[Var], _: &ModelAttr) -> Result<()> {
     for (c, span) in &v.clocks {
-        match by_name(vars, c) {
-            Some(clock) if clock.kind == Kind::Clock => {}
-            Some(_) => {
-                return Err(Error::new(
-                    *span,
-                    format!("'{}' is clocked by '{c}', which is no Clock", v.name),
-                ));
-            }
-            None => {
-                return Err(Error::new(
-                    *span,
-                    format!("'{}' is clocked by '{c}', which is not declared", v.name),
-                ));
-            }
+        if declared(vars, c, *span, || format!("'{}' is clocked by", v.name))?.kind != Kind::Clock {
+            return Err(Error::new(
+                *span,
+                format!("'{}' is clocked by '{c}', which is no Clock", v.name),
+            ));
         }
     }
     Ok(())
@@ -448,24 +421,16 @@ fn clock_interval(v: &Var, vars: &[Var], _: &ModelAttr) -> Result<()> {
                         | (Causality::Local, Variability::Constant, _)
                 )
         };
-        match by_name(vars, p) {
-            Some(x) if fits(x) => {}
-            Some(_) => {
-                return Err(Error::new(
-                    *span,
-                    format!(
-                        "the interval of {cv} clock '{}' is '{p}', which is not a scalar f64 parameter of its \
-                         variability (a fixed clock: a fixed parameter; a tunable clock: a fixed or tunable one)",
-                        v.name
-                    ),
-                ));
-            }
-            None => {
-                return Err(Error::new(
-                    *span,
-                    format!("the interval of clock '{}' is '{p}', which is not declared", v.name),
-                ));
-            }
+        let x = declared(vars, p, *span, || format!("the interval of clock '{}' is", v.name))?;
+        if !fits(x) {
+            return Err(Error::new(
+                *span,
+                format!(
+                    "the interval of {cv} clock '{}' is '{p}', which is not a scalar f64 parameter of its \
+                     variability (a fixed clock: a fixed parameter; a tunable clock: a fixed or tunable one)",
+                    v.name
+                ),
+            ));
         }
     }
     Ok(())
