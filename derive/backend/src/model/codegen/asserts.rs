@@ -13,6 +13,24 @@ use quote::quote_spanned;
 use syn::Ident;
 use syn::spanned::Spanned;
 
+/// What each `ValueError` of the runtime's `check_values` says of a declaration (after the
+/// variable's name), as the compile-time check reports it.
+#[rustfmt::skip] // a table: one error a line
+const VALUE_ERRORS: [(&str, &str); 12] = [
+    ("MinNotFinite", "min is not a finite number"),
+    ("MaxNotFinite", "max is not a finite number"),
+    ("MinAboveMax", "min is above max"),
+    ("IntegerMin", "an Integer's min must be an integer within i32"),
+    ("IntegerMax", "an Integer's max must be an integer within i32"),
+    ("StartNotFinite", "the start value is not a finite number"),
+    ("StartBelowMin", "the start value is below min"),
+    ("StartAboveMax", "the start value is above max"),
+    ("Nominal", "nominal must be finite and > 0"),
+    ("StartNotAnItem", "the start value is no item of the enumeration"),
+    ("IntegerTypeMin", "an integer's min must be an integer of its type, within ±2^53"),
+    ("IntegerTypeMax", "an integer's max must be an integer of its type, within ±2^53"),
+];
+
 /// The compile-time checks of model `ident` with `vars`, and the manifest's include.
 pub(crate) fn compile_time_checks(
     rt: &TokenStream,
@@ -26,21 +44,16 @@ pub(crate) fn compile_time_checks(
     let value_checks = vars.iter().enumerate().map(|(i, v)| {
         let span = v.span;
         let prefix = format!("variable '{}' (field `{}`): ", v.name, v.field);
+        let arms = VALUE_ERRORS.iter().map(|(error, message)| {
+            let error = Ident::new(error, span);
+            quote_spanned! {span=>
+                ::core::result::Result::Err(#rt::description::ValueError::#error) => panic!(concat!(#prefix, #message)),
+            }
+        });
         quote_spanned! {span=>
             const _: () = match #rt::description::check_values(&<#ident as #rt::Variables>::DESCRIPTION.variables[#i]) {
                 ::core::result::Result::Ok(()) => (),
-                ::core::result::Result::Err(#rt::description::ValueError::MinNotFinite) => panic!(concat!(#prefix, "min is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::MaxNotFinite) => panic!(concat!(#prefix, "max is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::MinAboveMax) => panic!(concat!(#prefix, "min is above max")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerMin) => panic!(concat!(#prefix, "an Integer's min must be an integer within i32")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerMax) => panic!(concat!(#prefix, "an Integer's max must be an integer within i32")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartNotFinite) => panic!(concat!(#prefix, "the start value is not a finite number")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartBelowMin) => panic!(concat!(#prefix, "the start value is below min")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartAboveMax) => panic!(concat!(#prefix, "the start value is above max")),
-                ::core::result::Result::Err(#rt::description::ValueError::Nominal) => panic!(concat!(#prefix, "nominal must be finite and > 0")),
-                ::core::result::Result::Err(#rt::description::ValueError::StartNotAnItem) => panic!(concat!(#prefix, "the start value is no item of the enumeration")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerTypeMin) => panic!(concat!(#prefix, "an integer's min must be an integer of its type, within ±2^53")),
-                ::core::result::Result::Err(#rt::description::ValueError::IntegerTypeMax) => panic!(concat!(#prefix, "an integer's max must be an integer of its type, within ±2^53")),
+                #(#arms)*
             };
         }
     });
