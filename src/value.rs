@@ -119,8 +119,9 @@ pub trait FmiType: Sized {
     }
 }
 
-/// The FMI 3.0 numeric types: one impl each.
-macro_rules! fmi3_numeric {
+/// The numeric and Boolean types (FMI 2.0's and FMI 3.0's): one impl each, a `Value` of its
+/// own variant.
+macro_rules! numeric {
     ($($t:ty => $variant:ident),* $(,)?) => {$(
         impl FmiType for $t {
             const TYPE: VarType = VarType::$variant;
@@ -137,7 +138,10 @@ macro_rules! fmi3_numeric {
     )*};
 }
 
-fmi3_numeric!(
+numeric!(
+    f64 => Real,
+    i32 => Integer,
+    bool => Boolean,
     f32 => Float32,
     i8 => Int8,
     u8 => UInt8,
@@ -162,45 +166,6 @@ impl FmiType for Vec<u8> {
     }
     fn from_bytes(b: &[u8]) -> Option<Self> {
         Some(b.to_vec())
-    }
-}
-
-impl FmiType for f64 {
-    const TYPE: VarType = VarType::Real;
-    fn to_value(&self) -> Option<Value> {
-        Some(Value::Real(*self))
-    }
-    fn from_value(v: Value) -> Option<Self> {
-        match v {
-            Value::Real(x) => Some(x),
-            _ => None,
-        }
-    }
-}
-
-impl FmiType for i32 {
-    const TYPE: VarType = VarType::Integer;
-    fn to_value(&self) -> Option<Value> {
-        Some(Value::Integer(*self))
-    }
-    fn from_value(v: Value) -> Option<Self> {
-        match v {
-            Value::Integer(x) => Some(x),
-            _ => None,
-        }
-    }
-}
-
-impl FmiType for bool {
-    const TYPE: VarType = VarType::Boolean;
-    fn to_value(&self) -> Option<Value> {
-        Some(Value::Boolean(*self))
-    }
-    fn from_value(v: Value) -> Option<Self> {
-        match v {
-            Value::Boolean(x) => Some(x),
-            _ => None,
-        }
     }
 }
 
