@@ -27,6 +27,7 @@ macro_rules! listed_enum {
     };
 }
 
+mod exports;
 pub mod guard;
 mod initial_derivatives;
 pub mod instance;

@@ -32,25 +32,15 @@ macro_rules! export_fmi2 {
                     || <__RustfmuModel as $crate::Variables>::INDICATORS.is_empty(),
                 "CoSimulation::INTERPOLATES_INPUTS with event indicators is not supported: the step that locates state events holds the inputs"
             );
-            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
-                co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
-                model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
-                version: $crate::description::FmiVersion::V2,
+            $crate::__rustfmu_embedded_description!(
+                __RustfmuModel,
+                V2,
                 can_interpolate_inputs: <__RustfmuModel as $crate::CoSimulation>::INTERPOLATES_INPUTS,
                 scheduled_execution: false,
-            };
-            const LEN: usize =
-                $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
-            const ENCODED: [u8; LEN] =
-                $crate::description::encode(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
-            const GUID_TEXT: [u8; 38] = $crate::description::guid(&ENCODED);
-            pub const GUID: &str = match ::core::str::from_utf8(&GUID_TEXT) {
-                Ok(s) => s,
-                Err(_) => panic!("the GUID is ASCII"),
-            };
-            /// The description, where `cargo fmu` finds it (see `rustfmu::description::find_encoded`).
-            #[used]
-            static DESCRIPTION: [u8; LEN] = ENCODED;
+                GUID,
+                GUID_TEXT,
+                "the GUID is ASCII"
+            );
 
             #[unsafe(no_mangle)]
             pub extern "C" fn fmi2GetTypesPlatform() -> fmi2String {
@@ -114,14 +104,6 @@ macro_rules! export_fmi2 {
                         stopTimeDefined,
                         stopTime,
                     );
-                fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterInitializationMode, component(c));
-                fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::ExitInitializationMode, component(c));
-                fmi2Terminate(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Terminate, component(c));
-                fmi2Reset(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Reset, component(c));
                 fmi2GetReal(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
@@ -178,28 +160,6 @@ macro_rules! export_fmi2 {
                     value: *const fmi2String,
                 ) -> fmi2Status =>
                     api::set_string::<__RustfmuModel>(component(c), vr, nvr, value);
-                fmi2GetFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
-                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
-                fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status =>
-                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
-                fmi2FreeFMUstate(c: fmi2Component, FMUstate: *mut fmi2FMUstate) -> fmi2Status =>
-                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate);
-                fmi2SerializedFMUstateSize(c: fmi2Component, FMUstate: fmi2FMUstate, size: *mut usize) -> fmi2Status =>
-                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, component(c), FMUstate, size);
-                fmi2SerializeFMUstate(
-                    c: fmi2Component,
-                    FMUstate: fmi2FMUstate,
-                    serializedState: *mut fmi2Byte,
-                    size: usize,
-                ) -> fmi2Status =>
-                    shared::serialize_fmu_state::<__RustfmuModel>(&TERMS, component(c), FMUstate, serializedState, size);
-                fmi2DeSerializeFMUstate(
-                    c: fmi2Component,
-                    serializedState: *const fmi2Byte,
-                    size: usize,
-                    FMUstate: *mut fmi2FMUstate,
-                ) -> fmi2Status =>
-                    shared::deserialize_fmu_state::<__RustfmuModel>(&TERMS, component(c), serializedState, size, FMUstate);
                 fmi2GetDirectionalDerivative(
                     c: fmi2Component,
                     vUnknown_ref: *const fmi2ValueReference,
@@ -218,47 +178,8 @@ macro_rules! export_fmi2 {
                         dvKnown,
                         dvUnknown,
                     );
-                fmi2EnterEventMode(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterEventMode, component(c));
                 fmi2NewDiscreteStates(c: fmi2Component, fmi2eventInfo: *mut fmi2EventInfo) -> fmi2Status =>
                     api::new_discrete_states::<__RustfmuModel>(component(c), fmi2eventInfo);
-                fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterContinuousTimeMode, component(c));
-                fmi2CompletedIntegratorStep(
-                    c: fmi2Component,
-                    noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
-                    enterEventMode: *mut fmi2Boolean,
-                    terminateSimulation: *mut fmi2Boolean,
-                ) -> fmi2Status =>
-                    shared::completed_integrator_step::<__RustfmuModel, fmi2Boolean>(
-                        &TERMS,
-                        component(c),
-                        noSetFMUStatePriorToCurrentPoint,
-                        enterEventMode,
-                        terminateSimulation,
-                    );
-                fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status =>
-                    shared::set_time::<__RustfmuModel>(&TERMS, component(c), time);
-                fmi2SetContinuousStates(c: fmi2Component, x: *const fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, component(c), x, nx);
-                fmi2GetDerivatives(c: fmi2Component, derivatives: *mut fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, component(c), derivatives, nx);
-                fmi2GetEventIndicators(c: fmi2Component, eventIndicators: *mut fmi2Real, ni: usize) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(
-                        &TERMS,
-                        shared::Vector::EventIndicators,
-                        component(c),
-                        eventIndicators,
-                        ni,
-                    );
-                fmi2GetContinuousStates(c: fmi2Component, x: *mut fmi2Real, nx: usize) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::ContinuousStates, component(c), x, nx);
-                fmi2GetNominalsOfContinuousStates(
-                    c: fmi2Component,
-                    x_nominal: *mut fmi2Real,
-                    nx: usize,
-                ) -> fmi2Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, component(c), x_nominal, nx);
                 fmi2SetRealInputDerivatives(
                     c: fmi2Component,
                     vr: *const fmi2ValueReference,
@@ -299,6 +220,19 @@ macro_rules! export_fmi2 {
                     api::get_status::<__RustfmuModel, fmi2Boolean>(component(c), "fmi2GetBooleanStatus", s, value, api::terminated);
                 fmi2GetStringStatus(c: fmi2Component, s: fmi2StatusKind, value: *mut fmi2String) -> fmi2Status =>
                     api::get_status::<__RustfmuModel, fmi2String>(component(c), "fmi2GetStringStatus", s, value, api::unavailable);
+            }
+            $crate::__rustfmu_shared_exports! {
+                for __RustfmuModel: instance fmi2Component, status fmi2Status, boolean fmi2Boolean, real fmi2Real,
+                    byte fmi2Byte, FMU state fmi2FMUstate;
+                transitions: fmi2EnterInitializationMode => EnterInitializationMode,
+                    fmi2ExitInitializationMode => ExitInitializationMode, fmi2Terminate => Terminate,
+                    fmi2Reset => Reset, fmi2EnterEventMode => EnterEventMode,
+                    fmi2EnterContinuousTimeMode => EnterContinuousTimeMode;
+                FMU state: fmi2GetFMUstate, fmi2SetFMUstate, fmi2FreeFMUstate, fmi2SerializedFMUstateSize,
+                    fmi2SerializeFMUstate, fmi2DeSerializeFMUstate;
+                vectors: fmi2GetDerivatives => Derivatives, fmi2GetEventIndicators => EventIndicators,
+                    fmi2GetContinuousStates => ContinuousStates, fmi2GetNominalsOfContinuousStates => Nominals;
+                model exchange: fmi2CompletedIntegratorStep, fmi2SetTime, fmi2SetContinuousStates;
             }
         }
         pub use __rustfmu_fmi2_exports::*;

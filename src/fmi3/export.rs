@@ -1,46 +1,125 @@
 //! `export_fmi3!(Model)`: the FMI 3.0 functions of a model (usually through
 //! [`export_fmu!`](crate::export_fmu), which exports both versions).
 
-/// Rows for [`__rustfmu_extern_c!`](crate::__rustfmu_extern_c) of the FMI 3.0 functions that
-/// refuse, written from shorter rows: the C name of a refusal says what it refuses (passed on
-/// with `stringify!`), and every one of a kind has the same parameters. Not part of the API.
+/// Rows for [`__rustfmu_extern_c!`](crate::__rustfmu_extern_c) of the FMI 3.0 getters and
+/// setters and of the functions that refuse, written from shorter rows: the C name of a typed
+/// getter or a refusal says what it gets or refuses (passed on with `stringify!`), and every one
+/// of a kind has the same parameters. Not part of the API.
 #[doc(hidden)]
 #[macro_export]
-macro_rules! __rustfmu_fmi3_refusals {
+macro_rules! __rustfmu_fmi3_rows {
+    // `fmi3GetX => get_x, fmi3SetX => set_x(fmi3X);`: the getter and the setter of a type with
+    // runtime functions of its own.
+    // Binaries have their sizes too: `(fmi3Binary, valueSizes)`.
+    (values for $model:ty: $($get:ident => $getter:ident, $set:ident => $setter:ident($t:ty $(, $sizes:ident)?);)*) => {
+        $crate::__rustfmu_fmi3_rows! {
+            @values
+            $(
+                $get(mut $t $(, $sizes)?) => [$crate::__private::api3::$getter::<$model>] [];
+                $set(const $t $(, $sizes)?) => [$crate::__private::api3::$setter::<$model>] [];
+            )*
+        }
+    };
     // `fmi3GetX, fmi3SetX(fmi3X);`: the getter and the setter of an FMI 3.0 numeric type
     // without a 2.0 counterpart, through the runtime's generic ones.
     (typed for $model:ty: $($get:ident, $set:ident($t:ty);)*) => {
+        $crate::__rustfmu_fmi3_rows! {
+            @values
+            $(
+                $get(mut $t) => [$crate::__private::api3::get_typed::<$model, $t>] [stringify!($get)];
+                $set(const $t) => [$crate::__private::api3::set_typed::<$model, $t>] [stringify!($set)];
+            )*
+        }
+    };
+    // `fmi3XValues(mut or const, the element type[, the sizes' parameter]) => [runtime function]
+    // [its name, if it takes it];`: every getter and setter has the same parameters (`values`
+    // and the sizes are `*mut` for a getter, `*const` for a setter).
+    (@values $($name:ident($ptr:tt $t:ty $(, $sizes:ident)?) => [$($callee:tt)*] [$($label:expr)?];)*) => {
         $crate::__rustfmu_extern_c! {
             $(
-                $get(
+                $name(
                     instance: $crate::__private::abi3::fmi3Instance,
                     valueReferences: *const $crate::__private::abi3::fmi3ValueReference,
                     nValueReferences: usize,
-                    values: *mut $t,
+                    $($sizes: *$ptr usize,)?
+                    values: *$ptr $t,
                     nValues: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
-                    $crate::__private::api3::get_typed::<$model, $t>(
+                    $($callee)*(
                         component(instance),
-                        stringify!($get),
+                        $($label,)?
                         valueReferences,
                         nValueReferences,
+                        $($sizes,)?
                         values,
                         nValues,
                     );
-                $set(
+            )*
+        }
+    };
+    // `fmi3GetXDerivative => adjoint;`: the two partial derivatives, one runtime function
+    // (`adjoint`: Jᵀ seed, else J seed).
+    (derivatives for $model:ty: $($name:ident => $adjoint:literal;)*) => {
+        $crate::__rustfmu_extern_c! {
+            $(
+                $name(
                     instance: $crate::__private::abi3::fmi3Instance,
-                    valueReferences: *const $crate::__private::abi3::fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const $t,
-                    nValues: usize,
+                    unknowns: *const $crate::__private::abi3::fmi3ValueReference,
+                    nUnknowns: usize,
+                    knowns: *const $crate::__private::abi3::fmi3ValueReference,
+                    nKnowns: usize,
+                    seed: *const $crate::__private::abi3::fmi3Float64,
+                    nSeed: usize,
+                    sensitivity: *mut $crate::__private::abi3::fmi3Float64,
+                    nSensitivity: usize,
                 ) -> $crate::__private::abi3::fmi3Status =>
-                    $crate::__private::api3::set_typed::<$model, $t>(
+                    $crate::__private::api3::get_derivative::<$model>(
+                        $adjoint,
                         component(instance),
-                        stringify!($set),
-                        valueReferences,
-                        nValueReferences,
-                        values,
-                        nValues,
+                        unknowns,
+                        nUnknowns,
+                        knowns,
+                        nKnowns,
+                        seed,
+                        nSeed,
+                        sensitivity,
+                        nSensitivity,
+                    );
+            )*
+        }
+    };
+    // `fmi3InstantiateX(parameters after loggingOn; parameters after logMessage) =>
+    // instantiate_x(arguments after the shared ones);`: the three instantiation functions, whose
+    // shared parameters go to the runtime as one `Instantiation` (with the binary's `TOKEN` and
+    // `DESCRIPTION`).
+    (instantiate for $model:ty: $(
+        $name:ident($($middle:ident: $middle_ty:ty),*; $($end:ident: $end_ty:ty),*) => $runtime:ident($($arg:expr),*);
+    )*) => {
+        $crate::__rustfmu_extern_c! {
+            $(
+                $name(
+                    instanceName: $crate::__private::abi3::fmi3String,
+                    instantiationToken: $crate::__private::abi3::fmi3String,
+                    resourcePath: $crate::__private::abi3::fmi3String,
+                    _visible: $crate::__private::abi3::fmi3Boolean,
+                    loggingOn: $crate::__private::abi3::fmi3Boolean,
+                    $($middle: $middle_ty,)*
+                    instanceEnvironment: $crate::__private::abi3::fmi3InstanceEnvironment,
+                    logMessage: $crate::__private::abi3::fmi3LogMessageCallback,
+                    $($end: $end_ty,)*
+                ) -> $crate::__private::abi3::fmi3Instance =>
+                    $crate::__private::api3::$runtime::<$model>(
+                        $crate::__private::api3::Instantiation {
+                            own_token: TOKEN,
+                            description: &DESCRIPTION,
+                            instance_name: instanceName,
+                            token: instantiationToken,
+                            resource_path: resourcePath,
+                            logging_on: loggingOn,
+                            environment: instanceEnvironment,
+                            log_message: logMessage,
+                        },
+                        $($arg),*
                     );
             )*
         }
@@ -76,26 +155,16 @@ macro_rules! export_fmi3 {
             use $crate::core::guard::component;
             type __RustfmuModel = $model;
 
-            const INTERFACES: $crate::description::Interfaces = $crate::description::Interfaces {
-                co_simulation: <__RustfmuModel as $crate::Variables>::CO_SIMULATION,
-                model_exchange: <__RustfmuModel as $crate::Variables>::MODEL_EXCHANGE,
-                version: $crate::description::FmiVersion::V3,
+            $crate::__rustfmu_embedded_description!(
+                __RustfmuModel,
+                V3,
                 // FMI 3.0 has no input derivatives.
                 can_interpolate_inputs: false,
                 scheduled_execution: <__RustfmuModel as $crate::Variables>::SCHEDULED_EXECUTION,
-            };
-            const LEN: usize =
-                $crate::description::encoded_len(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
-            const ENCODED: [u8; LEN] =
-                $crate::description::encode(&<__RustfmuModel as $crate::Variables>::DESCRIPTION, INTERFACES);
-            const TOKEN_TEXT: [u8; 38] = $crate::description::guid(&ENCODED);
-            pub const TOKEN: &str = match ::core::str::from_utf8(&TOKEN_TEXT) {
-                Ok(s) => s,
-                Err(_) => panic!("the token is ASCII"),
-            };
-            /// The description, where `cargo fmu` finds it (see `rustfmu::description::find_encoded`).
-            #[used]
-            static DESCRIPTION: [u8; LEN] = ENCODED;
+                TOKEN,
+                TOKEN_TEXT,
+                "the token is ASCII"
+            );
 
             #[unsafe(no_mangle)]
             pub extern "C" fn fmi3GetVersion() -> *const ::std::os::raw::c_char {
@@ -111,79 +180,6 @@ macro_rules! export_fmi3 {
                     categories: *const fmi3String,
                 ) -> fmi3Status =>
                     shared::set_debug_logging::<__RustfmuModel>(&TERMS, component(instance), loggingOn, nCategories, categories);
-                fmi3InstantiateModelExchange(
-                    instanceName: fmi3String,
-                    instantiationToken: fmi3String,
-                    resourcePath: fmi3String,
-                    visible: fmi3Boolean,
-                    loggingOn: fmi3Boolean,
-                    instanceEnvironment: fmi3InstanceEnvironment,
-                    logMessage: fmi3LogMessageCallback,
-                ) -> fmi3Instance =>
-                    api3::instantiate_model_exchange::<__RustfmuModel>(
-                        TOKEN,
-                        &DESCRIPTION,
-                        instanceName,
-                        instantiationToken,
-                        resourcePath,
-                        visible,
-                        loggingOn,
-                        instanceEnvironment,
-                        logMessage,
-                    );
-                fmi3InstantiateCoSimulation(
-                    instanceName: fmi3String,
-                    instantiationToken: fmi3String,
-                    resourcePath: fmi3String,
-                    visible: fmi3Boolean,
-                    loggingOn: fmi3Boolean,
-                    eventModeUsed: fmi3Boolean,
-                    earlyReturnAllowed: fmi3Boolean,
-                    requiredIntermediateVariables: *const fmi3ValueReference,
-                    nRequiredIntermediateVariables: usize,
-                    instanceEnvironment: fmi3InstanceEnvironment,
-                    logMessage: fmi3LogMessageCallback,
-                    intermediateUpdate: fmi3IntermediateUpdateCallback,
-                ) -> fmi3Instance =>
-                    api3::instantiate_co_simulation::<__RustfmuModel>(
-                        TOKEN,
-                        &DESCRIPTION,
-                        instanceName,
-                        instantiationToken,
-                        resourcePath,
-                        visible,
-                        loggingOn,
-                        eventModeUsed,
-                        earlyReturnAllowed,
-                        requiredIntermediateVariables,
-                        nRequiredIntermediateVariables,
-                        instanceEnvironment,
-                        logMessage,
-                        intermediateUpdate,
-                    );
-                fmi3InstantiateScheduledExecution(
-                    instanceName: fmi3String,
-                    instantiationToken: fmi3String,
-                    resourcePath: fmi3String,
-                    _visible: fmi3Boolean,
-                    loggingOn: fmi3Boolean,
-                    instanceEnvironment: fmi3InstanceEnvironment,
-                    logMessage: fmi3LogMessageCallback,
-                    clockUpdate: fmi3ClockUpdateCallback,
-                    _lockPreemption: fmi3LockPreemptionCallback,
-                    _unlockPreemption: fmi3UnlockPreemptionCallback,
-                ) -> fmi3Instance =>
-                    api3::instantiate_scheduled_execution::<__RustfmuModel>(
-                        TOKEN,
-                        &DESCRIPTION,
-                        instanceName,
-                        instantiationToken,
-                        resourcePath,
-                        loggingOn,
-                        instanceEnvironment,
-                        logMessage,
-                        clockUpdate,
-                    );
                 fmi3ActivateModelPartition(
                     instance: fmi3Instance,
                     clockReference: fmi3ValueReference,
@@ -208,210 +204,6 @@ macro_rules! export_fmi3 {
                         stopTimeDefined,
                         stopTime,
                     );
-                fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::ExitInitializationMode, component(instance));
-                fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterEventMode, component(instance));
-                fmi3Terminate(instance: fmi3Instance) -> fmi3Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Terminate, component(instance));
-                fmi3Reset(instance: fmi3Instance) -> fmi3Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::Reset, component(instance));
-                fmi3GetFloat64(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut fmi3Float64,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_float64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3GetInt32(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut fmi3Int32,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_int32::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3GetInt64(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut fmi3Int64,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_int64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3GetBoolean(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut fmi3Boolean,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_boolean::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3GetString(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut fmi3String,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_string::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3SetFloat64(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const fmi3Float64,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_float64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3SetInt32(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const fmi3Int32,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_int32::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3SetInt64(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const fmi3Int64,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_int64::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3SetBoolean(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const fmi3Boolean,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_boolean::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3SetString(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const fmi3String,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_string::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, values, nValues);
-                fmi3GetBinary(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    valueSizes: *mut usize,
-                    values: *mut fmi3Binary,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::get_binary::<__RustfmuModel>(
-                        component(instance),
-                        valueReferences,
-                        nValueReferences,
-                        valueSizes,
-                        values,
-                        nValues,
-                    );
-                fmi3SetBinary(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    valueSizes: *const usize,
-                    values: *const fmi3Binary,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    api3::set_binary::<__RustfmuModel>(
-                        component(instance),
-                        valueReferences,
-                        nValueReferences,
-                        valueSizes,
-                        values,
-                        nValues,
-                    );
-                fmi3GetFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
-                    shared::get_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
-                fmi3SetFMUState(instance: fmi3Instance, FMUState: fmi3FMUState) -> fmi3Status =>
-                    shared::set_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
-                fmi3FreeFMUState(instance: fmi3Instance, FMUState: *mut fmi3FMUState) -> fmi3Status =>
-                    shared::free_fmu_state::<__RustfmuModel>(&TERMS, component(instance), FMUState);
-                fmi3SerializedFMUStateSize(
-                    instance: fmi3Instance,
-                    FMUState: fmi3FMUState,
-                    size: *mut usize,
-                ) -> fmi3Status =>
-                    shared::serialized_fmu_state_size::<__RustfmuModel>(&TERMS, component(instance), FMUState, size);
-                fmi3SerializeFMUState(
-                    instance: fmi3Instance,
-                    FMUState: fmi3FMUState,
-                    serializedState: *mut fmi3Byte,
-                    size: usize,
-                ) -> fmi3Status =>
-                    shared::serialize_fmu_state::<__RustfmuModel>(
-                        &TERMS,
-                        component(instance),
-                        FMUState,
-                        serializedState.cast(),
-                        size,
-                    );
-                fmi3DeserializeFMUState(
-                    instance: fmi3Instance,
-                    serializedState: *const fmi3Byte,
-                    size: usize,
-                    FMUState: *mut fmi3FMUState,
-                ) -> fmi3Status =>
-                    shared::deserialize_fmu_state::<__RustfmuModel>(
-                        &TERMS,
-                        component(instance),
-                        serializedState.cast(),
-                        size,
-                        FMUState,
-                    );
-                fmi3GetDirectionalDerivative(
-                    instance: fmi3Instance,
-                    unknowns: *const fmi3ValueReference,
-                    nUnknowns: usize,
-                    knowns: *const fmi3ValueReference,
-                    nKnowns: usize,
-                    seed: *const fmi3Float64,
-                    nSeed: usize,
-                    sensitivity: *mut fmi3Float64,
-                    nSensitivity: usize,
-                ) -> fmi3Status =>
-                    api3::get_derivative::<__RustfmuModel>(
-                        false,
-                        component(instance),
-                        unknowns,
-                        nUnknowns,
-                        knowns,
-                        nKnowns,
-                        seed,
-                        nSeed,
-                        sensitivity,
-                        nSensitivity,
-                    );
-                fmi3GetAdjointDerivative(
-                    instance: fmi3Instance,
-                    unknowns: *const fmi3ValueReference,
-                    nUnknowns: usize,
-                    knowns: *const fmi3ValueReference,
-                    nKnowns: usize,
-                    seed: *const fmi3Float64,
-                    nSeed: usize,
-                    sensitivity: *mut fmi3Float64,
-                    nSensitivity: usize,
-                ) -> fmi3Status =>
-                    api3::get_derivative::<__RustfmuModel>(
-                        true,
-                        component(instance),
-                        unknowns,
-                        nUnknowns,
-                        knowns,
-                        nKnowns,
-                        seed,
-                        nSeed,
-                        sensitivity,
-                        nSensitivity,
-                    );
                 fmi3EvaluateDiscreteStates(instance: fmi3Instance) -> fmi3Status =>
                     api3::evaluate_discrete_states::<__RustfmuModel>(component(instance));
                 fmi3UpdateDiscreteStates(
@@ -432,65 +224,6 @@ macro_rules! export_fmi3 {
                         nextEventTimeDefined,
                         nextEventTime,
                     );
-                fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status =>
-                    shared::transition::<__RustfmuModel>(&TERMS, shared::Transition::EnterContinuousTimeMode, component(instance));
-                fmi3CompletedIntegratorStep(
-                    instance: fmi3Instance,
-                    noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
-                    enterEventMode: *mut fmi3Boolean,
-                    terminateSimulation: *mut fmi3Boolean,
-                ) -> fmi3Status =>
-                    shared::completed_integrator_step::<__RustfmuModel, fmi3Boolean>(
-                        &TERMS,
-                        component(instance),
-                        noSetFMUStatePriorToCurrentPoint,
-                        enterEventMode,
-                        terminateSimulation,
-                    );
-                fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status =>
-                    shared::set_time::<__RustfmuModel>(&TERMS, component(instance), time);
-                fmi3SetContinuousStates(
-                    instance: fmi3Instance,
-                    continuousStates: *const fmi3Float64,
-                    nContinuousStates: usize,
-                ) -> fmi3Status =>
-                    shared::set_continuous_states::<__RustfmuModel>(&TERMS, component(instance), continuousStates, nContinuousStates);
-                fmi3GetContinuousStateDerivatives(
-                    instance: fmi3Instance,
-                    derivatives: *mut fmi3Float64,
-                    n: usize,
-                ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Derivatives, component(instance), derivatives, n);
-                fmi3GetEventIndicators(
-                    instance: fmi3Instance,
-                    eventIndicators: *mut fmi3Float64,
-                    n: usize,
-                ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(
-                        &TERMS,
-                        shared::Vector::EventIndicators,
-                        component(instance),
-                        eventIndicators,
-                        n,
-                    );
-                fmi3GetContinuousStates(
-                    instance: fmi3Instance,
-                    continuousStates: *mut fmi3Float64,
-                    n: usize,
-                ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(
-                        &TERMS,
-                        shared::Vector::ContinuousStates,
-                        component(instance),
-                        continuousStates,
-                        n,
-                    );
-                fmi3GetNominalsOfContinuousStates(
-                    instance: fmi3Instance,
-                    nominals: *mut fmi3Float64,
-                    n: usize,
-                ) -> fmi3Status =>
-                    shared::get_vector::<__RustfmuModel>(&TERMS, shared::Vector::Nominals, component(instance), nominals, n);
                 fmi3GetNumberOfEventIndicators(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
                     api3::get_number_of_event_indicators::<__RustfmuModel>(component(instance), n);
                 fmi3GetNumberOfContinuousStates(instance: fmi3Instance, n: *mut usize) -> fmi3Status =>
@@ -614,8 +347,58 @@ macro_rules! export_fmi3 {
                 ) -> fmi3Status =>
                     api3::set_shift_decimal::<__RustfmuModel>(component(instance), valueReferences, nValueReferences, shifts);
             }
+            $crate::__rustfmu_shared_exports! {
+                for __RustfmuModel: instance fmi3Instance, status fmi3Status, boolean fmi3Boolean, real fmi3Float64,
+                    byte fmi3Byte, FMU state fmi3FMUState;
+                transitions: fmi3ExitInitializationMode => ExitInitializationMode, fmi3EnterEventMode => EnterEventMode,
+                    fmi3Terminate => Terminate, fmi3Reset => Reset,
+                    fmi3EnterContinuousTimeMode => EnterContinuousTimeMode;
+                FMU state: fmi3GetFMUState, fmi3SetFMUState, fmi3FreeFMUState, fmi3SerializedFMUStateSize,
+                    fmi3SerializeFMUState, fmi3DeserializeFMUState;
+                vectors: fmi3GetContinuousStateDerivatives => Derivatives, fmi3GetEventIndicators => EventIndicators,
+                    fmi3GetContinuousStates => ContinuousStates, fmi3GetNominalsOfContinuousStates => Nominals;
+                model exchange: fmi3CompletedIntegratorStep, fmi3SetTime, fmi3SetContinuousStates;
+            }
+            $crate::__rustfmu_fmi3_rows! {
+                instantiate for __RustfmuModel:
+                fmi3InstantiateModelExchange(;) => instantiate_model_exchange();
+                fmi3InstantiateCoSimulation(
+                    eventModeUsed: fmi3Boolean,
+                    earlyReturnAllowed: fmi3Boolean,
+                    requiredIntermediateVariables: *const fmi3ValueReference,
+                    nRequiredIntermediateVariables: usize;
+                    intermediateUpdate: fmi3IntermediateUpdateCallback
+                ) => instantiate_co_simulation(
+                    eventModeUsed,
+                    earlyReturnAllowed,
+                    requiredIntermediateVariables,
+                    nRequiredIntermediateVariables,
+                    intermediateUpdate
+                );
+                fmi3InstantiateScheduledExecution(;
+                    clockUpdate: fmi3ClockUpdateCallback,
+                    _lockPreemption: fmi3LockPreemptionCallback,
+                    _unlockPreemption: fmi3UnlockPreemptionCallback
+                ) => instantiate_scheduled_execution(clockUpdate);
+            }
+            $crate::__rustfmu_fmi3_rows! {
+                derivatives for __RustfmuModel:
+                fmi3GetDirectionalDerivative => false;
+                fmi3GetAdjointDerivative => true;
+            }
+            // The getters and setters of the types with runtime functions of their own (Enumerations
+            // are Int64).
+            $crate::__rustfmu_fmi3_rows! {
+                values for __RustfmuModel:
+                fmi3GetFloat64 => get_float64, fmi3SetFloat64 => set_float64(fmi3Float64);
+                fmi3GetInt32 => get_int32, fmi3SetInt32 => set_int32(fmi3Int32);
+                fmi3GetInt64 => get_int64, fmi3SetInt64 => set_int64(fmi3Int64);
+                fmi3GetBoolean => get_boolean, fmi3SetBoolean => set_boolean(fmi3Boolean);
+                fmi3GetString => get_string, fmi3SetString => set_string(fmi3String);
+                fmi3GetBinary => get_binary, fmi3SetBinary => set_binary(fmi3Binary, valueSizes);
+            }
             // The getters and setters of the FMI 3.0 types without a 2.0 counterpart.
-            $crate::__rustfmu_fmi3_refusals! {
+            $crate::__rustfmu_fmi3_rows! {
                 typed for __RustfmuModel:
                 fmi3GetFloat32, fmi3SetFloat32(fmi3Float32);
                 fmi3GetInt8, fmi3SetInt8(fmi3Int8);
@@ -627,7 +410,7 @@ macro_rules! export_fmi3 {
             }
             const NO_FRACTIONS: &str = "its clocks have supportsFraction = false: use the Decimal functions";
             // The functions of the features this FMU does not have, each with the reason.
-            $crate::__rustfmu_fmi3_refusals! {
+            $crate::__rustfmu_fmi3_rows! {
                 not_provided for __RustfmuModel:
                 fmi3GetIntervalFraction(
                     _valueReferences: *const fmi3ValueReference,

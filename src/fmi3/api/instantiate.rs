@@ -13,17 +13,27 @@ fn resource_dir(path: &str) -> Option<std::path::PathBuf> {
     p.is_absolute().then_some(p)
 }
 
-/// Both instantiation functions: checks, then the instance.
+/// What every instantiation function is given: this binary's token and embedded description
+/// (from `export_fmi3!`), and the importer's arguments the three functions share.
+#[derive(Clone, Copy)]
+pub struct Instantiation {
+    pub own_token: &'static str,
+    pub description: &'static [u8],
+    pub instance_name: fmi3String,
+    pub token: fmi3String,
+    pub resource_path: fmi3String,
+    pub logging_on: fmi3Boolean,
+    pub environment: fmi3InstanceEnvironment,
+    pub log_message: fmi3LogMessageCallback,
+}
+
+/// The three instantiation functions: checks, then the instance.
+///
+/// # Safety
+/// The strings of `given` are NULL or NUL-terminated (the instantiation function's contract).
 unsafe fn instantiate<M: CoSimulation>(
     function: &str,
-    own_token: &'static str,
-    description: &'static [u8],
-    instance_name: fmi3String,
-    token: fmi3String,
-    resource_path: fmi3String,
-    logging_on: bool,
-    environment: fmi3InstanceEnvironment,
-    log_message: fmi3LogMessageCallback,
+    given: Instantiation,
     model_exchange: bool,
     refusal: Option<String>,
     warning: Option<String>,
@@ -31,6 +41,16 @@ unsafe fn instantiate<M: CoSimulation>(
     intermediate_update: Option<Box<dyn FnMut(f64) -> Option<f64>>>,
     scheduled: Option<Option<std::rc::Rc<dyn Fn()>>>,
 ) -> fmi3Instance {
+    let Instantiation {
+        own_token,
+        description,
+        instance_name,
+        token,
+        resource_path,
+        logging_on,
+        environment,
+        log_message,
+    } = given;
     let made = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: NUL-terminated strings from the importer, or NULL.
         let (name, token, resources) = unsafe { (text(instance_name), text(token), text(resource_path)) };
@@ -99,29 +119,12 @@ unsafe fn instantiate<M: CoSimulation>(
     made.unwrap_or(ptr::null_mut())
 }
 
-pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
-    own_token: &'static str,
-    description: &'static [u8],
-    instance_name: fmi3String,
-    token: fmi3String,
-    resource_path: fmi3String,
-    _visible: fmi3Boolean,
-    logging_on: fmi3Boolean,
-    environment: fmi3InstanceEnvironment,
-    log_message: fmi3LogMessageCallback,
-) -> fmi3Instance {
+pub unsafe fn instantiate_model_exchange<M: CoSimulation>(given: Instantiation) -> fmi3Instance {
     // SAFETY: the strings come with this function's contract, which is `instantiate`'s.
     unsafe {
         instantiate::<M>(
             "fmi3InstantiateModelExchange",
-            own_token,
-            description,
-            instance_name,
-            token,
-            resource_path,
-            logging_on,
-            environment,
-            log_message,
+            given,
             true,
             None,
             None,
@@ -133,19 +136,11 @@ pub unsafe fn instantiate_model_exchange<M: CoSimulation>(
 }
 
 pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
-    own_token: &'static str,
-    description: &'static [u8],
-    instance_name: fmi3String,
-    token: fmi3String,
-    resource_path: fmi3String,
-    _visible: fmi3Boolean,
-    logging_on: fmi3Boolean,
+    given: Instantiation,
     event_mode_used: fmi3Boolean,
     early_return_allowed: fmi3Boolean,
     required_intermediate_variables: *const fmi3ValueReference,
     n_required_intermediate_variables: usize,
-    environment: fmi3InstanceEnvironment,
-    log_message: fmi3LogMessageCallback,
     intermediate_update: fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance {
     // With eventModeUsed the importer handles the events in Event Mode; with earlyReturnAllowed
@@ -198,7 +193,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     } else {
         None
     };
-    let can_return_early = early_return_allowed;
+    let (can_return_early, environment) = (early_return_allowed, given.environment);
     let intermediate = intermediate_update.map(|callback| {
         let hook = move |t: f64| -> Option<f64> {
             let (mut requested, mut at) = (false, t);
@@ -225,14 +220,7 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
     unsafe {
         instantiate::<M>(
             "fmi3InstantiateCoSimulation",
-            own_token,
-            description,
-            instance_name,
-            token,
-            resource_path,
-            logging_on,
-            environment,
-            log_message,
+            given,
             false,
             refusal,
             warning,
@@ -249,22 +237,16 @@ pub unsafe fn instantiate_co_simulation<M: CoSimulation>(
 /// not called: the runtime serializes the calls into one instance (a call from another thread
 /// waits until the one inside is done), so nothing inside an instance is preempted.
 pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
-    own_token: &'static str,
-    description: &'static [u8],
-    instance_name: fmi3String,
-    token: fmi3String,
-    resource_path: fmi3String,
-    logging_on: fmi3Boolean,
-    environment: fmi3InstanceEnvironment,
-    log_message: fmi3LogMessageCallback,
+    given: Instantiation,
     clock_update: fmi3ClockUpdateCallback,
 ) -> fmi3Instance {
+    let environment = given.environment;
     if !M::SCHEDULED_EXECUTION {
         let _ = catch_unwind(AssertUnwindSafe(|| {
             // SAFETY: a NUL-terminated string from the importer, or NULL.
-            let name = unsafe { text(instance_name) };
+            let name = unsafe { text(given.instance_name) };
             let logger = Logger::new(
-                Callback::Message(log_message),
+                Callback::Message(given.log_message),
                 environment,
                 name.as_deref().unwrap_or(""),
                 true,
@@ -291,14 +273,7 @@ pub unsafe fn instantiate_scheduled_execution<M: CoSimulation>(
     unsafe {
         instantiate::<M>(
             "fmi3InstantiateScheduledExecution",
-            own_token,
-            description,
-            instance_name,
-            token,
-            resource_path,
-            logging_on,
-            environment,
-            log_message,
+            given,
             false,
             None,
             None,
