@@ -53,11 +53,12 @@ pub const DISCARD: Status = 2;
 pub const ERROR: Status = 3;
 pub const FATAL: Status = 4;
 
-/// The FMI version an instance was instantiated through.
+/// The FMI version an instance was instantiated through (the discriminant: the column of
+/// `c_names`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Version {
-    Fmi2,
-    Fmi3,
+    Fmi2 = 0,
+    Fmi3 = 1,
 }
 
 listed_enum! {
@@ -116,22 +117,76 @@ pub struct Terms {
     pub fmu_state: &'static str,
 }
 
-/// The table of `name(x)` for every `x` of `$ty::ALL`, built at compile time (a `const fn`
-/// cannot call a function pointer, so each layer builds its tables with this).
-macro_rules! table {
-    ($name:ident, $ty:ty) => {{
-        let mut table = [""; <$ty>::COUNT];
-        let mut i = 0;
-        while i < <$ty>::COUNT {
-            table[i] = $name(<$ty>::ALL[i]);
-            i += 1;
-        }
-        table
-    }};
+/// Each [`Function`]'s C name in FMI 2.0 and in FMI 3.0, side by side.
+#[rustfmt::skip] // a table: one function a line
+const fn c_names(f: Function) -> [&'static str; 2] {
+    match f {
+        Function::SetDebugLogging => ["fmi2SetDebugLogging", "fmi3SetDebugLogging"],
+        // FMI 3.0 has no fmi3SetupExperiment: the experiment comes with fmi3EnterInitializationMode.
+        Function::SetupExperiment => ["fmi2SetupExperiment", "fmi3EnterInitializationMode"],
+        Function::EnterInitializationMode => ["fmi2EnterInitializationMode", "fmi3EnterInitializationMode"],
+        Function::ExitInitializationMode => ["fmi2ExitInitializationMode", "fmi3ExitInitializationMode"],
+        Function::Terminate => ["fmi2Terminate", "fmi3Terminate"],
+        Function::Reset => ["fmi2Reset", "fmi3Reset"],
+        Function::FreeInstance => ["fmi2FreeInstance", "fmi3FreeInstance"],
+        Function::GetString => ["fmi2GetString", "fmi3GetString"],
+        Function::SetString => ["fmi2SetString", "fmi3SetString"],
+        Function::DoStep => ["fmi2DoStep", "fmi3DoStep"],
+        Function::EnterEventMode => ["fmi2EnterEventMode", "fmi3EnterEventMode"],
+        Function::NewDiscreteStates => ["fmi2NewDiscreteStates", "fmi3UpdateDiscreteStates"],
+        Function::EnterContinuousTimeMode => ["fmi2EnterContinuousTimeMode", "fmi3EnterContinuousTimeMode"],
+        Function::CompletedIntegratorStep => ["fmi2CompletedIntegratorStep", "fmi3CompletedIntegratorStep"],
+        Function::SetTime => ["fmi2SetTime", "fmi3SetTime"],
+        Function::SetContinuousStates => ["fmi2SetContinuousStates", "fmi3SetContinuousStates"],
+        Function::GetContinuousStates => ["fmi2GetContinuousStates", "fmi3GetContinuousStates"],
+        Function::GetDerivatives => ["fmi2GetDerivatives", "fmi3GetContinuousStateDerivatives"],
+        Function::GetNominalsOfContinuousStates => ["fmi2GetNominalsOfContinuousStates", "fmi3GetNominalsOfContinuousStates"],
+        Function::GetEventIndicators => ["fmi2GetEventIndicators", "fmi3GetEventIndicators"],
+        Function::GetDirectionalDerivative => ["fmi2GetDirectionalDerivative", "fmi3GetDirectionalDerivative"],
+        Function::GetFmuState => ["fmi2GetFMUstate", "fmi3GetFMUState"],
+        Function::SetFmuState => ["fmi2SetFMUstate", "fmi3SetFMUState"],
+        Function::FreeFmuState => ["fmi2FreeFMUstate", "fmi3FreeFMUState"],
+        Function::SerializedFmuStateSize => ["fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize"],
+        Function::SerializeFmuState => ["fmi2SerializeFMUstate", "fmi3SerializeFMUState"],
+        Function::DeserializeFmuState => ["fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState"],
+    }
 }
-pub(crate) use table;
 
 impl Terms {
+    /// The terms of `version`: the functions' names of `c_names`, the state names of the core
+    /// (FMI 2.0's) but for `renamed` states, what the version calls the token and the FMU state.
+    pub const fn of(
+        version: Version,
+        token: &'static str,
+        fmu_state: &'static str,
+        renamed: &[(machine::State, &'static str)],
+    ) -> Terms {
+        let mut functions = [""; Function::COUNT];
+        let mut i = 0;
+        while i < Function::COUNT {
+            functions[i] = c_names(Function::ALL[i])[version as usize];
+            i += 1;
+        }
+        let mut states = [""; machine::State::COUNT];
+        let mut i = 0;
+        while i < machine::State::COUNT {
+            states[i] = machine::State::ALL[i].name();
+            i += 1;
+        }
+        let mut i = 0;
+        while i < renamed.len() {
+            states[renamed[i].0 as usize] = renamed[i].1;
+            i += 1;
+        }
+        Terms {
+            version,
+            functions,
+            states,
+            token,
+            fmu_state,
+        }
+    }
+
     #[inline]
     pub fn name(&self, f: Function) -> &'static str {
         self.functions[f as usize]
