@@ -176,32 +176,25 @@ pub unsafe fn get_derivative<M: CoSimulation>(
             )
         };
         match arrays {
+            (Some(unknowns), Some(knowns), Some(seed), Some(out)) if adjoint => {
+                adjoint_of(inst, unknowns, knowns, seed, out)
+            }
+            // fmi3GetDirectionalDerivative: sensitivity = J seed, exact (dual numbers); in
+            // Initialization Mode the InitialUnknowns' over the knowns of that mode
+            // (`core::initial_derivatives`).
             (Some(unknowns), Some(knowns), Some(seed), Some(out)) => {
-                let compute = if adjoint { adjoint_of::<M> } else { directional::<M> };
-                compute(inst, unknowns, knowns, seed, out)
+                let mut got = vec![0.0; out.len()];
+                let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
+                if status == fmi3OK {
+                    out.copy_from_slice(&got);
+                }
+                status
             }
             _ => inst.error(&format!(
                 "{function}: unknowns, knowns, seed or sensitivity is NULL (nUnknowns = {n_unknowns}, nKnowns = {n_knowns})"
             )),
         }
     })
-}
-
-/// fmi3GetDirectionalDerivative: sensitivity = J seed, exact (dual numbers); in Initialization
-/// Mode the InitialUnknowns' over the knowns of that mode (`core::initial_derivatives`).
-fn directional<M: CoSimulation>(
-    inst: &mut Instance<M>,
-    unknowns: &[u32],
-    knowns: &[u32],
-    seed: &[f64],
-    out: &mut [f64],
-) -> fmi3Status {
-    let mut got = vec![0.0; out.len()];
-    let status = inst.directional_derivative(unknowns, knowns, seed, &mut got);
-    if status == fmi3OK {
-        out.copy_from_slice(&got);
-    }
-    status
 }
 
 /// fmi3GetAdjointDerivative: sensitivity = Jᵀ seed, J = d unknowns / d knowns, exact: each

@@ -145,24 +145,36 @@ const NO_CONFIGURATION: &str = "this FMU has no structural parameters, so there 
 /// fmi3EnterConfigurationMode of an FMU with structural parameters (one without has none: the
 /// export refuses the call with the reason).
 pub fn enter_configuration_mode<M: CoSimulation>(c: Option<&Component<M>>) -> fmi3Status {
-    const F: &str = "fmi3EnterConfigurationMode";
-    if !const { M::DESCRIPTION.has_structural_parameters() } {
-        return not_provided::<M>(c, F, NO_CONFIGURATION);
-    }
-    with_instance(c, Call::EnterConfigurationMode, F, |inst| {
-        inst.enter_configuration_mode(F)
-    })
+    configuration_mode(
+        c,
+        "fmi3EnterConfigurationMode",
+        Call::EnterConfigurationMode,
+        Instance::enter_configuration_mode,
+    )
 }
 
 /// fmi3ExitConfigurationMode.
 pub fn exit_configuration_mode<M: CoSimulation>(c: Option<&Component<M>>) -> fmi3Status {
-    const F: &str = "fmi3ExitConfigurationMode";
+    configuration_mode(
+        c,
+        "fmi3ExitConfigurationMode",
+        Call::ExitConfigurationMode,
+        Instance::exit_configuration_mode,
+    )
+}
+
+/// Entering or leaving Configuration Mode (`change`, the state table's row `call`): refused with
+/// the reason by an FMU without structural parameters.
+fn configuration_mode<M: CoSimulation>(
+    c: Option<&Component<M>>,
+    function: &'static str,
+    call: Call,
+    change: fn(&mut Instance<M>, &str) -> fmi3Status,
+) -> fmi3Status {
     if !const { M::DESCRIPTION.has_structural_parameters() } {
-        return not_provided::<M>(c, F, NO_CONFIGURATION);
+        return not_provided::<M>(c, function, NO_CONFIGURATION);
     }
-    with_instance(c, Call::ExitConfigurationMode, F, |inst| {
-        inst.exit_configuration_mode(F)
-    })
+    with_instance(c, call, function, |inst| change(inst, function))
 }
 
 pub fn enter_step_mode<M: CoSimulation>(c: Option<&Component<M>>) -> fmi3Status {
@@ -211,30 +223,40 @@ pub unsafe fn update_discrete_states<M: CoSimulation>(
 }
 
 pub unsafe fn get_number_of_continuous_states<M: CoSimulation>(c: Option<&Component<M>>, n: *mut usize) -> fmi3Status {
-    const F: &str = "fmi3GetNumberOfContinuousStates";
-    with_instance(c, Call::GetNumberOf, F, |inst| {
-        // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
-        match unsafe { n.as_mut() } {
-            Some(n) => {
-                // With the structural parameters as they are now (a sized array state).
-                *n = crate::core::structural::number_of_states(&inst.sim.model);
-                fmi3OK
-            }
-            None => inst.error(&format!("{F}: nContinuousStates is NULL")),
-        }
-    })
+    // With the structural parameters as they are now (a sized array state).
+    let count = |inst: &Instance<M>| crate::core::structural::number_of_states(&inst.sim.model);
+    // SAFETY: this function's contract is `number_of`'s.
+    unsafe { number_of(c, "fmi3GetNumberOfContinuousStates", "nContinuousStates", n, count) }
 }
 
 pub unsafe fn get_number_of_event_indicators<M: CoSimulation>(c: Option<&Component<M>>, n: *mut usize) -> fmi3Status {
-    const F: &str = "fmi3GetNumberOfEventIndicators";
-    with_instance(c, Call::GetNumberOf, F, |inst| {
+    // SAFETY: this function's contract is `number_of`'s.
+    unsafe {
+        number_of(c, "fmi3GetNumberOfEventIndicators", "nEventIndicators", n, |_| {
+            M::INDICATORS.len()
+        })
+    }
+}
+
+/// `function`'s answer `count` written to its output `n` (its parameter `name`).
+///
+/// # Safety
+/// `c` NULL or a live instance of this library for `M`; `n` NULL or writable.
+unsafe fn number_of<M: CoSimulation>(
+    c: Option<&Component<M>>,
+    function: &'static str,
+    name: &str,
+    n: *mut usize,
+    count: impl FnOnce(&Instance<M>) -> usize,
+) -> fmi3Status {
+    with_instance(c, Call::GetNumberOf, function, |inst| {
         // SAFETY: `as_mut` checks NULL; the contract makes a non-NULL `n` writable.
         match unsafe { n.as_mut() } {
             Some(n) => {
-                *n = M::INDICATORS.len();
+                *n = count(inst);
                 fmi3OK
             }
-            None => inst.error(&format!("{F}: nEventIndicators is NULL")),
+            None => inst.error(&format!("{function}: {name} is NULL")),
         }
     })
 }
