@@ -81,6 +81,14 @@ pub fn find_encoded_for(binary: &[u8], version: FmiVersion) -> Result<&[u8], Str
     ))
 }
 
+/// `Ok($ty { .. })` of the fields read from `$d` in their encoded order, each by its reader
+/// (`str`, `i32`, `f64`, `bool`).
+macro_rules! read {
+    ($d:ident => $ty:ident { $($field:ident: $reader:ident),* $(,)? }) => {
+        Ok($ty { $($field: $d.$reader()?),* })
+    };
+}
+
 struct Dec<'a> {
     b: &'a [u8],
     at: usize,
@@ -127,6 +135,9 @@ impl Dec<'_> {
             .map(leak)
             .map_err(|_| "a text in the embedded description is not UTF-8".to_string())
     }
+    fn bool(&mut self) -> Result<bool, String> {
+        Ok(self.u8()? != 0)
+    }
     fn opt_f64(&mut self) -> Result<Option<f64>, String> {
         Ok(if self.u8()? == 0 { None } else { Some(self.f64()?) })
     }
@@ -142,11 +153,7 @@ impl Dec<'_> {
     fn names(&mut self) -> Result<Option<&'static [&'static str]>, String> {
         Ok(match self.u8()? {
             0 => None,
-            _ => {
-                let n = self.count()?;
-                let names = (0..n).map(|_| self.str()).collect::<Result<Vec<_>, _>>()?;
-                Some(leak_slice(names))
-            }
+            _ => Some(leak_slice(self.list(Self::str)?)),
         })
     }
     fn count(&mut self) -> Result<usize, String> {
@@ -159,6 +166,21 @@ impl Dec<'_> {
             ));
         }
         Ok(n)
+    }
+    /// A count, then that many items, each read by `item`.
+    fn list<T>(&mut self, mut item: impl FnMut(&mut Self) -> Result<T, String>) -> Result<Vec<T>, String> {
+        let n = self.count()?;
+        let mut items = Vec::with_capacity(n);
+        for _ in 0..n {
+            items.push(item(self)?);
+        }
+        Ok(items)
+    }
+    /// Whether the optional block `tag` comes next (then its tag is read).
+    fn block(&mut self, tag: u8) -> bool {
+        let here = self.at < self.b.len() && self.b[self.at] == tag;
+        self.at += usize::from(here);
+        here
     }
     fn start(&mut self, name: &str) -> Result<Start, String> {
         Ok(match self.u8()? {
@@ -173,11 +195,7 @@ impl Dec<'_> {
                 let n = self.count()?;
                 Start::Binary(leak_slice(self.take(n)?.to_vec()))
             }
-            8 => {
-                let n = self.count()?;
-                let items = (0..n).map(|_| self.start(name)).collect::<Result<Vec<_>, _>>()?;
-                Start::Array(leak_slice(items))
-            }
+            8 => Start::Array(leak_slice(self.list(|d| d.start(name))?)),
             t => return Err(format!("'{name}': unknown start code {t}")),
         })
     }
@@ -208,15 +226,7 @@ impl Dec<'_> {
         } else {
             let name = self.str()?;
             let description = self.str()?;
-            let n = self.count()?;
-            let mut items = Vec::with_capacity(n);
-            for _ in 0..n {
-                items.push(EnumItem {
-                    name: self.str()?,
-                    value: self.i32()?,
-                    description: self.str()?,
-                });
-            }
+            let items = self.list(|d| read!(d => EnumItem { name: str, value: i32, description: str }))?;
             Some(&*Box::leak(Box::new(EnumType {
                 name,
                 description,
@@ -247,6 +257,11 @@ impl Dec<'_> {
     }
 }
 
+/// Element `at` of `items` (the `of` read so far) that a block refers to, as `what` `at`.
+fn beyond<'a, T>(items: &'a mut [T], at: usize, what: &str, of: &str) -> Result<&'a mut T, String> {
+    items.get_mut(at).ok_or_else(|| format!("{what} {at}, beyond the {of}"))
+}
+
 /// Decodes what [`encode`] wrote (as [`find_encoded`] returns it). The texts are leaked: this is
 /// for short-lived tools such as `cargo fmu`, never for the FMU itself. One function of ~260
 /// lines on purpose: it reads the blocks in the order `Enc::description` writes them, and the
@@ -259,13 +274,8 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         b: &encoded[HEADER..],
         at: 0,
     };
-    let model_identifier = d.str()?;
-    let description = d.str()?;
-    let author = d.str()?;
-    let version = d.str()?;
-    let copyright = d.str()?;
-    let license = d.str()?;
-    let generation_tool = d.str()?;
+    let (model_identifier, description, author, version, copyright, license, generation_tool) =
+        (d.str()?, d.str()?, d.str()?, d.str()?, d.str()?, d.str()?, d.str()?);
     let mut interfaces = Interfaces {
         co_simulation: d.u8()? != 0,
         model_exchange: d.u8()? != 0,
@@ -283,10 +293,8 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             step_size: d.opt_f64()?,
         })
     };
-    let n = d.count()?;
-    let mut units = Vec::with_capacity(n);
-    for _ in 0..n {
-        units.push(Unit {
+    let mut units = d.list(|d| {
+        Ok(Unit {
             name: d.str()?,
             base: BaseUnit {
                 kg: d.i32()?,
@@ -301,65 +309,39 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 offset: d.f64()?,
             },
             display_units: &[],
-        });
-    }
-    let n = d.count()?;
-    let mut log_categories = Vec::with_capacity(n);
-    for _ in 0..n {
-        log_categories.push(LogCategory {
-            name: d.str()?,
-            description: d.str()?,
-        });
-    }
-    let n = d.count()?;
-    let mut variables = Vec::with_capacity(n);
-    for _ in 0..n {
-        variables.push(d.variable()?);
-    }
+        })
+    })?;
+    let log_categories = d.list(|d| read!(d => LogCategory { name: str, description: str }))?;
+    let mut variables = d.list(Dec::variable)?;
     let internal_state = d.str()?;
     let mut event_indicators: &'static [&'static str] = &[];
-    if d.at < d.b.len() && d.b[d.at] == EVENT_INDICATORS_TAG {
-        d.u8()?;
+    if d.block(EVENT_INDICATORS_TAG) {
         event_indicators = d.names()?.unwrap_or(&[]);
     }
-    let mut terminals: Vec<Terminal> = Vec::new();
-    if d.at < d.b.len() && d.b[d.at] == TERMINALS_TAG {
-        d.u8()?;
-        let n = d.count()?;
-        for _ in 0..n {
+    let terminals = if !d.block(TERMINALS_TAG) {
+        Vec::new()
+    } else {
+        d.list(|d| {
             let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
-            let m = d.count()?;
-            let members = (0..m)
-                .map(|_| {
-                    Ok(TerminalMember {
-                        variable: d.str()?,
-                        member: d.str()?,
-                        kind: d.str()?,
-                    })
-                })
-                .collect::<Result<Vec<_>, String>>()?;
-            terminals.push(Terminal {
+            let members = d.list(|d| read!(d => TerminalMember { variable: str, member: str, kind: str }))?;
+            Ok(Terminal {
                 name,
                 kind,
                 matching_rule,
                 description,
                 members: leak_slice(members),
-            });
-        }
-    }
-    if d.at < d.b.len() && d.b[d.at] == FMI3_EXTRAS_TAG {
-        d.u8()?;
+            })
+        })?
+    };
+    if d.block(FMI3_EXTRAS_TAG) {
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
             let only = d.u8()? != 0;
             let max_size = if d.u8()? == 0 { None } else { Some(d.u32()?) };
             let mime_type = d.str()?;
-            let n_dims = d.count()?;
-            let dimensions = leak_slice((0..n_dims).map(|_| d.u32()).collect::<Result<Vec<_>, _>>()?);
-            let v = variables
-                .get_mut(at)
-                .ok_or_else(|| format!("FMI 3.0 declarations of variable {at}, beyond the variables"))?;
+            let dimensions = leak_slice(d.list(Dec::u32)?);
+            let v = beyond(&mut variables, at, "FMI 3.0 declarations of variable", "variables")?;
             v.fmi3 = Fmi3Extras {
                 only,
                 max_size,
@@ -371,8 +353,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             };
         }
     }
-    if d.at < d.b.len() && d.b[d.at] == CLOCKS_TAG {
-        d.u8()?;
+    if d.block(CLOCKS_TAG) {
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
@@ -392,32 +373,25 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 })
             };
             let clocks = d.names()?.unwrap_or(&[]);
-            let v = variables
-                .get_mut(at)
-                .ok_or_else(|| format!("the clocks of variable {at}, beyond the variables"))?;
+            let v = beyond(&mut variables, at, "the clocks of variable", "variables")?;
             v.fmi3.clock = clock;
             v.fmi3.clocks = clocks;
         }
     }
-    if d.at < d.b.len() && d.b[d.at] == SIZED_TAG {
-        d.u8()?;
+    if d.block(SIZED_TAG) {
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
-            let n_dims = d.count()?;
-            let sized_by = leak_slice((0..n_dims).map(|_| d.u32()).collect::<Result<Vec<_>, _>>()?);
-            let v = variables
-                .get_mut(at)
-                .ok_or_else(|| format!("the sizes of variable {at}, beyond the variables"))?;
-            v.fmi3.sized_by = sized_by;
+            let sized_by = leak_slice(d.list(Dec::u32)?);
+            beyond(&mut variables, at, "the sizes of variable", "variables")?
+                .fmi3
+                .sized_by = sized_by;
         }
     }
-    if d.at < d.b.len() && d.b[d.at] == INTERPOLATES_INPUTS_TAG {
-        d.u8()?;
+    if d.block(INTERPOLATES_INPUTS_TAG) {
         interfaces.can_interpolate_inputs = true;
     }
-    if d.at < d.b.len() && d.b[d.at] == PRIORITIES_TAG {
-        d.u8()?;
+    if d.block(PRIORITIES_TAG) {
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
@@ -428,8 +402,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             }
         }
     }
-    if d.at < d.b.len() && d.b[d.at] == SCHEDULED_EXECUTION_TAG {
-        d.u8()?;
+    if d.block(SCHEDULED_EXECUTION_TAG) {
         interfaces.scheduled_execution = true;
     }
     // The last byte of an FMI 3.0 encoding is its version tag, never this block's tag.
@@ -438,37 +411,20 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
-            let k = d.count()?;
-            let mut list = Vec::with_capacity(k);
-            for _ in 0..k {
-                list.push(DisplayUnit {
-                    name: d.str()?,
-                    factor: d.f64()?,
-                    offset: d.f64()?,
-                    inverse: d.u8()? != 0,
-                });
-            }
-            let u = units
-                .get_mut(at)
-                .ok_or_else(|| format!("display units of unit {at}, beyond the units"))?;
-            u.display_units = leak_slice(list);
+            let list = d.list(|d| read!(d => DisplayUnit { name: str, factor: f64, offset: f64, inverse: bool }))?;
+            beyond(&mut units, at, "display units of unit", "units")?.display_units = leak_slice(list);
         }
         let n = d.count()?;
         for _ in 0..n {
             let at = d.u32()? as usize;
             let display_unit = d.str()?;
-            let k = d.count()?;
-            let mut aliases = Vec::with_capacity(k);
-            for _ in 0..k {
-                aliases.push(Alias {
-                    name: d.str()?,
-                    description: d.str()?,
-                    display_unit: d.str()?,
-                });
-            }
-            let v = variables
-                .get_mut(at)
-                .ok_or_else(|| format!("the display unit and aliases of variable {at}, beyond the variables"))?;
+            let aliases = d.list(|d| read!(d => Alias { name: str, description: str, display_unit: str }))?;
+            let v = beyond(
+                &mut variables,
+                at,
+                "the display unit and aliases of variable",
+                "variables",
+            )?;
             v.display_unit = display_unit;
             v.aliases = leak_slice(aliases);
         }
