@@ -7,18 +7,19 @@ use crate::description::{LogCategory, RUNTIME_LOG_CATEGORIES};
 use std::ffi::{CStr, CString};
 use std::os::raw::{c_char, c_void};
 
-/// The runtime's own categories, in [`RUNTIME_LOG_CATEGORIES`] order; a model's declared
+/// The runtime's own categories, in [`RUNTIME_LOG_CATEGORIES`] order (a category's
+/// discriminant, its place in the declaration, is its index there); a model's declared
 /// categories follow them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Category {
-    Events = 0,
-    StatusWarning = 1,
-    StatusDiscard = 2,
-    StatusError = 3,
-    StatusFatal = 4,
-    Calls = 5,
-    All = 6,
+    Events,
+    StatusWarning,
+    StatusDiscard,
+    StatusError,
+    StatusFatal,
+    Calls,
+    All,
 }
 
 const RUNTIME_NAMES: [&CStr; 7] = [
