@@ -36,6 +36,43 @@ pub fn get_version() -> fmi2String {
 
 /// Why an instance of the interface asked for cannot be made: the model declares the other
 /// interface only (`#[fmu(co_simulation_only)]`, `#[fmu(model_exchange_only)]`).
+/// A getter's Booleans (2.0's and 3.0's): read for all of `vrs` in one call, so that they are all
+/// checked before anything is computed (one call per reference initialized the model, then
+/// refused the next reference); written to the importer's array `out` as `c_value` makes them,
+/// only when the read succeeded.
+pub(crate) fn get_booleans<M: CoSimulation, C>(
+    inst: &mut Instance<M>,
+    function: &str,
+    vrs: &[u32],
+    out: &mut [C],
+    c_value: impl Fn(bool) -> C,
+) -> fmi2Status {
+    let mut values = vec![false; out.len()];
+    let status = inst.get_values(function, vrs, &mut values);
+    if status == fmi2OK {
+        for (o, v) in out.iter_mut().zip(values) {
+            *o = c_value(v);
+        }
+    }
+    status
+}
+
+/// A setter's strings (2.0's and 3.0's) as Rust strings, or the index of the first NULL one.
+///
+/// # Safety
+/// Each pointer of `values` is NULL or a NUL-terminated string.
+pub(crate) unsafe fn texts(values: &[*const std::os::raw::c_char]) -> Result<Vec<String>, usize> {
+    let mut texts = Vec::with_capacity(values.len());
+    for (i, p) in values.iter().enumerate() {
+        // SAFETY: `text` checks NULL; the caller's contract makes each string NUL-terminated.
+        match unsafe { text(*p) } {
+            Some(t) => texts.push(t.into_owned()),
+            None => return Err(i),
+        }
+    }
+    Ok(texts)
+}
+
 pub fn offered<M: CoSimulation>(model_exchange: bool) -> Option<String> {
     let (offered, name, declared) = if model_exchange {
         (M::MODEL_EXCHANGE, "Model Exchange", "co_simulation_only")
@@ -247,17 +284,7 @@ pub unsafe fn get_boolean<M: CoSimulation>(
 ) -> fmi2Status {
     const F: &str = "fmi2GetBoolean";
     let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [fmi2Boolean]| {
-        // One call for all references, so that they are all checked before anything is
-        // computed (one call per reference initialized the model, then refused the next
-        // reference).
-        let mut values = vec![false; vrs.len()];
-        let status = inst.get_values(F, vrs, &mut values);
-        if status == fmi2OK {
-            for (o, v) in out.iter_mut().zip(values) {
-                *o = if v { fmi2True } else { fmi2False };
-            }
-        }
-        status
+        get_booleans(inst, F, vrs, out, |v| if v { fmi2True } else { fmi2False })
     };
     // SAFETY: this function's contract is `getter`'s.
     unsafe { getter(c, F, (vr, nvr), value, read) }
@@ -297,15 +324,11 @@ pub unsafe fn set_string<M: CoSimulation>(
 ) -> fmi2Status {
     const F: &str = "fmi2SetString";
     let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[fmi2String]| {
-        let mut texts = Vec::with_capacity(values.len());
-        for (i, p) in values.iter().enumerate() {
-            // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
-            match unsafe { text(*p) } {
-                Some(t) => texts.push(t.into_owned()),
-                None => return inst.error(&format!("{F}: value[{i}] is NULL")),
-            }
+        // SAFETY: the contract makes each string NUL-terminated.
+        match unsafe { texts(values) } {
+            Ok(texts) => inst.set_strings(vrs, &texts),
+            Err(i) => inst.error(&format!("{F}: value[{i}] is NULL")),
         }
-        inst.set_strings(vrs, &texts)
     };
     // SAFETY: this function's contract is `setter`'s.
     unsafe { setter(c, Call::SetDiscreteValues, F, (vr, nvr), value, write) }

@@ -491,14 +491,7 @@ pub unsafe fn get_boolean<M: CoSimulation>(
     const F: &str = "fmi3GetBoolean";
     // Written as bytes 0 and 1: the importer's array is C `bool` (one byte).
     let read = |inst: &mut Instance<M>, vrs: &[u32], out: &mut [u8]| {
-        let mut got = vec![false; out.len()];
-        let status = inst.get_values(F, vrs, &mut got);
-        if status == fmi3OK {
-            for (o, v) in out.iter_mut().zip(got) {
-                *o = u8::from(v);
-            }
-        }
-        status
+        crate::fmi2::api::get_booleans(inst, F, vrs, out, u8::from)
     };
     // SAFETY: this function's contract is `getter`'s.
     unsafe { getter::<M, u8>(F, c, vr, nvr, values as *mut u8, n_values, read) }
@@ -554,15 +547,11 @@ pub unsafe fn set_string<M: CoSimulation>(
 ) -> fmi3Status {
     const F: &str = "fmi3SetString";
     let write = |inst: &mut Instance<M>, vrs: &[u32], values: &[fmi3String]| {
-        let mut texts = Vec::with_capacity(values.len());
-        for (i, p) in values.iter().enumerate() {
-            // SAFETY: `text` checks NULL; the contract makes each string NUL-terminated.
-            match unsafe { text(*p) } {
-                Some(t) => texts.push(t.into_owned()),
-                None => return inst.error(&format!("{F}: values[{i}] is NULL; nothing set")),
-            }
+        // SAFETY: the contract makes each string NUL-terminated.
+        match unsafe { crate::fmi2::api::texts(values) } {
+            Ok(texts) => inst.set_strings(vrs, &texts),
+            Err(i) => inst.error(&format!("{F}: values[{i}] is NULL; nothing set")),
         }
-        inst.set_strings(vrs, &texts)
     };
     // SAFETY: this function's contract is `setter`'s.
     unsafe { setter::<M, _>(F, Call::SetDiscreteValues, c, vr, nvr, values, n_values, write) }
