@@ -40,18 +40,14 @@ pub mod state;
 pub mod structural;
 mod trampolines;
 
-use std::os::raw::c_uint;
-
 /// What every function returns: `fmi2Status` and `fmi3Status` have the same C type and the
 /// same values for the five statuses (`fmi2Pending` has no use here: every step is
-/// synchronous), so the core answers in these and the C layers pass them on unchanged; each
+/// synchronous), so the core answers in FMI 3.0's and the C layers pass them on unchanged; each
 /// layer asserts the equality at compile time.
-pub type Status = c_uint;
-pub const OK: Status = 0;
-pub const WARNING: Status = 1;
-pub const DISCARD: Status = 2;
-pub const ERROR: Status = 3;
-pub const FATAL: Status = 4;
+pub use crate::fmi3::abi::{
+    fmi3Discard as DISCARD, fmi3Error as ERROR, fmi3Fatal as FATAL, fmi3OK as OK, fmi3Status as Status,
+    fmi3Warning as WARNING,
+};
 
 /// The FMI version an instance was instantiated through (the discriminant: the column of
 /// `c_names`).
