@@ -1,7 +1,15 @@
-//! What a check found. A check is a function that returns when the FMU passed and panics (an
-//! `assert!` message: what was expected, what came instead) when it failed. While it runs it
-//! may record:
+//! What a check found, and whose obligation it was. A check is a function that returns when the
+//! FMU passed and panics (an `assert!` message: what was expected, what came instead) when it
+//! failed. A failure is kept for what the standard requires ("shall", "must", "is required"): its
+//! message names the document and section (FMI 2.0.5 §x.y, FMI 3.0.2 §x.y) and the requirement in
+//! a few words. While it runs a check may record:
 //!
+//! - a **warning** ([`warn`], [`warned`]): a finding the standard does not make a requirement of
+//!   the FMU: what it leaves undefined or to the FMU (detecting an importer's mistake such as NaN
+//!   set for a Real, robustness beyond the standard, leaks, hangs on absurd input, portability and
+//!   hygiene such as extra exported symbols), each with why it matters. A check with warnings
+//!   and no failure is *warned*; `--strict` ([`Outcome::strict`]) makes it a failure, which is
+//!   what this exporter's own FMUs must pass;
 //! - a **limitation** ([`limitation`], [`convention`]): a part it could not test on this FMU,
 //!   such as the states only this exporter's FMUs can be forced into. A pass with limitations
 //!   is reported as a partial pass, never as a plain one;
@@ -20,10 +28,37 @@ use std::sync::Mutex;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Outcome {
     Pass,
-    /// The failure message.
+    /// The failure message: a normative requirement of the standard the FMU broke.
     Fail(String),
+    /// No failure, but warnings (one a line): see [`warn`].
+    Warn(String),
     /// Why the check does not apply.
     Skip(String),
+}
+
+/// How a warning turned into a failure by `--strict` ([`Outcome::strict`]) starts.
+pub const STRICT_PREFIX: &str = "warned (a failure under --strict):\n";
+
+impl Outcome {
+    /// The verdict's word in reports: `pass`, `fail`, `warn`, `skip`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Outcome::Pass => "pass",
+            Outcome::Fail(_) => "fail",
+            Outcome::Warn(_) => "warn",
+            Outcome::Skip(_) => "skip",
+        }
+    }
+
+    /// The outcome under `--strict`: a warning is a failure (what this exporter's own FMUs must
+    /// pass: they detect the importer's mistakes, leak nothing, export only FMI functions, and
+    /// serialize their state deterministically); everything else as it is.
+    pub fn strict(self) -> Outcome {
+        match self {
+            Outcome::Warn(m) => Outcome::Fail(format!("{STRICT_PREFIX}{m}")),
+            other => other,
+        }
+    }
 }
 
 /// What a check recorded besides its outcome.
@@ -31,6 +66,8 @@ pub enum Outcome {
 pub struct Findings {
     pub limitations: Vec<String>,
     pub info: Vec<String>,
+    /// What the standard leaves undefined or to the FMU that this FMU does not do: see [`warn`].
+    pub warnings: Vec<String>,
 }
 
 thread_local! {
@@ -40,6 +77,38 @@ thread_local! {
 
 /// The payload of [`skip`].
 struct Skipped(String);
+
+/// The payload of [`warned`].
+struct Warned;
+
+/// Records a warning and lets the check go on: a finding the standard does not make a
+/// requirement of the FMU (it leaves the case undefined or to the FMU, or it is portability and
+/// hygiene advice), with why it matters. The check is then *warned* unless it also fails; under
+/// `--strict` a failure. Once per text.
+pub fn warn(text: impl Into<String>) {
+    let text = text.into();
+    FINDINGS.with(|f| {
+        let mut f = f.borrow_mut();
+        if !f.warnings.contains(&text) {
+            f.warnings.push(text);
+        }
+    });
+}
+
+/// Records a warning ([`warn`]) and ends the check: what comes after it in the check cannot be
+/// tested once that happened.
+pub fn warned(text: impl Into<String>) -> ! {
+    warn(text);
+    std::panic::resume_unwind(Box::new(Warned))
+}
+
+/// `warn(text)` unless `ok`: the [`warn`] counterpart of `assert!` (the text is built only when
+/// it is needed).
+pub fn warn_unless(ok: bool, text: impl FnOnce() -> String) {
+    if !ok {
+        warn(text());
+    }
+}
 
 /// Ends the check as skipped: nothing of it applies to this FMU or on this machine.
 pub fn skip(reason: impl Into<String>) -> ! {
@@ -190,12 +259,25 @@ pub fn capture(f: impl FnOnce()) -> (Outcome, Findings) {
         Ok(()) => Outcome::Pass,
         Err(payload) => from_payload(payload),
     };
+    // A failure outranks warnings; warnings outrank a pass or a skip (they are findings about the
+    // FMU, made before the check found nothing more to test).
+    let outcome = match outcome {
+        Outcome::Pass | Outcome::Skip(_) | Outcome::Warn(_) if !findings.warnings.is_empty() => {
+            Outcome::Warn(findings.warnings.join("\n"))
+        }
+        other => other,
+    };
     (outcome, findings)
 }
 
 fn from_payload(payload: Box<dyn Any + Send>) -> Outcome {
     let payload = match payload.downcast::<Skipped>() {
         Ok(s) => return Outcome::Skip(s.0),
+        Err(p) => p,
+    };
+    let payload = match payload.downcast::<Warned>() {
+        // Its text is among the findings' warnings.
+        Ok(_) => return Outcome::Warn(String::new()),
         Err(p) => p,
     };
     let mut message = if let Some(s) = payload.downcast_ref::<String>() {
@@ -209,4 +291,57 @@ fn from_payload(payload: Box<dyn Any + Send>) -> Outcome {
         message.push_str(&format!("\n(check failed at {at})"));
     }
     Outcome::Fail(message)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failure_outranks_warnings_and_warnings_outrank_a_pass_or_a_skip() {
+        let (o, f) = capture(|| {
+            warn("w1");
+            warn("w1");
+            warn("w2");
+        });
+        assert_eq!(o, Outcome::Warn("w1\nw2".into()));
+        assert_eq!(f.warnings, ["w1", "w2"]);
+        let (o, _) = capture(|| {
+            warn("w");
+            panic!("FMI 2.0.5 §2.1.3: broken");
+        });
+        assert!(
+            matches!(&o, Outcome::Fail(m) if m.starts_with("FMI 2.0.5 §2.1.3: broken")),
+            "{o:?}"
+        );
+        let (o, _) = capture(|| {
+            warn("w");
+            skip("nothing else to test")
+        });
+        assert_eq!(o, Outcome::Warn("w".into()));
+        let (o, f) = capture(|| {
+            warned("stops here");
+            #[allow(unreachable_code)]
+            {
+                panic!("not reached")
+            }
+        });
+        assert_eq!(
+            (o, f.warnings),
+            (Outcome::Warn("stops here".into()), vec!["stops here".to_string()])
+        );
+        let (o, _) = capture(|| warn_unless(true, || unreachable!()));
+        assert_eq!(o, Outcome::Pass);
+    }
+
+    #[test]
+    fn strict_makes_a_warning_a_failure_and_nothing_else() {
+        assert_eq!(
+            Outcome::Warn("w".into()).strict(),
+            Outcome::Fail(format!("{STRICT_PREFIX}w"))
+        );
+        for o in [Outcome::Pass, Outcome::Fail("f".into()), Outcome::Skip("s".into())] {
+            assert_eq!(o.clone().strict(), o);
+        }
+    }
 }

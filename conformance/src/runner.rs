@@ -42,6 +42,8 @@ pub struct RunOptions {
     pub temp_dir: Option<PathBuf>,
     /// Check even this exporter's FMUs as another exporter's ([`crate::set_as_foreign`]).
     pub as_foreign: bool,
+    /// Warnings are failures ([`Outcome::strict`]): what this exporter's own FMUs must pass.
+    pub strict: bool,
 }
 
 impl RunOptions {
@@ -56,6 +58,7 @@ impl RunOptions {
             random_sequences: 0,
             temp_dir: None,
             as_foreign: false,
+            strict: false,
         }
     }
 
@@ -82,6 +85,10 @@ pub struct CheckReport {
     /// Parts not tested on this FMU: a pass with limitations is a partial pass.
     pub limitations: Vec<String>,
     pub info: Vec<String>,
+    /// What the standard leaves undefined or to the FMU that this FMU does not do
+    /// ([`outcome::warn`]); the outcome is [`Outcome::Warn`] (under `--strict`, a failure) when
+    /// there are some and nothing failed.
+    pub warnings: Vec<String>,
     pub duration: Duration,
 }
 
@@ -102,6 +109,12 @@ impl CheckReport {
             ),
             Outcome::Pass => format!("PASS  {} / {}  {took}", self.group, self.name),
             Outcome::Fail(m) => format!("FAIL  {} / {}  {took}  {}", self.group, self.name, summary(m)),
+            Outcome::Warn(_) => format!(
+                "WARN  {} / {}  {took}  {} warning(s), listed below",
+                self.group,
+                self.name,
+                self.warnings.len()
+            ),
             Outcome::Skip(why) => format!("SKIP  {} / {}: {why}", self.group, self.name),
         }
     }
@@ -135,6 +148,8 @@ pub struct Report {
     /// Why the FMU could not be checked at all (then every check is skipped).
     pub load_error: Option<String>,
     pub checks: Vec<CheckReport>,
+    /// Run with `--strict` (warnings made failures).
+    pub strict: bool,
 }
 
 impl Report {
@@ -163,17 +178,26 @@ impl Report {
             .count()
     }
 
+    /// Warned checks: no failure, but warnings (none under `--strict`: failures there).
+    pub fn warned(&self) -> usize {
+        self.checks
+            .iter()
+            .filter(|c| matches!(c.outcome, Outcome::Warn(_)))
+            .count()
+    }
+
     /// No failure (and the FMU loaded).
     pub fn success(&self) -> bool {
         self.failed() == 0
     }
 
-    /// The closing line: `N passed, N failed, N skipped`.
+    /// The closing line: `N passed, N failed, N warned, N skipped`.
     pub fn totals(&self) -> String {
         format!(
-            "{} passed, {} failed, {} skipped",
+            "{} passed, {} failed, {} warned, {} skipped",
             self.passed(),
             self.failed(),
+            self.warned(),
             self.skipped()
         )
     }
@@ -188,8 +212,18 @@ impl std::fmt::Display for Report {
         if let Some(e) = &self.load_error {
             writeln!(f, "FAIL  the FMU cannot be checked: {e}")?;
         }
+        if self.strict {
+            writeln!(f, "  --strict: a warning is a failure")?;
+        }
         for c in &self.checks {
             writeln!(f, "{}", c.line())?;
+            for l in &c.warnings {
+                let mut lines = l.lines();
+                writeln!(f, "        warning: {}", lines.next().unwrap_or(""))?;
+                for more in lines {
+                    writeln!(f, "          {more}")?;
+                }
+            }
             for l in &c.limitations {
                 writeln!(f, "        not tested: {l}")?;
             }
@@ -197,19 +231,50 @@ impl std::fmt::Display for Report {
                 writeln!(f, "        {l}")?;
             }
         }
-        let failures: Vec<&CheckReport> = self
-            .checks
-            .iter()
-            .filter(|c| matches!(c.outcome, Outcome::Fail(_)))
-            .collect();
+        // The summary, by verdict: what the FMU must fix (the standard's requirements), then
+        // what it should consider (warnings), then what was not checked and why.
+        let of =
+            |word: &str| -> Vec<&CheckReport> { self.checks.iter().filter(|c| c.outcome.word() == word).collect() };
+        let failures = of("fail");
         if !failures.is_empty() {
-            writeln!(f, "\nFailures:")?;
+            writeln!(
+                f,
+                "\nFailures ({}): requirements of the standard the FMU does not meet",
+                failures.len()
+            )?;
             for c in failures {
                 if let Outcome::Fail(m) = &c.outcome {
                     writeln!(f, "\n--- {} / {}", c.group, c.name)?;
                     for line in m.lines() {
                         writeln!(f, "    {line}")?;
                     }
+                }
+            }
+            writeln!(f)?;
+        }
+        let warned = of("warn");
+        if !warned.is_empty() {
+            writeln!(
+                f,
+                "\nWarnings ({}): what the standard leaves undefined or to the FMU (--strict makes them failures)",
+                warned.len()
+            )?;
+            for c in warned {
+                writeln!(f, "\n--- {} / {}", c.group, c.name)?;
+                for w in &c.warnings {
+                    for (i, line) in w.lines().enumerate() {
+                        writeln!(f, "    {}{line}", if i == 0 { "- " } else { "  " })?;
+                    }
+                }
+            }
+            writeln!(f)?;
+        }
+        let skipped = of("skip");
+        if !skipped.is_empty() {
+            writeln!(f, "\nSkipped ({}):", skipped.len())?;
+            for c in skipped {
+                if let Outcome::Skip(why) = &c.outcome {
+                    writeln!(f, "    {} / {}: {why}", c.group, c.name)?;
                 }
             }
             writeln!(f)?;
@@ -242,6 +307,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         about: vec![],
         load_error: None,
         checks: vec![],
+        strict: opts.strict,
     };
     let skip_all = |report: &mut Report, why: &str| {
         report.checks = selected
@@ -252,6 +318,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                 outcome: Outcome::Skip(why.to_string()),
                 limitations: vec![],
                 info: vec![],
+                warnings: vec![],
                 duration: Duration::ZERO,
             })
             .collect();
@@ -365,6 +432,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             outcome: Outcome::Pass,
             limitations: vec![],
             info: vec![],
+            warnings: vec![],
             duration: w.duration,
         };
         match (w.result.clone(), &w.crash) {
@@ -372,6 +440,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                 c.outcome = r.outcome;
                 c.limitations = r.limitations;
                 c.info = r.info;
+                c.warnings = r.warnings;
             }
             (Some(r), Some(_)) => {
                 c.outcome = Outcome::Fail(format!(
@@ -379,6 +448,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                     match &r.outcome {
                         Outcome::Pass => "passed".to_string(),
                         Outcome::Fail(m) => format!("failed: {m}"),
+                        Outcome::Warn(m) => format!("warned: {m}"),
                         Outcome::Skip(m) => format!("skipped: {m}"),
                     },
                     w.describe_crash()
@@ -392,6 +462,9 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                     .into(),
             );
         }
+        if opts.strict {
+            c.outcome = c.outcome.strict();
+        }
         progress(&c);
         report.checks.push(c);
     }
@@ -404,6 +477,7 @@ struct Parsed {
     outcome: Outcome,
     limitations: Vec<String>,
     info: Vec<String>,
+    warnings: Vec<String>,
 }
 
 struct WorkerRun {
@@ -658,8 +732,12 @@ fn format_result(outcome: &Outcome, findings: &Findings) -> String {
     let mut t = match outcome {
         Outcome::Pass => "pass\n".to_string(),
         Outcome::Fail(m) => format!("fail {}\n", escape(m)),
+        Outcome::Warn(m) => format!("warn {}\n", escape(m)),
         Outcome::Skip(m) => format!("skip {}\n", escape(m)),
     };
+    for l in &findings.warnings {
+        let _ = writeln!(t, "warning {}", escape(l));
+    }
     for l in &findings.limitations {
         let _ = writeln!(t, "limitation {}", escape(l));
     }
@@ -677,6 +755,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
     let outcome = match kind {
         "pass" => Outcome::Pass,
         "fail" => Outcome::Fail(unescape(rest)),
+        "warn" => Outcome::Warn(unescape(rest)),
         "skip" => Outcome::Skip(unescape(rest)),
         _ => return None,
     };
@@ -684,6 +763,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
         outcome,
         limitations: vec![],
         info: vec![],
+        warnings: vec![],
     };
     let mut complete = false;
     for l in lines {
@@ -691,6 +771,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
         match kind {
             "limitation" => p.limitations.push(unescape(rest)),
             "info" => p.info.push(unescape(rest)),
+            "warning" => p.warnings.push(unescape(rest)),
             "end" => complete = true,
             _ => return None,
         }
@@ -853,8 +934,8 @@ fn probe<F: Checked>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) -
     let code = write(
         Outcome::Pass,
         Findings {
-            limitations: vec![],
             info,
+            ..Findings::default()
         },
     );
     drop(f);
@@ -933,7 +1014,7 @@ fn state_child3(
     });
     match outcome {
         Outcome::Pass => Ok(()),
-        Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+        Outcome::Fail(m) | Outcome::Warn(m) | Outcome::Skip(m) => Err(m),
     }
 }
 
@@ -960,7 +1041,7 @@ fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str) -> Resu
     });
     match outcome {
         Outcome::Pass => Ok(()),
-        Outcome::Fail(m) | Outcome::Skip(m) => Err(m),
+        Outcome::Fail(m) | Outcome::Warn(m) | Outcome::Skip(m) => Err(m),
     }
 }
 
@@ -979,6 +1060,7 @@ mod tests {
             outcome: Outcome::Fail(message),
             limitations: vec![],
             info: vec![],
+            warnings: vec![],
             duration: Duration::from_millis(10),
         };
         let line = c.line();

@@ -70,7 +70,10 @@ enum Cmd {
     /// Run the black-box FMI 2.0 / FMI 3.0 conformance suite (by the file's fmiVersion) on an FMU file (ours or any
     /// other exporter's): every call in every state, bad arguments, FMU state, instances and
     /// threads, memory, random call sequences, a C host; each check in a child process, so an
-    /// FMU that crashes or hangs is reported, not shared. Ends with `N passed, N failed, N skipped`.
+    /// FMU that crashes or hangs is reported, not shared. A check fails where the FMU breaks a requirement of
+    /// the standard (the message names the section), warns where the standard leaves the case undefined
+    /// or to the FMU, is skipped where the FMU does not declare what it is about. Ends with `N passed, N
+    /// failed, N warned, N skipped`.
     Check {
         fmu: Option<PathBuf>,
         /// Only checks whose name or group contains this text.
@@ -86,6 +89,9 @@ enum Cmd {
         /// List the checks and exit.
         #[arg(long)]
         list: bool,
+        /// Make every warning a failure: what rustfmu's own FMUs must pass.
+        #[arg(long)]
+        strict: bool,
     },
     /// Compare (or with --write, refresh) the committed model descriptions of the workspace
     /// (`[workspace.metadata.fmu] model-descriptions`) with the packaged FMUs.
@@ -233,7 +239,8 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             timeout,
             random_sequences,
             list,
-        } => check(fmu.as_deref(), filter, timeout, random_sequences, list),
+            strict,
+        } => check(fmu.as_deref(), filter, timeout, random_sequences, list, strict),
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
             Ok(())
@@ -299,6 +306,7 @@ fn check(
     timeout: Option<f64>,
     random_sequences: u32,
     list: bool,
+    strict: bool,
 ) -> Result<(), String> {
     use fmi_conformance::runner::{RunOptions, run_with};
     if list {
@@ -325,6 +333,7 @@ fn check(
     let mut opts = RunOptions::new(exe, vec![CHECK_WORKER.into()]);
     opts.filter = filter;
     opts.random_sequences = random_sequences;
+    opts.strict = strict;
     if let Some(t) = timeout {
         if !(t.is_finite() && t > 0.0) {
             return Err(format!("--timeout {t}: seconds > 0"));

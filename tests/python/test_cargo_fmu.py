@@ -136,7 +136,7 @@ def test_cargo_fmu_info_and_validate_describe_it(user_crate):
 
 def test_cargo_fmu_check_passes_on_it(user_crate):
     crate, fmu, env = user_crate
-    out = run(["cargo", "fmu", "check", str(fmu)], crate, env)
+    out = run(["cargo", "fmu", "check", "--strict", str(fmu)], crate, env)
     assert " 0 failed" in out.stdout, out.stdout
 
 
@@ -315,7 +315,7 @@ def test_a_model_that_reads_its_resources_builds_checks_and_simulates():
     for fmu in (FMUS / "TableLag.fmu", FMUS / "fmi3" / "TableLag.fmu"):
         with zipfile.ZipFile(fmu) as z:
             assert z.read("resources/gain.txt") == b"2.5\n"
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+        out = subprocess.run(["cargo", "fmu", "check", "--strict", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
                              timeout=900)
         summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
         assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]
@@ -328,7 +328,7 @@ def test_a_model_that_reads_its_resources_builds_checks_and_simulates():
 def check_clean(crate, env, model_identifier):
     """`cargo fmu check` of the crate's FMI 2.0 and 3.0 FMUs: 0 failed in each."""
     for fmu in (FMUS / f"{model_identifier}.fmu", FMUS / "fmi3" / f"{model_identifier}.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+        out = subprocess.run(["cargo", "fmu", "check", "--strict", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
                              timeout=900)
         summary = [l for l in out.stdout.splitlines() if re.match(r"^\d+ passed, \d+ failed", l)]
         assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]

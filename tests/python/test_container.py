@@ -291,7 +291,7 @@ def test_the_components_messages_reach_the_importers_logger_with_their_names(tmp
 
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_cargo_fmu_check_passes_on_the_container(name):
-    r = subprocess.run([CARGO_FMU, "fmu", "check", container(name)], capture_output=True, text=True, timeout=1800)
+    r = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", container(name)], capture_output=True, text=True, timeout=1800)
     tail = (r.stdout + r.stderr)[-6000:]
     assert r.returncode == 0, tail
     assert re.search(r"\b0 failed\b", r.stdout + r.stderr), tail

@@ -247,7 +247,7 @@ def test_cargo_fmu_check_passes_on_the_clocked_fmu(sampled_lag):
     that activates the input clocks at their ticks and asks for the output clocks at every event)
     and every other check, which run its co-simulation with eventModeUsed as the standard requires."""
     crate, env = outside_crate("sampled-lag")
-    out = subprocess.run(["cargo", "fmu", "check", sampled_lag], cwd=crate, env=env, capture_output=True, text=True,
+    out = subprocess.run(["cargo", "fmu", "check", "--strict", sampled_lag], cwd=crate, env=env, capture_output=True, text=True,
                          timeout=900)
     summary = [line for line in out.stdout.splitlines() if " passed, " in line and " failed" in line]
     assert out.returncode == 0 and summary and " 0 failed" in summary[-1], out.stdout[-6000:] + out.stderr[-2000:]

@@ -163,7 +163,7 @@ def test_an_fmi3_only_crate_builds_without_fmi_versions_and_an_invalid_fmu_is_mo
     fmu = USER_TARGET / "fmu" / "fmi3" / "VersionsGain.fmu"
     assert not fmu.exists(), out.stderr[-3000:]
     assert (fmu.parent / "invalid" / "VersionsGain.fmu").exists(), out.stderr[-3000:]
-    out = subprocess.run(["cargo", "fmu", "check", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
+    out = subprocess.run(["cargo", "fmu", "check", "--strict", str(fmu)], cwd=crate, env=env, capture_output=True, text=True,
                          timeout=600)
     assert out.returncode != 0 and "found this FMU invalid and moved it to" in out.stderr, out.stderr[-3000:]
 
@@ -187,7 +187,7 @@ def test_the_event_checks_run_the_default_experiment_and_see_events_after_two_se
     out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr[-4000:]
     for fmu in (USER_TARGET / "fmu" / "SlowThermostat.fmu", USER_TARGET / "fmu" / "fmi3" / "SlowThermostat.fmu"):
-        out = subprocess.run(["cargo", "fmu", "check", str(fmu), "--filter", "events", "--random-sequences", "1"],
+        out = subprocess.run(["cargo", "fmu", "check", "--strict", str(fmu), "--filter", "events", "--random-sequences", "1"],
                              cwd=crate, env=env, capture_output=True, text=True, timeout=900)
         assert out.returncode == 0, out.stdout[-4000:] + out.stderr[-2000:]
         assert "not declared by the FMU: events" not in out.stdout, out.stdout[-4000:]
@@ -294,7 +294,7 @@ def test_the_checks_see_events_that_depend_on_an_input_and_read_an_int64_as_an_i
     out = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=1800)
     assert out.returncode == 0, out.stderr[-4000:]
     fmu = USER_TARGET / "fmu" / "fmi3" / "InputThermostat.fmu"
-    out = subprocess.run(["cargo", "fmu", "check", str(fmu), "--random-sequences", "20"], cwd=crate, env=env,
+    out = subprocess.run(["cargo", "fmu", "check", "--strict", str(fmu), "--random-sequences", "20"], cwd=crate, env=env,
                          capture_output=True, text=True, timeout=900)
     assert out.returncode == 0, out.stdout[-5000:] + out.stderr[-2000:]
     assert "never changed domain" not in out.stdout, out.stdout[-5000:]

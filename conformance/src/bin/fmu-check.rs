@@ -1,7 +1,8 @@
 //! `fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N]`: checks an FMI
 //! 2.0 FMU with the FMI 2.0 checks, an FMI 3.0 FMU with the FMI 3.0 ones (by the fmiVersion of
 //! its model description), each in a child process, and prints a report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
-//! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks).
+//! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks);
+//! `--strict` makes every warning a failure (what this exporter's own FMUs must pass).
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi_conformance::runner::worker_main`]).
 
@@ -11,8 +12,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str =
-    "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] | --list";
+const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] | --list";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -21,6 +21,7 @@ struct Args {
     random_sequences: u32,
     list: bool,
     as_foreign: bool,
+    strict: bool,
 }
 
 fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -31,6 +32,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         random_sequences: 0,
         list: false,
         as_foreign: false,
+        strict: false,
     };
     let mut it = args;
     while let Some(arg) = it.next() {
@@ -51,6 +53,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
             }
             "--list" => a.list = true,
             "--as-foreign" => a.as_foreign = true,
+            "--strict" => a.strict = true,
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
@@ -97,6 +100,7 @@ fn main() -> ExitCode {
     opts.filter = a.filter;
     opts.random_sequences = a.random_sequences;
     opts.as_foreign = a.as_foreign;
+    opts.strict = a.strict;
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }
