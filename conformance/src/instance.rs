@@ -6,6 +6,7 @@
 //! `"%s"`.
 
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::logger::{LogEntry, LogSink, callbacks};
 use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
 use crate::standard::State;
@@ -257,25 +258,28 @@ impl<'a> Instance<'a> {
 
     pub fn get_real(&self, vrs: &[u32]) -> (Status, Vec<f64>) {
         crumb("fmi2GetReal", || format!("vrs {vrs:?}"));
-        let mut v = vec![0.0; vrs.len()];
-        // SAFETY: arrays of nvr elements.
+        let mut v = Guarded::new(vrs.len(), 0.0);
+        // SAFETY: arrays of nvr elements (and the guard after `v`'s).
         let s = unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let v = v.into_values(|| format!("fmi2GetReal with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
 
     pub fn get_integer(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
         crumb("fmi2GetInteger", || format!("vrs {vrs:?}"));
-        let mut v = vec![0; vrs.len()];
-        // SAFETY: arrays of nvr elements.
+        let mut v = Guarded::new(vrs.len(), 0);
+        // SAFETY: arrays of nvr elements (and the guard after `v`'s).
         let s = unsafe { (self.fmu.api.get_integer)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let v = v.into_values(|| format!("fmi2GetInteger with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
 
     pub fn get_boolean(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
         crumb("fmi2GetBoolean", || format!("vrs {vrs:?}"));
-        let mut v = vec![0; vrs.len()];
-        // SAFETY: arrays of nvr elements.
+        let mut v = Guarded::new(vrs.len(), 0);
+        // SAFETY: arrays of nvr elements (and the guard after `v`'s).
         let s = unsafe { (self.fmu.api.get_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let v = v.into_values(|| format!("fmi2GetBoolean with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
 
@@ -358,9 +362,14 @@ impl<'a> Instance<'a> {
         if st != fmi2OK {
             return Err(st);
         }
-        let mut bytes = vec![0u8; size];
-        // SAFETY: a buffer of `size` bytes.
+        crumb("fmi2SerializeFMUstate", || format!("size {size}"));
+        let mut bytes = Guarded::new(size, 0u8);
+        // SAFETY: a buffer of `size` bytes (and the guard after it).
         let st = unsafe { (self.fmu.api.serialize_fmu_state)(self.c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size) };
+        let bytes = bytes.into_values(
+            || format!("fmi2SerializeFMUstate with size = {size} (fmi2SerializedFMUstateSize's answer)"),
+            STATE_RULE2,
+        );
         if st != fmi2OK {
             return Err(st);
         }
@@ -493,6 +502,7 @@ impl<'a> Instance<'a> {
 
 impl Drop for Instance<'_> {
     fn drop(&mut self) {
+        crumb("fmi2FreeInstance", String::new);
         // SAFETY: freed once; the callbacks outlive the call.
         unsafe { (self.fmu.api.free_instance)(self.c) };
         if !std::thread::panicking() {

@@ -26,6 +26,7 @@ pub mod archive;
 pub mod checks;
 pub mod fmi2;
 pub mod fmi3;
+pub mod guard;
 pub mod instance;
 pub mod logger;
 pub mod me;
@@ -167,6 +168,7 @@ impl Fmu {
         // SAFETY: the standard's calls with valid arguments on an instance made here.
         unsafe {
             let api = &self.api;
+            outcome::breadcrumb("fmi2Instantiate (probing the state format)");
             let c = api.instantiate_cs(c"probe", &guid, &res, &callbacks);
             if c.is_null() {
                 return Err("fmi2Instantiate returned NULL".into());
@@ -178,11 +180,25 @@ impl Fmu {
                 let mut size = 0usize;
                 status = (api.serialized_fmu_state_size)(c, s, &mut size);
                 if status == fmi2OK && size <= 1 << 30 {
-                    bytes = vec![0u8; size];
-                    status = (api.serialize_fmu_state)(c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size);
+                    let mut guarded = guard::Guarded::new(size, 0u8);
+                    outcome::breadcrumb("fmi2SerializeFMUstate (probing the state format)");
+                    status = (api.serialize_fmu_state)(c, s, guarded.as_mut_ptr() as *mut fmi2Byte, size);
+                    match guarded.try_values(
+                        || format!("fmi2SerializeFMUstate with size = {size}"),
+                        guard::STATE_RULE2,
+                    ) {
+                        Ok(b) => bytes = b,
+                        Err(e) => {
+                            (api.free_fmu_state)(c, &mut s);
+                            outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
+                            (api.free_instance)(c);
+                            return Err(e);
+                        }
+                    }
                 }
                 (api.free_fmu_state)(c, &mut s);
             }
+            outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
             (api.free_instance)(c);
             if status != fmi2OK {
                 return Err(format!("serializing the state of a new instance answered {status}"));

@@ -12,6 +12,7 @@
 
 use crate::api::MeApi;
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded};
 use crate::instance::{Args, Instance, Status, excitation, status_name};
 use crate::outcome::{breadcrumb, breadcrumbs_on, skip, skip_not_declared};
 use crate::{Fmu, state};
@@ -184,9 +185,10 @@ impl<'a> Instance<'a> {
         n: usize,
     ) -> (Status, Vec<f64>) {
         crumb(name, || format!("n {n}"));
-        let mut v = vec![f64::NAN; n];
-        // SAFETY: an array of n elements.
+        let mut v = Guarded::new(n, f64::NAN);
+        // SAFETY: an array of n elements (and the guard after it).
         let s = unsafe { f(self.c, v.as_mut_ptr(), n) };
+        let v = v.into_values(|| format!("{name} with n = {n}"), GETTER_RULE2);
         (s, v)
     }
 

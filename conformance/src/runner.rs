@@ -393,7 +393,14 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             outcome: Outcome::Fail(m) | Outcome::Skip(m),
             ..
         }) if probe.crash.is_none() => report.load_error = Some(m),
-        _ => report.load_error = Some(format!("loading it in a worker process: {}", probe.describe_crash())),
+        // The probe crashed (in the binary's initializers, or serializing a new instance's
+        // state): a crash is the FMU's failure, never a reason to skip. Every check runs, each in
+        // a process of its own, and fails with the call it crashed in where it meets the crash.
+        _ => report.about.push(format!(
+            "the preflight (loading the FMU, serializing a new instance's state) crashed: its worker process {}; \
+             every check runs, and fails where it meets the crash",
+            probe.describe_crash()
+        )),
     }
     if report.load_error.is_some() {
         skip_all(&mut report, "the FMU cannot be checked");

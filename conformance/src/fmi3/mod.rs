@@ -11,6 +11,7 @@ pub mod standard;
 pub mod types;
 
 use crate::archive::{self, PrivateDir};
+use crate::guard::{GETTER_RULE3, Guarded, STATE_RULE3};
 use md_reader::fmi3::Dimension;
 pub use md_reader::fmi3::{ModelDescription as Description, Type, Variable};
 use md_reader::{Causality, Variability};
@@ -707,12 +708,13 @@ impl<'a> Inst<'a> {
     /// fmi3GetFloat64 with `n` values (an array's elements count each, row-major, one variable
     /// after the other).
     pub fn get_f64_n(&self, vrs: &[u32], n: usize) -> (fmi3Status, Vec<f64>) {
-        let mut v = vec![0.0; n];
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
+        let mut v = Guarded::new(n, 0.0);
+        let p = v.as_mut_ptr();
+        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
         let s = self.call("fmi3GetFloat64", |c| unsafe {
-            (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr(), v.len())
+            (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), p, n)
         });
+        let v = v.into_values(|| format!("fmi3GetFloat64 with nValues = {n}"), GETTER_RULE3);
         (s, v)
     }
     /// fmi3GetFloat64 of every element of the variables (scalars and arrays, start sizes).
@@ -793,10 +795,11 @@ impl<'a> Inst<'a> {
     }
 
     pub fn vector(&self, what: &str, f: api::Vector, n: usize) -> (fmi3Status, Vec<f64>) {
-        let mut v = vec![0.0; n];
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        let s = self.call(what, |c| unsafe { f(c, v.as_mut_ptr(), n) });
+        let mut v = Guarded::new(n, 0.0);
+        let p = v.as_mut_ptr();
+        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
+        let s = self.call(what, |c| unsafe { f(c, p, n) });
+        let v = v.into_values(|| format!("{what} with n = {n}"), GETTER_RULE3);
         (s, v)
     }
 
@@ -859,8 +862,8 @@ impl<'a> Inst<'a> {
     /// [`Inst::get_raw`] with `n` as nValues (which may be wrong on purpose).
     pub fn get_raw_n(&self, v: &Variable, n: usize) -> (fmi3Status, Vec<u8>) {
         let api = self.api();
-        let mut words = vec![0u64; n.max(1)];
-        let p = words.as_mut_ptr();
+        let mut guarded = Guarded::aligned_bytes(n * c_size(v.ty));
+        let p = guarded.as_mut_ptr();
         let vr = &v.vr;
         let what = format!("fmi3Get{}", accessor(v.ty));
         if v.ty == Type::Binary {
@@ -880,6 +883,7 @@ impl<'a> Inst<'a> {
         // SAFETY: this instance's live handle; `words` holds `n` values of any of the types,
         // 8-byte aligned.
         let s = self.call(&what, |c| unsafe { api.get_values(c, v.ty, vr, p, n) });
+        let words = guarded.into_values(|| format!("{what} with nValues = {n}"), GETTER_RULE3);
         let bytes: Vec<u8> = words
             .iter()
             .flat_map(|w| w.to_ne_bytes())
@@ -937,8 +941,16 @@ impl<'a> Inst<'a> {
             let mut bytes = vec![];
             let mut s = (api.serialized_fmu_state_size)(self.c, st, &mut size);
             if s == fmi3OK && size <= 1 << 30 {
-                bytes = vec![0u8; size];
-                s = (api.serialize_fmu_state)(self.c, st, bytes.as_mut_ptr(), size);
+                let mut guarded = Guarded::new(size, 0u8);
+                crate::outcome::breadcrumb("fmi3SerializeFMUState");
+                s = (api.serialize_fmu_state)(self.c, st, guarded.as_mut_ptr(), size);
+                match guarded.try_values(|| format!("fmi3SerializeFMUState with size = {size}"), STATE_RULE3) {
+                    Ok(b) => bytes = b,
+                    Err(e) => {
+                        (api.free_fmu_state)(self.c, &mut st);
+                        return Err(e);
+                    }
+                }
             }
             (api.free_fmu_state)(self.c, &mut st);
             if s != fmi3OK {
@@ -974,14 +986,18 @@ impl<'a> Inst<'a> {
             fmi3OK
         );
         assert!(size < 1 << 30, "{}: serialized state of {size} bytes", self.fmu.id);
-        let mut bytes = vec![0u8; size];
+        let mut guarded = Guarded::new(size, 0u8);
+        let p = guarded.as_mut_ptr();
         assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
+            // SAFETY: a live instance; `p` holds `size` bytes (and the guard after them).
             self.call("fmi3SerializeFMUState", |c| unsafe {
-                (api.serialize_fmu_state)(c, st, bytes.as_mut_ptr(), size)
+                (api.serialize_fmu_state)(c, st, p, size)
             }),
             fmi3OK
+        );
+        let bytes = guarded.into_values(
+            || format!("fmi3SerializeFMUState with size = {size} (fmi3SerializedFMUStateSize's answer)"),
+            STATE_RULE3,
         );
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is

@@ -1,0 +1,244 @@
+/* Deliberately defective FMU binaries: the fixtures of tests/defective_fmus.rs, which prove that
+ * the suite still catches what it is for ("proof that it still bites", issue 51).
+ *
+ * Why a shim and not a model of our own in C: a fixture's good variant must pass every check
+ * (else a failure would not prove the defect), and a from-scratch C FMU that passes the whole
+ * suite (every call in every state, refusals with messages, FMU state, model exchange,
+ * directional derivatives, FMI 2.0 and 3.0) would be thousands of lines to keep right. This file
+ * is a pass-through instead: it loads a conformant binary (INNER, the path of a copy of this
+ * workspace's Dahlquist, der(x) = -k x, FMI 2.0 and 3.0 in one library) and forwards
+ * every fmi2 and fmi3 function to it, except the one a `-DDEFECT_...` flag breaks. Without a
+ * flag it is the good variant. Each defect is one violation, written here in a few lines:
+ *
+ *   DEFECT_GET_PAST         fmi2GetReal / fmi3GetFloat64 write one value past nValues
+ *   DEFECT_STEP_STUCK       fmi2DoStep / fmi3DoStep answer OK without advancing time
+ *   DEFECT_STATE_OVERRUN    fmi2SerializeFMUstate / fmi3SerializeFMUState write 16 bytes past
+ *                           the size fmi2SerializedFMUstateSize / fmi3SerializedFMUStateSize
+ *                           announced
+ *   DEFECT_ME_EQUATIONS     model exchange's derivatives are twice co-simulation's
+ *   DEFECT_RESTORE          fmi2SetFMUstate / fmi3SetFMUState answer OK and restore nothing
+ *   DEFECT_FREE_CRASH       fmi2FreeInstance / fmi3FreeInstance crash (SIGSEGV)
+ *   DEFECT_TOKEN=\"...\"    the binary does not check the GUID / instantiationToken: it
+ *                           instantiates with the given one whatever the importer passes
+ *
+ * The forwarding functions are two instructions of x86-64 assembly each (a jump through the
+ * address looked up in the inner library): they pass every argument on, whatever the
+ * signature, so no signature is written twice. Linux x86-64 only, like the test. */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define HIDDEN __attribute__((visibility("hidden")))
+
+/* X(name) for every function forwarded; the broken ones are defined below instead. */
+#define FMI2_COMMON(X)                                                                                            \
+    X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2SetupExperiment)                       \
+    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset)                    \
+    X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean)        \
+    X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize)                          \
+    X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative) X(fmi2SetRealInputDerivatives)                     \
+    X(fmi2GetRealOutputDerivatives) X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus)                       \
+    X(fmi2GetIntegerStatus) X(fmi2GetBooleanStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                  \
+    X(fmi2NewDiscreteStates) X(fmi2EnterContinuousTimeMode) X(fmi2CompletedIntegratorStep) X(fmi2SetTime)         \
+    X(fmi2SetContinuousStates) X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                               \
+    X(fmi2GetNominalsOfContinuousStates)
+
+#define FMI3_COMMON(X)                                                                                            \
+    X(fmi3GetVersion) X(fmi3SetDebugLogging) X(fmi3InstantiateScheduledExecution) X(fmi3EnterInitializationMode)  \
+    X(fmi3ExitInitializationMode) X(fmi3EnterEventMode) X(fmi3Terminate) X(fmi3Reset) X(fmi3GetFloat32)           \
+    X(fmi3GetInt8) X(fmi3GetUInt8) X(fmi3GetInt16) X(fmi3GetUInt16) X(fmi3GetInt32) X(fmi3GetUInt32)               \
+    X(fmi3GetInt64) X(fmi3GetUInt64) X(fmi3GetBoolean) X(fmi3GetString) X(fmi3GetBinary) X(fmi3GetClock)           \
+    X(fmi3SetFloat32) X(fmi3SetFloat64) X(fmi3SetInt8) X(fmi3SetUInt8) X(fmi3SetInt16) X(fmi3SetUInt16)           \
+    X(fmi3SetInt32) X(fmi3SetUInt32) X(fmi3SetInt64) X(fmi3SetUInt64) X(fmi3SetBoolean) X(fmi3SetString)           \
+    X(fmi3SetBinary) X(fmi3SetClock) X(fmi3GetNumberOfVariableDependencies) X(fmi3GetVariableDependencies)        \
+    X(fmi3GetFMUState) X(fmi3FreeFMUState) X(fmi3SerializedFMUStateSize) X(fmi3DeserializeFMUState)               \
+    X(fmi3GetDirectionalDerivative) X(fmi3GetAdjointDerivative) X(fmi3EnterConfigurationMode)                     \
+    X(fmi3ExitConfigurationMode) X(fmi3GetIntervalDecimal) X(fmi3GetIntervalFraction) X(fmi3GetShiftDecimal)      \
+    X(fmi3GetShiftFraction) X(fmi3SetIntervalDecimal) X(fmi3SetIntervalFraction) X(fmi3SetShiftDecimal)           \
+    X(fmi3SetShiftFraction) X(fmi3EvaluateDiscreteStates) X(fmi3UpdateDiscreteStates)                             \
+    X(fmi3EnterContinuousTimeMode) X(fmi3CompletedIntegratorStep) X(fmi3SetTime) X(fmi3SetContinuousStates)       \
+    X(fmi3GetEventIndicators) X(fmi3GetContinuousStates) X(fmi3GetNominalsOfContinuousStates)                     \
+    X(fmi3GetNumberOfEventIndicators) X(fmi3GetNumberOfContinuousStates) X(fmi3EnterStepMode)                     \
+    X(fmi3GetOutputDerivatives) X(fmi3ActivateModelPartition)
+
+/* The functions a defect may break: forwarded like the others where its defect is not compiled
+ * in, and always reachable through next_<name> for the broken version to call. */
+#define BREAKABLE(X)                                                                                              \
+    X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2GetReal) X(fmi2DoStep) X(fmi2SerializeFMUstate)                  \
+    X(fmi2SetFMUstate) X(fmi2GetDerivatives) X(fmi3InstantiateModelExchange) X(fmi3InstantiateCoSimulation)       \
+    X(fmi3FreeInstance) X(fmi3GetFloat64) X(fmi3DoStep) X(fmi3SerializeFMUState) X(fmi3SetFMUState)               \
+    X(fmi3GetContinuousStateDerivatives)
+
+#define POINTER(f) HIDDEN void *next_##f;
+FMI2_COMMON(POINTER)
+FMI3_COMMON(POINTER)
+BREAKABLE(POINTER)
+
+#define TRAMPOLINE(f)                                                                                             \
+    __asm__(".text\n.globl " #f "\n.type " #f ",@function\n" #f ":\n\tjmp *next_" #f "(%rip)\n.size " #f ",.-" #f  \
+            "\n");
+FMI2_COMMON(TRAMPOLINE)
+FMI3_COMMON(TRAMPOLINE)
+
+#ifndef DEFECT_TOKEN
+TRAMPOLINE(fmi2Instantiate)
+TRAMPOLINE(fmi3InstantiateModelExchange)
+TRAMPOLINE(fmi3InstantiateCoSimulation)
+#endif
+#ifndef DEFECT_FREE_CRASH
+TRAMPOLINE(fmi2FreeInstance)
+TRAMPOLINE(fmi3FreeInstance)
+#endif
+#ifndef DEFECT_GET_PAST
+TRAMPOLINE(fmi2GetReal)
+TRAMPOLINE(fmi3GetFloat64)
+#endif
+#ifndef DEFECT_STEP_STUCK
+TRAMPOLINE(fmi2DoStep)
+TRAMPOLINE(fmi3DoStep)
+#endif
+#ifndef DEFECT_STATE_OVERRUN
+TRAMPOLINE(fmi2SerializeFMUstate)
+TRAMPOLINE(fmi3SerializeFMUState)
+#endif
+#ifndef DEFECT_RESTORE
+TRAMPOLINE(fmi2SetFMUstate)
+TRAMPOLINE(fmi3SetFMUState)
+#endif
+#ifndef DEFECT_ME_EQUATIONS
+TRAMPOLINE(fmi2GetDerivatives)
+TRAMPOLINE(fmi3GetContinuousStateDerivatives)
+#endif
+
+static void *inner;
+
+/* Loads INNER (an absolute path, given at compile time: a copy of this library made elsewhere,
+ * as the unload check makes, still finds it) and looks up every function. */
+__attribute__((constructor)) static void load_inner(void) {
+    inner = dlopen(INNER, RTLD_NOW | RTLD_LOCAL);
+    if (!inner) {
+        fprintf(stderr, "defects.c: %s\n", dlerror());
+        abort();
+    }
+#define LOOKUP(f)                                                                                                 \
+    if (!(next_##f = dlsym(inner, #f))) {                                                                         \
+        fprintf(stderr, "defects.c: %s has no %s\n", INNER, #f);                                                 \
+        abort();                                                                                                  \
+    }
+    FMI2_COMMON(LOOKUP)
+    FMI3_COMMON(LOOKUP)
+    BREAKABLE(LOOKUP)
+}
+
+/* Unloaded with this library, so that unloading the FMU unloads the model too. */
+__attribute__((destructor)) static void unload_inner(void) {
+    if (inner) dlclose(inner);
+}
+
+typedef int S; /* fmi2Status and fmi3Status: a C enum, 0 is OK */
+
+#ifdef DEFECT_TOKEN
+void *fmi2Instantiate(const char *name, int type, const char *guid, const char *res, const void *cb, int visible,
+                      int logging) {
+    (void)guid;
+    return ((void *(*)(const char *, int, const char *, const char *, const void *, int, int))next_fmi2Instantiate)(
+        name, type, DEFECT_TOKEN, res, cb, visible, logging);
+}
+void *fmi3InstantiateModelExchange(const char *name, const char *token, const char *res, bool visible,
+                                   bool logging, void *env, void *log) {
+    (void)token;
+    return ((void *(*)(const char *, const char *, const char *, bool, bool, void *,
+                       void *))next_fmi3InstantiateModelExchange)(name, DEFECT_TOKEN, res, visible, logging, env, log);
+}
+void *fmi3InstantiateCoSimulation(const char *name, const char *token, const char *res, bool visible, bool logging,
+                                  bool eventMode, bool early, const unsigned *vrs, size_t n, void *env, void *log,
+                                  void *update) {
+    (void)token;
+    return ((void *(*)(const char *, const char *, const char *, bool, bool, bool, bool, const unsigned *, size_t,
+                       void *, void *, void *))next_fmi3InstantiateCoSimulation)(
+        name, DEFECT_TOKEN, res, visible, logging, eventMode, early, vrs, n, env, log, update);
+}
+#endif
+
+#ifdef DEFECT_FREE_CRASH
+static void crash(void *instance) {
+    volatile int *volatile nowhere = NULL;
+    if (instance) *nowhere = 1; /* SIGSEGV, as a use of freed memory would */
+}
+void fmi2FreeInstance(void *c) {
+    ((void (*)(void *))next_fmi2FreeInstance)(c);
+    crash(c);
+}
+void fmi3FreeInstance(void *c) {
+    ((void (*)(void *))next_fmi3FreeInstance)(c);
+    crash(c);
+}
+#endif
+
+#ifdef DEFECT_GET_PAST
+S fmi2GetReal(void *c, const unsigned *vr, size_t n, double *value) {
+    S s = ((S(*)(void *, const unsigned *, size_t, double *))next_fmi2GetReal)(c, vr, n, value);
+    if (s == 0 && n > 0) value[n] = value[0];
+    return s;
+}
+S fmi3GetFloat64(void *c, const unsigned *vr, size_t nvr, double *values, size_t n) {
+    S s = ((S(*)(void *, const unsigned *, size_t, double *, size_t))next_fmi3GetFloat64)(c, vr, nvr, values, n);
+    if (s == 0 && n > 0) values[n] = values[0];
+    return s;
+}
+#endif
+
+#ifdef DEFECT_STEP_STUCK
+S fmi2DoStep(void *c, double t, double h, int noSetPrior) {
+    (void)c, (void)t, (void)h, (void)noSetPrior;
+    return 0;
+}
+S fmi3DoStep(void *c, double t, double h, bool noSetPrior, bool *eventHandlingNeeded, bool *terminate,
+             bool *earlyReturn, double *lastSuccessfulTime) {
+    (void)c, (void)noSetPrior;
+    *eventHandlingNeeded = *terminate = *earlyReturn = false;
+    *lastSuccessfulTime = t + h;
+    return 0;
+}
+#endif
+
+#ifdef DEFECT_STATE_OVERRUN
+S fmi2SerializeFMUstate(void *c, void *state, unsigned char *bytes, size_t size) {
+    S s = ((S(*)(void *, void *, unsigned char *, size_t))next_fmi2SerializeFMUstate)(c, state, bytes, size);
+    if (s == 0) memset(bytes + size, 0xA5, 16);
+    return s;
+}
+S fmi3SerializeFMUState(void *c, void *state, unsigned char *bytes, size_t size) {
+    S s = ((S(*)(void *, void *, unsigned char *, size_t))next_fmi3SerializeFMUState)(c, state, bytes, size);
+    if (s == 0) memset(bytes + size, 0xA5, 16);
+    return s;
+}
+#endif
+
+#ifdef DEFECT_RESTORE
+S fmi2SetFMUstate(void *c, void *state) {
+    (void)c, (void)state;
+    return 0;
+}
+S fmi3SetFMUState(void *c, void *state) {
+    (void)c, (void)state;
+    return 0;
+}
+#endif
+
+#ifdef DEFECT_ME_EQUATIONS
+static S doubled(S s, double *d, size_t n) {
+    for (size_t i = 0; s == 0 && i < n; i++) d[i] *= 2;
+    return s;
+}
+S fmi2GetDerivatives(void *c, double *d, size_t n) {
+    return doubled(((S(*)(void *, double *, size_t))next_fmi2GetDerivatives)(c, d, n), d, n);
+}
+S fmi3GetContinuousStateDerivatives(void *c, double *d, size_t n) {
+    return doubled(((S(*)(void *, double *, size_t))next_fmi3GetContinuousStateDerivatives)(c, d, n), d, n);
+}
+#endif

@@ -1,0 +1,181 @@
+//! Guard values after the arrays the suite hands an FMU to fill: a getter that writes one value
+//! past `nValues`, or a serialized state longer than the size its FMU announced, overwrites
+//! memory of the importer, which in a real importer corrupts the heap silently (or crashes far
+//! from the call). Every output array of the common call paths (the getters of both versions,
+//! model exchange's vectors, the serialized FMU state) is allocated with [`GUARD_BYTES`] more
+//! bytes than the call is told, filled with [`GUARD_BYTE`]; after the call, a changed guard is
+//! a failure naming the function and the array's length.
+//!
+//! The standard's requirement (a failure, not a warning): the array belongs to the importer and
+//! has exactly the length the call names. FMI 2.0.5 §2.1.7 (fmi2GetReal/Integer/Boolean/String:
+//! `value` is a vector of `nvr` values), §2.1.8 (fmi2SerializeFMUstate copies the state "into
+//! the byte vector serializedState of length size, that must be provided by the environment",
+//! size being what fmi2SerializedFMUstateSize returned), §3.2.2 (the model-exchange vectors of
+//! `nx` and `ni` elements); FMI 3.0.2 "Getting and Setting Variable Values" (fmi3Get{VariableType}:
+//! `nValues` is the size of the `values` array), "Getting and Setting the Complete FMU State"
+//! (fmi3SerializeFMUState: the byte vector of length `size` the importer provides), and the
+//! model-exchange chapter's vectors of `nContinuousStates` and `nEventIndicators` elements.
+
+/// How many bytes (at least) follow each array: a whole number of its elements.
+pub const GUARD_BYTES: usize = 64;
+
+/// The elements of `T` the guard has.
+fn guard_elements<T>() -> usize {
+    GUARD_BYTES.div_ceil(std::mem::size_of::<T>().max(1))
+}
+
+/// The byte the guard is filled with (no FMU value is likely to be this pattern in every byte).
+pub const GUARD_BYTE: u8 = 0xDB;
+
+/// Element types any bit pattern is a valid value of (so that the guard's bytes may be written
+/// into them): the values of the getters and the bytes of a serialized state.
+pub trait Plain: Copy {}
+impl Plain for f64 {}
+impl Plain for f32 {}
+impl Plain for i8 {}
+impl Plain for u8 {}
+impl Plain for i16 {}
+impl Plain for u16 {}
+impl Plain for i32 {}
+impl Plain for u32 {}
+impl Plain for i64 {}
+impl Plain for u64 {}
+impl Plain for usize {}
+impl Plain for *const std::ffi::c_char {}
+impl Plain for *const u8 {}
+
+/// An output array of `n` elements, followed by [`GUARD_BYTES`] bytes of guard.
+pub struct Guarded<T: Plain> {
+    buf: Vec<T>,
+    /// The elements the call is told of.
+    n: usize,
+    /// Where the guard starts, in bytes from the array's start.
+    end: usize,
+}
+
+impl<T: Plain> Guarded<T> {
+    /// `n` elements of `fill`, then the guard.
+    pub fn new(n: usize, fill: T) -> Guarded<T> {
+        Guarded::guard_from(vec![fill; n + guard_elements::<T>()], n, n * std::mem::size_of::<T>())
+    }
+
+    /// `buf`, its bytes from `end` on made the guard.
+    fn guard_from(mut buf: Vec<T>, n: usize, end: usize) -> Guarded<T> {
+        let total = buf.len() * std::mem::size_of::<T>();
+        // SAFETY: bytes `end..total` are in the buffer, and any bit pattern is a valid `T`
+        // ([`Plain`]).
+        unsafe {
+            std::ptr::write_bytes(buf.as_mut_ptr().cast::<u8>().add(end), GUARD_BYTE, total - end);
+        }
+        Guarded { buf, n, end }
+    }
+
+    /// Where the FMU writes (the array's first element).
+    pub fn as_mut_ptr(&mut self) -> *mut T {
+        self.buf.as_mut_ptr()
+    }
+
+    /// The first bytes of the guard the call changed, if any: (index of the first changed byte
+    /// after the array, how many bytes changed).
+    fn overrun(&self) -> Option<(usize, usize)> {
+        let total = self.buf.len() * std::mem::size_of::<T>();
+        // SAFETY: the guard's bytes, in the buffer.
+        let guard =
+            unsafe { std::slice::from_raw_parts(self.buf.as_ptr().cast::<u8>().add(self.end), total - self.end) };
+        let changed = guard.iter().filter(|b| **b != GUARD_BYTE).count();
+        guard.iter().position(|b| *b != GUARD_BYTE).map(|at| (at, changed))
+    }
+
+    /// The array's `n` values; panics (the check fails) when the FMU wrote into the guard.
+    /// `call` names the function and its length argument (`fmi2GetReal with nvr = 3`), `rule`
+    /// the standard's requirement ([`GETTER_RULE2`] and the like).
+    pub fn into_values(self, call: impl FnOnce() -> String, rule: &str) -> Vec<T> {
+        self.try_values(call, rule).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`Guarded::into_values`], the failure as an error.
+    pub fn try_values(mut self, call: impl FnOnce() -> String, rule: &str) -> Result<Vec<T>, String> {
+        if let Some((at, changed)) = self.overrun() {
+            return Err(format!(
+                "{} wrote past the end of the array it was given: {changed} byte(s) of the guard after its {} \
+                 byte(s) changed, the first {at} byte(s) after its end ({rule})",
+                call(),
+                self.end
+            ));
+        }
+        self.buf.truncate(self.n);
+        Ok(self.buf)
+    }
+}
+
+impl Guarded<u64> {
+    /// `bytes` bytes in 8-byte aligned memory (values of any type, as [`crate::fmi3::Inst::get_raw`]
+    /// reads them), then the guard; [`Guarded::into_values`] gives the words that hold them.
+    pub fn aligned_bytes(bytes: usize) -> Guarded<u64> {
+        let words = bytes.div_ceil(8);
+        Guarded::guard_from(vec![0; words + guard_elements::<u64>()], words, bytes)
+    }
+}
+
+/// FMI 2.0.5's requirement for the getters and the model-exchange vectors.
+pub const GETTER_RULE2: &str =
+    "FMI 2.0.5 §2.1.7 and §3.2.2: the array the importer provides has exactly the number of elements the call names";
+/// FMI 3.0.2's requirement for the getters and the model-exchange vectors.
+pub const GETTER_RULE3: &str = "FMI 3.0.2, Getting and Setting Variable Values (and the model-exchange vectors): nValues (nContinuousStates, \
+     nEventIndicators) is the size of the array the importer provides";
+/// FMI 2.0.5's requirement for fmi2SerializeFMUstate.
+pub const STATE_RULE2: &str = "FMI 2.0.5 §2.1.8: fmi2SerializeFMUstate copies the state \"into the byte vector \
+     serializedState of length size, that must be provided by the environment\", size being what \
+     fmi2SerializedFMUstateSize returned";
+/// FMI 3.0.2's requirement for fmi3SerializeFMUState.
+pub const STATE_RULE3: &str = "FMI 3.0.2, Getting and Setting the Complete FMU State: fmi3SerializeFMUState copies the state into the byte vector \
+     serializedState of length size that the importer provides, size being what fmi3SerializedFMUStateSize returned";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_array_written_within_its_length_comes_back_whole() {
+        let mut g = Guarded::new(3, 0.0f64);
+        // SAFETY: three elements of the array.
+        unsafe { std::ptr::copy_nonoverlapping([1.0, 2.0, 3.0].as_ptr(), g.as_mut_ptr(), 3) };
+        assert_eq!(g.into_values(|| "f".into(), "rule"), vec![1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn one_value_past_the_end_fails_naming_the_call_and_the_rule() {
+        let mut g = Guarded::new(2, 0.0f64);
+        // SAFETY: the first guard element, inside the buffer.
+        unsafe { *g.as_mut_ptr().add(2) = 1.0 };
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            g.into_values(|| "fmi2GetReal with nvr = 2".into(), GETTER_RULE2)
+        }))
+        .unwrap_err();
+        let m = e.downcast_ref::<String>().unwrap();
+        assert!(m.contains("fmi2GetReal with nvr = 2 wrote past the end"), "{m}");
+        assert!(m.contains("FMI 2.0.5 §2.1.7"), "{m}");
+    }
+
+    #[test]
+    fn an_empty_array_has_its_guard_too() {
+        let mut g = Guarded::<u8>::new(0, 0);
+        // SAFETY: the first guard byte.
+        unsafe { *g.as_mut_ptr() = 7 };
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| g.into_values(|| "f".into(), "r")));
+        assert!(e.is_err());
+    }
+
+    #[test]
+    fn aligned_bytes_are_guarded_from_their_last_byte_on() {
+        let mut g = Guarded::aligned_bytes(3);
+        // SAFETY: the three bytes of the array.
+        unsafe { std::ptr::write_bytes(g.as_mut_ptr().cast::<u8>(), 1, 3) };
+        assert_eq!(g.into_values(|| "f".into(), "r")[0].to_ne_bytes()[..3], [1, 1, 1]);
+        let mut g = Guarded::aligned_bytes(3);
+        // SAFETY: the fourth byte, the guard's first.
+        unsafe { *g.as_mut_ptr().cast::<u8>().add(3) = 1 };
+        let e = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| g.into_values(|| "f".into(), "r")));
+        assert!(e.is_err());
+    }
+}

@@ -1,0 +1,315 @@
+//! Proof that the suite still bites (issue 51): FMUs with one deliberate defect each, FMI 2.0 and
+//! 3.0, are failed by the default verdicts, by the check that names the defect, and the same FMU
+//! without the defect has no failure (so each failure is the defect's, not the fixture's).
+//!
+//! The fixtures are `c/defects.c` (why a pass-through shim over this workspace's Dahlquist: see
+//! its head), compiled here with `cc` with one `-DDEFECT_...` flag, its library put in place of
+//! the binary of `target/fmu/Dahlquist.fmu` and `target/fmu/fmi3/Dahlquist.fmu`. They are checked
+//! as another exporter's FMU (`--as-foreign`): what a vendor who runs `cargo fmu check` gets.
+#![cfg(all(target_os = "linux", target_arch = "x86_64"))]
+
+use fmi_conformance::archive::PrivateDir;
+use fmi_conformance::outcome::Outcome;
+use fmi_conformance::runner::{Report, RunOptions, run};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+/// The FMU a fixture wraps, of FMI version `v` (2 or 3): its path and the folder of its binary.
+fn dahlquist(v: u32) -> (PathBuf, &'static str) {
+    match v {
+        2 => (fmi_conformance::fmu_dir().join("Dahlquist.fmu"), "linux64"),
+        _ => (fmi_conformance::fmi3::fmu3_dir().join("Dahlquist.fmu"), "x86_64-linux"),
+    }
+}
+
+fn entry(fmu: &Path, name: &str) -> Vec<u8> {
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (cargo run --release -p fmu-build makes the workspace's FMUs)",
+            fmu.display()
+        )
+    }))
+    .unwrap();
+    let mut bytes = vec![];
+    zip.by_name(name)
+        .unwrap_or_else(|e| panic!("{}: {name}: {e}", fmu.display()))
+        .read_to_end(&mut bytes)
+        .unwrap();
+    bytes
+}
+
+/// The value of `attribute="..."` in the model description.
+fn attribute(xml: &str, attribute: &str) -> String {
+    let at = xml.find(&format!("{attribute}=\"")).expect(attribute) + attribute.len() + 2;
+    xml[at..at + xml[at..].find('"').unwrap()].to_string()
+}
+
+/// `Dahlquist.fmu` of FMI version `v` with `c/defects.c` compiled with `defines` as its binary,
+/// in `dir`.
+fn fixture(dir: &Path, v: u32, name: &str, defines: &[String]) -> PathBuf {
+    let (original, platform) = dahlquist(v);
+    let binary = format!("binaries/{platform}/Dahlquist.so");
+    // The model the shim forwards to: a copy of the original binary (FMI 2.0 and 3.0 in one).
+    let inner = dir.join(format!("inner-{v}-{name}.so"));
+    std::fs::write(&inner, entry(&original, &binary)).unwrap();
+    let so = dir.join(format!("{name}-{v}.so"));
+    let out = Command::new("cc")
+        .args(["-shared", "-fPIC", "-O1", "-Wall", "-Wextra", "-Werror"])
+        .arg(format!("-DINNER=\"{}\"", inner.display()))
+        .args(defines)
+        .arg("-o")
+        .arg(&so)
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/c/defects.c"))
+        .arg("-ldl")
+        .output()
+        .expect("cc (tests/setup-env.sh installs it)");
+    assert!(out.status.success(), "cc: {}", String::from_utf8_lossy(&out.stderr));
+    let fmu = dir.join(format!("{name}-{v}.fmu"));
+    let mut w = zip::ZipWriter::new(std::fs::File::create(&fmu).unwrap());
+    let opts = zip::write::SimpleFileOptions::default();
+    w.start_file("modelDescription.xml", opts).unwrap();
+    w.write_all(&entry(&original, "modelDescription.xml")).unwrap();
+    w.start_file(binary, opts).unwrap();
+    w.write_all(&std::fs::read(&so).unwrap()).unwrap();
+    w.finish().unwrap();
+    fmu
+}
+
+/// Every check on the fixture, as another exporter's FMU (fewer random sequences: the defects
+/// show in the first ones).
+fn check(fmu: &Path, temp: &Path) -> Report {
+    let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+    o.temp_dir = Some(temp.to_path_buf());
+    o.timeout = Duration::from_secs(120);
+    o.random_sequences = 200;
+    o.as_foreign = true;
+    run(fmu, &o)
+}
+
+/// The defect `name` (`-DDEFECT_<name>`, `None` for the good variant) in both versions: each
+/// `(version, check, text)` of `expected` failed with `text` in its message.
+fn defect(name: &str, define: Option<&str>, expected: &[(u32, &str, &str)]) {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for v in [2, 3] {
+        let defines: Vec<String> = match define {
+            // The binary instantiates with the description's own token, whatever it is given.
+            Some("TOKEN") => {
+                let xml = String::from_utf8(entry(&dahlquist(v).0, "modelDescription.xml")).unwrap();
+                let token = attribute(&xml, if v == 2 { "guid" } else { "instantiationToken" });
+                vec![format!("-DDEFECT_TOKEN=\"{token}\"")]
+            }
+            Some(d) => vec![format!("-DDEFECT_{d}")],
+            None => vec![],
+        };
+        let fmu = fixture(dir.path(), v, name, &defines);
+        let report = check(&fmu, dir.path());
+        assert!(report.load_error.is_none(), "{report}");
+        for (_, check, text) in expected.iter().filter(|e| e.0 == v) {
+            let c = report
+                .checks
+                .iter()
+                .find(|c| c.name == *check)
+                .unwrap_or_else(|| panic!("no check {check} in the report of {name}, FMI {v}.0:\n{report}"));
+            match &c.outcome {
+                Outcome::Fail(m) => assert!(
+                    m.contains(text),
+                    "{name}, FMI {v}.0: {check} failed, but its message does not say '{text}': {m}"
+                ),
+                other => panic!("{name}, FMI {v}.0: expected {check} to fail, got {other:?}\n{report}"),
+            }
+        }
+        if define.is_none() {
+            assert_eq!(report.failed(), 0, "the good variant, FMI {v}.0, failed:\n{report}");
+        }
+    }
+}
+
+#[test]
+fn the_good_variant_of_the_fixtures_has_no_failure() {
+    defect("good", None, &[]);
+}
+
+#[test]
+fn a_getter_writing_one_value_past_n_values_is_failed() {
+    defect(
+        "GET_PAST",
+        Some("GET_PAST"),
+        &[
+            (
+                2,
+                "a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step",
+                "fmi2GetReal with nvr",
+            ),
+            (
+                2,
+                "a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step",
+                "wrote past the end",
+            ),
+            (
+                3,
+                "fmi3_start_values_are_readable_in_instantiated",
+                "fmi3GetFloat64 with nValues",
+            ),
+            (
+                3,
+                "fmi3_start_values_are_readable_in_instantiated",
+                "wrote past the end",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_do_step_answering_ok_without_advancing_time_is_failed() {
+    defect(
+        "STEP_STUCK",
+        Some("STEP_STUCK"),
+        &[
+            (
+                2,
+                "status_functions_report_the_last_successful_time_and_no_termination_request",
+                "",
+            ),
+            (
+                3,
+                "fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set",
+                "time after 3 steps",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_serialized_state_longer_than_its_announced_size_is_failed() {
+    defect(
+        "STATE_OVERRUN",
+        Some("STATE_OVERRUN"),
+        &[
+            (
+                2,
+                "serialize_deserialize_round_trip_continues_bit_identically",
+                "fmi2SerializeFMUstate with size = ",
+            ),
+            (
+                2,
+                "serialize_deserialize_round_trip_continues_bit_identically",
+                "16 byte(s) of the guard",
+            ),
+            (
+                3,
+                "fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically",
+                "fmi3SerializeFMUState with size = ",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn model_exchange_following_other_equations_than_co_simulation_is_failed() {
+    defect(
+        "ME_EQUATIONS",
+        Some("ME_EQUATIONS"),
+        &[
+            (
+                2,
+                "model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic",
+                "fmi2GetDerivatives",
+            ),
+            (
+                3,
+                "fmi3_model_exchange_states_and_derivatives_are_consistent",
+                "fmi3GetContinuousStateDerivatives",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_state_that_restores_to_something_else_is_failed() {
+    defect(
+        "RESTORE",
+        Some("RESTORE"),
+        &[
+            (
+                2,
+                "get_set_free_round_trip_continues_bit_identically",
+                "after fmi2SetFMUstate",
+            ),
+            (
+                3,
+                "fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically",
+                "",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_crash_in_free_instance_is_failed_with_the_call_it_crashed_in() {
+    defect(
+        "FREE_CRASH",
+        Some("FREE_CRASH"),
+        &[
+            (2, "ten_thousand_instantiate_free_cycles_leave_memory_flat", "SIGSEGV"),
+            (
+                2,
+                "ten_thousand_instantiate_free_cycles_leave_memory_flat",
+                "fmi2FreeInstance",
+            ),
+            (
+                3,
+                "fmi3_ten_thousand_instantiate_free_cycles_leave_memory_flat",
+                "SIGSEGV",
+            ),
+            (
+                3,
+                "fmi3_ten_thousand_instantiate_free_cycles_leave_memory_flat",
+                "fmi3FreeInstance",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn a_binary_that_does_not_check_the_token_of_its_description_is_failed() {
+    defect(
+        "TOKEN",
+        Some("TOKEN"),
+        &[
+            (
+                2,
+                "instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message",
+                "accepted",
+            ),
+            (
+                3,
+                "fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null",
+                "wrong instantiationToken",
+            ),
+        ],
+    );
+}
+
+/// A crash in the preflight (here: fmi2FreeInstance of the instance whose state it serializes,
+/// checked as this exporter's FMU so that the preflight serializes one) is no reason to skip:
+/// the checks run and fail with the call.
+#[test]
+fn a_crash_in_the_preflight_fails_the_checks_instead_of_skipping_them() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let fmu = fixture(dir.path(), 2, "FREE_CRASH", &["-DDEFECT_FREE_CRASH".into()]);
+    let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+    o.temp_dir = Some(dir.path().to_path_buf());
+    o.filter = Some("FMU state".into());
+    let report = run(&fmu, &o);
+    assert!(
+        report
+            .about
+            .iter()
+            .any(|l| l.contains("the preflight") && l.contains("SIGSEGV") && l.contains("fmi2FreeInstance")),
+        "{report}"
+    );
+    assert_eq!(report.skipped(), 0, "{report}");
+    assert!(report.failed() > 0, "{report}");
+}
