@@ -153,6 +153,24 @@ int main(int argc, char **argv) {
         if (!strstr(last, "log%s%n%s%n")) { fprintf(stderr, "the '%%' message arrived as: %s\n", last); return 1; }
     }
 
+    /* A step of h < 0, refused with fmi2Error (and its message through the logger, with "%s"),
+     * on an instance of its own: after fmi2Error the instance may only be freed or reset (FMI
+     * 2.0.5 §2.1.3 and the state machine of §4.2.4), so it is freed here and the run below
+     * uses another. Required of this exporter's FMUs; of another's (HOST_FOREIGN) the call is
+     * only made, for valgrind to watch, since a step size < 0 is the importer's mistake. */
+    {
+        fmi2Component bad_step = instantiate("c-host-bad-step", fmi2CoSimulation, argv[2], argv[3], &cb, 0, 1);
+        if (!bad_step) { fprintf(stderr, "fmi2Instantiate returned NULL: %s\n", last); return 1; }
+        CHECK(setup(bad_step, 0, 0.0, 0.0, 0, 0.0));
+        CHECK(enter(bad_step));
+        CHECK(exit_init(bad_step));
+        if (do_step(bad_step, 0.0, -1.0, 1) != fmi2Error && !getenv("HOST_FOREIGN")) {
+            fprintf(stderr, "h < 0 accepted\n");
+            return 1;
+        }
+        free_instance(bad_step);
+    }
+
     for (int run = 0; run < 2; run++) {
         for (int i = 7; i < argc; i++) {
             fmi2ValueReference vr = (fmi2ValueReference)atoi(argv[i]);
@@ -162,7 +180,6 @@ int main(int argc, char **argv) {
         CHECK(setup(c, 0, 0.0, 0.0, 0, 0.0));
         CHECK(enter(c));
         CHECK(exit_init(c));
-        if (do_step(c, 0.0, -1.0, 1) != fmi2Error) { fprintf(stderr, "h < 0 accepted\n"); return 1; }
         fmi2FMUstate saved = NULL;
         for (int n = 0; n < steps; n++) {
             if (n == steps / 2) {

@@ -108,6 +108,14 @@ static void print_bits(const char *tag, const double *v, size_t n) {
     printf("\n");
 }
 
+/* Whether the FMU's lastSuccessfulTime is the end of the step: FMI 3.0.2 (fmi3DoStep) lets it
+ * deviate from currentCommunicationPoint + communicationStepSize by rounding (the FMU may add up
+ * its time otherwise than this host does), so within a millionth of the step, not bit for bit. */
+static int same_time(double reached, double end, double h) {
+    double d = reached - end;
+    return (d < 0 ? -d : d) <= 1e-6 * h;
+}
+
 int main(int argc, char **argv) {
     if (argc < 8) {
         fprintf(stderr, "usage: host3 <so> <token> <resourcePath> <steps> <h> <nStates|-1> <vrs> [vr=value...]\n");
@@ -176,12 +184,12 @@ int main(int argc, char **argv) {
         CHECK(enter_step_mode(c));
     }
     double t = 0.0;
-    int trace = getenv("HOST_TRACE") != NULL;
+    int trace = getenv("HOST_TRACE") != NULL, time_noted = 0;
     for (int i = 0; i < steps; i++) {
         bool event = true, term = true, early = true;
         double reached = -1.0;
         CHECK(do_step(c, t, h, true, &event, &term, &early, &reached));
-        if (event_mode && event && !term && !early && reached == t + h) {
+        if (event_mode && event && !term && !early && same_time(reached, t + h, h)) {
             bool need = true, term2 = false, nom = false, vals = false, next_defined = false;
             double next = 0.0;
             CHECK(enter_event_mode(c));
@@ -189,9 +197,15 @@ int main(int argc, char **argv) {
             CHECK(enter_step_mode(c));
             event = false;
         }
-        if (event || term || early || reached != t + h) {
+        if (event || term || early) {
             fprintf(stderr, "fmi3DoStep at %g: event %d terminate %d early %d lastSuccessfulTime %g\n", t, event, term, early, reached);
             return 1;
+        }
+        /* A step that answered fmi3OK without early return but ended elsewhere: noted (once), and
+         * the run goes on, so that valgrind sees every call; the check reports it. */
+        if (!same_time(reached, t + h, h) && !time_noted) {
+            fprintf(stderr, "lastSuccessfulTime: fmi3DoStep(%.17g, %.17g) answered fmi3OK without early return and lastSuccessfulTime %.17g\n", t, h, reached);
+            time_noted = 1;
         }
         t += h;
         CHECK(get_f64(c, vrs, nv, values, nv_values));
