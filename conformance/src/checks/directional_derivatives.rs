@@ -12,6 +12,7 @@
 //! unknowns; in co-simulation fmi2SetReal of an input, then fmi2GetReal of the outputs.
 
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded};
 use crate::instance::{Instance, excitation, status_name, step_size};
 use crate::me::{Euler, Rng, needs_me};
 use crate::outcome::{NOT_DECLARED, info, limitation, skip_not_declared};
@@ -105,8 +106,8 @@ pub fn call(inst: &Instance, unknowns: &[u32], knowns: &[u32]) -> (fmi2Status, V
         "fmi2GetDirectionalDerivative(unknowns {unknowns:?}, knowns {knowns:?})"
     ));
     let seed = vec![1.0; knowns.len()];
-    let mut out = vec![f64::NAN; unknowns.len()];
-    // SAFETY: arrays of the lengths passed.
+    let mut out = Guarded::new(unknowns.len(), f64::NAN);
+    // SAFETY: arrays of the lengths passed (and the guard after `out`'s).
     let s = unsafe {
         (inst.fmu.api.get_directional_derivative)(
             inst.c,
@@ -118,6 +119,10 @@ pub fn call(inst: &Instance, unknowns: &[u32], knowns: &[u32]) -> (fmi2Status, V
             out.as_mut_ptr(),
         )
     };
+    let out = out.into_values(
+        || format!("fmi2GetDirectionalDerivative with nUnknown = {}", unknowns.len()),
+        GETTER_RULE2,
+    );
     (s, out)
 }
 

@@ -554,9 +554,13 @@ impl<'a> Inst<'a> {
         } else {
             ("fmi3GetDirectionalDerivative", api.get_directional_derivative)
         };
+        let n = sensitivity.len();
+        let mut out = Guarded::new(n, 0.0);
+        out_of(sensitivity, &mut out);
+        let p = out.as_mut_ptr();
         // SAFETY: this instance's live handle (or NULL, which the FMU must refuse); each array is
-        // a live slice passed with its own length.
-        self.call(what, |c| unsafe {
+        // a live slice passed with its own length (`p`: `n` values and the guard after them).
+        let s = self.call(what, |c| unsafe {
             f(
                 c,
                 unknowns.as_ptr(),
@@ -565,10 +569,12 @@ impl<'a> Inst<'a> {
                 knowns.len(),
                 seed.as_ptr(),
                 seed.len(),
-                sensitivity.as_mut_ptr(),
-                sensitivity.len(),
+                p,
+                n,
             )
-        })
+        });
+        sensitivity.copy_from_slice(&out.into_values(|| format!("{what} with nSensitivity = {n}"), GETTER_RULE3));
+        s
     }
 
     /// Runs a call that returns a status; when it is not fmi3OK, a message must have been logged
@@ -1161,4 +1167,10 @@ pub fn accessor(ty: Type) -> &'static str {
         Type::Enumeration => "Int64",
         other => other.name(),
     }
+}
+
+/// Starts `out` with the values of `from` (what the caller put there: the FMU may leave them).
+fn out_of(from: &[f64], out: &mut Guarded<f64>) {
+    // SAFETY: `out` holds `from.len()` values before its guard.
+    unsafe { std::ptr::copy_nonoverlapping(from.as_ptr(), out.as_mut_ptr(), from.len()) };
 }

@@ -4,6 +4,7 @@
 #![allow(non_upper_case_globals)] // fmi2OK etc. are the standard's names, matched on
 
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded};
 use crate::instance::{Instance, excitation, step_size};
 use crate::outcome::{info, skip_not_declared};
 use crate::{Fmu, Type};
@@ -85,8 +86,8 @@ impl OutputDerivatives for Instance<'_> {
         v
     }
     fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String> {
-        let mut out = vec![f64::NAN; vrs.len()];
-        // SAFETY: a live instance; arrays of vrs.len() elements.
+        let mut out = Guarded::new(vrs.len(), f64::NAN);
+        // SAFETY: a live instance; arrays of vrs.len() elements (and the guard after `out`'s).
         let s = unsafe {
             (self.fmu.api.get_real_output_derivatives)(
                 self.c,
@@ -96,6 +97,10 @@ impl OutputDerivatives for Instance<'_> {
                 out.as_mut_ptr(),
             )
         };
+        let out = out.into_values(
+            || format!("fmi2GetRealOutputDerivatives with nvr = {}", vrs.len()),
+            GETTER_RULE2,
+        );
         if s == fmi2OK { Ok(out) } else { Err(self.log_text()) }
     }
 }

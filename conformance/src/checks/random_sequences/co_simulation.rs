@@ -3,6 +3,7 @@
 
 use super::{Expect, SLOTS, Vr, config, real, resolve, vr};
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::instance::{Args, Instance, status_name};
 use crate::outcome::{breadcrumb, info, limitation};
 use crate::standard::allowed_states;
@@ -302,38 +303,33 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             }
             Op::GetReal { vrs, null } => {
                 let v = vrs_of(vrs);
-                let mut out = vec![0.0; v.len()];
+                let mut out = Guarded::new(v.len(), 0.0);
                 let p = if *null { ptr::null_mut() } else { out.as_mut_ptr() };
                 let s = (api.get_real)(c, v.as_ptr(), v.len(), p);
+                out.into_values(|| format!("fmi2GetReal with nvr = {}", v.len()), GETTER_RULE2);
                 let bad = *null && !v.is_empty();
                 (s, if bad { Expect::Refused } else { Expect::Anything }, None)
             }
             Op::GetInteger { vrs } => {
                 let v = vrs_of(vrs);
-                let mut out = vec![0; v.len()];
-                (
-                    (api.get_integer)(c, v.as_ptr(), v.len(), out.as_mut_ptr()),
-                    Expect::Anything,
-                    None,
-                )
+                let mut out = Guarded::new(v.len(), 0);
+                let s = (api.get_integer)(c, v.as_ptr(), v.len(), out.as_mut_ptr());
+                out.into_values(|| format!("fmi2GetInteger with nvr = {}", v.len()), GETTER_RULE2);
+                (s, Expect::Anything, None)
             }
             Op::GetBoolean { vrs } => {
                 let v = vrs_of(vrs);
-                let mut out = vec![0; v.len()];
-                (
-                    (api.get_boolean)(c, v.as_ptr(), v.len(), out.as_mut_ptr()),
-                    Expect::Anything,
-                    None,
-                )
+                let mut out = Guarded::new(v.len(), 0);
+                let s = (api.get_boolean)(c, v.as_ptr(), v.len(), out.as_mut_ptr());
+                out.into_values(|| format!("fmi2GetBoolean with nvr = {}", v.len()), GETTER_RULE2);
+                (s, Expect::Anything, None)
             }
             Op::GetString { vrs } => {
                 let v = vrs_of(vrs);
-                let mut out: Vec<fmi2String> = vec![ptr::null(); v.len()];
-                (
-                    (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr()),
-                    Expect::Anything,
-                    None,
-                )
+                let mut out: Guarded<fmi2String> = Guarded::new(v.len(), ptr::null());
+                let s = (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr());
+                out.into_values(|| format!("fmi2GetString with nvr = {}", v.len()), GETTER_RULE2);
+                (s, Expect::Anything, None)
             }
             Op::SetReal { values, null } => {
                 let v: Vec<u32> = values.iter().map(|(x, _)| resolve(fmu, *x)).collect();
@@ -404,8 +400,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                     if s1 != fmi2OK {
                         return (s1, Expect::Succeeds, None);
                     }
-                    let mut buf = vec![0u8; size];
-                    let s = (api.serialize_fmu_state)(c, p, buf.as_mut_ptr() as *mut fmi2Byte, size);
+                    let mut guarded = Guarded::new(size, 0u8);
+                    let s = (api.serialize_fmu_state)(c, p, guarded.as_mut_ptr() as *mut fmi2Byte, size);
+                    let buf = guarded.into_values(|| format!("fmi2SerializeFMUstate with size = {size}"), STATE_RULE2);
                     if s == fmi2OK {
                         sh.bytes = Some((buf, snap));
                     }

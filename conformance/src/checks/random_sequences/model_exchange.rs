@@ -4,6 +4,7 @@
 use super::{Expect, SLOTS, Vr, config, real, resolve, vr};
 use crate::Fmu;
 use crate::fmi2::*;
+use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::instance::{Args, Instance, status_name};
 use crate::me::{MeState, needs_me};
 use crate::outcome::{breadcrumb, info, limitation};
@@ -210,9 +211,10 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
             }
             MeOp::GetReal { vrs, null } => {
                 let v: Vec<u32> = vrs.iter().map(|x| resolve(fmu, *x)).collect();
-                let mut out = vec![0.0; v.len()];
+                let mut out = Guarded::new(v.len(), 0.0);
                 let p = if *null { ptr::null_mut() } else { out.as_mut_ptr() };
                 let s = (api.get_real)(c, v.as_ptr(), v.len(), p);
+                out.into_values(|| format!("fmi2GetReal with nvr = {}", v.len()), GETTER_RULE2);
                 (
                     s,
                     if *null && !v.is_empty() {
@@ -282,8 +284,9 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
                 if s != fmi2OK {
                     return (s, Expect::Succeeds, None);
                 }
-                let mut buf = vec![0u8; size];
-                let s = (api.serialize_fmu_state)(c, p, buf.as_mut_ptr() as *mut fmi2Byte, size);
+                let mut guarded = Guarded::new(size, 0u8);
+                let s = (api.serialize_fmu_state)(c, p, guarded.as_mut_ptr() as *mut fmi2Byte, size);
+                let mut buf = guarded.into_values(|| format!("fmi2SerializeFMUstate with size = {size}"), STATE_RULE2);
                 if s != fmi2OK {
                     return (s, Expect::Succeeds, None);
                 }
