@@ -6,6 +6,7 @@
 
 use super::directional_derivatives::{knowns, unknowns};
 use super::*;
+use crate::guard::{GETTER_RULE3, Guarded};
 use State::*;
 
 /// What the standard says of a call in a state.
@@ -237,8 +238,11 @@ impl F {
         macro_rules! get {
             ($f:ident, $ty:expr, $t:ty) => {{
                 let v = readable(i.fmu, $ty);
-                let mut out: Vec<$t> = vec![Default::default(); v.len()];
-                valid!(|c| (api.$f)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len()))
+                let mut out = Guarded::<$t>::new(v.len(), Default::default());
+                let p = out.as_mut_ptr();
+                let s = valid!(|c| (api.$f)(c, v.as_ptr(), v.len(), p, v.len()));
+                out.into_values(|| format!("{name} with nValues = {}", v.len()), GETTER_RULE3);
+                s
             }};
         }
         /// A getter of no variable.
