@@ -44,6 +44,9 @@ pub struct RunOptions {
     pub as_foreign: bool,
     /// Warnings are failures ([`Outcome::strict`]): what this exporter's own FMUs must pass.
     pub strict: bool,
+    /// Where a failing random check writes its reproducer (passed to the workers in
+    /// `$RUSTFMU_REPRODUCERS`; default [`crate::replay::default_reproducers_dir`]).
+    pub reproducers: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -59,6 +62,7 @@ impl RunOptions {
             temp_dir: None,
             as_foreign: false,
             strict: false,
+            reproducers: None,
         }
     }
 
@@ -615,6 +619,9 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
     }
     if let Some(seed) = seed {
         cmd.env(crate::SEED_VAR, seed.to_string());
+    }
+    if let Some(dir) = &opts.reproducers {
+        cmd.env(crate::replay::REPRODUCERS_VAR, dir);
     }
     cmd.arg("--tmp")
         .arg(run_dir)

@@ -2,7 +2,10 @@
 //! 2.0 FMU with the FMI 2.0 checks, an FMI 3.0 FMU with the FMI 3.0 ones (by the fmiVersion of
 //! its model description), each in a child process, and prints a report. Exits 1 when a check failed, 2 on a usage error. `fmu-check --list` lists the checks;
 //! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks);
-//! `--strict` makes every warning a failure (what this exporter's own FMUs must pass).
+//! `--strict` makes every warning a failure (what this exporter's own FMUs must pass);
+//! `--reproducers DIR`: where failing random sequences leave their reproducers.
+//! `fmu-check --replay FILE X.fmu` replays a reproducer in this process (as `cargo fmu replay`,
+//! [`fmi_conformance::replay`]): exits 1 when the FMU does not answer as the file expects.
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi_conformance::runner::worker_main`]).
 
@@ -12,7 +15,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] | --list";
+const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] | --list | --replay FILE X.fmu";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -22,6 +25,8 @@ struct Args {
     list: bool,
     as_foreign: bool,
     strict: bool,
+    reproducers: Option<PathBuf>,
+    replay: Option<PathBuf>,
 }
 
 fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -33,6 +38,8 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         list: false,
         as_foreign: false,
         strict: false,
+        reproducers: None,
+        replay: None,
     };
     let mut it = args;
     while let Some(arg) = it.next() {
@@ -54,6 +61,8 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
             "--list" => a.list = true,
             "--as-foreign" => a.as_foreign = true,
             "--strict" => a.strict = true,
+            "--reproducers" => a.reproducers = Some(PathBuf::from(value("--reproducers")?)),
+            "--replay" => a.replay = Some(PathBuf::from(value("--replay")?)),
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
@@ -89,6 +98,24 @@ fn main() -> ExitCode {
         eprintln!("{USAGE}");
         return ExitCode::from(2);
     };
+    if let Some(file) = a.replay {
+        return match fmi_conformance::replay::replay(&file, &fmu, &mut |line| println!("{line}")) {
+            Ok(report) => match report.difference {
+                None => {
+                    println!("replay: every call answered as {} expects", file.display());
+                    ExitCode::SUCCESS
+                }
+                Some(d) => {
+                    eprintln!("fmu-check: replay: the failure reproduces: {d}");
+                    ExitCode::FAILURE
+                }
+            },
+            Err(e) => {
+                eprintln!("fmu-check: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => {
@@ -101,6 +128,7 @@ fn main() -> ExitCode {
     opts.random_sequences = a.random_sequences;
     opts.as_foreign = a.as_foreign;
     opts.strict = a.strict;
+    opts.reproducers = a.reproducers;
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }

@@ -10,6 +10,7 @@ pub mod memory;
 pub mod model_exchange;
 pub mod native;
 pub mod random_sequences;
+pub mod reference_results;
 pub mod state_machine;
 
 use crate::outcome::Outcome;
@@ -80,6 +81,9 @@ registry! {
             random_call_sequences_keep_every_fmu_conformant,
             random_model_exchange_call_sequences_keep_every_fmu_conformant,
             regressions_found_by_random_sequences,
+        };
+        Calls: reference_results::{
+            reference_results_are_reproduced_by_the_default_experiment,
         };
         Native: native::{
             a_c_host_runs_every_fmu_with_the_same_results_as_the_rust_importer,

@@ -110,3 +110,8 @@ fn a_percent_sign_in_a_message_reaches_the_logger_verbatim() {
 fn each_instance_logs_to_its_own_component_environment() {
     on_every_fmu("each_instance_logs_to_its_own_component_environment");
 }
+
+#[test]
+fn reference_results_are_reproduced_by_the_default_experiment() {
+    on_every_fmu("reference_results_are_reproduced_by_the_default_experiment");
+}

@@ -177,3 +177,8 @@ fn the_runner_checks_a_3_0_file_with_the_3_0_checks() {
     assert_eq!(report.checks[0].outcome, Outcome::Pass, "{report}");
     assert!(report.about.iter().any(|l| l.contains("FMI 3.0")), "{report}");
 }
+
+#[test]
+fn fmi3_reference_results_are_reproduced_by_the_default_experiment() {
+    on_every_fmu("fmi3_reference_results_are_reproduced_by_the_default_experiment");
+}

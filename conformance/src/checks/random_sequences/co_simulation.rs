@@ -6,11 +6,12 @@ use crate::fmi2::*;
 use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::instance::{Args, Instance, status_name};
 use crate::outcome::{breadcrumb, info, limitation};
+use crate::replay::Expected;
 use crate::standard::allowed_states;
 use crate::state::State;
 use crate::{Fmu, Type, state};
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestRunner};
+use proptest::test_runner::{TestCaseError, TestError, TestRunner};
 use std::ptr;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -526,6 +527,27 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
 }
 
 pub(super) fn execute(fmu: &Fmu, logging_on: bool, ops: &[Op]) -> Result<(), TestCaseError> {
+    execute_with(fmu, logging_on, ops, &mut |_, _, _, _, _| Ok(()))
+}
+
+/// What [`run_ops`] tells about each call it made, before it checks the answer: the call's index
+/// in the sequence, the call, the status, what the standard requires there, the log it wrote.
+pub(in crate::checks) type Hook<'h, O> =
+    &'h mut dyn FnMut(usize, &O, fmi2Status, Expected, &[crate::LogEntry]) -> Result<(), TestCaseError>;
+
+/// The statuses the standard allows a call: fmi2Error where the state does not allow it or the
+/// arguments are invalid, fmi2OK (a step also fmi2Discard) where it must succeed, else any.
+pub(super) fn expected_of(allowed: bool, expect: &Expect, function: &str) -> Expected {
+    match (allowed, expect) {
+        (false, _) | (true, Expect::Refused) => Expected::ERROR,
+        (true, Expect::Succeeds) if function == "fmi2DoStep" => Expected::OK_OR_DISCARD,
+        (true, Expect::Succeeds) => Expected::OK,
+        (true, Expect::Anything) => Expected::ANY,
+    }
+}
+
+/// [`execute`], telling `hook` about each call.
+pub(super) fn execute_with(fmu: &Fmu, logging_on: bool, ops: &[Op], hook: Hook<Op>) -> Result<(), TestCaseError> {
     let args = Args {
         logging_on,
         ..Args::valid(fmu)
@@ -538,7 +560,7 @@ pub(super) fn execute(fmu: &Fmu, logging_on: bool, ops: &[Op]) -> Result<(), Tes
         slots: [None; SLOTS],
         bytes: None,
     };
-    let result = run_ops(&mut inst, &mut sh, ops);
+    let result = run_ops(&mut inst, &mut sh, ops, hook);
     // Whatever happened, free the FMU states the importer still holds (allowed in every state
     // the shadow can be in; Fatal would already have failed the case).
     for slot in sh.slots.iter_mut() {
@@ -559,7 +581,7 @@ pub(super) fn declared(fmu: &Fmu, op: &Op) -> bool {
     }
 }
 
-pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op]) -> Result<(), TestCaseError> {
+pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Hook<Op>) -> Result<(), TestCaseError> {
     let own = inst.fmu.own_state_format();
     let snapshots = inst.fmu.can_snapshot();
     for (i, op) in ops.iter().enumerate() {
@@ -586,6 +608,7 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op]) -> Resul
         let (status, expect, next) = call(inst, sh, op);
         let took = clock.elapsed();
         let log = inst.log();
+        hook(i, op, status, expected_of(allowed, &expect, function), &log)?;
         CALLS[sh.state as usize].fetch_add(1, Ordering::Relaxed);
         if status == fmi2OK {
             OK_CALLS[sh.state as usize].fetch_add(1, Ordering::Relaxed);
@@ -700,7 +723,18 @@ pub fn random_call_sequences_keep_every_fmu_conformant(fmu: &Fmu) {
         execute(fmu, logging_on, &ops)
     });
     if let Err(e) = result {
-        panic!("{}: {e}\n{}", fmu.id, crate::seed_note());
+        let note = match &e {
+            TestError::Fail(reason, (logging_on, ops)) => super::text::write(
+                fmu,
+                "random_call_sequences_keep_every_fmu_conformant",
+                "co-simulation",
+                &format!("fmi2Instantiate fmuType=CoSimulation loggingOn={logging_on}"),
+                &super::text::record_cs(fmu, *logging_on, ops),
+                reason.message(),
+            ),
+            TestError::Abort(_) => String::new(),
+        };
+        panic!("{}: {e}\n{}\n{note}", fmu.id, crate::seed_note());
     }
     let ran = ran.into_inner();
     if ran < config().cases as usize {

@@ -32,9 +32,11 @@ use proptest::test_runner::Config;
 mod co_simulation;
 mod model_exchange;
 mod regressions;
+mod text;
 pub use co_simulation::*;
 pub use model_exchange::*;
 pub use regressions::*;
+pub use text::{replay, reproducer_of_a_random_sequence};
 
 const SLOTS: usize = 3;
 

@@ -1,6 +1,7 @@
 //! Random model-exchange call sequences: the calls ([`MeOp`]), the shadow of the
 //! model-exchange state machine, and the check.
 
+use super::co_simulation::{Hook, expected_of};
 use super::{Expect, SLOTS, Vr, config, real, resolve, vr};
 use crate::Fmu;
 use crate::fmi2::*;
@@ -9,7 +10,7 @@ use crate::instance::{Args, Instance, status_name};
 use crate::me::{MeState, needs_me};
 use crate::outcome::{breadcrumb, info, limitation};
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestRunner};
+use proptest::test_runner::{TestCaseError, TestError, TestRunner};
 use std::ptr;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -405,6 +406,11 @@ pub(super) fn me_declared(fmu: &Fmu, op: &MeOp) -> bool {
 pub(super) static ME_CALLS: [AtomicUsize; 7] = [const { AtomicUsize::new(0) }; 7];
 
 pub(super) fn me_execute(fmu: &Fmu, ops: &[MeOp]) -> Result<(), TestCaseError> {
+    me_execute_with(fmu, ops, &mut |_, _, _, _, _| Ok(()))
+}
+
+/// [`me_execute`], telling `hook` about each call.
+pub(super) fn me_execute_with(fmu: &Fmu, ops: &[MeOp], hook: Hook<MeOp>) -> Result<(), TestCaseError> {
     let args = Args {
         fmu_type: fmi2ModelExchange,
         ..Args::valid(fmu)
@@ -415,7 +421,7 @@ pub(super) fn me_execute(fmu: &Fmu, ops: &[MeOp]) -> Result<(), TestCaseError> {
         time: 0.0,
         slots: [None; SLOTS],
     };
-    let result = me_run_ops(&mut inst, &mut sh, ops);
+    let result = me_run_ops(&mut inst, &mut sh, ops, hook);
     for slot in sh.slots.iter_mut() {
         if let Some((mut p, _, _)) = slot.take() {
             let _ = inst.free_state(&mut p);
@@ -425,7 +431,12 @@ pub(super) fn me_execute(fmu: &Fmu, ops: &[MeOp]) -> Result<(), TestCaseError> {
     result
 }
 
-pub(super) fn me_run_ops(inst: &mut Instance, sh: &mut MeShadow, ops: &[MeOp]) -> Result<(), TestCaseError> {
+pub(super) fn me_run_ops(
+    inst: &mut Instance,
+    sh: &mut MeShadow,
+    ops: &[MeOp],
+    hook: Hook<MeOp>,
+) -> Result<(), TestCaseError> {
     let observed = inst.fmu.me_state_codes().is_ok();
     let snapshots = crate::me::can_snapshot_me(inst.fmu);
     let own = inst.fmu.own_state_format();
@@ -441,6 +452,7 @@ pub(super) fn me_run_ops(inst: &mut Instance, sh: &mut MeShadow, ops: &[MeOp]) -
         let (status, expect, next) = me_call(inst, sh, op);
         let took = clock.elapsed();
         let log = inst.log();
+        hook(i, op, status, expected_of(allowed, &expect, function), &log)?;
         ME_CALLS[sh.state as usize].fetch_add(1, Ordering::Relaxed);
         let at = format!("op {i} {op:?} in {:?}", sh.state);
         prop_assert!(took < Duration::from_secs(10), "{}: took {:?}", at, took);
@@ -534,7 +546,18 @@ pub fn random_model_exchange_call_sequences_keep_every_fmu_conformant(fmu: &Fmu)
     let mut runner = TestRunner::new(config());
     let strategy = prop::collection::vec(me_op(), 1..100);
     if let Err(e) = runner.run(&strategy, |ops| me_execute(fmu, &ops)) {
-        panic!("{}: {e}\n{}", fmu.id, crate::seed_note());
+        let note = match &e {
+            TestError::Fail(reason, ops) => super::text::write(
+                fmu,
+                "random_model_exchange_call_sequences_keep_every_fmu_conformant",
+                "model-exchange",
+                "fmi2Instantiate fmuType=ModelExchange",
+                &super::text::record_me(fmu, ops),
+                reason.message(),
+            ),
+            TestError::Abort(_) => String::new(),
+        };
+        panic!("{}: {e}\n{}\n{note}", fmu.id, crate::seed_note());
     }
     let calls: Vec<usize> = ME_CALLS.iter().map(|x| x.swap(0, Ordering::Relaxed)).collect();
     info(format!(

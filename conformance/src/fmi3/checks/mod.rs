@@ -19,11 +19,14 @@ pub mod memory;
 pub mod model_exchange;
 pub mod native;
 pub mod random_sequences;
+pub mod reference_results;
 pub mod scheduled_execution;
 pub mod state_machine;
 pub mod structural;
 pub mod table;
 pub mod types;
+
+pub use random_sequences::replay;
 
 use super::standard::{State, settable_in};
 use super::types::*;
@@ -94,6 +97,9 @@ crate::registry::registry! {
         };
         RandomSequences: random_sequences::{
             fmi3_random_call_sequences_never_crash_and_keep_status_consistent,
+        };
+        Calls: reference_results::{
+            fmi3_reference_results_are_reproduced_by_the_default_experiment,
         };
         Native: native::{
             fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind,
