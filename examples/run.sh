@@ -2,8 +2,22 @@
 # The main job: build and package every FMU, FMI 2.0 and 3.0 (and the SSP files of the composed systems), print the
 # paper's numbers as computed, draw Figures 6-8, and run the full composed demo (4 FMUs) through fmpy.
 # Results go to out/.
+#
+#   bash examples/run.sh               the main job: the product's FMUs (Pendulum, DCMotor, Controller,
+#                                      SampledController) for every platform, the Reference-FMU
+#                                      re-makes (examples) and the containers' binary for this machine
+#   bash examples/run.sh --everything  also the re-makes and the containers for every platform
+#
+# cargo's messages go to target/main-job/*.log (all of them shown if a build fails); what is shown
+# is each build's progress (cargo fmu build -v shows cargo's messages as they come).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+everything=false
+case "${1:-}" in
+  --everything) everything=true ;;
+  "") ;;
+  *) echo "usage: bash examples/run.sh [--everything]" >&2; exit 2 ;;
+esac
 started=$SECONDS
 times=()
 # lap NAME: the time since the last lap, for the summary.
@@ -19,18 +33,30 @@ lap "setup (tests/setup-env.sh --main-job)"
 # (Setup and builds run one after the other: pip's install and maturin's build beside this build
 # made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
 source tests/pyo3-env.sh
-cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
+python3 tests/cargo-progress.py target/main-job/cargo-build.log \
+  cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
   -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
 bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
-target/release/cargo-fmu build --workspace --python .venv/bin/python
+# The Reference-FMU re-makes are examples (`example = true` in their Cargo.toml): built for this
+# machine only unless --everything (each of them for five platforms was 28 of the 55 fat-LTO links).
+if $everything; then
+  target/release/cargo-fmu build --workspace --python .venv/bin/python
+else
+  target/release/cargo-fmu build --workspace --examples-on-host --python .venv/bin/python
+fi
 lap "FMUs and SSP files (cargo fmu build)"
 # Each composed system as one FMU (cargo fmu container; the components inside, the runner's
 # master in its binary, for every platform the components carry), beside the SSP files: FMI 2.0
 # in target/fmu/containers, FMI 3.0 in target/fmu/containers/fmi3 (the same binary).
+# The containers' binary (the runner's master) for this machine only unless --everything.
 mkdir -p target/fmu/containers
+here=()
+host=$(rustc -vV | sed -n 's/^host: //p')
+[[ "$host" == *-linux-gnu ]] && host="$host.2.17"  # as the FMUs' Linux binaries: glibc 2.17 and newer
+$everything || here=(--target "$host")
 for s in PendulumLQR PendulumMotors; do
-  target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python
+  target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python "${here[@]}"
 done
 lap "container FMUs (cargo fmu container)"
 mkdir -p out
@@ -73,3 +99,7 @@ echo "command line (runner_motors.csv), the Dask studies on the native runner (o
 (cd out && find . -type f | sort | sed 's|^\./|  out/|')
 echo "Time: $((SECONDS - started)) s in all"
 for t in "${times[@]}"; do echo "  $t"; done
+if ! $everything; then
+  echo "Built for this machine only: the Reference-FMU re-makes (Dahlquist, BouncingBall, ...) and the"
+  echo "containers' binary. For every platform, as the tests use them: bash examples/run.sh --everything"
+fi

@@ -5,14 +5,15 @@
 //! fragment for documentation/index.html) and `resources` (a folder copied to resources/;
 //! default `resources` when it exists) and `fmi-versions` (which FMI versions `cargo fmu build`
 //! makes of it: `["2.0", "3.0"]`, the default, or one of them) and `targets` (the Rust target
-//! triples whose binaries go into each FMU; default: the host's only). The workspace's `[workspace.metadata.fmu]` may name
+//! triples whose binaries go into each FMU; default: the host's only) and `example` (`true`: an
+//! example, not a product: `cargo fmu build --examples-on-host` builds it for the host only). The workspace's `[workspace.metadata.fmu]` may name
 //! `model-descriptions` (a folder that keeps a committed copy of every description) and
 //! `systems` (files of composed systems to write as SSP).
 
 use cargo_metadata::{Metadata, MetadataCommand, Package};
 use rustfmu::description::FmiVersion;
 use std::collections::BTreeSet;
-use std::io::{BufRead, IsTerminal, Write};
+use std::io::{BufRead, IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -36,6 +37,9 @@ pub struct FmuCrate {
     /// documentation page's run of the default experiment sets (a model whose own start values
     /// are an equilibrium would plot flat lines), or what is wrong with the entry.
     pub documentation_start: Result<Vec<(String, f64)>, String>,
+    /// `[package.metadata.fmu] example = true`: an example (the Reference-FMU re-makes), which
+    /// `cargo fmu build --examples-on-host` builds for the host only.
+    pub example: bool,
 }
 
 /// `documentation-start = { alpha1_0 = 0.1, on = true }`: variable names and numbers (a Boolean
@@ -141,6 +145,9 @@ fn fmu_crate(p: &Package) -> FmuCrate {
         documentation_start: meta
             .and_then(|m| m.get("documentation-start"))
             .map_or(Ok(vec![]), parse_documentation_start),
+        example: meta
+            .and_then(|m| m.get("example"))
+            .is_some_and(|v| v == &serde_json::Value::Bool(true)),
     }
 }
 
@@ -385,6 +392,7 @@ pub fn build(
     triple: Option<&str>,
     host: &str,
     zig: Option<&crate::target::Zig>,
+    job: &mut crate::progress::Job,
 ) -> Result<(), String> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut common: Vec<String> = vec!["rustc".into(), "--profile".into(), FMU_PROFILE.into()];
@@ -402,16 +410,22 @@ pub fn build(
         env.extend(crate::target::build_env(t));
     }
     common.extend(["--lib".into(), "--crate-type".into(), "cdylib".into()]);
+    let verbose = job.verbose();
+    if !verbose {
+        // cargo's own progress line, read for the display (cargo draws it only on a terminal
+        // unless told).
+        env.extend([
+            ("CARGO_TERM_PROGRESS_WHEN".to_string(), "always".to_string()),
+            ("CARGO_TERM_PROGRESS_WIDTH".to_string(), "100".to_string()),
+            ("CARGO_TERM_COLOR".to_string(), "never".to_string()),
+        ]);
+    }
     for c in crates {
         let mut args = common.clone();
         args.extend(["-p".into(), c.package.clone()]);
         let mut cmd = match zig {
-            None => {
-                eprintln!("fmu: {cargo} {}", args.join(" "));
-                Command::new(&cargo)
-            }
+            None => Command::new(&cargo),
             Some(z) => {
-                eprintln!("fmu: {} {}", z.cargo_zigbuild.display(), args.join(" "));
                 let mut cmd = Command::new(&z.cargo_zigbuild);
                 if let Some(path) = z.path() {
                     cmd.env("PATH", path);
@@ -419,10 +433,43 @@ pub fn build(
                 cmd
             }
         };
+        let shown = format!("{} {}", cmd.get_program().to_string_lossy(), args.join(" "));
+        if verbose {
+            eprintln!("fmu: {shown}");
+        }
         cmd.current_dir(&ws.root).args(&args).envs(env.iter().cloned());
         let program = cmd.get_program().to_string_lossy().into_owned();
         let cannot_run = |e: std::io::Error| format!("cannot run {program}: {e}");
-        let status = if zig.is_some() && triple.is_some_and(|t| t.contains("-apple-darwin")) {
+        let macos = zig.is_some() && triple.is_some_and(|t| t.contains("-apple-darwin"));
+        let started = std::time::Instant::now();
+        job.start(&c.package);
+        let status = if !verbose {
+            // cargo's messages kept, shown only if the build fails; its progress line read.
+            let mut child = cmd.stderr(Stdio::piped()).spawn().map_err(cannot_run)?;
+            let mut from = child.stderr.take().expect("stderr is piped");
+            let kept = read_cargo(&mut from, |done, of, names| job.units(&c.package, done, of, names));
+            let status = child.wait().map_err(cannot_run)?;
+            let mut shown_lines = Vec::new();
+            let _ = without_xcrun_warning(&mut std::io::Cursor::new(&kept), &mut shown_lines);
+            let text = String::from_utf8_lossy(&shown_lines);
+            if !status.success() {
+                job.println(&format!("fmu: {shown}\n{}", text.trim_end()));
+            } else {
+                let warnings = text
+                    .lines()
+                    .filter(|l| l.starts_with("warning") && !l.contains(" generated "))
+                    .count();
+                if warnings > 0 {
+                    job.println(&format!(
+                        "fmu: {} for {}: cargo printed {warnings} warning{} (`-v` shows cargo's messages)",
+                        c.package,
+                        job.target,
+                        if warnings == 1 { "" } else { "s" }
+                    ));
+                }
+            }
+            status
+        } else if macos {
             // rustc's xcrun warning means nothing here: cargo's messages through a filter.
             if std::io::stderr().is_terminal() && std::env::var_os("CARGO_TERM_COLOR").is_none() {
                 cmd.env("CARGO_TERM_COLOR", "always");
@@ -445,7 +492,91 @@ pub fn build(
             let on = triple.map(|t| format!(" for {t}")).unwrap_or_default();
             return Err(format!("cargo rustc of {}{on} failed ({status})", c.package));
         }
+        job.crate_done(&c.package, started.elapsed().as_secs_f64());
     }
+    Ok(())
+}
+
+/// Reads cargo's stderr to its end: its progress lines (`\r`-drawn) go to `progress` as units
+/// done, units in all and the names being compiled; every other line is returned.
+fn read_cargo(from: &mut impl Read, mut progress: impl FnMut(usize, usize, &str)) -> Vec<u8> {
+    let mut kept = Vec::new();
+    let mut segment = Vec::new();
+    let mut buf = [0u8; 8192];
+    let mut end_segment = |segment: &mut Vec<u8>, newline: bool, kept: &mut Vec<u8>| {
+        let text = plain(segment);
+        match crate::progress::cargo_progress(&text) {
+            Some((done, of, names)) => progress(done, of, &names),
+            None if newline || !text.trim().is_empty() => {
+                kept.extend_from_slice(segment);
+                kept.push(b'\n');
+            }
+            None => {}
+        }
+        segment.clear();
+    };
+    loop {
+        let n = match from.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => n,
+        };
+        for &b in &buf[..n] {
+            match b {
+                b'\n' => end_segment(&mut segment, true, &mut kept),
+                b'\r' => end_segment(&mut segment, false, &mut kept),
+                _ => segment.push(b),
+            }
+        }
+    }
+    if !segment.is_empty() {
+        end_segment(&mut segment, true, &mut kept);
+    }
+    kept
+}
+
+/// [`build`] of each target's crates (`jobs`: a target and its crates), every target in a cargo
+/// folder of its own, as many side by side as the machine has cores: a target's build is a chain
+/// of `cargo rustc` invocations, one per crate, whose last step (the link-time optimisation of the
+/// whole library) runs on one core. The host's target (no `--target`) where a job's triple is the
+/// host; `zig` links those [`crate::target::uses_zig`] names. Shows the progress
+/// ([`crate::progress`]) and ends with a summary of `what` was built (the first error otherwise).
+pub fn build_targets(
+    ws: &Workspace,
+    jobs: &[(String, Vec<FmuCrate>)],
+    host: &str,
+    zig: Option<&crate::target::Zig>,
+    verbose: bool,
+    what: &str,
+) -> Result<(), String> {
+    let progress = crate::progress::Progress::new(verbose, jobs.iter().map(|(_, c)| c.len()).sum());
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(jobs.len())
+        .max(1);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let outcomes: std::sync::Mutex<Vec<(usize, Result<(), String>)>> = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let j = next.fetch_add(1, Ordering::SeqCst);
+                    let Some((t, crates)) = jobs.get(j) else { break };
+                    let triple = (t != host).then_some(t.as_str());
+                    let linker = if crate::target::uses_zig(t, host) { zig } else { None };
+                    let mut job = progress.job(t, crates.len());
+                    let outcome = build(ws, crates, triple, host, linker, &mut job);
+                    job.finish();
+                    outcomes.lock().unwrap_or_else(|e| e.into_inner()).push((j, outcome));
+                }
+            });
+        }
+    });
+    let mut outcomes = outcomes.into_inner().unwrap_or_else(|e| e.into_inner());
+    outcomes.sort_by_key(|(j, _)| *j);
+    if let Some((_, Err(e))) = outcomes.iter().find(|(_, o)| o.is_err()) {
+        return Err(e.clone());
+    }
+    progress.summary(what);
     Ok(())
 }
 

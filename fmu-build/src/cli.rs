@@ -57,6 +57,15 @@ enum Cmd {
         /// `--target x86_64-unknown-linux-gnu --target x86_64-pc-windows-gnu`.
         #[arg(long = "target", value_delimiter = ',', value_name = "TRIPLE")]
         targets: Vec<String>,
+        /// Build the examples (crates whose `[package.metadata.fmu]` says `example = true`: the
+        /// Reference-FMU re-makes) for the host only, the other crates for all their targets: the
+        /// main job's build (examples/run.sh). Without it, every crate for all its targets.
+        #[arg(long)]
+        examples_on_host: bool,
+        /// Show cargo's messages as they come (default: a progress line per target, cargo's
+        /// messages only for a build that failed).
+        #[arg(short, long)]
+        verbose: bool,
     },
     /// Validate FMU files: archive layout, description, binary, a smoke run in a child process.
     Validate {
@@ -140,6 +149,10 @@ enum Cmd {
         /// The venv Python whose zig links macOS and old-glibc Linux targets.
         #[arg(long)]
         python: Option<PathBuf>,
+        /// Show cargo's messages as they come (default: a progress line per target, cargo's
+        /// messages only for a build that failed).
+        #[arg(short, long)]
+        verbose: bool,
     },
     /// Internal: the default experiment's picture for `build`, in a child process (SVG on stdout).
     #[command(hide = true, name = "__plot")]
@@ -175,6 +188,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             fmi_versions,
             targets,
             python,
+            verbose,
         } => {
             let versions: Vec<FmiVersion> = parse_version_choice(&fmi_versions)?
                 .map_or_else(|| vec![FmiVersion::V2, FmiVersion::V3], |v| v.into_iter().collect());
@@ -185,6 +199,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 targets: &targets,
                 python: python.as_deref(),
                 versions: &versions,
+                verbose,
             })?;
             for out in outs {
                 println!("{}", out.display());
@@ -211,6 +226,8 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             python,
             fmi_versions,
             targets,
+            examples_on_host,
+            verbose,
         } => {
             let versions = parse_version_choice(&fmi_versions)?;
             // Before a build of minutes, not after it as "invalid: <a good FMU>".
@@ -223,7 +240,11 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 workspace,
                 python.as_deref(),
                 versions.as_ref(),
-                &targets,
+                &Choice {
+                    targets: &targets,
+                    examples_on_host,
+                    verbose,
+                },
             )
             .map(|_| ())
         }
@@ -397,12 +418,25 @@ pub fn build(
     all: bool,
     python: Option<&Path>,
 ) -> Result<Vec<PathBuf>, String> {
-    build_versions(manifest_path, packages, all, python, None, &[])
+    build_versions(manifest_path, packages, all, python, None, &Choice::default())
+}
+
+/// What else a build is asked for, besides crates and versions.
+#[derive(Default)]
+pub struct Choice<'a> {
+    /// `--target`: the targets of every crate (empty: what each crate names, else the host).
+    pub targets: &'a [String],
+    /// `--examples-on-host`: example crates for the host only.
+    pub examples_on_host: bool,
+    /// `-v`: cargo's messages as they come.
+    pub verbose: bool,
 }
 
 /// The targets of a crate: `--target` if given, else its `[package.metadata.fmu] targets`,
-/// else the host; the host first when it is among them.
-fn targets_of(c: &FmuCrate, asked: &[String], host: &str) -> Result<Vec<String>, String> {
+/// else the host; the host first when it is among them. With `examples_on_host`, an example
+/// crate's (`example = true`) are cut to the host's: its own entry for the host (with a glibc
+/// version, as the other crates' Linux binaries), else the host.
+fn targets_of(c: &FmuCrate, asked: &[String], host: &str, examples_on_host: bool) -> Result<Vec<String>, String> {
     let mut t: Vec<String> = if !asked.is_empty() {
         let mut out: Vec<String> = Vec::new();
         for a in asked {
@@ -419,6 +453,12 @@ fn targets_of(c: &FmuCrate, asked: &[String], host: &str) -> Result<Vec<String>,
             Some(Err(e)) => return Err(format!("{}: [package.metadata.fmu] {e}", c.package)),
         }
     };
+    if examples_on_host && c.example {
+        t.retain(|x| crate::target::split_glibc(x).0 == host);
+        if t.is_empty() {
+            t.push(host.to_string());
+        }
+    }
     t.sort_by_key(|x| x != host);
     Ok(t)
 }
@@ -449,7 +489,7 @@ pub fn build_versions(
     all: bool,
     python: Option<&Path>,
     asked: Option<&BTreeSet<FmiVersion>>,
-    asked_targets: &[String],
+    choice: &Choice,
 ) -> Result<Vec<PathBuf>, String> {
     let ws = cargo::workspace(manifest_path)?;
     let crates = ws.select(packages, all)?;
@@ -469,7 +509,7 @@ pub fn build_versions(
             );
             continue;
         }
-        let targets = targets_of(&c, asked_targets, &host)?;
+        let targets = targets_of(&c, choice.targets, &host, choice.examples_on_host)?;
         // A target without a folder in a version (aarch64 Linux in FMI 2.0) is left out of that
         // version's FMU; a version left with no target is an error.
         for v in &versions {
@@ -539,41 +579,11 @@ pub fn build_versions(
     } else {
         None
     };
-    let workers = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(jobs.len())
-        .max(1);
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let outcomes: std::sync::Mutex<Vec<(usize, Result<f64, String>)>> = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..workers {
-            scope.spawn(|| {
-                loop {
-                    let j = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let Some((t, mine)) = jobs.get(j) else { break };
-                    let started = std::time::Instant::now();
-                    let crates: Vec<FmuCrate> = mine.iter().map(|(c, _)| c.clone()).collect();
-                    let triple = (t != &host).then_some(t.as_str());
-                    let linker = if crate::target::uses_zig(t, &host) {
-                        zig.as_ref()
-                    } else {
-                        None
-                    };
-                    let outcome =
-                        cargo::build(&ws, &crates, triple, &host, linker).map(|()| started.elapsed().as_secs_f64());
-                    if let Ok(seconds) = &outcome {
-                        eprintln!("fmu: built target {t} in {seconds:.1} s");
-                    }
-                    outcomes.lock().unwrap_or_else(|e| e.into_inner()).push((j, outcome));
-                }
-            });
-        }
-    });
-    let mut outcomes = outcomes.into_inner().unwrap_or_else(|e| e.into_inner());
-    outcomes.sort_by_key(|(j, _)| *j);
-    if let Some((_, Err(e))) = outcomes.iter().find(|(_, o)| o.is_err()) {
-        return Err(e.clone());
-    }
+    let work: Vec<(String, Vec<FmuCrate>)> = jobs
+        .iter()
+        .map(|(t, mine)| (t.clone(), mine.iter().map(|(c, _)| c.clone()).collect()))
+        .collect();
+    cargo::build_targets(&ws, &work, &host, zig.as_ref(), choice.verbose, "libraries")?;
     // Versions a crate's library does not implement, where nobody asked for them by name (no
     // --fmi-version, no fmi-versions in its Cargo.toml): built as the library says, with a note.
     let mut not_implemented: BTreeSet<(String, FmiVersion)> = BTreeSet::new();
@@ -900,6 +910,8 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
         python: None,
         fmi_versions: vec![],
         targets: vec![],
+        examples_on_host: false,
+        verbose: false,
     });
     match run(cmd, tool) {
         Ok(()) => ExitCode::SUCCESS,

@@ -25,6 +25,8 @@ pub struct Request<'a> {
     /// The FMI versions to write: FMI 2.0 to `out`, FMI 3.0 to `out` when it is the only one,
     /// else to `fmi3/` beside it (as `cargo fmu build` places FMI 3.0 FMUs).
     pub versions: &'a [FmiVersion],
+    /// `-v`: cargo's messages as they come (else a progress line per target).
+    pub verbose: bool,
 }
 
 /// The archive's entries: (name, bytes).
@@ -260,29 +262,21 @@ pub fn container(req: &Request) -> Result<Vec<PathBuf>, String> {
         fmi_versions: None,
         targets: None,
         documentation_start: Ok(vec![]),
+        example: false,
     };
     let zig = if wanted.iter().any(|(t, _)| crate::target::uses_zig(t, &host)) {
         Some(crate::target::Zig::find(req.python)?)
     } else {
         None
     };
-    // One binary serves both versions (it exports the fmi2* and the fmi3* functions).
+    // One binary serves both versions (it exports the fmi2* and the fmi3* functions), every target
+    // built side by side as `cargo fmu build` builds FMU crates.
+    let jobs: Vec<(String, Vec<FmuCrate>)> = wanted.iter().map(|(t, _)| (t.clone(), vec![krate.clone()])).collect();
+    cargo::build_targets(&ws, &jobs, &host, zig.as_ref(), req.verbose, "container binaries")?;
     let mut built: Vec<(String, String, Vec<u8>)> = Vec::new();
     let mut built3: Vec<(String, String, Vec<u8>)> = Vec::new();
     for (t, versions) in &wanted {
         let p = platform(t)?;
-        let triple = (t != &host).then_some(t.as_str());
-        let linker = if crate::target::uses_zig(t, &host) {
-            zig.as_ref()
-        } else {
-            None
-        };
-        let started = std::time::Instant::now();
-        cargo::build(&ws, std::slice::from_ref(&krate), triple, &host, linker)?;
-        eprintln!(
-            "fmu: the container's binary for {t}: {:.1} s",
-            started.elapsed().as_secs_f64()
-        );
         let lib = ws.library_for(&krate, t, &host)?;
         let bytes = std::fs::read(&lib).map_err(|e| format!("{}: {e}", lib.display()))?;
         for v in versions {

@@ -17,6 +17,7 @@ pub mod docs;
 pub mod library;
 pub mod new;
 pub mod plot;
+pub mod progress;
 pub mod ssp;
 pub mod systems;
 pub mod target;

@@ -245,7 +245,8 @@ def test_the_crates_metadata_chooses_its_fmi_versions(user_crate):
 def test_each_target_is_built_once_for_both_fmi_versions(user_crate):
     """One cargo build per target, whose binary goes into the FMI 2.0 and the FMI 3.0 FMU."""
     crate, _, env = user_crate
-    out = run(["cargo", "fmu", "build"], crate, env)
+    # -v: the cargo commands and cargo's messages as they come.
+    out = run(["cargo", "fmu", "build", "-v"], crate, env)
     builds = re.findall(r"^fmu: \S*cargo rustc (.*)$", out.stderr, re.M)
     # One `cargo rustc` of the library alone (--crate-type cdylib: link-time optimisation, which an
     # rlib beside it would switch off), in the FMU profile.
@@ -256,6 +257,27 @@ def test_each_target_is_built_once_for_both_fmi_versions(user_crate):
         with zipfile.ZipFile(fmu) as z:
             binaries.append(z.read(f"binaries/{folder}/GainLag.so"))
     assert binaries[0] == binaries[1]
+
+
+def test_the_build_shows_its_progress_and_cargos_messages_only_on_failure(user_crate):
+    """Without -v, in a log (no terminal): one line per crate built with the count and the time, a
+    summary, none of cargo's own lines; a build that fails shows all of cargo's messages of it."""
+    crate, _, env = user_crate
+    lib = crate / "src" / "lib.rs"
+    lib.write_text(lib.read_text() + "\n// touched\n")
+    out = run(["cargo", "fmu", "build"], crate, env)
+    assert re.search(r"^fmu: \[1/1\] built gain-lag for \S+ in [0-9.]+ s", out.stderr, re.M), out.stderr
+    assert re.search(r"^fmu: built 1 libraries for 1 targets in ", out.stderr, re.M), out.stderr
+    assert "Compiling" not in out.stderr and "Finished" not in out.stderr, out.stderr
+    text = lib.read_text()
+    try:
+        lib.write_text(text + "\nfn broken() -> u32 { \"not a number\" }\n")
+        bad = subprocess.run(["cargo", "fmu", "build"], cwd=crate, env=env, capture_output=True, text=True, timeout=900)
+        assert bad.returncode != 0, bad.stderr
+        assert "mismatched types" in bad.stderr and "Compiling gain-lag" in bad.stderr, bad.stderr
+        assert "cargo rustc of gain-lag failed" in bad.stderr, bad.stderr
+    finally:
+        lib.write_text(text)
 
 
 def test_a_crate_sharing_the_target_folder_cannot_replace_another_crates_fmu(user_crate):

@@ -52,8 +52,8 @@ pub fn read() -> Result<Metadata, String> {
     // Read here: what goes into the description. Read by cargo fmu: documentation, resources,
     // fmi-versions (which FMI versions `cargo fmu build` makes), targets (the Rust target
     // triples whose binaries go into the FMU), documentation-start (the start values of the
-    // documentation page's run).
-    const KNOWN: [&str; 11] = [
+    // documentation page's run), example (built for the host only by `--examples-on-host`).
+    const KNOWN: [&str; 12] = [
         "author",
         "version",
         "copyright",
@@ -65,6 +65,7 @@ pub fn read() -> Result<Metadata, String> {
         "fmi-versions",
         "targets",
         "documentation-start",
+        "example",
     ];
     if let Some(table) = fmu.as_table() {
         for key in table.keys() {
