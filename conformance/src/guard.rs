@@ -98,7 +98,7 @@ impl<T: Plain> Guarded<T> {
         if let Some((at, changed)) = self.overrun() {
             return Err(format!(
                 "{} wrote past the end of the array it was given: {changed} byte(s) of the guard after its {} \
-                 byte(s) changed, the first {at} byte(s) after its end ({rule})",
+                 byte(s) changed, the first at offset {at} past the end ({rule})",
                 call(),
                 self.end
             ));

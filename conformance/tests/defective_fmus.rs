@@ -49,6 +49,17 @@ fn attribute(xml: &str, attribute: &str) -> String {
 /// `Dahlquist.fmu` of FMI version `v` with `c/defects.c` compiled with `defines` as its binary,
 /// in `dir`.
 fn fixture(dir: &Path, v: u32, name: &str, defines: &[String]) -> PathBuf {
+    fixture_with(dir, v, name, defines, |xml| xml)
+}
+
+/// [`fixture`] with its model description changed by `description`.
+fn fixture_with(
+    dir: &Path,
+    v: u32,
+    name: &str,
+    defines: &[String],
+    description: impl FnOnce(String) -> String,
+) -> PathBuf {
     let (original, platform) = dahlquist(v);
     let binary = format!("binaries/{platform}/Dahlquist.so");
     // The model the shim forwards to: a copy of the original binary (FMI 2.0 and 3.0 in one).
@@ -70,7 +81,8 @@ fn fixture(dir: &Path, v: u32, name: &str, defines: &[String]) -> PathBuf {
     let mut w = zip::ZipWriter::new(std::fs::File::create(&fmu).unwrap());
     let opts = zip::write::SimpleFileOptions::default();
     w.start_file("modelDescription.xml", opts).unwrap();
-    w.write_all(&entry(&original, "modelDescription.xml")).unwrap();
+    let xml = String::from_utf8(entry(&original, "modelDescription.xml")).unwrap();
+    w.write_all(description(xml).as_bytes()).unwrap();
     w.start_file(binary, opts).unwrap();
     w.write_all(&std::fs::read(&so).unwrap()).unwrap();
     w.finish().unwrap();
@@ -312,4 +324,36 @@ fn a_crash_in_the_preflight_fails_the_checks_instead_of_skipping_them() {
     );
     assert_eq!(report.skipped(), 0, "{report}");
     assert!(report.failed() > 0, "{report}");
+}
+
+/// A description that disagrees with its binary: it declares a variable (value reference 99, a
+/// local Real/Float64) the binary does not know, so that the binary refuses it. The good binary.
+#[test]
+fn a_description_declaring_a_variable_the_binary_refuses_is_failed() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (v, declaration, name) in [
+        (
+            2,
+            r#"<ScalarVariable name="extra" valueReference="99" causality="local" variability="continuous"><Real/></ScalarVariable>"#,
+            "every_function_in_every_state_answers_as_the_standard_says",
+        ),
+        (
+            3,
+            r#"<Float64 name="extra" valueReference="99" causality="local" variability="continuous"/>"#,
+            "fmi3_reset_from_every_state_then_a_rerun_is_bit_identical",
+        ),
+    ] {
+        let fmu = fixture_with(dir.path(), v, "EXTRA", &[], |xml| {
+            xml.replace("</ModelVariables>", &format!("  {declaration}\n  </ModelVariables>"))
+        });
+        let report = check(&fmu, dir.path());
+        let c = report.checks.iter().find(|c| c.name == name).expect(name);
+        match &c.outcome {
+            Outcome::Fail(m) => assert!(
+                m.contains("fmi2GetReal") || m.contains("value reference 99"),
+                "FMI {v}.0: {name} failed, but not for the variable: {m}"
+            ),
+            other => panic!("FMI {v}.0: expected {name} to fail, got {other:?}\n{report}"),
+        }
+    }
 }
