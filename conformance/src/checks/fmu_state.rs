@@ -9,6 +9,7 @@
 
 use crate::Fmu;
 use crate::fmi2::*;
+use crate::guard::{Guarded, STATE_RULE2};
 use crate::instance::{Instance, excitation, status_name, step_size};
 use crate::outcome::{convention, limitation, skip};
 use crate::state::{FORMAT_VERSION, parse, reseal};
@@ -334,9 +335,15 @@ pub fn damaged_serialized_states_are_refused_with_a_message(fmu: &Fmu) {
     assert_eq!(s, fmi2Error, "{}: NULL FMUstate*", fmu.id);
     // A buffer of the wrong size for fmi2SerializeFMUstate.
     let (_, mut st) = inst.get_state();
-    let mut small = vec![0u8; good.len() - 1];
-    // SAFETY: a buffer of the size passed.
-    let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, small.as_mut_ptr() as *mut fmi2Byte, small.len()) };
+    let n = good.len() - 1;
+    let mut small = Guarded::new(n, 0u8);
+    // SAFETY: a buffer of the size passed (and the guard after it).
+    let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, small.as_mut_ptr() as *mut fmi2Byte, n) };
+    // Refused or not, nothing may be written past the buffer the call names.
+    let small = small.into_values(
+        || format!("fmi2SerializeFMUstate into a buffer one byte too small (size = {n})"),
+        STATE_RULE2,
+    );
     assert_eq!(
         s, fmi2Error,
         "{}: fmi2SerializeFMUstate into a too small buffer",

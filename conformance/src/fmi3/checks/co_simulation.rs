@@ -2,6 +2,7 @@
 //! and output derivatives. (Registered with the calls, [`super::calls`] re-exports them.)
 
 use super::*;
+use crate::guard::{GETTER_RULE3, Guarded};
 
 /// Intermediate update (FMI 3.0, 4.2.2; `providesIntermediateUpdate`): over ten steps, every
 /// call of the importer's callback names a time inside the step in progress, never earlier than
@@ -207,12 +208,14 @@ impl crate::checks::calls::OutputDerivatives for Inst<'_> {
     }
     fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String> {
         let api = self.api();
-        let mut out = vec![f64::NAN; vrs.len()];
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
+        let n = vrs.len();
+        let mut out = Guarded::new(n, f64::NAN);
+        let p = out.as_mut_ptr();
+        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
         let s = self.call("fmi3GetOutputDerivatives", |c| unsafe {
-            (api.get_output_derivatives)(c, vrs.as_ptr(), vrs.len(), orders.as_ptr(), out.as_mut_ptr(), out.len())
+            (api.get_output_derivatives)(c, vrs.as_ptr(), n, orders.as_ptr(), p, n)
         });
+        let out = out.into_values(|| format!("fmi3GetOutputDerivatives with nValues = {n}"), GETTER_RULE3);
         if s == fmi3OK { Ok(out) } else { Err(self.log_text()) }
     }
 }

@@ -2,6 +2,7 @@
 //! in another process.
 
 use super::*;
+use crate::guard::{Guarded, STATE_RULE3};
 
 // ---------------------------------------------------------------------------------------------
 // FMU state
@@ -145,12 +146,18 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         assert_eq!(a.call("get", |c| unsafe { (api.get_fmu_state)(c, &mut st) }), fmi3OK);
-        let mut small = vec![0u8; bytes.len().saturating_sub(1)];
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
+        let n = bytes.len().saturating_sub(1);
+        let mut small = Guarded::new(n, 0u8);
+        let p = small.as_mut_ptr();
+        // SAFETY: a live instance; `p` holds `n` bytes (and the guard after them).
         let s = a.call("fmi3SerializeFMUState(size - 1)", |c| unsafe {
-            (api.serialize_fmu_state)(c, st, small.as_mut_ptr(), small.len())
+            (api.serialize_fmu_state)(c, st, p, n)
         });
+        // Refused or not, nothing may be written past the buffer the call names.
+        small.into_values(
+            || format!("fmi3SerializeFMUState into a buffer one byte too small (size = {n})"),
+            STATE_RULE3,
+        );
         assert_eq!(
             s,
             fmi3Error,
