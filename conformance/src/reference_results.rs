@@ -9,8 +9,8 @@
 //! hex.
 //!
 //! [`write`] writes them in that form (`cargo fmu build` does, from the default experiment it
-//! runs for the documentation page); [`read`] and [`compare`] serve the checks that run the
-//! default experiment again and compare (`reference_results_are_reproduced_by_the_default_experiment`
+//! runs for the documentation page); [`read`], [`steps`] and [`compare`] serve the checks that
+//! run the default experiment again (at its step size where it declares one) and compare (`reference_results_are_reproduced_by_the_default_experiment`
 //! and its FMI 3.0 twin).
 
 use std::fmt::Write as _;
@@ -306,6 +306,24 @@ fn show(v: &Value) -> String {
         Value::Numbers(n) => n.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(" "),
         Value::Text(t) => t.clone(),
     }
+}
+
+/// The steps from `from` to `to`: as many equal steps as the default experiment's step size `h`
+/// makes (within 1e-6 of a whole number), the run's own grid, else one.
+pub fn steps(from: f64, to: f64, h: Option<f64>) -> (usize, f64) {
+    let span = to - from;
+    let n = match h {
+        Some(h) if h > 0.0 && h.is_finite() => {
+            let k = (span / h).round();
+            if k >= 1.0 && (span / h - k).abs() <= 1e-6 * k {
+                k as usize
+            } else {
+                1
+            }
+        }
+        _ => 1,
+    };
+    (n, span / n as f64)
 }
 
 /// Lower-case hex of bytes (a Binary as the Reference-FMUs' CSV writes it).

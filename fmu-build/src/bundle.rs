@@ -1,5 +1,7 @@
 //! The `.fmu` archive: a zip with `modelDescription.xml` at the root,
-//! `binaries/<platform>/<modelIdentifier>.<ext>`, `documentation/index.html` and `resources/`.
+//! `binaries/<platform>/<modelIdentifier>.<ext>`, `documentation/index.html`, `resources/`, and
+//! the default experiment's run as FMI-LS-REF reference results
+//! (`extra/org.fmi-standard.fmi-ls-ref/`: `fmi-ls-manifest.xml` and `<modelIdentifier>_out.csv`).
 //! An FMI 2.0 binary goes to `target/fmu/<id>.fmu` (`binaries/linux64/`), an FMI 3.0 one to
 //! `target/fmu/fmi3/<id>.fmu` (`binaries/x86_64-linux/`, the FMI 3.0 platform tuple). One FMU
 //! holds the binaries of every target it was built for (`binaries/win64/<id>.dll`,
@@ -287,6 +289,18 @@ pub fn package(
     }
     files.extend(binaries);
     files.push(("documentation/index.html".into(), docs.into_bytes()));
+    // The page's run as FMI-LS-REF reference results, as the Reference-FMUs ship theirs
+    // (`cargo fmu check` compares a run with them): no second simulation.
+    if let Some(csv) = libraries
+        .iter()
+        .find(|(triple, _)| crate::target::platform(triple).ok() == here)
+        .and_then(|(_, library)| crate::plot::reference_results(library))
+    {
+        use fmi_conformance::reference_results::{FOLDER, MANIFEST, manifest};
+        let source = format!("{id}_out.csv");
+        files.push((MANIFEST.into(), manifest(&source).into_bytes()));
+        files.push((format!("{FOLDER}/{source}"), csv.into_bytes()));
+    }
     for (name, path) in resources {
         let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         files.push((format!("resources/{name}"), bytes));

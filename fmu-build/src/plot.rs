@@ -290,8 +290,14 @@ pub fn svg(run: &Run, title: &str) -> String {
     out
 }
 
+/// What separates the SVG from the reference results in [`default_experiment_svg`]'s text.
+const RESULTS_MARKER: &str = "\n<!-- cargo-fmu: the run as FMI-LS-REF reference results -->\n";
+
 /// The default experiment of the library at `so` as an SVG (the smoke run's child does this;
-/// `Err` says why there is no picture).
+/// `Err` says why there is no picture), followed, when the run is the default experiment as an
+/// importer runs it (no documentation-start values) and reached its stop time, by a marker line
+/// and the run as FMI-LS-REF reference results (the CSV of
+/// [`fmi_conformance::reference_results::csv`]: every step recorded, or every `stride`-th).
 pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, f64)]) -> Result<String, String> {
     let binary = std::fs::read(so).map_err(|e| format!("{}: {e}", so.display()))?;
     let me = crate::library::read_library(&binary, rustfmu::description::FmiVersion::V2).map_err(|_| {
@@ -314,7 +320,27 @@ pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, 
         label(e.start_time.unwrap_or(0.0)),
         label(run.times.last().copied().unwrap_or(0.0))
     );
-    Ok(svg(&run, &title))
+    let mut text = svg(&run, &title);
+    if starts.is_empty() && run.stopped.is_none() {
+        let names: Vec<String> = run.curves.iter().map(|c| c.name.clone()).collect();
+        let values: Vec<Vec<f64>> = run.curves.iter().map(|c| c.values.clone()).collect();
+        text.push_str(RESULTS_MARKER);
+        text.push_str(&fmi_conformance::reference_results::csv(&names, &run.times, &values));
+    }
+    Ok(text)
+}
+
+/// The picture and the reference results of one run (see [`default_experiment_svg`]).
+type Made = Result<(String, Option<String>), String>;
+
+static MADE: std::sync::Mutex<Option<std::collections::HashMap<std::path::PathBuf, Made>>> =
+    std::sync::Mutex::new(None);
+
+/// The reference results of the run [`picture`] made of the library at `so` (None: no run, or
+/// one that is not the default experiment as an importer runs it).
+pub fn reference_results(so: &Path) -> Option<String> {
+    let made = MADE.lock().ok()?;
+    made.as_ref()?.get(so)?.as_ref().ok()?.1.clone()
 }
 
 /// The picture of the library at `so`, made in a child process (this program run as `__plot`)
@@ -322,15 +348,13 @@ pub fn default_experiment_svg(so: &Path, resource_uri: &str, starts: &[(String, 
 /// 3.0 packages of one build share it). `resources`: the crate's `resources/` folder, if any.
 pub fn picture(so: &Path, resources: Option<&Path>, starts: &[(String, f64)]) -> Result<String, String> {
     use std::collections::HashMap;
-    use std::sync::Mutex;
-    static MADE: Mutex<Option<HashMap<std::path::PathBuf, Result<String, String>>>> = Mutex::new(None);
     let key = so.to_path_buf();
     if let Some(made) = MADE
         .lock()
         .ok()
         .and_then(|m| m.as_ref().and_then(|m| m.get(&key).cloned()))
     {
-        return made;
+        return made.map(|(svg, _)| svg);
     }
     // A crate without resources/ gets an empty folder, as an importer gives one.
     let empty = std::env::temp_dir().join(format!("cargo-fmu-no-resources-{}", std::process::id()));
@@ -364,10 +388,14 @@ pub fn picture(so: &Path, resources: Option<&Path>, starts: &[(String, f64)]) ->
         _ => default_experiment_svg(so, &uri, starts),
     };
     let _ = std::fs::remove_dir(&empty);
+    let made: Made = made.map(|text| match text.split_once(RESULTS_MARKER) {
+        Some((svg, csv)) => (svg.to_string(), Some(csv.to_string())),
+        None => (text, None),
+    });
     if let Ok(mut m) = MADE.lock() {
         m.get_or_insert_with(HashMap::new).insert(key, made.clone());
     }
-    made
+    made.map(|(svg, _)| svg)
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! The FMU's own reference results (FMI-LS-REF, [`crate::reference_results`]), reproduced: the
-//! default experiment run again through co-simulation, output at the result file's times.
+//! default experiment run again through co-simulation, at its step size where it declares one,
+//! output at the result file's times.
 //!
 //! Verdict: *warned* where the run does not reproduce them. FMI-LS-REF (1.0.0-alpha.1, "Related
 //! Files", role `result`: "Result file, e.g., a result file that contains the results of an
@@ -14,7 +15,7 @@ use crate::Fmu;
 use crate::fmi2::*;
 use crate::instance::{Args, Instance, status_name};
 use crate::outcome::{info, limitation, skip, skip_not_declared, warn, warned};
-use crate::reference_results::{Value, compare, read};
+use crate::reference_results::{Value, compare, read, steps};
 use md_reader::fmi2::Type;
 
 /// What the skip says when the FMU ships no reference results (FMI 2.0 and 3.0).
@@ -113,11 +114,17 @@ pub fn reference_results_are_reproduced_by_the_default_experiment(fmu: &Fmu) {
         let mut t = t0;
         for (i, &time) in table.times.iter().enumerate() {
             if i > 0 && time > t {
-                let s = inst.do_step(t, time - t);
-                // The FMU ended the simulation (fmi2Discard, fmi2Terminated true): the values
-                // of this row are those at its last successful time, and the run ends here.
-                let ended = s == fmi2Discard && inst.terminated() == (fmi2OK, fmi2True);
-                if !ended {
+                let (n, h) = steps(t, time, fmu.md.default_experiment.step_size());
+                let mut ended = false;
+                for k in 0..n {
+                    let from = if k == 0 { t } else { t + k as f64 * h };
+                    let s = inst.do_step(from, if k + 1 == n { time - from } else { h });
+                    // The FMU ended the simulation (fmi2Discard, fmi2Terminated true): the
+                    // values of this row are those at its last successful time; the run ends.
+                    ended = s == fmi2Discard && inst.terminated() == (fmi2OK, fmi2True);
+                    if ended {
+                        break;
+                    }
                     run(s, &format!("fmi2DoStep to t = {time}"), &inst);
                 }
                 t = time;
