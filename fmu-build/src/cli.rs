@@ -101,6 +101,19 @@ enum Cmd {
         /// Make every warning a failure: what rustfmu's own FMUs must pass.
         #[arg(long)]
         strict: bool,
+        /// Where a failing random call sequence leaves its reproducer (default: the system's
+        /// temp folder, fmu-check-reproducers/); `cargo fmu replay` runs it again.
+        #[arg(long, value_name = "DIR")]
+        reproducers: Option<PathBuf>,
+    },
+    /// Replay a reproducer (the calls of a failing random call sequence, one a line, as `cargo fmu
+    /// check` writes them) on an FMU, in this process (so that it runs under a debugger): prints
+    /// each call and its status; exits 1 when a status is not the one the file expects or a check
+    /// of the sequence fails.
+    Replay {
+        /// The reproducer (conformance/README.md, "Reproducers").
+        file: PathBuf,
+        fmu: PathBuf,
     },
     /// Compare (or with --write, refresh) the committed model descriptions of the workspace
     /// (`[workspace.metadata.fmu] model-descriptions`) with the packaged FMUs.
@@ -261,7 +274,17 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             random_sequences,
             list,
             strict,
-        } => check(fmu.as_deref(), filter, timeout, random_sequences, list, strict),
+            reproducers,
+        } => check(
+            fmu.as_deref(),
+            filter,
+            timeout,
+            random_sequences,
+            list,
+            strict,
+            reproducers,
+        ),
+        Cmd::Replay { file, fmu } => replay(&file, &fmu),
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
             Ok(())
@@ -328,6 +351,7 @@ fn check(
     random_sequences: u32,
     list: bool,
     strict: bool,
+    reproducers: Option<PathBuf>,
 ) -> Result<(), String> {
     use fmi_conformance::runner::{RunOptions, run_with};
     if list {
@@ -355,6 +379,7 @@ fn check(
     opts.filter = filter;
     opts.random_sequences = random_sequences;
     opts.strict = strict;
+    opts.reproducers = reproducers;
     if let Some(t) = timeout {
         if !(t.is_finite() && t > 0.0) {
             return Err(format!("--timeout {t}: seconds > 0"));
@@ -368,6 +393,19 @@ fn check(
     let report = run_with(fmu, &opts, &mut |c| eprintln!("{}", c.line()));
     println!("{report}");
     if report.success() { Ok(()) } else { Err(String::new()) }
+}
+
+/// `cargo fmu replay FILE FMU`: the calls on stdout as they are made, then whether the FMU
+/// answered as the file expects (Err: it did not, or the file or FMU could not be read).
+fn replay(file: &Path, fmu: &Path) -> Result<(), String> {
+    let report = fmi_conformance::replay::replay(file, fmu, &mut |line| println!("{line}"))?;
+    match report.difference {
+        None => {
+            println!("replay: every call answered as {} expects", file.display());
+            Ok(())
+        }
+        Some(d) => Err(format!("replay: the failure reproduces: {d}")),
+    }
 }
 
 /// The hidden subcommand a `check` child runs (fmi_conformance::runner::worker_main).
