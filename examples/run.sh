@@ -23,6 +23,9 @@ times=()
 # lap NAME: the time since the last lap, for the summary.
 lap_at=$SECONDS
 lap() { times+=("$(printf '%-44s %4d s' "$1" $((SECONDS - lap_at)))"); lap_at=$SECONDS; }
+# phase K TEXT: where the main job is, for the person watching it (six phases).
+phase() { echo; echo "== main job $1/6 ($((SECONDS - started)) s so far): $2"; }
+phase 1 "setup: the venv's Python packages, the Rust targets, the linkers"
 bash tests/setup-env.sh --main-job
 lap "setup (tests/setup-env.sh --main-job)"
 # Every host program the main job runs, and the runner's Python module, in one cargo invocation:
@@ -33,6 +36,7 @@ lap "setup (tests/setup-env.sh --main-job)"
 # (Setup and builds run one after the other: pip's install and maturin's build beside this build
 # made the main job slower on 2 cores, 448-456 s against 383 s, as measured for issue 21.)
 source tests/pyo3-env.sh
+phase 2 "cargo build of cargo-fmu, the runner, its Python module, paper_numbers (messages: target/main-job/cargo-build.log)"
 python3 tests/cargo-progress.py target/main-job/cargo-build.log \
   cargo build --release -p fmu-build --bin cargo-fmu -p holonomic --example paper_numbers \
   -p rustfmu-runner --bin rustfmu-runner -p rustfmu-runner-python --lib
@@ -40,6 +44,7 @@ bash tests/setup-env.sh --main-job --part module
 lap "cargo build: cargo-fmu, paper_numbers, runner, module"
 # The Reference-FMU re-makes are examples (`example = true` in their Cargo.toml): built for this
 # machine only unless --everything (each of them for five platforms was 28 of the 55 fat-LTO links).
+phase 3 "cargo fmu build: every FMU crate, FMI 2.0 and 3.0, packaged and validated; the SSP files"
 if $everything; then
   target/release/cargo-fmu build --workspace --python .venv/bin/python
 else
@@ -50,6 +55,7 @@ lap "FMUs and SSP files (cargo fmu build)"
 # master in its binary, for every platform the components carry), beside the SSP files: FMI 2.0
 # in target/fmu/containers, FMI 3.0 in target/fmu/containers/fmi3 (the same binary).
 # The containers' binary (the runner's master) for this machine only unless --everything.
+phase 4 "cargo fmu container: the composed systems as one FMU each"
 mkdir -p target/fmu/containers
 here=()
 host=$(rustc -vV | sed -n 's/^host: //p')
@@ -59,6 +65,7 @@ for s in PendulumLQR PendulumMotors; do
   target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python "${here[@]}"
 done
 lap "container FMUs (cargo fmu container)"
+phase 5 "the paper's numbers, Figures 6-8, the composed demo in fmpy, the clocked controller, the container"
 mkdir -p out
 target/release/examples/paper_numbers | tee out/paper_numbers.txt
 .venv/bin/python examples/paper_figures.py --out out
@@ -69,6 +76,7 @@ lap "paper numbers, Figures 6-8"
 # The closed loop as one FMU in fmpy, against the native runner on its SSP file.
 .venv/bin/python examples/container_demo.py --out out
 lap "composed demo (fmpy), clocked controller, container"
+phase 6 "the native runner's command line, the Dask parameter studies"
 # The full loop from the command line of the native SSP runner (runner/).
 target/release/rustfmu-runner run target/fmu/PendulumMotors.ssp --stop-time 10 --step 1e-3 \
   --set pendulum.alpha1_0=0.2 --record pendulum.alpha1 --record pendulum.alpha2 --record motor1.tau \
