@@ -357,3 +357,65 @@ fn a_description_declaring_a_variable_the_binary_refuses_is_failed() {
         }
     }
 }
+
+/// A defect the random call sequences find leaves a reproducer (issue 51: "`cargo fmu replay`
+/// reproducing one"): the `doStep` that answers OK without advancing answers OK in Instantiated
+/// too, where the standard requires fmi2Error/fmi3Error. The file the failing check names, replayed
+/// (`fmu-check --replay`, as `cargo fmu replay`), exits 1 on the defective FMU at that call, and 0
+/// on the FMU it wraps, which refuses the call.
+#[test]
+fn a_random_sequence_that_fails_leaves_a_reproducer_that_replays_the_failure() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (v, name) in [
+        (2, "random_call_sequences_keep_every_fmu_conformant"),
+        (3, "fmi3_random_call_sequences_never_crash_and_keep_status_consistent"),
+    ] {
+        let fmu = fixture(dir.path(), v, "STEP_STUCK", &["-DDEFECT_STEP_STUCK".to_string()]);
+        let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+        o.temp_dir = Some(dir.path().to_path_buf());
+        o.random_sequences = 200;
+        o.as_foreign = true;
+        o.filter = Some(name.into());
+        o.reproducers = Some(dir.path().join(format!("reproducers-{v}")));
+        let report = run(&fmu, &o);
+        let c = report.checks.iter().find(|c| c.name == name).expect("the check ran");
+        let Outcome::Fail(message) = &c.outcome else {
+            panic!("FMI {v}: {name} should fail on the stuck doStep:\n{report}")
+        };
+        let file = message
+            .split("reproducer (the shrunk sequence, one call a line): ")
+            .nth(1)
+            .and_then(|rest| rest.split(';').next())
+            .map(PathBuf::from)
+            .unwrap_or_else(|| panic!("FMI {v}: the failure names no reproducer: {message}"));
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert!(
+            text.contains("DoStep") && text.contains("# answered OK"),
+            "FMI {v}:\n{text}"
+        );
+        let replay = |fmu: &Path| {
+            Command::new(env!("CARGO_BIN_EXE_fmu-check"))
+                .arg("--replay")
+                .arg(&file)
+                .arg(fmu)
+                .output()
+                .unwrap()
+        };
+        let out = replay(&fmu);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "FMI {v}: the replay on the defective FMU:\n{stdout}"
+        );
+        assert!(stdout.contains("DIFFERS: the file expects Error"), "FMI {v}:\n{stdout}");
+        let out = replay(&dahlquist(v).0);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "FMI {v}: the replay on the FMU without the defect:\n{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
