@@ -284,7 +284,7 @@ pub fn write_reproducer(stem: &str, text: &str) -> Result<PathBuf, String> {
 pub fn reproducer_note(written: Result<PathBuf, String>, fmu: &Path) -> String {
     match written {
         Ok(path) => format!(
-            "reproducer (the shrunk sequence, one call a line): {}; replay it with `cargo fmu replay {} {}` \
+            "reproducer (the failing sequence, one call a line): {}; replay it with `cargo fmu replay {} {}` \
              (or `fmu-check --replay {} {}`)",
             path.display(),
             path.display(),

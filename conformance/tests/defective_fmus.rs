@@ -383,7 +383,7 @@ fn a_random_sequence_that_fails_leaves_a_reproducer_that_replays_the_failure() {
             panic!("FMI {v}: {name} should fail on the stuck doStep:\n{report}")
         };
         let file = message
-            .split("reproducer (the shrunk sequence, one call a line): ")
+            .split("reproducer (the failing sequence, one call a line): ")
             .nth(1)
             .and_then(|rest| rest.split(';').next())
             .map(PathBuf::from)

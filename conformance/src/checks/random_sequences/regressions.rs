@@ -72,7 +72,15 @@ pub fn regressions_found_by_random_sequences(fmu: &Fmu) {
     for (what, ops) in &cases {
         for logging_on in [false, true] {
             if let Err(e) = execute(fmu, logging_on, ops) {
-                panic!("{}: {what}: {e}", fmu.id);
+                let note = super::text::write(
+                    fmu,
+                    "regressions_found_by_random_sequences",
+                    "co-simulation",
+                    &format!("fmi2Instantiate fmuType=CoSimulation loggingOn={logging_on}"),
+                    &super::text::record_cs(fmu, logging_on, ops),
+                    &format!("{what}: {e}"),
+                );
+                panic!("{}: {what}: {e}\n{note}", fmu.id);
             }
         }
     }
