@@ -9,6 +9,10 @@ use crate::fmi2::*;
 use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::logger::{LogEntry, LogSink, callbacks};
 use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
+
+/// Why a refused call that changed the instance is a warning and not a failure (FMI 2.0).
+pub const REFUSED_CHANGED_WHY: &str = "FMI 2.0.5 §2.1.3 leaves the instance undefined after fmi2Error, so this is \
+     robustness beyond the standard; it matters to an importer that goes on after a refused call";
 use crate::standard::State;
 use crate::{Fmu, Type, state};
 use md_reader::{Causality, Initial, Variability};
@@ -60,6 +64,9 @@ pub struct Instance<'a> {
     _callbacks: Box<fmi2CallbackFunctions>,
     /// The communication point of the next step, as the importer tracks it.
     pub time: f64,
+    /// fmi2EnterInitializationMode answered fmi2OK since the instance was made or last reset: the
+    /// getters may be called ([`Instance::fingerprint`] calls them only then).
+    pub initialized: bool,
 }
 
 // SAFETY: an instance is used by one thread at a time (the standard's rule); the FMU has no
@@ -113,6 +120,7 @@ impl<'a> Instance<'a> {
             sink,
             _callbacks: cb,
             time: 0.0,
+            initialized: false,
         })
     }
 
@@ -201,7 +209,9 @@ impl<'a> Instance<'a> {
     pub fn enter_init(&mut self) -> Status {
         crumb("fmi2EnterInitializationMode", String::new);
         // SAFETY: a live instance.
-        unsafe { (self.fmu.api.enter_initialization_mode)(self.c) }
+        let s = unsafe { (self.fmu.api.enter_initialization_mode)(self.c) };
+        self.initialized |= s == fmi2OK;
+        s
     }
 
     pub fn exit_init(&mut self) -> Status {
@@ -222,6 +232,7 @@ impl<'a> Instance<'a> {
         let s = unsafe { (self.fmu.api.reset)(self.c) };
         if s == fmi2OK {
             self.time = 0.0;
+            self.initialized = false;
         }
         s
     }
@@ -428,16 +439,65 @@ impl<'a> Instance<'a> {
         s
     }
 
-    /// The serialized FMU state for before/after comparisons, when the FMU declares it can
-    /// give one (else `None`, recorded as a limitation: the comparison then proves nothing).
+    /// What the instance shows of itself, for before/after comparisons around a refused call:
+    /// on this exporter's FMUs, and under `--strict` ([`crate::outcome::strict`]), the serialized
+    /// FMU state (hidden state included; theirs is deterministic); otherwise what an importer
+    /// observes, the value of every variable as the getters read it, with their statuses. FMI
+    /// 2.0.5 promises nothing of the bytes of a serialized state (one that holds addresses differs
+    /// on every serialization), so another exporter's FMU is judged by what it shows.
     pub fn fingerprint(&mut self) -> Option<Vec<u8>> {
-        if self.fmu.can_snapshot() {
+        if self.fmu.can_snapshot() && (self.fmu.own_state_format() || crate::outcome::strict()) {
             Some(self.snapshot())
         } else {
-            limitation(
-                "the FMU does not declare canGetAndSetFMUstate and canSerializeFMUstate: that a refused call changes nothing is not checked",
-            );
-            None
+            Some(self.observable())
+        }
+    }
+
+    /// The value of every Real, Integer and Boolean variable and the getters' statuses, as bytes
+    /// (the getters' log messages dropped). Nothing before initialization: FMI 2.0.5 allows no
+    /// getter in Instantiated, and an FMU may take the call for an error and stop.
+    fn observable(&mut self) -> Vec<u8> {
+        let md = &self.fmu.md;
+        let mut out = vec![];
+        if !self.initialized {
+            return out;
+        }
+        let reals = md.vrs_of_type(Type::Real);
+        if !reals.is_empty() {
+            let (s, v) = self.get_real(&reals);
+            out.push(s as u8);
+            out.extend(v.iter().flat_map(|x| x.to_bits().to_le_bytes()));
+        }
+        for ty in [Type::Integer, Type::Boolean] {
+            let vrs = md.vrs_of_type(ty);
+            if vrs.is_empty() {
+                continue;
+            }
+            let (s, v) = if ty == Type::Integer {
+                self.get_integer(&vrs)
+            } else {
+                self.get_boolean(&vrs)
+            };
+            out.push(s as u8);
+            out.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+        }
+        let _ = self.sink.take();
+        out
+    }
+
+    /// Warns unless the instance shows what it showed `before` ([`Instance::fingerprint`]):
+    /// a refused call that changed the instance. A warning, not a failure: FMI 2.0.5 §2.1.3
+    /// (fmi2Error) says "the simulation cannot be continued with this FMU instance" and leaves
+    /// the instance undefined until fmi2SetFMUstate, fmi2Reset or fmi2FreeInstance; a refusal
+    /// that changes nothing is robustness beyond the standard (an importer can go on after
+    /// catching its own mistake).
+    /// Only after a refusal (`status` fmi2Error): a call accepted changes what it changes.
+    pub fn warn_if_changed(&mut self, before: &Option<Vec<u8>>, status: Status, what: impl std::fmt::Display) {
+        if status == fmi2Error && before.is_some() && &self.fingerprint() != before {
+            crate::outcome::warn(format!(
+                "{}: {what}: refused, but the instance changed ({})",
+                self.fmu.id, REFUSED_CHANGED_WHY
+            ));
         }
     }
 

@@ -75,6 +75,58 @@ thread_local! {
     static PANIC_AT: RefCell<Option<String>> = const { RefCell::new(None) };
 }
 
+static STRICT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether this run is strict (`--strict`, and the workspace's own tests): then the checks also
+/// compare what only this exporter's determinism promises, such as the bytes of serialized FMU
+/// states before and after a refused call.
+pub fn strict() -> bool {
+    STRICT.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Sets [`strict`] for this process (a worker of a `--strict` run; the workspace's tests).
+pub fn set_strict(on: bool) {
+    STRICT.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// How a breadcrumb ([`breadcrumb`]) starts when the call it names is an importer's mistake
+/// or absurd input made on purpose (a NULL array with n > 0, a damaged buffer, a step of 1e300 s):
+/// the standard leaves what the FMU then does undefined, so a crash or a hang there is a warning,
+/// not a failure ([`on_purpose`]).
+pub const IMPORTERS_MISTAKE: &str = "[an importer's mistake or absurd input, on purpose] ";
+
+static ON_PURPOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Runs `f`, whose calls are an importer's mistakes or absurd input made on purpose: their
+/// breadcrumbs start with [`IMPORTERS_MISTAKE`], so that a crash or hang in them is a warning.
+pub fn on_purpose<R>(f: impl FnOnce() -> R) -> R {
+    let was = ON_PURPOSE.swap(true, std::sync::atomic::Ordering::Relaxed);
+    let r = f();
+    ON_PURPOSE.store(was, std::sync::atomic::Ordering::Relaxed);
+    r
+}
+
+/// The warning for a worker that died or hung (`how`) during a call whose breadcrumb starts
+/// with [`IMPORTERS_MISTAKE`].
+pub fn crash_on_a_mistake(how: &str) -> String {
+    format!(
+        "the check's process {how}: the call was an importer's mistake or absurd input, whose outcome the \
+         standard leaves undefined (FMI 2.0.5 §2.1.3, FMI 3.0.2 §2.2.3: an FMU that detects it returns an \
+         error); a crash or hang takes the importer down with it. The rest of the check did not run"
+    )
+}
+
+/// Whether two times are the same within a tolerance relative to the step `h` (and to their
+/// size): FMI 2.0.5 and 3.0.2 promise no bit identity of times an FMU computes (FMI 3.0.2
+/// fmi3DoStep: `lastSuccessfulTime` is the FMU's own time; t + h summed in another order, or an
+/// internal step summed n times, differs by rounding). `1e-9 h`, at least 64 ulps of the
+/// larger time.
+pub fn same_time(a: f64, b: f64, h: f64) -> bool {
+    let scale = a.abs().max(b.abs());
+    let tol = (1e-9 * h.abs()).max(64.0 * f64::EPSILON * scale);
+    a == b || (a - b).abs() <= tol
+}
+
 /// The payload of [`skip`].
 struct Skipped(String);
 
@@ -217,6 +269,13 @@ pub fn breadcrumb(text: &str) {
     if !breadcrumbs_on() {
         return;
     }
+    let marked;
+    let text = if ON_PURPOSE.load(std::sync::atomic::Ordering::Relaxed) && !text.starts_with(IMPORTERS_MISTAKE) {
+        marked = format!("{IMPORTERS_MISTAKE}{text}");
+        marked.as_str()
+    } else {
+        text
+    };
     let guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
     if let Some(f) = guard.as_ref() {
         let mut record = [0u8; BREADCRUMB_BYTES];

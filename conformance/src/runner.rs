@@ -465,6 +465,17 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
                     w.describe_crash()
                 ))
             }
+            // Died in a call the check made as an importer's mistake on purpose: what the FMU does
+            // then is undefined by the standard, a warning.
+            (None, Some(_))
+                if w.breadcrumb
+                    .as_deref()
+                    .is_some_and(|b| b.starts_with(outcome::IMPORTERS_MISTAKE)) =>
+            {
+                let text = outcome::crash_on_a_mistake(&w.describe_crash());
+                c.warnings = vec![text.clone()];
+                c.outcome = Outcome::Warn(text);
+            }
             (None, _) => c.outcome = Outcome::Fail(format!("the check's process {}{seed_note}", w.describe_crash())),
         }
         if w.restarted {
@@ -616,6 +627,9 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
     cmd.args(&opts.worker_args_prefix).args(args);
     if opts.as_foreign {
         cmd.arg("--as-foreign");
+    }
+    if opts.strict {
+        cmd.arg("--strict");
     }
     if let Some(seed) = seed {
         cmd.env(crate::SEED_VAR, seed.to_string());
@@ -803,7 +817,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
 ///   print the re-serialized state (hex) and the observations after each step (for the check
 ///   of restoring a state in another process).
 ///
-/// `--as-foreign`: [`crate::set_as_foreign`]. `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
+/// `--as-foreign`: [`crate::set_as_foreign`]. `--strict`: [`outcome::set_strict`]. `--breadcrumb FILE`: where the checks record what they are about to do (read by the runner
 /// when the worker dies). The result goes to the result file; the exit code is 0 whenever a result was written
 /// (whatever it says), 2 for a usage error.
 pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
@@ -833,6 +847,7 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
             "--self" => self_exe = Some(PathBuf::from(value("--self"))),
             "--self-arg" => self_args.push(value("--self-arg")),
             "--as-foreign" => crate::set_as_foreign(true),
+            "--strict" => outcome::set_strict(true),
             "--breadcrumb" => {
                 let path = value("--breadcrumb");
                 if let Err(e) = outcome::set_breadcrumb_file(Path::new(&path)) {

@@ -196,6 +196,11 @@ pub struct Interface {
     pub max_output_derivative_order: u32,
     pub provides_intermediate_update: bool,
     pub can_return_early: bool,
+    /// `providesPerElementDependencies`: fmi3GetNumberOfVariableDependencies and
+    /// fmi3GetVariableDependencies are offered.
+    pub provides_per_element_dependencies: bool,
+    /// `providesEvaluateDiscreteStates` (Model Exchange): fmi3EvaluateDiscreteStates is offered.
+    pub provides_evaluate_discrete_states: bool,
 }
 
 /// One element of `<ModelStructure>` (`<Output>`, `<ContinuousStateDerivative>`,
@@ -273,6 +278,8 @@ impl ModelDescription {
                 max_output_derivative_order: e.number("maxOutputDerivativeOrder").unwrap_or(0),
                 provides_intermediate_update: e.flag("providesIntermediateUpdate"),
                 can_return_early: e.flag("canReturnEarlyAfterIntermediateUpdate"),
+                provides_per_element_dependencies: e.flag("providesPerElementDependencies"),
+                provides_evaluate_discrete_states: e.flag("providesEvaluateDiscreteStates"),
             };
             if in_variables && let Some(ty) = Type::from_element(&e.name) {
                 let vr = e

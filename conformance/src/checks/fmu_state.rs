@@ -91,11 +91,11 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     let (before, old_ptr) = (inst.observe(), saved);
     // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
     assert_eq!(unsafe { (fmu.api.get_fmu_state)(inst.c, &mut saved) }, fmi2OK);
-    assert_eq!(
-        saved, old_ptr,
-        "{}: fmi2GetFMUstate on an existing state must reuse it",
-        fmu.id
-    );
+    // FMI 2.0.5 §2.1.8: fmi2GetFMUstate "typically reuses the memory of this FMUstate": not
+    // required, a warning.
+    crate::outcome::warn_unless(saved == old_ptr, || {
+        format!("{}: fmi2GetFMUstate on an existing FMUstate did not reuse it", fmu.id)
+    });
     let t2 = inst.time;
     continue_for(&mut inst, 3);
     assert_eq!(inst.set_state(saved), fmi2OK);
@@ -121,19 +121,35 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     );
 }
 
+/// Verdict: judged by behaviour. FMI 2.0.5 §2.1.8: fmi2GetFMUstate "makes a copy of the internal
+/// FMU state and returns a pointer to this copy", and fmi2SetFMUstate "copies the content of the
+/// previously copied FMUstate back": restored after the instance moved on and was reset, the
+/// state continues as the instance did from it (a failure otherwise). Its serialized bytes
+/// differing from before is a warning (a state holding addresses serializes differently each
+/// time; the standard promises nothing of the bytes).
 pub fn a_saved_state_is_a_complete_copy_independent_of_the_instance(fmu: &Fmu) {
     needs_serialize(fmu);
     let mut inst = advanced(fmu, 5);
     let (_, mut saved) = inst.get_state();
     let bytes = inst.serialize(saved).unwrap();
-    continue_for(&mut inst, 5);
+    let from_saved = continue_for(&mut inst, 5);
     assert_eq!(inst.reset(), fmi2OK);
+    crate::outcome::warn_unless(inst.serialize(saved).unwrap() == bytes, || {
+        format!(
+            "{}: the saved state serializes differently after the instance moved on (addresses in it, or it shares memory with the instance)",
+            fmu.id
+        )
+    });
+    assert_eq!(inst.set_state(saved), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+    let (_, t) = inst.last_successful_time();
+    inst.time = t;
     assert_eq!(
-        inst.serialize(saved).unwrap(),
-        bytes,
-        "{}: the saved state changed with the instance",
+        continue_for(&mut inst, 5),
+        from_saved,
+        "{}: restored after the instance moved on and was reset, the state continues differently from the instance it was taken of (FMI 2.0.5 §2.1.8: fmi2GetFMUstate makes a copy of the internal FMU state)",
         fmu.id
     );
+    assert_eq!(inst.reset(), fmi2OK);
     // And another instance can continue from it exactly like the first would have.
     let mut other = Instance::new(fmu);
     assert_eq!(other.set_state(saved), fmi2OK, "{}: {}", fmu.id, other.log_text());
@@ -170,25 +186,40 @@ pub fn serialize_deserialize_round_trip_continues_bit_identically(fmu: &Fmu) {
         (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut existing)
     };
     assert_eq!(s, fmi2OK);
+    crate::outcome::warn_unless(inst.serialize(existing).unwrap() == bytes, || {
+        format!(
+            "{}: deserialized into an existing FMUstate, the state serializes to other bytes (FMI 2.0.5 promises nothing of the bytes; determinism helps importers that compare states)",
+            fmu.id
+        )
+    });
+    assert_eq!(inst.set_state(existing), fmi2OK, "{}: {}", fmu.id, inst.log_text());
+    inst.time = t;
     assert_eq!(
-        inst.serialize(existing).unwrap(),
-        bytes,
-        "{}: deserializing into an existing state",
+        continue_for(&mut inst, 20),
+        first,
+        "{}: continuation after deserializing into an existing FMUstate (FMI 2.0.5 §2.1.8)",
         fmu.id
     );
     assert_eq!(inst.free_state(&mut existing), fmi2OK);
 }
 
+/// Verdict: warned, never failed: FMI 2.0.5 §2.1.8 asks of a serialized state only that it
+/// restores (judged by behaviour in the other FMU-state checks). Equal states serializing to
+/// different bytes (addresses in the state) is portability advice: such a state cannot be
+/// compared, cached or restored in another process reliably. `--strict` makes it a failure.
 pub fn the_serialized_state_holds_no_pointers_and_is_versioned(fmu: &Fmu) {
     needs_serialize(fmu);
     // Two instances at different addresses in the same state serialize to the same bytes.
     let (mut a, mut b) = (advanced(fmu, 7), advanced(fmu, 7));
     let (sa, sb) = (a.snapshot(), b.snapshot());
-    assert_eq!(
-        sa, sb,
-        "{}: equal states, different bytes (addresses in the state?)",
-        fmu.id
-    );
+    if sa != sb {
+        crate::outcome::warned(format!(
+            "{}: two instances in equal states serialize to different bytes ({} of {} differ): addresses in the state? It cannot then be restored in another process reliably",
+            fmu.id,
+            sa.iter().zip(&sb).filter(|(x, y)| x != y).count() + sa.len().abs_diff(sb.len()),
+            sa.len()
+        ));
+    }
     if convention(fmu, "this exporter's versioned state format with the GUID") {
         let layout = parse(&sa).unwrap_or_else(|e| panic!("{}: {e}", fmu.id));
         assert_eq!(
@@ -202,22 +233,27 @@ pub fn the_serialized_state_holds_no_pointers_and_is_versioned(fmu: &Fmu) {
     assert_eq!(a.free_state(&mut s), fmi2OK);
 }
 
+/// A damaged buffer handed to fmi2DeSerializeFMUstate is the importer's mistake: FMI 2.0.5
+/// §2.1.8 defines deserialization of what fmi2SerializeFMUstate wrote and nothing else, so not
+/// refusing it (or crashing on it: [`crate::outcome::on_purpose`]) is a warning.
 fn assert_refused(inst: &mut Instance, bytes: &[u8], what: &str) {
-    let before = inst.snapshot();
-    let (s, p) = inst.deserialize(bytes);
+    let before = inst.fingerprint();
+    let (s, p) = crate::outcome::on_purpose(|| inst.deserialize(bytes));
     let log = inst.log();
-    assert_eq!(s, fmi2Error, "{}: {what} was accepted", inst.fmu.id);
-    assert!(
-        p.is_null(),
-        "{}: {what}: a refused deserialization wrote a state",
-        inst.fmu.id
-    );
-    assert!(
-        inst.says(&log, fmi2Error, &["fmi2DeSerializeFMUstate"]),
-        "{}: {what}: no message: {log:?}",
-        inst.fmu.id
-    );
-    assert_eq!(inst.snapshot(), before, "{}: {what}: the instance changed", inst.fmu.id);
+    if s != fmi2Error {
+        crate::outcome::warn(format!(
+            "{}: {what} was accepted by fmi2DeSerializeFMUstate (damage not detected)",
+            inst.fmu.id
+        ));
+        return;
+    }
+    crate::outcome::warn_unless(p.is_null(), || {
+        format!("{}: {what}: a refused deserialization wrote a state", inst.fmu.id)
+    });
+    crate::outcome::warn_unless(inst.says(&log, fmi2Error, &["fmi2DeSerializeFMUstate"]), || {
+        format!("{}: {what}: refused without a message: {log:?}", inst.fmu.id)
+    });
+    inst.warn_if_changed(&before, s, what);
 }
 
 /// For damage that only a checksum can find, on another exporter's FMU (whose format may have
@@ -226,12 +262,17 @@ fn refused_or_accepted(inst: &mut Instance, bytes: &[u8], what: &str) {
     if inst.fmu.own_state_format() {
         return assert_refused(inst, bytes, what);
     }
-    let before = inst.snapshot();
-    let (s, mut p) = inst.deserialize(bytes);
+    let before = inst.fingerprint();
+    let (s, mut p) = crate::outcome::on_purpose(|| inst.deserialize(bytes));
     if s == fmi2OK {
         assert_eq!(inst.free_state(&mut p), fmi2OK, "{}: {what}: freeing it", inst.fmu.id);
         inst.log();
-        assert_eq!(inst.snapshot(), before, "{}: {what}: the instance changed", inst.fmu.id);
+        crate::outcome::warn_unless(inst.fingerprint() == before, || {
+            format!(
+                "{}: {what}: deserializing it (not set) changed the instance",
+                inst.fmu.id
+            )
+        });
     } else {
         assert_refused(inst, bytes, what);
     }
@@ -324,43 +365,63 @@ pub fn damaged_serialized_states_are_refused_with_a_message(fmu: &Fmu) {
         inst.log();
     }
 
-    // NULL bytes with a size, NULL out pointer.
+    // NULL bytes with a size, NULL out pointer: the importer's mistakes (a warning).
+    crate::outcome::breadcrumb(&format!(
+        "{}fmi2DeSerializeFMUstate(NULL, 16)",
+        crate::outcome::IMPORTERS_MISTAKE
+    ));
     // SAFETY: the FMU must check both before reading.
     let s = unsafe { (fmu.api.deserialize_fmu_state)(inst.c, ptr::null(), 16, &mut ptr::null_mut()) };
-    assert_eq!(s, fmi2Error, "{}: NULL serializedState", fmu.id);
+    crate::outcome::warn_unless(s == fmi2Error, || format!("{}: NULL serializedState accepted", fmu.id));
+    crate::outcome::breadcrumb(&format!(
+        "{}fmi2DeSerializeFMUstate(.., NULL FMUstate*)",
+        crate::outcome::IMPORTERS_MISTAKE
+    ));
     // SAFETY: as above.
     let s = unsafe {
         (fmu.api.deserialize_fmu_state)(inst.c, good.as_ptr() as *const fmi2Byte, good.len(), ptr::null_mut())
     };
-    assert_eq!(s, fmi2Error, "{}: NULL FMUstate*", fmu.id);
+    crate::outcome::warn_unless(s == fmi2Error, || format!("{}: NULL FMUstate* accepted", fmu.id));
     // A buffer of the wrong size for fmi2SerializeFMUstate.
     let (_, mut st) = inst.get_state();
     let n = good.len() - 1;
     let mut small = Guarded::new(n, 0u8);
     // SAFETY: a buffer of the size passed (and the guard after it).
-    let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, small.as_mut_ptr() as *mut fmi2Byte, n) };
+    let s = crate::outcome::on_purpose(|| unsafe {
+        (fmu.api.serialize_fmu_state)(inst.c, st, small.as_mut_ptr() as *mut fmi2Byte, n)
+    });
     // Refused or not, nothing may be written past the buffer the call names.
     let small = small.into_values(
         || format!("fmi2SerializeFMUstate into a buffer one byte too small (size = {n})"),
         STATE_RULE2,
     );
-    assert_eq!(
-        s, fmi2Error,
-        "{}: fmi2SerializeFMUstate into a too small buffer",
-        fmu.id
-    );
+    crate::outcome::warn_unless(s == fmi2Error, || {
+        format!("{}: fmi2SerializeFMUstate into a too small buffer: not refused", fmu.id)
+    });
+    // Writing into the buffer and then refusing leaves the importer garbage: a failure.
     assert!(
-        small.iter().all(|b| *b == 0),
-        "{}: wrote into a too small buffer",
+        small.iter().all(|b| *b == 0) || s != fmi2Error,
+        "{}: wrote into a too small buffer and then refused it",
         fmu.id
     );
     assert_eq!(inst.free_state(&mut st), fmi2OK);
     inst.log();
-    assert_eq!(inst.step(step_size(fmu)), fmi2OK, "{}: still usable", fmu.id);
+    let s = inst.step(step_size(fmu));
+    crate::outcome::warn_unless(s == fmi2OK, || {
+        format!(
+            "{}: a step after the refused damaged states answered {} (going on after fmi2Error is beyond FMI 2.0.5 §2.1.3)",
+            fmu.id,
+            status_name(s)
+        )
+    });
 }
 
 /// The other process is a worker ([`crate::worker`], mode `state-child`): it unpacks and loads
 /// the FMU afresh, restores the state, and prints what it observes.
+///
+/// Verdict: judged by behaviour: the other process's 20 steps must equal this one's (a failure
+/// otherwise: FMI 2.0.5 §2.1.8 defines serialization so that a state can be restored "in
+/// another process"); the re-serialized bytes differing is a warning.
 pub fn a_state_serialized_here_restores_in_another_process_and_continues_identically(fmu: &Fmu) {
     needs_serialize(fmu);
     let worker = crate::worker().unwrap_or_else(|| {
@@ -396,12 +457,17 @@ pub fn a_state_serialized_here_restores_in_another_process_and_continues_identic
             .collect()
     };
     let reserialized: Vec<u8> = parse_hex(lines.next().unwrap()).into_iter().map(|b| b as u8).collect();
-    assert_eq!(
-        reserialized, bytes,
-        "{}: the other process re-serializes the state differently",
-        fmu.id
-    );
+    crate::outcome::warn_unless(reserialized == bytes, || {
+        format!(
+            "{}: the other process re-serializes the state to other bytes (FMI 2.0.5 promises nothing of the bytes; judged by behaviour below)",
+            fmu.id
+        )
+    });
     let got: Vec<Vec<u64>> = lines.map(parse_hex).collect();
     assert_eq!(got.len(), expected.len(), "{}: steps reported by the child", fmu.id);
-    assert_eq!(got, expected, "{}: the other process continues differently", fmu.id);
+    assert_eq!(
+        got, expected,
+        "{}: restored in another process, the state continues differently (FMI 2.0.5 §2.1.8: a serialized state restored with fmi2DeSerializeFMUstate and fmi2SetFMUstate continues as the instance it was taken of)",
+        fmu.id
+    );
 }

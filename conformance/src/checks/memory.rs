@@ -35,18 +35,24 @@ fn cycle(fmu: &Fmu, full: bool) {
             inst.restore(&bytes);
         }
         let s = inst.do_step(-1.0, -1.0);
-        assert_eq!(
-            s,
-            fmi2Error,
-            "{}: a step of h = -1 (made so that the FMU logs a refusal) answered {}",
-            fmu.id,
-            crate::instance::status_name(s)
-        );
+        // A refusal of the importer's mistake is not required (a warning), and after fmi2Error
+        // only fmi2Reset or fmi2FreeInstance are sure to be allowed (FMI 2.0.5 §2.1.3).
+        crate::outcome::warn_unless(s == fmi2Error, || {
+            format!(
+                "{}: a step of h = -1 (made so that the FMU logs a refusal) answered {}",
+                fmu.id,
+                crate::instance::status_name(s)
+            )
+        });
         inst.log();
-        assert_eq!(inst.terminate(), fmi2OK);
+        if s != fmi2Error || fmu.own_state_format() {
+            assert_eq!(inst.terminate(), fmi2OK);
+        }
     }
 }
 
+/// Verdict: a leak is a warning (see [`cycles_leave_memory_flat`]); a crash or a refused legal
+/// call in the cycles stays a failure.
 pub fn ten_thousand_instantiate_free_cycles_leave_memory_flat(fmu: &Fmu) {
     if !fmu.can_snapshot() {
         limitation("the FMU cannot serialize its state: the cycles take and restore no FMU state");
@@ -119,9 +125,13 @@ pub fn cycles_leave_memory_flat(id: &str, mut cycle: impl FnMut(bool)) {
                 slack / cycles
             ));
         }
-        assert!(
-            grew <= slack,
-            "{id}: RSS grew by {grew} bytes over {cycles} {what} cycles (allowed {slack}), in a second run of the cycles as in the first: a leak"
-        );
+        // A leak is a warning: FMI 2.0.5 §2.1.5 and FMI 3.0.2 §2.3.1 say fmi2FreeInstance /
+        // fmi3FreeInstance frees the instance's memory, but a small leak breaks no call; it
+        // matters to an importer that instantiates many times (parameter studies).
+        crate::outcome::warn_unless(grew <= slack, || {
+            format!(
+                "{id}: RSS grew by {grew} bytes over {cycles} {what} cycles (allowed {slack}), in a second run of the cycles as in the first: a leak"
+            )
+        });
     }
 }

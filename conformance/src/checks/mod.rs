@@ -135,6 +135,8 @@ pub fn on_every_fmu(name: &str) {
 }
 
 fn on_every<F: Checked>(check: &Check) {
+    // This exporter's FMUs are held to `--strict`.
+    crate::outcome::set_strict(true);
     let name = check.name;
     let mut failures = vec![];
     for fmu in crate::all::<F>() {

@@ -33,27 +33,30 @@ pub fn do_step_refuses_a_step_size_that_is_not_finite_and_positive(fmu: &Fmu) {
         let before = inst.fingerprint();
         let s = inst.do_step(inst.time, bad);
         refused(&inst, &format!("fmi2DoStep(h = {bad:e})"), s, &["fmi2DoStep"]);
-        assert_eq!(
-            inst.fingerprint(),
-            before,
-            "{}: a refused step (h = {bad}) changed the FMU state",
-            fmu.id
-        );
-        assert_eq!(inst.last_successful_time(), (fmi2OK, inst.time));
+        inst.warn_if_changed(&before, s, format_args!("a step of h = {bad}"));
+        let last = inst.last_successful_time();
+        crate::outcome::warn_unless(last == (fmi2OK, inst.time), || {
+            format!(
+                "{}: after a refused step of h = {bad}: fmi2GetRealStatus(fmi2LastSuccessfulTime) = {last:?}, expected (fmi2OK, {})",
+                fmu.id, inst.time
+            )
+        });
     }
-    assert_eq!(
-        inst.step(h),
-        fmi2OK,
-        "{}: a good step after the refusals: {}",
-        fmu.id,
-        inst.log_text()
-    );
-    assert_eq!(
-        inst.observe(),
-        reference[2],
-        "{}: the refusals changed the trajectory",
-        fmu.id
-    );
+    // Going on after fmi2Error is beyond FMI 2.0.5 (§2.1.3: "the simulation cannot be continued
+    // with this FMU instance"): a warning when the instance cannot.
+    let s = inst.step(h);
+    if s != fmi2OK {
+        crate::outcome::warn(format!(
+            "{}: a good step after the refused ones: {} ({}): the instance cannot go on after refusing an importer's mistake",
+            fmu.id,
+            status_name(s),
+            inst.log_text()
+        ));
+    } else {
+        crate::outcome::warn_unless(inst.observe() == reference[2], || {
+            format!("{}: the refused steps changed the trajectory", fmu.id)
+        });
+    }
 }
 
 pub fn do_step_compares_the_communication_point_with_a_relative_tolerance(fmu: &Fmu) {
@@ -95,12 +98,7 @@ pub fn do_step_compares_the_communication_point_with_a_relative_tolerance(fmu: &
             s,
             &["currentCommunicationPoint"],
         );
-        assert_eq!(
-            inst.fingerprint(),
-            before,
-            "{}: a refused step changed the FMU state",
-            fmu.id
-        );
+        inst.warn_if_changed(&before, s, format_args!("a step off by {dt} with h = {h}"));
     }
 }
 
@@ -112,6 +110,12 @@ pub fn do_step_beyond_the_stop_time_is_refused(fmu: &Fmu) {
     );
     let s = inst.do_step(0.0, 0.1);
     refused(&inst, "a step past stopTime", s, &["stopTime"]);
+    // A fresh instance: after fmi2Error the first one may not go on (FMI 2.0.5 §2.1.3).
+    let mut inst = Instance::new(fmu);
+    assert_eq!(
+        [inst.setup(0.0, Some(0.05)), inst.enter_init(), inst.exit_init()],
+        [fmi2OK; 3]
+    );
     assert_eq!(
         inst.do_step(0.0, 0.05),
         fmi2OK,
@@ -124,6 +128,12 @@ pub fn do_step_beyond_the_stop_time_is_refused(fmu: &Fmu) {
 /// A huge step must end within bounded time with fmi2OK or fmi2Discard; after a discard the
 /// status functions answer truthfully, another step is refused, and restoring an earlier FMU
 /// state makes the instance usable again.
+///
+/// Verdict: a step of 1e6, 1e300 or f64::MAX seconds is absurd input; FMI 2.0.5 bounds neither
+/// its time nor how exactly the FMU's clock lands on t + h, so a hang, a crash or a drifting
+/// fmi2LastSuccessfulTime is a warning. Failures stay for what §4.2.3 requires of the answers:
+/// a status other than fmi2OK/fmi2Discard/fmi2Error, fmi2LastSuccessfulTime outside the step
+/// after fmi2Discard.
 pub fn a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_truth(fmu: &Fmu) {
     for huge in [1e6, 1e300, f64::MAX] {
         let mut inst = Instance::new(fmu);
@@ -135,13 +145,30 @@ pub fn a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_t
         let saved = fmu.can_snapshot().then(|| inst.snapshot());
         let t0 = inst.time;
         let clock = std::time::Instant::now();
-        let s = inst.do_step(t0, huge);
+        // Absurd input: a crash or a hang in it is a warning (outcome::on_purpose).
+        let s = crate::outcome::on_purpose(|| inst.do_step(t0, huge));
         let took = clock.elapsed();
-        assert!(took.as_secs() < 20, "{}: a step of {huge:e} s took {took:?}", fmu.id);
+        crate::outcome::warn_unless(took.as_secs() < 20, || {
+            format!(
+                "{}: a step of {huge:e} s took {took:?} (a hang on absurd input)",
+                fmu.id
+            )
+        });
         let log = inst.log();
         match s {
             fmi2OK => {
-                assert_eq!(inst.last_successful_time(), (fmi2OK, t0 + huge));
+                // A step this large is absurd input: how close the FMU's clock ends to t0 + h is
+                // numerics (an internal fixed step summed 10^8 times drifts), which FMI 2.0.5
+                // does not bound; a warning beyond a tolerance relative to the step.
+                let (st, last) = inst.last_successful_time();
+                assert_eq!(st, fmi2OK, "{}: fmi2GetRealStatus(fmi2LastSuccessfulTime)", fmu.id);
+                crate::outcome::warn_unless(crate::outcome::same_time(last, t0 + huge, huge), || {
+                    format!(
+                        "{}: a completed step of {huge:e} from {t0}: fmi2LastSuccessfulTime = {last}, not t + h = {} within a tolerance relative to the step (the FMU's clock drifts on absurd steps)",
+                        fmu.id,
+                        t0 + huge
+                    )
+                });
                 if fmu.own_state_format() {
                     assert_eq!(inst.machine_state(), State::StepComplete);
                 }
@@ -219,7 +246,15 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
     let h = step_size(fmu);
     for _ in 0..3 {
         assert_eq!(inst.step(h), fmi2OK);
-        assert_eq!(inst.last_successful_time(), (fmi2OK, inst.time));
+        // FMI 2.0.5 §4.2.3: fmi2LastSuccessfulTime is "the end time of the last successfully
+        // completed communication step": t + h, within a tolerance relative to the step.
+        let (st, last) = inst.last_successful_time();
+        assert!(
+            st == fmi2OK && crate::outcome::same_time(last, inst.time, h),
+            "{}: fmi2GetRealStatus(fmi2LastSuccessfulTime) = ({st}, {last}) after a completed step to {} (FMI 2.0.5 §4.2.3: the end time of the last successfully completed communication step)",
+            fmu.id,
+            inst.time
+        );
         assert_eq!(inst.terminated(), (fmi2OK, fmi2False));
     }
     // Kinds that belong to another getter: fmi2Discard with a message, value untouched.

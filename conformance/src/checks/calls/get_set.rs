@@ -6,12 +6,16 @@
 use super::{initialized, refused};
 use crate::fmi2::*;
 use crate::instance::{Instance, excitation, excite, run, status_name, step_size};
-use crate::outcome::info;
+use crate::outcome::{convention, info};
 use crate::state::{State, name};
 use crate::{Fmu, Type};
 use md_reader::{Causality, Variability};
 use std::ptr;
 
+/// Verdict: warned, never failed. An unknown value reference is the importer's mistake; FMI 2.0.5
+/// requires no detection of it (§2.1.3: on fmi2Error "the simulation cannot be continued with this
+/// FMU instance"), so an FMU that answers fmi2OK, refuses without a message or changes what its
+/// getters show is warned (a wrong value reference then goes unnoticed by the user).
 pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu) {
     let mut inst = initialized(fmu);
     for vr in [fmu.md.unknown_vr(), u32::MAX] {
@@ -37,11 +41,10 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
         // SAFETY: arrays of one element.
         let s = unsafe { (fmu.api.set_string)(inst.c, &vr, 1, v.as_ptr()) };
         refused(&inst, "fmi2SetString(unknown vr)", s, &["fmi2SetString", &n]);
-        assert_eq!(
-            inst.fingerprint(),
-            before,
-            "{}: refused calls changed the FMU state",
-            fmu.id
+        inst.warn_if_changed(
+            &before,
+            fmi2Error,
+            format_args!("the calls with unknown value reference {vr}"),
         );
     }
     // A known vr of another type.
@@ -57,6 +60,10 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
     }
 }
 
+/// Verdict: nvr = 0 with NULL arrays must answer fmi2OK (a failure otherwise: the call is legal,
+/// FMI 2.0.5 §2.1.7 gives the arrays nvr elements); NULL arrays with nvr > 0 are the importer's
+/// mistake, which the standard leaves undefined: not refusing them, or crashing on them, is a
+/// warning (a crash takes the importer down).
 pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_refused(fmu: &Fmu) {
     let mut inst = initialized(fmu);
     let api = &fmu.api;
@@ -102,50 +109,65 @@ pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_ref
             fmu.id
         );
         let null_cases = [
-            raw!("fmi2GetReal", (api.get_real)(c, ptr::null(), 1, r.as_mut_ptr())),
-            raw!("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!("fmi2GetInteger", (api.get_integer)(c, ptr::null(), 1, i.as_mut_ptr())),
-            raw!("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!("fmi2GetBoolean", (api.get_boolean)(c, ptr::null(), 1, i.as_mut_ptr())),
-            raw!("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!("fmi2GetString", (api.get_string)(c, ptr::null(), 1, st.as_mut_ptr())),
-            raw!("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!("fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
-            raw!("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!("fmi2SetInteger", (api.set_integer)(c, ptr::null(), 1, i.as_ptr())),
-            raw!("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!("fmi2SetBoolean", (api.set_boolean)(c, ptr::null(), 1, i.as_ptr())),
-            raw!("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!("fmi2SetString", (api.set_string)(c, ptr::null(), 1, st.as_ptr())),
-            raw!("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!(mistake "fmi2GetReal", (api.get_real)(c, ptr::null(), 1, r.as_mut_ptr())),
+            raw!(mistake "fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!(mistake "fmi2GetInteger", (api.get_integer)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!(mistake "fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!(mistake "fmi2GetBoolean", (api.get_boolean)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!(mistake "fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!(mistake "fmi2GetString", (api.get_string)(c, ptr::null(), 1, st.as_mut_ptr())),
+            raw!(mistake "fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
+            raw!(mistake "fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
+            raw!(mistake "fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!(mistake "fmi2SetInteger", (api.set_integer)(c, ptr::null(), 1, i.as_ptr())),
+            raw!(mistake "fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!(mistake "fmi2SetBoolean", (api.set_boolean)(c, ptr::null(), 1, i.as_ptr())),
+            raw!(mistake "fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, ptr::null())),
+            raw!(mistake "fmi2SetString", (api.set_string)(c, ptr::null(), 1, st.as_ptr())),
+            raw!(mistake "fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, ptr::null())),
         ];
+        // NULL arrays with nvr > 0 are the importer's mistake (FMI 2.0.5 §2.1.7 gives the
+        // arrays nvr elements): detecting them is beyond the standard, a warning otherwise.
         let log = inst.log();
         for (f, s) in null_cases {
-            assert_eq!(s, fmi2Error, "{}: {f} with a NULL array and nvr = 1", fmu.id);
+            crate::outcome::warn_unless(s == fmi2Error, || {
+                format!(
+                    "{}: {f} with a NULL array and nvr = 1 answered {}, not fmi2Error (an importer's mistake not detected)",
+                    fmu.id,
+                    status_name(s)
+                )
+            });
             let messages = log
                 .iter()
                 .filter(|e| e.text.contains(f) && e.text.contains("NULL"))
                 .count();
-            assert_eq!(
-                messages, 2,
-                "{}: {f}: one message per refused call expected: {log:?}",
-                fmu.id
-            );
+            if s == fmi2Error && convention(fmu, "one message naming the function and NULL per refused call") {
+                crate::outcome::warn_unless(messages == 2, || {
+                    format!("{}: {f}: one message per refused call expected: {log:?}", fmu.id)
+                });
+            }
         }
     }
     inst.time = 0.0;
-    assert_eq!(
-        inst.step(step_size(fmu)),
-        fmi2OK,
-        "{}: usable after the refusals",
-        fmu.id
-    );
+    let s = inst.step(step_size(fmu));
+    crate::outcome::warn_unless(s == fmi2OK, || {
+        format!(
+            "{}: a step after the refused NULL arrays answered {} (going on after fmi2Error is beyond FMI 2.0.5 §2.1.3)",
+            fmu.id,
+            status_name(s)
+        )
+    });
 }
 
 /// For every variable, in each state where fmi2SetXXX is allowed, the FMU accepts exactly the
 /// variables the standard lets an importer set there; a refusal names the variable and leaves
 /// the FMU state as it was. Covers outputs, calculated parameters, fixed parameters after
 /// initialization, and tunable parameters between steps.
+///
+/// Verdict: refusing a set the standard allows (FMI 2.0.5 §4.2.4, the variables fmi2SetXXX may be
+/// called on in each state) fails; accepting a set it does not allow, or changing the instance
+/// while refusing it, is the importer's mistake undetected, a warning (the standard asks no
+/// detection).
 pub fn each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu) {
     let mut failures = vec![];
     for state in [State::Instantiated, State::InitializationMode, State::StepComplete] {
@@ -185,21 +207,28 @@ pub fn each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &Fmu) 
                     status_name(s)
                 ));
             }
+            // Setting a variable where the standard does not allow it is the importer's mistake
+            // (FMI 2.0.5 §3.2.3/§4.2.4 say where fmi2SetXXX may be called on which variables; they
+            // ask no detection of the FMU): a warning when it is accepted or changes the instance.
             if !want {
                 if s != fmi2Error {
-                    failures.push(format!("{at}: not allowed, got {}", status_name(s)));
+                    crate::outcome::warn(format!(
+                        "{at}: not allowed by the standard, got {} (an importer's mistake not detected)",
+                        status_name(s)
+                    ));
                 } else if !inst.says(&log, fmi2Error, &[&format!("'{}'", v.name)]) {
-                    failures.push(format!("{at}: the refusal does not name the variable: {log:?}"));
+                    crate::outcome::warn(format!("{at}: the refusal does not name the variable: {log:?}"));
                 }
-                if inst.fingerprint() != before {
-                    failures.push(format!("{at}: refused, but the FMU state changed"));
-                }
+                inst.warn_if_changed(&before, s, &at);
             }
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// Verdict: warned, never failed. FMI 2.0.5 does not forbid NaN or infinity in an fmi2Real
+/// (§2.2.7 defines min/max, and leaves values outside to the FMU); setting one is the importer's
+/// mistake, and refusing it is good practice (a NaN input otherwise spreads silently).
 pub fn nan_and_infinite_values_are_refused_with_a_message_and_change_nothing(fmu: &Fmu) {
     for state in [State::Instantiated, State::InitializationMode, State::StepComplete] {
         let mut inst = Instance::new(fmu);
@@ -223,13 +252,7 @@ pub fn nan_and_infinite_values_are_refused_with_a_message_and_change_nothing(fmu
                     s,
                     &[&format!("'{}'", v.name)],
                 );
-                assert_eq!(
-                    inst.fingerprint(),
-                    before,
-                    "{}: '{}' = {bad} changed the FMU state",
-                    fmu.id,
-                    v.name
-                );
+                inst.warn_if_changed(&before, s, format_args!("'{}' = {bad} in {state:?}", v.name));
             }
         }
         // All or nothing: a good value next to a bad one is not stored either.
@@ -237,7 +260,7 @@ pub fn nan_and_infinite_values_are_refused_with_a_message_and_change_nothing(fmu
             let before = inst.fingerprint();
             let s = inst.set_real(&[first.vr, first.vr], &[excite(first), f64::NAN]);
             refused(&inst, "a batch with one NaN", s, &["NaN"]);
-            assert_eq!(inst.fingerprint(), before, "{}: a refused batch stored a value", fmu.id);
+            inst.warn_if_changed(&before, s, "a batch with one NaN");
         }
     }
 }

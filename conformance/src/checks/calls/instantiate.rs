@@ -46,6 +46,11 @@ fn refused_with_message(fmu: &Fmu, args: &Args, what: &str, word: &str, missing:
 
 /// fmi2ModelExchange is refused unless the FMU declares `<ModelExchange>` (then it is
 /// accepted); an unknown fmuType always.
+///
+/// Verdict: refusing fmi2ModelExchange that the FMU declares fails (FMI 2.0.5 §2.1.5: the FMU
+/// is instantiated with the fmuType of an interface it declares). Accepting an interface the FMU
+/// does not declare, or an fmuType that does not exist (7), is the importer's mistake, which the
+/// standard leaves undefined: a warning (the importer then runs an interface the FMU never made).
 pub fn instantiate_refuses_model_exchange_and_unknown_types_with_a_message(fmu: &Fmu) {
     for (ty, word) in [(fmi2ModelExchange, "fmi2ModelExchange"), (7, "fmuType")] {
         if ty == fmi2ModelExchange && fmu.md.me.is_some() {
@@ -66,13 +71,21 @@ pub fn instantiate_refuses_model_exchange_and_unknown_types_with_a_message(fmu: 
             fmu_type: ty,
             ..Args::valid(fmu)
         };
-        let log = Instance::with(fmu, &args)
-            .err()
-            .unwrap_or_else(|| panic!("{}: fmuType {ty} accepted", fmu.id));
-        assert!(
+        let Some(log) = Instance::with(fmu, &args).err() else {
+            crate::outcome::warn(format!(
+                "{}: fmi2Instantiate with fmuType {ty} ({word}, not declared by the FMU) accepted: an importer's mistake not detected",
+                fmu.id
+            ));
+            continue;
+        };
+        crate::outcome::warn_unless(
             log.iter().any(|e| e.text.contains(word)) || says(fmu, &log, fmi2Error, &[word]),
-            "{}: fmuType {ty}: {log:?}",
-            fmu.id
+            || {
+                format!(
+                    "{}: fmuType {ty} refused without a message naming {word}: {log:?}",
+                    fmu.id
+                )
+            },
         );
     }
 }

@@ -505,22 +505,25 @@ pub fn model_exchange_fmu_states_in_event_and_continuous_time_mode_continue_bit_
         other.restore(&bytes);
         other.time = t;
         let now = other.snapshot();
-        assert!(
-            now == bytes,
-            "{}: a state of {mode:?} deserialized into another instance: serialized again it differs (first difference at byte {:?})",
-            fmu.id,
-            now.iter().zip(&bytes).position(|(a, b)| a != b)
-        );
+        // The bytes: a warning (FMI 2.0.5 promises nothing of them); the behaviour below decides.
+        crate::outcome::warn_unless(now == bytes, || {
+            format!(
+                "{}: a state of {mode:?} deserialized into another instance serializes again to other bytes (first difference at byte {:?})",
+                fmu.id,
+                now.iter().zip(&bytes).position(|(a, b)| a != b)
+            )
+        });
         // And into this one, after going on from it.
         continue_from(&mut inst, &euler, false, 3);
         inst.restore(&bytes);
         let now = inst.snapshot();
-        assert!(
-            now == bytes,
-            "{}: a state of {mode:?} deserialized into the instance that made it, after going on: serialized again it differs (first difference at byte {:?})",
-            fmu.id,
-            now.iter().zip(&bytes).position(|(a, b)| a != b)
-        );
+        crate::outcome::warn_unless(now == bytes, || {
+            format!(
+                "{}: a state of {mode:?} deserialized into the instance that made it, after going on, serializes again to other bytes (first difference at byte {:?})",
+                fmu.id,
+                now.iter().zip(&bytes).position(|(a, b)| a != b)
+            )
+        });
         if observed {
             assert_eq!(other.me_state(), mode, "{}: a deserialized state of {mode:?}", fmu.id);
         }

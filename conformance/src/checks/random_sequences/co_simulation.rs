@@ -583,6 +583,10 @@ pub(super) fn declared(fmu: &Fmu, op: &Op) -> bool {
 
 pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Hook<Op>) -> Result<(), TestCaseError> {
     let own = inst.fmu.own_state_format();
+    // The importer's mistakes (a call the state machine does not allow, invalid arguments) and
+    // the FMU state after a refusal are judged on this exporter's FMUs and under --strict; FMI
+    // 2.0.5 asks no detection of them (the calls checks warn about them on any FMU).
+    let judge_mistakes = own || crate::outcome::strict();
     let snapshots = inst.fmu.can_snapshot();
     for (i, op) in ops.iter().enumerate() {
         if !declared(inst.fmu, op) {
@@ -626,7 +630,14 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
             status,
             log
         );
-        if status != fmi2OK {
+        // After fmi2Error FMI 2.0.5 (§2.1.3) leaves the instance undefined but for fmi2Reset,
+        // fmi2SetFMUstate and fmi2FreeInstance, and requires no message with it: on another
+        // exporter's FMU the sequence ends there.
+        if status == fmi2Error && !judge_mistakes {
+            return Ok(());
+        }
+        // FMI 2.0.5 asks no message with a status: judged where mistakes are.
+        if status != fmi2OK && judge_mistakes {
             prop_assert!(
                 log.iter().any(|e| e.status == status),
                 "{}: {} without a message; log {:?}",
@@ -635,7 +646,7 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
                 log
             );
         }
-        if !allowed {
+        if !allowed && judge_mistakes {
             prop_assert_eq!(
                 status,
                 fmi2Error,
@@ -650,8 +661,9 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
                 inst.says(&log, fmi2Error, &[function, &state])
             };
             prop_assert!(named, "{}: refused without naming function and state: {:?}", at, log);
-        } else {
+        } else if allowed {
             match expect {
+                Expect::Refused if !judge_mistakes => {}
                 Expect::Refused => prop_assert_eq!(status, fmi2Error, "{}: invalid arguments accepted", at),
                 Expect::Succeeds => prop_assert!(
                     status == fmi2OK || (function == "fmi2DoStep" && status == fmi2Discard),
@@ -664,7 +676,7 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
             }
         }
         if status == fmi2Error {
-            if snapshots {
+            if snapshots && judge_mistakes {
                 let after = inst.snapshot();
                 prop_assert!(after == before, "{}: answered fmi2Error but changed the FMU state", at);
             }
@@ -761,6 +773,14 @@ pub fn random_call_sequences_keep_every_fmu_conformant(fmu: &Fmu) {
         State::StepComplete,
         State::Terminated,
     ] {
+        // On another exporter's FMU a sequence ends at its first fmi2Error (see run_ops): a
+        // state no sequence reached is a limitation there.
+        if !(fmu.own_state_format() || crate::outcome::strict()) && calls[s as usize] == 0 {
+            crate::outcome::limitation(format!(
+                "no random call was made in {s:?} (the sequences end at the FMU's first fmi2Error)"
+            ));
+            continue;
+        }
         assert!(
             calls[s as usize] > 0,
             "{}: no random call was made in {s:?}\n{}",

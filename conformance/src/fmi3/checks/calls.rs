@@ -601,11 +601,11 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         status_name(s),
                         inst.log_text()
                     );
-                } else {
-                    assert_eq!(
-                        s,
-                        fmi3Error,
-                        "{}: setting '{}' ({}, {}, initial {:?}) in {state:?} ({}) answered {}: the standard does not allow it",
+                } else if s != fmi3Error {
+                    // The importer's mistake: FMI 3.0.2 §2.2.3 requires fmi3Error "when
+                    // detecting" it, not the detection; undetected, a warning.
+                    crate::outcome::warn(format!(
+                        "{}: setting '{}' ({}, {}, initial {:?}) in {state:?} ({}) answered {}: the standard does not allow it (an importer's mistake not detected)",
                         fmu.id,
                         v.name,
                         v.causality,
@@ -613,7 +613,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         crate::standard::initial(v.causality, v.variability, v.declared_initial),
                         if me { "ME" } else { "CS" },
                         status_name(s)
-                    );
+                    ));
                 }
             }
         }
@@ -841,17 +841,25 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
         }
         let (s, v) = i.get_f64(&[t.vr]);
         assert_eq!(s, fmi3OK);
-        assert_eq!(
-            v[0],
-            i.time,
-            "{}: {} after 3 steps of {h} from 0.25 ({})",
+        // Within a tolerance relative to the step: FMI 3.0.2 does not promise that the FMU sums
+        // the steps as the importer does (its time is its own: fmi3DoStep's lastSuccessfulTime).
+        assert!(
+            crate::outcome::same_time(v[0], i.time, h),
+            "{}: {} = {} after 3 steps of {h} from 0.25 ({}), expected {} within a tolerance relative to the step (FMI 3.0.2 §2.4.7.4: the independent variable is the time)",
             fmu.id,
             t.name,
-            if me { "ME" } else { "CS" }
+            v[0],
+            if me { "ME" } else { "CS" },
+            i.time
         );
     }
 }
 
+/// Verdict: lastSuccessfulTime is compared with t + h within a tolerance relative to the step
+/// (FMI 3.0.2 promises no bit identity of the FMU's time); a step that answers fmi3OK without
+/// early return and ends elsewhere fails. Refusing a bad step size, a wrong
+/// currentCommunicationPoint or NULL output pointers is detecting the importer's mistakes: a
+/// warning when not done (FMI 3.0.2 §2.2.3 requires fmi3Error only "when detecting" them).
 pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     cs_only(fmu);
     let mut i = Inst::cs(fmu);
@@ -868,10 +876,12 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
             "{}: step {n}: eventHandlingNeeded, terminateSimulation, earlyReturn = {flags:?}: expected all false (no event mode, no early return)",
             fmu.id
         );
-        assert_eq!(
-            last,
-            t + h,
-            "{}: step {n}: lastSuccessfulTime {last}, expected t + h = {}",
+        // FMI 3.0.2 §4.2.1 (fmi3DoStep): lastSuccessfulTime is the FMU's own time; without an
+        // early return it ends the step, up to rounding: compared within a tolerance relative
+        // to the step, never bit for bit.
+        assert!(
+            crate::outcome::same_time(last, t + h, h),
+            "{}: step {n}: lastSuccessfulTime {last}, expected t + h = {} within a tolerance relative to the step (FMI 3.0.2 §4.2.1: fmi3OK without earlyReturn completes the step)",
             fmu.id,
             t + h
         );
@@ -886,13 +896,13 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
         let s = i.call("fmi3DoStep(bad h)", |c| unsafe {
             (api.do_step)(c, t, bad, true, &mut a, &mut b, &mut c2, &mut last)
         });
-        assert_eq!(
-            s,
-            fmi3Error,
-            "{}: fmi3DoStep(t = {t}, h = {bad}): expected fmi3Error, got {}",
-            fmu.id,
-            status_name(s)
-        );
+        crate::outcome::warn_unless(s == fmi3Error, || {
+            format!(
+                "{}: fmi3DoStep(t = {t}, h = {bad}): expected fmi3Error, got {} (an importer's mistake not detected)",
+                fmu.id,
+                status_name(s)
+            )
+        });
     }
     // After refused steps the instance may be in an error state (FMI 3.0: after fmi3Error only
     // some calls are allowed); a fresh instance continues.
@@ -905,24 +915,31 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     let s = j.call("fmi3DoStep(wrong currentCommunicationPoint)", |c| unsafe {
         (api.do_step)(c, 1.0 + 10.0 * h, h, true, &mut a, &mut b, &mut c2, &mut last)
     });
-    assert_ne!(
-        s, fmi3OK,
-        "{}: fmi3DoStep at currentCommunicationPoint 1 + 10 h while the FMU is at 0 answered fmi3OK",
-        fmu.id
-    );
+    // FMI 3.0.2 asks no check of currentCommunicationPoint against the FMU's time (the
+    // Reference-FMUs' maintainers: "there is no requirement"): a warning.
+    crate::outcome::warn_unless(s != fmi3OK, || {
+        format!(
+            "{}: fmi3DoStep at currentCommunicationPoint 1 + 10 h while the FMU is at 0 answered fmi3OK (an importer's mistake not detected)",
+            fmu.id
+        )
+    });
     // null output pointers with valid step
     let mut k = Inst::cs(fmu);
     k.initialize();
-    // SAFETY: NULL output pointers on purpose: the FMU must not write through them; we never read them.
-    let s = k.call("fmi3DoStep(NULL outputs)", |c| unsafe {
-        (api.do_step)(c, 0.0, h, true, null_mut(), null_mut(), null_mut(), null_mut())
+    let s = crate::outcome::on_purpose(|| {
+        // SAFETY: NULL output pointers on purpose: the FMU must not write through them; we never
+        // read them.
+        k.call("fmi3DoStep(NULL outputs)", |c| unsafe {
+            (api.do_step)(c, 0.0, h, true, null_mut(), null_mut(), null_mut(), null_mut())
+        })
     });
-    assert!(
-        s == fmi3OK || s == fmi3Error,
-        "{}: fmi3DoStep with NULL output pointers: {} (expected fmi3OK or fmi3Error, no crash)",
-        fmu.id,
-        status_name(s)
-    );
+    crate::outcome::warn_unless(s == fmi3OK || s == fmi3Error, || {
+        format!(
+            "{}: fmi3DoStep with NULL output pointers (an importer's mistake): {} (expected fmi3OK or fmi3Error)",
+            fmu.id,
+            status_name(s)
+        )
+    });
     let _ = k.time;
     // A huge step: completed (lastSuccessfulTime = t + h) or discarded (fmi3Discard with a
     // message, t <= lastSuccessfulTime < t + h); then the outputs are readable and the
@@ -941,11 +958,12 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
         );
         info(format!("a step of {huge} s: the model ended the simulation at {last}"));
     } else if s == fmi3OK {
-        assert_eq!(
-            last, huge,
-            "{}: a completed step of {huge}: lastSuccessfulTime {last}",
-            fmu.id
-        );
+        crate::outcome::warn_unless(crate::outcome::same_time(last, huge, huge), || {
+            format!(
+                "{}: a completed step of {huge} (absurd input): lastSuccessfulTime {last}, not t + h within a tolerance relative to the step",
+                fmu.id
+            )
+        });
     } else if s == fmi3Discard {
         assert!(
             (0.0..huge).contains(&last),

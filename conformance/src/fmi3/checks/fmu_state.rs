@@ -123,12 +123,14 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             b.log_text()
         );
         b.time = t_saved;
-        assert_eq!(
-            b.snapshot(),
-            bytes,
-            "{}: the state serialized after restoring differs from the one restored",
-            fmu.id
-        );
+        // The bytes: a warning (FMI 3.0.2 promises nothing of them, and a state holding addresses
+        // differs on every serialization); what the restored instance does decides, below.
+        crate::outcome::warn_unless(b.snapshot() == bytes, || {
+            format!(
+                "{}: the state serialized after restoring differs from the one restored (addresses in it? it cannot be compared or cached)",
+                fmu.id
+            )
+        });
         let other: Vec<Vec<u64>> = (0..10)
             .map(|_| {
                 b.step(h);
@@ -174,6 +176,9 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
     }
 }
 
+/// Verdict: warned, never failed (but for a crash outside the damaged calls): a damaged buffer
+/// or another FMU's state is the importer's mistake, whose detection FMI 3.0.2 leaves to the FMU
+/// (§2.2.3: fmi3Error "when detecting illegal arguments"); a crash on one is a warning too.
 pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: &Fmu3) {
     let me = fmu.md.cs.is_none();
     if !fmu.can_snapshot(me) {
@@ -199,21 +204,27 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
         let mut st: fmi3FMUState = null_mut();
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let s = a.call(what, |c| unsafe {
-            (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), &mut st)
+        let s = crate::outcome::on_purpose(|| {
+            // SAFETY: a live instance; `b` is readable for the length passed; `st` a live local.
+            a.call(what, |c| unsafe {
+                (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), &mut st)
+            })
         });
         if s == fmi3OK {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let _ = a.call("free", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
         }
-        assert!(
-            s == fmi3Error || (!strict && s == fmi3OK),
-            "{}: fmi3DeserializeFMUState of {what}: expected fmi3Error{}, got {}",
-            fmu.id,
-            if strict { "" } else { " (or fmi3OK)" },
-            status_name(s)
-        );
+        // A damaged buffer is the importer's mistake (FMI 3.0.2 §2.2.6.4 defines deserializing
+        // what fmi3SerializeFMUState wrote): not detected, a warning.
+        crate::outcome::warn_unless(s == fmi3Error || (!strict && s == fmi3OK), || {
+            format!(
+                "{}: fmi3DeserializeFMUState of {what}: expected fmi3Error{}, got {} (an importer's mistake not detected)",
+                fmu.id,
+                if strict { "" } else { " (or fmi3OK)" },
+                status_name(s)
+            )
+        });
     };
     let try_bytes = |what: &str, b: &[u8]| attempt(what, b, true);
     let try_checksum = |what: &str, b: &[u8]| attempt(what, b, own);
@@ -231,20 +242,27 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     }
     // NULL buffer with a size
     let mut st: fmi3FMUState = null_mut();
-    // SAFETY: NULL bytes with a non-zero size on purpose: the FMU must refuse without reading them;
-    // `st` is a live local.
-    let s = a.call("fmi3DeserializeFMUState(NULL, n)", |c| unsafe {
-        (api.deserialize_fmu_state)(c, null(), bytes.len(), &mut st)
+    let s = crate::outcome::on_purpose(|| {
+        // SAFETY: NULL bytes with a non-zero size on purpose: the FMU must refuse without reading
+        // them; `st` is a live local.
+        a.call("fmi3DeserializeFMUState(NULL, n)", |c| unsafe {
+            (api.deserialize_fmu_state)(c, null(), bytes.len(), &mut st)
+        })
     });
-    assert_eq!(
-        s,
-        fmi3Error,
-        "{}: fmi3DeserializeFMUState(NULL, {}): {}",
-        fmu.id,
-        bytes.len(),
-        status_name(s)
-    );
-    assert_eq!(a.observe(), before, "{}: refused states changed the instance", fmu.id);
+    crate::outcome::warn_unless(s == fmi3Error, || {
+        format!(
+            "{}: fmi3DeserializeFMUState(NULL, {}): {} (an importer's mistake not detected)",
+            fmu.id,
+            bytes.len(),
+            status_name(s)
+        )
+    });
+    crate::outcome::warn_unless(a.observe() == before, || {
+        format!(
+            "{}: refused states changed the instance (robustness beyond FMI 3.0.2 §2.2.3)",
+            fmu.id
+        )
+    });
     // States of the other packaged FMUs (3.0 files next to this one, and the 2.0 file of the
     // same model one folder up, as `cargo fmu build` places them).
     let mut others = 0;
@@ -351,11 +369,12 @@ pub fn fmi3_a_state_serialized_here_restores_in_another_process_and_continues_id
             .into_iter()
             .map(|b| b as u8)
             .collect();
-        assert_eq!(
-            reserialized, bytes,
-            "{}: {what}: the other process re-serializes the state differently",
-            fmu.id
-        );
+        crate::outcome::warn_unless(reserialized == bytes, || {
+            format!(
+                "{}: {what}: the other process re-serializes the state to other bytes (FMI 3.0.2 promises nothing of them; judged by the steps below)",
+                fmu.id
+            )
+        });
         let got: Vec<Vec<u64>> = lines.map(parse_hex).collect();
         assert_eq!(
             got.len(),

@@ -268,24 +268,30 @@ fn run(fmu: &Fmu3, me: bool, steps: usize, h: f64) -> Vec<Vec<u64>> {
         .collect()
 }
 
-/// Runs `f`, which must be refused with fmi3Error, with a message; then the Float64 values
-/// must be what they were (`what` says what was passed).
+/// Runs `f`, an importer's mistake made on purpose, which should be refused with fmi3Error,
+/// with a message; then the Float64 values should be what they were (`what` says what was
+/// passed). Warnings, not failures: FMI 3.0.2 §2.2.3 says "When detecting illegal arguments or a
+/// function call not allowed in the current state according to the respective state machine,
+/// the FMU must return fmi3Error" and leaves the detection to the FMU; after fmi3Error "the
+/// simulation cannot be continued" with the instance, so what it shows then is beyond the
+/// standard too. A crash in `f` is a warning ([`crate::outcome::on_purpose`]).
 fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) {
     let before = inst.observe();
-    let s = inst.call(what, f);
-    assert_eq!(
-        s,
-        fmi3Error,
-        "{}: {what}: expected fmi3Error, got {}",
-        inst.fmu.id,
-        status_name(s)
-    );
-    assert_eq!(
-        inst.observe(),
-        before,
-        "{}: {what} was refused but changed values",
-        inst.fmu.id
-    );
+    let s = crate::outcome::on_purpose(|| inst.call(what, f));
+    if s != fmi3Error {
+        crate::outcome::warn(format!(
+            "{}: {what}: expected fmi3Error, got {} (an importer's mistake not detected)",
+            inst.fmu.id,
+            status_name(s)
+        ));
+        return;
+    }
+    crate::outcome::warn_unless(inst.observe() == before, || {
+        format!(
+            "{}: {what} was refused but changed values (robustness beyond FMI 3.0.2 §2.2.3, which leaves the instance undefined after fmi3Error)",
+            inst.fmu.id
+        )
+    });
 }
 
 /// The scalar variables of element `ty` that have a start value in the description (FMI 3.0,

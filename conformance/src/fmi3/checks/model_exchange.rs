@@ -146,10 +146,14 @@ pub fn fmi3_model_exchange_an_explicit_euler_run_follows_the_co_simulation_run(f
         let t_vr = fmu.md.independent().map(|v| v.vr);
         for (k, vr) in vrs.iter().enumerate() {
             if Some(*vr) == t_vr {
-                assert_eq!(
-                    last[k], cs_last[k],
+                // The importer sums the ME steps, the FMU its own: equal within a tolerance
+                // relative to the step, not bit for bit (FMI 3.0.2 does not promise that).
+                assert!(
+                    crate::outcome::same_time(last[k], cs_last[k], h),
                     "{}: time after {steps} steps: ME {} CS {}",
-                    fmu.id, last[k], cs_last[k]
+                    fmu.id,
+                    last[k],
+                    cs_last[k]
                 );
             }
         }
@@ -410,16 +414,23 @@ fn cs_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         let (s, [event, terminate, early], last) = i.do_step(step);
         assert_eq!(s, fmi3OK, "{id}: fmi3DoStep({t}, {step}): {}", i.log_text());
         if event == 0 {
-            assert_eq!((early, last), (0, t + step), "{id}: a step from {t} without an event");
-        } else {
             assert!(
-                last >= t && last <= t + step,
+                early == 0 && crate::outcome::same_time(last, t + step, step),
+                "{id}: a step from {t} without an event: earlyReturn {early}, lastSuccessfulTime {last}, expected t + h = {} (FMI 3.0.2 §4.2.1)",
+                t + step
+            );
+        } else {
+            // Within the step, its ends within a tolerance relative to the step (FMI 3.0.2
+            // promises no bit identity of the FMU's time).
+            let at_end = crate::outcome::same_time(last, t + step, step);
+            assert!(
+                (last >= t && last <= t + step) || at_end,
                 "{id}: an event at lastSuccessfulTime {last}, outside the step from {t} by {step}"
             );
-            assert_eq!(
-                early == 1,
-                last < t + step,
-                "{id}: earlyReturn {early} with lastSuccessfulTime {last}"
+            assert!(
+                early == 1 || at_end,
+                "{id}: earlyReturn {early} with lastSuccessfulTime {last} before the end of the step {} (FMI 3.0.2 §4.2.1)",
+                t + step
             );
             i.time = last;
             handed += 1;

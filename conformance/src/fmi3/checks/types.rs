@@ -319,6 +319,11 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
 /// (an element without `dependencies` depends on every known: the inputs and continuous states
 /// at run time; the inputs, the independent variable and the initial = exact variables in
 /// Initialization Mode).
+/// Verdict: skipped where the FMU does not declare providesPerElementDependencies and refuses
+/// the functions (FMI 3.0.2 §2.2.11 offers fmi3GetNumberOfVariableDependencies and
+/// fmi3GetVariableDependencies with that capability only); where it answers, its answers must
+/// equal its `<ModelStructure>` (a failure otherwise: the functions give "the dependency
+/// information ... of the model structure").
 pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
     let md = &fmu.md;
     let id = &fmu.id;
@@ -344,6 +349,7 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
         .collect();
     let mut n = 0;
     let me = md.cs.is_none();
+    let declared = md.cs.iter().chain(&md.me).any(|i| i.provides_per_element_dependencies);
     for (state, unknowns, knowns) in [
         (
             State::InitializationMode,
@@ -373,6 +379,15 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
             let s = inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
                 (api.get_number_of_variable_dependencies)(c, u.vr, &mut count)
             });
+            // FMI 3.0.2 offers these functions only where the FMU declares
+            // providesPerElementDependencies: without it, a refusal is the FMU's right (skipped);
+            // an FMU that answers anyway is held to its answers.
+            if s != fmi3OK && !declared {
+                crate::outcome::skip_not_declared(format!(
+                    "providesPerElementDependencies (fmi3GetNumberOfVariableDependencies answered {})",
+                    crate::fmi3::types::status_name(s)
+                ));
+            }
             assert_eq!(
                 s,
                 fmi3OK,
