@@ -8,19 +8,27 @@ use std::sync::Mutex;
 /// Held by each test for its whole run: the tests of a binary run on threads of one process.
 static ALONE: Mutex<()> = Mutex::new(());
 
-/// The measuring loop itself, on cycles that leak 64 bytes each: refused, whatever the noise.
+/// The measuring loop itself, on cycles that leak 64 bytes each: warned (issue 51: a leak is a
+/// warning, a failure under --strict), whatever the noise.
 #[test]
-fn the_measuring_loop_fails_a_cycle_that_leaks_64_bytes() {
+fn the_measuring_loop_warns_of_a_cycle_that_leaks_64_bytes() {
+    use fmi_conformance::outcome::{Outcome, capture};
     let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());
-    let failed = std::panic::catch_unwind(|| {
+    let (outcome, findings) = capture(|| {
         fmi_conformance::checks::memory::cycles_leave_memory_flat("Leaky", |_| {
             // Touched, so that the pages are resident.
             std::hint::black_box(Box::leak(vec![1u8; 64].into_boxed_slice()));
         })
     });
-    let message = failed.expect_err("a 64-byte leak per cycle passed the memory check");
-    let text = message.downcast_ref::<String>().cloned().unwrap_or_default();
-    assert!(text.contains("Leaky: RSS grew by"), "{text}");
+    assert!(
+        matches!(outcome, Outcome::Warn(_)),
+        "a 64-byte leak per cycle: {outcome:?}"
+    );
+    assert!(
+        findings.warnings.iter().any(|w| w.contains("Leaky: RSS grew by")),
+        "{findings:?}"
+    );
+    assert!(matches!(outcome.strict(), Outcome::Fail(_)));
 }
 
 /// ... and passes cycles whose process grows once (here 1 MiB touched at one cycle of the
@@ -29,10 +37,13 @@ fn the_measuring_loop_fails_a_cycle_that_leaks_64_bytes() {
 fn the_measuring_loop_passes_a_one_time_growth() {
     let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());
     let mut n = 0usize;
-    fmi_conformance::checks::memory::cycles_leave_memory_flat("OnceGrown", |_| {
-        n += 1;
-        if n == 5_000 {
-            std::hint::black_box(Box::leak(vec![1u8; 1 << 20].into_boxed_slice()));
-        }
+    let (outcome, findings) = fmi_conformance::outcome::capture(|| {
+        fmi_conformance::checks::memory::cycles_leave_memory_flat("OnceGrown", |_| {
+            n += 1;
+            if n == 5_000 {
+                std::hint::black_box(Box::leak(vec![1u8; 1 << 20].into_boxed_slice()));
+            }
+        })
     });
+    assert_eq!(outcome, fmi_conformance::outcome::Outcome::Pass, "{findings:?}");
 }
