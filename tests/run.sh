@@ -142,6 +142,30 @@ nf=0
 while IFS=$'\t' read -r name p f; do record "$name" "$p" "$f"; nf=$((nf + f)); done < <(cat "$logs/independent.tsv" 2>/dev/null)
 [ "$st" -eq 0 ] || [ "$nf" -ne 0 ] || record "independent importers (exit $st)" 0 1
 
+echo "== cargo fmu check (default verdicts) on each Reference FMU of ../shared/independent/reference-fmus"
+# Issue 51: another exporter's FMUs, as a vendor runs the checker: each run must reach its end with
+# a report (its failed verdicts are the Reference FMUs' own defects, each naming the standard's
+# section) and a JUnit file that parses; 100 random sequences per FMU keep the step short.
+ref_dir=../shared/independent/reference-fmus
+n=0
+nf=0
+for fmu in "$ref_dir"/2.0/*.fmu "$ref_dir"/3.0/*.fmu; do
+  [ -e "$fmu" ] || continue
+  v=$(basename "$(dirname "$fmu")")
+  out="$logs/ref-check-$v-$(basename "$fmu" .fmu)"
+  target/release/cargo-fmu fmu check "$fmu" --random-sequences 100 --junit "$out.xml" >"$out.log" 2>&1 || true
+  if grep -qE '^[0-9]+ passed, [0-9]+ failed, [0-9]+ warned, [0-9]+ skipped$' "$out.log" &&
+    python -c 'import sys, xml.etree.ElementTree as E; E.parse(sys.argv[1])' "$out.xml"; then
+    n=$((n + 1))
+    echo "$v/$(basename "$fmu"): $(tail -n 1 "$out.log")"
+  else
+    nf=$((nf + 1))
+    echo "$v/$(basename "$fmu"): no report"
+    tail -n 20 "$out.log"
+  fi
+done
+record "cargo fmu check Reference FMUs" "$n" "$nf"
+
 echo "== Rust tests (cargo test --workspace --no-fail-fast)"
 # --no-fail-fast: a failing test binary does not stop the ones after it (without it one failure
 # hid some 300 tests, issue 53). A binary that starts but prints no "test result:" line (it

@@ -34,6 +34,7 @@ pub mod outcome;
 pub mod reference_results;
 pub mod registry;
 pub mod replay;
+pub mod report;
 pub mod runner;
 pub mod standard;
 pub mod state;

@@ -251,3 +251,114 @@ fn every_fmi3_check_passes_on_a_packaged_fmi3_fmu_checked_as_another_exporters()
         .archive;
     every_check_passes_as_another_exporters(fmu, checks_of(Version::Fmi3).count());
 }
+
+/// What a JUnit file holds, read back with an XML parser: test suites, test cases, and the test
+/// cases with a `<failure>`, a `<skipped>` and a `verdict` property `warned`.
+#[derive(Debug, Default, PartialEq)]
+struct JUnit {
+    suites: usize,
+    cases: usize,
+    failures: usize,
+    skipped: usize,
+    warned: usize,
+    /// The `tests`, `failures` and `skipped` attributes of `<testsuites>`.
+    declared: (usize, usize, usize),
+}
+
+fn read_junit(path: &Path) -> JUnit {
+    use quick_xml::events::Event;
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut reader = quick_xml::Reader::from_str(&text);
+    let mut j = JUnit::default();
+    let attr = |e: &quick_xml::events::BytesStart, name: &str| -> String {
+        e.attributes()
+            .map(|a| a.expect("a well-formed attribute"))
+            .find(|a| a.key.as_ref() == name.as_bytes())
+            .map(|a| a.unescape_value().expect("an escaped value").into_owned())
+            .unwrap_or_default()
+    };
+    loop {
+        match reader
+            .read_event()
+            .unwrap_or_else(|e| panic!("{}: not XML: {e}", path.display()))
+        {
+            Event::Start(e) | Event::Empty(e) => match e.name().as_ref() {
+                b"testsuites" => {
+                    let n = |k| attr(&e, k).parse::<usize>().unwrap();
+                    j.declared = (n("tests"), n("failures"), n("skipped"));
+                }
+                b"testsuite" => j.suites += 1,
+                b"testcase" => j.cases += 1,
+                b"failure" => j.failures += 1,
+                b"skipped" => j.skipped += 1,
+                b"property" if attr(&e, "name") == "verdict" && attr(&e, "value") == "warned" => j.warned += 1,
+                _ => {}
+            },
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    j
+}
+
+/// The counts of the report's last line, `N passed, N failed, N warned, N skipped`.
+fn totals(stdout: &str) -> [usize; 4] {
+    let line = stdout.trim_end().lines().last().unwrap_or_default();
+    let n: Vec<usize> = line
+        .split(", ")
+        .map(|part| part.split(' ').next().unwrap().parse().unwrap())
+        .collect();
+    n.try_into().unwrap_or_else(|_| panic!("not a totals line: {line}"))
+}
+
+/// Issue 51: `--junit FILE` and `--json FILE`. A run of the state-machine checks on a packaged
+/// FMU (all pass) and one of a check on an FMU that segfaults (it fails): each JUnit file, read
+/// back with an XML parser, has a test suite per group and a test case per check, and as many
+/// failures, skips and warned cases as the report's last line says.
+#[test]
+fn the_junit_file_of_a_run_reads_back_with_the_reports_counts() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let good = fmi_conformance::all::<fmi_conformance::Fmu>()
+        .first()
+        .expect("a packaged FMU")
+        .archive
+        .clone();
+    let bad = bad_fmu(dir.path(), 1);
+    for (fmu, filter, groups) in [(&good, "state machine", 1), (&bad, "terminate_twice", 1)] {
+        let (xml, json) = (dir.path().join("junit.xml"), dir.path().join("report.json"));
+        let out = Command::new(env!("CARGO_BIN_EXE_fmu-check"))
+            .arg(fmu)
+            .args(["--filter", filter, "--junit"])
+            .arg(&xml)
+            .arg("--json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let [passed, failed, warned, skipped] = totals(&stdout);
+        let j = read_junit(&xml);
+        let cases = passed + failed + warned + skipped;
+        assert!(cases > 0, "{stdout}");
+        assert_eq!(
+            j,
+            JUnit {
+                suites: groups,
+                cases,
+                failures: failed,
+                skipped,
+                warned,
+                declared: (cases, failed, skipped),
+            },
+            "{}:\n{stdout}",
+            std::fs::read_to_string(&xml).unwrap()
+        );
+        let json = std::fs::read_to_string(&json).unwrap();
+        assert!(
+            json.contains(&format!(
+                "\"totals\": {{\"passed\": {passed}, \"failed\": {failed}, \"warned\": {warned}, \"skipped\": {skipped}}}"
+            )),
+            "{json}"
+        );
+        assert_eq!(json.matches("\"verdict\": ").count(), cases, "{json}");
+    }
+}

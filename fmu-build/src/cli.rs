@@ -105,6 +105,12 @@ enum Cmd {
         /// temp folder, fmu-check-reproducers/); `cargo fmu replay` runs it again.
         #[arg(long, value_name = "DIR")]
         reproducers: Option<PathBuf>,
+        /// Also write the report as JUnit XML (a test suite per group, a test case per check).
+        #[arg(long, value_name = "FILE")]
+        junit: Option<PathBuf>,
+        /// Also write the report as JSON.
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
     },
     /// Replay a reproducer (the calls of a failing random call sequence, one a line, as `cargo fmu
     /// check` writes them) on an FMU, in this process (so that it runs under a debugger): prints
@@ -275,14 +281,20 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             list,
             strict,
             reproducers,
+            junit,
+            json,
         } => check(
             fmu.as_deref(),
-            filter,
-            timeout,
-            random_sequences,
-            list,
-            strict,
-            reproducers,
+            CheckOptions {
+                filter,
+                timeout,
+                random_sequences,
+                list,
+                strict,
+                reproducers,
+                junit,
+                json,
+            },
         ),
         Cmd::Replay { file, fmu } => replay(&file, &fmu),
         Cmd::Info { fmu } => {
@@ -344,15 +356,29 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
     }
 }
 
-fn check(
-    fmu: Option<&Path>,
+/// The options of `cargo fmu check`.
+struct CheckOptions {
     filter: Option<String>,
     timeout: Option<f64>,
     random_sequences: u32,
     list: bool,
     strict: bool,
     reproducers: Option<PathBuf>,
-) -> Result<(), String> {
+    junit: Option<PathBuf>,
+    json: Option<PathBuf>,
+}
+
+fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
+    let CheckOptions {
+        filter,
+        timeout,
+        random_sequences,
+        list,
+        strict,
+        reproducers,
+        junit,
+        json,
+    } = o;
     use fmi_conformance::runner::{RunOptions, run_with};
     if list {
         for c in fmi_conformance::checks::all_checks() {
@@ -392,6 +418,7 @@ fn check(
     // Progress on stderr while it runs; the report on stdout.
     let report = run_with(fmu, &opts, &mut |c| eprintln!("{}", c.line()));
     println!("{report}");
+    fmi_conformance::report::write_files(&report, junit.as_deref(), json.as_deref())?;
     if report.success() { Ok(()) } else { Err(String::new()) }
 }
 

@@ -6,6 +6,8 @@
 //! `--reproducers DIR`: where failing random sequences leave their reproducers.
 //! `fmu-check --replay FILE X.fmu` replays a reproducer in this process (as `cargo fmu replay`,
 //! [`fmi_conformance::replay`]): exits 1 when the FMU does not answer as the file expects.
+//! `--junit FILE` and `--json FILE` write the report for CI systems too
+//! ([`fmi_conformance::report`]).
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi_conformance::runner::worker_main`]).
 
@@ -15,7 +17,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] | --list | --replay FILE X.fmu";
+const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] [--junit FILE] [--json FILE] | --list | --replay FILE X.fmu";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -27,6 +29,8 @@ struct Args {
     strict: bool,
     reproducers: Option<PathBuf>,
     replay: Option<PathBuf>,
+    junit: Option<PathBuf>,
+    json: Option<PathBuf>,
 }
 
 fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -40,6 +44,8 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         strict: false,
         reproducers: None,
         replay: None,
+        junit: None,
+        json: None,
     };
     let mut it = args;
     while let Some(arg) = it.next() {
@@ -63,6 +69,8 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
             "--strict" => a.strict = true,
             "--reproducers" => a.reproducers = Some(PathBuf::from(value("--reproducers")?)),
             "--replay" => a.replay = Some(PathBuf::from(value("--replay")?)),
+            "--junit" => a.junit = Some(PathBuf::from(value("--junit")?)),
+            "--json" => a.json = Some(PathBuf::from(value("--json")?)),
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
@@ -139,6 +147,10 @@ fn main() -> ExitCode {
     // Progress on stderr while it runs; the report on stdout.
     let report = run_with(&fmu, &opts, &mut |c| eprintln!("{}", c.line()));
     println!("{report}");
+    if let Err(e) = fmi_conformance::report::write_files(&report, a.junit.as_deref(), a.json.as_deref()) {
+        eprintln!("fmu-check: {e}");
+        return ExitCode::from(2);
+    }
     if report.success() {
         ExitCode::SUCCESS
     } else {
