@@ -845,11 +845,11 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
         // the steps as the importer does (its time is its own: fmi3DoStep's lastSuccessfulTime).
         assert!(
             crate::outcome::same_time(v[0], i.time, h),
-            "{}: {} = {} after 3 steps of {h} from 0.25 ({}), expected {} within a tolerance relative to the step (FMI 3.0.2 §2.4.7.4: the independent variable is the time)",
+            "{}: {} after 3 steps of {h} from 0.25 ({}): {}, expected {} within a tolerance relative to the step (FMI 3.0.2 §2.4.7.4: the independent variable is the time)",
             fmu.id,
             t.name,
-            v[0],
             if me { "ME" } else { "CS" },
+            v[0],
             i.time
         );
     }
