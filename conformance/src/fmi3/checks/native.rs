@@ -6,6 +6,10 @@ use super::*;
 // ---------------------------------------------------------------------------------------------
 // Native: symbols
 
+/// Verdict: every function of fmi3Functions.h must be exported (a failure otherwise: FMI 3.0.2
+/// §2.3 has the binary export all of them); other symbols, a partial FMI 2.0 set and fmi3 names the
+/// standard does not define are portability and hygiene advice, warnings (they can clash with the
+/// importer's or another FMU's symbols).
 pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
     let so = fmu.so.to_str().unwrap();
     let out = match std::process::Command::new("nm")
@@ -27,20 +31,22 @@ pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
         .iter()
         .filter(|n| !n.starts_with("fmi3") && !n.starts_with("fmi2") && !linker.contains(n))
         .collect();
-    assert!(
-        foreign.is_empty(),
-        "{}: exports symbols that are not FMI functions: {foreign:?}",
-        fmu.id
-    );
+    crate::outcome::warn_unless(foreign.is_empty(), || {
+        format!(
+            "{}: exports symbols that are not FMI functions: {foreign:?} (they can clash with the importer's or another FMU's symbols)",
+            fmu.id
+        )
+    });
     // A binary may implement FMI 2.0 too (rustfmu's `export_fmu!` binaries serve both
     // versions): then its co-simulation functions (34), with model exchange 44.
     let fmi2 = names.iter().filter(|n| n.starts_with("fmi2")).count();
-    assert!(
-        [0, 34, 44].contains(&fmi2),
-        "{}: exports {fmi2} fmi2 names: FMI 2.0 whole (34 functions of co-simulation, 44 with model \
-         exchange) or none",
-        fmu.id
-    );
+    crate::outcome::warn_unless([0, 34, 44].contains(&fmi2), || {
+        format!(
+            "{}: exports {fmi2} fmi2 names: FMI 2.0 whole (34 functions of co-simulation, 44 with model \
+             exchange) or none",
+            fmu.id
+        )
+    });
     let missing: Vec<&&str> = crate::fmi3::api::FUNCTIONS
         .iter()
         .filter(|f| !names.contains(f))
@@ -54,11 +60,12 @@ pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
         .iter()
         .filter(|n| n.starts_with("fmi3") && !crate::fmi3::api::FUNCTIONS.contains(n))
         .collect();
-    assert!(
-        extra.is_empty(),
-        "{}: exports fmi3 symbols the standard does not define: {extra:?}",
-        fmu.id
-    );
+    crate::outcome::warn_unless(extra.is_empty(), || {
+        format!(
+            "{}: exports fmi3 symbols the standard does not define: {extra:?}",
+            fmu.id
+        )
+    });
     info(format!(
         "{} fmi3 functions{}, nothing else",
         crate::fmi3::api::FUNCTIONS.len(),
