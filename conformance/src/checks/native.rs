@@ -209,12 +209,16 @@ pub fn a_c_host_runs_every_fmu_with_the_same_results_as_the_rust_importer(fmu: &
     compare_me(fmu, &stdout);
 }
 
+/// Verdict: memory errors (invalid reads and writes, uses of uninitialized values, bad frees) fail:
+/// they are undefined behaviour inside the importer's process, whatever the call. Leaks are
+/// warnings ([`warn_of_leaks`]).
 pub fn a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck(fmu: &Fmu) {
     let mut args = vec![
         "--error-exitcode=1".to_string(),
         "--leak-check=full".into(),
         "--show-leak-kinds=definite,indirect,possible".into(),
-        "--errors-for-leak-kinds=definite,indirect,possible".into(),
+        // Leaks do not set the exit code: they are warnings (warn_of_leaks).
+        "--errors-for-leak-kinds=none".into(),
         "--quiet".into(),
         host(fmu).to_string_lossy().into_owned(),
     ];
@@ -232,6 +236,7 @@ pub fn a_whole_run_of_every_fmu_is_clean_under_valgrind_memcheck(fmu: &Fmu) {
         fmu.id,
         String::from_utf8_lossy(&out.stderr)
     );
+    warn_of_leaks(&fmu.id, &String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(
         parse_final(&stdout),
@@ -334,5 +339,25 @@ pub fn the_binary_needs_only_the_c_runtime(fmu: &Fmu) {
                 fmu.id
             )
         });
+    }
+}
+
+/// Warns of the leaks valgrind's memcheck reported in `stderr` (a run with `--leak-check=full`
+/// and `--errors-for-leak-kinds=none`). A warning, not a failure: FMI 2.0.5 §2.1.5 and FMI 3.0.2
+/// §2.3.1 have fmi2FreeInstance / fmi3FreeInstance free the instance's resources, but a leak
+/// breaks no call; it matters to an importer that instantiates many times.
+pub fn warn_of_leaks(id: &str, stderr: &str) {
+    let lost: Vec<&str> = stderr
+        .lines()
+        .filter(|l| {
+            l.contains("are definitely lost") || l.contains("are indirectly lost") || l.contains("are possibly lost")
+        })
+        .collect();
+    if !lost.is_empty() {
+        crate::outcome::warn(format!(
+            "{id}: valgrind memcheck found leaks ({} records):\n{}",
+            lost.len(),
+            stderr.trim_end()
+        ));
     }
 }

@@ -80,6 +80,8 @@ pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
 // ---------------------------------------------------------------------------------------------
 // The C host
 
+/// Verdict: memory errors fail (undefined behaviour in the importer's process); leaks are
+/// warnings ([`crate::checks::native::warn_of_leaks`]).
 pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(fmu: &Fmu3) {
     cs_only(fmu);
     let src = fmu.scratch.join("host3.c");
@@ -214,7 +216,8 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
             "--error-exitcode=1",
             "--leak-check=full",
             "--show-leak-kinds=definite,indirect,possible",
-            "--errors-for-leak-kinds=definite,indirect,possible",
+            // Leaks do not set the exit code: they are warnings (checks::native::warn_of_leaks).
+            "--errors-for-leak-kinds=none",
             "--quiet",
         ])
         .arg(&exe)
@@ -228,6 +231,7 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
         String::from_utf8_lossy(&out.stderr),
         String::from_utf8_lossy(&out.stdout)
     );
+    crate::checks::native::warn_of_leaks(&fmu.id, &String::from_utf8_lossy(&out.stderr));
     assert_eq!(
         String::from_utf8_lossy(&out.stdout),
         stdout,
