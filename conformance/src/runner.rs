@@ -914,7 +914,14 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
                 }
             }
         }
-        ["state-child", fmu, file, steps, h] => match state_child(Path::new(fmu), &tmp, file, steps, h) {
+        ["state-child", fmu, file, steps, h] => match state_child(Path::new(fmu), &tmp, file, steps, h, None) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("state-child: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        ["state-child", fmu, file, steps, h, t] => match state_child(Path::new(fmu), &tmp, file, steps, h, Some(t)) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("state-child: {e}");
@@ -1050,8 +1057,12 @@ fn state_child3(
 /// Loads the FMU afresh, restores the serialized state in `file`, prints the re-serialized
 /// state as hex on the first line, then one line of observations (hex bit patterns) after each
 /// of `steps` steps of `h`.
-fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str) -> Result<(), String> {
+fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str, t: Option<&str>) -> Result<(), String> {
     use crate::fmi2::fmi2OK;
+    // The state's time as the parent knows it (else the FMU's fmi2LastSuccessfulTime): the
+    // communication point of the next step, so that a wrong status answer is not taken for a
+    // state that did not restore.
+    let t: Option<f64> = t.map(|t| t.parse().map_err(|e| format!("time: {e}"))).transpose()?;
     let steps: usize = steps.parse().map_err(|e| format!("steps: {e}"))?;
     let h: f64 = h.parse().map_err(|e| format!("step size: {e}"))?;
     let bytes = std::fs::read(file).map_err(|e| format!("{file}: {e}"))?;
@@ -1059,8 +1070,7 @@ fn state_child(fmu: &Path, tmp: &Path, file: &str, steps: &str, h: &str) -> Resu
     let (outcome, _) = outcome::capture(|| {
         let mut inst = crate::Instance::new(&fmu);
         inst.restore(&bytes);
-        let (_, t) = inst.last_successful_time();
-        inst.time = t;
+        inst.time = t.unwrap_or_else(|| inst.last_successful_time().1);
         println!("{}", hex(inst.snapshot().into_iter().map(u64::from)));
         for _ in 0..steps {
             let s = inst.step(h);

@@ -178,11 +178,10 @@ pub fn a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_t
                     e.category == "logStatusDiscard"
                         || !convention(fmu, "a discarded step's message under category logStatusDiscard")
                 };
-                assert!(
-                    log.iter().any(|e| e.status == fmi2Discard && category(e)),
-                    "{}: fmi2Discard without a message: {log:?}",
-                    fmu.id
-                );
+                // FMI 2.0.5 asks no message with fmi2Discard ("should"): a warning.
+                crate::outcome::warn_unless(log.iter().any(|e| e.status == fmi2Discard && category(e)), || {
+                    format!("{}: fmi2Discard without a message: {log:?}", fmu.id)
+                });
                 if fmu.own_state_format() {
                     assert_eq!(inst.machine_state(), State::StepFailed);
                 }
