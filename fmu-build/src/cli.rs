@@ -872,14 +872,34 @@ fn validate_all(fmus: &[PathBuf], python: Option<&Path>, built: bool) -> Result<
     if fmus.is_empty() {
         return Err("no FMU file given".into());
     }
-    let mut failures = Vec::new();
-    for f in fmus {
-        let mut problems = crate::validate::validate(f);
-        if problems.is_empty()
-            && let Some(py) = python
-        {
-            problems.extend(crate::validate::fmpy_validate(py, f));
+    // Each file's checks (smoke runs in child processes, fmpy's validator) side by side, as many as
+    // the machine has cores; reported in the order given.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let found: std::sync::Mutex<Vec<(usize, Vec<String>)>> = std::sync::Mutex::new(Vec::new());
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(fmus.len());
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let Some(f) = fmus.get(i) else { break };
+                    let mut problems = crate::validate::validate(f);
+                    if problems.is_empty()
+                        && let Some(py) = python
+                    {
+                        problems.extend(crate::validate::fmpy_validate(py, f));
+                    }
+                    found.lock().unwrap_or_else(|e| e.into_inner()).push((i, problems));
+                }
+            });
         }
+    });
+    let mut found = found.into_inner().unwrap_or_else(|e| e.into_inner());
+    found.sort_by_key(|(i, _)| *i);
+    let mut failures = Vec::new();
+    for (f, (_, problems)) in fmus.iter().zip(found) {
         if problems.is_empty() {
             eprintln!("fmu: {} is valid", f.display());
             // What the Linux binaries need of the system: the oldest glibc they load with.
