@@ -142,29 +142,6 @@ nf=0
 while IFS=$'\t' read -r name p f; do record "$name" "$p" "$f"; nf=$((nf + f)); done < <(cat "$logs/independent.tsv" 2>/dev/null)
 [ "$st" -eq 0 ] || [ "$nf" -ne 0 ] || record "independent importers (exit $st)" 0 1
 
-echo "== cargo fmu check (default verdicts) on each Reference FMU of ../shared/independent/reference-fmus"
-# Issue 51: another exporter's FMUs, as a vendor runs the checker: each run must reach its end with
-# a report (its failed verdicts are the Reference FMUs' own defects, each naming the standard's
-# section) and a JUnit file that parses; 100 random sequences per FMU keep the step short.
-ref_dir=../shared/independent/reference-fmus
-n=0
-nf=0
-for fmu in "$ref_dir"/2.0/*.fmu "$ref_dir"/3.0/*.fmu; do
-  [ -e "$fmu" ] || continue
-  v=$(basename "$(dirname "$fmu")")
-  out="$logs/ref-check-$v-$(basename "$fmu" .fmu)"
-  target/release/cargo-fmu fmu check "$fmu" --random-sequences 100 --junit "$out.xml" >"$out.log" 2>&1 || true
-  if grep -qE '^[0-9]+ passed, [0-9]+ failed, [0-9]+ warned, [0-9]+ skipped$' "$out.log" &&
-    python -c 'import sys, xml.etree.ElementTree as E; E.parse(sys.argv[1])' "$out.xml"; then
-    n=$((n + 1))
-    echo "$v/$(basename "$fmu"): $(tail -n 1 "$out.log")"
-  else
-    nf=$((nf + 1))
-    echo "$v/$(basename "$fmu"): no report"
-    tail -n 20 "$out.log"
-  fi
-done
-record "cargo fmu check Reference FMUs" "$n" "$nf"
 
 echo "== Rust tests (cargo test --workspace --no-fail-fast)"
 # --no-fail-fast: a failing test binary does not stop the ones after it (without it one failure
@@ -184,6 +161,31 @@ if [ "$unfinished" -gt 0 ]; then f=$((f + unfinished)); fi
 [ "$rust_status" -eq 0 ] || f=$((f > 0 ? f : 1))
 record "Rust tests ($binaries binaries, $unfinished unfinished)" "${p:-0}" "${f:-1}"
 
+# Issue 51: cargo fmu check (default verdicts) on each Reference FMU of ../shared/independent/,
+# another exporter's FMUs, as a vendor runs the checker: each run must reach its end with a report
+# (its failed verdicts are the Reference FMUs' own defects, each naming the standard's section) and
+# a JUnit file that parses; 100 random sequences per FMU keep it short. It runs beside the Python
+# tests (after clippy; about 5 minutes of one core) and writes its lines and counts to $logs/ref*.
+reference_checks() {
+  local ref_dir=../shared/independent/reference-fmus n=0 nf=0 fmu v out
+  for fmu in "$ref_dir"/2.0/*.fmu "$ref_dir"/3.0/*.fmu; do
+    [ -e "$fmu" ] || continue
+    v=$(basename "$(dirname "$fmu")")
+    out="$logs/ref-check-$v-$(basename "$fmu" .fmu)"
+    target/release/cargo-fmu fmu check "$fmu" --random-sequences 100 --junit "$out.xml" >"$out.log" 2>&1 || true
+    if grep -qE '^[0-9]+ passed, [0-9]+ failed, [0-9]+ warned, [0-9]+ skipped$' "$out.log" &&
+      python -c 'import sys, xml.etree.ElementTree as E; E.parse(sys.argv[1])' "$out.xml"; then
+      n=$((n + 1))
+      echo "$v/$(basename "$fmu"): $(tail -n 1 "$out.log")"
+    else
+      nf=$((nf + 1))
+      echo "$v/$(basename "$fmu"): no report"
+      tail -n 20 "$out.log"
+    fi
+  done
+  echo "$n $nf" >"$logs/ref.counts"
+}
+
 # Clippy, and the conformance suite's fmu-check cross-compiled for Windows (test_windows.py's
 # fixture then finds it built), run beside the Python tests: those run one simulation at a time,
 # on one core of two most of the time, and these are builds that use both (about 130 s and 45 s
@@ -200,6 +202,9 @@ record "Rust tests ($binaries binaries, $unfinished unfinished)" "${p:-0}" "${f:
   echo $? >"$logs/doc.rc"
   nice -n 19 cargo build --release --target x86_64-pc-windows-gnu -p fmi-conformance --bin fmu-check \
     >"$logs/fmu-check-exe.log" 2>&1 || true
+  started=$SECONDS
+  reference_checks >"$logs/ref.log" 2>&1
+  echo $((SECONDS - started)) >"$logs/ref.seconds"
 ) &
 beside=$!
 
@@ -222,6 +227,12 @@ if [ "$(cat "$logs/clippy.rc")" = 0 ]; then record "cargo clippy -D warnings" 1 
 echo "== cargo doc (RUSTDOCFLAGS=-D warnings) of rustfmu and rustfmu-derive"
 cat "$logs/doc.log"
 if [ "$(cat "$logs/doc.rc")" = 0 ]; then record "cargo doc -D warnings" 1 0; else record "cargo doc -D warnings" 0 1; fi
+
+echo "== cargo fmu check (default verdicts) on each Reference FMU (ran beside the Python tests: $(cat "$logs/ref.seconds" 2>/dev/null) s)"
+cat "$logs/ref.log"
+read -r n nf < <(cat "$logs/ref.counts" 2>/dev/null || echo "0 1")
+suite_started=$((SECONDS - $(cat "$logs/ref.seconds" 2>/dev/null || echo 0)))
+record "cargo fmu check Reference FMUs" "$n" "$nf"
 
 echo "== Windows binaries under wine (C hosts against Linux, the conformance suite's fmu-check.exe), aarch64 under qemu"
 rm -f target/wine-test/report.txt
