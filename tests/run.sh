@@ -43,7 +43,6 @@ step() {
 echo "setup: $((SECONDS - run_started)) s"
 suite_started=$SECONDS
 step "cargo fmt --check" cargo fmt --all --check
-echo "== Rust build: every binary and test binary of the workspace, once"
 # One cargo invocation over the whole workspace builds everything the later steps run
 # (cargo-fmu, the runner, the benchmarks' binaries, every test binary). Cargo resolves features
 # per invocation: `cargo run -p fmu-build` or `cargo test -p X` would build the shared
