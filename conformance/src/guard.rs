@@ -79,9 +79,9 @@ impl<T: Plain> Guarded<T> {
     /// after the array, how many bytes changed).
     fn overrun(&self) -> Option<(usize, usize)> {
         let total = self.buf.len() * std::mem::size_of::<T>();
-        // SAFETY: the guard's bytes, in the buffer.
-        let guard =
-            unsafe { std::slice::from_raw_parts(self.buf.as_ptr().cast::<u8>().add(self.end), total - self.end) };
+        let bytes = self.buf.as_ptr().cast::<u8>();
+        // SAFETY: the guard's bytes, in the buffer (`end` <= `total`, both in bytes of it).
+        let guard = unsafe { std::slice::from_raw_parts(bytes.add(self.end), total - self.end) };
         let changed = guard.iter().filter(|b| **b != GUARD_BYTE).count();
         guard.iter().position(|b| *b != GUARD_BYTE).map(|at| (at, changed))
     }
