@@ -303,11 +303,14 @@ def test_the_conformance_suite_passes_on_the_windows_binaries_under_wine(conform
     assert "binaries\\" in out.stdout or passed > 0
     # Skips: the native checks (no C host for Windows here), the clock check of an FMU without
     # clocks, the structural-parameter check of an FMU without them, the Scheduled Execution
-    # check of an FMU without <ScheduledExecution>.
+    # check of an FMU without <ScheduledExecution>, the reference-results check of an FMU that ships
+    # none (FMI-LS-REF; the Pendulum's documentation run starts off its start values, so cargo fmu
+    # build writes no reference results for it, issue 51).
     not_declared = (
         "not declared by the FMU: <Clock> variables",
         "not declared by the FMU: structural parameters",
         "not declared by the FMU: <ScheduledExecution>",
+        "not declared by the FMU: reference results",
     )
     others = [l for l in out.stdout.splitlines()
               if l.startswith("SKIP") and NATIVE not in l and not any(n in l for n in not_declared)]
