@@ -407,7 +407,7 @@ fn the_manifests_are_read_as_cargo_reads_them() {
 /// The documents a newcomer reads, each a path from the workspace root.
 fn documents() -> Vec<String> {
     let mut docs = vec!["README.md".to_string(), "ARCHITECTURE.md".to_string()];
-    for dir in ["docs", "conformance", "tests/independent", "bench"] {
+    for dir in ["docs", "conformance", "tests/independent", "bench", "runner"] {
         let Ok(entries) = std::fs::read_dir(root().join(dir)) else {
             continue;
         };

@@ -9,8 +9,9 @@
 //! - [`sim`] is the master: parameter and start values after fmi2Instantiate, initialization
 //!   with the connections propagated once per instance, then at every communication point
 //!   t = k·h the connections evaluated in dependency order (Gauss-Seidel along the connections
-//!   by ModelStructure feedthrough, the order of `examples/cosim/master.py`) and every FMU
-//!   stepped; chosen variables recorded; parameters and start values overridden per run.
+//!   by ModelStructure feedthrough, the order of `examples/cosim/master.py`; algebraic loops
+//!   solved by Newton's method, [`sim::loops`]) and every FMU stepped; chosen variables
+//!   recorded; parameters and start values overridden per run.
 //!
 //! The command line is `rustfmu-runner run SYSTEM.ssp --stop-time 10 --step 1e-3
 //! --set pendulum.alpha1_0=0.2 --output out.csv`; the Python module (`runner/python`) runs the
@@ -32,7 +33,7 @@ pub mod me;
 pub mod sim;
 pub mod ssp;
 
-pub use sim::{Adaptive, Override, RunOptions, RunResult, Scheme, Simulation};
+pub use sim::{Adaptive, LoopOptions, LoopReport, Override, RunOptions, RunResult, Scheme, Simulation};
 
 use std::fmt;
 
@@ -49,6 +50,9 @@ pub enum ErrorKind {
     Fmi,
     /// A request that makes no sense (a step <= 0, ...).
     Usage,
+    /// An algebraic loop Newton's method did not solve at a communication point (singular, or
+    /// not converged): the loop's components and unknowns, the residual and the time.
+    Loop,
 }
 
 /// An error of the runner: always a message naming the component (and variable or function)

@@ -53,6 +53,20 @@ enum Command {
         /// default: every connected output).
         #[arg(long = "error-on", value_name = "COMPONENT.VARIABLE", requires = "tolerance")]
         error_on: Vec<String>,
+        /// Algebraic loops: relative tolerance of Newton's method, |u - g(u)| <= atol + rtol |u|
+        /// for every unknown (a connected input in the loop).
+        #[arg(long, default_value_t = rustfmu_runner::LoopOptions::default().rtol)]
+        loop_rtol: f64,
+        /// Algebraic loops: absolute tolerance (the unknowns' units).
+        #[arg(long, default_value_t = rustfmu_runner::LoopOptions::default().atol)]
+        loop_atol: f64,
+        /// Algebraic loops: Newton iterations allowed at one communication point.
+        #[arg(long, default_value_t = rustfmu_runner::LoopOptions::default().max_iterations)]
+        loop_max_iterations: usize,
+        /// Algebraic loops: a finite-difference Jacobian even where every component of the loop
+        /// gives directional derivatives.
+        #[arg(long)]
+        loop_finite_differences: bool,
         /// component.variable=value on top of the SSP's parameter bindings (repeatable).
         #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
         set: Vec<String>,
@@ -161,6 +175,13 @@ fn run(cli: Cli) -> Result<(), String> {
                 println!("  component {c}: {id}");
             }
             println!("evaluation order: {}", sim.evaluation_order().join(" -> "));
+            for (components, unknowns) in sim.algebraic_loops() {
+                println!(
+                    "algebraic loop among {} (solved by Newton's method; unknowns: {})",
+                    components.join(", "),
+                    unknowns.join(", ")
+                );
+            }
             println!("parameters: {}", sim.parameters().join(", "));
             println!("outputs: {}", sim.outputs().join(", "));
             Ok(())
@@ -174,6 +195,10 @@ fn run(cli: Cli) -> Result<(), String> {
             max_step,
             input_derivatives,
             error_on,
+            loop_rtol,
+            loop_atol,
+            loop_max_iterations,
+            loop_finite_differences,
             set,
             record,
             output,
@@ -222,6 +247,12 @@ fn run(cli: Cli) -> Result<(), String> {
             };
             let mut opts = RunOptions::new(stop_time, step);
             opts.input_derivatives = input_derivatives;
+            opts.loops = rustfmu_runner::LoopOptions {
+                rtol: loop_rtol,
+                atol: loop_atol,
+                max_iterations: loop_max_iterations,
+                finite_differences: loop_finite_differences,
+            };
             opts.adaptive = tolerance.map(|tolerance| rustfmu_runner::Adaptive {
                 tolerance,
                 min_step,
@@ -258,6 +289,9 @@ fn run(cli: Cli) -> Result<(), String> {
             let result = result.map_err(|f| f.error.message)?;
             if let Some(note) = &result.note {
                 eprintln!("rustfmu-runner: {note}");
+            }
+            for report in &result.loops {
+                eprintln!("rustfmu-runner: {report}");
             }
             if opts.adaptive.is_some() {
                 eprintln!(

@@ -15,10 +15,12 @@
 //! Propagation ([`Scheme::GaussSeidel`]): the components are sorted so that each comes after
 //! those whose outputs reach an input it feeds through to an output (ModelStructure
 //! `dependencies`; an output without the attribute depends on every input), stable in the
-//! system's order; a cycle is an algebraic loop and is refused. Each component's inputs from
-//! the components before it are set (one fmi2SetReal per source component), then its outputs
-//! are read (one fmi2GetReal); inputs from components later in the order are set last.
-//! [`Scheme::Jacobi`] reads every output first, then sets every input.
+//! system's order; components whose feedthrough closes a cycle are an algebraic loop, placed as
+//! one block and solved by Newton's method where the block's turn comes ([`loops`]). Each
+//! component's inputs from the components before it are set (one fmi2SetReal per source
+//! component), then its outputs are read (one fmi2GetReal); inputs from components later in the
+//! order are set last. [`Scheme::Jacobi`] reads every output first, then sets every input (a loop
+//! then has a step of delay, as every other connection).
 //!
 //! All buffers are made when the simulation is built: a communication step allocates nothing
 //! but the recorded row.
@@ -34,10 +36,12 @@ use std::ffi::CString;
 use std::path::Path;
 
 mod exchange;
+pub mod loops;
 mod options;
 mod queries;
 mod run;
 
+pub use loops::{LoopOptions, LoopReport};
 pub use options::{Adaptive, Failure, Override, RunOptions, RunResult, Scheme};
 
 /// (target, source) components -> [(input vr, output vr)] they connect.
@@ -165,6 +169,10 @@ pub struct Simulation {
     system_connectors: Vec<crate::ssp::SystemConnector>,
     /// Each component in a child process of its own ([`crate::isolate`]), or None: in this one.
     isolation: Option<crate::isolate::Isolation>,
+    /// The algebraic loops, in the evaluation order ([`loops`]).
+    loops: Vec<loops::Loop>,
+    /// How they are solved (set per run from [`RunOptions::loops`]).
+    pub loop_options: LoopOptions,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -320,6 +328,8 @@ impl Simulation {
             connections: connections.to_vec(),
             system_connectors: Vec::new(),
             isolation,
+            loops: Vec::new(),
+            loop_options: LoopOptions::default(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
@@ -576,7 +586,8 @@ impl Simulation {
                 idx,
             });
         }
-        // The evaluation order: a topological sort of the direct-feedthrough graph.
+        // The evaluation order: a topological sort of the direct-feedthrough graph's strongly
+        // connected components ([`loops::order`]).
         let n = self.slaves.len();
         let mut feeds: Vec<Vec<usize>> = vec![Vec::new(); n];
         for ((target, source), list) in &pairs {
@@ -585,44 +596,7 @@ impl Simulation {
                 feeds[*target].push(*source);
             }
         }
-        let mut order: Vec<usize> = Vec::new();
-        while order.len() < n {
-            let ready = (0..n).find(|i| !order.contains(i) && feeds[*i].iter().all(|s| order.contains(s)));
-            match ready {
-                Some(i) => order.push(i),
-                None => {
-                    let left: Vec<&str> = (0..n)
-                        .filter(|i| !order.contains(i))
-                        .map(|i| self.slaves[i].name.as_str())
-                        .collect();
-                    return Err(Error::unsupported(
-                        left.first().copied(),
-                        None,
-                        format!(
-                            "system '{}': algebraic loop (direct feedthrough in a cycle) among {left:?}",
-                            self.name
-                        ),
-                    ));
-                }
-            }
-        }
-        let position = |i: usize| order.iter().position(|&s| s == i).expect("sorted");
-        for &c in &order {
-            let before = pairs
-                .iter()
-                .enumerate()
-                .filter(|(_, ((t, s), _))| *t == c && position(*s) < position(c))
-                .map(|(w, _)| w)
-                .collect();
-            self.steps.push((c, before));
-        }
-        self.late = pairs
-            .iter()
-            .enumerate()
-            .filter(|(_, ((t, s), _))| position(*s) >= position(*t))
-            .map(|(w, _)| w)
-            .collect();
-        Ok(())
+        self.arrange(&pairs, &feeds)
     }
 
     fn instance(&mut self, slave: usize) -> &mut InstanceCS {

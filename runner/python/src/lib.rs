@@ -12,7 +12,8 @@
 //! Errors are exceptions, never panics: `SspError` (an SSP or FMU the runner cannot read or run),
 //! `VariableError` (an unknown component or variable, a value of the wrong type), `FmuError`
 //! (an FMI call that failed: attributes `component`, `variable`, `function`, `status`, `time`,
-//! and `partial`, the arrays recorded up to the failure); all derive from `RunnerError`.
+//! and `partial`, the arrays recorded up to the failure), `LoopError` (an algebraic loop not
+//! solved at a communication point: the same attributes); all derive from `RunnerError`.
 
 // runner::Error is large (it carries the details of a failure), on the cold path only.
 #![allow(clippy::result_large_err)]
@@ -45,6 +46,12 @@ create_exception!(
     RunnerError,
     "An FMI call that failed during a run."
 );
+create_exception!(
+    rustfmu_runner,
+    LoopError,
+    RunnerError,
+    "An algebraic loop the runner's Newton iteration did not solve (singular, or not converged)."
+);
 
 /// The simulation, used by one thread at a time (behind the `Mutex`): here, or (isolate =
 /// "system") in a child process.
@@ -62,6 +69,7 @@ fn to_pyerr(py: Python<'_>, e: &Error, partial: Option<&RunResult>) -> PyErr {
         ErrorKind::Io | ErrorKind::Unsupported => SspError::new_err(e.message.clone()),
         ErrorKind::Variable | ErrorKind::Usage => VariableError::new_err(e.message.clone()),
         ErrorKind::Fmi => FmuError::new_err(e.message.clone()),
+        ErrorKind::Loop => LoopError::new_err(e.message.clone()),
     };
     let value = err.value(py);
     let set = |name: &str, v: Option<String>| {
@@ -268,7 +276,9 @@ impl PySystem {
     /// `last_run` says what the run made. `input_derivatives=True`: a first-order hold on the
     /// connections (the outputs' exact time derivatives, through each feedthrough by its
     /// directional derivative, set as input derivatives where a component interpolates inputs).
-    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None, input_derivatives = false))]
+    /// `loops`: how algebraic loops are solved, {"rtol": 1e-10, "atol": 1e-10,
+    /// "max_iterations": 20, "finite_differences": False} (any of them; runner/README.md).
+    #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None, input_derivatives = false, loops = None))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
         &self,
@@ -283,9 +293,26 @@ impl PySystem {
         max_step: Option<f64>,
         error_on: Option<Vec<String>>,
         input_derivatives: bool,
+        loops: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut opts = RunOptions::new(stop_time, step);
         opts.input_derivatives = input_derivatives;
+        if let Some(loops) = loops {
+            for (k, v) in loops.iter() {
+                let key: String = k.extract()?;
+                match key.as_str() {
+                    "rtol" => opts.loops.rtol = v.extract()?,
+                    "atol" => opts.loops.atol = v.extract()?,
+                    "max_iterations" => opts.loops.max_iterations = v.extract()?,
+                    "finite_differences" => opts.loops.finite_differences = v.extract()?,
+                    other => {
+                        return Err(VariableError::new_err(format!(
+                            "loops: no option '{other}' (rtol, atol, max_iterations, finite_differences)"
+                        )));
+                    }
+                }
+            }
+        }
         if let Some(tolerance) = tolerance {
             opts.adaptive = Some(Adaptive {
                 tolerance,
@@ -326,6 +353,19 @@ impl PySystem {
             d.set_item("fmu_steps", r.fmu_steps)?;
             d.set_item("rejected", r.rejected)?;
             d.set_item("note", r.note.clone())?;
+            let loops = pyo3::types::PyList::empty(py);
+            for l in &r.loops {
+                let e = PyDict::new(py);
+                e.set_item("components", l.components.clone())?;
+                e.set_item("unknowns", l.unknowns.clone())?;
+                e.set_item("exact_jacobian", l.exact_jacobian)?;
+                e.set_item("solves", l.solves)?;
+                e.set_item("iterations", l.iterations)?;
+                e.set_item("most_iterations", l.most_iterations)?;
+                e.set_item("evaluations", l.evaluations)?;
+                loops.append(e)?;
+            }
+            d.set_item("loops", loops)?;
             Ok(d.unbind())
         };
         match result {
@@ -350,7 +390,9 @@ impl PySystem {
 
     /// What the last run made: {"fmu_steps": fmi2DoStep calls (each one per component),
     /// "rejected": error-controlled steps rejected, "note": why an error-controlled run was made
-    /// with fixed steps, or None}; None before the first run.
+    /// with fixed steps, or None, "loops": for each algebraic loop {"components", "unknowns",
+    /// "exact_jacobian", "solves", "iterations", "most_iterations", "evaluations"}}; None before
+    /// the first run.
     #[getter]
     fn last_run(&self, py: Python<'_>) -> Option<Py<PyDict>> {
         self.last_run
@@ -377,6 +419,7 @@ fn rustfmu_runner(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SspError", py.get_type::<SspError>())?;
     m.add("VariableError", py.get_type::<VariableError>())?;
     m.add("FmuError", py.get_type::<FmuError>())?;
+    m.add("LoopError", py.get_type::<LoopError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

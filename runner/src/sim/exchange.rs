@@ -130,6 +130,7 @@ impl Simulation {
     /// Sets every connected input from its output, as [`Simulation::scheme`] says.
     pub(super) fn propagate_values(&mut self, t: f64) -> Result<(), Error> {
         match self.scheme {
+            Scheme::GaussSeidel if !self.loops.is_empty() => self.propagate_with_loops(t)?,
             Scheme::GaussSeidel => {
                 for i in 0..self.steps.len() {
                     for j in 0..self.steps[i].1.len() {
@@ -227,6 +228,7 @@ impl Simulation {
         for (key, target, value) in values {
             self.set(key, *target, value)?;
         }
+        self.reset_loops(values);
         self.each_instance("fmi2SetupExperiment", None, "", |_, i| {
             i.setup_experiment(None, 0.0, Some(stop_time))
         })?;

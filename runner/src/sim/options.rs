@@ -40,6 +40,10 @@ pub struct RunOptions {
     pub adaptive: Option<Adaptive>,
     /// A first-order hold on the connections: see [`Simulation::input_derivatives`].
     pub input_derivatives: bool,
+    /// How algebraic loops are solved ([`crate::sim::LoopOptions`]: tolerances, iterations,
+    /// finite differences).
+    #[serde(default)]
+    pub loops: crate::sim::LoopOptions,
 }
 
 /// Error-controlled communication steps: each step of h is made once whole and once as two
@@ -73,6 +77,7 @@ impl RunOptions {
             stop_when_above: Vec::new(),
             adaptive: None,
             input_derivatives: false,
+            loops: crate::sim::LoopOptions::default(),
         }
     }
 }
@@ -94,6 +99,9 @@ pub struct RunResult {
     pub rejected: usize,
     /// Why an error-controlled run was made with fixed steps, if it was.
     pub note: Option<String>,
+    /// What each algebraic loop took (Jacobian kind, solves, Newton iterations), in the order.
+    #[serde(default)]
+    pub loops: Vec<crate::sim::LoopReport>,
 }
 
 impl RunResult {

@@ -55,16 +55,32 @@ impl Simulation {
         if !(opts.stop_time >= 0.0 && opts.stop_time.is_finite()) {
             return Err(Error::usage(format!("stop time = {} s: must be a number >= 0", opts.stop_time)).into());
         }
+        let l = &opts.loops;
+        if !(l.rtol >= 0.0 && l.atol >= 0.0 && l.rtol + l.atol > 0.0 && (l.rtol + l.atol).is_finite()) {
+            return Err(Error::usage(format!(
+                "algebraic loops: rtol = {}, atol = {}: both numbers >= 0, not both 0",
+                l.rtol, l.atol
+            ))
+            .into());
+        }
+        self.loop_options = *l;
         let n = (opts.stop_time / opts.step).round() as usize;
         crate::fmu_log::install();
         crate::fmu_log::clear();
-        self.run_inner(opts, n, progress).map_err(|mut f| {
-            let log = crate::fmu_log::take();
-            if !log.is_empty() {
-                f.error.message = format!("{} | FMU log: {}", f.error.message, log.join(" / "));
+        match self.run_inner(opts, n, progress) {
+            Ok(mut result) => {
+                result.loops = self.loop_reports();
+                Ok(result)
             }
-            f
-        })
+            Err(mut f) => {
+                f.partial.loops = self.loop_reports();
+                let log = crate::fmu_log::take();
+                if !log.is_empty() {
+                    f.error.message = format!("{} | FMU log: {}", f.error.message, log.join(" / "));
+                }
+                Err(f)
+            }
+        }
     }
 
     pub(super) fn run_inner(
@@ -77,6 +93,13 @@ impl Simulation {
             return Err(Error::usage(
                 "input derivatives (a first-order hold) follow the Gauss-Seidel order: not with the Jacobi scheme",
             )
+            .into());
+        }
+        if opts.input_derivatives && self.scheme == Scheme::GaussSeidel && !self.loops.is_empty() {
+            return Err(Error::usage(format!(
+                "input derivatives (a first-order hold) through an algebraic loop are not computed: the loop among {} has no derivative sweep; run without them",
+                self.loops_named()
+            ))
             .into());
         }
         self.input_derivatives = opts.input_derivatives;
@@ -104,6 +127,7 @@ impl Simulation {
             fmu_steps: 0,
             rejected: 0,
             note: None,
+            loops: Vec::new(),
         };
         if let Some(a) = &opts.adaptive {
             match self.why_fixed_steps() {
