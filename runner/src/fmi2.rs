@@ -611,6 +611,22 @@ impl Instance2 {
         check(unsafe { (self.api().set_string)(self.c, vrs.as_ptr(), vrs.len(), ptrs.as_ptr()) })
     }
 
+    /// FMI 2.0 has only its four types ([`Instance2::get_real`] ...): never called for it.
+    pub fn get_typed(&mut self, _vrs: &[u32], out: &mut crate::values::Values) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer(format!(
+            "an FMI 2.0 FMU has no {} variables",
+            out.type_name()
+        )))
+    }
+
+    /// As [`Instance2::get_typed`].
+    pub fn set_typed(&mut self, _vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer(format!(
+            "an FMI 2.0 FMU has no {} variables",
+            values.type_name()
+        )))
+    }
+
     /// fmi2GetFMUstate into a new state of this instance.
     pub fn get_fmu_state(&mut self) -> Result<FmuState, Fmi2Error> {
         let get = self.api().get_fmu_state.ok_or_else(|| missing("fmi2GetFMUstate"))?;

@@ -1,11 +1,15 @@
 //! The runner's FMI 3.0 co-simulation importer: an FMU unpacked (or found unpacked), its binary
 //! loaded once, instances (without event mode), values, steps and FMU states, behind the same
-//! [`crate::fmi2::InstanceCS`] as FMI 2.0 instances, so a system mixes both.
+//! [`crate::instance::InstanceCS`] as FMI 2.0 instances, so a system mixes both.
 //!
 //! The runner reads an FMI 3.0 FMU as the FMI 2.0 one it would be ([`as_fmi2`]): Float64 as
 //! Real, Int32 as Integer, Enumeration (read and set here with fmi3GetInt64 / fmi3SetInt64),
-//! Boolean (C `bool`), String; variables of the other types and arrays are left out, named in
-//! [`Fmi3Parts::skipped`] (a connection or parameter naming one is refused with its type).
+//! Boolean (C `bool`), String. Every variable of every type but Clock, scalar or array, is also
+//! kept as a [`Var3`] and got and set with its type's own function (`typed.rs`:
+//! fmi3GetFloat32 ... fmi3GetBinary, `nValues` the array's elements): what connections,
+//! parameters and records of the types FMI 2.0 lacks go through. Clocks and clocked variables
+//! are left out, named in [`Fmi3Parts::skipped`] (a connection or parameter naming one is refused
+//! with what it is: the runner runs FMI 3.0 without event mode).
 //! Written here for the reasons of [`crate::fmi2`]'s header, and because the `fmi` crate's FMI 3.0
 //! description parser refuses FMI 3.0 units; the description is `md-reader`'s.
 
@@ -20,8 +24,9 @@ use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod typed;
 mod view;
-pub use view::{Fmi3Parts, as_fmi2};
+pub use view::{Fmi3Parts, Var3, as_fmi2};
 
 fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
     match status {
@@ -35,6 +40,22 @@ fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
 
 type Get<T> = unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *mut T, usize) -> fmi3Status;
 type Set<T> = unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *const T, usize) -> fmi3Status;
+type GetBinary = unsafe extern "C" fn(
+    fmi3Instance,
+    *const fmi3ValueReference,
+    usize,
+    *mut usize,
+    *mut fmi3Binary,
+    usize,
+) -> fmi3Status;
+type SetBinary = unsafe extern "C" fn(
+    fmi3Instance,
+    *const fmi3ValueReference,
+    usize,
+    *const usize,
+    *const fmi3Binary,
+    usize,
+) -> fmi3Status;
 type InstantiateCS = unsafe extern "C" fn(
     fmi3String,
     fmi3String,
@@ -139,6 +160,22 @@ struct Api {
     get_int64: Get<i64>,
     get_boolean: Get<bool>,
     get_string: Get<fmi3String>,
+    get_binary: GetBinary,
+    get_float32: Get<f32>,
+    get_int8: Get<i8>,
+    get_uint8: Get<u8>,
+    get_int16: Get<i16>,
+    get_uint16: Get<u16>,
+    get_uint32: Get<u32>,
+    get_uint64: Get<u64>,
+    set_float32: Set<f32>,
+    set_int8: Set<i8>,
+    set_uint8: Set<u8>,
+    set_int16: Set<i16>,
+    set_uint16: Set<u16>,
+    set_uint32: Set<u32>,
+    set_uint64: Set<u64>,
+    set_binary: SetBinary,
     set_float64: Set<f64>,
     set_int32: Set<i32>,
     set_int64: Set<i64>,
@@ -199,6 +236,22 @@ impl Library {
                 get_int64: symbol(&lib, path, "fmi3GetInt64")?,
                 get_boolean: symbol(&lib, path, "fmi3GetBoolean")?,
                 get_string: symbol(&lib, path, "fmi3GetString")?,
+                get_binary: symbol(&lib, path, "fmi3GetBinary")?,
+                get_float32: symbol(&lib, path, "fmi3GetFloat32")?,
+                get_int8: symbol(&lib, path, "fmi3GetInt8")?,
+                get_uint8: symbol(&lib, path, "fmi3GetUInt8")?,
+                get_int16: symbol(&lib, path, "fmi3GetInt16")?,
+                get_uint16: symbol(&lib, path, "fmi3GetUInt16")?,
+                get_uint32: symbol(&lib, path, "fmi3GetUInt32")?,
+                get_uint64: symbol(&lib, path, "fmi3GetUInt64")?,
+                set_float32: symbol(&lib, path, "fmi3SetFloat32")?,
+                set_int8: symbol(&lib, path, "fmi3SetInt8")?,
+                set_uint8: symbol(&lib, path, "fmi3SetUInt8")?,
+                set_int16: symbol(&lib, path, "fmi3SetInt16")?,
+                set_uint16: symbol(&lib, path, "fmi3SetUInt16")?,
+                set_uint32: symbol(&lib, path, "fmi3SetUInt32")?,
+                set_uint64: symbol(&lib, path, "fmi3SetUInt64")?,
+                set_binary: symbol(&lib, path, "fmi3SetBinary")?,
                 set_float64: symbol(&lib, path, "fmi3SetFloat64")?,
                 set_int32: symbol(&lib, path, "fmi3SetInt32")?,
                 set_int64: symbol(&lib, path, "fmi3SetInt64")?,
@@ -316,6 +369,8 @@ impl Fmi3Import {
             states: Slots::default(),
             experiment: (None, 0.0, None),
             int64: self.int64.clone(),
+            ptrs: Vec::new(),
+            sizes: Vec::new(),
             _env: env,
         }
     }
@@ -493,6 +548,10 @@ pub struct Instance3 {
     /// tolerance, start and stop time of `setup_experiment`, for fmi3EnterInitializationMode.
     experiment: (Option<f64>, f64, Option<f64>),
     int64: Arc<HashSet<u32>>,
+    /// The pointers and sizes of the String and Binary values of a typed call, kept from call
+    /// to call ([`Instance3::get_typed`]).
+    ptrs: Vec<*const u8>,
+    sizes: Vec<usize>,
     _env: Box<Env>,
 }
 

@@ -24,8 +24,12 @@ pub struct Fmu {
     /// FMI 2.0's, or an FMI 3.0 FMU's read as FMI 2.0's.
     pub description: Description,
     pub import: Import,
-    /// An FMI 3.0 FMU's variables the runner does not read: (name, type).
+    /// An FMI 3.0 FMU's variables the runner does not read (clocks, clocked variables):
+    /// (name, what).
     pub skipped: Vec<(String, String)>,
+    /// An FMI 3.0 FMU's variables of every type, scalars and arrays, as typed calls get and set
+    /// them (empty for FMI 2.0).
+    pub typed: Vec<crate::fmi3::Var3>,
     /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
     /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
     pub feedthrough: Vec<u32>,
@@ -45,7 +49,7 @@ impl Fmu {
             .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
             .read_to_string(&mut xml)
             .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-        let (description, int64, skipped) = Fmu::description(component, label, &xml)?;
+        let (description, int64, skipped, typed, feedthrough3) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid).map(Import::V2),
             Some(int64) => {
@@ -53,7 +57,7 @@ impl Fmu {
             }
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import, skipped)
+        Fmu::with(component, label, description, import, (skipped, typed, feedthrough3))
     }
 
     /// Loads the FMU unpacked in the folder `dir` (a container's components).
@@ -64,7 +68,7 @@ impl Fmu {
         };
         let path = dir.join("modelDescription.xml");
         let xml = std::fs::read_to_string(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-        let (description, int64, skipped) = Fmu::description(component, label, &xml)?;
+        let (description, int64, skipped, typed, feedthrough3) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid).map(Import::V2),
             Some(int64) => {
@@ -72,7 +76,7 @@ impl Fmu {
             }
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import, skipped)
+        Fmu::with(component, label, description, import, (skipped, typed, feedthrough3))
     }
 
     /// The description of `xml`, checked to be one of an FMI 2.0 or 3.0 co-simulation FMU; for
@@ -87,6 +91,8 @@ impl Fmu {
             Description,
             Option<std::collections::HashSet<u32>>,
             Vec<(String, String)>,
+            Vec<crate::fmi3::Var3>,
+            Vec<u32>,
         ),
         Error,
     > {
@@ -95,12 +101,24 @@ impl Fmu {
             ..Error::io(format!("component '{component}' ({label}): {what}"))
         };
         let version = md_reader::fmi_version(xml).map_err(fail)?;
-        let (description, int64, skipped) = if version.starts_with("3.") {
+        let (description, int64, skipped, typed, feedthrough3) = if version.starts_with("3.") {
             let d3 = md_reader::fmi3::ModelDescription::parse(xml).map_err(fail)?;
             let parts = crate::fmi3::as_fmi2(&d3);
-            (parts.description, Some(parts.int64), parts.skipped)
+            (
+                parts.description,
+                Some(parts.int64),
+                parts.skipped,
+                parts.typed,
+                parts.feedthrough,
+            )
         } else if version.starts_with("2.") {
-            (Description::parse(xml).map_err(fail)?, None, Vec::new())
+            (
+                Description::parse(xml).map_err(fail)?,
+                None,
+                Vec::new(),
+                Vec::new(),
+                Vec::new(),
+            )
         } else {
             return Err(Error::unsupported(
                 Some(component),
@@ -119,7 +137,7 @@ impl Fmu {
                 ),
             ));
         }
-        Ok((description, int64, skipped))
+        Ok((description, int64, skipped, typed, feedthrough3))
     }
 
     fn with(
@@ -127,7 +145,7 @@ impl Fmu {
         label: &str,
         description: Description,
         import: Import,
-        skipped: Vec<(String, String)>,
+        (skipped, typed, feedthrough3): (Vec<(String, String)>, Vec<crate::fmi3::Var3>, Vec<u32>),
     ) -> Result<Fmu, Error> {
         let fail = |what: String| Error {
             component: Some(component.to_owned()),
@@ -154,6 +172,8 @@ impl Fmu {
                 }
             }
         }
+        // FMI 3.0: the inputs of every type (FMI 2.0's view keeps only its own types).
+        feedthrough.extend(&feedthrough3);
         feedthrough.sort_unstable();
         feedthrough.dedup();
         Ok(Fmu {
@@ -161,6 +181,7 @@ impl Fmu {
             description,
             import,
             skipped,
+            typed,
             feedthrough,
         })
     }
@@ -178,6 +199,12 @@ impl Fmu {
         self.description.model_identifier()
     }
 
+    /// The FMI 3.0 variable `name` as typed calls get and set it (None: an FMI 2.0 FMU, or no
+    /// such variable).
+    pub fn var3(&self, name: &str) -> Option<&crate::fmi3::Var3> {
+        self.typed.iter().find(|v| v.name == name)
+    }
+
     /// The variable `name`; the error names the component and lists the variables there are.
     pub fn variable(&self, component: &str, name: &str) -> Result<&Variable, Error> {
         self.description
@@ -190,12 +217,17 @@ impl Fmu {
                         Some(component),
                         Some(name),
                         format!(
-                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}, a type the runner does not read (it reads Float64, Int32, Enumeration, Boolean, String scalars)",
+                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}: the runner runs FMI 3.0 without event mode, so no clocks and no clocked variables",
                             self.model_identifier()
                         ),
                     );
                 }
-                let names: Vec<&str> = self.description.variables.iter().map(|v| v.name.as_str()).collect();
+                let mut names: Vec<&str> = self.description.variables.iter().map(|v| v.name.as_str()).collect();
+                for v in &self.typed {
+                    if !names.contains(&v.name.as_str()) {
+                        names.push(&v.name);
+                    }
+                }
                 Error::variable(
                     component,
                     name,

@@ -32,6 +32,7 @@ pub mod isolate;
 pub mod me;
 pub mod sim;
 pub mod ssp;
+pub mod values;
 
 pub use sim::{Adaptive, LoopOptions, LoopReport, Override, RunOptions, RunResult, Scheme, Simulation};
 

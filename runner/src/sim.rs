@@ -40,6 +40,7 @@ pub mod loops;
 mod options;
 mod queries;
 mod run;
+mod typed;
 
 pub use loops::{LoopOptions, LoopReport};
 pub use options::{Adaptive, Failure, Override, RunOptions, RunResult, Scheme};
@@ -104,6 +105,8 @@ enum Setter {
     Integer(i32),
     Boolean(bool),
     String(CString),
+    /// An FMI 3.0 variable of any type and shape ([`typed`]).
+    Values(crate::values::Values),
 }
 
 /// A resolved variable: (slave, value reference, type).
@@ -173,6 +176,8 @@ pub struct Simulation {
     loops: Vec<loops::Loop>,
     /// How they are solved (set per run from [`RunOptions::loops`]).
     pub loop_options: LoopOptions,
+    /// The connections of FMI 3.0 values that are not Float64 scalars ([`typed`]).
+    typed: Box<typed::TypedLinks>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -330,11 +335,17 @@ impl Simulation {
             isolation,
             loops: Vec::new(),
             loop_options: LoopOptions::default(),
+            typed: Default::default(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
-            let target = sim.resolve(&c, &v)?;
-            let setter = sim.typed_setter(&c, &v, target.ty, &value)?;
+            let (target, setter) = match sim.typed_start(&c, &v, &value)? {
+                Some(typed) => typed,
+                None => {
+                    let target = sim.resolve(&c, &v)?;
+                    (target, sim.typed_setter(&c, &v, target.ty, &value)?)
+                }
+            };
             sim.starts.push((format!("{c}.{v}"), target, setter));
         }
         Ok(sim)
@@ -496,8 +507,14 @@ impl Simulation {
         let mut source_vars: Vec<Vec<u32>> = vec![Vec::new(); self.slaves.len()];
         // (target, source) -> [(input vr, source vr)], in order of first appearance.
         let mut pairs: Pairs = Vec::new();
+        // (target, source, input) of the typed connections, for the evaluation order.
+        let mut typed = Vec::new();
         for k in connections {
             let text = format!("{}.{} -> {}.{}", k.start.0, k.start.1, k.end.0, k.end.1);
+            if let Some(link) = self.typed_connection(k, &text)? {
+                typed.push(link);
+                continue;
+            }
             let from = self.resolve(&k.start.0, &k.start.1).map_err(|e| Error {
                 message: format!("connection {text}: {}", e.message),
                 ..e
@@ -596,7 +613,10 @@ impl Simulation {
                 feeds[*target].push(*source);
             }
         }
-        self.arrange(&pairs, &feeds)
+        self.typed_feeds(&typed, &mut feeds)?;
+        self.arrange(&pairs, &feeds)?;
+        self.order_typed();
+        Ok(())
     }
 
     fn instance(&mut self, slave: usize) -> &mut InstanceCS {
@@ -614,6 +634,7 @@ impl Simulation {
             Setter::Integer(x) => ("fmi2SetInteger", inst.set_integer(&vr, &[*x]).map(|_| ())),
             Setter::Boolean(x) => ("fmi2SetBoolean", inst.set_boolean(&vr, &[i32::from(*x)]).map(|_| ())),
             Setter::String(s) => ("fmi2SetString", inst.set_string(&vr, std::slice::from_ref(s))),
+            Setter::Values(v) => ("fmi3Set", inst.set_typed(&vr, v)),
         };
         // An isolated component answers a set with its next call: wait here, so that a refused
         // parameter or start value is reported with its name and value.
@@ -623,9 +644,13 @@ impl Simulation {
                 e => e,
             })
         });
+        let function = match value {
+            Setter::Values(v) => format!("{function}{}", v.type_name()),
+            _ => fname(v3, function).to_owned(),
+        };
         r.map_err(|err| Error {
             variable: Some(variable.clone()),
-            ..Error::fmi(&name, fname(v3, function), &err, None, &format!("{variable} = {value}"))
+            ..Error::fmi(&name, &function, &err, None, &format!("{variable} = {value}"))
         })
     }
 
@@ -700,6 +725,7 @@ impl std::fmt::Display for Setter {
             Setter::Integer(x) => write!(f, "{x}"),
             Setter::Boolean(x) => write!(f, "{x}"),
             Setter::String(s) => write!(f, "{s:?}"),
+            Setter::Values(v) => write!(f, "{v}"),
         }
     }
 }

@@ -410,3 +410,45 @@ fn gauss_seidel_and_jacobi_differ_on_the_controller_loop() {
     );
     assert_ne!(gs.values.last(), j.values.last());
 }
+
+// The values of FMI 3.0 variables of every type (runner/src/values.rs).
+#[test]
+fn an_fmi3_array_start_is_read_in_order_and_its_length_checked() {
+    use md_reader::fmi3::Type;
+    use rustfmu_runner::values::Values;
+    assert_eq!(
+        Values::parse(Type::Float64, 3, "1 0 2.5").unwrap(),
+        Values::Float64(vec![1.0, 0.0, 2.5])
+    );
+    assert!(
+        Values::parse(Type::Float64, 3, "1 0")
+            .unwrap_err()
+            .contains("2 value(s) given")
+    );
+    assert!(Values::parse(Type::UInt8, 1, "256").unwrap_err().contains("UInt8"));
+    assert_eq!(
+        Values::parse(Type::Binary, 1, "666f6f").unwrap(),
+        Values::Binary(vec![b"foo".to_vec()])
+    );
+    assert_eq!(
+        Values::parse(Type::String, 1, "a b").unwrap(),
+        Values::String(vec![b"a b\0".to_vec()])
+    );
+}
+
+#[test]
+fn an_fmi3_number_is_range_checked_for_each_integer_type() {
+    use md_reader::fmi3::Type;
+    use rustfmu_runner::values::Values;
+    assert_eq!(
+        Values::from_number(Type::Int8, 0.0, Some(-128)).unwrap(),
+        Values::Int8(vec![-128])
+    );
+    assert!(Values::from_number(Type::Int8, 0.0, Some(128)).is_err());
+    assert!(Values::from_number(Type::UInt64, 0.0, Some(-1)).is_err());
+    assert!(Values::from_number(Type::Int16, 1.5, None).is_err());
+    assert_eq!(
+        Values::from_number(Type::Float32, 0.1, None).unwrap(),
+        Values::Float32(vec![0.1f32])
+    );
+}

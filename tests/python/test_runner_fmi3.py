@@ -84,9 +84,10 @@ def test_error_controlled_steps_set_fmi3_states_back():
         assert np.array_equal(ra[k], rb[k]), k
 
 
-def test_an_fmi3_variable_the_runner_does_not_read_is_refused_with_its_type(tmp_path):
-    """Feedthrough (FMI 3.0) has Float32 and Binary variables: a parameter binding to one names
-    the type; the FMI 3.0 component's failing calls are named with their FMI 3.0 names."""
+def test_a_float32_parameter_is_set_and_failing_calls_have_their_fmi3_names(tmp_path):
+    """Feedthrough (FMI 3.0) has Float32 variables: a parameter binding to one is set with
+    fmi3SetFloat32 (every type: test_runner_fmi3_types.py); the FMI 3.0 component's failing calls
+    are named with their FMI 3.0 names."""
     ssd = """<?xml version="1.0" encoding="UTF-8"?>
 <ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
     xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -109,8 +110,9 @@ def test_an_fmi3_variable_the_runner_does_not_read_is_refused_with_its_type(tmp_
             z.writestr("resources/Feedthrough.fmu", (FMU_DIR / "fmi3" / "Feedthrough.fmu").read_bytes())
         return str(out)
 
-    with pytest.raises(rustfmu_runner.RunnerError, match="'Float32_continuous_input' is an FMI 3.0 Float32"):
-        rustfmu_runner.System(file("Float32_continuous_input", "1.5"))
+    out = cli("run", file("Float32_continuous_input", "1.5"), "--stop-time", "0.01", "--step", "1e-3",
+              "--record", "f.Float32_continuous_output", "--no-progress")
+    assert out.returncode == 0 and [r.split(",")[1] for r in out.stdout.splitlines()[1:]] == ["1.5"] * 11, out
     # A Float64 parameter it reads; a value outside its range is the FMU's fmi3SetFloat64 error.
     s = rustfmu_runner.System(file("Float64_fixed_parameter", "2.5"))
     r = s.run(0.01, 1e-3, record=["f.Float64_continuous_output"])

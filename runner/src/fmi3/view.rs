@@ -1,4 +1,5 @@
-//! An FMI 3.0 description as the FMI 2.0 one the runner reads ([`as_fmi2`]; see [`super`]).
+//! An FMI 3.0 description as the FMI 2.0 one the runner reads ([`as_fmi2`]; see [`super`]), and
+//! every variable as the typed calls get and set it ([`Var3`]).
 
 use md_reader::Causality;
 use md_reader::fmi2 as d2;
@@ -10,8 +11,100 @@ pub struct Fmi3Parts {
     pub description: d2::ModelDescription,
     /// Value references of the Enumeration variables (fmi3GetInt64 / fmi3SetInt64).
     pub int64: HashSet<u32>,
-    /// (name, FMI 3.0 type) of the variables the runner does not read: other types, arrays.
+    /// Every variable but the independent one and the clocks, of every type, scalar or array:
+    /// what connections, parameters and records of the types FMI 2.0 lacks go through.
+    pub typed: Vec<Var3>,
+    /// (name, what) of the variables the runner does not read: clocks and clocked variables.
     pub skipped: Vec<(String, String)>,
+    /// The inputs of every type some output depends on directly (ModelStructure `<Output
+    /// dependencies>`; an output without the attribute depends on every input).
+    pub feedthrough: Vec<u32>,
+}
+
+/// An FMI 3.0 variable as the runner gets and sets it ([`crate::values::Values`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Var3 {
+    pub name: String,
+    pub vr: u32,
+    pub ty: d3::Type,
+    pub causality: Causality,
+    /// Its dimensions' sizes, outermost first (empty: a scalar): a fixed size, or the start
+    /// value of the structural parameter that sets it (the size the instance has until one is
+    /// set, which the runner does not do).
+    pub shape: Vec<usize>,
+    /// The structural parameters that size it (value references).
+    pub sized_by: Vec<u32>,
+    pub start: Option<String>,
+    pub unit: Option<String>,
+}
+
+impl Var3 {
+    /// The number of values (an array's elements, 1 for a scalar).
+    pub fn count(&self) -> usize {
+        self.shape.iter().product()
+    }
+
+    /// Its type and shape as messages say them: `Float64`, `Float64[3,3]`.
+    pub fn kind(&self) -> String {
+        if self.shape.is_empty() {
+            self.ty.name().to_owned()
+        } else {
+            let dims: Vec<String> = self.shape.iter().map(|n| n.to_string()).collect();
+            format!("{}[{}]", self.ty.name(), dims.join(","))
+        }
+    }
+}
+
+/// The sizes of `v`'s dimensions (fixed, or its structural parameters' start values).
+fn shape(d: &d3::ModelDescription, v: &d3::Variable) -> Result<Vec<usize>, String> {
+    v.dimensions
+        .iter()
+        .map(|dim| match dim {
+            d3::Dimension::Fixed(n) => usize::try_from(*n).map_err(|_| format!("dimension {n} is too large")),
+            d3::Dimension::Parameter(vr) => {
+                let p = d
+                    .by_vr(*vr)
+                    .ok_or_else(|| format!("its dimension names value reference {vr}, which does not exist"))?;
+                p.start
+                    .as_deref()
+                    .and_then(|s| s.trim().parse::<usize>().ok())
+                    .ok_or_else(|| format!("its dimension's structural parameter '{}' has no integer start", p.name))
+            }
+        })
+        .collect()
+}
+
+/// `v` into `typed`, or (a clock, a clocked variable, an array of unknown size) `skipped`.
+fn sort(d: &d3::ModelDescription, v: &d3::Variable, typed: &mut Vec<Var3>, skipped: &mut Vec<(String, String)>) {
+    if v.ty == d3::Type::Clock || !v.clocks.is_empty() {
+        let what = if v.ty == d3::Type::Clock {
+            "Clock".to_owned()
+        } else {
+            format!("{} clocked variable (clocks and event mode are not run)", v.ty)
+        };
+        skipped.push((v.name.clone(), what));
+        return;
+    }
+    match shape(d, v) {
+        Ok(shape) => typed.push(Var3 {
+            name: v.name.clone(),
+            vr: v.vr,
+            ty: v.ty,
+            causality: v.causality,
+            sized_by: v
+                .dimensions
+                .iter()
+                .filter_map(|dim| match dim {
+                    d3::Dimension::Parameter(vr) => Some(*vr),
+                    d3::Dimension::Fixed(_) => None,
+                })
+                .collect(),
+            shape,
+            start: v.start.clone(),
+            unit: v.unit.clone(),
+        }),
+        Err(why) => skipped.push((v.name.clone(), format!("{} array ({why})", v.ty))),
+    }
 }
 
 /// The FMI 3.0 description `d` as the FMI 2.0 one the runner reads (see the module).
@@ -19,7 +112,14 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
     let mut variables = Vec::new();
     let mut int64 = HashSet::new();
     let mut skipped = Vec::new();
+    let mut typed = Vec::new();
     for v in &d.variables {
+        if v.causality != Causality::Independent {
+            sort(d, v, &mut typed, &mut skipped);
+        }
+        if v.ty == d3::Type::Clock || !v.clocks.is_empty() {
+            continue;
+        }
         let ty = match v.ty {
             d3::Type::Float64 => Some(d2::Type::Real),
             d3::Type::Int32 => Some(d2::Type::Integer),
@@ -29,14 +129,6 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
             _ => None,
         };
         let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && v.clocks.is_empty()) else {
-            if v.causality != Causality::Independent {
-                let what = if v.dimensions.is_empty() && !v.array {
-                    format!("{:?}", v.ty)
-                } else {
-                    format!("{:?} array", v.ty)
-                };
-                skipped.push((v.name.clone(), what));
-            }
             continue;
         };
         if ty == d2::Type::Enumeration {
@@ -113,9 +205,23 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
             errors: d.errors.clone(),
         },
     };
+    let inputs: Vec<u32> = typed
+        .iter()
+        .filter(|v| v.causality == Causality::Input)
+        .map(|v| v.vr)
+        .collect();
+    let mut feedthrough = Vec::new();
+    for o in &d.outputs {
+        match &o.dependencies {
+            None => feedthrough.extend(&inputs),
+            Some(deps) => feedthrough.extend(deps.iter().filter(|k| inputs.contains(k))),
+        }
+    }
     Fmi3Parts {
         description,
         int64,
+        typed,
         skipped,
+        feedthrough,
     }
 }

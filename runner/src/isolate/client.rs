@@ -486,6 +486,23 @@ impl Isolated {
         })
     }
 
+    /// Not carried by the wire: a component whose FMI 3.0 variables of the types FMI 2.0 lacks
+    /// (or arrays) are connected, set or recorded runs in the runner's process.
+    pub fn get_typed(&mut self, _vrs: &[u32], out: &mut crate::values::Values) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer(format!(
+            "isolation carries Float64, Int32, Boolean, String and Enumeration scalars only, not {} values: run this component without isolation",
+            out.type_name()
+        )))
+    }
+
+    /// As [`Isolated::get_typed`].
+    pub fn set_typed(&mut self, _vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer(format!(
+            "isolation carries Float64, Int32, Boolean, String and Enumeration scalars only, not {} values: run this component without isolation",
+            values.type_name()
+        )))
+    }
+
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {
         self.get_values(GET_INTEGER, vrs, out, |r| r.u32() as i32)
     }

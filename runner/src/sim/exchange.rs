@@ -133,6 +133,7 @@ impl Simulation {
             Scheme::GaussSeidel if !self.loops.is_empty() => self.propagate_with_loops(t)?,
             Scheme::GaussSeidel => {
                 for i in 0..self.steps.len() {
+                    self.typed_inputs(self.steps[i].0, t)?;
                     for j in 0..self.steps[i].1.len() {
                         let w = self.steps[i].1[j];
                         self.write(w, t)?;
@@ -140,19 +141,23 @@ impl Simulation {
                     if let Some(r) = self.read_of[self.steps[i].0] {
                         self.read(r, t)?;
                     }
+                    self.typed_outputs(self.steps[i].0, t)?;
                 }
                 for j in 0..self.late.len() {
                     let w = self.late[j];
                     self.write(w, t)?;
                 }
+                self.typed_late(t)?;
             }
             Scheme::Jacobi => {
                 for r in 0..self.reads.len() {
                     self.read(r, t)?;
                 }
+                self.typed_all(true, t)?;
                 for w in 0..self.writes.len() {
                     self.write(w, t)?;
                 }
+                self.typed_all(false, t)?;
             }
         }
         Ok(())
@@ -185,8 +190,13 @@ impl Simulation {
     ) -> Result<Vec<(String, Target, Setter)>, Error> {
         let mut values = self.starts.clone();
         for (key, value) in overrides {
-            let target = self.resolve_qualified(key)?;
-            let setter = self.override_setter(key, target.ty, value)?;
+            let (target, setter) = match self.typed_override(key, value)? {
+                Some(typed) => typed,
+                None => {
+                    let target = self.resolve_qualified(key)?;
+                    (target, self.override_setter(key, target.ty, value)?)
+                }
+            };
             match values.iter_mut().find(|(k, _, _)| k == key) {
                 Some(slot) => slot.2 = setter,
                 None => values.push((key.clone(), target, setter)),

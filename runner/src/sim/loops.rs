@@ -416,6 +416,7 @@ impl Simulation {
         while i < self.steps.len() {
             if next < self.loops.len() && self.loops[next].first_step == i {
                 for m in 0..self.loops[next].members.len() {
+                    self.typed_inputs(self.steps[i + m].0, t)?;
                     for j in 0..self.steps[i + m].1.len() {
                         let w = self.steps[i + m].1[j];
                         self.write(w, t)?;
@@ -423,12 +424,17 @@ impl Simulation {
                 }
                 let mut lp = std::mem::take(&mut self.loops[next]);
                 let r = self.solve(&mut lp, t);
-                i += lp.members.len();
+                let members = lp.members.len();
                 self.loops[next] = lp;
                 r?;
+                for m in 0..members {
+                    self.typed_outputs(self.steps[i + m].0, t)?;
+                }
+                i += members;
                 next += 1;
                 continue;
             }
+            self.typed_inputs(self.steps[i].0, t)?;
             for j in 0..self.steps[i].1.len() {
                 let w = self.steps[i].1[j];
                 self.write(w, t)?;
@@ -436,13 +442,14 @@ impl Simulation {
             if let Some(r) = self.read_of[self.steps[i].0] {
                 self.read(r, t)?;
             }
+            self.typed_outputs(self.steps[i].0, t)?;
             i += 1;
         }
         for j in 0..self.late.len() {
             let w = self.late[j];
             self.write(w, t)?;
         }
-        Ok(())
+        self.typed_late(t)
     }
 
     /// g(`lp.u`) into `lp.g`, the residual into `lp.r`; returns the scaled residual

@@ -71,6 +71,7 @@ impl Simulation {
             Setter::Integer(x) => x.to_string(),
             Setter::Boolean(x) => x.to_string(),
             Setter::String(s) => s.to_string_lossy().into_owned(),
+            Setter::Values(v) => v.to_string(),
         })
     }
 
@@ -104,6 +105,7 @@ impl Simulation {
                 }
             }
         }
+        self.typed_outputs_list(&mut out);
         out
     }
 

@@ -4,9 +4,19 @@
 use super::*;
 
 impl Simulation {
-    pub(super) fn record_groups(&self, record: &[String]) -> Result<Vec<RecordGroup>, Error> {
+    /// The recorded variables of each instance and type, and the names of the row's columns
+    /// (an array's elements each a column: [`Simulation::typed_record`]); the FMI 3.0 variables
+    /// FMI 2.0's view leaves out are kept in `self.typed`.
+    pub(super) fn record_groups(&mut self, record: &[String]) -> Result<(Vec<RecordGroup>, Vec<String>), Error> {
         let mut groups: Vec<RecordGroup> = Vec::new();
-        for (col, key) in record.iter().enumerate() {
+        let mut names = Vec::new();
+        self.typed.records.clear();
+        for key in record {
+            let col = names.len();
+            if let Some(r) = self.typed_record(key, col, &mut names)? {
+                self.typed.records.push(r);
+                continue;
+            }
             let t = self.resolve_qualified(key)?;
             let kind = match t.ty {
                 Type::Real => Kind::Real,
@@ -37,12 +47,13 @@ impl Simulation {
             };
             groups[i].vrs.push(t.vr);
             groups[i].columns.push(col);
+            names.push(key.clone());
         }
         for g in &mut groups {
             g.reals = vec![0.0; g.vrs.len()];
             g.ints = vec![0; g.vrs.len()];
         }
-        Ok(groups)
+        Ok((groups, names))
     }
 
     /// One run (see the module): returns the recorded variables at every communication point,
@@ -105,10 +116,10 @@ impl Simulation {
         self.input_derivatives = opts.input_derivatives;
         self.dbufs.clear();
         let values = self.start_values(&opts.overrides)?;
-        let mut groups = self.record_groups(&opts.record)?;
+        let (mut groups, names) = self.record_groups(&opts.record)?;
         let mut stops = Vec::new();
         for (key, limit) in &opts.stop_when_above {
-            let col = opts.record.iter().position(|r| r == key).ok_or_else(|| {
+            let col = names.iter().position(|r| r == key).ok_or_else(|| {
                 let (c, v) = key.split_once('.').unwrap_or((key, ""));
                 Error::variable(
                     c,
@@ -118,9 +129,9 @@ impl Simulation {
             })?;
             stops.push((col, *limit));
         }
-        let m = opts.record.len();
+        let m = names.len();
         let mut result = RunResult {
-            names: opts.record.clone(),
+            names,
             time: Vec::with_capacity(n + 1),
             values: Vec::with_capacity((n + 1) * m),
             stopped: false,
@@ -281,7 +292,7 @@ impl Simulation {
             return Err(Failure { error, partial: result });
         }
         let scale = 1000usize;
-        let m = opts.record.len();
+        let m = result.names.len();
         let mut row = vec![0.0; m];
         let (mut whole, mut halves) = (Vec::new(), Vec::new());
         let mut slots: Vec<FmuState> = Vec::new();
@@ -368,6 +379,9 @@ impl Simulation {
                 };
             }
         }
-        Ok(())
+        let mut typed = std::mem::take(&mut self.typed.records);
+        let r = self.read_typed_record(&mut typed, row, t);
+        self.typed.records = typed;
+        r
     }
 }
