@@ -67,6 +67,8 @@ struct Motor {
     b: f64,
     u: f64,
     i0: f64,
+    /// Supply limit: U_applied = U limited to +-u_max.
+    u_max: f64,
 }
 
 const A: Motor = Motor {
@@ -77,6 +79,7 @@ const A: Motor = Motor {
     b: 2.0,
     u: 1.0,
     i0: 0.2,
+    u_max: 6.0,
 };
 const B: Motor = Motor {
     l: 0.2,
@@ -86,12 +89,13 @@ const B: Motor = Motor {
     b: 1.5,
     u: -0.5,
     i0: 0.0,
+    u_max: 6.0,
 };
 
 fn motor_xml(name: &str, m: Motor) -> String {
     let real = |n: &str, v: f64| format!(r#"<ssv:Parameter name="{n}"><ssv:Real value="{v:?}"/></ssv:Parameter>"#);
     format!(
-        r#"<ssd:Component name="{name}" source="resources/DCMotor.fmu"><ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="p"><ssv:Parameters>{}{}{}{}{}{}{}{}<ssv:Parameter name="coupled"><ssv:Boolean value="true"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings></ssd:Component>"#,
+        r#"<ssd:Component name="{name}" source="resources/DCMotor.fmu"><ssd:ParameterBindings><ssd:ParameterBinding><ssd:ParameterValues><ssv:ParameterSet version="1.0" name="p"><ssv:Parameters>{}{}{}{}{}{}{}{}{}<ssv:Parameter name="coupled"><ssv:Boolean value="true"/></ssv:Parameter></ssv:Parameters></ssv:ParameterSet></ssd:ParameterValues></ssd:ParameterBinding></ssd:ParameterBindings></ssd:Component>"#,
         real("L", m.l),
         real("R", m.r),
         real("km", m.km),
@@ -100,6 +104,7 @@ fn motor_xml(name: &str, m: Motor) -> String {
         real("gear_ratio", 1.0),
         real("U", m.u),
         real("i", m.i0),
+        real("U_max", m.u_max),
     )
 }
 
@@ -113,11 +118,32 @@ impl Drop for Scratch {
 }
 
 /// The SSP file of the two motors and their loads (`load` the Feedthrough FMU's file) in a
-/// folder `dir` of this process (the file, and the folder to drop when done).
+/// folder `dir` of this process (the file, and the folder to drop when done): each motor's torque
+/// drives its load, whose speed is the other motor's.
 fn system(dir: &str, a: Motor, b: Motor, load: &Path) -> (PathBuf, Scratch) {
-    let conn = |a: &str, x: &str, b: &str, y: &str| {
-        format!(r#"<ssd:Connection startElement="{a}" startConnector="{x}" endElement="{b}" endConnector="{y}"/>"#)
-    };
+    let speeds = [
+        ("motor_a", "tau", "load_a", "Float64_continuous_input"),
+        ("load_a", "Float64_continuous_output", "motor_b", "omega"),
+        ("motor_b", "tau", "load_b", "Float64_continuous_input"),
+        ("load_b", "Float64_continuous_output", "motor_a", "omega"),
+    ];
+    system_with(dir, a, b, load, &speeds)
+}
+
+/// [`system`] with other `connections` (start element, connector, end element, connector).
+fn system_with(
+    dir: &str,
+    a: Motor,
+    b: Motor,
+    load: &Path,
+    connections: &[(&str, &str, &str, &str)],
+) -> (PathBuf, Scratch) {
+    let conn: String = connections
+        .iter()
+        .map(|(a, x, b, y)| {
+            format!(r#"<ssd:Connection startElement="{a}" startConnector="{x}" endElement="{b}" endConnector="{y}"/>"#)
+        })
+        .collect();
     let ssd = format!(
         r#"<?xml version="1.0" encoding="UTF-8"?>
 <ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -126,14 +152,11 @@ fn system(dir: &str, a: Motor, b: Motor, load: &Path) -> (PathBuf, Scratch) {
 <ssd:System name="TwoMotors"><ssd:Elements>{}{}
 <ssd:Component name="load_a" source="resources/Feedthrough.fmu"/>
 <ssd:Component name="load_b" source="resources/Feedthrough.fmu"/>
-</ssd:Elements><ssd:Connections>{}{}{}{}</ssd:Connections></ssd:System>
+</ssd:Elements><ssd:Connections>{}</ssd:Connections></ssd:System>
 <ssd:DefaultExperiment startTime="0" stopTime="1"/></ssd:SystemStructureDescription>"#,
         motor_xml("motor_a", a),
         motor_xml("motor_b", b),
-        conn("motor_a", "tau", "load_a", "Float64_continuous_input"),
-        conn("load_a", "Float64_continuous_output", "motor_b", "omega"),
-        conn("motor_b", "tau", "load_b", "Float64_continuous_input"),
-        conn("load_b", "Float64_continuous_output", "motor_a", "omega"),
+        conn,
     );
     let d = std::env::temp_dir().join(format!("rustfmu-runner-loops-{dir}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -377,4 +400,78 @@ fn the_same_loop_with_a_step_of_delay_diverges() {
         .fold(0.0f64, |m, row| m.max(row[2].abs()));
     println!("largest |motor_a.tau| over 0.5 s: {delayed:.3e} with a step of delay, {solved:.3e} solved");
     assert!(solved < 1.0 && delayed > 1e3, "{delayed} vs {solved}");
+}
+
+#[test]
+fn a_loop_through_a_supply_limit_takes_newton_across_the_limit() {
+    // Nonlinear, not smooth: motor_a's voltage is motor_b's torque (through load_b), motor_b's
+    // speed motor_a's applied voltage (through load_a), U_applied = U limited to +-0.5 V:
+    //   U = km_b i_b - B_b clamp(U, -0.5, 0.5).
+    // As i_b rises past 3 A the solution leaves the linear piece (slope 1 + B_b = 3) for the
+    // limited one (slope 1): Newton from the point before's solution needs more than one
+    // iteration there, the Jacobian through the limit exact (its derivative 0 beyond it, from the
+    // FMU) or by differences.
+    let a = Motor {
+        u_max: 0.5,
+        i0: 0.0,
+        ..A
+    };
+    let b = Motor {
+        l: 0.2,
+        r: 1.0,
+        km: 0.5,
+        kb: 0.3,
+        b: 2.0,
+        u: 5.0,
+        i0: 0.0,
+        u_max: 6.0,
+    };
+    let limited = [
+        ("motor_a", "U_applied", "load_a", "Float64_continuous_input"),
+        ("load_a", "Float64_continuous_output", "motor_b", "omega"),
+        ("motor_b", "tau", "load_b", "Float64_continuous_input"),
+        ("load_b", "Float64_continuous_output", "motor_a", "U"),
+    ];
+    let (ssp, _dir) = system_with("limit-loop", a, b, &ours("Feedthrough"), &limited);
+    let (stop, h): (f64, f64) = (1.0, 1e-2);
+    // Here: the loop by its two pieces, the currents stepped exactly (motor_a's joint speed is
+    // not connected: 0).
+    let mut expected = Vec::new();
+    let (mut ia, mut ib) = (a.i0, b.i0);
+    for _ in 0..=(stop / h).round() as usize {
+        let x = b.km * ib;
+        let u = if (x / (1.0 + b.b)).abs() <= a.u_max {
+            x / (1.0 + b.b)
+        } else {
+            x - b.b * a.u_max * x.signum()
+        };
+        let applied = u.clamp(-a.u_max, a.u_max);
+        expected.push([ia, ib, applied, u]);
+        let step = |m: Motor, i: f64, drive: f64| {
+            let e = (-m.r * h / m.l).exp();
+            i * e + drive * (1.0 - e) / m.r
+        };
+        (ia, ib) = (step(a, ia, applied), step(b, ib, b.u - b.kb * applied));
+    }
+    assert!(
+        expected.iter().any(|r| r[3].abs() < a.u_max) && expected.iter().any(|r| r[3].abs() > a.u_max),
+        "the run crosses the limit"
+    );
+    for finite_differences in [false, true] {
+        let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
+        let mut opts = RunOptions::new(stop, h);
+        opts.record = ["motor_a.i", "motor_b.i", "motor_a.U_applied", "motor_b.tau"]
+            .map(String::from)
+            .to_vec();
+        opts.loops.finite_differences = finite_differences;
+        let r = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+        let error = largest_error(&r, &expected);
+        println!("{}; largest |runner - independent| = {error:.3e}", r.loops[0]);
+        assert!(error < 1e-9, "{error}");
+        // One iteration on a piece; across the limit more (the first step, on the linear
+        // piece's slope, lands beyond the limit; a step that does not lower the residual is
+        // halved), and a few.
+        let most = r.loops[0].most_iterations;
+        assert!((2..=4).contains(&most), "across the limit: {}", r.loops[0]);
+    }
 }
