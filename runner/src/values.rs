@@ -240,6 +240,120 @@ impl Values {
     }
 }
 
+/// The types in the order of their wire codes ([`Values::code`]).
+const CODES: [Type; 13] = [
+    Type::Float32,
+    Type::Float64,
+    Type::Int8,
+    Type::UInt8,
+    Type::Int16,
+    Type::UInt16,
+    Type::Int32,
+    Type::UInt32,
+    Type::Int64,
+    Type::UInt64,
+    Type::Boolean,
+    Type::String,
+    Type::Binary,
+];
+
+/// Applies `$body` to each numeric vector `$x` of `$v` with `$t` its element type; `$bool` for
+/// Boolean, `$other` for String and Binary (`$s`).
+macro_rules! by_element {
+    ($v:expr, $x:ident: $t:ident => $body:expr, $b:ident => $bool:expr, $s:ident => $other:expr) => {
+        match $v {
+            Values::Float32($x) => {
+                type $t = f32;
+                $body
+            }
+            Values::Float64($x) => {
+                type $t = f64;
+                $body
+            }
+            Values::Int8($x) => {
+                type $t = i8;
+                $body
+            }
+            Values::UInt8($x) => {
+                type $t = u8;
+                $body
+            }
+            Values::Int16($x) => {
+                type $t = i16;
+                $body
+            }
+            Values::UInt16($x) => {
+                type $t = u16;
+                $body
+            }
+            Values::Int32($x) => {
+                type $t = i32;
+                $body
+            }
+            Values::UInt32($x) => {
+                type $t = u32;
+                $body
+            }
+            Values::Int64($x) => {
+                type $t = i64;
+                $body
+            }
+            Values::UInt64($x) => {
+                type $t = u64;
+                $body
+            }
+            Values::Boolean($b) => $bool,
+            Values::String($s) | Values::Binary($s) => $other,
+        }
+    };
+}
+
+/// The values as bytes between the runner and a component's child process
+/// ([`crate::isolate`]): a type code and a count, then each value (a number in its native bytes,
+/// a Boolean one byte, a String or Binary its length as 4 native bytes first).
+impl Values {
+    /// The wire code of the values' type.
+    pub(crate) fn code(&self) -> u8 {
+        let name = self.type_name();
+        CODES
+            .iter()
+            .position(|t| t.name() == name)
+            .expect("every type has a code") as u8
+    }
+
+    /// `n` zero values of the type of wire code `code` (None: no such code).
+    pub(crate) fn of_code(code: u8, n: usize) -> Option<Values> {
+        Values::zeros(*CODES.get(usize::from(code))?, n)
+    }
+
+    /// Each value's bytes to `put`, in order.
+    pub(crate) fn put<E>(&self, put: &mut impl FnMut(&[u8]) -> Result<(), E>) -> Result<(), E> {
+        by_element!(self,
+            x: T => x.iter().try_for_each(|v| put(&T::to_ne_bytes(*v))),
+            b => b.iter().try_for_each(|v| put(&[u8::from(*v)])),
+            s => s.iter().try_for_each(|v| {
+                put(&(v.len() as u32).to_ne_bytes())?;
+                put(v)
+            })
+        )
+    }
+
+    /// Its values read from `take(k)` (the next k bytes), as [`Values::put`] wrote them.
+    pub(crate) fn take<'a>(&mut self, take: &mut impl FnMut(usize) -> &'a [u8]) {
+        by_element!(self,
+            x: T => x.iter_mut().for_each(|v| {
+                *v = T::from_ne_bytes(take(std::mem::size_of::<T>()).try_into().expect("sized"));
+            }),
+            b => b.iter_mut().for_each(|v| *v = take(1)[0] != 0),
+            s => s.iter_mut().for_each(|v| {
+                let n = u32::from_ne_bytes(take(4).try_into().expect("sized")) as usize;
+                v.clear();
+                v.extend_from_slice(take(n));
+            })
+        )
+    }
+}
+
 /// Hexadecimal digits, two per byte (a Binary's `start`, FMI 3.0, 2.4.7.5).
 fn hex(text: &str) -> Result<Vec<u8>, String> {
     let t = text.trim();

@@ -244,3 +244,23 @@ def test_a_cycle_of_typed_feedthrough_is_refused_as_a_loop_newton_does_not_solve
     r = cli("run", ssp, "--stop-time", "0.1", "--step", "0.1", "--no-progress")
     assert r.returncode == 1, r.stderr
     assert "(Int8) closes an algebraic loop" in r.stderr and "loops of Float64 values only" in r.stderr, r.stderr
+
+
+@pytest.mark.skipif(not pathlib.Path("/dev/shm").is_dir(), reason="isolation runs on Linux")
+def test_typed_values_cross_to_isolated_components_unchanged(tmp_path):
+    """Every component in a child process (--isolate), or the whole system in one: the typed
+    connections, overrides and records give the rows of the run in the runner's process."""
+    ref = need(REF / "Feedthrough.fmu")
+    ssp = write_ssp(tmp_path / "M.ssp", [("a", ref), ("b", ours("Feedthrough")), ("s", need(REF / "StateSpace.fmu")),
+                                         ("o", ours("StateSpace"))],
+                    [("a", f"{t}_output", "b", f"{t}_input") for t in NUMERIC + ["String", "Binary"]] + [("s", "y", "o", "u")])
+    args = [a for t in NUMERIC for a in ("--set", f"a.{t}_input={VALUES[t]}")]
+    args += ["--set", "s.u=3 2 1", "--set", "a.String_input=hi", "--set", "a.Binary_input=00ff",
+             "--record", "o.y", "--record", "o.x", *[a for t in NUMERIC for a in ("--record", f"b.{t}_output")]]
+    here = runner(tmp_path, ssp, 0.5, 0.1, *args)
+    for isolate in (["--isolate"], ["--isolate", "system"]):
+        there = runner(tmp_path, ssp, 0.5, 0.1, *isolate, *args)
+        assert list(there) == list(here)
+        for k in here:
+            assert np.array_equal(there[k], here[k]), (isolate, k)
+    assert here["b.Int8_output"][-1] == -128 and here["o.y[1]"][0] == 3.0

@@ -125,7 +125,14 @@ impl Isolated {
     ) -> Result<(), Fmi2Error> {
         if !matches!(
             op,
-            GET_REAL | GET_INTEGER | GET_BOOLEAN | GET_STRING | OUTPUT_DERIVATIVES | DIRECTIONAL | SERIALIZE
+            GET_REAL
+                | GET_INTEGER
+                | GET_BOOLEAN
+                | GET_STRING
+                | GET_TYPED
+                | OUTPUT_DERIVATIVES
+                | DIRECTIONAL
+                | SERIALIZE
         ) {
             self.cache_valid = false;
         }
@@ -486,21 +493,32 @@ impl Isolated {
         })
     }
 
-    /// Not carried by the wire: a component whose FMI 3.0 variables of the types FMI 2.0 lacks
-    /// (or arrays) are connected, set or recorded runs in the runner's process.
-    pub fn get_typed(&mut self, _vrs: &[u32], out: &mut crate::values::Values) -> Result<(), Fmi2Error> {
-        Err(Fmi2Error::Importer(format!(
-            "isolation carries Float64, Int32, Boolean, String and Enumeration scalars only, not {} values: run this component without isolation",
-            out.type_name()
-        )))
+    /// FMI 3.0 values of any type and shape, `out`'s type and length asked for.
+    pub fn get_typed(&mut self, vrs: &[u32], out: &mut crate::values::Values) -> Result<(), Fmi2Error> {
+        let (code, n) = (out.code(), out.len() as u32);
+        self.call(
+            GET_TYPED,
+            self.time,
+            |w| {
+                w.u32s(vrs)?;
+                w.u8(code)?;
+                w.u32(n)
+            },
+            |r| {
+                out.take(&mut |k| r.bytes(k));
+                Ok(())
+            },
+        )
     }
 
-    /// As [`Isolated::get_typed`].
-    pub fn set_typed(&mut self, _vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
-        Err(Fmi2Error::Importer(format!(
-            "isolation carries Float64, Int32, Boolean, String and Enumeration scalars only, not {} values: run this component without isolation",
-            values.type_name()
-        )))
+    /// FMI 3.0 values of any type and shape, posted as the other setters are.
+    pub fn set_typed(&mut self, vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
+        self.post(SET_TYPED, self.time, false, |w| {
+            w.u32s(vrs)?;
+            w.u8(values.code())?;
+            w.u32(values.len() as u32)?;
+            values.put(&mut |b| w.bytes(b))
+        })
     }
 
     pub fn get_integer(&mut self, vrs: &[u32], out: &mut [i32]) -> Result<(), Fmi2Error> {

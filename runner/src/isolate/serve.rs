@@ -71,6 +71,7 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
     let mut fmu: Option<crate::fmu::Fmu> = None;
     let (mut vrs, mut vrs2, mut reals, mut ints) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut strings: Vec<CString> = Vec::new();
+    let mut typed: Vec<crate::values::Values> = Vec::new();
     let mut quit = false;
     let mut patience = Patience::new(50, 200);
     while !quit {
@@ -167,6 +168,32 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                     SET_INTEGER => set(&mut r, &mut vrs, &mut ints, |v, x| inst.set_integer(v, x)),
                     SET_BOOLEAN => set(&mut r, &mut vrs, &mut ints, |v, x| inst.set_boolean(v, x)),
                     SET_STRING => set(&mut r, &mut vrs, &mut strings, |v, x| inst.set_string(v, x)),
+                    GET_TYPED | SET_TYPED => {
+                        r.u32s_into(&mut vrs);
+                        let (code, n) = (r.u8(), r.u32() as usize);
+                        // A buffer per type and length, made at the first call that needs it.
+                        let k = match typed.iter().position(|t| t.code() == code && t.len() == n) {
+                            Some(k) => k,
+                            None => {
+                                typed.push(
+                                    crate::values::Values::of_code(code, n)
+                                        .ok_or_else(|| Fmi2Error::Importer(format!("isolation: type code {code}")))?,
+                                );
+                                typed.len() - 1
+                            }
+                        };
+                        let buf = &mut typed[k];
+                        if op == GET_TYPED {
+                            inst.get_typed(&vrs, buf)?;
+                            buf.put(&mut |b| {
+                                values.extend_from_slice(b);
+                                Ok::<(), Fmi2Error>(())
+                            })
+                        } else {
+                            buf.take(&mut |k| r.bytes(k));
+                            inst.set_typed(&vrs, buf)
+                        }
+                    }
                     GET_STATE | UPDATE_STATE | SET_STATE | FREE_STATE => {
                         let idx = r.u32() as usize;
                         let s = FmuState(idx);

@@ -171,6 +171,9 @@ pub(super) const DESERIALIZE: u8 = 20;
 pub(super) const OUTPUT_DERIVATIVES: u8 = 21;
 pub(super) const INPUT_DERIVATIVES: u8 = 22;
 pub(super) const DIRECTIONAL: u8 = 23;
+/// FMI 3.0 values of any type and shape ([`crate::values::Values`]).
+pub(super) const GET_TYPED: u8 = 24;
+pub(super) const SET_TYPED: u8 = 25;
 /// The first batch: instantiate (the answer: ok, or the error's message).
 pub(super) const HELLO: u8 = 98;
 pub(super) const QUIT: u8 = 99;
@@ -319,6 +322,8 @@ pub(super) fn function_of(op: u8) -> &'static str {
         OUTPUT_DERIVATIVES => "fmi2GetRealOutputDerivatives",
         INPUT_DERIVATIVES => "fmi2SetRealInputDerivatives",
         DIRECTIONAL => "fmi2GetDirectionalDerivative",
+        GET_TYPED => "fmi3Get{Type}",
+        SET_TYPED => "fmi3Set{Type}",
         HELLO => "fmi2Instantiate",
         _ => "fmi2FreeInstance",
     }
