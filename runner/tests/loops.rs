@@ -475,3 +475,18 @@ fn a_loop_through_a_supply_limit_takes_newton_across_the_limit() {
         assert!((2..=4).contains(&most), "across the limit: {}", r.loops[0]);
     }
 }
+
+#[test]
+fn a_first_order_hold_through_a_loop_is_refused_saying_so() {
+    let (ssp, _dir) = system("hold", A, B, &ours("Feedthrough"));
+    let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
+    let mut opts = RunOptions::new(0.1, 1e-2);
+    opts.input_derivatives = true;
+    let e = sim.run(&opts, &mut |_, _| {}).expect_err("refused").error;
+    assert_eq!(e.kind, ErrorKind::Usage);
+    assert!(
+        e.message.contains("through an algebraic loop are not computed")
+            && e.message.contains("[motor_a, motor_b, load_a, load_b]"),
+        "{e}"
+    );
+}
