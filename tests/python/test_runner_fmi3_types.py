@@ -264,3 +264,24 @@ def test_typed_values_cross_to_isolated_components_unchanged(tmp_path):
         for k in here:
             assert np.array_equal(there[k], here[k]), (isolate, k)
     assert here["b.Int8_output"][-1] == -128 and here["o.y[1]"][0] == 3.0
+
+
+def test_the_python_module_takes_arrays_as_sequences_and_records_their_elements(tmp_path):
+    """The module's start values of an array: a list or a numpy array of any shape (row-major), a
+    numpy Boolean as the runner's true; the elements come back as columns y[1] .. y[3], equal
+    to fmusim's."""
+    import rustfmu_runner
+
+    fmu = need(REF / "StateSpace.fmu")
+    ssp = write_ssp(tmp_path / "S.ssp", [("s", fmu)])
+    a = np.diag([-1.0, -2.0, -3.0])
+    r = rustfmu_runner.System(ssp).run(1.0, 0.25, start={"s.u": [0.5, -1, 2], "s.A": a}, record=["s.y"])
+    assert [k for k in r if k != "time"] == ["s.y[1]", "s.y[2]", "s.y[3]"]
+    ref = fmusim(tmp_path, fmu, 1.0, 0.25, "--start-value", "u", "0.5 -1 2", "--start-value", "A",
+                 " ".join(repr(float(x)) for x in a.flatten()))
+    y = np.column_stack([r[f"s.y[{i}]"] for i in (1, 2, 3)])
+    assert np.max(np.abs(y - ref["y"])) <= 1e-15, (y, ref["y"])
+    f = write_ssp(tmp_path / "F.ssp", [("f", need(REF / "Feedthrough.fmu"))])
+    r = rustfmu_runner.System(f).run(0.1, 0.1, start={"f.Boolean_input": np.True_, "f.UInt16_input": np.uint16(7)},
+                                     record=["f.Boolean_output", "f.UInt16_output"])
+    assert list(r["f.Boolean_output"]) == [1.0, 1.0] and list(r["f.UInt16_output"]) == [7.0, 7.0]

@@ -107,16 +107,49 @@ fn to_override(key: &str, v: &Bound<'_, PyAny>) -> PyResult<Override> {
     if v.is_instance_of::<PyString>() {
         return Ok(Override::Text(v.extract()?));
     }
-    // numpy scalars and other numbers
+    // numpy scalars and other numbers; a numpy Boolean (numpy.bool, numpy.bool_) before them,
+    // which converts to a number too.
+    if v.get_type().name().is_ok_and(|n| n == "bool" || n == "bool_") {
+        return Ok(Override::Boolean(v.is_truthy()?));
+    }
     if let Ok(x) = v.extract::<i64>() {
         return Ok(Override::Integer(x));
     }
     if let Ok(x) = v.extract::<f64>() {
         return Ok(Override::Real(x));
     }
+    // An array's elements (a list, a tuple, a numpy array of any shape, row-major): the text the
+    // command line takes, parsed as the variable's type.
+    if v.try_iter().is_ok() {
+        let mut words = Vec::new();
+        elements(v, &mut words)?;
+        return Ok(Override::Text(words.join(" ")));
+    }
     Err(VariableError::new_err(format!(
-        "{key} = {v}: a start value must be a bool, int, float or str"
+        "{key} = {v}: a start value must be a bool, int, float, str or a sequence of them (an array)"
     )))
+}
+
+/// The elements of `v`, nested sequences flattened in order, each as the runner's text of it.
+fn elements(v: &Bound<'_, PyAny>, out: &mut Vec<String>) -> PyResult<()> {
+    if v.is_instance_of::<PyString>() {
+        out.push(v.extract()?);
+        return Ok(());
+    }
+    if let Ok(items) = v.try_iter() {
+        for x in items {
+            elements(&x?, out)?;
+        }
+        return Ok(());
+    }
+    let text: String = v.str()?.extract()?;
+    // A Python or numpy Boolean prints True / False; the runner reads true / false.
+    out.push(match text.as_str() {
+        "True" => "true".to_owned(),
+        "False" => "false".to_owned(),
+        _ => text,
+    });
+    Ok(())
 }
 
 /// An SSP system of FMI 2.0 co-simulation FMUs, loaded once; `run` runs it.
