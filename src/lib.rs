@@ -60,6 +60,9 @@ pub use clock::Clock;
 pub use model::{CoSimulation, Context, Event, EventClock, Model, Real, StateVector, StepFailure, StepView, Variables};
 pub use num_dual;
 pub use rustfmu_derive::{FmuEnum, Model};
+/// FMI-LS-BUS 1.0.0's CAN bus operations, for the models of network FMUs
+/// (`#[fmu(can_network(..))]`): the crate `rustfmu-ls-bus`.
+pub use rustfmu_ls_bus as ls_bus;
 pub use step::events::{MAX_EVENTS_PER_STEP, MAX_ROUNDS, Round, update_round};
 pub use step::standalone::Standalone;
 pub use value::{FmiType, FmuEnum, Value};

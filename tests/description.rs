@@ -243,3 +243,64 @@ fn the_guid_follows_the_content() {
     assert_eq!(a.len(), 38);
     assert_eq!(&a[15..16], "5", "a version-5 (name-based, SHA-1) UUID: {a}");
 }
+
+/// A network node of FMI-LS-BUS (`can_network`): its terminal with the nested Configuration
+/// terminal goes through the encoding and back, and only the FMI 3.0 encoding carries it.
+#[derive(Model, Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[fmu(
+    fmi3_only,
+    can_network(
+        name = "CAN",
+        rx_clock = rx_clock,
+        rx_data = rx_data,
+        tx_clock = tx_clock,
+        tx_data = tx_data,
+        bus_notifications = notifications
+    )
+)]
+pub struct Node {
+    #[variable(vr = 1, input, clock(triggered))]
+    pub rx_clock: Clock,
+    #[variable(vr = 2, input, discrete, clocks = [rx_clock], max_size = 64)]
+    pub rx_data: Vec<u8>,
+    #[variable(vr = 3, output, clock(triggered))]
+    pub tx_clock: Clock,
+    #[variable(vr = 4, output, discrete, clocks = [tx_clock], max_size = 64, depends = [])]
+    pub tx_data: Vec<u8>,
+    #[variable(vr = 5, parameter, fixed, start = false)]
+    pub notifications: bool,
+}
+impl Model for Node {}
+impl CoSimulation for Node {}
+
+#[test]
+fn nested_terminals_round_trip_through_the_fmi3_encoding() {
+    let three = Interfaces {
+        version: FmiVersion::V3,
+        ..CS
+    };
+    let bytes = description::encode_to_vec(&Node::DESCRIPTION, three);
+    let (d, _) = description::decode(&bytes).unwrap();
+    assert_eq!(d.terminals, Node::DESCRIPTION.terminals);
+    let [bus] = d.terminals else {
+        panic!("{:?}", d.terminals)
+    };
+    assert_eq!(
+        (bus.kind, bus.matching_rule),
+        ("org.fmi-ls-bus.network-terminal", "org.fmi-ls-bus.transceiver")
+    );
+    let [config] = bus.terminals else {
+        panic!("{:?}", bus.terminals)
+    };
+    assert_eq!(
+        (config.name, config.kind, config.matching_rule),
+        ("Configuration", "org.fmi-ls-bus.network-terminal.configuration", "bus")
+    );
+    assert_eq!(config.members[0].member, "BusNotifications");
+    let rx = Node::DESCRIPTION
+        .variables
+        .iter()
+        .find(|v| v.name == "rx_data")
+        .unwrap();
+    assert_eq!(rx.fmi3.mime_type, rustfmu::ls_bus::CAN_MIME_TYPE);
+}

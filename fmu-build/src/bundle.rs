@@ -287,6 +287,11 @@ pub fn package(
     {
         files.push(("terminalsAndIcons/terminalsAndIcons.xml".into(), terminals.into_bytes()));
     }
+    if version == FmiVersion::V3
+        && let Some(manifest) = crate::xml::ls_bus_manifest(&me.description)
+    {
+        files.push((crate::xml::LS_BUS_MANIFEST.into(), manifest.into_bytes()));
+    }
     files.extend(binaries);
     files.push(("documentation/index.html".into(), docs.into_bytes()));
     // The page's run as FMI-LS-REF reference results, as the Reference-FMUs ship theirs

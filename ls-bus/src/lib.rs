@@ -48,6 +48,10 @@ pub mod op_code {
     pub const WAKEUP: u32 = 0x0042;
 }
 
+/// FMI-LS-BUS 1.0.0, "MIME Types": the `mimeType` of the Tx/Rx data variables of a CAN network
+/// (CAN, CAN FD and CAN XL). `#[fmu(can_network(..))]` gives it to them.
+pub const CAN_MIME_TYPE: &str = "application/org.fmi-standard.fmi-ls-bus.can; version=\"1.0.0\"";
+
 /// OP Code and Length: every operation starts with them (`fmi3LsBusOperationHeader`, 8 bytes).
 pub const HEADER_LEN: usize = 8;
 
@@ -528,14 +532,7 @@ impl TxBuffer {
 
     /// Appends `op` if it keeps the standard's rules and fits; otherwise writes nothing and says why.
     pub fn push(&mut self, op: &Operation<'_>) -> Result<(), PushError> {
-        op.validate().map_err(PushError::Invalid)?;
-        let needed = op.encoded_len();
-        let free = self.capacity - self.bytes.len();
-        if needed > free {
-            return Err(PushError::Full { needed, free });
-        }
-        op.write(&mut self.bytes);
-        Ok(())
+        push_into(&mut self.bytes, self.capacity, op)
     }
 
     /// The bytes written so far: the Binary variable's value.
@@ -557,6 +554,20 @@ impl TxBuffer {
     pub fn capacity(&self) -> usize {
         self.capacity
     }
+}
+
+/// Appends `op` to `bytes` (a Binary variable's value, a model's `Vec<u8>` field) if it keeps the
+/// standard's rules and `bytes` stays within `capacity` (the variable's `maxSize`); otherwise
+/// writes nothing and says why. [`TxBuffer::push`] is this on its own buffer.
+pub fn push_into(bytes: &mut Vec<u8>, capacity: usize, op: &Operation<'_>) -> Result<(), PushError> {
+    op.validate().map_err(PushError::Invalid)?;
+    let needed = op.encoded_len();
+    let free = capacity.saturating_sub(bytes.len());
+    if needed > free {
+        return Err(PushError::Full { needed, free });
+    }
+    op.write(bytes);
+    Ok(())
 }
 
 /// The operations of a received buffer, in order ([`operations`]).

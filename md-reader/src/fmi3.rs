@@ -102,6 +102,8 @@ pub struct Variable {
     pub array: bool,
     /// A Binary's `maxSize` (bytes).
     pub max_size: Option<u64>,
+    /// A Binary's `mimeType` as written (`application/octet-stream` when absent).
+    pub mime_type: Option<String>,
     /// The `<Dimension>`s of an array, outermost first: the fixed size (`start`), or the value
     /// reference of the structural parameter that sets it.
     pub dimensions: Vec<Dimension>,
@@ -311,6 +313,7 @@ impl ModelDescription {
                     derivative: e.number("derivative"),
                     array: false,
                     max_size: e.number("maxSize"),
+                    mime_type: e.string("mimeType"),
                     dimensions: Vec::new(),
                     declared_type: e.string("declaredType"),
                     unit: e.string("unit"),

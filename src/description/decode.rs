@@ -2,8 +2,8 @@
 //! in a built library and reads it back into a [`ModelDescription`] with its [`Interfaces`].
 
 use super::encode::{
-    CLOCKS_TAG, DISPLAY_TAG, EVENT_INDICATORS_TAG, FMI3_EXTRAS_TAG, HEADER, INTERPOLATES_INPUTS_TAG, PRIORITIES_TAG,
-    SCHEDULED_EXECUTION_TAG, SIZED_TAG, TERMINALS_TAG,
+    CLOCKS_TAG, DISPLAY_TAG, EVENT_INDICATORS_TAG, FMI3_EXTRAS_TAG, HEADER, INTERPOLATES_INPUTS_TAG,
+    NESTED_TERMINALS_TAG, PRIORITIES_TAG, SCHEDULED_EXECUTION_TAG, SIZED_TAG, TERMINALS_TAG,
 };
 use super::*;
 
@@ -100,6 +100,23 @@ fn leak(s: String) -> &'static str {
 
 fn leak_slice<T>(v: Vec<T>) -> &'static [T] {
     Box::leak(v.into_boxed_slice())
+}
+
+/// The terminals nested in one terminal, each with its own (the encoder's `nested_terminals`).
+fn nested_terminals(d: &mut Dec<'_>) -> Result<Vec<Terminal>, String> {
+    d.list(|d| {
+        let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
+        let members = d.list(|d| read!(d => TerminalMember { variable: str, member: str, kind: str }))?;
+        let terminals = leak_slice(nested_terminals(d)?);
+        Ok(Terminal {
+            name,
+            kind,
+            matching_rule,
+            description,
+            members: leak_slice(members),
+            terminals,
+        })
+    })
 }
 
 impl Dec<'_> {
@@ -330,9 +347,16 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
                 matching_rule,
                 description,
                 members: leak_slice(members),
+                terminals: &[],
             })
         })?
     };
+    let mut terminals = terminals;
+    if !terminals.is_empty() && d.block(NESTED_TERMINALS_TAG) {
+        for t in &mut terminals {
+            t.terminals = leak_slice(nested_terminals(&mut d)?);
+        }
+    }
     if d.block(FMI3_EXTRAS_TAG) {
         let n = d.count()?;
         for _ in 0..n {

@@ -254,6 +254,29 @@ impl Enc<'_> {
         }
     }
 
+    /// The terminals nested in one terminal, each with its own nested ones (recursively).
+    const fn nested_terminals(&mut self, ts: &[Terminal]) {
+        self.u32(ts.len() as u32);
+        let mut i = 0;
+        while i < ts.len() {
+            let t = &ts[i];
+            self.str(t.name);
+            self.str(t.kind);
+            self.str(t.matching_rule);
+            self.str(t.description);
+            self.u32(t.members.len() as u32);
+            let mut j = 0;
+            while j < t.members.len() {
+                self.str(t.members[j].variable);
+                self.str(t.members[j].member);
+                self.str(t.members[j].kind);
+                j += 1;
+            }
+            self.nested_terminals(t.terminals);
+            i += 1;
+        }
+    }
+
     /// The whole description, block after block in the order of the format (which
     /// [`decode`] reads in the same order). One function of ~260 lines on purpose: the order
     /// of the blocks is the format, and the GUIDs of every FMU built are its hash, so it reads
@@ -369,6 +392,22 @@ impl Enc<'_> {
                     j += 1;
                 }
                 i += 1;
+            }
+            // Nested terminals in a block of their own, only where some terminal has them: the
+            // encodings (and instantiation tokens) of terminals without are those from before.
+            let mut nested = false;
+            let mut k = 0;
+            while k < d.terminals.len() {
+                nested |= !d.terminals[k].terminals.is_empty();
+                k += 1;
+            }
+            if nested {
+                self.u8(NESTED_TERMINALS_TAG);
+                let mut k = 0;
+                while k < d.terminals.len() {
+                    self.nested_terminals(d.terminals[k].terminals);
+                    k += 1;
+                }
             }
         }
         // Likewise the FMI 3.0 declarations: only where some variable has one.
@@ -657,6 +696,8 @@ pub(super) const EVENT_INDICATORS_TAG: u8 = 0xE1;
 pub(super) const FMI3_EXTRAS_TAG: u8 = 0xE2;
 /// Marks the terminals' block (FMI 3.0 encodings only), before the FMI 3.0 declarations.
 pub(super) const TERMINALS_TAG: u8 = 0xE3;
+/// Marks the nested terminals of the terminals' block (only where some terminal has them).
+pub(super) const NESTED_TERMINALS_TAG: u8 = 0xEA;
 /// Marks the block of the clocks and clocked variables, after the FMI 3.0 declarations.
 pub(super) const CLOCKS_TAG: u8 = 0xE4;
 /// Marks a co-simulation step that follows input derivatives (canInterpolateInputs), last.

@@ -103,6 +103,9 @@ pub struct Terminal {
     pub matching_rule: &'static str,
     pub description: &'static str,
     pub members: &'static [TerminalMember],
+    /// Nested `<Terminal>`s (after the members, as `fmi3Terminal.xsd` orders them): an
+    /// FMI-LS-BUS network terminal's `Configuration` terminal.
+    pub terminals: &'static [Terminal],
 }
 
 /// A `<TerminalMemberVariable>`.

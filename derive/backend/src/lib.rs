@@ -78,4 +78,6 @@ mod alias_tests;
 #[cfg(test)]
 mod docs_tests;
 #[cfg(test)]
+mod network_tests;
+#[cfg(test)]
 mod tests;

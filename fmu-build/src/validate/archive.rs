@@ -3,8 +3,8 @@
 //! [`super::macho`]) and the smoke run of this machine's binary ([`super::smoke`]).
 
 use super::{
-    architecture_problems, array_problems, export_problems, macho_problems, pe_problems, smoke_run_in_child,
-    terminal_problems,
+    architecture_problems, array_problems, export_problems, ls_bus_problems, macho_problems, pe_problems,
+    smoke_run_in_child, terminal_problems,
 };
 use md_reader::{ModelDescription, fmi2, fmi3};
 use rustfmu::description::FmiVersion;
@@ -148,6 +148,13 @@ fn validate_inner(fmu: &Path) -> Result<Vec<String>, String> {
             (_, Ok(text)) => problems.extend(terminal_problems(&text, &xml)),
         }
     }
+    // FMI-LS-BUS: the manifest and every network terminal's rules (nothing where neither is).
+    let read = |p: std::path::PathBuf| std::fs::read_to_string(p).ok();
+    problems.extend(ls_bus_problems(
+        read(terminals.clone()).as_deref(),
+        &xml,
+        read(dir.path().join(crate::xml::LS_BUS_MANIFEST)).as_deref(),
+    ));
     for (folder, bin_name) in &binaries {
         let so = dir.path().join(bin_name);
         let binary = std::fs::read(&so).map_err(|e| format!("{bin_name}: {e}"))?;

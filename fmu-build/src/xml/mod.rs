@@ -23,7 +23,7 @@ pub use arrays::array_sizes;
 pub use check::check_description;
 pub use fmi2::fmi2;
 pub use fmi3::fmi3;
-pub use terminals::terminals_and_icons;
+pub use terminals::{LS_BUS_DESCRIPTION, LS_BUS_MANIFEST, NETWORK_TERMINAL_KIND, ls_bus_manifest, terminals_and_icons};
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};

@@ -81,9 +81,11 @@ fn scheduled_execution(vars: &[Var], model: &ModelAttr) -> Result<()> {
     Ok(())
 }
 
-/// A terminal's members: variables of the model, each member name once.
+/// A terminal's members (and its nested terminals'): variables of the model, each member name
+/// once in its terminal; the FMI-LS-BUS rules of every `can_network` first (their messages name
+/// the role of the variable).
 fn terminals(vars: &[Var], model: &ModelAttr) -> Result<()> {
-    for t in &model.terminals {
+    fn members(vars: &[Var], t: &super::fmu_attr::TerminalAttr) -> Result<()> {
         let mut seen = Vec::new();
         for (variable, member, _, span) in &t.members {
             if !vars.iter().any(|v| v.is_named(variable)) {
@@ -103,8 +105,10 @@ fn terminals(vars: &[Var], model: &ModelAttr) -> Result<()> {
             }
             seen.push(member);
         }
+        t.terminals.iter().try_for_each(|n| members(vars, n))
     }
-    Ok(())
+    super::network::check(vars, model)?;
+    model.terminals.iter().try_for_each(|t| members(vars, t))
 }
 
 /// Each variable of a type FMI 2.0 has (or left out of it), each name and value reference once.

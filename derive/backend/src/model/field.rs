@@ -109,7 +109,9 @@ pub(crate) fn parse_var(field: &syn::Field, attr: &syn::Attribute) -> Result<Var
     let mut depends = a.depends;
     if let (Some(deps), Some(clocks)) = (&mut depends, &a.clocks) {
         // "All dependencies must be listed, also the dependencies of clocked variables on their
-        // input Clocks" (FMI 3.0, 2.4.8): a clocked variable depends on its clocks.
+        // input Clocks" (FMI 3.0, 2.4.8): a clocked variable depends on its clocks (the output
+        // clocks among them are taken out again by [`output_clocks_are_no_dependencies`], once
+        // every clock's causality is known).
         for c in clocks {
             if !deps.iter().any(|(d, _)| *d == c.0) {
                 deps.push(c.clone());
@@ -384,4 +386,25 @@ fn clock_rules(a: &VarAttr, kind: Kind, causality: Causality, variability: Varia
         ));
     }
     Ok(())
+}
+
+/// Takes the output clocks out of the `depends` a clocked variable was given by its `clocks`:
+/// only input clocks are knowns ("the dependencies of clocked variables on their input Clocks",
+/// FMI 3.0, 2.4.8); an output clocked by an output clock (an FMI-LS-BUS Tx_Data with a triggered
+/// Tx_Clock) depends on what it is computed from, not on the clock it raises.
+pub(crate) fn output_clocks_are_no_dependencies(vars: &mut [Var]) {
+    let output_clocks: Vec<(String, String)> = vars
+        .iter()
+        .filter(|v| v.kind == Kind::Clock && v.causality == Causality::Output)
+        .map(|v| (v.name.clone(), v.field.to_string()))
+        .collect();
+    for v in vars.iter_mut() {
+        let clocks = &v.clocks;
+        if let Some(deps) = &mut v.depends {
+            deps.retain(|(d, _)| {
+                let own_clock = clocks.iter().any(|(c, _)| c == d);
+                !(own_clock && output_clocks.iter().any(|(name, field)| d == name || d == field))
+            });
+        }
+    }
 }

@@ -26,6 +26,8 @@ pub(crate) struct ModelAttr {
     pub display_units: Vec<(String, String, units::Display, Span)>,
     pub categories: Vec<(String, String, Span)>,
     pub terminals: Vec<TerminalAttr>,
+    /// `can_network(..)`: FMI-LS-BUS CAN networks (each also one of `terminals`).
+    pub networks: Vec<super::network::NetworkAttr>,
 }
 
 /// `terminal(name = .., kind = .., matching_rule = .., description = .., member(..), ..)`.
@@ -36,10 +38,12 @@ pub(crate) struct TerminalAttr {
     pub description: String,
     /// (variable, memberName, variableKind, span of the variable)
     pub members: Vec<(String, String, String, Span)>,
+    /// Nested `terminal(..)`s.
+    pub terminals: Vec<TerminalAttr>,
 }
 
 /// Every key of `#[fmu(...)]` on a model struct, in the order the error lists them.
-const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 10] = [
+const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 11] = [
     Key {
         name: "identifier",
         parse: |m, meta| {
@@ -91,6 +95,10 @@ const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 10] = [
     Key {
         name: "terminal(..)",
         parse: terminal,
+    },
+    Key {
+        name: "can_network(..)",
+        parse: super::network::can_network,
     },
     Key {
         name: "display_unit(..)",
@@ -282,8 +290,19 @@ fn log_category(m: &mut ModelAttr, meta: &ParseNestedMeta) -> Result<()> {
     Ok(())
 }
 
-/// `terminal(name = .., kind = .., matching_rule = .., description = .., member(..), ..)`.
+/// `terminal(name = .., kind = .., matching_rule = .., description = .., member(..), terminal(..), ..)`.
 fn terminal(m: &mut ModelAttr, meta: &ParseNestedMeta) -> Result<()> {
+    let span = meta.path.span();
+    let t = parse_terminal(meta)?;
+    if m.terminals.iter().any(|o| o.name == t.name) {
+        return Err(Error::new(span, format!("terminal '{}' is declared twice", t.name)));
+    }
+    m.terminals.push(t);
+    Ok(())
+}
+
+/// One terminal and the terminals nested in it.
+fn parse_terminal(meta: &ParseNestedMeta) -> Result<TerminalAttr> {
     let span = meta.path.span();
     let mut t = TerminalAttr {
         name: String::new(),
@@ -291,6 +310,7 @@ fn terminal(m: &mut ModelAttr, meta: &ParseNestedMeta) -> Result<()> {
         matching_rule: "plug".into(),
         description: String::new(),
         members: Vec::new(),
+        terminals: Vec::new(),
     };
     meta.parse_nested_meta(|c| {
         if c.path.is_ident("name") {
@@ -303,25 +323,29 @@ fn terminal(m: &mut ModelAttr, meta: &ParseNestedMeta) -> Result<()> {
             t.description = string(&c)?;
         } else if c.path.is_ident("member") {
             t.members.push(member(&c)?);
+        } else if c.path.is_ident("terminal") {
+            let nested = parse_terminal(&c)?;
+            if t.terminals.iter().any(|o| o.name == nested.name) {
+                return Err(c.error(format!("terminal '{}' is nested twice", nested.name)));
+            }
+            t.terminals.push(nested);
         } else {
-            return Err(c.error("a terminal has `name`, `kind`, `matching_rule`, `description` and `member(..)`s"));
+            return Err(c.error(
+                "a terminal has `name`, `kind`, `matching_rule`, `description`, `member(..)`s and nested `terminal(..)`s",
+            ));
         }
         Ok(())
     })?;
     if t.name.is_empty() {
         return Err(Error::new(span, "a terminal needs `name = \"...\"`"));
     }
-    if t.members.is_empty() {
+    if t.members.is_empty() && t.terminals.is_empty() {
         return Err(Error::new(
             span,
-            "a terminal needs at least one `member(variable = .., name = \"..\")`",
+            "a terminal needs at least one `member(variable = .., name = \"..\")` or nested `terminal(..)`",
         ));
     }
-    if m.terminals.iter().any(|o| o.name == t.name) {
-        return Err(Error::new(span, format!("terminal '{}' is declared twice", t.name)));
-    }
-    m.terminals.push(t);
-    Ok(())
+    Ok(t)
 }
 
 /// A terminal's `member(variable = .., name = .., kind = ..)`: (variable, memberName,

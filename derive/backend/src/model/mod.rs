@@ -4,8 +4,9 @@
 //!
 //! Each step is a room: `grammar` (one typed grammar for every attribute) below
 //! `variable_attr` and `fmu_attr` (the attributes' keys), `decl` (the declarations as the rest
-//! sees them), `field` (one field's declaration and its own rules), `check` (the rules between
-//! declarations), `codegen` (the generated code); this file runs them in that order.
+//! sees them), `field` (one field's declaration and its own rules), `network` (FMI-LS-BUS network
+//! terminals: their terminal, MIME types and rules), `check` (the rules between declarations),
+//! `codegen` (the generated code); this file runs them in that order.
 
 mod check;
 mod codegen;
@@ -13,6 +14,7 @@ pub(crate) mod decl;
 mod field;
 pub(crate) mod fmu_attr;
 mod grammar;
+mod network;
 pub(crate) mod variable_attr;
 
 // The lists the documentation is checked against (`docs_tests.rs`).
@@ -113,6 +115,8 @@ fn expand_checked(input: DeriveInput) -> Result<Expansion> {
     // generated when it can be (the declarations parsed), so that the model's own impls and
     // `export_fmu!` do not add "the trait bound `M: Variables` is not satisfied" errors after it
     // (issue 23); a mistake the generator cannot get past (it panics on it) gives the error alone.
+    field::output_clocks_are_no_dependencies(&mut vars);
+    network::apply_mime_types(&model, &mut vars);
     let problem = check::check_declarations(&vars, &model).err();
     let generate = || codegen::generate(&input, fields, &model, &vars, &others, &internal);
     let generated = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(generate)) {

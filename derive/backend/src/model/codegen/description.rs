@@ -56,20 +56,23 @@ pub(crate) fn model_description(
         .iter()
         .filter(|v| v.event_indicator.is_some())
         .map(|v| v.name.clone());
-    let terminal_tokens = model.terminals.iter().map(|t| {
+    fn terminal(rt: &TokenStream, vars: &[Var], t: &crate::model::fmu_attr::TerminalAttr) -> TokenStream {
         let (name, kind, rule, description) = (&t.name, &t.kind, &t.matching_rule, &t.description);
         let members = t.members.iter().map(|(variable, member, kind, _)| {
             let variable = fmi_name(vars, variable);
             quote!(#rt::description::TerminalMember { variable: #variable, member: #member, kind: #kind })
         });
+        let nested = t.terminals.iter().map(|n| terminal(rt, vars, n));
         quote!(#rt::description::Terminal {
             name: #name,
             kind: #kind,
             matching_rule: #rule,
             description: #description,
             members: &[#(#members),*],
+            terminals: &[#(#nested),*],
         })
-    });
+    }
+    let terminal_tokens = model.terminals.iter().map(|t| terminal(rt, vars, t));
 
     quote! {
         #rt::description::ModelDescription {
