@@ -18,6 +18,17 @@ pub enum Import {
     V3(Fmi3Import),
 }
 
+/// What an FMI 3.0 description adds to the FMI 2.0 view of it (nothing for FMI 2.0).
+#[derive(Default)]
+struct Extra {
+    skipped: Vec<(String, String)>,
+    typed: Vec<crate::fmi3::Var3>,
+    /// The inputs of every type with direct feedthrough.
+    feedthrough: Vec<u32>,
+    /// The number of continuous states (None: the FMI 2.0 view's derivatives).
+    states: Option<usize>,
+}
+
 pub struct Fmu {
     /// Where it came from ("resources/Pendulum.fmu" of an SSP file, or a path).
     pub label: String,
@@ -30,6 +41,8 @@ pub struct Fmu {
     /// An FMI 3.0 FMU's variables of every type, scalars and arrays, as typed calls get and set
     /// them (empty for FMI 2.0).
     pub typed: Vec<crate::fmi3::Var3>,
+    /// The number of continuous states (FMI 3.0: an array derivative counts its elements).
+    pub states: usize,
     /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
     /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
     pub feedthrough: Vec<u32>,
@@ -49,7 +62,7 @@ impl Fmu {
             .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?
             .read_to_string(&mut xml)
             .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-        let (description, int64, skipped, typed, feedthrough3) = Fmu::description(component, label, &xml)?;
+        let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid).map(Import::V2),
             Some(int64) => {
@@ -57,7 +70,7 @@ impl Fmu {
             }
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import, (skipped, typed, feedthrough3))
+        Fmu::with(component, label, description, import, extra)
     }
 
     /// Loads the FMU unpacked in the folder `dir` (a container's components).
@@ -68,7 +81,7 @@ impl Fmu {
         };
         let path = dir.join("modelDescription.xml");
         let xml = std::fs::read_to_string(&path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-        let (description, int64, skipped, typed, feedthrough3) = Fmu::description(component, label, &xml)?;
+        let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid).map(Import::V2),
             Some(int64) => {
@@ -76,49 +89,33 @@ impl Fmu {
             }
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
-        Fmu::with(component, label, description, import, (skipped, typed, feedthrough3))
+        Fmu::with(component, label, description, import, extra)
     }
 
     /// The description of `xml`, checked to be one of an FMI 2.0 or 3.0 co-simulation FMU; for
-    /// FMI 3.0 also the value references read with fmi3GetInt64 and the variables left out.
-    #[allow(clippy::type_complexity)]
+    /// FMI 3.0 also the value references read with fmi3GetInt64 and what its view adds.
     fn description(
         component: &str,
         label: &str,
         xml: &str,
-    ) -> Result<
-        (
-            Description,
-            Option<std::collections::HashSet<u32>>,
-            Vec<(String, String)>,
-            Vec<crate::fmi3::Var3>,
-            Vec<u32>,
-        ),
-        Error,
-    > {
+    ) -> Result<(Description, Option<std::collections::HashSet<u32>>, Extra), Error> {
         let fail = |what: String| Error {
             component: Some(component.to_owned()),
             ..Error::io(format!("component '{component}' ({label}): {what}"))
         };
         let version = md_reader::fmi_version(xml).map_err(fail)?;
-        let (description, int64, skipped, typed, feedthrough3) = if version.starts_with("3.") {
+        let (description, int64, extra) = if version.starts_with("3.") {
             let d3 = md_reader::fmi3::ModelDescription::parse(xml).map_err(fail)?;
             let parts = crate::fmi3::as_fmi2(&d3);
-            (
-                parts.description,
-                Some(parts.int64),
-                parts.skipped,
-                parts.typed,
-                parts.feedthrough,
-            )
+            let extra = Extra {
+                skipped: parts.skipped,
+                typed: parts.typed,
+                feedthrough: parts.feedthrough,
+                states: Some(parts.states),
+            };
+            (parts.description, Some(parts.int64), extra)
         } else if version.starts_with("2.") {
-            (
-                Description::parse(xml).map_err(fail)?,
-                None,
-                Vec::new(),
-                Vec::new(),
-                Vec::new(),
-            )
+            (Description::parse(xml).map_err(fail)?, None, Extra::default())
         } else {
             return Err(Error::unsupported(
                 Some(component),
@@ -137,7 +134,7 @@ impl Fmu {
                 ),
             ));
         }
-        Ok((description, int64, skipped, typed, feedthrough3))
+        Ok((description, int64, extra))
     }
 
     fn with(
@@ -145,7 +142,7 @@ impl Fmu {
         label: &str,
         description: Description,
         import: Import,
-        (skipped, typed, feedthrough3): (Vec<(String, String)>, Vec<crate::fmi3::Var3>, Vec<u32>),
+        extra: Extra,
     ) -> Result<Fmu, Error> {
         let fail = |what: String| Error {
             component: Some(component.to_owned()),
@@ -173,15 +170,17 @@ impl Fmu {
             }
         }
         // FMI 3.0: the inputs of every type (FMI 2.0's view keeps only its own types).
-        feedthrough.extend(&feedthrough3);
+        feedthrough.extend(&extra.feedthrough);
         feedthrough.sort_unstable();
         feedthrough.dedup();
+        let states = extra.states.unwrap_or(description.model_structure.derivatives.len());
         Ok(Fmu {
             label: label.to_owned(),
+            states,
             description,
             import,
-            skipped,
-            typed,
+            skipped: extra.skipped,
+            typed: extra.typed,
             feedthrough,
         })
     }
@@ -278,7 +277,7 @@ impl Fmu {
         if self.description.me.is_none() {
             return Err(fail("no <ModelExchange> in its modelDescription.xml".into()));
         }
-        let nx = self.description.model_structure.derivatives.len();
+        let nx = self.states;
         let nz = self.description.number_of_event_indicators;
         let inner = match &self.import {
             Import::V2(import) => import

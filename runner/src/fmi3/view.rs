@@ -19,6 +19,9 @@ pub struct Fmi3Parts {
     /// The inputs of every type some output depends on directly (ModelStructure `<Output
     /// dependencies>`; an output without the attribute depends on every input).
     pub feedthrough: Vec<u32>,
+    /// The number of continuous states: the elements of the `<ContinuousStateDerivative>`s
+    /// (an array derivative counts each; FMI 3.0, 2.4.8).
+    pub states: usize,
 }
 
 /// An FMI 3.0 variable as the runner gets and sets it ([`crate::values::Values`]).
@@ -184,6 +187,13 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         max_output_derivative_order: cs.max_output_derivative_order,
         can_run_asynchronuously: false,
     });
+    // An array among the derivatives or the event indicators counts its elements (FMI 3.0, 2.4.8).
+    let elements = |list: &[d3::Unknown]| -> usize {
+        list.iter()
+            .map(|u| typed.iter().find(|v| v.vr == u.vr).map_or(1, Var3::count))
+            .sum()
+    };
+    let states = elements(&d.derivatives);
     let description = d2::ModelDescription {
         fmi_version: d.fmi_version.clone(),
         model_name: d.model_name.clone(),
@@ -191,7 +201,7 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         description: d.description.clone(),
         version: d.version.clone(),
         generation_tool: d.generation_tool.clone(),
-        number_of_event_indicators: d.event_indicators.len(),
+        number_of_event_indicators: elements(&d.event_indicators),
         cs,
         me,
         enumerations: Vec::new(),
@@ -223,5 +233,6 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         typed,
         skipped,
         feedthrough,
+        states,
     }
 }
