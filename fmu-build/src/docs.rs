@@ -108,6 +108,7 @@ mod tests {
             internal_state: "",
             event_indicators: &[],
             terminals: &[],
+            bus_simulation: false,
         };
         let both = Interfaces {
             co_simulation: true,

@@ -24,6 +24,8 @@
 
 use std::fmt;
 
+pub mod bus;
+
 /// The OP codes of FMI-LS-BUS 1.0.0 (`fmi3LsBus.h`, `fmi3LsBusCan.h`).
 pub mod op_code {
     /// Format Error (common to every bus type).
@@ -116,6 +118,7 @@ pub struct CanXlFrame<'a> {
 
 /// Bus Error's Error Code (`FMI3_LS_BUS_CAN_BUSERROR_PARAM_ERROR_CODE_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[repr(u8)]
 pub enum ErrorCode {
     /// The sender read back a bit other than the one it sent.
@@ -134,6 +137,7 @@ pub enum ErrorCode {
 
 /// Bus Error's Error Flag (`FMI3_LS_BUS_CAN_BUSERROR_PARAM_ERROR_FLAG_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[repr(u8)]
 pub enum ErrorFlag {
     /// This network FMU detected the error first.
@@ -144,6 +148,7 @@ pub enum ErrorFlag {
 
 /// The CAN node state a network FMU reports (Status, `FMI3_LS_BUS_CAN_STATUS_PARAM_STATUS_KIND_*`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[repr(u8)]
 pub enum Status {
     /// ERROR ACTIVE (the default a bus simulation assumes).
@@ -156,6 +161,7 @@ pub enum Status {
 
 /// What a bus simulation does with a frame that lost arbitration (Configuration parameter 0x04).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[repr(u8)]
 pub enum ArbitrationLostBehavior {
     /// Keep the frame and send it when the bus is free; no Arbitration Lost operation.
@@ -166,6 +172,7 @@ pub enum ArbitrationLostBehavior {
 
 /// One parameter of a Configuration operation (OP code 0x40; one parameter per operation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Configuration {
     /// CAN baud rate, bit/s (parameter type 0x01).
     CanBaudrate(u32),

@@ -357,6 +357,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             t.terminals = leak_slice(nested_terminals(&mut d)?);
         }
     }
+    let bus_simulation = !terminals.is_empty() && d.block(BUS_SIMULATION_TAG);
     if d.block(FMI3_EXTRAS_TAG) {
         let n = d.count()?;
         for _ in 0..n {
@@ -485,6 +486,7 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
             internal_state,
             event_indicators,
             terminals: leak_slice(terminals),
+            bus_simulation,
         },
         interfaces,
     ))

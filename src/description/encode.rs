@@ -409,6 +409,9 @@ impl Enc<'_> {
                     k += 1;
                 }
             }
+            if d.bus_simulation {
+                self.u8(BUS_SIMULATION_TAG);
+            }
         }
         // Likewise the FMI 3.0 declarations: only where some variable has one.
         if extras > 0 {
@@ -698,6 +701,8 @@ pub(super) const FMI3_EXTRAS_TAG: u8 = 0xE2;
 pub(super) const TERMINALS_TAG: u8 = 0xE3;
 /// Marks the nested terminals of the terminals' block (only where some terminal has them).
 pub(super) const NESTED_TERMINALS_TAG: u8 = 0xEA;
+/// Marks an FMI-LS-BUS bus simulation (after the terminals; only where it is one).
+pub(super) const BUS_SIMULATION_TAG: u8 = 0xEB;
 /// Marks the block of the clocks and clocked variables, after the FMI 3.0 declarations.
 pub(super) const CLOCKS_TAG: u8 = 0xE4;
 /// Marks a co-simulation step that follows input derivatives (canInterpolateInputs), last.

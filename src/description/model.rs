@@ -90,6 +90,9 @@ pub struct ModelDescription {
     /// FMI 3.0 terminals (`terminalsAndIcons/terminalsAndIcons.xml`): named groups of
     /// variables an importer connects as one (a mechanical flange: angle, speed, torque).
     pub terminals: &'static [Terminal],
+    /// An FMI-LS-BUS bus simulation FMU (`#[fmu(bus_simulation)]`): the manifest says
+    /// `isBusSimulationFMU="true"`.
+    pub bus_simulation: bool,
 }
 
 /// An FMI 3.0 `<Terminal>` (FMI 3.0, 2.4.9): variables that belong together.

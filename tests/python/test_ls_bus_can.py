@@ -267,3 +267,182 @@ def test_cargo_fmu_check_passes_on_the_network_fmu(can_signal):
     out = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", path], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-2000:]
     assert " 0 failed, 0 warned" in out.stdout, out.stdout[-2000:]
+
+
+# --- The bus simulation: CanBus between network FMUs ------------------------------------------
+
+def can_bits(can_id, data):
+    """A classic standard CAN data frame's length in bits, written here from ISO 11898-1 (not from
+    the Rust code): start of frame .. CRC-15, stuffed (a bit of opposite value after five equal
+    ones), then CRC delimiter, ACK slot and delimiter, end of frame (7), intermission (3)."""
+    bits = [0] + [(can_id >> i) & 1 for i in range(10, -1, -1)] + [0, 0, 0]  # SOF, ID, RTR, IDE, r0
+    bits += [(len(data) >> i) & 1 for i in range(3, -1, -1)]
+    for byte in data:
+        bits += [(byte >> i) & 1 for i in range(7, -1, -1)]
+    crc = 0
+    for b in bits:
+        nxt = b ^ ((crc >> 14) & 1)
+        crc = (crc << 1) & 0x7FFF
+        if nxt:
+            crc ^= 0x4599
+    bits += [(crc >> i) & 1 for i in range(14, -1, -1)]
+    stuffed, run, last = 0, 0, None
+    for b in bits:
+        run = run + 1 if b == last else 1
+        last = b
+        if run == 5:
+            stuffed, last, run = stuffed + 1, 1 - b, 1
+    return len(bits) + stuffed + 13
+
+
+@pytest.fixture(scope="module")
+def can_bus():
+    path = fmu3("CanBus")
+    md = fmpy.read_model_description(path)
+    return path, md, {v.name: v.valueReference for v in md.modelVariables}
+
+
+class Bus:
+    """The CanBus instance: ports 1..4, the countdown Tx clocks read after every event."""
+
+    def __init__(self, fmu, **params):
+        path, md, self.vr = fmu
+        self.messages = []
+        self.f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path),
+                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bus")
+        self.f.instantiate(eventModeUsed=True, loggingOn=True,
+                           logMessage=lambda *a: self.messages.append(a[-1].decode()))
+        self.f.enterInitializationMode(startTime=0.0)
+        for k, v in params.items():
+            self.f.setInt32([self.vr[k]], [v])
+        self.f.exitInitializationMode()
+        self.t = 0.0
+        self.next = None
+
+    def settle(self):
+        while self.f.updateDiscreteStates()[0]:
+            pass
+        # A countdown clock whose interval changed: the importer schedules its tick.
+        vrs = (fmi3ValueReference * 1)(self.vr["Node1.Tx_Clock"])
+        intervals, qualifiers = (fmi3Float64 * 1)(), (fmi3IntervalQualifier * 1)()
+        self.f.getIntervalDecimal(vrs, intervals, qualifiers)
+        if qualifiers[0] == 2:  # fmi3IntervalChanged
+            self.next = self.t + intervals[0]
+
+    def receive(self, port, data):
+        self.f.setClock([self.vr[f"Node{port}.Rx_Clock"]], [True])
+        self.f.setBinary([self.vr[f"Node{port}.Rx_Data"]], [data])
+        self.settle()
+
+    def deliver(self, ports):
+        """The bus's Tx tick: what each port gets."""
+        self.f.setClock([self.vr[f"Node{p}.Tx_Clock"] for p in ports], [True] * len(ports))
+        out = {p: self.f.getBinary([self.vr[f"Node{p}.Tx_Data"]])[0] for p in ports}
+        self.next = None
+        self.settle()
+        return out
+
+    def step(self, t, h):
+        self.f.enterStepMode()
+        event, terminate, early, _ = self.f.doStep(t, h)
+        assert not terminate and not early
+        self.f.enterEventMode()
+        self.t = t + h
+
+    def get(self, name):
+        v = self.vr[name]
+        return self.f.getFloat64([v])[0] if name == "bus_load" else self.f.getInt32([v])[0]
+
+
+def run_network(nodes, bus, stop, inputs):
+    """The scheduler of an importer with a bus simulation: nodes[i] is on port i + 1; at each
+    time point, every node whose Tx clock ticks sends (its Tx_Data into its port's Rx_Data), then
+    the bus delivers if its countdown ended (each port's Tx_Data into its node's Rx_Data). The
+    next time point is the earliest of the nodes' Tx ticks and the bus's countdown. Returns the
+    deliveries: [(time, port, operations)]."""
+    deliveries, t = [], 0.0
+    next_tx = [0.0 for _ in nodes]
+    while t <= stop + 1e-12:
+        for i, node in enumerate(nodes):
+            if abs(next_tx[i] - t) < 1e-12:
+                tx = node.send(inputs[i](t))
+                if tx:
+                    bus.receive(i + 1, tx)
+                next_tx[i] += node.period
+        if bus.next is not None and abs(bus.next - t) < 1e-12:
+            for port, data in bus.deliver([1, 2, 3, 4]).items():
+                if data and port <= len(nodes):
+                    nodes[port - 1].receive(data)
+                    deliveries.append((t, port, operations(data)))
+        candidates = next_tx + ([bus.next] if bus.next is not None else [])
+        t_next = min(candidates)
+        if t_next > stop + 1e-12:
+            break
+        for node in nodes:
+            node.step(t, t_next - t)
+        bus.step(t, t_next - t)
+        t = t_next
+    return deliveries
+
+
+def test_a_frame_crosses_the_bus_in_its_bit_time_and_is_confirmed(can_signal, can_bus):
+    sensor = Node(can_signal, "sensor", tx_id=0x123, rx_id=0x7FF, period=PERIOD, BusNotifications=True)
+    actuator = Node(can_signal, "actuator", tx_id=0x200, rx_id=0x123, period=PERIOD, BusNotifications=True)
+    sensor.period = actuator.period = PERIOD
+    bus = Bus(can_bus)
+    u = [lambda t: math.cos(t) + 0.5, lambda t: 0.0]
+    deliveries = run_network([sensor, actuator], bus, 0.055, u)
+    # The sensor's frame at t = 0 reaches the actuator after its length at 500 kbit/s (the bus's
+    # default), counted here from ISO 11898-1; the actuator's own frame (ID 0x200) loses the
+    # arbitration at t = 0 and follows right after.
+    first = can_bits(0x123, struct.pack("<d", u[0](0.0))) / 500_000
+    second = can_bits(0x200, struct.pack("<d", 0.0)) / 500_000
+    at0 = [(t, p, ops) for t, p, ops in deliveries if t < PERIOD / 2]
+    (t1, p1, ops1), (t1b, p1b, ops1b) = sorted(at0[:2], key=lambda d: d[1])
+    assert abs(t1 - first) < 1e-12 and abs(t1b - first) < 1e-12, (t1, first)
+    assert p1 == 1 and [c for c, _ in ops1] == [0x20] and struct.unpack("<I", ops1[0][1])[0] == 0x123  # Confirm
+    assert p1b == 2 and [c for c, _ in ops1b] == [0x10]
+    assert transmitted(ops1b[0][1])[3] == struct.pack("<d", u[0](0.0))
+    t2 = [(t, p) for t, p, _ in at0[2:]]
+    assert t2 and abs(t2[0][0] - (first + second)) < 1e-12, (t2, first + second)
+    # Every period the same: the actuator outputs the sensor's signal of the last tick.
+    assert actuator.get("y") == u[0](0.05) and actuator.get("frames_received") == 6
+    assert sensor.get("confirmed") == 6 and actuator.get("confirmed") == 6
+    assert bus.get("frames_delivered") == 12 and bus.get("arbitration_losses") == 0
+    # The bus load: the bits of the twelve frames (each counted here with its own data) over the time.
+    busy = sum(can_bits(0x123, struct.pack("<d", u[0](k * PERIOD))) + can_bits(0x200, struct.pack("<d", 0.0))
+               for k in range(6)) / 500_000
+    load = bus.get("bus_load")
+    assert abs(load - busy / bus.t) < 1e-9, (load, busy / bus.t)
+    for x in (sensor, actuator):
+        x.close()
+
+
+def test_injected_bus_errors_reach_every_node_and_the_frame_is_sent_again(can_signal, can_bus):
+    sensor = Node(can_signal, "sensor", tx_id=0x123, rx_id=0x7FF, period=PERIOD, BusNotifications=True)
+    actuator = Node(can_signal, "actuator", tx_id=0x200, rx_id=0x123, period=PERIOD, BusNotifications=True)
+    sensor.period = actuator.period = PERIOD
+    bus = Bus(can_bus, error_every=3)
+    run_network([sensor, actuator], bus, 0.055, [lambda t: t, lambda t: 0.0])
+    errors = bus.get("bus_errors")
+    assert errors >= 3
+    # Each error reached both nodes (one Bus Error each); every frame still arrived, later.
+    assert sensor.get("bus_errors") == actuator.get("bus_errors") == errors
+    assert bus.get("frames_delivered") == 12 and actuator.get("y") == 0.05
+    for x in (sensor, actuator):
+        x.close()
+
+
+def test_the_bus_simulation_is_packaged_as_one(can_bus):
+    path, md, _ = can_bus
+    with zipfile.ZipFile(path) as z:
+        manifest = etree.fromstring(z.read("extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml"))
+        terminals = etree.fromstring(z.read("terminalsAndIcons/terminalsAndIcons.xml"))
+    assert manifest.get("isBusSimulationFMU") == "true"
+    assert [t.get("name") for t in terminals.findall("Terminals/Terminal")] == ["Node1", "Node2", "Node3", "Node4"]
+    v = {x.name: x for x in md.modelVariables}
+    assert all(v[f"Node{k}.Tx_Clock"].intervalVariability == "countdown" for k in range(1, 5))
+    assert all((v[f"Node{k}.BusNotifications"].causality, v[f"Node{k}.BusNotifications"].variability)
+               == ("output", "constant") for k in range(1, 5))
+    out = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", path], capture_output=True, text=True)
+    assert out.returncode == 0 and " 0 failed, 0 warned" in out.stdout, out.stdout[-3000:]

@@ -59,12 +59,18 @@ fn an_output_triggered_tx_clock_is_legal_too() {
             r#"name = "Powertrain.Tx_Clock", input, clock(countdown)"#,
             r#"name = "Powertrain.Tx_Clock", output, clock(triggered)"#,
         ),
-        ("clocks = [tx_clock], max_size = 64", "clocks = [tx_clock], max_size = 64, depends = []"),
+        (
+            "clocks = [tx_clock], max_size = 64",
+            "clocks = [tx_clock], max_size = 64, depends = []",
+        ),
     ]));
     // Tx_Data depends on nothing: an output clock is no known (FMI 3.0, 2.4.8: "the dependencies
     // of clocked variables on their input Clocks").
     assert!(code.contains(r#"name : "Powertrain.Tx_Data""#), "{code}");
-    assert!(!code.contains(r#"depends : Some (& ["Powertrain.Tx_Clock"])"#), "{code}");
+    assert!(
+        !code.contains(r#"depends : Some (& ["Powertrain.Tx_Clock"])"#),
+        "{code}"
+    );
 }
 
 #[test]
@@ -145,6 +151,34 @@ struct M {
     let e = error(&src.replace("member(variable = b)", "member(variable = c)")).to_string();
     assert!(
         e.contains("terminal 'inner': member variable 'c' is no variable of the model"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_bus_simulation_announces_its_notifications_as_the_standard_says() {
+    let bus = |notifications: &str| {
+        node(&[
+            ("#[fmu(fmi3_only, ", "#[fmu(fmi3_only, bus_simulation, "),
+            (
+                r#"name = "BusNotifications", parameter, fixed, start = false"#,
+                notifications,
+            ),
+        ])
+    };
+    let code = generated(&bus(r#"name = "BusNotifications", output, constant, start = true"#));
+    assert!(code.contains("bus_simulation : true"), "{code}");
+    generated(&bus(r#"name = "BusNotifications", calculated_parameter, fixed"#));
+    let e = error(&bus(r#"name = "BusNotifications", parameter, fixed, start = false"#)).to_string();
+    assert!(
+        e.contains("of a bus simulation must be a bool `calculated_parameter, fixed` or `output, constant`"),
+        "{e}"
+    );
+    assert!(generated(&node(&[])).contains("bus_simulation : false"));
+    let lonely = "#[fmu(fmi3_only, bus_simulation)]\nstruct B {\n#[variable(vr = 1, input)]\nu: f64,\n}\n";
+    let e = error(lonely).to_string();
+    assert!(
+        e.contains("a bus simulation FMU has a can_network(..) for each network FMU"),
         "{e}"
     );
 }

@@ -68,6 +68,7 @@ const BALL: ModelDescription = ModelDescription {
     internal_state: "",
     event_indicators: &[],
     terminals: &[],
+    bus_simulation: false,
 };
 
 /// The description as `cargo fmu` gets it from a library of that version.

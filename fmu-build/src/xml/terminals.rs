@@ -64,8 +64,8 @@ fn terminal(w: &mut Xml, d: &ModelDescription, t: &Terminal) -> Result<(), Strin
 
 /// `extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml` of a description with an FMI-LS-BUS
 /// network terminal ("The manifest file shall be stored inside the FMU at the following path"),
-/// `None` otherwise. A network FMU: `isBusSimulationFMU="false"` (the bus simulation FMUs of
-/// issue 55's item 2 are not declarable yet).
+/// `None` otherwise; `isBusSimulationFMU` says whether it is a bus simulation
+/// (`#[fmu(bus_simulation)]`).
 pub fn ls_bus_manifest(d: &ModelDescription) -> Option<String> {
     d.terminals.iter().any(|t| t.kind == NETWORK_TERMINAL_KIND).then(|| {
         format!(
@@ -75,8 +75,9 @@ pub fn ls_bus_manifest(d: &ModelDescription) -> Option<String> {
     fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-bus"
     fmi-ls:fmi-ls-version="1.0.0"
     fmi-ls:fmi-ls-description="{LS_BUS_DESCRIPTION}"
-    isBusSimulationFMU="false"/>
-"#
+    isBusSimulationFMU="{}"/>
+"#,
+            d.bus_simulation
         )
     })
 }

@@ -55,6 +55,7 @@ const D: ModelDescription = ModelDescription {
     internal_state: "",
     event_indicators: &[],
     terminals: &[],
+    bus_simulation: false,
 };
 
 #[test]
@@ -261,6 +262,7 @@ const LAG: ModelDescription = ModelDescription {
     internal_state: "",
     event_indicators: &[],
     terminals: &[],
+    bus_simulation: false,
 };
 
 fn lag3() -> String {

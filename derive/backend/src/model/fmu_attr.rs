@@ -26,6 +26,9 @@ pub(crate) struct ModelAttr {
     pub display_units: Vec<(String, String, units::Display, Span)>,
     pub categories: Vec<(String, String, Span)>,
     pub terminals: Vec<TerminalAttr>,
+    /// `bus_simulation`: an FMI-LS-BUS bus simulation FMU (its networks' rules are a bus
+    /// simulation's; the manifest says so).
+    pub bus_simulation: Option<Span>,
     /// `can_network(..)`: FMI-LS-BUS CAN networks (each also one of `terminals`).
     pub networks: Vec<super::network::NetworkAttr>,
 }
@@ -43,7 +46,7 @@ pub(crate) struct TerminalAttr {
 }
 
 /// Every key of `#[fmu(...)]` on a model struct, in the order the error lists them.
-const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 11] = [
+const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 12] = [
     Key {
         name: "identifier",
         parse: |m, meta| {
@@ -99,6 +102,10 @@ const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 11] = [
     Key {
         name: "can_network(..)",
         parse: super::network::can_network,
+    },
+    Key {
+        name: "bus_simulation",
+        parse: |m, meta| flag(&mut m.bus_simulation, meta, "bus_simulation is given twice"),
     },
     Key {
         name: "display_unit(..)",

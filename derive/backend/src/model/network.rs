@@ -230,15 +230,35 @@ pub(crate) fn check(vars: &[Var], model: &ModelAttr) -> Result<()> {
         }
         if let Some(b) = &n.bus_notifications {
             let v = get(b, "bus_notifications")?;
-            let start_false =
-                matches!(&v.start, Some(syn::Expr::Lit(syn::ExprLit { lit: syn::Lit::Bool(b), .. })) if !b.value);
-            if v.kind != Kind::Boolean || v.causality != Causality::Parameter || !start_false {
-                return bad(
-                    v,
-                    "bus_notifications",
-                    "must be a bool parameter with `start = false`: \"The default value of this parameter shall be \
-                     false\" (FMI-LS-BUS 1.0.0, Bus Notification Parameter)",
-                );
+            if model.bus_simulation.is_some() {
+                // A bus simulation "shall indicate ... whether it provides bus notifications":
+                // "causality = calculatedParameter and variability = fixed; or causality = output
+                // and variability = constant" (FMI-LS-BUS 1.0.0, Bus Notification Parameter).
+                let ok = v.kind == Kind::Boolean
+                    && matches!(
+                        (v.causality, v.variability),
+                        (Causality::CalculatedParameter, Variability::Fixed)
+                            | (Causality::Output, Variability::Constant)
+                    );
+                if !ok {
+                    return bad(
+                        v,
+                        "bus_notifications",
+                        "of a bus simulation must be a bool `calculated_parameter, fixed` or `output, constant` \
+                         (FMI-LS-BUS 1.0.0, Bus Notification Parameter)",
+                    );
+                }
+            } else {
+                let start_false =
+                    matches!(&v.start, Some(syn::Expr::Lit(syn::ExprLit { lit: syn::Lit::Bool(b), .. })) if !b.value);
+                if v.kind != Kind::Boolean || v.causality != Causality::Parameter || !start_false {
+                    return bad(
+                        v,
+                        "bus_notifications",
+                        "must be a bool parameter with `start = false`: \"The default value of this parameter shall be \
+                         false\" (FMI-LS-BUS 1.0.0, Bus Notification Parameter)",
+                    );
+                }
             }
         }
         // "The use of the same variable within different Bus Terminals is not allowed."
@@ -264,6 +284,14 @@ pub(crate) fn check(vars: &[Var], model: &ModelAttr) -> Result<()> {
                 ),
             ));
         }
+    }
+    if let Some(span) = model.bus_simulation
+        && model.networks.is_empty()
+    {
+        return Err(Error::new(
+            span,
+            "bus_simulation: a bus simulation FMU has a can_network(..) for each network FMU it connects",
+        ));
     }
     Ok(())
 }

@@ -73,6 +73,7 @@ pub(crate) fn model_description(
         })
     }
     let terminal_tokens = model.terminals.iter().map(|t| terminal(rt, vars, t));
+    let bus_simulation = model.bus_simulation.is_some();
 
     quote! {
         #rt::description::ModelDescription {
@@ -90,6 +91,7 @@ pub(crate) fn model_description(
             internal_state: #internal_state,
             event_indicators: &[#(#indicator_names),*],
             terminals: &[#(#terminal_tokens),*],
+            bus_simulation: #bus_simulation,
         }
     }
 }
