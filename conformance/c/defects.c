@@ -18,6 +18,8 @@
  *   DEFECT_ME_EQUATIONS     model exchange's derivatives are twice co-simulation's
  *   DEFECT_RESTORE          fmi2SetFMUstate / fmi3SetFMUState answer OK and restore nothing
  *   DEFECT_FREE_CRASH       fmi2FreeInstance / fmi3FreeInstance crash (SIGSEGV)
+ *   DEFECT_ONE_PAST         fmi2GetRealStatus / fmi3GetNumberOfContinuousStates write a second
+ *                           value after the one their output pointer holds
  *   DEFECT_TOKEN=\"...\"    the binary does not check the GUID / instantiationToken: it
  *                           instantiates with the given one whatever the importer passes
  *
@@ -41,7 +43,7 @@
     X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean)        \
     X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize)                          \
     X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative) X(fmi2SetRealInputDerivatives)                     \
-    X(fmi2GetRealOutputDerivatives) X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus)                       \
+    X(fmi2GetRealOutputDerivatives) X(fmi2CancelStep) X(fmi2GetStatus)                                            \
     X(fmi2GetIntegerStatus) X(fmi2GetBooleanStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                  \
     X(fmi2NewDiscreteStates) X(fmi2EnterContinuousTimeMode) X(fmi2CompletedIntegratorStep) X(fmi2SetTime)         \
     X(fmi2SetContinuousStates) X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                               \
@@ -62,7 +64,7 @@
     X(fmi3SetShiftFraction) X(fmi3EvaluateDiscreteStates) X(fmi3UpdateDiscreteStates)                             \
     X(fmi3EnterContinuousTimeMode) X(fmi3CompletedIntegratorStep) X(fmi3SetTime) X(fmi3SetContinuousStates)       \
     X(fmi3GetEventIndicators) X(fmi3GetContinuousStates) X(fmi3GetNominalsOfContinuousStates)                     \
-    X(fmi3GetNumberOfEventIndicators) X(fmi3GetNumberOfContinuousStates) X(fmi3EnterStepMode)                     \
+    X(fmi3GetNumberOfEventIndicators) X(fmi3EnterStepMode)                                                        \
     X(fmi3GetOutputDerivatives) X(fmi3ActivateModelPartition)
 
 /* The functions a defect may break: forwarded like the others where its defect is not compiled
@@ -71,7 +73,7 @@
     X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2GetReal) X(fmi2DoStep) X(fmi2SerializeFMUstate)                  \
     X(fmi2SetFMUstate) X(fmi2GetDerivatives) X(fmi3InstantiateModelExchange) X(fmi3InstantiateCoSimulation)       \
     X(fmi3FreeInstance) X(fmi3GetFloat64) X(fmi3DoStep) X(fmi3SerializeFMUState) X(fmi3SetFMUState)               \
-    X(fmi3GetContinuousStateDerivatives)
+    X(fmi3GetContinuousStateDerivatives) X(fmi2GetRealStatus) X(fmi3GetNumberOfContinuousStates)
 
 #define POINTER(f) HIDDEN void *next_##f;
 FMI2_COMMON(POINTER)
@@ -108,6 +110,10 @@ TRAMPOLINE(fmi3SerializeFMUState)
 #ifndef DEFECT_RESTORE
 TRAMPOLINE(fmi2SetFMUstate)
 TRAMPOLINE(fmi3SetFMUState)
+#endif
+#ifndef DEFECT_ONE_PAST
+TRAMPOLINE(fmi2GetRealStatus)
+TRAMPOLINE(fmi3GetNumberOfContinuousStates)
 #endif
 #ifndef DEFECT_ME_EQUATIONS
 TRAMPOLINE(fmi2GetDerivatives)
@@ -240,5 +246,18 @@ S fmi2GetDerivatives(void *c, double *d, size_t n) {
 }
 S fmi3GetContinuousStateDerivatives(void *c, double *d, size_t n) {
     return doubled(((S(*)(void *, double *, size_t))next_fmi3GetContinuousStateDerivatives)(c, d, n), d, n);
+}
+#endif
+
+#ifdef DEFECT_ONE_PAST
+S fmi2GetRealStatus(void *c, int kind, double *value) {
+    S s = ((S(*)(void *, int, double *))next_fmi2GetRealStatus)(c, kind, value);
+    if (s == 0) value[1] = value[0];
+    return s;
+}
+S fmi3GetNumberOfContinuousStates(void *c, size_t *n) {
+    S s = ((S(*)(void *, size_t *))next_fmi3GetNumberOfContinuousStates)(c, n);
+    if (s == 0) n[1] = n[0];
+    return s;
 }
 #endif

@@ -342,7 +342,15 @@ impl<'a> Instance<'a> {
         crumb("fmi2GetFMUstate", String::new);
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: a live instance and a valid out pointer.
-        let st = unsafe { (self.fmu.api.get_fmu_state)(self.c, &mut s) };
+        let st = unsafe {
+            crate::guard::fill_one(
+                &mut s,
+                "fmi2GetFMUstate",
+                "one FMU state",
+                crate::guard::STATE_RULE2,
+                |q| (self.fmu.api.get_fmu_state)(self.c, q),
+            )
+        };
         (st, s)
     }
 
@@ -369,7 +377,15 @@ impl<'a> Instance<'a> {
     pub fn serialize(&mut self, s: fmi2FMUstate) -> Result<Vec<u8>, Status> {
         let mut size = 0usize;
         // SAFETY: a state of this FMU and valid out pointers.
-        let st = unsafe { (self.fmu.api.serialized_fmu_state_size)(self.c, s, &mut size) };
+        let st = unsafe {
+            crate::guard::fill_one(
+                &mut size,
+                "fmi2SerializedFMUstateSize",
+                "one size_t",
+                crate::guard::STATE_RULE2,
+                |p| (self.fmu.api.serialized_fmu_state_size)(self.c, s, p),
+            )
+        };
         if st != fmi2OK {
             return Err(st);
         }
@@ -393,7 +409,13 @@ impl<'a> Instance<'a> {
         let mut s: fmi2FMUstate = ptr::null_mut();
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
         let st = unsafe {
-            (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut s)
+            crate::guard::fill_one(
+                &mut s,
+                "fmi2DeSerializeFMUstate",
+                "one FMU state",
+                crate::guard::STATE_RULE2,
+                |q| (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+            )
         };
         (st, s)
     }
@@ -539,14 +561,30 @@ impl<'a> Instance<'a> {
     pub fn last_successful_time(&self) -> (Status, f64) {
         let mut t = f64::NAN;
         // SAFETY: a valid out pointer.
-        let s = unsafe { (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, &mut t) };
+        let s = unsafe {
+            crate::guard::fill_one(
+                &mut t,
+                "fmi2GetRealStatus",
+                "one value",
+                crate::guard::STATUS_RULE2,
+                |p| (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, p),
+            )
+        };
         (s, t)
     }
 
     pub fn terminated(&self) -> (Status, fmi2Boolean) {
         let mut b = -1;
         // SAFETY: a valid out pointer.
-        let s = unsafe { (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, &mut b) };
+        let s = unsafe {
+            crate::guard::fill_one(
+                &mut b,
+                "fmi2GetBooleanStatus",
+                "one value",
+                crate::guard::STATUS_RULE2,
+                |p| (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, p),
+            )
+        };
         (s, b)
     }
 

@@ -178,10 +178,22 @@ impl Fmu {
             }
             let mut s: fmi2FMUstate = std::ptr::null_mut();
             let mut bytes = vec![];
-            let mut status = (api.get_fmu_state)(c, &mut s);
+            let mut status = crate::guard::fill_one(
+                &mut s,
+                "fmi2GetFMUstate",
+                "one FMU state",
+                crate::guard::STATE_RULE2,
+                |q| (api.get_fmu_state)(c, q),
+            );
             if status == fmi2OK {
                 let mut size = 0usize;
-                status = (api.serialized_fmu_state_size)(c, s, &mut size);
+                status = crate::guard::fill_one(
+                    &mut size,
+                    "fmi2SerializedFMUstateSize",
+                    "one size_t",
+                    crate::guard::STATE_RULE2,
+                    |p| (api.serialized_fmu_state_size)(c, s, p),
+                );
                 if status == fmi2OK && size <= 1 << 30 {
                     let mut guarded = guard::Guarded::new(size, 0u8);
                     outcome::breadcrumb("fmi2SerializeFMUstate (probing the state format)");
@@ -192,14 +204,26 @@ impl Fmu {
                     ) {
                         Ok(b) => bytes = b,
                         Err(e) => {
-                            (api.free_fmu_state)(c, &mut s);
+                            crate::guard::fill_one(
+                                &mut s,
+                                "fmi2FreeFMUstate",
+                                "one FMU state",
+                                crate::guard::STATE_RULE2,
+                                |q| (api.free_fmu_state)(c, q),
+                            );
                             outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
                             (api.free_instance)(c);
                             return Err(e);
                         }
                     }
                 }
-                (api.free_fmu_state)(c, &mut s);
+                crate::guard::fill_one(
+                    &mut s,
+                    "fmi2FreeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.free_fmu_state)(c, q),
+                );
             }
             outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
             (api.free_instance)(c);

@@ -106,6 +106,11 @@ pub fn on_purpose<R>(f: impl FnOnce() -> R) -> R {
     r
 }
 
+/// Whether the calls made now are an importer's mistakes on purpose (inside [`on_purpose`]).
+pub fn is_on_purpose() -> bool {
+    ON_PURPOSE.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// The warning for a worker that died or hung (`how`) during a call whose breadcrumb starts
 /// with [`IMPORTERS_MISTAKE`].
 pub fn crash_on_a_mistake(how: &str) -> String {

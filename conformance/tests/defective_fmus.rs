@@ -151,6 +151,16 @@ fn a_getter_writing_one_value_past_n_values_is_failed() {
         &[
             (
                 2,
+                "getters_write_no_value_past_the_array_they_are_given",
+                "fmi2GetReal with nvr = ",
+            ),
+            (
+                3,
+                "fmi3_getters_write_no_value_past_the_array_they_are_given",
+                "fmi3GetFloat64 with nValues",
+            ),
+            (
+                2,
                 "a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step",
                 "fmi2GetReal with nvr",
             ),
@@ -179,6 +189,8 @@ fn a_do_step_answering_ok_without_advancing_time_is_failed() {
         "STEP_STUCK",
         Some("STEP_STUCK"),
         &[
+            (2, "do_step_advances_time_by_the_step", "after 1 fmi2DoStep"),
+            (3, "fmi3_do_step_advances_time_by_the_step", "after 1 fmi3DoStep"),
             (
                 2,
                 "status_functions_report_the_last_successful_time_and_no_termination_request",
@@ -199,6 +211,16 @@ fn a_serialized_state_longer_than_its_announced_size_is_failed() {
         "STATE_OVERRUN",
         Some("STATE_OVERRUN"),
         &[
+            (
+                2,
+                "serialized_state_fits_its_announced_size",
+                "fmi2SerializeFMUstate with size = ",
+            ),
+            (
+                3,
+                "fmi3_serialized_state_fits_its_announced_size",
+                "fmi3SerializeFMUState with size = ",
+            ),
             (
                 2,
                 "serialize_deserialize_round_trip_continues_bit_identically",
@@ -422,4 +444,37 @@ fn a_random_sequence_that_fails_leaves_a_reproducer_that_replays_the_failure() {
             String::from_utf8_lossy(&out.stderr)
         );
     }
+}
+
+/// A one-value output argument written past its value (fmi2GetRealStatus writes a second
+/// fmi2Real after `value`, fmi3GetNumberOfContinuousStates a second size_t): the guard after
+/// every buffer the suite hands an FMU, single values included, catches it.
+#[test]
+fn an_output_argument_written_past_its_one_value_is_failed() {
+    defect(
+        "ONE_PAST",
+        Some("ONE_PAST"),
+        &[
+            (
+                2,
+                "getters_write_no_value_past_the_array_they_are_given",
+                "fmi2GetRealStatus, given one value, wrote past the end",
+            ),
+            (
+                3,
+                "fmi3_getters_write_no_value_past_the_array_they_are_given",
+                "fmi3GetNumberOfContinuousStates, given one size_t, wrote past the end",
+            ),
+            (
+                2,
+                "status_functions_report_the_last_successful_time_and_no_termination_request",
+                "fmi2GetRealStatus, given one value, wrote past the end",
+            ),
+            (
+                3,
+                "fmi3_model_exchange_states_and_derivatives_are_consistent",
+                "fmi3GetNumberOfContinuousStates, given one size_t, wrote past the end",
+            ),
+        ],
+    );
 }

@@ -518,62 +518,52 @@ pub fn directional_derivatives_refuse_unknown_references_and_null_arrays(fmu: &F
             [
                 (
                     "an unknown value reference among the unknowns",
-                    (api.get_directional_derivative)(
-                        c,
-                        &bad_vr,
-                        1,
-                        knowns.as_ptr(),
-                        1,
-                        seed.as_ptr(),
-                        out.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut out,
+                        "fmi2GetDirectionalDerivative",
+                        "nUnknown",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_directional_derivative)(c, &bad_vr, 1, knowns.as_ptr(), 1, seed.as_ptr(), p),
                     ),
                 ),
                 (
                     "an unknown value reference among the knowns",
-                    (api.get_directional_derivative)(
-                        c,
-                        unknowns.as_ptr(),
-                        1,
-                        &bad_vr,
-                        1,
-                        seed.as_ptr(),
-                        out.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut out,
+                        "fmi2GetDirectionalDerivative",
+                        "nUnknown",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, &bad_vr, 1, seed.as_ptr(), p),
                     ),
                 ),
                 (
                     "vUnknown_ref NULL with nUnknown = 1",
-                    (api.get_directional_derivative)(
-                        c,
-                        null_vr,
-                        1,
-                        knowns.as_ptr(),
-                        1,
-                        seed.as_ptr(),
-                        out.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut out,
+                        "fmi2GetDirectionalDerivative",
+                        "nUnknown",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_directional_derivative)(c, null_vr, 1, knowns.as_ptr(), 1, seed.as_ptr(), p),
                     ),
                 ),
                 (
                     "vKnown_ref NULL with nKnown = 1",
-                    (api.get_directional_derivative)(
-                        c,
-                        unknowns.as_ptr(),
-                        1,
-                        null_vr,
-                        1,
-                        seed.as_ptr(),
-                        out.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut out,
+                        "fmi2GetDirectionalDerivative",
+                        "nUnknown",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, null_vr, 1, seed.as_ptr(), p),
                     ),
                 ),
                 (
                     "dvKnown NULL",
-                    (api.get_directional_derivative)(
-                        c,
-                        unknowns.as_ptr(),
-                        1,
-                        knowns.as_ptr(),
-                        1,
-                        null_r,
-                        out.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut out,
+                        "fmi2GetDirectionalDerivative",
+                        "nUnknown",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, knowns.as_ptr(), 1, null_r, p),
                     ),
                 ),
                 (

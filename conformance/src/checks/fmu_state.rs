@@ -90,7 +90,19 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     // Re-using an existing FMUstate: fmi2GetFMUstate overwrites it in place.
     let (before, old_ptr) = (inst.observe(), saved);
     // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
-    assert_eq!(unsafe { (fmu.api.get_fmu_state)(inst.c, &mut saved) }, fmi2OK);
+    assert_eq!(
+        // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
+        unsafe {
+            crate::guard::fill_one(
+                &mut saved,
+                "fmi2GetFMUstate",
+                "one FMU state",
+                crate::guard::STATE_RULE2,
+                |q| (fmu.api.get_fmu_state)(inst.c, q),
+            )
+        },
+        fmi2OK
+    );
     // FMI 2.0.5 §2.1.8: fmi2GetFMUstate "typically reuses the memory of this FMUstate": not
     // required, a warning.
     crate::outcome::warn_unless(saved == old_ptr, || {
@@ -182,7 +194,13 @@ pub fn serialize_deserialize_round_trip_continues_bit_identically(fmu: &Fmu) {
     let (_, mut existing) = inst.get_state();
     // SAFETY: `bytes.len()` readable bytes, an FMUstate of this FMU.
     let s = unsafe {
-        (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut existing)
+        crate::guard::fill_one(
+            &mut existing,
+            "fmi2DeSerializeFMUstate",
+            "one FMU state",
+            crate::guard::STATE_RULE2,
+            |q| (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+        )
     };
     assert_eq!(s, fmi2OK);
     crate::outcome::warn_unless(inst.serialize(existing).unwrap() == bytes, || {
@@ -470,4 +488,38 @@ pub fn a_state_serialized_here_restores_in_another_process_and_continues_identic
         "{}: restored in another process, the state continues differently (FMI 2.0.5 §2.1.8: a serialized state restored with fmi2DeSerializeFMUstate and fmi2SetFMUstate continues as the instance it was taken of)",
         fmu.id
     );
+}
+
+/// The serialized FMU state, taken after initialization and after 10 steps, fits the size
+/// fmi2SerializedFMUstateSize announced: fmi2SerializeFMUstate writes no byte past it (the
+/// guard after the buffer, `src/guard.rs`).
+///
+/// Verdict: a byte written past the size is a failure: FMI 2.0.5 §2.1.8 (fmi2SerializeFMUstate
+/// copies the state "into the byte vector serializedState of length size, that must be provided
+/// by the environment", size being fmi2SerializedFMUstateSize's answer). Skipped where the FMU
+/// does not declare canGetAndSetFMUstate and canSerializeFMUstate.
+pub fn serialized_state_fits_its_announced_size(fmu: &Fmu) {
+    if !fmu.can_snapshot() {
+        crate::outcome::skip_not_declared("canGetAndSetFMUstate and canSerializeFMUstate");
+    }
+    for k in [0, 10] {
+        let mut inst = advanced(fmu, k);
+        let (s, st) = inst.get_state();
+        assert_eq!(
+            s,
+            fmi2OK,
+            "{}: fmi2GetFMUstate after {k} steps: {}",
+            fmu.id,
+            inst.log_text()
+        );
+        // Guarded: a byte past `size` fails here, naming the call.
+        let bytes = inst.serialize(st);
+        assert!(
+            bytes.is_ok(),
+            "{}: fmi2SerializeFMUstate after {k} steps answered {:?}: {}",
+            fmu.id,
+            bytes.err(),
+            inst.log_text()
+        );
+    }
 }

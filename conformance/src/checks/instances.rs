@@ -137,7 +137,13 @@ fn raw_run(api: &Api, md: &Description, resources: &str, steps: usize) -> Result
         s = s.max((api.exit_initialization_mode)(c));
         for n in 0..steps {
             s = s.max((api.do_step)(c, n as f64 * 0.01, 0.01, fmi2True));
-            s = s.max((api.get_real)(c, vrs.as_ptr(), vrs.len(), values.as_mut_ptr()));
+            s = s.max(crate::guard::fill(
+                &mut values,
+                "fmi2GetReal",
+                "nvr",
+                crate::guard::GETTER_RULE2,
+                |p| (api.get_real)(c, vrs.as_ptr(), vrs.len(), p),
+            ));
             out.extend(bits(&values));
         }
         s = s.max((api.terminate)(c));

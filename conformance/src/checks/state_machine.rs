@@ -192,7 +192,11 @@ fn cases() -> Vec<Case> {
                 let vrs = i.fmu.md.vrs_of_type(Type::String);
                 let mut v: Vec<fmi2String> = vec![ptr::null(); vrs.len()];
                 // SAFETY: arrays of nvr elements.
-                unsafe { (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) }
+                unsafe {
+                    crate::guard::fill(&mut v, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
+                        (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), p)
+                    })
+                }
             },
         },
         Case {
@@ -297,7 +301,15 @@ fn cases() -> Vec<Case> {
             call: |i, d, s| {
                 let mut size = 0usize;
                 // SAFETY: a state of this FMU, a valid out pointer.
-                let st = unsafe { (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], &mut size) };
+                let st = unsafe {
+                    crate::guard::fill_one(
+                        &mut size,
+                        "fmi2SerializedFMUstateSize",
+                        "one size_t",
+                        crate::guard::STATE_RULE2,
+                        |p| (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p),
+                    )
+                };
                 if st == fmi2OK {
                     assert_eq!(size, d.bytes[s as usize].len(), "fmi2SerializedFMUstateSize");
                 }
@@ -312,13 +324,15 @@ fn cases() -> Vec<Case> {
             call: |i, d, s| {
                 let want = &d.bytes[s as usize];
                 let mut buf = vec![0u8; want.len()];
-                // SAFETY: a state of this FMU, a buffer of the size it needs.
+                let n = buf.len();
+                // SAFETY: a state of this FMU, a buffer of the size it needs (and the guard after it).
                 let st = unsafe {
-                    (i.fmu.api.serialize_fmu_state)(
-                        i.c,
-                        d.states[s as usize],
-                        buf.as_mut_ptr() as *mut fmi2Byte,
-                        buf.len(),
+                    crate::guard::fill(
+                        &mut buf,
+                        "fmi2SerializeFMUstate",
+                        "size",
+                        crate::guard::STATE_RULE2,
+                        |p| (i.fmu.api.serialize_fmu_state)(i.c, d.states[s as usize], p as *mut fmi2Byte, n),
                     )
                 };
                 if st == fmi2OK {
@@ -416,7 +430,11 @@ fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v = 99;
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(&mut v, "fmi2GetStatus", "one value", crate::guard::STATUS_RULE2, |p| {
+                        (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, p)
+                    })
+                }
             },
         },
         Case {
@@ -434,7 +452,15 @@ fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v = 0;
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(
+                        &mut v,
+                        "fmi2GetIntegerStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p),
+                    )
+                }
             },
         },
         Case {
@@ -452,7 +478,15 @@ fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v: fmi2String = ptr::null();
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(
+                        &mut v,
+                        "fmi2GetStringStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p),
+                    )
+                }
             },
         },
     ]
@@ -625,6 +659,7 @@ pub fn every_function_in_every_state_answers_as_the_standard_says(fmu: &Fmu) {
 }
 
 pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
+    use crate::guard::{GETTER_RULE2 as R, STATUS_RULE2 as S, fill, fill_one};
     let api = &fmu.api;
     let c: fmi2Component = ptr::null_mut();
     let vr = [0u32];
@@ -643,20 +678,76 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             raw!("fmi2ExitInitializationMode", (api.exit_initialization_mode)(c)),
             raw!("fmi2Terminate", (api.terminate)(c)),
             raw!("fmi2Reset", (api.reset)(c)),
-            raw!("fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, real.as_mut_ptr())),
-            raw!("fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
-            raw!("fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, int.as_mut_ptr())),
-            raw!("fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, &mut string)),
+            raw!(
+                "fmi2GetReal",
+                fill(&mut real[..1], "fmi2GetReal", "nvr", R, |p| (api.get_real)(
+                    c,
+                    vr.as_ptr(),
+                    1,
+                    p
+                ))
+            ),
+            raw!(
+                "fmi2GetInteger",
+                fill(&mut int[..1], "fmi2GetInteger", "nvr", R, |p| (api.get_integer)(
+                    c,
+                    vr.as_ptr(),
+                    1,
+                    p
+                ))
+            ),
+            raw!(
+                "fmi2GetBoolean",
+                fill(&mut int[..1], "fmi2GetBoolean", "nvr", R, |p| (api.get_boolean)(
+                    c,
+                    vr.as_ptr(),
+                    1,
+                    p
+                ))
+            ),
+            raw!(
+                "fmi2GetString",
+                fill_one(&mut string, "fmi2GetString", "nvr", R, |p| (api.get_string)(
+                    c,
+                    vr.as_ptr(),
+                    1,
+                    p
+                ))
+            ),
             raw!("fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, real.as_ptr())),
             raw!("fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, int.as_ptr())),
             raw!("fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, int.as_ptr())),
             raw!("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, &string)),
-            raw!("fmi2GetFMUstate", (api.get_fmu_state)(c, &mut st)),
+            raw!(
+                "fmi2GetFMUstate",
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi2GetFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.get_fmu_state)(c, q)
+                )
+            ),
             raw!("fmi2SetFMUstate", (api.set_fmu_state)(c, st)),
-            raw!("fmi2FreeFMUstate", (api.free_fmu_state)(c, &mut st)),
+            raw!(
+                "fmi2FreeFMUstate",
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi2FreeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.free_fmu_state)(c, q)
+                )
+            ),
             (
                 "fmi2SerializedFMUstateSize",
-                (api.serialized_fmu_state_size)(c, st, &mut size),
+                crate::guard::fill_one(
+                    &mut size,
+                    "fmi2SerializedFMUstateSize",
+                    "one size_t",
+                    crate::guard::STATE_RULE2,
+                    |p| (api.serialized_fmu_state_size)(c, st, p),
+                ),
             ),
             (
                 "fmi2SerializeFMUstate",
@@ -664,7 +755,13 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             ),
             (
                 "fmi2DeSerializeFMUstate",
-                (api.deserialize_fmu_state)(c, ptr::null(), 0, &mut st),
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi2DeSerializeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.deserialize_fmu_state)(c, ptr::null(), 0, q),
+                ),
             ),
             (
                 "fmi2GetDirectionalDerivative",
@@ -680,11 +777,40 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             ),
             raw!("fmi2DoStep", (api.do_step)(c, 0.0, 0.1, 0)),
             raw!("fmi2CancelStep", (api.cancel_step)(c)),
-            raw!("fmi2GetStatus", (api.get_status)(c, 0, &mut status)),
-            raw!("fmi2GetRealStatus", (api.get_real_status)(c, 2, real.as_mut_ptr())),
-            raw!("fmi2GetIntegerStatus", (api.get_integer_status)(c, 0, int.as_mut_ptr())),
-            raw!("fmi2GetBooleanStatus", (api.get_boolean_status)(c, 3, int.as_mut_ptr())),
-            raw!("fmi2GetStringStatus", (api.get_string_status)(c, 0, &mut string)),
+            raw!(
+                "fmi2GetStatus",
+                fill_one(&mut status, "fmi2GetStatus", "one value", S, |p| (api.get_status)(
+                    c, 0, p
+                ))
+            ),
+            raw!(
+                "fmi2GetRealStatus",
+                fill(&mut real[..1], "fmi2GetRealStatus", "one value", S, |p| (api
+                    .get_real_status)(
+                    c, 2, p
+                ))
+            ),
+            raw!(
+                "fmi2GetIntegerStatus",
+                fill(&mut int[..1], "fmi2GetIntegerStatus", "one value", S, |p| (api
+                    .get_integer_status)(
+                    c, 0, p
+                ))
+            ),
+            raw!(
+                "fmi2GetBooleanStatus",
+                fill(&mut int[..1], "fmi2GetBooleanStatus", "one value", S, |p| (api
+                    .get_boolean_status)(
+                    c, 3, p
+                ))
+            ),
+            raw!(
+                "fmi2GetStringStatus",
+                fill_one(&mut string, "fmi2GetStringStatus", "one value", S, |p| (api
+                    .get_string_status)(
+                    c, 0, p
+                ))
+            ),
         ]
     };
     for (f, s) in answers {

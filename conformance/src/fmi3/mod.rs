@@ -682,8 +682,12 @@ impl<'a> Inst<'a> {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = self.call("fmi3UpdateDiscreteStates", |c| unsafe {
-                let [a, b, cc, d, e] = &mut flags;
-                (self.fmu.api.update_discrete_states)(c, a, b, cc, d, e, &mut next)
+                crate::guard::fill_outputs(
+                    "fmi3UpdateDiscreteStates",
+                    &mut flags,
+                    &mut next,
+                    |[a, b, cc, d, e], t| (self.fmu.api.update_discrete_states)(c, a, b, cc, d, e, t),
+                )
             });
             assert_eq!(
                 s,
@@ -745,8 +749,9 @@ impl<'a> Inst<'a> {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = self.call("fmi3DoStep", |c| unsafe {
-            let [a, b, d] = &mut flags;
-            (self.fmu.api.do_step)(c, t, h, true, a, b, d, &mut last)
+            crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, d], l| {
+                (self.fmu.api.do_step)(c, t, h, true, a, b, d, l)
+            })
         });
         if s == fmi3OK {
             self.time = t + h;
@@ -788,7 +793,13 @@ impl<'a> Inst<'a> {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = self.call("fmi3GetNumberOfContinuousStates", |c| unsafe {
-            (self.fmu.api.get_number_of_continuous_states)(c, &mut n)
+            crate::guard::fill_one(
+                &mut n,
+                "fmi3GetNumberOfContinuousStates",
+                "one size_t",
+                crate::guard::COUNT_RULE3,
+                |q| (self.fmu.api.get_number_of_continuous_states)(c, q),
+            )
         });
         assert_eq!(
             s,
@@ -876,7 +887,11 @@ impl<'a> Inst<'a> {
             let (mut size, mut data) = (0usize, std::ptr::null::<u8>());
             // SAFETY: a live instance; each pointer is to a live local of the length passed.
             let s = self.call(&what, |c| unsafe {
-                (api.get_binary)(c, vr, 1, &mut size, &mut data, 1)
+                crate::guard::fill_one(&mut size, "fmi3GetBinary (valueSizes)", "nValues", GETTER_RULE3, |ps| {
+                    crate::guard::fill_one(&mut data, "fmi3GetBinary (values)", "nValues", GETTER_RULE3, |pd| {
+                        (api.get_binary)(c, vr, 1, ps, pd, 1)
+                    })
+                })
             });
             let bytes = if s == fmi3OK && !data.is_null() {
                 // SAFETY: the FMU's answer: `size` bytes at `data`, valid until the next call.
@@ -940,12 +955,25 @@ impl<'a> Inst<'a> {
         let mut st: fmi3FMUState = std::ptr::null_mut();
         // SAFETY: the standard's calls with valid pointers on a live instance.
         unsafe {
-            if (api.get_fmu_state)(self.c, &mut st) != fmi3OK {
+            if crate::guard::fill_one(
+                &mut st,
+                "fmi3GetFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.get_fmu_state)(self.c, q),
+            ) != fmi3OK
+            {
                 return Err("fmi3GetFMUState of a new instance failed".into());
             }
             let mut size = 0usize;
             let mut bytes = vec![];
-            let mut s = (api.serialized_fmu_state_size)(self.c, st, &mut size);
+            let mut s = crate::guard::fill_one(
+                &mut size,
+                "fmi3SerializedFMUStateSize",
+                "one size_t",
+                crate::guard::STATE_RULE3,
+                |p| (api.serialized_fmu_state_size)(self.c, st, p),
+            );
             if s == fmi3OK && size <= 1 << 30 {
                 let mut guarded = Guarded::new(size, 0u8);
                 crate::outcome::breadcrumb("fmi3SerializeFMUState");
@@ -953,12 +981,24 @@ impl<'a> Inst<'a> {
                 match guarded.try_values(|| format!("fmi3SerializeFMUState with size = {size}"), STATE_RULE3) {
                     Ok(b) => bytes = b,
                     Err(e) => {
-                        (api.free_fmu_state)(self.c, &mut st);
+                        crate::guard::fill_one(
+                            &mut st,
+                            "fmi3FreeFMUState",
+                            "one FMU state",
+                            crate::guard::STATE_RULE3,
+                            |q| (api.free_fmu_state)(self.c, q),
+                        );
                         return Err(e);
                     }
                 }
             }
-            (api.free_fmu_state)(self.c, &mut st);
+            crate::guard::fill_one(
+                &mut st,
+                "fmi3FreeFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.free_fmu_state)(self.c, q),
+            );
             if s != fmi3OK {
                 return Err(format!(
                     "serializing the state of a new instance answered {}",
@@ -976,7 +1016,15 @@ impl<'a> Inst<'a> {
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            self.call("fmi3GetFMUState", |c| unsafe { (api.get_fmu_state)(c, &mut st) }),
+            self.call("fmi3GetFMUState", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3GetFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.get_fmu_state)(c, q),
+                )
+            }),
             fmi3OK,
             "{}: fmi3GetFMUState: {}",
             self.fmu.id,
@@ -987,7 +1035,13 @@ impl<'a> Inst<'a> {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             self.call("fmi3SerializedFMUStateSize", |c| unsafe {
-                (api.serialized_fmu_state_size)(c, st, &mut size)
+                crate::guard::fill_one(
+                    &mut size,
+                    "fmi3SerializedFMUStateSize",
+                    "one size_t",
+                    crate::guard::STATE_RULE3,
+                    |p| (api.serialized_fmu_state_size)(c, st, p),
+                )
             }),
             fmi3OK
         );
@@ -1008,7 +1062,15 @@ impl<'a> Inst<'a> {
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            self.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) }),
+            self.call("fmi3FreeFMUState", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3FreeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.free_fmu_state)(c, q),
+                )
+            }),
             fmi3OK
         );
         assert!(
@@ -1026,7 +1088,13 @@ impl<'a> Inst<'a> {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = self.call("fmi3DeserializeFMUState", |c| unsafe {
-            (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), &mut st)
+            crate::guard::fill_one(
+                &mut st,
+                "fmi3DeserializeFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q),
+            )
         });
         if s != fmi3OK {
             return s;
@@ -1036,7 +1104,15 @@ impl<'a> Inst<'a> {
         let s = self.call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) });
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let f = self.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
+        let f = self.call("fmi3FreeFMUState", |c| unsafe {
+            crate::guard::fill_one(
+                &mut st,
+                "fmi3FreeFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.free_fmu_state)(c, q),
+            )
+        });
         assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState: {}", self.fmu.id, self.log_text());
         s
     }
@@ -1099,7 +1175,21 @@ pub fn euler_step_n(inst: &mut Inst, nx: usize, h: f64) {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-        (api.completed_integrator_step)(c, true, &mut enter, &mut term)
+        crate::guard::fill_one(
+            &mut enter,
+            "fmi3CompletedIntegratorStep (enterEventMode)",
+            "one value",
+            crate::guard::OUTPUT_ARGUMENTS_RULE3,
+            |qa| {
+                crate::guard::fill_one(
+                    &mut term,
+                    "fmi3CompletedIntegratorStep (terminateSimulation)",
+                    "one value",
+                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                    |qb| (api.completed_integrator_step)(c, true, qa, qb),
+                )
+            },
+        )
     });
     assert_eq!(s, fmi3OK, "{id}: fmi3CompletedIntegratorStep: {}", inst.log_text());
     assert!(

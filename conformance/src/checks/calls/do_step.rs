@@ -259,7 +259,15 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
     // Kinds that belong to another getter: fmi2Discard with a message, value untouched.
     let mut r = -1.0;
     // SAFETY: a valid out pointer.
-    let s = unsafe { (fmu.api.get_real_status)(inst.c, fmi2Terminated, &mut r) };
+    let s = unsafe {
+        crate::guard::fill_one(
+            &mut r,
+            "fmi2GetRealStatus",
+            "one value",
+            crate::guard::STATUS_RULE2,
+            |p| (fmu.api.get_real_status)(inst.c, fmi2Terminated, p),
+        )
+    };
     assert_eq!(
         (s, r),
         (fmi2Discard, -1.0),
@@ -268,7 +276,15 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
     );
     let mut b = -1;
     // SAFETY: a valid out pointer.
-    let s = unsafe { (fmu.api.get_boolean_status)(inst.c, 99, &mut b) };
+    let s = unsafe {
+        crate::guard::fill_one(
+            &mut b,
+            "fmi2GetBooleanStatus",
+            "one value",
+            crate::guard::STATUS_RULE2,
+            |p| (fmu.api.get_boolean_status)(inst.c, 99, p),
+        )
+    };
     assert_eq!((s, b), (fmi2Discard, -1), "{}: fmi2GetBooleanStatus(99)", fmu.id);
     // SAFETY: NULL out pointer: refused.
     let s = unsafe { (fmu.api.get_real_status)(inst.c, fmi2LastSuccessfulTime, ptr::null_mut()) };

@@ -35,7 +35,11 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
         refused(&inst, "fmi2SetBoolean(unknown vr)", s, &["fmi2SetBoolean", &n]);
         let mut out: [fmi2String; 1] = [ptr::null()];
         // SAFETY: arrays of one element.
-        let s = unsafe { (fmu.api.get_string)(inst.c, &vr, 1, out.as_mut_ptr()) };
+        let s = unsafe {
+            crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
+                (fmu.api.get_string)(inst.c, &vr, 1, p)
+            })
+        };
         refused(&inst, "fmi2GetString(unknown vr)", s, &["fmi2GetString", &n]);
         let v = [c"x".as_ptr()];
         // SAFETY: arrays of one element.
@@ -65,6 +69,7 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
 /// mistake, which the standard leaves undefined: not refusing them, or crashing on them, is a
 /// warning (a crash takes the importer down).
 pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_refused(fmu: &Fmu) {
+    use crate::guard::{GETTER_RULE2 as R2, fill};
     let mut inst = initialized(fmu);
     let api = &fmu.api;
     let c = inst.c;
@@ -109,13 +114,13 @@ pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_ref
             fmu.id
         );
         let null_cases = [
-            raw!(mistake "fmi2GetReal", (api.get_real)(c, ptr::null(), 1, r.as_mut_ptr())),
+            raw!(mistake "fmi2GetReal", fill(&mut r[..1], "fmi2GetReal", "nvr", R2, |p| (api.get_real)(c, ptr::null(), 1, p))),
             raw!(mistake "fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetInteger", (api.get_integer)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!(mistake "fmi2GetInteger", fill(&mut i[..1], "fmi2GetInteger", "nvr", R2, |p| (api.get_integer)(c, ptr::null(), 1, p))),
             raw!(mistake "fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetBoolean", (api.get_boolean)(c, ptr::null(), 1, i.as_mut_ptr())),
+            raw!(mistake "fmi2GetBoolean", fill(&mut i[..1], "fmi2GetBoolean", "nvr", R2, |p| (api.get_boolean)(c, ptr::null(), 1, p))),
             raw!(mistake "fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetString", (api.get_string)(c, ptr::null(), 1, st.as_mut_ptr())),
+            raw!(mistake "fmi2GetString", fill(&mut st[..1], "fmi2GetString", "nvr", R2, |p| (api.get_string)(c, ptr::null(), 1, p))),
             raw!(mistake "fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
             raw!(mistake "fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
             raw!(mistake "fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),

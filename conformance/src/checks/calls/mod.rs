@@ -43,11 +43,13 @@ mod do_step;
 mod get_set;
 mod instantiate;
 mod logging;
+mod named_defects;
 mod output_derivatives;
 pub use do_step::*;
 pub use get_set::*;
 pub use instantiate::*;
 pub use logging::*;
+pub use named_defects::*;
 pub use output_derivatives::*;
 
 /// An importer's mistake made on purpose (`what`) should be refused with fmi2Error and a message:

@@ -354,22 +354,63 @@ pub fn model_exchange_functions_refuse_a_null_component(fmu: &Fmu) {
             ("fmi2EnterContinuousTimeMode", (me.enter_continuous_time_mode)(c)),
             (
                 "fmi2CompletedIntegratorStep",
-                (me.completed_integrator_step)(c, 0, &mut a, &mut b),
+                crate::guard::fill_one(
+                    &mut a,
+                    "fmi2CompletedIntegratorStep (enterEventMode)",
+                    "one value",
+                    crate::guard::GETTER_RULE2,
+                    |pa| {
+                        crate::guard::fill_one(
+                            &mut b,
+                            "fmi2CompletedIntegratorStep (terminateSimulation)",
+                            "one value",
+                            crate::guard::GETTER_RULE2,
+                            |pb| (me.completed_integrator_step)(c, 0, pa, pb),
+                        )
+                    },
+                ),
             ),
             ("fmi2SetTime", (me.set_time)(c, 0.0)),
             ("fmi2SetContinuousStates", (me.set_continuous_states)(c, v.as_ptr(), n)),
-            ("fmi2GetDerivatives", (me.get_derivatives)(c, v.as_mut_ptr(), n)),
+            (
+                "fmi2GetDerivatives",
+                crate::guard::fill(
+                    &mut v[..n],
+                    "fmi2GetDerivatives",
+                    "nx",
+                    crate::guard::GETTER_RULE2,
+                    |p| (me.get_derivatives)(c, p, n),
+                ),
+            ),
             (
                 "fmi2GetEventIndicators",
-                (me.get_event_indicators)(c, v.as_mut_ptr(), ni),
+                crate::guard::fill(
+                    &mut v[..ni],
+                    "fmi2GetEventIndicators",
+                    "ni",
+                    crate::guard::GETTER_RULE2,
+                    |p| (me.get_event_indicators)(c, p, ni),
+                ),
             ),
             (
                 "fmi2GetContinuousStates",
-                (me.get_continuous_states)(c, v.as_mut_ptr(), n),
+                crate::guard::fill(
+                    &mut v[..n],
+                    "fmi2GetContinuousStates",
+                    "nx",
+                    crate::guard::GETTER_RULE2,
+                    |p| (me.get_continuous_states)(c, p, n),
+                ),
             ),
             (
                 "fmi2GetNominalsOfContinuousStates",
-                (me.get_nominals_of_continuous_states)(c, v.as_mut_ptr(), n),
+                crate::guard::fill(
+                    &mut v[..n],
+                    "fmi2GetNominalsOfContinuousStates",
+                    "nx",
+                    crate::guard::GETTER_RULE2,
+                    |p| (me.get_nominals_of_continuous_states)(c, p, n),
+                ),
             ),
         ]
     };

@@ -155,7 +155,11 @@ pub(super) fn cases() -> Vec<Case> {
                 let vrs = i.fmu.md.vrs_of_type(Type::String);
                 let mut v: Vec<fmi2String> = vec![ptr::null(); vrs.len()];
                 // SAFETY: arrays of nvr elements.
-                unsafe { (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) }
+                unsafe {
+                    crate::guard::fill(&mut v, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
+                        (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), p)
+                    })
+                }
             },
         },
         Case {
@@ -255,7 +259,15 @@ pub(super) fn cases() -> Vec<Case> {
             call: |i, d, s| {
                 let mut size = 0usize;
                 // SAFETY: a state of this FMU, a valid out pointer.
-                let st = unsafe { (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], &mut size) };
+                let st = unsafe {
+                    crate::guard::fill_one(
+                        &mut size,
+                        "fmi2SerializedFMUstateSize",
+                        "one size_t",
+                        crate::guard::STATE_RULE2,
+                        |p| (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p),
+                    )
+                };
                 if st == fmi2OK {
                     assert_eq!(size, d.bytes[s as usize].len(), "fmi2SerializedFMUstateSize");
                 }
@@ -269,13 +281,15 @@ pub(super) fn cases() -> Vec<Case> {
             call: |i, d, s| {
                 let want = &d.bytes[s as usize];
                 let mut buf = vec![0u8; want.len()];
-                // SAFETY: a state of this FMU, a buffer of the size it needs.
+                let n = buf.len();
+                // SAFETY: a state of this FMU, a buffer of the size it needs (and the guard after it).
                 let st = unsafe {
-                    (i.fmu.api.serialize_fmu_state)(
-                        i.c,
-                        d.states[s as usize],
-                        buf.as_mut_ptr() as *mut fmi2Byte,
-                        buf.len(),
+                    crate::guard::fill(
+                        &mut buf,
+                        "fmi2SerializeFMUstate",
+                        "size",
+                        crate::guard::STATE_RULE2,
+                        |p| (i.fmu.api.serialize_fmu_state)(i.c, d.states[s as usize], p as *mut fmi2Byte, n),
                     )
                 };
                 if st == fmi2OK {
@@ -414,12 +428,20 @@ pub(super) fn cases() -> Vec<Case> {
                 let (order, mut der) = (vec![1; outputs.len()], vec![0.0; outputs.len()]);
                 // SAFETY: arrays of nvr elements.
                 unsafe {
-                    (i.fmu.api.get_real_output_derivatives)(
-                        i.c,
-                        outputs.as_ptr(),
-                        outputs.len(),
-                        order.as_ptr(),
-                        der.as_mut_ptr(),
+                    crate::guard::fill(
+                        &mut der,
+                        "fmi2GetRealOutputDerivatives",
+                        "nvr",
+                        crate::guard::GETTER_RULE2,
+                        |p| {
+                            (i.fmu.api.get_real_output_derivatives)(
+                                i.c,
+                                outputs.as_ptr(),
+                                outputs.len(),
+                                order.as_ptr(),
+                                p,
+                            )
+                        },
                     )
                 }
             },
@@ -447,7 +469,11 @@ pub(super) fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v = 99;
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(&mut v, "fmi2GetStatus", "one value", crate::guard::STATUS_RULE2, |p| {
+                        (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, p)
+                    })
+                }
             },
         },
         Case {
@@ -463,7 +489,15 @@ pub(super) fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v = 0;
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(
+                        &mut v,
+                        "fmi2GetIntegerStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p),
+                    )
+                }
             },
         },
         Case {
@@ -479,7 +513,15 @@ pub(super) fn cases() -> Vec<Case> {
             call: |i, _, _| {
                 let mut v: fmi2String = ptr::null();
                 // SAFETY: a valid out pointer.
-                unsafe { (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, &mut v) }
+                unsafe {
+                    crate::guard::fill_one(
+                        &mut v,
+                        "fmi2GetStringStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p),
+                    )
+                }
             },
         },
     ]

@@ -369,7 +369,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             }
             Op::GetState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = (api.get_fmu_state)(c, &mut p);
+                let s = crate::guard::fill_one(
+                    &mut p,
+                    "fmi2GetFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.get_fmu_state)(c, q),
+                );
                 if s == fmi2OK {
                     sh.slots[*slot] = Some((p, sh.snap()));
                 }
@@ -387,7 +393,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             },
             Op::FreeState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = (api.free_fmu_state)(c, &mut p);
+                let s = crate::guard::fill_one(
+                    &mut p,
+                    "fmi2FreeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.free_fmu_state)(c, q),
+                );
                 if s == fmi2OK {
                     assert!(p.is_null(), "fmi2FreeFMUstate left the pointer set");
                     sh.slots[*slot] = None;
@@ -397,7 +409,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             Op::Serialize { slot } => match sh.slots[*slot] {
                 Some((p, snap)) => {
                     let mut size = 0usize;
-                    let s1 = (api.serialized_fmu_state_size)(c, p, &mut size);
+                    let s1 = crate::guard::fill_one(
+                        &mut size,
+                        "fmi2SerializedFMUstateSize",
+                        "one size_t",
+                        crate::guard::STATE_RULE2,
+                        |q| (api.serialized_fmu_state_size)(c, p, q),
+                    );
                     if s1 != fmi2OK {
                         return (s1, Expect::Succeeds, None);
                     }
@@ -412,7 +430,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 None => {
                     let mut size = 0usize;
                     (
-                        (api.serialized_fmu_state_size)(c, ptr::null_mut(), &mut size),
+                        crate::guard::fill_one(
+                            &mut size,
+                            "fmi2SerializedFMUstateSize",
+                            "one size_t",
+                            crate::guard::STATE_RULE2,
+                            |p| (api.serialized_fmu_state_size)(c, ptr::null_mut(), p),
+                        ),
                         Expect::Refused,
                         None,
                     )
@@ -422,7 +446,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 let damage = if fmu.own_state_format() { damage } else { &None };
                 let Some((mut bytes, snap)) = sh.bytes.clone() else {
                     let mut p = ptr::null_mut();
-                    let s = (api.deserialize_fmu_state)(c, ptr::null(), 8, &mut p);
+                    let s = crate::guard::fill_one(
+                        &mut p,
+                        "fmi2DeSerializeFMUstate",
+                        "one FMU state",
+                        crate::guard::STATE_RULE2,
+                        |q| (api.deserialize_fmu_state)(c, ptr::null(), 8, q),
+                    );
                     return (s, Expect::Refused, None);
                 };
                 let damaged = damage.is_some() || truncate.is_some_and(|n| n % (bytes.len() + 1) < bytes.len());
@@ -435,7 +465,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 }
                 let mut p = sh.slots[*to].map_or(ptr::null_mut(), |s| s.0);
                 let before = p;
-                let s = (api.deserialize_fmu_state)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), &mut p);
+                let s = crate::guard::fill_one(
+                    &mut p,
+                    "fmi2DeSerializeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.deserialize_fmu_state)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+                );
                 if s == fmi2OK {
                     sh.slots[*to] = Some((p, snap));
                 } else {
@@ -458,7 +494,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                     }
                     fmi2Discard => {
                         let mut lst = f64::NAN;
-                        let _ = (api.get_real_status)(c, fmi2LastSuccessfulTime, &mut lst);
+                        let _ = crate::guard::fill_one(
+                            &mut lst,
+                            "fmi2GetRealStatus",
+                            "one value",
+                            crate::guard::STATUS_RULE2,
+                            |p| (api.get_real_status)(c, fmi2LastSuccessfulTime, p),
+                        );
                         sh.time = lst;
                         Some(State::StepFailed)
                     }
@@ -481,11 +523,39 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             Op::CancelStep => ((api.cancel_step)(c), Expect::Anything, None),
             Op::Status { which, kind } => {
                 let s = match which {
-                    0 => (api.get_status)(c, *kind, &mut 0),
-                    1 => (api.get_real_status)(c, *kind, &mut 0.0),
-                    2 => (api.get_integer_status)(c, *kind, &mut 0),
-                    3 => (api.get_boolean_status)(c, *kind, &mut 0),
-                    _ => (api.get_string_status)(c, *kind, &mut ptr::null()),
+                    0 => {
+                        crate::guard::fill_one(&mut 0, "fmi2GetStatus", "one value", crate::guard::STATUS_RULE2, |p| {
+                            (api.get_status)(c, *kind, p)
+                        })
+                    }
+                    1 => crate::guard::fill_one(
+                        &mut 0.0,
+                        "fmi2GetRealStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (api.get_real_status)(c, *kind, p),
+                    ),
+                    2 => crate::guard::fill_one(
+                        &mut 0,
+                        "fmi2GetIntegerStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (api.get_integer_status)(c, *kind, p),
+                    ),
+                    3 => crate::guard::fill_one(
+                        &mut 0,
+                        "fmi2GetBooleanStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (api.get_boolean_status)(c, *kind, p),
+                    ),
+                    _ => crate::guard::fill_one(
+                        &mut ptr::null(),
+                        "fmi2GetStringStatus",
+                        "one value",
+                        crate::guard::STATUS_RULE2,
+                        |p| (api.get_string_status)(c, *kind, p),
+                    ),
                 };
                 (s, Expect::Anything, None)
             }
@@ -493,14 +563,12 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 let reals = fmu.md.vrs_of_type(Type::Real);
                 let v = &reals[..(*n).min(reals.len())];
                 let (dk, mut du) = (vec![1.0; v.len()], vec![0.0; v.len()]);
-                let s = (api.get_directional_derivative)(
-                    c,
-                    v.as_ptr(),
-                    v.len(),
-                    v.as_ptr(),
-                    v.len(),
-                    dk.as_ptr(),
-                    du.as_mut_ptr(),
+                let s = crate::guard::fill(
+                    &mut du,
+                    "fmi2GetDirectionalDerivative",
+                    "nUnknown",
+                    crate::guard::GETTER_RULE2,
+                    |p| (api.get_directional_derivative)(c, v.as_ptr(), v.len(), v.as_ptr(), v.len(), dk.as_ptr(), p),
                 );
                 (s, Expect::Anything, None)
             }
@@ -517,7 +585,13 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 let v = vec![0u32; *n];
                 let (o, mut x) = (vec![1; *n], vec![0.0; *n]);
                 (
-                    (api.get_real_output_derivatives)(c, v.as_ptr(), *n, o.as_ptr(), x.as_mut_ptr()),
+                    crate::guard::fill(
+                        &mut x,
+                        "fmi2GetRealOutputDerivatives",
+                        "nvr",
+                        crate::guard::GETTER_RULE2,
+                        |p| (api.get_real_output_derivatives)(c, v.as_ptr(), *n, o.as_ptr(), p),
+                    ),
                     Expect::Anything,
                     None,
                 )

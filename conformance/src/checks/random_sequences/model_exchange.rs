@@ -246,7 +246,13 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
             }
             MeOp::GetState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = (api.get_fmu_state)(c, &mut p);
+                let s = crate::guard::fill_one(
+                    &mut p,
+                    "fmi2GetFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.get_fmu_state)(c, q),
+                );
                 if s == fmi2OK {
                     sh.slots[*slot] = Some((p, sh.state, sh.time));
                 }
@@ -264,7 +270,13 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
             },
             MeOp::FreeState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = (api.free_fmu_state)(c, &mut p);
+                let s = crate::guard::fill_one(
+                    &mut p,
+                    "fmi2FreeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.free_fmu_state)(c, q),
+                );
                 if s == fmi2OK {
                     assert!(p.is_null(), "fmi2FreeFMUstate left the pointer set");
                     sh.slots[*slot] = None;
@@ -275,13 +287,25 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
                 let Some((p, _, _)) = sh.slots[*slot] else {
                     let mut size = 0usize;
                     return (
-                        (api.serialized_fmu_state_size)(c, ptr::null_mut(), &mut size),
+                        crate::guard::fill_one(
+                            &mut size,
+                            "fmi2SerializedFMUstateSize",
+                            "one size_t",
+                            crate::guard::STATE_RULE2,
+                            |p| (api.serialized_fmu_state_size)(c, ptr::null_mut(), p),
+                        ),
                         Expect::Refused,
                         None,
                     );
                 };
                 let mut size = 0usize;
-                let s = (api.serialized_fmu_state_size)(c, p, &mut size);
+                let s = crate::guard::fill_one(
+                    &mut size,
+                    "fmi2SerializedFMUstateSize",
+                    "one size_t",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.serialized_fmu_state_size)(c, p, q),
+                );
                 if s != fmi2OK {
                     return (s, Expect::Succeeds, None);
                 }
@@ -296,9 +320,21 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
                     buf.truncate(n);
                 }
                 let mut q = ptr::null_mut();
-                let s = (api.deserialize_fmu_state)(c, buf.as_ptr() as *const fmi2Byte, buf.len(), &mut q);
+                let s = crate::guard::fill_one(
+                    &mut q,
+                    "fmi2DeSerializeFMUstate",
+                    "one FMU state",
+                    crate::guard::STATE_RULE2,
+                    |q| (api.deserialize_fmu_state)(c, buf.as_ptr() as *const fmi2Byte, buf.len(), q),
+                );
                 if s == fmi2OK {
-                    let _ = (api.free_fmu_state)(c, &mut q);
+                    let _ = crate::guard::fill_one(
+                        &mut q,
+                        "fmi2FreeFMUstate",
+                        "one FMU state",
+                        crate::guard::STATE_RULE2,
+                        |q| (api.free_fmu_state)(c, q),
+                    );
                 }
                 (
                     s,

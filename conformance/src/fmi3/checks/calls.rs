@@ -7,6 +7,7 @@ pub use super::co_simulation::{
     fmi3_output_derivatives_agree_with_finite_differences_of_the_outputs,
 };
 use super::*;
+use crate::guard::{GETTER_RULE3 as RULE, fill, fill_one};
 
 // ---------------------------------------------------------------------------------------------
 // Calls
@@ -219,12 +220,14 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
     let unknown = md.unknown_vr();
     let floats = md.vrs_of_type(Type::Float64);
     let f = floats[0];
-    let mut out = vec![0.0f64; 4];
+    let mut out = [0.0f64; 4];
     // NULL arrays with n > 0.
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetFloat64(vrs = NULL, n = 1)", |c| unsafe {
-        (api.get_float64)(c, null(), 1, out.as_mut_ptr(), 1)
+        fill(&mut out[..1], "fmi3GetFloat64", "nValues", RULE, |p| {
+            (api.get_float64)(c, null(), 1, p, 1)
+        })
     });
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
@@ -245,18 +248,24 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetFloat64(n = 1, nValues = 2)", |c| unsafe {
-        (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 2)
+        fill(&mut out[..2], "fmi3GetFloat64", "nValues", RULE, |p| {
+            (api.get_float64)(c, &f, 1, p, 2)
+        })
     });
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetFloat64(n = 1, nValues = 0)", |c| unsafe {
-        (api.get_float64)(c, &f, 1, out.as_mut_ptr(), 0)
+        fill(&mut out[..0], "fmi3GetFloat64", "nValues", RULE, |p| {
+            (api.get_float64)(c, &f, 1, p, 0)
+        })
     });
     // Unknown value references, and a known one with an unknown one (all-or-nothing).
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, &format!("fmi3GetFloat64([{unknown}])"), |c| unsafe {
-        (api.get_float64)(c, &unknown, 1, out.as_mut_ptr(), 1)
+        fill(&mut out[..1], "fmi3GetFloat64", "nValues", RULE, |p| {
+            (api.get_float64)(c, &unknown, 1, p, 1)
+        })
     });
     let inputs = float_inputs(fmu);
     if let Some(u) = inputs.first() {
@@ -348,50 +357,64 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
     } else {
         info("no continuous Float64 input: NaN/inf/min/max and all-or-nothing of setters not exercised");
     }
-    // Wrong types: a Float64 vr through every other getter.
-    let mut buf = [0u64; 4];
-    let p = buf.as_mut_ptr() as *mut std::ffi::c_void;
-    for (name, g) in [
-        ("fmi3GetFloat32", api.get_float32),
-        ("fmi3GetInt8", api.get_int8),
-        ("fmi3GetUInt8", api.get_uint8),
-        ("fmi3GetInt16", api.get_int16),
-        ("fmi3GetUInt16", api.get_uint16),
-        ("fmi3GetUInt32", api.get_uint32),
-        ("fmi3GetUInt64", api.get_uint64),
+    // Wrong types: a Float64 vr through every other getter, into one value of the getter's own
+    // type (a guard after it: an FMU that writes its 8-byte Float64 there overruns it).
+    for (name, g, bytes) in [
+        ("fmi3GetFloat32", api.get_float32, 4),
+        ("fmi3GetInt8", api.get_int8, 1),
+        ("fmi3GetUInt8", api.get_uint8, 1),
+        ("fmi3GetInt16", api.get_int16, 2),
+        ("fmi3GetUInt16", api.get_uint16, 2),
+        ("fmi3GetUInt32", api.get_uint32, 4),
+        ("fmi3GetUInt64", api.get_uint64, 8),
     ] {
+        let mut one = vec![0u8; bytes];
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
         refused(&inst, &format!("{name} of a Float64 (vr {f})"), |c| unsafe {
-            g(c, &f, 1, p, 1)
+            fill(&mut one, name, "nValues = 1 (bytes)", RULE, |p| {
+                g(c, &f, 1, p.cast(), 1)
+            })
         });
     }
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetInt32 of a Float64", |c| unsafe {
-        (api.get_int32)(c, &f, 1, buf.as_mut_ptr() as *mut i32, 1)
+        fill_one(&mut 0i32, "fmi3GetInt32", "nValues", RULE, |p| {
+            (api.get_int32)(c, &f, 1, p, 1)
+        })
     });
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetInt64 of a Float64", |c| unsafe {
-        (api.get_int64)(c, &f, 1, buf.as_mut_ptr() as *mut i64, 1)
+        fill_one(&mut 0i64, "fmi3GetInt64", "nValues", RULE, |p| {
+            (api.get_int64)(c, &f, 1, p, 1)
+        })
     });
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetBoolean of a Float64", |c| unsafe {
-        (api.get_boolean)(c, &f, 1, buf.as_mut_ptr() as *mut u8, 1)
+        fill_one(&mut 0u8, "fmi3GetBoolean", "nValues", RULE, |p| {
+            (api.get_boolean)(c, &f, 1, p, 1)
+        })
     });
     let mut s: fmi3String = null();
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetString of a Float64", |c| unsafe {
-        (api.get_string)(c, &f, 1, &mut s, 1)
+        fill_one(&mut s, "fmi3GetString", "nValues", RULE, |p| {
+            (api.get_string)(c, &f, 1, p, 1)
+        })
     });
     let (mut size, mut bin) = (0usize, null::<u8>());
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetBinary of a Float64", |c| unsafe {
-        (api.get_binary)(c, &f, 1, &mut size, &mut bin, 1)
+        fill_one(&mut size, "fmi3GetBinary (valueSizes)", "nValues", RULE, |ps| {
+            fill_one(&mut bin, "fmi3GetBinary (values)", "nValues", RULE, |pb| {
+                (api.get_binary)(c, &f, 1, ps, pb, 1)
+            })
+        })
     });
     if let Some(i32v) = md.of_type(Type::Int32).next() {
         let mut x = 0.0;
@@ -400,7 +423,11 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
             &format!("fmi3GetFloat64 of the Int32 '{}'", i32v.name),
             // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
             // lengths passed.
-            |c| unsafe { (api.get_float64)(c, &i32v.vr, 1, &mut x, 1) },
+            |c| unsafe {
+                fill_one(&mut x, "fmi3GetFloat64", "nValues", RULE, |p| {
+                    (api.get_float64)(c, &i32v.vr, 1, p, 1)
+                })
+            },
         );
     }
     if let Some(b) = md.of_type(Type::Boolean).next() {
@@ -410,7 +437,11 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
             &format!("fmi3GetInt32 of the Boolean '{}'", b.name),
             // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
             // lengths passed.
-            |c| unsafe { (api.get_int32)(c, &b.vr, 1, &mut x, 1) },
+            |c| unsafe {
+                fill_one(&mut x, "fmi3GetInt32", "nValues", RULE, |p| {
+                    (api.get_int32)(c, &b.vr, 1, p, 1)
+                })
+            },
         );
     }
     if let Some(e) = md.of_type(Type::Enumeration).next() {
@@ -423,13 +454,19 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
             ),
             // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
             // lengths passed.
-            |c| unsafe { (api.get_int32)(c, &e.vr, 1, &mut x, 1) },
+            |c| unsafe {
+                fill_one(&mut x, "fmi3GetInt32", "nValues", RULE, |p| {
+                    (api.get_int32)(c, &e.vr, 1, p, 1)
+                })
+            },
         );
         let mut y = 0i64;
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = inst.call("fmi3GetInt64 of an Enumeration", |c| unsafe {
-            (api.get_int64)(c, &e.vr, 1, &mut y, 1)
+            fill_one(&mut y, "fmi3GetInt64", "nValues", RULE, |p| {
+                (api.get_int64)(c, &e.vr, 1, p, 1)
+            })
         });
         assert_eq!(
             s,
@@ -478,7 +515,13 @@ fn bad_arguments(fmu: &Fmu3, me: bool) {
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
         refused(&inst, "fmi3GetContinuousStates(nContinuousStates + 1)", |c| unsafe {
-            (api.get_continuous_states)(c, v.as_mut_ptr(), n + 1)
+            fill(
+                &mut v[..n + 1],
+                "fmi3GetContinuousStates",
+                "nContinuousStates",
+                RULE,
+                |p| (api.get_continuous_states)(c, p, n + 1),
+            )
         });
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
@@ -554,7 +597,11 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                             // loaded, on this instance's live handle; each pointer we pass is to a
                             // live local of at least the length passed (or is an FMU state, the
                             // FMU's own handle).
-                            && inst.call("get", |c| unsafe { (api.get_float64)(c, &v.vr, 1, &mut x, 1) }) == fmi3OK;
+                            && inst.call("get", |c| unsafe {
+                                fill_one(&mut x, "fmi3GetFloat64", "nValues", RULE, |p| {
+                                    (api.get_float64)(c, &v.vr, 1, p, 1)
+                                })
+                            }) == fmi3OK;
                         if !got {
                             x = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0.0);
                         }
@@ -672,7 +719,11 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
                     // SAFETY: the standard's function from the library the FMU keeps loaded, on
                     // this instance's live handle; each pointer we pass is to a live local of at
                     // least the length passed (or is an FMU state, the FMU's own handle).
-                    let s = inst.call($name, |c| unsafe { (api.$get)(c, &v.vr, 1, got.as_mut_ptr(), 1) });
+                    let s = inst.call($name, |c| unsafe {
+                        fill(&mut got, $name, "nValues", RULE, |p| {
+                            (api.$get)(c, &v.vr, 1, p, 1)
+                        })
+                    });
                     assert_eq!(
                         (s, got[0]),
                         (fmi3OK, want),
@@ -693,7 +744,9 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetBoolean", |c| unsafe {
-                (api.get_boolean)(c, &v.vr, 1, got.as_mut_ptr(), 1)
+                fill(&mut got, "fmi3GetBoolean", "nValues", RULE, |p| {
+                    (api.get_boolean)(c, &v.vr, 1, p, 1)
+                })
             });
             assert_eq!(
                 (s, got[0] != 0),
@@ -709,7 +762,9 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetString", |c| unsafe {
-                (api.get_string)(c, &v.vr, 1, got.as_mut_ptr(), 1)
+                fill(&mut got, "fmi3GetString", "nValues", RULE, |p| {
+                    (api.get_string)(c, &v.vr, 1, p, 1)
+                })
             });
             assert_eq!(
                 s,
@@ -890,11 +945,13 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     let api = &fmu.api;
     let t = i.time;
     for bad in [0.0, -h, f64::NAN, f64::INFINITY] {
-        let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+        let (mut flags, mut last) = ([0u8; 3], 0.0);
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = i.call("fmi3DoStep(bad h)", |c| unsafe {
-            (api.do_step)(c, t, bad, true, &mut a, &mut b, &mut c2, &mut last)
+            crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, c2], l| {
+                (api.do_step)(c, t, bad, true, a, b, c2, l)
+            })
         });
         crate::outcome::warn_unless(s == fmi3Error, || {
             format!(
@@ -909,11 +966,13 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     let mut j = Inst::cs(fmu);
     excite(&j);
     j.initialize();
-    let (mut a, mut b, mut c2, mut last) = (0u8, 0u8, 0u8, 0.0);
+    let (mut flags, mut last) = ([0u8; 3], 0.0);
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = j.call("fmi3DoStep(wrong currentCommunicationPoint)", |c| unsafe {
-        (api.do_step)(c, 1.0 + 10.0 * h, h, true, &mut a, &mut b, &mut c2, &mut last)
+        crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, c2], l| {
+            (api.do_step)(c, 1.0 + 10.0 * h, h, true, a, b, c2, l)
+        })
     });
     // FMI 3.0.2 asks no check of currentCommunicationPoint against the FMU's time (the
     // Reference-FMUs' maintainers: "there is no requirement"): a warning.
@@ -1069,4 +1128,97 @@ pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
         (api.set_debug_logging)(c, false, 0, null())
     });
     assert_eq!(s, fmi3OK);
+}
+
+/// Every getter, with every (non-clocked) variable through its own type's getter
+/// ([`Inst::observe`]: every element of the arrays, each Binary), all Float64 at once, each
+/// String, and in Model Exchange fmi3GetNumberOfContinuousStates and the state vectors, after
+/// initialization and after a step, in each declared interface: each writes no byte past the
+/// array it is given (the guard after every buffer, `src/guard.rs`).
+///
+/// Verdict: a byte written past the array is a failure: FMI 3.0.2, Getting and Setting Variable
+/// Values (`nValues` is the size of the `values` array the importer provides), and the
+/// model-exchange functions' `size_t` and vectors of nContinuousStates elements. What the
+/// values are is other checks' business.
+pub fn fmi3_getters_write_no_value_past_the_array_they_are_given(fmu: &Fmu3) {
+    for me in [false, true] {
+        if (me && fmu.md.me.is_none()) || (!me && fmu.md.cs.is_none()) {
+            continue;
+        }
+        let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        excite(&inst);
+        inst.initialize();
+        for round in 0..2 {
+            if round == 1 {
+                inst.step(fmu.step_size());
+            }
+            let _ = inst.observe();
+            let floats: Vec<&Variable> = fmu.md.of_type(Type::Float64).filter(|v| v.clocks.is_empty()).collect();
+            let _ = inst.get_f64_of(&floats);
+            for v in fmu.md.of_type(Type::String).filter(|v| !v.array && v.clocks.is_empty()) {
+                let mut out = [null::<std::ffi::c_char>()];
+                // SAFETY: a live instance; one value reference, one value (and the guard after it).
+                inst.call("fmi3GetString", |c| unsafe {
+                    fill(&mut out, "fmi3GetString", "nValues", RULE, |p| {
+                        (fmu.api.get_string)(c, &v.vr, 1, p, 1)
+                    })
+                });
+            }
+            if me {
+                let n = inst.n_states();
+                if n != usize::MAX {
+                    let _ = inst.vector("fmi3GetContinuousStates", fmu.api.get_continuous_states, n);
+                    let _ = inst.vector(
+                        "fmi3GetContinuousStateDerivatives",
+                        fmu.api.get_continuous_state_derivatives,
+                        n,
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// fmi3DoStep answered fmi3OK three times from the start time: the FMU is at t0 + 3 h, as its
+/// time variable (the `independent` Float64) reads (within a millionth of the step:
+/// `outcome::same_time`).
+///
+/// Verdict: a failure where it reads another time after fmi3OK without early return: FMI 3.0.2,
+/// Co-Simulation, fmi3DoStep (the FMU computes the communication step from
+/// currentCommunicationPoint to currentCommunicationPoint + communicationStepSize; fmi3OK
+/// without earlyReturn: the step was computed to its end). Skipped without `<CoSimulation>`.
+pub fn fmi3_do_step_advances_time_by_the_step(fmu: &Fmu3) {
+    if fmu.md.cs.is_none() {
+        skip_not_declared("<CoSimulation>");
+    }
+    let Some(time) = fmu.md.independent().filter(|v| v.ty == Type::Float64) else {
+        panic!(
+            "{}: no Float64 variable with causality=\"independent\" (FMI 3.0.2 §2.4.7.4: exactly one is required)",
+            fmu.id
+        )
+    };
+    let mut inst = Inst::cs(fmu);
+    excite(&inst);
+    inst.initialize();
+    let h = fmu.step_size();
+    let t0 = inst.time;
+    for n in 1..=3 {
+        let (s, flags, _) = inst.do_step(h);
+        assert_eq!(s, fmi3OK, "{}: fmi3DoStep {n} of h = {h}: {}", fmu.id, inst.log_text());
+        if flags[2] == 1 {
+            skip("fmi3DoStep returned early (earlyReturn), so the step's end is not where it stopped");
+        }
+        let (s, v) = inst.get_f64(&[time.vr]);
+        assert!(
+            s == fmi3OK && crate::outcome::same_time(v[0], inst.time, h),
+            "{}: after {n} fmi3DoStep of h = {h} from t = {t0} answered fmi3OK, the time variable '{}' reads {} ({}), \
+             expected {} (FMI 3.0.2, fmi3DoStep: fmi3OK without earlyReturn means the step was computed to \
+             currentCommunicationPoint + communicationStepSize)",
+            fmu.id,
+            time.name,
+            v[0],
+            status_name(s),
+            inst.time
+        );
+    }
 }

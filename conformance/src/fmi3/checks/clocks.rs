@@ -58,7 +58,22 @@ pub(super) fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
-        (inst.api().get_interval_decimal)(c, &vr, 1, &mut h, &mut q)
+        use crate::guard::{CLOCK_RULE3 as R, fill_one};
+        fill_one(
+            &mut h,
+            "fmi3GetIntervalDecimal (intervals)",
+            "nValueReferences",
+            R,
+            |ph| {
+                fill_one(
+                    &mut q,
+                    "fmi3GetIntervalDecimal (qualifiers)",
+                    "nValueReferences",
+                    R,
+                    |pq| (inst.api().get_interval_decimal)(c, &vr, 1, ph, pq),
+                )
+            },
+        )
     });
     (s, h, q)
 }
@@ -91,7 +106,13 @@ pub(super) fn periodic_shift(inst: &Inst, v: &crate::fmi3::Variable) -> f64 {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
-        (inst.api().get_shift_decimal)(cc, &v.vr, 1, &mut shift)
+        crate::guard::fill_one(
+            &mut shift,
+            "fmi3GetShiftDecimal",
+            "nValueReferences",
+            crate::guard::CLOCK_RULE3,
+            |p| (inst.api().get_shift_decimal)(cc, &v.vr, 1, p),
+        )
     });
     assert_eq!(
         s,
@@ -320,7 +341,11 @@ fn run(
             let mut on = 7u8;
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            let s = inst.call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
+            let s = inst.call("fmi3GetClock", |c| unsafe {
+                crate::guard::fill_one(&mut on, "fmi3GetClock", "nValues", crate::guard::CLOCK_RULE3, |p| {
+                    (api.get_clock)(c, &oc.vr, 1, p)
+                })
+            });
             assert!(
                 s == fmi3OK && on <= 1,
                 "{id}: fmi3GetClock of output clock '{}' at t = {t}: status {s}, value {on}: {}",
@@ -364,7 +389,11 @@ fn run(
             let mut on = 7u8;
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            let s = inst.call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &vr, 1, &mut on) });
+            let s = inst.call("fmi3GetClock", |c| unsafe {
+                crate::guard::fill_one(&mut on, "fmi3GetClock", "nValues", crate::guard::CLOCK_RULE3, |p| {
+                    (api.get_clock)(c, &vr, 1, p)
+                })
+            });
             assert!(
                 s == fmi3OK && on == 0,
                 "{id}: '{}' after fmi3UpdateDiscreteStates: status {s}, active {on} (expected inactive)",

@@ -281,17 +281,28 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
         |c| unsafe {
-            (api.get_directional_derivative)(
-                c,
-                u.as_ptr(),
-                nuv,
-                k.as_ptr(),
-                nkv,
-                seed.as_ptr(),
-                nk + 1,
-                sens.as_mut_ptr(),
-                nu,
-            )
+            {
+                let m = nu;
+                crate::guard::fill(
+                    &mut sens[..m],
+                    "fmi3GetDirectionalDerivative",
+                    "nSensitivity",
+                    crate::guard::GETTER_RULE3,
+                    |p| {
+                        (api.get_directional_derivative)(
+                            c,
+                            u.as_ptr(),
+                            nuv,
+                            k.as_ptr(),
+                            nkv,
+                            seed.as_ptr(),
+                            nk + 1,
+                            p,
+                            m,
+                        )
+                    },
+                )
+            }
         },
     );
     refused(
@@ -300,17 +311,16 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
         |c| unsafe {
-            (api.get_directional_derivative)(
-                c,
-                u.as_ptr(),
-                nuv,
-                k.as_ptr(),
-                nkv,
-                seed.as_ptr(),
-                nk,
-                sens.as_mut_ptr(),
-                nu + 1,
-            )
+            {
+                let m = nu + 1;
+                crate::guard::fill(
+                    &mut sens[..m],
+                    "fmi3GetDirectionalDerivative",
+                    "nSensitivity",
+                    crate::guard::GETTER_RULE3,
+                    |p| (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, seed.as_ptr(), nk, p, m),
+                )
+            }
         },
     );
     if nu != nuv || nk != nkv {
@@ -324,17 +334,28 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
             // lengths passed.
             |c| unsafe {
-                (api.get_directional_derivative)(
-                    c,
-                    u.as_ptr(),
-                    nuv,
-                    k.as_ptr(),
-                    nkv,
-                    seed.as_ptr(),
-                    nkv,
-                    sens.as_mut_ptr(),
-                    nuv,
-                )
+                {
+                    let m = nuv;
+                    crate::guard::fill(
+                        &mut sens[..m],
+                        "fmi3GetDirectionalDerivative",
+                        "nSensitivity",
+                        crate::guard::GETTER_RULE3,
+                        |p| {
+                            (api.get_directional_derivative)(
+                                c,
+                                u.as_ptr(),
+                                nuv,
+                                k.as_ptr(),
+                                nkv,
+                                seed.as_ptr(),
+                                nkv,
+                                p,
+                                m,
+                            )
+                        },
+                    )
+                }
             },
         );
     }
@@ -345,23 +366,31 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
         |c| unsafe {
-            (api.get_directional_derivative)(
-                c,
-                bad.as_ptr(),
-                1,
-                k.as_ptr(),
-                nkv,
-                seed.as_ptr(),
-                nk,
-                sens.as_mut_ptr(),
-                1,
-            )
+            {
+                let m = 1;
+                crate::guard::fill(
+                    &mut sens[..m],
+                    "fmi3GetDirectionalDerivative",
+                    "nSensitivity",
+                    crate::guard::GETTER_RULE3,
+                    |p| (api.get_directional_derivative)(c, bad.as_ptr(), 1, k.as_ptr(), nkv, seed.as_ptr(), nk, p, m),
+                )
+            }
         },
     );
     // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
     // passed.
     refused(&inst, "fmi3GetDirectionalDerivative(seed = NULL)", |c| unsafe {
-        (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, null(), nk, sens.as_mut_ptr(), nu)
+        {
+            let m = nu;
+            crate::guard::fill(
+                &mut sens[..m],
+                "fmi3GetDirectionalDerivative",
+                "nSensitivity",
+                crate::guard::GETTER_RULE3,
+                |p| (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, null(), nk, p, m),
+            )
+        }
     });
     if i.provides_adjoint_derivatives {
         refused(
@@ -370,17 +399,28 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
             // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
             // lengths passed.
             |c| unsafe {
-                (api.get_adjoint_derivative)(
-                    c,
-                    u.as_ptr(),
-                    nuv,
-                    k.as_ptr(),
-                    nkv,
-                    seed.as_ptr(),
-                    if nk == nu { nu + 1 } else { nk },
-                    sens.as_mut_ptr(),
-                    if nk == nu { nk } else { nu },
-                )
+                {
+                    let m = if nk == nu { nk } else { nu };
+                    crate::guard::fill(
+                        &mut sens[..m],
+                        "fmi3GetAdjointDerivative",
+                        "nSensitivity",
+                        crate::guard::GETTER_RULE3,
+                        |p| {
+                            (api.get_adjoint_derivative)(
+                                c,
+                                u.as_ptr(),
+                                nuv,
+                                k.as_ptr(),
+                                nkv,
+                                seed.as_ptr(),
+                                if nk == nu { nu + 1 } else { nk },
+                                p,
+                                m,
+                            )
+                        },
+                    )
+                }
             },
         );
     }

@@ -39,7 +39,15 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            a.call("fmi3GetFMUState", |c| unsafe { (api.get_fmu_state)(c, &mut st) }),
+            a.call("fmi3GetFMUState", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3GetFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.get_fmu_state)(c, q),
+                )
+            }),
             fmi3OK
         );
         let bytes = a.snapshot();
@@ -103,13 +111,27 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             a.call("fmi3GetFMUState (update)", |c| unsafe {
-                (api.get_fmu_state)(c, &mut st)
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3GetFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.get_fmu_state)(c, q),
+                )
             }),
             fmi3OK
         );
         assert_eq!(
             // SAFETY: a live instance; `st` is the state it returned, freed once (it sets `st` to NULL).
-            a.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) }),
+            a.call("fmi3FreeFMUState", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3FreeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.free_fmu_state)(c, q),
+                )
+            }),
             fmi3OK
         );
         assert!(st.is_null(), "{}: fmi3FreeFMUState left the pointer non-NULL", fmu.id);
@@ -147,7 +169,19 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         let mut st: fmi3FMUState = null_mut();
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        assert_eq!(a.call("get", |c| unsafe { (api.get_fmu_state)(c, &mut st) }), fmi3OK);
+        assert_eq!(
+            // SAFETY: a live instance; the pointer is to a live local (and the guard after it).
+            a.call("get", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3GetFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.get_fmu_state)(c, q),
+                )
+            }),
+            fmi3OK
+        );
         let n = bytes.len().saturating_sub(1);
         let mut small = Guarded::new(n, 0u8);
         let p = small.as_mut_ptr();
@@ -169,7 +203,19 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         );
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        assert_eq!(a.call("free", |c| unsafe { (api.free_fmu_state)(c, &mut st) }), fmi3OK);
+        assert_eq!(
+            // SAFETY: a live instance and the FMU state it returned (and the guard after the pointer).
+            a.call("free", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3FreeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.free_fmu_state)(c, q),
+                )
+            }),
+            fmi3OK
+        );
     }
     if tested == 0 {
         skip_not_declared("canGetAndSetFMUState and canSerializeFMUState");
@@ -207,13 +253,27 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
         let s = crate::outcome::on_purpose(|| {
             // SAFETY: a live instance; `b` is readable for the length passed; `st` a live local.
             a.call(what, |c| unsafe {
-                (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), &mut st)
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3DeserializeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), q),
+                )
             })
         });
         if s == fmi3OK {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            let _ = a.call("free", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
+            let _ = a.call("free", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3FreeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.free_fmu_state)(c, q),
+                )
+            });
         }
         // A damaged buffer is the importer's mistake (FMI 3.0.2 §2.2.6.4 defines deserializing
         // what fmi3SerializeFMUState wrote): not detected, a warning.
@@ -246,7 +306,13 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
         // SAFETY: NULL bytes with a non-zero size on purpose: the FMU must refuse without reading
         // them; `st` is a live local.
         a.call("fmi3DeserializeFMUState(NULL, n)", |c| unsafe {
-            (api.deserialize_fmu_state)(c, null(), bytes.len(), &mut st)
+            crate::guard::fill_one(
+                &mut st,
+                "fmi3DeserializeFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.deserialize_fmu_state)(c, null(), bytes.len(), q),
+            )
         })
     });
     crate::outcome::warn_unless(s == fmi3Error, || {
@@ -391,5 +457,35 @@ pub fn fmi3_a_state_serialized_here_restores_in_another_process_and_continues_id
     }
     if checked == 0 {
         skip_not_declared("canGetAndSetFMUState and canSerializeFMUState");
+    }
+}
+
+/// The serialized FMU state, taken after initialization and after 10 steps in each declared
+/// interface that can serialize it, fits the size fmi3SerializedFMUStateSize announced:
+/// fmi3SerializeFMUState writes no byte past it (the guard after the buffer, `src/guard.rs`).
+///
+/// Verdict: a byte written past the size is a failure: FMI 3.0.2, Getting and Setting the
+/// Complete FMU State (fmi3SerializeFMUState copies the state into the byte vector
+/// serializedState of length size that the importer provides, size being
+/// fmi3SerializedFMUStateSize's answer). Skipped where the FMU does not declare
+/// canGetAndSetFMUState and canSerializeFMUState.
+pub fn fmi3_serialized_state_fits_its_announced_size(fmu: &Fmu3) {
+    let interfaces: Vec<bool> = [false, true].into_iter().filter(|me| fmu.can_snapshot(*me)).collect();
+    if interfaces.is_empty() {
+        skip_not_declared("canGetAndSetFMUState and canSerializeFMUState");
+    }
+    for me in interfaces {
+        let mut inst = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        excite(&inst);
+        inst.initialize();
+        for k in [0, 10] {
+            for _ in 0..k {
+                inst.step(fmu.step_size());
+            }
+            // Guarded: a byte past `size` fails here, naming the call.
+            if let Err(e) = inst.try_snapshot() {
+                panic!("{}: the FMU state after {k} steps: {e}", fmu.id);
+            }
+        }
     }
 }

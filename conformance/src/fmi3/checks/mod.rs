@@ -50,6 +50,8 @@ crate::registry::registry! {
             fmi3_start_values_are_readable_in_instantiated,
             fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set,
             fmi3_do_step_output_arguments_are_truthful,
+            fmi3_getters_write_no_value_past_the_array_they_are_given,
+            fmi3_do_step_advances_time_by_the_step,
             fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_where_asked,
             fmi3_output_derivatives_agree_with_finite_differences_of_the_outputs,
             fmi3_set_debug_logging_refuses_unknown_categories,
@@ -86,6 +88,7 @@ crate::registry::registry! {
         };
         FmuState: fmu_state::{
             fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically,
+            fmi3_serialized_state_fits_its_announced_size,
             fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused,
             fmi3_a_state_serialized_here_restores_in_another_process_and_continues_identically,
         };

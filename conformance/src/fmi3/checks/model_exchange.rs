@@ -28,7 +28,15 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
     assert_eq!(
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        i.call("n", |c| unsafe { (api.get_number_of_event_indicators)(c, &mut ne) }),
+        i.call("n", |c| unsafe {
+            crate::guard::fill_one(
+                &mut ne,
+                "fmi3GetNumberOfEventIndicators",
+                "one size_t",
+                crate::guard::COUNT_RULE3,
+                |q| (api.get_number_of_event_indicators)(c, q),
+            )
+        }),
         fmi3OK
     );
     let nz = fmu.n_event_indicators_declared();
@@ -236,7 +244,13 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = i.call("fmi3GetNumberOfEventIndicators", |c| unsafe {
-        (api.get_number_of_event_indicators)(c, &mut count)
+        crate::guard::fill_one(
+            &mut count,
+            "fmi3GetNumberOfEventIndicators",
+            "one size_t",
+            crate::guard::COUNT_RULE3,
+            |q| (api.get_number_of_event_indicators)(c, q),
+        )
     });
     assert_eq!((s, count), (fmi3OK, nz), "{id}: fmi3GetNumberOfEventIndicators");
     let indicators = |i: &Inst| {
@@ -289,7 +303,21 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = i.call("fmi3CompletedIntegratorStep", |c| unsafe {
-            (api.completed_integrator_step)(c, true, &mut enter, &mut term)
+            crate::guard::fill_one(
+                &mut enter,
+                "fmi3CompletedIntegratorStep (enterEventMode)",
+                "one value",
+                crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                |qa| {
+                    crate::guard::fill_one(
+                        &mut term,
+                        "fmi3CompletedIntegratorStep (terminateSimulation)",
+                        "one value",
+                        crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                        |qb| (api.completed_integrator_step)(c, true, qa, qb),
+                    )
+                },
+            )
         });
         assert_eq!(
             (s, term),

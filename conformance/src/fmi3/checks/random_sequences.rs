@@ -149,7 +149,21 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                 // this instance's live handle; each pointer we pass is to a live local of at
                 // least the length passed (or is an FMU state, the FMU's own handle).
                 Op::Step if me => inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-                    (api.completed_integrator_step)(c, true, &mut 0, &mut 0)
+                    crate::guard::fill_one(
+                        &mut 0,
+                        "fmi3CompletedIntegratorStep (enterEventMode)",
+                        "one value",
+                        crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                        |qa| {
+                            crate::guard::fill_one(
+                                &mut 0,
+                                "fmi3CompletedIntegratorStep (terminateSimulation)",
+                                "one value",
+                                crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                                |qb| (api.completed_integrator_step)(c, true, qa, qb),
+                            )
+                        },
+                    )
                 }),
                 Op::Step => inst.do_step(h).0,
                 Op::EnterEventMode => inst.unary("fmi3EnterEventMode", api.enter_event_mode),
@@ -195,7 +209,21 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                     // this instance's live handle; each pointer we pass is to a live local of
                     // at least the length passed (or is an FMU state, the FMU's own handle).
                     inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-                        (api.completed_integrator_step)(c, true, &mut 0, &mut 0)
+                        crate::guard::fill_one(
+                            &mut 0,
+                            "fmi3CompletedIntegratorStep (enterEventMode)",
+                            "one value",
+                            crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                            |qa| {
+                                crate::guard::fill_one(
+                                    &mut 0,
+                                    "fmi3CompletedIntegratorStep (terminateSimulation)",
+                                    "one value",
+                                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                                    |qb| (api.completed_integrator_step)(c, true, qa, qb),
+                                )
+                            },
+                        )
                     })
                 }
             }
@@ -208,8 +236,9 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                 // this instance's live handle; each pointer we pass is to a live local of at
                 // least the length passed (or is an FMU state, the FMU's own handle).
                 inst.call("fmi3UpdateDiscreteStates", |c| unsafe {
-                    let [a, b, cc, d, e] = &mut f;
-                    (api.update_discrete_states)(c, a, b, cc, d, e, &mut t)
+                    crate::guard::fill_outputs("fmi3UpdateDiscreteStates", &mut f, &mut t, |[a, b, cc, d, e], t| {
+                        (api.update_discrete_states)(c, a, b, cc, d, e, t)
+                    })
                 })
             }
             Op::EnterCtm => inst.unary("fmi3EnterContinuousTimeMode", api.enter_continuous_time_mode),

@@ -36,6 +36,9 @@ struct Update {
     /// fmi3GetIntervalDecimal of each countdown/changing input clock: (vr, status, interval,
     /// qualifier).
     intervals: Vec<(u32, fmi3Status, f64, u32)>,
+    /// A call of the callback that wrote past the array it was given (the guard's message:
+    /// recorded, as a panic may not leave the callback, and failed by the check).
+    overruns: Vec<String>,
 }
 
 /// What the callback of one instance needs and records.
@@ -90,19 +93,22 @@ fn clocked_by(fmu: &Fmu3, clock: u32) -> impl Iterator<Item = &Variable> {
 /// # Safety
 ///
 /// `c` is a live instance of `api`'s FMU.
-unsafe fn get_plain(api: &api::Api, c: fmi3Instance, v: &Variable) -> (fmi3Status, Vec<u8>) {
+unsafe fn get_plain(api: &api::Api, c: fmi3Instance, v: &Variable) -> (fmi3Status, Result<Vec<u8>, String>) {
     let n = v.fixed_count().unwrap_or(1) as usize;
-    let mut words = vec![0u64; n.max(1)];
+    let mut words = crate::guard::Guarded::aligned_bytes(n * c_size(v.ty));
     let p = words.as_mut_ptr();
     let vr = &v.vr;
     // SAFETY: `c` is a live instance of `api`'s FMU (this function's contract); `words` holds `n`
-    // values of any of the types, 8-byte aligned.
+    // values of any of the types, 8-byte aligned (and the guard after them).
     let s = unsafe { api.get_values(c, v.ty, vr, p, n) };
-    let bytes = words
-        .iter()
-        .flat_map(|w| w.to_ne_bytes())
-        .take(n * c_size(v.ty))
-        .collect();
+    let what = || format!("fmi3Get{:?} with nValues = {n}", v.ty);
+    let bytes = words.try_values(what, crate::guard::GETTER_RULE3).map(|words| {
+        words
+            .iter()
+            .flat_map(|w| w.to_ne_bytes())
+            .take(n * c_size(v.ty))
+            .collect()
+    });
     (s, bytes)
 }
 
@@ -123,25 +129,49 @@ unsafe extern "C" fn clock_update(env: fmi3InstanceEnvironment) {
             ..Update::default()
         };
         if !c.is_null() {
+            use crate::guard::{CLOCK_RULE3, Guarded};
             let api = &fmu.api;
+            // A guard overwritten is recorded (the check fails with it), not panicked on here.
+            fn checked<T>(r: Result<Vec<T>, String>, u: &mut Update) -> Vec<T> {
+                r.unwrap_or_else(|e| {
+                    u.overruns.push(e);
+                    vec![]
+                })
+            }
             for oc in output_clocks(fmu) {
-                let mut on = 7u8;
-                // SAFETY: a live instance, one value reference, one value.
-                let s = unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) };
+                let mut on = Guarded::new(1, 7u8);
+                // SAFETY: a live instance, one value reference, one value (and the guard after it).
+                let s = unsafe { (api.get_clock)(c, &oc.vr, 1, on.as_mut_ptr()) };
+                let on = checked(
+                    on.try_values(|| "fmi3GetClock with nValues = 1".into(), CLOCK_RULE3),
+                    &mut u,
+                );
+                let on = on.first().copied().unwrap_or(7);
                 u.outs.push((oc.vr, s, on));
                 if s == fmi3OK && on == 1 {
                     for v in clocked_by(fmu, oc.vr) {
                         // SAFETY: a live instance.
                         let (s, bytes) = unsafe { get_plain(api, c, v) };
-                        u.values.push((v.vr, s, bytes));
+                        match bytes {
+                            Ok(bytes) => u.values.push((v.vr, s, bytes)),
+                            Err(e) => u.overruns.push(e),
+                        }
                     }
                 }
             }
             for ic in aperiodic(fmu) {
-                let (mut h, mut q) = (f64::NAN, 99u32);
-                // SAFETY: a live instance, one value reference, one value each.
-                let s = unsafe { (api.get_interval_decimal)(c, &ic.vr, 1, &mut h, &mut q) };
-                u.intervals.push((ic.vr, s, h, q));
+                let (mut h, mut q) = (Guarded::new(1, f64::NAN), Guarded::new(1, 99u32));
+                // SAFETY: a live instance, one value reference, one value each (and the guards).
+                let s = unsafe { (api.get_interval_decimal)(c, &ic.vr, 1, h.as_mut_ptr(), q.as_mut_ptr()) };
+                let what = |a: &'static str| move || format!("fmi3GetIntervalDecimal ({a}) with nValueReferences = 1");
+                let h = checked(h.try_values(what("intervals"), CLOCK_RULE3), &mut u);
+                let q = checked(q.try_values(what("qualifiers"), CLOCK_RULE3), &mut u);
+                u.intervals.push((
+                    ic.vr,
+                    s,
+                    h.first().copied().unwrap_or(f64::NAN),
+                    q.first().copied().unwrap_or(99),
+                ));
             }
         }
         p.updates.lock().unwrap_or_else(|e| e.into_inner()).push(u);
@@ -442,6 +472,12 @@ fn run(fmu: &Fmu3, snapshot_at: Option<usize>, restore: Option<&Snapshot>) -> (T
         callbacks += new.len();
         for u in &new {
             assert!(
+                u.overruns.is_empty(),
+                "{id}: in clockUpdate (activation of '{}' at {t}): {}",
+                clock.name,
+                u.overruns.join("; ")
+            );
+            assert!(
                 u.inside && u.time == t,
                 "{id}: clockUpdate was called outside fmi3ActivateModelPartition (activation of '{}' at {t})",
                 clock.name
@@ -498,7 +534,11 @@ fn run(fmu: &Fmu3, snapshot_at: Option<usize>, restore: Option<&Snapshot>) -> (T
                 .inst
                 // SAFETY: a live instance; each pointer is to a live local of the length passed, or
                 // is an FMU state.
-                .call("fmi3GetClock", |c| unsafe { (api.get_clock)(c, &oc.vr, 1, &mut on) });
+                .call("fmi3GetClock", |c| unsafe {
+                    crate::guard::fill_one(&mut on, "fmi3GetClock", "nValues", crate::guard::CLOCK_RULE3, |p| {
+                        (api.get_clock)(c, &oc.vr, 1, p)
+                    })
+                });
             assert!(
                 st == fmi3OK && on <= 1,
                 "{id}: fmi3GetClock of output clock '{}' in Clock Activation Mode (t = {t}): status {}, value {on}: {}",
@@ -647,10 +687,12 @@ fn refusals(fmu: &Fmu3) -> usize {
     // The Co-Simulation and Model Exchange functions.
     {
         let (s, _) = ready(fmu);
-        let (mut a, mut b, mut c3, mut last) = (9u8, 9u8, 9u8, f64::NAN);
+        let (mut flags, mut last) = ([9u8; 3], f64::NAN);
         // SAFETY: a call the FMU must refuse here, with values and pointers to live locals.
         expect_error(&s, "fmi3DoStep on a Scheduled Execution instance", |c| unsafe {
-            (api.do_step)(c, 0.0, fmu.step_size(), true, &mut a, &mut b, &mut c3, &mut last)
+            crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, c3], l| {
+                (api.do_step)(c, 0.0, fmu.step_size(), true, a, b, c3, l)
+            })
         });
         n += 1;
     }

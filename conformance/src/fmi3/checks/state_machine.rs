@@ -126,15 +126,33 @@ pub fn fmi3_a_null_instance_is_refused_by_every_function(fmu: &Fmu3) {
     unsafe {
         answers.push((
             "fmi3SerializedFMUStateSize",
-            (api.serialized_fmu_state_size)(null_mut(), null_mut(), &mut size),
+            crate::guard::fill_one(
+                &mut size,
+                "fmi3SerializedFMUStateSize",
+                "one size_t",
+                crate::guard::STATE_RULE3,
+                |p| (api.serialized_fmu_state_size)(null_mut(), null_mut(), p),
+            ),
         ));
         answers.push((
             "fmi3SerializeFMUState",
-            (api.serialize_fmu_state)(null_mut(), null_mut(), buf.as_mut_ptr(), buf.len()),
+            crate::guard::fill(
+                &mut buf,
+                "fmi3SerializeFMUState",
+                "size",
+                crate::guard::STATE_RULE3,
+                |p| (api.serialize_fmu_state)(null_mut(), null_mut(), p, 64),
+            ),
         ));
         answers.push((
             "fmi3DeserializeFMUState",
-            (api.deserialize_fmu_state)(null_mut(), buf.as_ptr(), buf.len(), &mut st),
+            crate::guard::fill_one(
+                &mut st,
+                "fmi3DeserializeFMUState",
+                "one FMU state",
+                crate::guard::STATE_RULE3,
+                |q| (api.deserialize_fmu_state)(null_mut(), buf.as_ptr(), buf.len(), q),
+            ),
         ));
         (api.free_instance)(null_mut());
     }

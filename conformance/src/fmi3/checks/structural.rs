@@ -87,7 +87,9 @@ fn get_u64(inst: &Inst, vr: u32) -> (fmi3Status, u64) {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3GetUInt64", |c| unsafe {
-        (inst.api().get_uint64)(c, &vr, 1, &mut x as *mut u64 as Values, 1)
+        crate::guard::fill_one(&mut x, "fmi3GetUInt64", "nValues", crate::guard::GETTER_RULE3, |p| {
+            (inst.api().get_uint64)(c, &vr, 1, p as Values, 1)
+        })
     });
     (s, x)
 }

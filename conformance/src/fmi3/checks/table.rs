@@ -285,7 +285,12 @@ impl F {
             F::GetString => {
                 let v = readable(i.fmu, Type::String);
                 let mut out = vec![null(); v.len()];
-                valid!(|c| (api.get_string)(c, v.as_ptr(), v.len(), out.as_mut_ptr(), out.len()))
+                let n = out.len();
+                valid!(
+                    |c| crate::guard::fill(&mut out, "fmi3GetString", "nValues", crate::guard::GETTER_RULE3, |p| {
+                        (api.get_string)(c, v.as_ptr(), v.len(), p, n)
+                    })
+                )
             }
             F::GetFloat32 => none!(get_float32),
             F::GetInt8 => none!(get_int8),
@@ -313,7 +318,13 @@ impl F {
             F::GetNumberOfVariableDependencies => {
                 let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
                 let mut n = 0;
-                valid!(|c| (api.get_number_of_variable_dependencies)(c, vr, &mut n))
+                valid!(|c| crate::guard::fill_one(
+                    &mut n,
+                    "fmi3GetNumberOfVariableDependencies",
+                    "one nDependencies",
+                    crate::guard::DEPENDENCIES_RULE3,
+                    |q| (api.get_number_of_variable_dependencies)(c, vr, q)
+                ))
             }
             F::GetVariableDependencies => {
                 let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
@@ -321,19 +332,39 @@ impl F {
             }
             F::GetFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                let s = valid!(|c| (api.get_fmu_state)(c, &mut st));
+                let s = valid!(|c| crate::guard::fill_one(
+                    &mut st,
+                    "fmi3GetFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.get_fmu_state)(c, q)
+                ));
                 if s == fmi3OK {
                     // SAFETY: the standard's function from the library the FMU keeps loaded, on
                     // this instance's live handle; each pointer we pass is to a live local of at
                     // least the length passed (or is an FMU state, the FMU's own handle).
-                    let f = i.call("fmi3FreeFMUState", |c| unsafe { (api.free_fmu_state)(c, &mut st) });
+                    let f = i.call("fmi3FreeFMUState", |c| unsafe {
+                        crate::guard::fill_one(
+                            &mut st,
+                            "fmi3FreeFMUState",
+                            "one FMU state",
+                            crate::guard::STATE_RULE3,
+                            |q| (api.free_fmu_state)(c, q),
+                        )
+                    });
                     assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState of a state just taken", i.fmu.id);
                 }
                 s
             }
             F::FreeFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                valid!(|c| (api.free_fmu_state)(c, &mut st))
+                valid!(|c| crate::guard::fill_one(
+                    &mut st,
+                    "fmi3FreeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.free_fmu_state)(c, q)
+                ))
             }
             F::GetDirectionalDerivative => derivative_call(i, false),
             F::GetAdjointDerivative => derivative_call(i, true),
@@ -353,15 +384,31 @@ impl F {
             F::UpdateDiscreteStates => {
                 let mut f = [0u8; 5];
                 let mut t = 0.0;
-                valid!(|c| {
-                    let [a, b, cc, d, e] = &mut f;
-                    (api.update_discrete_states)(c, a, b, cc, d, e, &mut t)
-                })
+                valid!(|c| crate::guard::fill_outputs(
+                    "fmi3UpdateDiscreteStates",
+                    &mut f,
+                    &mut t,
+                    |[a, b, cc, d, e], t| (api.update_discrete_states)(c, a, b, cc, d, e, t)
+                ))
             }
             F::EnterContinuousTimeMode => unary!(enter_continuous_time_mode),
             F::CompletedIntegratorStep => {
                 let (mut a, mut b) = (0u8, 0u8);
-                valid!(|c| (api.completed_integrator_step)(c, true, &mut a, &mut b))
+                valid!(|c| crate::guard::fill_one(
+                    &mut a,
+                    "fmi3CompletedIntegratorStep (enterEventMode)",
+                    "one value",
+                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                    |qa| {
+                        crate::guard::fill_one(
+                            &mut b,
+                            "fmi3CompletedIntegratorStep (terminateSimulation)",
+                            "one value",
+                            crate::guard::OUTPUT_ARGUMENTS_RULE3,
+                            |qb| (api.completed_integrator_step)(c, true, qa, qb),
+                        )
+                    }
+                ))
             }
             F::SetTime => valid!(|c| (api.set_time)(c, 0.0)),
             F::SetContinuousStates => {
@@ -374,11 +421,23 @@ impl F {
             F::GetNominalsOfContinuousStates => vector!(get_nominals_of_continuous_states, n_states),
             F::GetNumberOfEventIndicators => {
                 let mut n = 0;
-                valid!(|c| (api.get_number_of_event_indicators)(c, &mut n))
+                valid!(|c| crate::guard::fill_one(
+                    &mut n,
+                    "fmi3GetNumberOfEventIndicators",
+                    "one size_t",
+                    crate::guard::COUNT_RULE3,
+                    |q| (api.get_number_of_event_indicators)(c, q)
+                ))
             }
             F::GetNumberOfContinuousStates => {
                 let mut n = 0;
-                valid!(|c| (api.get_number_of_continuous_states)(c, &mut n))
+                valid!(|c| crate::guard::fill_one(
+                    &mut n,
+                    "fmi3GetNumberOfContinuousStates",
+                    "one size_t",
+                    crate::guard::COUNT_RULE3,
+                    |q| (api.get_number_of_continuous_states)(c, q)
+                ))
             }
             F::EnterStepMode => unary!(enter_step_mode),
             F::GetOutputDerivatives => {
@@ -395,9 +454,13 @@ impl F {
                 ))
             }
             F::DoStep => {
-                let (mut a, mut b, mut d, mut t) = (0u8, 0u8, 0u8, 0.0);
+                let (mut f, mut t) = ([0u8; 3], 0.0);
                 let h = i.fmu.step_size();
-                valid!(|c| (api.do_step)(c, 0.0, h, true, &mut a, &mut b, &mut d, &mut t))
+                valid!(
+                    |c| crate::guard::fill_outputs("fmi3DoStep", &mut f, &mut t, |[a, b, d], t| {
+                        (api.do_step)(c, 0.0, h, true, a, b, d, t)
+                    })
+                )
             }
             F::ActivateModelPartition => valid!(|c| (api.activate_model_partition)(c, 0, 0.0)),
         }

@@ -377,7 +377,13 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
-                (api.get_number_of_variable_dependencies)(c, u.vr, &mut count)
+                crate::guard::fill_one(
+                    &mut count,
+                    "fmi3GetNumberOfVariableDependencies",
+                    "one nDependencies",
+                    crate::guard::DEPENDENCIES_RULE3,
+                    |p| (api.get_number_of_variable_dependencies)(c, u.vr, p),
+                )
             });
             // FMI 3.0.2 offers these functions only where the FMU declares
             // providesPerElementDependencies: without it, a refusal is the FMU's right (skipped);
@@ -404,15 +410,17 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetVariableDependencies", |c| unsafe {
-                (api.get_variable_dependencies)(
-                    c,
-                    u.vr,
-                    e_dep.as_mut_ptr(),
-                    ind.as_mut_ptr(),
-                    e_ind.as_mut_ptr(),
-                    kinds.as_mut_ptr(),
-                    count,
-                )
+                use crate::guard::{DEPENDENCIES_RULE3 as R, fill};
+                let f = "fmi3GetVariableDependencies";
+                fill(&mut e_dep, f, "nDependencies (elementIndicesOfDependent)", R, |a| {
+                    fill(&mut ind, f, "nDependencies (independents)", R, |b| {
+                        fill(&mut e_ind, f, "nDependencies (elementIndicesOfIndependents)", R, |d| {
+                            fill(&mut kinds, f, "nDependencies (dependencyKinds)", R, |k| {
+                                (api.get_variable_dependencies)(c, u.vr, a, b, d, k, count)
+                            })
+                        })
+                    })
+                })
             });
             assert_eq!(
                 s,

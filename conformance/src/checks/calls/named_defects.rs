@@ -1,0 +1,112 @@
+//! Checks named by the defect they catch: a getter that writes past the values it is given, a
+//! `fmi2DoStep` that answers fmi2OK without advancing time. (Other checks meet these defects on
+//! their way too; these say what is wrong in their names.)
+
+use super::initialized;
+use crate::fmi2::*;
+use crate::instance::step_size;
+use crate::{Fmu, Type};
+use md_reader::Causality;
+
+/// Every getter and status function, with every variable of its type at once and each alone,
+/// after initialization and after a step: each writes no byte past the array it is given (the
+/// guard after every buffer, `src/guard.rs`).
+///
+/// Verdict: a byte written past the array is a failure: FMI 2.0.5 §2.1.7 ("`value[]` ... a vector
+/// of nvr values" the importer provides), §4.2.3 (fmi2Get*Status return one value through
+/// `value`). What the values are is other checks' business.
+pub fn getters_write_no_value_past_the_array_they_are_given(fmu: &Fmu) {
+    let mut inst = initialized(fmu);
+    let h = step_size(fmu);
+    for round in 0..2 {
+        if round == 1 {
+            // The values after a step (whatever its status: the getters are what is checked).
+            let _ = inst.step(h);
+        }
+        for ty in [
+            Type::Real,
+            Type::Integer,
+            Type::Enumeration,
+            Type::Boolean,
+            Type::String,
+        ] {
+            let vrs = fmu.md.vrs_of_type(ty);
+            for chunk in std::iter::once(&vrs[..]).chain(vrs.chunks(1)) {
+                match ty {
+                    Type::Real => drop(inst.get_real(chunk)),
+                    Type::Integer | Type::Enumeration => drop(inst.get_integer(chunk)),
+                    Type::Boolean => drop(inst.get_boolean(chunk)),
+                    Type::String => {
+                        let mut out: Vec<fmi2String> = vec![std::ptr::null(); chunk.len()];
+                        // SAFETY: arrays of nvr elements (and the guard after `out`'s).
+                        unsafe {
+                            crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
+                                (fmu.api.get_string)(inst.c, chunk.as_ptr(), chunk.len(), p)
+                            })
+                        };
+                    }
+                }
+            }
+        }
+        if round == 1 {
+            let _ = inst.last_successful_time();
+            let _ = inst.terminated();
+        }
+    }
+}
+
+/// fmi2DoStep answered fmi2OK three times from the start time: the FMU is at t0 + 3 h, as its
+/// time variable (the `independent` Real, where declared) and fmi2LastSuccessfulTime say
+/// (within a millionth of the step: `outcome::same_time`).
+///
+/// Verdict: a failure where either reads another time after fmi2OK: FMI 2.0.5 §4.2.2
+/// (fmi2DoStep computes the communication step from currentCommunicationPoint to
+/// currentCommunicationPoint + communicationStepSize; fmi2OK: the step was computed to its end)
+/// and §4.2.3 (fmi2LastSuccessfulTime: "the end time of the last successfully completed
+/// communication step"). Skipped where the FMU declares no independent variable and does not
+/// answer fmi2LastSuccessfulTime (it then shows its time nowhere).
+pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
+    let time = fmu
+        .md
+        .variables
+        .iter()
+        .find(|v| v.ty == Type::Real && v.causality == Causality::Independent)
+        .map(|v| (v.vr, v.name.clone()));
+    let mut inst = initialized(fmu);
+    let h = step_size(fmu);
+    let t0 = inst.time;
+    let mut shown = time.is_some();
+    for n in 1..=3 {
+        let s = inst.step(h);
+        assert_eq!(s, fmi2OK, "{}: fmi2DoStep {n} of h = {h}: {}", fmu.id, inst.log_text());
+        if let Some((vr, name)) = &time {
+            let (s, v) = inst.get_real(&[*vr]);
+            assert!(
+                s == fmi2OK && crate::outcome::same_time(v[0], inst.time, h),
+                "{}: after {n} fmi2DoStep of h = {h} from t = {t0} answered fmi2OK, the time variable '{name}' reads \
+                 {} ({}), expected {} (FMI 2.0.5 §4.2.2: fmi2OK means the step was computed to \
+                 currentCommunicationPoint + communicationStepSize)",
+                fmu.id,
+                v[0],
+                crate::instance::status_name(s),
+                inst.time
+            );
+        }
+        let (s, last) = inst.last_successful_time();
+        if s == fmi2OK {
+            shown = true;
+            assert!(
+                crate::outcome::same_time(last, inst.time, h),
+                "{}: after {n} fmi2DoStep of h = {h} from t = {t0} answered fmi2OK, fmi2LastSuccessfulTime is {last}, \
+                 expected {} (FMI 2.0.5 §4.2.2, §4.2.3: the end time of the last successfully completed communication step)",
+                fmu.id,
+                inst.time
+            );
+        }
+    }
+    if !shown {
+        crate::outcome::skip_not_declared(
+            "an independent (time) variable, and fmi2GetRealStatus(fmi2LastSuccessfulTime) is not answered",
+        );
+    }
+}
