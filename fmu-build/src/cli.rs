@@ -85,32 +85,8 @@ enum Cmd {
     /// failed, N warned, N skipped`.
     Check {
         fmu: Option<PathBuf>,
-        /// Only checks whose name or group contains this text.
-        #[arg(long)]
-        filter: Option<String>,
-        /// Longest a check may take, in seconds (default 30); its process is then killed and the
-        /// check fails.
-        #[arg(long)]
-        timeout: Option<f64>,
-        /// Random call sequences per FMU (default 2000).
-        #[arg(long, default_value_t = 0)]
-        random_sequences: u32,
-        /// List the checks and exit.
-        #[arg(long)]
-        list: bool,
-        /// Make every warning a failure: what rustfmu's own FMUs must pass.
-        #[arg(long)]
-        strict: bool,
-        /// Where a failing random call sequence leaves its reproducer (default: the system's
-        /// temp folder, fmu-check-reproducers/); `cargo fmu replay` runs it again.
-        #[arg(long, value_name = "DIR")]
-        reproducers: Option<PathBuf>,
-        /// Also write the report as JUnit XML (a test suite per group, a test case per check).
-        #[arg(long, value_name = "FILE")]
-        junit: Option<PathBuf>,
-        /// Also write the report as JSON.
-        #[arg(long, value_name = "FILE")]
-        json: Option<PathBuf>,
+        #[command(flatten)]
+        options: CheckOptions,
     },
     /// Replay a reproducer (the calls of a failing random call sequence, one a line, as `cargo fmu
     /// check` writes them) on an FMU, in this process (so that it runs under a debugger): prints
@@ -273,29 +249,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             }
             validate_all(&fmus, python.as_deref(), false)
         }
-        Cmd::Check {
-            fmu,
-            filter,
-            timeout,
-            random_sequences,
-            list,
-            strict,
-            reproducers,
-            junit,
-            json,
-        } => check(
-            fmu.as_deref(),
-            CheckOptions {
-                filter,
-                timeout,
-                random_sequences,
-                list,
-                strict,
-                reproducers,
-                junit,
-                json,
-            },
-        ),
+        Cmd::Check { fmu, options } => check(fmu.as_deref(), options),
         Cmd::Replay { file, fmu } => replay(&file, &fmu),
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
@@ -356,15 +310,34 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
     }
 }
 
-/// The options of `cargo fmu check`.
+/// The options of `cargo fmu check` (its flags: clap flattens them into the subcommand).
+#[derive(clap::Args)]
 struct CheckOptions {
+    /// Only checks whose name or group contains this text.
+    #[arg(long)]
     filter: Option<String>,
+    /// Longest a check may take, in seconds (default 30); its process is then killed and the
+    /// check fails.
+    #[arg(long)]
     timeout: Option<f64>,
+    /// Random call sequences per FMU (default 2000).
+    #[arg(long, default_value_t = 0)]
     random_sequences: u32,
+    /// List the checks and exit.
+    #[arg(long)]
     list: bool,
+    /// Make every warning a failure: what rustfmu's own FMUs must pass.
+    #[arg(long)]
     strict: bool,
+    /// Where a failing random call sequence leaves its reproducer (default: the system's
+    /// temp folder, fmu-check-reproducers/); `cargo fmu replay` runs it again.
+    #[arg(long, value_name = "DIR")]
     reproducers: Option<PathBuf>,
+    /// Also write the report as JUnit XML (a test suite per group, a test case per check).
+    #[arg(long, value_name = "FILE")]
     junit: Option<PathBuf>,
+    /// Also write the report as JSON.
+    #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
 }
 
