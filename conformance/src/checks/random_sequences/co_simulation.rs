@@ -678,10 +678,16 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
                 op
             );
         }
-        breadcrumb(&format!(
-            "random call {i} of a sequence: {op:?} in state {:?}",
-            sh.state
-        ));
+        // A NULL array passed with values on purpose (`null: true`, no empty list) and a step
+        // size that is not finite and positive are importer's mistakes: a crash or hang in them
+        // is a warning (outcome::IMPORTERS_MISTAKE), as in the calls checks.
+        let text = format!("random call {i} of a sequence: {op:?} in state {:?}", sh.state);
+        let bad_step = matches!(op, Op::DoStep { h, .. } if !(h.is_finite() && *h > 0.0));
+        if (text.contains("null: true") && !text.contains("[]")) || bad_step {
+            breadcrumb(&format!("{}{text}", crate::outcome::IMPORTERS_MISTAKE));
+        } else {
+            breadcrumb(&text);
+        }
         let clock = Instant::now();
         let (status, expect, next) = call(inst, sh, op);
         let took = clock.elapsed();
