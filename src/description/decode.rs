@@ -105,17 +105,25 @@ fn leak_slice<T>(v: Vec<T>) -> &'static [T] {
 /// The terminals nested in one terminal, each with its own (the encoder's `nested_terminals`).
 fn nested_terminals(d: &mut Dec<'_>) -> Result<Vec<Terminal>, String> {
     d.list(|d| {
-        let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
-        let members = d.list(|d| read!(d => TerminalMember { variable: str, member: str, kind: str }))?;
-        let terminals = leak_slice(nested_terminals(d)?);
+        let t = terminal(d)?;
         Ok(Terminal {
-            name,
-            kind,
-            matching_rule,
-            description,
-            members: leak_slice(members),
-            terminals,
+            terminals: leak_slice(nested_terminals(d)?),
+            ..t
         })
+    })
+}
+
+/// One terminal's attributes and members (the encoder's `terminal`), without nested terminals.
+fn terminal(d: &mut Dec<'_>) -> Result<Terminal, String> {
+    let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
+    let members = d.list(|d| read!(d => TerminalMember { variable: str, member: str, kind: str }))?;
+    Ok(Terminal {
+        name,
+        kind,
+        matching_rule,
+        description,
+        members: leak_slice(members),
+        terminals: &[],
     })
 }
 
@@ -335,23 +343,11 @@ pub fn decode(encoded: &[u8]) -> Result<(ModelDescription, Interfaces), String> 
     if d.block(EVENT_INDICATORS_TAG) {
         event_indicators = d.names()?.unwrap_or(&[]);
     }
-    let terminals = if !d.block(TERMINALS_TAG) {
+    let mut terminals = if !d.block(TERMINALS_TAG) {
         Vec::new()
     } else {
-        d.list(|d| {
-            let (name, kind, matching_rule, description) = (d.str()?, d.str()?, d.str()?, d.str()?);
-            let members = d.list(|d| read!(d => TerminalMember { variable: str, member: str, kind: str }))?;
-            Ok(Terminal {
-                name,
-                kind,
-                matching_rule,
-                description,
-                members: leak_slice(members),
-                terminals: &[],
-            })
-        })?
+        d.list(terminal)?
     };
-    let mut terminals = terminals;
     if !terminals.is_empty() && d.block(NESTED_TERMINALS_TAG) {
         for t in &mut terminals {
             t.terminals = leak_slice(nested_terminals(&mut d)?);

@@ -259,21 +259,25 @@ impl Enc<'_> {
         self.u32(ts.len() as u32);
         let mut i = 0;
         while i < ts.len() {
-            let t = &ts[i];
-            self.str(t.name);
-            self.str(t.kind);
-            self.str(t.matching_rule);
-            self.str(t.description);
-            self.u32(t.members.len() as u32);
-            let mut j = 0;
-            while j < t.members.len() {
-                self.str(t.members[j].variable);
-                self.str(t.members[j].member);
-                self.str(t.members[j].kind);
-                j += 1;
-            }
-            self.nested_terminals(t.terminals);
+            self.terminal(&ts[i]);
+            self.nested_terminals(ts[i].terminals);
             i += 1;
+        }
+    }
+
+    /// One terminal's attributes and members (its nested terminals are written apart).
+    const fn terminal(&mut self, t: &Terminal) {
+        self.str(t.name);
+        self.str(t.kind);
+        self.str(t.matching_rule);
+        self.str(t.description);
+        self.u32(t.members.len() as u32);
+        let mut j = 0;
+        while j < t.members.len() {
+            self.str(t.members[j].variable);
+            self.str(t.members[j].member);
+            self.str(t.members[j].kind);
+            j += 1;
         }
     }
 
@@ -378,19 +382,7 @@ impl Enc<'_> {
             self.u32(d.terminals.len() as u32);
             let mut i = 0;
             while i < d.terminals.len() {
-                let t = &d.terminals[i];
-                self.str(t.name);
-                self.str(t.kind);
-                self.str(t.matching_rule);
-                self.str(t.description);
-                self.u32(t.members.len() as u32);
-                let mut j = 0;
-                while j < t.members.len() {
-                    self.str(t.members[j].variable);
-                    self.str(t.members[j].member);
-                    self.str(t.members[j].kind);
-                    j += 1;
-                }
+                self.terminal(&d.terminals[i]);
                 i += 1;
             }
             // Nested terminals in a block of their own, only where some terminal has them: the
