@@ -1,5 +1,6 @@
 //! The runner's FMI 3.0 co-simulation importer: an FMU unpacked (or found unpacked), its binary
-//! loaded once, instances (without event mode), values, steps and FMU states, behind the same
+//! loaded once, instances (in Event Mode where the runner ticks their input clocks: `fmi3/clocks.rs`;
+//! without it otherwise), values, steps and FMU states, behind the same
 //! [`crate::instance::InstanceCS`] as FMI 2.0 instances, so a system mixes both.
 //!
 //! The runner reads an FMI 3.0 FMU as the FMI 2.0 one it would be ([`as_fmi2`]): Float64 as
@@ -7,9 +8,10 @@
 //! Boolean (C `bool`), String. Every variable of every type but Clock, scalar or array, is also
 //! kept as a [`Var3`] and got and set with its type's own function (`typed.rs`:
 //! fmi3GetFloat32 ... fmi3GetBinary, `nValues` the array's elements): what connections,
-//! parameters and records of the types FMI 2.0 lacks go through. Clocks and clocked variables
-//! are left out, named in [`Fmi3Parts::skipped`] (a connection or parameter naming one is refused
-//! with what it is: the runner runs FMI 3.0 without event mode).
+//! parameters and records of the types FMI 2.0 lacks go through. The clocked Float64 scalars of
+//! the input clocks the runner ticks are read as Real ones; the clocks and every other clocked
+//! variable are left out, named in [`Fmi3Parts::skipped`] (a connection or parameter naming one
+//! is refused with what it is).
 //! Written here for the reasons of [`crate::fmi2`]'s header, and because the `fmi` crate's FMI 3.0
 //! description parser refuses FMI 3.0 units; the description is `md-reader`'s.
 
@@ -24,8 +26,11 @@ use std::ffi::{CStr, CString, c_char, c_void};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod clocks;
 mod typed;
 mod view;
+pub use clocks::ClockPlan;
+use clocks::ClockState;
 pub use view::{Fmi3Parts, Var3, as_fmi2};
 
 fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
@@ -107,6 +112,21 @@ struct MeApi {
     enter_event_mode: InstanceFunction,
     update_discrete_states: UpdateDiscreteStates,
     enter_continuous_time_mode: InstanceFunction,
+}
+/// The Event Mode and clock functions of co-simulation with eventModeUsed ([`clocks`]).
+struct EventApi {
+    enter_event_mode: InstanceFunction,
+    enter_step_mode: InstanceFunction,
+    update_discrete_states: UpdateDiscreteStates,
+    set_clock: unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *const fmi3Clock) -> fmi3Status,
+    get_interval: unsafe extern "C" fn(
+        fmi3Instance,
+        *const fmi3ValueReference,
+        usize,
+        *mut fmi3Float64,
+        *mut fmi3IntervalQualifier,
+    ) -> fmi3Status,
+    get_shift: unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *mut fmi3Float64) -> fmi3Status,
 }
 type EnterInit =
     unsafe extern "C" fn(fmi3Instance, fmi3Boolean, fmi3Float64, fmi3Float64, fmi3Boolean, fmi3Float64) -> fmi3Status;
@@ -191,6 +211,7 @@ struct Api {
     serialize: Serialize,
     deserialize: Deserialize,
     me: Option<MeApi>,
+    events: Option<EventApi>,
 }
 
 /// A loaded FMI 3.0 binary.
@@ -222,8 +243,19 @@ impl Library {
                     enter_continuous_time_mode: optional(&lib, "fmi3EnterContinuousTimeMode")?,
                 })
             })();
+            let events = (|| {
+                Some(EventApi {
+                    enter_event_mode: optional(&lib, "fmi3EnterEventMode")?,
+                    enter_step_mode: optional(&lib, "fmi3EnterStepMode")?,
+                    update_discrete_states: optional(&lib, "fmi3UpdateDiscreteStates")?,
+                    set_clock: optional(&lib, "fmi3SetClock")?,
+                    get_interval: optional(&lib, "fmi3GetIntervalDecimal")?,
+                    get_shift: optional(&lib, "fmi3GetShiftDecimal")?,
+                })
+            })();
             Api {
                 me,
+                events,
                 instantiate: optional(&lib, "fmi3InstantiateCoSimulation"),
                 free_instance: symbol(&lib, path, "fmi3FreeInstance")?,
                 set_debug_logging: symbol(&lib, path, "fmi3SetDebugLogging")?,
@@ -296,6 +328,8 @@ pub struct Fmi3Import {
     token: CString,
     resource_path: CString,
     int64: Arc<HashSet<u32>>,
+    /// The input clocks the runner ticks (None: it runs without event mode).
+    clocks: Option<Arc<ClockPlan>>,
     /// Last: the unpacked folder goes after the library is unloaded.
     _scratch: Option<Scratch>,
 }
@@ -352,8 +386,27 @@ impl Fmi3Import {
             token: CString::new(token).map_err(|_| "an instantiation token with a NUL".to_string())?,
             resource_path: CString::new(path).map_err(|_| "a path with a NUL".to_string())?,
             int64: Arc::new(int64),
+            clocks: None,
             _scratch: None,
         })
+    }
+
+    /// Its input clocks, ticked by the runner: co-simulation instances run with eventModeUsed.
+    pub fn with_clocks(mut self, plan: Option<ClockPlan>) -> Result<Fmi3Import, String> {
+        if plan.is_some() && self.library.api.events.is_none() {
+            return Err(
+                "the FMU has input clocks but its binary lacks fmi3EnterEventMode, fmi3EnterStepMode, \
+                 fmi3UpdateDiscreteStates, fmi3SetClock, fmi3GetIntervalDecimal or fmi3GetShiftDecimal"
+                    .into(),
+            );
+        }
+        self.clocks = plan.map(Arc::new);
+        Ok(self)
+    }
+
+    /// Whether the runner ticks input clocks of this FMU.
+    pub fn has_clocks(&self) -> bool {
+        self.clocks.is_some()
     }
 
     /// Where the FMU is unpacked.
@@ -362,8 +415,9 @@ impl Fmi3Import {
     }
 
     /// The instance `c` this import's library made, with its environment.
-    fn instance(&self, c: fmi3Instance, env: Box<Env>) -> Instance3 {
+    fn instance(&self, c: fmi3Instance, env: Box<Env>, clocks: Option<Arc<ClockPlan>>) -> Instance3 {
         Instance3 {
+            clocks: clocks.map(|p| Box::new(ClockState::new(p))),
             library: self.library.clone(),
             c,
             states: Slots::default(),
@@ -375,7 +429,8 @@ impl Fmi3Import {
         }
     }
 
-    /// fmi3InstantiateCoSimulation(name, ...) without event mode, with the runner's logger.
+    /// fmi3InstantiateCoSimulation(name, ...) with the runner's logger; eventModeUsed when the
+    /// runner ticks the FMU's input clocks (`fmi3/clocks.rs`), earlyReturnAllowed false.
     pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(Env {
@@ -395,7 +450,7 @@ impl Fmi3Import {
                 self.resource_path.as_ptr(),
                 visible,
                 logging_on,
-                false,
+                self.clocks.is_some(),
                 false,
                 std::ptr::null(),
                 0,
@@ -407,7 +462,7 @@ impl Fmi3Import {
         if c.is_null() {
             return Err("fmi3InstantiateCoSimulation returned NULL".into());
         }
-        Ok(self.instance(c, env))
+        Ok(self.instance(c, env, self.clocks.clone()))
     }
 }
 
@@ -438,7 +493,7 @@ impl Fmi3Import {
         if c.is_null() {
             return Err("fmi3InstantiateModelExchange returned NULL".into());
         }
-        Ok(self.instance(c, env))
+        Ok(self.instance(c, env, None))
     }
 }
 
@@ -552,6 +607,8 @@ pub struct Instance3 {
     /// to call ([`Instance3::get_typed`]).
     ptrs: Vec<*const u8>,
     sizes: Vec<usize>,
+    /// The input clocks the runner ticks and where they stand (None: no event mode).
+    clocks: Option<Box<ClockState>>,
     _env: Box<Env>,
 }
 
@@ -591,6 +648,9 @@ impl Instance3 {
     }
 
     pub fn enter_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        if let Some(c) = &mut self.clocks {
+            c.initializing = true;
+        }
         let (tol, start, stop) = self.experiment;
         // SAFETY: a live instance.
         check(unsafe {
@@ -605,9 +665,28 @@ impl Instance3 {
         })
     }
 
-    crate::common::calls!(instance: exit_initialization_mode, terminate, reset);
+    crate::common::calls!(instance: terminate);
+
+    pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
+        if self.clocks.is_some() {
+            return self.exit_initialization_clocked();
+        }
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().exit_initialization_mode)(self.c) })
+    }
+
+    pub fn reset(&mut self) -> Result<(), Fmi2Error> {
+        if let Some(c) = &mut self.clocks {
+            c.reset();
+        }
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().reset)(self.c) })
+    }
 
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        if self.clocks.is_some() {
+            self.end_event_mode(t, h)?;
+        }
         let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
         // SAFETY: a live instance; the four outputs point to locals.
         check(unsafe {
@@ -634,6 +713,9 @@ impl Instance3 {
             return Err(Fmi2Error::Importer(format!(
                 "fmi3DoStep({t}, {h}) returned early at {last} (not allowed: earlyReturnAllowed = false)"
             )));
+        }
+        if self.clocks.is_some() {
+            self.begin_event_mode(t + h, event)?;
         }
         Ok(())
     }
@@ -675,8 +757,23 @@ impl Instance3 {
         })
     }
 
+    /// fmi3GetFloat64, whatever the clocks (for [`clocks`]).
+    fn get_float64(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance; both arrays hold vrs.len() elements (every variable a scalar).
+        check(unsafe { (self.api().get_float64)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr(), out.len()) })
+    }
+
+    /// fmi3SetFloat64, whatever the clocks (for [`clocks`]).
+    fn set_float64(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        // SAFETY: a live instance; both arrays hold vrs.len() elements.
+        check(unsafe { (self.api().set_float64)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr(), values.len()) })
+    }
+
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
         lengths(vrs.len(), out.len())?;
+        if self.clocks.is_some() {
+            return self.get_clocked(vrs, out);
+        }
         // SAFETY: a live instance; both arrays hold vrs.len() elements (every variable a scalar).
         check(unsafe { (self.api().get_float64)(self.c, vrs.as_ptr(), vrs.len(), out.as_mut_ptr(), out.len()) })
     }
@@ -727,6 +824,9 @@ impl Instance3 {
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
         lengths(vrs.len(), values.len())?;
+        if self.clocks.is_some() {
+            return self.set_clocked(vrs, values);
+        }
         // SAFETY: a live instance; both arrays hold vrs.len() elements.
         check(unsafe { (self.api().set_float64)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr(), values.len()) })
     }

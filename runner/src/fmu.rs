@@ -22,6 +22,8 @@ pub enum Import {
 #[derive(Default)]
 struct Extra {
     skipped: Vec<(String, String)>,
+    /// The input clocks the runner ticks ([`crate::fmi3::ClockPlan`]).
+    clocks: Option<crate::fmi3::ClockPlan>,
     typed: Vec<crate::fmi3::Var3>,
     /// The inputs of every type with direct feedthrough.
     feedthrough: Vec<u32>,
@@ -65,9 +67,9 @@ impl Fmu {
         let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid).map(Import::V2),
-            Some(int64) => {
-                Fmi3Import::from_bytes(&bytes, description.model_identifier(), &description.guid, int64).map(Import::V3)
-            }
+            Some(int64) => Fmi3Import::from_bytes(&bytes, description.model_identifier(), &description.guid, int64)
+                .and_then(|i| i.with_clocks(extra.clocks.clone()))
+                .map(Import::V3),
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
         Fmu::with(component, label, description, import, extra)
@@ -84,9 +86,9 @@ impl Fmu {
         let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid).map(Import::V2),
-            Some(int64) => {
-                Fmi3Import::from_dir(dir, description.model_identifier(), &description.guid, int64).map(Import::V3)
-            }
+            Some(int64) => Fmi3Import::from_dir(dir, description.model_identifier(), &description.guid, int64)
+                .and_then(|i| i.with_clocks(extra.clocks.clone()))
+                .map(Import::V3),
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
         Fmu::with(component, label, description, import, extra)
@@ -109,6 +111,7 @@ impl Fmu {
             let parts = crate::fmi3::as_fmi2(&d3);
             let extra = Extra {
                 skipped: parts.skipped,
+                clocks: parts.clocks,
                 typed: parts.typed,
                 feedthrough: parts.feedthrough,
                 states: Some(parts.states),
@@ -216,7 +219,7 @@ impl Fmu {
                         Some(component),
                         Some(name),
                         format!(
-                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}: the runner runs FMI 3.0 without event mode, so no clocks and no clocked variables",
+                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}: the runner connects, sets and records the clocked Float64 scalars of time-based input clocks only (runner/README.md, FMI 3.0)",
                             self.model_identifier()
                         ),
                     );
@@ -276,6 +279,11 @@ impl Fmu {
         };
         if self.description.me.is_none() {
             return Err(fail("no <ModelExchange> in its modelDescription.xml".into()));
+        }
+        if matches!(&self.import, Import::V3(i) if i.has_clocks()) {
+            return Err(fail(
+                "it has input clocks: the runner ticks them in co-simulation only (run it as co-simulation)".into(),
+            ));
         }
         let nx = self.states;
         let nz = self.description.number_of_event_indicators;

@@ -147,15 +147,18 @@ impl Error {
         } else {
             format!(" ({what})")
         };
+        // The importer's own refusal (a clock's tick inside a step, fmi3DoStep asking to
+        // terminate): its words, not a status.
+        let message = match err {
+            crate::fmi2::Fmi2Error::Importer(m) => format!("component '{component}': {function}{what}{at}: {m}"),
+            _ => format!("component '{component}': {function}{what} returned fmi2{status}{at}"),
+        };
         Error {
             component: Some(component.to_owned()),
             function: Some(function.to_owned()),
             status: Some(status.clone()),
             time,
-            ..Error::new(
-                ErrorKind::Fmi,
-                format!("component '{component}': {function}{what} returned fmi2{status}{at}"),
-            )
+            ..Error::new(ErrorKind::Fmi, message)
         }
     }
 }

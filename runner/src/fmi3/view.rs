@@ -14,8 +14,12 @@ pub struct Fmi3Parts {
     /// Every variable but the independent one and the clocks, of every type, scalar or array:
     /// what connections, parameters and records of the types FMI 2.0 lacks go through.
     pub typed: Vec<Var3>,
-    /// (name, what) of the variables the runner does not read: clocks and clocked variables.
+    /// (name, what) of the variables the runner does not read or set: clocks, and the clocked
+    /// variables it does not connect (see `fmi3/clocks.rs`).
     pub skipped: Vec<(String, String)>,
+    /// The time-based input clocks the runner ticks and their clocked Float64 variables (which
+    /// are in `description` as Real ones); None: no event mode.
+    pub clocks: Option<super::ClockPlan>,
     /// The inputs of every type some output depends on directly (ModelStructure `<Output
     /// dependencies>`; an output without the attribute depends on every input).
     pub feedthrough: Vec<u32>,
@@ -81,9 +85,15 @@ fn shape(d: &d3::ModelDescription, v: &d3::Variable) -> Result<Vec<usize>, Strin
 fn sort(d: &d3::ModelDescription, v: &d3::Variable, typed: &mut Vec<Var3>, skipped: &mut Vec<(String, String)>) {
     if v.ty == d3::Type::Clock || !v.clocks.is_empty() {
         let what = if v.ty == d3::Type::Clock {
-            "Clock".to_owned()
+            match v.clock.as_ref() {
+                Some(c) => format!("Clock ({}, interval {})", v.causality.name(), c.interval_variability),
+                None => "Clock".to_owned(),
+            }
         } else {
-            format!("{} clocked variable (clocks and event mode are not run)", v.ty)
+            format!(
+                "{} clocked variable (the runner sets and reads the clocked Float64 scalars of time-based input clocks only)",
+                v.ty
+            )
         };
         skipped.push((v.name.clone(), what));
         return;
@@ -116,11 +126,14 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
     let mut int64 = HashSet::new();
     let mut skipped = Vec::new();
     let mut typed = Vec::new();
+    let mut clocks = super::clocks::plan(d);
     for v in &d.variables {
-        if v.causality != Causality::Independent {
+        // A clocked Float64 the runner ticks: read and set as a Real, between ticks held.
+        let admitted = !v.clocks.is_empty() && clocks.as_mut().is_some_and(|p| super::clocks::admit(p, v));
+        if v.causality != Causality::Independent && !admitted {
             sort(d, v, &mut typed, &mut skipped);
         }
-        if v.ty == d3::Type::Clock || !v.clocks.is_empty() {
+        if v.ty == d3::Type::Clock || (!v.clocks.is_empty() && !admitted) {
             continue;
         }
         let ty = match v.ty {
@@ -131,7 +144,7 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
             d3::Type::String => Some(d2::Type::String),
             _ => None,
         };
-        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && v.clocks.is_empty()) else {
+        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && (v.clocks.is_empty() || admitted)) else {
             continue;
         };
         if ty == d2::Type::Enumeration {
@@ -232,6 +245,7 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         int64,
         typed,
         skipped,
+        clocks,
         feedthrough,
         states,
     }

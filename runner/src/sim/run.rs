@@ -199,6 +199,14 @@ impl Simulation {
             let Some(cs) = d.cs.as_ref() else {
                 return Some(format!("fixed steps: component '{}' is no co-simulation FMU", s.name));
             };
+            if matches!(&self.fmus[s.fmu].import, crate::fmu::Import::V3(i) if i.has_clocks()) {
+                // Its clocks tick at communication points, with an Event Mode the rollback does
+                // not take back.
+                return Some(format!(
+                    "fixed steps: component '{}' has input clocks, which the runner ticks at fixed communication points",
+                    s.name
+                ));
+            }
             if !cs.can_get_and_set_fmu_state {
                 return Some(format!(
                     "fixed steps: component '{}' cannot get and set its FMU state (canGetAndSetFMUstate = false), so a step cannot be made again",

@@ -1,0 +1,453 @@
+//! Time-based input clocks of an FMI 3.0 co-simulation instance, scheduled by the runner: the
+//! instance runs with eventModeUsed = true; its clocks tick at communication points, where it is
+//! in Event Mode; its clocked Float64 variables are set and read while one of their clocks ticks
+//! and held between the ticks (FMI 3.0.2: Clocks; Co-Simulation's Event Mode).
+//!
+//! The order of a communication point t with a tick (the one of the tests' own fmpy scheduler,
+//! `examples/cosim/master.py`): the step that reaches t ends, fmi3EnterEventMode,
+//! fmi3SetClock(the clocks due); the master propagates the connections (clocked inputs set,
+//! clocked outputs read) and records; at the next fmi3DoStep the instance first calls
+//! fmi3UpdateDiscreteStates until no new discrete states are needed, then fmi3EnterStepMode.
+//! After fmi3ExitInitializationMode the instance is in Event Mode and the same sequence runs at
+//! the start time. The state machine lives in the instance, so a system's order, its isolated
+//! children and its model of a communication point are unchanged, and an instance without
+//! clocks costs one test of an `Option` a call.
+
+use md_reader::Causality;
+use md_reader::fmi3 as d3;
+use std::collections::HashMap;
+
+/// How a clock's ticks are known (its `intervalVariability`, FMI 3.0.2, the Clock element).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interval {
+    /// `constant`: interval and shift from the description.
+    Constant,
+    /// `fixed`, `calculated`: read once, in Initialization Mode (fmi3GetIntervalDecimal,
+    /// fmi3GetShiftDecimal).
+    Fixed,
+    /// `tunable`: as fixed, and read again after each Event Mode (a changed interval counts from
+    /// the last tick).
+    Tunable,
+    /// `changing`, `countdown`: aperiodic; after each Event Mode, an interval the FMU says is
+    /// changed is the time from then to the next tick.
+    Aperiodic,
+}
+
+/// One input clock the runner ticks.
+#[derive(Debug, Clone)]
+pub struct ClockDecl {
+    pub name: String,
+    pub vr: u32,
+    pub interval: Interval,
+    /// `intervalDecimal`, `shiftDecimal` of the description (a constant clock's).
+    pub declared: (Option<f64>, Option<f64>),
+}
+
+/// The clocks of an FMU the runner schedules, and its clocked Float64 variables.
+#[derive(Debug, Clone, Default)]
+pub struct ClockPlan {
+    pub inputs: Vec<ClockDecl>,
+    /// value reference -> the indices (in `inputs`) of its clocks.
+    pub clocked: HashMap<u32, Vec<usize>>,
+}
+
+/// The input clocks of `d` the runner schedules (time-based: every `intervalVariability` but
+/// `triggered`), or None when it has none (it then runs without event mode, as before).
+pub fn plan(d: &d3::ModelDescription) -> Option<ClockPlan> {
+    let mut inputs = Vec::new();
+    for v in &d.variables {
+        let Some(attrs) = v
+            .clock
+            .as_ref()
+            .filter(|_| v.ty == d3::Type::Clock && v.causality == Causality::Input)
+        else {
+            continue;
+        };
+        let interval = match attrs.interval_variability.as_str() {
+            "constant" => Interval::Constant,
+            "fixed" | "calculated" => Interval::Fixed,
+            "tunable" => Interval::Tunable,
+            "changing" | "countdown" => Interval::Aperiodic,
+            _ => continue,
+        };
+        inputs.push(ClockDecl {
+            name: v.name.clone(),
+            vr: v.vr,
+            interval,
+            declared: (attrs.interval_decimal, attrs.shift_decimal),
+        });
+    }
+    if inputs.is_empty() {
+        return None;
+    }
+    Some(ClockPlan {
+        inputs,
+        clocked: HashMap::new(),
+    })
+}
+
+/// Whether the clocked variable `v` is one the runner sets and reads: a Float64 scalar whose
+/// clocks are all input clocks of `plan`; its entry in `plan.clocked` made.
+pub fn admit(plan: &mut ClockPlan, v: &d3::Variable) -> bool {
+    if v.ty != d3::Type::Float64 || v.array || !v.dimensions.is_empty() {
+        return false;
+    }
+    let idx: Option<Vec<usize>> = v
+        .clocks
+        .iter()
+        .map(|c| plan.inputs.iter().position(|k| k.vr == *c))
+        .collect();
+    match idx {
+        Some(idx) if !idx.is_empty() => {
+            plan.clocked.insert(v.vr, idx);
+            true
+        }
+        _ => false,
+    }
+}
+
+/// The run-time state of an instance's clocks (see the module).
+#[derive(Debug)]
+pub struct ClockState {
+    pub plan: std::sync::Arc<ClockPlan>,
+    /// Each clock's next tick (None: not known), its interval, its last tick.
+    pub next: Vec<Option<f64>>,
+    pub interval: Vec<f64>,
+    pub last: Vec<Option<f64>>,
+    /// In Event Mode (after fmi3ExitInitializationMode, at a tick, at an event fmi3DoStep reports).
+    pub event_mode: bool,
+    /// Which clocks tick now (all in Initialization Mode, where clocked variables are free).
+    pub active: Vec<bool>,
+    pub initializing: bool,
+    /// The last value set or read of each clocked variable: what a read between ticks gives.
+    pub held: HashMap<u32, f64>,
+    /// Scratch for the unclocked part of a call.
+    pub vrs: Vec<u32>,
+    pub vals: Vec<f64>,
+}
+
+impl ClockState {
+    pub fn new(plan: std::sync::Arc<ClockPlan>) -> ClockState {
+        let n = plan.inputs.len();
+        ClockState {
+            plan,
+            next: vec![None; n],
+            interval: vec![0.0; n],
+            last: vec![None; n],
+            event_mode: false,
+            active: vec![false; n],
+            initializing: false,
+            held: HashMap::new(),
+            vrs: Vec::new(),
+            vals: Vec::new(),
+        }
+    }
+
+    /// Back to the state of a fresh instance (fmi3Reset).
+    pub fn reset(&mut self) {
+        let plan = self.plan.clone();
+        *self = ClockState::new(plan);
+    }
+
+    /// Whether the variable `vr` may be set or read now (not clocked, or one of its clocks ticks).
+    pub fn free(&self, vr: u32) -> bool {
+        self.initializing
+            || match self.plan.clocked.get(&vr) {
+                None => true,
+                Some(idx) => idx.iter().any(|&i| self.active[i]),
+            }
+    }
+
+    /// Whether every clocked variable among `vrs` may be set or read now.
+    pub fn all_free(&self, vrs: &[u32]) -> bool {
+        vrs.iter().all(|v| self.free(*v))
+    }
+
+    /// The clocks whose tick is at `t` (within a relative 1e-9 of the time: ticks computed from
+    /// intervals, communication points from steps).
+    pub fn due(&self, t: f64) -> Vec<usize> {
+        (0..self.next.len())
+            .filter(|&i| self.next[i].is_some_and(|n| (n - t).abs() <= close(t)))
+            .collect()
+    }
+
+    /// The first tick before `end` (beyond the rounding of [`ClockState::due`]): (clock, time).
+    pub fn inside(&self, end: f64) -> Option<(usize, f64)> {
+        (0..self.next.len())
+            .filter_map(|i| self.next[i].map(|n| (i, n)))
+            .find(|&(_, n)| n < end - close(end))
+    }
+
+    /// After the clocks `due` ticked at `t`: the next tick of each periodic one.
+    pub fn advance(&mut self, due: &[usize], t: f64) {
+        for &i in due {
+            self.last[i] = Some(t);
+            self.next[i] = match self.plan.inputs[i].interval {
+                Interval::Aperiodic => None,
+                _ => Some(t + self.interval[i]),
+            };
+        }
+    }
+
+    /// An interval read after an Event Mode at `t` (fmi3GetIntervalDecimal's qualifier: 2 =
+    /// fmi3IntervalChanged).
+    pub fn changed(&mut self, i: usize, interval: f64, qualifier: i32, t: f64) {
+        if qualifier != 2 {
+            return;
+        }
+        self.interval[i] = interval;
+        self.next[i] = match self.plan.inputs[i].interval {
+            Interval::Tunable => Some(self.last[i].unwrap_or(t) + interval),
+            Interval::Aperiodic => Some(t + interval),
+            _ => self.next[i],
+        };
+    }
+}
+
+/// The tolerance of a tick's time at `t`.
+fn close(t: f64) -> f64 {
+    1e-9 * t.abs().max(1.0)
+}
+
+use super::{Fmi2Error, Instance3, check};
+use rustfmu::fmi3::abi::*;
+
+impl Instance3 {
+    fn events(&self) -> &super::EventApi {
+        self.library
+            .api
+            .events
+            .as_ref()
+            .expect("checked by Fmi3Import::with_clocks")
+    }
+
+    fn state(&mut self) -> &mut ClockState {
+        self.clocks.as_mut().expect("an instance with clocks")
+    }
+
+    /// In Initialization Mode: the clocked outputs' values (what a read gives until the first
+    /// tick), each clock's interval and shift; then fmi3ExitInitializationMode, which leaves the
+    /// instance in Event Mode (FMI 3.0.2: with eventModeUsed), and the clocks due at the
+    /// start time tick.
+    pub(super) fn exit_initialization_clocked(&mut self) -> Result<(), Fmi2Error> {
+        let start = self.experiment.1;
+        let plan = self.state().plan.clone();
+        let vrs: Vec<u32> = plan.clocked.keys().copied().collect();
+        let mut values = vec![0.0; vrs.len()];
+        self.get_float64(&vrs, &mut values)?;
+        self.state()
+            .held
+            .extend(vrs.iter().copied().zip(values.iter().copied()));
+        for (i, c) in plan.inputs.iter().enumerate() {
+            let (interval, shift) = match c.interval {
+                Interval::Constant => match c.declared {
+                    (Some(h), s) => (Some(h), s.unwrap_or(0.0)),
+                    (None, _) => {
+                        return Err(Fmi2Error::Importer(format!(
+                            "clock '{}' is constant but declares no intervalDecimal",
+                            c.name
+                        )));
+                    }
+                },
+                Interval::Fixed | Interval::Tunable | Interval::Aperiodic => {
+                    let (mut h, mut q, mut s) = (0.0, 0 as fmi3IntervalQualifier, 0.0);
+                    let f = self.events().get_interval;
+                    // SAFETY: a live instance; one value reference, one interval, one qualifier.
+                    check(unsafe { f(self.c, &c.vr, 1, &mut h, &mut q) }).map_err(|e| {
+                        Fmi2Error::Importer(format!("fmi3GetIntervalDecimal of clock '{}': {e}", c.name))
+                    })?;
+                    if c.interval != Interval::Aperiodic {
+                        let f = self.events().get_shift;
+                        // SAFETY: as above, one shift.
+                        check(unsafe { f(self.c, &c.vr, 1, &mut s) }).map_err(|e| {
+                            Fmi2Error::Importer(format!("fmi3GetShiftDecimal of clock '{}': {e}", c.name))
+                        })?;
+                    }
+                    // fmi3IntervalNotYetKnown (0): an aperiodic clock with no tick planned yet.
+                    if q == 0 { (None, 0.0) } else { (Some(h), s) }
+                }
+            };
+            if let Some(h) = interval
+                && !(h > 0.0 && h.is_finite() && shift >= 0.0 && shift.is_finite())
+            {
+                return Err(Fmi2Error::Importer(format!(
+                    "clock '{}': interval {h} s, shift {shift} s: the interval must be a positive number, the shift a number >= 0",
+                    c.name
+                )));
+            }
+            let state = self.state();
+            state.interval[i] = interval.unwrap_or(0.0);
+            state.next[i] = interval.map(|_| start + shift);
+        }
+        // SAFETY: a live instance.
+        check(unsafe { (self.api().exit_initialization_mode)(self.c) })?;
+        let state = self.state();
+        state.initializing = false;
+        state.event_mode = true;
+        self.tick(start)
+    }
+
+    /// At `t`, in Event Mode: fmi3SetClock of the clocks due (they tick until the Event Mode ends).
+    fn tick(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        let due = self.state().due(t);
+        if due.is_empty() {
+            return Ok(());
+        }
+        let plan = self.state().plan.clone();
+        let vrs: Vec<u32> = due.iter().map(|&i| plan.inputs[i].vr).collect();
+        let on = vec![true; vrs.len()];
+        let f = self.events().set_clock;
+        // SAFETY: a live instance in Event Mode; both arrays hold vrs.len() elements.
+        check(unsafe { f(self.c, vrs.as_ptr(), vrs.len(), on.as_ptr()) }).map_err(|e| {
+            let names: Vec<&str> = due.iter().map(|&i| plan.inputs[i].name.as_str()).collect();
+            Fmi2Error::Importer(format!("fmi3SetClock({}) at t = {t}: {e}", names.join(", ")))
+        })?;
+        let state = self.state();
+        for &i in &due {
+            state.active[i] = true;
+        }
+        state.advance(&due, t);
+        Ok(())
+    }
+
+    /// Before the step from `t` of `h`: an Event Mode ends (fmi3UpdateDiscreteStates until the
+    /// FMU needs no more, the intervals of tunable and aperiodic clocks read again,
+    /// fmi3EnterStepMode); a tick inside the step is refused.
+    pub(super) fn end_event_mode(&mut self, t: f64, h: f64) -> Result<(), Fmi2Error> {
+        if self.state().event_mode {
+            let f = self.events().update_discrete_states;
+            for _ in 0..1000 {
+                let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
+                    (false, false, false, false, false, 0.0);
+                // SAFETY: a live instance in Event Mode; the outputs point to locals.
+                check(unsafe {
+                    f(
+                        self.c,
+                        &mut update,
+                        &mut terminate,
+                        &mut nominals,
+                        &mut values,
+                        &mut defined,
+                        &mut next,
+                    )
+                })
+                .map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
+                if terminate {
+                    return Err(Fmi2Error::Importer(format!(
+                        "fmi3UpdateDiscreteStates asked to terminate the simulation at t = {t}"
+                    )));
+                }
+                if !update {
+                    break;
+                }
+            }
+            let plan = self.state().plan.clone();
+            for (i, c) in plan.inputs.iter().enumerate() {
+                if matches!(c.interval, Interval::Tunable | Interval::Aperiodic) {
+                    let (mut h, mut q) = (0.0, 0 as fmi3IntervalQualifier);
+                    let f = self.events().get_interval;
+                    // SAFETY: a live instance in Event Mode; one value each.
+                    check(unsafe { f(self.c, &c.vr, 1, &mut h, &mut q) }).map_err(|e| {
+                        Fmi2Error::Importer(format!("fmi3GetIntervalDecimal of clock '{}': {e}", c.name))
+                    })?;
+                    self.state().changed(i, h, q as i32, t);
+                }
+            }
+            let f = self.events().enter_step_mode;
+            // SAFETY: a live instance in Event Mode.
+            check(unsafe { f(self.c) })?;
+            let state = self.state();
+            state.event_mode = false;
+            state.active.iter_mut().for_each(|a| *a = false);
+        }
+        if let Some((i, at)) = self.state().inside(t + h) {
+            let name = self.state().plan.inputs[i].name.clone();
+            return Err(Fmi2Error::Importer(format!(
+                "clock '{name}' ticks at t = {at}, inside the communication step from {t} to {}: the runner ticks clocks at communication points; choose a step that divides the clock's interval and shift",
+                t + h
+            )));
+        }
+        Ok(())
+    }
+
+    /// After a step that reached `t`: Event Mode where a clock ticks at `t` or the FMU asked for
+    /// it (eventHandlingNeeded), and the clocks due set.
+    pub(super) fn begin_event_mode(&mut self, t: f64, event: bool) -> Result<(), Fmi2Error> {
+        if event || !self.state().due(t).is_empty() {
+            let f = self.events().enter_event_mode;
+            // SAFETY: a live instance in Step Mode.
+            check(unsafe { f(self.c) })
+                .map_err(|e| Fmi2Error::Importer(format!("fmi3EnterEventMode at t = {t}: {e}")))?;
+            self.state().event_mode = true;
+            self.tick(t)?;
+        }
+        Ok(())
+    }
+
+    /// fmi3GetFloat64 of the variables that may be read now; the others' held values.
+    pub(super) fn get_clocked(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
+        let state = self.clocks.as_mut().expect("an instance with clocks");
+        if state.all_free(vrs) {
+            self.get_float64(vrs, out)?;
+            let state = self.state();
+            for (vr, x) in vrs.iter().zip(out.iter()) {
+                if state.plan.clocked.contains_key(vr) {
+                    state.held.insert(*vr, *x);
+                }
+            }
+            return Ok(());
+        }
+        let (mut v, mut x) = (std::mem::take(&mut state.vrs), std::mem::take(&mut state.vals));
+        v.clear();
+        v.extend(vrs.iter().copied().filter(|vr| state.free(*vr)));
+        x.clear();
+        x.resize(v.len(), 0.0);
+        let r = if v.is_empty() {
+            Ok(())
+        } else {
+            self.get_float64(&v, &mut x)
+        };
+        let state = self.state();
+        let mut k = 0;
+        for (vr, o) in vrs.iter().zip(out.iter_mut()) {
+            if state.free(*vr) {
+                *o = x[k];
+                k += 1;
+                if state.plan.clocked.contains_key(vr) {
+                    state.held.insert(*vr, *o);
+                }
+            } else {
+                *o = state.held.get(vr).copied().unwrap_or(0.0);
+            }
+        }
+        (state.vrs, state.vals) = (v, x);
+        r
+    }
+
+    /// fmi3SetFloat64 of the variables that may be set now; a clocked one whose clocks do not
+    /// tick keeps its value until they do (the master sets it again at the tick).
+    pub(super) fn set_clocked(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
+        let state = self.clocks.as_mut().expect("an instance with clocks");
+        if state.all_free(vrs) {
+            for (vr, x) in vrs.iter().zip(values) {
+                if state.plan.clocked.contains_key(vr) {
+                    state.held.insert(*vr, *x);
+                }
+            }
+            return self.set_float64(vrs, values);
+        }
+        let (mut v, mut x) = (std::mem::take(&mut state.vrs), std::mem::take(&mut state.vals));
+        v.clear();
+        x.clear();
+        for (vr, value) in vrs.iter().zip(values) {
+            if state.free(*vr) {
+                v.push(*vr);
+                x.push(*value);
+            }
+        }
+        let r = if v.is_empty() { Ok(()) } else { self.set_float64(&v, &x) };
+        let state = self.state();
+        (state.vrs, state.vals) = (v, x);
+        r
+    }
+}
