@@ -123,9 +123,12 @@ def test_two_nodes_connected_directly_carry_the_signal_frame_by_frame(can_signal
     actuator = Node(can_signal, "actuator", tx_id=0x200, rx_id=0x123, period=PERIOD)
     intervals, qualifiers = (fmi3Float64 * 1)(), (fmi3IntervalQualifier * 1)()
     sensor.f.getIntervalDecimal((fmi3ValueReference * 1)(sensor.vr["CAN.Tx_Clock"]), intervals, qualifiers)
-    assert intervals[0] == PERIOD  # the importer schedules the Tx ticks from it
+    # A countdown clock: the importer schedules the first Tx tick one interval on.
+    assert intervals[0] == PERIOD and qualifiers[0] == 2  # fmi3IntervalChanged
     n = 20
-    for k in range(n + 1):
+    for k in range(1, n + 1):
+        sensor.step((k - 1) * PERIOD, PERIOD)
+        actuator.step((k - 1) * PERIOD, PERIOD)
         t = k * PERIOD
         u = math.sin(2 * math.pi * t) + 0.25
         tx = sensor.send(u)
@@ -135,11 +138,8 @@ def test_two_nodes_connected_directly_carry_the_signal_frame_by_frame(can_signal
         actuator.send(0.0)  # its own tick, ignored by the sensor here
         actuator.receive(tx)
         assert actuator.get("y") == u
-        if k < n:
-            sensor.step(t, PERIOD)
-            actuator.step(t, PERIOD)
-    assert sensor.get("frames_sent") == n + 1
-    assert actuator.get("frames_received") == n + 1
+    assert sensor.get("frames_sent") == n
+    assert actuator.get("frames_received") == n
     assert actuator.get("format_errors") == 0
     sensor.close()
     actuator.close()
@@ -361,7 +361,7 @@ def run_network(nodes, bus, stop, inputs):
     next time point is the earliest of the nodes' Tx ticks and the bus's countdown. Returns the
     deliveries: [(time, port, operations)]."""
     deliveries, t = [], 0.0
-    next_tx = [0.0 for _ in nodes]
+    next_tx = [node.period for node in nodes]  # countdown clocks: the first tick one period on
     while t <= stop + 1e-12:
         for i, node in enumerate(nodes):
             if abs(next_tx[i] - t) < 1e-12:
@@ -392,26 +392,26 @@ def test_a_frame_crosses_the_bus_in_its_bit_time_and_is_confirmed(can_signal, ca
     bus = Bus(can_bus)
     u = [lambda t: math.cos(t) + 0.5, lambda t: 0.0]
     deliveries = run_network([sensor, actuator], bus, 0.055, u)
-    # The sensor's frame at t = 0 reaches the actuator after its length at 500 kbit/s (the bus's
-    # default), counted here from ISO 11898-1; the actuator's own frame (ID 0x200) loses the
-    # arbitration at t = 0 and follows right after.
-    first = can_bits(0x123, struct.pack("<d", u[0](0.0))) / 500_000
+    # The sensor's frame of its first tick (t = PERIOD) reaches the actuator after its length at
+    # 500 kbit/s (the bus's default), counted here from ISO 11898-1; the actuator's own frame (ID
+    # 0x200) loses the arbitration at that tick and follows right after.
+    first = can_bits(0x123, struct.pack("<d", u[0](PERIOD))) / 500_000
     second = can_bits(0x200, struct.pack("<d", 0.0)) / 500_000
-    at0 = [(t, p, ops) for t, p, ops in deliveries if t < PERIOD / 2]
+    at0 = [(t - PERIOD, p, ops) for t, p, ops in deliveries if t < 1.5 * PERIOD]
     (t1, p1, ops1), (t1b, p1b, ops1b) = sorted(at0[:2], key=lambda d: d[1])
     assert abs(t1 - first) < 1e-12 and abs(t1b - first) < 1e-12, (t1, first)
     assert p1 == 1 and [c for c, _ in ops1] == [0x20] and struct.unpack("<I", ops1[0][1])[0] == 0x123  # Confirm
     assert p1b == 2 and [c for c, _ in ops1b] == [0x10]
-    assert transmitted(ops1b[0][1])[3] == struct.pack("<d", u[0](0.0))
+    assert transmitted(ops1b[0][1])[3] == struct.pack("<d", u[0](PERIOD))
     t2 = [(t, p) for t, p, _ in at0[2:]]
     assert t2 and abs(t2[0][0] - (first + second)) < 1e-12, (t2, first + second)
     # Every period the same: the actuator outputs the sensor's signal of the last tick.
-    assert actuator.get("y") == u[0](0.05) and actuator.get("frames_received") == 6
-    assert sensor.get("confirmed") == 6 and actuator.get("confirmed") == 6
-    assert bus.get("frames_delivered") == 12 and bus.get("arbitration_losses") == 0
-    # The bus load: the bits of the twelve frames (each counted here with its own data) over the time.
+    assert actuator.get("y") == u[0](0.05) and actuator.get("frames_received") == 5
+    assert sensor.get("confirmed") == 5 and actuator.get("confirmed") == 5
+    assert bus.get("frames_delivered") == 10 and bus.get("arbitration_losses") == 0
+    # The bus load: the bits of the ten frames (each counted here with its own data) over the time.
     busy = sum(can_bits(0x123, struct.pack("<d", u[0](k * PERIOD))) + can_bits(0x200, struct.pack("<d", 0.0))
-               for k in range(6)) / 500_000
+               for k in range(1, 6)) / 500_000
     load = bus.get("bus_load")
     assert abs(load - busy / bus.t) < 1e-9, (load, busy / bus.t)
     for x in (sensor, actuator):
@@ -428,7 +428,7 @@ def test_injected_bus_errors_reach_every_node_and_the_frame_is_sent_again(can_si
     assert errors >= 3
     # Each error reached both nodes (one Bus Error each); every frame still arrived, later.
     assert sensor.get("bus_errors") == actuator.get("bus_errors") == errors
-    assert bus.get("frames_delivered") == 12 and actuator.get("y") == 0.05
+    assert bus.get("frames_delivered") == 10 and actuator.get("y") == 0.05
     for x in (sensor, actuator):
         x.close()
 

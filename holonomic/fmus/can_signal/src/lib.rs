@@ -1,5 +1,5 @@
 //! The `CanSignal` FMU (FMI 3.0, FMI-LS-BUS 1.0.0): a node of a CAN network that carries one
-//! signal. At every tick of its periodic Tx clock it sends its input `u` in a CAN frame of
+//! signal. At every tick of its Tx clock (a countdown it sets to `period` again at each tick) it sends its input `u` in a CAN frame of
 //! identifier `tx_id` (8 data bytes: the f64, little-endian); from the frames it receives it
 //! takes those of identifier `rx_id` and outputs their value as `y`. A sensor node (the
 //! pendulum's angles onto the bus) and an actuator node (a motor command off the bus) are each
@@ -66,8 +66,8 @@ pub struct CanSignal {
     /// The bus operations delivered (FMI-LS-BUS CAN)
     #[variable(vr = 1001, name = "CAN.Rx_Data", input, discrete, clocks = [rx_clock], max_size = RX_MAX_SIZE)]
     pub rx_data: Vec<u8>,
-    /// Ticks every period: the node's bus communication points for sending
-    #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(fixed, interval = period))]
+    /// Ticks every period (a countdown the node sets to period at each tick): its bus communication points for sending
+    #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(countdown))]
     pub tx_clock: Clock,
     /// The bus operations this node sends (FMI-LS-BUS CAN)
     #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [])]
@@ -142,6 +142,15 @@ impl CanSignal {
 }
 
 impl Model for CanSignal {
+    fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
+        // The first Tx tick one period after the start. A countdown clock rather than a periodic
+        // one: an importer with a bus simulation schedules countdown clocks (the layered standard's
+        // example, "a time-based Tx_Clock with intervalVariability=countdown"; FMU Manipulation
+        // Toolbox's containers tick countdown clocks, not periodic ones).
+        self.tx_clock.set_interval(self.period);
+        Ok(())
+    }
+
     fn update(&mut self, event: &mut Event) -> Result<(), String> {
         // What the importer read at the last Tx tick is gone: an empty Tx_Data means nothing to
         // send ("the size of the corresponding binary Tx_Data variable shall be set to zero").
@@ -163,6 +172,7 @@ impl Model for CanSignal {
                 .map_err(|e| format!("CAN.Tx_Data: frame {:#x} not sent: {e}", self.tx_id))?;
             self.frames_sent += 1;
             self.sent = true;
+            self.tx_clock.set_interval(self.period);
         }
         Ok(())
     }
