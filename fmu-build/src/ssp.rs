@@ -1,5 +1,13 @@
 //! SSP 1.0 archives of composed systems: `<out_dir>/<system>.ssp` holding
-//! `SystemStructure.ssd` and the system's FMUs under `resources/`.
+//! `SystemStructure.ssd` and the system's FMUs under `resources/`; and SSP 2.0 for the FMI 3.0
+//! archive (`<out_dir>/fmi3/<system>.ssp`) of a system that asks for it (`ssp-version = "2.0"`).
+//!
+//! SSP 2.0 keeps SSP 1.0's namespaces; the SSD says `version="2.0"` (and its parameter sets
+//! too), its connectors and parameter values take the FMI 3.0 types of the FMI 3.0 twins'
+//! variables: a Real of the FMI 2.0 description is a Float64 of the FMI 3.0 one, an Integer an
+//! Int32 (what `cargo fmu build` makes of one declaration), a Boolean, String or Enumeration the
+//! same; an Enumeration parameter is written as SSP 1.0 writes it (`ssv:Integer`, which SSP 2.0
+//! keeps).
 //!
 //! A system comes from a systems file ([`crate::systems`]); the SSD is generated from it after
 //! [`System::check`] has checked it against the packaged FMUs' modelDescription.xml (every
@@ -40,11 +48,11 @@ fn escape(s: &str) -> String {
     quick_xml::escape::escape(s).into_owned()
 }
 
-/// The SSV element and value text of a parameter value.
-fn ssv_value(v: &Value) -> (&'static str, String) {
+/// The SSV element and value text of a parameter value (`v2`: SSP 2.0's FMI 3.0 types).
+fn ssv_value(v: &Value, v2: bool) -> (&'static str, String) {
     match v {
-        Value::Real(x) => ("Real", format!("{x:?}")),
-        Value::Integer(x) => ("Integer", x.to_string()),
+        Value::Real(x) => (if v2 { "Float64" } else { "Real" }, format!("{x:?}")),
+        Value::Integer(x) => (if v2 { "Int32" } else { "Integer" }, x.to_string()),
         Value::Boolean(x) => ("Boolean", x.to_string()),
         Value::String(s) => ("String", escape(s)),
         // See the module's documentation: the importers take an Enumeration as an Integer.
@@ -57,8 +65,30 @@ pub fn ssd(system: &System, fmus: &Fmus) -> Result<String, String> {
     Ok(ssd_of_checked(&system.check(fmus)?))
 }
 
+/// `SystemStructure.ssd` of a system in SSP 2.0 (of its FMI 3.0 FMUs), after checking it
+/// against its FMUs' (FMI 2.0) descriptions.
+pub fn ssd2(system: &System, fmus: &Fmus) -> Result<String, String> {
+    Ok(write_ssd(&system.check(fmus)?, true))
+}
+
 /// `SystemStructure.ssd` of a checked system.
 pub fn ssd_of_checked(checked: &Checked) -> String {
+    write_ssd(checked, false)
+}
+
+/// The SSD connector type of an FMI 2.0 type (`v2`: its FMI 3.0 twin's).
+fn connector_type(t: crate::systems::VarType, v2: bool) -> &'static str {
+    use crate::systems::VarType;
+    match (t, v2) {
+        (VarType::Real, true) => "Float64",
+        (VarType::Integer, true) => "Int32",
+        (t, _) => t.name(),
+    }
+}
+
+/// `SystemStructure.ssd` of a checked system, SSP 1.0 or (`v2`) 2.0.
+fn write_ssd(checked: &Checked, v2: bool) -> String {
+    let version = if v2 { "2.0" } else { "1.0" };
     let system = checked.system;
     // Each component's connectors, in the order the connections first name them.
     let mut connectors: Vec<Vec<(&str, &str, String)>> = vec![Vec::new(); system.components.len()];
@@ -73,7 +103,7 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
                 }
                 format!(r#"<ssc:Enumeration name="{}"/>"#, escape(&e.name))
             }
-            None => format!("<ssc:{}/>", tc.var_type.name()),
+            None => format!("<ssc:{}/>", connector_type(tc.var_type, v2)),
         };
         for (port, kind) in [(&c.from, "output"), (&c.to, "input")] {
             let k = system
@@ -91,7 +121,7 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
     let _ = writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
     let _ = writeln!(
         w,
-        r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" xmlns:oms="{OMS_NS}" version="1.0" name="{}" generationTool="rustfmu fmu-build">"#,
+        r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" xmlns:oms="{OMS_NS}" version="{version}" name="{}" generationTool="rustfmu fmu-build">"#,
         escape(&system.name)
     );
     let description = match &system.description {
@@ -124,12 +154,12 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
             );
             let _ = writeln!(
                 w,
-                r#"              <ssv:ParameterSet version="1.0" name="{}">"#,
+                r#"              <ssv:ParameterSet version="{version}" name="{}">"#,
                 escape(&system.name)
             );
             let _ = writeln!(w, "                <ssv:Parameters>");
             for (name, value) in parameters {
-                let (element, text) = ssv_value(value);
+                let (element, text) = ssv_value(value, v2);
                 let _ = writeln!(
                     w,
                     r#"                  <ssv:Parameter name="{}"><ssv:{element} value="{text}"/></ssv:Parameter>"#,
@@ -214,7 +244,7 @@ pub fn ssd_of_checked(checked: &Checked) -> String {
 /// Writes `<out_dir>/<system>.ssp`: the SSD and the system's FMUs, read from
 /// `<fmu_dir>/<fmu>.fmu` (packaged before).
 pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf, String> {
-    write_from(system, fmu_dir, fmu_dir, out_dir)
+    write_from(system, fmu_dir, fmu_dir, out_dir, false)
 }
 
 /// Writes `<out_dir>/fmi3/<system>.ssp`, the same system of the FMI 3.0 FMUs
@@ -231,15 +261,22 @@ pub fn write_fmi3(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<Opt
     }
     let out = out_dir.join("fmi3");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-    write_from(system, fmu_dir, &fmi3, &out).map(Some)
+    let v2 = system.ssp_version.as_deref() == Some("2.0");
+    write_from(system, fmu_dir, &fmi3, &out, v2).map(Some)
 }
 
 /// Writes `<out_dir>/<system>.ssp`: the SSD checked against the FMUs of `check_dir`, the FMU
-/// files of `files_dir`.
-fn write_from(system: &System, check_dir: &Path, files_dir: &Path, out_dir: &Path) -> Result<PathBuf, String> {
+/// files of `files_dir`; in SSP 2.0 if `v2`.
+fn write_from(
+    system: &System,
+    check_dir: &Path,
+    files_dir: &Path,
+    out_dir: &Path,
+    v2: bool,
+) -> Result<PathBuf, String> {
     let fmu_dir = files_dir;
     let fmus = system.read_fmus(check_dir)?;
-    let ssd = ssd(system, &fmus)?;
+    let ssd = if v2 { ssd2(system, &fmus)? } else { ssd(system, &fmus)? };
     let out = out_dir.join(format!("{}.ssp", system.name));
     // Written aside and renamed, so an interrupted build never leaves a half-written .ssp.
     let tmp = out.with_extension("ssp.partial");

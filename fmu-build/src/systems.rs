@@ -12,6 +12,7 @@
 //! description = "..."         # optional
 //! stop-time = 5.0             # optional: stopTime of the SSD's DefaultExperiment [s]
 //! step-size = 1e-3            # optional: the communication step the system is made for [s]
+//! ssp-version = "2.0"         # optional: "1.0" (default) or "2.0", the SSP of the FMI 3.0 twin
 //! connections = [             # output -> input, of the same type
 //!     "pendulum.alpha1 -> controller.alpha1",
 //!     "controller.M1 -> pendulum.M1",
@@ -191,6 +192,9 @@ pub struct System {
     /// The communication step the system is made for, in seconds (the fixed-step master of
     /// OMSimulator's annotation in the SSP file).
     pub step_size: Option<f64>,
+    /// The SSP version of the system's FMI 3.0 archive (`fmi3/<system>.ssp`): "1.0" (None) or
+    /// "2.0"; the FMI 2.0 archive is SSP 1.0.
+    pub ssp_version: Option<String>,
     pub connections: Vec<Connection>,
     pub components: Vec<Component>,
 }
@@ -206,6 +210,8 @@ struct SystemTable {
     stop_time: Option<f64>,
     #[serde(default)]
     step_size: Option<f64>,
+    #[serde(default)]
+    ssp_version: Option<String>,
     #[serde(default)]
     connections: Vec<toml::Spanned<String>>,
     #[serde(default)]
@@ -270,6 +276,7 @@ impl Systems {
                 description: t.description,
                 stop_time: t.stop_time,
                 step_size: t.step_size,
+                ssp_version: t.ssp_version,
                 connections,
                 components: t.component,
             });
@@ -283,6 +290,11 @@ impl Systems {
                 && !(h.is_finite() && h > 0.0)
             {
                 return Err(format!("{at}: step-size = {h} must be finite and > 0"));
+            }
+            if let Some(v) = &s.ssp_version
+                && !matches!(v.as_str(), "1.0" | "2.0")
+            {
+                return Err(format!("{at}: ssp-version = \"{v}\": \"1.0\" or \"2.0\""));
             }
             for (k, c) in s.components.iter().enumerate() {
                 if c.name.is_empty() || c.name.contains('.') {

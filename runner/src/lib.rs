@@ -186,6 +186,14 @@ pub enum Value {
     String(String),
     /// `ssv:Enumeration value="<item name>"`: set through fmi2SetInteger once resolved.
     Enumeration(String),
+    /// An SSV 2.0 value the scalars above do not hold: an array (`value` a list, row-major), a
+    /// UInt64 beyond i64, or a Binary (hexadecimal digits); `ty` the SSV element (`Float64`,
+    /// `Int8`, ..., `Binary`), `text` the value as written. It binds to an FMI 3.0 variable of
+    /// that type, its number of elements checked.
+    List {
+        ty: String,
+        text: String,
+    },
 }
 
 impl Value {
@@ -196,6 +204,7 @@ impl Value {
             Value::Boolean(_) => "Boolean",
             Value::String(_) => "String",
             Value::Enumeration(_) => "Enumeration",
+            Value::List { .. } => "SSV 2.0 list",
         }
     }
 }

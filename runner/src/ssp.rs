@@ -1,4 +1,6 @@
-//! Reading an SSP 1.0 archive: `SystemStructure.ssd` and the files it names.
+//! Reading an SSP 1.0 or 2.0 archive: `SystemStructure.ssd` and the files it names. An SSD of
+//! `version="2.0"` is checked against the SSP 2.0 schemas' structure first and read with SSP
+//! 2.0's types (`ssp/v2.rs`); every other as SSP 1.0.
 //!
 //! What is read: the root `ssd:System` with its `ssd:Elements/ssd:Component`s (each an FMU,
 //! `source="resources/X.fmu"` inside the archive), `ssd:Connections/ssd:Connection`
@@ -25,6 +27,8 @@ use crate::{Error, ErrorKind, Value};
 use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 use std::io::{Read, Seek};
+
+mod v2;
 
 /// One component of the system: an FMU instance.
 #[derive(Debug, Clone)]
@@ -103,14 +107,68 @@ fn typed_value(file: &str, param: &str, kind: &str, value: Option<String>) -> Re
         }),
         "String" => Value::String(text.clone()),
         "Enumeration" => Value::Enumeration(text.clone()),
-        _ => unreachable!("called for the five SSV types"),
+        _ => return typed_value2(file, param, kind, text),
+    })
+}
+
+/// An SSV 2.0 value of a type SSP 1.0 lacks (`Float64`, `Int8`, ..., `Binary`), or a list (an
+/// array): a scalar as the SSP 1.0 value of its kind, the rest as [`Value::List`].
+fn typed_value2(file: &str, param: &str, kind: &str, text: String) -> Result<Value, Error> {
+    let words = text.split_whitespace().count();
+    let bad = || Error::io(format!("{file}: parameter '{param}': '{text}' is not an ssv:{kind}"));
+    if words != 1 || matches!(kind, "Binary" | "UInt64") {
+        if kind == "UInt64"
+            && words == 1
+            && let Ok(i) = text.trim().parse::<i64>()
+        {
+            return Ok(Value::Integer(i));
+        }
+        return Ok(Value::List {
+            ty: kind.to_owned(),
+            text,
+        });
+    }
+    Ok(match kind {
+        "Float64" | "Float32" => Value::Real(text.trim().parse().map_err(|_| bad())?),
+        "Int8" | "UInt8" | "Int16" | "UInt16" | "Int32" | "UInt32" | "Int64" => {
+            Value::Integer(text.trim().parse().map_err(|_| bad())?)
+        }
+        _ => unreachable!("called for the SSV 2.0 types"),
     })
 }
 
 const SSV_TYPES: [&str; 5] = ["Real", "Integer", "Boolean", "String", "Enumeration"];
 
-/// The parameters of an SSV document (`ssv:ParameterSet`), in order.
-pub fn parse_ssv(file: &str, xml: &str) -> Result<Vec<(String, Value)>, Error> {
+/// An SSV 2.0 array of String, Enumeration or Binary (`ssv:Value` elements): refused.
+fn array_of_values(file: &str, param: &str) -> Error {
+    Error::unsupported(
+        None,
+        Some(param),
+        format!(
+            "{file}: parameter '{param}': an array of ssv:Value elements (String, Enumeration or Binary) is not supported: only arrays of numbers and Booleans (a value list)"
+        ),
+    )
+}
+
+/// The root's `version`, if the document has a root.
+fn root_version(xml: &str) -> Option<String> {
+    let mut reader = Reader::from_str(xml);
+    loop {
+        match reader.read_event().ok()? {
+            Event::Start(e) | Event::Empty(e) => return attr(&e, "version"),
+            Event::Eof => return None,
+            _ => {}
+        }
+    }
+}
+
+/// The parameters of an SSV document (`ssv:ParameterSet`), in order; `v2`: of an SSP 2.0
+/// system (checked against the SSP 2.0 schema first, its values of the SSP 2.0 types).
+pub fn parse_ssv(file: &str, xml: &str, v2: bool) -> Result<Vec<(String, Value)>, Error> {
+    if v2 {
+        v2::validate(file, xml, "ssv:ParameterSet")?;
+    }
+    let types: &[&str] = if v2 { &v2::SSV_TYPES } else { &SSV_TYPES };
     let mut reader = Reader::from_str(xml);
     let mut out = Vec::new();
     let mut param: Option<String> = None;
@@ -123,9 +181,11 @@ pub fn parse_ssv(file: &str, xml: &str) -> Result<Vec<(String, Value)>, Error> {
                     param = Some(
                         attr(&e, "name").ok_or_else(|| Error::io(format!("{file}: ssv:Parameter without a name")))?,
                     );
-                } else if let (Some(p), true) = (&param, SSV_TYPES.contains(&tag.as_str())) {
+                } else if let (Some(p), true) = (&param, types.contains(&tag.as_str())) {
                     out.push((p.clone(), typed_value(file, p, &tag, attr(&e, "value"))?));
-                } else if tag == "Binary" || tag == "Unit" && param.is_some() {
+                } else if v2 && tag == "Value" && param.is_some() {
+                    return Err(array_of_values(file, param.as_deref().unwrap_or("")));
+                } else if !v2 && tag == "Binary" || tag == "Unit" && param.is_some() {
                     return Err(Error::unsupported(
                         None,
                         param.as_deref(),
@@ -150,6 +210,17 @@ pub fn parse_ssv(file: &str, xml: &str) -> Result<Vec<(String, Value)>, Error> {
 // take the whole state.
 pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>) -> Result<Ssd, Error> {
     const FILE: &str = "SystemStructure.ssd";
+    // SSP 2.0: checked against its schemas' structure first, read with its types.
+    let v2 = root_version(xml).is_some_and(|v| v.trim() == "2.0");
+    if v2 {
+        v2::validate(FILE, xml, "ssd:SystemStructureDescription")?;
+    }
+    let ssv_types: &[&str] = if v2 { &v2::SSV_TYPES } else { &SSV_TYPES };
+    let connector_types: &[&str] = if v2 {
+        &v2::CONNECTOR_TYPES
+    } else {
+        &["Real", "Integer", "Boolean", "String", "Enumeration"]
+    };
     let mut reader = Reader::from_str(xml);
     let mut ssd = Ssd {
         name: String::new(),
@@ -171,6 +242,8 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
     let mut param: Option<String> = None;
     let mut connector: Option<usize> = None;
     let mut connection: Option<String> = None;
+    // The components' Clock connectors (component, connector).
+    let mut clock_connectors: Vec<(String, String)> = Vec::new();
     loop {
         let event = reader.read_event().map_err(|e| xml_error(FILE, &reader, e))?;
         let (e, empty) = match event {
@@ -280,13 +353,33 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     system_connector = Some(ssd.connectors.len() - 1);
                 }
             }
-            "Real" | "Integer" | "Boolean" | "String" | "Enumeration" if connector.is_some() && param.is_none() => {
+            // ssd:Clock (a connector's clock, by name): the FMU's description says which
+            // variables are clocked and the runner runs or refuses them by it.
+            "Clock" if v2 && attr(&e, "name").is_some() => {}
+            // ssc:Clock, a Clock connector: a connection of clocks is refused once all are read.
+            "Clock" if v2 && param.is_none() => {
+                if let Some(k) = connector {
+                    let c = ssd.components.last().expect("inside a component");
+                    clock_connectors.push((c.name.clone(), c.connectors[k].0.clone()));
+                } else if let Some(k) = system_connector {
+                    let name = ssd.connectors[k].name.clone();
+                    return Err(Error::unsupported(
+                        None,
+                        Some(&name),
+                        format!(
+                            "{FILE}: system '{}': its connector '{name}' is a Clock (ssc:Clock): clock connectors of the system are not supported",
+                            ssd.name
+                        ),
+                    ));
+                }
+            }
+            t if connector.is_some() && param.is_none() && connector_types.contains(&t) => {
                 if let Some(unit) = attr(&e, "unit") {
                     let c = ssd.components.last_mut().expect("inside a component");
                     c.connectors[connector.expect("checked")].2 = Some(unit);
                 }
             }
-            "Real" | "Integer" | "Boolean" | "String" | "Enumeration" if system_connector.is_some() => {
+            t if system_connector.is_some() && connector_types.contains(&t) => {
                 if let Some(unit) = attr(&e, "unit") {
                     ssd.connectors[system_connector.expect("checked")].unit = Some(unit);
                 }
@@ -320,7 +413,7 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                         ));
                     }
                     let text = read(&src)?;
-                    let values = parse_ssv(&src, &text)?;
+                    let values = parse_ssv(&src, &text, v2)?;
                     ssd.components.last_mut().expect("inside").parameters.extend(values);
                 }
             }
@@ -338,7 +431,10 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                 param =
                     Some(attr(&e, "name").ok_or_else(|| Error::io(format!("{FILE}: ssv:Parameter without a name")))?);
             }
-            t if param.is_some() && SSV_TYPES.contains(&t) => {
+            "Value" if v2 && param.is_some() => {
+                return Err(array_of_values(FILE, param.as_deref().unwrap_or("")));
+            }
+            t if param.is_some() && ssv_types.contains(&t) => {
                 let p = param.clone().expect("checked");
                 let v = typed_value(FILE, &p, t, attr(&e, "value"))?;
                 ssd.components.last_mut().expect("inside").parameters.push((p, v));
@@ -353,6 +449,17 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     end.0.as_deref().unwrap_or("<system>"),
                     end.1
                 );
+                for a in ["startIndices", "endIndices"] {
+                    if let Some(i) = attr(&e, a) {
+                        return Err(Error::unsupported(
+                            end.0.as_deref(),
+                            Some(&end.1),
+                            format!(
+                                "connection {text}: {a}=\"{i}\" (a connection of some elements of an array connector) is not supported: an array connects whole"
+                            ),
+                        ));
+                    }
+                }
                 let (Some(se), Some(ee)) = (start.0.clone(), end.0.clone()) else {
                     match (start.0.clone(), end.0.clone()) {
                         (None, Some(ee)) => boundary.push((start.1.clone(), true, (ee, end.1.clone()), text.clone())),
@@ -452,6 +559,19 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
             ));
         }
         sc.links.push(end);
+    }
+    // Connections of clocks: the runner ticks time-based input clocks itself and connects none.
+    for k in &ssd.connections {
+        if let Some(end) = [&k.start, &k.end].into_iter().find(|e| clock_connectors.contains(e)) {
+            return Err(Error::unsupported(
+                Some(&end.0),
+                Some(&end.1),
+                format!(
+                    "connection {}.{} -> {}.{}: '{}.{}' is a Clock connector (ssc:Clock): clock connections are not run by the runner (it ticks time-based input clocks itself)",
+                    k.start.0, k.start.1, k.end.0, k.end.1, end.0, end.1
+                ),
+            ));
+        }
     }
     // Unit conversions: both ends declare a unit and they differ.
     for k in &ssd.connections {

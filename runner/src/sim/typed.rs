@@ -325,6 +325,8 @@ impl Simulation {
         settable(&var).map_err(&bad)?;
         let count = var.count();
         let values = match value {
+            Value::List { ty, text } if same_type(ty, var.ty) => Values::parse(var.ty, count, text),
+            Value::List { ty, .. } => Err(format!("an ssv:{ty} value for a {} variable", var.ty)),
             _ if !var.shape.is_empty() => Err(format!(
                 "an array of {count}: SSP 1.0 values are scalars; give it to the run as \"{count} values separated by spaces\""
             )),
@@ -467,4 +469,15 @@ fn target(slave: usize, var: &Var3) -> Target {
         _ => Type::Integer,
     };
     Target { slave, vr: var.vr, ty }
+}
+
+/// Whether an SSV 2.0 value element `ty` (`Float64`, `Int8`, ...; SSP 1.0's `Real` and `Integer`
+/// are Float64 and Int32) is of the FMI 3.0 type `var`.
+fn same_type(ty: &str, var: Type3) -> bool {
+    let ty = match ty {
+        "Real" => "Float64",
+        "Integer" => "Int32",
+        t => t,
+    };
+    ty == var.name() || ty == "Int64" && var == Type3::Enumeration
 }
