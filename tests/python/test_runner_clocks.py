@@ -107,3 +107,14 @@ def test_the_clocked_loop_runs_the_same_in_child_processes_and_with_fixed_steps_
     assert "component 'controller' has input clocks" in r.stderr + r.stdout, r.stderr
     tol = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
     assert np.array_equal(tol[:, 1], base["pendulum.alpha1"])
+
+
+def test_the_python_module_runs_the_clocked_loop_as_the_command_line(tmp_path):
+    import rustfmu_runner
+
+    path = clocked_ssp("PendulumLQR", tmp_path)
+    record = SYSTEMS["PendulumLQR"]
+    want = run_cli(path, 1.0, TS / 2, record)
+    got = rustfmu_runner.System(path).run(1.0, TS / 2, record=[f"{c}.{v}" for c, vs in record.items() for v in vs])
+    for key in want:
+        assert np.array_equal(np.asarray(got[key]), want[key]), key

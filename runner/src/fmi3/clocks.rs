@@ -229,6 +229,8 @@ impl Instance3 {
     /// tick), each clock's interval and shift; then fmi3ExitInitializationMode, which leaves the
     /// instance in Event Mode (FMI 3.0.2: with eventModeUsed), and the clocks due at the
     /// start time tick.
+    #[cold]
+    #[inline(never)]
     pub(super) fn exit_initialization_clocked(&mut self) -> Result<(), Fmi2Error> {
         let start = self.experiment.1;
         let plan = self.state().plan.clone();
@@ -313,6 +315,8 @@ impl Instance3 {
     /// Before the step from `t` of `h`: an Event Mode ends (fmi3UpdateDiscreteStates until the
     /// FMU needs no more, the intervals of tunable and aperiodic clocks read again,
     /// fmi3EnterStepMode); a tick inside the step is refused.
+    #[cold]
+    #[inline(never)]
     pub(super) fn end_event_mode(&mut self, t: f64, h: f64) -> Result<(), Fmi2Error> {
         if self.state().event_mode {
             let f = self.events().update_discrete_states;
@@ -372,6 +376,8 @@ impl Instance3 {
 
     /// After a step that reached `t`: Event Mode where a clock ticks at `t` or the FMU asked for
     /// it (eventHandlingNeeded), and the clocks due set.
+    #[cold]
+    #[inline(never)]
     pub(super) fn begin_event_mode(&mut self, t: f64, event: bool) -> Result<(), Fmi2Error> {
         if event || !self.state().due(t).is_empty() {
             let f = self.events().enter_event_mode;
@@ -385,6 +391,8 @@ impl Instance3 {
     }
 
     /// fmi3GetFloat64 of the variables that may be read now; the others' held values.
+    #[cold]
+    #[inline(never)]
     pub(super) fn get_clocked(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
         let state = self.clocks.as_mut().expect("an instance with clocks");
         if state.all_free(vrs) {
@@ -426,6 +434,8 @@ impl Instance3 {
 
     /// fmi3SetFloat64 of the variables that may be set now; a clocked one whose clocks do not
     /// tick keeps its value until they do (the master sets it again at the tick).
+    #[cold]
+    #[inline(never)]
     pub(super) fn set_clocked(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error> {
         let state = self.clocks.as_mut().expect("an instance with clocks");
         if state.all_free(vrs) {
