@@ -256,6 +256,14 @@ impl Simulation {
                 message: format!("{}: {}", archive.path, e.message),
                 ..e
             })?;
+        for c in &ssd.components {
+            for (connector, ty, dims) in &c.declared {
+                sim.check_declared(&c.name, connector, ty, dims).map_err(|e| Error {
+                    message: format!("{}: {}", archive.path, e.message),
+                    ..e
+                })?;
+            }
+        }
         for c in ssd.components.iter().filter(|c| c.model_exchange) {
             sim.use_model_exchange(&c.name).map_err(|e| Error {
                 message: format!("{}: {}", archive.path, e.message),
@@ -409,6 +417,54 @@ impl Simulation {
             vr: v.vr,
             ty: v.ty,
         })
+    }
+
+    /// An SSP 2.0 connector's declared type (`ty`, "" if none) and dimensions against its
+    /// variable: "if the type of the connector differs from the type of the underlying FMU
+    /// variable this constitutes an error" (SSP 2.0, `SystemStructureDescription.xsd`, the
+    /// connector's type). SSP 1.0's Real and Integer stand for Float64 and Int32.
+    fn check_declared(&self, c: &str, connector: &str, ty: &str, dims: &[Option<u64>]) -> Result<(), Error> {
+        let fmu = self.fmu_of(self.slave_index(c)?);
+        let (actual, shape): (String, Vec<usize>) = match fmu.var3(connector) {
+            Some(v) => (v.ty.name().to_owned(), v.shape.clone()),
+            None => {
+                let v = fmu.variable(c, connector)?;
+                let name = match v.ty {
+                    Type::Real => "Float64",
+                    Type::Integer => "Int32",
+                    t => type_name(t),
+                };
+                (name.to_owned(), Vec::new())
+            }
+        };
+        let declared = match ty {
+            "Real" => "Float64",
+            "Integer" => "Int32",
+            t => t,
+        };
+        let kind = |t: &str, d: &[String]| {
+            if d.is_empty() {
+                t.to_owned()
+            } else {
+                format!("{t}[{}]", d.join(","))
+            }
+        };
+        let shown: Vec<String> = dims.iter().map(|d| d.map_or("?".into(), |n| n.to_string())).collect();
+        let real: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
+        let same_shape =
+            dims.len() == shape.len() && dims.iter().zip(&shape).all(|(d, n)| d.is_none_or(|d| d as usize == *n));
+        if (!declared.is_empty() && declared != actual) || !same_shape {
+            return Err(Error::variable(
+                c,
+                connector,
+                format!(
+                    "component '{c}': connector '{connector}' is declared {} in the SSD, and its variable is {} in the FMU's modelDescription.xml (SSP 2.0: a connector's type differing from its variable's is an error)",
+                    kind(if ty.is_empty() { "(no type)" } else { ty }, &shown),
+                    kind(&actual, &real)
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// "component.variable" (the component's name is what precedes the first '.').

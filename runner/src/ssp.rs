@@ -42,6 +42,10 @@ pub struct Component {
     pub connectors: Vec<(String, String, Option<String>)>,
     /// `implementation="ModelExchange"`: the runner integrates it ([`crate::me`]).
     pub model_exchange: bool,
+    /// SSP 2.0: the connectors that declare a type or dimensions: (connector, its type element,
+    /// e.g. "Float64", or "" if none, each `ssc:Dimension`'s `size`, None if it has none),
+    /// checked against the FMU's variables when the system is built.
+    pub declared: Vec<(String, String, Vec<Option<u64>>)>,
 }
 
 /// `start.0.start.1 -> end.0.end.1`: (component, connector).
@@ -321,6 +325,7 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     parameters: Vec::new(),
                     connectors: Vec::new(),
                     model_exchange,
+                    declared: Vec::new(),
                 });
             }
             "SignalDictionary" | "SignalDictionaryReference" => {
@@ -373,7 +378,21 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     ));
                 }
             }
+            "Dimension" if v2 && connector.is_some() && param.is_none() => {
+                let c = ssd.components.last_mut().expect("inside a component");
+                let name = &c.connectors[connector.expect("checked")].0;
+                let size = attr(&e, "size").and_then(|v| v.trim().parse().ok());
+                match c.declared.last_mut() {
+                    Some((n, _, dims)) if n == name => dims.push(size),
+                    _ => c.declared.push((name.clone(), String::new(), vec![size])),
+                }
+            }
             t if connector.is_some() && param.is_none() && connector_types.contains(&t) => {
+                if v2 {
+                    let c = ssd.components.last_mut().expect("inside a component");
+                    let name = c.connectors[connector.expect("checked")].0.clone();
+                    c.declared.push((name, t.to_owned(), Vec::new()));
+                }
                 if let Some(unit) = attr(&e, "unit") {
                     let c = ssd.components.last_mut().expect("inside a component");
                     c.connectors[connector.expect("checked")].2 = Some(unit);

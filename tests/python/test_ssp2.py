@@ -255,3 +255,20 @@ def test_ssp2_array_connectors_and_array_values_equal_fmusim(tmp_path):
     path, _ = write_ssp2(tmp_path / "C.ssp", [("s", fmu)], {}, [], {"s": [("u", "Int32", "1 2 3", (3,))]})
     r = cli("run", path, "--stop-time", "0.1", "--step", "0.1", "--no-progress")
     assert r.returncode == 1 and "an ssv:Int32 value for a Float64 variable" in r.stderr, r.stderr
+
+
+def test_a_connector_type_or_size_other_than_its_variables_is_refused(tmp_path):
+    """SSP 2.0: 'if the type of the connector differs from the type of the underlying FMU variable
+    this constitutes an error' (SystemStructureDescription.xsd, a connector's type)."""
+    fmu, ss = need(REF / "Feedthrough.fmu"), need(REF / "StateSpace.fmu")
+    path, ssd = write_ssp2(tmp_path / "T.ssp", [("f", fmu)], {"f": [("Int8_output", "output", "Int16", ())]}, [], {})
+    valid(ssd)
+    r = cli("run", path, "--stop-time", "0.1", "--step", "0.1", "--no-progress")
+    assert r.returncode == 1 and "connector 'Int8_output' is declared Int16 in the SSD, and its variable is Int8" in r.stderr, r.stderr
+    path, ssd = write_ssp2(tmp_path / "D.ssp", [("s", ss)], {"s": [("y", "output", "Float64", (2,))]}, [], {})
+    valid(ssd)
+    r = cli("run", path, "--stop-time", "0.1", "--step", "0.1", "--no-progress")
+    assert r.returncode == 1 and "connector 'y' is declared Float64[2] in the SSD, and its variable is Float64[3]" in r.stderr, r.stderr
+    # SSP 1.0's Real for a Float64, and every type of the writer's files, are accepted.
+    path, _ = write_ssp2(tmp_path / "R.ssp", [("f", fmu)], {"f": [("Float64_continuous_output", "output", "Real", ())]}, [], {})
+    assert cli("run", path, "--stop-time", "0.1", "--step", "0.1", "--no-progress").returncode == 0
