@@ -332,6 +332,31 @@ mod tests {
         std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
     }
 
+    /// SSP 2.0 is SSP 1.0's SSD with its version, FMI 3.0 type names and nothing else changed
+    /// (the schema validation and the run are tests/python/test_ssp2.py's).
+    #[test]
+    fn the_ssp2_ssd_is_the_ssp1_one_with_fmi3_types() {
+        let systems = paper_systems();
+        for name in ["PendulumLQR", "PendulumMotors"] {
+            let system = systems.get(name).unwrap();
+            let v1 = ssd(system, &fmus()).unwrap();
+            let v2 = ssd2(system, &fmus()).unwrap();
+            assert!(v2.contains(r#"version="2.0" name=""#) && !v2.contains(r#"Set version="1.0""#));
+            assert!(!v2.contains("<ssc:Real/>") && !v2.contains("<ssv:Real "));
+            let back = v2
+                .replace(r#"version="2.0""#, r#"version="1.0""#)
+                .replace("<ssc:Float64/>", "<ssc:Real/>")
+                .replace("<ssv:Float64 ", "<ssv:Real ")
+                .replace("<ssc:Int32/>", "<ssc:Integer/>")
+                .replace("<ssv:Int32 ", "<ssv:Integer ");
+            assert_eq!(back, v1, "{name}");
+        }
+        let e =
+            crate::systems::Systems::parse("[[system]]\nname = \"S\"\nssp-version = \"1.1\"\n", Path::new("v.toml"))
+                .unwrap_err();
+        assert!(e.contains("ssp-version = \"1.1\"") && e.contains("\"2.0\""), "{e}");
+    }
+
     /// The fixtures are the SSDs of the paper's systems file, reviewed by hand: any change to
     /// the writer or to holonomic/systems.toml shows here first.
     #[test]
