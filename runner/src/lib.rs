@@ -1,11 +1,13 @@
-//! `rustfmu-runner`: a fixed-step co-simulation runner for SSP 1.0 systems of FMI 2.0
-//! co-simulation FMUs — this project's FMUs and any other exporter's.
+//! `rustfmu-runner`: a co-simulation runner for SSP 1.0 and 2.0 systems of FMI 2.0 and FMI 3.0
+//! FMUs (co-simulation, or model exchange integrated by the runner) — this project's FMUs and
+//! any other exporter's.
 //!
 //! - [`ssp`] reads an SSP archive's `SystemStructure.ssd`: components (`source="resources/X.fmu"`),
 //!   connections, parameter bindings (inline `ssv:ParameterSet` or a `.ssv` file in the archive),
 //!   and refuses what it cannot run (system-level connectors, nested systems, transformations,
-//!   unit conversions, FMI 3.0 FMUs, model-exchange-only FMUs), naming component and connector.
-//! - [`fmu`] loads one FMU through the `fmi` crate's importer.
+//!   unit conversions, clock connections), naming component and connector.
+//! - [`fmu`] loads one FMU with the runner's own importers (FMI 2.0 and FMI 3.0: every type and
+//!   array, Event Mode and time-based input clocks).
 //! - [`sim`] is the master: parameter and start values after fmi2Instantiate, initialization
 //!   with the connections propagated once per instance, then at every communication point
 //!   t = k·h the connections evaluated in dependency order (Gauss-Seidel along the connections
