@@ -52,11 +52,25 @@ impl std::fmt::Display for Fmi2Error {
     }
 }
 
-/// Loads the FMU binary at `path` (both importers).
+/// Loads the FMU binary at `path` (both importers), after the libraries it expects the
+/// importer to have loaded ([`crate::libpython`]: a PythonFMU binary's libpython).
 pub(crate) fn load_binary(path: &Path) -> Result<libloading::Library, String> {
+    crate::libpython::before(path).map_err(|e| format!("cannot load {}: {e}", path.display()))?;
     // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
     // importer trusts the FMU it was given.
-    unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))
+    match unsafe { libloading::Library::new(path) } {
+        Ok(lib) => Ok(lib),
+        Err(e) => {
+            let e = e.to_string();
+            match crate::libpython::after_failure(path, &e) {
+                // SAFETY: as above.
+                Ok(true) => unsafe { libloading::Library::new(path) }.map_err(|e| e.to_string()),
+                Ok(false) => Err(e),
+                Err(why) => Err(why),
+            }
+            .map_err(|e| format!("cannot load {}: {e}", path.display()))
+        }
+    }
 }
 
 /// The function `name` of the binary `lib` (loaded from `path`), or why there is none.

@@ -31,6 +31,7 @@ pub mod fmu;
 pub mod fmu_log;
 pub mod instance;
 pub mod isolate;
+pub mod libpython;
 pub mod me;
 pub mod sim;
 pub mod ssp;

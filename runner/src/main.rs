@@ -20,6 +20,12 @@ use std::path::PathBuf;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// A shared library to load (RTLD_GLOBAL) before the FMUs, in this process and in isolated
+    /// components' ones (repeatable; also RUSTFMU_RUNNER_PRELOAD, paths separated by ':'). A
+    /// PythonFMU binary needs libpython and names none: the runner finds the one of python3 on
+    /// PATH (or RUSTFMU_RUNNER_PYTHON) by itself; this chooses another.
+    #[arg(long = "preload-lib", value_name = "PATH", global = true)]
+    preload_lib: Vec<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -145,6 +151,7 @@ fn parse_set(text: &str) -> Result<(String, Override), String> {
 // ~170 lines: one match over the subcommands, each arm the plain sequence of its steps (read,
 // run, write); nothing in it is shared between arms.
 fn run(cli: Cli) -> Result<(), String> {
+    rustfmu_runner::libpython::preload(&cli.preload_lib)?;
     match cli.command {
         #[cfg(target_os = "linux")]
         Command::ServeComponent {

@@ -346,6 +346,10 @@ pub(super) fn start_worker(
     }
     cmd.arg("--shm").arg(shm).stdin(std::process::Stdio::null());
     cmd.args(flag);
+    // The libraries loaded before the FMUs here (--preload-lib), loaded there too.
+    if let Some(libs) = crate::libpython::for_child() {
+        cmd.env(crate::libpython::ENV, libs);
+    }
     cmd.spawn().map_err(|e| {
         let _ = std::fs::remove_file(shm);
         format!("cannot start {}: {e}", worker.display())
