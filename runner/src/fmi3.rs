@@ -29,8 +29,8 @@ use std::sync::Arc;
 mod clocks;
 mod typed;
 mod view;
-pub use clocks::ClockPlan;
 use clocks::ClockState;
+pub use clocks::{ClockDecl, ClockPlan, Interval};
 pub use view::{Fmi3Parts, Var3, as_fmi2};
 
 fn check(status: fmi3Status) -> Result<(), Fmi2Error> {
@@ -119,6 +119,7 @@ struct EventApi {
     enter_step_mode: InstanceFunction,
     update_discrete_states: UpdateDiscreteStates,
     set_clock: unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *const fmi3Clock) -> fmi3Status,
+    get_clock: unsafe extern "C" fn(fmi3Instance, *const fmi3ValueReference, usize, *mut fmi3Clock) -> fmi3Status,
     get_interval: unsafe extern "C" fn(
         fmi3Instance,
         *const fmi3ValueReference,
@@ -249,6 +250,7 @@ impl Library {
                     enter_step_mode: optional(&lib, "fmi3EnterStepMode")?,
                     update_discrete_states: optional(&lib, "fmi3UpdateDiscreteStates")?,
                     set_clock: optional(&lib, "fmi3SetClock")?,
+                    get_clock: optional(&lib, "fmi3GetClock")?,
                     get_interval: optional(&lib, "fmi3GetIntervalDecimal")?,
                     get_shift: optional(&lib, "fmi3GetShiftDecimal")?,
                 })
@@ -395,8 +397,8 @@ impl Fmi3Import {
     pub fn with_clocks(mut self, plan: Option<ClockPlan>) -> Result<Fmi3Import, String> {
         if plan.is_some() && self.library.api.events.is_none() {
             return Err(
-                "the FMU has input clocks but its binary lacks fmi3EnterEventMode, fmi3EnterStepMode, \
-                 fmi3UpdateDiscreteStates, fmi3SetClock, fmi3GetIntervalDecimal or fmi3GetShiftDecimal"
+                "the FMU has clocks but its binary lacks fmi3EnterEventMode, fmi3EnterStepMode, \
+                 fmi3UpdateDiscreteStates, fmi3SetClock, fmi3GetClock, fmi3GetIntervalDecimal or fmi3GetShiftDecimal"
                     .into(),
             );
         }
@@ -407,6 +409,11 @@ impl Fmi3Import {
     /// Whether the runner ticks input clocks of this FMU.
     pub fn has_clocks(&self) -> bool {
         self.clocks.is_some()
+    }
+
+    /// Its clocks (None: it runs without event mode).
+    pub fn clock_plan(&self) -> Option<&ClockPlan> {
+        self.clocks.as_deref()
     }
 
     /// Where the FMU is unpacked.

@@ -219,7 +219,7 @@ impl Fmu {
                         Some(component),
                         Some(name),
                         format!(
-                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}: the runner connects, sets and records the clocked Float64 scalars of time-based input clocks only (runner/README.md, FMI 3.0)",
+                            "component '{component}' ({}): '{name}' is an FMI 3.0 {ty}: the runner does not set, read or record it (a Clock is connected only to a Clock, by a clock connection; runner/README.md, FMI 3.0)",
                             self.model_identifier()
                         ),
                     );

@@ -40,6 +40,53 @@ dispatch_with! {
     fn set_input_derivatives(&mut self, vrs: &[u32], values: &[f64]) -> Result<(), Fmi2Error>;
 }
 
+/// The clocks of a system's components: what the system asks of an instance to tick the clocks
+/// connected to others and to step to the ticks (`fmi3/clocks.rs`; `sim/clocks.rs`). Only an
+/// FMI 3.0 co-simulation instance in this process has clocks (the system refuses the others).
+impl InstanceCS {
+    fn v3(&mut self) -> Option<&mut crate::fmi3::Instance3> {
+        match self {
+            InstanceCS::V3(i) => Some(i),
+            _ => None,
+        }
+    }
+
+    /// An Event Mode ends at `t` (updates, intervals read, Step Mode).
+    pub fn settle(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        self.v3().map_or(Ok(()), |i| i.settle(t))
+    }
+
+    /// The next tick of its time-based clocks.
+    pub fn next_tick(&mut self) -> Option<f64> {
+        self.v3().and_then(|i| i.next_tick())
+    }
+
+    /// The clocks due at `t` tick (Event Mode entered for them).
+    pub fn tick_now(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        self.v3().map_or(Ok(()), |i| i.tick_now(t))
+    }
+
+    /// Its output clocks read, once its input clocks are set.
+    pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        self.v3().map_or(Ok(()), |i| i.poll_output_clocks(t))
+    }
+
+    /// Whether its clock `vr` ticks now.
+    pub fn clock_active(&mut self, vr: u32) -> bool {
+        self.v3().is_some_and(|i| i.clock_active(vr))
+    }
+
+    /// Its input clock `vr` ticks at `t` (a clock connected to it ticked).
+    pub fn trigger(&mut self, vr: u32, t: f64) -> Result<(), Fmi2Error> {
+        match self.v3() {
+            Some(i) => i.trigger(vr, t),
+            None => Err(Fmi2Error::Importer(
+                "only an FMI 3.0 co-simulation instance has clocks".into(),
+            )),
+        }
+    }
+}
+
 impl InstanceCS {
     /// Waits for every call made so far (an isolated instance sends the calls that answer only
     /// a status with the next one that answers values): their failure, if any, now.

@@ -35,6 +35,7 @@ use md_reader::fmi2::Type;
 use std::ffi::CString;
 use std::path::Path;
 
+mod clocks;
 mod exchange;
 pub mod loops;
 mod options;
@@ -178,6 +179,8 @@ pub struct Simulation {
     pub loop_options: LoopOptions,
     /// The connections of FMI 3.0 values that are not Float64 scalars ([`typed`]).
     typed: Box<typed::TypedLinks>,
+    /// The clock connections ([`clocks`]).
+    clock_links: Vec<clocks::ClockLink>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -278,6 +281,10 @@ impl Simulation {
                 })?;
             }
         }
+        sim.build_clock_links(&ssd.clock_connections).map_err(|e| Error {
+            message: format!("{}: {}", archive.path, e.message),
+            ..e
+        })?;
         sim.system_connectors = ssd.connectors;
         Ok(sim)
     }
@@ -344,6 +351,7 @@ impl Simulation {
             loops: Vec::new(),
             loop_options: LoopOptions::default(),
             typed: Default::default(),
+            clock_links: Vec::new(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
@@ -425,6 +433,24 @@ impl Simulation {
     /// connector's type). SSP 1.0's Real and Integer stand for Float64 and Int32.
     fn check_declared(&self, c: &str, connector: &str, ty: &str, dims: &[Option<u64>]) -> Result<(), Error> {
         let fmu = self.fmu_of(self.slave_index(c)?);
+        let clock = match &fmu.import {
+            crate::fmu::Import::V3(i) => i.clock_plan().and_then(|p| p.clock(connector)),
+            _ => None,
+        };
+        if ty == "Clock" || clock.is_some() {
+            if ty == "Clock" && clock.is_some() {
+                return Ok(());
+            }
+            return Err(Error::variable(
+                c,
+                connector,
+                format!(
+                    "component '{c}': connector '{connector}' is declared {} in the SSD, and its variable {} in the FMU's modelDescription.xml (SSP 2.0: a connector's type differing from its variable's is an error)",
+                    if ty.is_empty() { "(no type)" } else { ty },
+                    if clock.is_some() { "is a Clock" } else { "is no Clock" }
+                ),
+            ));
+        }
         let (actual, shape): (String, Vec<usize>) = match fmu.var3(connector) {
             Some(v) => (v.ty.name().to_owned(), v.shape.clone()),
             None => {

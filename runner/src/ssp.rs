@@ -74,6 +74,9 @@ pub struct Ssd {
     pub components: Vec<Component>,
     /// The connections between components.
     pub connections: Vec<Connection>,
+    /// The connections between Clock connectors of components (SSP 2.0 `ssc:Clock`): the
+    /// receiver's clock ticks when the sender's does (`sim/clocks.rs`).
+    pub clock_connections: Vec<Connection>,
     /// The system's own connectors, with the connections to and from them.
     pub connectors: Vec<SystemConnector>,
     /// `ssd:DefaultExperiment` startTime, stopTime, s.
@@ -230,6 +233,7 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
         name: String::new(),
         components: Vec::new(),
         connections: Vec::new(),
+        clock_connections: Vec::new(),
         connectors: Vec::new(),
         start_time: None,
         stop_time: None,
@@ -579,19 +583,25 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
         }
         sc.links.push(end);
     }
-    // Connections of clocks: the runner ticks time-based input clocks itself and connects none.
-    for k in &ssd.connections {
-        if let Some(end) = [&k.start, &k.end].into_iter().find(|e| clock_connectors.contains(e)) {
+    // Connections of clocks: run apart from the data connections (`sim/clocks.rs`); a clock
+    // connected to a connector of another kind is refused.
+    let (clocks, data): (Vec<Connection>, Vec<Connection>) = std::mem::take(&mut ssd.connections)
+        .into_iter()
+        .partition(|k| clock_connectors.contains(&k.start) || clock_connectors.contains(&k.end));
+    ssd.connections = data;
+    for k in &clocks {
+        if let Some(end) = [&k.start, &k.end].into_iter().find(|e| !clock_connectors.contains(e)) {
             return Err(Error::unsupported(
                 Some(&end.0),
                 Some(&end.1),
                 format!(
-                    "connection {}.{} -> {}.{}: '{}.{}' is a Clock connector (ssc:Clock): clock connections are not run by the runner (it ticks time-based input clocks itself)",
+                    "connection {}.{} -> {}.{}: '{}.{}' is no Clock connector: a Clock (ssc:Clock) connects to a Clock only",
                     k.start.0, k.start.1, k.end.0, k.end.1, end.0, end.1
                 ),
             ));
         }
     }
+    ssd.clock_connections = clocks;
     // Unit conversions: both ends declare a unit and they differ.
     for k in &ssd.connections {
         let unit = |(c, v): &(String, String)| {

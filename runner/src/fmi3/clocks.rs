@@ -31,6 +31,18 @@ pub enum Interval {
     /// `changing`, `countdown`: aperiodic; after each Event Mode, an interval the FMU says is
     /// changed is the time from then to the next tick.
     Aperiodic,
+    /// `triggered` input clock: ticks when the clock connected to it ticks (a clock connection
+    /// of the system), never by itself.
+    Triggered,
+    /// An output clock: the FMU ticks it (fmi3GetClock in Event Mode says when).
+    Output,
+}
+
+impl Interval {
+    /// Whether the runner plans its ticks from intervals (a time-based input clock).
+    pub fn time_based(self) -> bool {
+        !matches!(self, Interval::Triggered | Interval::Output)
+    }
 }
 
 /// One input clock the runner ticks.
@@ -43,31 +55,55 @@ pub struct ClockDecl {
     pub declared: (Option<f64>, Option<f64>),
 }
 
-/// The clocks of an FMU the runner schedules, and its clocked Float64 variables.
+/// The clocks of an FMU: its input clocks (time-based ones the runner schedules, triggered ones
+/// a clock connection ticks) and its output clocks (`inputs` holds them all, despite its name),
+/// and its clocked variables.
 #[derive(Debug, Clone, Default)]
 pub struct ClockPlan {
     pub inputs: Vec<ClockDecl>,
     /// value reference -> the indices (in `inputs`) of its clocks.
     pub clocked: HashMap<u32, Vec<usize>>,
+    /// The clocked Float64 scalars (read and set as Real ones; the others through the typed calls).
+    pub reals: Vec<u32>,
+    /// The clocked outputs of the typed calls (other types, arrays of a fixed size): value
+    /// reference and an empty buffer of its type and size.
+    pub typed_outputs: Vec<(u32, crate::values::Values)>,
 }
 
-/// The input clocks of `d` the runner schedules (time-based: every `intervalVariability` but
-/// `triggered`), or None when it has none (it then runs without event mode, as before).
+impl ClockPlan {
+    /// The clock `name` (its index in `inputs`).
+    pub fn clock(&self, name: &str) -> Option<usize> {
+        self.inputs.iter().position(|c| c.name == name)
+    }
+
+    /// Whether the system must step to its ticks: a clock whose ticks no fixed grid can meet
+    /// (aperiodic), or one that ticks by events (triggered, output).
+    pub fn has_events(&self) -> bool {
+        self.inputs
+            .iter()
+            .any(|c| matches!(c.interval, Interval::Aperiodic | Interval::Triggered | Interval::Output))
+    }
+}
+
+/// The clocks of `d` (input clocks of every `intervalVariability`, output clocks), or None when
+/// it has none (it then runs without event mode, as before).
 pub fn plan(d: &d3::ModelDescription) -> Option<ClockPlan> {
     let mut inputs = Vec::new();
     for v in &d.variables {
         let Some(attrs) = v
             .clock
             .as_ref()
-            .filter(|_| v.ty == d3::Type::Clock && v.causality == Causality::Input)
+            .filter(|_| v.ty == d3::Type::Clock && matches!(v.causality, Causality::Input | Causality::Output))
         else {
             continue;
         };
         let interval = match attrs.interval_variability.as_str() {
+            _ if v.causality == Causality::Output => Interval::Output,
             "constant" => Interval::Constant,
             "fixed" | "calculated" => Interval::Fixed,
             "tunable" => Interval::Tunable,
             "changing" | "countdown" => Interval::Aperiodic,
+            "triggered" => Interval::Triggered,
             _ => continue,
         };
         inputs.push(ClockDecl {
@@ -83,15 +119,14 @@ pub fn plan(d: &d3::ModelDescription) -> Option<ClockPlan> {
     Some(ClockPlan {
         inputs,
         clocked: HashMap::new(),
+        reals: Vec::new(),
+        typed_outputs: Vec::new(),
     })
 }
 
-/// Whether the clocked variable `v` is one the runner sets and reads: a Float64 scalar whose
-/// clocks are all input clocks of `plan`; its entry in `plan.clocked` made.
+/// Whether the clocked variable `v` is one the runner sets and reads: every clock of it one of
+/// `plan`; its entry in `plan.clocked` made (and in `plan.reals` for a Float64 scalar).
 pub fn admit(plan: &mut ClockPlan, v: &d3::Variable) -> bool {
-    if v.ty != d3::Type::Float64 || v.array || !v.dimensions.is_empty() {
-        return false;
-    }
     let idx: Option<Vec<usize>> = v
         .clocks
         .iter()
@@ -100,10 +135,30 @@ pub fn admit(plan: &mut ClockPlan, v: &d3::Variable) -> bool {
     match idx {
         Some(idx) if !idx.is_empty() => {
             plan.clocked.insert(v.vr, idx);
+            if is_real(v) {
+                plan.reals.push(v.vr);
+            } else if v.causality == Causality::Output {
+                let fixed: Option<usize> = v
+                    .dimensions
+                    .iter()
+                    .map(|d| match d {
+                        d3::Dimension::Fixed(n) => usize::try_from(*n).ok(),
+                        d3::Dimension::Parameter(_) => None,
+                    })
+                    .product();
+                if let Some(buf) = fixed.and_then(|n| crate::values::Values::zeros(v.ty, n)) {
+                    plan.typed_outputs.push((v.vr, buf));
+                }
+            }
             true
         }
         _ => false,
     }
+}
+
+/// Whether `v` is read and set as a Real (a Float64 scalar).
+pub fn is_real(v: &d3::Variable) -> bool {
+    v.ty == d3::Type::Float64 && !v.array && v.dimensions.is_empty()
 }
 
 /// The run-time state of an instance's clocks (see the module).
@@ -116,11 +171,15 @@ pub struct ClockState {
     pub last: Vec<Option<f64>>,
     /// In Event Mode (after fmi3ExitInitializationMode, at a tick, at an event fmi3DoStep reports).
     pub event_mode: bool,
+    /// Its output clocks read in this Event Mode ([`Instance3::poll_output_clocks`]).
+    pub polled: bool,
     /// Which clocks tick now (all in Initialization Mode, where clocked variables are free).
     pub active: Vec<bool>,
     pub initializing: bool,
     /// The last value set or read of each clocked variable: what a read between ticks gives.
     pub held: HashMap<u32, f64>,
+    /// The same for the clocked variables of the typed calls (every type, arrays whole).
+    pub held_typed: HashMap<u32, crate::values::Values>,
     /// Scratch for the unclocked part of a call.
     pub vrs: Vec<u32>,
     pub vals: Vec<f64>,
@@ -135,9 +194,11 @@ impl ClockState {
             interval: vec![0.0; n],
             last: vec![None; n],
             event_mode: false,
+            polled: false,
             active: vec![false; n],
             initializing: false,
             held: HashMap::new(),
+            held_typed: HashMap::new(),
             vrs: Vec::new(),
             vals: Vec::new(),
         }
@@ -183,7 +244,7 @@ impl ClockState {
         for &i in due {
             self.last[i] = Some(t);
             self.next[i] = match self.plan.inputs[i].interval {
-                Interval::Aperiodic => None,
+                Interval::Aperiodic | Interval::Triggered | Interval::Output => None,
                 _ => Some(t + self.interval[i]),
             };
         }
@@ -234,14 +295,17 @@ impl Instance3 {
     pub(super) fn exit_initialization_clocked(&mut self) -> Result<(), Fmi2Error> {
         let start = self.experiment.1;
         let plan = self.state().plan.clone();
-        let vrs: Vec<u32> = plan.clocked.keys().copied().collect();
+        let vrs: Vec<u32> = plan.reals.clone();
         let mut values = vec![0.0; vrs.len()];
-        self.get_float64(&vrs, &mut values)?;
+        if !vrs.is_empty() {
+            self.get_float64(&vrs, &mut values)?;
+        }
         self.state()
             .held
             .extend(vrs.iter().copied().zip(values.iter().copied()));
         for (i, c) in plan.inputs.iter().enumerate() {
             let (interval, shift) = match c.interval {
+                Interval::Triggered | Interval::Output => continue,
                 Interval::Constant => match c.declared {
                     (Some(h), s) => (Some(h), s.unwrap_or(0.0)),
                     (None, _) => {
@@ -269,17 +333,30 @@ impl Instance3 {
                     if q == 0 { (None, 0.0) } else { (Some(h), s) }
                 }
             };
+            let least = if c.interval == Interval::Aperiodic {
+                0.0
+            } else {
+                f64::MIN_POSITIVE
+            };
             if let Some(h) = interval
-                && !(h > 0.0 && h.is_finite() && shift >= 0.0 && shift.is_finite())
+                && !(h >= least && h.is_finite() && shift >= 0.0 && shift.is_finite())
             {
                 return Err(Fmi2Error::Importer(format!(
-                    "clock '{}': interval {h} s, shift {shift} s: the interval must be a positive number, the shift a number >= 0",
+                    "clock '{}': interval {h} s, shift {shift} s: the interval must be a positive number (>= 0 for a countdown), the shift a number >= 0",
                     c.name
                 )));
             }
             let state = self.state();
             state.interval[i] = interval.unwrap_or(0.0);
-            state.next[i] = interval.map(|_| start + shift);
+            // An aperiodic clock's interval is the time from now to its tick (FMI 3.0.2,
+            // fmi3GetIntervalDecimal: countdown clocks); a periodic one ticks first at its shift.
+            state.next[i] = interval.map(|h| {
+                if c.interval == Interval::Aperiodic {
+                    start + h
+                } else {
+                    start + shift
+                }
+            });
         }
         // SAFETY: a live instance.
         check(unsafe { (self.api().exit_initialization_mode)(self.c) })?;
@@ -318,7 +395,27 @@ impl Instance3 {
     #[cold]
     #[inline(never)]
     pub(super) fn end_event_mode(&mut self, t: f64, h: f64) -> Result<(), Fmi2Error> {
+        self.settle(t)?;
+        if let Some((i, at)) = self.state().inside(t + h) {
+            let name = self.state().plan.inputs[i].name.clone();
+            return Err(Fmi2Error::Importer(format!(
+                "clock '{name}' ticks at t = {at}, inside the communication step from {t} to {}: the runner ticks clocks at communication points; choose a step that divides the clock's interval and shift",
+                t + h
+            )));
+        }
+        Ok(())
+    }
+
+    /// At `t`, an Event Mode ends (fmi3UpdateDiscreteStates until the FMU needs no more, the
+    /// intervals of tunable and aperiodic clocks read again, fmi3EnterStepMode); nothing
+    /// outside Event Mode.
+    pub fn settle(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if self.clocks.is_none() {
+            return Ok(());
+        }
         if self.state().event_mode {
+            self.poll_output_clocks(t)?;
+            self.hold_outputs()?;
             let f = self.events().update_discrete_states;
             for _ in 0..1000 {
                 let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
@@ -362,14 +459,114 @@ impl Instance3 {
             check(unsafe { f(self.c) })?;
             let state = self.state();
             state.event_mode = false;
+            state.polled = false;
             state.active.iter_mut().for_each(|a| *a = false);
         }
-        if let Some((i, at)) = self.state().inside(t + h) {
-            let name = self.state().plan.inputs[i].name.clone();
+        Ok(())
+    }
+
+    /// Before an Event Mode ends: the clocked outputs whose clocks tick are read, so that what a
+    /// read gives until their next tick (a record, a connection) is the value of this tick.
+    fn hold_outputs(&mut self) -> Result<(), Fmi2Error> {
+        let plan = self.state().plan.clone();
+        let vrs: Vec<u32> = plan.reals.iter().copied().filter(|v| self.state().free(*v)).collect();
+        if !vrs.is_empty() {
+            let mut x = vec![0.0; vrs.len()];
+            self.get_float64(&vrs, &mut x)?;
+            self.state().held.extend(vrs.iter().copied().zip(x));
+        }
+        for (vr, buf) in &plan.typed_outputs {
+            if self.state().free(*vr) {
+                let mut out = buf.clone();
+                self.get_typed(&[*vr], &mut out)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The next tick of its time-based clocks (None: none planned, or no clocks).
+    pub fn next_tick(&self) -> Option<f64> {
+        let state = self.clocks.as_ref()?;
+        state.next.iter().flatten().copied().reduce(f64::min)
+    }
+
+    /// Whether its clock `vr` ticks now (an input clock set, an output clock the FMU ticks).
+    pub fn clock_active(&self, vr: u32) -> bool {
+        self.clocks
+            .as_ref()
+            .is_some_and(|s| s.event_mode && s.plan.inputs.iter().zip(&s.active).any(|(c, a)| c.vr == vr && *a))
+    }
+
+    /// At `t`: the clocks due tick (Event Mode entered for them): a countdown of interval 0, or
+    /// a tick the system stepped to without this instance's step ending there.
+    pub fn tick_now(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if self.clocks.is_none() || self.state().due(t).is_empty() {
+            return Ok(());
+        }
+        self.enter_event(t)?;
+        self.tick(t)
+    }
+
+    /// The input clock `vr` ticks at `t`, because the clock connected to it ticks (Event Mode
+    /// entered for it where the instance is in Step Mode); then its output clocks read.
+    pub fn trigger(&mut self, vr: u32, t: f64) -> Result<(), Fmi2Error> {
+        let Some(i) = self
+            .clocks
+            .as_ref()
+            .and_then(|s| s.plan.inputs.iter().position(|c| c.vr == vr))
+        else {
             return Err(Fmi2Error::Importer(format!(
-                "clock '{name}' ticks at t = {at}, inside the communication step from {t} to {}: the runner ticks clocks at communication points; choose a step that divides the clock's interval and shift",
-                t + h
+                "value reference {vr} is no clock of the FMU"
             )));
+        };
+        self.enter_event(t)?;
+        let f = self.events().set_clock;
+        // SAFETY: a live instance in Event Mode; one value reference, one value.
+        check(unsafe { f(self.c, &vr, 1, &true) }).map_err(|e| {
+            let name = &self.clocks.as_ref().expect("clocks").plan.inputs[i].name;
+            Fmi2Error::Importer(format!("fmi3SetClock({name}) at t = {t}: {e}"))
+        })?;
+        self.state().active[i] = true;
+        Ok(())
+    }
+
+    /// fmi3EnterEventMode at `t` unless in Event Mode.
+    fn enter_event(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if !self.state().event_mode {
+            let f = self.events().enter_event_mode;
+            // SAFETY: a live instance in Step Mode.
+            check(unsafe { f(self.c) })
+                .map_err(|e| Fmi2Error::Importer(format!("fmi3EnterEventMode at t = {t}: {e}")))?;
+            self.state().event_mode = true;
+        }
+        Ok(())
+    }
+
+    /// In Event Mode, once its input clocks are all set (the system asks it after the clock
+    /// connections into it ticked): fmi3GetClock of its output clocks, once an Event Mode; those
+    /// that tick are active until the Event Mode ends (FMI 3.0.2, fmi3GetClock: an output
+    /// clock's tick is reported once). Asking earlier would evaluate the tick before a triggered
+    /// input clock is set, which the FMU may refuse.
+    pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if self.clocks.as_ref().is_none_or(|s| !s.event_mode || s.polled) {
+            return Ok(());
+        }
+        self.state().polled = true;
+        self.output_clocks(t)
+    }
+
+    fn output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        let plan = self.state().plan.clone();
+        for (i, c) in plan.inputs.iter().enumerate() {
+            if c.interval != Interval::Output || self.state().active[i] {
+                continue;
+            }
+            let mut on = false;
+            let f = self.events().get_clock;
+            // SAFETY: a live instance in Event Mode; one value reference, one value.
+            check(unsafe { f(self.c, &c.vr, 1, &mut on) })
+                .map_err(|e| Fmi2Error::Importer(format!("fmi3GetClock({}) at t = {t}: {e}", c.name)))?;
+            self.state().active[i] = on;
         }
         Ok(())
     }
@@ -380,11 +577,7 @@ impl Instance3 {
     #[inline(never)]
     pub(super) fn begin_event_mode(&mut self, t: f64, event: bool) -> Result<(), Fmi2Error> {
         if event || !self.state().due(t).is_empty() {
-            let f = self.events().enter_event_mode;
-            // SAFETY: a live instance in Step Mode.
-            check(unsafe { f(self.c) })
-                .map_err(|e| Fmi2Error::Importer(format!("fmi3EnterEventMode at t = {t}: {e}")))?;
-            self.state().event_mode = true;
+            self.enter_event(t)?;
             self.tick(t)?;
         }
         Ok(())

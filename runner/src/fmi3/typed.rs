@@ -8,8 +8,56 @@ use std::ffi::CStr;
 
 impl Instance3 {
     /// The values of `vrs` (variables of `out`'s type; arrays whole) into `out`, as long as all
-    /// their elements together.
+    /// their elements together. A clocked variable is read while one of its clocks ticks; between
+    /// the ticks it gives the value of its last tick (see `clocks.rs`).
     pub fn get_typed(&mut self, vrs: &[u32], out: &mut Values) -> Result<(), Fmi2Error> {
+        match self.clocked_call(vrs)? {
+            None => self.get_typed_raw(vrs, out),
+            Some(true) => {
+                self.get_typed_raw(vrs, out)?;
+                let held = self.clocks.as_mut().expect("clocks");
+                held.held_typed.insert(vrs[0], out.clone());
+                Ok(())
+            }
+            Some(false) => {
+                let held = self.clocks.as_ref().expect("clocks");
+                if let Some(v) = held.held_typed.get(&vrs[0])
+                    && std::mem::discriminant(v) == std::mem::discriminant(out)
+                {
+                    out.clone_from(v);
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Sets `vrs` (variables of `values`' type; arrays whole) to `values`; a clocked variable
+    /// only while one of its clocks ticks (the master sets it again at the next tick).
+    pub fn set_typed(&mut self, vrs: &[u32], values: &Values) -> Result<(), Fmi2Error> {
+        match self.clocked_call(vrs)? {
+            None | Some(true) => self.set_typed_raw(vrs, values),
+            Some(false) => Ok(()),
+        }
+    }
+
+    /// None: no clocked variable among `vrs`; Some(whether its clocks tick) for one clocked
+    /// variable (a typed call of the runner names one variable at a time).
+    fn clocked_call(&self, vrs: &[u32]) -> Result<Option<bool>, Fmi2Error> {
+        let Some(state) = self.clocks.as_ref() else {
+            return Ok(None);
+        };
+        if !vrs.iter().any(|v| state.plan.clocked.contains_key(v)) {
+            return Ok(None);
+        }
+        if vrs.len() != 1 {
+            return Err(Fmi2Error::Importer(format!(
+                "value references {vrs:?}: a clocked variable is got and set alone"
+            )));
+        }
+        Ok(Some(state.free(vrs[0])))
+    }
+
+    fn get_typed_raw(&mut self, vrs: &[u32], out: &mut Values) -> Result<(), Fmi2Error> {
         let api = &self.library.api;
         let c = self.c;
         macro_rules! get {
@@ -87,8 +135,7 @@ impl Instance3 {
         }
     }
 
-    /// Sets `vrs` (variables of `values`' type; arrays whole) to `values`.
-    pub fn set_typed(&mut self, vrs: &[u32], values: &Values) -> Result<(), Fmi2Error> {
+    fn set_typed_raw(&mut self, vrs: &[u32], values: &Values) -> Result<(), Fmi2Error> {
         let api = &self.library.api;
         let c = self.c;
         macro_rules! set {

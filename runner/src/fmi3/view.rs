@@ -17,8 +17,8 @@ pub struct Fmi3Parts {
     /// (name, what) of the variables the runner does not read or set: clocks, and the clocked
     /// variables it does not connect (see `fmi3/clocks.rs`).
     pub skipped: Vec<(String, String)>,
-    /// The time-based input clocks the runner ticks and their clocked Float64 variables (which
-    /// are in `description` as Real ones); None: no event mode.
+    /// The clocks and their clocked variables (the Float64 scalars are in `description` as Real
+    /// ones, the others in `typed`); None: no event mode.
     pub clocks: Option<super::ClockPlan>,
     /// The inputs of every type some output depends on directly (ModelStructure `<Output
     /// dependencies>`; an output without the attribute depends on every input).
@@ -82,18 +82,21 @@ fn shape(d: &d3::ModelDescription, v: &d3::Variable) -> Result<Vec<usize>, Strin
 }
 
 /// `v` into `typed`, or (a clock, a clocked variable, an array of unknown size) `skipped`.
-fn sort(d: &d3::ModelDescription, v: &d3::Variable, typed: &mut Vec<Var3>, skipped: &mut Vec<(String, String)>) {
-    if v.ty == d3::Type::Clock || !v.clocks.is_empty() {
+fn sort(
+    d: &d3::ModelDescription,
+    v: &d3::Variable,
+    admitted: bool,
+    typed: &mut Vec<Var3>,
+    skipped: &mut Vec<(String, String)>,
+) {
+    if v.ty == d3::Type::Clock || (!v.clocks.is_empty() && !admitted) {
         let what = if v.ty == d3::Type::Clock {
             match v.clock.as_ref() {
                 Some(c) => format!("Clock ({}, interval {})", v.causality.name(), c.interval_variability),
                 None => "Clock".to_owned(),
             }
         } else {
-            format!(
-                "{} clocked variable (the runner sets and reads the clocked Float64 scalars of time-based input clocks only)",
-                v.ty
-            )
+            format!("{} clocked variable (a clock of it is none of the FMU's)", v.ty)
         };
         skipped.push((v.name.clone(), what));
         return;
@@ -128,12 +131,14 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
     let mut typed = Vec::new();
     let mut clocks = super::clocks::plan(d);
     for v in &d.variables {
-        // A clocked Float64 the runner ticks: read and set as a Real, between ticks held.
+        // A clocked variable: set and read while its clocks tick, between ticks held; a Float64
+        // scalar as a Real, the others through the typed calls.
         let admitted = !v.clocks.is_empty() && clocks.as_mut().is_some_and(|p| super::clocks::admit(p, v));
-        if v.causality != Causality::Independent && !admitted {
-            sort(d, v, &mut typed, &mut skipped);
+        let real = admitted && super::clocks::is_real(v);
+        if v.causality != Causality::Independent && !real {
+            sort(d, v, admitted, &mut typed, &mut skipped);
         }
-        if v.ty == d3::Type::Clock || (!v.clocks.is_empty() && !admitted) {
+        if v.ty == d3::Type::Clock || (!v.clocks.is_empty() && !real) {
             continue;
         }
         let ty = match v.ty {
@@ -144,7 +149,7 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
             d3::Type::String => Some(d2::Type::String),
             _ => None,
         };
-        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && (v.clocks.is_empty() || admitted)) else {
+        let Some(ty) = ty.filter(|_| v.dimensions.is_empty() && !v.array && (v.clocks.is_empty() || real)) else {
             continue;
         };
         if ty == d2::Type::Enumeration {

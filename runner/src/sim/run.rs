@@ -149,11 +149,17 @@ impl Simulation {
         if let Err(error) = self.initialize_with(n as f64 * opts.step, &values) {
             return Err(Failure { error, partial: result });
         }
+        let ticks = self.steps_to_ticks();
+        if let Some(why) = self.why_not_ticks() {
+            return Err(Failure {
+                error: Error::usage(why),
+                partial: result,
+            });
+        }
         let mut row = vec![0.0; m];
         for k in 0..=n {
             let t = k as f64 * opts.step;
-            let r = self
-                .propagate(t)
+            let r = (if ticks { self.event_point(t) } else { self.propagate(t) })
                 .and_then(|_| self.read_record(&mut groups, &mut row, t));
             if let Err(error) = r {
                 self.note(&error);
@@ -169,7 +175,20 @@ impl Simulation {
             if k == n {
                 break;
             }
-            if let Err(error) = self.do_step(t, opts.step) {
+            let (from, h) = if ticks {
+                let end = (k + 1) as f64 * opts.step;
+                match self.step_to_ticks(t, end, &mut groups, &mut row, &mut result, &stops) {
+                    Ok(Some(from)) => (from, end - from),
+                    Ok(None) => break,
+                    Err(error) => {
+                        self.note(&error);
+                        return Err(Failure { error, partial: result });
+                    }
+                }
+            } else {
+                (t, opts.step)
+            };
+            if let Err(error) = self.do_step(from, h) {
                 self.note(&error);
                 return Err(Failure { error, partial: result });
             }
@@ -180,6 +199,51 @@ impl Simulation {
             return Err(Failure { error, partial: result });
         }
         Ok(result)
+    }
+
+    /// From the communication point `t` towards `end` (`sim/clocks.rs`): every Event Mode ended,
+    /// then a step to each tick before `end`, where the clocks and connections tick, the values
+    /// are propagated and a row is recorded. Returns where the last step to `end` begins (None:
+    /// a stop condition ended the run).
+    fn step_to_ticks(
+        &mut self,
+        mut t: f64,
+        end: f64,
+        groups: &mut [RecordGroup],
+        row: &mut [f64],
+        result: &mut RunResult,
+        stops: &[(usize, f64)],
+    ) -> Result<Option<f64>, Error> {
+        let close = |x: f64| 1e-9 * x.abs().max(1.0);
+        let mut same = 0;
+        while same < 1000 {
+            let at = match self.settle_clocks(t)? {
+                Some(e) if e <= t + close(t) => {
+                    self.tick_clocks_now(t)?;
+                    same += 1;
+                    t
+                }
+                Some(e) if e < end - close(end) => {
+                    self.do_step(t, e - t)?;
+                    result.fmu_steps += 1;
+                    same = 0;
+                    e
+                }
+                _ => return Ok(Some(t)),
+            };
+            t = at;
+            self.event_point(t)?;
+            self.read_record(groups, row, t)?;
+            result.time.push(t);
+            result.values.extend_from_slice(row);
+            if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
+                result.stopped = true;
+                return Ok(None);
+            }
+        }
+        Err(Error::usage(format!(
+            "clocks ticked 1000 times at t = {t} s without time advancing (a countdown clock of interval 0 set again at every tick)"
+        )))
     }
 
     /// Why this system cannot take error-controlled steps (None: it can).

@@ -1,0 +1,213 @@
+//! Clocks across components: clock connections, and steps that end at the clocks' ticks.
+//!
+//! A clock connection (SSP 2.0: a connection of two `ssc:Clock` connectors) ticks the
+//! receiver's triggered input clock whenever the sender's clock ticks: an output clock the
+//! sender reports (fmi3GetClock in its Event Mode, after fmi3DoStep said eventHandlingNeeded), a
+//! time-based input clock the runner ticks (FMI-LS-BUS 1.0.0, Time-based Tx Clocks: "it is
+//! allowed to connect both, since a time-based Clock of an FMU is considered only to be a
+//! request to the importer to provide a corresponding Clock source"), or a triggered clock a
+//! connection ticked (chains). Every clock is ticked before any value is exchanged, and the
+//! clocked values then travel in the connections' order (Gauss-Seidel): a sender's Tx_Data is
+//! read before the receiver's Rx_Data is set ("an importer has to activate the Rx_Clock
+//! respecting the Tx_Data and Rx_Data dependency").
+//!
+//! A system with a clock connection or a clock whose ticks no fixed step can meet (countdown,
+//! changing, triggered, output) steps *to the ticks*: before each step every instance ends its
+//! Event Mode (so the countdown intervals are known) and the step ends at the earliest tick if
+//! it comes before the next communication point of the grid (FMI-LS-BUS 1.0.0: "the importer can
+//! adapt the next communicationStepSize for all networked FMUs accordingly"); that time is a
+//! communication point of its own, with a recorded row. Periodic clocks alone keep today's
+//! rule (their ticks on the grid).
+
+use super::*;
+
+/// A clock connection: (component, clock value reference) at both ends, and how it is written.
+#[derive(Debug, Clone)]
+pub(super) struct ClockLink {
+    pub from: (usize, u32),
+    pub to: (usize, u32),
+    pub text: String,
+}
+
+impl Simulation {
+    /// The clock connections `conns` resolved and checked: both ends clocks of FMI 3.0
+    /// co-simulation components, the receiver a triggered input clock.
+    pub(super) fn build_clock_links(&mut self, conns: &[Connection]) -> Result<(), Error> {
+        for k in conns {
+            let text = format!("{}.{} -> {}.{}", k.start.0, k.start.1, k.end.0, k.end.1);
+            let from = self.clock_end(&k.start, &text)?;
+            let to = self.clock_end(&k.end, &text)?;
+            let decl = self.clock_decl(to.0, to.1).expect("resolved");
+            if decl.interval != crate::fmi3::Interval::Triggered {
+                return Err(Error::variable(
+                    &k.end.0,
+                    &k.end.1,
+                    format!(
+                        "clock connection {text}: '{}.{}' is {}: a clock connection ticks a triggered input clock (intervalVariability=\"triggered\"); a time-based one ticks by its own intervals",
+                        k.end.0,
+                        k.end.1,
+                        match decl.interval {
+                            crate::fmi3::Interval::Output => "an output clock".to_owned(),
+                            _ => "a time-based input clock".to_owned(),
+                        }
+                    ),
+                ));
+            }
+            self.clock_links.push(ClockLink { from, to, text });
+        }
+        // The links out of a component after those into it (its output clocks are read once its
+        // input clocks are set): the components in a topological order of the links (a cycle
+        // keeps the system's order).
+        let n = self.slaves.len();
+        let mut rank = vec![usize::MAX; n];
+        let mut next = 0;
+        while next < n {
+            let ready = (0..n).find(|&c| {
+                rank[c] == usize::MAX
+                    && !self
+                        .clock_links
+                        .iter()
+                        .any(|k| k.to.0 == c && k.from.0 != c && rank[k.from.0] == usize::MAX)
+            });
+            let c = ready.unwrap_or_else(|| (0..n).find(|&c| rank[c] == usize::MAX).expect("one left"));
+            rank[c] = next;
+            next += 1;
+        }
+        self.clock_links.sort_by_key(|k| rank[k.from.0]);
+        Ok(())
+    }
+
+    fn clock_decl(&self, slave: usize, vr: u32) -> Option<&crate::fmi3::ClockDecl> {
+        match &self.fmus[self.slaves[slave].fmu].import {
+            crate::fmu::Import::V3(i) => i.clock_plan()?.inputs.iter().find(|c| c.vr == vr),
+            _ => None,
+        }
+    }
+
+    /// (component, clock) of the connector `end`, which must be a clock of an FMI 3.0
+    /// co-simulation component.
+    fn clock_end(&self, end: &(String, String), text: &str) -> Result<(usize, u32), Error> {
+        let slave = self.slave_index(&end.0)?;
+        let s = &self.slaves[slave];
+        let plan = match &self.fmus[s.fmu].import {
+            crate::fmu::Import::V3(i) if !s.me => i.clock_plan(),
+            _ => None,
+        };
+        let clock = plan.and_then(|p| p.clock(&end.1).map(|i| p.inputs[i].vr));
+        clock.map(|vr| (slave, vr)).ok_or_else(|| {
+            Error::variable(
+                &end.0,
+                &end.1,
+                format!(
+                    "clock connection {text}: '{}.{}' is no clock of an FMI 3.0 co-simulation component",
+                    end.0, end.1
+                ),
+            )
+        })
+    }
+
+    /// Whether the system steps to its clocks' ticks (see the module).
+    pub(super) fn steps_to_ticks(&self) -> bool {
+        !self.clock_links.is_empty()
+            || self.slaves.iter().any(|s| {
+                !s.me
+                    && matches!(&self.fmus[s.fmu].import,
+                        crate::fmu::Import::V3(i) if i.clock_plan().is_some_and(|p| p.has_events()))
+            })
+    }
+
+    /// Why a system that steps to its ticks cannot run as asked (None: it can).
+    pub(super) fn why_not_ticks(&self) -> Option<String> {
+        if self.isolation.is_some() && self.steps_to_ticks() {
+            return Some(
+                "clock connections and countdown, changing, triggered or output clocks are not run with --isolate (the runner steps to their ticks in its own process): run without it".into(),
+            );
+        }
+        None
+    }
+
+    /// At `t`, after every instance reached it: each clock connection whose sender ticks ticks
+    /// its receiver, until none is left (a chain of connections).
+    pub(super) fn link_clocks(&mut self, t: f64) -> Result<(), Error> {
+        for _ in 0..=self.clock_links.len() {
+            let mut changed = false;
+            for k in 0..self.clock_links.len() {
+                let ClockLink { from, to, .. } = self.clock_links[k];
+                let s = &mut self.slaves[from.0];
+                s.instance
+                    .as_mut()
+                    .expect("instantiated")
+                    .poll_output_clocks(t)
+                    .map_err(|e| {
+                        Error::fmi(
+                            &s.name,
+                            "fmi3GetClock",
+                            &e,
+                            Some(t),
+                            &format!("clock connection {}", self.clock_links[k].text),
+                        )
+                    })?;
+                if self.instance(from.0).clock_active(from.1) && !self.instance(to.0).clock_active(to.1) {
+                    let s = &mut self.slaves[to.0];
+                    s.instance
+                        .as_mut()
+                        .expect("instantiated")
+                        .trigger(to.1, t)
+                        .map_err(|e| {
+                            Error::fmi(
+                                &s.name,
+                                "fmi3SetClock",
+                                &e,
+                                Some(t),
+                                &format!("clock connection {}", self.clock_links[k].text),
+                            )
+                        })?;
+                    changed = true;
+                }
+            }
+            if !changed {
+                return Ok(());
+            }
+        }
+        Ok(())
+    }
+
+    /// A communication point `t` of a system that steps to its ticks: the clock connections
+    /// tick, the values are propagated (the clocked ones of the clocks ticking), every Event Mode
+    /// ends (fmi3UpdateDiscreteStates: what the components received is taken in), and the
+    /// values are propagated again, so that what is recorded and what the next step starts
+    /// from are the values after the event, as an importer's event iteration leaves them.
+    pub(super) fn event_point(&mut self, t: f64) -> Result<(), Error> {
+        self.link_clocks(t)?;
+        self.propagate(t)?;
+        self.settle_clocks(t)?;
+        self.propagate(t)
+    }
+
+    /// Before a step from `t`: every Event Mode ends (so the intervals of countdown clocks are
+    /// known); then the earliest tick of any instance (None: none planned).
+    pub(super) fn settle_clocks(&mut self, t: f64) -> Result<Option<f64>, Error> {
+        let mut next: Option<f64> = None;
+        for s in &mut self.slaves {
+            let inst = s.instance.as_mut().expect("instantiated");
+            inst.settle(t)
+                .map_err(|e| Error::fmi(&s.name, "fmi3UpdateDiscreteStates", &e, Some(t), "ending Event Mode"))?;
+            if let Some(n) = inst.next_tick() {
+                next = Some(next.map_or(n, |m: f64| m.min(n)));
+            }
+        }
+        Ok(next)
+    }
+
+    /// At `t` without a step ending there (a countdown of interval 0): the clocks due tick.
+    pub(super) fn tick_clocks_now(&mut self, t: f64) -> Result<(), Error> {
+        for s in &mut self.slaves {
+            s.instance
+                .as_mut()
+                .expect("instantiated")
+                .tick_now(t)
+                .map_err(|e| Error::fmi(&s.name, "fmi3SetClock", &e, Some(t), "clocks due"))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,278 @@
+"""An FMI-LS-BUS CAN network in the runner, against the same network run by fmpy with a scheduler
+written here: two CanSignal nodes (holonomic/fmus/can_signal) on ports 1 and 2 of the CanBus bus
+simulation (holonomic/fmus/can_bus), each node's signal u from a VanDerPol oscillator, in an SSP
+2.0 file whose clock connections join each node's Tx_Clock to its port's Rx_Clock and the port's
+Tx_Clock to the node's Rx_Clock (FMI-LS-BUS 1.0.0, Time-based Tx Clocks: the node's countdown
+Tx_Clock and the bus's triggered Rx_Clock are connected, the bus's countdown Tx_Clock and the
+node's triggered Rx_Clock).
+
+The scheduler (`schedule`) is the importer the layered standard describes ("the importer can
+adapt the next communicationStepSize for all networked FMUs accordingly"), over the same fixed
+grid as the runner: every FMU steps to the earliest announced Tx tick (each countdown's interval
+read after each event) or the next grid point; at a tick a node's Tx_Data is handed to its port's
+Rx_Data and the port's Tx_Data to its node's Rx_Data; what each FMU gives after the event is
+recorded. Every byte it hands on is kept, and each delivered CAN Transmit is decoded with `struct`
+from the standard's table (test_ls_bus_can's helpers), so that the frames the runner carried are
+checked against the scheduler's bytes: timestamps, payloads, Confirms."""
+
+import struct
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3IntervalQualifier, fmi3ValueReference
+
+from conftest import fmu3
+from test_ls_bus_can import Bus, Node, operations, transmitted
+from test_runner_fmi3_types import runner
+from test_ssp2 import valid, write_ssp2
+
+PERIOD = 0.01
+STEP = 0.01
+NODES = {"sensor": dict(tx_id=0x123, rx_id=0x200, port=1, source="x0"),
+         "actuator": dict(tx_id=0x200, rx_id=0x123, port=2, source="x1")}
+RECORD = [f"{n}.{v}" for n in NODES for v in ("y", "frames_sent", "frames_received", "confirmed", "arbitration_lost",
+                                              "bus_errors")] + \
+         [f"bus.{v}" for v in ("bus_load", "frames_delivered", "bus_errors", "arbitration_losses")] + ["vdp.x0", "vdp.x1"]
+
+
+def network_ssp(tmp_path, error_every):
+    """The SSP 2.0 file of the network (VanDerPol first: the nodes' u are set before their Tx_Data
+    is read, which CanSignal's ModelStructure does not order)."""
+    comps = [("vdp", fmu3("VanDerPol"))] + [(n, fmu3("CanSignal")) for n in NODES] + [("bus", fmu3("CanBus"))]
+    connectors = {"vdp": [("x0", "output", "Float64", ()), ("x1", "output", "Float64", ())], "bus": []}
+    connections, parameters = [], {"bus": [("error_every", "Int32", error_every, ())]}
+    for n, d in NODES.items():
+        p = d["port"]
+        connectors[n] = [("u", "input", "Float64", ()), ("CAN.Tx_Clock", "input", "Clock", ()),
+                         ("CAN.Tx_Data", "output", "Binary", ()), ("CAN.Rx_Clock", "input", "Clock", ()),
+                         ("CAN.Rx_Data", "input", "Binary", ())]
+        connectors["bus"] += [(f"Node{p}.Rx_Clock", "input", "Clock", ()), (f"Node{p}.Rx_Data", "input", "Binary", ()),
+                              (f"Node{p}.Tx_Clock", "input", "Clock", ()), (f"Node{p}.Tx_Data", "output", "Binary", ())]
+        connections += [("vdp", d["source"], n, "u"),
+                        (n, "CAN.Tx_Clock", "bus", f"Node{p}.Rx_Clock"), (n, "CAN.Tx_Data", "bus", f"Node{p}.Rx_Data"),
+                        ("bus", f"Node{p}.Tx_Clock", n, "CAN.Rx_Clock"), ("bus", f"Node{p}.Tx_Data", n, "CAN.Rx_Data")]
+        parameters[n] = [("tx_id", "Int32", d["tx_id"], ()), ("rx_id", "Int32", d["rx_id"], ()),
+                         ("period", "Float64", PERIOD, ()), ("BusNotifications", "Boolean", "true", ())]
+    path, ssd = write_ssp2(tmp_path / "CanNetwork.ssp", comps, connectors, connections, parameters)
+    valid(ssd)
+    return path
+
+
+def tx_interval(node):
+    """The node's countdown Tx_Clock: (interval, qualifier) read after an event."""
+    vrs = (fmi3ValueReference * 1)(node.vr["CAN.Tx_Clock"])
+    intervals, qualifiers = (fmi3Float64 * 1)(), (fmi3IntervalQualifier * 1)()
+    node.f.getIntervalDecimal(vrs, intervals, qualifiers)
+    return intervals[0], qualifiers[0]
+
+
+def schedule(stop, error_every):
+    """The network in fmpy (see the module): the recorded rows and the bytes delivered,
+    [(time, port, bytes)]."""
+    md = fmpy.read_model_description(fmu3("VanDerPol"))
+    vdp = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(fmu3("VanDerPol")),
+                    modelIdentifier=md.coSimulation.modelIdentifier, instanceName="vdp")
+    vdp_vr = {v.name: v.valueReference for v in md.modelVariables}
+    vdp.instantiate()
+    vdp.enterInitializationMode(startTime=0.0, stopTime=stop)
+    vdp.exitInitializationMode()
+    path = fmu3("CanSignal")
+    smd = fmpy.read_model_description(path)
+    sig = (path, smd, {v.name: v.valueReference for v in smd.modelVariables})
+    bpath = fmu3("CanBus")
+    bmd = fmpy.read_model_description(bpath)
+    nodes = {n: Node(sig, n, tx_id=d["tx_id"], rx_id=d["rx_id"], period=PERIOD, BusNotifications=True)
+             for n, d in NODES.items()}
+    bus = Bus((bpath, bmd, {v.name: v.valueReference for v in bmd.modelVariables}), error_every=error_every)
+    close = lambda x: 1e-9 * max(abs(x), 1.0)  # noqa: E731
+    # Time 0: the Event Mode exitInitializationMode leaves each node in ends; the countdowns read.
+    next_tx = {}
+    for n, node in nodes.items():
+        node.settle()
+        h, q = tx_interval(node)
+        next_tx[n] = 0.0 + h if q == 2 else None
+    bus.settle()
+    rows, delivered = [], []
+
+    def record(t):
+        x = dict(zip(["vdp.x0", "vdp.x1"], vdp.getFloat64([vdp_vr["x0"], vdp_vr["x1"]])))
+        for n, node in nodes.items():
+            for v in ("y", "frames_sent", "frames_received", "confirmed", "arbitration_lost", "bus_errors"):
+                x[f"{n}.{v}"] = node.get(v)
+        x["bus.bus_load"] = bus.get("bus_load")
+        for v in ("frames_delivered", "bus_errors", "arbitration_losses"):
+            x[f"bus.{v}"] = bus.get(v)
+        rows.append((t, x))
+
+    def event(t):
+        u = dict(zip(["x0", "x1"], vdp.getFloat64([vdp_vr["x0"], vdp_vr["x1"]])))
+        for n, node in nodes.items():
+            node.f.setFloat64([node.vr["u"]], [u[NODES[n]["source"]]])
+            if next_tx[n] is not None and abs(next_tx[n] - t) <= close(t):
+                # The Tx tick: Tx_Data to the port's Rx_Data (the connected Rx_Clock ticks with it).
+                tx = node.send(u[NODES[n]["source"]])
+                bus.receive(NODES[n]["port"], tx)
+                h, q = tx_interval(node)
+                next_tx[n] = t + h if q == 2 else None
+        if bus.next is not None and abs(bus.next - t) <= close(t):
+            out = bus.deliver([1, 2, 3, 4])
+            for n, node in nodes.items():
+                data = out[NODES[n]["port"]]
+                node.receive(data)  # the node's Rx_Clock ticks with its port's Tx_Clock, data or none
+                delivered.append((t, NODES[n]["port"], data))
+        record(t)
+
+    n_points = round(stop / STEP)
+    event(0.0)
+    t = 0.0
+    for k in range(n_points):
+        end = (k + 1) * STEP
+        while True:
+            ticks = [x for x in list(next_tx.values()) + [bus.next] if x is not None]
+            e = min(ticks) if ticks else None
+            if e is None or not e < end - close(end):
+                break
+            vdp.doStep(t, e - t)
+            for x in list(nodes.values()) + [bus]:
+                x.step(t, e - t)
+            t = e
+            event(t)
+        vdp.doStep(t, end - t)
+        for x in list(nodes.values()) + [bus]:
+            x.step(t, end - t)
+        t = end
+        event(t)
+    for x in list(nodes.values()):
+        x.close()
+    vdp.terminate()
+    vdp.freeInstance()
+    return rows, delivered
+
+
+@pytest.mark.parametrize("error_every", [0, 3])
+def test_a_can_network_in_the_runner_equals_the_fmpy_scheduler_frame_by_frame(error_every, tmp_path):
+    stop = 0.1
+    got = runner(tmp_path, network_ssp(tmp_path, error_every), stop, STEP, *[a for r in RECORD for a in ("--record", r)])
+    rows, delivered = schedule(stop, error_every)
+    # The same communication points: the grid and every Tx tick of the nodes and the bus.
+    times = np.array([t for t, _ in rows])
+    assert len(got["time"]) == len(times), (list(got["time"]), list(times))
+    assert np.max(np.abs(np.asarray(got["time"]) - times)) == 0.0
+    # Every recorded value after every event, bit for bit.
+    for name in RECORD:
+        want = np.array([x[name] for _, x in rows], dtype=float)
+        assert np.array_equal(np.asarray(got[name]), want), (name, list(got[name]), list(want))
+    # Every frame: each CAN Transmit the bus delivered (bytes the scheduler handed on) is in the
+    # runner's receiving node at that time (y: the frame's 8 bytes as a double; the count);
+    # each Confirm counted by its sender.
+    frames = confirms = 0
+    index = {t: i for i, t in enumerate(times)}
+    for t, port, data in delivered:
+        node = next(n for n, d in NODES.items() if d["port"] == port)
+        row = index[t]
+        for code, args in operations(data):
+            if code == 0x10:
+                can_id, _, _, payload = transmitted(args)
+                if can_id == NODES[node]["rx_id"]:
+                    frames += 1
+                    assert got[f"{node}.y"][row] == struct.unpack("<d", payload)[0]
+            elif code == 0x20:
+                confirms += 1
+    assert frames == sum(got[f"{n}.frames_received"][-1] for n in NODES) and frames >= 18
+    assert confirms == sum(got[f"{n}.confirmed"][-1] for n in NODES)
+    if error_every:
+        assert got["bus.bus_errors"][-1] >= 3
+    print(f"error_every={error_every}: {len(times)} points, {frames} frames, {confirms} confirms compared")
+
+
+# --- An output clock into a triggered input clock: two of the project's Clocks ---------------
+
+CLOCKS_RECORD = ["a.inClock1Ticks", "a.totalInClockTicks", "a.inClock3Ticks", "b.inClock1Ticks", "b.inClock2Ticks",
+                 "b.totalInClockTicks", "b.result2"]
+
+
+def clocks_schedule(stop, h):
+    """Two Clocks instances in fmpy, a's outClock connected to b's inClock2: at each point of the
+    grid, an FMU whose time-based clock is due (inClock1 every second, the countdown inClock3
+    from the interval read after each event) enters Event Mode and gets it set; a's outClock is
+    read with fmi3GetClock after its clocks are set, and where it ticks b's inClock2 is set too
+    (b entering Event Mode for it); the clocked outputs are read while their clocks tick; then
+    each updates its discrete states, the countdown's interval is read, Step Mode."""
+    path = fmu3("Clocks")
+    md = fmpy.read_model_description(path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmus = {}
+    for name in ("a", "b"):
+        f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path), modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=name)
+        f.instantiate(eventModeUsed=True)
+        f.enterInitializationMode(startTime=0.0, stopTime=stop)
+        f.setInt32([vr["input2"]], [7])
+        f.exitInitializationMode()
+        fmus[name] = f
+    held = {k: 0 for k in CLOCKS_RECORD}
+    next3 = {"a": None, "b": None}
+    clocked = {"inClock1": ["inClock1Ticks", "totalInClockTicks"], "inClock2": ["inClock2Ticks", "result2"],
+               "inClock3": ["totalInClockTicks"]}
+    rows = []
+    in_event = {"a": True, "b": True}  # exitInitializationMode leaves each in Event Mode
+    for k in range(round(stop / h) + 1):
+        t = k * h
+        if k > 0:
+            for name, f in fmus.items():
+                f.enterStepMode() if in_event[name] else None
+                f.doStep((k - 1) * h, h)
+                in_event[name] = False
+        out = False
+        for name in ("a", "b"):
+            f = fmus[name]
+            due = []
+            if abs(t - round(t)) < 1e-9:
+                due.append("inClock1")
+            if next3[name] is not None and abs(next3[name] - t) < 1e-9:
+                due.append("inClock3")
+                next3[name] = None
+            if name == "b" and out:
+                due.append("inClock2")
+            if not due:
+                continue
+            if not in_event[name]:
+                f.enterEventMode()
+                in_event[name] = True
+            f.setClock([vr[c] for c in due], [True] * len(due))
+            if name == "a":
+                out = f.getClock([vr["outClock"]])[0]
+            for c in due:
+                for v in clocked[c]:
+                    held[f"{name}.{v}"] = f.getInt32([vr[v]])[0]
+        for name, f in fmus.items():
+            if in_event[name]:
+                while f.updateDiscreteStates()[0]:
+                    pass
+                intervals, qualifiers = (fmi3Float64 * 1)(), (fmi3IntervalQualifier * 1)()
+                f.getIntervalDecimal((fmi3ValueReference * 1)(vr["inClock3"]), intervals, qualifiers)
+                if qualifiers[0] == 2:
+                    next3[name] = t + intervals[0]
+                f.enterStepMode()
+                in_event[name] = False
+            held[f"{name}.inClock3Ticks"] = f.getInt32([vr["inClock3Ticks"]])[0]  # not clocked
+        rows.append((t, dict(held)))
+    return rows
+
+
+def test_an_output_clock_ticks_the_triggered_input_clock_connected_to_it_as_in_fmpy(tmp_path):
+    comps = [("a", fmu3("Clocks")), ("b", fmu3("Clocks"))]
+    connectors = {"a": [("outClock", "output", "Clock", ())], "b": [("inClock2", "input", "Clock", ())]}
+    parameters = {n: [("input2", "Int32", 7, ())] for n in ("a", "b")}
+    path, ssd = write_ssp2(tmp_path / "Clocks.ssp", comps, connectors, [("a", "outClock", "b", "inClock2")], parameters)
+    valid(ssd)
+    stop, h = 10.0, 0.5
+    got = runner(tmp_path, path, stop, h, *[a for r in CLOCKS_RECORD for a in ("--record", r)])
+    rows = clocks_schedule(stop, h)
+    assert list(got["time"]) == [t for t, _ in rows]
+    for name in CLOCKS_RECORD:
+        want = [x[name] for _, x in rows]
+        assert list(got[name]) == want, (name, list(got[name]), want)
+    # a's fifth input tick (t = 4) and tenth tick the clock connection passed on to b.
+    assert got["b.inClock2Ticks"][-1] >= 2 and got["b.result2"][-1] == 7
