@@ -227,6 +227,12 @@ impl Bus {
         &self.nodes[n]
     }
 
+    /// What node `n` has configured, to change (a bus simulation's own defaults, e.g. its baud
+    /// rate, before the nodes configure anything).
+    pub fn node_mut(&mut self, n: usize) -> &mut NodeConfig {
+        &mut self.nodes[n]
+    }
+
     fn send(&mut self, to: usize, op: &Operation<'_>) {
         if push_into(&mut self.outbox[to], self.capacity, op).is_err() {
             self.dropped += 1;
@@ -237,6 +243,14 @@ impl Bus {
     /// Configuration or Status changes the node, a Wake Up goes to every other node; the bus
     /// then starts the next frame if it is idle.
     pub fn receive(&mut self, from: usize, t: f64, ops: &[Operation<'_>]) {
+        self.enqueue(from, ops);
+        self.start(t);
+    }
+
+    /// As [`receive`](Self::receive), without starting a frame: for the operations of several
+    /// nodes at one instant, so that their frames meet in one arbitration
+    /// ([`arbitrate`](Self::arbitrate) after the last).
+    pub fn enqueue(&mut self, from: usize, ops: &[Operation<'_>]) {
         for op in ops {
             match op {
                 Operation::CanTransmit(CanFrame { id, .. })
@@ -277,6 +291,11 @@ impl Bus {
                 _ => {}
             }
         }
+    }
+
+    /// If the bus is idle at time `t` and frames wait: the arbitration, the winner on the bus
+    /// from `t`.
+    pub fn arbitrate(&mut self, t: f64) {
         self.start(t);
     }
 
@@ -477,6 +496,21 @@ mod tests {
         // The loser (buffered, the default) goes next, right after.
         let (bits2, _) = frame_bits(&transmit(0x200, &[1; 8])).unwrap();
         assert!((bus.next_event().unwrap() - (end + f64::from(bits2) / 500_000.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn frames_enqueued_at_one_instant_meet_in_one_arbitration_whoever_came_first() {
+        let mut bus = Bus::new(2, 256);
+        bus.enqueue(0, &[transmit(0x300, &[1])]);
+        bus.enqueue(1, &[transmit(0x010, &[2])]);
+        assert_eq!(bus.next_event(), None, "nothing on the bus before the arbitration");
+        bus.arbitrate(0.0);
+        let (bits, _) = frame_bits(&transmit(0x010, &[2])).unwrap();
+        assert_eq!(
+            bus.next_event(),
+            Some(f64::from(bits) / 500_000.0),
+            "the lower identifier first"
+        );
     }
 
     #[test]

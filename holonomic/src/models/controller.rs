@@ -347,6 +347,26 @@ impl ControlLaw {
         w(p.r) / (n * w(p.km)) * (w(limited) + n * n * w(p.b) * w(omega)) + n * w(p.kb) * w(omega)
     }
 
+    /// One sample of the law as a digital controller that samples every `h` (s): except at the
+    /// first sample, the memory first advances over `h` from `x` ([`advance`](Self::advance),
+    /// with the command of the memory before), then the command for `x` from the advanced
+    /// memory. The SampledController FMU ticks it with the measurement of its previous tick; the
+    /// networked pendulum's Controller ECU with the last measurement the bus brought.
+    pub fn tick(
+        &self,
+        memory: &mut ControllerState,
+        x: &Vector4<f64>,
+        reference: &Vector2<f64>,
+        h: f64,
+        first: bool,
+    ) -> Command {
+        if !first {
+            let before = self.command(memory, x, reference);
+            *memory = self.advance(memory, x, reference, &before, h);
+        }
+        self.command(memory, x, reference)
+    }
+
     /// The memory after a step of `h` [s] from a sample with measurement `x` and command `c`.
     pub fn advance(
         &self,

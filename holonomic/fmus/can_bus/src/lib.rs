@@ -7,9 +7,16 @@
 //! model sets to the end of the frame on the bus. Losers wait (or get Arbitration Lost if their
 //! node configured DISCARD_AND_NOTIFY); every `error_every`-th transmission is hit by a CRC error
 //! (Bus Error to every node, the frame sent again). The bus itself is [`Bus`], plain Rust.
+//!
+//! `baud_rate` is every node's baud rate until it configures its own (a CAN Configuration
+//! operation). `background_load` > 0 adds the rest of a vehicle's traffic: a frame of identifier
+//! `background_id` (8 data bytes) every T, T chosen so that these frames alone keep the bus busy
+//! that share of the time at `baud_rate`; they take part in the arbitration as any frame (with
+//! the default identifier 0 they win it against every other) and are delivered to every port, whose
+//! nodes take no frame of that identifier.
 
-use rustfmu::ls_bus::bus::Bus;
-use rustfmu::ls_bus::{Operation, decode_all};
+use rustfmu::ls_bus::bus::{Bus, frame_bits};
+use rustfmu::ls_bus::{CanFrame, Operation, decode_all};
 use rustfmu::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -17,6 +24,10 @@ use serde::{Deserialize, Serialize};
 pub const MAX_SIZE: u32 = 4096;
 /// Ports: network FMUs this bus connects.
 pub const PORTS: usize = 4;
+/// The bus's node that sends the background frames (after the ports).
+const BACKGROUND: usize = PORTS;
+/// The background frames' data.
+const BACKGROUND_DATA: [u8; 8] = [0x55; 8];
 
 /// A CAN bus simulation for four network FMUs (FMI-LS-BUS 1.0.0)
 #[derive(Model, Debug, Clone, Serialize, Deserialize)]
@@ -129,6 +140,15 @@ pub struct CanBus {
     /// Every error_every-th transmission is hit by a CRC error (0: none)
     #[variable(vr = 100, parameter, fixed, start = 0, min = 0)]
     pub error_every: i32,
+    /// Baud rate [bit/s] of every node that does not configure its own
+    #[variable(vr = 101, parameter, fixed, start = 500000, min = 1)]
+    pub baud_rate: i32,
+    /// Share of the bus's time taken by background frames of identifier background_id (0: none)
+    #[variable(vr = 102, parameter, fixed, start = 0.0, min = 0.0, max = 0.95)]
+    pub background_load: f64,
+    /// Identifier of the background frames (standard, 11 bits; 0 wins every arbitration)
+    #[variable(vr = 103, parameter, fixed, start = 0, min = 0, max = 0x7FF)]
+    pub background_id: i32,
     /// Share of the time the bus was busy, since the start
     #[variable(vr = 110, output, discrete, initial = exact, start = 0.0, depends = [])]
     pub bus_load: f64,
@@ -147,6 +167,9 @@ pub struct CanBus {
     sent: [bool; PORTS],
     /// The start time (for the bus load)
     start: f64,
+    /// When the next background frame is queued, and the time between two (0: none)
+    next_background: f64,
+    background_period: f64,
 }
 
 impl CanBus {
@@ -157,6 +180,15 @@ impl CanBus {
             2 => (&self.rx_clock3, &self.rx_data3),
             _ => (&self.rx_clock4, &self.rx_data4),
         }
+    }
+
+    fn background_frame(&self) -> Operation<'static> {
+        Operation::CanTransmit(CanFrame {
+            id: self.background_id as u32,
+            ide: false,
+            rtr: false,
+            data: &BACKGROUND_DATA,
+        })
     }
 
     fn tx(&mut self, k: usize) -> (&mut Clock, &mut Vec<u8>) {
@@ -171,10 +203,28 @@ impl CanBus {
 
 impl Model for CanBus {
     fn initialize(&mut self, ctx: &Context) -> Result<(), String> {
-        self.bus = Bus::new(PORTS, MAX_SIZE as usize);
+        self.bus = Bus::new(PORTS + 1, MAX_SIZE as usize);
         self.bus.error_every =
             u64::try_from(self.error_every).map_err(|_| format!("error_every = {} < 0", self.error_every))?;
+        let baud = u32::try_from(self.baud_rate).map_err(|_| format!("baud_rate = {} < 1", self.baud_rate))?;
+        for n in 0..=PORTS {
+            self.bus.node_mut(n).can_baudrate = baud;
+        }
         self.start = ctx.start_time();
+        self.background_period = if self.background_load > 0.0 {
+            let (bits, _) = frame_bits(&self.background_frame()).expect("a Transmit");
+            f64::from(bits) / f64::from(baud) / self.background_load
+        } else {
+            0.0
+        };
+        self.next_background = self.start + self.background_period;
+        if self.background_period > 0.0 {
+            // The first background frame: the bus's first communication point.
+            let first = self.background_period;
+            for k in 0..PORTS {
+                self.tx(k).0.set_interval(first);
+            }
+        }
         Ok(())
     }
 
@@ -188,6 +238,14 @@ impl Model for CanBus {
         }
         // Frames that ended by now are delivered (into the outboxes), then what the nodes sent.
         self.bus.advance(t);
+        if self.background_period > 0.0 {
+            while self.next_background <= t + 1e-12 * t.abs().max(1.0) {
+                self.bus.enqueue(BACKGROUND, &[self.background_frame()]);
+                self.next_background += self.background_period;
+            }
+        }
+        // What the bus delivers to the background node goes nowhere.
+        self.bus.clear_outbox(BACKGROUND);
         for k in 0..PORTS {
             let (clock, data) = self.rx(k);
             if !clock.is_active() {
@@ -195,7 +253,7 @@ impl Model for CanBus {
             }
             let data = data.to_vec();
             match decode_all(&data) {
-                Ok(ops) => self.bus.receive(k, t, &ops),
+                Ok(ops) => self.bus.enqueue(k, &ops),
                 Err(e) => {
                     event.context().log(
                         "logBus",
@@ -206,6 +264,8 @@ impl Model for CanBus {
                 }
             }
         }
+        // The frames of this instant meet in one arbitration (whichever port's came first).
+        self.bus.arbitrate(t);
         // The ports whose clock ticks now get their operations.
         for k in 0..PORTS {
             let outbox = self.bus.outbox(k).to_vec();
@@ -218,11 +278,14 @@ impl Model for CanBus {
         }
         // The next delivery: the end of the frame on the bus, or (replies waiting, the bus idle)
         // one bit time at the default 500 kbit/s from now.
-        let next = match (self.bus.next_event(), self.bus.has_mail()) {
+        let mut next = match (self.bus.next_event(), self.bus.has_mail()) {
             (Some(end), _) => Some(end),
             (None, true) => Some(t + 2e-6),
             (None, false) => None,
         };
+        if self.background_period > 0.0 {
+            next = Some(next.map_or(self.next_background, |at| at.min(self.next_background)));
+        }
         if let Some(at) = next {
             let dt = (at - t).max(1e-9);
             for k in 0..PORTS {

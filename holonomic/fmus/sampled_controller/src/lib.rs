@@ -139,11 +139,7 @@ impl Model for SampledController {
         let now = self.measurement();
         let held = if self.ticks == 0 { now } else { self.pending };
         let (x, reference) = split(&held);
-        if self.ticks > 0 {
-            let command = law.command(&self.memory, &x, &reference);
-            self.memory = law.advance(&self.memory, &x, &reference, &command, self.Ts);
-        }
-        let out = law.command(&self.memory, &x, &reference);
+        let out = law.tick(&mut self.memory, &x, &reference, self.Ts, self.ticks == 0);
         [self.M1, self.M2] = [out.m[0], out.m[1]];
         [self.U1, self.U2] = [out.u[0], out.u[1]];
         self.pending = now;
