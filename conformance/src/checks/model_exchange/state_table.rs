@@ -553,11 +553,13 @@ pub fn model_exchange_every_function_in_every_state_answers_as_the_standard_says
             fmu_type: fmi2ModelExchange,
             ..Args::valid(fmu)
         };
+        // Instantiating an interface the FMU does not declare is the importer's mistake, which
+        // FMI 2.0.5 leaves undefined: a warning, as in instantiate_refuses_model_exchange_and_unknown_types.
         let log = Instance::with(fmu, &args).err().unwrap_or_else(|| {
-            panic!(
-                "{}: no <ModelExchange>, but fmi2Instantiate(fmi2ModelExchange) gave an instance",
+            crate::outcome::warned(format!(
+                "{}: no <ModelExchange>, but fmi2Instantiate(fmi2ModelExchange) gave an instance: an importer's mistake not detected",
                 fmu.id
-            )
+            ))
         });
         assert!(
             log.iter().any(|e| e.status == fmi2Error),
