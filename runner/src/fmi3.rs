@@ -439,6 +439,30 @@ impl Fmi3Import {
     /// fmi3InstantiateCoSimulation(name, ...) with the runner's logger; eventModeUsed when the
     /// runner ticks the FMU's input clocks (`fmi3/clocks.rs`), earlyReturnAllowed false.
     pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
+        self.instantiate_with(name, visible, logging_on, self.clocks.is_some(), false)
+    }
+
+    /// fmi3InstantiateCoSimulation(name, ...) with eventModeUsed and earlyReturnAllowed: the
+    /// events it reports are handled in Event Mode, its early returns end the system's step.
+    pub fn instantiate_cs_events(&self, name: &str) -> Result<Instance3, String> {
+        if self.library.api.events.is_none() {
+            return Err(
+                "its binary lacks fmi3EnterEventMode, fmi3EnterStepMode, fmi3UpdateDiscreteStates, \
+                 fmi3SetClock, fmi3GetClock, fmi3GetIntervalDecimal or fmi3GetShiftDecimal"
+                    .into(),
+            );
+        }
+        self.instantiate_with(name, false, false, true, true)
+    }
+
+    fn instantiate_with(
+        &self,
+        name: &str,
+        visible: bool,
+        logging_on: bool,
+        event_mode: bool,
+        early_return: bool,
+    ) -> Result<Instance3, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(Env {
             instance: name_c.clone(),
@@ -457,8 +481,8 @@ impl Fmi3Import {
                 self.resource_path.as_ptr(),
                 visible,
                 logging_on,
-                self.clocks.is_some(),
-                false,
+                event_mode,
+                early_return,
                 std::ptr::null(),
                 0,
                 &*env as *const Env as *mut c_void,
@@ -469,7 +493,16 @@ impl Fmi3Import {
         if c.is_null() {
             return Err("fmi3InstantiateCoSimulation returned NULL".into());
         }
-        Ok(self.instance(c, env, self.clocks.clone()))
+        let clocks = match (&self.clocks, event_mode) {
+            (Some(p), _) => Some(p.clone()),
+            (None, true) => Some(Arc::new(ClockPlan::default())),
+            (None, false) => None,
+        };
+        let mut inst = self.instance(c, env, clocks);
+        if let Some(state) = inst.clocks.as_mut() {
+            state.early_allowed = early_return;
+        }
+        Ok(inst)
     }
 }
 
@@ -717,9 +750,18 @@ impl Instance3 {
             )));
         }
         if early {
-            return Err(Fmi2Error::Importer(format!(
-                "fmi3DoStep({t}, {h}) returned early at {last} (not allowed: earlyReturnAllowed = false)"
-            )));
+            if !self.clocks.as_ref().is_some_and(|c| c.early_allowed) {
+                return Err(Fmi2Error::Importer(format!(
+                    "fmi3DoStep({t}, {h}) returned early at {last} (not allowed: earlyReturnAllowed = false)"
+                )));
+            }
+            if !(last >= t && last <= t + h) {
+                return Err(Fmi2Error::Importer(format!(
+                    "fmi3DoStep({t}, {h}) returned early at lastSuccessfulTime = {last}, outside the step"
+                )));
+            }
+            self.state_mut().early_at = Some(last);
+            return self.begin_event_mode(last, event);
         }
         if self.clocks.is_some() {
             self.begin_event_mode(t + h, event)?;

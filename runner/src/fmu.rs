@@ -29,6 +29,7 @@ struct Extra {
     feedthrough: Vec<u32>,
     /// The number of continuous states (None: the FMI 2.0 view's derivatives).
     states: Option<usize>,
+    has_event_mode: bool,
 }
 
 pub struct Fmu {
@@ -48,6 +49,8 @@ pub struct Fmu {
     /// Value references of the inputs some output depends on directly (ModelStructure/Outputs
     /// `dependencies`; an output without the attribute depends on every input, as in fmpy).
     pub feedthrough: Vec<u32>,
+    /// FMI 3.0 `<CoSimulation hasEventMode>` (false for FMI 2.0).
+    pub has_event_mode: bool,
 }
 
 impl Fmu {
@@ -115,6 +118,7 @@ impl Fmu {
                 typed: parts.typed,
                 feedthrough: parts.feedthrough,
                 states: Some(parts.states),
+                has_event_mode: parts.has_event_mode,
             };
             (parts.description, Some(parts.int64), extra)
         } else if version.starts_with("2.") {
@@ -185,6 +189,7 @@ impl Fmu {
             skipped: extra.skipped,
             typed: extra.typed,
             feedthrough,
+            has_event_mode: extra.has_event_mode,
         })
     }
 
@@ -265,6 +270,42 @@ impl Fmu {
                 ),
             )
         })
+    }
+
+    /// A co-simulation instance with eventModeUsed and earlyReturnAllowed (FMI 3.0, hasEventMode):
+    /// the events it reports are handled in Event Mode and its early returns end every
+    /// component's step there (`sim/clocks.rs`).
+    pub fn instantiate_events(&self, component: &str) -> Result<InstanceCS, Error> {
+        let fail = |why: String| {
+            Error::unsupported(
+                Some(component),
+                None,
+                format!(
+                    "component '{component}' ({}): no event mode: {why}",
+                    self.model_identifier()
+                ),
+            )
+        };
+        match &self.import {
+            Import::V3(_) if !self.has_event_mode => {
+                Err(fail("its <CoSimulation> does not say hasEventMode=\"true\"".into()))
+            }
+            Import::V3(i) => i
+                .instantiate_cs_events(component)
+                .map(InstanceCS::V3)
+                .map_err(|e| Error {
+                    component: Some(component.to_owned()),
+                    function: Some("fmi3InstantiateCoSimulation".into()),
+                    ..Error::new(
+                        crate::ErrorKind::Fmi,
+                        format!(
+                            "component '{component}' ({}): fmi3InstantiateCoSimulation failed: {e}",
+                            self.model_identifier()
+                        ),
+                    )
+                }),
+            Import::V2(_) => Err(fail("an FMI 2.0 FMU has no Event Mode in co-simulation".into())),
+        }
     }
 
     /// A model-exchange instance the runner integrates (FMI 2.0 FMUs with `<ModelExchange>`).

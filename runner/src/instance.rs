@@ -66,6 +66,11 @@ impl InstanceCS {
         self.v3().map_or(Ok(()), |i| i.tick_now(t))
     }
 
+    /// Where its last step returned early (an instance with earlyReturnAllowed).
+    pub fn take_early_return(&mut self) -> Option<f64> {
+        self.v3().and_then(|i| i.take_early_return())
+    }
+
     /// Its output clocks read, once its input clocks are set.
     pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
         self.v3().map_or(Ok(()), |i| i.poll_output_clocks(t))

@@ -28,6 +28,8 @@ struct Cli {
     preload_lib: Vec<PathBuf>,
 }
 
+// The command line is parsed once: the size of its largest variant costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
     /// Runs the system from t = 0 and writes the recorded variables as CSV.
@@ -96,6 +98,11 @@ enum Command {
         /// With --isolate: the longest one FMU call may take, s, before its process is killed.
         #[arg(long, requires = "isolate")]
         call_timeout: Option<f64>,
+        /// An FMI 3.0 co-simulation component run with eventModeUsed and earlyReturnAllowed
+        /// (repeatable): the events it reports are handled in Event Mode at their time, and a
+        /// step it ends early ends every component's step there (not with --isolate).
+        #[arg(long = "event-mode", value_name = "COMPONENT")]
+        event_mode: Vec<String>,
     },
     /// Runs a whole system for the runner that started this process (--isolate system).
     #[command(hide = true)]
@@ -213,6 +220,7 @@ fn run(cli: Cli) -> Result<(), String> {
             no_progress,
             isolate,
             call_timeout,
+            event_mode,
         } => {
             let stop_time = match stop_time {
                 Some(t) => t,
@@ -247,6 +255,12 @@ fn run(cli: Cli) -> Result<(), String> {
                 && order == "jacobi"
             {
                 sim.scheme = Scheme::Jacobi;
+            }
+            for c in &event_mode {
+                match &mut system {
+                    Backend::Here(sim) => sim.use_event_mode(c)?,
+                    Backend::Process(_) => return Err(format!("--event-mode {c}: not with --isolate system")),
+                }
             }
             let (name, outputs) = match &system {
                 Backend::Here(sim) => (sim.name.clone(), sim.outputs()),

@@ -58,6 +58,8 @@ struct Slave {
     v3: bool,
     /// Run as model exchange, integrated by the runner ([`crate::me`]).
     me: bool,
+    /// Run with eventModeUsed and earlyReturnAllowed ([`Simulation::use_event_mode`]).
+    events: bool,
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
@@ -328,6 +330,7 @@ impl Simulation {
                 instance: Some(make_instance(fmu, c, me, isolation.as_ref())?),
                 v3: fmu.fmi_version() == "3.0",
                 me,
+                events: false,
             });
         }
         let mut sim = Simulation {
@@ -791,6 +794,33 @@ impl Simulation {
         let inst = make_instance(self.fmu_of(i), component, true, self.isolation.as_ref())?;
         self.slaves[i].instance = Some(inst);
         self.slaves[i].me = true;
+        Ok(())
+    }
+
+    /// Runs the FMI 3.0 co-simulation `component` with eventModeUsed and earlyReturnAllowed
+    /// (`sim/clocks.rs`): the events it reports are handled in Event Mode at the time it
+    /// reports them, and a step it ends early ends every component's step there.
+    pub fn use_event_mode(&mut self, component: &str) -> Result<(), Error> {
+        let i = self.slave_index(component)?;
+        if self.slaves[i].events {
+            return Ok(());
+        }
+        if self.slaves[i].me || self.isolation.is_some() {
+            return Err(Error::usage(format!(
+                "component '{component}': event mode is for a co-simulation component run in this process (not as model exchange, not with --isolate)"
+            )));
+        }
+        self.slaves[i].instance = None;
+        let inst = self.fmu_of(i).instantiate_events(component);
+        let inst = match inst {
+            Ok(inst) => inst,
+            Err(e) => {
+                self.slaves[i].instance = Some(make_instance(self.fmu_of(i), component, false, None)?);
+                return Err(e);
+            }
+        };
+        self.slaves[i].instance = Some(inst);
+        self.slaves[i].events = true;
         Ok(())
     }
 

@@ -15,6 +15,7 @@ recorded. Every byte it hands on is kept, and each delivered CAN Transmit is dec
 from the standard's table (test_ls_bus_can's helpers), so that the frames the runner carried are
 checked against the scheduler's bytes: timestamps, payloads, Confirms."""
 
+import math
 import struct
 
 import fmpy
@@ -276,3 +277,75 @@ def test_an_output_clock_ticks_the_triggered_input_clock_connected_to_it_as_in_f
         assert list(got[name]) == want, (name, list(got[name]), want)
     # a's fifth input tick (t = 4) and tenth tick the clock connection passed on to b.
     assert got["b.inClock2Ticks"][-1] >= 2 and got["b.result2"][-1] == 7
+
+
+# --- Early return: a component's event ends every component's step ---------------------------
+
+def early_schedule(stop, h):
+    """The project's BouncingBall (FMI 3.0) with eventModeUsed and earlyReturnAllowed beside a
+    VanDerPol, in fmpy: the ball steps first; where it returns early (its bounce), the oscillator
+    steps to that time, the ball's Event Mode is handled (updates until none is needed) and the
+    point is recorded; then on to the grid point."""
+    def load(name, **kw):
+        path = fmu3(name)
+        md = fmpy.read_model_description(path)
+        f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path), modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName=name)
+        f.instantiate(**kw)
+        f.enterInitializationMode(startTime=0.0, stopTime=stop)
+        f.exitInitializationMode()
+        return f, {v.name: v.valueReference for v in md.modelVariables}
+    ball, bvr = load("BouncingBall", eventModeUsed=True, earlyReturnAllowed=True)
+    vdp, vvr = load("VanDerPol")
+
+    def event():
+        while ball.updateDiscreteStates()[0]:
+            pass
+        ball.enterStepMode()
+
+    def record(t):
+        rows.append((t, dict(zip(["ball.h", "ball.v"], ball.getFloat64([bvr["h"], bvr["v"]])),
+                             **{"vdp.x0": vdp.getFloat64([vvr["x0"]])[0]})))
+    rows = []
+    event()
+    record(0.0)
+    t = 0.0
+    for k in range(round(stop / h)):
+        end = (k + 1) * h
+        while True:
+            need, terminate, early, last = ball.doStep(t, end - t)
+            assert not terminate
+            reached = last if early and last < end else end
+            vdp.doStep(t, reached - t)
+            t = reached
+            if need:
+                ball.enterEventMode()
+                event()
+            record(t)
+            if reached == end:
+                break
+    return rows
+
+
+def test_an_early_return_ends_every_components_step_at_the_event_as_in_fmpy(tmp_path):
+    comps = [("ball", fmu3("BouncingBall")), ("vdp", fmu3("VanDerPol"))]
+    path, ssd = write_ssp2(tmp_path / "Early.ssp", comps, {}, [], {})
+    stop, h = 3.0, 0.1
+    record = ["ball.h", "ball.v", "vdp.x0"]
+    got = runner(tmp_path, path, stop, h, "--event-mode", "ball", *[a for r in record for a in ("--record", r)])
+    rows = early_schedule(stop, h)
+    assert list(got["time"]) == [t for t, _ in rows]
+    for name in record:
+        assert list(got[name]) == [x[name] for _, x in rows], name
+    # The points off the grid are the bounces: the first two at the free fall's exact times
+    # (h0 = 1 m, g = 9.81 m/s^2, e = 0.7), and the ball leaves each going up.
+    grid = {round(k * h, 9) for k in range(round(stop / h) + 1)}
+    bounces = [i for i, t in enumerate(got["time"]) if round(t, 9) not in grid]
+    t1 = math.sqrt(2 / 9.81)
+    t2 = t1 + 2 * 0.7 * 9.81 * t1 / 9.81
+    assert len(bounces) >= 4
+    assert abs(got["time"][bounces[0]] - t1) < 1e-9 and abs(got["time"][bounces[1]] - t2) < 1e-9
+    assert all(got["ball.v"][i] > 0 for i in bounces[:4])
+    # Without event mode the ball is stepped over its bounces on the grid alone.
+    plain = runner(tmp_path, path, stop, h, "--record", "ball.h")
+    assert len(plain["time"]) == round(stop / h) + 1

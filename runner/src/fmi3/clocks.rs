@@ -173,6 +173,9 @@ pub struct ClockState {
     pub event_mode: bool,
     /// Its output clocks read in this Event Mode ([`Instance3::poll_output_clocks`]).
     pub polled: bool,
+    /// Instantiated with earlyReturnAllowed; where its last step returned early.
+    pub early_allowed: bool,
+    pub early_at: Option<f64>,
     /// Which clocks tick now (all in Initialization Mode, where clocked variables are free).
     pub active: Vec<bool>,
     pub initializing: bool,
@@ -195,6 +198,8 @@ impl ClockState {
             last: vec![None; n],
             event_mode: false,
             polled: false,
+            early_allowed: false,
+            early_at: None,
             active: vec![false; n],
             initializing: false,
             held: HashMap::new(),
@@ -206,8 +211,9 @@ impl ClockState {
 
     /// Back to the state of a fresh instance (fmi3Reset).
     pub fn reset(&mut self) {
-        let plan = self.plan.clone();
+        let (plan, early) = (self.plan.clone(), self.early_allowed);
         *self = ClockState::new(plan);
+        self.early_allowed = early;
     }
 
     /// Whether the variable `vr` may be set or read now (not clocked, or one of its clocks ticks).
@@ -280,6 +286,15 @@ impl Instance3 {
             .events
             .as_ref()
             .expect("checked by Fmi3Import::with_clocks")
+    }
+
+    pub(super) fn state_mut(&mut self) -> &mut ClockState {
+        self.state()
+    }
+
+    /// Where its last step returned early (taken: None until the next early return).
+    pub fn take_early_return(&mut self) -> Option<f64> {
+        self.clocks.as_mut().and_then(|s| s.early_at.take())
     }
 
     fn state(&mut self) -> &mut ClockState {

@@ -26,6 +26,8 @@ pub struct Fmi3Parts {
     /// The number of continuous states: the elements of the `<ContinuousStateDerivative>`s
     /// (an array derivative counts each; FMI 3.0, 2.4.8).
     pub states: usize,
+    /// `<CoSimulation hasEventMode>`: it may be instantiated with eventModeUsed.
+    pub has_event_mode: bool,
 }
 
 /// An FMI 3.0 variable as the runner gets and sets it ([`crate::values::Values`]).
@@ -253,5 +255,6 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         clocks,
         feedthrough,
         states,
+        has_event_mode: d.cs.as_ref().is_some_and(|cs| cs.has_event_mode),
     }
 }

@@ -109,6 +109,7 @@ impl Simulation {
     /// Whether the system steps to its clocks' ticks (see the module).
     pub(super) fn steps_to_ticks(&self) -> bool {
         !self.clock_links.is_empty()
+            || self.slaves.iter().any(|s| s.events)
             || self.slaves.iter().any(|s| {
                 !s.me
                     && matches!(&self.fmus[s.fmu].import,
@@ -197,6 +198,49 @@ impl Simulation {
             }
         }
         Ok(next)
+    }
+
+    /// The step from `t` of `h` of every instance, those that may return early first
+    /// ([`Simulation::use_event_mode`]): where one returns early, the others step to that time.
+    /// Returns the time every instance reached.
+    pub(super) fn do_step_events(&mut self, t: f64, h: f64) -> Result<f64, Error> {
+        crate::isolate::crumb_time(t);
+        let mut end = t + h;
+        let mut stepped: Option<usize> = None;
+        let order: Vec<usize> = (0..self.slaves.len())
+            .filter(|&i| self.slaves[i].events)
+            .chain((0..self.slaves.len()).filter(|&i| !self.slaves[i].events))
+            .collect();
+        for &i in &order {
+            let s = &mut self.slaves[i];
+            let inst = s.instance.as_mut().expect("instantiated");
+            inst.do_step(t, end - t, true).map_err(|e| {
+                Error::fmi(
+                    &s.name,
+                    fname(s.v3, "fmi2DoStep"),
+                    &e,
+                    Some(t),
+                    &format!("step {} s", end - t),
+                )
+            })?;
+            let early = inst.take_early_return();
+            let events = s.events;
+            if let Some(at) = early
+                && at < end
+            {
+                if let Some(other) = stepped {
+                    return Err(Error::usage(format!(
+                        "component '{}' returned early at t = {at}, after '{}' had stepped to {end}: the runner aligns the others to one early return a step (it does not roll a component back)",
+                        self.slaves[i].name, self.slaves[other].name
+                    )));
+                }
+                end = at;
+            }
+            if events {
+                stepped = Some(i);
+            }
+        }
+        Ok(end)
     }
 
     /// At `t` without a step ending there (a countdown of interval 0): the clocks due tick.

@@ -168,7 +168,11 @@ impl Simulation {
         for i in 0..self.slaves.len() {
             self.slaves[i].instance = None; // fmi2FreeInstance
             let name = self.slaves[i].name.clone();
-            let inst = make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?;
+            let inst = if self.slaves[i].events {
+                self.fmu_of(i).instantiate_events(&name)?
+            } else {
+                make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?
+            };
             self.slaves[i].instance = Some(inst);
         }
         self.runs = 0;

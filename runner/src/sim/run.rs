@@ -175,20 +175,18 @@ impl Simulation {
             if k == n {
                 break;
             }
-            let (from, h) = if ticks {
+            if ticks {
                 let end = (k + 1) as f64 * opts.step;
                 match self.step_to_ticks(t, end, &mut groups, &mut row, &mut result, &stops) {
-                    Ok(Some(from)) => (from, end - from),
-                    Ok(None) => break,
+                    Ok(true) => continue,
+                    Ok(false) => break,
                     Err(error) => {
                         self.note(&error);
                         return Err(Failure { error, partial: result });
                     }
                 }
-            } else {
-                (t, opts.step)
-            };
-            if let Err(error) = self.do_step(from, h) {
+            }
+            if let Err(error) = self.do_step(t, opts.step) {
                 self.note(&error);
                 return Err(Failure { error, partial: result });
             }
@@ -201,10 +199,10 @@ impl Simulation {
         Ok(result)
     }
 
-    /// From the communication point `t` towards `end` (`sim/clocks.rs`): every Event Mode ended,
-    /// then a step to each tick before `end`, where the clocks and connections tick, the values
-    /// are propagated and a row is recorded. Returns where the last step to `end` begins (None:
-    /// a stop condition ended the run).
+    /// From the communication point `t` to `end` (`sim/clocks.rs`): every Event Mode ended,
+    /// then a step to each tick before `end` and to each time a component returns early at, where
+    /// the clocks and connections tick, the values are propagated and a row is recorded; then the
+    /// step to `end`. Returns false where a stop condition ended the run.
     fn step_to_ticks(
         &mut self,
         mut t: f64,
@@ -213,7 +211,7 @@ impl Simulation {
         row: &mut [f64],
         result: &mut RunResult,
         stops: &[(usize, f64)],
-    ) -> Result<Option<f64>, Error> {
+    ) -> Result<bool, Error> {
         let close = |x: f64| 1e-9 * x.abs().max(1.0);
         let mut same = 0;
         while same < 1000 {
@@ -223,13 +221,19 @@ impl Simulation {
                     same += 1;
                     t
                 }
-                Some(e) if e < end - close(end) => {
-                    self.do_step(t, e - t)?;
+                next => {
+                    let to = match next {
+                        Some(e) if e < end - close(end) => e,
+                        _ => end,
+                    };
+                    let reached = self.do_step_events(t, to - t)?;
                     result.fmu_steps += 1;
                     same = 0;
-                    e
+                    if reached == end {
+                        return Ok(true);
+                    }
+                    reached
                 }
-                _ => return Ok(Some(t)),
             };
             t = at;
             self.event_point(t)?;
@@ -238,7 +242,7 @@ impl Simulation {
             result.values.extend_from_slice(row);
             if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
                 result.stopped = true;
-                return Ok(None);
+                return Ok(false);
             }
         }
         Err(Error::usage(format!(
