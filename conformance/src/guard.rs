@@ -136,7 +136,7 @@ impl<T: Plain> Guarded<T> {
 /// call made as an importer's mistake on purpose ([`crate::outcome::on_purpose`]: NULL value
 /// references, a wrong nValues, a variable through another type's getter) it is a warning, as
 /// the standard leaves what the FMU does with such arguments undefined (FMI 2.0.5 §2.1.3, FMI
-/// 3.0.2 §2.2.3), though writing past the array the importer gave corrupts the importer's memory.
+/// 3.0.2 §2.2.4), though writing past the array the importer gave corrupts the importer's memory.
 pub fn fill<T: Plain, R>(out: &mut [T], function: &str, count: &str, rule: &str, call: impl FnOnce(*mut T) -> R) -> R {
     let n = out.len();
     let mut g = Guarded::guard_from(
@@ -243,7 +243,7 @@ pub const STATUS_RULE2: &str =
 pub const CLOCK_RULE3: &str = "FMI 3.0.2 §2.2.9 (Clocks): fmi3GetClock, fmi3GetInterval* and fmi3GetShift* fill arrays of \
      nValueReferences elements (nValues for fmi3GetClock) that the importer provides";
 /// FMI 3.0.2's requirement for fmi3GetVariableDependencies and its count.
-pub const DEPENDENCIES_RULE3: &str = "FMI 3.0.2 §2.2.11: fmi3GetVariableDependencies fills arrays of nDependencies elements, \
+pub const DEPENDENCIES_RULE3: &str = "FMI 3.0.2 §2.2.10: fmi3GetVariableDependencies fills arrays of nDependencies elements, \
      the number fmi3GetNumberOfVariableDependencies returned (which it writes to one size_t)";
 /// FMI 3.0.2's requirement for the output arguments of fmi3DoStep and fmi3UpdateDiscreteStates:
 /// one value each.

@@ -116,7 +116,7 @@ pub fn is_on_purpose() -> bool {
 pub fn crash_on_a_mistake(how: &str) -> String {
     format!(
         "the check's process {how}: the call was an importer's mistake or absurd input, whose outcome the \
-         standard leaves undefined (FMI 2.0.5 §2.1.3, FMI 3.0.2 §2.2.3: an FMU that detects it returns an \
+         standard leaves undefined (FMI 2.0.5 §2.1.3, FMI 3.0.2 §2.2.4: an FMU that detects it returns an \
          error); a crash or hang takes the importer down with it. The rest of the check did not run"
     )
 }

@@ -399,7 +399,7 @@ fn a_random_sequence_that_fails_leaves_a_reproducer_that_replays_the_failure() {
         o.random_sequences = 200;
         o.as_foreign = true;
         // A call the state machine does not allow, accepted, is judged under --strict (by default
-        // a warning: FMI 3.0.2 §2.2.3 requires fmi3Error "when detecting" it; issue 51).
+        // a warning: FMI 3.0.2 §2.2.4 requires fmi3Error "when detecting" it; issue 51).
         o.strict = true;
         o.filter = Some(name.into());
         o.reproducers = Some(dir.path().join(format!("reproducers-{v}")));

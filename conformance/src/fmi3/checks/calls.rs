@@ -649,7 +649,7 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         inst.log_text()
                     );
                 } else if s != fmi3Error {
-                    // The importer's mistake: FMI 3.0.2 §2.2.3 requires fmi3Error "when
+                    // The importer's mistake: FMI 3.0.2 §2.2.4 requires fmi3Error "when
                     // detecting" it, not the detection; undetected, a warning.
                     crate::outcome::warn(format!(
                         "{}: setting '{}' ({}, {}, initial {:?}) in {state:?} ({}) answered {}: the standard does not allow it (an importer's mistake not detected)",
@@ -914,7 +914,7 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
 /// (FMI 3.0.2 promises no bit identity of the FMU's time); a step that answers fmi3OK without
 /// early return and ends elsewhere fails. Refusing a bad step size, a wrong
 /// currentCommunicationPoint or NULL output pointers is detecting the importer's mistakes: a
-/// warning when not done (FMI 3.0.2 §2.2.3 requires fmi3Error only "when detecting" them).
+/// warning when not done (FMI 3.0.2 §2.2.4 requires fmi3Error only "when detecting" them).
 pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     cs_only(fmu);
     let mut i = Inst::cs(fmu);

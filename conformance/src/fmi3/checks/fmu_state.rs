@@ -224,7 +224,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
 
 /// Verdict: warned, never failed (but for a crash outside the damaged calls): a damaged buffer
 /// or another FMU's state is the importer's mistake, whose detection FMI 3.0.2 leaves to the FMU
-/// (§2.2.3: fmi3Error "when detecting illegal arguments"); a crash on one is a warning too.
+/// (§2.2.4: fmi3Error "when detecting illegal arguments"); a crash on one is a warning too.
 pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: &Fmu3) {
     let me = fmu.md.cs.is_none();
     if !fmu.can_snapshot(me) {
@@ -325,7 +325,7 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     });
     crate::outcome::warn_unless(a.observe() == before, || {
         format!(
-            "{}: refused states changed the instance (robustness beyond FMI 3.0.2 §2.2.3)",
+            "{}: refused states changed the instance (robustness beyond FMI 3.0.2 §2.2.4)",
             fmu.id
         )
     });

@@ -273,7 +273,7 @@ fn run(fmu: &Fmu3, me: bool, steps: usize, h: f64) -> Vec<Vec<u64>> {
 
 /// Runs `f`, an importer's mistake made on purpose, which should be refused with fmi3Error,
 /// with a message; then the Float64 values should be what they were (`what` says what was
-/// passed). Warnings, not failures: FMI 3.0.2 §2.2.3 says "When detecting illegal arguments or a
+/// passed). Warnings, not failures: FMI 3.0.2 §2.2.4 says "When detecting illegal arguments or a
 /// function call not allowed in the current state according to the respective state machine,
 /// the FMU must return fmi3Error" and leaves the detection to the FMU; after fmi3Error "the
 /// simulation cannot be continued" with the instance, so what it shows then is beyond the
@@ -291,7 +291,7 @@ fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) 
     }
     crate::outcome::warn_unless(inst.observe() == before, || {
         format!(
-            "{}: {what} was refused but changed values (robustness beyond FMI 3.0.2 §2.2.3, which leaves the instance undefined after fmi3Error)",
+            "{}: {what} was refused but changed values (robustness beyond FMI 3.0.2 §2.2.4, which leaves the instance undefined after fmi3Error)",
             inst.fmu.id
         )
     });

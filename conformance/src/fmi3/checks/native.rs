@@ -7,7 +7,7 @@ use super::*;
 // Native: symbols
 
 /// Verdict: every function of fmi3Functions.h must be exported (a failure otherwise: FMI 3.0.2
-/// §2.3 has the binary export all of them); other symbols, a partial FMI 2.0 set and fmi3 names the
+/// §2.2, the C API: every function of fmi3Functions.h); other symbols, a partial FMI 2.0 set and fmi3 names the
 /// standard does not define are portability and hygiene advice, warnings (they can clash with the
 /// importer's or another FMU's symbols).
 pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {

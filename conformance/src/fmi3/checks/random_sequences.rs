@@ -329,7 +329,7 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
             }
             None => {
                 errored = true;
-                // A call the state machine does not allow: FMI 3.0.2 §2.2.3 requires fmi3Error
+                // A call the state machine does not allow: FMI 3.0.2 §2.2.4 requires fmi3Error
                 // only "when detecting" it; judged on this exporter's FMUs and under --strict
                 // (the state-machine check warns about it on any FMU).
                 if !(fmu.own_state_format() || crate::outcome::strict()) {

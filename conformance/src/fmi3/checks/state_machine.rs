@@ -48,7 +48,7 @@ fn state_table(fmu: &Fmu3, me: bool) {
             }
             if !want.allows(s) && want == Expect::Error {
                 // A call the state machine does not allow is the importer's mistake: FMI 3.0.2
-                // §2.2.3 requires fmi3Error "when detecting ... a function call not allowed in the
+                // §2.2.4 requires fmi3Error "when detecting ... a function call not allowed in the
                 // current state", not the detection: a warning.
                 mistakes.push(format!(
                     "{name} in {state:?}: {}, expected {:?} ({})",

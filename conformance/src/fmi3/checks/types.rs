@@ -320,7 +320,7 @@ pub fn fmi3_every_type_reads_its_start_sets_reads_back_and_refuses_outside_its_b
 /// at run time; the inputs, the independent variable and the initial = exact variables in
 /// Initialization Mode).
 /// Verdict: skipped where the FMU does not declare providesPerElementDependencies and refuses
-/// the functions (FMI 3.0.2 §2.2.11 offers fmi3GetNumberOfVariableDependencies and
+/// the functions (FMI 3.0.2 §2.2.10 offers fmi3GetNumberOfVariableDependencies and
 /// fmi3GetVariableDependencies with that capability only); where it answers, its answers must
 /// equal its `<ModelStructure>` (a failure otherwise: the functions give "the dependency
 /// information ... of the model structure").
