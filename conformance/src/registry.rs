@@ -88,7 +88,10 @@ impl Check {
     pub fn run_on<F: Checked>(&self, fmu: &F) -> (Outcome, Findings) {
         let run = F::check_fn(self.run)
             .unwrap_or_else(|| panic!("{} checks {:?} FMUs, not {:?}", self.name, self.version(), F::VERSION));
-        capture(|| run(fmu))
+        capture(|| {
+            fmu.runnable(self.name);
+            run(fmu)
+        })
     }
 
     /// Whether a filter selects this check: a substring of its name or of its group's name.
@@ -125,6 +128,10 @@ pub(crate) use registry;
 pub trait Checked: Loaded {
     /// The check function of `run` when it is a check of this version.
     fn check_fn(run: Run) -> Option<fn(&Self)>;
+
+    /// Skips (by panicking with [`crate::outcome::skip`]'s payload) the check `name` where the
+    /// FMU offers none of the interfaces it drives; called before every check.
+    fn runnable(&self, _name: &str) {}
 }
 
 impl Checked for Fmu {
@@ -142,5 +149,9 @@ impl Checked for Fmu3 {
             Run::Fmi3(f) => Some(f),
             Run::Fmi2(_) => None,
         }
+    }
+
+    fn runnable(&self, name: &str) {
+        crate::fmi3::checks::skip_unless_the_interfaces_allow(self, name);
     }
 }

@@ -478,3 +478,42 @@ fn an_output_argument_written_past_its_one_value_is_failed() {
         ],
     );
 }
+
+/// A description of Scheduled Execution only (as the Reference-FMUs' Clocks, v0.0.41): the FMU is
+/// loaded (md-reader reads it), the checks that drive co-simulation or model exchange are skipped
+/// naming the declarations, and those that need neither run (issue 51 item 5). Our Dahlquist
+/// 3.0 with `<ScheduledExecution>` in place of its two interface elements (its binary exports
+/// every fmi3 function).
+#[test]
+fn a_description_of_scheduled_execution_only_is_checked_with_its_co_simulation_and_model_exchange_checks_skipped() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let fmu = fixture_with(dir.path(), 3, "SE_ONLY", &[], |xml| {
+        xml.lines()
+            .filter(|l| !l.trim_start().starts_with("<CoSimulation"))
+            .map(|l| {
+                if l.trim_start().starts_with("<ModelExchange") {
+                    r#"  <ScheduledExecution modelIdentifier="Dahlquist"/>"#.to_string()
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    });
+    let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+    o.temp_dir = Some(dir.path().to_path_buf());
+    o.filter = Some("calls".into());
+    let report = run(&fmu, &o);
+    assert!(report.load_error.is_none(), "{report}");
+    let outcome = |name: &str| &report.checks.iter().find(|c| c.name == name).expect(name).outcome;
+    assert!(matches!(outcome("fmi3_get_version_is_3_0"), Outcome::Pass), "{report}");
+    for name in [
+        "fmi3_do_step_advances_time_by_the_step",
+        "fmi3_getters_write_no_value_past_the_array_they_are_given",
+    ] {
+        match outcome(name) {
+            Outcome::Skip(why) => assert!(why.contains("<ScheduledExecution> only"), "{name}: {why}"),
+            other => panic!("{name}: expected a skip naming the declarations, got {other:?}\n{report}"),
+        }
+    }
+}

@@ -246,9 +246,10 @@ pub struct ModelDescription {
 }
 
 impl ModelDescription {
-    /// Reads an FMI 3.0 description. A description with neither `<CoSimulation>` nor
-    /// `<ModelExchange>` is refused (scheduled execution alone is no interface any tool here
-    /// runs).
+    /// Reads an FMI 3.0 description. A description with none of `<CoSimulation>`,
+    /// `<ModelExchange>` and `<ScheduledExecution>` is refused (it offers no interface to run;
+    /// each is optional in fmi3ModelDescription.xsd). One of Scheduled Execution only is read (`cs` and `me`
+    /// None, `se` true): a tool that runs co-simulation or model exchange refuses it itself.
     pub fn parse(xml: &str) -> Result<ModelDescription, String> {
         let mut events = Events::new(xml);
         let mut d = ModelDescription::default();
@@ -417,19 +418,28 @@ impl ModelDescription {
                 _ => {}
             }
         }
-        if d.cs.is_none() && d.me.is_none() {
-            return Err("modelDescription.xml: neither <CoSimulation> nor <ModelExchange>".into());
+        if d.cs.is_none() && d.me.is_none() && !d.se {
+            return Err(
+                "modelDescription.xml: none of <CoSimulation>, <ModelExchange> and <ScheduledExecution>".into(),
+            );
         }
         Ok(d)
     }
 
-    /// The model identifier (of CoSimulation, else of ModelExchange).
+    /// The model identifier (of CoSimulation, else of ModelExchange, else of
+    /// ScheduledExecution).
     pub fn model_identifier(&self) -> &str {
         self.cs
             .as_ref()
             .or(self.me.as_ref())
+            .or(self.se_interface.as_ref())
             .map(|i| i.model_identifier.as_str())
             .unwrap_or("")
+    }
+
+    /// Whether the FMU declares Scheduled Execution and neither co-simulation nor model exchange.
+    pub fn scheduled_execution_only(&self) -> bool {
+        self.se && self.cs.is_none() && self.me.is_none()
     }
 
     /// The scalar (not array) variables of that type that are not clocked (a clocked variable
@@ -612,8 +622,14 @@ mod tests {
             .replace(r#"<CoSimulation modelIdentifier="Lag""#, "<Y");
         assert_eq!(
             ModelDescription::parse(&none).unwrap_err(),
-            "modelDescription.xml: neither <CoSimulation> nor <ModelExchange>"
+            "modelDescription.xml: none of <CoSimulation>, <ModelExchange> and <ScheduledExecution>"
         );
+        // Scheduled Execution alone (as the Reference-FMUs' Clocks, v0.0.41) is read, its
+        // identifier the element's.
+        let se = none.replacen("<Y", r#"<ScheduledExecution modelIdentifier="LagSE""#, 1);
+        let d = ModelDescription::parse(&se).unwrap();
+        assert!(d.cs.is_none() && d.me.is_none() && d.se && d.scheduled_execution_only());
+        assert_eq!(d.model_identifier(), "LagSE");
     }
 
     #[test]

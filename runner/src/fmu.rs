@@ -111,6 +111,16 @@ impl Fmu {
         let version = md_reader::fmi_version(xml).map_err(fail)?;
         let (description, int64, extra) = if version.starts_with("3.") {
             let d3 = md_reader::fmi3::ModelDescription::parse(xml).map_err(fail)?;
+            if d3.scheduled_execution_only() {
+                return Err(Error::unsupported(
+                    Some(component),
+                    None,
+                    format!(
+                        "component '{component}' ({label}): the FMU declares only <ScheduledExecution>; the runner runs \
+                         co-simulation (FMI 3.0: <CoSimulation>) or model exchange (<ModelExchange>)"
+                    ),
+                ));
+            }
             let parts = crate::fmi3::as_fmi2(&d3);
             let extra = Extra {
                 skipped: parts.skipped,

@@ -342,6 +342,24 @@ fn initialize(s: &mut Se) -> Vec<Input> {
             variability: iv.to_string(),
             periodic: None,
         };
+        // A constant or fixed clock's interval and shift are in the description (intervalDecimal,
+        // shiftDecimal), where an importer reads them. On another exporter's FMU the schedule takes
+        // them from there and does not ask fmi3GetIntervalDecimal/fmi3GetShiftDecimal: the Reference
+        // FMUs' Clocks (v0.0.41) answers fmi3Error for its constant clock, which then ends the
+        // instance (fmi3Error: "the simulation must not be continued", FMI 3.0.2 §2.2.4); FMI
+        // 3.0.2 §2.2.9 only allows an importer to ask ("For input Clocks it is allowed to call this
+        // function"). This exporter's FMUs are asked, and their answers checked, below.
+        if let Some(d) = c.interval_decimal
+            && matches!(iv, "constant" | "fixed")
+            && !fmu.own_state_format()
+        {
+            crate::outcome::limitation(
+                "the intervals and shifts of constant and fixed input clocks are taken from the description, not asked of the FMU",
+            );
+            input.periodic = Some((c.shift_decimal.unwrap_or(0.0), d));
+            out.push(input);
+            continue;
+        }
         if matches!(iv, "constant" | "fixed" | "tunable") {
             let (h, q) = periodic_interval(inst, v, " in Initialization Mode");
             if let Some(d) = c.interval_decimal
