@@ -191,18 +191,57 @@ fn a_do_step_answering_ok_without_advancing_time_is_failed() {
         &[
             (2, "do_step_advances_time_by_the_step", "after 1 fmi2DoStep"),
             (3, "fmi3_do_step_advances_time_by_the_step", "after 1 fmi3DoStep"),
-            (
-                2,
-                "status_functions_report_the_last_successful_time_and_no_termination_request",
-                "",
-            ),
-            (
-                3,
-                "fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set",
-                "time after 3 steps",
-            ),
         ],
     );
+}
+
+/// One defect, one failure (issue 51): the checks that meet the stuck time on their way (the
+/// status functions', the time variable's, the output arguments') note it and leave the verdict
+/// to the check named for it, which fails.
+#[test]
+fn a_do_step_answering_ok_without_advancing_time_fails_only_the_check_named_for_it() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (v, named, others) in [
+        (
+            2,
+            "do_step_advances_time_by_the_step",
+            &["status_functions_report_the_last_successful_time_and_no_termination_request"][..],
+        ),
+        (
+            3,
+            "fmi3_do_step_advances_time_by_the_step",
+            &[
+                "fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set",
+                "fmi3_do_step_output_arguments_are_truthful",
+            ][..],
+        ),
+    ] {
+        let fmu = fixture(dir.path(), v, "STEP_STUCK", &["-DDEFECT_STEP_STUCK".to_string()]);
+        let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+        o.temp_dir = Some(dir.path().to_path_buf());
+        o.as_foreign = true;
+        o.filter = Some("calls".into());
+        o.random_sequences = 1;
+        let report = run(&fmu, &o);
+        let outcome = |name: &str| {
+            &report
+                .checks
+                .iter()
+                .find(|c| c.name == name)
+                .unwrap_or_else(|| panic!("no check {name}:\n{report}"))
+                .outcome
+        };
+        assert!(
+            matches!(outcome(named), Outcome::Fail(_)),
+            "FMI {v}.0: {named}:\n{report}"
+        );
+        for other in others {
+            assert!(
+                !matches!(outcome(other), Outcome::Fail(_)),
+                "FMI {v}.0: {other} failed the stuck time too (counted twice):\n{report}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -286,6 +325,26 @@ fn a_crash_in_free_instance_is_failed_with_the_call_it_crashed_in() {
         "FREE_CRASH",
         Some("FREE_CRASH"),
         &[
+            (
+                2,
+                "free_instance_frees_an_instance_in_every_state_without_crashing",
+                "SIGSEGV",
+            ),
+            (
+                2,
+                "free_instance_frees_an_instance_in_every_state_without_crashing",
+                "fmi2FreeInstance",
+            ),
+            (
+                3,
+                "fmi3_free_instance_frees_an_instance_in_every_state_without_crashing",
+                "SIGSEGV",
+            ),
+            (
+                3,
+                "fmi3_free_instance_frees_an_instance_in_every_state_without_crashing",
+                "fmi3FreeInstance",
+            ),
             (2, "ten_thousand_instantiate_free_cycles_leave_memory_flat", "SIGSEGV"),
             (
                 2,
@@ -350,33 +409,47 @@ fn a_crash_in_the_preflight_fails_the_checks_instead_of_skipping_them() {
 
 /// A description that disagrees with its binary: it declares a variable (value reference 99, a
 /// local Real/Float64) the binary does not know, so that the binary refuses it. The good binary.
+/// Failed by the check named for it, and by the state-machine and reset checks on their way.
 #[test]
 fn a_description_declaring_a_variable_the_binary_refuses_is_failed() {
     let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
-    for (v, declaration, name) in [
+    for (v, declaration, names) in [
         (
             2,
             r#"<ScalarVariable name="extra" valueReference="99" causality="local" variability="continuous"><Real/></ScalarVariable>"#,
-            "every_function_in_every_state_answers_as_the_standard_says",
+            [
+                "the_binary_knows_every_variable_its_description_declares",
+                "every_function_in_every_state_answers_as_the_standard_says",
+            ],
         ),
         (
             3,
             r#"<Float64 name="extra" valueReference="99" causality="local" variability="continuous"/>"#,
-            "fmi3_reset_from_every_state_then_a_rerun_is_bit_identical",
+            [
+                "fmi3_the_binary_knows_every_variable_its_description_declares",
+                "fmi3_reset_from_every_state_then_a_rerun_is_bit_identical",
+            ],
         ),
     ] {
         let fmu = fixture_with(dir.path(), v, "EXTRA", &[], |xml| {
             xml.replace("</ModelVariables>", &format!("  {declaration}\n  </ModelVariables>"))
         });
         let report = check(&fmu, dir.path());
-        let c = report.checks.iter().find(|c| c.name == name).expect(name);
-        match &c.outcome {
-            Outcome::Fail(m) => assert!(
-                m.contains("fmi2GetReal") || m.contains("value reference 99"),
-                "FMI {v}.0: {name} failed, but not for the variable: {m}"
-            ),
-            other => panic!("FMI {v}.0: expected {name} to fail, got {other:?}\n{report}"),
+        for name in names {
+            let c = report.checks.iter().find(|c| c.name == name).expect(name);
+            match &c.outcome {
+                Outcome::Fail(m) => assert!(
+                    m.contains("fmi2GetReal") || m.contains("value reference 99"),
+                    "FMI {v}.0: {name} failed, but not for the variable: {m}"
+                ),
+                other => panic!("FMI {v}.0: expected {name} to fail, got {other:?}\n{report}"),
+            }
         }
+        let named = report.checks.iter().find(|c| c.name == names[0]).unwrap();
+        let Outcome::Fail(m) = &named.outcome else {
+            unreachable!()
+        };
+        assert!(m.contains("'extra' (value reference 99)"), "FMI {v}.0: {m}");
     }
 }
 

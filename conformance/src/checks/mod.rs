@@ -45,6 +45,8 @@ registry! {
             status_functions_report_the_last_successful_time_and_no_termination_request,
             getters_write_no_value_past_the_array_they_are_given,
             do_step_advances_time_by_the_step,
+            free_instance_frees_an_instance_in_every_state_without_crashing,
+            the_binary_knows_every_variable_its_description_declares,
             reset_from_every_state_then_a_rerun_is_bit_identical,
             the_log_categories_importers_look_for_are_declared,
             debug_logging_follows_logging_on_and_set_debug_logging,

@@ -115,3 +115,13 @@ fn each_instance_logs_to_its_own_component_environment() {
 fn reference_results_are_reproduced_by_the_default_experiment() {
     on_every_fmu("reference_results_are_reproduced_by_the_default_experiment");
 }
+
+#[test]
+fn free_instance_frees_an_instance_in_every_state_without_crashing() {
+    on_every_fmu("free_instance_frees_an_instance_in_every_state_without_crashing");
+}
+
+#[test]
+fn the_binary_knows_every_variable_its_description_declares() {
+    on_every_fmu("the_binary_knows_every_variable_its_description_declares");
+}

@@ -182,3 +182,13 @@ fn the_runner_checks_a_3_0_file_with_the_3_0_checks() {
 fn fmi3_reference_results_are_reproduced_by_the_default_experiment() {
     on_every_fmu("fmi3_reference_results_are_reproduced_by_the_default_experiment");
 }
+
+#[test]
+fn fmi3_free_instance_frees_an_instance_in_every_state_without_crashing() {
+    on_every_fmu("fmi3_free_instance_frees_an_instance_in_every_state_without_crashing");
+}
+
+#[test]
+fn fmi3_the_binary_knows_every_variable_its_description_declares() {
+    on_every_fmu("fmi3_the_binary_knows_every_variable_its_description_declares");
+}

@@ -240,20 +240,40 @@ pub fn a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_t
     }
 }
 
+/// After completed steps the status functions answer: fmi2LastSuccessfulTime with fmi2OK,
+/// fmi2Terminated false; kinds of another getter are answered fmi2Discard; a NULL `value` is
+/// refused.
+///
+/// Verdict: FMI 2.0.5 §4.2.3 (fmi2Get*Status "Informs the master about the actual status of the
+/// simulation run"; "If a status is required which cannot be retrieved by the slave it returns
+/// fmi2Discard"): a status other than those fails. Whether fmi2LastSuccessfulTime is t + h after
+/// fmi2OK is what fmi2OK means (§4.2.2): `do_step_advances_time_by_the_step` carries that verdict
+/// (one defect, one failure); here a differing time is noted, not failed. A NULL `value` is the
+/// importer's mistake: not refused, or a crash in it, is a warning.
 pub fn status_functions_report_the_last_successful_time_and_no_termination_request(fmu: &Fmu) {
     let mut inst = initialized(fmu);
     let h = step_size(fmu);
     for _ in 0..3 {
         assert_eq!(inst.step(h), fmi2OK);
         // FMI 2.0.5 §4.2.3: fmi2LastSuccessfulTime is "the end time of the last successfully
-        // completed communication step": t + h, within a tolerance relative to the step.
+        // completed communication step". Whether that is t + h after fmi2OK is what fmi2OK means
+        // (§4.2.2), the verdict of `do_step_advances_time_by_the_step`, which compares the same
+        // value: one defect, one failure. Here the status function must answer.
         let (st, last) = inst.last_successful_time();
-        assert!(
-            st == fmi2OK && crate::outcome::same_time(last, inst.time, h),
-            "{}: fmi2GetRealStatus(fmi2LastSuccessfulTime) = ({st}, {last}) after a completed step to {} (FMI 2.0.5 §4.2.3: the end time of the last successfully completed communication step)",
+        assert_eq!(
+            st,
+            fmi2OK,
+            "{}: fmi2GetRealStatus(fmi2LastSuccessfulTime) answered {} after a completed step to {} (FMI 2.0.5 §4.2.3: the end time of the last successfully completed communication step)",
             fmu.id,
+            status_name(st),
             inst.time
         );
+        if !crate::outcome::same_time(last, inst.time, h) {
+            crate::outcome::info(format!(
+                "fmi2LastSuccessfulTime is {last} after a completed step to {}: judged by do_step_advances_time_by_the_step",
+                inst.time
+            ));
+        }
         assert_eq!(inst.terminated(), (fmi2OK, fmi2False));
     }
     // Kinds that belong to another getter: fmi2Discard with a message, value untouched.
@@ -286,16 +306,30 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
         )
     };
     assert_eq!((s, b), (fmi2Discard, -1), "{}: fmi2GetBooleanStatus(99)", fmu.id);
-    // SAFETY: NULL out pointer: refused.
-    let s = unsafe { (fmu.api.get_real_status)(inst.c, fmi2LastSuccessfulTime, ptr::null_mut()) };
+    // A NULL out pointer is the importer's mistake (FMI 2.0.5 §4.2.3 has the importer provide
+    // `value`): a crash in it is a warning.
+    let s = crate::outcome::on_purpose(|| {
+        crate::outcome::breadcrumb("fmi2GetRealStatus(fmi2LastSuccessfulTime, value = NULL)");
+        // SAFETY: NULL out pointer: refused.
+        unsafe { (fmu.api.get_real_status)(inst.c, fmi2LastSuccessfulTime, ptr::null_mut()) }
+    });
     refused(&inst, "fmi2GetRealStatus(NULL)", s, &["NULL"]);
     assert_eq!(inst.terminate(), fmi2OK);
+    // The time itself: do_step_advances_time_by_the_step's verdict (see above).
+    let (st, last) = inst.last_successful_time();
     assert_eq!(
-        inst.last_successful_time(),
-        (fmi2OK, inst.time),
-        "{}: after fmi2Terminate",
-        fmu.id
+        st,
+        fmi2OK,
+        "{}: fmi2GetRealStatus(fmi2LastSuccessfulTime) after fmi2Terminate answered {}",
+        fmu.id,
+        status_name(st)
     );
+    if !crate::outcome::same_time(last, inst.time, h) {
+        crate::outcome::info(format!(
+            "fmi2LastSuccessfulTime is {last} after fmi2Terminate at {}: judged by do_step_advances_time_by_the_step",
+            inst.time
+        ));
+    }
 }
 
 // ---- fmi2Reset -----------------------------------------------------------------------------

@@ -110,3 +110,111 @@ pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
         );
     }
 }
+
+/// fmi2FreeInstance of an instance in each state an importer frees one in: Instantiated,
+/// Initialization Mode, Step Mode after a step, Terminated. Each call must return; a crash or a
+/// hang in it fails this check with the call it died in (the worker's report).
+///
+/// Verdict: a crash in fmi2FreeInstance is a failure: FMI 2.0.5 §2.1.5 (fmi2FreeInstance
+/// "Disposes the given instance, unloads the loaded model, and frees all the allocated memory
+/// and other resources"), a call the state machine allows in every state (§4.2.4) with the
+/// instance fmi2Instantiate returned; the importer's process dies with it.
+pub fn free_instance_frees_an_instance_in_every_state_without_crashing(fmu: &Fmu) {
+    let h = step_size(fmu);
+    // Instantiated.
+    drop(crate::instance::Instance::new(fmu));
+    // Initialization Mode.
+    let mut inst = crate::instance::Instance::new(fmu);
+    assert_eq!(
+        inst.setup(0.0, None),
+        fmi2OK,
+        "{}: fmi2SetupExperiment: {}",
+        fmu.id,
+        inst.log_text()
+    );
+    assert_eq!(
+        inst.enter_init(),
+        fmi2OK,
+        "{}: fmi2EnterInitializationMode: {}",
+        fmu.id,
+        inst.log_text()
+    );
+    drop(inst);
+    // Step Mode, after a step (whatever the step answered: the free is what is checked).
+    let mut inst = initialized(fmu);
+    let _ = inst.step(h);
+    drop(inst);
+    // Terminated.
+    let mut inst = initialized(fmu);
+    let _ = inst.step(h);
+    assert_eq!(
+        inst.terminate(),
+        fmi2OK,
+        "{}: fmi2Terminate: {}",
+        fmu.id,
+        inst.log_text()
+    );
+    drop(inst);
+}
+
+/// After initialization and after a step, every variable the model description declares is read
+/// alone through its type's getter (Real, Integer and Enumeration, Boolean, String), by the value
+/// reference the description gives it: the binary must know it.
+///
+/// Verdict: a declared variable refused (any status but fmi2OK/fmi2Warning) is a failure: the
+/// description and the binary disagree. FMI 2.0.5 §2.2.7 (`valueReference`: "A handle of the
+/// variable to efficiently identify the variable value in the model interface") and §4.2.4 (the
+/// co-simulation state machine allows fmi2GetXXX on every variable after initialization);
+/// fmi2Error is for "illegal arguments" (§2.1.3), which a declared value reference is not.
+pub fn the_binary_knows_every_variable_its_description_declares(fmu: &Fmu) {
+    let mut inst = initialized(fmu);
+    let h = step_size(fmu);
+    for round in 0..2 {
+        if round == 1 {
+            let s = inst.step(h);
+            assert!(
+                s == fmi2OK || s == fmi2Warning,
+                "{}: fmi2DoStep(h = {h}) after initialization: {}: {}",
+                fmu.id,
+                crate::instance::status_name(s),
+                inst.log_text()
+            );
+        }
+        let when = if round == 0 {
+            "after initialization"
+        } else {
+            "after a step"
+        };
+        for v in &fmu.md.variables {
+            let vr = [v.vr];
+            let (function, s) = match v.ty {
+                Type::Real => ("fmi2GetReal", inst.get_real(&vr).0),
+                Type::Integer | Type::Enumeration => ("fmi2GetInteger", inst.get_integer(&vr).0),
+                Type::Boolean => ("fmi2GetBoolean", inst.get_boolean(&vr).0),
+                Type::String => {
+                    let mut out: Vec<fmi2String> = vec![std::ptr::null()];
+                    crate::outcome::breadcrumb("fmi2GetString (a declared variable)");
+                    // SAFETY: arrays of nvr = 1 elements (and the guard after `out`'s).
+                    let s = unsafe {
+                        crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
+                            (fmu.api.get_string)(inst.c, vr.as_ptr(), 1, p)
+                        })
+                    };
+                    ("fmi2GetString", s)
+                }
+            };
+            assert!(
+                s == fmi2OK || s == fmi2Warning,
+                "{}: {function} of the declared variable '{}' (value reference {}) answered {} {when}: the binary \
+                 does not know a variable its description declares (FMI 2.0.5 §2.2.7: the valueReference \
+                 identifies the variable in the model interface; §4.2.4: fmi2GetXXX is allowed on every \
+                 variable after initialization). Log: {}",
+                fmu.id,
+                v.name,
+                v.vr,
+                crate::instance::status_name(s),
+                inst.log_text()
+            );
+        }
+    }
+}

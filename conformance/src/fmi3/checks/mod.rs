@@ -52,6 +52,8 @@ crate::registry::registry! {
             fmi3_do_step_output_arguments_are_truthful,
             fmi3_getters_write_no_value_past_the_array_they_are_given,
             fmi3_do_step_advances_time_by_the_step,
+            fmi3_free_instance_frees_an_instance_in_every_state_without_crashing,
+            fmi3_the_binary_knows_every_variable_its_description_declares,
             fmi3_intermediate_update_names_times_inside_the_step_and_returns_early_where_asked,
             fmi3_output_derivatives_agree_with_finite_differences_of_the_outputs,
             fmi3_set_debug_logging_refuses_unknown_categories,

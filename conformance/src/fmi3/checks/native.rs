@@ -81,7 +81,9 @@ pub fn fmi3_the_binary_exports_every_fmi3_function_and_no_others(fmu: &Fmu3) {
 // The C host
 
 /// Verdict: memory errors fail (undefined behaviour in the importer's process); leaks are
-/// warnings ([`crate::checks::native::warn_of_leaks`]).
+/// warnings ([`crate::checks::native::warn_of_leaks`]). A step that answered fmi3OK without early
+/// return but ended away from t + h is noted, its verdict left to
+/// `fmi3_do_step_advances_time_by_the_step` (which steps 1 ms too, as this host does).
 pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(fmu: &Fmu3) {
     cs_only(fmu);
     let src = fmu.scratch.join("host3.c");
@@ -239,7 +241,9 @@ pub fn fmi3_a_c_host_runs_co_simulation_and_model_exchange_clean_under_valgrind(
         fmu.id
     );
     if let Some(note) = time_note {
-        panic!("{note}");
+        info(format!(
+            "{note}; judged by fmi3_do_step_advances_time_by_the_step (one defect, one failure)"
+        ));
     }
     info("C host: 1000 co-simulation steps and an explicit-Euler ME run, memcheck clean");
 }
