@@ -352,19 +352,7 @@ impl Context<'_> {
     /// A context outside any FMU, for calling a model directly (tests, benchmarks): nothing
     /// it logs goes anywhere.
     pub fn standalone(start_time: f64, tolerance: Option<f64>) -> Context<'static> {
-        Context {
-            start_time,
-            tolerance,
-            logger: None,
-            resources: None,
-            solver: None,
-            refreshed: false,
-            model_exchange: false,
-            events: None,
-            return_at_events: ReturnAtEvents::Never,
-            intermediate: None,
-            input_slopes: &[],
-        }
+        Context::outside_step(start_time, tolerance, None, None, false)
     }
 
     /// The context of a call outside a communication step (initialization, a parameter change,
@@ -395,17 +383,8 @@ impl Context<'_> {
     /// [`CoSimulation::do_step`] directly.
     pub fn standalone_with_solver(start_time: f64, tolerance: Option<f64>, solver: &mut Dopri5) -> Context<'_> {
         Context {
-            start_time,
-            tolerance,
-            logger: None,
-            resources: None,
             solver: Some(solver),
-            refreshed: false,
-            model_exchange: false,
-            events: None,
-            return_at_events: ReturnAtEvents::Never,
-            intermediate: None,
-            input_slopes: &[],
+            ..Context::outside_step(start_time, tolerance, None, None, false)
         }
     }
 

@@ -61,15 +61,9 @@ impl<M: CoSimulation> Instance<M> {
         let Some(before) = self.before_configuration.take() else {
             return OK;
         };
-        let ctx = crate::model::Context::outside_step(
-            self.sim.start_time,
-            self.sim.tolerance,
-            Some(&self.logger),
-            self.resources.as_deref(),
-            self.model_exchange,
-        );
-        let outcome = self.sim.model.parameters_changed(&ctx).and_then(|()| {
-            crate::step::oversized_binary(&self.sim.model).map_or(Ok(()), |what| Err(format!("it left {what}")))
+        let (sim, ctx) = self.sim_and_context();
+        let outcome = sim.model.parameters_changed(&ctx).and_then(|()| {
+            crate::step::oversized_binary(&sim.model).map_or(Ok(()), |what| Err(format!("it left {what}")))
         });
         if let Err(why) = outcome {
             self.sim.model = *before;

@@ -6,7 +6,7 @@ use super::{Instance, Outcome};
 use crate::core::logging::Category;
 use crate::core::machine::State;
 use crate::core::{DISCARD, Status};
-use crate::model::{CoSimulation, Context};
+use crate::model::CoSimulation;
 use crate::step::{evaluate, non_finite, oversized_binary};
 
 impl<M: CoSimulation> Instance<M> {
@@ -18,20 +18,13 @@ impl<M: CoSimulation> Instance<M> {
             return Ok(());
         }
         let before = self.sim.model.clone();
-        let ctx = Context::outside_step(
-            self.sim.start_time,
-            self.sim.tolerance,
-            Some(&self.logger),
-            self.resources.as_deref(),
-            self.model_exchange,
-        );
-        let outcome = self
-            .sim
+        let (sim, ctx) = self.sim_and_context();
+        let outcome = sim
             .model
             .initialize(&ctx)
-            .map(|()| evaluate(&mut self.sim.model, self.sim.start_time))
+            .map(|()| evaluate(&mut sim.model, sim.start_time))
             .and_then(
-                |()| match non_finite(&self.sim.model).or_else(|| oversized_binary(&self.sim.model)) {
+                |()| match non_finite(&sim.model).or_else(|| oversized_binary(&sim.model)) {
                     None => Ok(()),
                     Some(what) => Err(format!("{what} (computed from the start values and parameters)")),
                 },

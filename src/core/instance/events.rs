@@ -7,7 +7,7 @@ use super::{EventInfo, Instance, Outcome};
 use crate::core::machine::State;
 use crate::core::{Function, OK, Status};
 use crate::description::{Causality, Variable};
-use crate::model::{CoSimulation, Context};
+use crate::model::CoSimulation;
 use crate::step::oversized_binary;
 
 impl<M: CoSimulation> Instance<M> {
@@ -179,26 +179,20 @@ impl<M: CoSimulation> Instance<M> {
             return status;
         }
         let before = (self.sim.model.clone(), self.sim.events);
-        let ctx = Context::outside_step(
-            self.sim.start_time,
-            self.sim.tolerance,
-            Some(&self.logger),
-            self.resources.as_deref(),
-            self.model_exchange,
-        );
-        let time = self.sim.time;
+        let (sim, ctx) = self.sim_and_context();
+        let time = sim.time;
         let outcome = if all_rounds {
-            crate::step::events::iterate(&mut self.sim.model, &ctx, time, &mut self.sim.events).map(
-                |(changed, terminate)| crate::step::events::Round {
+            crate::step::events::iterate(&mut sim.model, &ctx, time, &mut sim.events).map(|(changed, terminate)| {
+                crate::step::events::Round {
                     again: false,
                     terminate,
                     states_changed: changed,
-                },
-            )
+                }
+            })
         } else {
-            crate::step::events::update_round(&mut self.sim.model, &ctx, time, &mut self.sim.events)
+            crate::step::events::update_round(&mut sim.model, &ctx, time, &mut sim.events)
         };
-        let outcome = outcome.and_then(|round| match oversized_binary(&self.sim.model) {
+        let outcome = outcome.and_then(|round| match oversized_binary(&sim.model) {
             None => Ok(round),
             Some(what) => Err(format!("the update left {what}")),
         });

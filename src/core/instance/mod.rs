@@ -16,7 +16,7 @@ use super::logging::{Category, Logger};
 use super::machine::{Call, State, contains, state_names};
 use super::{ERROR, FATAL, OK, Status, Terms, Version};
 use crate::description::{VarType, Variable};
-use crate::model::{CoSimulation, EventClock, StateVector};
+use crate::model::{CoSimulation, Context, EventClock, StateVector};
 use std::ffi::CString;
 
 mod checks;
@@ -206,6 +206,20 @@ impl<M: CoSimulation> Instance<M> {
         if self.logger.wants(OK, Category::Calls) {
             self.logger.log(OK, Category::Calls, &message());
         }
+    }
+
+    /// The instance's state and the context a model's hooks run in outside a communication step
+    /// (initialization, an event, a parameter change: no integrator, the instance's logger),
+    /// borrowed together so that the model can change while the context is held.
+    pub(crate) fn sim_and_context(&mut self) -> (&mut Sim<M>, Context<'_>) {
+        let ctx = Context::outside_step(
+            self.sim.start_time,
+            self.sim.tolerance,
+            Some(&self.logger),
+            self.resources.as_deref(),
+            self.model_exchange,
+        );
+        (&mut self.sim, ctx)
     }
 
     /// A panic was caught at the boundary: nothing about this instance can be trusted any more.

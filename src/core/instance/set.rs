@@ -8,7 +8,7 @@ use crate::core::logging::Category;
 use crate::core::machine::State;
 use crate::core::{Function, OK, Status, WARNING};
 use crate::description::{Causality, Initial, VarType, Variability, Variable};
-use crate::model::{CoSimulation, Context};
+use crate::model::CoSimulation;
 use crate::step::{non_finite, oversized_binary};
 use crate::value::{FmiType, Value};
 
@@ -361,16 +361,10 @@ impl<M: CoSimulation> Instance<M> {
         self.sim.stale_derivatives = true;
         self.sim.stale_outputs = true;
         if let Some(previous) = previous {
-            let ctx = Context::outside_step(
-                self.sim.start_time,
-                self.sim.tolerance,
-                Some(&self.logger),
-                self.resources.as_deref(),
-                self.model_exchange,
-            );
-            let outcome = self.sim.model.parameters_changed(&ctx).and_then(|()| {
-                non_finite(&self.sim.model)
-                    .or_else(|| oversized_binary(&self.sim.model))
+            let (sim, ctx) = self.sim_and_context();
+            let outcome = sim.model.parameters_changed(&ctx).and_then(|()| {
+                non_finite(&sim.model)
+                    .or_else(|| oversized_binary(&sim.model))
                     .map_or(Ok(()), Err)
             });
             if let Err(why) = outcome {
