@@ -18,19 +18,18 @@ impl Spec {
     ) -> String {
         let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
         let descriptions = sim.component_descriptions();
-        let (state, serialize, names) = capabilities(sim);
+        let Header {
+            name,
+            description,
+            state,
+            serialize,
+        } = self.header(sim, system_name);
         let mut x = String::new();
         let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
         let _ = writeln!(
             x,
-            r#"<fmiModelDescription fmiVersion="2.0" modelName="{}" guid="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
-            esc(system_name),
+            r#"<fmiModelDescription fmiVersion="2.0" modelName="{name}" guid="{}" description="{description}" generationTool="rustfmu-container {}" variableNamingConvention="structured" numberOfEventIndicators="0">"#,
             self.guid,
-            esc(&format!(
-                "The system {system_name} as one FMU: {}, stepped by rustfmu-runner's master at {} s",
-                names.join(", "),
-                self.step
-            )),
             env!("CARGO_PKG_VERSION")
         );
         let _ = writeln!(
@@ -52,8 +51,7 @@ impl Spec {
         write_categories_and_experiment(&mut x, experiment, self.step);
         let _ = writeln!(x, "  <ModelVariables>");
         for e in &self.variables {
-            let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);
-            let v = d.and_then(|d| d.variable(&e.variable));
+            let v = declaration(&descriptions, e);
             let description = v.and_then(|v| v.description.clone()).unwrap_or_default();
             let _ = write!(
                 x,
@@ -66,31 +64,9 @@ impl Spec {
             if !description.is_empty() {
                 let _ = write!(x, r#" description="{}""#, esc(&description));
             }
-            let initial = match e.causality() {
-                Causality::Output if e.start.is_some() => Some("exact"),
-                Causality::Parameter => Some("exact"),
-                _ => None,
-            };
-            if let Some(i) = initial {
-                let _ = write!(x, r#" initial="{i}""#);
-            }
+            write_initial(&mut x, e);
             let _ = write!(x, ">\n      <{}", e.ty);
-            if let Some(v) = v {
-                if let Some(t) = &v.declared_type {
-                    let _ = write!(x, r#" declaredType="{}""#, esc(t));
-                }
-                if let Some(u) = &v.unit {
-                    let _ = write!(x, r#" unit="{}""#, esc(u));
-                }
-                if e.ty() != Type::Boolean && e.ty() != Type::String {
-                    if let Some(m) = v.min {
-                        let _ = write!(x, r#" min="{m}""#);
-                    }
-                    if let Some(m) = v.max {
-                        let _ = write!(x, r#" max="{m}""#);
-                    }
-                }
-            }
+            write_type_attributes(&mut x, e, v);
             if let Some(s) = &e.start {
                 let _ = write!(x, r#" start="{}""#, esc(s));
             }
@@ -98,11 +74,7 @@ impl Spec {
         }
         let _ = writeln!(x, "  </ModelVariables>");
         let _ = writeln!(x, "  <ModelStructure>");
-        let outputs: Vec<&Exposed> = self
-            .variables
-            .iter()
-            .filter(|e| e.causality() == Causality::Output)
-            .collect();
+        let outputs = self.outputs();
         if !outputs.is_empty() {
             let _ = writeln!(x, "    <Outputs>");
             for e in &outputs {
@@ -144,19 +116,18 @@ impl Spec {
     ) -> String {
         let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
         let descriptions = sim.component_descriptions();
-        let (state, serialize, names) = capabilities(sim);
+        let Header {
+            name,
+            description,
+            state,
+            serialize,
+        } = self.header(sim, system_name);
         let mut x = String::new();
         let _ = writeln!(x, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
         let _ = writeln!(
             x,
-            r#"<fmiModelDescription fmiVersion="3.0" modelName="{}" instantiationToken="{}" description="{}" generationTool="rustfmu-container {}" variableNamingConvention="structured">"#,
-            esc(system_name),
+            r#"<fmiModelDescription fmiVersion="3.0" modelName="{name}" instantiationToken="{}" description="{description}" generationTool="rustfmu-container {}" variableNamingConvention="structured">"#,
             self.guid,
-            esc(&format!(
-                "The system {system_name} as one FMU: {}, stepped by rustfmu-runner's master at {} s",
-                names.join(", "),
-                self.step
-            )),
             env!("CARGO_PKG_VERSION")
         );
         let _ = writeln!(
@@ -182,8 +153,7 @@ impl Spec {
             self.time_vr()
         );
         for e in &self.variables {
-            let d = descriptions.iter().find(|(c, _)| *c == e.component).map(|(_, d)| *d);
-            let v = d.and_then(|d| d.variable(&e.variable));
+            let v = declaration(&descriptions, e);
             let element = match e.ty() {
                 Type::Real => "Float64",
                 Type::Integer => "Int32",
@@ -204,30 +174,8 @@ impl Spec {
             {
                 let _ = write!(x, r#" description="{}""#, esc(description));
             }
-            let initial = match e.causality() {
-                Causality::Output if e.start.is_some() => Some("exact"),
-                Causality::Parameter => Some("exact"),
-                _ => None,
-            };
-            if let Some(i) = initial {
-                let _ = write!(x, r#" initial="{i}""#);
-            }
-            if let Some(v) = v {
-                if let Some(t) = &v.declared_type {
-                    let _ = write!(x, r#" declaredType="{}""#, esc(t));
-                }
-                if let Some(u) = &v.unit {
-                    let _ = write!(x, r#" unit="{}""#, esc(u));
-                }
-                if e.ty() != Type::Boolean && e.ty() != Type::String {
-                    if let Some(m) = v.min {
-                        let _ = write!(x, r#" min="{m}""#);
-                    }
-                    if let Some(m) = v.max {
-                        let _ = write!(x, r#" max="{m}""#);
-                    }
-                }
-            }
+            write_initial(&mut x, e);
+            write_type_attributes(&mut x, e, v);
             match (&e.start, e.ty()) {
                 (Some(s), Type::String) => {
                     let _ = writeln!(x, ">\n      <Start value=\"{}\"/>\n    </String>", esc(s));
@@ -242,11 +190,7 @@ impl Spec {
         }
         let _ = writeln!(x, "  </ModelVariables>");
         let _ = writeln!(x, "  <ModelStructure>");
-        let outputs: Vec<&Exposed> = self
-            .variables
-            .iter()
-            .filter(|e| e.causality() == Causality::Output)
-            .collect();
+        let outputs = self.outputs();
         for e in &outputs {
             let deps: Vec<String> = self
                 .output_dependencies(sim, e)
@@ -266,6 +210,32 @@ impl Spec {
         let _ = writeln!(x, "  </ModelStructure>");
         let _ = writeln!(x, "</fmiModelDescription>");
         x
+    }
+
+    /// What both versions' headers say: the system's name and a description naming the
+    /// components and the step (both escaped), and whether every component can get and set,
+    /// and serialize, its FMU state.
+    fn header(&self, sim: &Simulation, system_name: &str) -> Header {
+        let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+        let (state, serialize, names) = capabilities(sim);
+        Header {
+            name: esc(system_name),
+            description: esc(&format!(
+                "The system {system_name} as one FMU: {}, stepped by rustfmu-runner's master at {} s",
+                names.join(", "),
+                self.step
+            )),
+            state,
+            serialize,
+        }
+    }
+
+    /// The exposed outputs, in the container's order.
+    fn outputs(&self) -> Vec<&Exposed> {
+        self.variables
+            .iter()
+            .filter(|e| e.causality() == Causality::Output)
+            .collect()
     }
 
     /// The units and simple types (their 2.0 XML blocks) the exposed variables use: the
@@ -525,4 +495,54 @@ fn simple_type3(block: &str) -> Option<String> {
     }
     let _ = write!(out, "\n    </{element}>");
     Some(out)
+}
+
+/// [`Spec::header`]'s answer.
+struct Header {
+    name: String,
+    description: String,
+    state: bool,
+    serialize: bool,
+}
+
+/// The declaration of the exposed variable `e` in its component's description.
+fn declaration<'a>(descriptions: &[(&str, &'a Description)], e: &Exposed) -> Option<&'a md_reader::fmi2::Variable> {
+    descriptions
+        .iter()
+        .find(|(c, _)| *c == e.component)
+        .and_then(|(_, d)| d.variable(&e.variable))
+}
+
+/// An exposed output with a start value, and a parameter, are `initial="exact"`; the others
+/// take the standard's default.
+fn write_initial(x: &mut String, e: &Exposed) {
+    let initial = match e.causality() {
+        Causality::Output if e.start.is_some() => Some("exact"),
+        Causality::Parameter => Some("exact"),
+        _ => None,
+    };
+    if let Some(i) = initial {
+        let _ = write!(x, r#" initial="{i}""#);
+    }
+}
+
+/// The attributes an exposed variable takes from its component's declaration `v`: declared
+/// type, unit, and (but for Boolean and String) min and max.
+fn write_type_attributes(x: &mut String, e: &Exposed, v: Option<&md_reader::fmi2::Variable>) {
+    let esc = |s: &str| quick_xml::escape::escape(s).into_owned();
+    let Some(v) = v else { return };
+    if let Some(t) = &v.declared_type {
+        let _ = write!(x, r#" declaredType="{}""#, esc(t));
+    }
+    if let Some(u) = &v.unit {
+        let _ = write!(x, r#" unit="{}""#, esc(u));
+    }
+    if e.ty() != Type::Boolean && e.ty() != Type::String {
+        if let Some(m) = v.min {
+            let _ = write!(x, r#" min="{m}""#);
+        }
+        if let Some(m) = v.max {
+            let _ = write!(x, r#" max="{m}""#);
+        }
+    }
 }
