@@ -9,6 +9,24 @@ use crate::export::exports;
 use crate::*;
 use rustfmu::fmi3::abi::*;
 
+/// The rows of `fmi3Get{Type}` and `fmi3Set{Type}`: every one has the header's signature, so a
+/// row names the function and its `values` type, and the function that runs, which takes the
+/// arguments in the header's order (function name `F` second) and then the row's own.
+macro_rules! value_functions {
+    ($($name:ident(values: *$ptr:tt $ty:ty) => $f:ident($($arg:expr),* $(,)?);)*) => {
+        exports! {
+            $($name(
+                instance: fmi3Instance,
+                valueReferences: *const fmi3ValueReference,
+                nValueReferences: usize,
+                values: *$ptr $ty,
+                nValues: usize,
+            ) -> fmi3Status =>
+                $f(instance, F, valueReferences, nValueReferences, values, nValues, $($arg),*);)*
+        }
+    };
+}
+
 mod refusals;
 
 fn with3(c: fmi3Instance, function: &str, f: impl FnOnce(&mut Container) -> Outcome) -> fmi3Status {
@@ -203,15 +221,16 @@ fn arrays<'a, T>(
     Ok(slice(vr, nvr))
 }
 
+#[allow(clippy::too_many_arguments)]
 fn get3<T: Scalar>(
     instance: fmi3Instance,
     function: &'static str,
-    ty: Type,
-    asked: &'static str,
     vr: *const fmi3ValueReference,
     nvr: usize,
     out: *mut T,
     n_values: usize,
+    ty: Type,
+    asked: &'static str,
     get: impl Fn(&mut InstanceCS, &[u32], &mut [T]) -> Result<(), Fmi2Error>,
     finite: impl Fn(&T) -> bool,
     time: impl Fn(f64) -> Option<T>,
@@ -223,105 +242,44 @@ fn get3<T: Scalar>(
     })
 }
 
-exports! {
-    fmi3GetFloat64(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *mut fmi3Float64,
-        nValues: usize,
-    ) -> fmi3Status =>
-        get3(
-            instance,
-            F,
-            Type::Real,
-            "Float64",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |i, v, out| i.get_real(v, out),
-            |x| x.is_finite(),
-            Some,
-        );
-    fmi3GetInt32(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *mut fmi3Int32,
-        nValues: usize,
-    ) -> fmi3Status =>
-        get3(
-            instance,
-            F,
-            Type::Integer,
-            "Int32",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |i, v, out| i.get_integer(v, out),
-            |_| true,
-            |_| None,
-        );
+/// Values the components give as fmi2Integer (`get`), converted into the FMI 3.0 type of `out`.
+fn through_i32<T>(
+    n: usize,
+    out: &mut [T],
+    get: impl FnOnce(&mut [i32]) -> Result<(), Fmi2Error>,
+    convert: impl Fn(i32) -> T,
+) -> Result<(), Fmi2Error> {
+    let mut ints = vec![0i32; n];
+    get(&mut ints)?;
+    for (o, x) in out.iter_mut().zip(ints) {
+        *o = convert(x);
+    }
+    Ok(())
 }
 
-// An Enumeration's values (its FMI 3.0 access type is Int64; the components' are fmi2Integer).
+value_functions! {
+    fmi3GetFloat64(values: *mut fmi3Float64) =>
+        get3(Type::Real, "Float64", |i, v, out| i.get_real(v, out), |x| x.is_finite(), Some);
+    fmi3GetInt32(values: *mut fmi3Int32) =>
+        get3(Type::Integer, "Int32", |i, v, out| i.get_integer(v, out), |_| true, |_| None);
+    // An Enumeration's values (its FMI 3.0 access type is Int64; the components' are fmi2Integer).
+    fmi3GetInt64(values: *mut fmi3Int64) => get3(
+        Type::Enumeration,
+        "Int64 (an Enumeration)",
+        |i, v, out| through_i32(v.len(), out, |w| i.get_integer(v, w), i64::from),
+        |_| true,
+        |_| None,
+    );
+    fmi3GetBoolean(values: *mut fmi3Boolean) => get3(
+        Type::Boolean,
+        "Boolean",
+        |i, v, out| through_i32(v.len(), out, |w| i.get_boolean(v, w), |x| x != 0),
+        |_| true,
+        |_| None,
+    );
+}
+
 exports! {
-    fmi3GetInt64(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *mut fmi3Int64,
-        nValues: usize,
-    ) -> fmi3Status =>
-        get3(
-            instance,
-            F,
-            Type::Enumeration,
-            "Int64 (an Enumeration)",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |i, v, out| {
-                let mut ints = vec![0i32; v.len()];
-                i.get_integer(v, &mut ints)?;
-                for (o, x) in out.iter_mut().zip(ints) {
-                    *o = i64::from(x);
-                }
-                Ok(())
-            },
-            |_| true,
-            |_| None,
-        );
-    fmi3GetBoolean(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *mut fmi3Boolean,
-        nValues: usize,
-    ) -> fmi3Status =>
-        get3(
-            instance,
-            F,
-            Type::Boolean,
-            "Boolean",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |i, v, out| {
-                let mut ints = vec![0i32; v.len()];
-                i.get_boolean(v, &mut ints)?;
-                for (o, x) in out.iter_mut().zip(ints) {
-                    *o = x != 0;
-                }
-                Ok(())
-            },
-            |_| true,
-            |_| None,
-        );
     fmi3GetString(
         instance: fmi3Instance,
         valueReferences: *const fmi3ValueReference,
@@ -348,15 +306,16 @@ exports! {
         });
 }
 
+#[allow(clippy::too_many_arguments)]
 fn set3<T: Scalar>(
     instance: fmi3Instance,
     function: &'static str,
-    ty: Type,
-    asked: &'static str,
     vr: *const fmi3ValueReference,
     nvr: usize,
     value: *const T,
     n_values: usize,
+    ty: Type,
+    asked: &'static str,
     number: impl Fn(&T) -> Option<f64>,
     set: impl Fn(&mut InstanceCS, u32, T) -> Result<(), Fmi2Error>,
 ) -> fmi3Status {
@@ -366,45 +325,24 @@ fn set3<T: Scalar>(
     })
 }
 
+value_functions! {
+    fmi3SetFloat64(values: *const fmi3Float64) =>
+        set3(Type::Real, "Float64", |x| Some(*x), |i, v, x| i.set_real(&[v], &[x]).map(|_| ()));
+    fmi3SetInt32(values: *const fmi3Int32) => set3(
+        Type::Integer,
+        "Int32",
+        |x| Some(f64::from(*x)),
+        |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
+    );
+    fmi3SetBoolean(values: *const fmi3Boolean) => set3(
+        Type::Boolean,
+        "Boolean",
+        |_| None,
+        |i, v, x| i.set_boolean(&[v], &[i32::from(x)]).map(|_| ()),
+    );
+}
+
 exports! {
-    fmi3SetFloat64(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *const fmi3Float64,
-        nValues: usize,
-    ) -> fmi3Status =>
-        set3(
-            instance,
-            F,
-            Type::Real,
-            "Float64",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |x| Some(*x),
-            |i, v, x| i.set_real(&[v], &[x]).map(|_| ()),
-        );
-    fmi3SetInt32(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *const fmi3Int32,
-        nValues: usize,
-    ) -> fmi3Status =>
-        set3(
-            instance,
-            F,
-            Type::Integer,
-            "Int32",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |x| Some(f64::from(*x)),
-            |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
-        );
     fmi3SetInt64(
         instance: fmi3Instance,
         valueReferences: *const fmi3ValueReference,
@@ -441,25 +379,6 @@ exports! {
                 |i, v, x| i.set_integer(&[v], &[x]).map(|_| ()),
             )
         });
-    fmi3SetBoolean(
-        instance: fmi3Instance,
-        valueReferences: *const fmi3ValueReference,
-        nValueReferences: usize,
-        values: *const fmi3Boolean,
-        nValues: usize,
-    ) -> fmi3Status =>
-        set3(
-            instance,
-            F,
-            Type::Boolean,
-            "Boolean",
-            valueReferences,
-            nValueReferences,
-            values,
-            nValues,
-            |_| None,
-            |i, v, x| i.set_boolean(&[v], &[i32::from(x)]).map(|_| ()),
-        );
     fmi3SetString(
         instance: fmi3Instance,
         valueReferences: *const fmi3ValueReference,

@@ -27,33 +27,45 @@ fn no_such_type(me: &Container, call: Call, function: &str, asked: &str, vrs: &[
     }
 }
 
+/// The getter of a type no variable of a container has.
+fn refuse_get<T>(
+    instance: fmi3Instance,
+    function: &str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *mut T,
+    n_values: usize,
+    asked: &str,
+) -> fmi3Status {
+    with3(instance, function, |me| {
+        let vrs = arrays(me, function, vr, nvr, values as *const T, n_values)?;
+        no_such_type(me, Call::GetValues, function, asked, vrs)
+    })
+}
+
+/// The setter of a type no variable of a container has.
+fn refuse_set<T>(
+    instance: fmi3Instance,
+    function: &str,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const T,
+    n_values: usize,
+    asked: &str,
+) -> fmi3Status {
+    with3(instance, function, |me| {
+        let vrs = arrays(me, function, vr, nvr, values, n_values)?;
+        no_such_type(me, Call::SetDiscreteValues, function, asked, vrs)
+    })
+}
+
 /// The getter and setter rows of each type a container has no variable of.
 macro_rules! no_such_types {
     ($($get:ident, $set:ident, $ty:ty, $name:literal;)*) => {
-        exports! {
+        value_functions! {
             $(
-                $get(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *mut $ty,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    with3(instance, F, |me| {
-                        let vrs = arrays(me, F, valueReferences, nValueReferences, values as *const $ty, nValues)?;
-                        no_such_type(me, Call::GetValues, F, $name, vrs)
-                    });
-                $set(
-                    instance: fmi3Instance,
-                    valueReferences: *const fmi3ValueReference,
-                    nValueReferences: usize,
-                    values: *const $ty,
-                    nValues: usize,
-                ) -> fmi3Status =>
-                    with3(instance, F, |me| {
-                        let vrs = arrays(me, F, valueReferences, nValueReferences, values, nValues)?;
-                        no_such_type(me, Call::SetDiscreteValues, F, $name, vrs)
-                    });
+                $get(values: *mut $ty) => refuse_get($name);
+                $set(values: *const $ty) => refuse_set($name);
             )*
         }
     };
