@@ -349,3 +349,57 @@ def test_an_early_return_ends_every_components_step_at_the_event_as_in_fmpy(tmp_
     # Without event mode the ball is stepped over its bounces on the grid alone.
     plain = runner(tmp_path, path, stop, h, "--record", "ball.h")
     assert len(plain["time"]) == round(stop / h) + 1
+
+
+# --- Triggered output Tx clocks: two CanSignalTriggered nodes connected directly ------------
+
+def test_triggered_output_tx_clocks_carry_frames_both_ways_as_the_fmpy_scheduler_of_test_ls_bus_triggered(tmp_path):
+    """Each node's Tx_Clock is a triggered output clock ticking at its own time events (the step
+    that reaches one ends with eventHandlingNeeded; fmi3GetClock says it ticks): the runner
+    connects it to the other node's Rx_Clock (FMI-LS-BUS 1.0.0, Triggered Tx Clocks), Tx_Data to
+    Rx_Data. Where both send at once (every 20 ms) the second frame is taken in a second round of
+    the same Event Mode. Against test_ls_bus_triggered's own fmpy scheduler (t += h): every send
+    at the same time (to the ulps t += h adds), every frame's signal received."""
+    import test_ls_bus_triggered as trig
+    path = fmu3("CanSignalTriggered")
+    params = {"sensor": dict(tx_id=0x123, rx_id=0x200, period=0.01, u=2.5),
+              "actuator": dict(tx_id=0x200, rx_id=0x123, period=0.02, u=-1.25)}
+    connectors = {n: [("CAN.Tx_Clock", "output", "Clock", ()), ("CAN.Tx_Data", "output", "Binary", ()),
+                      ("CAN.Rx_Clock", "input", "Clock", ()), ("CAN.Rx_Data", "input", "Binary", ())] for n in params}
+    links = []
+    for a, b in (("sensor", "actuator"), ("actuator", "sensor")):
+        links += [(a, "CAN.Tx_Clock", b, "CAN.Rx_Clock"), (a, "CAN.Tx_Data", b, "CAN.Rx_Data")]
+    ssv = {"Int32": "Int32", "Float64": "Float64"}
+    parameters = {n: [(k, ssv["Int32" if isinstance(v, int) else "Float64"], v, ()) for k, v in p.items()]
+                  for n, p in params.items()}
+    ssp, ssd = write_ssp2(tmp_path / "Triggered.ssp", [(n, path) for n in params], connectors, links, parameters)
+    valid(ssd)
+    record = [f"{n}.{v}" for n in params for v in ("y", "frames_sent", "frames_received")]
+    stop = 0.1
+    got = runner(tmp_path, ssp, stop, trig.H, *[a for r in record for a in ("--record", r)])
+    md = fmpy.read_model_description(path)
+    fmu = (path, md, {v.name: v.valueReference for v in md.modelVariables})
+    nodes = {n: trig.Node(fmu, n, **p) for n, p in params.items()}
+    sent = trig.run(list(nodes.values()), stop=stop)
+    time = np.asarray(got["time"])
+    frames = 0
+    for name, node in nodes.items():
+        other = next(n for n in nodes if n != name)
+        want = [t for t, n, _ in sent if n is node]
+        counts = np.asarray(got[f"{name}.frames_sent"])
+        at = time[1:][np.diff(counts) > 0]
+        assert len(at) == len(want) and np.max(np.abs(at - np.array(want))) < 1e-12, (name, list(at), want)
+        # Every frame it sent arrived at the other node at that point, its signal bit for bit.
+        received = np.asarray(got[f"{other}.frames_received"])
+        assert list(time[1:][np.diff(received) > 0]) == list(at)
+        for t, n, data in sent:
+            if n is node:
+                [(can_id, payload)] = trig.frames(data)
+                assert can_id == params[name]["tx_id"]
+                i = int(np.argmin(np.abs(time - t)))
+                assert got[f"{other}.y"][i] == struct.unpack("<d", payload)[0] == params[name]["u"]
+                frames += 1
+        assert got[f"{name}.frames_sent"][-1] == node.get("frames_sent")
+        assert got[f"{other}.frames_received"][-1] == nodes[other].get("frames_received")
+    assert frames == 15
+    print(f"triggered: {frames} frames compared")

@@ -173,6 +173,11 @@ pub struct ClockState {
     pub event_mode: bool,
     /// Its output clocks read in this Event Mode ([`Instance3::poll_output_clocks`]).
     pub polled: bool,
+    /// Its tick evaluated in this round (output clocks or a clocked variable read): a clock set
+    /// now begins a second round ([`Instance3::trigger`]).
+    pub evaluated: bool,
+    /// The clocked variables read in this round (a read may empty a Binary: FMI-LS-BUS Tx_Data).
+    pub fresh: std::collections::HashSet<u32>,
     /// Instantiated with earlyReturnAllowed; where its last step returned early.
     pub early_allowed: bool,
     pub early_at: Option<f64>,
@@ -198,6 +203,8 @@ impl ClockState {
             last: vec![None; n],
             event_mode: false,
             polled: false,
+            evaluated: false,
+            fresh: Default::default(),
             early_allowed: false,
             early_at: None,
             active: vec![false; n],
@@ -430,33 +437,7 @@ impl Instance3 {
         }
         if self.state().event_mode {
             self.poll_output_clocks(t)?;
-            self.hold_outputs()?;
-            let f = self.events().update_discrete_states;
-            for _ in 0..1000 {
-                let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
-                    (false, false, false, false, false, 0.0);
-                // SAFETY: a live instance in Event Mode; the outputs point to locals.
-                check(unsafe {
-                    f(
-                        self.c,
-                        &mut update,
-                        &mut terminate,
-                        &mut nominals,
-                        &mut values,
-                        &mut defined,
-                        &mut next,
-                    )
-                })
-                .map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
-                if terminate {
-                    return Err(Fmi2Error::Importer(format!(
-                        "fmi3UpdateDiscreteStates asked to terminate the simulation at t = {t}"
-                    )));
-                }
-                if !update {
-                    break;
-                }
-            }
+            self.update_round(t)?;
             let plan = self.state().plan.clone();
             for (i, c) in plan.inputs.iter().enumerate() {
                 if matches!(c.interval, Interval::Tunable | Interval::Aperiodic) {
@@ -475,6 +456,8 @@ impl Instance3 {
             let state = self.state();
             state.event_mode = false;
             state.polled = false;
+            state.evaluated = false;
+            state.fresh.clear();
             state.active.iter_mut().for_each(|a| *a = false);
         }
         Ok(())
@@ -484,18 +467,62 @@ impl Instance3 {
     /// read gives until their next tick (a record, a connection) is the value of this tick.
     fn hold_outputs(&mut self) -> Result<(), Fmi2Error> {
         let plan = self.state().plan.clone();
-        let vrs: Vec<u32> = plan.reals.iter().copied().filter(|v| self.state().free(*v)).collect();
+        let vrs: Vec<u32> = plan
+            .reals
+            .iter()
+            .copied()
+            .filter(|v| self.state().free(*v) && !self.state().fresh.contains(v))
+            .collect();
         if !vrs.is_empty() {
             let mut x = vec![0.0; vrs.len()];
             self.get_float64(&vrs, &mut x)?;
             self.state().held.extend(vrs.iter().copied().zip(x));
         }
         for (vr, buf) in &plan.typed_outputs {
-            if self.state().free(*vr) {
+            if self.state().free(*vr) && !self.state().fresh.contains(vr) {
                 let mut out = buf.clone();
                 self.get_typed(&[*vr], &mut out)?;
             }
         }
+        Ok(())
+    }
+
+    /// The tick of this Event Mode ends: its clocked outputs held, fmi3UpdateDiscreteStates
+    /// until the FMU needs no more; its clocks then tick no more (a clock set after this starts
+    /// another round of the same Event Mode, FMI 3.0.2: super-dense time).
+    fn update_round(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        self.hold_outputs()?;
+        let f = self.events().update_discrete_states;
+        for _ in 0..1000 {
+            let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
+                (false, false, false, false, false, 0.0);
+            // SAFETY: a live instance in Event Mode; the outputs point to locals.
+            check(unsafe {
+                f(
+                    self.c,
+                    &mut update,
+                    &mut terminate,
+                    &mut nominals,
+                    &mut values,
+                    &mut defined,
+                    &mut next,
+                )
+            })
+            .map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
+            if terminate {
+                return Err(Fmi2Error::Importer(format!(
+                    "fmi3UpdateDiscreteStates asked to terminate the simulation at t = {t}"
+                )));
+            }
+            if !update {
+                break;
+            }
+        }
+        let state = self.state();
+        state.active.iter_mut().for_each(|a| *a = false);
+        state.polled = false;
+        state.evaluated = false;
+        state.fresh.clear();
         Ok(())
     }
 
@@ -535,6 +562,11 @@ impl Instance3 {
             )));
         };
         self.enter_event(t)?;
+        if self.state().evaluated {
+            // Its tick was evaluated (its output clocks read): the new clock ticks in a second
+            // round of this Event Mode, after the first ends (its outputs held).
+            self.update_round(t)?;
+        }
         let f = self.events().set_clock;
         // SAFETY: a live instance in Event Mode; one value reference, one value.
         check(unsafe { f(self.c, &vr, 1, &true) }).map_err(|e| {
@@ -566,7 +598,9 @@ impl Instance3 {
         if self.clocks.as_ref().is_none_or(|s| !s.event_mode || s.polled) {
             return Ok(());
         }
-        self.state().polled = true;
+        let state = self.state();
+        state.polled = true;
+        state.evaluated |= state.plan.inputs.iter().any(|c| c.interval == Interval::Output);
         self.output_clocks(t)
     }
 
@@ -606,6 +640,10 @@ impl Instance3 {
         if state.all_free(vrs) {
             self.get_float64(vrs, out)?;
             let state = self.state();
+            for v in vrs.iter().filter(|v| state.plan.clocked.contains_key(v)) {
+                state.evaluated = true;
+                state.fresh.insert(*v);
+            }
             for (vr, x) in vrs.iter().zip(out.iter()) {
                 if state.plan.clocked.contains_key(vr) {
                     state.held.insert(*vr, *x);
@@ -631,6 +669,8 @@ impl Instance3 {
                 k += 1;
                 if state.plan.clocked.contains_key(vr) {
                     state.held.insert(*vr, *o);
+                    state.evaluated = true;
+                    state.fresh.insert(*vr);
                 }
             } else {
                 *o = state.held.get(vr).copied().unwrap_or(0.0);

@@ -16,6 +16,8 @@ impl Instance3 {
             Some(true) => {
                 self.get_typed_raw(vrs, out)?;
                 let held = self.clocks.as_mut().expect("clocks");
+                held.evaluated = true;
+                held.fresh.insert(vrs[0]);
                 held.held_typed.insert(vrs[0], out.clone());
                 Ok(())
             }

@@ -241,7 +241,10 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         .map(|v| v.vr)
         .collect();
     let mut feedthrough = Vec::new();
-    for o in &d.outputs {
+    // An output clock's dependencies say what its ticks depend on, not a value's: the runner
+    // ticks clocks before any value is exchanged (`sim/clocks.rs`), so they close no loop.
+    let is_clock = |vr: u32| d.by_vr(vr).is_some_and(|v| v.ty == d3::Type::Clock);
+    for o in d.outputs.iter().filter(|o| !is_clock(o.vr)) {
         match &o.dependencies {
             None => feedthrough.extend(&inputs),
             Some(deps) => feedthrough.extend(deps.iter().filter(|k| inputs.contains(k))),

@@ -26,6 +26,8 @@ use super::*;
 pub(super) struct ClockLink {
     pub from: (usize, u32),
     pub to: (usize, u32),
+    /// The sender's clock is an output clock (its tick known once the sender's is evaluated).
+    pub output: bool,
     pub text: String,
 }
 
@@ -53,7 +55,8 @@ impl Simulation {
                     ),
                 ));
             }
-            self.clock_links.push(ClockLink { from, to, text });
+            let output = self.clock_decl(from.0, from.1).expect("resolved").interval == crate::fmi3::Interval::Output;
+            self.clock_links.push(ClockLink { from, to, output, text });
         }
         // The links out of a component after those into it (its output clocks are read once its
         // input clocks are set): the components in a topological order of the links (a cycle
@@ -128,27 +131,32 @@ impl Simulation {
     }
 
     /// At `t`, after every instance reached it: each clock connection whose sender ticks ticks
-    /// its receiver, until none is left (a chain of connections).
-    pub(super) fn link_clocks(&mut self, t: f64) -> Result<(), Error> {
+    /// its receiver, until none is left (a chain of connections). `outputs` false: only the
+    /// connections from input clocks (known without evaluating the sender's tick); true: also
+    /// those from output clocks, as [`Simulation::poll_senders`] read them (a sender that enters
+    /// Event Mode only by a connection here is read when its Event Mode ends, too late for its
+    /// own connections at this time). Returns whether a receiver ticked.
+    pub(super) fn link_clocks(&mut self, t: f64, outputs: bool) -> Result<bool, Error> {
+        // The clocks that tick, as they are before any receiver takes its tick (a receiver whose
+        // first round ends for it stops ticking its own clocks, which tick at this time all the same).
+        let mut ticking: Vec<(usize, u32)> = Vec::new();
+        for k in 0..self.clock_links.len() {
+            let ClockLink { from, output, .. } = self.clock_links[k];
+            if (outputs || !output) && !ticking.contains(&from) && self.instance(from.0).clock_active(from.1) {
+                ticking.push(from);
+            }
+        }
+        let mut done = vec![false; self.clock_links.len()];
+        let mut any = false;
         for _ in 0..=self.clock_links.len() {
             let mut changed = false;
-            for k in 0..self.clock_links.len() {
-                let ClockLink { from, to, .. } = self.clock_links[k];
-                let s = &mut self.slaves[from.0];
-                s.instance
-                    .as_mut()
-                    .expect("instantiated")
-                    .poll_output_clocks(t)
-                    .map_err(|e| {
-                        Error::fmi(
-                            &s.name,
-                            "fmi3GetClock",
-                            &e,
-                            Some(t),
-                            &format!("clock connection {}", self.clock_links[k].text),
-                        )
-                    })?;
-                if self.instance(from.0).clock_active(from.1) && !self.instance(to.0).clock_active(to.1) {
+            for (k, finished) in done.iter_mut().enumerate() {
+                let ClockLink { from, to, output, .. } = self.clock_links[k];
+                if *finished || (output && !outputs) || !ticking.contains(&from) {
+                    continue;
+                }
+                *finished = true;
+                if !self.instance(to.0).clock_active(to.1) {
                     let s = &mut self.slaves[to.0];
                     s.instance
                         .as_mut()
@@ -163,11 +171,40 @@ impl Simulation {
                                 &format!("clock connection {}", self.clock_links[k].text),
                             )
                         })?;
-                    changed = true;
+                    any = true;
                 }
+                if !ticking.contains(&to) {
+                    ticking.push(to);
+                }
+                changed = true;
             }
             if !changed {
-                return Ok(());
+                return Ok(any);
+            }
+        }
+        Ok(any)
+    }
+
+    /// The senders of connections from output clocks read their output clocks (their ticks
+    /// evaluated), before any value is exchanged.
+    fn poll_senders(&mut self, t: f64) -> Result<(), Error> {
+        for k in 0..self.clock_links.len() {
+            let ClockLink { from, output, .. } = self.clock_links[k];
+            if output {
+                let s = &mut self.slaves[from.0];
+                s.instance
+                    .as_mut()
+                    .expect("instantiated")
+                    .poll_output_clocks(t)
+                    .map_err(|e| {
+                        Error::fmi(
+                            &s.name,
+                            "fmi3GetClock",
+                            &e,
+                            Some(t),
+                            &format!("clock connection {}", self.clock_links[k].text),
+                        )
+                    })?;
             }
         }
         Ok(())
@@ -179,8 +216,13 @@ impl Simulation {
     /// values are propagated again, so that what is recorded and what the next step starts
     /// from are the values after the event, as an importer's event iteration leaves them.
     pub(super) fn event_point(&mut self, t: f64) -> Result<(), Error> {
-        self.link_clocks(t)?;
+        self.link_clocks(t, false)?;
+        self.poll_senders(t)?;
         self.propagate(t)?;
+        if self.link_clocks(t, true)? {
+            // A round the receivers of output clocks take their values in.
+            self.propagate(t)?;
+        }
         self.settle_clocks(t)?;
         self.propagate(t)
     }
