@@ -5,15 +5,16 @@
 //! - [`ssp`] reads an SSP archive's `SystemStructure.ssd`: components (`source="resources/X.fmu"`),
 //!   connections, parameter bindings (inline `ssv:ParameterSet` or a `.ssv` file in the archive),
 //!   and refuses what it cannot run (system-level connectors, nested systems, transformations,
-//!   unit conversions, clock connections), naming component and connector.
+//!   unit conversions), naming component and connector; SSP 2.0 clock connections.
 //! - [`fmu`] loads one FMU with the runner's own importers (FMI 2.0 and FMI 3.0: every type and
-//!   array, Event Mode and time-based input clocks).
+//!   array, Event Mode, input clocks of every kind and output clocks, early return).
 //! - [`sim`] is the master: parameter and start values after fmi2Instantiate, initialization
 //!   with the connections propagated once per instance, then at every communication point
 //!   t = k·h the connections evaluated in dependency order (Gauss-Seidel along the connections
 //!   by ModelStructure feedthrough, the order of `examples/cosim/master.py`; algebraic loops
-//!   solved by Newton's method, [`sim::loops`]) and every FMU stepped; chosen variables
-//!   recorded; parameters and start values overridden per run.
+//!   solved by Newton's method, [`sim::loops`]) and every FMU stepped; with clock connections
+//!   or aperiodic clocks, also at every tick and early return (runner/README.md, Clocks); chosen
+//!   variables recorded; parameters and start values overridden per run.
 //!
 //! The command line is `rustfmu-runner run SYSTEM.ssp --stop-time 10 --step 1e-3
 //! --set pendulum.alpha1_0=0.2 --output out.csv`; the Python module (`runner/python`) runs the
