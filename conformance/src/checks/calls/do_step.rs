@@ -195,12 +195,21 @@ pub fn a_huge_step_completes_or_is_discarded_and_the_status_functions_tell_the_t
                 // fmi2Terminated: true only where the model ended the simulation in the step.
                 let (st, terminated) = inst.terminated();
                 assert_eq!(st, fmi2OK, "{}: fmi2GetBooleanStatus(fmi2Terminated)", fmu.id);
+                // A message saying why is this exporter's wording and FMI 2.0.5's "should" (the
+                // logger is called with fmi2Discard: §2.1.3, not a requirement): a warning.
                 if terminated == fmi2True {
-                    assert!(
-                        log.iter()
-                            .any(|e| e.status == fmi2Discard && e.text.contains("ended the simulation")),
-                        "{}: fmi2Terminated after a discarded step, but no message says the model ended the simulation: {log:?}",
-                        fmu.id
+                    crate::outcome::warn_unless(
+                        log.iter().any(|e| {
+                            e.status == fmi2Discard
+                                && (e.text.contains("ended the simulation")
+                                    || !convention(fmu, "the wording of messages (which words name what is wrong)"))
+                        }),
+                        || {
+                            format!(
+                                "{}: fmi2Terminated after a discarded step, but no message says the model ended the simulation: {log:?}",
+                                fmu.id
+                            )
+                        },
                     );
                 }
                 let values = inst.get_real(&fmu.md.vrs_of_type(Type::Real));
