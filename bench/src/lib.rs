@@ -20,6 +20,23 @@ use fmi::traits::FmiImport;
 use rustfmu::description::VarType;
 use std::path::{Path, PathBuf};
 
+/// What every run-timing program of the bench takes: how long a run is, its communication step,
+/// and how many runs are timed (`#[command(flatten)]` in each program's arguments).
+#[derive(clap::Args, Debug, Clone, Copy)]
+// Its doc comment is not the programs' `--help` text.
+#[command(about = None, long_about = None)]
+pub struct RunArgs {
+    /// Simulated time [s].
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Communication step [s].
+    #[arg(long, default_value_t = 1e-3)]
+    pub step: f64,
+    /// Runs; the fastest and the median are reported.
+    #[arg(long, default_value_t = 5)]
+    pub repeat: usize,
+}
+
 /// The median of `v` (of an even count, the upper of the middle two), as every report binary
 /// gives its repeated timings.
 pub fn median(mut v: Vec<f64>) -> f64 {

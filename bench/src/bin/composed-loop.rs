@@ -20,15 +20,8 @@ struct Args {
     /// Print the loop table as JSON (for bench/python/composed_loop.py) and exit.
     #[arg(long)]
     topology_json: bool,
-    /// Simulated time [s].
-    #[arg(long, default_value_t = 10.0)]
-    seconds: f64,
-    /// Communication step [s].
-    #[arg(long, default_value_t = 1e-3)]
-    step: f64,
-    /// Runs; the fastest and the median are reported.
-    #[arg(long, default_value_t = 5)]
-    repeat: usize,
+    #[command(flatten)]
+    run: rustfmu_bench::RunArgs,
     /// Evaluate each communication point in the Jacobi order (every output read, then every input
     /// set; what fmpy.ssp and libcosim do) instead of the dependency order.
     #[arg(long)]
@@ -46,7 +39,7 @@ fn run() -> Result<(), String> {
         println!("{}", topo.to_json());
         return Ok(());
     }
-    let (seconds, h, repeat) = (args.seconds, args.step, args.repeat);
+    let (seconds, h, repeat) = (args.run.seconds, args.run.step, args.run.repeat);
     let n = (seconds / h).round() as usize;
     let mut master = Master::new(topo)?;
     if args.jacobi {

@@ -22,12 +22,8 @@ struct Args {
     /// PendulumLQR, PendulumMotors (repeatable; default both).
     #[arg(long)]
     system: Vec<String>,
-    #[arg(long, default_value_t = 10.0)]
-    seconds: f64,
-    #[arg(long, default_value_t = 1e-3)]
-    step: f64,
-    #[arg(long, default_value_t = 5)]
-    repeat: usize,
+    #[command(flatten)]
+    run: rustfmu_bench::RunArgs,
     #[arg(long, default_value = "target/fmu")]
     fmu_dir: PathBuf,
 }
@@ -69,20 +65,20 @@ fn run() -> Result<(), String> {
         let t0 = Instant::now();
         let mut whole = SystemProcess::spawn(iso, &ssp, false)?;
         let start_whole = t0.elapsed().as_secs_f64();
-        let mut all = RunOptions::new(args.seconds, args.step);
+        let mut all = RunOptions::new(args.run.seconds, args.run.step);
         all.record = here.outputs();
-        let mut angles = RunOptions::new(args.seconds, args.step);
+        let mut angles = RunOptions::new(args.run.seconds, args.run.step);
         angles.record = vec!["pendulum.alpha1".into(), "pendulum.alpha2".into()];
         let mut line = Vec::new();
-        let steps = (args.seconds / args.step).round();
+        let steps = (args.run.seconds / args.run.step).round();
         for (what, opts) in [("all_outputs", &all), ("angles", &angles)] {
             // One run each first: the pages and caches of both.
             per_run(&mut here, opts, 1)?;
             per_run(&mut there, opts, 1)?;
-            let a = per_run(&mut here, opts, args.repeat)?;
-            let b = per_run(&mut there, opts, args.repeat)?;
+            let a = per_run(&mut here, opts, args.run.repeat)?;
+            let b = per_run(&mut there, opts, args.run.repeat)?;
             let mut times = Vec::new();
-            for _ in 0..=args.repeat.max(1) {
+            for _ in 0..=args.run.repeat.max(1) {
                 let t0 = Instant::now();
                 whole.run(opts).map_err(|f| f.error.message)?;
                 times.push(t0.elapsed().as_secs_f64());
@@ -103,9 +99,9 @@ fn run() -> Result<(), String> {
         println!(
             "{{\"system\": \"{name}\", \"components\": {}, \"seconds\": {}, \"step\": {}, \"repeat\": {}, \"start_in_process_ms\": {:.1}, \"start_component_ms\": {:.1}, \"start_system_ms\": {:.1}, {}}}",
             here.components().len(),
-            args.seconds,
-            args.step,
-            args.repeat,
+            args.run.seconds,
+            args.run.step,
+            args.run.repeat,
             start_here * 1e3,
             start_there * 1e3,
             start_whole * 1e3,
