@@ -60,7 +60,7 @@ macro_rules! can_signal_node {
             $(# $tx_clock_attr)*
             pub tx_clock: Clock,
             /// The bus operations this node sends (FMI-LS-BUS CAN)
-            #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [])]
+            #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [u])]
             pub tx_data: Vec<u8>,
             /// Frames sent
             #[variable(vr = 20, output, discrete, initial = exact, start = 0, depends = [])]

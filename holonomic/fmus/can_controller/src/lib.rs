@@ -126,7 +126,7 @@ with_design_parameters! {
         #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(countdown))]
         pub tx_clock: Clock,
         /// The bus operations this node sends (FMI-LS-BUS CAN)
-        #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [])]
+        #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [alpha1_ref, alpha2_ref])]
         pub tx_data: Vec<u8>,
         /// Measurement frames received and applied
         #[variable(vr = 70, output, discrete, initial = exact, start = 0, depends = [])]

@@ -74,7 +74,7 @@ pub struct CanSensor {
     #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(countdown))]
     pub tx_clock: Clock,
     /// The bus operations this node sends (FMI-LS-BUS CAN)
-    #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [])]
+    #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [alpha1, omega1, alpha2, omega2])]
     pub tx_data: Vec<u8>,
     /// Measurement frames sent
     #[variable(vr = 20, output, discrete, initial = exact, start = 0, depends = [])]
