@@ -1075,7 +1075,7 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
 }
 
 /// Verdict: warned, never failed. FMI 3.0.2 §2.3.1 (fmi3SetDebugLogging): the categories are
-/// the modeling environment's, "none, some or all" declared in <LogCategories>; one the FMU does
+/// the modeling environment's, "none, some or all" declared in `<LogCategories>`; one the FMU does
 /// not know is the importer's mistake (see `importers_mistakes`).
 pub fn fmi3_set_debug_logging_refuses_unknown_categories(fmu: &Fmu3) {
     let i = if fmu.md.cs.is_some() {
