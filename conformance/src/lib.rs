@@ -27,7 +27,6 @@ pub mod checks;
 pub mod fmi2;
 pub mod fmi3;
 pub mod guard;
-pub mod importers_mistakes;
 pub mod instance;
 pub mod logger;
 pub mod me;

@@ -106,37 +106,6 @@ pub fn on_purpose<R>(f: impl FnOnce() -> R) -> R {
     r
 }
 
-/// Runs `f`, a part of a check whose every call is an importer's mistake made on purpose (a
-/// wrong GUID, a NULL instance, an unknown value reference, a call outside the state machine):
-/// the standard leaves the FMU's answer undefined, so detecting it is good practice, not
-/// conformance. Inside [`on_purpose`] (a crash is a warning), and a failure of `f` is recorded
-/// as a warning ([`warn`]) that ends with `why` (the standard's sentence that puts the
-/// obligation on the importer); a skip or [`warned`] ends the check as it would have.
-pub fn importers_mistake(why: &str, f: impl FnOnce()) {
-    let was = ON_PURPOSE.swap(true, std::sync::atomic::Ordering::Relaxed);
-    // Until `f` says more: a crash before its first breadcrumb is in one of its mistakes.
-    breadcrumb(why);
-    let result = catch_unwind(AssertUnwindSafe(f));
-    ON_PURPOSE.store(was, std::sync::atomic::Ordering::Relaxed);
-    let Err(payload) = result else { return };
-    if payload.is::<Skipped>() || payload.is::<Warned>() {
-        std::panic::resume_unwind(payload);
-    }
-    if let Outcome::Fail(m) = from_payload(payload) {
-        warn(format!("{m}\n(warned, not failed: {why})"));
-    }
-}
-
-/// Runs `f`, a call the standard defines inside a check of importer's mistakes (as
-/// fmi2FreeInstance(NULL), which it says is ignored): its breadcrumbs are not marked as a
-/// mistake ([`on_purpose`]), so a crash in it is a failure.
-pub fn required<R>(f: impl FnOnce() -> R) -> R {
-    let was = ON_PURPOSE.swap(false, std::sync::atomic::Ordering::Relaxed);
-    let r = f();
-    ON_PURPOSE.store(was, std::sync::atomic::Ordering::Relaxed);
-    r
-}
-
 /// Whether the calls made now are an importer's mistakes on purpose (inside [`on_purpose`]).
 pub fn is_on_purpose() -> bool {
     ON_PURPOSE.load(std::sync::atomic::Ordering::Relaxed)
@@ -391,32 +360,6 @@ fn from_payload(payload: Box<dyn Any + Send>) -> Outcome {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn an_importers_mistake_fails_as_a_warning_with_its_reason_and_a_skip_stays_a_skip() {
-        let (o, f) = capture(|| {
-            importers_mistake("FMI 2.0.5 §2.1.5: the importer's obligation", || {
-                assert!(is_on_purpose());
-                panic!("a wrong GUID accepted");
-            });
-            assert!(!is_on_purpose());
-        });
-        assert!(
-            matches!(&o, Outcome::Warn(m) if m.starts_with("a wrong GUID accepted") && m.ends_with("(warned, not failed: FMI 2.0.5 §2.1.5: the importer's obligation)")),
-            "{o:?}"
-        );
-        assert_eq!(f.warnings.len(), 1);
-        let (o, _) = capture(|| importers_mistake("why", || skip("not declared")));
-        assert_eq!(o, Outcome::Skip("not declared".into()));
-        let (o, _) = capture(|| {
-            importers_mistake("why", || {});
-            panic!("FMI 2.0.5 §2.1.3: broken");
-        });
-        assert!(
-            matches!(&o, Outcome::Fail(m) if m.starts_with("FMI 2.0.5 §2.1.3: broken")),
-            "{o:?}"
-        );
-    }
 
     #[test]
     fn a_failure_outranks_warnings_and_warnings_outrank_a_pass_or_a_skip() {

@@ -83,19 +83,14 @@ impl Check {
         }
     }
 
-    /// Runs the check on `fmu` in this process (panics are caught); one of
-    /// [`crate::importers_mistakes::CHECKS`] inside [`crate::outcome::importers_mistake`]. Panics
-    /// when the check is of the other FMI version.
+    /// Runs the check on `fmu` in this process (panics are caught). Panics when the check is
+    /// of the other FMI version.
     pub fn run_on<F: Checked>(&self, fmu: &F) -> (Outcome, Findings) {
         let run = F::check_fn(self.run)
             .unwrap_or_else(|| panic!("{} checks {:?} FMUs, not {:?}", self.name, self.version(), F::VERSION));
         capture(|| {
             fmu.runnable(self.name);
-            // A check of importer's mistakes only: what the FMU does is undefined, a warning.
-            match crate::importers_mistakes::why(self.name) {
-                Some(why) => crate::outcome::importers_mistake(why, || run(fmu)),
-                None => run(fmu),
-            }
+            run(fmu)
         })
     }
 

@@ -191,11 +191,10 @@ pub fn directional_derivative_flag_is_either_value_and_false_means_refused(fmu: 
                 "{at}: providesDirectionalDerivative=\"false\", expected fmi2Error, got {}; log {log:?}",
                 status_name(s)
             );
-            // FMI 2.0.5 prescribes no message with a refusal: without one, a warning (a house
-            // rule: the user learns why the call failed).
-            crate::outcome::warn_unless(inst.says(&log, fmi2Error, &["fmi2GetDirectionalDerivative"]), || {
-                format!("{at}: refused without a message naming fmi2GetDirectionalDerivative: {log:?}")
-            });
+            assert!(
+                inst.says(&log, fmi2Error, &["fmi2GetDirectionalDerivative"]),
+                "{at}: refused without a message: {log:?}"
+            );
         }
     }
 }

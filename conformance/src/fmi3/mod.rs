@@ -472,7 +472,6 @@ impl<'a> Inst<'a> {
                 )
             }
         };
-        FATAL.store(false, std::sync::atomic::Ordering::Relaxed);
         if c.is_null() {
             return Err(format!(
                 "fmi3Instantiate{} returned NULL: {:?}",
@@ -584,16 +583,8 @@ impl<'a> Inst<'a> {
         crate::outcome::breadcrumb(what);
         let before = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
         let s = f(self.c);
-        if s == fmi3Fatal {
-            FATAL.store(true, std::sync::atomic::Ordering::Relaxed);
-        }
         {
-            // logMessage's category: one of <LogCategories>, NULL if there are none: a warning.
-            // FMI 3.0.2 §2.3.1 (fmi3LogMessageCallback): "The meaning of category is defined by the
-            // modeling environment that generated the FMU. Depending on this modeling environment,
-            // none, some or all allowed values of category for this FMU are defined in the
-            // modelDescription.xml file via element <LogCategories>": not a requirement, but an
-            // importer filtering by the declared categories never shows such a message.
+            // logMessage's category: one of <LogCategories>, NULL if there are none.
             let entries = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner());
             let cats = &self.fmu.md.log_categories;
             for e in &entries[before.min(entries.len())..] {
@@ -602,14 +593,11 @@ impl<'a> Inst<'a> {
                 } else {
                     cats.contains(&e.category)
                 };
-                crate::outcome::warn_unless(ok, || {
-                    format!(
-                        "{}: {what} logged with the category '{}', which <LogCategories> does not declare ({cats:?}): \
-                         FMI 3.0.2 §2.3.1 leaves the categories to the modeling environment (\"none, some or all\" \
-                         declared), but an importer that offers the declared ones to filter by never shows this message",
-                        self.fmu.id, e.category
-                    )
-                });
+                assert!(
+                    ok,
+                    "{}: {what} logged with the category '{}', which <LogCategories> does not declare ({cats:?})",
+                    self.fmu.id, e.category
+                );
             }
         }
         if s != fmi3OK && !self.c.is_null() {
@@ -1130,22 +1118,9 @@ impl<'a> Inst<'a> {
     }
 }
 
-/// Whether a call of this process answered fmi3Fatal since the last instance was made. FMI 3.0.2
-/// §2.2.4 (fmi3Fatal): "The model computations are irreparably corrupted for all FMU instances
-/// ... It is not allowed to call any other function for any instance of the FMU": an [`Inst`]
-/// dropped then is not freed (an FMU may throw from fmi3FreeInstance then: PythonFMU3 0.3.4
-/// does, a C++ exception that would abort the check's process).
-static FATAL: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
 impl Drop for Inst<'_> {
     fn drop(&mut self) {
         if self.c.is_null() {
-            return;
-        }
-        if FATAL.load(std::sync::atomic::Ordering::Relaxed) {
-            crate::outcome::info(
-                "an instance not freed: a call answered fmi3Fatal, after which FMI 3.0.2 §2.2.4 allows no other call",
-            );
             return;
         }
         crate::outcome::breadcrumb("fmi3FreeInstance");

@@ -21,9 +21,6 @@ pub fn instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message(fmu: &Fmu) 
     }
 }
 
-/// Verdict: warned, never failed. FMI 2.0.5 §2.1.5 (instanceName): "It is not allowed to provide
-/// a null pointer and this string must be non-empty": the importer's obligation (see
-/// `importers_mistakes`).
 pub fn instantiate_refuses_a_null_or_empty_instance_name_with_a_message(fmu: &Fmu) {
     for name in [Some(""), None] {
         let args = Args {
@@ -93,9 +90,6 @@ pub fn instantiate_refuses_model_exchange_and_unknown_types_with_a_message(fmu: 
     }
 }
 
-/// Verdict: warned, never failed. FMI 2.0.5 §2.1.5 (fmi2Instantiate, functions): the importer
-/// provides the callbacks (logger, allocateMemory, freeMemory); missing ones are its mistake
-/// (see `importers_mistakes`).
 pub fn instantiate_without_callbacks_or_logger_returns_null_without_crashing(fmu: &Fmu) {
     let guid = std::ffi::CString::new(fmu.md.guid.as_str()).unwrap();
     let no_logger = fmi2CallbackFunctions {

@@ -125,7 +125,7 @@ const SCHEDULED_EXECUTION_CHECKS: [&str; 4] = [
 ];
 
 /// Skips the check `name` on an FMU that declares only `<ScheduledExecution>` unless it is one
-/// of `SCHEDULED_EXECUTION_CHECKS`: the others drive a co-simulation or model-exchange instance,
+/// of [`SCHEDULED_EXECUTION_CHECKS`]: the others drive a co-simulation or model-exchange instance,
 /// which such an FMU does not offer (the reason names both declarations).
 pub fn skip_unless_the_interfaces_allow(fmu: &Fmu3, name: &str) {
     if fmu.md.scheduled_execution_only() && !SCHEDULED_EXECUTION_CHECKS.contains(&name) {

@@ -282,16 +282,6 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                 let vr = fmu.md.unknown_vr();
                 let s = inst.set_f64(&[vr], &[1.0]);
                 hook(k, op, s, Expected::ERROR, &inst)?;
-                if s == fmi3Fatal && !crate::outcome::strict() {
-                    // The importer's mistake: the answer is the FMU's (FMI 3.0.2 §2.2.4), and after
-                    // fmi3Fatal no call is allowed: the sequence ends, a warning.
-                    crate::outcome::warn(format!(
-                        "{}: setting an unknown value reference (the importer's mistake, on purpose) answered \
-                         fmi3Fatal: not a failure, but it ends every instance where fmi3Error would end one call",
-                        fmu.id
-                    ));
-                    return Ok(());
-                }
                 prop_assert_eq!(
                     s,
                     fmi3Error,
@@ -310,16 +300,6 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
             Expected::ERROR
         };
         hook(k, op, s, standard, &inst)?;
-        if s == fmi3Fatal && expected.is_none() && !(fmu.own_state_format() || crate::outcome::strict()) {
-            // fmi3Fatal to a call the state machine does not allow (the importer's mistake, whose
-            // answer FMI 3.0.2 §2.2.4 leaves to the FMU): the sequence ends there, a warning.
-            crate::outcome::warn(format!(
-                "{}: a call the state machine does not allow (the importer's mistake, on purpose) answered \
-                 fmi3Fatal: not a failure, but it ends every instance where fmi3Error would end one call",
-                fmu.id
-            ));
-            return Ok(());
-        }
         prop_assert!(
             s != fmi3Fatal,
             "{}: op {} {:?} in {:?}: fmi3Fatal: {}",

@@ -374,27 +374,17 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
                 None => knowns.clone(),
             };
             let mut count = usize::MAX;
-            let mut call = || {
-                // SAFETY: a live instance; each pointer is to a live local of the length passed, or
-                // is an FMU state.
-                inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
-                    crate::guard::fill_one(
-                        &mut count,
-                        "fmi3GetNumberOfVariableDependencies",
-                        "one nDependencies",
-                        crate::guard::DEPENDENCIES_RULE3,
-                        |p| (api.get_number_of_variable_dependencies)(c, u.vr, p),
-                    )
-                })
-            };
-            // Undeclared (no providesPerElementDependencies), the call is the importer's: a crash
-            // in it (PythonFMU3 0.3.4 throws a C++ std::logic_error "not implemented" out of it,
-            // which ends any host process, a ctypes one too) is a warning.
-            let s = if declared {
-                call()
-            } else {
-                crate::outcome::on_purpose(call)
-            };
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
+            // an FMU state.
+            let s = inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut count,
+                    "fmi3GetNumberOfVariableDependencies",
+                    "one nDependencies",
+                    crate::guard::DEPENDENCIES_RULE3,
+                    |p| (api.get_number_of_variable_dependencies)(c, u.vr, p),
+                )
+            });
             // FMI 3.0.2 offers these functions only where the FMU declares
             // providesPerElementDependencies: without it, a refusal is the FMU's right (skipped);
             // an FMU that answers anyway is held to its answers.
