@@ -23,6 +23,7 @@ mod design_parameters;
 
 // Not every node uses every helper of the shared file.
 #[allow(dead_code)]
+#[macro_use]
 #[path = "../../can_node.rs"]
 mod can_node;
 
@@ -40,28 +41,11 @@ control_mode!(
     /// The control law (`mode`), as the Controller's.
 );
 
-with_design_parameters! {
-    sampled;
+can_node! {
+    network: "The CAN bus the measurement comes on and the commands go on";
+    log_bus: "Bus operations refused, frames ignored";
     /// The networked pendulum's controller ECU: the paper's LQR (eq. (14)) every period on the measurement of the CAN bus, the motor voltages sent in CAN frames
-    #[derive(Model, Debug, Clone, Serialize, Deserialize)]
-    #[fmu(
-        fmi3_only,
-        co_simulation_only,
-        log_category(name = "logBus", description = "Bus operations refused, frames ignored"),
-        can_network(
-            name = "CAN",
-            description = "The CAN bus the measurement comes on and the commands go on",
-            rx_clock = rx_clock,
-            rx_data = rx_data,
-            tx_clock = tx_clock,
-            tx_data = tx_data,
-            bus_notifications = bus_notifications,
-        )
-    )]
     pub struct CanController {
-        /// Simulation time
-        #[variable(vr = 0, independent, unit = "s")]
-        pub time: f64,
         /// Angle alpha1 of the last measurement frame received (0 until one arrives)
         #[variable(vr = 1, output, discrete, initial = exact, start = 0.0, unit = "rad", depends = [])]
         pub alpha1: f64,
@@ -113,48 +97,25 @@ with_design_parameters! {
         /// Voltage resolution of the command frames (as the drives')
         #[variable(vr = 37, parameter, fixed, start = 1e-3, unit = "V", min > 0.0)]
         pub voltage_resolution: f64,
-        /// Whether the node waits for Confirm, Arbitration Lost and Bus Error (FMI-LS-BUS BusNotifications)
-        #[variable(vr = 38, name = "BusNotifications", parameter, fixed, start = false)]
-        pub bus_notifications: bool,
-        /// Ticks when the importer delivers bus operations to this node
-        #[variable(vr = 1002, name = "CAN.Rx_Clock", input, clock(triggered))]
-        pub rx_clock: Clock,
-        /// The bus operations delivered (FMI-LS-BUS CAN)
-        #[variable(vr = 1001, name = "CAN.Rx_Data", input, discrete, clocks = [rx_clock], max_size = RX_MAX_SIZE)]
-        pub rx_data: Vec<u8>,
-        /// Ticks every period (a countdown the node sets to period at each tick): the samples
-        #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(countdown))]
-        pub tx_clock: Clock,
-        /// The bus operations this node sends (FMI-LS-BUS CAN)
-        #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [alpha1_ref, alpha2_ref])]
-        pub tx_data: Vec<u8>,
+        bus_notifications(vr = 38),
+        terminal {
+            /// Ticks every period (a countdown the node sets to period at each tick): the samples
+            tx_clock: input, clock(countdown);
+            tx_data: depends = [alpha1_ref, alpha2_ref];
+        },
         /// Measurement frames received and applied
-        #[variable(vr = 70, output, discrete, initial = exact, start = 0, depends = [])]
-        pub frames_received: i32,
+        count frames_received(vr = 70),
         /// Command frames sent (two a tick)
-        #[variable(vr = 71, output, discrete, initial = exact, start = 0, depends = [])]
-        pub frames_sent: i32,
+        count frames_sent(vr = 71),
         /// Frames sensor_id ignored: their data is not a measurement (another data length)
-        #[variable(vr = 72, output, discrete, initial = exact, start = 0, depends = [])]
-        pub bad_frames: i32,
-        /// Confirm operations for motor1_id and motor2_id received
-        #[variable(vr = 73, output, discrete, initial = exact, start = 0, depends = [])]
-        pub confirmed: i32,
-        /// Arbitration Lost operations for motor1_id and motor2_id received
-        #[variable(vr = 74, output, discrete, initial = exact, start = 0, depends = [])]
-        pub arbitration_lost: i32,
-        /// Bus Error operations received
-        #[variable(vr = 75, output, discrete, initial = exact, start = 0, depends = [])]
-        pub bus_errors: i32,
-        /// Received buffers refused as malformed (each answered with a Format Error operation)
-        #[variable(vr = 76, output, discrete, initial = exact, start = 0, depends = [])]
-        pub format_errors: i32,
+        count bad_frames(vr = 72),
+        notifications(confirmed = 73, arbitration_lost = 74, ours = "motor1_id and motor2_id"),
+        bus_errors_and_format_errors(vr = 75, 76),
         /// Commands sent limited to their 16-bit range
-        #[variable(vr = 77, output, discrete, initial = exact, start = 0, depends = [])]
-        pub signals_limited: i32,
+        count signals_limited(vr = 77),
     }
     // The design parameters (`mode` .. `U_max`, ../../design_parameters.rs), then:
-    {
+    with_design_parameters(sampled) {
         /// LQR gain K of eq. (14), 2 x 4, computed at initialization (row i: the torque M_i)
         #[variable(vr = 110, calculated_parameter, fixed, initial_depends = [m1, m2, l1, l2, g, J1, J2, Q11, Q22, Q33, Q44, R11, R22])]
         pub K: [[f64; 4]; 2],
@@ -162,8 +123,6 @@ with_design_parameters! {
         pub memory: ControllerState,
         /// Ticks since initialization.
         pub ticks: u64,
-        /// Tx_Data was read at the last Tx tick: it is emptied at the next event.
-        sent: bool,
     }
 }
 
@@ -234,10 +193,7 @@ impl Model for CanController {
     }
 
     fn update(&mut self, event: &mut Event) -> Result<(), String> {
-        if self.sent {
-            self.tx_data.clear();
-            self.sent = false;
-        }
+        self.forget_sent();
         if self.rx_clock.is_active() {
             self.receive(event);
         }

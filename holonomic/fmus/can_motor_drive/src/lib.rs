@@ -13,6 +13,7 @@
 
 // Not every node uses every helper of the shared file.
 #[allow(dead_code)]
+#[macro_use]
 #[path = "../../can_node.rs"]
 mod can_node;
 
@@ -20,77 +21,42 @@ use can_node::{Notified, RX_MAX_SIZE, TX_MAX_SIZE, bad_frame, received};
 use holonomic::models::can_messages::{CommandFrame, Signal};
 use rustfmu::ls_bus::{CanFrame, Operation};
 use rustfmu::prelude::*;
-use serde::{Deserialize, Serialize};
 
-/// The networked pendulum's motor-drive node: outputs the voltage command of the CAN frames rx_id, held until the next one
-#[derive(Model, Debug, Clone, Serialize, Deserialize)]
-#[fmu(
-    fmi3_only,
-    co_simulation_only,
-    log_category(name = "logBus", description = "Bus operations refused, frames ignored"),
-    can_network(
-        name = "CAN",
-        description = "The CAN bus the voltage command comes on",
-        rx_clock = rx_clock,
-        rx_data = rx_data,
-        tx_clock = tx_clock,
-        tx_data = tx_data,
-        bus_notifications = bus_notifications,
-    )
-)]
-pub struct CanMotorDrive {
-    /// Simulation time
-    #[variable(vr = 0, independent, unit = "s")]
-    pub time: f64,
-    /// Voltage command U of the last frame rx_id received, held (0 until one arrives; connect to DCMotor.U)
-    #[variable(vr = 1, output, discrete, initial = exact, start = 0.0, unit = "V", depends = [])]
-    pub U: f64,
-    /// Identifier of the command frames for this motor (standard, 11 bits)
-    #[variable(vr = 10, parameter, fixed, start = 0x010, min = 0, max = 0x7FF)]
-    pub rx_id: i32,
-    /// Voltage resolution: the value of one bit of the 16-bit signal U
-    #[variable(vr = 11, parameter, fixed, start = 1e-3, unit = "V", min > 0.0)]
-    pub voltage_resolution: f64,
-    /// Time from a refused buffer to the Tx tick that answers it with a Format Error
-    #[variable(vr = 12, parameter, fixed, start = 1e-6, unit = "s", min > 0.0)]
-    pub reply_delay: f64,
-    /// Whether the node waits for Confirm, Arbitration Lost and Bus Error (FMI-LS-BUS BusNotifications)
-    #[variable(vr = 13, name = "BusNotifications", parameter, fixed, start = false)]
-    pub bus_notifications: bool,
-    /// Ticks when the importer delivers bus operations to this node
-    #[variable(vr = 1002, name = "CAN.Rx_Clock", input, clock(triggered))]
-    pub rx_clock: Clock,
-    /// The bus operations delivered (FMI-LS-BUS CAN)
-    #[variable(vr = 1001, name = "CAN.Rx_Data", input, discrete, clocks = [rx_clock], max_size = RX_MAX_SIZE)]
-    pub rx_data: Vec<u8>,
-    /// Ticks reply_delay after a refused buffer, to send its Format Error (a countdown)
-    #[variable(vr = 1004, name = "CAN.Tx_Clock", input, clock(countdown))]
-    pub tx_clock: Clock,
-    /// The bus operations this node sends (FMI-LS-BUS CAN): Format Errors only
-    #[variable(vr = 1003, name = "CAN.Tx_Data", output, discrete, clocks = [tx_clock], max_size = TX_MAX_SIZE, depends = [])]
-    pub tx_data: Vec<u8>,
-    /// Command frames rx_id received and applied
-    #[variable(vr = 20, output, discrete, initial = exact, start = 0, depends = [])]
-    pub frames_received: i32,
-    /// Frames rx_id ignored: their data is not a command (another data length)
-    #[variable(vr = 21, output, discrete, initial = exact, start = 0, depends = [])]
-    pub bad_frames: i32,
-    /// Bus Error operations received
-    #[variable(vr = 24, output, discrete, initial = exact, start = 0, depends = [])]
-    pub bus_errors: i32,
-    /// Received buffers refused as malformed (each answered with a Format Error operation)
-    #[variable(vr = 25, output, discrete, initial = exact, start = 0, depends = [])]
-    pub format_errors: i32,
-    /// Tx_Data was read at the last Tx tick: it is emptied at the next event
-    sent: bool,
+can_node! {
+    network: "The CAN bus the voltage command comes on";
+    log_bus: "Bus operations refused, frames ignored";
+    /// The networked pendulum's motor-drive node: outputs the voltage command of the CAN frames rx_id, held until the next one
+    pub struct CanMotorDrive {
+        /// Voltage command U of the last frame rx_id received, held (0 until one arrives; connect to DCMotor.U)
+        #[variable(vr = 1, output, discrete, initial = exact, start = 0.0, unit = "V", depends = [])]
+        pub U: f64,
+        /// Identifier of the command frames for this motor (standard, 11 bits)
+        #[variable(vr = 10, parameter, fixed, start = 0x010, min = 0, max = 0x7FF)]
+        pub rx_id: i32,
+        /// Voltage resolution: the value of one bit of the 16-bit signal U
+        #[variable(vr = 11, parameter, fixed, start = 1e-3, unit = "V", min > 0.0)]
+        pub voltage_resolution: f64,
+        /// Time from a refused buffer to the Tx tick that answers it with a Format Error
+        #[variable(vr = 12, parameter, fixed, start = 1e-6, unit = "s", min > 0.0)]
+        pub reply_delay: f64,
+        bus_notifications(vr = 13),
+        terminal {
+            /// Ticks reply_delay after a refused buffer, to send its Format Error (a countdown)
+            tx_clock: input, clock(countdown);
+            /// The bus operations this node sends (FMI-LS-BUS CAN): Format Errors only
+            tx_data: depends = [];
+        },
+        /// Command frames rx_id received and applied
+        count frames_received(vr = 20),
+        /// Frames rx_id ignored: their data is not a command (another data length)
+        count bad_frames(vr = 21),
+        bus_errors_and_format_errors(vr = 24, 25),
+    }
 }
 
 impl Model for CanMotorDrive {
     fn update(&mut self, event: &mut Event) -> Result<(), String> {
-        if self.sent {
-            self.tx_data.clear();
-            self.sent = false;
-        }
+        self.forget_sent();
         if self.tx_clock.is_active() {
             self.sent = !self.tx_data.is_empty();
         }

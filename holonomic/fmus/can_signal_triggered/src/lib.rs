@@ -20,40 +20,22 @@
 //! at the node's time event. A send time strictly inside a step is handled inside it, and its
 //! frame never reaches the importer.
 
-use rustfmu::ls_bus::{CanFrame, Operation, decode_all, push_into};
-use rustfmu::prelude::*;
-use serde::{Deserialize, Serialize};
-
 #[macro_use]
 #[path = "../../can_signal_node.rs"]
 mod can_signal_node;
 
 pub use can_signal_node::{RX_MAX_SIZE, TX_MAX_SIZE};
+use rustfmu::prelude::*;
 
 can_signal_node! {
     /// One signal over a CAN bus, the node ticking its Tx clock itself: sent in frame tx_id every period, received from frame rx_id
-    #[derive(Model, Debug, Clone, Serialize, Deserialize)]
-    #[fmu(
-        fmi3_only,
-        co_simulation_only,
-        log_category(name = "logBus", description = "Bus operations received and sent, and refused buffers"),
-        can_network(
-            name = "CAN",
-            description = "The CAN bus the signal travels on",
-            rx_clock = rx_clock,
-            rx_data = rx_data,
-            tx_clock = tx_clock,
-            tx_data = tx_data,
-            bus_notifications = bus_notifications,
-        )
-    )]
     pub struct CanSignalTriggered;
     period:
         /// Send period: the time between the node's time events, each a tick of Tx_Clock (a multiple of the importer's step)
         #[variable(vr = 12, parameter, fixed, start = 0.01, unit = "s", min > 0.0)];
     tx_clock:
         /// Ticks every period, at the node's time events (the first one period after the start): its bus communication points for sending
-        #[variable(vr = 1004, name = "CAN.Tx_Clock", output, clock(triggered))];
+        output, clock(triggered);
 }
 
 impl Model for CanSignalTriggered {
@@ -64,7 +46,7 @@ impl Model for CanSignalTriggered {
             event.schedule(event.time() + self.period);
         }
         if self.rx_clock.is_active() {
-            self.receive(event)?;
+            self.receive(event);
         }
         if event.time_event() {
             self.send()?;
