@@ -61,81 +61,10 @@ fn hex(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
-const XL_DATA: [u8; 100] = {
-    let mut d = [0u8; 100];
-    let mut i = 0;
-    while i < 100 {
-        d[i] = (i * 7 + 3) as u8;
-        i += 1;
-    }
-    d
-};
-const FORMAT_ERROR_DATA: [u8; 9] = [0x41, 0, 0, 0, 9, 0, 0, 0, 9];
-
-/// Every CAN operation (each Configuration parameter and a Format Error included), in the order
-/// the C program below writes them.
-fn every_operation() -> Vec<Operation<'static>> {
-    vec![
-        Operation::CanTransmit(CanFrame {
-            id: 0x123,
-            ide: false,
-            rtr: false,
-            data: &[1, 2, 3, 4, 5, 6, 7, 8],
-        }),
-        Operation::CanTransmit(CanFrame {
-            id: 0x1ABC_DEF0,
-            ide: true,
-            rtr: true,
-            data: &[],
-        }),
-        Operation::CanFdTransmit(CanFdFrame {
-            id: 0x7FF,
-            ide: false,
-            brs: true,
-            esi: true,
-            data: &[0xA0, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6, 0xA7, 0xA8, 0xA9, 0xAA, 0xAB],
-        }),
-        Operation::CanXlTransmit(CanXlFrame {
-            id: 0x42,
-            ide: false,
-            sec: true,
-            sdt: 0x03,
-            vcid: 0x7E,
-            af: 0xDEAD_BEEF,
-            data: &XL_DATA,
-        }),
-        Operation::Confirm { id: 0x123 },
-        Operation::ArbitrationLost { id: 0x1ABC_DEF0 },
-        Operation::BusError {
-            id: 0x10,
-            error_code: ErrorCode::CrcError,
-            error_flag: ErrorFlag::Primary,
-            is_sender: true,
-        },
-        Operation::BusError {
-            id: 0x11,
-            error_code: ErrorCode::BrokenErrorFrame,
-            error_flag: ErrorFlag::Secondary,
-            is_sender: false,
-        },
-        Operation::Configuration(Configuration::CanBaudrate(500_000)),
-        Operation::Configuration(Configuration::CanFdBaudrate(2_000_000)),
-        Operation::Configuration(Configuration::CanXlBaudrate(10_000_000)),
-        Operation::Configuration(Configuration::ArbitrationLostBehavior(
-            ArbitrationLostBehavior::BufferAndRetransmit,
-        )),
-        Operation::Configuration(Configuration::ArbitrationLostBehavior(
-            ArbitrationLostBehavior::DiscardAndNotify,
-        )),
-        Operation::Status(Status::ErrorActive),
-        Operation::Status(Status::ErrorPassive),
-        Operation::Status(Status::BusOff),
-        Operation::Wakeup,
-        Operation::FormatError {
-            data: &FORMAT_ERROR_DATA,
-        },
-    ]
-}
+// Every CAN operation, shared with the unit tests of src/lib.rs.
+#[path = "common/every_operation.rs"]
+mod every_operation;
+use every_operation::every_operation;
 
 const WRITE_C: &str = r#"
 #include <stdio.h>
