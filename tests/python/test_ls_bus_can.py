@@ -14,14 +14,20 @@ import math
 import pathlib
 import struct
 import subprocess
+import sys
 import zipfile
 
 import fmpy
 import pytest
-from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3IntervalQualifier, fmi3ValueReference
+from fmpy.fmi3 import fmi3Float64, fmi3IntervalQualifier, fmi3ValueReference
 from lxml import etree
 
-from conftest import FMU_DIR, ROOT, fmu3
+from conftest import FMU_DIR, ROOT
+from fmi_harness import EventModeSlave, fmu3_with_vrs
+
+sys.path.insert(0, str(ROOT / "examples"))
+# A frame's bits from ISO 11898-1, written in Python (not taken from the Rust code).
+from ls_bus_loop import can_bits  # noqa: E402
 
 INDEPENDENT = ROOT.parent / "shared" / "independent"
 CARGO_FMU = FMU_DIR.parent / "release" / "cargo-fmu"
@@ -59,34 +65,12 @@ def transmitted(args):
 
 @pytest.fixture(scope="module")
 def can_signal():
-    path = fmu3("CanSignal")
-    md = fmpy.read_model_description(path)
-    return path, md, {v.name: v.valueReference for v in md.modelVariables}
+    return fmu3_with_vrs("CanSignal")
 
 
-class Node:
-    """One CanSignal instance in co-simulation with event mode, its messages kept."""
-
-    def __init__(self, fmu, name, **params):
-        path, md, self.vr = fmu
-        self.messages = []
-        self.f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path),
-                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.f.instantiate(eventModeUsed=True, loggingOn=True,
-                           logMessage=lambda *a: self.messages.append(a[-1].decode()))
-        self.f.enterInitializationMode(startTime=0.0)
-        for k, v in params.items():
-            if isinstance(v, float):
-                self.f.setFloat64([self.vr[k]], [v])
-            elif isinstance(v, bool):
-                self.f.setBoolean([self.vr[k]], [v])
-            else:
-                self.f.setInt32([self.vr[k]], [v])
-        self.f.exitInitializationMode()  # now in Event Mode
-
-    def settle(self):
-        while self.f.updateDiscreteStates()[0]:
-            pass
+class Node(EventModeSlave):
+    """One CanSignal instance in co-simulation with event mode, its messages kept; after __init__
+    in Event Mode."""
 
     def send(self, u):
         """A Tx tick: u set, Tx_Clock activated; the Tx_Data it gives."""
@@ -271,57 +255,21 @@ def test_cargo_fmu_check_passes_on_the_network_fmu(can_signal):
 
 # --- The bus simulation: CanBus between network FMUs ------------------------------------------
 
-def can_bits(can_id, data):
-    """A classic standard CAN data frame's length in bits, written here from ISO 11898-1 (not from
-    the Rust code): start of frame .. CRC-15, stuffed (a bit of opposite value after five equal
-    ones), then CRC delimiter, ACK slot and delimiter, end of frame (7), intermission (3)."""
-    bits = [0] + [(can_id >> i) & 1 for i in range(10, -1, -1)] + [0, 0, 0]  # SOF, ID, RTR, IDE, r0
-    bits += [(len(data) >> i) & 1 for i in range(3, -1, -1)]
-    for byte in data:
-        bits += [(byte >> i) & 1 for i in range(7, -1, -1)]
-    crc = 0
-    for b in bits:
-        nxt = b ^ ((crc >> 14) & 1)
-        crc = (crc << 1) & 0x7FFF
-        if nxt:
-            crc ^= 0x4599
-    bits += [(crc >> i) & 1 for i in range(14, -1, -1)]
-    stuffed, run, last = 0, 0, None
-    for b in bits:
-        run = run + 1 if b == last else 1
-        last = b
-        if run == 5:
-            stuffed, last, run = stuffed + 1, 1 - b, 1
-    return len(bits) + stuffed + 13
-
-
 @pytest.fixture(scope="module")
 def can_bus():
-    path = fmu3("CanBus")
-    md = fmpy.read_model_description(path)
-    return path, md, {v.name: v.valueReference for v in md.modelVariables}
+    return fmu3_with_vrs("CanBus")
 
 
-class Bus:
+class Bus(EventModeSlave):
     """The CanBus instance: ports 1..4, the countdown Tx clocks read after every event."""
 
     def __init__(self, fmu, **params):
-        path, md, self.vr = fmu
-        self.messages = []
-        self.f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path),
-                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bus")
-        self.f.instantiate(eventModeUsed=True, loggingOn=True,
-                           logMessage=lambda *a: self.messages.append(a[-1].decode()))
-        self.f.enterInitializationMode(startTime=0.0)
-        for k, v in params.items():
-            self.f.setInt32([self.vr[k]], [v])
-        self.f.exitInitializationMode()
         self.t = 0.0
         self.next = None
+        super().__init__(fmu, "bus", **params)
 
     def settle(self):
-        while self.f.updateDiscreteStates()[0]:
-            pass
+        super().settle()
         # A countdown clock whose interval changed: the importer schedules its tick.
         vrs = (fmi3ValueReference * 1)(self.vr["Node1.Tx_Clock"])
         intervals, qualifiers = (fmi3Float64 * 1)(), (fmi3IntervalQualifier * 1)()

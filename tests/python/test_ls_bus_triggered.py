@@ -15,11 +15,9 @@ little-endian), independently of the Rust codec the FMU uses."""
 
 import struct
 
-import fmpy
 import pytest
-from fmpy.fmi3 import FMU3Slave
 
-from conftest import fmu3
+from fmi_harness import EventModeSlave, fmu3_with_vrs
 
 H = 0.001
 PERIOD = 0.01
@@ -27,9 +25,7 @@ PERIOD = 0.01
 
 @pytest.fixture(scope="module")
 def triggered():
-    path = fmu3("CanSignalTriggered")
-    md = fmpy.read_model_description(path)
-    return path, md, {v.name: v.valueReference for v in md.modelVariables}
+    return fmu3_with_vrs("CanSignalTriggered")
 
 
 def frames(buffer):
@@ -47,26 +43,14 @@ def frames(buffer):
     return out
 
 
-class Node:
-    """One CanSignalTriggered instance in co-simulation with event mode."""
+class Node(EventModeSlave):
+    """One CanSignalTriggered instance in co-simulation with event mode, in Step Mode after
+    __init__."""
 
     def __init__(self, fmu, name, **params):
-        path, md, self.vr = fmu
-        self.messages = []
-        self.f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path),
-                           modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.f.instantiate(eventModeUsed=True, loggingOn=True,
-                           logMessage=lambda *a: self.messages.append(a[-1].decode()))
-        self.f.enterInitializationMode(startTime=0.0)
-        for k, v in params.items():
-            (self.f.setFloat64 if isinstance(v, float) else self.f.setInt32)([self.vr[k]], [v])
-        self.f.exitInitializationMode()  # in Event Mode
+        super().__init__(fmu, name, **params)
         self.settle()
         self.f.enterStepMode()
-
-    def settle(self):
-        while self.f.updateDiscreteStates()[0]:
-            pass
 
     def get(self, name, kind="Int32"):
         return getattr(self.f, f"get{kind}")([self.vr[name]])[0]
