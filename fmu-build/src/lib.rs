@@ -20,6 +20,7 @@ pub mod plot;
 pub mod progress;
 pub mod ssp;
 pub mod systems;
+pub mod systems_fmi3;
 pub mod target;
 pub mod validate;
 pub mod xml;

@@ -9,6 +9,13 @@
 //! same; an Enumeration parameter is written as SSP 1.0 writes it (`ssv:Integer`, which SSP 2.0
 //! keeps).
 //!
+//! A system of FMI 3.0 FMUs (`fmi-version = "3.0"`, [`crate::systems_fmi3`]) is written in SSP
+//! 2.0 only, to `<out_dir>/fmi3/<system>.ssp` with its FMUs of `<fmu_dir>/fmi3/`, checked
+//! against their FMI 3.0 descriptions: its connectors take the FMUs' own types (`ssc:Float64`,
+//! `ssc:Int32`, ..., `ssc:Binary` with the variable's `mime-type`, `ssc:Clock`) and the
+//! variables' causalities as their kinds (a countdown Tx_Clock that starts a clock connection
+//! is an `input` connector), its parameter values `ssv:<type>` (a Binary as hexadecimal digits).
+//!
 //! A system comes from a systems file ([`crate::systems`]); the SSD is generated from it after
 //! [`System::check`] has checked it against the packaged FMUs' modelDescription.xml (every
 //! connection goes from an output to an input of the same type, every parameter exists, takes
@@ -36,6 +43,7 @@
 //!   connectors and aborts on them).
 
 use crate::systems::{Checked, Enumeration, Fmus, System, Systems, Value};
+use crate::systems_fmi3::{Checked3, Fmus3, Type3};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -86,114 +94,183 @@ fn connector_type(t: crate::systems::VarType, v2: bool) -> &'static str {
     }
 }
 
+/// What an SSD says of a system's components: each one's connectors (variable, kind, type
+/// element) and parameter values (variable, SSV element, value text escaped), the
+/// Enumeration types its connections carry, and the SSP version.
+struct Layout<'a> {
+    system: &'a System,
+    version: &'static str,
+    connectors: Vec<Vec<(&'a str, &'static str, String)>>,
+    parameters: Vec<Vec<(&'a str, &'static str, String)>>,
+    enumerations: Vec<Enumeration>,
+}
+
+impl<'a> Layout<'a> {
+    fn new(system: &'a System, version: &'static str) -> Layout<'a> {
+        let n = system.components.len();
+        Layout {
+            system,
+            version,
+            connectors: vec![Vec::new(); n],
+            parameters: vec![Vec::new(); n],
+            enumerations: Vec::new(),
+        }
+    }
+
+    /// The connector `variable` of `component`, the first time a connection names it.
+    fn connector(&mut self, component: &str, variable: &'a str, kind: &'static str, type_element: &str) {
+        let k = self
+            .system
+            .components
+            .iter()
+            .position(|comp| comp.name == component)
+            .expect("checked by System::check");
+        if !self.connectors[k].iter().any(|(n, _, _)| *n == variable) {
+            self.connectors[k].push((variable, kind, type_element.to_owned()));
+        }
+    }
+}
+
 /// `SystemStructure.ssd` of a checked system, SSP 1.0 or (`v2`) 2.0.
 fn write_ssd(checked: &Checked, v2: bool) -> String {
-    let version = if v2 { "2.0" } else { "1.0" };
     let system = checked.system;
-    // Each component's connectors, in the order the connections first name them.
-    let mut connectors: Vec<Vec<(&str, &str, String)>> = vec![Vec::new(); system.components.len()];
-    // The Enumeration types the connections carry, by name.
-    let mut enumerations: Vec<&Enumeration> = Vec::new();
+    let mut layout = Layout::new(system, if v2 { "2.0" } else { "1.0" });
     for tc in &checked.connections {
         let c = tc.connection;
         let type_element = match &tc.enumeration {
             Some(e) => {
-                if !enumerations.iter().any(|d| d.name == e.name) {
-                    enumerations.push(e);
+                if !layout.enumerations.iter().any(|d| d.name == e.name) {
+                    layout.enumerations.push(e.clone());
                 }
                 format!(r#"<ssc:Enumeration name="{}"/>"#, escape(&e.name))
             }
             None => format!("<ssc:{}/>", connector_type(tc.var_type, v2)),
         };
-        for (port, kind) in [(&c.from, "output"), (&c.to, "input")] {
-            let k = system
-                .components
-                .iter()
-                .position(|comp| comp.name == port.component)
-                .expect("checked by System::check");
-            if !connectors[k].iter().any(|(n, _, _)| *n == port.variable) {
-                connectors[k].push((&port.variable, kind, type_element.clone()));
-            }
+        layout.connector(&c.from.component, &c.from.variable, "output", &type_element);
+        layout.connector(&c.to.component, &c.to.variable, "input", &type_element);
+    }
+    for (k, parameters) in checked.parameters.iter().enumerate() {
+        for (name, value) in parameters {
+            let (element, text) = ssv_value(value, v2);
+            layout.parameters[k].push((name, element, text));
         }
     }
-    let mut x = String::new();
-    let w = &mut x;
-    let _ = writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
-    let _ = writeln!(
-        w,
-        r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" xmlns:oms="{OMS_NS}" version="{version}" name="{}" generationTool="rustfmu fmu-build">"#,
-        escape(&system.name)
-    );
-    let description = match &system.description {
-        Some(d) => format!(r#" description="{}""#, escape(d)),
-        None => String::new(),
-    };
-    let _ = writeln!(w, r#"  <ssd:System name="{}"{description}>"#, escape(&system.name));
-    let _ = writeln!(w, "    <ssd:Elements>");
-    for (k, c) in system.components.iter().enumerate() {
-        let _ = writeln!(
-            w,
-            r#"      <ssd:Component name="{}" type="application/x-fmu-sharedlibrary" source="resources/{}.fmu">"#,
-            escape(&c.name),
-            escape(&c.fmu)
-        );
-        let _ = writeln!(w, "        <ssd:Connectors>");
-        for (var, kind, type_element) in &connectors[k] {
-            let _ = writeln!(
-                w,
-                r#"          <ssd:Connector name="{}" kind="{kind}">{type_element}</ssd:Connector>"#,
-                escape(var)
-            );
-        }
-        let _ = writeln!(w, "        </ssd:Connectors>");
-        let parameters = &checked.parameters[k];
-        if !parameters.is_empty() {
-            let _ = writeln!(
-                w,
-                "        <ssd:ParameterBindings>\n          <ssd:ParameterBinding>\n            <ssd:ParameterValues>"
-            );
-            let _ = writeln!(
-                w,
-                r#"              <ssv:ParameterSet version="{version}" name="{}">"#,
-                escape(&system.name)
-            );
-            let _ = writeln!(w, "                <ssv:Parameters>");
-            for (name, value) in parameters {
-                let (element, text) = ssv_value(value, v2);
-                let _ = writeln!(
-                    w,
-                    r#"                  <ssv:Parameter name="{}"><ssv:{element} value="{text}"/></ssv:Parameter>"#,
-                    escape(name)
-                );
-            }
-            let _ = writeln!(
-                w,
-                "                </ssv:Parameters>\n              </ssv:ParameterSet>"
-            );
-            let _ = writeln!(
-                w,
-                "            </ssd:ParameterValues>\n          </ssd:ParameterBinding>\n        </ssd:ParameterBindings>"
-            );
-        }
-        let _ = writeln!(w, "      </ssd:Component>");
-    }
-    let _ = writeln!(w, "    </ssd:Elements>\n    <ssd:Connections>");
+    layout.write()
+}
+
+/// `SystemStructure.ssd` (SSP 2.0) of a system of FMI 3.0 FMUs, after checking it against
+/// their FMI 3.0 descriptions.
+pub fn ssd_fmi3(system: &System, fmus: &Fmus3) -> Result<String, String> {
+    Ok(write_ssd_fmi3(&system.check_fmi3(fmus)?))
+}
+
+/// `SystemStructure.ssd` (SSP 2.0) of a checked system of FMI 3.0 FMUs.
+pub fn write_ssd_fmi3(checked: &Checked3) -> String {
+    let mut layout = Layout::new(checked.system, "2.0");
     for tc in &checked.connections {
         let c = tc.connection;
-        let _ = writeln!(
-            w,
-            r#"      <ssd:Connection startElement="{}" startConnector="{}" endElement="{}" endConnector="{}"/>"#,
-            escape(&c.from.component),
-            escape(&c.from.variable),
-            escape(&c.to.component),
-            escape(&c.to.variable)
+        let type_element = match (&tc.var_type, &tc.mime_type) {
+            (Type3::Binary, Some(m)) if m != "application/octet-stream" => {
+                format!(r#"<ssc:Binary mime-type="{}"/>"#, escape(m))
+            }
+            (t, _) => format!("<ssc:{}/>", t.name()),
+        };
+        layout.connector(
+            &c.from.component,
+            &c.from.variable,
+            tc.from_causality.name(),
+            &type_element,
         );
+        layout.connector(&c.to.component, &c.to.variable, tc.to_causality.name(), &type_element);
     }
-    let _ = writeln!(w, "    </ssd:Connections>");
-    if let Some(h) = system.step_size {
+    for (k, parameters) in checked.parameters.iter().enumerate() {
+        for (name, value) in parameters {
+            layout.parameters[k].push((name, value.ty.name(), escape(&value.text)));
+        }
+    }
+    layout.write()
+}
+
+impl Layout<'_> {
+    fn write(&self) -> String {
+        let (system, version, connectors, enumerations) =
+            (self.system, self.version, &self.connectors, &self.enumerations);
+        let mut x = String::new();
+        let w = &mut x;
+        let _ = writeln!(w, r#"<?xml version="1.0" encoding="UTF-8"?>"#);
         let _ = writeln!(
             w,
-            r#"    <ssd:Annotations>
+            r#"<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription" xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues" xmlns:oms="{OMS_NS}" version="{version}" name="{}" generationTool="rustfmu fmu-build">"#,
+            escape(&system.name)
+        );
+        let description = match &system.description {
+            Some(d) => format!(r#" description="{}""#, escape(d)),
+            None => String::new(),
+        };
+        let _ = writeln!(w, r#"  <ssd:System name="{}"{description}>"#, escape(&system.name));
+        let _ = writeln!(w, "    <ssd:Elements>");
+        for (k, c) in system.components.iter().enumerate() {
+            let _ = writeln!(
+                w,
+                r#"      <ssd:Component name="{}" type="application/x-fmu-sharedlibrary" source="resources/{}.fmu">"#,
+                escape(&c.name),
+                escape(&c.fmu)
+            );
+            let _ = writeln!(w, "        <ssd:Connectors>");
+            for (var, kind, type_element) in &connectors[k] {
+                let _ = writeln!(
+                    w,
+                    r#"          <ssd:Connector name="{}" kind="{kind}">{type_element}</ssd:Connector>"#,
+                    escape(var)
+                );
+            }
+            let _ = writeln!(w, "        </ssd:Connectors>");
+            let parameters = &self.parameters[k];
+            if !parameters.is_empty() {
+                let _ = writeln!(
+                    w,
+                    "        <ssd:ParameterBindings>\n          <ssd:ParameterBinding>\n            <ssd:ParameterValues>"
+                );
+                let _ = writeln!(
+                    w,
+                    r#"              <ssv:ParameterSet version="{version}" name="{}">"#,
+                    escape(&system.name)
+                );
+                let _ = writeln!(w, "                <ssv:Parameters>");
+                for (name, element, text) in parameters {
+                    let _ = writeln!(
+                        w,
+                        r#"                  <ssv:Parameter name="{}"><ssv:{element} value="{text}"/></ssv:Parameter>"#,
+                        escape(name)
+                    );
+                }
+                let _ = writeln!(
+                    w,
+                    "                </ssv:Parameters>\n              </ssv:ParameterSet>"
+                );
+                let _ = writeln!(
+                    w,
+                    "            </ssd:ParameterValues>\n          </ssd:ParameterBinding>\n        </ssd:ParameterBindings>"
+                );
+            }
+            let _ = writeln!(w, "      </ssd:Component>");
+        }
+        let _ = writeln!(w, "    </ssd:Elements>\n    <ssd:Connections>");
+        for c in &system.connections {
+            let _ = writeln!(
+                w,
+                r#"      <ssd:Connection startElement="{}" startConnector="{}" endElement="{}" endConnector="{}"/>"#,
+                escape(&c.from.component),
+                escape(&c.from.variable),
+                escape(&c.to.component),
+                escape(&c.to.variable)
+            );
+        }
+        let _ = writeln!(w, "    </ssd:Connections>");
+        if let Some(h) = system.step_size {
+            let _ = writeln!(
+                w,
+                r#"    <ssd:Annotations>
       <ssc:Annotation type="org.openmodelica">
         <oms:Annotations>
           <oms:SimulationInformation>
@@ -202,28 +279,28 @@ fn write_ssd(checked: &Checked, v2: bool) -> String {
         </oms:Annotations>
       </ssc:Annotation>
     </ssd:Annotations>"#
-        );
-    }
-    let _ = writeln!(w, "  </ssd:System>");
-    if !enumerations.is_empty() {
-        let _ = writeln!(w, "  <ssd:Enumerations>");
-        for e in &enumerations {
-            let _ = writeln!(w, r#"    <ssc:Enumeration name="{}">"#, escape(&e.name));
-            for (item, value) in &e.items {
-                let _ = writeln!(w, r#"      <ssc:Item name="{}" value="{value}"/>"#, escape(item));
-            }
-            let _ = writeln!(w, "    </ssc:Enumeration>");
+            );
         }
-        let _ = writeln!(w, "  </ssd:Enumerations>");
-    }
-    let stop = match system.stop_time {
-        Some(t) => format!(r#" stopTime="{t:?}""#),
-        None => String::new(),
-    };
-    if system.step_size.is_some() {
-        let _ = writeln!(
-            w,
-            r#"  <ssd:DefaultExperiment startTime="0.0"{stop}>
+        let _ = writeln!(w, "  </ssd:System>");
+        if !enumerations.is_empty() {
+            let _ = writeln!(w, "  <ssd:Enumerations>");
+            for e in enumerations {
+                let _ = writeln!(w, r#"    <ssc:Enumeration name="{}">"#, escape(&e.name));
+                for (item, value) in &e.items {
+                    let _ = writeln!(w, r#"      <ssc:Item name="{}" value="{value}"/>"#, escape(item));
+                }
+                let _ = writeln!(w, "    </ssc:Enumeration>");
+            }
+            let _ = writeln!(w, "  </ssd:Enumerations>");
+        }
+        let stop = match system.stop_time {
+            Some(t) => format!(r#" stopTime="{t:?}""#),
+            None => String::new(),
+        };
+        if system.step_size.is_some() {
+            let _ = writeln!(
+                w,
+                r#"  <ssd:DefaultExperiment startTime="0.0"{stop}>
     <ssd:Annotations>
       <ssc:Annotation type="org.openmodelica">
         <oms:Annotations>
@@ -232,13 +309,14 @@ fn write_ssd(checked: &Checked, v2: bool) -> String {
       </ssc:Annotation>
     </ssd:Annotations>
   </ssd:DefaultExperiment>"#,
-            escape(&system.name)
-        );
-    } else {
-        let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0"{stop}/>"#);
+                escape(&system.name)
+            );
+        } else {
+            let _ = writeln!(w, r#"  <ssd:DefaultExperiment startTime="0.0"{stop}/>"#);
+        }
+        let _ = writeln!(w, "</ssd:SystemStructureDescription>");
+        x
     }
-    let _ = writeln!(w, "</ssd:SystemStructureDescription>");
-    x
 }
 
 /// Writes `<out_dir>/<system>.ssp`: the SSD and the system's FMUs, read from
@@ -250,8 +328,17 @@ pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf,
 /// Writes `<out_dir>/fmi3/<system>.ssp`, the same system of the FMI 3.0 FMUs
 /// (`<fmu_dir>/fmi3/<fmu>.fmu`, the same models as the FMI 2.0 ones the SSD is checked against:
 /// `cargo fmu build` makes both from one crate); `None` if a component has no FMI 3.0 FMU.
+/// A system of FMI 3.0 FMUs (`fmi-version = "3.0"`) is checked against their FMI 3.0
+/// descriptions and written in SSP 2.0; a missing FMU of it is an error.
 pub fn write_fmi3(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<Option<PathBuf>, String> {
     let fmi3 = fmu_dir.join("fmi3");
+    if system.is_fmi3() {
+        let fmus = system.read_fmus3(&fmi3)?;
+        let ssd = ssd_fmi3(system, &fmus)?;
+        let out = out_dir.join("fmi3");
+        std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+        return write_archive(system, &ssd, fmus.keys(), &fmi3, &out).map(Some);
+    }
     if system
         .components
         .iter()
@@ -274,9 +361,19 @@ fn write_from(
     out_dir: &Path,
     v2: bool,
 ) -> Result<PathBuf, String> {
-    let fmu_dir = files_dir;
     let fmus = system.read_fmus(check_dir)?;
     let ssd = if v2 { ssd2(system, &fmus)? } else { ssd(system, &fmus)? };
+    write_archive(system, &ssd, fmus.keys(), files_dir, out_dir)
+}
+
+/// Writes `<out_dir>/<system>.ssp`: `ssd` and the FMUs `ids` (each once, in order) of `fmu_dir`.
+fn write_archive<'a>(
+    system: &System,
+    ssd: &str,
+    ids: impl Iterator<Item = &'a String>,
+    fmu_dir: &Path,
+    out_dir: &Path,
+) -> Result<PathBuf, String> {
     let out = out_dir.join(format!("{}.ssp", system.name));
     // Written aside and renamed, so an interrupted build never leaves a half-written .ssp.
     let tmp = out.with_extension("ssp.partial");
@@ -288,7 +385,7 @@ fn write_from(
         .map_err(|e| zip_err(&e))?;
     zip.write_all(ssd.as_bytes()).map_err(|e| zip_err(&e))?;
     // Fmus is ordered by name: each FMU once, sorted.
-    for id in fmus.keys() {
+    for id in ids {
         let path = fmu_dir.join(format!("{id}.fmu"));
         let bytes = std::fs::read(&path).map_err(|e| {
             format!(
@@ -309,12 +406,15 @@ fn write_from(
     Ok(out)
 }
 
-/// Writes `<out_dir>/<system>.ssp` for every system of a file, and `<out_dir>/fmi3/<system>.ssp`
-/// where every component has an FMI 3.0 FMU too.
+/// Writes `<out_dir>/<system>.ssp` for every system of FMI 2.0 FMUs of a file, and
+/// `<out_dir>/fmi3/<system>.ssp` where every component has an FMI 3.0 FMU too and for every
+/// system of FMI 3.0 FMUs.
 pub fn write_all(systems: &Systems, fmu_dir: &Path, out_dir: &Path) -> Result<Vec<PathBuf>, String> {
     let mut out = Vec::new();
     for s in &systems.systems {
-        out.push(write(s, fmu_dir, out_dir)?);
+        if !s.is_fmi3() {
+            out.push(write(s, fmu_dir, out_dir)?);
+        }
         out.extend(write_fmi3(s, fmu_dir, out_dir)?);
     }
     Ok(out)
@@ -375,7 +475,7 @@ mod tests {
     #[test]
     fn every_connection_names_both_ends() {
         let systems = paper_systems();
-        for s in &systems.systems {
+        for s in systems.systems.iter().filter(|s| !s.is_fmi3()) {
             let text = ssd(s, &fmus()).unwrap_or_else(|e| panic!("{}: {e}", s.name));
             assert_eq!(
                 text.matches("<ssd:Connection ").count(),
@@ -393,7 +493,7 @@ mod tests {
     #[test]
     fn one_parameter_set_name_and_the_omsimulator_annotations() {
         let systems = paper_systems();
-        for s in &systems.systems {
+        for s in systems.systems.iter().filter(|s| !s.is_fmi3()) {
             let text = ssd(s, &fmus()).unwrap_or_else(|e| panic!("{}: {e}", s.name));
             let named = format!(r#"<ssv:ParameterSet version="1.0" name="{}">"#, s.name);
             assert_eq!(
@@ -536,6 +636,100 @@ mod tests {
         assert!(e.contains("src.m -> dst.m") && e.contains("Mode (A = 1, C = 3)"), "{e}");
     }
 
+    /// The networked pendulum's SSD (FMI 3.0 FMUs) is the reviewed fixture, passes the
+    /// runner's SSP 2.0 schema check and reading (tests/python/test_ssp2.py validates it against
+    /// the standard's XSDs with lxml), and keeps its clock connections apart from its data.
+    #[test]
+    // The file reader parse_ssd takes returns the runner's Error, whatever its size.
+    #[allow(clippy::result_large_err)]
+    fn the_networked_pendulum_is_written_in_ssp2_with_clock_and_binary_connectors() {
+        let systems = paper_systems();
+        let system = systems.get("NetworkedPendulum").unwrap();
+        let text = ssd_fmi3(system, &crate::systems_fmi3::tests::fmus3()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            text == fixture("NetworkedPendulum"),
+            "the SSD differs from tests/fixtures/NetworkedPendulum.ssd:\n{text}"
+        );
+        let ssd = rustfmu_runner::ssp::parse_ssd(&text, &mut |f| panic!("reads no file: {f}"))
+            .unwrap_or_else(|e| panic!("{}\n{text}", e.message));
+        assert_eq!((ssd.connections.len(), ssd.clock_connections.len()), (18, 8));
+        assert_eq!(ssd.components.len(), 8);
+        let sensor = &ssd.components[3];
+        assert_eq!(sensor.source, "resources/CanSensor.fmu");
+        assert!(
+            sensor
+                .connectors
+                .iter()
+                .any(|(n, kind, _)| n == "CAN.Tx_Clock" && kind == "input"),
+            "a countdown Tx_Clock that starts a connection is an input connector: {:?}",
+            sensor.connectors
+        );
+        assert!(text.contains(
+            r#"<ssd:Connector name="CAN.Tx_Data" kind="output"><ssc:Binary mime-type="application/org.fmi-standard.fmi-ls-bus.can; version=&quot;1.0.0&quot;"/></ssd:Connector>"#
+        ));
+        assert!(text.contains(r#"<ssv:Parameter name="tx_id"><ssv:Int32 value="32"/></ssv:Parameter>"#));
+        // A system that fails its check is not written.
+        let mut bad = system.clone();
+        bad.connections[10] = "sensor.CAN.Tx_Clock -> bus.Node1.Tx_Clock".parse().unwrap();
+        assert!(ssd_fmi3(&bad, &crate::systems_fmi3::tests::fmus3()).is_err());
+    }
+
+    /// A system of FMI 3.0 FMUs goes to fmi3/ alone (no SSP 1.0 twin); its missing FMU is an
+    /// error naming the component and the file.
+    #[test]
+    fn an_fmi3_system_is_written_to_fmi3_only_and_needs_its_fmus() {
+        let dir = std::env::temp_dir().join(format!("fmu-build-ssp3-test-{}", std::process::id()));
+        let (fmu_dir, out_dir) = (dir.join("fmus"), dir.join("out"));
+        std::fs::create_dir_all(fmu_dir.join("fmi3")).unwrap();
+        let mut systems = paper_systems();
+        systems.systems.retain(|s| s.is_fmi3());
+        let ids = [
+            "Pendulum",
+            "DCMotor",
+            "CanSensor",
+            "CanController",
+            "CanMotorDrive",
+            "CanBus",
+        ];
+        for id in &ids[..5] {
+            let path = crate::systems::testing::workspace_root().join(format!("modelDescription/fmi3/{id}.xml"));
+            let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join(format!("fmi3/{id}.fmu"))).unwrap());
+            zip.start_file("modelDescription.xml", SimpleFileOptions::default())
+                .unwrap();
+            zip.write_all(&std::fs::read(path).unwrap()).unwrap();
+            zip.finish().unwrap();
+        }
+        let e = write_all(&systems, &fmu_dir, &out_dir).unwrap_err();
+        assert!(
+            e.contains("system 'NetworkedPendulum': component 'bus'") && e.contains("fmi3/CanBus.fmu"),
+            "{e}"
+        );
+        let path = crate::systems::testing::workspace_root().join("modelDescription/fmi3/CanBus.xml");
+        let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join("fmi3/CanBus.fmu")).unwrap());
+        zip.start_file("modelDescription.xml", SimpleFileOptions::default())
+            .unwrap();
+        zip.write_all(&std::fs::read(path).unwrap()).unwrap();
+        zip.finish().unwrap();
+        let written = write_all(&systems, &fmu_dir, &out_dir).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(written, [out_dir.join("fmi3/NetworkedPendulum.ssp")]);
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&written[0]).unwrap()).unwrap();
+        let mut names: Vec<String> = (0..zip.len())
+            .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
+            .collect();
+        names.sort();
+        let mut want: Vec<String> = ids.iter().map(|id| format!("resources/{id}.fmu")).collect();
+        want.push("SystemStructure.ssd".into());
+        want.sort();
+        assert_eq!(names, want);
+        let mut text = String::new();
+        zip.by_name("SystemStructure.ssd")
+            .unwrap()
+            .read_to_string(&mut text)
+            .unwrap();
+        assert_eq!(text, fixture("NetworkedPendulum"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// The archive: the SSD, then each FMU once under resources/, stored as it was packaged.
     #[test]
     fn the_archive_holds_the_ssd_and_each_fmu_once() {
@@ -550,7 +744,9 @@ mod tests {
             zip.write_all(xml(id).as_bytes()).unwrap();
             zip.finish().unwrap();
         }
-        let systems = paper_systems();
+        let mut systems = paper_systems();
+        // The systems of FMI 2.0 FMUs (those of FMI 3.0 FMUs need FMUs of fmi3/).
+        systems.systems.retain(|s| !s.is_fmi3());
         let written = write_all(&systems, &fmu_dir, &out_dir).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
             written,

@@ -4,7 +4,10 @@ DCMotors, the CanSensor, the CanController (the ECU: the LQR of eq. (14)) and tw
 on ports 1-4 of the CanBus bus simulation, in an SSP 2.0 file whose clock connections join each
 node's countdown Tx_Clock to its port's triggered Rx_Clock and the port's countdown Tx_Clock to
 the node's triggered Rx_Clock (FMI-LS-BUS 1.0.0, Time-based Tx Clocks), the Tx_Data/Rx_Data
-Binary connectors carrying the CAN mime type.
+Binary connectors carrying the bus operations: the file `cargo fmu build` writes from
+holonomic/systems.toml (target/fmu/fmi3/NetworkedPendulum.ssp, `fmi-version = "3.0"`; its Binary
+connectors name the CAN mime type) and, for the configurations it does not hold (a loaded bus),
+one this test writes by hand, equal to it but for the values.
 
 Compared (bit for bit: both importers make the same FMI calls with the same arguments at the
 same times, so there is no tolerance to justify): the communication points (the grid of `h` and
@@ -19,12 +22,14 @@ import math
 import pathlib
 import struct
 import sys
+import zipfile
 
 import numpy as np
 import pytest
 
-from conftest import fmu3
+from conftest import fmu3, packaged
 from test_runner_fmi3_types import runner
+from lxml import etree
 from test_ssp2 import valid, write_ssp2
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "examples"))
@@ -76,6 +81,57 @@ def pendulum_ssp(tmp_path, cfg):
     path, ssd = write_ssp2(tmp_path / "NetworkedPendulum.ssp", comps, connectors, connections, parameters)
     valid(ssd)
     return path
+
+
+def written_ssp():
+    """target/fmu/fmi3/NetworkedPendulum.ssp, as `cargo fmu build --workspace` (or `cargo fmu ssp`)
+    writes it from the NetworkedPendulum of holonomic/systems.toml."""
+    return packaged("fmi3/NetworkedPendulum.ssp", " (or `target/release/cargo-fmu fmu ssp`) with the CAN FMUs built")
+
+
+def system_of(ssd):
+    """What an SSD says, in the order the runner's results depend on: the components in order,
+    the connectors {(component, name): (kind, type element, its attributes)}, the connections in
+    order, and the parameters {(component, name): (ssv type, value: a number, or a Boolean's
+    text)}."""
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+          "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
+    doc = etree.fromstring(ssd)
+    comps, connectors, parameters = [], {}, {}
+    for c in doc.iterfind(".//ssd:Component", ns):
+        comps.append(c.get("name"))
+        for k in c.iterfind("ssd:Connectors/ssd:Connector", ns):
+            connectors[(c.get("name"), k.get("name"))] = (k.get("kind"), etree.QName(k[0]).localname, dict(k[0].attrib))
+        for p in c.iterfind(".//ssv:Parameter", ns):
+            ty, text = etree.QName(p[0]).localname, p[0].get("value")
+            parameters[(c.get("name"), p.get("name"))] = (ty, text if ty == "Boolean" else float(text))
+    links = [(k.get("startElement"), k.get("startConnector"), k.get("endElement"), k.get("endConnector"))
+             for k in doc.iterfind(".//ssd:Connection", ns)]
+    return comps, connectors, links, parameters
+
+
+def test_cargo_fmu_writes_the_networked_pendulum_as_this_test_does_by_hand(tmp_path):
+    """The SSP 2.0 file cargo fmu writes (valid against the standard's XSDs) holds the hand-written
+    file's components in its order, its connections in its order, every connector with its kind
+    and type (the Binaries with the CAN mime type, which the hand-written file leaves out) and the
+    same parameter values, those of examples/ls_bus_loop.py's default Config (sensor and ECU at
+    10 ms, 500 kbit/s, no background load)."""
+    with zipfile.ZipFile(written_ssp()) as z:
+        ssd = z.read("SystemStructure.ssd")
+        fmus = ["Pendulum", "DCMotor", "CanSensor", "CanController", "CanMotorDrive", "CanBus"]
+        assert sorted(z.namelist()) == sorted(["SystemStructure.ssd"] + [f"resources/{f}.fmu" for f in fmus])
+    valid(ssd.decode())
+    assert etree.fromstring(ssd).get("version") == "2.0"
+    with zipfile.ZipFile(pendulum_ssp(tmp_path, loop.Config())) as z:
+        hand = system_of(z.read("SystemStructure.ssd"))
+    comps, connectors, links, parameters = system_of(ssd)
+    assert comps == hand[0]
+    assert links == hand[2]
+    assert set(connectors) == set(hand[1])
+    can = 'application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0"'
+    for key, (kind, ty, _) in hand[1].items():
+        assert connectors[key] == (kind, ty, {"mime-type": can} if ty == "Binary" else {}), key
+    assert parameters == hand[3]
 
 
 def on_the_grid(cfg):
@@ -131,8 +187,10 @@ def frames_in_the_rows(got, run, cfg):
     return compared
 
 
-def run_both(tmp_path, cfg, monkeypatch=None):
-    got = runner(tmp_path, pendulum_ssp(tmp_path, cfg), cfg.stop, cfg.h, *[a for r in RECORD for a in ("--record", r)])
+def run_both(tmp_path, cfg, monkeypatch=None, ssp=None):
+    """The runner on `ssp` (default: the file written here for `cfg`), and the scheduler with `cfg`."""
+    ssp = ssp or pendulum_ssp(tmp_path, cfg)
+    got = runner(tmp_path, ssp, cfg.stop, cfg.h, *[a for r in RECORD for a in ("--record", r)])
     if monkeypatch is not None:
         monkeypatch.setattr(loop.Node, "announced", on_the_grid(cfg))
     return got, loop.networked(cfg, fmu_dir=pathlib.Path(fmu3("CanBus")).parent)
@@ -149,18 +207,20 @@ def run_both(tmp_path, cfg, monkeypatch=None):
 # respecting the Tx_Data and Rx_Data dependency" (a second round of the Event Mode, after
 # fmi3UpdateDiscreteStates, as the scheduler does). Neither is fixed here (the scheduler and the
 # runner's clocks belong to other work this session); the case stays, strict, to say when.
-LOADED = pytest.param(0.3, marks=pytest.mark.xfail(strict=True, reason=(
+LOADED = pytest.param(0.3, False, marks=pytest.mark.xfail(strict=True, reason=(
     "at 0.19 s the CanBus's announced Tx tick coincides with the sensor's: the scheduler drops it, "
     "the runner sets the sensor's Rx_Data after its Tx_Data is read (see the comment above)")))
 
 
-@pytest.mark.parametrize("background_load", [0.0, LOADED])
-def test_the_networked_pendulum_in_the_runner_equals_the_fmpy_scheduler_bit_for_bit(background_load, tmp_path,
+@pytest.mark.parametrize("background_load, written", [(0.0, True), LOADED])
+def test_the_networked_pendulum_in_the_runner_equals_the_fmpy_scheduler_bit_for_bit(background_load, written, tmp_path,
                                                                                     monkeypatch):
     """The scheduler with the runner's rule for a tick on a grid point: the same FMI calls with
-    the same arguments, so every point, angle, voltage, load and frame is equal, bit for bit."""
+    the same arguments, so every point, angle, voltage, load and frame is equal, bit for bit.
+    Without background load the runner runs the file cargo fmu wrote (its values are the default
+    Config's: the test above); with it, one written here."""
     cfg = loop.Config(stop=1.0, background_load=background_load)
-    got, run = run_both(tmp_path, cfg, monkeypatch)
+    got, run = run_both(tmp_path, cfg, monkeypatch, ssp=written_ssp() if written else None)
     assert not run.fallen
     assert np.array_equal(np.asarray(got["time"]), run.t), (len(got["time"]), len(run.t))
     for k, s in enumerate(loop.STATE):
@@ -182,7 +242,7 @@ def test_the_networked_pendulum_in_the_runner_equals_the_plain_scheduler_to_its_
     rounding only: 1e-12 rad and rad/s is a thousand times what a step of a few ulps' change
     in length does to a state of size 1 integrated to 1e-10 (the Pendulum's rtol)."""
     cfg = loop.Config(stop=1.0)
-    got, run = run_both(tmp_path, cfg)
+    got, run = run_both(tmp_path, cfg, ssp=written_ssp())
     times = np.asarray(got["time"])
     assert len(times) == len(run.t)
     dt = np.max(np.abs(times - run.t))

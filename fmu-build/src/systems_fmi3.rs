@@ -1,0 +1,534 @@
+//! Systems of FMI 3.0 FMUs (`fmi-version = "3.0"` on a `[[system]]` of a systems file,
+//! [`crate::systems`]): the components are the FMI 3.0 FMUs `<fmu-dir>/fmi3/<fmu>.fmu`, FMUs
+//! that may have no FMI 2.0 twin (clocks, Binary variables: the FMI-LS-BUS network FMUs), and
+//! the system is checked against their FMI 3.0 `modelDescription.xml` as any importer reads it
+//! (md-reader); [`crate::ssp`] writes it in SSP 2.0 only (`<out>/fmi3/<system>.ssp`).
+//!
+//! What the check asks of a connection `a.x -> b.y`:
+//! - both ends exist and have one type (Float64, Int8 .. UInt64, Boolean, String, Binary, Clock);
+//! - data: `x` is an output, `y` an input; two Binaries carry one mime type;
+//! - clocks: `y` is a triggered input clock (`intervalVariability="triggered"`), the one a
+//!   connection can tick; `x` an output clock, or an input clock the importer ticks, its ticks
+//!   passed on (FMI-LS-BUS 1.0.0, Time-based Tx Clocks: a node's countdown Tx_Clock connects to
+//!   the bus's triggered Rx_Clock);
+//! - no input is driven twice.
+//!
+//! A parameter names a variable that takes a start value (not an input, a constant or a
+//! clock) and gets a value of its type: a number for a Float, an integer in range for an Int or
+//! UInt, `true`/`false`, a string, for a Binary a string of hexadecimal digits (two a byte).
+//! Arrays and Enumerations are refused, with the variable: md-reader reads no FMI 3.0 type
+//! definitions, and no system of this workspace has them.
+
+use crate::systems::{Component, Connection, Literal, Port, System};
+use md_reader::Causality;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+pub use md_reader::fmi3::{ModelDescription as Fmu3Description, Type as Type3, Variable as Variable3};
+
+/// The FMI 3.0 FMUs of a system, by the name its components give them (`fmu`).
+pub type Fmus3 = BTreeMap<String, Fmu3Description>;
+
+/// A Binary's mime type when it declares none (FMI 3.0, 2.4.7.5.4).
+const OCTET_STREAM: &str = "application/octet-stream";
+
+/// Reads a modelDescription.xml of FMI 3.0.
+pub fn parse_description(xml: &str) -> Result<Fmu3Description, String> {
+    let d = Fmu3Description::parse(xml)?;
+    if !d.fmi_version.starts_with("3.") {
+        return Err(format!(
+            "fmiVersion is \"{}\", expected \"3.0\" (a system with fmi-version = \"3.0\" is of FMI 3.0 FMUs)",
+            d.fmi_version
+        ));
+    }
+    Ok(d)
+}
+
+/// Reads `modelDescription.xml` of FMI 3.0 from an `.fmu` archive.
+pub fn read_description(fmu: &Path) -> Result<Fmu3Description, String> {
+    let xml = crate::systems::read_xml(fmu)?;
+    parse_description(&xml).map_err(|e| format!("{}: {e}", fmu.display()))
+}
+
+/// A connection of a checked FMI 3.0 system, with what its connectors declare.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TypedConnection3<'a> {
+    pub connection: &'a Connection,
+    pub var_type: Type3,
+    /// A Binary's mime type (both ends'), as the FMUs declare it; `None`: octet-stream.
+    pub mime_type: Option<String>,
+    /// The causality of the start and end variables (an input clock may start a connection).
+    pub from_causality: Causality,
+    pub to_causality: Causality,
+}
+
+/// A parameter value typed by its FMI 3.0 variable: its type and the text of its SSV value
+/// (`ssv:<type> value="<text>"`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Value3 {
+    pub ty: Type3,
+    pub text: String,
+}
+
+/// An FMI 3.0 system that has passed [`System::check_fmi3`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked3<'a> {
+    pub system: &'a System,
+    /// For each component, in order: its parameters, in order, with their typed values.
+    pub parameters: Vec<Vec<(&'a str, Value3)>>,
+    /// Every connection, in order.
+    pub connections: Vec<TypedConnection3<'a>>,
+}
+
+/// `output Float64`, `input Clock (triggered)`
+fn describe(v: &Variable3) -> String {
+    let mut s = format!("{} {}", v.causality.name(), v.ty);
+    if let Some(c) = &v.clock {
+        s += &format!(" ({})", c.interval_variability);
+    }
+    if v.array {
+        s += " array";
+    }
+    s
+}
+
+impl System {
+    /// Whether the system is of FMI 3.0 FMUs (`fmi-version = "3.0"`).
+    pub fn is_fmi3(&self) -> bool {
+        self.fmi_version.as_deref() == Some("3.0")
+    }
+
+    /// Reads the FMI 3.0 description of every FMU the system names from `<fmi3_dir>/<fmu>.fmu`.
+    pub fn read_fmus3(&self, fmi3_dir: &Path) -> Result<Fmus3, String> {
+        let mut fmus = Fmus3::new();
+        for c in &self.components {
+            if !fmus.contains_key(&c.fmu) {
+                let path = fmi3_dir.join(format!("{}.fmu", c.fmu));
+                let d = read_description(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
+                fmus.insert(c.fmu.clone(), d);
+            }
+        }
+        Ok(fmus)
+    }
+
+    /// The component of `port`, its FMU and the FMU's variable `port.variable`.
+    fn lookup3<'f>(&self, fmus: &'f Fmus3, port: &Port) -> Result<(&Component, &'f Variable3), String> {
+        let c = self
+            .component(&port.component)
+            .ok_or_else(|| format!("{}: no component '{}'", self.at(), port.component))?;
+        let fmu = fmus
+            .get(&c.fmu)
+            .ok_or_else(|| format!("{}: the description of {}.fmu was not read", self.at(), c.fmu))?;
+        let v = fmu.variables.iter().find(|v| v.name == port.variable).ok_or_else(|| {
+            let names: Vec<&str> = fmu.variables.iter().map(|v| v.name.as_str()).collect();
+            format!(
+                "{}: {port}: {}.fmu (FMI 3.0) has no variable '{}' (it has: {})",
+                self.at(),
+                c.fmu,
+                port.variable,
+                names.join(", ")
+            )
+        })?;
+        Ok((c, v))
+    }
+
+    /// Checks the system against the FMI 3.0 descriptions of its FMUs (see the module).
+    pub fn check_fmi3<'a>(&'a self, fmus: &Fmus3) -> Result<Checked3<'a>, String> {
+        let mut connections = Vec::new();
+        for (i, c) in self.connections.iter().enumerate() {
+            let (_, o) = self.lookup3(fmus, &c.from)?;
+            let (_, inp) = self.lookup3(fmus, &c.to)?;
+            let wrong = |why: String| {
+                format!(
+                    "{}: connection {c}: {} is {}, {} is {}: {why}",
+                    self.at(),
+                    c.from,
+                    describe(o),
+                    c.to,
+                    describe(inp)
+                )
+            };
+            if o.ty != inp.ty {
+                return Err(wrong(format!(
+                    "a connection joins two variables of one type ({} to {})",
+                    o.ty, inp.ty
+                )));
+            }
+            if o.ty == Type3::Clock {
+                let triggered = |v: &Variable3| v.clock.as_ref().is_some_and(|k| k.interval_variability == "triggered");
+                if inp.causality != Causality::Input || !triggered(inp) {
+                    return Err(wrong(format!(
+                        "a clock connection ticks a triggered input clock (intervalVariability=\"triggered\"), and {} is not one",
+                        c.to
+                    )));
+                }
+                if !matches!(o.causality, Causality::Output | Causality::Input) {
+                    return Err(wrong(format!(
+                        "a clock connection starts at an output clock or at an input clock the importer ticks, and {} is neither",
+                        c.from
+                    )));
+                }
+            } else if o.causality != Causality::Output || inp.causality != Causality::Input {
+                return Err(wrong("a connection goes from an output to an input".into()));
+            }
+            for v in [o, inp] {
+                if v.array || v.ty == Type3::Enumeration {
+                    let port = if std::ptr::eq(v, o) { &c.from } else { &c.to };
+                    return Err(wrong(format!(
+                        "{port} is {}: fmu-build writes no connection of arrays or Enumerations in an FMI 3.0 system",
+                        if v.array { "an array" } else { "an Enumeration" }
+                    )));
+                }
+            }
+            let mime = |v: &Variable3| v.mime_type.clone().unwrap_or_else(|| OCTET_STREAM.into());
+            if o.ty == Type3::Binary && mime(o) != mime(inp) {
+                return Err(wrong(format!(
+                    "the Binaries carry different mime types: '{}' and '{}'",
+                    mime(o),
+                    mime(inp)
+                )));
+            }
+            if let Some(first) = self.connections[..i].iter().find(|d| d.to == c.to) {
+                return Err(format!(
+                    "{}: input {} is driven twice: by {} and by {}",
+                    self.at(),
+                    c.to,
+                    first.from,
+                    c.from
+                ));
+            }
+            connections.push(TypedConnection3 {
+                connection: c,
+                var_type: o.ty,
+                mime_type: (o.ty == Type3::Binary).then(|| mime(o)),
+                from_causality: o.causality,
+                to_causality: inp.causality,
+            });
+        }
+        let mut parameters = Vec::new();
+        for c in &self.components {
+            let mut typed = Vec::new();
+            for p in &c.parameters {
+                let port = Port {
+                    component: c.name.clone(),
+                    variable: p.name.clone(),
+                };
+                let (_, v) = self.lookup3(fmus, &port)?;
+                let refused = |why: &str| {
+                    format!(
+                        "{}: parameter {port}: {}.fmu's '{}' ({}) cannot be given a value: {why}",
+                        self.at(),
+                        c.fmu,
+                        v.name,
+                        describe(v)
+                    )
+                };
+                if v.causality == Causality::Input {
+                    return Err(refused("it is an input (its value comes from its connection)"));
+                }
+                if v.variability == md_reader::Variability::Constant {
+                    return Err(refused("it is a constant"));
+                }
+                if v.ty == Type3::Clock {
+                    return Err(refused("it is a clock"));
+                }
+                if v.start.is_none() {
+                    return Err(refused("it declares no start value"));
+                }
+                if v.array || v.ty == Type3::Enumeration {
+                    return Err(refused(
+                        "fmu-build writes no array or Enumeration value in an FMI 3.0 system",
+                    ));
+                }
+                let text = typed_text(&p.value, v.ty).map_err(|why| {
+                    format!(
+                        "{}: parameter {port} = {}: {}.fmu declares '{}' {why}",
+                        self.at(),
+                        p.value,
+                        c.fmu,
+                        v.name
+                    )
+                })?;
+                typed.push((p.name.as_str(), Value3 { ty: v.ty, text }));
+            }
+            parameters.push(typed);
+        }
+        Ok(Checked3 {
+            system: self,
+            parameters,
+            connections,
+        })
+    }
+}
+
+/// The SSV value text of `literal` for a variable of type `ty`; the error completes
+/// "declares 'v' ...".
+fn typed_text(literal: &Literal, ty: Type3) -> Result<String, String> {
+    let mismatch = |want: &str| format!("{ty}, which takes {want}");
+    let integer = |min: i128, max: i128| match literal {
+        Literal::Integer(x) if (min..=max).contains(&i128::from(*x)) => Ok(x.to_string()),
+        Literal::Integer(x) => Err(format!("{ty}, an integer in [{min}, {max}]: {x} is out of range")),
+        _ => Err(mismatch("an integer")),
+    };
+    match ty {
+        Type3::Float64 | Type3::Float32 => match literal {
+            Literal::Float(x) => Ok(format!("{x:?}")),
+            Literal::Integer(x) => Ok(format!("{:?}", *x as f64)),
+            _ => Err(mismatch("a number")),
+        },
+        Type3::Int8 => integer(i8::MIN.into(), i8::MAX.into()),
+        Type3::UInt8 => integer(0, u8::MAX.into()),
+        Type3::Int16 => integer(i16::MIN.into(), i16::MAX.into()),
+        Type3::UInt16 => integer(0, u16::MAX.into()),
+        Type3::Int32 => integer(i32::MIN.into(), i32::MAX.into()),
+        Type3::UInt32 => integer(0, u32::MAX.into()),
+        Type3::Int64 => integer(i64::MIN.into(), i64::MAX.into()),
+        Type3::UInt64 => integer(0, u64::MAX.into()),
+        Type3::Boolean => match literal {
+            Literal::Boolean(x) => Ok(x.to_string()),
+            _ => Err(mismatch("true or false")),
+        },
+        Type3::String => match literal {
+            Literal::String(s) => Ok(s.clone()),
+            _ => Err(mismatch("a string")),
+        },
+        Type3::Binary => match literal {
+            Literal::String(s) if s.len() % 2 == 0 && s.bytes().all(|b| b.is_ascii_hexdigit()) => Ok(s.clone()),
+            _ => Err(mismatch("a string of hexadecimal digits, two a byte (\"00ff\")")),
+        },
+        Type3::Enumeration | Type3::Clock => Err(format!("{ty}, which takes no value here")),
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::systems::Systems;
+    use crate::systems::testing::*;
+
+    pub(crate) fn fmus3() -> Fmus3 {
+        [
+            "Pendulum",
+            "DCMotor",
+            "CanSensor",
+            "CanController",
+            "CanMotorDrive",
+            "CanBus",
+        ]
+        .into_iter()
+        .map(|id| {
+            let path = workspace_root().join("modelDescription/fmi3").join(format!("{id}.xml"));
+            let xml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            (
+                id.to_owned(),
+                parse_description(&xml).unwrap_or_else(|e| panic!("{id}: {e}")),
+            )
+        })
+        .collect()
+    }
+
+    fn networked() -> System {
+        paper_systems().get("NetworkedPendulum").unwrap().clone()
+    }
+
+    /// Why the networked pendulum is refused with its connection `old` replaced by `new`.
+    fn refused_with(old: &str, new: &str) -> String {
+        let mut s = networked();
+        let k = s
+            .connections
+            .iter()
+            .position(|c| c.to_string() == old)
+            .unwrap_or_else(|| panic!("no connection {old}"));
+        s.connections[k] = new.parse().unwrap();
+        s.check_fmi3(&fmus3()).unwrap_err()
+    }
+
+    #[test]
+    fn the_networked_pendulum_checks_against_its_fmi3_fmus() {
+        let s = networked();
+        assert!(s.is_fmi3());
+        let checked = s.check_fmi3(&fmus3()).unwrap_or_else(|e| panic!("{e}"));
+        let count = |t: Type3| checked.connections.iter().filter(|c| c.var_type == t).count();
+        // 4 measurements, 2 x (U, omega, tau); each of the 4 nodes: 2 clocks and 2 Binaries.
+        assert_eq!(
+            (count(Type3::Float64), count(Type3::Clock), count(Type3::Binary)),
+            (10, 8, 8)
+        );
+        let can = r#"application/org.fmi-standard.fmi-ls-bus.can; version="1.0.0""#;
+        assert!(
+            checked
+                .connections
+                .iter()
+                .filter(|c| c.var_type == Type3::Binary)
+                .all(|c| c.mime_type.as_deref() == Some(can))
+        );
+        let sensor = s.components.iter().position(|c| c.name == "sensor").unwrap();
+        assert_eq!(
+            checked.parameters[sensor][0],
+            (
+                "tx_id",
+                Value3 {
+                    ty: Type3::Int32,
+                    text: "32".into()
+                }
+            ),
+            "0x020 typed by the FMU's Int32"
+        );
+    }
+
+    #[test]
+    fn a_clock_connection_to_a_time_based_clock_or_from_data_is_refused() {
+        // Into the bus's countdown Tx_Clock: a connection cannot tick a time-based clock.
+        let e = refused_with(
+            "sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock",
+            "sensor.CAN.Tx_Clock -> bus.Node1.Tx_Clock",
+        );
+        assert!(
+            e.contains("holonomic/systems.toml: system 'NetworkedPendulum'")
+                && e.contains("connection sensor.CAN.Tx_Clock -> bus.Node1.Tx_Clock")
+                && e.contains("bus.Node1.Tx_Clock is input Clock (countdown)")
+                && e.contains("ticks a triggered input clock"),
+            "expected file, system, connection and the clock's kind named, got: {e}"
+        );
+        // A Binary into a clock.
+        let e = refused_with(
+            "sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock",
+            "sensor.CAN.Tx_Data -> bus.Node1.Rx_Clock",
+        );
+        assert!(
+            e.contains("connection sensor.CAN.Tx_Data -> bus.Node1.Rx_Clock")
+                && e.contains("sensor.CAN.Tx_Data is output Binary")
+                && e.contains("one type (Binary to Clock)"),
+            "{e}"
+        );
+        // Two triggered clocks the wrong way round: the node's Rx_Clock is no source of ticks
+        // into the bus's Tx_Clock (countdown).
+        let e = refused_with(
+            "bus.Node1.Tx_Clock -> sensor.CAN.Rx_Clock",
+            "sensor.CAN.Rx_Clock -> bus.Node1.Tx_Clock",
+        );
+        assert!(e.contains("bus.Node1.Tx_Clock is not one"), "{e}");
+    }
+
+    #[test]
+    fn a_binary_to_a_float64_and_an_output_into_an_output_are_refused() {
+        let e = refused_with(
+            "bus.Node3.Tx_Data -> drive1.CAN.Rx_Data",
+            "bus.Node3.Tx_Data -> motor1.U",
+        );
+        assert!(
+            e.contains("connection bus.Node3.Tx_Data -> motor1.U")
+                && e.contains("bus.Node3.Tx_Data is output Binary, motor1.U is input Float64")
+                && e.contains("(Binary to Float64)"),
+            "{e}"
+        );
+        let e = refused_with("drive1.U -> motor1.U", "drive1.U -> motor1.tau");
+        assert!(
+            e.contains("motor1.tau is output Float64") && e.contains("from an output to an input"),
+            "{e}"
+        );
+        let e = refused_with("drive2.U -> motor2.U", "drive1.U -> motor1.U");
+        assert!(
+            e.contains("input motor1.U is driven twice: by drive1.U and by drive1.U"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_unknown_variable_is_refused_with_the_variables_there_are() {
+        let e = refused_with(
+            "sensor.CAN.Tx_Data -> bus.Node1.Rx_Data",
+            "sensor.CAN.Tx_Data -> bus.Node9.Rx_Data",
+        );
+        assert!(
+            e.contains(
+                "system 'NetworkedPendulum': bus.Node9.Rx_Data: CanBus.fmu (FMI 3.0) has no variable 'Node9.Rx_Data'"
+            ) && e.contains("Node4.Rx_Data"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn binaries_of_different_mime_types_are_refused() {
+        let mut fmus = fmus3();
+        let bus = fmus.get_mut("CanBus").unwrap();
+        let rx = bus.variables.iter_mut().find(|v| v.name == "Node1.Rx_Data").unwrap();
+        rx.mime_type = Some("application/org.fmi-standard.fmi-ls-bus.flexray".into());
+        let e = networked().check_fmi3(&fmus).unwrap_err();
+        assert!(
+            e.contains("sensor.CAN.Tx_Data -> bus.Node1.Rx_Data")
+                && e.contains("different mime types")
+                && e.contains("fmi-ls-bus.flexray"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn parameters_are_typed_by_the_fmi3_declarations() {
+        let with = |component: &str, fmu: &str, parameters: &str| {
+            one_system(&format!(
+                "[[system]]\nname = \"S\"\nfmi-version = \"3.0\"\n[[system.component]]\nname = \"{component}\"\n\
+                 fmu = \"{fmu}\"\nparameters = {{ {parameters} }}\n"
+            ))
+            .check_fmi3(&fmus3())
+            .map(|c| {
+                c.parameters[0]
+                    .iter()
+                    .map(|(n, v)| (n.to_string(), v.clone()))
+                    .collect::<Vec<_>>()
+            })
+        };
+        let ok = with("bus", "CanBus", "baud_rate = 250000, background_load = 1").unwrap();
+        assert_eq!(
+            ok,
+            [
+                (
+                    "baud_rate".to_string(),
+                    Value3 {
+                        ty: Type3::Int32,
+                        text: "250000".into()
+                    }
+                ),
+                (
+                    "background_load".to_string(),
+                    Value3 {
+                        ty: Type3::Float64,
+                        text: "1.0".into()
+                    }
+                )
+            ]
+        );
+        let e = with("bus", "CanBus", "baud_rate = 4294967296").unwrap_err();
+        assert!(
+            e.contains("parameter bus.baud_rate = 4294967296") && e.contains("Int32, an integer in"),
+            "{e}"
+        );
+        let e = with("bus", "CanBus", "baud_rate = 5e5").unwrap_err();
+        assert!(e.contains("Int32, which takes an integer"), "{e}");
+        let e = with("sensor", "CanSensor", "alpha1 = 0.1").unwrap_err();
+        assert!(e.contains("sensor.alpha1") && e.contains("it is an input"), "{e}");
+        let e = with("sensor", "CanSensor", "\"CAN.Tx_Clock\" = 1").unwrap_err();
+        assert!(e.contains("sensor.CAN.Tx_Clock") && e.contains("it is an input"), "{e}");
+        let e = with("sensor", "CanSensor", "frames = 1").unwrap_err();
+        assert!(e.contains("CanSensor.fmu (FMI 3.0) has no variable 'frames'"), "{e}");
+    }
+
+    #[test]
+    fn an_fmi3_system_is_declared_with_its_version() {
+        let parse = |t: &str| Systems::parse(t, Path::new("v.toml"));
+        let e = parse("[[system]]\nname = \"S\"\nfmi-version = \"3\"\n").unwrap_err();
+        assert!(e.contains("fmi-version = \"3\"") && e.contains("\"3.0\""), "{e}");
+        let e = parse("[[system]]\nname = \"S\"\nfmi-version = \"3.0\"\nssp-version = \"1.0\"\n").unwrap_err();
+        assert!(e.contains("SSP 1.0 has no FMI 3.0 types"), "{e}");
+        let s = parse("[[system]]\nname = \"S\"\nfmi-version = \"3.0\"\n").unwrap();
+        assert!(s.systems[0].is_fmi3());
+        let s = parse("[[system]]\nname = \"S\"\n").unwrap();
+        assert!(!s.systems[0].is_fmi3());
+    }
+
+    #[test]
+    fn an_fmi2_description_is_refused_for_an_fmi3_system() {
+        let e = parse_description(&xml("Pendulum")).unwrap_err();
+        assert!(e.contains("fmiVersion is \"2.0\", expected \"3.0\""), "{e}");
+    }
+}
