@@ -93,6 +93,7 @@ echo "== Made"
 echo "FMUs, FMI 2.0 (target/fmu): $(cd target/fmu && ls *.fmu | tr '\n' ' ')"
 echo "FMUs, FMI 3.0 (target/fmu/fmi3): $(cd target/fmu/fmi3 && ls *.fmu | tr '\n' ' ')"
 echo "SSP files (target/fmu; of the FMI 3.0 FMUs in target/fmu/fmi3): $(cd target/fmu && ls *.ssp 2>/dev/null | tr '\n' ' ')"
+echo "SSP 2.0 files of systems of FMI 3.0 FMUs only (target/fmu/fmi3): $(cd target/fmu/fmi3 && for f in *.ssp; do [[ -e "$f" && ! -e "../$f" ]] && printf '%s ' "$f"; done)"
 echo "Container FMUs, the SSP files' systems as one FMU each (target/fmu/containers, FMI 3.0 in containers/fmi3): $(cd target/fmu/containers && ls *.fmu | tr '\n' ' ')"
 # The platforms each FMU carries: its binaries/ folders (the same for every FMU of one version).
 platforms() { .venv/bin/python -c 'import sys, zipfile; print(" ".join(sorted({n.split("/")[1] for n in zipfile.ZipFile(sys.argv[1]).namelist() if n.startswith("binaries/") and n.count("/") > 1})))' "$1"; }
