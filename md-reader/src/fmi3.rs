@@ -198,6 +198,9 @@ pub struct Interface {
     pub max_output_derivative_order: u32,
     pub provides_intermediate_update: bool,
     pub can_return_early: bool,
+    /// `mightReturnEarlyFromDoStep` (Co-Simulation): with earlyReturnAllowed, fmi3DoStep may end
+    /// a step early of its own accord.
+    pub might_return_early: bool,
     /// `providesPerElementDependencies`: fmi3GetNumberOfVariableDependencies and
     /// fmi3GetVariableDependencies are offered.
     pub provides_per_element_dependencies: bool,
@@ -281,6 +284,7 @@ impl ModelDescription {
                 max_output_derivative_order: e.number("maxOutputDerivativeOrder").unwrap_or(0),
                 provides_intermediate_update: e.flag("providesIntermediateUpdate"),
                 can_return_early: e.flag("canReturnEarlyAfterIntermediateUpdate"),
+                might_return_early: e.flag("mightReturnEarlyFromDoStep"),
                 provides_per_element_dependencies: e.flag("providesPerElementDependencies"),
                 provides_evaluate_discrete_states: e.flag("providesEvaluateDiscreteStates"),
             };
