@@ -481,6 +481,14 @@ pub fn model_exchange_directional_derivatives_match_finite_differences(fmu: &Fmu
     match_finite_differences(fmu, true);
 }
 
+/// fmi2GetDirectionalDerivative with an unknown value reference among the unknowns and among the
+/// knowns, and with each array NULL: refused with fmi2Error and a message, and the same valid
+/// call afterwards gives the same result.
+///
+/// Verdict: warned, not failed, where a mistaken call is not refused (or crashes): these are the
+/// importer's mistakes, which FMI 2.0.5 leaves undefined (§2.1.3: fmi2Error is the answer to what
+/// the FMU detects; detecting is good practice, not a requirement). Failed: the valid call after
+/// them answering other than fmi2OK or giving another result (the instance must still serve).
 pub fn directional_derivatives_refuse_unknown_references_and_null_arrays(fmu: &Fmu) {
     let mut interfaces = vec![];
     if provides(fmu, false) {
@@ -510,95 +518,90 @@ pub fn directional_derivatives_refuse_unknown_references_and_null_arrays(fmu: &F
         let api = &fmu.api;
         let c = inst.c;
         let seed = [1.0];
-        let mut out = [0.0];
         let null_r = std::ptr::null::<f64>();
         let null_vr = std::ptr::null::<u32>();
-        // SAFETY: arrays of one element, or NULL on purpose (which the FMU must refuse).
-        let cases = unsafe {
-            [
-                (
-                    "an unknown value reference among the unknowns",
-                    crate::guard::fill(
-                        &mut out,
-                        "fmi2GetDirectionalDerivative",
-                        "nUnknown",
-                        crate::guard::GETTER_RULE2,
-                        |p| (api.get_directional_derivative)(c, &bad_vr, 1, knowns.as_ptr(), 1, seed.as_ptr(), p),
-                    ),
-                ),
-                (
-                    "an unknown value reference among the knowns",
-                    crate::guard::fill(
-                        &mut out,
-                        "fmi2GetDirectionalDerivative",
-                        "nUnknown",
-                        crate::guard::GETTER_RULE2,
-                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, &bad_vr, 1, seed.as_ptr(), p),
-                    ),
-                ),
-                (
-                    "vUnknown_ref NULL with nUnknown = 1",
-                    crate::guard::fill(
-                        &mut out,
-                        "fmi2GetDirectionalDerivative",
-                        "nUnknown",
-                        crate::guard::GETTER_RULE2,
-                        |p| (api.get_directional_derivative)(c, null_vr, 1, knowns.as_ptr(), 1, seed.as_ptr(), p),
-                    ),
-                ),
-                (
-                    "vKnown_ref NULL with nKnown = 1",
-                    crate::guard::fill(
-                        &mut out,
-                        "fmi2GetDirectionalDerivative",
-                        "nUnknown",
-                        crate::guard::GETTER_RULE2,
-                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, null_vr, 1, seed.as_ptr(), p),
-                    ),
-                ),
-                (
-                    "dvKnown NULL",
-                    crate::guard::fill(
-                        &mut out,
-                        "fmi2GetDirectionalDerivative",
-                        "nUnknown",
-                        crate::guard::GETTER_RULE2,
-                        |p| (api.get_directional_derivative)(c, unknowns.as_ptr(), 1, knowns.as_ptr(), 1, null_r, p),
-                    ),
-                ),
-                (
-                    "dvUnknown NULL",
-                    (api.get_directional_derivative)(
-                        c,
-                        unknowns.as_ptr(),
-                        1,
-                        knowns.as_ptr(),
-                        1,
-                        seed.as_ptr(),
-                        std::ptr::null_mut(),
-                    ),
-                ),
-            ]
-        };
-        let log = inst.log();
-        for (what, s) in cases {
-            assert_eq!(
-                s,
-                fmi2Error,
-                "{}: {}: fmi2GetDirectionalDerivative with {what}: expected fmi2Error, got {}; log {log:?}",
-                fmu.id,
-                interface(me),
-                status_name(s)
-            );
+        let dd = api.get_directional_derivative;
+        // (what, unknowns, knowns, seed, the output NULL): each an importer's mistake.
+        let cases: [(&str, *const u32, *const u32, *const f64, bool); 6] = [
+            (
+                "an unknown value reference among the unknowns",
+                &bad_vr,
+                knowns.as_ptr(),
+                seed.as_ptr(),
+                false,
+            ),
+            (
+                "an unknown value reference among the knowns",
+                unknowns.as_ptr(),
+                &bad_vr,
+                seed.as_ptr(),
+                false,
+            ),
+            (
+                "vUnknown_ref NULL with nUnknown = 1",
+                null_vr,
+                knowns.as_ptr(),
+                seed.as_ptr(),
+                false,
+            ),
+            (
+                "vKnown_ref NULL with nKnown = 1",
+                unknowns.as_ptr(),
+                null_vr,
+                seed.as_ptr(),
+                false,
+            ),
+            ("dvKnown NULL", unknowns.as_ptr(), knowns.as_ptr(), null_r, false),
+            (
+                "dvUnknown NULL",
+                unknowns.as_ptr(),
+                knowns.as_ptr(),
+                seed.as_ptr(),
+                true,
+            ),
+        ];
+        let mut refused = 0;
+        for (what, u, k, sd, null_out) in cases {
+            // Each call alone is the importer's mistake (outcome::on_purpose): a crash in it is
+            // a warning naming it, the calls before and after it are the check's own.
+            let s = crate::outcome::on_purpose(|| {
+                crate::outcome::breadcrumb(&format!("fmi2GetDirectionalDerivative with {what}"));
+                let mut out = [0.0];
+                // SAFETY: arrays of one element, or NULL on purpose (which a careful FMU refuses).
+                unsafe {
+                    if null_out {
+                        dd(c, u, 1, k, 1, sd, std::ptr::null_mut())
+                    } else {
+                        crate::guard::fill(
+                            &mut out,
+                            "fmi2GetDirectionalDerivative",
+                            "nUnknown",
+                            crate::guard::GETTER_RULE2,
+                            |p| dd(c, u, 1, k, 1, sd, p),
+                        )
+                    }
+                }
+            });
+            refused += usize::from(s == fmi2Error);
+            crate::outcome::warn_unless(s == fmi2Error, || {
+                format!(
+                    "{}: {}: fmi2GetDirectionalDerivative with {what}: expected fmi2Error, got {} (an importer's \
+                     mistake not detected)",
+                    fmu.id,
+                    interface(me),
+                    status_name(s)
+                )
+            });
         }
-        let refusals = log.iter().filter(|e| e.status == fmi2Error).count();
-        assert!(
-            refusals >= cases.len(),
-            "{}: {}: {} refused calls, {refusals} fmi2Error messages: {log:?}",
-            fmu.id,
-            interface(me),
-            cases.len()
-        );
+        let log = inst.log();
+        let messages = log.iter().filter(|e| e.status == fmi2Error).count();
+        crate::outcome::warn_unless(messages >= refused, || {
+            format!(
+                "{}: {}: {refused} refused calls, {messages} fmi2Error messages: {log:?}",
+                fmu.id,
+                interface(me)
+            )
+        });
         let (s, again) = call(&inst, &unknowns, &knowns);
         assert_eq!(s, fmi2OK, "{}: usable after the refusals: {}", fmu.id, inst.log_text());
         assert_eq!(

@@ -6,7 +6,7 @@
 use super::says;
 use crate::Fmu;
 use crate::fmi2::*;
-use crate::instance::{Args, Instance, step_size};
+use crate::instance::{Args, Instance, status_name, step_size};
 use crate::outcome::info;
 use std::ptr;
 
@@ -116,6 +116,15 @@ pub fn instantiate_without_callbacks_or_logger_returns_null_without_crashing(fmu
     }
 }
 
+/// fmi2Instantiate with the FMU's resources/ named in each form of a `file` URI (`file:///abs`,
+/// `file:/abs`, `file://localhost/abs`, percent-encoded), then initialized and stepped; and with
+/// locations that hold nothing (a missing folder, http, empty, NULL).
+///
+/// Verdict: failed where a `file` URI of the FMU's own resources is refused or its
+/// initialization fails: FMI 2.0.5 §2.1.5 (fmi2Instantiate, fmuResourceLocation): "The following
+/// schemes must be understood by the FMU: Mandatory: "file" with absolute path (either including
+/// or omitting the authority component)" (RFC 8089: the authority `localhost` is this machine).
+/// Without the files, an fmi2Error with a message is the right answer of a model that reads them.
 pub fn instantiate_accepts_every_resource_location_form_and_a_missing_folder(fmu: &Fmu) {
     // The FMU's own unpacked resources/, and a copy of it under a name that needs encoding.
     let abs = fmu.dir.join("resources");
@@ -155,7 +164,17 @@ pub fn instantiate_accepts_every_resource_location_form_and_a_missing_folder(fmu
             Err(log) => panic!("{}: resourceLocation {loc:?} refused: {log:?}", fmu.id),
         };
         if has_files {
-            inst.initialize();
+            let s = [inst.setup(0.0, None), inst.enter_init(), inst.exit_init()];
+            assert!(
+                s.iter().all(|s| *s == fmi2OK || *s == fmi2Warning),
+                "{}: with fmuResourceLocation {loc:?} (the FMU's own resources/), initialization answered {:?}: {} \
+                 (FMI 2.0.5 §2.1.5, fmi2Instantiate: the scheme \"file\" with an absolute path, \"either including or \
+                 omitting the authority component\", must be understood; RFC 8089: the authority \"localhost\" is this \
+                 machine)",
+                fmu.id,
+                s.map(status_name),
+                inst.log_text()
+            );
             assert_eq!(
                 inst.step(step_size(fmu)),
                 fmi2OK,

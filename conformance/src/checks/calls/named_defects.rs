@@ -61,9 +61,12 @@ pub fn getters_write_no_value_past_the_array_they_are_given(fmu: &Fmu) {
 ///
 /// Verdict: a failure where either reads another time after fmi2OK: FMI 2.0.5 §4.2.2
 /// (fmi2DoStep computes the communication step from currentCommunicationPoint to
-/// currentCommunicationPoint + communicationStepSize; fmi2OK: the step was computed to its end)
-/// and §4.2.3 (fmi2LastSuccessfulTime: "the end time of the last successfully completed
-/// communication step"). Skipped where the FMU declares no independent variable and does not
+/// currentCommunicationPoint + communicationStepSize; fmi2OK: the step was computed to its end),
+/// §2.2.7 (causality "independent": its value is "after initialization set ... by arguments
+/// currentCommunicationPoint and communicationStepSize of fmi2DoStep for CoSimulation"; "[The
+/// actual value can be inquired with fmi2GetReal.]") and §4.2.3 (fmi2LastSuccessfulTime: "the
+/// end time of the last successfully completed communication step"). The Reference Feedthrough
+/// and Resource v0.0.41 (no continuous states) keep their time variable at the start time. Skipped where the FMU declares no independent variable and does not
 /// answer fmi2LastSuccessfulTime (it then shows its time nowhere).
 pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
     let time = fmu
@@ -85,7 +88,8 @@ pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
                 s == fmi2OK && crate::outcome::same_time(v[0], inst.time, h),
                 "{}: after {n} fmi2DoStep of h = {h} from t = {t0} answered fmi2OK, the time variable '{name}' reads \
                  {} ({}), expected {} (FMI 2.0.5 §4.2.2: fmi2OK means the step was computed to \
-                 currentCommunicationPoint + communicationStepSize)",
+                 currentCommunicationPoint + communicationStepSize; §2.2.7: the independent variable's value is set by \
+                 the arguments of fmi2DoStep)",
                 fmu.id,
                 v[0],
                 crate::instance::status_name(s),
