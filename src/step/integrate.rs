@@ -16,6 +16,17 @@ fn slope_inputs<M: Variables>(c: &mut M::Continuous<f64>, model: &M, slopes: &[(
     }
 }
 
+/// The derivatives at the step's end where the integrator's last stage does not hold them (a
+/// failed step, inputs with slopes): out of line, since inlined here the compiler moved the
+/// outputs' `sin` calls (sin α1, sin α2 of the Pendulum) into the other branch, where this
+/// call had them already, and so kept them from pairing with their `cos` into one `sincos`
+/// (bench/callgrind.sh, docs/performance.md).
+#[cold]
+#[inline(never)]
+fn derivatives_at_end<M: CoSimulation>(model: &M, t: f64, c: &mut M::Continuous<f64>) {
+    model.derivatives(t, c);
+}
+
 impl Context<'_> {
     /// Integrates the model's [`crate::Model::derivatives`] from `t` over `h` with the runtime's
     /// Dormand-Prince 5(4) integrator, at [`CoSimulation::tolerances`], the inputs held; then
@@ -120,7 +131,7 @@ impl Context<'_> {
             }
         }
         if !fresh || !slopes.is_empty() {
-            model.derivatives(reached, &mut c);
+            derivatives_at_end(&*model, reached, &mut c);
         }
         model.outputs(reached, &mut c);
         model.store_continuous(&c);
