@@ -23,6 +23,12 @@ pub enum Fmi2Error {
     /// A call of an isolated component that failed and is reported by a later call
     /// ([`crate::isolate`]: the calls that answer only a status are not waited for).
     Deferred(Box<Deferred>),
+    /// Not a failure: the instance asks to end the simulation, at its last successful time, s
+    /// (FMI 2.0.5 4.2.3: fmi2DoStep's fmi2Discard with fmi2GetBooleanStatus(fmi2Terminated)
+    /// true, "the slave wants to terminate the simulation"; FMI 3.0.2 4.2.1: fmi3DoStep's or
+    /// fmi3UpdateDiscreteStates' `terminateSimulation`; a model exchange FMU's
+    /// `terminateSimulation`). The run ends there ([`crate::ErrorKind::Terminated`]).
+    Terminate(f64),
 }
 
 /// A call that failed, reported by the call after it: which, and when.
@@ -44,6 +50,7 @@ impl std::fmt::Display for Fmi2Error {
             Fmi2Error::Pending => write!(f, "fmi2Pending"),
             Fmi2Error::Unknown(s) => write!(f, "status {s}"),
             Fmi2Error::Importer(m) | Fmi2Error::Died(m) => write!(f, "{m}"),
+            Fmi2Error::Terminate(t) => write!(f, "asked to terminate the simulation at t = {t} s"),
             Fmi2Error::Deferred(d) => match d.time {
                 Some(t) => write!(f, "{} at t = {t} s: {}", d.function, d.error),
                 None => write!(f, "{}: {}", d.function, d.error),

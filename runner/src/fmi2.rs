@@ -63,6 +63,10 @@ struct Api {
     set_string: fmi2SetTYPE<fmi2String>,
     /// Absent from a model-exchange-only FMU.
     do_step: Option<fmi2DoStepTYPE>,
+    /// fmi2GetBooleanStatus, fmi2GetRealStatus (co-simulation): asked after fmi2DoStep answers
+    /// fmi2Discard (fmi2Terminated, fmi2LastSuccessfulTime).
+    get_boolean_status: Option<StatusOf<fmi2Boolean>>,
+    get_real_status: Option<StatusOf<fmi2Real>>,
     /// fmi2GetRealOutputDerivatives, fmi2SetRealInputDerivatives (co-simulation, optional).
     get_output_derivatives: Option<Derivatives<*mut fmi2Real>>,
     set_input_derivatives: Option<Derivatives<*const fmi2Real>>,
@@ -96,6 +100,9 @@ type DirectionalDerivative = unsafe extern "C" fn(
     *const fmi2Real,
     *mut fmi2Real,
 ) -> fmi2Status;
+
+/// `fmi2GetBooleanStatusTYPE` (`T`: `fmi2Boolean`), `fmi2GetRealStatusTYPE` (`fmi2Real`).
+type StatusOf<T> = unsafe extern "C" fn(fmi2Component, fmi2StatusKind, *mut T) -> fmi2Status;
 
 /// The model-exchange functions of an FMI 2.0 binary (fmi2FunctionTypes.h, section 3.2).
 struct MeApi {
@@ -142,6 +149,8 @@ impl Library {
                 set_boolean: symbol(&lib, path, "fmi2SetBoolean")?,
                 set_string: symbol(&lib, path, "fmi2SetString")?,
                 do_step: optional(&lib, "fmi2DoStep"),
+                get_boolean_status: optional(&lib, "fmi2GetBooleanStatus"),
+                get_real_status: optional(&lib, "fmi2GetRealStatus"),
                 get_output_derivatives: optional(&lib, "fmi2GetRealOutputDerivatives"),
                 set_input_derivatives: optional(&lib, "fmi2SetRealInputDerivatives"),
                 get_directional_derivative: optional(&lib, "fmi2GetDirectionalDerivative"),
@@ -472,7 +481,34 @@ impl Instance2 {
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
         let step = self.api().do_step.ok_or_else(|| missing("fmi2DoStep"))?;
         // SAFETY: a live instance.
-        check(unsafe { step(self.c, t, h, fmi2Boolean::from(no_set_prior)) })
+        match check(unsafe { step(self.c, t, h, fmi2Boolean::from(no_set_prior)) }) {
+            Err(Fmi2Error::Discard) => Err(self.why_discarded(t, h)),
+            r => r,
+        }
+    }
+
+    /// After fmi2DoStep(t, h) answered fmi2Discard: [`Fmi2Error::Terminate`] at its
+    /// fmi2LastSuccessfulTime where fmi2GetBooleanStatus(fmi2Terminated) says the slave wants to
+    /// end the simulation (FMI 2.0.5 4.2.3), fmi2Discard otherwise.
+    #[cold]
+    fn why_discarded(&mut self, t: f64, h: f64) -> Fmi2Error {
+        let Some(terminated) = self.api().get_boolean_status else {
+            return Fmi2Error::Discard;
+        };
+        let mut yes: fmi2Boolean = fmi2False;
+        // SAFETY: a live instance; the output points to a local.
+        if check(unsafe { terminated(self.c, fmi2Terminated, &mut yes) }).is_err() || yes == fmi2False {
+            return Fmi2Error::Discard;
+        }
+        let mut last = f64::NAN;
+        if let Some(f) = self.api().get_real_status {
+            // SAFETY: as above.
+            if check(unsafe { f(self.c, fmi2LastSuccessfulTime, &mut last) }).is_err() {
+                last = f64::NAN;
+            }
+        }
+        // A time outside the step (or none given): the step's start, the last time known reached.
+        Fmi2Error::Terminate(if last >= t && last <= t + h { last } else { t })
     }
 
     /// First time derivatives (order 1) of the outputs `vrs` (fmi2GetRealOutputDerivatives).

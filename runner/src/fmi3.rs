@@ -745,9 +745,13 @@ impl Instance3 {
             )
         })?;
         if terminate {
-            return Err(Fmi2Error::Importer(format!(
-                "fmi3DoStep({t}, {h}) asked to terminate the simulation at {last}"
-            )));
+            // FMI 3.0.2 4.2.1: "the FMU requests to stop the simulation"; lastSuccessfulTime is
+            // where it stopped (the step's end if it gives a time outside the step).
+            return Err(Fmi2Error::Terminate(if last >= t && last <= t + h {
+                last
+            } else {
+                t + h
+            }));
         }
         if early {
             if !self.clocks.as_ref().is_some_and(|c| c.early_allowed) {

@@ -58,6 +58,11 @@ pub enum ErrorKind {
     /// An algebraic loop Newton's method did not solve at a communication point (singular, or
     /// not converged): the loop's components and unknowns, the residual and the time.
     Loop,
+    /// Not a failure: a component asked to end the simulation (FMI 2.0.5 4.2.3, fmi2Terminated;
+    /// FMI 3.0.2 `terminateSimulation`) at `time`, its last successful time. [`Simulation::run`]
+    /// ends the run there and returns what it recorded ([`RunResult::terminated`]); only a
+    /// caller of [`Simulation::step`] sees it as an error.
+    Terminated,
 }
 
 /// An error of the runner: always a message naming the component (and variable or function)
@@ -136,6 +141,21 @@ impl Error {
                 ..Error::new(
                     ErrorKind::Fmi,
                     format!("component '{component}': {function}{at} did not return: {how}"),
+                )
+            };
+        }
+        if let crate::fmi2::Fmi2Error::Terminate(at) = err {
+            let during = match time {
+                Some(t) => format!("{function} from t = {t} s"),
+                None => function.to_owned(),
+            };
+            return Error {
+                component: Some(component.to_owned()),
+                function: Some(function.to_owned()),
+                time: Some(*at),
+                ..Error::new(
+                    ErrorKind::Terminated,
+                    format!("component '{component}' asked to terminate the simulation at t = {at} s (in {during})"),
                 )
             };
         }

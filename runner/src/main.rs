@@ -311,6 +311,10 @@ fn run(cli: Cli) -> Result<(), String> {
             if let Some(note) = &result.note {
                 eprintln!("rustfmu-runner: {note}");
             }
+            if let Some(end) = &result.terminated {
+                // Not a failure (FMI 2.0.5 4.2.3, FMI 3.0.2 4.2.1): the rows are written, exit 0.
+                eprintln!("rustfmu-runner: {}", end.message);
+            }
             for report in &result.loops {
                 eprintln!("rustfmu-runner: {report}");
             }

@@ -187,10 +187,7 @@ impl MeInstance {
         for _ in 0..10_000 {
             let info = self.inner.new_discrete_states()?;
             if info.terminateSimulation != fmi2False {
-                return Err(importer(format!(
-                    "the model asked to terminate the simulation at t = {}",
-                    self.clock.t
-                )));
+                return Err(Fmi2Error::Terminate(self.clock.t));
             }
             self.clock.next_event = (info.nextEventTimeDefined != fmi2False).then_some(info.nextEventTime);
             if info.newDiscreteStatesNeeded == fmi2False {
@@ -344,9 +341,7 @@ impl MeInstance {
             self.x.copy_from_slice(&x1);
             let (step_event, terminate) = self.inner.completed_integrator_step(no_set_prior)?;
             if terminate {
-                return Err(importer(format!(
-                    "the model asked to terminate the simulation at t = {at}"
-                )));
+                return Err(Fmi2Error::Terminate(at));
             }
             let time_event = self.clock.next_event.is_some_and(|te| te <= at);
             if state_event || step_event || time_event {

@@ -44,7 +44,7 @@ mod run;
 mod typed;
 
 pub use loops::{LoopOptions, LoopReport};
-pub use options::{Adaptive, Failure, Override, RunOptions, RunResult, Scheme};
+pub use options::{Adaptive, Failure, Override, RunOptions, RunResult, Scheme, Terminated};
 
 /// (target, source) components -> [(input vr, output vr)] they connect.
 type Pairs = Vec<((usize, usize), Vec<(u32, u32)>)>;
@@ -183,6 +183,18 @@ pub struct Simulation {
     typed: Box<typed::TypedLinks>,
     /// The clock connections ([`clocks`]).
     clock_links: Vec<clocks::ClockLink>,
+    /// Where a step ended short: a component's request to end the simulation ([`StepBack`];
+    /// boxed: off the hot path).
+    back: Box<StepBack>,
+}
+
+/// What a step that ended short of its end keeps.
+#[derive(Default)]
+struct StepBack {
+    /// After a step a component asked to end the simulation in: the time every component then
+    /// reached (the others stepped to it, [`Simulation::complete_ended_step`]), where the run's
+    /// last row is read; `Some(None)` where they are not at one time; None: no step decided it.
+    ending: Option<Option<f64>>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -355,6 +367,7 @@ impl Simulation {
             loop_options: LoopOptions::default(),
             typed: Default::default(),
             clock_links: Vec::new(),
+            back: Box::default(),
         };
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {

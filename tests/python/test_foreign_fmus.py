@@ -216,10 +216,10 @@ def test_a_pythonfmu_lag_fed_by_our_dc_motor_fed_by_the_reference_dahlquist_equa
 
 
 # Each FMI 2.0 Reference FMU, its DefaultExperiment's stop time and step (0.1 where it gives none).
-# Stair to 8.8 s: at t = 9 its counter reaches 10 and its fmi2DoStep answers fmi2Discard with
-# fmi2Terminated true (FMI 2.0.5, 4.2.3: the slave wants to terminate the simulation); fmusim ends
-# the run there, the runner fails it (runner/README.md, "FMUs of other exporters").
-REFERENCE_2 = {"BouncingBall": (3.0, 0.01), "Dahlquist": (10.0, 0.1), "Feedthrough": (2.0, 0.1), "Stair": (8.8, 0.2),
+# Stair to its stop time, 10 s: at t = 9 its counter reaches 10 and its fmi2DoStep answers
+# fmi2Discard with fmi2Terminated true (FMI 2.0.5, 4.2.3: the slave wants to terminate the
+# simulation); fmusim and the runner end the run there, the row at t = 9 the last.
+REFERENCE_2 = {"BouncingBall": (3.0, 0.01), "Dahlquist": (10.0, 0.1), "Feedthrough": (2.0, 0.1), "Stair": (10.0, 0.2),
                "VanDerPol": (20.0, 0.01), "Resource": (1.0, 0.1)}
 
 
@@ -236,6 +236,81 @@ def test_each_fmi2_reference_fmu_alone_equals_fmusim(name, tmp_path):
     for k in outputs:
         want = ref[k[2:]]
         close(got[k], [as_number(x) for x in want] if isinstance(want, list) else want, k)
+
+
+@pytest.mark.parametrize("version", ["2.0", "3.0"])
+@pytest.mark.parametrize("step", [0.2, 0.4])
+def test_a_component_that_asks_to_end_the_simulation_ends_the_run_where_fmusim_ends_it(version, step, tmp_path):
+    """The Reference Stair asks to end the simulation at t = 9 s (FMI 2.0: fmi2DoStep's
+    fmi2Discard with fmi2Terminated true; FMI 3.0: fmi3DoStep's terminateSimulation, FMI 3.0.2
+    4.2.1 "the FMU requests to stop the simulation"). The command line ends the run there and exits
+    0, its rows those of fmusim over the whole run, the last at t = 9 (with a step of 0.4 s, inside
+    the step from 8.8 s: its last successful time, where fmusim writes FMI 3.0's at 9.2); beside it the Reference Dahlquist, stepped to
+    that time too, equals fmusim's Dahlquist at every row. The Python module returns the same rows
+    with a RuntimeWarning and says who asked in last_run["terminated"]."""
+    import rustfmu_runner
+
+    ref_dir = INDEPENDENT / "reference-fmus" / version
+    stair, dahlquist = need(ref_dir / "Stair.fmu"), need(ref_dir / "Dahlquist.fmu")
+    ssp = write_ssp(tmp_path / "S.ssp", [("stair", stair), ("d", dahlquist)])
+    out = tmp_path / "runner.csv"
+    r = cli("run", ssp, "--stop-time", 10, "--step", step, "--no-progress", "--output", out)
+    assert r.returncode == 0, r.stderr
+    assert "component 'stair' asked to terminate the simulation at t = 9 s" in r.stderr, r.stderr
+    assert "the rows end at t = 9 s" in r.stderr, r.stderr
+    got = read_csv(out)
+    ref = fmusim(tmp_path, stair, 10, step, name="stair")
+    if version == "3.0" and step == 0.4:
+        # fmusim (and fmusim-rs 0.8.0) write FMI 3.0's last row at the step's end, 9.2, where
+        # the FMU's lastSuccessfulTime says 9 (FMI 3.0.2 4.2.1): the runner writes 9.
+        assert ref["time"][-1] > 9.19, ref["time"][-3:]
+        ref["time"][-1] = 9.0
+    close(got["time"], ref["time"], "time")
+    assert got["time"][-1] == 9.0 and ref["counter"][-1] == 10, (got["time"][-3:], ref["counter"][-3:])
+    close(got["stair.counter"], ref["counter"], "counter")
+    # fmusim's Dahlquist alone, to the same time: the runner's rows at each of its points.
+    d = fmusim(tmp_path, dahlquist, 9, step, name="d")
+    close(got["time"], d["time"], "time")
+    close(got["d.x"], d["x"], "x")
+
+    system = rustfmu_runner.System(ssp)
+    with pytest.warns(RuntimeWarning, match="component 'stair' asked to terminate the simulation at t = 9 s"):
+        m = system.run(10.0, step)
+    assert np.array_equal(m["time"], got["time"]) and np.array_equal(m["d.x"], got["d.x"])
+    end = system.last_run["terminated"]
+    assert end["component"] == "stair" and end["time"] == 9.0 and "the run ends there" in end["message"], end
+    # A run that no component ends says so too. (A fresh system: the Reference Stair's fmi2Reset
+    # keeps its terminateSimulation flag, so a second run of the same instance ends at its first
+    # step, fmusim's or ours.)
+    system = rustfmu_runner.System(ssp)
+    assert system.run(8.0, step)["time"][-1] == 8.0 and system.last_run["terminated"] is None
+
+
+@pytest.mark.parametrize("case", ["after", "isolate", "event-mode"])
+def test_where_the_run_ends_when_a_component_asks_depends_on_where_the_others_are(case, tmp_path):
+    """Stair after Dahlquist in the order, a step of 0.4 s: Dahlquist stepped to 9.2 s before
+    Stair stopped at 9, and is not taken back, so the rows end at 8.8 s and the message says why.
+    Isolated (each in a child process, the step's answer read at the next call): the same rows as
+    in-process. FMI 3.0 with --event-mode: Stair returns early at its time event, 9 s, asks to end
+    in fmi3UpdateDiscreteStates there, and the last row is at 9 s."""
+    version = "2.0" if case == "isolate" else "3.0"
+    ref_dir = INDEPENDENT / "reference-fmus" / version
+    ssp = write_ssp(tmp_path / "S.ssp", [("d", need(ref_dir / "Dahlquist.fmu")), ("stair", need(ref_dir / "Stair.fmu"))])
+    args = {"after": [], "isolate": ["--isolate"], "event-mode": ["--event-mode", "stair"]}[case]
+    out = tmp_path / "runner.csv"
+    r = cli("run", ssp, "--stop-time", 10, "--step", 0.4, "--no-progress", "--output", out, *args)
+    assert r.returncode == 0, r.stderr
+    got = read_csv(out)
+    if case == "event-mode":
+        assert "(in fmi3UpdateDiscreteStates from t = 9 s): the run ends there; the rows end at t = 9 s" in r.stderr
+        assert got["time"][-1] == 9.0 and got["stair.counter"][-1] == 10, r.stderr
+        # A row at each of Stair's events (every second) besides the grid's.
+        assert list(got["stair.counter"][np.isin(got["time"], np.arange(1.0, 10.0))]) == list(range(2, 11)), got
+        return
+    assert "the rows end at t = 8.8 s (no row at t = 9 s: a component stepped before it had passed" in r.stderr, r.stderr
+    assert got["time"][-1] == 8.8 and got["stair.counter"][-1] == 9, (got["time"][-2:], got["stair.counter"][-2:])
+    alone = runner(tmp_path, write_ssp(tmp_path / "D.ssp", [("d", str(ref_dir / "Dahlquist.fmu"))]), 8.8, 0.4)
+    assert np.array_equal(got["d.x"], alone["d.x"])
 
 
 @pytest.mark.parametrize("version", ["2.0", "3.0"])

@@ -70,6 +70,9 @@ fn to_pyerr(py: Python<'_>, e: &Error, partial: Option<&RunResult>) -> PyErr {
         ErrorKind::Variable | ErrorKind::Usage => VariableError::new_err(e.message.clone()),
         ErrorKind::Fmi => FmuError::new_err(e.message.clone()),
         ErrorKind::Loop => LoopError::new_err(e.message.clone()),
+        // A run returns the rows where a component asks to end it; seen here only if a caller
+        // other than `run` ever passes one.
+        ErrorKind::Terminated => FmuError::new_err(e.message.clone()),
     };
     let value = err.value(py);
     let set = |name: &str, v: Option<String>| {
@@ -311,6 +314,10 @@ impl PySystem {
     /// directional derivative, set as input derivatives where a component interpolates inputs).
     /// `loops`: how algebraic loops are solved, {"rtol": 1e-10, "atol": 1e-10,
     /// "max_iterations": 20, "finite_differences": False} (any of them; runner/README.md).
+    ///
+    /// A component that asks to end the simulation (FMI 2.0 fmi2Terminated, FMI 3.0
+    /// terminateSimulation) ends the run there, as fmusim does: the arrays up to that time are
+    /// returned, with a RuntimeWarning saying who asked and when, and `last_run["terminated"]`.
     #[pyo3(signature = (stop_time, step, start = None, record = None, stop_when = None, tolerance = None, min_step = None, max_step = None, error_on = None, input_derivatives = false, loops = None))]
     #[allow(clippy::too_many_arguments)]
     fn run<'py>(
@@ -399,12 +406,23 @@ impl PySystem {
                 loops.append(e)?;
             }
             d.set_item("loops", loops)?;
+            let terminated = match &r.terminated {
+                Some(end) => {
+                    let e = PyDict::new(py);
+                    e.set_item("component", end.component.clone())?;
+                    e.set_item("time", end.time)?;
+                    e.set_item("message", end.message.clone())?;
+                    Some(e)
+                }
+                None => None,
+            };
+            d.set_item("terminated", terminated)?;
             Ok(d.unbind())
         };
         match result {
             Ok(r) => {
                 *self.last_run.lock().unwrap_or_else(|e| e.into_inner()) = Some(made(&r)?);
-                if let Some(note) = &r.note {
+                for note in r.note.iter().chain(r.terminated.as_ref().map(|end| &end.message)) {
                     PyErr::warn(
                         py,
                         &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(),
@@ -424,8 +442,9 @@ impl PySystem {
     /// What the last run made: {"fmu_steps": fmi2DoStep calls (each one per component),
     /// "rejected": error-controlled steps rejected, "note": why an error-controlled run was made
     /// with fixed steps, or None, "loops": for each algebraic loop {"components", "unknowns",
-    /// "exact_jacobian", "solves", "iterations", "most_iterations", "evaluations"}}; None before
-    /// the first run.
+    /// "exact_jacobian", "solves", "iterations", "most_iterations", "evaluations"},
+    /// "terminated": {"component", "time", "message"} where a component asked to end the run,
+    /// else None}; None before the first run.
     #[getter]
     fn last_run(&self, py: Python<'_>) -> Option<Py<PyDict>> {
         self.last_run

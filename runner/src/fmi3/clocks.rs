@@ -510,9 +510,8 @@ impl Instance3 {
             })
             .map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
             if terminate {
-                return Err(Fmi2Error::Importer(format!(
-                    "fmi3UpdateDiscreteStates asked to terminate the simulation at t = {t}"
-                )));
+                // FMI 3.0.2 3.2.1 (fmi3UpdateDiscreteStates): the FMU asks to end the simulation.
+                return Err(Fmi2Error::Terminate(t));
             }
             if !update {
                 break;

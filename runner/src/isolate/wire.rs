@@ -232,6 +232,10 @@ impl W<'_> {
                 self.u8(4)?;
                 self.u32(*s)
             }
+            Fmi2Error::Terminate(t) => {
+                self.u8(6)?;
+                self.f64(*t)
+            }
             other => {
                 self.u8(5)?;
                 self.blob(other.to_string().as_bytes())
@@ -290,6 +294,7 @@ impl<'a> R<'a> {
             2 => Fmi2Error::Fatal,
             3 => Fmi2Error::Pending,
             4 => Fmi2Error::Unknown(self.u32()),
+            6 => Fmi2Error::Terminate(self.f64()),
             _ => Fmi2Error::Importer(String::from_utf8_lossy(self.blob()).into_owned()),
         }
     }

@@ -253,18 +253,23 @@ impl Simulation {
             .filter(|&i| self.slaves[i].events)
             .chain((0..self.slaves.len()).filter(|&i| !self.slaves[i].events))
             .collect();
-        for &i in &order {
+        for (k, &i) in order.iter().enumerate() {
             let s = &mut self.slaves[i];
             let inst = s.instance.as_mut().expect("instantiated");
-            inst.do_step(t, end - t, true).map_err(|e| {
-                Error::fmi(
+            if let Err(e) = inst.do_step(t, end - t, true) {
+                let error = Error::fmi(
                     &s.name,
                     fname(s.v3, "fmi2DoStep"),
                     &e,
                     Some(t),
                     &format!("step {} s", end - t),
-                )
-            })?;
+                );
+                if let Fmi2Error::Terminate(at) = e {
+                    self.complete_ended_step(t, at, end, k > 0, &order[k + 1..], true)?;
+                }
+                return Err(error);
+            }
+            let inst = s.instance.as_mut().expect("instantiated");
             let early = inst.take_early_return();
             let events = s.events;
             if let Some(at) = early

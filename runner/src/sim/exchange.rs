@@ -274,15 +274,88 @@ impl Simulation {
 
     /// fmi2DoStep(t, h, no_set_prior) of every instance, in the system's order; `no_set_prior =
     /// false` when an FMU state of before this point may be set afterwards (a rollback).
+    ///
+    /// A component that asks to end the simulation ([`crate::ErrorKind::Terminated`]): the
+    /// components after it are stepped to where the others are, if they can be (runner/README.md,
+    /// "A component that asks to end the simulation").
     pub fn do_step_with(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
         crate::isolate::crumb_time(t);
-        for s in &mut self.slaves {
-            s.instance
-                .as_mut()
-                .expect("instantiated")
-                .do_step(t, h, no_set_prior)
-                .map_err(|e| Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s")))?;
+        for (i, s) in self.slaves.iter_mut().enumerate() {
+            if let Err(e) = s.instance.as_mut().expect("instantiated").do_step(t, h, no_set_prior) {
+                let error = Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s"));
+                if let Fmi2Error::Terminate(at) = e {
+                    let pending: Vec<usize> = (i + 1..self.slaves.len()).collect();
+                    self.complete_ended_step(t, at, t + h, i > 0, &pending, no_set_prior)?;
+                }
+                return Err(error);
+            }
         }
+        Ok(())
+    }
+
+    /// A component asked to end the simulation at `at` in the step from `t`; the components
+    /// stepped before it (`others_stepped`) reached `reached`, those of `pending` have not
+    /// stepped. Where every component can be at one time, the pending ones step to it and
+    /// `back.ending` is that time: `reached` if `at` is it (within 1e-9 relative), else
+    /// `at` when no other component stepped yet and each pending one takes a shorter step
+    /// (model exchange, or canHandleVariableCommunicationStepSize). A pending component's failure
+    /// is the run's; one that asks to end too, at the same time, is taken as it is.
+    #[cold]
+    pub(super) fn complete_ended_step(
+        &mut self,
+        t: f64,
+        at: f64,
+        reached: f64,
+        others_stepped: bool,
+        pending: &[usize],
+        no_set_prior: bool,
+    ) -> Result<(), Error> {
+        self.back.ending = Some(None);
+        let close = |x: f64| 1e-9 * x.abs().max(1.0);
+        let target = if (at - reached).abs() <= close(reached) {
+            reached
+        } else if !others_stepped {
+            at
+        } else {
+            return Ok(());
+        };
+        if target <= t + close(t) {
+            // Nothing reached beyond the last communication point.
+            return Ok(());
+        }
+        let shorter = target < reached;
+        for &j in pending {
+            let s = &self.slaves[j];
+            if shorter
+                && !s.me
+                && !self.fmus[s.fmu]
+                    .description
+                    .cs
+                    .as_ref()
+                    .is_some_and(|cs| cs.can_handle_variable_step)
+            {
+                return Ok(());
+            }
+        }
+        for &j in pending {
+            let s = &mut self.slaves[j];
+            let h = target - t;
+            match s.instance.as_mut().expect("instantiated").do_step(t, h, no_set_prior) {
+                Ok(()) => {}
+                Err(Fmi2Error::Terminate(other)) if (other - target).abs() <= close(target) => {}
+                Err(Fmi2Error::Terminate(_)) => return Ok(()),
+                Err(e) => {
+                    return Err(Error::fmi(
+                        &s.name,
+                        fname(s.v3, "fmi2DoStep"),
+                        &e,
+                        Some(t),
+                        &format!("step {h} s"),
+                    ));
+                }
+            }
+        }
+        self.back.ending = Some(Some(target));
         Ok(())
     }
 

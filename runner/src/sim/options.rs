@@ -1,5 +1,5 @@
 //! What a run is asked ([`RunOptions`], [`Scheme`], [`Override`], [`Adaptive`]) and what it
-//! gives ([`RunResult`], [`Failure`]).
+//! gives ([`RunResult`], [`Terminated`], [`Failure`]).
 
 use crate::Error;
 
@@ -102,6 +102,23 @@ pub struct RunResult {
     /// What each algebraic loop took (Jacobian kind, solves, Newton iterations), in the order.
     #[serde(default)]
     pub loops: Vec<crate::sim::LoopReport>,
+    /// A component asked to end the simulation before the stop time: the run ended there.
+    #[serde(default)]
+    pub terminated: Option<Terminated>,
+}
+
+/// A component asked to end the simulation (FMI 2.0.5 4.2.3: fmi2DoStep answered fmi2Discard
+/// and fmi2GetBooleanStatus(fmi2Terminated) fmi2True, "the slave wants to terminate the
+/// simulation"; FMI 3.0.2 4.2.1: fmi3DoStep's `terminateSimulation`, "the FMU requests to stop
+/// the simulation", or fmi3UpdateDiscreteStates'): the run ended there, as fmusim ends it, with
+/// every component terminated (fmi2Terminate / fmi3Terminate). Not a failure.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Terminated {
+    pub component: String,
+    /// Its last successful time, s.
+    pub time: f64,
+    /// Who asked, when, and where the rows end.
+    pub message: String,
 }
 
 impl RunResult {

@@ -2,6 +2,7 @@
 //! kept to step again), the recorded rows.
 
 use super::*;
+use crate::ErrorKind;
 
 impl Simulation {
     /// The recorded variables of each instance and type, and the names of the row's columns
@@ -139,6 +140,7 @@ impl Simulation {
             rejected: 0,
             note: None,
             loops: Vec::new(),
+            terminated: None,
         };
         if let Some(a) = &opts.adaptive {
             match self.why_fixed_steps() {
@@ -146,7 +148,11 @@ impl Simulation {
                 Some(why) => result.note = Some(why),
             }
         }
+        self.back.ending = None;
         if let Err(error) = self.initialize_with(n as f64 * opts.step, &values) {
+            if error.kind == ErrorKind::Terminated {
+                return self.end_on_request(error, None, &mut groups, &mut vec![0.0; m], result);
+            }
             return Err(Failure { error, partial: result });
         }
         let ticks = self.steps_to_ticks();
@@ -162,6 +168,9 @@ impl Simulation {
             let r = (if ticks { self.event_point(t) } else { self.propagate(t) })
                 .and_then(|_| self.read_record(&mut groups, &mut row, t));
             if let Err(error) = r {
+                if error.kind == ErrorKind::Terminated {
+                    return self.end_on_request(error, Some(t), &mut groups, &mut row, result);
+                }
                 self.note(&error);
                 return Err(Failure { error, partial: result });
             }
@@ -180,6 +189,11 @@ impl Simulation {
                 match self.step_to_ticks(t, end, &mut groups, &mut row, &mut result, &stops) {
                     Ok(true) => continue,
                     Ok(false) => break,
+                    Err(error) if error.kind == ErrorKind::Terminated => {
+                        // A request at a tick's point comes at the point's own time.
+                        let point = error.time;
+                        return self.end_on_request(error, point, &mut groups, &mut row, result);
+                    }
                     Err(error) => {
                         self.note(&error);
                         return Err(Failure { error, partial: result });
@@ -187,6 +201,9 @@ impl Simulation {
                 }
             }
             if let Err(error) = self.do_step(t, opts.step) {
+                if error.kind == ErrorKind::Terminated {
+                    return self.end_on_request(error, None, &mut groups, &mut row, result);
+                }
                 self.note(&error);
                 return Err(Failure { error, partial: result });
             }
@@ -427,6 +444,11 @@ impl Simulation {
             let _ = self.instance(i).free_fmu_state(slot);
         }
         if let Err(error) = outcome {
+            if error.kind == ErrorKind::Terminated {
+                // A step tried, not accepted: the rows end at the last accepted point.
+                self.back.ending = Some(None);
+                return self.end_on_request(error, None, groups, &mut row, result);
+            }
             self.note(&error);
             return Err(Failure { error, partial: result });
         }
@@ -434,6 +456,61 @@ impl Simulation {
             self.note(&error);
             return Err(Failure { error, partial: result });
         }
+        Ok(result)
+    }
+
+    /// A component asked to end the simulation (`error`, [`ErrorKind::Terminated`]): the run
+    /// ends there, with what it recorded and, where every component reached one time after the
+    /// last row (`back.ending`, or `point`, the communication point the request came
+    /// at), a last row there, read as the steps left the components (no input is set: an FMI
+    /// 2.0 slave that asked accepts none, FMI 2.0.5 4.3.1 stepFailed); then every component
+    /// terminated.
+    #[cold]
+    fn end_on_request(
+        &mut self,
+        error: Error,
+        point: Option<f64>,
+        groups: &mut [RecordGroup],
+        row: &mut [f64],
+        mut result: RunResult,
+    ) -> Result<RunResult, Failure> {
+        let close = |x: f64| 1e-9 * x.abs().max(1.0);
+        let at = error.time.unwrap_or(f64::NAN);
+        let row_at = match self.back.ending.take() {
+            Some(decided) => decided,
+            None => point.filter(|&p| (at - p).abs() <= close(p)),
+        }
+        .filter(|&r| result.time.last().is_none_or(|&l| r > l + close(l)));
+        let mut rows = match row_at {
+            Some(r) => match self.read_record(groups, row, r) {
+                Ok(()) => {
+                    result.time.push(r);
+                    result.values.extend_from_slice(row);
+                    String::new()
+                }
+                Err(e) => format!(" (the row at t = {r} s could not be read: {})", e.message),
+            },
+            None => String::new(),
+        };
+        if row_at.is_none() && result.time.last().is_some_and(|&l| at > l + close(l)) {
+            rows = format!(
+                " (no row at t = {at} s: a component stepped before it had passed that time and is not taken back, or one takes no shorter step){rows}"
+            );
+        }
+        rows = match result.time.last() {
+            Some(l) => format!("the rows end at t = {l} s{rows}"),
+            None => format!("no row was recorded{rows}"),
+        };
+        let message = format!("{}: the run ends there; {rows}", error.message);
+        if let Err(error) = self.terminate() {
+            self.note(&error);
+            return Err(Failure { error, partial: result });
+        }
+        result.terminated = Some(Terminated {
+            component: error.component.clone().unwrap_or_default(),
+            time: at,
+            message,
+        });
         Ok(result)
     }
 
