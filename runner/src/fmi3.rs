@@ -29,7 +29,7 @@ use std::sync::Arc;
 mod clocks;
 mod typed;
 mod view;
-use clocks::ClockState;
+pub use clocks::ClockState;
 pub use clocks::{ClockDecl, ClockPlan, Interval};
 pub use view::{Fmi3Parts, Var3, as_fmi2};
 

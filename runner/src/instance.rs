@@ -71,6 +71,19 @@ impl InstanceCS {
         self.v3().and_then(|i| i.take_early_return())
     }
 
+    /// The importer's side of its clocks, kept with an FMU state (an FMI 3.0 instance with
+    /// clocks or Event Mode; None for the others).
+    pub fn clock_snapshot(&mut self) -> Option<crate::fmi3::ClockState> {
+        self.v3().and_then(|i| i.clock_snapshot())
+    }
+
+    /// Its clocks as `snapshot` kept them (with the FMU state set back to the one taken then).
+    pub fn restore_clocks(&mut self, snapshot: &crate::fmi3::ClockState) {
+        if let Some(i) = self.v3() {
+            i.restore_clocks(snapshot);
+        }
+    }
+
     /// Its output clocks read, once its input clocks are set.
     pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
         self.v3().map_or(Ok(()), |i| i.poll_output_clocks(t))

@@ -183,8 +183,8 @@ pub struct Simulation {
     typed: Box<typed::TypedLinks>,
     /// The clock connections ([`clocks`]).
     clock_links: Vec<clocks::ClockLink>,
-    /// Where a step ended short: a component's request to end the simulation ([`StepBack`];
-    /// boxed: off the hot path).
+    /// Where a step ended short: a component's request to end the simulation, early returns
+    /// taken back ([`StepBack`]; boxed: off the hot path).
     back: Box<StepBack>,
 }
 
@@ -195,6 +195,10 @@ struct StepBack {
     /// reached (the others stepped to it, [`Simulation::complete_ended_step`]), where the run's
     /// last row is read; `Some(None)` where they are not at one time; None: no step decided it.
     ending: Option<Option<f64>>,
+    /// Each event-mode component's FMU state (and its clocks' importer side) at the start of
+    /// the step, where two or more may return early ([`Simulation::do_step_events`]: the one
+    /// that went past the other's early return is taken back); freed after the run.
+    early_states: Vec<Option<(FmuState, Option<crate::fmi3::ClockState>)>>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {

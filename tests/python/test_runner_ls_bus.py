@@ -351,6 +351,100 @@ def test_an_early_return_ends_every_components_step_at_the_event_as_in_fmpy(tmp_
     assert len(plain["time"]) == round(stop / h) + 1
 
 
+def two_balls_schedule(stop, h, h0):
+    """Two of the project's BouncingBalls (FMI 3.0) with eventModeUsed and earlyReturnAllowed,
+    in fmpy, `a` stepped first, `b` dropped from `h0[1]`: at each step both FMU states are kept;
+    where one returns early before the time the other reached, that one is set back
+    (fmi3SetFMUState) and steps again to the earlier time, until both stop at one time; the
+    Event Modes are handled and the point recorded; then on to the grid point. Returns the rows
+    and how many steps were taken back."""
+    balls, vrs = [], None
+    for name, height in zip("ab", h0):
+        path = fmu3("BouncingBall")
+        md = fmpy.read_model_description(path)
+        f = FMU3Slave(guid=md.guid, unzipDirectory=fmpy.extract(path),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        f.instantiate(eventModeUsed=True, earlyReturnAllowed=True)
+        vrs = {v.name: v.valueReference for v in md.modelVariables}
+        f.setFloat64([vrs["h"]], [height])
+        f.enterInitializationMode(startTime=0.0, stopTime=stop)
+        f.exitInitializationMode()
+        balls.append(f)
+
+    def event(f):
+        while f.updateDiscreteStates()[0]:
+            pass
+        f.enterStepMode()
+
+    def record(t):
+        values = {}
+        for name, f in zip("ab", balls):
+            values[f"{name}.h"], values[f"{name}.v"] = f.getFloat64([vrs["h"], vrs["v"]])
+        rows.append((t, values))
+    rows, rolled = [], 0
+    for f in balls:
+        event(f)
+    record(0.0)
+    t = 0.0
+    for k in range(round(stop / h)):
+        end = (k + 1) * h
+        while True:
+            states = [f.getFMUState() for f in balls]
+            target, reached, need = end, [None, None], [False, False]
+            moved = True
+            while moved:
+                moved = False
+                for i, f in enumerate(balls):
+                    if reached[i] == target:
+                        continue
+                    if reached[i] is not None:
+                        f.setFMUState(states[i])
+                        rolled += 1
+                    need[i], terminate, early, last = f.doStep(t, target - t, noSetFMUStatePriorToCurrentPoint=False)
+                    assert not terminate
+                    if early and last < target:
+                        target, moved = last, True
+                    reached[i] = target
+            for f, s in zip(balls, states):
+                f.freeFMUState(s)
+            t = target
+            for i, f in enumerate(balls):
+                if need[i]:
+                    f.enterEventMode()
+                    event(f)
+            record(t)
+            if t == end:
+                break
+    return rows, rolled
+
+
+def test_two_early_returns_in_one_step_take_the_later_one_back_as_in_fmpy(tmp_path):
+    """Two BouncingBalls with --event-mode, `a` (dropped from 1 m) stepped first, `b` from 0.9 m:
+    in the step from 0.4 s `a` returns early at its bounce (0.4515 s), then `b` at its own, earlier
+    (0.4284 s); `a` is set back to its state at 0.4 s (fmi3SetFMUState) and steps again to 0.4284 s.
+    The same points and values as fmpy with the test's scheduler that does the same, bit for bit,
+    every bounce of each ball a point of its own at the free fall's exact time (within 1e-9 s)."""
+    comps = [("a", fmu3("BouncingBall")), ("b", fmu3("BouncingBall"))]
+    path, ssd = write_ssp2(tmp_path / "Balls.ssp", comps, {}, [], {})
+    stop, h = 1.5, 0.1
+    record = ["a.h", "a.v", "b.h", "b.v"]
+    got = runner(tmp_path, path, stop, h, "--event-mode", "a", "--event-mode", "b", "--set", "b.h=0.9",
+                 *[a for r in record for a in ("--record", r)])
+    rows, rolled = two_balls_schedule(stop, h, (1.0, 0.9))
+    assert rolled > 0, "the scheduler never set a ball back: the case is not tested"
+    assert list(got["time"]) == [t for t, _ in rows]
+    for name in record:
+        assert list(got[name]) == [x[name] for _, x in rows], name
+    # Each ball's first two bounces are points, at the free fall's times (g = 9.81 m/s^2, e = 0.7).
+    for h0 in (1.0, 0.9):
+        t1 = math.sqrt(2 * h0 / 9.81)
+        t2 = t1 + 2 * 0.7 * t1
+        for tb in (t1, t2):
+            assert np.min(np.abs(got["time"] - tb)) < 1e-9, (h0, tb)
+    # Both first bounces fall in the step from 0.4 s, b's first although a steps first.
+    assert 0.4 < math.sqrt(1.8 / 9.81) < math.sqrt(2 / 9.81) < 0.5
+
+
 # --- Triggered output Tx clocks: two CanSignalTriggered nodes connected directly ------------
 
 def test_triggered_output_tx_clocks_carry_frames_both_ways_as_the_fmpy_scheduler_of_test_ls_bus_triggered(tmp_path):

@@ -162,7 +162,7 @@ pub fn is_real(v: &d3::Variable) -> bool {
 }
 
 /// The run-time state of an instance's clocks (see the module).
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct ClockState {
     pub plan: std::sync::Arc<ClockPlan>,
     /// Each clock's next tick (None: not known), its interval, its last tick.
@@ -302,6 +302,20 @@ impl Instance3 {
     /// Where its last step returned early (taken: None until the next early return).
     pub fn take_early_return(&mut self) -> Option<f64> {
         self.clocks.as_mut().and_then(|s| s.early_at.take())
+    }
+
+    /// The importer's side of its clocks now (ticks planned, Event Mode, held values), kept with
+    /// an FMU state to take a step back ([`Instance3::restore_clocks`]).
+    pub fn clock_snapshot(&self) -> Option<ClockState> {
+        self.clocks.as_deref().cloned()
+    }
+
+    /// Its clocks as [`Instance3::clock_snapshot`] kept them, with fmi3SetFMUState of the FMU
+    /// state taken then.
+    pub fn restore_clocks(&mut self, snapshot: &ClockState) {
+        if let Some(c) = &mut self.clocks {
+            c.as_mut().clone_from(snapshot);
+        }
     }
 
     fn state(&mut self) -> &mut ClockState {

@@ -245,49 +245,180 @@ impl Simulation {
     /// The step from `t` of `h` of every instance, those that may return early first
     /// ([`Simulation::use_event_mode`]): where one returns early, the others step to that time.
     /// Returns the time every instance reached.
+    ///
+    /// With two or more such components, each one's FMU state is taken before the step
+    /// (fmi3GetFMUState, with the importer's side of its clocks): where one returns early at
+    /// t_e after another had stepped past t_e, that one is set back (fmi3SetFMUState) and steps
+    /// again to t_e, and so on until every one of them stops at the earliest time (FMI 3.0.2,
+    /// Co-Simulation, Early Return: the importer "may ... roll back" the FMUs that went further).
+    /// A component that cannot (canGetAndSetFMUState = false) fails the run then, saying so.
     pub(super) fn do_step_events(&mut self, t: f64, h: f64) -> Result<f64, Error> {
         crate::isolate::crumb_time(t);
+        let close = |x: f64| 1e-9 * x.abs().max(1.0);
         let mut end = t + h;
-        let mut stepped: Option<usize> = None;
-        let order: Vec<usize> = (0..self.slaves.len())
-            .filter(|&i| self.slaves[i].events)
-            .chain((0..self.slaves.len()).filter(|&i| !self.slaves[i].events))
+        let n = self.slaves.len();
+        let early: Vec<usize> = (0..n).filter(|&i| self.slaves[i].events).collect();
+        let order: Vec<usize> = early
+            .iter()
+            .copied()
+            .chain((0..n).filter(|&i| !self.slaves[i].events))
             .collect();
-        for (k, &i) in order.iter().enumerate() {
-            let s = &mut self.slaves[i];
-            let inst = s.instance.as_mut().expect("instantiated");
-            if let Err(e) = inst.do_step(t, end - t, true) {
-                let error = Error::fmi(
-                    &s.name,
-                    fname(s.v3, "fmi2DoStep"),
-                    &e,
-                    Some(t),
-                    &format!("step {} s", end - t),
-                );
-                if let Fmi2Error::Terminate(at) = e {
-                    self.complete_ended_step(t, at, end, k > 0, &order[k + 1..], true)?;
+        let rollback = early.len() > 1 && early.iter().all(|&i| self.can_roll_back(i));
+        if rollback {
+            self.save_early_states(&early, t)?;
+        }
+        // Where each early-returning component is (None: not stepped yet).
+        let mut reached: Vec<Option<f64>> = vec![None; n];
+        let mut rounds = 0;
+        loop {
+            let mut moved = false;
+            for (k, &i) in order.iter().enumerate() {
+                if !self.slaves[i].events {
+                    break;
                 }
-                return Err(error);
-            }
-            let inst = s.instance.as_mut().expect("instantiated");
-            let early = inst.take_early_return();
-            let events = s.events;
-            if let Some(at) = early
-                && at < end
-            {
-                if let Some(other) = stepped {
-                    return Err(Error::usage(format!(
-                        "component '{}' returned early at t = {at}, after '{}' had stepped to {end}: the runner aligns the others to one early return a step (it does not roll a component back)",
-                        self.slaves[i].name, self.slaves[other].name
-                    )));
+                match reached[i] {
+                    Some(r) if r == end => continue,
+                    Some(r) => self.roll_back(i, t, r, end, rollback)?,
+                    None => {}
                 }
-                end = at;
+                self.step_one(i, t, end - t, !rollback, k, &order)?;
+                let s = &mut self.slaves[i];
+                let at = s.instance.as_mut().expect("instantiated").take_early_return();
+                match at {
+                    Some(at) if at < end - close(end) => {
+                        end = at;
+                        moved = true;
+                        reached[i] = Some(at);
+                    }
+                    _ => reached[i] = Some(end),
+                }
             }
-            if events {
-                stepped = Some(i);
+            rounds += 1;
+            if !moved || early.len() < 2 {
+                break;
+            }
+            if rounds > 100 {
+                return Err(Error::usage(format!(
+                    "the components of --event-mode returned early 100 times in the step from t = {t} s without agreeing on a time (the last {end} s)"
+                )));
             }
         }
+        for (k, &i) in order.iter().enumerate().skip(early.len()) {
+            self.step_one(i, t, end - t, true, k, &order)?;
+        }
         Ok(end)
+    }
+
+    /// fmi3DoStep / fmi2DoStep(t, h) of component `i`, the `k`th of `order` this step; a request
+    /// to end the simulation completes the step of those after it ([`Simulation::complete_ended_step`]).
+    fn step_one(
+        &mut self,
+        i: usize,
+        t: f64,
+        h: f64,
+        no_set_prior: bool,
+        k: usize,
+        order: &[usize],
+    ) -> Result<(), Error> {
+        let s = &mut self.slaves[i];
+        let inst = s.instance.as_mut().expect("instantiated");
+        if let Err(e) = inst.do_step(t, h, no_set_prior) {
+            let error = Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s"));
+            if let Fmi2Error::Terminate(at) = e {
+                self.complete_ended_step(t, at, t + h, k > 0, &order[k + 1..], no_set_prior)?;
+            }
+            return Err(error);
+        }
+        Ok(())
+    }
+
+    /// Whether component `i` can be set back to a state it had (canGetAndSetFMUState).
+    fn can_roll_back(&self, i: usize) -> bool {
+        let d = &self.fmus[self.slaves[i].fmu].description;
+        d.cs.as_ref().is_some_and(|cs| cs.can_get_and_set_fmu_state)
+    }
+
+    /// The FMU states of `early` at `t` (taken anew, or updated in place).
+    #[cold]
+    fn save_early_states(&mut self, early: &[usize], t: f64) -> Result<(), Error> {
+        if self.back.early_states.len() < self.slaves.len() {
+            self.back.early_states.resize_with(self.slaves.len(), || None);
+        }
+        for &i in early {
+            let s = &mut self.slaves[i];
+            let inst = s.instance.as_mut().expect("instantiated");
+            let r = match &self.back.early_states[i] {
+                Some((state, _)) => inst.update_fmu_state(state),
+                None => inst
+                    .get_fmu_state()
+                    .map(|state| self.back.early_states[i] = Some((state, None))),
+            };
+            r.map_err(|e| {
+                Error::fmi(
+                    &s.name,
+                    "fmi3GetFMUState",
+                    &e,
+                    Some(t),
+                    "kept to take an early return back",
+                )
+            })?;
+            let clocks = inst.clock_snapshot();
+            if let Some(slot) = &mut self.back.early_states[i] {
+                slot.1 = clocks;
+            }
+        }
+        Ok(())
+    }
+
+    /// Component `i`, which stepped to `past`, set back to its state at `t` (another component
+    /// returned early at `end`, before it), or why it cannot be.
+    #[cold]
+    fn roll_back(&mut self, i: usize, t: f64, past: f64, end: f64, rollback: bool) -> Result<(), Error> {
+        let name = self.slaves[i].name.clone();
+        if !rollback {
+            let cannot: Vec<String> = self
+                .slaves
+                .iter()
+                .enumerate()
+                .filter(|&(j, s)| s.events && !self.can_roll_back(j))
+                .map(|(_, s)| format!("'{}'", s.name))
+                .collect();
+            return Err(Error {
+                component: Some(name.clone()),
+                time: Some(t),
+                ..Error::usage(format!(
+                    "component '{name}' stepped to t = {past} s, past another component's early return at t = {end} s: taking it back needs fmi3GetFMUState/fmi3SetFMUState, which {} cannot (canGetAndSetFMUState = false)",
+                    cannot.join(", ")
+                ))
+            });
+        }
+        let (state, clocks) = self.back.early_states[i].as_ref().expect("saved before the step");
+        let s = &mut self.slaves[i];
+        let inst = s.instance.as_mut().expect("instantiated");
+        inst.set_fmu_state(state).map_err(|e| {
+            Error::fmi(
+                &s.name,
+                "fmi3SetFMUState",
+                &e,
+                Some(t),
+                &format!("taking back its step to {past} s: another component returned early at {end} s"),
+            )
+        })?;
+        if let Some(c) = clocks {
+            inst.restore_clocks(c);
+        }
+        Ok(())
+    }
+
+    /// Frees the states [`Simulation::do_step_events`] kept.
+    pub(super) fn free_early_states(&mut self) {
+        for (i, slot) in std::mem::take(&mut self.back.early_states).into_iter().enumerate() {
+            if let (Some((state, _)), Some(s)) = (slot, self.slaves.get_mut(i))
+                && let Some(inst) = s.instance.as_mut()
+            {
+                let _ = inst.free_fmu_state(state);
+            }
+        }
     }
 
     /// At `t` without a step ending there (a countdown of interval 0): the clocks due tick.

@@ -79,7 +79,9 @@ impl Simulation {
         let n = (opts.stop_time / opts.step).round() as usize;
         crate::fmu_log::install();
         crate::fmu_log::clear();
-        match self.run_inner(opts, n, progress) {
+        let outcome = self.run_inner(opts, n, progress);
+        self.free_early_states();
+        match outcome {
             Ok(mut result) => {
                 result.loops = self.loop_reports();
                 Ok(result)
