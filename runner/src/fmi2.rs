@@ -13,7 +13,7 @@
 //!   48 bytes possibly lost per run); here an FMU is unpacked once (or read unpacked from a
 //!   container's resources) and its binary loaded once for all its instances;
 //! - it never calls fmi2FreeFMUstate before the instance is freed, so every deserialized state
-//!   stayed allocated: [`InstanceCS::free_fmu_state`] frees one;
+//!   stayed allocated: [`InstanceCS::free_fmu_state`](crate::instance::InstanceCS::free_fmu_state) frees one;
 //! - its logger shim panics on an `fmi2Pending` status inside a C callback (an abort of the
 //!   importer); here every status is a message;
 //! - fmi-sys runs bindgen (libclang) at build time: a cross build of the container for Windows
@@ -478,6 +478,7 @@ impl Instance2 {
 
     crate::common::calls!(instance: enter_initialization_mode, exit_initialization_mode, terminate, reset);
 
+    #[inline]
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
         let step = self.api().do_step.ok_or_else(|| missing("fmi2DoStep"))?;
         // SAFETY: a live instance.
@@ -491,6 +492,7 @@ impl Instance2 {
     /// fmi2LastSuccessfulTime where fmi2GetBooleanStatus(fmi2Terminated) says the slave wants to
     /// end the simulation (FMI 2.0.5 4.2.3), fmi2Discard otherwise.
     #[cold]
+    #[inline(never)]
     fn why_discarded(&mut self, t: f64, h: f64) -> Fmi2Error {
         let Some(terminated) = self.api().get_boolean_status else {
             return Fmi2Error::Discard;

@@ -280,17 +280,29 @@ impl Simulation {
     /// "A component that asks to end the simulation").
     pub fn do_step_with(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
         crate::isolate::crumb_time(t);
-        for (i, s) in self.slaves.iter_mut().enumerate() {
+        for i in 0..self.slaves.len() {
+            let s = &mut self.slaves[i];
             if let Err(e) = s.instance.as_mut().expect("instantiated").do_step(t, h, no_set_prior) {
-                let error = Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s"));
-                if let Fmi2Error::Terminate(at) = e {
-                    let pending: Vec<usize> = (i + 1..self.slaves.len()).collect();
-                    self.complete_ended_step(t, at, t + h, i > 0, &pending, no_set_prior)?;
-                }
-                return Err(error);
+                return Err(self.step_failed(i, e, t, h, no_set_prior));
             }
         }
         Ok(())
+    }
+
+    /// Component `i`'s fmi2DoStep(t, h) failed with `e`, or asked to end the simulation: the
+    /// components after it then step to where the others are ([`Simulation::do_step_with`]).
+    #[cold]
+    #[inline(never)]
+    fn step_failed(&mut self, i: usize, e: Fmi2Error, t: f64, h: f64, no_set_prior: bool) -> Error {
+        let s = &self.slaves[i];
+        let error = Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s"));
+        if let Fmi2Error::Terminate(at) = e {
+            let pending: Vec<usize> = (i + 1..self.slaves.len()).collect();
+            if let Err(other) = self.complete_ended_step(t, at, t + h, i > 0, &pending, no_set_prior) {
+                return other;
+            }
+        }
+        error
     }
 
     /// A component asked to end the simulation at `at` in the step from `t`; the components
