@@ -351,6 +351,30 @@ def test_an_early_return_ends_every_components_step_at_the_event_as_in_fmpy(tmp_
     assert len(plain["time"]) == round(stop / h) + 1
 
 
+def test_the_python_module_runs_event_mode_components_as_the_command_line(tmp_path):
+    """System(path, event_mode=[...]) is the command line's --event-mode: the BouncingBall beside
+    the VanDerPol, the same points (the grid and every bounce) and values, bit for bit; refused
+    with isolate and for a name that is no component."""
+    import rustfmu_runner
+
+    comps = [("ball", fmu3("BouncingBall")), ("vdp", fmu3("VanDerPol"))]
+    path, ssd = write_ssp2(tmp_path / "Early.ssp", comps, {}, [], {})
+    stop, h = 3.0, 0.1
+    record = ["ball.h", "ball.v", "vdp.x0"]
+    got = runner(tmp_path, path, stop, h, "--event-mode", "ball", *[a for r in record for a in ("--record", r)])
+    r = rustfmu_runner.System(path, event_mode=["ball"]).run(stop, h, record=record)
+    assert len(r["time"]) > round(stop / h) + 1, "no bounce became a point"
+    assert np.array_equal(r["time"], got["time"])
+    for name in record:
+        assert np.array_equal(r[name], got[name]), name
+    plain = rustfmu_runner.System(path).run(stop, h, record=record)
+    assert len(plain["time"]) == round(stop / h) + 1
+    with pytest.raises(rustfmu_runner.VariableError, match="not with --isolate"):
+        rustfmu_runner.System(path, isolate=True, event_mode=["ball"])
+    with pytest.raises(rustfmu_runner.VariableError, match="nope"):
+        rustfmu_runner.System(path, event_mode=["nope"])
+
+
 def two_balls_schedule(stop, h, h0):
     """Two of the project's BouncingBalls (FMI 3.0) with eventModeUsed and earlyReturnAllowed,
     in fmpy, `a` stepped first, `b` dropped from `h0[1]`: at each step both FMU states are kept;

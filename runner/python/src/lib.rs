@@ -190,8 +190,13 @@ impl PySystem {
     /// (the same errors, at the in-process cost per step; an FMU can reach the others' memory). `call_timeout` (s): the longest one FMU call may take before its
     /// process is killed (default: no limit). `worker`: the rustfmu-runner binary the children
     /// run (default: $RUSTFMU_RUNNER, this environment's scripts folder, PATH).
+    ///
+    /// `event_mode`: FMI 3.0 co-simulation components (names) run with eventModeUsed and
+    /// earlyReturnAllowed, as the command line's `--event-mode`: the events each reports are
+    /// handled in Event Mode at their time, and a step one ends early ends every component's step
+    /// there (each such point a row of its own); not with `isolate`.
     #[new]
-    #[pyo3(signature = (path, order = "gauss-seidel", isolate = None, call_timeout = None, worker = None))]
+    #[pyo3(signature = (path, order = "gauss-seidel", isolate = None, call_timeout = None, worker = None, event_mode = None))]
     fn new(
         py: Python<'_>,
         path: std::path::PathBuf,
@@ -199,6 +204,7 @@ impl PySystem {
         isolate: Option<&Bound<'_, PyAny>>,
         call_timeout: Option<f64>,
         worker: Option<std::path::PathBuf>,
+        event_mode: Option<Vec<String>>,
     ) -> PyResult<PySystem> {
         // isolate: False/None, True or "component" (each FMU in a process), "system" (one).
         let granularity = match isolate {
@@ -284,6 +290,16 @@ impl PySystem {
         let mut sim = sim;
         if let Sim::Here(s) = &mut sim {
             s.scheme = scheme;
+        }
+        for c in event_mode.unwrap_or_default() {
+            match &mut sim {
+                Sim::Here(s) => s.use_event_mode(&c).map_err(|e| to_pyerr(py, &e, None))?,
+                Sim::Process(_) => {
+                    return Err(PyValueError::new_err(format!(
+                        "event_mode {c}: not with isolate=\"system\" (the runner steps to the events in its own process)"
+                    )));
+                }
+            }
         }
         Ok(PySystem {
             path: shown,
