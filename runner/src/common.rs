@@ -1,8 +1,8 @@
 //! What both importers (FMI 2.0 and 3.0), the model-exchange integrator and an isolated instance
 //! share, below all of them: the error of a call ([`Fmi2Error`], FMI 2.0's statuses, which every
-//! instance answers with), the FMU states an instance took ([`FmuState`], [`Slots`]), a folder
-//! an FMU is unpacked into ([`Scratch`]), and the forwarding of a method to the instance it is
-//! one of ([`dispatch!`]).
+//! instance answers with), the FMU states an instance took ([`FmuState`], `Slots`), a folder
+//! an FMU is unpacked into (`Scratch`), and the forwarding of a method to the instance it is
+//! one of (`dispatch!`).
 
 use std::ffi::c_void;
 use std::path::{Path, PathBuf};
@@ -140,7 +140,7 @@ impl Directional<'_> {
     }
 }
 
-/// An FMU state of an [`InstanceCS`] (an index into its states).
+/// An FMU state of an [`InstanceCS`](crate::instance::InstanceCS) (an index into its states).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FmuState(pub(crate) usize);
 

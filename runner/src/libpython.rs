@@ -3,7 +3,7 @@
 //! one binary serves every Python 3; loaded alone they fail with `undefined symbol:
 //! _Py_NoneStruct`).
 //!
-//! Before an FMU binary is loaded ([`crate::common::load_binary`]), the libraries given with
+//! Before an FMU binary is loaded (`common::load_binary`), the libraries given with
 //! `--preload-lib PATH` (or [`ENV`]) are loaded, each once, with `RTLD_GLOBAL`. Where none is
 //! given and the binary (ELF) needs symbols of the Python C API that nothing loaded provides,
 //! or its loading fails on an undefined `Py`/`_Py` symbol, the runner finds the shared

@@ -7,7 +7,7 @@
 //!
 //! The child is `rustfmu-runner serve-component` (the runner's own binary): it loads the FMU the
 //! parent unpacked, instantiates it (co-simulation, FMI 2.0 or 3.0, or model exchange integrated
-//! by [`crate::me`]) and answers the calls of an [`InstanceCS`] it gets through a shared memory
+//! by [`crate::me`]) and answers the calls of an [`InstanceCS`](crate::instance::InstanceCS) it gets through a shared memory
 //! file in /dev/shm (removed as soon as the child has it open). The FMUs' log messages travel back
 //! with each answer and reach the parent's `log` logger as an in-process FMU's would.
 //!
@@ -16,7 +16,7 @@
 //!   waited for: the setters travel with the next call that answers values, fmi2DoStep is sent at
 //!   once so the components step in parallel in their processes while the master goes on. A
 //!   failure of such a call comes back with the next call, reported as the call that failed (its
-//!   function and time: [`Fmi2Error::Deferred`]); the calls sent after it are not made.
+//!   function and time: [`Fmi2Error::Deferred`](crate::common::Fmi2Error::Deferred)); the calls sent after it are not made.
 //! - both sides spin briefly on the shared memory before they sleep on a futex.
 //!
 //! The wire format is a few flat arrays of u32/f64 per call, written in place; a hand-written

@@ -421,7 +421,7 @@ pub(super) fn describe_exit(status: std::process::ExitStatus) -> String {
 /// The child's shared header, for the crumbs of [`crumb`] (null: not a system's child).
 pub(super) static CRUMB: AtomicPtr<Header> = AtomicPtr::new(std::ptr::null_mut());
 
-/// Before each call of an [`InstanceCS`]: which instance and method, in a system's child
+/// Before each call of an [`InstanceCS`](crate::instance::InstanceCS): which instance and method, in a system's child
 /// (a relaxed store of a few words; nothing elsewhere).
 #[inline]
 pub fn crumb(instance: usize, method: &'static str) {

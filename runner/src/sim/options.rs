@@ -38,7 +38,7 @@ pub struct RunOptions {
     pub stop_when_above: Vec<(String, f64)>,
     /// Error-controlled communication steps ([`Adaptive`]); `None`: fixed steps of `step`.
     pub adaptive: Option<Adaptive>,
-    /// A first-order hold on the connections: see [`Simulation::input_derivatives`].
+    /// A first-order hold on the connections: see [`Simulation::input_derivatives`](crate::Simulation::input_derivatives).
     pub input_derivatives: bool,
     /// How algebraic loops are solved ([`crate::sim::LoopOptions`]: tolerances, iterations,
     /// finite differences).
