@@ -13,9 +13,11 @@ use crate::outcome::{breadcrumb, breadcrumbs_on, convention, limitation};
 /// Why a refused call that changed the instance is a warning and not a failure (FMI 2.0).
 pub const REFUSED_CHANGED_WHY: &str = "FMI 2.0.5 §2.1.3 leaves the instance undefined after fmi2Error, so this is \
      robustness beyond the standard; it matters to an importer that goes on after a refused call";
+use crate::calllog::{Log, Val};
 use crate::standard::State;
 use crate::{Fmu, Type, state};
 use md_reader::{Causality, Initial, Variability};
+use std::cell::RefCell;
 use std::ffi::CString;
 use std::ptr;
 
@@ -67,6 +69,8 @@ pub struct Instance<'a> {
     /// fmi2EnterInitializationMode answered fmi2OK since the instance was made or last reset: the
     /// getters may be called ([`Instance::fingerprint`] calls them only then).
     pub initialized: bool,
+    /// Every call made on the instance ([`crate::calllog`]): a failing check's reproducer.
+    pub calls: RefCell<Log>,
 }
 
 // SAFETY: an instance is used by one thread at a time (the standard's rule); the FMU has no
@@ -113,6 +117,31 @@ impl<'a> Instance<'a> {
         if c.is_null() {
             return Err(sink.take());
         }
+        let text = |s: &Option<String>, own: &str| match s {
+            None => Val::Null,
+            Some(s) if s == own => Val::Text("own".into()),
+            Some(s) => Val::Text(s.clone()),
+        };
+        let calls = RefCell::new(Log::new(
+            "fmi2Instantiate",
+            vec![
+                ("instanceName", args.name.clone().map_or(Val::Null, Val::Text)),
+                (
+                    "fmuType",
+                    Val::Text(
+                        if args.fmu_type == fmi2ModelExchange {
+                            "ModelExchange"
+                        } else {
+                            "CoSimulation"
+                        }
+                        .into(),
+                    ),
+                ),
+                ("guid", text(&args.guid, &fmu.md.guid)),
+                ("resourceLocation", text(&args.resources, &fmu.resource_uri())),
+                ("loggingOn", Val::Bool(args.logging_on)),
+            ],
+        ));
         Ok(Instance {
             fmu,
             c,
@@ -121,7 +150,32 @@ impl<'a> Instance<'a> {
             _callbacks: cb,
             time: 0.0,
             initialized: false,
+            calls,
         })
+    }
+
+    /// Records a call about to be made ([`crate::calllog`]); its index for [`Instance::answered`].
+    pub fn record(&self, function: &'static str, args: Vec<(&'static str, Val)>) -> usize {
+        self.calls.borrow_mut().call(function, args, true)
+    }
+
+    /// Records a call whose arguments the log does not keep (a comment in the reproducer).
+    pub fn record_unreplayable(&self, function: &'static str) -> usize {
+        self.calls.borrow_mut().call(function, vec![], false)
+    }
+
+    /// The status the call [`Instance::record`] recorded answered; the status.
+    pub fn answered(&self, i: usize, s: Status) -> Status {
+        self.calls.borrow_mut().answered(i, s);
+        s
+    }
+
+    /// The number of the FMU state `s` in the log (`made`: a state this call made).
+    fn state_val(&self, s: fmi2FMUstate, made: bool) -> Option<Val> {
+        if s.is_null() {
+            return Some(Val::Null);
+        }
+        self.calls.borrow_mut().state(s as usize, made).map(Val::State)
     }
 
     /// Messages logged since the last call, each checked (see the module documentation).
@@ -189,6 +243,13 @@ impl<'a> Instance<'a> {
 
     pub fn setup(&mut self, start: f64, stop: Option<f64>) -> Status {
         crumb("fmi2SetupExperiment", || format!("start {start}, stop {stop:?}"));
+        let i = self.record(
+            "fmi2SetupExperiment",
+            vec![
+                ("startTime", Val::F64(start)),
+                ("stopTime", stop.map_or(Val::Null, Val::F64)),
+            ],
+        );
         // SAFETY: a live instance.
         let s = unsafe {
             (self.fmu.api.setup_experiment)(
@@ -200,6 +261,7 @@ impl<'a> Instance<'a> {
                 stop.unwrap_or(0.0),
             )
         };
+        self.answered(i, s);
         if s == fmi2OK {
             self.time = start;
         }
@@ -208,28 +270,32 @@ impl<'a> Instance<'a> {
 
     pub fn enter_init(&mut self) -> Status {
         crumb("fmi2EnterInitializationMode", String::new);
+        let i = self.record("fmi2EnterInitializationMode", vec![]);
         // SAFETY: a live instance.
-        let s = unsafe { (self.fmu.api.enter_initialization_mode)(self.c) };
+        let s = self.answered(i, unsafe { (self.fmu.api.enter_initialization_mode)(self.c) });
         self.initialized |= s == fmi2OK;
         s
     }
 
     pub fn exit_init(&mut self) -> Status {
         crumb("fmi2ExitInitializationMode", String::new);
+        let i = self.record("fmi2ExitInitializationMode", vec![]);
         // SAFETY: a live instance.
-        unsafe { (self.fmu.api.exit_initialization_mode)(self.c) }
+        self.answered(i, unsafe { (self.fmu.api.exit_initialization_mode)(self.c) })
     }
 
     pub fn terminate(&mut self) -> Status {
         crumb("fmi2Terminate", String::new);
+        let i = self.record("fmi2Terminate", vec![]);
         // SAFETY: a live instance.
-        unsafe { (self.fmu.api.terminate)(self.c) }
+        self.answered(i, unsafe { (self.fmu.api.terminate)(self.c) })
     }
 
     pub fn reset(&mut self) -> Status {
         crumb("fmi2Reset", String::new);
+        let i = self.record("fmi2Reset", vec![]);
         // SAFETY: a live instance.
-        let s = unsafe { (self.fmu.api.reset)(self.c) };
+        let s = self.answered(i, unsafe { (self.fmu.api.reset)(self.c) });
         if s == fmi2OK {
             self.time = 0.0;
             self.initialized = false;
@@ -252,8 +318,15 @@ impl<'a> Instance<'a> {
 
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
         crumb("fmi2DoStep", || format!("t {t}, h {h}"));
+        let i = self.record(
+            "fmi2DoStep",
+            vec![
+                ("currentCommunicationPoint", Val::F64(t)),
+                ("communicationStepSize", Val::F64(h)),
+            ],
+        );
         // SAFETY: a live instance.
-        unsafe { (self.fmu.api.do_step)(self.c, t, h, fmi2False) }
+        self.answered(i, unsafe { (self.fmu.api.do_step)(self.c, t, h, fmi2False) })
     }
 
     /// One step from the tracked time; the time advances when the FMU answers fmi2OK.
@@ -269,27 +342,36 @@ impl<'a> Instance<'a> {
 
     pub fn get_real(&self, vrs: &[u32]) -> (Status, Vec<f64>) {
         crumb("fmi2GetReal", || format!("vrs {vrs:?}"));
+        let i = self.record("fmi2GetReal", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0.0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
-        let s = unsafe { (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let s = self.answered(i, unsafe {
+            (self.fmu.api.get_real)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr())
+        });
         let v = v.into_values(|| format!("fmi2GetReal with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
 
     pub fn get_integer(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
         crumb("fmi2GetInteger", || format!("vrs {vrs:?}"));
+        let i = self.record("fmi2GetInteger", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
-        let s = unsafe { (self.fmu.api.get_integer)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let s = self.answered(i, unsafe {
+            (self.fmu.api.get_integer)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr())
+        });
         let v = v.into_values(|| format!("fmi2GetInteger with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
 
     pub fn get_boolean(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
         crumb("fmi2GetBoolean", || format!("vrs {vrs:?}"));
+        let i = self.record("fmi2GetBoolean", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
-        let s = unsafe { (self.fmu.api.get_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr()) };
+        let s = self.answered(i, unsafe {
+            (self.fmu.api.get_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_mut_ptr())
+        });
         let v = v.into_values(|| format!("fmi2GetBoolean with nvr = {}", vrs.len()), GETTER_RULE2);
         (s, v)
     }
@@ -297,23 +379,47 @@ impl<'a> Instance<'a> {
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
         crumb("fmi2SetReal", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
+        let i = self.record(
+            "fmi2SetReal",
+            vec![("vr", Val::U32s(vrs.to_vec())), ("values", Val::F64s(values.to_vec()))],
+        );
         // SAFETY: arrays of nvr elements.
-        unsafe { (self.fmu.api.set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
+        self.answered(i, unsafe {
+            (self.fmu.api.set_real)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr())
+        })
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
         crumb("fmi2SetInteger", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
+        let i = self.record(
+            "fmi2SetInteger",
+            vec![
+                ("vr", Val::U32s(vrs.to_vec())),
+                ("values", Val::I64s(values.iter().map(|x| i64::from(*x)).collect())),
+            ],
+        );
         // SAFETY: arrays of nvr elements.
-        unsafe { (self.fmu.api.set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr()) }
+        self.answered(i, unsafe {
+            (self.fmu.api.set_integer)(self.c, vrs.as_ptr(), vrs.len(), values.as_ptr())
+        })
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
         crumb("fmi2SetBoolean", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let v: Vec<fmi2Boolean> = values.iter().map(|b| *b as fmi2Boolean).collect();
+        let i = self.record(
+            "fmi2SetBoolean",
+            vec![
+                ("vr", Val::U32s(vrs.to_vec())),
+                ("values", Val::I64s(v.iter().map(|x| i64::from(*x)).collect())),
+            ],
+        );
         // SAFETY: arrays of nvr elements.
-        unsafe { (self.fmu.api.set_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_ptr()) }
+        self.answered(i, unsafe {
+            (self.fmu.api.set_boolean)(self.c, vrs.as_ptr(), vrs.len(), v.as_ptr())
+        })
     }
 
     /// Every Real, Integer and Boolean variable as bit patterns, in description order: the
@@ -341,6 +447,7 @@ impl<'a> Instance<'a> {
     pub fn get_state(&mut self) -> (Status, fmi2FMUstate) {
         crumb("fmi2GetFMUstate", String::new);
         let mut s: fmi2FMUstate = ptr::null_mut();
+        let i = self.record("fmi2GetFMUstate", vec![]);
         // SAFETY: a live instance and a valid out pointer.
         let st = unsafe {
             crate::guard::fill_one(
@@ -348,9 +455,12 @@ impl<'a> Instance<'a> {
                 "fmi2GetFMUstate",
                 "one FMU state",
                 crate::guard::STATE_RULE2,
-                |q| (self.fmu.api.get_fmu_state)(self.c, q),
+                |q| self.answered(i, (self.fmu.api.get_fmu_state)(self.c, q)),
             )
         };
+        if let Some(v) = self.state_val(s, true) {
+            self.calls.borrow_mut().add_arg(i, "state", v);
+        }
         (st, s)
     }
 
@@ -359,16 +469,24 @@ impl<'a> Instance<'a> {
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn set_state(&mut self, s: fmi2FMUstate) -> Status {
         crumb("fmi2SetFMUstate", || format!("{s:?}"));
+        let i = match self.state_val(s, false) {
+            Some(v) => self.record("fmi2SetFMUstate", vec![("state", v)]),
+            None => self.record_unreplayable("fmi2SetFMUstate"),
+        };
         // SAFETY: a state of this FMU (or NULL, which the FMU must refuse).
-        unsafe { (self.fmu.api.set_fmu_state)(self.c, s) }
+        self.answered(i, unsafe { (self.fmu.api.set_fmu_state)(self.c, s) })
     }
 
     // The harness passes FMU states through to the FMU as an importer does; checking them
     // is the FMU's job, which is what the tests test.
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn free_state(&mut self, s: &mut fmi2FMUstate) -> Status {
+        let i = match self.state_val(*s, false) {
+            Some(v) => self.record("fmi2FreeFMUstate", vec![("state", v)]),
+            None => self.record_unreplayable("fmi2FreeFMUstate"),
+        };
         // SAFETY: a state of this FMU, freed once.
-        unsafe { (self.fmu.api.free_fmu_state)(self.c, s) }
+        self.answered(i, unsafe { (self.fmu.api.free_fmu_state)(self.c, s) })
     }
 
     // The harness passes FMU states through to the FMU as an importer does; checking them
@@ -376,6 +494,11 @@ impl<'a> Instance<'a> {
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn serialize(&mut self, s: fmi2FMUstate) -> Result<Vec<u8>, Status> {
         let mut size = 0usize;
+        let state = self.state_val(s, false);
+        let i = match &state {
+            Some(v) => self.record("fmi2SerializedFMUstateSize", vec![("state", v.clone())]),
+            None => self.record_unreplayable("fmi2SerializedFMUstateSize"),
+        };
         // SAFETY: a state of this FMU and valid out pointers.
         let st = unsafe {
             crate::guard::fill_one(
@@ -383,7 +506,7 @@ impl<'a> Instance<'a> {
                 "fmi2SerializedFMUstateSize",
                 "one size_t",
                 crate::guard::STATE_RULE2,
-                |p| (self.fmu.api.serialized_fmu_state_size)(self.c, s, p),
+                |p| self.answered(i, (self.fmu.api.serialized_fmu_state_size)(self.c, s, p)),
             )
         };
         if st != fmi2OK {
@@ -391,8 +514,17 @@ impl<'a> Instance<'a> {
         }
         crumb("fmi2SerializeFMUstate", || format!("size {size}"));
         let mut bytes = Guarded::new(size, 0u8);
+        let i = match state {
+            Some(v) => self.record(
+                "fmi2SerializeFMUstate",
+                vec![("state", v), ("size", Val::U64(size as u64))],
+            ),
+            None => self.record_unreplayable("fmi2SerializeFMUstate"),
+        };
         // SAFETY: a buffer of `size` bytes (and the guard after it).
-        let st = unsafe { (self.fmu.api.serialize_fmu_state)(self.c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size) };
+        let st = self.answered(i, unsafe {
+            (self.fmu.api.serialize_fmu_state)(self.c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size)
+        });
         let bytes = bytes.into_values(
             || format!("fmi2SerializeFMUstate with size = {size} (fmi2SerializedFMUstateSize's answer)"),
             STATE_RULE2,
@@ -407,6 +539,7 @@ impl<'a> Instance<'a> {
     pub fn deserialize(&mut self, bytes: &[u8]) -> (Status, fmi2FMUstate) {
         crumb("fmi2DeSerializeFMUstate", || format!("{} bytes", bytes.len()));
         let mut s: fmi2FMUstate = ptr::null_mut();
+        let i = self.record("fmi2DeSerializeFMUstate", vec![("bytes", Val::Bytes(bytes.to_vec()))]);
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
         let st = unsafe {
             crate::guard::fill_one(
@@ -414,9 +547,17 @@ impl<'a> Instance<'a> {
                 "fmi2DeSerializeFMUstate",
                 "one FMU state",
                 crate::guard::STATE_RULE2,
-                |q| (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+                |q| {
+                    self.answered(
+                        i,
+                        (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+                    )
+                },
             )
         };
+        if let Some(v) = self.state_val(s, true) {
+            self.calls.borrow_mut().add_arg(i, "state", v);
+        }
         (st, s)
     }
 
@@ -560,6 +701,10 @@ impl<'a> Instance<'a> {
 
     pub fn last_successful_time(&self) -> (Status, f64) {
         let mut t = f64::NAN;
+        let i = self.record(
+            "fmi2GetRealStatus",
+            vec![("kind", Val::Text("fmi2LastSuccessfulTime".into()))],
+        );
         // SAFETY: a valid out pointer.
         let s = unsafe {
             crate::guard::fill_one(
@@ -567,7 +712,7 @@ impl<'a> Instance<'a> {
                 "fmi2GetRealStatus",
                 "one value",
                 crate::guard::STATUS_RULE2,
-                |p| (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, p),
+                |p| self.answered(i, (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, p)),
             )
         };
         (s, t)
@@ -575,6 +720,10 @@ impl<'a> Instance<'a> {
 
     pub fn terminated(&self) -> (Status, fmi2Boolean) {
         let mut b = -1;
+        let i = self.record(
+            "fmi2GetBooleanStatus",
+            vec![("kind", Val::Text("fmi2Terminated".into()))],
+        );
         // SAFETY: a valid out pointer.
         let s = unsafe {
             crate::guard::fill_one(
@@ -582,7 +731,7 @@ impl<'a> Instance<'a> {
                 "fmi2GetBooleanStatus",
                 "one value",
                 crate::guard::STATUS_RULE2,
-                |p| (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, p),
+                |p| self.answered(i, (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, p)),
             )
         };
         (s, b)
@@ -593,14 +742,27 @@ impl<'a> Instance<'a> {
         let owned: Vec<CString> = categories.iter().map(|c| CString::new(*c).unwrap()).collect();
         let ptrs: Vec<fmi2String> = owned.iter().map(|c| c.as_ptr()).collect();
         let p = if ptrs.is_empty() { ptr::null() } else { ptrs.as_ptr() };
+        let i = self.record(
+            "fmi2SetDebugLogging",
+            vec![
+                ("loggingOn", Val::Bool(on)),
+                (
+                    "categories",
+                    Val::Texts(categories.iter().map(|c| c.to_string()).collect()),
+                ),
+            ],
+        );
         // SAFETY: nCategories valid strings (or NULL with 0).
-        unsafe { (self.fmu.api.set_debug_logging)(self.c, on as fmi2Boolean, ptrs.len(), p) }
+        self.answered(i, unsafe {
+            (self.fmu.api.set_debug_logging)(self.c, on as fmi2Boolean, ptrs.len(), p)
+        })
     }
 }
 
 impl Drop for Instance<'_> {
     fn drop(&mut self) {
         crumb("fmi2FreeInstance", String::new);
+        crate::calllog::retire(std::mem::take(self.calls.get_mut()));
         // SAFETY: freed once; the callbacks outlive the call.
         unsafe { (self.fmu.api.free_instance)(self.c) };
         if !std::thread::panicking() {

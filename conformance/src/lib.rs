@@ -23,6 +23,7 @@
 
 pub mod api;
 pub mod archive;
+pub mod calllog;
 pub mod checks;
 pub mod fmi2;
 pub mod fmi3;
@@ -34,6 +35,7 @@ pub mod outcome;
 pub mod reference_results;
 pub mod registry;
 pub mod replay;
+pub mod replay_calls;
 pub mod report;
 pub mod runner;
 pub mod standard;
@@ -252,6 +254,8 @@ pub trait Loaded: Sized + Sync + 'static {
     fn load(path: &Path, parent: &Path) -> Result<Self, String>;
     /// The model identifier.
     fn id(&self) -> &str;
+    /// The FMU file it was loaded from.
+    fn archive(&self) -> &Path;
     /// Ok for this exporter's serialized state format, else why not (see [`Fmu::state_format`]).
     fn state_format(&self) -> &Result<(), String>;
     /// The report's head for a file of this version, from the archive alone (no FMU code runs).
@@ -274,6 +278,9 @@ macro_rules! impl_loaded {
             }
             fn id(&self) -> &str {
                 &self.id
+            }
+            fn archive(&self) -> &std::path::Path {
+                &self.archive
             }
             fn state_format(&self) -> &Result<(), String> {
                 <$fmu>::state_format(self)

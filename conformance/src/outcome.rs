@@ -127,9 +127,12 @@ pub fn crash_on_a_mistake(how: &str) -> String {
 /// internal step summed n times, differs by rounding). A millionth of the step (as the C hosts
 /// allow), at least 64 ulps of the larger time.
 pub fn same_time(a: f64, b: f64, h: f64) -> bool {
-    let scale = a.abs().max(b.abs());
-    let tol = (1e-6 * h.abs()).max(64.0 * f64::EPSILON * scale);
-    a == b || (a - b).abs() <= tol
+    a == b || (a - b).abs() <= time_tolerance(a.abs().max(b.abs()), h)
+}
+
+/// The tolerance of [`same_time`] for times of size `t` and the step `h`.
+pub fn time_tolerance(t: f64, h: f64) -> f64 {
+    (1e-6 * h.abs()).max(64.0 * f64::EPSILON * t.abs())
 }
 
 /// The payload of [`skip`].

@@ -88,10 +88,40 @@ impl Check {
     pub fn run_on<F: Checked>(&self, fmu: &F) -> (Outcome, Findings) {
         let run = F::check_fn(self.run)
             .unwrap_or_else(|| panic!("{} checks {:?} FMUs, not {:?}", self.name, self.version(), F::VERSION));
-        capture(|| {
+        crate::calllog::begin();
+        let (outcome, findings) = capture(|| {
             fmu.runnable(self.name);
             run(fmu)
-        })
+        });
+        let failing = crate::calllog::take_failing();
+        let outcome = match outcome {
+            // The random checks write their own (shrunk) reproducers.
+            Outcome::Fail(m)
+                if self.group != Group::RandomSequences && !m.contains(crate::replay::REPRODUCER_SENTENCE) =>
+            {
+                match failing {
+                    Some((log, _)) if !log.replayable() => Outcome::Fail(format!(
+                        "{m}\nno reproducer: the check failed on an instance the replay does not make ({})",
+                        log.instantiate.as_ref().map_or("", |i| &*i.function)
+                    )),
+                    Some((log, notes)) => {
+                        let note = crate::replay::write_check_reproducer(
+                            fmu.id(),
+                            fmu.archive(),
+                            F::VERSION,
+                            self.name,
+                            &m,
+                            &log,
+                            &notes,
+                        );
+                        Outcome::Fail(format!("{m}\n{note}"))
+                    }
+                    None => Outcome::Fail(m),
+                }
+            }
+            other => other,
+        };
+        (outcome, findings)
     }
 
     /// Whether a filter selects this check: a substring of its name or of its group's name.

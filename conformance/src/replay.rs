@@ -280,6 +280,62 @@ pub fn write_reproducer(stem: &str, text: &str) -> Result<PathBuf, String> {
     Err(format!("{}: too many reproducers named {stem}", dir.display()))
 }
 
+/// How the sentence that names a reproducer starts ([`reproducer_note`]), in every failure
+/// message that has one.
+pub const REPRODUCER_SENTENCE: &str = "reproducer (";
+
+/// Writes the reproducer of the named check `check` that failed with `failure` on the FMU `id`
+/// (its file `archive`): the calls of `log`, the instance it failed on ([`crate::calllog`]), as
+/// `<id>-fmi2-<check>-<n>.txt` (`-fmi3-`); the sentence that ends the failure message.
+pub fn write_check_reproducer(
+    id: &str,
+    archive: &Path,
+    version: crate::Version,
+    check: &str,
+    failure: &str,
+    log: &crate::calllog::Log,
+    notes: &[(u64, crate::calllog::Note)],
+) -> String {
+    let v = match version {
+        crate::Version::Fmi2 => "fmi2",
+        crate::Version::Fmi3 => "fmi3",
+    };
+    let about = [
+        format!(
+            "FMU: {} (model {id}, {})",
+            archive.display(),
+            if v == "fmi2" { "FMI 2.0" } else { "FMI 3.0" }
+        ),
+        format!("check: {check}"),
+    ];
+    let text = crate::calllog::reproducer_text(log, notes, &about, failure);
+    let written = write_reproducer(&format!("{id}-{v}-{check}"), &text);
+    match written {
+        Ok(path) => format!(
+            "reproducer (the calls of the instance the check failed on, one a line): {}; replay it with \
+             `cargo fmu replay {} {}` (or `fmu-check --replay {} {}`)",
+            path.display(),
+            path.display(),
+            archive.display(),
+            path.display(),
+            archive.display()
+        ),
+        Err(e) => format!("no reproducer written: {e}"),
+    }
+}
+
+/// The reproducers a failure message names ([`reproducer_note`], [`write_check_reproducer`]).
+pub fn reproducer_paths(message: &str) -> Vec<PathBuf> {
+    message
+        .split(REPRODUCER_SENTENCE)
+        .skip(1)
+        .filter_map(|rest| {
+            let path = rest.split_once("): ")?.1;
+            Some(PathBuf::from(path.split_once("; replay it")?.0))
+        })
+        .collect()
+}
+
 /// The sentence a failure message ends with: where the reproducer is and how to replay it.
 pub fn reproducer_note(written: Result<PathBuf, String>, fmu: &Path) -> String {
     match written {
@@ -326,7 +382,17 @@ pub fn replay(file: &Path, fmu: &Path, out: &mut dyn FnMut(&str)) -> Result<Repl
             })
         })
     };
+    // A named check's reproducer names its instance; a random sequence's does not.
+    let named = first.has("instanceName");
     let report = match (version, first.function.as_str()) {
+        (crate::Version::Fmi2, "fmi2Instantiate") if named => {
+            let loaded = crate::Fmu::load(fmu, &root)?;
+            caught(&mut || crate::replay_calls::replay2(&loaded, &lines, out))
+        }
+        (crate::Version::Fmi3, "fmi3InstantiateCoSimulation" | "fmi3InstantiateModelExchange") if named => {
+            let loaded = crate::Fmu3::load(fmu, &root)?;
+            caught(&mut || crate::replay_calls::replay3(&loaded, &lines, out))
+        }
         (crate::Version::Fmi2, "fmi2Instantiate") => {
             let loaded = crate::Fmu::load(fmu, &root)?;
             caught(&mut || crate::checks::random_sequences::replay(&loaded, &lines, out))
@@ -361,6 +427,21 @@ pub fn replay_line(line: &Line, call: &str, status: u32, expected: Expected) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_reproducers_a_failure_message_names_are_found() {
+        let fmu = Path::new("X.fmu");
+        let m = format!(
+            "broken\n{}\nand\n{}",
+            reproducer_note(Ok(PathBuf::from("/t/a-1.txt")), fmu),
+            reproducer_note(Ok(PathBuf::from("/t/b c-2.txt")), fmu)
+        );
+        assert_eq!(
+            reproducer_paths(&m),
+            [PathBuf::from("/t/a-1.txt"), PathBuf::from("/t/b c-2.txt")]
+        );
+        assert!(reproducer_paths("no reproducer written: full disk").is_empty());
+    }
 
     #[test]
     fn expectations_read_back_as_written() {

@@ -590,3 +590,127 @@ fn a_description_of_scheduled_execution_only_is_checked_with_its_co_simulation_a
         }
     }
 }
+
+/// The file a failure message names as its reproducer.
+fn reproducer_of(message: &str) -> PathBuf {
+    let paths = fmi_conformance::replay::reproducer_paths(message);
+    assert_eq!(paths.len(), 1, "one reproducer in: {message}");
+    paths[0].clone()
+}
+
+/// `fmu-check --replay file fmu` (as `cargo fmu replay`): exit code and what it printed.
+fn replay(file: &Path, fmu: &Path) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_fmu-check"))
+        .arg("--replay")
+        .arg(file)
+        .arg(fmu)
+        .output()
+        .unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (out.status.code(), text)
+}
+
+/// Issue 51 item 3: a named check that fails leaves a reproducer, the calls of the instance it
+/// failed on, which replays the failure on the defective FMU (exit 1, saying what differs: a
+/// guard overwritten, a value other than the check expected) and not on the FMU it wraps (exit
+/// 0); the same check passing on that FMU leaves no file. Three defects, FMI 2.0 and 3.0.
+#[test]
+fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_passing_one_none() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (defect, v, name, differs) in [
+        (
+            "GET_PAST",
+            2,
+            "getters_write_no_value_past_the_array_they_are_given",
+            "fmi2GetReal with nvr = ",
+        ),
+        (
+            "GET_PAST",
+            3,
+            "fmi3_getters_write_no_value_past_the_array_they_are_given",
+            "fmi3GetFloat64 with nValues",
+        ),
+        (
+            "STEP_STUCK",
+            2,
+            "do_step_advances_time_by_the_step",
+            "the check expected",
+        ),
+        (
+            "STEP_STUCK",
+            3,
+            "fmi3_do_step_advances_time_by_the_step",
+            "the check expected",
+        ),
+        (
+            "ONE_PAST",
+            2,
+            "status_functions_report_the_last_successful_time_and_no_termination_request",
+            "fmi2GetRealStatus, given one value, wrote past the end",
+        ),
+        (
+            "ONE_PAST",
+            3,
+            "fmi3_model_exchange_states_and_derivatives_are_consistent",
+            "fmi3GetNumberOfContinuousStates, given one size_t, wrote past the end",
+        ),
+    ] {
+        let fmu = fixture(dir.path(), v, defect, &[format!("-DDEFECT_{defect}")]);
+        let run_one = |fmu: &Path, reproducers: &Path| {
+            let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+            o.temp_dir = Some(dir.path().to_path_buf());
+            o.as_foreign = true;
+            o.filter = Some(name.into());
+            o.reproducers = Some(reproducers.to_path_buf());
+            let report = run(fmu, &o);
+            let c = report
+                .checks
+                .iter()
+                .find(|c| c.name == name)
+                .unwrap_or_else(|| panic!("no check {name}:\n{report}"));
+            c.outcome.clone()
+        };
+        let reproducers = dir.path().join(format!("reproducers-{defect}-{v}"));
+        let Outcome::Fail(message) = run_one(&fmu, &reproducers) else {
+            panic!("{defect}, FMI {v}.0: {name} should fail")
+        };
+        let file = reproducer_of(&message);
+        assert!(file.starts_with(&reproducers), "{}", file.display());
+        let text = std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(
+            text.contains(&format!("# check: {name}")) && text.contains("# failure: "),
+            "{defect}, FMI {v}.0: the file names the check and its failure:\n{text}"
+        );
+        let (code, out) = replay(&file, &fmu);
+        assert_eq!(
+            code,
+            Some(1),
+            "{defect}, FMI {v}.0: the replay on the defective FMU:\n{out}\n{text}"
+        );
+        assert!(
+            out.contains("the failure reproduces") && out.contains(differs),
+            "{defect}, FMI {v}.0: the replay says what differs ('{differs}'):\n{out}"
+        );
+        let (code, out) = replay(&file, &dahlquist(v).0);
+        assert_eq!(
+            code,
+            Some(0),
+            "{defect}, FMI {v}.0: the replay on the FMU without the defect:\n{out}\n{text}"
+        );
+        // The check passes on the FMU without the defect: no file.
+        let clean = dir.path().join(format!("clean-{defect}-{v}"));
+        let outcome = run_one(&dahlquist(v).0, &clean);
+        assert!(
+            !matches!(outcome, Outcome::Fail(_)),
+            "FMI {v}.0: {name} on Dahlquist: {outcome:?}"
+        );
+        let written: Vec<_> = std::fs::read_dir(&clean)
+            .map(|d| d.flatten().collect())
+            .unwrap_or_default();
+        assert!(written.is_empty(), "a passing check wrote {written:?}");
+    }
+}

@@ -88,10 +88,10 @@ enum Cmd {
         #[command(flatten)]
         options: CheckOptions,
     },
-    /// Replay a reproducer (the calls of a failing random call sequence, one a line, as `cargo fmu
-    /// check` writes them) on an FMU, in this process (so that it runs under a debugger): prints
-    /// each call and its status; exits 1 when a status is not the one the file expects or a check
-    /// of the sequence fails.
+    /// Replay a reproducer (the calls of a failed check, one a line, as `cargo fmu check` writes
+    /// them) on an FMU, in this process (so that it runs under a debugger): prints each call, its
+    /// status and the values it returned; exits 1 when a status or value is not the one the file
+    /// expects, a buffer's guard was overwritten, or a check of the sequence fails.
     Replay {
         /// The reproducer (conformance/README.md, "Reproducers").
         file: PathBuf,
@@ -329,8 +329,8 @@ struct CheckOptions {
     /// Make every warning a failure: what rustfmu's own FMUs must pass.
     #[arg(long)]
     strict: bool,
-    /// Where a failing random call sequence leaves its reproducer (default: the system's
-    /// temp folder, fmu-check-reproducers/); `cargo fmu replay` runs it again.
+    /// Where a failed check leaves its reproducer (default: the system's temp folder,
+    /// fmu-check-reproducers/); `cargo fmu replay` runs it again.
     #[arg(long, value_name = "DIR")]
     reproducers: Option<PathBuf>,
     /// Also write the report as JUnit XML (a test suite per group, a test case per check).
@@ -391,6 +391,25 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
     // Progress on stderr while it runs; the report on stdout.
     let report = run_with(fmu, &opts, &mut |c| eprintln!("{}", c.line()));
     println!("{report}");
+    let reproducers: Vec<PathBuf> = report
+        .checks
+        .iter()
+        .filter_map(|c| match &c.outcome {
+            fmi_conformance::outcome::Outcome::Fail(m) => Some(fmi_conformance::replay::reproducer_paths(m)),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    if !reproducers.is_empty() {
+        println!(
+            "reproducers of the failures (the calls that show each, one a line; `cargo fmu replay FILE {}` runs one \
+             again, under a debugger if you like):",
+            fmu.display()
+        );
+        for r in &reproducers {
+            println!("  {}", r.display());
+        }
+    }
     fmi_conformance::report::write_files(&report, junit.as_deref(), json.as_deref())?;
     if report.success() { Ok(()) } else { Err(String::new()) }
 }

@@ -11,11 +11,13 @@ pub mod standard;
 pub mod types;
 
 use crate::archive::{self, PrivateDir};
+use crate::calllog::{Log, Val};
 use crate::guard::{GETTER_RULE3, Guarded, STATE_RULE3};
 use md_reader::fmi3::Dimension;
 pub use md_reader::fmi3::{ModelDescription as Description, Type, Variable};
 use md_reader::{Causality, Variability};
 pub use standard::State;
+use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::ffi::{CStr, CString, c_char};
 use std::path::{Path, PathBuf};
@@ -396,6 +398,14 @@ pub struct Inst<'a> {
     /// fmi3DoStep: the FMU "requests to stop the simulation"): [`Inst::step`] makes no step after
     /// it, as an importer stops there.
     pub ended_at: Option<f64>,
+    /// Every call made on the instance ([`crate::calllog`]): a failing check's reproducer.
+    pub calls: RefCell<Log>,
+    /// The arguments of the call [`Inst::call`] makes next, as its wrapper gives them
+    /// ([`Inst::args`]); a call made without them is recorded as not replayable, unless it
+    /// takes none ([`crate::replay_calls::FMI3_NO_ARGUMENTS`]).
+    pending: RefCell<Option<Vec<(&'static str, Val)>>>,
+    /// The index of the last call in [`Inst::calls`].
+    last_call: Cell<usize>,
 }
 
 impl<'a> Inst<'a> {
@@ -431,7 +441,7 @@ impl<'a> Inst<'a> {
 
     /// (eventModeUsed, earlyReturnAllowed) as given; `intermediate`: with the
     /// intermediate-update callback.
-    fn try_new_full(
+    pub(crate) fn try_new_full(
         fmu: &'a Fmu3,
         me: bool,
         name: &str,
@@ -486,6 +496,23 @@ impl<'a> Inst<'a> {
                 sink.take()
             ));
         }
+        let calls = RefCell::new(Log::new(
+            if me {
+                "fmi3InstantiateModelExchange"
+            } else {
+                "fmi3InstantiateCoSimulation"
+            },
+            if me {
+                vec![("instanceName", Val::Text(name.to_string_lossy().into_owned()))]
+            } else {
+                vec![
+                    ("instanceName", Val::Text(name.to_string_lossy().into_owned())),
+                    ("eventModeUsed", Val::Bool(event_mode)),
+                    ("earlyReturnAllowed", Val::Bool(early_return)),
+                    ("intermediateUpdate", Val::Bool(intermediate)),
+                ]
+            },
+        ));
         Ok(Inst {
             fmu,
             c,
@@ -494,7 +521,57 @@ impl<'a> Inst<'a> {
             time: 0.0,
             auto_events,
             ended_at: None,
+            calls,
+            pending: RefCell::new(None),
+            last_call: Cell::new(usize::MAX),
         })
+    }
+
+    /// The arguments of the next [`Inst::call`], for the call log ([`crate::calllog`]); `self`.
+    pub fn args(&self, args: Vec<(&'static str, Val)>) -> &Self {
+        *self.pending.borrow_mut() = Some(args);
+        self
+    }
+
+    /// Adds an output of the last call (an FMU state it made) to its record.
+    fn output(&self, key: &'static str, v: Val) {
+        self.calls.borrow_mut().add_arg(self.last_call.get(), key, v);
+    }
+
+    /// The number of the FMU state `st` in the log (`made`: the call made it).
+    fn state_val(&self, st: fmi3FMUState, made: bool) -> Option<Val> {
+        if st.is_null() {
+            return Some(Val::Null);
+        }
+        self.calls.borrow_mut().state(st as usize, made).map(Val::State)
+    }
+
+    /// [`Inst::args`] for a call on the FMU state `st` (`state=N` first); a state this instance's
+    /// calls did not make (another instance's) leaves the call unreplayable.
+    fn state_args(&self, st: fmi3FMUState, mut rest: Vec<(&'static str, Val)>) -> &Self {
+        if let Some(v) = self.state_val(st, false) {
+            rest.insert(0, ("state", v));
+            self.args(rest);
+        }
+        self
+    }
+
+    /// An instance fmi3InstantiateScheduledExecution made (with `sink` as its environment). Its
+    /// calls are recorded, but it leaves no reproducer: the replay does not instantiate
+    /// Scheduled Execution (whose clocks the FMU ticks through callbacks).
+    pub(crate) fn scheduled_execution(fmu: &'a Fmu3, c: fmi3Instance, sink: Box<LogSink>) -> Inst<'a> {
+        Inst {
+            fmu,
+            c,
+            me: false,
+            sink,
+            time: 0.0,
+            auto_events: false,
+            ended_at: None,
+            calls: RefCell::new(Log::not_replayable("fmi3InstantiateScheduledExecution")),
+            pending: RefCell::new(None),
+            last_call: Cell::new(usize::MAX),
+        }
     }
 
     /// No instance: every call passes NULL (the checks of a NULL instance). Nothing is logged
@@ -508,6 +585,9 @@ impl<'a> Inst<'a> {
             time: 0.0,
             auto_events: false,
             ended_at: None,
+            calls: RefCell::default(),
+            pending: RefCell::new(None),
+            last_call: Cell::new(usize::MAX),
         }
     }
 
@@ -567,6 +647,12 @@ impl<'a> Inst<'a> {
         let mut out = Guarded::new(n, 0.0);
         out_of(sensitivity, &mut out);
         let p = out.as_mut_ptr();
+        self.args(vec![
+            ("unknowns", Val::U32s(unknowns.to_vec())),
+            ("knowns", Val::U32s(knowns.to_vec())),
+            ("seed", Val::F64s(seed.to_vec())),
+            ("nSensitivity", Val::U64(n as u64)),
+        ]);
         // SAFETY: this instance's live handle (or NULL, which the FMU must refuse); each array is
         // a live slice passed with its own length (`p`: `n` values and the guard after them).
         let s = self.call(what, |c| unsafe {
@@ -590,8 +676,25 @@ impl<'a> Inst<'a> {
     /// that status, a warning (`--strict`: a failure; this exporter's FMUs always log one).
     pub fn call(&self, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) -> fmi3Status {
         crate::outcome::breadcrumb(what);
+        let args = self.pending.borrow_mut().take();
+        if !self.c.is_null() {
+            let known = crate::replay_calls::FMI3_CALLS.iter().find(|k| **k == what);
+            let i = match known {
+                Some(name) => {
+                    let replayable = args.is_some() || crate::replay_calls::FMI3_NO_ARGUMENTS.contains(name);
+                    self.calls
+                        .borrow_mut()
+                        .call(*name, args.unwrap_or_default(), replayable)
+                }
+                None => self.calls.borrow_mut().call(what.to_string(), vec![], false),
+            };
+            self.last_call.set(i);
+        }
         let before = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
         let s = f(self.c);
+        if !self.c.is_null() {
+            self.calls.borrow_mut().answered(self.last_call.get(), s);
+        }
         {
             // logMessage's category: one of <LogCategories>, NULL if there are none.
             let entries = self.sink.entries.lock().unwrap_or_else(|e| e.into_inner());
@@ -632,9 +735,11 @@ impl<'a> Inst<'a> {
     pub fn enter_init(&mut self, start: f64) -> fmi3Status {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let s = self.call("fmi3EnterInitializationMode", |c| unsafe {
-            (self.fmu.api.enter_initialization_mode)(c, false, 0.0, start, false, 0.0)
-        });
+        let s = self
+            .args(vec![("startTime", Val::F64(start))])
+            .call("fmi3EnterInitializationMode", |c| unsafe {
+                (self.fmu.api.enter_initialization_mode)(c, false, 0.0, start, false, 0.0)
+            });
         if s == fmi3OK {
             self.time = start;
         }
@@ -735,9 +840,11 @@ impl<'a> Inst<'a> {
         let mut v = Guarded::new(n, 0.0);
         let p = v.as_mut_ptr();
         // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
-        let s = self.call("fmi3GetFloat64", |c| unsafe {
-            (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), p, n)
-        });
+        let s = self
+            .args(vec![("vr", Val::U32s(vrs.to_vec())), ("nValues", Val::U64(n as u64))])
+            .call("fmi3GetFloat64", |c| unsafe {
+                (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), p, n)
+            });
         let v = v.into_values(|| format!("fmi3GetFloat64 with nValues = {n}"), GETTER_RULE3);
         (s, v)
     }
@@ -749,9 +856,10 @@ impl<'a> Inst<'a> {
     pub fn set_f64(&self, vrs: &[u32], v: &[f64]) -> fmi3Status {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        self.call("fmi3SetFloat64", |c| unsafe {
-            (self.fmu.api.set_float64)(c, vrs.as_ptr(), vrs.len(), v.as_ptr(), v.len())
-        })
+        self.args(vec![("vr", Val::U32s(vrs.to_vec())), ("values", Val::F64s(v.to_vec()))])
+            .call("fmi3SetFloat64", |c| unsafe {
+                (self.fmu.api.set_float64)(c, vrs.as_ptr(), vrs.len(), v.as_ptr(), v.len())
+            })
     }
 
     /// One fmi3DoStep from `self.time`; returns the status and (eventHandlingNeeded,
@@ -762,11 +870,16 @@ impl<'a> Inst<'a> {
         let t = self.time;
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let s = self.call("fmi3DoStep", |c| unsafe {
-            crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, d], l| {
-                (self.fmu.api.do_step)(c, t, h, true, a, b, d, l)
-            })
-        });
+        let s = self
+            .args(vec![
+                ("currentCommunicationPoint", Val::F64(t)),
+                ("communicationStepSize", Val::F64(h)),
+            ])
+            .call("fmi3DoStep", |c| unsafe {
+                crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, d], l| {
+                    (self.fmu.api.do_step)(c, t, h, true, a, b, d, l)
+                })
+            });
         if s == fmi3OK {
             self.time = t + h;
             if self.auto_events && flags[0] == 1 {
@@ -834,7 +947,9 @@ impl<'a> Inst<'a> {
         let mut v = Guarded::new(n, 0.0);
         let p = v.as_mut_ptr();
         // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
-        let s = self.call(what, |c| unsafe { f(c, p, n) });
+        let s = self
+            .args(vec![("n", Val::U64(n as u64))])
+            .call(what, |c| unsafe { f(c, p, n) });
         let v = v.into_values(|| format!("{what} with n = {n}"), GETTER_RULE3);
         (s, v)
     }
@@ -922,7 +1037,9 @@ impl<'a> Inst<'a> {
         }
         // SAFETY: this instance's live handle; `words` holds `n` values of any of the types,
         // 8-byte aligned.
-        let s = self.call(&what, |c| unsafe { api.get_values(c, v.ty, vr, p, n) });
+        let s = self
+            .args(vec![("vr", Val::U32s(vec![*vr])), ("nValues", Val::U64(n as u64))])
+            .call(&what, |c| unsafe { api.get_values(c, v.ty, vr, p, n) });
         let words = guarded.into_values(|| format!("{what} with nValues = {n}"), GETTER_RULE3);
         let bytes: Vec<u8> = words
             .iter()
@@ -949,6 +1066,11 @@ impl<'a> Inst<'a> {
         // SAFETY: the words hold at least bytes.len() bytes; u8 has no alignment.
         unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), words.as_mut_ptr() as *mut u8, bytes.len()) };
         let p = words.as_ptr() as *const std::ffi::c_void;
+        self.args(vec![
+            ("vr", Val::U32s(vec![*vr])),
+            ("nValues", Val::U64(n as u64)),
+            ("bytes", Val::Bytes(bytes.to_vec())),
+        ]);
         // SAFETY: for every call, one value reference, `n` values of the type in an aligned buffer.
         self.call(&what, |c| unsafe {
             match v.ty {
@@ -1033,17 +1155,24 @@ impl<'a> Inst<'a> {
         let api = self.api();
         let mut st: fmi3FMUState = std::ptr::null_mut();
         assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            self.call("fmi3GetFMUState", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3GetFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.get_fmu_state)(c, q),
-                )
-            }),
+            {
+                self.args(vec![]);
+                // SAFETY: a live instance; each pointer is to a live local of the length passed,
+                // or is an FMU state.
+                let s = self.call("fmi3GetFMUState", |c| unsafe {
+                    crate::guard::fill_one(
+                        &mut st,
+                        "fmi3GetFMUState",
+                        "one FMU state",
+                        crate::guard::STATE_RULE3,
+                        |q| (api.get_fmu_state)(c, q),
+                    )
+                });
+                if let Some(v) = self.state_val(st, true) {
+                    self.output("state", v);
+                }
+                s
+            },
             fmi3OK,
             "{}: fmi3GetFMUState: {}",
             self.fmu.id,
@@ -1051,27 +1180,29 @@ impl<'a> Inst<'a> {
         );
         let mut size = 0usize;
         assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            self.call("fmi3SerializedFMUStateSize", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut size,
-                    "fmi3SerializedFMUStateSize",
-                    "one size_t",
-                    crate::guard::STATE_RULE3,
-                    |p| (api.serialized_fmu_state_size)(c, st, p),
-                )
-            }),
+            self.state_args(st, vec![])
+                // SAFETY: a live instance; each pointer is to a live local of the length passed,
+                // or is an FMU state.
+                .call("fmi3SerializedFMUStateSize", |c| unsafe {
+                    crate::guard::fill_one(
+                        &mut size,
+                        "fmi3SerializedFMUStateSize",
+                        "one size_t",
+                        crate::guard::STATE_RULE3,
+                        |p| (api.serialized_fmu_state_size)(c, st, p),
+                    )
+                }),
             fmi3OK
         );
         assert!(size < 1 << 30, "{}: serialized state of {size} bytes", self.fmu.id);
         let mut guarded = Guarded::new(size, 0u8);
         let p = guarded.as_mut_ptr();
         assert_eq!(
-            // SAFETY: a live instance; `p` holds `size` bytes (and the guard after them).
-            self.call("fmi3SerializeFMUState", |c| unsafe {
-                (api.serialize_fmu_state)(c, st, p, size)
-            }),
+            self.state_args(st, vec![("size", Val::U64(size as u64))])
+                // SAFETY: a live instance; `p` holds `size` bytes (and the guard after them).
+                .call("fmi3SerializeFMUState", |c| unsafe {
+                    (api.serialize_fmu_state)(c, st, p, size)
+                }),
             fmi3OK
         );
         let bytes = guarded.into_values(
@@ -1081,7 +1212,7 @@ impl<'a> Inst<'a> {
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            self.call("fmi3FreeFMUState", |c| unsafe {
+            self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
                 crate::guard::fill_one(
                     &mut st,
                     "fmi3FreeFMUState",
@@ -1106,24 +1237,31 @@ impl<'a> Inst<'a> {
         let mut st: fmi3FMUState = std::ptr::null_mut();
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let s = self.call("fmi3DeserializeFMUState", |c| unsafe {
-            crate::guard::fill_one(
-                &mut st,
-                "fmi3DeserializeFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q),
-            )
-        });
+        let s = self
+            .args(vec![("bytes", Val::Bytes(bytes.to_vec()))])
+            .call("fmi3DeserializeFMUState", |c| unsafe {
+                crate::guard::fill_one(
+                    &mut st,
+                    "fmi3DeserializeFMUState",
+                    "one FMU state",
+                    crate::guard::STATE_RULE3,
+                    |q| (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q),
+                )
+            });
+        if let Some(v) = self.state_val(st, true) {
+            self.output("state", v);
+        }
         if s != fmi3OK {
             return s;
         }
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let s = self.call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) });
+        let s = self
+            .state_args(st, vec![])
+            .call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) });
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        let f = self.call("fmi3FreeFMUState", |c| unsafe {
+        let f = self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
             crate::guard::fill_one(
                 &mut st,
                 "fmi3FreeFMUState",
@@ -1143,6 +1281,7 @@ impl Drop for Inst<'_> {
             return;
         }
         crate::outcome::breadcrumb("fmi3FreeInstance");
+        crate::calllog::retire(std::mem::take(self.calls.get_mut()));
         // SAFETY: an instance made by this value, freed once.
         unsafe { (self.fmu.api.free_instance)(self.c) };
     }
@@ -1172,19 +1311,19 @@ pub fn euler_step_n(inst: &mut Inst, nx: usize, h: f64) {
     let t = inst.time + h;
     let x1: Vec<f64> = x.iter().zip(&dx).map(|(x, d)| x + h * d).collect();
     assert_eq!(
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        inst.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t) }),
+        inst.args(vec![("time", Val::F64(t))])
+            // SAFETY: a live instance.
+            .call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t) }),
         fmi3OK,
         "{id}: fmi3SetTime({t}): {}",
         inst.log_text()
     );
     assert_eq!(
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        inst.call("fmi3SetContinuousStates", |c| unsafe {
-            (api.set_continuous_states)(c, x1.as_ptr(), nx)
-        }),
+        inst.args(vec![("values", Val::F64s(x1.clone()))])
+            // SAFETY: a live instance; `x1` holds nx values.
+            .call("fmi3SetContinuousStates", |c| unsafe {
+                (api.set_continuous_states)(c, x1.as_ptr(), nx)
+            }),
         fmi3OK,
         "{id}: fmi3SetContinuousStates (nx = {nx}): {}",
         inst.log_text()
@@ -1193,7 +1332,7 @@ pub fn euler_step_n(inst: &mut Inst, nx: usize, h: f64) {
     let (mut enter, mut term) = (7u8, 7u8);
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
-    let s = inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
+    let s = inst.args(vec![]).call("fmi3CompletedIntegratorStep", |c| unsafe {
         crate::guard::fill_one(
             &mut enter,
             "fmi3CompletedIntegratorStep (enterEventMode)",

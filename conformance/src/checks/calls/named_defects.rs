@@ -84,6 +84,7 @@ pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
         assert_eq!(s, fmi2OK, "{}: fmi2DoStep {n} of h = {h}: {}", fmu.id, inst.log_text());
         if let Some((vr, name)) = &time {
             let (s, v) = inst.get_real(&[*vr]);
+            crate::calllog::expect_values(&[inst.time], crate::outcome::time_tolerance(inst.time, h));
             assert!(
                 s == fmi2OK && crate::outcome::same_time(v[0], inst.time, h),
                 "{}: after {n} fmi2DoStep of h = {h} from t = {t0} answered fmi2OK, the time variable '{name}' reads \
@@ -99,6 +100,7 @@ pub fn do_step_advances_time_by_the_step(fmu: &Fmu) {
         let (s, last) = inst.last_successful_time();
         if s == fmi2OK {
             shown = true;
+            crate::calllog::expect_values(&[inst.time], crate::outcome::time_tolerance(inst.time, h));
             assert!(
                 crate::outcome::same_time(last, inst.time, h),
                 "{}: after {n} fmi2DoStep of h = {h} from t = {t0} answered fmi2OK, fmi2LastSuccessfulTime is {last}, \

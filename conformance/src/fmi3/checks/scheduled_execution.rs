@@ -235,15 +235,7 @@ fn se(fmu: &Fmu3) -> Se<'_> {
         .unwrap_or_else(|e| e.into_inner())
         .push((sink.env() as usize, probe.clone()));
     Se {
-        inst: Inst {
-            fmu,
-            c,
-            me: false,
-            sink,
-            time: 0.0,
-            auto_events: false,
-            ended_at: None,
-        },
+        inst: Inst::scheduled_execution(fmu, c, sink),
         probe,
     }
 }

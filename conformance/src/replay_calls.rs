@@ -1,0 +1,672 @@
+//! The replay of a named check's reproducer ([`crate::calllog`]): every call written with all of
+//! its arguments, made again literally (no model of the state machine decides anything), on an
+//! instance driven through the suite's own wrappers, so that the guard after every buffer the FMU
+//! is given is checked as it was in the check. Such a file's first line names the instance
+//! (`fmi2Instantiate instanceName=...`, `fmi3InstantiateCoSimulation instanceName=...`): that is
+//! how [`crate::replay::replay`] tells it from a random sequence's reproducer.
+//!
+//! Each call is printed with its status, the values a getter returned and the messages the FMU
+//! logged. A difference (exit 1): a status the line does not expect, values other than the
+//! line's `expect=[...]` (within `within=`), a guard after a buffer overwritten (a getter that
+//! wrote past nValues), or one of the wrappers' own assertions (a message logged under another
+//! instance's environment, ...).
+
+use crate::calllog::{decode, unhex};
+use crate::fmi2::*;
+use crate::fmi3::types::fmi3FMUState;
+use crate::guard::{Guarded, STATE_RULE2, STATE_RULE3};
+use crate::instance::{Args, Instance};
+use crate::replay::{Expected, Line, ReplayReport, list, real, replay_line};
+use crate::{Fmu, Fmu3};
+use std::collections::BTreeMap;
+
+/// The FMI 3.0 calls the replay makes (and the call log records with their arguments).
+pub const FMI3_CALLS: &[&str] = &[
+    "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode",
+    "fmi3EnterEventMode",
+    "fmi3EnterContinuousTimeMode",
+    "fmi3EnterStepMode",
+    "fmi3EnterConfigurationMode",
+    "fmi3ExitConfigurationMode",
+    "fmi3Terminate",
+    "fmi3Reset",
+    "fmi3UpdateDiscreteStates",
+    "fmi3GetNumberOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators",
+    "fmi3GetContinuousStates",
+    "fmi3GetContinuousStateDerivatives",
+    "fmi3GetEventIndicators",
+    "fmi3GetNominalsOfContinuousStates",
+    "fmi3SetTime",
+    "fmi3SetContinuousStates",
+    "fmi3CompletedIntegratorStep",
+    "fmi3DoStep",
+    "fmi3GetFMUState",
+    "fmi3SetFMUState",
+    "fmi3FreeFMUState",
+    "fmi3SerializedFMUStateSize",
+    "fmi3SerializeFMUState",
+    "fmi3DeserializeFMUState",
+    "fmi3GetDirectionalDerivative",
+    "fmi3GetAdjointDerivative",
+    "fmi3GetFloat32",
+    "fmi3GetFloat64",
+    "fmi3GetInt8",
+    "fmi3GetUInt8",
+    "fmi3GetInt16",
+    "fmi3GetUInt16",
+    "fmi3GetInt32",
+    "fmi3GetUInt32",
+    "fmi3GetInt64",
+    "fmi3GetUInt64",
+    "fmi3GetBoolean",
+    "fmi3SetFloat32",
+    "fmi3SetFloat64",
+    "fmi3SetInt8",
+    "fmi3SetUInt8",
+    "fmi3SetInt16",
+    "fmi3SetUInt16",
+    "fmi3SetInt32",
+    "fmi3SetUInt32",
+    "fmi3SetInt64",
+    "fmi3SetUInt64",
+    "fmi3SetBoolean",
+];
+
+/// The calls of [`FMI3_CALLS`] that take no argument but the instance (their outputs are
+/// printed), so that a call made without [`crate::fmi3::Inst::args`] is replayable.
+pub const FMI3_NO_ARGUMENTS: &[&str] = &[
+    "fmi3ExitInitializationMode",
+    "fmi3EnterEventMode",
+    "fmi3EnterContinuousTimeMode",
+    "fmi3EnterStepMode",
+    "fmi3EnterConfigurationMode",
+    "fmi3ExitConfigurationMode",
+    "fmi3Terminate",
+    "fmi3Reset",
+    "fmi3UpdateDiscreteStates",
+    "fmi3GetNumberOfContinuousStates",
+    "fmi3GetNumberOfEventIndicators",
+];
+
+/// A line's `expect=[...] within=W`, compared with what the call gave.
+fn compare(l: &Line, got: &[f64]) -> Result<(), String> {
+    let Some(want) = (if l.has("expect") {
+        l.list::<f64>("expect")?
+    } else {
+        None
+    }) else {
+        return Ok(());
+    };
+    let within: f64 = l.parse_or("within", 0.0)?;
+    let same = want.len() == got.len() && want.iter().zip(got).all(|(w, g)| w == g || (w - g).abs() <= within);
+    if same {
+        Ok(())
+    } else {
+        Err(format!(
+            "line {}: {} gave {}, the check expected {} (within {})",
+            l.number,
+            l.function,
+            list(got.iter().map(|x| real(*x))),
+            list(want.iter().map(|x| real(*x))),
+            real(within)
+        ))
+    }
+}
+
+fn text(l: &Line, key: &str) -> Result<Option<String>, String> {
+    match l.raw(key)? {
+        "NULL" => Ok(None),
+        w => decode(w).map(Some).map_err(|e| l.error(e)),
+    }
+}
+
+/// The FMU states of a replay by their number in the file.
+struct States<T>(BTreeMap<usize, T>);
+
+impl<T: Copy> States<T> {
+    fn get(&self, l: &Line, null: T) -> Result<T, String> {
+        if l.raw("state")? == "NULL" {
+            return Ok(null);
+        }
+        let n: usize = l.parse("state")?;
+        self.0
+            .get(&n)
+            .copied()
+            .ok_or_else(|| l.error(format!("state={n}: no call before made FMU state {n}")))
+    }
+}
+
+/// Prints and checks one call: its line, then `details` (values, outputs), then the log.
+struct Printer<'o> {
+    out: &'o mut dyn FnMut(&str),
+    report: ReplayReport,
+}
+
+impl Printer<'_> {
+    fn print(&mut self, text: String) {
+        (self.out)(&text);
+        self.report.lines.push(text);
+    }
+
+    /// Err: the difference that ends the replay.
+    fn call(&mut self, l: &Line, status: u32, details: Vec<String>, log: Vec<String>) -> Result<(), String> {
+        let expected = l.expected.unwrap_or(Expected::ANY);
+        self.print(replay_line(l, &l.function, status, expected));
+        for d in details {
+            self.print(format!("       {d}"));
+        }
+        for m in log {
+            self.print(format!("       log {m}"));
+        }
+        if expected.contains(status) {
+            Ok(())
+        } else {
+            Err(format!(
+                "line {}: {} answered {}, the file expects {expected}",
+                l.number,
+                l.function,
+                crate::replay::status_word(status)
+            ))
+        }
+    }
+}
+
+/// Replays a named check's FMI 2.0 reproducer (first line `fmi2Instantiate instanceName=...`).
+pub fn replay2(fmu: &Fmu, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<ReplayReport, String> {
+    let first = &lines[0];
+    let own = |l: &Line, key: &str, own: String| -> Result<Option<String>, String> {
+        Ok(match text(l, key)? {
+            Some(t) if t == "own" => Some(own),
+            t => t,
+        })
+    };
+    let args = Args {
+        name: text(first, "instanceName")?,
+        fmu_type: match first.raw("fmuType")? {
+            "CoSimulation" => fmi2CoSimulation,
+            "ModelExchange" => fmi2ModelExchange,
+            t => return Err(first.error(format!("fmuType={t}: CoSimulation or ModelExchange"))),
+        },
+        guid: own(first, "guid", fmu.md.guid.clone())?,
+        resources: own(first, "resourceLocation", fmu.resource_uri())?,
+        logging_on: first.parse_or("loggingOn", false)?,
+    };
+    let mut p = Printer {
+        out,
+        report: ReplayReport::default(),
+    };
+    p.print(format!(
+        "replaying {} calls of a named check on {} (FMI 2.0), each as the file writes it",
+        lines.len() - 1,
+        fmu.id
+    ));
+    let mut inst = match Instance::with(fmu, &args) {
+        Ok(i) => i,
+        Err(log) => {
+            p.report.difference = Some(format!("line {}: fmi2Instantiate returned NULL: {log:?}", first.number));
+            return Ok(p.report);
+        }
+    };
+    p.print(format!("{:>4} {} -> an instance", first.number, first.function));
+    let mut states = States::<fmi2FMUstate>(BTreeMap::new());
+    for l in &lines[1..] {
+        // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            replay2_line(&mut inst, &mut states, l, &mut p)
+        }))
+        .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
+        if let Err(d) = r {
+            p.report.difference = Some(d);
+            break;
+        }
+    }
+    Ok(p.report)
+}
+
+/// A panic's message.
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "a panic without a message".into())
+}
+
+fn log2(inst: &Instance) -> Vec<String> {
+    inst.log()
+        .iter()
+        .map(|e| {
+            format!(
+                "[{}] {}: {}",
+                crate::instance::status_name(e.status),
+                e.category,
+                e.text
+            )
+        })
+        .collect()
+}
+
+fn vrs(l: &Line) -> Result<Vec<u32>, String> {
+    Ok(l.list::<u32>("vr")?.unwrap_or_default())
+}
+
+fn replay2_line(
+    inst: &mut Instance,
+    states: &mut States<fmi2FMUstate>,
+    l: &Line,
+    p: &mut Printer,
+) -> Result<(), String> {
+    let fmu = inst.fmu;
+    let mut details = vec![];
+    let mut values: Option<Vec<f64>> = None;
+    let s = match l.function.as_str() {
+        "fmi2SetupExperiment" => {
+            let stop = if l.raw("stopTime")? == "NULL" {
+                None
+            } else {
+                Some(l.parse("stopTime")?)
+            };
+            inst.setup(l.parse("startTime")?, stop)
+        }
+        "fmi2EnterInitializationMode" => inst.enter_init(),
+        "fmi2ExitInitializationMode" => inst.exit_init(),
+        "fmi2Terminate" => inst.terminate(),
+        "fmi2Reset" => inst.reset(),
+        "fmi2DoStep" => inst.do_step(l.parse("currentCommunicationPoint")?, l.parse("communicationStepSize")?),
+        "fmi2GetReal" => {
+            let (s, v) = inst.get_real(&vrs(l)?);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi2GetInteger" | "fmi2GetBoolean" => {
+            let (s, v) = if l.function == "fmi2GetInteger" {
+                inst.get_integer(&vrs(l)?)
+            } else {
+                inst.get_boolean(&vrs(l)?)
+            };
+            details.push(format!("values {}", list(&v)));
+            values = Some(v.iter().map(|x| f64::from(*x)).collect());
+            s
+        }
+        "fmi2SetReal" => inst.set_real(&vrs(l)?, &l.list::<f64>("values")?.unwrap_or_default()),
+        "fmi2SetInteger" => inst.set_integer(&vrs(l)?, &l.list::<i32>("values")?.unwrap_or_default()),
+        "fmi2SetBoolean" => {
+            let v: Vec<bool> = l
+                .list::<i32>("values")?
+                .unwrap_or_default()
+                .iter()
+                .map(|x| *x != 0)
+                .collect();
+            inst.set_boolean(&vrs(l)?, &v)
+        }
+        "fmi2GetFMUstate" | "fmi2DeSerializeFMUstate" => {
+            let (s, st) = if l.function == "fmi2GetFMUstate" {
+                inst.get_state()
+            } else {
+                let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
+                inst.deserialize(&bytes)
+            };
+            if l.has("state") && l.raw("state")? != "NULL" {
+                states.0.insert(l.parse("state")?, st);
+            }
+            details.push(format!("FMUstate {st:?}"));
+            s
+        }
+        "fmi2SetFMUstate" => inst.set_state(states.get(l, std::ptr::null_mut())?),
+        "fmi2FreeFMUstate" => {
+            let mut st = states.get(l, std::ptr::null_mut())?;
+            let s = inst.free_state(&mut st);
+            details.push(format!("FMUstate after the call {st:?}"));
+            s
+        }
+        "fmi2SerializedFMUstateSize" => {
+            let st = states.get(l, std::ptr::null_mut())?;
+            let mut size = 0usize;
+            // SAFETY: a live instance, a state of it (or NULL) and a valid out pointer.
+            let s = unsafe {
+                crate::guard::fill_one(
+                    &mut size,
+                    "fmi2SerializedFMUstateSize",
+                    "one size_t",
+                    STATE_RULE2,
+                    |q| (fmu.api.serialized_fmu_state_size)(inst.c, st, q),
+                )
+            };
+            details.push(format!("size {size}"));
+            s
+        }
+        "fmi2SerializeFMUstate" => {
+            let st = states.get(l, std::ptr::null_mut())?;
+            let size: usize = l.parse("size")?;
+            let mut bytes = Guarded::new(size, 0u8);
+            // SAFETY: a buffer of `size` bytes (and the guard after it).
+            let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, bytes.as_mut_ptr() as *mut fmi2Byte, size) };
+            let bytes = bytes.into_values(|| format!("fmi2SerializeFMUstate with size = {size}"), STATE_RULE2);
+            details.push(format!("{} bytes", bytes.len()));
+            s
+        }
+        "fmi2GetRealStatus" => match l.raw("kind")? {
+            "fmi2LastSuccessfulTime" => {
+                let (s, t) = inst.last_successful_time();
+                details.push(format!("value {}", real(t)));
+                values = Some(vec![t]);
+                s
+            }
+            k => return Err(l.error(format!("kind={k}: the replay asks fmi2LastSuccessfulTime"))),
+        },
+        "fmi2GetBooleanStatus" => match l.raw("kind")? {
+            "fmi2Terminated" => {
+                let (s, b) = inst.terminated();
+                details.push(format!("value {b}"));
+                s
+            }
+            k => return Err(l.error(format!("kind={k}: the replay asks fmi2Terminated"))),
+        },
+        "fmi2SetDebugLogging" => {
+            let names: Vec<String> = l
+                .list::<String>("categories")?
+                .unwrap_or_default()
+                .iter()
+                .map(|c| decode(c))
+                .collect::<Result<_, _>>()
+                .map_err(|e| l.error(e))?;
+            let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+            inst.set_debug_logging(l.parse("loggingOn")?, &refs)
+        }
+        f => return Err(l.error(format!("{f} is not a call the replay of a named check makes (FMI 2.0)"))),
+    };
+    let log = log2(inst);
+    p.call(l, s, details, log)?;
+    match values {
+        Some(v) => compare(l, &v),
+        None => Ok(()),
+    }
+}
+
+/// Replays a named check's FMI 3.0 reproducer (first line `fmi3InstantiateCoSimulation
+/// instanceName=...` or `fmi3InstantiateModelExchange instanceName=...`).
+pub fn replay3(fmu: &Fmu3, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<ReplayReport, String> {
+    let first = &lines[0];
+    let me = first.function == "fmi3InstantiateModelExchange";
+    let name = text(first, "instanceName")?.unwrap_or_default();
+    let event_mode: bool = first.parse_or("eventModeUsed", false)?;
+    let early: bool = first.parse_or("earlyReturnAllowed", false)?;
+    let intermediate: bool = first.parse_or("intermediateUpdate", false)?;
+    let mut p = Printer {
+        out,
+        report: ReplayReport::default(),
+    };
+    p.print(format!(
+        "replaying {} calls of a named check on {} (FMI 3.0), each as the file writes it",
+        lines.len() - 1,
+        fmu.id
+    ));
+    let mut inst = match crate::fmi3::Inst::try_new_full(fmu, me, &name, (event_mode, early), intermediate) {
+        Ok(i) => i,
+        Err(e) => {
+            p.report.difference = Some(format!("line {}: {e}", first.number));
+            return Ok(p.report);
+        }
+    };
+    // The file holds every call the check made, those of Event Mode too.
+    inst.auto_events = false;
+    p.print(format!("{:>4} {} -> an instance", first.number, first.function));
+    let mut states = States::<fmi3FMUState>(BTreeMap::new());
+    for l in &lines[1..] {
+        // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            replay3_line(&mut inst, &mut states, l, &mut p)
+        }))
+        .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
+        if let Err(d) = r {
+            p.report.difference = Some(d);
+            break;
+        }
+    }
+    Ok(p.report)
+}
+
+fn replay3_line(
+    inst: &mut crate::fmi3::Inst,
+    states: &mut States<fmi3FMUState>,
+    l: &Line,
+    p: &mut Printer,
+) -> Result<(), String> {
+    use crate::fmi3::Type;
+    let fmu = inst.fmu;
+    let api = &fmu.api;
+    let before = inst.sink.entries.lock().unwrap_or_else(|e| e.into_inner()).len();
+    let mut details = vec![];
+    let mut values: Option<Vec<f64>> = None;
+    let f = l.function.as_str();
+    let n = || -> Result<usize, String> { l.parse("n") };
+    let s = match f {
+        "fmi3EnterInitializationMode" => inst.enter_init(l.parse("startTime")?),
+        "fmi3ExitInitializationMode" => inst.unary(f, api.exit_initialization_mode),
+        "fmi3EnterEventMode" => inst.unary(f, api.enter_event_mode),
+        "fmi3EnterContinuousTimeMode" => inst.unary(f, api.enter_continuous_time_mode),
+        "fmi3EnterStepMode" => inst.unary(f, api.enter_step_mode),
+        "fmi3EnterConfigurationMode" => inst.unary(f, api.enter_configuration_mode),
+        "fmi3ExitConfigurationMode" => inst.unary(f, api.exit_configuration_mode),
+        "fmi3Terminate" => inst.unary(f, api.terminate),
+        "fmi3Reset" => inst.unary(f, api.reset),
+        "fmi3UpdateDiscreteStates" => {
+            let mut flags = [0u8; 5];
+            let mut next = 0.0;
+            // SAFETY: a live instance; five flags and a time, each with a guard after it.
+            let s = inst.call(f, |c| unsafe {
+                crate::guard::fill_outputs(f, &mut flags, &mut next, |[a, b, cc, d, e], t| {
+                    (api.update_discrete_states)(c, a, b, cc, d, e, t)
+                })
+            });
+            details.push(format!(
+                "discreteStatesNeedUpdate {} terminateSimulation {} nominalsOfContinuousStatesChanged {} \
+                 valuesOfContinuousStatesChanged {} nextEventTimeDefined {} nextEventTime {}",
+                flags[0],
+                flags[1],
+                flags[2],
+                flags[3],
+                flags[4],
+                real(next)
+            ));
+            s
+        }
+        "fmi3GetNumberOfContinuousStates" | "fmi3GetNumberOfEventIndicators" => {
+            let g = if f == "fmi3GetNumberOfContinuousStates" {
+                api.get_number_of_continuous_states
+            } else {
+                api.get_number_of_event_indicators
+            };
+            let mut k = usize::MAX;
+            // SAFETY: a live instance; one size_t with a guard after it.
+            let s = inst.call(f, |c| unsafe {
+                crate::guard::fill_one(&mut k, f, "one size_t", crate::guard::COUNT_RULE3, |q| g(c, q))
+            });
+            details.push(format!("value {k}"));
+            s
+        }
+        "fmi3GetContinuousStates"
+        | "fmi3GetContinuousStateDerivatives"
+        | "fmi3GetEventIndicators"
+        | "fmi3GetNominalsOfContinuousStates" => {
+            let g = match f {
+                "fmi3GetContinuousStates" => api.get_continuous_states,
+                "fmi3GetContinuousStateDerivatives" => api.get_continuous_state_derivatives,
+                "fmi3GetEventIndicators" => api.get_event_indicators,
+                _ => api.get_nominals_of_continuous_states,
+            };
+            let (s, v) = inst.vector(f, g, n()?);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi3SetTime" => {
+            let t: f64 = l.parse("time")?;
+            // SAFETY: a live instance.
+            inst.call(f, |c| unsafe { (api.set_time)(c, t) })
+        }
+        "fmi3SetContinuousStates" => {
+            let x = l.list::<f64>("values")?.unwrap_or_default();
+            // SAFETY: a live instance; `x.len()` values.
+            inst.call(f, |c| unsafe { (api.set_continuous_states)(c, x.as_ptr(), x.len()) })
+        }
+        "fmi3CompletedIntegratorStep" => {
+            let (mut enter, mut term) = (7u8, 7u8);
+            // SAFETY: a live instance; two one-byte outputs, each with a guard after it.
+            let s = inst.call(f, |c| unsafe {
+                crate::guard::fill_one(&mut enter, f, "one value", crate::guard::OUTPUT_ARGUMENTS_RULE3, |qa| {
+                    crate::guard::fill_one(&mut term, f, "one value", crate::guard::OUTPUT_ARGUMENTS_RULE3, |qb| {
+                        (api.completed_integrator_step)(c, true, qa, qb)
+                    })
+                })
+            });
+            details.push(format!("enterEventMode {enter} terminateSimulation {term}"));
+            s
+        }
+        "fmi3DoStep" => {
+            inst.time = l.parse("currentCommunicationPoint")?;
+            let (s, flags, last) = inst.do_step(l.parse("communicationStepSize")?);
+            details.push(format!(
+                "eventHandlingNeeded {} terminateSimulation {} earlyReturn {} lastSuccessfulTime {}",
+                flags[0],
+                flags[1],
+                flags[2],
+                real(last)
+            ));
+            values = Some(vec![last]);
+            s
+        }
+        "fmi3GetFMUState" | "fmi3DeserializeFMUState" => {
+            let mut st: fmi3FMUState = std::ptr::null_mut();
+            let s = if f == "fmi3GetFMUState" {
+                // SAFETY: a live instance; one FMU state with a guard after it.
+                inst.call(f, |c| unsafe {
+                    crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| (api.get_fmu_state)(c, q))
+                })
+            } else {
+                let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
+                // SAFETY: a live instance; `bytes.len()` bytes; one FMU state with a guard after it.
+                inst.call(f, |c| unsafe {
+                    crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| {
+                        (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
+                    })
+                })
+            };
+            if l.has("state") && l.raw("state")? != "NULL" {
+                states.0.insert(l.parse("state")?, st);
+            }
+            details.push(format!("FMUState {st:?}"));
+            s
+        }
+        "fmi3SetFMUState" => {
+            let st = states.get(l, std::ptr::null_mut())?;
+            // SAFETY: a live instance and a state it made (or NULL).
+            inst.call(f, |c| unsafe { (api.set_fmu_state)(c, st) })
+        }
+        "fmi3FreeFMUState" => {
+            let mut st = states.get(l, std::ptr::null_mut())?;
+            // SAFETY: a live instance and a state it made, freed once.
+            let s = inst.call(f, |c| unsafe {
+                crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| (api.free_fmu_state)(c, q))
+            });
+            details.push(format!("FMUState after the call {st:?}"));
+            s
+        }
+        "fmi3SerializedFMUStateSize" => {
+            let st = states.get(l, std::ptr::null_mut())?;
+            let mut size = 0usize;
+            // SAFETY: a live instance, a state it made; one size_t with a guard after it.
+            let s = inst.call(f, |c| unsafe {
+                crate::guard::fill_one(&mut size, f, "one size_t", STATE_RULE3, |q| {
+                    (api.serialized_fmu_state_size)(c, st, q)
+                })
+            });
+            details.push(format!("size {size}"));
+            s
+        }
+        "fmi3SerializeFMUState" => {
+            let st = states.get(l, std::ptr::null_mut())?;
+            let size: usize = l.parse("size")?;
+            let mut g = Guarded::new(size, 0u8);
+            let q = g.as_mut_ptr();
+            // SAFETY: a live instance, a state it made; `size` bytes and the guard after them.
+            let s = inst.call(f, |c| unsafe { (api.serialize_fmu_state)(c, st, q, size) });
+            let bytes = g.into_values(|| format!("fmi3SerializeFMUState with size = {size}"), STATE_RULE3);
+            details.push(format!("{} bytes", bytes.len()));
+            s
+        }
+        "fmi3GetDirectionalDerivative" | "fmi3GetAdjointDerivative" => {
+            let unknowns = l.list::<u32>("unknowns")?.unwrap_or_default();
+            let knowns = l.list::<u32>("knowns")?.unwrap_or_default();
+            let seed = l.list::<f64>("seed")?.unwrap_or_default();
+            let mut sensitivity = vec![0.0; l.parse("nSensitivity")?];
+            let s = inst.derivative(
+                f == "fmi3GetAdjointDerivative",
+                &unknowns,
+                &knowns,
+                &seed,
+                &mut sensitivity,
+            );
+            details.push(format!("sensitivity {}", list(sensitivity.iter().map(|x| real(*x)))));
+            values = Some(sensitivity);
+            s
+        }
+        "fmi3GetFloat64" if !l.has("bytes") => {
+            let (s, v) = inst.get_f64_n(&vrs(l)?, l.parse("nValues")?);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi3SetFloat64" if !l.has("bytes") => inst.set_f64(&vrs(l)?, &l.list::<f64>("values")?.unwrap_or_default()),
+        _ if f.starts_with("fmi3Get") || f.starts_with("fmi3Set") => {
+            let vr = *vrs(l)?
+                .first()
+                .ok_or_else(|| l.error("needs vr=[one value reference]"))?;
+            let v = fmu
+                .md
+                .variables
+                .iter()
+                .find(|v| v.vr == vr)
+                .ok_or_else(|| l.error(format!("no variable has value reference {vr}")))?;
+            if format!("fmi3Get{}", crate::fmi3::accessor(v.ty)) != f
+                && format!("fmi3Set{}", crate::fmi3::accessor(v.ty)) != f
+            {
+                return Err(l.error(format!("value reference {vr} is a {:?}", v.ty)));
+            }
+            if f.starts_with("fmi3Get") {
+                let (s, bytes) = inst.get_raw_n(v, l.parse("nValues")?);
+                if matches!(v.ty, Type::Float64 | Type::Float32) {
+                    let x = crate::fmi3::floats(v.ty, &bytes);
+                    details.push(format!("values {}", list(x.iter().map(|x| real(*x)))));
+                    values = Some(x);
+                } else {
+                    details.push(format!("bytes {}", crate::calllog::Val::Bytes(bytes)));
+                }
+                s
+            } else {
+                let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
+                inst.set_raw(v, &bytes)
+            }
+        }
+        _ => return Err(l.error(format!("{f} is not a call the replay of a named check makes (FMI 3.0)"))),
+    };
+    let log: Vec<String> = inst.sink.entries.lock().unwrap_or_else(|e| e.into_inner())[before..]
+        .iter()
+        .map(|e| {
+            format!(
+                "[{}] {}: {}",
+                crate::fmi3::types::status_name(e.status),
+                e.category,
+                e.message
+            )
+        })
+        .collect();
+    p.call(l, s, details, log)?;
+    match values {
+        Some(v) => compare(l, &v),
+        None => Ok(()),
+    }
+}
