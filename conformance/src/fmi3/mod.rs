@@ -733,10 +733,10 @@ impl<'a> Inst<'a> {
     }
 
     pub fn enter_init(&mut self, start: f64) -> fmi3Status {
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         let s = self
             .args(vec![("startTime", Val::F64(start))])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+            // FMU state.
             .call("fmi3EnterInitializationMode", |c| unsafe {
                 (self.fmu.api.enter_initialization_mode)(c, false, 0.0, start, false, 0.0)
             });
@@ -839,9 +839,9 @@ impl<'a> Inst<'a> {
     pub fn get_f64_n(&self, vrs: &[u32], n: usize) -> (fmi3Status, Vec<f64>) {
         let mut v = Guarded::new(n, 0.0);
         let p = v.as_mut_ptr();
-        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
         let s = self
             .args(vec![("vr", Val::U32s(vrs.to_vec())), ("nValues", Val::U64(n as u64))])
+            // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
             .call("fmi3GetFloat64", |c| unsafe {
                 (self.fmu.api.get_float64)(c, vrs.as_ptr(), vrs.len(), p, n)
             });
@@ -854,9 +854,9 @@ impl<'a> Inst<'a> {
         self.get_f64_n(&vrs, vars.iter().map(|v| self.fmu.element_count(v)).sum())
     }
     pub fn set_f64(&self, vrs: &[u32], v: &[f64]) -> fmi3Status {
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         self.args(vec![("vr", Val::U32s(vrs.to_vec())), ("values", Val::F64s(v.to_vec()))])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+            // FMU state.
             .call("fmi3SetFloat64", |c| unsafe {
                 (self.fmu.api.set_float64)(c, vrs.as_ptr(), vrs.len(), v.as_ptr(), v.len())
             })
@@ -868,13 +868,13 @@ impl<'a> Inst<'a> {
         let mut flags = [7u8; 3];
         let mut last = f64::NAN;
         let t = self.time;
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         let s = self
             .args(vec![
                 ("currentCommunicationPoint", Val::F64(t)),
                 ("communicationStepSize", Val::F64(h)),
             ])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+            // FMU state.
             .call("fmi3DoStep", |c| unsafe {
                 crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, d], l| {
                     (self.fmu.api.do_step)(c, t, h, true, a, b, d, l)
@@ -946,9 +946,9 @@ impl<'a> Inst<'a> {
     pub fn vector(&self, what: &str, f: api::Vector, n: usize) -> (fmi3Status, Vec<f64>) {
         let mut v = Guarded::new(n, 0.0);
         let p = v.as_mut_ptr();
-        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
         let s = self
             .args(vec![("n", Val::U64(n as u64))])
+            // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
             .call(what, |c| unsafe { f(c, p, n) });
         let v = v.into_values(|| format!("{what} with n = {n}"), GETTER_RULE3);
         (s, v)
@@ -1035,10 +1035,10 @@ impl<'a> Inst<'a> {
             };
             return (s, bytes);
         }
-        // SAFETY: this instance's live handle; `words` holds `n` values of any of the types,
-        // 8-byte aligned.
         let s = self
             .args(vec![("vr", Val::U32s(vec![*vr])), ("nValues", Val::U64(n as u64))])
+            // SAFETY: this instance's live handle; `words` holds `n` values of any of the types,
+            // 8-byte aligned.
             .call(&what, |c| unsafe { api.get_values(c, v.ty, vr, p, n) });
         let words = guarded.into_values(|| format!("{what} with nValues = {n}"), GETTER_RULE3);
         let bytes: Vec<u8> = words
@@ -1235,10 +1235,10 @@ impl<'a> Inst<'a> {
     pub fn restore(&self, bytes: &[u8]) -> fmi3Status {
         let api = self.api();
         let mut st: fmi3FMUState = std::ptr::null_mut();
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         let s = self
             .args(vec![("bytes", Val::Bytes(bytes.to_vec()))])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+            // FMU state.
             .call("fmi3DeserializeFMUState", |c| unsafe {
                 crate::guard::fill_one(
                     &mut st,
@@ -1254,10 +1254,10 @@ impl<'a> Inst<'a> {
         if s != fmi3OK {
             return s;
         }
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         let s = self
             .state_args(st, vec![])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+            // FMU state.
             .call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) });
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
