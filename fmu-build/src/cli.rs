@@ -62,6 +62,16 @@ enum Cmd {
         /// main job's build (examples/run.sh). Without it, every crate for all its targets.
         #[arg(long)]
         examples_on_host: bool,
+        /// With `--examples-on-host`: these example packages are built for all their targets all
+        /// the same (repeatable, or a comma list). The tests' build (tests/run.sh): the examples
+        /// whose foreign binaries a test reads or runs, the others for the host.
+        #[arg(
+            long = "examples-everywhere",
+            value_delimiter = ',',
+            value_name = "PACKAGE",
+            requires = "examples_on_host"
+        )]
+        examples_everywhere: Vec<String>,
         /// Show cargo's messages as they come (default: a progress line per target, cargo's
         /// messages only for a build that failed).
         #[arg(short, long)]
@@ -222,6 +232,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             fmi_versions,
             targets,
             examples_on_host,
+            examples_everywhere,
             verbose,
         } => {
             let versions = parse_version_choice(&fmi_versions)?;
@@ -238,6 +249,7 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
                 &Choice {
                     targets: &targets,
                     examples_on_host,
+                    examples_everywhere: &examples_everywhere,
                     verbose,
                 },
             )
@@ -485,15 +497,25 @@ pub struct Choice<'a> {
     pub targets: &'a [String],
     /// `--examples-on-host`: example crates for the host only.
     pub examples_on_host: bool,
+    /// `--examples-everywhere`: examples built for all their targets despite `examples_on_host`.
+    pub examples_everywhere: &'a [String],
     /// `-v`: cargo's messages as they come.
     pub verbose: bool,
 }
 
+impl Choice<'_> {
+    /// Whether `c`'s targets are cut to the host's: an example under `--examples-on-host`, unless
+    /// `--examples-everywhere` names it.
+    fn on_host_only(&self, c: &FmuCrate) -> bool {
+        self.examples_on_host && c.example && !self.examples_everywhere.contains(&c.package)
+    }
+}
+
 /// The targets of a crate: `--target` if given, else its `[package.metadata.fmu] targets`,
-/// else the host; the host first when it is among them. With `examples_on_host`, an example
-/// crate's (`example = true`) are cut to the host's: its own entry for the host (with a glibc
-/// version, as the other crates' Linux binaries), else the host.
-fn targets_of(c: &FmuCrate, asked: &[String], host: &str, examples_on_host: bool) -> Result<Vec<String>, String> {
+/// else the host; the host first when it is among them. With `on_host_only` (an example under
+/// `--examples-on-host`, [`Choice::on_host_only`]) they are cut to the host's: the crate's own
+/// entry for the host (with a glibc version, as the other crates' Linux binaries), else the host.
+fn targets_of(c: &FmuCrate, asked: &[String], host: &str, on_host_only: bool) -> Result<Vec<String>, String> {
     let mut t: Vec<String> = if !asked.is_empty() {
         let mut out: Vec<String> = Vec::new();
         for a in asked {
@@ -510,7 +532,7 @@ fn targets_of(c: &FmuCrate, asked: &[String], host: &str, examples_on_host: bool
             Some(Err(e)) => return Err(format!("{}: [package.metadata.fmu] {e}", c.package)),
         }
     };
-    if examples_on_host && c.example {
+    if on_host_only {
         t.retain(|x| crate::target::split_glibc(x).0 == host);
         if t.is_empty() {
             t.push(host.to_string());
@@ -550,6 +572,23 @@ pub fn build_versions(
 ) -> Result<Vec<PathBuf>, String> {
     let ws = cargo::workspace(manifest_path)?;
     let crates = ws.select(packages, all)?;
+    for name in choice.examples_everywhere {
+        match crates.iter().find(|c| &c.package == name) {
+            Some(c) if c.example => {}
+            Some(_) => {
+                return Err(format!(
+                    "--examples-everywhere {name}: not an example crate (`example = true` in [package.metadata.fmu]): \
+                     it is built for all its targets anyway"
+                ));
+            }
+            None => {
+                return Err(format!(
+                    "--examples-everywhere {name}: no FMU crate of that name among those built ({})",
+                    crates.iter().map(|c| c.package.as_str()).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
+    }
     let host = crate::target::host_triple()?;
     let mut plan: Vec<(FmuCrate, BTreeSet<FmiVersion>, Vec<String>)> = Vec::new();
     for c in crates {
@@ -566,7 +605,7 @@ pub fn build_versions(
             );
             continue;
         }
-        let targets = targets_of(&c, choice.targets, &host, choice.examples_on_host)?;
+        let targets = targets_of(&c, choice.targets, &host, choice.on_host_only(&c))?;
         // A target without a folder in a version (aarch64 Linux in FMI 2.0) is left out of that
         // version's FMU; a version left with no target is an error.
         for v in &versions {
@@ -988,6 +1027,7 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
         fmi_versions: vec![],
         targets: vec![],
         examples_on_host: false,
+        examples_everywhere: vec![],
         verbose: false,
     });
     match run(cmd, tool) {
@@ -997,5 +1037,66 @@ pub fn main(args: Vec<OsString>, tool: &str) -> ExitCode {
             eprintln!("{tool}: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example(package: &str) -> FmuCrate {
+        FmuCrate {
+            package: package.into(),
+            manifest_dir: PathBuf::from("x"),
+            lib_name: package.replace('-', "_"),
+            documentation: None,
+            resources: None,
+            fmi_versions: None,
+            targets: Some(Ok(vec![
+                "x86_64-unknown-linux-gnu.2.17".into(),
+                "x86_64-pc-windows-gnu".into(),
+                "aarch64-apple-darwin".into(),
+            ])),
+            documentation_start: Ok(vec![]),
+            example: true,
+        }
+    }
+
+    #[test]
+    fn examples_everywhere_needs_examples_on_host() {
+        let parse = |args: &[&str]| Cli::try_parse_from(["cargo-fmu"].iter().chain(args));
+        assert!(parse(&["build", "--examples-everywhere", "a-fmu"]).is_err());
+        let Ok(Cli {
+            command:
+                Some(Cmd::Build {
+                    examples_on_host,
+                    examples_everywhere,
+                    ..
+                }),
+        }) = parse(&["build", "--examples-on-host", "--examples-everywhere", "a-fmu,b-fmu"])
+        else {
+            panic!("--examples-on-host --examples-everywhere a-fmu,b-fmu did not parse");
+        };
+        assert!(examples_on_host);
+        assert_eq!(examples_everywhere, ["a-fmu", "b-fmu"]);
+    }
+
+    #[test]
+    fn an_example_named_by_examples_everywhere_keeps_all_its_targets() {
+        let host = "x86_64-unknown-linux-gnu";
+        let everywhere = ["b-fmu".to_string()];
+        let choice = Choice {
+            examples_on_host: true,
+            examples_everywhere: &everywhere,
+            ..Choice::default()
+        };
+        let (a, b) = (example("a-fmu"), example("b-fmu"));
+        let mut product = example("c-fmu");
+        product.example = false;
+        assert!(choice.on_host_only(&a) && !choice.on_host_only(&b) && !choice.on_host_only(&product));
+        assert!(!Choice::default().on_host_only(&a));
+        let cut = targets_of(&a, &[], host, choice.on_host_only(&a)).unwrap();
+        assert_eq!(cut, ["x86_64-unknown-linux-gnu.2.17"]);
+        assert_eq!(targets_of(&b, &[], host, choice.on_host_only(&b)).unwrap().len(), 3);
     }
 }
