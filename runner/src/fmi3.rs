@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 mod clocks;
+mod scheduled;
 mod typed;
 mod view;
 pub use clocks::ClockState;
@@ -76,6 +77,19 @@ type InstantiateCS = unsafe extern "C" fn(
     fmi3IntermediateUpdateCallback,
 ) -> fmi3Instance;
 type InstanceFunction = unsafe extern "C" fn(fmi3Instance) -> fmi3Status;
+type InstantiateSE = unsafe extern "C" fn(
+    fmi3String,
+    fmi3String,
+    fmi3String,
+    fmi3Boolean,
+    fmi3Boolean,
+    fmi3InstanceEnvironment,
+    fmi3LogMessageCallback,
+    fmi3ClockUpdateCallback,
+    fmi3LockPreemptionCallback,
+    fmi3UnlockPreemptionCallback,
+) -> fmi3Instance;
+type ActivateModelPartition = unsafe extern "C" fn(fmi3Instance, fmi3ValueReference, fmi3Float64) -> fmi3Status;
 type InstantiateME = unsafe extern "C" fn(
     fmi3String,
     fmi3String,
@@ -213,6 +227,9 @@ struct Api {
     deserialize: Deserialize,
     me: Option<MeApi>,
     events: Option<EventApi>,
+    /// Scheduled Execution (FMI 3.0, chapter 5): fmi3InstantiateScheduledExecution,
+    /// fmi3ActivateModelPartition.
+    scheduled: Option<(InstantiateSE, ActivateModelPartition)>,
 }
 
 /// A loaded FMI 3.0 binary.
@@ -255,9 +272,12 @@ impl Library {
                     get_shift: optional(&lib, "fmi3GetShiftDecimal")?,
                 })
             })();
+            let scheduled =
+                optional(&lib, "fmi3InstantiateScheduledExecution").zip(optional(&lib, "fmi3ActivateModelPartition"));
             Api {
                 me,
                 events,
+                scheduled,
                 instantiate: optional(&lib, "fmi3InstantiateCoSimulation"),
                 free_instance: symbol(&lib, path, "fmi3FreeInstance")?,
                 set_debug_logging: symbol(&lib, path, "fmi3SetDebugLogging")?,
@@ -432,7 +452,7 @@ impl Fmi3Import {
             int64: self.int64.clone(),
             ptrs: Vec::new(),
             sizes: Vec::new(),
-            _env: env,
+            env,
         }
     }
 
@@ -466,6 +486,7 @@ impl Fmi3Import {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(Env {
             instance: name_c.clone(),
+            updates: Default::default(),
         });
         let instantiate = self
             .library
@@ -516,6 +537,7 @@ impl Fmi3Import {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
         let env = Box::new(Env {
             instance: name_c.clone(),
+            updates: Default::default(),
         });
         // SAFETY: valid C strings; the environment outlives the instance (dropped after
         // fmi3FreeInstance).
@@ -592,6 +614,8 @@ impl Instance3 {
 /// The instanceEnvironment of an instance: its name, for the messages.
 struct Env {
     instance: CString,
+    /// What the clockUpdate callback of a Scheduled Execution instance read ([`scheduled`]).
+    updates: std::cell::RefCell<Option<scheduled::Updates>>,
 }
 
 /// Every FMU message goes to the `log` crate as FMI 2.0 ones do (module path "logger", target
@@ -649,7 +673,7 @@ pub struct Instance3 {
     sizes: Vec<usize>,
     /// The input clocks the runner ticks and where they stand (None: no event mode).
     clocks: Option<Box<ClockState>>,
-    _env: Box<Env>,
+    env: Box<Env>,
 }
 
 // SAFETY: as an FMI 2.0 instance (FMI 3.0, 2.2.1: one thread at a time).
@@ -724,6 +748,9 @@ impl Instance3 {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
+        if self.clocks.as_ref().is_some_and(|c| c.scheduled) {
+            return self.step_scheduled(t, h);
+        }
         if self.clocks.is_some() {
             self.end_event_mode(t, h)?;
         }

@@ -30,6 +30,8 @@ struct Extra {
     /// The number of continuous states (None: the FMI 2.0 view's derivatives).
     states: Option<usize>,
     has_event_mode: bool,
+    /// The `<ScheduledExecution>` modelIdentifier (None: no Scheduled Execution).
+    scheduled_execution: Option<String>,
 }
 
 pub struct Fmu {
@@ -51,6 +53,8 @@ pub struct Fmu {
     pub feedthrough: Vec<u32>,
     /// FMI 3.0 `<CoSimulation hasEventMode>` (false for FMI 2.0).
     pub has_event_mode: bool,
+    /// FMI 3.0: the modelIdentifier of its `<ScheduledExecution>` (None: it has none; FMI 2.0).
+    pub scheduled_execution: Option<String>,
 }
 
 impl Fmu {
@@ -70,9 +74,11 @@ impl Fmu {
         let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_bytes(&bytes, description.model_identifier(), &description.guid).map(Import::V2),
-            Some(int64) => Fmi3Import::from_bytes(&bytes, description.model_identifier(), &description.guid, int64)
-                .and_then(|i| i.with_clocks(extra.clocks.clone()))
-                .map(Import::V3),
+            Some(int64) => {
+                Fmi3Import::from_bytes(&bytes, Fmu::identifier(&description, &extra), &description.guid, int64)
+                    .and_then(|i| i.with_clocks(extra.clocks.clone()))
+                    .map(Import::V3)
+            }
         }
         .map_err(|e| fail(format!("cannot import: {e}")))?;
         Fmu::with(component, label, description, import, extra)
@@ -89,7 +95,7 @@ impl Fmu {
         let (description, int64, extra) = Fmu::description(component, label, &xml)?;
         let import = match int64 {
             None => Fmi2Import::from_dir(dir, description.model_identifier(), &description.guid).map(Import::V2),
-            Some(int64) => Fmi3Import::from_dir(dir, description.model_identifier(), &description.guid, int64)
+            Some(int64) => Fmi3Import::from_dir(dir, Fmu::identifier(&description, &extra), &description.guid, int64)
                 .and_then(|i| i.with_clocks(extra.clocks.clone()))
                 .map(Import::V3),
         }
@@ -111,16 +117,6 @@ impl Fmu {
         let version = md_reader::fmi_version(xml).map_err(fail)?;
         let (description, int64, extra) = if version.starts_with("3.") {
             let d3 = md_reader::fmi3::ModelDescription::parse(xml).map_err(fail)?;
-            if d3.scheduled_execution_only() {
-                return Err(Error::unsupported(
-                    Some(component),
-                    None,
-                    format!(
-                        "component '{component}' ({label}): the FMU declares only <ScheduledExecution>; the runner runs \
-                         co-simulation (FMI 3.0: <CoSimulation>) or model exchange (<ModelExchange>)"
-                    ),
-                ));
-            }
             let parts = crate::fmi3::as_fmi2(&d3);
             let extra = Extra {
                 skipped: parts.skipped,
@@ -129,6 +125,11 @@ impl Fmu {
                 feedthrough: parts.feedthrough,
                 states: Some(parts.states),
                 has_event_mode: parts.has_event_mode,
+                scheduled_execution: d3
+                    .se_interface
+                    .as_ref()
+                    .map(|i| i.model_identifier.clone())
+                    .filter(|_| d3.se),
             };
             (parts.description, Some(parts.int64), extra)
         } else if version.starts_with("2.") {
@@ -142,7 +143,7 @@ impl Fmu {
                 ),
             ));
         };
-        if description.cs.is_none() && description.me.is_none() {
+        if description.cs.is_none() && description.me.is_none() && extra.scheduled_execution.is_none() {
             return Err(Error::unsupported(
                 Some(component),
                 None,
@@ -200,7 +201,17 @@ impl Fmu {
             typed: extra.typed,
             feedthrough,
             has_event_mode: extra.has_event_mode,
+            scheduled_execution: extra.scheduled_execution,
         })
+    }
+
+    /// The model identifier of the binary to load: co-simulation's, model exchange's, or
+    /// Scheduled Execution's for an FMU that offers only that.
+    fn identifier<'a>(description: &'a Description, extra: &'a Extra) -> &'a str {
+        match description.model_identifier() {
+            "" => extra.scheduled_execution.as_deref().unwrap_or(""),
+            id => id,
+        }
     }
 
     /// Loads the FMU file at `path`.
@@ -213,7 +224,57 @@ impl Fmu {
     }
 
     pub fn model_identifier(&self) -> &str {
-        self.description.model_identifier()
+        match self.description.model_identifier() {
+            "" => self.scheduled_execution.as_deref().unwrap_or(""),
+            id => id,
+        }
+    }
+
+    /// Whether it runs only in Scheduled Execution (FMI 3.0: neither co-simulation nor model exchange).
+    pub fn scheduled_execution_only(&self) -> bool {
+        self.description.cs.is_none() && self.description.me.is_none() && self.scheduled_execution.is_some()
+    }
+
+    /// An instance for Scheduled Execution (FMI 3.0, chapter 5: `fmi3/scheduled.rs`), or why
+    /// the FMU has none.
+    pub fn instantiate_scheduled(&self, component: &str) -> Result<InstanceCS, Error> {
+        let fail = |why: String| {
+            Error::unsupported(
+                Some(component),
+                None,
+                format!(
+                    "component '{component}' ({}): no Scheduled Execution: {why}",
+                    self.model_identifier()
+                ),
+            )
+        };
+        let i = match &self.import {
+            Import::V2(_) => return Err(fail("an FMI 2.0 FMU (Scheduled Execution is FMI 3.0's)".into())),
+            Import::V3(i) => i,
+        };
+        match &self.scheduled_execution {
+            None => return Err(fail("its modelDescription.xml has no <ScheduledExecution>".into())),
+            Some(id) if id != self.model_identifier() => {
+                return Err(fail(format!(
+                    "its <ScheduledExecution> modelIdentifier '{id}' is another binary than the one loaded ('{}')",
+                    self.model_identifier()
+                )));
+            }
+            Some(_) => {}
+        }
+        i.instantiate_scheduled(component)
+            .map(InstanceCS::V3)
+            .map_err(|e| Error {
+                component: Some(component.to_owned()),
+                function: Some("fmi3InstantiateScheduledExecution".into()),
+                ..Error::new(
+                    crate::ErrorKind::Fmi,
+                    format!(
+                        "component '{component}' ({}): fmi3InstantiateScheduledExecution failed: {e}",
+                        self.model_identifier()
+                    ),
+                )
+            })
     }
 
     /// The FMI 3.0 variable `name` as typed calls get and set it (None: an FMI 2.0 FMU, or no

@@ -84,6 +84,12 @@ impl InstanceCS {
         }
     }
 
+    /// Scheduled Execution: the partitions of the clocks that tick at `t` activated, once the
+    /// inputs are set (nothing for the other instances); whether one was.
+    pub fn activate_scheduled(&mut self, t: f64) -> Result<bool, Fmi2Error> {
+        self.v3().map_or(Ok(false), |i| i.activate_pending(t))
+    }
+
     /// Its output clocks read, once its input clocks are set.
     pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
         self.v3().map_or(Ok(()), |i| i.poll_output_clocks(t))

@@ -60,6 +60,8 @@ struct Slave {
     me: bool,
     /// Run with eventModeUsed and earlyReturnAllowed ([`Simulation::use_event_mode`]).
     events: bool,
+    /// Run in Scheduled Execution ([`Simulation::use_scheduled_execution`]).
+    scheduled: bool,
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
@@ -285,6 +287,12 @@ impl Simulation {
                 })?;
             }
         }
+        for c in ssd.components.iter().filter(|c| c.scheduled) {
+            sim.use_scheduled_execution(&c.name).map_err(|e| Error {
+                message: format!("{}: {}", archive.path, e.message),
+                ..e
+            })?;
+        }
         for c in ssd.components.iter().filter(|c| c.model_exchange) {
             sim.use_model_exchange(&c.name).map_err(|e| Error {
                 message: format!("{}: {}", archive.path, e.message),
@@ -338,15 +346,29 @@ impl Simulation {
             let fmu = fmus
                 .get(*f)
                 .ok_or_else(|| Error::usage(format!("component '{c}': no FMU {f}")))?;
-            // A model-exchange-only FMU is integrated by the runner.
-            let me = fmu.description.cs.is_none();
+            // A model-exchange-only FMU is integrated by the runner; one of Scheduled Execution
+            // only runs so.
+            let scheduled = fmu.scheduled_execution_only();
+            let me = fmu.description.cs.is_none() && !scheduled;
+            let instance = if scheduled {
+                if isolation.is_some() {
+                    return Err(Error::usage(format!(
+                        "component '{c}' ({}) runs in Scheduled Execution (its only interface): not with --isolate (the runner activates its partitions in its own process)",
+                        fmu.model_identifier()
+                    )));
+                }
+                fmu.instantiate_scheduled(c)?
+            } else {
+                make_instance(fmu, c, me, isolation.as_ref())?
+            };
             slaves.push(Slave {
                 name: c.clone(),
                 fmu: *f,
-                instance: Some(make_instance(fmu, c, me, isolation.as_ref())?),
+                instance: Some(instance),
                 v3: fmu.fmi_version() == "3.0",
                 me,
                 events: false,
+                scheduled,
             });
         }
         let mut sim = Simulation {
@@ -822,7 +844,7 @@ impl Simulation {
         if self.slaves[i].events {
             return Ok(());
         }
-        if self.slaves[i].me || self.isolation.is_some() {
+        if self.slaves[i].me || self.slaves[i].scheduled || self.isolation.is_some() {
             return Err(Error::usage(format!(
                 "component '{component}': event mode is for a co-simulation component run in this process (not as model exchange, not with --isolate)"
             )));
@@ -839,6 +861,32 @@ impl Simulation {
         self.slaves[i].instance = Some(inst);
         self.slaves[i].events = true;
         Ok(())
+    }
+
+    /// Runs the FMI 3.0 `component` in Scheduled Execution (an SSD's
+    /// `implementation="ScheduledExecution"`; `fmi3/scheduled.rs`): the runner activates the
+    /// model partition of each input clock at its ticks, the inputs set before and the outputs
+    /// read after; its FMU must have `<ScheduledExecution>`.
+    pub fn use_scheduled_execution(&mut self, component: &str) -> Result<(), Error> {
+        let i = self.slave_index(component)?;
+        if self.slaves[i].scheduled {
+            return Ok(());
+        }
+        if self.isolation.is_some() {
+            return Err(Error::usage(format!(
+                "component '{component}': Scheduled Execution is run in this process (not with --isolate)"
+            )));
+        }
+        let inst = self.fmu_of(i).instantiate_scheduled(component)?;
+        let s = &mut self.slaves[i];
+        s.instance = Some(inst);
+        (s.scheduled, s.me, s.events) = (true, false, false);
+        Ok(())
+    }
+
+    /// Whether `component` runs in Scheduled Execution.
+    pub fn is_scheduled(&self, component: &str) -> bool {
+        self.slave_index(component).is_ok_and(|i| self.slaves[i].scheduled)
     }
 
     /// Whether `component` runs as model exchange, integrated by the runner.

@@ -42,6 +42,9 @@ pub struct Component {
     pub connectors: Vec<(String, String, Option<String>)>,
     /// `implementation="ModelExchange"`: the runner integrates it ([`crate::me`]).
     pub model_exchange: bool,
+    /// `implementation="ScheduledExecution"` (SSP 2.0): the runner activates its partitions
+    /// ([`crate::sim::Simulation::use_scheduled_execution`]).
+    pub scheduled: bool,
     /// SSP 2.0: the connectors that declare a type or dimensions: (connector, its type element,
     /// e.g. "Float64", or "" if none, each `ssc:Dimension`'s `size`, None if it has none),
     /// checked against the FMU's variables when the system is built.
@@ -310,15 +313,17 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                         ),
                     ));
                 }
-                let model_exchange = match attr(&e, "implementation").as_deref() {
-                    None | Some("any") | Some("CoSimulation") => false,
-                    Some("ModelExchange") => true,
+                let (model_exchange, scheduled) = match attr(&e, "implementation").as_deref() {
+                    None | Some("any") | Some("CoSimulation") => (false, false),
+                    Some("ModelExchange") => (true, false),
+                    // SSP 2.0 (SystemStructureDescription.xsd, ssd:Component/@implementation).
+                    Some("ScheduledExecution") => (false, true),
                     Some(other) => {
                         return Err(Error::unsupported(
                             Some(&name),
                             None,
                             format!(
-                                "component '{name}': implementation=\"{other}\" is not supported (CoSimulation, ModelExchange or any)"
+                                "component '{name}': implementation=\"{other}\" is not supported (CoSimulation, ModelExchange, ScheduledExecution or any)"
                             ),
                         ));
                     }
@@ -329,6 +334,7 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     parameters: Vec::new(),
                     connectors: Vec::new(),
                     model_exchange,
+                    scheduled,
                     declared: Vec::new(),
                 });
             }

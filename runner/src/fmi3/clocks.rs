@@ -53,6 +53,8 @@ pub struct ClockDecl {
     pub interval: Interval,
     /// `intervalDecimal`, `shiftDecimal` of the description (a constant clock's).
     pub declared: (Option<f64>, Option<f64>),
+    /// `priority` (Scheduled Execution: the partitions due at one time run in its order, 0 first).
+    pub priority: Option<u32>,
 }
 
 /// The clocks of an FMU: its input clocks (time-based ones the runner schedules, triggered ones
@@ -111,6 +113,7 @@ pub fn plan(d: &d3::ModelDescription) -> Option<ClockPlan> {
             vr: v.vr,
             interval,
             declared: (attrs.interval_decimal, attrs.shift_decimal),
+            priority: attrs.priority,
         });
     }
     if inputs.is_empty() {
@@ -184,6 +187,11 @@ pub struct ClockState {
     /// Which clocks tick now (all in Initialization Mode, where clocked variables are free).
     pub active: Vec<bool>,
     pub initializing: bool,
+    /// A Scheduled Execution instance (`fmi3/scheduled.rs`): "Event Mode" is the round of a
+    /// time's activations, a clock that ticks is activated, not set.
+    pub scheduled: bool,
+    /// Scheduled Execution: the clocks that tick now whose partitions are not activated yet.
+    pub pending: Vec<bool>,
     /// The last value set or read of each clocked variable: what a read between ticks gives.
     pub held: HashMap<u32, f64>,
     /// The same for the clocked variables of the typed calls (every type, arrays whole).
@@ -209,6 +217,8 @@ impl ClockState {
             early_at: None,
             active: vec![false; n],
             initializing: false,
+            scheduled: false,
+            pending: vec![false; n],
             held: HashMap::new(),
             held_typed: HashMap::new(),
             vrs: Vec::new(),
@@ -218,9 +228,10 @@ impl ClockState {
 
     /// Back to the state of a fresh instance (fmi3Reset).
     pub fn reset(&mut self) {
-        let (plan, early) = (self.plan.clone(), self.early_allowed);
+        let (plan, early, scheduled) = (self.plan.clone(), self.early_allowed, self.scheduled);
         *self = ClockState::new(plan);
         self.early_allowed = early;
+        self.scheduled = scheduled;
     }
 
     /// Whether the variable `vr` may be set or read now (not clocked, or one of its clocks ticks).
@@ -398,14 +409,19 @@ impl Instance3 {
         check(unsafe { (self.api().exit_initialization_mode)(self.c) })?;
         let state = self.state();
         state.initializing = false;
-        state.event_mode = true;
+        // Scheduled Execution: Clock Activation Mode; a round opens when a clock ticks.
+        state.event_mode = !state.scheduled;
         self.tick(start)
     }
 
     /// At `t`, in Event Mode: fmi3SetClock of the clocks due (they tick until the Event Mode ends).
-    fn tick(&mut self, t: f64) -> Result<(), Fmi2Error> {
+    pub(super) fn tick(&mut self, t: f64) -> Result<(), Fmi2Error> {
         let due = self.state().due(t);
         if due.is_empty() {
+            return Ok(());
+        }
+        if self.state().scheduled {
+            self.arm(&due, t);
             return Ok(());
         }
         let plan = self.state().plan.clone();
@@ -449,6 +465,9 @@ impl Instance3 {
         if self.clocks.is_none() {
             return Ok(());
         }
+        if self.state().scheduled {
+            return self.settle_scheduled(t);
+        }
         if self.state().event_mode {
             self.poll_output_clocks(t)?;
             self.update_round(t)?;
@@ -479,7 +498,7 @@ impl Instance3 {
 
     /// Before an Event Mode ends: the clocked outputs whose clocks tick are read, so that what a
     /// read gives until their next tick (a record, a connection) is the value of this tick.
-    fn hold_outputs(&mut self) -> Result<(), Fmi2Error> {
+    pub(super) fn hold_outputs(&mut self) -> Result<(), Fmi2Error> {
         let plan = self.state().plan.clone();
         let vrs: Vec<u32> = plan
             .reals
@@ -574,6 +593,10 @@ impl Instance3 {
                 "value reference {vr} is no clock of the FMU"
             )));
         };
+        if self.state().scheduled {
+            self.arm(&[i], t);
+            return Ok(());
+        }
         self.enter_event(t)?;
         if self.state().evaluated {
             // Its tick was evaluated (its output clocks read): the new clock ticks in a second
@@ -592,6 +615,10 @@ impl Instance3 {
 
     /// fmi3EnterEventMode at `t` unless in Event Mode.
     fn enter_event(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if self.state().scheduled {
+            self.state().event_mode = true;
+            return Ok(());
+        }
         if !self.state().event_mode {
             let f = self.events().enter_event_mode;
             // SAFETY: a live instance in Step Mode.
@@ -608,7 +635,11 @@ impl Instance3 {
     /// clock's tick is reported once). Asking earlier would evaluate the tick before a triggered
     /// input clock is set, which the FMU may refuse.
     pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
-        if self.clocks.as_ref().is_none_or(|s| !s.event_mode || s.polled) {
+        if self
+            .clocks
+            .as_ref()
+            .is_none_or(|s| !s.event_mode || s.polled || s.scheduled)
+        {
             return Ok(());
         }
         let state = self.state();

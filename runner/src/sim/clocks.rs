@@ -218,13 +218,35 @@ impl Simulation {
     pub(super) fn event_point(&mut self, t: f64) -> Result<(), Error> {
         self.link_clocks(t, false)?;
         self.poll_senders(t)?;
-        self.propagate(t)?;
+        self.exchange(t)?;
         if self.link_clocks(t, true)? {
             // A round the receivers of output clocks take their values in.
             self.propagate(t)?;
         }
         self.settle_clocks(t)?;
         self.propagate(t)
+    }
+
+    /// The values propagated at `t`; where a Scheduled Execution component's clocks tick, its
+    /// partitions then run with the inputs just set, and the values are propagated again (its
+    /// outputs, and output clocks, are read after the activations).
+    pub(super) fn exchange(&mut self, t: f64) -> Result<(), Error> {
+        self.propagate(t)?;
+        if self.slaves.iter().any(|s| s.scheduled) {
+            let mut any = false;
+            for s in self.slaves.iter_mut().filter(|s| s.scheduled) {
+                any |= s
+                    .instance
+                    .as_mut()
+                    .expect("instantiated")
+                    .activate_scheduled(t)
+                    .map_err(|e| Error::fmi(&s.name, "fmi3ActivateModelPartition", &e, Some(t), "its clocks tick"))?;
+            }
+            if any {
+                self.propagate(t)?;
+            }
+        }
+        Ok(())
     }
 
     /// Before a step from `t`: every Event Mode ends (so the intervals of countdown clocks are

@@ -167,7 +167,7 @@ impl Simulation {
         let mut row = vec![0.0; m];
         for k in 0..=n {
             let t = k as f64 * opts.step;
-            let r = (if ticks { self.event_point(t) } else { self.propagate(t) })
+            let r = (if ticks { self.event_point(t) } else { self.exchange(t) })
                 .and_then(|_| self.read_record(&mut groups, &mut row, t));
             if let Err(error) = r {
                 if error.kind == ErrorKind::Terminated {

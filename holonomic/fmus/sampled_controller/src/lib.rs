@@ -34,10 +34,11 @@ with_design_parameters! {
     /// Digital LQR / PID controller of the double inverted pendulum (Liptak et al., 'The control of
     /// holonomic system', eqs. (14), (16)), sampled at the ticks of the clock `sample` (every Ts)
     #[derive(Model, Debug, Clone, Serialize, Deserialize)]
-    #[fmu(fmi3_only)]
+    #[fmu(fmi3_only, scheduled_execution)]
     pub struct SampledController {
-        /// The sample clock: ticks at start + k Ts (the importer activates it in Event Mode)
-        #[variable(vr = 200, input, clock(fixed, interval = Ts))]
+        /// The sample clock: ticks at start + k Ts (the importer activates it in Event Mode, or
+        /// its model partition in Scheduled Execution)
+        #[variable(vr = 200, input, clock(fixed, interval = Ts, priority = 0))]
         pub sample: Clock,
         /// Sample period Ts: the interval of `sample`
         #[variable(vr = 31, name = "Ts", parameter, fixed, start = 0.01, unit = "s", min > 0.0)]

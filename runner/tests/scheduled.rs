@@ -1,0 +1,333 @@
+//! FMI 3.0 Scheduled Execution components in the runner (FMI 3.0.2, chapter 5; `fmi3/scheduled.rs`):
+//! the C Reference-FMUs' Clocks (Scheduled Execution only) alone against the model's own
+//! definition; our Clocks and our SampledController (closing the Pendulum's loop), each run in
+//! Scheduled Execution and in event-mode co-simulation, row for row; an SSD's
+//! `implementation="ScheduledExecution"`; the refusal of a component without it.
+//! Needs target/fmu (Pendulum, Clocks, SampledController: `cargo fmu build`) and the C
+//! Reference-FMUs of ../shared/independent.
+
+// rustfmu_runner::Error is large (it carries the details of a failure), on the cold path only.
+#![allow(clippy::result_large_err)]
+
+use rustfmu_runner::fmu::Fmu;
+use rustfmu_runner::ssp::Connection;
+use rustfmu_runner::{RunOptions, RunResult, Simulation, Value};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+/// `target/fmu/fmi3/<name>.fmu` (honours CARGO_TARGET_DIR).
+fn ours(name: &str) -> PathBuf {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map_or(
+            root().join("target"),
+            |t| if t.is_absolute() { t } else { root().join(t) },
+        );
+    let p = target.join("fmu/fmi3").join(format!("{name}.fmu"));
+    assert!(
+        p.exists(),
+        "{} is missing: build it with `cargo fmu build`",
+        p.display()
+    );
+    p
+}
+
+/// The C Reference-FMUs' FMI 3.0 `name`.
+fn theirs(name: &str) -> PathBuf {
+    let p = root().join(format!("../shared/independent/reference-fmus/3.0/{name}.fmu"));
+    assert!(
+        p.exists(),
+        "{} is missing (the C Reference-FMUs v0.0.41 of shared/independent)",
+        p.display()
+    );
+    p
+}
+
+fn connect(pairs: &[(&str, &str, &str, &str)]) -> Vec<Connection> {
+    pairs
+        .iter()
+        .map(|(a, x, b, y)| Connection {
+            start: (a.to_string(), x.to_string()),
+            end: (b.to_string(), y.to_string()),
+        })
+        .collect()
+}
+
+/// A system of `components` (name, FMU file) with `connections` and `parameters`.
+fn system(
+    components: &[(&str, &Path)],
+    connections: &[(&str, &str, &str, &str)],
+    parameters: Vec<(String, String, Value)>,
+) -> Simulation {
+    let fmus = components
+        .iter()
+        .map(|(c, p)| Fmu::from_path(c, p).unwrap_or_else(|e| panic!("{e}")))
+        .collect();
+    let names = components
+        .iter()
+        .enumerate()
+        .map(|(i, (c, _))| (c.to_string(), i))
+        .collect();
+    Simulation::new("S", fmus, names, &connect(connections), parameters).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run(sim: &mut Simulation, stop: f64, step: f64, record: &[&str]) -> RunResult {
+    let mut opts = RunOptions::new(stop, step);
+    opts.record = record.iter().map(|r| r.to_string()).collect();
+    sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"))
+}
+
+/// The first row where `a` and `b` differ (time or any value, bit for bit), or None.
+fn first_difference(a: &RunResult, b: &RunResult) -> Option<String> {
+    assert_eq!(a.names, b.names);
+    if a.time.len() != b.time.len() {
+        return Some(format!(
+            "{} rows against {}: {:?} / {:?}",
+            a.time.len(),
+            b.time.len(),
+            a.time,
+            b.time
+        ));
+    }
+    let m = a.names.len();
+    (0..a.time.len()).find_map(|k| {
+        let (ra, rb) = (&a.values[k * m..(k + 1) * m], &b.values[k * m..(k + 1) * m]);
+        (a.time[k].to_bits() != b.time[k].to_bits() || ra.iter().zip(rb).any(|(x, y)| x.to_bits() != y.to_bits()))
+            .then(|| format!("row {k}: t = {} {ra:?} against t = {} {rb:?}", a.time[k], b.time[k]))
+    })
+}
+
+const COUNTERS: [&str; 6] = [
+    "inClock1Ticks",
+    "inClock2Ticks",
+    "inClock3Ticks",
+    "totalInClockTicks",
+    "result2",
+    "output3",
+];
+
+#[test]
+fn the_reference_clocks_alone_runs_its_partitions_at_their_ticks_as_the_model_defines_them() {
+    // Clocks (C, v0.0.41) declares only <ScheduledExecution>: the runner runs it so.
+    for step in [1.0, 0.5, 0.25] {
+        let mut sim = system(&[("clocks", &theirs("Clocks"))], &[], Vec::new());
+        assert!(sim.is_scheduled("clocks"));
+        let record: Vec<String> = COUNTERS.iter().map(|v| format!("clocks.{v}")).collect();
+        let record: Vec<&str> = record.iter().map(String::as_str).collect();
+        let r = run(&mut sim, 10.0, step, &record);
+        let n = (10.0 / step) as usize;
+        assert_eq!(
+            r.time,
+            (0..=n).map(|k| k as f64 * step).collect::<Vec<_>>(),
+            "step {step}"
+        );
+        for (k, &t) in r.time.iter().enumerate() {
+            // The model (its model.c): inClock1 (constant, 1 s, priority 0) counts its ticks at
+            // 0, 1, ..., and at t = 4 gives the countdown inClock3 the interval 0: inClock3 ticks
+            // once, at 4, after inClock1's partition, and sets output3 to 1000. inClock2 is
+            // triggered, and nothing triggers it here.
+            let ticks1 = t.floor() + 1.0;
+            let ticks3 = if t >= 4.0 { 1.0 } else { 0.0 };
+            let want = [ticks1, 0.0, ticks3, ticks1 + ticks3, 0.0, 1000.0 * ticks3];
+            let got: Vec<f64> = (0..COUNTERS.len()).map(|i| r.column(i)[k]).collect();
+            assert_eq!(got, want, "t = {t}, step {step}: {COUNTERS:?}");
+        }
+    }
+}
+
+/// An SSP 2.0 file of two of our Clocks, `a` and `b`, with `implementation`: a's output clock
+/// triggers b's inClock2, whose partition adds b.input2 (a's output3) to b.result2.
+fn two_clocks_ssp(dir: &str, implementation: &str) -> PathBuf {
+    let component = |name: &str, connectors: &str| {
+        format!(
+            r#"<ssd:Component name="{name}" source="resources/Clocks.fmu" type="application/x-fmu-sharedlibrary" implementation="{implementation}"><ssd:Connectors>{connectors}</ssd:Connectors></ssd:Component>"#
+        )
+    };
+    let a = component(
+        "a",
+        r#"<ssd:Connector name="outClock" kind="output"><ssc:Clock/></ssd:Connector><ssd:Connector name="output3" kind="output"><ssc:Int32/></ssd:Connector>"#,
+    );
+    let b = component(
+        "b",
+        r#"<ssd:Connector name="inClock2" kind="input"><ssc:Clock/></ssd:Connector><ssd:Connector name="input2" kind="input"><ssc:Int32/></ssd:Connector>"#,
+    );
+    let ssd = format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+  xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="2.0" name="TwoClocks">
+<ssd:System name="TwoClocks"><ssd:Elements>{a}{b}</ssd:Elements><ssd:Connections>
+<ssd:Connection startElement="a" startConnector="outClock" endElement="b" endConnector="inClock2"/>
+<ssd:Connection startElement="a" startConnector="output3" endElement="b" endConnector="input2"/>
+</ssd:Connections></ssd:System></ssd:SystemStructureDescription>"#
+    );
+    archive(dir, "TwoClocks", &ssd, &[("Clocks", &ours("Clocks"))])
+}
+
+/// An SSP file `<name>.ssp` in a folder of its own (`dir`) with `ssd` and `fmus` (resources/<name>.fmu).
+fn archive(dir: &str, name: &str, ssd: &str, fmus: &[(&str, &Path)]) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rustfmu-runner-scheduled-{dir}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let path = d.join(format!("{name}.ssp"));
+    let mut z = zip::ZipWriter::new(std::fs::File::create(&path).unwrap());
+    let opts = zip::write::SimpleFileOptions::default();
+    z.start_file("SystemStructure.ssd", opts).unwrap();
+    z.write_all(ssd.as_bytes()).unwrap();
+    for (n, f) in fmus {
+        z.start_file(format!("resources/{n}.fmu"), opts).unwrap();
+        z.write_all(&std::fs::read(f).unwrap()).unwrap();
+    }
+    z.finish().unwrap();
+    path
+}
+
+#[test]
+fn our_clocks_in_scheduled_execution_equals_its_event_mode_co_simulation_row_for_row() {
+    // Our Clocks offers both; its countdown inClock3 ticks 0.5 s after inClock1's tick at 4 (a
+    // communication point of its own).
+    let record: Vec<String> = ["a", "b"]
+        .iter()
+        .flat_map(|c| COUNTERS.iter().map(move |v| format!("{c}.{v}")))
+        .collect();
+    let record: Vec<&str> = record.iter().map(String::as_str).collect();
+    let runs: Vec<RunResult> = ["CoSimulation", "ScheduledExecution"]
+        .iter()
+        .map(|implementation| {
+            let ssp = two_clocks_ssp(implementation, implementation);
+            let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
+            std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+            let scheduled = *implementation == "ScheduledExecution";
+            assert_eq!((sim.is_scheduled("a"), sim.is_scheduled("b")), (scheduled, scheduled));
+            run(&mut sim, 10.0, 1.0, &record)
+        })
+        .collect();
+    let (event_mode, scheduled) = (&runs[0], &runs[1]);
+    assert_eq!(first_difference(scheduled, event_mode), None);
+    assert!(scheduled.time.contains(&4.5), "{:?}", scheduled.time);
+    // Something went through the clock connection: b's inClock2 ticked and took a's output3.
+    let col = |n: &str| scheduled.column(record.iter().position(|r| *r == n).unwrap());
+    assert!(
+        col("b.inClock2Ticks").last().unwrap() > &0.0,
+        "{:?}",
+        col("b.inClock2Ticks")
+    );
+    assert!(col("b.result2").last().unwrap() >= &1000.0, "{:?}", col("b.result2"));
+}
+
+/// The Pendulum (FMI 3.0) and the SampledController (`sample` every Ts = 10 ms), its loop closed
+/// as in holonomic/systems.toml's PendulumLQR.
+fn sampled_loop(scheduled: bool) -> (Simulation, Vec<&'static str>) {
+    let conns = [
+        ("pendulum", "alpha1", "controller", "alpha1"),
+        ("pendulum", "omega1", "controller", "omega1"),
+        ("pendulum", "alpha2", "controller", "alpha2"),
+        ("pendulum", "omega2", "controller", "omega2"),
+        ("controller", "M1", "pendulum", "M1"),
+        ("controller", "M2", "pendulum", "M2"),
+    ];
+    let params = vec![
+        ("pendulum".into(), "alpha1_0".into(), Value::Real(0.1)),
+        ("pendulum".into(), "alpha2_0".into(), Value::Real(-0.05)),
+        ("controller".into(), "mode".into(), Value::Integer(1)),
+    ];
+    let mut sim = system(
+        &[
+            ("pendulum", &ours("Pendulum")),
+            ("controller", &ours("SampledController")),
+        ],
+        &conns,
+        params,
+    );
+    if scheduled {
+        sim.use_scheduled_execution("controller").unwrap();
+    }
+    let record = vec![
+        "pendulum.alpha1",
+        "pendulum.omega1",
+        "pendulum.alpha2",
+        "pendulum.omega2",
+        "controller.M1",
+        "controller.M2",
+        "pendulum.M1",
+        "pendulum.M2",
+    ];
+    (sim, record)
+}
+
+#[test]
+fn the_sampled_controller_in_scheduled_execution_closes_the_pendulum_loop_as_in_event_mode() {
+    for step in [1e-3, 1e-2] {
+        let (mut a, record) = sampled_loop(false);
+        let (mut b, _) = sampled_loop(true);
+        let event_mode = run(&mut a, 2.0, step, &record);
+        let scheduled = run(&mut b, 2.0, step, &record);
+        assert_eq!(first_difference(&scheduled, &event_mode), None, "step {step}");
+        // The loop is closed: the controller's torque moves and the pendulum is brought back.
+        let m1 = scheduled.column(4);
+        assert!(m1.iter().any(|x| x.abs() > 1e-3), "{m1:?}");
+        let alpha1 = scheduled.column(0);
+        assert!(alpha1.last().unwrap().abs() < 0.1 * alpha1[0].abs(), "{alpha1:?}");
+    }
+    // A tick inside a communication step is refused as in event mode (Ts = 10 ms, step 15 ms).
+    let (mut b, record) = sampled_loop(true);
+    let mut opts = RunOptions::new(0.1, 0.015);
+    opts.record = record.iter().map(|r| r.to_string()).collect();
+    let f = b.run(&opts, &mut |_, _| {}).expect_err("a tick inside a step");
+    assert!(
+        f.error.message.contains("clock 'sample' ticks at t = 0.01"),
+        "{}",
+        f.error.message
+    );
+}
+
+/// An SSP file of the one component `name` from `fmu`, with `implementation` on it.
+fn one_component_ssp(dir: &str, name: &str, fmu: &Path, implementation: &str) -> PathBuf {
+    let ssd = format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
+  xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="2.0" name="One">
+<ssd:System name="One"><ssd:Elements>
+<ssd:Component name="{name}" source="resources/X.fmu" type="application/x-fmu-sharedlibrary" implementation="{implementation}"/>
+</ssd:Elements></ssd:System></ssd:SystemStructureDescription>"#
+    );
+    archive(dir, "One", &ssd, &[("X", fmu)])
+}
+
+#[test]
+fn an_ssd_asking_for_scheduled_execution_gets_it_and_a_component_without_it_is_refused_by_name() {
+    let ssp = one_component_ssp("clocks", "clocks", &ours("Clocks"), "ScheduledExecution");
+    let sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
+    assert!(sim.is_scheduled("clocks"));
+    let ssp = one_component_ssp("clocks-cs", "clocks", &ours("Clocks"), "CoSimulation");
+    assert!(!Simulation::from_ssp(&ssp).unwrap().is_scheduled("clocks"));
+    std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+
+    let ssp = one_component_ssp("pendulum", "plant", &ours("Pendulum"), "ScheduledExecution");
+    let e = Simulation::from_ssp(&ssp)
+        .err()
+        .expect("the Pendulum has no Scheduled Execution");
+    assert_eq!(e.component.as_deref(), Some("plant"));
+    assert!(
+        e.message.contains(
+            "component 'plant' (Pendulum): no Scheduled Execution: its modelDescription.xml has no <ScheduledExecution>"
+        ),
+        "{}",
+        e.message
+    );
+    std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+    // The same through the API; the component keeps running as before.
+    let mut sim = system(&[("plant", &ours("Pendulum"))], &[], Vec::new());
+    let e = sim.use_scheduled_execution("plant").expect_err("refused");
+    assert!(
+        e.message
+            .contains("component 'plant' (Pendulum): no Scheduled Execution"),
+        "{}",
+        e.message
+    );
+    assert!(!sim.is_scheduled("plant"));
+    let r = run(&mut sim, 0.01, 1e-3, &["plant.alpha1"]);
+    assert_eq!(r.time.len(), 11);
+}
