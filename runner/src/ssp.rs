@@ -316,14 +316,15 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                 let (model_exchange, scheduled) = match attr(&e, "implementation").as_deref() {
                     None | Some("any") | Some("CoSimulation") => (false, false),
                     Some("ModelExchange") => (true, false),
-                    // SSP 2.0 (SystemStructureDescription.xsd, ssd:Component/@implementation).
-                    Some("ScheduledExecution") => (false, true),
+                    // SSP 2.0 (SystemStructureDescription.xsd, ssd:Component/@implementation);
+                    // SSP 1.0 does not define it.
+                    Some("ScheduledExecution") if v2 => (false, true),
                     Some(other) => {
                         return Err(Error::unsupported(
                             Some(&name),
                             None,
                             format!(
-                                "component '{name}': implementation=\"{other}\" is not supported (CoSimulation, ModelExchange, ScheduledExecution or any)"
+                                "component '{name}': implementation=\"{other}\" is not supported (CoSimulation, ModelExchange or any; ScheduledExecution in an SSP 2.0 file, version=\"2.0\")"
                             ),
                         ));
                     }
