@@ -159,3 +159,21 @@ def test_the_sampled_controller_in_scheduled_execution_closes_the_loop_as_the_fm
         assert np.array_equal(got[key], want[key]), (key, np.max(np.abs(got[key] - want[key])))
     assert np.max(np.abs(got["controller.M1"])) > 0.1
     assert abs(got["pendulum.alpha1"][-1]) < abs(got["pendulum.alpha1"][0])
+
+
+def test_the_python_module_runs_the_scheduled_component_as_the_command_line(tmp_path):
+    import rustfmu_runner
+
+    path = ssp(tmp_path, "PendulumLQRScheduled",
+               [("pendulum", fmu3("Pendulum"), "CoSimulation"),
+                ("controller", fmu3("SampledController"), "ScheduledExecution")], LOOP)
+    record = ["pendulum.alpha1", "pendulum.omega1", "controller.M1", "controller.M2"]
+    sets = [x for c, vs in START.items() for v, x0 in vs.items() for x in ("--set", f"{c}.{v}={x0}")]
+    want = run_cli(path, "1", "0.005", record, *sets)
+    start = {f"{c}.{v}": x0 for c, vs in START.items() for v, x0 in vs.items()}
+    got = rustfmu_runner.System(path).run(1.0, 0.005, record=record, start=start)
+    for key in want:
+        assert np.array_equal(np.asarray(got[key]), want[key]), key
+    # Scheduled Execution is run in this process only.
+    with pytest.raises(Exception, match="Scheduled Execution is run in this process"):
+        rustfmu_runner.System(path, isolate="component")
