@@ -158,6 +158,8 @@ impl Simulation {
             return Err(Failure { error, partial: result });
         }
         let ticks = self.steps_to_ticks();
+        // Scheduled Execution components: their partitions activated between two propagations.
+        let scheduled = self.slaves.iter().any(|s| s.scheduled);
         if let Some(why) = self.why_not_ticks() {
             return Err(Failure {
                 error: Error::usage(why),
@@ -167,8 +169,14 @@ impl Simulation {
         let mut row = vec![0.0; m];
         for k in 0..=n {
             let t = k as f64 * opts.step;
-            let r = (if ticks { self.event_point(t) } else { self.exchange(t) })
-                .and_then(|_| self.read_record(&mut groups, &mut row, t));
+            let r = (if ticks {
+                self.event_point(t)
+            } else if scheduled {
+                self.exchange(t)
+            } else {
+                self.propagate(t)
+            })
+            .and_then(|_| self.read_record(&mut groups, &mut row, t));
             if let Err(error) = r {
                 if error.kind == ErrorKind::Terminated {
                     return self.end_on_request(error, Some(t), &mut groups, &mut row, result);
