@@ -333,7 +333,7 @@ pub fn write(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<PathBuf,
 pub fn write_fmi3(system: &System, fmu_dir: &Path, out_dir: &Path) -> Result<Option<PathBuf>, String> {
     let fmi3 = fmu_dir.join("fmi3");
     if system.is_fmi3() {
-        let fmus = system.read_fmus3(&fmi3)?;
+        let fmus = system.read_fmus(&fmi3)?;
         let ssd = ssd_fmi3(system, &fmus)?;
         let out = out_dir.join("fmi3");
         std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -426,6 +426,29 @@ mod tests {
     use crate::systems::FmuDescription;
     use crate::systems::testing::*;
     use std::io::Read as _;
+
+    /// Writes an `.fmu` archive at `path` that holds only `modelDescription.xml`.
+    fn packaged(path: &Path, description: &[u8]) {
+        let mut zip = zip::ZipWriter::new(std::fs::File::create(path).unwrap());
+        zip.start_file("modelDescription.xml", SimpleFileOptions::default())
+            .unwrap();
+        zip.write_all(description).unwrap();
+        zip.finish().unwrap();
+    }
+
+    /// The entry names of the archive at `path`, in order, and the text of its SSD.
+    fn unpacked(path: &Path) -> (Vec<String>, String) {
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+        let names = (0..zip.len())
+            .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
+            .collect();
+        let mut text = String::new();
+        zip.by_name("SystemStructure.ssd")
+            .unwrap()
+            .read_to_string(&mut text)
+            .unwrap();
+        (names, text)
+    }
 
     fn fixture(name: &str) -> String {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/fixtures/{name}.ssd"));
@@ -683,49 +706,26 @@ mod tests {
         std::fs::create_dir_all(fmu_dir.join("fmi3")).unwrap();
         let mut systems = paper_systems();
         systems.systems.retain(|s| s.is_fmi3());
-        let ids = [
-            "Pendulum",
-            "DCMotor",
-            "CanSensor",
-            "CanController",
-            "CanMotorDrive",
-            "CanBus",
-        ];
-        for id in &ids[..5] {
-            let path = crate::systems::testing::workspace_root().join(format!("modelDescription/fmi3/{id}.xml"));
-            let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join(format!("fmi3/{id}.fmu"))).unwrap());
-            zip.start_file("modelDescription.xml", SimpleFileOptions::default())
-                .unwrap();
-            zip.write_all(&std::fs::read(path).unwrap()).unwrap();
-            zip.finish().unwrap();
-        }
+        let ids = crate::systems_fmi3::tests::NETWORKED_FMUS;
+        let package = |id: &str| {
+            let xml = std::fs::read(workspace_root().join(format!("modelDescription/fmi3/{id}.xml"))).unwrap();
+            packaged(&fmu_dir.join(format!("fmi3/{id}.fmu")), &xml);
+        };
+        ids[..5].iter().for_each(|id| package(id));
         let e = write_all(&systems, &fmu_dir, &out_dir).unwrap_err();
         assert!(
             e.contains("system 'NetworkedPendulum': component 'bus'") && e.contains("fmi3/CanBus.fmu"),
             "{e}"
         );
-        let path = crate::systems::testing::workspace_root().join("modelDescription/fmi3/CanBus.xml");
-        let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join("fmi3/CanBus.fmu")).unwrap());
-        zip.start_file("modelDescription.xml", SimpleFileOptions::default())
-            .unwrap();
-        zip.write_all(&std::fs::read(path).unwrap()).unwrap();
-        zip.finish().unwrap();
+        package("CanBus");
         let written = write_all(&systems, &fmu_dir, &out_dir).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(written, [out_dir.join("fmi3/NetworkedPendulum.ssp")]);
-        let mut zip = zip::ZipArchive::new(std::fs::File::open(&written[0]).unwrap()).unwrap();
-        let mut names: Vec<String> = (0..zip.len())
-            .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
-            .collect();
+        let (mut names, text) = unpacked(&written[0]);
         names.sort();
         let mut want: Vec<String> = ids.iter().map(|id| format!("resources/{id}.fmu")).collect();
         want.push("SystemStructure.ssd".into());
         want.sort();
         assert_eq!(names, want);
-        let mut text = String::new();
-        zip.by_name("SystemStructure.ssd")
-            .unwrap()
-            .read_to_string(&mut text)
-            .unwrap();
         assert_eq!(text, fixture("NetworkedPendulum"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -738,11 +738,7 @@ mod tests {
         std::fs::create_dir_all(&fmu_dir).unwrap();
         std::fs::create_dir_all(&out_dir).unwrap();
         for id in ["Pendulum", "Controller", "DCMotor"] {
-            let mut zip = zip::ZipWriter::new(std::fs::File::create(fmu_dir.join(format!("{id}.fmu"))).unwrap());
-            zip.start_file("modelDescription.xml", SimpleFileOptions::default())
-                .unwrap();
-            zip.write_all(xml(id).as_bytes()).unwrap();
-            zip.finish().unwrap();
+            packaged(&fmu_dir.join(format!("{id}.fmu")), xml(id).as_bytes());
         }
         let mut systems = paper_systems();
         // The systems of FMI 2.0 FMUs (those of FMI 3.0 FMUs need FMUs of fmi3/).
@@ -752,10 +748,7 @@ mod tests {
             written,
             [out_dir.join("PendulumLQR.ssp"), out_dir.join("PendulumMotors.ssp")]
         );
-        let mut zip = zip::ZipArchive::new(std::fs::File::open(&written[1]).unwrap()).unwrap();
-        let names: Vec<String> = (0..zip.len())
-            .map(|i| zip.by_index(i).unwrap().name().unwrap().into_owned())
-            .collect();
+        let (names, text) = unpacked(&written[1]);
         assert_eq!(
             names,
             [
@@ -765,12 +758,8 @@ mod tests {
                 "resources/Pendulum.fmu"
             ]
         );
-        let mut text = String::new();
-        zip.by_name("SystemStructure.ssd")
-            .unwrap()
-            .read_to_string(&mut text)
-            .unwrap();
         assert_eq!(text, fixture("PendulumMotors"));
+        let mut zip = zip::ZipArchive::new(std::fs::File::open(&written[1]).unwrap()).unwrap();
         let motor = zip.by_name("resources/DCMotor.fmu").unwrap();
         assert_eq!(motor.compression(), zip::CompressionMethod::Stored);
         drop(motor);

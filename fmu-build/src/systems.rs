@@ -504,38 +504,97 @@ impl System {
         format!("{}: system '{}'", self.file.display(), self.name)
     }
 
-    /// Reads the description of every FMU the system names from `<fmu_dir>/<fmu>.fmu`.
-    pub fn read_fmus(&self, fmu_dir: &Path) -> Result<Fmus, String> {
-        let mut fmus = Fmus::new();
+    /// Reads the description of every FMU the system names from `<dir>/<fmu>.fmu`: of FMI 2.0
+    /// ([`Fmus`]) or of FMI 3.0 ([`crate::systems_fmi3::Fmus3`], from `<fmu-dir>/fmi3`).
+    pub fn read_fmus<D: Description>(&self, dir: &Path) -> Result<BTreeMap<String, D>, String> {
+        let mut fmus = BTreeMap::new();
         for c in &self.components {
             if !fmus.contains_key(&c.fmu) {
-                let path = fmu_dir.join(format!("{}.fmu", c.fmu));
-                let d = read_description(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
+                let path = dir.join(format!("{}.fmu", c.fmu));
+                let d = D::read(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
                 fmus.insert(c.fmu.clone(), d);
             }
         }
         Ok(fmus)
     }
 
-    /// The FMU of `component` and its declaration of `variable`.
-    fn lookup<'f>(&self, fmus: &'f Fmus, port: &Port) -> Result<(&'f FmuDescription, &'f Variable), String> {
+    /// The FMU of `port`'s component and its declaration of `port.variable`.
+    fn lookup<'f, D: Description>(
+        &self,
+        fmus: &'f BTreeMap<String, D>,
+        port: &Port,
+    ) -> Result<(&'f D, &'f D::Variable), String> {
         let c = self
             .component(&port.component)
             .ok_or_else(|| format!("{}: no component '{}'", self.at(), port.component))?;
         let fmu = fmus
             .get(&c.fmu)
             .ok_or_else(|| format!("{}: the description of {}.fmu was not read", self.at(), c.fmu))?;
-        let v = fmu.variable(&port.variable).ok_or_else(|| {
-            let names: Vec<&str> = fmu.variables.iter().map(|v| v.name.as_str()).collect();
+        let v = fmu.find(&port.variable).ok_or_else(|| {
             format!(
-                "{}: {port}: {}.fmu has no variable '{}' (it has: {})",
+                "{}: {port}: {}.fmu{} has no variable '{}' (it has: {})",
                 self.at(),
                 c.fmu,
+                D::VERSION,
                 port.variable,
-                names.join(", ")
+                fmu.names().join(", ")
             )
         })?;
         Ok((fmu, v))
+    }
+
+    /// The check of either FMI version: each connection's ends looked up and judged by
+    /// `connect` (which gives the connection its type), no input driven twice, each parameter's
+    /// variable looked up and its value typed by `parameter`.
+    pub(crate) fn check_with<'a, D: Description, C, V>(
+        &'a self,
+        fmus: &BTreeMap<String, D>,
+        connect: impl Fn(&'a Connection, End<'_, D>, End<'_, D>) -> Result<C, String>,
+        parameter: impl Fn(&Literal, End<'_, D>) -> Result<V, Refusal>,
+    ) -> Result<(Vec<C>, Parameters<'a, V>), String> {
+        let mut connections = Vec::new();
+        for (i, c) in self.connections.iter().enumerate() {
+            let from = self.lookup(fmus, &c.from)?;
+            let to = self.lookup(fmus, &c.to)?;
+            let typed = connect(c, from, to)?;
+            if let Some(first) = self.connections[..i].iter().find(|d| d.to == c.to) {
+                return Err(format!(
+                    "{}: input {} is driven twice: by {} and by {}",
+                    self.at(),
+                    c.to,
+                    first.from,
+                    c.from
+                ));
+            }
+            connections.push(typed);
+        }
+        let mut parameters = Vec::new();
+        for c in &self.components {
+            let mut typed = Vec::new();
+            for p in &c.parameters {
+                let port = Port {
+                    component: c.name.clone(),
+                    variable: p.name.clone(),
+                };
+                let value = parameter(&p.value, self.lookup(fmus, &port)?).map_err(|refusal| match refusal {
+                    Refusal::Valueless { variable, why } => format!(
+                        "{}: parameter {port}: {}.fmu's {variable} cannot be given a value: {why}",
+                        self.at(),
+                        c.fmu
+                    ),
+                    Refusal::Mistyped(why) => format!(
+                        "{}: parameter {port} = {}: {}.fmu declares '{}' {why}",
+                        self.at(),
+                        p.value,
+                        c.fmu,
+                        p.name
+                    ),
+                })?;
+                typed.push((p.name.as_str(), value));
+            }
+            parameters.push(typed);
+        }
+        Ok((connections, parameters))
     }
 
     /// Checks the system against the descriptions of its FMUs: every connection goes from an
@@ -543,10 +602,7 @@ impl System {
     /// is driven twice, and every parameter names a variable that takes a start value
     /// ([`Variable::takes_start_value`]) and has a value of its type.
     pub fn check<'a>(&'a self, fmus: &Fmus) -> Result<Checked<'a>, String> {
-        let mut connections = Vec::new();
-        for (i, c) in self.connections.iter().enumerate() {
-            let (ofmu, o) = self.lookup(fmus, &c.from)?;
-            let (ifmu, inp) = self.lookup(fmus, &c.to)?;
+        let connect = |c: &'a Connection, (ofmu, o): End<FmuDescription>, (ifmu, inp): End<FmuDescription>| {
             let (oe, ie) = (ofmu.enumeration_of(o), ifmu.enumeration_of(inp));
             let same_items = o.ty != VarType::Enumeration || oe.map(|e| &e.items) == ie.map(|e| &e.items);
             if o.causality != Causality::Output || inp.causality != Causality::Input || o.ty != inp.ty || !same_items {
@@ -565,64 +621,74 @@ impl System {
                     describe(inp, ie)
                 ));
             }
-            if let Some(first) = self.connections[..i].iter().find(|d| d.to == c.to) {
-                return Err(format!(
-                    "{}: input {} is driven twice: by {} and by {}",
-                    self.at(),
-                    c.to,
-                    first.from,
-                    c.from
-                ));
-            }
-            connections.push(TypedConnection {
+            Ok(TypedConnection {
                 connection: c,
                 var_type: o.ty,
                 enumeration: oe.filter(|_| o.ty == VarType::Enumeration).cloned(),
-            });
-        }
-        let mut parameters = Vec::new();
-        for c in &self.components {
-            let mut typed = Vec::new();
-            for p in &c.parameters {
-                let port = Port {
-                    component: c.name.clone(),
-                    variable: p.name.clone(),
+            })
+        };
+        let parameter = |literal: &Literal, (fmu, v): End<FmuDescription>| {
+            if !v.takes_start_value() {
+                let why = if v.causality == Causality::Input {
+                    "it is an input (its value comes from its connection)"
+                } else if v.variability == Variability::Constant {
+                    "it is a constant"
+                } else {
+                    "it declares no start value"
                 };
-                let (fmu, v) = self.lookup(fmus, &port)?;
-                if !v.takes_start_value() {
-                    let why = if v.causality == Causality::Input {
-                        "it is an input (its value comes from its connection)"
-                    } else if v.variability == Variability::Constant {
-                        "it is a constant"
-                    } else {
-                        "it declares no start value"
-                    };
-                    return Err(format!(
-                        "{}: parameter {port}: {}.fmu's '{}' cannot be given a value: {why}",
-                        self.at(),
-                        c.fmu,
-                        v.name
-                    ));
-                }
-                let value = typed_value(&p.value, v, fmu).map_err(|why| {
-                    format!(
-                        "{}: parameter {port} = {}: {}.fmu declares '{}' {why}",
-                        self.at(),
-                        p.value,
-                        c.fmu,
-                        v.name
-                    )
-                })?;
-                typed.push((p.name.as_str(), value));
+                let variable = format!("'{}'", v.name);
+                return Err(Refusal::Valueless { variable, why });
             }
-            parameters.push(typed);
-        }
+            typed_value(literal, v, fmu).map_err(Refusal::Mistyped)
+        };
+        let (connections, parameters) = self.check_with(fmus, connect, parameter)?;
         Ok(Checked {
             system: self,
             parameters,
             connections,
         })
     }
+}
+
+/// What checking a system asks of an FMU's description, of either FMI version.
+pub trait Description: Sized {
+    type Variable;
+    /// How an error names the FMU's version after its file: "" or " (FMI 3.0)".
+    const VERSION: &'static str;
+    /// Reads the description from an `.fmu` archive.
+    fn read(fmu: &Path) -> Result<Self, String>;
+    /// The variable called `name`.
+    fn find(&self, name: &str) -> Option<&Self::Variable>;
+    /// The names of all variables, in order.
+    fn names(&self) -> Vec<&str>;
+}
+
+impl Description for FmuDescription {
+    type Variable = Variable;
+    const VERSION: &'static str = "";
+    fn read(fmu: &Path) -> Result<Self, String> {
+        read_description(fmu)
+    }
+    fn find(&self, name: &str) -> Option<&Variable> {
+        self.variable(name)
+    }
+    fn names(&self) -> Vec<&str> {
+        self.variables.iter().map(|v| v.name.as_str()).collect()
+    }
+}
+
+/// One end of a connection, or a parameter's variable: the FMU and its declaration.
+pub(crate) type End<'f, D> = (&'f D, &'f <D as Description>::Variable);
+
+/// For each component, in order: its parameters, in order, with their typed values.
+pub(crate) type Parameters<'a, V> = Vec<Vec<(&'a str, V)>>;
+
+/// Why a parameter's value is refused.
+pub(crate) enum Refusal {
+    /// The variable (`'name'`, perhaps with what it is) takes no value, for the reason `why`.
+    Valueless { variable: String, why: &'static str },
+    /// The value is not one of the variable's type; completes "declares 'v' ...".
+    Mistyped(String),
 }
 
 /// `literal` as a value of `v`'s type; the error completes "declares 'v' ...".
@@ -1020,7 +1086,7 @@ mod tests {
     #[test]
     fn a_missing_fmu_is_reported_with_the_command_that_packages_it() {
         let s = paper_systems().get("PendulumLQR").unwrap().clone();
-        let e = s.read_fmus(Path::new("/nonexistent")).unwrap_err();
+        let e = s.read_fmus::<FmuDescription>(Path::new("/nonexistent")).unwrap_err();
         assert!(
             e.contains("component 'pendulum'")
                 && e.contains("/nonexistent/Pendulum.fmu")

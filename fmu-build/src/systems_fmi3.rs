@@ -19,7 +19,7 @@
 //! Arrays and Enumerations are refused, with the variable: md-reader reads no FMI 3.0 type
 //! definitions, and no system of this workspace has them.
 
-use crate::systems::{Component, Connection, Literal, Port, System};
+use crate::systems::{Connection, Description, End, Literal, Refusal, System};
 use md_reader::Causality;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -92,52 +92,30 @@ fn describe(v: &Variable3) -> String {
     s
 }
 
+impl Description for Fmu3Description {
+    type Variable = Variable3;
+    const VERSION: &'static str = " (FMI 3.0)";
+    fn read(fmu: &Path) -> Result<Self, String> {
+        read_description(fmu)
+    }
+    fn find(&self, name: &str) -> Option<&Variable3> {
+        self.variables.iter().find(|v| v.name == name)
+    }
+    fn names(&self) -> Vec<&str> {
+        self.variables.iter().map(|v| v.name.as_str()).collect()
+    }
+}
+
 impl System {
     /// Whether the system is of FMI 3.0 FMUs (`fmi-version = "3.0"`).
     pub fn is_fmi3(&self) -> bool {
         self.fmi_version.as_deref() == Some("3.0")
     }
 
-    /// Reads the FMI 3.0 description of every FMU the system names from `<fmi3_dir>/<fmu>.fmu`.
-    pub fn read_fmus3(&self, fmi3_dir: &Path) -> Result<Fmus3, String> {
-        let mut fmus = Fmus3::new();
-        for c in &self.components {
-            if !fmus.contains_key(&c.fmu) {
-                let path = fmi3_dir.join(format!("{}.fmu", c.fmu));
-                let d = read_description(&path).map_err(|e| format!("{}: component '{}': {e}", self.at(), c.name))?;
-                fmus.insert(c.fmu.clone(), d);
-            }
-        }
-        Ok(fmus)
-    }
-
-    /// The component of `port`, its FMU and the FMU's variable `port.variable`.
-    fn lookup3<'f>(&self, fmus: &'f Fmus3, port: &Port) -> Result<(&Component, &'f Variable3), String> {
-        let c = self
-            .component(&port.component)
-            .ok_or_else(|| format!("{}: no component '{}'", self.at(), port.component))?;
-        let fmu = fmus
-            .get(&c.fmu)
-            .ok_or_else(|| format!("{}: the description of {}.fmu was not read", self.at(), c.fmu))?;
-        let v = fmu.variables.iter().find(|v| v.name == port.variable).ok_or_else(|| {
-            let names: Vec<&str> = fmu.variables.iter().map(|v| v.name.as_str()).collect();
-            format!(
-                "{}: {port}: {}.fmu (FMI 3.0) has no variable '{}' (it has: {})",
-                self.at(),
-                c.fmu,
-                port.variable,
-                names.join(", ")
-            )
-        })?;
-        Ok((c, v))
-    }
-
     /// Checks the system against the FMI 3.0 descriptions of its FMUs (see the module).
     pub fn check_fmi3<'a>(&'a self, fmus: &Fmus3) -> Result<Checked3<'a>, String> {
-        let mut connections = Vec::new();
-        for (i, c) in self.connections.iter().enumerate() {
-            let (_, o) = self.lookup3(fmus, &c.from)?;
-            let (_, inp) = self.lookup3(fmus, &c.to)?;
+        let mime = |v: &Variable3| v.mime_type.clone().unwrap_or_else(|| OCTET_STREAM.into());
+        let connect = |c: &'a Connection, (_, o): End<Fmu3Description>, (_, inp): End<Fmu3Description>| {
             let wrong = |why: String| {
                 format!(
                     "{}: connection {c}: {} is {}, {} is {}: {why}",
@@ -180,7 +158,6 @@ impl System {
                     )));
                 }
             }
-            let mime = |v: &Variable3| v.mime_type.clone().unwrap_or_else(|| OCTET_STREAM.into());
             if o.ty == Type3::Binary && mime(o) != mime(inp) {
                 return Err(wrong(format!(
                     "the Binaries carry different mime types: '{}' and '{}'",
@@ -188,71 +165,40 @@ impl System {
                     mime(inp)
                 )));
             }
-            if let Some(first) = self.connections[..i].iter().find(|d| d.to == c.to) {
-                return Err(format!(
-                    "{}: input {} is driven twice: by {} and by {}",
-                    self.at(),
-                    c.to,
-                    first.from,
-                    c.from
-                ));
-            }
-            connections.push(TypedConnection3 {
+            Ok(TypedConnection3 {
                 connection: c,
                 var_type: o.ty,
                 mime_type: (o.ty == Type3::Binary).then(|| mime(o)),
                 from_causality: o.causality,
                 to_causality: inp.causality,
-            });
-        }
-        let mut parameters = Vec::new();
-        for c in &self.components {
-            let mut typed = Vec::new();
-            for p in &c.parameters {
-                let port = Port {
-                    component: c.name.clone(),
-                    variable: p.name.clone(),
-                };
-                let (_, v) = self.lookup3(fmus, &port)?;
-                let refused = |why: &str| {
-                    format!(
-                        "{}: parameter {port}: {}.fmu's '{}' ({}) cannot be given a value: {why}",
-                        self.at(),
-                        c.fmu,
-                        v.name,
-                        describe(v)
-                    )
-                };
-                if v.causality == Causality::Input {
-                    return Err(refused("it is an input (its value comes from its connection)"));
-                }
-                if v.variability == md_reader::Variability::Constant {
-                    return Err(refused("it is a constant"));
-                }
-                if v.ty == Type3::Clock {
-                    return Err(refused("it is a clock"));
-                }
-                if v.start.is_none() {
-                    return Err(refused("it declares no start value"));
-                }
-                if v.array || v.ty == Type3::Enumeration {
-                    return Err(refused(
-                        "fmu-build writes no array or Enumeration value in an FMI 3.0 system",
-                    ));
-                }
-                let text = typed_text(&p.value, v.ty).map_err(|why| {
-                    format!(
-                        "{}: parameter {port} = {}: {}.fmu declares '{}' {why}",
-                        self.at(),
-                        p.value,
-                        c.fmu,
-                        v.name
-                    )
-                })?;
-                typed.push((p.name.as_str(), Value3 { ty: v.ty, text }));
+            })
+        };
+        let parameter = |literal: &Literal, (_, v): End<Fmu3Description>| {
+            let refused = |why| Refusal::Valueless {
+                variable: format!("'{}' ({})", v.name, describe(v)),
+                why,
+            };
+            if v.causality == Causality::Input {
+                return Err(refused("it is an input (its value comes from its connection)"));
             }
-            parameters.push(typed);
-        }
+            if v.variability == md_reader::Variability::Constant {
+                return Err(refused("it is a constant"));
+            }
+            if v.ty == Type3::Clock {
+                return Err(refused("it is a clock"));
+            }
+            if v.start.is_none() {
+                return Err(refused("it declares no start value"));
+            }
+            if v.array || v.ty == Type3::Enumeration {
+                return Err(refused(
+                    "fmu-build writes no array or Enumeration value in an FMI 3.0 system",
+                ));
+            }
+            let text = typed_text(literal, v.ty).map_err(Refusal::Mistyped)?;
+            Ok(Value3 { ty: v.ty, text })
+        };
+        let (connections, parameters) = self.check_with(fmus, connect, parameter)?;
         Ok(Checked3 {
             system: self,
             parameters,
@@ -306,25 +252,28 @@ pub(crate) mod tests {
     use crate::systems::Systems;
     use crate::systems::testing::*;
 
+    /// The FMUs of the networked pendulum, the bus last.
+    pub(crate) const NETWORKED_FMUS: [&str; 6] = [
+        "Pendulum",
+        "DCMotor",
+        "CanSensor",
+        "CanController",
+        "CanMotorDrive",
+        "CanBus",
+    ];
+
     pub(crate) fn fmus3() -> Fmus3 {
-        [
-            "Pendulum",
-            "DCMotor",
-            "CanSensor",
-            "CanController",
-            "CanMotorDrive",
-            "CanBus",
-        ]
-        .into_iter()
-        .map(|id| {
-            let path = workspace_root().join("modelDescription/fmi3").join(format!("{id}.xml"));
-            let xml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            (
-                id.to_owned(),
-                parse_description(&xml).unwrap_or_else(|e| panic!("{id}: {e}")),
-            )
-        })
-        .collect()
+        NETWORKED_FMUS
+            .into_iter()
+            .map(|id| {
+                let path = workspace_root().join("modelDescription/fmi3").join(format!("{id}.xml"));
+                let xml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                (
+                    id.to_owned(),
+                    parse_description(&xml).unwrap_or_else(|e| panic!("{id}: {e}")),
+                )
+            })
+            .collect()
     }
 
     fn networked() -> System {
