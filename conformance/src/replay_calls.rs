@@ -20,9 +20,9 @@ use crate::replay::{Expected, Line, ReplayReport, list, real, replay_line};
 use crate::{Fmu, Fmu3};
 use std::collections::BTreeMap;
 
-/// The FMI 3.0 calls the replay makes (and the call log records with their arguments).
-pub const FMI3_CALLS: &[&str] = &[
-    "fmi3EnterInitializationMode",
+/// The FMI 3.0 calls the replay makes that take no argument but the instance (their outputs are
+/// printed), so that such a call made without [`crate::fmi3::Inst::args`] is replayable.
+const FMI3_NO_ARGUMENTS: &[&str] = &[
     "fmi3ExitInitializationMode",
     "fmi3EnterEventMode",
     "fmi3EnterContinuousTimeMode",
@@ -34,6 +34,12 @@ pub const FMI3_CALLS: &[&str] = &[
     "fmi3UpdateDiscreteStates",
     "fmi3GetNumberOfContinuousStates",
     "fmi3GetNumberOfEventIndicators",
+];
+
+/// The other FMI 3.0 calls the replay makes, with the arguments the call log records, besides
+/// the getters and setters of [`replays_values_of`] and every function of the FMU state.
+const FMI3_WITH_ARGUMENTS: &[&str] = &[
+    "fmi3EnterInitializationMode",
     "fmi3GetContinuousStates",
     "fmi3GetContinuousStateDerivatives",
     "fmi3GetEventIndicators",
@@ -42,53 +48,33 @@ pub const FMI3_CALLS: &[&str] = &[
     "fmi3SetContinuousStates",
     "fmi3CompletedIntegratorStep",
     "fmi3DoStep",
-    "fmi3GetFMUState",
-    "fmi3SetFMUState",
-    "fmi3FreeFMUState",
-    "fmi3SerializedFMUStateSize",
-    "fmi3SerializeFMUState",
-    "fmi3DeserializeFMUState",
     "fmi3GetDirectionalDerivative",
     "fmi3GetAdjointDerivative",
-    "fmi3GetFloat32",
-    "fmi3GetFloat64",
-    "fmi3GetInt8",
-    "fmi3GetUInt8",
-    "fmi3GetInt16",
-    "fmi3GetUInt16",
-    "fmi3GetInt32",
-    "fmi3GetUInt32",
-    "fmi3GetInt64",
-    "fmi3GetUInt64",
-    "fmi3GetBoolean",
-    "fmi3SetFloat32",
-    "fmi3SetFloat64",
-    "fmi3SetInt8",
-    "fmi3SetUInt8",
-    "fmi3SetInt16",
-    "fmi3SetUInt16",
-    "fmi3SetInt32",
-    "fmi3SetUInt32",
-    "fmi3SetInt64",
-    "fmi3SetUInt64",
-    "fmi3SetBoolean",
 ];
 
-/// The calls of [`FMI3_CALLS`] that take no argument but the instance (their outputs are
-/// printed), so that a call made without [`crate::fmi3::Inst::args`] is replayable.
-pub const FMI3_NO_ARGUMENTS: &[&str] = &[
-    "fmi3ExitInitializationMode",
-    "fmi3EnterEventMode",
-    "fmi3EnterContinuousTimeMode",
-    "fmi3EnterStepMode",
-    "fmi3EnterConfigurationMode",
-    "fmi3ExitConfigurationMode",
-    "fmi3Terminate",
-    "fmi3Reset",
-    "fmi3UpdateDiscreteStates",
-    "fmi3GetNumberOfContinuousStates",
-    "fmi3GetNumberOfEventIndicators",
-];
+/// Whether the replay gets and sets values of the type called `name`: the numbers and Boolean
+/// (not String, Binary or Clock; an Enumeration's values are Int64's).
+fn replays_values_of(name: &str) -> bool {
+    use crate::fmi3::Type;
+    Type::ALL
+        .iter()
+        .any(|t| t.name() == name && !matches!(t, Type::String | Type::Binary | Type::Enumeration | Type::Clock))
+}
+
+/// An FMI 3.0 call the replay makes, as the standard names it, and whether it takes no argument
+/// but the instance ([`FMI3_NO_ARGUMENTS`]); `None` for a call the replay does not make (the call
+/// log records it as not replayable).
+pub fn fmi3_call(function: &str) -> Option<(&'static str, bool)> {
+    let name = *fmi_standard::functions::FMI3_FUNCTIONS
+        .iter()
+        .find(|f| **f == function)?;
+    let values = ["fmi3Get", "fmi3Set"]
+        .iter()
+        .any(|prefix| name.strip_prefix(prefix).is_some_and(replays_values_of));
+    let no_arguments = FMI3_NO_ARGUMENTS.contains(&name);
+    let state = name.contains("FMUState");
+    (no_arguments || values || state || FMI3_WITH_ARGUMENTS.contains(&name)).then_some((name, no_arguments))
+}
 
 /// A line's `expect=[...] within=W`, compared with what the call gave.
 fn compare(l: &Line, got: &[f64]) -> Result<(), String> {
@@ -144,14 +130,50 @@ struct Printer<'o> {
     report: ReplayReport,
 }
 
-impl Printer<'_> {
+impl<'o> Printer<'o> {
+    /// A printer that has said what it replays.
+    fn start(out: &'o mut dyn FnMut(&str), lines: &[Line], fmu: &str, version: &str) -> Printer<'o> {
+        let mut p = Printer {
+            out,
+            report: ReplayReport::default(),
+        };
+        p.print(format!(
+            "replaying {} calls of a named check on {fmu} (FMI {version}), each as the file writes it",
+            lines.len() - 1
+        ));
+        p
+    }
+
+    /// Replays the lines after the first (the instance, made) by `one`, up to the first difference.
+    fn replay_each(&mut self, lines: &[Line], mut one: impl FnMut(&Line, &mut Printer) -> Result<(), String>) {
+        let first = &lines[0];
+        self.print(format!("{:>4} {} -> an instance", first.number, first.function));
+        for l in &lines[1..] {
+            // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| one(l, self)))
+                .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
+            if let Err(d) = r {
+                self.report.difference = Some(d);
+                break;
+            }
+        }
+    }
+
     fn print(&mut self, text: String) {
         (self.out)(&text);
         self.report.lines.push(text);
     }
 
-    /// Err: the difference that ends the replay.
-    fn call(&mut self, l: &Line, status: u32, details: Vec<String>, log: Vec<String>) -> Result<(), String> {
+    /// Err: the difference that ends the replay (a status the line does not expect, then
+    /// `values` other than the line's `expect=`).
+    fn call(
+        &mut self,
+        l: &Line,
+        status: u32,
+        details: Vec<String>,
+        log: Vec<String>,
+        values: Option<Vec<f64>>,
+    ) -> Result<(), String> {
         let expected = l.expected.unwrap_or(Expected::ANY);
         self.print(replay_line(l, &l.function, status, expected));
         for d in details {
@@ -160,17 +182,24 @@ impl Printer<'_> {
         for m in log {
             self.print(format!("       log {m}"));
         }
-        if expected.contains(status) {
-            Ok(())
-        } else {
-            Err(format!(
+        if !expected.contains(status) {
+            return Err(format!(
                 "line {}: {} answered {}, the file expects {expected}",
                 l.number,
                 l.function,
                 crate::replay::status_word(status)
-            ))
+            ));
+        }
+        match values {
+            Some(v) => compare(l, &v),
+            None => Ok(()),
         }
     }
+}
+
+/// A message the FMU logged, as the replay prints it.
+fn log_line(status: impl std::fmt::Display, category: &str, message: &str) -> String {
+    format!("[{status}] {category}: {message}")
 }
 
 /// Replays a named check's FMI 2.0 reproducer (first line `fmi2Instantiate instanceName=...`).
@@ -193,15 +222,7 @@ pub fn replay2(fmu: &Fmu, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<R
         resources: own(first, "resourceLocation", fmu.resource_uri())?,
         logging_on: first.parse_or("loggingOn", false)?,
     };
-    let mut p = Printer {
-        out,
-        report: ReplayReport::default(),
-    };
-    p.print(format!(
-        "replaying {} calls of a named check on {} (FMI 2.0), each as the file writes it",
-        lines.len() - 1,
-        fmu.id
-    ));
+    let mut p = Printer::start(out, lines, &fmu.id, "2.0");
     let mut inst = match Instance::with(fmu, &args) {
         Ok(i) => i,
         Err(log) => {
@@ -209,19 +230,8 @@ pub fn replay2(fmu: &Fmu, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<R
             return Ok(p.report);
         }
     };
-    p.print(format!("{:>4} {} -> an instance", first.number, first.function));
     let mut states = States::<fmi2FMUstate>(BTreeMap::new());
-    for l in &lines[1..] {
-        // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            replay2_line(&mut inst, &mut states, l, &mut p)
-        }))
-        .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
-        if let Err(d) = r {
-            p.report.difference = Some(d);
-            break;
-        }
-    }
+    p.replay_each(lines, |l, p| replay2_line(&mut inst, &mut states, l, p));
     Ok(p.report)
 }
 
@@ -232,20 +242,6 @@ fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
         .cloned()
         .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
         .unwrap_or_else(|| "a panic without a message".into())
-}
-
-fn log2(inst: &Instance) -> Vec<String> {
-    inst.log()
-        .iter()
-        .map(|e| {
-            format!(
-                "[{}] {}: {}",
-                crate::instance::status_name(e.status),
-                e.category,
-                e.text
-            )
-        })
-        .collect()
 }
 
 fn vrs(l: &Line) -> Result<Vec<u32>, String> {
@@ -378,12 +374,11 @@ fn replay2_line(
         }
         f => return Err(l.error(format!("{f} is not a call the replay of a named check makes (FMI 2.0)"))),
     };
-    let log = log2(inst);
-    p.call(l, s, details, log)?;
-    match values {
-        Some(v) => compare(l, &v),
-        None => Ok(()),
-    }
+    let log = inst.log();
+    let log = log
+        .iter()
+        .map(|e| log_line(crate::instance::status_name(e.status), &e.category, &e.text));
+    p.call(l, s, details, log.collect(), values)
 }
 
 /// Replays a named check's FMI 3.0 reproducer (first line `fmi3InstantiateCoSimulation
@@ -395,15 +390,7 @@ pub fn replay3(fmu: &Fmu3, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<
     let event_mode: bool = first.parse_or("eventModeUsed", false)?;
     let early: bool = first.parse_or("earlyReturnAllowed", false)?;
     let intermediate: bool = first.parse_or("intermediateUpdate", false)?;
-    let mut p = Printer {
-        out,
-        report: ReplayReport::default(),
-    };
-    p.print(format!(
-        "replaying {} calls of a named check on {} (FMI 3.0), each as the file writes it",
-        lines.len() - 1,
-        fmu.id
-    ));
+    let mut p = Printer::start(out, lines, &fmu.id, "3.0");
     let mut inst = match crate::fmi3::Inst::try_new_full(fmu, me, &name, (event_mode, early), intermediate) {
         Ok(i) => i,
         Err(e) => {
@@ -413,19 +400,8 @@ pub fn replay3(fmu: &Fmu3, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<
     };
     // The file holds every call the check made, those of Event Mode too.
     inst.auto_events = false;
-    p.print(format!("{:>4} {} -> an instance", first.number, first.function));
     let mut states = States::<fmi3FMUState>(BTreeMap::new());
-    for l in &lines[1..] {
-        // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
-        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            replay3_line(&mut inst, &mut states, l, &mut p)
-        }))
-        .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
-        if let Err(d) = r {
-            p.report.difference = Some(d);
-            break;
-        }
-    }
+    p.replay_each(lines, |l, p| replay3_line(&mut inst, &mut states, l, p));
     Ok(p.report)
 }
 
@@ -653,20 +629,9 @@ fn replay3_line(
         }
         _ => return Err(l.error(format!("{f} is not a call the replay of a named check makes (FMI 3.0)"))),
     };
-    let log: Vec<String> = inst.sink.entries.lock().unwrap_or_else(|e| e.into_inner())[before..]
+    let log = inst.sink.entries.lock().unwrap_or_else(|e| e.into_inner())[before..]
         .iter()
-        .map(|e| {
-            format!(
-                "[{}] {}: {}",
-                crate::fmi3::types::status_name(e.status),
-                e.category,
-                e.message
-            )
-        })
+        .map(|e| log_line(crate::fmi3::types::status_name(e.status), &e.category, &e.message))
         .collect();
-    p.call(l, s, details, log)?;
-    match values {
-        Some(v) => compare(l, &v),
-        None => Ok(()),
-    }
+    p.call(l, s, details, log, values)
 }

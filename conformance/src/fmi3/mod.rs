@@ -402,7 +402,7 @@ pub struct Inst<'a> {
     pub calls: RefCell<Log>,
     /// The arguments of the call [`Inst::call`] makes next, as its wrapper gives them
     /// ([`Inst::args`]); a call made without them is recorded as not replayable, unless it
-    /// takes none ([`crate::replay_calls::FMI3_NO_ARGUMENTS`]).
+    /// takes none ([`crate::replay_calls::fmi3_call`]).
     pending: RefCell<Option<Vec<(&'static str, Val)>>>,
     /// The index of the last call in [`Inst::calls`].
     last_call: Cell<usize>,
@@ -678,13 +678,10 @@ impl<'a> Inst<'a> {
         crate::outcome::breadcrumb(what);
         let args = self.pending.borrow_mut().take();
         if !self.c.is_null() {
-            let known = crate::replay_calls::FMI3_CALLS.iter().find(|k| **k == what);
-            let i = match known {
-                Some(name) => {
-                    let replayable = args.is_some() || crate::replay_calls::FMI3_NO_ARGUMENTS.contains(name);
-                    self.calls
-                        .borrow_mut()
-                        .call(*name, args.unwrap_or_default(), replayable)
+            let i = match crate::replay_calls::fmi3_call(what) {
+                Some((name, no_arguments)) => {
+                    let replayable = args.is_some() || no_arguments;
+                    self.calls.borrow_mut().call(name, args.unwrap_or_default(), replayable)
                 }
                 None => self.calls.borrow_mut().call(what.to_string(), vec![], false),
             };
