@@ -210,6 +210,36 @@ pub fn fill_one<T: Plain, R>(x: &mut T, function: &str, count: &str, rule: &str,
     fill(std::slice::from_mut(x), function, count, rule, call)
 }
 
+/// [`fill_one`] of the FMU state an FMI 2.0 call writes (fmi2GetFMUstate, fmi2FreeFMUstate, ...).
+pub fn fill_state2<T: Plain, R>(st: &mut T, function: &str, call: impl FnOnce(*mut T) -> R) -> R {
+    fill_one(st, function, "one FMU state", STATE_RULE2, call)
+}
+
+/// [`fill_one`] of the FMU state an FMI 3.0 call writes (fmi3GetFMUState, fmi3FreeFMUState, ...).
+pub fn fill_state3<T: Plain, R>(st: &mut T, function: &str, call: impl FnOnce(*mut T) -> R) -> R {
+    fill_one(st, function, "one FMU state", STATE_RULE3, call)
+}
+
+/// fmi3CompletedIntegratorStep's outputs enterEventMode and terminateSimulation, one value each
+/// with a guard after it: `call` gets the pointers to `enter` and `term`.
+pub fn fill_integrator_step3<T: Plain, R>(enter: &mut T, term: &mut T, call: impl FnOnce(*mut T, *mut T) -> R) -> R {
+    fill_one(
+        enter,
+        "fmi3CompletedIntegratorStep (enterEventMode)",
+        "one value",
+        OUTPUT_ARGUMENTS_RULE3,
+        |qa| {
+            fill_one(
+                term,
+                "fmi3CompletedIntegratorStep (terminateSimulation)",
+                "one value",
+                OUTPUT_ARGUMENTS_RULE3,
+                |qb| call(qa, qb),
+            )
+        },
+    )
+}
+
 /// A `T` of zero bytes (any bit pattern is a valid [`Plain`] value).
 fn zeroed<T: Plain>() -> T {
     // SAFETY: any bit pattern, zero included, is a valid `T` ([`Plain`]).

@@ -450,13 +450,9 @@ impl<'a> Instance<'a> {
         let i = self.record("fmi2GetFMUstate", vec![]);
         // SAFETY: a live instance and a valid out pointer.
         let st = unsafe {
-            crate::guard::fill_one(
-                &mut s,
-                "fmi2GetFMUstate",
-                "one FMU state",
-                crate::guard::STATE_RULE2,
-                |q| self.answered(i, (self.fmu.api.get_fmu_state)(self.c, q)),
-            )
+            crate::guard::fill_state2(&mut s, "fmi2GetFMUstate", |q| {
+                self.answered(i, (self.fmu.api.get_fmu_state)(self.c, q))
+            })
         };
         if let Some(v) = self.state_val(s, true) {
             self.calls.borrow_mut().add_arg(i, "state", v);
@@ -542,18 +538,12 @@ impl<'a> Instance<'a> {
         let i = self.record("fmi2DeSerializeFMUstate", vec![("bytes", Val::Bytes(bytes.to_vec()))]);
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
         let st = unsafe {
-            crate::guard::fill_one(
-                &mut s,
-                "fmi2DeSerializeFMUstate",
-                "one FMU state",
-                crate::guard::STATE_RULE2,
-                |q| {
-                    self.answered(
-                        i,
-                        (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
-                    )
-                },
-            )
+            crate::guard::fill_state2(&mut s, "fmi2DeSerializeFMUstate", |q| {
+                self.answered(
+                    i,
+                    (self.fmu.api.deserialize_fmu_state)(self.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
+                )
+            })
         };
         if let Some(v) = self.state_val(s, true) {
             self.calls.borrow_mut().add_arg(i, "state", v);

@@ -180,13 +180,7 @@ impl Fmu {
             }
             let mut s: fmi2FMUstate = std::ptr::null_mut();
             let mut bytes = vec![];
-            let mut status = crate::guard::fill_one(
-                &mut s,
-                "fmi2GetFMUstate",
-                "one FMU state",
-                crate::guard::STATE_RULE2,
-                |q| (api.get_fmu_state)(c, q),
-            );
+            let mut status = crate::guard::fill_state2(&mut s, "fmi2GetFMUstate", |q| (api.get_fmu_state)(c, q));
             if status == fmi2OK {
                 let mut size = 0usize;
                 status = crate::guard::fill_one(
@@ -206,26 +200,14 @@ impl Fmu {
                     ) {
                         Ok(b) => bytes = b,
                         Err(e) => {
-                            crate::guard::fill_one(
-                                &mut s,
-                                "fmi2FreeFMUstate",
-                                "one FMU state",
-                                crate::guard::STATE_RULE2,
-                                |q| (api.free_fmu_state)(c, q),
-                            );
+                            crate::guard::fill_state2(&mut s, "fmi2FreeFMUstate", |q| (api.free_fmu_state)(c, q));
                             outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
                             (api.free_instance)(c);
                             return Err(e);
                         }
                     }
                 }
-                crate::guard::fill_one(
-                    &mut s,
-                    "fmi2FreeFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.free_fmu_state)(c, q),
-                );
+                crate::guard::fill_state2(&mut s, "fmi2FreeFMUstate", |q| (api.free_fmu_state)(c, q));
             }
             outcome::breadcrumb("fmi2FreeInstance (probing the state format)");
             (api.free_instance)(c);

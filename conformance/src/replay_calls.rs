@@ -520,13 +520,13 @@ fn replay3_line(
             let s = if f == "fmi3GetFMUState" {
                 // SAFETY: a live instance; one FMU state with a guard after it.
                 inst.call(f, |c| unsafe {
-                    crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| (api.get_fmu_state)(c, q))
+                    crate::guard::fill_state3(&mut st, f, |q| (api.get_fmu_state)(c, q))
                 })
             } else {
                 let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
                 // SAFETY: a live instance; `bytes.len()` bytes; one FMU state with a guard after it.
                 inst.call(f, |c| unsafe {
-                    crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| {
+                    crate::guard::fill_state3(&mut st, f, |q| {
                         (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
                     })
                 })
@@ -546,7 +546,7 @@ fn replay3_line(
             let mut st = states.get(l, std::ptr::null_mut())?;
             // SAFETY: a live instance and a state it made, freed once.
             let s = inst.call(f, |c| unsafe {
-                crate::guard::fill_one(&mut st, f, "one FMU state", STATE_RULE3, |q| (api.free_fmu_state)(c, q))
+                crate::guard::fill_state3(&mut st, f, |q| (api.free_fmu_state)(c, q))
             });
             details.push(format!("FMUState after the call {st:?}"));
             s

@@ -99,15 +99,7 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
     assert_eq!(
         // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
-        unsafe {
-            crate::guard::fill_one(
-                &mut saved,
-                "fmi2GetFMUstate",
-                "one FMU state",
-                crate::guard::STATE_RULE2,
-                |q| (fmu.api.get_fmu_state)(inst.c, q),
-            )
-        },
+        unsafe { crate::guard::fill_state2(&mut saved, "fmi2GetFMUstate", |q| (fmu.api.get_fmu_state)(inst.c, q)) },
         fmi2OK
     );
     // FMI 2.0.5 §2.1.8: fmi2GetFMUstate "typically reuses the memory of this FMUstate": not
@@ -215,13 +207,9 @@ pub fn serialize_deserialize_round_trip_continues_bit_identically(fmu: &Fmu) {
     let (_, mut existing) = inst.get_state();
     // SAFETY: `bytes.len()` readable bytes, an FMUstate of this FMU.
     let s = unsafe {
-        crate::guard::fill_one(
-            &mut existing,
-            "fmi2DeSerializeFMUstate",
-            "one FMU state",
-            crate::guard::STATE_RULE2,
-            |q| (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
-        )
+        crate::guard::fill_state2(&mut existing, "fmi2DeSerializeFMUstate", |q| {
+            (fmu.api.deserialize_fmu_state)(inst.c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q)
+        })
     };
     assert_eq!(s, fmi2OK);
     crate::outcome::warn_unless(inst.serialize(existing).unwrap() == bytes, || {

@@ -720,24 +720,12 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             raw!("fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, &string)),
             raw!(
                 "fmi2GetFMUstate",
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi2GetFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.get_fmu_state)(c, q)
-                )
+                crate::guard::fill_state2(&mut st, "fmi2GetFMUstate", |q| (api.get_fmu_state)(c, q))
             ),
             raw!("fmi2SetFMUstate", (api.set_fmu_state)(c, st)),
             raw!(
                 "fmi2FreeFMUstate",
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi2FreeFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.free_fmu_state)(c, q)
-                )
+                crate::guard::fill_state2(&mut st, "fmi2FreeFMUstate", |q| (api.free_fmu_state)(c, q))
             ),
             (
                 "fmi2SerializedFMUstateSize",
@@ -755,13 +743,9 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             ),
             (
                 "fmi2DeSerializeFMUstate",
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi2DeSerializeFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.deserialize_fmu_state)(c, ptr::null(), 0, q),
-                ),
+                crate::guard::fill_state2(&mut st, "fmi2DeSerializeFMUstate", |q| {
+                    (api.deserialize_fmu_state)(c, ptr::null(), 0, q)
+                }),
             ),
             (
                 "fmi2GetDirectionalDerivative",

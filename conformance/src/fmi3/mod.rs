@@ -1093,14 +1093,7 @@ impl<'a> Inst<'a> {
         let mut st: fmi3FMUState = std::ptr::null_mut();
         // SAFETY: the standard's calls with valid pointers on a live instance.
         unsafe {
-            if crate::guard::fill_one(
-                &mut st,
-                "fmi3GetFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.get_fmu_state)(self.c, q),
-            ) != fmi3OK
-            {
+            if crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(self.c, q)) != fmi3OK {
                 return Err("fmi3GetFMUState of a new instance failed".into());
             }
             let mut size = 0usize;
@@ -1119,24 +1112,12 @@ impl<'a> Inst<'a> {
                 match guarded.try_values(|| format!("fmi3SerializeFMUState with size = {size}"), STATE_RULE3) {
                     Ok(b) => bytes = b,
                     Err(e) => {
-                        crate::guard::fill_one(
-                            &mut st,
-                            "fmi3FreeFMUState",
-                            "one FMU state",
-                            crate::guard::STATE_RULE3,
-                            |q| (api.free_fmu_state)(self.c, q),
-                        );
+                        crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(self.c, q));
                         return Err(e);
                     }
                 }
             }
-            crate::guard::fill_one(
-                &mut st,
-                "fmi3FreeFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.free_fmu_state)(self.c, q),
-            );
+            crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(self.c, q));
             if s != fmi3OK {
                 return Err(format!(
                     "serializing the state of a new instance answered {}",
@@ -1157,13 +1138,7 @@ impl<'a> Inst<'a> {
                 // SAFETY: a live instance; each pointer is to a live local of the length passed,
                 // or is an FMU state.
                 let s = self.call("fmi3GetFMUState", |c| unsafe {
-                    crate::guard::fill_one(
-                        &mut st,
-                        "fmi3GetFMUState",
-                        "one FMU state",
-                        crate::guard::STATE_RULE3,
-                        |q| (api.get_fmu_state)(c, q),
-                    )
+                    crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
                 });
                 if let Some(v) = self.state_val(st, true) {
                     self.output("state", v);
@@ -1210,13 +1185,7 @@ impl<'a> Inst<'a> {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3FreeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.free_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
             }),
             fmi3OK
         );
@@ -1237,13 +1206,9 @@ impl<'a> Inst<'a> {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
             // FMU state.
             .call("fmi3DeserializeFMUState", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3DeserializeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
+                    (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
+                })
             });
         if let Some(v) = self.state_val(st, true) {
             self.output("state", v);
@@ -1259,13 +1224,7 @@ impl<'a> Inst<'a> {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let f = self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
-            crate::guard::fill_one(
-                &mut st,
-                "fmi3FreeFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.free_fmu_state)(c, q),
-            )
+            crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
         });
         assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState: {}", self.fmu.id, self.log_text());
         s
@@ -1330,21 +1289,9 @@ pub fn euler_step_n(inst: &mut Inst, nx: usize, h: f64) {
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.args(vec![]).call("fmi3CompletedIntegratorStep", |c| unsafe {
-        crate::guard::fill_one(
-            &mut enter,
-            "fmi3CompletedIntegratorStep (enterEventMode)",
-            "one value",
-            crate::guard::OUTPUT_ARGUMENTS_RULE3,
-            |qa| {
-                crate::guard::fill_one(
-                    &mut term,
-                    "fmi3CompletedIntegratorStep (terminateSimulation)",
-                    "one value",
-                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                    |qb| (api.completed_integrator_step)(c, true, qa, qb),
-                )
-            },
-        )
+        crate::guard::fill_integrator_step3(&mut enter, &mut term, |qa, qb| {
+            (api.completed_integrator_step)(c, true, qa, qb)
+        })
     });
     assert_eq!(s, fmi3OK, "{id}: fmi3CompletedIntegratorStep: {}", inst.log_text());
     assert!(

@@ -369,13 +369,7 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             }
             Op::GetState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = crate::guard::fill_one(
-                    &mut p,
-                    "fmi2GetFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.get_fmu_state)(c, q),
-                );
+                let s = crate::guard::fill_state2(&mut p, "fmi2GetFMUstate", |q| (api.get_fmu_state)(c, q));
                 if s == fmi2OK {
                     sh.slots[*slot] = Some((p, sh.snap()));
                 }
@@ -393,13 +387,7 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             },
             Op::FreeState { slot } => {
                 let mut p = sh.slots[*slot].map_or(ptr::null_mut(), |s| s.0);
-                let s = crate::guard::fill_one(
-                    &mut p,
-                    "fmi2FreeFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.free_fmu_state)(c, q),
-                );
+                let s = crate::guard::fill_state2(&mut p, "fmi2FreeFMUstate", |q| (api.free_fmu_state)(c, q));
                 if s == fmi2OK {
                     assert!(p.is_null(), "fmi2FreeFMUstate left the pointer set");
                     sh.slots[*slot] = None;
@@ -446,13 +434,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 let damage = if fmu.own_state_format() { damage } else { &None };
                 let Some((mut bytes, snap)) = sh.bytes.clone() else {
                     let mut p = ptr::null_mut();
-                    let s = crate::guard::fill_one(
-                        &mut p,
-                        "fmi2DeSerializeFMUstate",
-                        "one FMU state",
-                        crate::guard::STATE_RULE2,
-                        |q| (api.deserialize_fmu_state)(c, ptr::null(), 8, q),
-                    );
+                    let s = crate::guard::fill_state2(&mut p, "fmi2DeSerializeFMUstate", |q| {
+                        (api.deserialize_fmu_state)(c, ptr::null(), 8, q)
+                    });
                     return (s, Expect::Refused, None);
                 };
                 let damaged = damage.is_some() || truncate.is_some_and(|n| n % (bytes.len() + 1) < bytes.len());
@@ -465,13 +449,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 }
                 let mut p = sh.slots[*to].map_or(ptr::null_mut(), |s| s.0);
                 let before = p;
-                let s = crate::guard::fill_one(
-                    &mut p,
-                    "fmi2DeSerializeFMUstate",
-                    "one FMU state",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.deserialize_fmu_state)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q),
-                );
+                let s = crate::guard::fill_state2(&mut p, "fmi2DeSerializeFMUstate", |q| {
+                    (api.deserialize_fmu_state)(c, bytes.as_ptr() as *const fmi2Byte, bytes.len(), q)
+                });
                 if s == fmi2OK {
                     sh.slots[*to] = Some((p, snap));
                 } else {
@@ -600,6 +580,44 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
     }
 }
 
+/// What every call of a random sequence answers, of either interface: within 10 s, one of the
+/// four statuses, and (where mistakes are judged) a message with any status but fmi2OK.
+/// `Ok(false)`: the sequence ends here.
+pub(super) fn answered(
+    at: &str,
+    took: Duration,
+    status: fmi2Status,
+    log: &[crate::LogEntry],
+    judge_mistakes: bool,
+) -> Result<bool, TestCaseError> {
+    prop_assert!(took < Duration::from_secs(10), "{}: took {:?}", at, took);
+    prop_assert!(
+        matches!(status, fmi2OK | fmi2Warning | fmi2Discard | fmi2Error),
+        "{}: answered {} ({}); log {:?}",
+        at,
+        status_name(status),
+        status,
+        log
+    );
+    // After fmi2Error FMI 2.0.5 (§2.1.3) leaves the instance undefined but for fmi2Reset,
+    // fmi2SetFMUstate and fmi2FreeInstance, and requires no message with it: on another
+    // exporter's FMU the sequence ends there.
+    if status == fmi2Error && !judge_mistakes {
+        return Ok(false);
+    }
+    // FMI 2.0.5 asks no message with a status: judged where mistakes are.
+    if status != fmi2OK && judge_mistakes {
+        prop_assert!(
+            log.iter().any(|e| e.status == status),
+            "{}: {} without a message; log {:?}",
+            at,
+            status_name(status),
+            log
+        );
+    }
+    Ok(true)
+}
+
 pub(super) fn execute(fmu: &Fmu, logging_on: bool, ops: &[Op]) -> Result<(), TestCaseError> {
     execute_with(fmu, logging_on, ops, &mut |_, _, _, _, _| Ok(()))
 }
@@ -701,30 +719,8 @@ pub(super) fn run_ops(inst: &mut Instance, sh: &mut Shadow, ops: &[Op], hook: Ho
             }
         }
         let at = format!("op {i} {op:?} in {:?}", sh.state);
-        prop_assert!(took < Duration::from_secs(10), "{}: took {:?}", at, took);
-        prop_assert!(
-            matches!(status, fmi2OK | fmi2Warning | fmi2Discard | fmi2Error),
-            "{}: answered {} ({}); log {:?}",
-            at,
-            status_name(status),
-            status,
-            log
-        );
-        // After fmi2Error FMI 2.0.5 (§2.1.3) leaves the instance undefined but for fmi2Reset,
-        // fmi2SetFMUstate and fmi2FreeInstance, and requires no message with it: on another
-        // exporter's FMU the sequence ends there.
-        if status == fmi2Error && !judge_mistakes {
+        if !answered(&at, took, status, &log, judge_mistakes)? {
             return Ok(());
-        }
-        // FMI 2.0.5 asks no message with a status: judged where mistakes are.
-        if status != fmi2OK && judge_mistakes {
-            prop_assert!(
-                log.iter().any(|e| e.status == status),
-                "{}: {} without a message; log {:?}",
-                at,
-                status_name(status),
-                log
-            );
         }
         if !allowed && judge_mistakes {
             prop_assert_eq!(

@@ -40,13 +40,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             a.call("fmi3GetFMUState", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3GetFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.get_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
             }),
             fmi3OK
         );
@@ -111,26 +105,14 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             a.call("fmi3GetFMUState (update)", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3GetFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.get_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
             }),
             fmi3OK
         );
         assert_eq!(
             // SAFETY: a live instance; `st` is the state it returned, freed once (it sets `st` to NULL).
             a.call("fmi3FreeFMUState", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3FreeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.free_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
             }),
             fmi3OK
         );
@@ -172,13 +154,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         assert_eq!(
             // SAFETY: a live instance; the pointer is to a live local (and the guard after it).
             a.call("get", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3GetFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.get_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
             }),
             fmi3OK
         );
@@ -206,13 +182,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         assert_eq!(
             // SAFETY: a live instance and the FMU state it returned (and the guard after the pointer).
             a.call("free", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3FreeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.free_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
             }),
             fmi3OK
         );
@@ -253,26 +223,16 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
         let s = crate::outcome::on_purpose(|| {
             // SAFETY: a live instance; `b` is readable for the length passed; `st` a live local.
             a.call(what, |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3DeserializeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
+                    (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), q)
+                })
             })
         });
         if s == fmi3OK {
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let _ = a.call("free", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut st,
-                    "fmi3FreeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.free_fmu_state)(c, q),
-                )
+                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
             });
         }
         // A damaged buffer is the importer's mistake (FMI 3.0.2 §2.2.6.4 defines deserializing
@@ -306,13 +266,9 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
         // SAFETY: NULL bytes with a non-zero size on purpose: the FMU must refuse without reading
         // them; `st` is a live local.
         a.call("fmi3DeserializeFMUState(NULL, n)", |c| unsafe {
-            crate::guard::fill_one(
-                &mut st,
-                "fmi3DeserializeFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.deserialize_fmu_state)(c, null(), bytes.len(), q),
-            )
+            crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
+                (api.deserialize_fmu_state)(c, null(), bytes.len(), q)
+            })
         })
     });
     crate::outcome::warn_unless(s == fmi3Error, || {

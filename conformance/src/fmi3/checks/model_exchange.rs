@@ -328,21 +328,9 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = i.call("fmi3CompletedIntegratorStep", |c| unsafe {
-            crate::guard::fill_one(
-                &mut enter,
-                "fmi3CompletedIntegratorStep (enterEventMode)",
-                "one value",
-                crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                |qa| {
-                    crate::guard::fill_one(
-                        &mut term,
-                        "fmi3CompletedIntegratorStep (terminateSimulation)",
-                        "one value",
-                        crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                        |qb| (api.completed_integrator_step)(c, true, qa, qb),
-                    )
-                },
-            )
+            crate::guard::fill_integrator_step3(&mut enter, &mut term, |qa, qb| {
+                (api.completed_integrator_step)(c, true, qa, qb)
+            })
         });
         assert_eq!(
             (s, term),

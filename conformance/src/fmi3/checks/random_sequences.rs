@@ -149,21 +149,9 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                 // this instance's live handle; each pointer we pass is to a live local of at
                 // least the length passed (or is an FMU state, the FMU's own handle).
                 Op::Step if me => inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-                    crate::guard::fill_one(
-                        &mut 0,
-                        "fmi3CompletedIntegratorStep (enterEventMode)",
-                        "one value",
-                        crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                        |qa| {
-                            crate::guard::fill_one(
-                                &mut 0,
-                                "fmi3CompletedIntegratorStep (terminateSimulation)",
-                                "one value",
-                                crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                                |qb| (api.completed_integrator_step)(c, true, qa, qb),
-                            )
-                        },
-                    )
+                    crate::guard::fill_integrator_step3(&mut 0, &mut 0, |qa, qb| {
+                        (api.completed_integrator_step)(c, true, qa, qb)
+                    })
                 }),
                 Op::Step => inst.do_step(h).0,
                 Op::EnterEventMode => inst.unary("fmi3EnterEventMode", api.enter_event_mode),
@@ -209,21 +197,9 @@ fn run_sequence(fmu: &Fmu3, me: bool, ops: &[Op], hook: Hook) -> Result<(), Test
                     // this instance's live handle; each pointer we pass is to a live local of
                     // at least the length passed (or is an FMU state, the FMU's own handle).
                     inst.call("fmi3CompletedIntegratorStep", |c| unsafe {
-                        crate::guard::fill_one(
-                            &mut 0,
-                            "fmi3CompletedIntegratorStep (enterEventMode)",
-                            "one value",
-                            crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                            |qa| {
-                                crate::guard::fill_one(
-                                    &mut 0,
-                                    "fmi3CompletedIntegratorStep (terminateSimulation)",
-                                    "one value",
-                                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                                    |qb| (api.completed_integrator_step)(c, true, qa, qb),
-                                )
-                            },
-                        )
+                        crate::guard::fill_integrator_step3(&mut 0, &mut 0, |qa, qb| {
+                            (api.completed_integrator_step)(c, true, qa, qb)
+                        })
                     })
                 }
             }

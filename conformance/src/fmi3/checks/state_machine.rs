@@ -146,13 +146,9 @@ pub fn fmi3_a_null_instance_is_refused_by_every_function(fmu: &Fmu3) {
         ));
         answers.push((
             "fmi3DeserializeFMUState",
-            crate::guard::fill_one(
-                &mut st,
-                "fmi3DeserializeFMUState",
-                "one FMU state",
-                crate::guard::STATE_RULE3,
-                |q| (api.deserialize_fmu_state)(null_mut(), buf.as_ptr(), buf.len(), q),
-            ),
+            crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
+                (api.deserialize_fmu_state)(null_mut(), buf.as_ptr(), buf.len(), q)
+            }),
         ));
         (api.free_instance)(null_mut());
     }

@@ -332,25 +332,14 @@ impl F {
             }
             F::GetFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                let s = valid!(|c| crate::guard::fill_one(
-                    &mut st,
-                    "fmi3GetFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.get_fmu_state)(c, q)
-                ));
+                let s =
+                    valid!(|c| crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q)));
                 if s == fmi3OK {
                     // SAFETY: the standard's function from the library the FMU keeps loaded, on
                     // this instance's live handle; each pointer we pass is to a live local of at
                     // least the length passed (or is an FMU state, the FMU's own handle).
                     let f = i.call("fmi3FreeFMUState", |c| unsafe {
-                        crate::guard::fill_one(
-                            &mut st,
-                            "fmi3FreeFMUState",
-                            "one FMU state",
-                            crate::guard::STATE_RULE3,
-                            |q| (api.free_fmu_state)(c, q),
-                        )
+                        crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
                     });
                     assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState of a state just taken", i.fmu.id);
                 }
@@ -358,13 +347,7 @@ impl F {
             }
             F::FreeFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                valid!(|c| crate::guard::fill_one(
-                    &mut st,
-                    "fmi3FreeFMUState",
-                    "one FMU state",
-                    crate::guard::STATE_RULE3,
-                    |q| (api.free_fmu_state)(c, q)
-                ))
+                valid!(|c| crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q)))
             }
             F::GetDirectionalDerivative => derivative_call(i, false),
             F::GetAdjointDerivative => derivative_call(i, true),
@@ -394,21 +377,10 @@ impl F {
             F::EnterContinuousTimeMode => unary!(enter_continuous_time_mode),
             F::CompletedIntegratorStep => {
                 let (mut a, mut b) = (0u8, 0u8);
-                valid!(|c| crate::guard::fill_one(
-                    &mut a,
-                    "fmi3CompletedIntegratorStep (enterEventMode)",
-                    "one value",
-                    crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                    |qa| {
-                        crate::guard::fill_one(
-                            &mut b,
-                            "fmi3CompletedIntegratorStep (terminateSimulation)",
-                            "one value",
-                            crate::guard::OUTPUT_ARGUMENTS_RULE3,
-                            |qb| (api.completed_integrator_step)(c, true, qa, qb),
-                        )
-                    }
-                ))
+                valid!(|c| crate::guard::fill_integrator_step3(&mut a, &mut b, |qa, qb| (api
+                    .completed_integrator_step)(
+                    c, true, qa, qb
+                )))
             }
             F::SetTime => valid!(|c| (api.set_time)(c, 0.0)),
             F::SetContinuousStates => {
