@@ -138,33 +138,18 @@ pub fn info(fmu: &Path) -> Result<String, String> {
 
 /// One line per `<Terminal>` of terminalsAndIcons.xml: `name (kind): member = variable (kind), ...`.
 fn terminal_lines(text: &str) -> Vec<String> {
-    use quick_xml::events::Event;
-    let mut reader = quick_xml::Reader::from_str(text);
+    use super::ls_bus::{TerminalXml, walk_terminals};
     let mut out: Vec<String> = Vec::new();
     let mut members: Vec<String> = Vec::new();
     let mut current: Option<String> = None;
-    loop {
-        let (e, empty) = match reader.read_event() {
-            Ok(Event::Start(e)) => (e, false),
-            Ok(Event::Empty(e)) => (e, true),
-            Ok(Event::End(e)) if e.name().as_ref() == b"Terminal" => {
-                if let Some(t) = current.take() {
-                    out.push(format!("{t}: {}", members.join(", ")));
-                    members.clear();
-                }
-                continue;
+    walk_terminals(text, |element| match element {
+        TerminalXml::EndOfTerminal => {
+            if let Some(t) = current.take() {
+                out.push(format!("{t}: {}", members.join(", ")));
+                members.clear();
             }
-            Ok(Event::Eof) | Err(_) => break,
-            Ok(_) => continue,
-        };
-        let attr = |name: &str| {
-            e.try_get_attribute(name)
-                .ok()
-                .flatten()
-                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
-                .unwrap_or_default()
-        };
-        match e.name().as_ref() {
+        }
+        TerminalXml::Open { name, attr, empty } => match name {
             b"Terminal" => {
                 let kind = attr("terminalKind");
                 current = Some(if kind.is_empty() {
@@ -183,8 +168,8 @@ fn terminal_lines(text: &str) -> Vec<String> {
                 attr("variableKind")
             )),
             _ => {}
-        }
-    }
+        },
+    });
     out
 }
 

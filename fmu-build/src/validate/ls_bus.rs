@@ -23,33 +23,18 @@ struct Term {
 /// The terminals of `terminalsAndIcons.xml`, nested as written (the file is checked well-formed by
 /// `terminal_problems`; a malformed one gives no terminals here).
 fn terminals(text: &str) -> Vec<Term> {
-    let mut reader = quick_xml::Reader::from_str(text);
     let mut stack: Vec<Term> = Vec::new();
     let mut top = Vec::new();
-    loop {
-        let (e, empty) = match reader.read_event() {
-            Ok(Event::Start(e)) => (e, false),
-            Ok(Event::Empty(e)) => (e, true),
-            Ok(Event::End(e)) if e.name().as_ref() == b"Terminal" => {
-                if let Some(t) = stack.pop() {
-                    match stack.last_mut() {
-                        Some(parent) => parent.nested.push(t),
-                        None => top.push(t),
-                    }
+    walk_terminals(text, |element| match element {
+        TerminalXml::EndOfTerminal => {
+            if let Some(t) = stack.pop() {
+                match stack.last_mut() {
+                    Some(parent) => parent.nested.push(t),
+                    None => top.push(t),
                 }
-                continue;
             }
-            Ok(Event::Eof) | Err(_) => break,
-            Ok(_) => continue,
-        };
-        let attr = |name: &str| {
-            e.try_get_attribute(name)
-                .ok()
-                .flatten()
-                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
-                .unwrap_or_default()
-        };
-        match e.name().as_ref() {
+        }
+        TerminalXml::Open { name, attr, empty } => match name {
             b"Terminal" => {
                 let t = Term {
                     name: attr("name"),
@@ -73,9 +58,51 @@ fn terminals(text: &str) -> Vec<Term> {
                 }
             }
             _ => {}
-        }
-    }
+        },
+    });
     top
+}
+
+/// What [`walk_terminals`] meets in terminalsAndIcons.xml.
+pub(super) enum TerminalXml<'a> {
+    /// An element opens (`empty`: and closes, `<X/>`); `attr` gives an attribute's value ("" if
+    /// it has none).
+    Open {
+        name: &'a [u8],
+        attr: &'a dyn Fn(&str) -> String,
+        empty: bool,
+    },
+    /// `</Terminal>`.
+    EndOfTerminal,
+}
+
+/// Reads terminalsAndIcons.xml element by element, to its end or its first error.
+pub(super) fn walk_terminals(text: &str, mut each: impl FnMut(TerminalXml)) {
+    let mut reader = quick_xml::Reader::from_str(text);
+    loop {
+        let (e, empty) = match reader.read_event() {
+            Ok(Event::Start(e)) => (e, false),
+            Ok(Event::Empty(e)) => (e, true),
+            Ok(Event::End(e)) if e.name().as_ref() == b"Terminal" => {
+                each(TerminalXml::EndOfTerminal);
+                continue;
+            }
+            Ok(Event::Eof) | Err(_) => break,
+            Ok(_) => continue,
+        };
+        let attr = |name: &str| {
+            e.try_get_attribute(name)
+                .ok()
+                .flatten()
+                .and_then(|a| a.unescape_value().ok().map(|v| v.into_owned()))
+                .unwrap_or_default()
+        };
+        each(TerminalXml::Open {
+            name: e.name().as_ref(),
+            attr: &attr,
+            empty,
+        });
+    }
 }
 
 /// The layered standard's rules on one FMU: `terminals_xml` is its `terminalsAndIcons.xml` (if

@@ -46,13 +46,7 @@ const VARS: &[Variable] = &[
 
 const BALL: ModelDescription = ModelDescription {
     model_identifier: "Ball",
-    description: "",
-    author: "",
     version: "",
-    copyright: "",
-    license: "",
-    generation_tool: "test",
-    default_experiment: None,
     units: &[Unit {
         name: "m",
         base: M,
@@ -63,12 +57,8 @@ const BALL: ModelDescription = ModelDescription {
             inverse: false,
         }],
     }],
-    log_categories: &[],
     variables: VARS,
-    internal_state: "",
-    event_indicators: &[],
-    terminals: &[],
-    bus_simulation: false,
+    ..super::tests::D
 };
 
 /// The description as `cargo fmu` gets it from a library of that version.

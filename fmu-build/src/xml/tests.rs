@@ -40,7 +40,8 @@ const VARS: &[Variable] = &[
     ),
 ];
 
-const D: ModelDescription = ModelDescription {
+/// Nothing but the integer bounds of `VARS`; the alias tests start from it too.
+pub(super) const D: ModelDescription = ModelDescription {
     model_identifier: "Bounds",
     description: "",
     author: "",
