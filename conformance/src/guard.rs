@@ -220,6 +220,21 @@ pub fn fill_state3<T: Plain, R>(st: &mut T, function: &str, call: impl FnOnce(*m
     fill_one(st, function, "one FMU state", STATE_RULE3, call)
 }
 
+/// [`fill_one`] of the size fmi2SerializedFMUstateSize writes.
+pub fn fill_state_size2<R>(size: &mut usize, function: &str, call: impl FnOnce(*mut usize) -> R) -> R {
+    fill_one(size, function, "one size_t", STATE_RULE2, call)
+}
+
+/// [`fill_one`] of the size fmi3SerializedFMUStateSize writes.
+pub fn fill_state_size3<R>(size: &mut usize, function: &str, call: impl FnOnce(*mut usize) -> R) -> R {
+    fill_one(size, function, "one size_t", STATE_RULE3, call)
+}
+
+/// [`fill_one`] of the value an FMI 2.0 status getter writes (fmi2GetStatus, fmi2GetRealStatus, ...).
+pub fn fill_status2<T: Plain, R>(value: &mut T, function: &str, call: impl FnOnce(*mut T) -> R) -> R {
+    fill_one(value, function, "one value", STATUS_RULE2, call)
+}
+
 /// fmi3CompletedIntegratorStep's outputs enterEventMode and terminateSimulation, one value each
 /// with a guard after it: `call` gets the pointers to `enter` and `term`.
 pub fn fill_integrator_step3<T: Plain, R>(enter: &mut T, term: &mut T, call: impl FnOnce(*mut T, *mut T) -> R) -> R {

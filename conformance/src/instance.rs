@@ -497,13 +497,9 @@ impl<'a> Instance<'a> {
         };
         // SAFETY: a state of this FMU and valid out pointers.
         let st = unsafe {
-            crate::guard::fill_one(
-                &mut size,
-                "fmi2SerializedFMUstateSize",
-                "one size_t",
-                crate::guard::STATE_RULE2,
-                |p| self.answered(i, (self.fmu.api.serialized_fmu_state_size)(self.c, s, p)),
-            )
+            crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                self.answered(i, (self.fmu.api.serialized_fmu_state_size)(self.c, s, p))
+            })
         };
         if st != fmi2OK {
             return Err(st);
@@ -697,13 +693,9 @@ impl<'a> Instance<'a> {
         );
         // SAFETY: a valid out pointer.
         let s = unsafe {
-            crate::guard::fill_one(
-                &mut t,
-                "fmi2GetRealStatus",
-                "one value",
-                crate::guard::STATUS_RULE2,
-                |p| self.answered(i, (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, p)),
-            )
+            crate::guard::fill_status2(&mut t, "fmi2GetRealStatus", |p| {
+                self.answered(i, (self.fmu.api.get_real_status)(self.c, fmi2LastSuccessfulTime, p))
+            })
         };
         (s, t)
     }
@@ -716,13 +708,9 @@ impl<'a> Instance<'a> {
         );
         // SAFETY: a valid out pointer.
         let s = unsafe {
-            crate::guard::fill_one(
-                &mut b,
-                "fmi2GetBooleanStatus",
-                "one value",
-                crate::guard::STATUS_RULE2,
-                |p| self.answered(i, (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, p)),
-            )
+            crate::guard::fill_status2(&mut b, "fmi2GetBooleanStatus", |p| {
+                self.answered(i, (self.fmu.api.get_boolean_status)(self.c, fmi2Terminated, p))
+            })
         };
         (s, b)
     }

@@ -183,13 +183,9 @@ impl Fmu {
             let mut status = crate::guard::fill_state2(&mut s, "fmi2GetFMUstate", |q| (api.get_fmu_state)(c, q));
             if status == fmi2OK {
                 let mut size = 0usize;
-                status = crate::guard::fill_one(
-                    &mut size,
-                    "fmi2SerializedFMUstateSize",
-                    "one size_t",
-                    crate::guard::STATE_RULE2,
-                    |p| (api.serialized_fmu_state_size)(c, s, p),
-                );
+                status = crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                    (api.serialized_fmu_state_size)(c, s, p)
+                });
                 if status == fmi2OK && size <= 1 << 30 {
                     let mut guarded = guard::Guarded::new(size, 0u8);
                     outcome::breadcrumb("fmi2SerializeFMUstate (probing the state format)");

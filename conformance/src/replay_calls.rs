@@ -323,13 +323,9 @@ fn replay2_line(
             let mut size = 0usize;
             // SAFETY: a live instance, a state of it (or NULL) and a valid out pointer.
             let s = unsafe {
-                crate::guard::fill_one(
-                    &mut size,
-                    "fmi2SerializedFMUstateSize",
-                    "one size_t",
-                    STATE_RULE2,
-                    |q| (fmu.api.serialized_fmu_state_size)(inst.c, st, q),
-                )
+                crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |q| {
+                    (fmu.api.serialized_fmu_state_size)(inst.c, st, q)
+                })
             };
             details.push(format!("size {size}"));
             s
@@ -556,9 +552,7 @@ fn replay3_line(
             let mut size = 0usize;
             // SAFETY: a live instance, a state it made; one size_t with a guard after it.
             let s = inst.call(f, |c| unsafe {
-                crate::guard::fill_one(&mut size, f, "one size_t", STATE_RULE3, |q| {
-                    (api.serialized_fmu_state_size)(c, st, q)
-                })
+                crate::guard::fill_state_size3(&mut size, f, |q| (api.serialized_fmu_state_size)(c, st, q))
             });
             details.push(format!("size {size}"));
             s

@@ -302,13 +302,9 @@ fn cases() -> Vec<Case> {
                 let mut size = 0usize;
                 // SAFETY: a state of this FMU, a valid out pointer.
                 let st = unsafe {
-                    crate::guard::fill_one(
-                        &mut size,
-                        "fmi2SerializedFMUstateSize",
-                        "one size_t",
-                        crate::guard::STATE_RULE2,
-                        |p| (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p),
-                    )
+                    crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                        (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p)
+                    })
                 };
                 if st == fmi2OK {
                     assert_eq!(size, d.bytes[s as usize].len(), "fmi2SerializedFMUstateSize");
@@ -431,7 +427,7 @@ fn cases() -> Vec<Case> {
                 let mut v = 99;
                 // SAFETY: a valid out pointer.
                 unsafe {
-                    crate::guard::fill_one(&mut v, "fmi2GetStatus", "one value", crate::guard::STATUS_RULE2, |p| {
+                    crate::guard::fill_status2(&mut v, "fmi2GetStatus", |p| {
                         (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, p)
                     })
                 }
@@ -453,13 +449,9 @@ fn cases() -> Vec<Case> {
                 let mut v = 0;
                 // SAFETY: a valid out pointer.
                 unsafe {
-                    crate::guard::fill_one(
-                        &mut v,
-                        "fmi2GetIntegerStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p),
-                    )
+                    crate::guard::fill_status2(&mut v, "fmi2GetIntegerStatus", |p| {
+                        (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p)
+                    })
                 }
             },
         },
@@ -479,13 +471,9 @@ fn cases() -> Vec<Case> {
                 let mut v: fmi2String = ptr::null();
                 // SAFETY: a valid out pointer.
                 unsafe {
-                    crate::guard::fill_one(
-                        &mut v,
-                        "fmi2GetStringStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p),
-                    )
+                    crate::guard::fill_status2(&mut v, "fmi2GetStringStatus", |p| {
+                        (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p)
+                    })
                 }
             },
         },
@@ -729,13 +717,9 @@ pub fn a_null_component_is_refused_by_every_function(fmu: &Fmu) {
             ),
             (
                 "fmi2SerializedFMUstateSize",
-                crate::guard::fill_one(
-                    &mut size,
-                    "fmi2SerializedFMUstateSize",
-                    "one size_t",
-                    crate::guard::STATE_RULE2,
-                    |p| (api.serialized_fmu_state_size)(c, st, p),
-                ),
+                crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                    (api.serialized_fmu_state_size)(c, st, p)
+                }),
             ),
             (
                 "fmi2SerializeFMUstate",

@@ -1098,13 +1098,9 @@ impl<'a> Inst<'a> {
             }
             let mut size = 0usize;
             let mut bytes = vec![];
-            let mut s = crate::guard::fill_one(
-                &mut size,
-                "fmi3SerializedFMUStateSize",
-                "one size_t",
-                crate::guard::STATE_RULE3,
-                |p| (api.serialized_fmu_state_size)(self.c, st, p),
-            );
+            let mut s = crate::guard::fill_state_size3(&mut size, "fmi3SerializedFMUStateSize", |p| {
+                (api.serialized_fmu_state_size)(self.c, st, p)
+            });
             if s == fmi3OK && size <= 1 << 30 {
                 let mut guarded = Guarded::new(size, 0u8);
                 crate::outcome::breadcrumb("fmi3SerializeFMUState");
@@ -1156,13 +1152,9 @@ impl<'a> Inst<'a> {
                 // SAFETY: a live instance; each pointer is to a live local of the length passed,
                 // or is an FMU state.
                 .call("fmi3SerializedFMUStateSize", |c| unsafe {
-                    crate::guard::fill_one(
-                        &mut size,
-                        "fmi3SerializedFMUStateSize",
-                        "one size_t",
-                        crate::guard::STATE_RULE3,
-                        |p| (api.serialized_fmu_state_size)(c, st, p),
-                    )
+                    crate::guard::fill_state_size3(&mut size, "fmi3SerializedFMUStateSize", |p| {
+                        (api.serialized_fmu_state_size)(c, st, p)
+                    })
                 }),
             fmi3OK
         );

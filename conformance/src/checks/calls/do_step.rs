@@ -289,13 +289,9 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
     let mut r = -1.0;
     // SAFETY: a valid out pointer.
     let s = unsafe {
-        crate::guard::fill_one(
-            &mut r,
-            "fmi2GetRealStatus",
-            "one value",
-            crate::guard::STATUS_RULE2,
-            |p| (fmu.api.get_real_status)(inst.c, fmi2Terminated, p),
-        )
+        crate::guard::fill_status2(&mut r, "fmi2GetRealStatus", |p| {
+            (fmu.api.get_real_status)(inst.c, fmi2Terminated, p)
+        })
     };
     assert_eq!(
         (s, r),
@@ -306,13 +302,9 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
     let mut b = -1;
     // SAFETY: a valid out pointer.
     let s = unsafe {
-        crate::guard::fill_one(
-            &mut b,
-            "fmi2GetBooleanStatus",
-            "one value",
-            crate::guard::STATUS_RULE2,
-            |p| (fmu.api.get_boolean_status)(inst.c, 99, p),
-        )
+        crate::guard::fill_status2(&mut b, "fmi2GetBooleanStatus", |p| {
+            (fmu.api.get_boolean_status)(inst.c, 99, p)
+        })
     };
     assert_eq!((s, b), (fmi2Discard, -1), "{}: fmi2GetBooleanStatus(99)", fmu.id);
     // A NULL out pointer is the importer's mistake (FMI 2.0.5 §4.2.3 has the importer provide

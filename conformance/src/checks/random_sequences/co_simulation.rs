@@ -397,13 +397,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             Op::Serialize { slot } => match sh.slots[*slot] {
                 Some((p, snap)) => {
                     let mut size = 0usize;
-                    let s1 = crate::guard::fill_one(
-                        &mut size,
-                        "fmi2SerializedFMUstateSize",
-                        "one size_t",
-                        crate::guard::STATE_RULE2,
-                        |q| (api.serialized_fmu_state_size)(c, p, q),
-                    );
+                    let s1 = crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |q| {
+                        (api.serialized_fmu_state_size)(c, p, q)
+                    });
                     if s1 != fmi2OK {
                         return (s1, Expect::Succeeds, None);
                     }
@@ -418,13 +414,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                 None => {
                     let mut size = 0usize;
                     (
-                        crate::guard::fill_one(
-                            &mut size,
-                            "fmi2SerializedFMUstateSize",
-                            "one size_t",
-                            crate::guard::STATE_RULE2,
-                            |p| (api.serialized_fmu_state_size)(c, ptr::null_mut(), p),
-                        ),
+                        crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                            (api.serialized_fmu_state_size)(c, ptr::null_mut(), p)
+                        }),
                         Expect::Refused,
                         None,
                     )
@@ -474,13 +466,9 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
                     }
                     fmi2Discard => {
                         let mut lst = f64::NAN;
-                        let _ = crate::guard::fill_one(
-                            &mut lst,
-                            "fmi2GetRealStatus",
-                            "one value",
-                            crate::guard::STATUS_RULE2,
-                            |p| (api.get_real_status)(c, fmi2LastSuccessfulTime, p),
-                        );
+                        let _ = crate::guard::fill_status2(&mut lst, "fmi2GetRealStatus", |p| {
+                            (api.get_real_status)(c, fmi2LastSuccessfulTime, p)
+                        });
                         sh.time = lst;
                         Some(State::StepFailed)
                     }
@@ -503,39 +491,19 @@ pub(super) fn call(inst: &mut Instance, sh: &mut Shadow, op: &Op) -> (fmi2Status
             Op::CancelStep => ((api.cancel_step)(c), Expect::Anything, None),
             Op::Status { which, kind } => {
                 let s = match which {
-                    0 => {
-                        crate::guard::fill_one(&mut 0, "fmi2GetStatus", "one value", crate::guard::STATUS_RULE2, |p| {
-                            (api.get_status)(c, *kind, p)
-                        })
-                    }
-                    1 => crate::guard::fill_one(
-                        &mut 0.0,
-                        "fmi2GetRealStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (api.get_real_status)(c, *kind, p),
-                    ),
-                    2 => crate::guard::fill_one(
-                        &mut 0,
-                        "fmi2GetIntegerStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (api.get_integer_status)(c, *kind, p),
-                    ),
-                    3 => crate::guard::fill_one(
-                        &mut 0,
-                        "fmi2GetBooleanStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (api.get_boolean_status)(c, *kind, p),
-                    ),
-                    _ => crate::guard::fill_one(
-                        &mut ptr::null(),
-                        "fmi2GetStringStatus",
-                        "one value",
-                        crate::guard::STATUS_RULE2,
-                        |p| (api.get_string_status)(c, *kind, p),
-                    ),
+                    0 => crate::guard::fill_status2(&mut 0, "fmi2GetStatus", |p| (api.get_status)(c, *kind, p)),
+                    1 => crate::guard::fill_status2(&mut 0.0, "fmi2GetRealStatus", |p| {
+                        (api.get_real_status)(c, *kind, p)
+                    }),
+                    2 => crate::guard::fill_status2(&mut 0, "fmi2GetIntegerStatus", |p| {
+                        (api.get_integer_status)(c, *kind, p)
+                    }),
+                    3 => crate::guard::fill_status2(&mut 0, "fmi2GetBooleanStatus", |p| {
+                        (api.get_boolean_status)(c, *kind, p)
+                    }),
+                    _ => crate::guard::fill_status2(&mut ptr::null(), "fmi2GetStringStatus", |p| {
+                        (api.get_string_status)(c, *kind, p)
+                    }),
                 };
                 (s, Expect::Anything, None)
             }

@@ -275,25 +275,17 @@ pub(super) fn me_call(inst: &mut Instance, sh: &mut MeShadow, op: &MeOp) -> (fmi
                 let Some((p, _, _)) = sh.slots[*slot] else {
                     let mut size = 0usize;
                     return (
-                        crate::guard::fill_one(
-                            &mut size,
-                            "fmi2SerializedFMUstateSize",
-                            "one size_t",
-                            crate::guard::STATE_RULE2,
-                            |p| (api.serialized_fmu_state_size)(c, ptr::null_mut(), p),
-                        ),
+                        crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
+                            (api.serialized_fmu_state_size)(c, ptr::null_mut(), p)
+                        }),
                         Expect::Refused,
                         None,
                     );
                 };
                 let mut size = 0usize;
-                let s = crate::guard::fill_one(
-                    &mut size,
-                    "fmi2SerializedFMUstateSize",
-                    "one size_t",
-                    crate::guard::STATE_RULE2,
-                    |q| (api.serialized_fmu_state_size)(c, p, q),
-                );
+                let s = crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |q| {
+                    (api.serialized_fmu_state_size)(c, p, q)
+                });
                 if s != fmi2OK {
                     return (s, Expect::Succeeds, None);
                 }

@@ -126,13 +126,9 @@ pub fn fmi3_a_null_instance_is_refused_by_every_function(fmu: &Fmu3) {
     unsafe {
         answers.push((
             "fmi3SerializedFMUStateSize",
-            crate::guard::fill_one(
-                &mut size,
-                "fmi3SerializedFMUStateSize",
-                "one size_t",
-                crate::guard::STATE_RULE3,
-                |p| (api.serialized_fmu_state_size)(null_mut(), null_mut(), p),
-            ),
+            crate::guard::fill_state_size3(&mut size, "fmi3SerializedFMUStateSize", |p| {
+                (api.serialized_fmu_state_size)(null_mut(), null_mut(), p)
+            }),
         ));
         answers.push((
             "fmi3SerializeFMUState",
