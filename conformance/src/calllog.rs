@@ -42,13 +42,28 @@ pub enum Val {
 
 impl std::fmt::Display for Val {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        /// `[a,b,...]` as [`list`] writes it, item by item (the breadcrumb of every call is
+        /// formatted so, and stops formatting when full).
+        fn items<T>(f: &mut std::fmt::Formatter<'_>, v: &[T], item: impl Fn(&T) -> String) -> std::fmt::Result
+        where
+            T: std::fmt::Display,
+        {
+            f.write_str("[")?;
+            for (i, x) in v.iter().enumerate() {
+                if i > 0 {
+                    f.write_str(",")?;
+                }
+                f.write_str(&item(x))?;
+            }
+            f.write_str("]")
+        }
         match self {
             Val::F64(x) => f.write_str(&real(*x)),
             Val::U64(x) => write!(f, "{x}"),
             Val::Bool(b) => write!(f, "{b}"),
-            Val::U32s(v) => f.write_str(&list(v)),
-            Val::F64s(v) => f.write_str(&list(v.iter().map(|x| real(*x)))),
-            Val::I64s(v) => f.write_str(&list(v)),
+            Val::U32s(v) => items(f, v, u32::to_string),
+            Val::F64s(v) => items(f, v, |x| real(*x)),
+            Val::I64s(v) => items(f, v, i64::to_string),
             Val::Bytes(b) => {
                 f.write_str("hex:")?;
                 b.iter().try_for_each(|x| write!(f, "{x:02x}"))
@@ -154,6 +169,8 @@ thread_local! {
     static RETIRED: RefCell<Vec<Log>> = const { RefCell::new(Vec::new()) };
     static LAST: RefCell<Option<Log>> = const { RefCell::new(None) };
     static NOTES: RefCell<Vec<(u64, Note)>> = const { RefCell::new(Vec::new()) };
+    /// The call a check said it failed on ([`fails_at`]), the first one said.
+    static FAILING: Cell<Option<u64>> = const { Cell::new(None) };
 }
 
 /// What a check said about a call.
@@ -205,6 +222,11 @@ impl Log {
         self.calls.last().or(self.instantiate.as_ref()).map_or(0, |r| r.seq)
     }
 
+    /// Whether call `seq` is this instance's.
+    fn holds(&self, seq: u64) -> bool {
+        self.instantiate.as_ref().is_some_and(|i| i.seq <= seq) && seq <= self.last_seq()
+    }
+
     /// Records a call about to be made (its status unknown until [`Log::answered`]); its index.
     pub fn call(
         &mut self,
@@ -212,17 +234,23 @@ impl Log {
         args: Vec<(&'static str, Val)>,
         replayable: bool,
     ) -> usize {
-        if self.calls.len() >= MAX_CALLS {
-            self.cut += 1;
-            return usize::MAX;
-        }
-        self.calls.push(Rec {
+        let rec = Rec {
             seq: next_seq(),
             function: function.into(),
             args,
             replayable,
             status: None,
-        });
+        };
+        // Every call recorded names itself in the breadcrumb, so that a crash inside the FMU is
+        // reported with the call that crashed (its arguments as the reproducer writes them).
+        if crate::outcome::breadcrumbs_on() {
+            crate::outcome::breadcrumb(&line_of_at_most(&rec, crate::outcome::BREADCRUMB_BYTES));
+        }
+        if self.calls.len() >= MAX_CALLS {
+            self.cut += 1;
+            return usize::MAX;
+        }
+        self.calls.push(rec);
         self.calls.len() - 1
     }
 
@@ -264,6 +292,7 @@ pub fn begin() {
     RETIRED.with(|r| r.borrow_mut().clear());
     LAST.with(|l| *l.borrow_mut() = None);
     NOTES.with(|n| n.borrow_mut().clear());
+    FAILING.with(|f| f.set(None));
 }
 
 /// An instance's log, handed over when the instance is dropped.
@@ -271,7 +300,9 @@ pub fn retire(log: Log) {
     if log.instantiate.is_none() {
         return;
     }
-    if std::thread::panicking() {
+    // The instance of the call the check said it failed on is kept, though the check goes on
+    // with other instances (and fails when it has gathered every failure).
+    if std::thread::panicking() || FAILING.with(Cell::get).is_some_and(|s| log.holds(s)) {
         RETIRED.with(|r| r.borrow_mut().push(log));
     } else {
         LAST.with(|l| *l.borrow_mut() = Some(log));
@@ -292,23 +323,68 @@ pub fn expect_values(values: &[f64], within: f64) {
     NOTES.with(|n| n.borrow_mut().push((seq, Note::Values(values.to_vec(), within))));
 }
 
-/// The log of the instance that made the last call of the check (among those dropped), with
-/// the notes the check made on its calls.
+/// The number of the last call recorded on this thread (for [`fails_at`] once the check has
+/// made more calls).
+pub fn last_call() -> u64 {
+    SEQ.with(Cell::get)
+}
+
+/// The check failed on call `seq` ([`last_call`] just after it), which gave `values` where it
+/// expected `expected`, each within `within`: the reproducer is of that call's instance, ends
+/// with that call and expects those values, so that the replay exits 1 where the FMU gives
+/// them again. For a check that gathers its failures and fails at the end: the first one said
+/// is the one written.
+pub fn fails_at(seq: u64, expected: &[f64], within: f64) {
+    if FAILING.with(Cell::get).is_some() {
+        return;
+    }
+    FAILING.with(|f| f.set(Some(seq)));
+    NOTES.with(|n| n.borrow_mut().push((seq, Note::Values(expected.to_vec(), within))));
+}
+
+/// The log of the instance the check failed on, with the notes the check made on its calls: the
+/// instance of the call [`fails_at`] named, cut after it; else the instance that made the last
+/// call of the check (among those dropped).
 pub fn take_failing() -> Option<(Log, Vec<(u64, Note)>)> {
     let mut logs = RETIRED.with(|r| std::mem::take(&mut *r.borrow_mut()));
     logs.extend(LAST.with(|l| l.borrow_mut().take()));
-    let log = logs.into_iter().max_by_key(Log::last_seq)?;
     let notes = NOTES.with(|n| std::mem::take(&mut *n.borrow_mut()));
+    if let Some(seq) = FAILING.with(|f| f.take())
+        && let Some(mut log) = logs.iter().position(|l| l.holds(seq)).map(|i| logs.swap_remove(i))
+    {
+        log.calls.retain(|r| r.seq <= seq);
+        return Some((log, notes));
+    }
+    let log = logs.into_iter().max_by_key(Log::last_seq)?;
     Some((log, notes))
 }
 
 /// A record's line: `function key=value ...`.
 fn line_of(r: &Rec) -> String {
-    let mut s = r.function.to_string();
-    for (k, v) in &r.args {
-        let _ = write!(s, " {k}={v}");
+    line_of_at_most(r, usize::MAX)
+}
+
+/// [`line_of`], formatted no further than about `max` bytes (a breadcrumb's: a state's bytes
+/// are not written out for it).
+fn line_of_at_most(r: &Rec, max: usize) -> String {
+    /// A writer that stops (with an error that ends the formatting) once full.
+    struct Bounded(String, usize);
+    impl std::fmt::Write for Bounded {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            if self.0.len() >= self.1 {
+                return Err(std::fmt::Error);
+            }
+            self.0.push_str(s);
+            Ok(())
+        }
     }
-    s
+    let mut w = Bounded(r.function.to_string(), max);
+    for (k, v) in &r.args {
+        if write!(w, " {k}={v}").is_err() {
+            break;
+        }
+    }
+    w.0
 }
 
 /// The reproducer of a failed check from the log of the instance it failed on: `about` (the FMU,
@@ -415,5 +491,34 @@ mod tests {
         );
         assert!(!text.contains("EnterInitializationMode"), "{text}");
         assert!(take_failing().is_none());
+    }
+
+    #[test]
+    fn the_call_a_check_failed_on_ends_the_reproducer_though_the_check_went_on() {
+        begin();
+        let mut a = Log::new("fmi2Instantiate", vec![("instanceName", Val::Text("a".into()))]);
+        let i = a.call(
+            "fmi2GetDirectionalDerivative",
+            vec![("unknowns", Val::U32s(vec![1]))],
+            true,
+        );
+        a.answered(i, 0);
+        fails_at(last_call(), &[1.0], 1e-5);
+        // A second failure said later is not the one written.
+        fails_at(last_call(), &[2.0], 0.0);
+        let i = a.call("fmi2GetReal", vec![("vr", Val::U32s(vec![1]))], true);
+        a.answered(i, 0);
+        retire(a);
+        let mut b = Log::new("fmi2Instantiate", vec![("instanceName", Val::Text("b".into()))]);
+        let i = b.call("fmi2GetReal", vec![("vr", Val::U32s(vec![1]))], true);
+        b.answered(i, 0);
+        retire(b);
+        let (log, notes) = take_failing().expect("a log");
+        let text = reproducer_text(&log, &notes, &[], "the failure");
+        assert!(text.contains("fmi2Instantiate instanceName=a\n"), "{text}");
+        assert!(
+            text.ends_with("fmi2GetDirectionalDerivative unknowns=[1] expect=[1.0] within=1e-5 -> OK\n"),
+            "{text}"
+        );
     }
 }

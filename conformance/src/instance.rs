@@ -242,7 +242,6 @@ impl<'a> Instance<'a> {
     // ---- lifecycle -------------------------------------------------------------------------
 
     pub fn setup(&mut self, start: f64, stop: Option<f64>) -> Status {
-        crumb("fmi2SetupExperiment", || format!("start {start}, stop {stop:?}"));
         let i = self.record(
             "fmi2SetupExperiment",
             vec![
@@ -269,7 +268,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn enter_init(&mut self) -> Status {
-        crumb("fmi2EnterInitializationMode", String::new);
         let i = self.record("fmi2EnterInitializationMode", vec![]);
         // SAFETY: a live instance.
         let s = self.answered(i, unsafe { (self.fmu.api.enter_initialization_mode)(self.c) });
@@ -278,21 +276,18 @@ impl<'a> Instance<'a> {
     }
 
     pub fn exit_init(&mut self) -> Status {
-        crumb("fmi2ExitInitializationMode", String::new);
         let i = self.record("fmi2ExitInitializationMode", vec![]);
         // SAFETY: a live instance.
         self.answered(i, unsafe { (self.fmu.api.exit_initialization_mode)(self.c) })
     }
 
     pub fn terminate(&mut self) -> Status {
-        crumb("fmi2Terminate", String::new);
         let i = self.record("fmi2Terminate", vec![]);
         // SAFETY: a live instance.
         self.answered(i, unsafe { (self.fmu.api.terminate)(self.c) })
     }
 
     pub fn reset(&mut self) -> Status {
-        crumb("fmi2Reset", String::new);
         let i = self.record("fmi2Reset", vec![]);
         // SAFETY: a live instance.
         let s = self.answered(i, unsafe { (self.fmu.api.reset)(self.c) });
@@ -317,7 +312,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64) -> Status {
-        crumb("fmi2DoStep", || format!("t {t}, h {h}"));
         let i = self.record(
             "fmi2DoStep",
             vec![
@@ -341,7 +335,6 @@ impl<'a> Instance<'a> {
     // ---- values ----------------------------------------------------------------------------
 
     pub fn get_real(&self, vrs: &[u32]) -> (Status, Vec<f64>) {
-        crumb("fmi2GetReal", || format!("vrs {vrs:?}"));
         let i = self.record("fmi2GetReal", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0.0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
@@ -353,7 +346,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn get_integer(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
-        crumb("fmi2GetInteger", || format!("vrs {vrs:?}"));
         let i = self.record("fmi2GetInteger", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
@@ -365,7 +357,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn get_boolean(&self, vrs: &[u32]) -> (Status, Vec<i32>) {
-        crumb("fmi2GetBoolean", || format!("vrs {vrs:?}"));
         let i = self.record("fmi2GetBoolean", vec![("vr", Val::U32s(vrs.to_vec()))]);
         let mut v = Guarded::new(vrs.len(), 0);
         // SAFETY: arrays of nvr elements (and the guard after `v`'s).
@@ -377,7 +368,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Status {
-        crumb("fmi2SetReal", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let i = self.record(
             "fmi2SetReal",
@@ -390,7 +380,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Status {
-        crumb("fmi2SetInteger", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let i = self.record(
             "fmi2SetInteger",
@@ -406,7 +395,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Status {
-        crumb("fmi2SetBoolean", || format!("vrs {vrs:?}, values {values:?}"));
         assert_eq!(vrs.len(), values.len());
         let v: Vec<fmi2Boolean> = values.iter().map(|b| *b as fmi2Boolean).collect();
         let i = self.record(
@@ -445,7 +433,6 @@ impl<'a> Instance<'a> {
     // ---- FMU state -------------------------------------------------------------------------
 
     pub fn get_state(&mut self) -> (Status, fmi2FMUstate) {
-        crumb("fmi2GetFMUstate", String::new);
         let mut s: fmi2FMUstate = ptr::null_mut();
         let i = self.record("fmi2GetFMUstate", vec![]);
         // SAFETY: a live instance and a valid out pointer.
@@ -464,7 +451,6 @@ impl<'a> Instance<'a> {
     // is the FMU's job, which is what the tests test.
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn set_state(&mut self, s: fmi2FMUstate) -> Status {
-        crumb("fmi2SetFMUstate", || format!("{s:?}"));
         let i = match self.state_val(s, false) {
             Some(v) => self.record("fmi2SetFMUstate", vec![("state", v)]),
             None => self.record_unreplayable("fmi2SetFMUstate"),
@@ -504,7 +490,6 @@ impl<'a> Instance<'a> {
         if st != fmi2OK {
             return Err(st);
         }
-        crumb("fmi2SerializeFMUstate", || format!("size {size}"));
         let mut bytes = Guarded::new(size, 0u8);
         let i = match state {
             Some(v) => self.record(
@@ -529,7 +514,6 @@ impl<'a> Instance<'a> {
 
     /// `fmi2DeSerializeFMUstate` into a new state (NULL on entry).
     pub fn deserialize(&mut self, bytes: &[u8]) -> (Status, fmi2FMUstate) {
-        crumb("fmi2DeSerializeFMUstate", || format!("{} bytes", bytes.len()));
         let mut s: fmi2FMUstate = ptr::null_mut();
         let i = self.record("fmi2DeSerializeFMUstate", vec![("bytes", Val::Bytes(bytes.to_vec()))]);
         // SAFETY: `bytes.len()` readable bytes, a valid out pointer.
@@ -716,7 +700,6 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Status {
-        crumb("fmi2SetDebugLogging", || format!("{on}, {categories:?}"));
         let owned: Vec<CString> = categories.iter().map(|c| CString::new(*c).unwrap()).collect();
         let ptrs: Vec<fmi2String> = owned.iter().map(|c| c.as_ptr()).collect();
         let p = if ptrs.is_empty() { ptr::null() } else { ptrs.as_ptr() };

@@ -29,6 +29,7 @@ pub mod fmi2;
 pub mod fmi3;
 pub mod guard;
 pub mod instance;
+pub mod instance_calls;
 pub mod logger;
 pub mod me;
 pub mod outcome;

@@ -11,10 +11,11 @@
 //! theirs, and that guess is tested on the FMU before it is used.
 
 use crate::api::MeApi;
+use crate::calllog::Val;
 use crate::fmi2::*;
 use crate::guard::{GETTER_RULE2, Guarded};
 use crate::instance::{Args, Instance, Status, excitation, status_name};
-use crate::outcome::{breadcrumb, breadcrumbs_on, skip, skip_not_declared};
+use crate::outcome::{skip, skip_not_declared};
 use crate::{Fmu, state};
 pub use MeState::*;
 
@@ -118,11 +119,13 @@ pub fn can_snapshot_me(fmu: &Fmu) -> bool {
         .is_some_and(|m| m.can_get_and_set_fmu_state && m.can_serialize_fmu_state)
 }
 
-fn crumb(function: &str, args: impl FnOnce() -> String) {
-    if breadcrumbs_on() {
-        breadcrumb(&format!("{function}({}) [model exchange]", args()));
-    }
-}
+/// The model-exchange functions that fill a vector of Reals.
+pub const VECTOR_GETTERS: [&str; 4] = [
+    "fmi2GetContinuousStates",
+    "fmi2GetDerivatives",
+    "fmi2GetEventIndicators",
+    "fmi2GetNominalsOfContinuousStates",
+];
 
 /// What fmi2CompletedIntegratorStep answered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -163,9 +166,9 @@ impl<'a> Instance<'a> {
 
     /// fmi2SetTime; the tracked time follows when the FMU answers fmi2OK.
     pub fn set_time(&mut self, t: f64) -> Status {
-        crumb("fmi2SetTime", || format!("{t:?}"));
+        let i = self.record("fmi2SetTime", vec![("time", Val::F64(t))]);
         // SAFETY: a live instance.
-        let s = unsafe { (self.me().set_time)(self.c, t) };
+        let s = self.answered(i, unsafe { (self.me().set_time)(self.c, t) });
         if s == fmi2OK {
             self.time = t;
         }
@@ -173,21 +176,36 @@ impl<'a> Instance<'a> {
     }
 
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Status {
-        crumb("fmi2SetContinuousStates", || format!("{x:?}"));
+        let i = self.record("fmi2SetContinuousStates", vec![("x", Val::F64s(x.to_vec()))]);
         // SAFETY: an array of nx elements.
-        unsafe { (self.me().set_continuous_states)(self.c, x.as_ptr(), x.len()) }
+        self.answered(i, unsafe {
+            (self.me().set_continuous_states)(self.c, x.as_ptr(), x.len())
+        })
+    }
+
+    /// One of [`VECTOR_GETTERS`] (`name`) with `n` values.
+    pub fn get_vector_n(&self, name: &'static str, n: usize) -> (Status, Vec<f64>) {
+        let me = self.me();
+        let f = match name {
+            "fmi2GetContinuousStates" => me.get_continuous_states,
+            "fmi2GetDerivatives" => me.get_derivatives,
+            "fmi2GetEventIndicators" => me.get_event_indicators,
+            "fmi2GetNominalsOfContinuousStates" => me.get_nominals_of_continuous_states,
+            other => panic!("{other} is not a model-exchange vector getter"),
+        };
+        self.get_vector(name, f, n)
     }
 
     fn get_vector(
         &self,
-        name: &str,
+        name: &'static str,
         f: unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status,
         n: usize,
     ) -> (Status, Vec<f64>) {
-        crumb(name, || format!("n {n}"));
+        let i = self.record(name, vec![("n", Val::U64(n as u64))]);
         let mut v = Guarded::new(n, f64::NAN);
         // SAFETY: an array of n elements (and the guard after it).
-        let s = unsafe { f(self.c, v.as_mut_ptr(), n) };
+        let s = self.answered(i, unsafe { f(self.c, v.as_mut_ptr(), n) });
         let v = v.into_values(|| format!("{name} with n = {n}"), GETTER_RULE2);
         (s, v)
     }
@@ -213,21 +231,21 @@ impl<'a> Instance<'a> {
     }
 
     pub fn enter_event_mode(&mut self) -> Status {
-        crumb("fmi2EnterEventMode", String::new);
+        let i = self.record("fmi2EnterEventMode", vec![]);
         // SAFETY: a live instance.
-        unsafe { (self.me().enter_event_mode)(self.c) }
+        self.answered(i, unsafe { (self.me().enter_event_mode)(self.c) })
     }
 
     pub fn enter_continuous_time_mode(&mut self) -> Status {
-        crumb("fmi2EnterContinuousTimeMode", String::new);
+        let i = self.record("fmi2EnterContinuousTimeMode", vec![]);
         // SAFETY: a live instance.
-        unsafe { (self.me().enter_continuous_time_mode)(self.c) }
+        self.answered(i, unsafe { (self.me().enter_continuous_time_mode)(self.c) })
     }
 
     /// fmi2NewDiscreteStates with an eventInfo that holds values no FMU writes (so that a
     /// field the FMU does not fill shows).
     pub fn new_discrete_states(&mut self) -> (Status, fmi2EventInfo) {
-        crumb("fmi2NewDiscreteStates", String::new);
+        let i = self.record("fmi2NewDiscreteStates", vec![]);
         let mut info = fmi2EventInfo {
             newDiscreteStatesNeeded: 77,
             terminateSimulation: 77,
@@ -237,17 +255,22 @@ impl<'a> Instance<'a> {
             nextEventTime: f64::NAN,
         };
         // SAFETY: a valid out pointer.
-        let s = unsafe { (self.me().new_discrete_states)(self.c, &mut info) };
+        let s = self.answered(i, unsafe { (self.me().new_discrete_states)(self.c, &mut info) });
         (s, info)
     }
 
     /// fmi2CompletedIntegratorStep(noSetFMUStatePriorToCurrentPoint = false: the checks may go
     /// back to an earlier FMU state).
     pub fn completed_integrator_step(&mut self) -> Completed {
-        crumb("fmi2CompletedIntegratorStep", String::new);
+        let i = self.record(
+            "fmi2CompletedIntegratorStep",
+            vec![("noSetFMUStatePriorToCurrentPoint", Val::Bool(false))],
+        );
         let (mut enter, mut terminate) = (77, 77);
         // SAFETY: valid out pointers.
-        let status = unsafe { (self.me().completed_integrator_step)(self.c, fmi2False, &mut enter, &mut terminate) };
+        let status = self.answered(i, unsafe {
+            (self.me().completed_integrator_step)(self.c, fmi2False, &mut enter, &mut terminate)
+        });
         Completed {
             status,
             enter_event_mode: enter == fmi2True,

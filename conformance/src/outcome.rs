@@ -246,18 +246,26 @@ pub fn convention(fmu: &Fmu, what: &str) -> bool {
     }
 }
 
-static BREADCRUMB: Mutex<Option<std::fs::File>> = Mutex::new(None);
+static BREADCRUMB: Mutex<Option<memmap2::MmapMut>> = Mutex::new(None);
 static BREADCRUMBS_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-const BREADCRUMB_BYTES: usize = 1024;
+pub const BREADCRUMB_BYTES: usize = 1024;
 
-/// Where [`breadcrumb`] writes (a worker's file, which the runner reads if the worker dies).
+/// Where [`breadcrumb`] writes (a worker's file, which the runner reads if the worker dies):
+/// mapped into memory, so that the breadcrumb the call log writes before every FMI call is a
+/// copy and no system call (what a process writes into a shared mapping is in the file for
+/// every reader, after the process was killed too).
 pub fn set_breadcrumb_file(path: &std::path::Path) -> std::io::Result<()> {
     let f = std::fs::OpenOptions::new()
         .create(true)
         .truncate(true)
+        .read(true)
         .write(true)
         .open(path)?;
-    *BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner()) = Some(f);
+    f.set_len(BREADCRUMB_BYTES as u64)?;
+    // SAFETY: the worker's own file, which no other process writes or truncates while it runs
+    // (the runner reads it only after the worker ended).
+    let map = unsafe { memmap2::MmapMut::map_mut(&f) }?;
+    *BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner()) = Some(map);
     BREADCRUMBS_ON.store(true, std::sync::atomic::Ordering::Relaxed);
     Ok(())
 }
@@ -268,12 +276,8 @@ pub fn breadcrumbs_on() -> bool {
 }
 
 /// Records what the check is about to do, so that a crash inside the FMU can say where it
-/// happened (one write of a fixed-size record; nothing without a breadcrumb file).
+/// happened (a copy into the mapped breadcrumb file; nothing without one).
 pub fn breadcrumb(text: &str) {
-    #[cfg(unix)]
-    use std::os::unix::fs::FileExt;
-    #[cfg(windows)]
-    use std::os::windows::fs::FileExt;
     if !breadcrumbs_on() {
         return;
     }
@@ -284,15 +288,14 @@ pub fn breadcrumb(text: &str) {
     } else {
         text
     };
-    let guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(f) = guard.as_ref() {
-        let mut record = [0u8; BREADCRUMB_BYTES];
+    let mut guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(map) = guard.as_mut() {
         let n = text.len().min(BREADCRUMB_BYTES);
-        record[..n].copy_from_slice(&text.as_bytes()[..n]);
-        #[cfg(unix)]
-        let _ = f.write_all_at(&record, 0);
-        #[cfg(windows)]
-        let _ = f.seek_write(&record, 0);
+        map[..n].copy_from_slice(&text.as_bytes()[..n]);
+        // The reader stops at the first NUL.
+        if n < BREADCRUMB_BYTES {
+            map[n] = 0;
+        }
     }
 }
 

@@ -14,8 +14,9 @@
 use crate::calllog::{decode, unhex};
 use crate::fmi2::*;
 use crate::fmi3::types::fmi3FMUState;
-use crate::guard::{Guarded, STATE_RULE2, STATE_RULE3};
+use crate::guard::{Guarded, STATE_RULE3};
 use crate::instance::{Args, Instance};
+use crate::instance_calls::{Derivative, kind_of};
 use crate::replay::{Expected, Line, ReplayReport, list, real, replay_line};
 use crate::{Fmu, Fmu3};
 use std::collections::BTreeMap;
@@ -50,6 +51,11 @@ const FMI3_WITH_ARGUMENTS: &[&str] = &[
     "fmi3DoStep",
     "fmi3GetDirectionalDerivative",
     "fmi3GetAdjointDerivative",
+    "fmi3GetString",
+    "fmi3GetClock",
+    "fmi3SetClock",
+    "fmi3GetIntervalDecimal",
+    "fmi3GetShiftDecimal",
 ];
 
 /// Whether the replay gets and sets values of the type called `name`: the numbers and Boolean
@@ -254,7 +260,6 @@ fn replay2_line(
     l: &Line,
     p: &mut Printer,
 ) -> Result<(), String> {
-    let fmu = inst.fmu;
     let mut details = vec![];
     let mut values: Option<Vec<f64>> = None;
     let s = match l.function.as_str() {
@@ -319,24 +324,12 @@ fn replay2_line(
             s
         }
         "fmi2SerializedFMUstateSize" => {
-            let st = states.get(l, std::ptr::null_mut())?;
-            let mut size = 0usize;
-            // SAFETY: a live instance, a state of it (or NULL) and a valid out pointer.
-            let s = unsafe {
-                crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |q| {
-                    (fmu.api.serialized_fmu_state_size)(inst.c, st, q)
-                })
-            };
+            let (s, size) = inst.serialized_size(states.get(l, std::ptr::null_mut())?);
             details.push(format!("size {size}"));
             s
         }
         "fmi2SerializeFMUstate" => {
-            let st = states.get(l, std::ptr::null_mut())?;
-            let size: usize = l.parse("size")?;
-            let mut bytes = Guarded::new(size, 0u8);
-            // SAFETY: a buffer of `size` bytes (and the guard after it).
-            let s = unsafe { (fmu.api.serialize_fmu_state)(inst.c, st, bytes.as_mut_ptr() as *mut fmi2Byte, size) };
-            let bytes = bytes.into_values(|| format!("fmi2SerializeFMUstate with size = {size}"), STATE_RULE2);
+            let (s, bytes) = inst.serialize_into(states.get(l, std::ptr::null_mut())?, l.parse("size")?);
             details.push(format!("{} bytes", bytes.len()));
             s
         }
@@ -367,6 +360,112 @@ fn replay2_line(
                 .map_err(|e| l.error(e))?;
             let refs: Vec<&str> = names.iter().map(String::as_str).collect();
             inst.set_debug_logging(l.parse("loggingOn")?, &refs)
+        }
+        "fmi2GetStatus" => {
+            let (s, v) = inst.get_status(kind_of(l.raw("kind")?).map_err(|e| l.error(e))?);
+            details.push(format!("value {v}"));
+            s
+        }
+        "fmi2GetIntegerStatus" => {
+            let (s, v) = inst.get_integer_status(kind_of(l.raw("kind")?).map_err(|e| l.error(e))?);
+            details.push(format!("value {v}"));
+            s
+        }
+        "fmi2GetStringStatus" => {
+            let (s, v) = inst.get_string_status(kind_of(l.raw("kind")?).map_err(|e| l.error(e))?);
+            details.push(format!("value {v:?}"));
+            s
+        }
+        "fmi2CancelStep" => inst.cancel_step(),
+        "fmi2GetString" => {
+            let (s, v) = inst.get_string(&vrs(l)?);
+            details.push(format!("values {v:?}"));
+            s
+        }
+        "fmi2SetString" => {
+            let texts: Vec<String> = l
+                .list::<String>("values")?
+                .unwrap_or_default()
+                .iter()
+                .map(|t| decode(t))
+                .collect::<Result<_, _>>()
+                .map_err(|e| l.error(e))?;
+            inst.set_string(&vrs(l)?, &texts)
+        }
+        "fmi2GetDirectionalDerivative" => {
+            let unknowns = l.list::<u32>("unknowns")?;
+            let knowns = l.list::<u32>("knowns")?;
+            let seed = l.list::<f64>("seed")?;
+            let d = Derivative {
+                unknowns: unknowns.as_deref(),
+                n_unknown: l.parse("nUnknown")?,
+                knowns: knowns.as_deref(),
+                n_known: l.parse("nKnown")?,
+                seed: seed.as_deref(),
+                output: !l.has("dvUnknown"),
+            };
+            // The wrapper passes the arrays as they are: none may be shorter than its count.
+            let short = |a: Option<usize>, n: usize| a.is_some_and(|a| a < n);
+            if short(d.unknowns.map(<[u32]>::len), d.n_unknown)
+                || short(d.knowns.map(<[u32]>::len), d.n_known)
+                || short(d.seed.map(<[f64]>::len), d.n_known)
+            {
+                return Err(l.error("an array shorter than its count (nUnknown, nKnown)"));
+            }
+            let (s, v) = inst.directional_derivative(d);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi2SetRealInputDerivatives" => inst.set_real_input_derivatives(
+            &vrs(l)?,
+            &l.list::<i32>("order")?.unwrap_or_default(),
+            &l.list::<f64>("values")?.unwrap_or_default(),
+        ),
+        "fmi2GetRealOutputDerivatives" => {
+            let (s, v) = inst.get_real_output_derivatives(&vrs(l)?, &l.list::<i32>("order")?.unwrap_or_default());
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi2SetTime" => inst.set_time(l.parse("time")?),
+        "fmi2SetContinuousStates" => inst.set_continuous_states(&l.list::<f64>("x")?.unwrap_or_default()),
+        "fmi2GetContinuousStates"
+        | "fmi2GetDerivatives"
+        | "fmi2GetEventIndicators"
+        | "fmi2GetNominalsOfContinuousStates" => {
+            let name = crate::me::VECTOR_GETTERS
+                .iter()
+                .find(|n| **n == l.function)
+                .expect("one of the vector getters");
+            let (s, v) = inst.get_vector_n(name, l.parse("n")?);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi2EnterEventMode" => inst.enter_event_mode(),
+        "fmi2EnterContinuousTimeMode" => inst.enter_continuous_time_mode(),
+        "fmi2NewDiscreteStates" => {
+            let (s, e) = inst.new_discrete_states();
+            details.push(format!(
+                "newDiscreteStatesNeeded {} terminateSimulation {} nominalsOfContinuousStatesChanged {} \
+                 valuesOfContinuousStatesChanged {} nextEventTimeDefined {} nextEventTime {}",
+                e.newDiscreteStatesNeeded,
+                e.terminateSimulation,
+                e.nominalsOfContinuousStatesChanged,
+                e.valuesOfContinuousStatesChanged,
+                e.nextEventTimeDefined,
+                real(e.nextEventTime)
+            ));
+            s
+        }
+        "fmi2CompletedIntegratorStep" => {
+            let c = inst.completed_integrator_step();
+            details.push(format!(
+                "enterEventMode {} terminateSimulation {}",
+                c.enter_event_mode, c.terminate_simulation
+            ));
+            c.status
         }
         f => return Err(l.error(format!("{f} is not a call the replay of a named check makes (FMI 2.0)"))),
     };
@@ -582,6 +681,95 @@ fn replay3_line(
             );
             details.push(format!("sensitivity {}", list(sensitivity.iter().map(|x| real(*x)))));
             values = Some(sensitivity);
+            s
+        }
+        "fmi3GetString" => {
+            let vr = vrs(l)?;
+            let n: usize = l.parse("nValues")?;
+            let mut out = Guarded::new(n, std::ptr::null::<std::ffi::c_char>());
+            let q = out.as_mut_ptr();
+            // SAFETY: a live instance; `vr.len()` value references, `n` values and the guard after them.
+            let s = inst.call(f, |c| unsafe { (api.get_string)(c, vr.as_ptr(), vr.len(), q, n) });
+            let out = out.into_values(
+                || format!("fmi3GetString with nValues = {n}"),
+                crate::guard::GETTER_RULE3,
+            );
+            let gave = s == crate::fmi3::types::fmi3OK || s == crate::fmi3::types::fmi3Warning;
+            let texts: Vec<Option<String>> = out
+                .iter()
+                .map(|p| {
+                    (gave && !p.is_null()).then(|| {
+                        // SAFETY: a string the FMU returned, valid until its next call.
+                        unsafe { std::ffi::CStr::from_ptr(*p) }.to_string_lossy().into_owned()
+                    })
+                })
+                .collect();
+            details.push(format!("values {texts:?}"));
+            s
+        }
+        "fmi3GetClock" => {
+            let vr = vrs(l)?;
+            let mut out = Guarded::new(vr.len(), 7u8);
+            let q = out.as_mut_ptr();
+            // SAFETY: a live instance; `vr.len()` value references and values, the guard after them.
+            let s = inst.call(f, |c| unsafe { (api.get_clock)(c, vr.as_ptr(), vr.len(), q) });
+            let out = out.into_values(
+                || format!("fmi3GetClock with nValues = {}", vr.len()),
+                crate::guard::CLOCK_RULE3,
+            );
+            details.push(format!("values {}", list(&out)));
+            values = Some(out.iter().map(|x| f64::from(*x)).collect());
+            s
+        }
+        "fmi3SetClock" => {
+            let vr = vrs(l)?;
+            let on: Vec<bool> = l
+                .list::<i64>("values")?
+                .unwrap_or_default()
+                .iter()
+                .map(|x| *x != 0)
+                .collect();
+            if on.len() != vr.len() {
+                return Err(l.error("values: one for each value reference"));
+            }
+            // SAFETY: a live instance; `vr.len()` value references and values.
+            inst.call(f, |c| unsafe { (api.set_clock)(c, vr.as_ptr(), vr.len(), on.as_ptr()) })
+        }
+        "fmi3GetIntervalDecimal" => {
+            let vr = vrs(l)?;
+            let mut h = Guarded::new(vr.len(), f64::NAN);
+            let mut q = Guarded::new(vr.len(), 99u32);
+            let (ph, pq) = (h.as_mut_ptr(), q.as_mut_ptr());
+            // SAFETY: a live instance; `vr.len()` value references, intervals and qualifiers, each
+            // array with a guard after it.
+            let s = inst.call(f, |c| unsafe {
+                (api.get_interval_decimal)(c, vr.as_ptr(), vr.len(), ph, pq)
+            });
+            let h = h.into_values(
+                || "fmi3GetIntervalDecimal (intervals)".into(),
+                crate::guard::CLOCK_RULE3,
+            );
+            let q = q.into_values(
+                || "fmi3GetIntervalDecimal (qualifiers)".into(),
+                crate::guard::CLOCK_RULE3,
+            );
+            details.push(format!(
+                "intervals {} qualifiers {}",
+                list(h.iter().map(|x| real(*x))),
+                list(&q)
+            ));
+            values = Some(h);
+            s
+        }
+        "fmi3GetShiftDecimal" => {
+            let vr = vrs(l)?;
+            let mut out = Guarded::new(vr.len(), f64::NAN);
+            let q = out.as_mut_ptr();
+            // SAFETY: a live instance; `vr.len()` value references and values, the guard after them.
+            let s = inst.call(f, |c| unsafe { (api.get_shift_decimal)(c, vr.as_ptr(), vr.len(), q) });
+            let out = out.into_values(|| "fmi3GetShiftDecimal".into(), crate::guard::CLOCK_RULE3);
+            details.push(format!("values {}", list(out.iter().map(|x| real(*x)))));
+            values = Some(out);
             s
         }
         "fmi3GetFloat64" if !l.has("bytes") => {

@@ -617,7 +617,7 @@ fn replay(file: &Path, fmu: &Path) -> (Option<i32>, String) {
 /// Issue 51 item 3: a named check that fails leaves a reproducer, the calls of the instance it
 /// failed on, which replays the failure on the defective FMU (exit 1, saying what differs: a
 /// guard overwritten, a value other than the check expected) and not on the FMU it wraps (exit
-/// 0); the same check passing on that FMU leaves no file. Three defects, FMI 2.0 and 3.0.
+/// 0); the same check passing on that FMU leaves no file. Four defects, FMI 2.0 and 3.0.
 #[test]
 fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_passing_one_none() {
     let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
@@ -645,6 +645,13 @@ fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_pass
             3,
             "fmi3_do_step_advances_time_by_the_step",
             "the check expected",
+        ),
+        // A check that called the C functions directly before the call log took them.
+        (
+            "ME_EQUATIONS",
+            2,
+            "model_exchange_states_and_derivatives_are_declared_consistent_and_deterministic",
+            "fmi2GetDerivatives gave",
         ),
         (
             "ONE_PAST",

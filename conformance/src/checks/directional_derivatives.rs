@@ -12,8 +12,8 @@
 //! unknowns; in co-simulation fmi2SetReal of an input, then fmi2GetReal of the outputs.
 
 use crate::fmi2::*;
-use crate::guard::{GETTER_RULE2, Guarded};
 use crate::instance::{Instance, excitation, status_name, step_size};
+use crate::instance_calls::Derivative;
 use crate::me::{Euler, Rng, needs_me};
 use crate::outcome::{NOT_DECLARED, info, limitation, skip_not_declared};
 use crate::{Fmu, Type, Variable, bits};
@@ -102,28 +102,8 @@ pub fn valid_pair(fmu: &Fmu, me: bool) -> (Vec<u32>, Vec<u32>) {
 /// fmi2GetDirectionalDerivative(unknowns, knowns, seed 1 for every known): the sum of the
 /// columns of the knowns.
 pub fn call(inst: &Instance, unknowns: &[u32], knowns: &[u32]) -> (fmi2Status, Vec<f64>) {
-    crate::outcome::breadcrumb(&format!(
-        "fmi2GetDirectionalDerivative(unknowns {unknowns:?}, knowns {knowns:?})"
-    ));
     let seed = vec![1.0; knowns.len()];
-    let mut out = Guarded::new(unknowns.len(), f64::NAN);
-    // SAFETY: arrays of the lengths passed (and the guard after `out`'s).
-    let s = unsafe {
-        (inst.fmu.api.get_directional_derivative)(
-            inst.c,
-            unknowns.as_ptr(),
-            unknowns.len(),
-            knowns.as_ptr(),
-            knowns.len(),
-            seed.as_ptr(),
-            out.as_mut_ptr(),
-        )
-    };
-    let out = out.into_values(
-        || format!("fmi2GetDirectionalDerivative with nUnknown = {}", unknowns.len()),
-        GETTER_RULE2,
-    );
-    (s, out)
+    inst.directional_derivative(Derivative::of(unknowns, knowns, &seed))
 }
 
 fn provides(fmu: &Fmu, me: bool) -> bool {
@@ -277,6 +257,7 @@ fn compare_here(
             )
         };
         let (s, dd) = call(inst, &vrs, &[k.var().vr]);
+        let dd_call = crate::calllog::last_call();
         if s != fmi2OK {
             failures.push(format!(
                 "{}: {}: fmi2GetDirectionalDerivative(unknowns, ['{}']) answered {}: {}",
@@ -322,6 +303,9 @@ fn compare_here(
             {
                 stats.zeros += 1;
                 if dd[ui] != 0.0 {
+                    let mut expected = dd.clone();
+                    expected[ui] = 0.0;
+                    crate::calllog::fails_at(dd_call, &expected, 0.0);
                     failures.push(format!(
                         "{}: <ModelStructure> declares no dependency, but the directional derivative is {:e}",
                         at(u),
@@ -339,6 +323,11 @@ fn compare_here(
             let error = (dd[ui] - fd1[ui]).abs() / scale;
             stats.max_error = stats.max_error.max(error);
             if error > TOLERANCE {
+                // The reproducer ends with this call, expecting the finite difference here
+                // (and the other unknowns as they came): its replay differs where this did.
+                let mut expected = dd.clone();
+                expected[ui] = fd1[ui];
+                crate::calllog::fails_at(dd_call, &expected, TOLERANCE * scale);
                 failures.push(format!(
                     "{}: fmi2GetDirectionalDerivative gives {:e}, central finite differences {:e} (step {h:e}; {:e} with 10 times the step)",
                     at(u),
@@ -514,74 +503,41 @@ pub fn directional_derivatives_refuse_unknown_references_and_null_arrays(fmu: &F
         let (s, good) = call(&inst, &unknowns, &knowns);
         assert_eq!(s, fmi2OK, "{}: {}", fmu.id, inst.log_text());
         inst.log();
-        let bad_vr = fmu.md.unknown_vr();
-        let api = &fmu.api;
-        let c = inst.c;
+        let bad_vr = [fmu.md.unknown_vr()];
         let seed = [1.0];
-        let null_r = std::ptr::null::<f64>();
-        let null_vr = std::ptr::null::<u32>();
-        let dd = api.get_directional_derivative;
-        // (what, unknowns, knowns, seed, the output NULL): each an importer's mistake.
-        let cases: [(&str, *const u32, *const u32, *const f64, bool); 6] = [
+        let valid = Derivative::of(&unknowns, &knowns, &seed);
+        // (what, the call): each an importer's mistake.
+        let cases: [(&str, Derivative); 6] = [
             (
                 "an unknown value reference among the unknowns",
-                &bad_vr,
-                knowns.as_ptr(),
-                seed.as_ptr(),
-                false,
+                Derivative {
+                    unknowns: Some(&bad_vr),
+                    ..valid
+                },
             ),
             (
                 "an unknown value reference among the knowns",
-                unknowns.as_ptr(),
-                &bad_vr,
-                seed.as_ptr(),
-                false,
+                Derivative {
+                    knowns: Some(&bad_vr),
+                    ..valid
+                },
             ),
             (
                 "vUnknown_ref NULL with nUnknown = 1",
-                null_vr,
-                knowns.as_ptr(),
-                seed.as_ptr(),
-                false,
+                Derivative {
+                    unknowns: None,
+                    ..valid
+                },
             ),
-            (
-                "vKnown_ref NULL with nKnown = 1",
-                unknowns.as_ptr(),
-                null_vr,
-                seed.as_ptr(),
-                false,
-            ),
-            ("dvKnown NULL", unknowns.as_ptr(), knowns.as_ptr(), null_r, false),
-            (
-                "dvUnknown NULL",
-                unknowns.as_ptr(),
-                knowns.as_ptr(),
-                seed.as_ptr(),
-                true,
-            ),
+            ("vKnown_ref NULL with nKnown = 1", Derivative { knowns: None, ..valid }),
+            ("dvKnown NULL", Derivative { seed: None, ..valid }),
+            ("dvUnknown NULL", Derivative { output: false, ..valid }),
         ];
         let mut refused = 0;
-        for (what, u, k, sd, null_out) in cases {
+        for (what, d) in cases {
             // Each call alone is the importer's mistake (outcome::on_purpose): a crash in it is
             // a warning naming it, the calls before and after it are the check's own.
-            let s = crate::outcome::on_purpose(|| {
-                crate::outcome::breadcrumb(&format!("fmi2GetDirectionalDerivative with {what}"));
-                let mut out = [0.0];
-                // SAFETY: arrays of one element, or NULL on purpose (which a careful FMU refuses).
-                unsafe {
-                    if null_out {
-                        dd(c, u, 1, k, 1, sd, std::ptr::null_mut())
-                    } else {
-                        crate::guard::fill(
-                            &mut out,
-                            "fmi2GetDirectionalDerivative",
-                            "nUnknown",
-                            crate::guard::GETTER_RULE2,
-                            |p| dd(c, u, 1, k, 1, sd, p),
-                        )
-                    }
-                }
-            });
+            let s = crate::outcome::on_purpose(|| inst.directional_derivative(d).0);
             refused += usize::from(s == fmi2Error);
             crate::outcome::warn_unless(s == fmi2Error, || {
                 format!(

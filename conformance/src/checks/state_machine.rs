@@ -188,16 +188,7 @@ fn cases() -> Vec<Case> {
             answers: &[fmi2OK],
             says: None,
             next: same,
-            call: |i, _, _| {
-                let vrs = i.fmu.md.vrs_of_type(Type::String);
-                let mut v: Vec<fmi2String> = vec![ptr::null(); vrs.len()];
-                // SAFETY: arrays of nvr elements.
-                unsafe {
-                    crate::guard::fill(&mut v, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
-                        (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_string(&i.fmu.md.vrs_of_type(Type::String)).0,
         },
         Case {
             function: "fmi2SetReal",
@@ -239,15 +230,12 @@ fn cases() -> Vec<Case> {
             next: same,
             // Only the Strings the standard lets an importer set in this state (a fixed String
             // parameter is not settable after initialization), each to its start value.
+            // Only the Strings the standard lets an importer set in this state (a fixed String
+            // parameter is not settable after initialization), each to its start value.
             call: |i, _, s| {
                 let (vrs, vars) = settable(i, Type::String, s);
-                let starts: Vec<std::ffi::CString> = vars
-                    .iter()
-                    .map(|v| std::ffi::CString::new(v.start.clone().unwrap_or_default()).unwrap_or_default())
-                    .collect();
-                let v: Vec<fmi2String> = starts.iter().map(|c| c.as_ptr()).collect();
-                // SAFETY: arrays of nvr elements; the strings outlive the call.
-                unsafe { (i.fmu.api.set_string)(i.c, vrs.as_ptr(), vrs.len(), v.as_ptr()) }
+                let starts: Vec<String> = vars.iter().map(|v| v.start.clone().unwrap_or_default()).collect();
+                i.set_string(&vrs, &starts)
             },
         },
         Case {
@@ -299,13 +287,7 @@ fn cases() -> Vec<Case> {
             says: None,
             next: same,
             call: |i, d, s| {
-                let mut size = 0usize;
-                // SAFETY: a state of this FMU, a valid out pointer.
-                let st = unsafe {
-                    crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
-                        (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p)
-                    })
-                };
+                let (st, size) = i.serialized_size(d.states[s as usize]);
                 if st == fmi2OK {
                     assert_eq!(size, d.bytes[s as usize].len(), "fmi2SerializedFMUstateSize");
                 }
@@ -319,18 +301,7 @@ fn cases() -> Vec<Case> {
             next: same,
             call: |i, d, s| {
                 let want = &d.bytes[s as usize];
-                let mut buf = vec![0u8; want.len()];
-                let n = buf.len();
-                // SAFETY: a state of this FMU, a buffer of the size it needs (and the guard after it).
-                let st = unsafe {
-                    crate::guard::fill(
-                        &mut buf,
-                        "fmi2SerializeFMUstate",
-                        "size",
-                        crate::guard::STATE_RULE2,
-                        |p| (i.fmu.api.serialize_fmu_state)(i.c, d.states[s as usize], p as *mut fmi2Byte, n),
-                    )
-                };
+                let (st, buf) = i.serialize_into(d.states[s as usize], want.len());
                 if st == fmi2OK {
                     assert_eq!(&buf, want, "serializing a deserialized state must give the same bytes");
                 } else {
@@ -384,20 +355,15 @@ fn cases() -> Vec<Case> {
             says: None,
             next: same,
             // nvr = 0: nothing to interpolate, valid whatever canInterpolateInputs says.
-            // SAFETY: nvr = 0 with NULL arrays is valid.
-            call: |i, _, _| unsafe {
-                (i.fmu.api.set_real_input_derivatives)(i.c, ptr::null(), 0, ptr::null(), ptr::null())
-            },
+            // nvr = 0: nothing to interpolate, valid whatever canInterpolateInputs says.
+            call: |i, _, _| i.set_real_input_derivatives(&[], &[], &[]),
         },
         Case {
             function: "fmi2GetRealOutputDerivatives",
             answers: &[fmi2OK],
             says: None,
             next: same,
-            // SAFETY: nvr = 0 with NULL arrays is valid.
-            call: |i, _, _| unsafe {
-                (i.fmu.api.get_real_output_derivatives)(i.c, ptr::null(), 0, ptr::null(), ptr::null_mut())
-            },
+            call: |i, _, _| i.get_real_output_derivatives(&[], &[]).0,
         },
         Case {
             function: "fmi2DoStep",
@@ -414,8 +380,7 @@ fn cases() -> Vec<Case> {
             answers: &[],
             says: None,
             next: same,
-            // SAFETY: a live instance.
-            call: |i, _, _| unsafe { (i.fmu.api.cancel_step)(i.c) },
+            call: |i, _, _| i.cancel_step(),
         },
         Case {
             function: "fmi2GetStatus",
@@ -423,15 +388,7 @@ fn cases() -> Vec<Case> {
             answers: &[fmi2Discard],
             says: None,
             next: same,
-            call: |i, _, _| {
-                let mut v = 99;
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetStatus", |p| {
-                        (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_status(fmi2DoStepStatus).0,
         },
         Case {
             function: "fmi2GetRealStatus",
@@ -445,15 +402,7 @@ fn cases() -> Vec<Case> {
             answers: &[fmi2Discard],
             says: None,
             next: same,
-            call: |i, _, _| {
-                let mut v = 0;
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetIntegerStatus", |p| {
-                        (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_integer_status(fmi2PendingStatus).0,
         },
         Case {
             function: "fmi2GetBooleanStatus",
@@ -467,15 +416,7 @@ fn cases() -> Vec<Case> {
             answers: &[fmi2Discard],
             says: None,
             next: same,
-            call: |i, _, _| {
-                let mut v: fmi2String = ptr::null();
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetStringStatus", |p| {
-                        (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_string_status(fmi2PendingStatus).0,
         },
     ]
 }

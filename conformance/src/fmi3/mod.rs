@@ -675,9 +675,11 @@ impl<'a> Inst<'a> {
     /// Runs a call that returns a status; when it is not fmi3OK and no message was logged with
     /// that status, a warning (`--strict`: a failure; this exporter's FMUs always log one).
     pub fn call(&self, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) -> fmi3Status {
-        crate::outcome::breadcrumb(what);
         let args = self.pending.borrow_mut().take();
-        if !self.c.is_null() {
+        if self.c.is_null() {
+            // Not logged (no instance): the breadcrumb the call log writes for the others.
+            crate::outcome::breadcrumb(what);
+        } else {
             let i = match crate::replay_calls::fmi3_call(what) {
                 Some((name, no_arguments)) => {
                     let replayable = args.is_some() || no_arguments;

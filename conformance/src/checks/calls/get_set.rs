@@ -33,17 +33,9 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
         refused(&inst, "fmi2SetInteger(unknown vr)", s, &["fmi2SetInteger", &n]);
         let s = inst.set_boolean(&[vr], &[true]);
         refused(&inst, "fmi2SetBoolean(unknown vr)", s, &["fmi2SetBoolean", &n]);
-        let mut out: [fmi2String; 1] = [ptr::null()];
-        // SAFETY: arrays of one element.
-        let s = unsafe {
-            crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
-                (fmu.api.get_string)(inst.c, &vr, 1, p)
-            })
-        };
+        let s = inst.get_string(&[vr]).0;
         refused(&inst, "fmi2GetString(unknown vr)", s, &["fmi2GetString", &n]);
-        let v = [c"x".as_ptr()];
-        // SAFETY: arrays of one element.
-        let s = unsafe { (fmu.api.set_string)(inst.c, &vr, 1, v.as_ptr()) };
+        let s = inst.set_string(&[vr], &["x".into()]);
         refused(&inst, "fmi2SetString(unknown vr)", s, &["fmi2SetString", &n]);
         inst.warn_if_changed(
             &before,

@@ -36,15 +36,7 @@ pub fn getters_write_no_value_past_the_array_they_are_given(fmu: &Fmu) {
                     Type::Real => drop(inst.get_real(chunk)),
                     Type::Integer | Type::Enumeration => drop(inst.get_integer(chunk)),
                     Type::Boolean => drop(inst.get_boolean(chunk)),
-                    Type::String => {
-                        let mut out: Vec<fmi2String> = vec![std::ptr::null(); chunk.len()];
-                        // SAFETY: arrays of nvr elements (and the guard after `out`'s).
-                        unsafe {
-                            crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
-                                (fmu.api.get_string)(inst.c, chunk.as_ptr(), chunk.len(), p)
-                            })
-                        };
-                    }
+                    Type::String => drop(inst.get_string(chunk)),
                 }
             }
         }
@@ -197,17 +189,7 @@ pub fn the_binary_knows_every_variable_its_description_declares(fmu: &Fmu) {
                 Type::Real => ("fmi2GetReal", inst.get_real(&vr).0),
                 Type::Integer | Type::Enumeration => ("fmi2GetInteger", inst.get_integer(&vr).0),
                 Type::Boolean => ("fmi2GetBoolean", inst.get_boolean(&vr).0),
-                Type::String => {
-                    let mut out: Vec<fmi2String> = vec![std::ptr::null()];
-                    crate::outcome::breadcrumb("fmi2GetString (a declared variable)");
-                    // SAFETY: arrays of nvr = 1 elements (and the guard after `out`'s).
-                    let s = unsafe {
-                        crate::guard::fill(&mut out, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
-                            (fmu.api.get_string)(inst.c, vr.as_ptr(), 1, p)
-                        })
-                    };
-                    ("fmi2GetString", s)
-                }
+                Type::String => ("fmi2GetString", inst.get_string(&vr).0),
             };
             assert!(
                 s == fmi2OK || s == fmi2Warning,

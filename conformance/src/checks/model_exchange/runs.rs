@@ -69,6 +69,7 @@ pub fn model_exchange_states_and_derivatives_are_declared_consistent_and_determi
         // derivatives.
         let (s1, x) = inst.get_continuous_states();
         let (s2, dx) = inst.get_derivatives();
+        let dx_call = crate::calllog::last_call();
         assert_eq!([s1, s2], [fmi2OK; 2], "{}: {}", fmu.id, inst.log_text());
         let at = format!("{}: round {round}, t = {}", fmu.id, inst.time);
         assert_eq!(x.len(), nx);
@@ -77,9 +78,14 @@ pub fn model_exchange_states_and_derivatives_are_declared_consistent_and_determi
             bits(&inst.get_real(&state_vrs).1),
             "{at}: fmi2GetContinuousStates differs from fmi2GetReal of the state variables {state_vrs:?}"
         );
+        let der = inst.get_real(&der_vrs).1;
+        if bits(&dx) != bits(&der) {
+            // The reproducer ends with fmi2GetDerivatives, expecting the derivative variables.
+            crate::calllog::fails_at(dx_call, &der, 0.0);
+        }
         assert_eq!(
             bits(&dx),
-            bits(&inst.get_real(&der_vrs).1),
+            bits(&der),
             "{at}: fmi2GetDerivatives differs from fmi2GetReal of the derivative variables {der_vrs:?}"
         );
         assert!(dx.iter().all(|d| d.is_finite()), "{at}: derivatives not finite: {dx:?}");

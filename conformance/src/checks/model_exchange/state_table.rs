@@ -151,16 +151,7 @@ pub(super) fn cases() -> Vec<Case> {
             function: "fmi2GetString",
             answers: &[fmi2OK],
             next: same,
-            call: |i, _, _| {
-                let vrs = i.fmu.md.vrs_of_type(Type::String);
-                let mut v: Vec<fmi2String> = vec![ptr::null(); vrs.len()];
-                // SAFETY: arrays of nvr elements.
-                unsafe {
-                    crate::guard::fill(&mut v, "fmi2GetString", "nvr", crate::guard::GETTER_RULE2, |p| {
-                        (i.fmu.api.get_string)(i.c, vrs.as_ptr(), vrs.len(), p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_string(&i.fmu.md.vrs_of_type(Type::String)).0,
         },
         Case {
             function: "fmi2SetReal",
@@ -204,13 +195,8 @@ pub(super) fn cases() -> Vec<Case> {
                 let vars = settable(i, Type::String, s);
                 let vrs: Vec<u32> = vars.iter().map(|v| v.vr).collect();
                 // Each to its start value (a model may refuse an empty file name, say).
-                let starts: Vec<std::ffi::CString> = vars
-                    .iter()
-                    .map(|v| std::ffi::CString::new(v.start.clone().unwrap_or_default()).unwrap_or_default())
-                    .collect();
-                let v: Vec<fmi2String> = starts.iter().map(|c| c.as_ptr()).collect();
-                // SAFETY: arrays of nvr elements; the strings outlive the call.
-                unsafe { (i.fmu.api.set_string)(i.c, vrs.as_ptr(), vrs.len(), v.as_ptr()) }
+                let starts: Vec<String> = vars.iter().map(|v| v.start.clone().unwrap_or_default()).collect();
+                i.set_string(&vrs, &starts)
             },
         },
         Case {
@@ -257,13 +243,7 @@ pub(super) fn cases() -> Vec<Case> {
             answers: &[fmi2OK],
             next: same,
             call: |i, d, s| {
-                let mut size = 0usize;
-                // SAFETY: a state of this FMU, a valid out pointer.
-                let st = unsafe {
-                    crate::guard::fill_state_size2(&mut size, "fmi2SerializedFMUstateSize", |p| {
-                        (i.fmu.api.serialized_fmu_state_size)(i.c, d.states[s as usize], p)
-                    })
-                };
+                let (st, size) = i.serialized_size(d.states[s as usize]);
                 if st == fmi2OK {
                     assert_eq!(size, d.bytes[s as usize].len(), "fmi2SerializedFMUstateSize");
                 }
@@ -276,18 +256,7 @@ pub(super) fn cases() -> Vec<Case> {
             next: same,
             call: |i, d, s| {
                 let want = &d.bytes[s as usize];
-                let mut buf = vec![0u8; want.len()];
-                let n = buf.len();
-                // SAFETY: a state of this FMU, a buffer of the size it needs (and the guard after it).
-                let st = unsafe {
-                    crate::guard::fill(
-                        &mut buf,
-                        "fmi2SerializeFMUstate",
-                        "size",
-                        crate::guard::STATE_RULE2,
-                        |p| (i.fmu.api.serialize_fmu_state)(i.c, d.states[s as usize], p as *mut fmi2Byte, n),
-                    )
-                };
+                let (st, buf) = i.serialize_into(d.states[s as usize], want.len());
                 if st == fmi2OK {
                     assert_eq!(&buf, want, "serializing a deserialized state must give the same bytes");
                 }
@@ -396,16 +365,7 @@ pub(super) fn cases() -> Vec<Case> {
                     .take(1)
                     .collect();
                 let (order, der) = (vec![1; inputs.len()], vec![0.0; inputs.len()]);
-                // SAFETY: arrays of nvr elements.
-                unsafe {
-                    (i.fmu.api.set_real_input_derivatives)(
-                        i.c,
-                        inputs.as_ptr(),
-                        inputs.len(),
-                        order.as_ptr(),
-                        der.as_ptr(),
-                    )
-                }
+                i.set_real_input_derivatives(&inputs, &order, &der)
             },
         },
         Case {
@@ -421,25 +381,7 @@ pub(super) fn cases() -> Vec<Case> {
                     .map(|v| v.vr)
                     .take(1)
                     .collect();
-                let (order, mut der) = (vec![1; outputs.len()], vec![0.0; outputs.len()]);
-                // SAFETY: arrays of nvr elements.
-                unsafe {
-                    crate::guard::fill(
-                        &mut der,
-                        "fmi2GetRealOutputDerivatives",
-                        "nvr",
-                        crate::guard::GETTER_RULE2,
-                        |p| {
-                            (i.fmu.api.get_real_output_derivatives)(
-                                i.c,
-                                outputs.as_ptr(),
-                                outputs.len(),
-                                order.as_ptr(),
-                                p,
-                            )
-                        },
-                    )
-                }
+                i.get_real_output_derivatives(&outputs, &vec![1; outputs.len()]).0
             },
         },
         Case {
@@ -455,22 +397,13 @@ pub(super) fn cases() -> Vec<Case> {
             function: "fmi2CancelStep",
             answers: &[],
             next: same,
-            // SAFETY: a live instance.
-            call: |i, _, _| unsafe { (i.fmu.api.cancel_step)(i.c) },
+            call: |i, _, _| i.cancel_step(),
         },
         Case {
             function: "fmi2GetStatus",
             answers: &[],
             next: same,
-            call: |i, _, _| {
-                let mut v = 99;
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetStatus", |p| {
-                        (i.fmu.api.get_status)(i.c, fmi2DoStepStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_status(fmi2DoStepStatus).0,
         },
         Case {
             function: "fmi2GetRealStatus",
@@ -482,15 +415,7 @@ pub(super) fn cases() -> Vec<Case> {
             function: "fmi2GetIntegerStatus",
             answers: &[],
             next: same,
-            call: |i, _, _| {
-                let mut v = 0;
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetIntegerStatus", |p| {
-                        (i.fmu.api.get_integer_status)(i.c, fmi2PendingStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_integer_status(fmi2PendingStatus).0,
         },
         Case {
             function: "fmi2GetBooleanStatus",
@@ -502,15 +427,7 @@ pub(super) fn cases() -> Vec<Case> {
             function: "fmi2GetStringStatus",
             answers: &[],
             next: same,
-            call: |i, _, _| {
-                let mut v: fmi2String = ptr::null();
-                // SAFETY: a valid out pointer.
-                unsafe {
-                    crate::guard::fill_status2(&mut v, "fmi2GetStringStatus", |p| {
-                        (i.fmu.api.get_string_status)(i.c, fmi2PendingStatus, p)
-                    })
-                }
-            },
+            call: |i, _, _| i.get_string_status(fmi2PendingStatus).0,
         },
     ]
 }

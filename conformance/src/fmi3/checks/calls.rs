@@ -759,6 +759,10 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         }
         for v in with_start(fmu, Type::String) {
             let mut got = [null::<std::ffi::c_char>()];
+            inst.args(vec![
+                ("vr", crate::calllog::Val::U32s(vec![v.vr])),
+                ("nValues", crate::calllog::Val::U64(1)),
+            ]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetString", |c| unsafe {
@@ -1168,6 +1172,10 @@ pub fn fmi3_getters_write_no_value_past_the_array_they_are_given(fmu: &Fmu3) {
             let _ = inst.get_f64_of(&floats);
             for v in fmu.md.of_type(Type::String).filter(|v| !v.array && v.clocks.is_empty()) {
                 let mut out = [null::<std::ffi::c_char>()];
+                inst.args(vec![
+                    ("vr", crate::calllog::Val::U32s(vec![v.vr])),
+                    ("nValues", crate::calllog::Val::U64(1)),
+                ]);
                 // SAFETY: a live instance; one value reference, one value (and the guard after it).
                 inst.call("fmi3GetString", |c| unsafe {
                     fill(&mut out, "fmi3GetString", "nValues", RULE, |p| {
@@ -1343,6 +1351,10 @@ pub fn fmi3_the_binary_knows_every_variable_its_description_declares(fmu: &Fmu3)
             let (function, s) = if v.ty == Type::String {
                 let n = fmu.element_count(v);
                 let mut out = vec![null::<std::ffi::c_char>(); n];
+                inst.args(vec![
+                    ("vr", crate::calllog::Val::U32s(vec![v.vr])),
+                    ("nValues", crate::calllog::Val::U64(n as u64)),
+                ]);
                 // SAFETY: a live instance; one value reference, n values (and the guard after them).
                 let s = inst.call("fmi3GetString", |c| unsafe {
                     fill(&mut out, "fmi3GetString", "nValues", RULE, |p| {

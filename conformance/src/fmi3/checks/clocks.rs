@@ -55,6 +55,7 @@ impl Ticking {
 /// fmi3GetIntervalDecimal of one clock: (status, interval, qualifier).
 pub(super) fn interval(inst: &Inst, vr: u32) -> (fmi3Status, f64, u32) {
     let (mut h, mut q) = (f64::NAN, 99u32);
+    inst.args(vec![("vr", crate::calllog::Val::U32s(vec![vr]))]);
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3GetIntervalDecimal", |c| unsafe {
@@ -103,6 +104,7 @@ pub(super) fn periodic_interval(inst: &Inst, v: &crate::fmi3::Variable, when: &s
 pub(super) fn periodic_shift(inst: &Inst, v: &crate::fmi3::Variable) -> f64 {
     let id = &inst.fmu.id;
     let mut shift = f64::NAN;
+    inst.args(vec![("vr", crate::calllog::Val::U32s(vec![v.vr]))]);
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
     let s = inst.call("fmi3GetShiftDecimal", |cc| unsafe {
@@ -285,6 +287,10 @@ fn run(
             .collect();
         for &i in &due {
             let vr = clocks[i].vr;
+            inst.args(vec![
+                ("vr", crate::calllog::Val::U32s(vec![vr])),
+                ("values", crate::calllog::Val::I64s(vec![1])),
+            ]);
             assert_eq!(
                 // SAFETY: a live instance; each pointer is to a live local of the length passed, or
                 // is an FMU state.
@@ -339,6 +345,7 @@ fn run(
             .filter(|v| v.ty == Type::Clock && v.causality == Causality::Output)
         {
             let mut on = 7u8;
+            inst.args(vec![("vr", crate::calllog::Val::U32s(vec![oc.vr]))]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetClock", |c| unsafe {
@@ -387,6 +394,7 @@ fn run(
         for i in &due {
             let vr = clocks[*i].vr;
             let mut on = 7u8;
+            inst.args(vec![("vr", crate::calllog::Val::U32s(vec![vr]))]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetClock", |c| unsafe {
