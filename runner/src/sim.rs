@@ -287,6 +287,12 @@ impl Simulation {
                 })?;
             }
         }
+        for c in ssd.components.iter().filter(|c| c.co_simulation) {
+            sim.require_co_simulation(&c.name).map_err(|e| Error {
+                message: format!("{}: {}", archive.path, e.message),
+                ..e
+            })?;
+        }
         for c in ssd.components.iter().filter(|c| c.scheduled) {
             sim.use_scheduled_execution(&c.name).map_err(|e| Error {
                 message: format!("{}: {}", archive.path, e.message),
@@ -820,6 +826,27 @@ impl Simulation {
     /// The value reference of `component.variable`.
     pub fn vr(&self, component: &str, variable: &str) -> Result<u32, Error> {
         Ok(self.resolve(component, variable)?.vr)
+    }
+
+    /// An SSD's `implementation="CoSimulation"`: `component`'s FMU must offer co-simulation. SSP
+    /// (SystemStructureDescription.xsd, ssd:Component/@implementation): "the corresponding FMU
+    /// implementation must be used. It is an error if the specified type of FMU implementation
+    /// is not present in the FMU." Without it the runner would pick the FMU's only interface
+    /// (model exchange, or Scheduled Execution).
+    pub fn require_co_simulation(&self, component: &str) -> Result<(), Error> {
+        let i = self.slave_index(component)?;
+        let fmu = self.fmu_of(i);
+        if fmu.description.cs.is_some() {
+            return Ok(());
+        }
+        Err(Error::unsupported(
+            Some(component),
+            None,
+            format!(
+                "component '{component}' ({}): implementation=\"CoSimulation\", but its modelDescription.xml has no <CoSimulation> (SSP: the implementation named must be used; \"any\" lets the runner choose)",
+                fmu.model_identifier()
+            ),
+        ))
     }
 
     /// Runs `component` as model exchange, integrated by the runner (an SSD's

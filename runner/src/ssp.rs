@@ -45,6 +45,10 @@ pub struct Component {
     /// `implementation="ScheduledExecution"` (SSP 2.0): the runner activates its partitions
     /// ([`crate::sim::Simulation::use_scheduled_execution`]).
     pub scheduled: bool,
+    /// `implementation="CoSimulation"` written out: its FMU must offer co-simulation (SSP 1.0 and
+    /// 2.0, ssd:Component/@implementation: an error where the FMU does not), not the interface
+    /// the runner would pick for an FMU of model exchange or Scheduled Execution only.
+    pub co_simulation: bool,
     /// SSP 2.0: the connectors that declare a type or dimensions: (connector, its type element,
     /// e.g. "Float64", or "" if none, each `ssc:Dimension`'s `size`, None if it has none),
     /// checked against the FMU's variables when the system is built.
@@ -313,7 +317,9 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                         ),
                     ));
                 }
-                let (model_exchange, scheduled) = match attr(&e, "implementation").as_deref() {
+                let implementation = attr(&e, "implementation");
+                let co_simulation = implementation.as_deref() == Some("CoSimulation");
+                let (model_exchange, scheduled) = match implementation.as_deref() {
                     None | Some("any") | Some("CoSimulation") => (false, false),
                     Some("ModelExchange") => (true, false),
                     // SSP 2.0 (SystemStructureDescription.xsd, ssd:Component/@implementation);
@@ -336,6 +342,7 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     connectors: Vec::new(),
                     model_exchange,
                     scheduled,
+                    co_simulation,
                     declared: Vec::new(),
                 });
             }

@@ -331,3 +331,29 @@ fn an_ssd_asking_for_scheduled_execution_gets_it_and_a_component_without_it_is_r
     let r = run(&mut sim, 0.01, 1e-3, &["plant.alpha1"]);
     assert_eq!(r.time.len(), 11);
 }
+
+#[test]
+fn an_ssd_asking_for_co_simulation_of_an_fmu_of_scheduled_execution_only_is_refused() {
+    // SSP (SystemStructureDescription.xsd, ssd:Component/@implementation): "It is an error if the
+    // specified type of FMU implementation is not present in the FMU". The C Clocks has only
+    // <ScheduledExecution>: with "any" the runner runs it so; with "CoSimulation" it refuses.
+    let ssp = one_component_ssp("c-clocks-any", "clocks", &theirs("Clocks"), "any");
+    assert!(
+        Simulation::from_ssp(&ssp)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .is_scheduled("clocks")
+    );
+    std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+    let ssp = one_component_ssp("c-clocks-cs", "clocks", &theirs("Clocks"), "CoSimulation");
+    let e = Simulation::from_ssp(&ssp)
+        .err()
+        .expect("the C Clocks has no co-simulation");
+    assert_eq!(e.component.as_deref(), Some("clocks"));
+    assert!(
+        e.message
+            .contains("component 'clocks' (Clocks): implementation=\"CoSimulation\", but its modelDescription.xml has no <CoSimulation>"),
+        "{}",
+        e.message
+    );
+    std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+}
