@@ -21,41 +21,12 @@
 // rustfmu_runner::Error is large (it carries the details of a failure), on the cold path only.
 #![allow(clippy::result_large_err)]
 
+mod support;
+
 use rustfmu_runner::{ErrorKind, RunOptions, RunResult, Simulation};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
-}
-
-/// `target/fmu/<name>.fmu` (honours CARGO_TARGET_DIR).
-fn ours(name: &str) -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .map_or(
-            root().join("target"),
-            |t| if t.is_absolute() { t } else { root().join(t) },
-        );
-    let p = target.join("fmu").join(format!("{name}.fmu"));
-    assert!(
-        p.exists(),
-        "{} is missing: run `cargo run --release -p fmu-build` first",
-        p.display()
-    );
-    p
-}
-
-/// The C Reference-FMUs' FMI 2.0 Feedthrough (no directional derivatives).
-fn theirs_feedthrough() -> PathBuf {
-    let p = root().join("../shared/independent/reference-fmus/2.0/Feedthrough.fmu");
-    assert!(
-        p.exists(),
-        "{} is missing (the C Reference-FMUs v0.0.41 of shared/independent)",
-        p.display()
-    );
-    p
-}
+use support::{ours, theirs};
 
 /// One motor's parameters (gear ratio 1, coupled) and its voltage and initial current.
 #[derive(Clone, Copy)]
@@ -165,7 +136,7 @@ fn system_with(
     let opts = zip::write::SimpleFileOptions::default();
     z.start_file("SystemStructure.ssd", opts).unwrap();
     z.write_all(ssd.as_bytes()).unwrap();
-    for (name, file) in [("DCMotor", ours("DCMotor")), ("Feedthrough", load.to_path_buf())] {
+    for (name, file) in [("DCMotor", ours("DCMotor", false)), ("Feedthrough", load.to_path_buf())] {
         z.start_file(format!("resources/{name}.fmu"), opts).unwrap();
         z.write_all(&std::fs::read(file).unwrap()).unwrap();
     }
@@ -232,7 +203,7 @@ fn largest_error(r: &RunResult, rows: &[[f64; 4]]) -> f64 {
 
 #[test]
 fn a_loop_of_feedthrough_is_ordered_as_one_block_and_named() {
-    let (ssp, _dir) = system("order", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("order", A, B, &ours("Feedthrough", false));
     let sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(sim.evaluation_order(), ["motor_a", "motor_b", "load_a", "load_b"]);
     let loops = sim.algebraic_loops();
@@ -253,7 +224,7 @@ fn a_loop_of_feedthrough_is_ordered_as_one_block_and_named() {
 #[test]
 fn the_loop_solved_by_newton_with_exact_jacobians_is_the_independent_solution() {
     let (stop, h) = (1.0, 1e-2);
-    let (ssp, _dir) = system("exact", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("exact", A, B, &ours("Feedthrough", false));
     let r = run(&ssp, stop, h, false);
     let error = largest_error(&r, &independent(A, B, stop, h));
     let report = &r.loops[0];
@@ -284,7 +255,7 @@ fn the_loop_solved_by_newton_with_exact_jacobians_is_the_independent_solution() 
 #[test]
 fn finite_differences_and_directional_derivatives_give_the_same_solution() {
     let (stop, h) = (1.0, 1e-2);
-    let (ssp, _dir) = system("fd", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("fd", A, B, &ours("Feedthrough", false));
     let exact = run(&ssp, stop, h, false);
     let fd = run(&ssp, stop, h, true);
     assert!(exact.loops[0].exact_jacobian && !fd.loops[0].exact_jacobian);
@@ -318,7 +289,7 @@ fn finite_differences_and_directional_derivatives_give_the_same_solution() {
 #[test]
 fn a_foreign_component_without_directional_derivatives_gets_finite_differences() {
     let (stop, h) = (1.0, 1e-2);
-    let (ssp, _dir) = system("theirs", A, B, &theirs_feedthrough());
+    let (ssp, _dir) = system("theirs", A, B, &theirs("2.0", "Feedthrough"));
     let r = run(&ssp, stop, h, false);
     let error = largest_error(&r, &independent(A, B, stop, h));
     println!("{}; largest |runner - independent| = {error:.3e}", r.loops[0]);
@@ -335,7 +306,7 @@ fn a_singular_loop_fails_the_run_naming_loop_unknowns_residual_and_time() {
     // unless km_a i_a = km_b i_b); found in Initialization Mode, where the loop is first solved.
     let a = Motor { b: 1.0, ..A };
     let b = Motor { b: 1.0, ..B };
-    let (ssp, _dir) = system("singular", a, b, &ours("Feedthrough"));
+    let (ssp, _dir) = system("singular", a, b, &ours("Feedthrough", false));
     let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     let mut opts = RunOptions::new(1.0, 1e-2);
     opts.record = vec!["motor_a.i".into()];
@@ -361,7 +332,7 @@ fn a_singular_loop_fails_the_run_naming_loop_unknowns_residual_and_time() {
 
 #[test]
 fn a_loop_not_converged_in_the_iterations_allowed_fails_naming_them() {
-    let (ssp, _dir) = system("limit", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("limit", A, B, &ours("Feedthrough", false));
     let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     let mut opts = RunOptions::new(1.0, 1e-2);
     opts.loops.max_iterations = 0;
@@ -387,7 +358,7 @@ fn the_same_loop_with_a_step_of_delay_diverges() {
     // The Jacobi order (every output read, then every input set) solves nothing: each point
     // takes the loop's values of the point before, w <- km i - B w, whose gain B_a B_b = 3 per
     // round trip makes it grow without bound; Newton's solution stays below 1 N·m.
-    let (ssp, _dir) = system("jacobi", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("jacobi", A, B, &ours("Feedthrough", false));
     let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     sim.scheme = rustfmu_runner::Scheme::Jacobi;
     let mut opts = RunOptions::new(0.5, 1e-2);
@@ -432,7 +403,7 @@ fn a_loop_through_a_supply_limit_takes_newton_across_the_limit() {
         ("motor_b", "tau", "load_b", "Float64_continuous_input"),
         ("load_b", "Float64_continuous_output", "motor_a", "U"),
     ];
-    let (ssp, _dir) = system_with("limit-loop", a, b, &ours("Feedthrough"), &limited);
+    let (ssp, _dir) = system_with("limit-loop", a, b, &ours("Feedthrough", false), &limited);
     let (stop, h): (f64, f64) = (1.0, 1e-2);
     // Here: the loop by its two pieces, the currents stepped exactly (motor_a's joint speed is
     // not connected: 0).
@@ -478,7 +449,7 @@ fn a_loop_through_a_supply_limit_takes_newton_across_the_limit() {
 
 #[test]
 fn a_first_order_hold_through_a_loop_is_refused_saying_so() {
-    let (ssp, _dir) = system("hold", A, B, &ours("Feedthrough"));
+    let (ssp, _dir) = system("hold", A, B, &ours("Feedthrough", false));
     let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     let mut opts = RunOptions::new(0.1, 1e-2);
     opts.input_derivatives = true;

@@ -9,43 +9,14 @@
 // rustfmu_runner::Error is large (it carries the details of a failure), on the cold path only.
 #![allow(clippy::result_large_err)]
 
+mod support;
+
 use rustfmu_runner::fmu::Fmu;
 use rustfmu_runner::ssp::Connection;
 use rustfmu_runner::{RunOptions, RunResult, Simulation, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
-}
-
-/// `target/fmu/fmi3/<name>.fmu` (honours CARGO_TARGET_DIR).
-fn ours(name: &str) -> PathBuf {
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .map_or(
-            root().join("target"),
-            |t| if t.is_absolute() { t } else { root().join(t) },
-        );
-    let p = target.join("fmu/fmi3").join(format!("{name}.fmu"));
-    assert!(
-        p.exists(),
-        "{} is missing: build it with `cargo fmu build`",
-        p.display()
-    );
-    p
-}
-
-/// The C Reference-FMUs' FMI 3.0 `name`.
-fn theirs(name: &str) -> PathBuf {
-    let p = root().join(format!("../shared/independent/reference-fmus/3.0/{name}.fmu"));
-    assert!(
-        p.exists(),
-        "{} is missing (the C Reference-FMUs v0.0.41 of shared/independent)",
-        p.display()
-    );
-    p
-}
+use support::{ours, theirs};
 
 fn connect(pairs: &[(&str, &str, &str, &str)]) -> Vec<Connection> {
     pairs
@@ -114,7 +85,7 @@ const COUNTERS: [&str; 6] = [
 fn the_reference_clocks_alone_runs_its_partitions_at_their_ticks_as_the_model_defines_them() {
     // Clocks (C, v0.0.41) declares only <ScheduledExecution>: the runner runs it so.
     for step in [1.0, 0.5, 0.25] {
-        let mut sim = system(&[("clocks", &theirs("Clocks"))], &[], Vec::new());
+        let mut sim = system(&[("clocks", &theirs("3.0", "Clocks"))], &[], Vec::new());
         assert!(sim.is_scheduled("clocks"));
         let record: Vec<String> = COUNTERS.iter().map(|v| format!("clocks.{v}")).collect();
         let record: Vec<&str> = record.iter().map(String::as_str).collect();
@@ -164,7 +135,7 @@ fn two_clocks_ssp(dir: &str, implementation: &str) -> PathBuf {
 <ssd:Connection startElement="a" startConnector="output3" endElement="b" endConnector="input2"/>
 </ssd:Connections></ssd:System></ssd:SystemStructureDescription>"#
     );
-    archive(dir, "TwoClocks", &ssd, &[("Clocks", &ours("Clocks"))])
+    archive(dir, "TwoClocks", &ssd, &[("Clocks", &ours("Clocks", true))])
 }
 
 /// An SSP file `<name>.ssp` in a folder of its own (`dir`) with `ssd` and `fmus` (resources/<name>.fmu).
@@ -235,8 +206,8 @@ fn sampled_loop(scheduled: bool) -> (Simulation, Vec<&'static str>) {
     ];
     let mut sim = system(
         &[
-            ("pendulum", &ours("Pendulum")),
-            ("controller", &ours("SampledController")),
+            ("pendulum", &ours("Pendulum", true)),
+            ("controller", &ours("SampledController", true)),
         ],
         &conns,
         params,
@@ -298,14 +269,14 @@ fn one_component_ssp(dir: &str, name: &str, fmu: &Path, implementation: &str) ->
 
 #[test]
 fn an_ssd_asking_for_scheduled_execution_gets_it_and_a_component_without_it_is_refused_by_name() {
-    let ssp = one_component_ssp("clocks", "clocks", &ours("Clocks"), "ScheduledExecution");
+    let ssp = one_component_ssp("clocks", "clocks", &ours("Clocks", true), "ScheduledExecution");
     let sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
     assert!(sim.is_scheduled("clocks"));
-    let ssp = one_component_ssp("clocks-cs", "clocks", &ours("Clocks"), "CoSimulation");
+    let ssp = one_component_ssp("clocks-cs", "clocks", &ours("Clocks", true), "CoSimulation");
     assert!(!Simulation::from_ssp(&ssp).unwrap().is_scheduled("clocks"));
     std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
 
-    let ssp = one_component_ssp("pendulum", "plant", &ours("Pendulum"), "ScheduledExecution");
+    let ssp = one_component_ssp("pendulum", "plant", &ours("Pendulum", true), "ScheduledExecution");
     let e = Simulation::from_ssp(&ssp)
         .err()
         .expect("the Pendulum has no Scheduled Execution");
@@ -319,7 +290,7 @@ fn an_ssd_asking_for_scheduled_execution_gets_it_and_a_component_without_it_is_r
     );
     std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
     // The same through the API; the component keeps running as before.
-    let mut sim = system(&[("plant", &ours("Pendulum"))], &[], Vec::new());
+    let mut sim = system(&[("plant", &ours("Pendulum", true))], &[], Vec::new());
     let e = sim.use_scheduled_execution("plant").expect_err("refused");
     assert!(
         e.message
@@ -337,14 +308,14 @@ fn an_ssd_asking_for_co_simulation_of_an_fmu_of_scheduled_execution_only_is_refu
     // SSP (SystemStructureDescription.xsd, ssd:Component/@implementation): "It is an error if the
     // specified type of FMU implementation is not present in the FMU". The C Clocks has only
     // <ScheduledExecution>: with "any" the runner runs it so; with "CoSimulation" it refuses.
-    let ssp = one_component_ssp("c-clocks-any", "clocks", &theirs("Clocks"), "any");
+    let ssp = one_component_ssp("c-clocks-any", "clocks", &theirs("3.0", "Clocks"), "any");
     assert!(
         Simulation::from_ssp(&ssp)
             .unwrap_or_else(|e| panic!("{e}"))
             .is_scheduled("clocks")
     );
     std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
-    let ssp = one_component_ssp("c-clocks-cs", "clocks", &theirs("Clocks"), "CoSimulation");
+    let ssp = one_component_ssp("c-clocks-cs", "clocks", &theirs("3.0", "Clocks"), "CoSimulation");
     let e = Simulation::from_ssp(&ssp)
         .err()
         .expect("the C Clocks has no co-simulation");
