@@ -212,10 +212,16 @@ class Bus(Node):
         self.f.setBinary([self.vr(f"Node{p}.Rx_Data") for p in ports], [sent[p] for p in ports])
         self.event()
 
-    def deliver(self):
-        """The bus's tick: {port: the bus operations it gets}."""
+    def deliver(self, sent=None):
+        """The bus's tick: {port: the bus operations it gets}. The Tx_Data of the nodes that sent
+        at the same instant (`sent`, as in receive_all) arrive in the same event: the tick the bus
+        announced is activated at its time (FMI 3.0.2, countdown Clocks), its Rx_Clocks with it."""
         ports = [1, 2, 3, 4]
         self.f.setClock([self.vr(f"Node{p}.Tx_Clock") for p in ports], [True] * 4)
+        if sent:
+            rx = sorted(sent)
+            self.f.setClock([self.vr(f"Node{p}.Rx_Clock") for p in rx], [True] * len(rx))
+            self.f.setBinary([self.vr(f"Node{p}.Rx_Data") for p in rx], [sent[p] for p in rx])
         out = {p: self.f.getBinary([self.vr(f"Node{p}.Tx_Data")])[0] for p in ports}
         self.next_tx = None
         self.event()
@@ -302,6 +308,10 @@ def networked(cfg=Config(), fmu_dir=FMU_DIR, plant=None, motor=None, law=None):
     t, fallen = 0.0, False
     while True:
         x = p.state()
+        # Whether the bus's announced tick is now, known before anything happens at this instant
+        # (the Rx event of the frames sent now may announce another interval: the tick announced
+        # for now is activated all the same, in that event).
+        bus_due = bus.next_tx is not None and abs(bus.next_tx - t) < EPS
         # The nodes whose Tx clock ticks now send; their frames meet at the bus in one event.
         sent = {}
         for k, node in enumerate(nodes):
@@ -313,11 +323,13 @@ def networked(cfg=Config(), fmu_dir=FMU_DIR, plant=None, motor=None, law=None):
                         f = Frame(can_id, data, t, k + 1)
                         sent_frames.append(f)
                         in_flight[can_id].append(f)
-        if sent:
+        if sent and not bus_due:
             bus.receive_all(sent)
-        # The bus's tick: what each port gets (a frame goes to every port but its sender's).
-        if bus.next_tx is not None and abs(bus.next_tx - t) < EPS:
-            delivered = bus.deliver()
+        # The bus's tick: what each port gets (a frame goes to every port but its sender's). A
+        # node that sent now receives after its Tx_Data was read, in an event of its own
+        # (FMI-LS-BUS 1.0.0, 4: the Rx_Clock activated "respecting the Tx_Data and Rx_Data dependency").
+        if bus_due:
+            delivered = bus.deliver(sent)
             arrived = collections.Counter()
             for port, data in delivered.items():
                 if data:

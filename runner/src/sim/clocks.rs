@@ -137,8 +137,14 @@ impl Simulation {
     /// Event Mode only by a connection here is read when its Event Mode ends, too late for its
     /// own connections at this time). Returns whether a receiver ticked.
     pub(super) fn link_clocks(&mut self, t: f64, outputs: bool) -> Result<bool, Error> {
-        // The clocks that tick, as they are before any receiver takes its tick (a receiver whose
-        // first round ends for it stops ticking its own clocks, which tick at this time all the same).
+        let ticking = self.ticking_senders(outputs);
+        Ok(!self.tick_links(t, ticking, false)?.is_empty())
+    }
+
+    /// The senders' clocks that tick now (those of output clocks too where `outputs`), as they
+    /// are before any receiver takes its tick: a receiver whose round ends for a tick stops
+    /// ticking its own clocks, which tick at this time all the same.
+    fn ticking_senders(&mut self, outputs: bool) -> Vec<(usize, u32)> {
         let mut ticking: Vec<(usize, u32)> = Vec::new();
         for k in 0..self.clock_links.len() {
             let ClockLink { from, output, .. } = self.clock_links[k];
@@ -146,13 +152,35 @@ impl Simulation {
                 ticking.push(from);
             }
         }
-        let mut done = vec![false; self.clock_links.len()];
-        let mut any = false;
+        ticking
+    }
+
+    /// Whether each clock connection is *late*: its receiver's outputs are read before its
+    /// sender's at a communication point (the receiver comes before the sender in the evaluation
+    /// order, or is the sender; every connection under Jacobi, where all outputs are read first).
+    fn late_links(&self) -> Vec<bool> {
+        let mut position = vec![usize::MAX; self.slaves.len()];
+        for (k, (c, _)) in self.steps.iter().enumerate() {
+            position[*c] = k;
+        }
+        let jacobi = matches!(self.scheme, Scheme::Jacobi);
+        self.clock_links
+            .iter()
+            .map(|k| jacobi || position[k.to.0] <= position[k.from.0])
+            .collect()
+    }
+
+    /// The clock connections of [`Simulation::link_clocks`] from the senders `ticking`, those
+    /// that are late (`late`) or the others; returns the receivers that ticked.
+    fn tick_links(&mut self, t: f64, mut ticking: Vec<(usize, u32)>, late: bool) -> Result<Vec<usize>, Error> {
+        let is_late = self.late_links();
+        let mut done: Vec<bool> = is_late.iter().map(|&l| l != late).collect();
+        let mut receivers: Vec<usize> = Vec::new();
         for _ in 0..=self.clock_links.len() {
             let mut changed = false;
             for (k, finished) in done.iter_mut().enumerate() {
-                let ClockLink { from, to, output, .. } = self.clock_links[k];
-                if *finished || (output && !outputs) || !ticking.contains(&from) {
+                let ClockLink { from, to, .. } = self.clock_links[k];
+                if *finished || !ticking.contains(&from) {
                     continue;
                 }
                 *finished = true;
@@ -171,7 +199,9 @@ impl Simulation {
                                 &format!("clock connection {}", self.clock_links[k].text),
                             )
                         })?;
-                    any = true;
+                    if !receivers.contains(&to.0) {
+                        receivers.push(to.0);
+                    }
                 }
                 if !ticking.contains(&to) {
                     ticking.push(to);
@@ -179,10 +209,40 @@ impl Simulation {
                 changed = true;
             }
             if !changed {
-                return Ok(any);
+                break;
             }
         }
-        Ok(any)
+        Ok(receivers)
+    }
+
+    /// The late clock connections whose senders ticked at `t` tick their receivers, each in a
+    /// round of its own after the one whose outputs were read ([`Instance3::trigger`]: the round
+    /// ends with fmi3UpdateDiscreteStates, the clock starts the next one, FMI 3.0.2 super-dense
+    /// time), and the receivers' inputs are set again from the outputs already read: the clocked
+    /// inputs of the new round take the values of this time. FMI-LS-BUS 1.0.0, 4 (Time-based Tx
+    /// Clocks): "an importer has to activate the Rx_Clock respecting the Tx_Data and Rx_Data
+    /// dependency" — a network FMU whose Tx_Data the bus read at `t` gets the bus's Tx_Data of
+    /// `t` after it, not in the round its own was computed in (where its Rx_Clock would tick
+    /// with the Rx_Data of the last time, and setting the new one is refused).
+    ///
+    /// [`Instance3::trigger`]: crate::fmi3::Instance3::trigger
+    pub(super) fn late_round(&mut self, t: f64, ticking: Vec<(usize, u32)>) -> Result<(), Error> {
+        let receivers = self.tick_links(t, ticking, true)?;
+        if receivers.is_empty() {
+            return Ok(());
+        }
+        let jacobi = matches!(self.scheme, Scheme::Jacobi);
+        let real: Vec<usize> = if jacobi {
+            (0..self.writes.len()).collect()
+        } else {
+            self.late.clone()
+        };
+        for w in real {
+            if receivers.contains(&self.writes[w].port.slave) {
+                self.write(w, t)?;
+            }
+        }
+        self.typed_into(&receivers, jacobi, t)
     }
 
     /// The senders of connections from output clocks read their output clocks (their ticks
@@ -219,10 +279,12 @@ impl Simulation {
         self.link_clocks(t, false)?;
         self.poll_senders(t)?;
         self.exchange(t)?;
-        if self.link_clocks(t, true)? {
+        let ticking = self.ticking_senders(true);
+        if !self.tick_links(t, ticking.clone(), false)?.is_empty() {
             // A round the receivers of output clocks take their values in.
             self.propagate(t)?;
         }
+        self.late_round(t, ticking)?;
         self.settle_clocks(t)?;
         self.propagate(t)
     }

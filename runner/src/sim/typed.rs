@@ -300,6 +300,22 @@ impl Simulation {
         Ok(())
     }
 
+    /// The typed inputs of the components `receivers` set again from the outputs last read:
+    /// those from later components (every one under `jacobi`), see [`Simulation::late_round`].
+    pub(super) fn typed_into(&mut self, receivers: &[usize], jacobi: bool, t: f64) -> Result<(), Error> {
+        let list: Vec<usize> = if jacobi {
+            (0..self.typed.writes.len()).collect()
+        } else {
+            self.typed.late.clone()
+        };
+        for w in list {
+            if receivers.contains(&self.typed.writes[w].slave) {
+                self.typed_write(w, t)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Jacobi: every typed output read (`read`), or every typed input set.
     pub(super) fn typed_all(&mut self, read: bool, t: f64) -> Result<(), Error> {
         if read {
