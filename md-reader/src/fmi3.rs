@@ -118,6 +118,8 @@ pub struct Variable {
     pub clocks: Vec<u32>,
     /// A Clock's `intervalVariability`, `intervalDecimal`, `shiftDecimal`, `canBeDeactivated`.
     pub clock: Option<ClockAttrs>,
+    /// `intermediateUpdate`: the variable may be got or set in Intermediate Update Mode.
+    pub intermediate_update: bool,
 }
 
 /// An `<Alias>` of a variable.
@@ -336,6 +338,7 @@ impl ModelDescription {
                         .string("clocks")
                         .map(|s| s.split_whitespace().filter_map(|x| x.parse().ok()).collect())
                         .unwrap_or_default(),
+                    intermediate_update: e.flag("intermediateUpdate"),
                 });
                 open = (!empty).then_some(d.variables.len() - 1);
                 continue;

@@ -27,6 +27,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 mod clocks;
+mod intermediate;
 mod scheduled;
 mod typed;
 mod view;
@@ -459,7 +460,7 @@ impl Fmi3Import {
     /// fmi3InstantiateCoSimulation(name, ...) with the runner's logger; eventModeUsed when the
     /// runner ticks the FMU's input clocks (`fmi3/clocks.rs`), earlyReturnAllowed false.
     pub fn instantiate_cs(&self, name: &str, visible: bool, logging_on: bool) -> Result<Instance3, String> {
-        self.instantiate_with(name, visible, logging_on, self.clocks.is_some(), false)
+        self.instantiate_with(name, visible, logging_on, self.clocks.is_some(), false, None)
     }
 
     /// fmi3InstantiateCoSimulation(name, ...) with eventModeUsed and earlyReturnAllowed: the
@@ -472,9 +473,11 @@ impl Fmi3Import {
                     .into(),
             );
         }
-        self.instantiate_with(name, false, false, true, true)
+        self.instantiate_with(name, false, false, true, true, None)
     }
 
+    /// fmi3InstantiateCoSimulation; `intermediate`: the requiredIntermediateVariables, the
+    /// intermediateUpdate callback and what it reads into ([`intermediate`]).
     fn instantiate_with(
         &self,
         name: &str,
@@ -482,11 +485,17 @@ impl Fmi3Import {
         logging_on: bool,
         event_mode: bool,
         early_return: bool,
+        intermediate: Option<(&[u32], fmi3IntermediateUpdateCallback, intermediate::Samples)>,
     ) -> Result<Instance3, String> {
         let name_c = CString::new(name).map_err(|_| format!("instance name '{name}' has a NUL"))?;
+        let (required, callback, samples) = match intermediate {
+            Some((vrs, callback, samples)) => (vrs, callback, Some(samples)),
+            None => (&[][..], None, None),
+        };
         let env = Box::new(Env {
             instance: name_c.clone(),
             updates: Default::default(),
+            samples: std::cell::RefCell::new(samples),
         });
         let instantiate = self
             .library
@@ -504,11 +513,15 @@ impl Fmi3Import {
                 logging_on,
                 event_mode,
                 early_return,
-                std::ptr::null(),
-                0,
+                if required.is_empty() {
+                    std::ptr::null()
+                } else {
+                    required.as_ptr()
+                },
+                required.len(),
                 &*env as *const Env as *mut c_void,
                 Some(log_message),
-                None,
+                callback,
             )
         };
         if c.is_null() {
@@ -523,6 +536,7 @@ impl Fmi3Import {
         if let Some(state) = inst.clocks.as_mut() {
             state.early_allowed = early_return;
         }
+        inst.arm_intermediate();
         Ok(inst)
     }
 }
@@ -538,6 +552,7 @@ impl Fmi3Import {
         let env = Box::new(Env {
             instance: name_c.clone(),
             updates: Default::default(),
+            samples: Default::default(),
         });
         // SAFETY: valid C strings; the environment outlives the instance (dropped after
         // fmi3FreeInstance).
@@ -616,6 +631,8 @@ struct Env {
     instance: CString,
     /// What the clockUpdate callback of a Scheduled Execution instance read ([`scheduled`]).
     updates: std::cell::RefCell<Option<scheduled::Updates>>,
+    /// What the intermediateUpdate callback read ([`intermediate`]; None: no callback).
+    samples: std::cell::RefCell<Option<intermediate::Samples>>,
 }
 
 /// Every FMU message goes to the `log` crate as FMI 2.0 ones do (module path "logger", target

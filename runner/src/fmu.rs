@@ -32,6 +32,8 @@ struct Extra {
     has_event_mode: bool,
     /// The `<ScheduledExecution>` modelIdentifier (None: no Scheduled Execution).
     scheduled_execution: Option<String>,
+    /// See [`Fmu::intermediate`].
+    intermediate: Option<Vec<u32>>,
 }
 
 pub struct Fmu {
@@ -55,6 +57,9 @@ pub struct Fmu {
     pub has_event_mode: bool,
     /// FMI 3.0: the modelIdentifier of its `<ScheduledExecution>` (None: it has none; FMI 2.0).
     pub scheduled_execution: Option<String>,
+    /// FMI 3.0 `<CoSimulation providesIntermediateUpdate="true">`: the scalar Float64 variables
+    /// with `intermediateUpdate="true"` (None: no intermediate update; FMI 2.0).
+    pub intermediate: Option<Vec<u32>>,
 }
 
 impl Fmu {
@@ -130,6 +135,13 @@ impl Fmu {
                     .as_ref()
                     .map(|i| i.model_identifier.clone())
                     .filter(|_| d3.se),
+                intermediate: d3.cs.as_ref().filter(|cs| cs.provides_intermediate_update).map(|_| {
+                    d3.variables
+                        .iter()
+                        .filter(|v| v.intermediate_update && v.ty == md_reader::fmi3::Type::Float64 && !v.array)
+                        .map(|v| v.vr)
+                        .collect()
+                }),
             };
             (parts.description, Some(parts.int64), extra)
         } else if version.starts_with("2.") {
@@ -202,6 +214,7 @@ impl Fmu {
             feedthrough,
             has_event_mode: extra.has_event_mode,
             scheduled_execution: extra.scheduled_execution,
+            intermediate: extra.intermediate,
         })
     }
 
@@ -376,6 +389,29 @@ impl Fmu {
                     )
                 }),
             Import::V2(_) => Err(fail("an FMI 2.0 FMU has no Event Mode in co-simulation".into())),
+        }
+    }
+
+    /// A co-simulation instance with the intermediateUpdate callback reading `vrs` (FMI 3.0,
+    /// `fmi3/intermediate.rs`); with eventModeUsed and earlyReturnAllowed where `events`.
+    pub fn instantiate_intermediate(&self, component: &str, vrs: &[u32], events: bool) -> Result<InstanceCS, Error> {
+        let fail = |e: String| Error {
+            component: Some(component.to_owned()),
+            function: Some("fmi3InstantiateCoSimulation".into()),
+            ..Error::new(
+                crate::ErrorKind::Fmi,
+                format!(
+                    "component '{component}' ({}): fmi3InstantiateCoSimulation with an intermediateUpdate callback failed: {e}",
+                    self.model_identifier()
+                ),
+            )
+        };
+        match &self.import {
+            Import::V3(i) => i
+                .instantiate_cs_intermediate(component, vrs, events)
+                .map(InstanceCS::V3)
+                .map_err(fail),
+            Import::V2(_) => Err(fail("an FMI 2.0 FMU has no intermediate update".into())),
         }
     }
 

@@ -66,6 +66,12 @@ impl InstanceCS {
         self.v3().map_or(Ok(()), |i| i.tick_now(t))
     }
 
+    /// The samples its intermediateUpdate callback took since the last call (an FMI 3.0
+    /// instance made with one; none for the others).
+    pub fn take_intermediate(&mut self) -> Result<Vec<(f64, Vec<f64>)>, Fmi2Error> {
+        self.v3().map_or(Ok(Vec::new()), |i| i.take_intermediate())
+    }
+
     /// Where its last step returned early (an instance with earlyReturnAllowed).
     pub fn take_early_return(&mut self) -> Option<f64> {
         self.v3().and_then(|i| i.take_early_return())

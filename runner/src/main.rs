@@ -103,6 +103,13 @@ enum Command {
         /// step it ends early ends every component's step there (not with --isolate).
         #[arg(long = "event-mode", value_name = "COMPONENT")]
         event_mode: Vec<String>,
+        /// Also the values the FMI 3.0 co-simulation components give inside their steps: the
+        /// recorded Float64 variables with intermediateUpdate="true" of those that provide
+        /// intermediate update, read in their intermediateUpdate callbacks, as rows of their own
+        /// (the other columns NaN), as fmusim's option of the same name (not with --isolate or
+        /// --tolerance).
+        #[arg(long)]
+        record_intermediate_values: bool,
     },
     /// Runs a whole system for the runner that started this process (--isolate system).
     #[command(hide = true)]
@@ -221,6 +228,7 @@ fn run(cli: Cli) -> Result<(), String> {
             isolate,
             call_timeout,
             event_mode,
+            record_intermediate_values,
         } => {
             let stop_time = match stop_time {
                 Some(t) => t,
@@ -282,6 +290,18 @@ fn run(cli: Cli) -> Result<(), String> {
             });
             opts.overrides = set.iter().map(|s| parse_set(s)).collect::<Result<_, _>>()?;
             opts.record = if record.is_empty() { outputs } else { record };
+            if record_intermediate_values {
+                match &mut system {
+                    Backend::Here(sim) => {
+                        for note in sim.record_intermediate_values(&opts.record)? {
+                            eprintln!("rustfmu-runner: {note}");
+                        }
+                    }
+                    Backend::Process(_) => {
+                        return Err("--record-intermediate-values: not with --isolate system".into());
+                    }
+                }
+            }
             let n = if opts.adaptive.is_some() {
                 1000
             } else {

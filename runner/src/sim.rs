@@ -37,6 +37,7 @@ use std::path::Path;
 
 mod clocks;
 mod exchange;
+mod intermediate;
 pub mod loops;
 mod options;
 mod queries;
@@ -62,6 +63,9 @@ struct Slave {
     events: bool,
     /// Run in Scheduled Execution ([`Simulation::use_scheduled_execution`]).
     scheduled: bool,
+    /// The recorded variables its intermediateUpdate callback reads, (component.variable, value
+    /// reference) ([`Simulation::record_intermediate_values`]; empty: no callback).
+    intermediate: Vec<(String, u32)>,
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
@@ -375,6 +379,7 @@ impl Simulation {
                 me,
                 events: false,
                 scheduled,
+                intermediate: Vec::new(),
             });
         }
         let mut sim = Simulation {

@@ -140,6 +140,7 @@ impl Fmi3Import {
                 changed: Vec::new(),
                 error: None,
             })),
+            samples: Default::default(),
         });
         // SAFETY: valid C strings; the environment outlives the instance (dropped after
         // fmi3FreeInstance); the callbacks have the signatures of fmi3FunctionTypes.h.

@@ -491,6 +491,8 @@ impl Simulation {
         if let Some(c) = clocks {
             inst.restore_clocks(c);
         }
+        // The samples of the step taken back: the step again gives its own.
+        let _ = inst.take_intermediate();
         Ok(())
     }
 

@@ -168,7 +168,11 @@ impl Simulation {
         for i in 0..self.slaves.len() {
             self.slaves[i].instance = None; // fmi2FreeInstance
             let name = self.slaves[i].name.clone();
-            let inst = if self.slaves[i].events {
+            let inst = if !self.slaves[i].intermediate.is_empty() {
+                let vrs: Vec<u32> = self.slaves[i].intermediate.iter().map(|(_, vr)| *vr).collect();
+                self.fmu_of(i)
+                    .instantiate_intermediate(&name, &vrs, self.slaves[i].events)?
+            } else if self.slaves[i].events {
                 self.fmu_of(i).instantiate_events(&name)?
             } else {
                 make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?

@@ -116,6 +116,12 @@ impl Simulation {
             ))
             .into());
         }
+        if opts.adaptive.is_some() && self.records_intermediate() {
+            return Err(Error::usage(
+                "--record-intermediate-values: not with --tolerance (a rejected step's callbacks would give rows of a step taken back)",
+            )
+            .into());
+        }
         self.input_derivatives = opts.input_derivatives;
         self.dbufs.clear();
         let values = self.start_values(&opts.overrides)?;
@@ -210,7 +216,10 @@ impl Simulation {
                     }
                 }
             }
-            if let Err(error) = self.do_step(t, opts.step) {
+            if let Err(error) = self
+                .do_step(t, opts.step)
+                .and_then(|_| self.intermediate_rows(t, (k + 1) as f64 * opts.step, &mut result))
+            {
                 if error.kind == ErrorKind::Terminated {
                     return self.end_on_request(error, None, &mut groups, &mut row, result);
                 }
@@ -254,6 +263,7 @@ impl Simulation {
                         _ => end,
                     };
                     let reached = self.do_step_events(t, to - t)?;
+                    self.intermediate_rows(t, reached, result)?;
                     result.fmu_steps += 1;
                     same = 0;
                     if reached == end {
