@@ -365,24 +365,49 @@ fn a_crash_in_free_instance_is_failed_with_the_call_it_crashed_in() {
     );
 }
 
+/// A binary that instantiates whatever GUID / instantiationToken it is given is warned, not
+/// failed (FMI 2.0.5 §2.1.5 and FMI 3.0.2 §2.3.1 let the FMU use the token to check its
+/// description, and require no refusal: the verdicts in the two checks' documentation), and
+/// nothing else in the checks of instantiation fails for it.
 #[test]
-fn a_binary_that_does_not_check_the_token_of_its_description_is_failed() {
-    defect(
-        "TOKEN",
-        Some("TOKEN"),
-        &[
-            (
-                2,
-                "instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message",
-                "accepted",
-            ),
-            (
-                3,
-                "fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null",
-                "wrong instantiationToken",
-            ),
-        ],
-    );
+fn a_binary_that_does_not_check_the_token_of_its_description_is_warned_not_failed() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (v, name, says) in [
+        (
+            2,
+            "instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message",
+            "fmi2Instantiate with GUID Some(\"{00000000-0000-0000-0000-000000000000}\") returned an instance",
+        ),
+        (
+            3,
+            "fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null",
+            "with a wrong instantiationToken returned an instance",
+        ),
+    ] {
+        let xml = String::from_utf8(entry(&dahlquist(v).0, "modelDescription.xml")).unwrap();
+        let token = attribute(&xml, if v == 2 { "guid" } else { "instantiationToken" });
+        let fmu = fixture(dir.path(), v, "TOKEN", &[format!("-DDEFECT_TOKEN=\"{token}\"")]);
+        let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+        o.temp_dir = Some(dir.path().to_path_buf());
+        o.as_foreign = true;
+        o.filter = Some("instantiate".into());
+        let report = run(&fmu, &o);
+        assert!(report.load_error.is_none(), "{report}");
+        let c = report
+            .checks
+            .iter()
+            .find(|c| c.name == name)
+            .unwrap_or_else(|| panic!("no check {name}:\n{report}"));
+        match &c.outcome {
+            Outcome::Warn(m) => assert!(m.contains(says), "FMI {v}.0: {name} warned without '{says}': {m}"),
+            other => panic!("FMI {v}.0: expected {name} to warn, got {other:?}\n{report}"),
+        }
+        assert_eq!(
+            report.failed(),
+            0,
+            "FMI {v}.0: the checks of instantiation failed:\n{report}"
+        );
+    }
 }
 
 /// A crash in the preflight (here: fmi2FreeInstance of the instance whose state it serializes,
@@ -720,4 +745,36 @@ fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_pass
             .unwrap_or_default();
         assert!(written.is_empty(), "a passing check wrote {written:?}");
     }
+}
+
+/// The C Reference-FMUs' Clocks (v0.0.41, Scheduled Execution only; `../shared/independent`)
+/// gives its countdown clock inClock3 the interval 0 at 4 s (fmi3IntervalChanged from inside
+/// clockUpdate): an interval FMI 3.0.2 §2.2.9 allows ("T_interval,i >= 0"), which the scheduler
+/// runs at once, not a failure (the check failed it until 2026-12-07).
+#[test]
+fn a_countdown_clock_given_the_interval_zero_ticks_at_once_and_is_not_failed() {
+    let clocks = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/independent/reference-fmus/3.0/Clocks.fmu");
+    assert!(
+        clocks.exists(),
+        "{} is missing (the C Reference-FMUs v0.0.41 of shared/independent)",
+        clocks.display()
+    );
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let name = "fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates";
+    let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+    o.temp_dir = Some(dir.path().to_path_buf());
+    o.timeout = Duration::from_secs(300);
+    o.filter = Some(name.into());
+    let report = run(&clocks, &o);
+    assert!(report.load_error.is_none(), "{report}");
+    let c = report
+        .checks
+        .iter()
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no check {name}:\n{report}"));
+    assert!(
+        !matches!(c.outcome, Outcome::Fail(_) | Outcome::Skip(_)),
+        "{name} on the C Clocks: {:?}\n{report}",
+        c.outcome
+    );
 }
