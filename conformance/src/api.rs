@@ -165,22 +165,46 @@ impl Api {
 }
 
 /// Loads an FMU's binary: `dlopen` with RTLD_NOW | RTLD_LOCAL on Unix (a symbol the binary needs
-/// but no library provides fails here, by name), `LoadLibraryExW` on Windows.
+/// but no library provides fails here, by name), `LoadLibraryExW` on Windows; before it, the
+/// libpython a PythonFMU binary expects its importer to have loaded and names none of, as the
+/// runner loads it ([`rustfmu_libpython`]; the report's head says which, from
+/// [`rustfmu_libpython::loaded`]).
+///
+/// # Safety
+/// Loading runs the binary's initializers (and those of the libpython loaded for it).
+pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
+    rustfmu_libpython::before(so, None).map_err(|e| format!("{}: {e}", so.display()))?;
+    // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
+    let lib = unsafe { dlopen(so) };
+    match lib {
+        Err(e) => match rustfmu_libpython::after_failure(so, &e.to_string(), None) {
+            // SAFETY: as above (libpython is loaded now).
+            Ok(Some(_)) => unsafe { dlopen(so) },
+            Ok(None) => Err(e),
+            Err(why) => return Err(format!("{}: {why}", so.display())),
+        },
+        ok => ok,
+    }
+    .map_err(|e| format!("{}: {e}", so.display()))
+}
+
+/// `dlopen` of `so` with RTLD_NOW | RTLD_LOCAL.
 ///
 /// # Safety
 /// Loading runs the binary's initializers.
-pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
-    #[cfg(unix)]
+#[cfg(unix)]
+unsafe fn dlopen(so: &Path) -> Result<libloading::Library, libloading::Error> {
+    use libloading::os::unix::{Library, RTLD_LOCAL, RTLD_NOW};
     // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
-    let lib = unsafe {
-        libloading::os::unix::Library::open(
-            Some(so),
-            libloading::os::unix::RTLD_NOW | libloading::os::unix::RTLD_LOCAL,
-        )
-    }
-    .map(libloading::Library::from);
-    #[cfg(not(unix))]
+    unsafe { Library::open(Some(so), RTLD_NOW | RTLD_LOCAL) }.map(libloading::Library::from)
+}
+
+/// `LoadLibraryExW` of `so`.
+///
+/// # Safety
+/// Loading runs the binary's initializers.
+#[cfg(not(unix))]
+unsafe fn dlopen(so: &Path) -> Result<libloading::Library, libloading::Error> {
     // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
-    let lib = unsafe { libloading::Library::new(so) };
-    lib.map_err(|e| format!("{}: {e}", so.display()))
+    unsafe { libloading::Library::new(so) }
 }

@@ -952,7 +952,8 @@ fn probe<F: Checked>(fmu: &Path, tmp: &Path, write: impl Fn(Outcome, Findings) -
         Ok(f) => f,
         Err(e) => return write(Outcome::Fail(e), Findings::default()),
     };
-    let mut info = vec![];
+    // The libpython loaded for a PythonFMU binary: every worker loads it the same way.
+    let mut info: Vec<String> = rustfmu_libpython::loaded();
     if F::VERSION == Version::Fmi3 {
         info.push(format!(
             "an FMI 3.0 FMU: its binary exports the {} functions of fmi3Functions.h",

@@ -60,19 +60,29 @@ impl std::fmt::Display for Fmi2Error {
 }
 
 /// Loads the FMU binary at `path` (both importers), after the libraries it expects the
-/// importer to have loaded ([`crate::libpython`]: a PythonFMU binary's libpython).
+/// importer to have loaded ([`crate::libpython`]: a PythonFMU binary's libpython, said on
+/// standard error when loaded).
 pub(crate) fn load_binary(path: &Path) -> Result<libloading::Library, String> {
-    crate::libpython::before(path).map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+    const OPTION: Option<&str> = Some("--preload-lib");
+    let say = |sentence: Option<String>| {
+        if let Some(s) = sentence.filter(|s| !s.is_empty()) {
+            eprintln!("rustfmu-runner: {s}");
+        }
+    };
+    say(crate::libpython::before(path, OPTION).map_err(|e| format!("cannot load {}: {e}", path.display()))?);
     // SAFETY: loading runs the library's initializers: an FMU binary's, trusted as the
     // importer trusts the FMU it was given.
     match unsafe { libloading::Library::new(path) } {
         Ok(lib) => Ok(lib),
         Err(e) => {
             let e = e.to_string();
-            match crate::libpython::after_failure(path, &e) {
-                // SAFETY: as above.
-                Ok(true) => unsafe { libloading::Library::new(path) }.map_err(|e| e.to_string()),
-                Ok(false) => Err(e),
+            match crate::libpython::after_failure(path, &e, OPTION) {
+                Ok(Some(sentence)) => {
+                    say(Some(sentence));
+                    // SAFETY: as above.
+                    unsafe { libloading::Library::new(path) }.map_err(|e| e.to_string())
+                }
+                Ok(None) => Err(e),
                 Err(why) => Err(why),
             }
             .map_err(|e| format!("cannot load {}: {e}", path.display()))

@@ -32,7 +32,9 @@ pub mod fmu;
 pub mod fmu_log;
 pub mod instance;
 pub mod isolate;
-pub mod libpython;
+/// The libpython a PythonFMU binary needs, loaded before it (a crate shared with the conformance
+/// checker); `--preload-lib` is its [`libpython::preload`].
+pub use rustfmu_libpython as libpython;
 pub mod me;
 pub mod sim;
 pub mod ssp;

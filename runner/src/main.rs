@@ -165,7 +165,7 @@ fn parse_set(text: &str) -> Result<(String, Override), String> {
 // ~170 lines: one match over the subcommands, each arm the plain sequence of its steps (read,
 // run, write); nothing in it is shared between arms.
 fn run(cli: Cli) -> Result<(), String> {
-    rustfmu_runner::libpython::preload(&cli.preload_lib)?;
+    rustfmu_runner::libpython::preload(&cli.preload_lib, "--preload-lib")?;
     match cli.command {
         #[cfg(target_os = "linux")]
         Command::ServeComponent {

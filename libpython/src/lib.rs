@@ -1,24 +1,26 @@
 //! The Python library an FMU binary expects its importer to have loaded (PythonFMU's and
 //! PythonFMU3's: their binaries call the Python C API but name no `libpython` they need, so that
 //! one binary serves every Python 3; loaded alone they fail with `undefined symbol:
-//! _Py_NoneStruct`).
+//! _Py_NoneStruct`). Both importers of the workspace load FMU binaries through it: the runner
+//! (`rustfmu-runner`, whose `--preload-lib` is [`preload`]) and the conformance checker
+//! (`cargo fmu check`, whose report names what was loaded).
 //!
-//! Before an FMU binary is loaded (`common::load_binary`), the libraries given with
-//! `--preload-lib PATH` (or [`ENV`]) are loaded, each once, with `RTLD_GLOBAL`. Where none is
-//! given and the binary (ELF) needs symbols of the Python C API that nothing loaded provides,
-//! or its loading fails on an undefined `Py`/`_Py` symbol, the runner finds the shared
-//! `libpython` of the Python it runs beside ([`PYTHON_ENV`], else `python3` on `PATH`: its
-//! sysconfig `LIBDIR` with `INSTSONAME` or `LDLIBRARY`; else a `libpython3.N.so.1.0` the
-//! dynamic linker finds), loads it with `RTLD_GLOBAL` and says on standard error which and why.
-//! If there is none, the error names the missing symbol, the library it comes from and the
-//! option to give. An isolated component's process ([`crate::isolate`]) inherits the libraries
-//! given through [`ENV`].
+//! Before an FMU binary is loaded ([`before`]), the libraries given with [`preload`] (or [`ENV`])
+//! are loaded, each once, with `RTLD_GLOBAL`. Where none is given and the binary (ELF) needs
+//! symbols of the Python C API that nothing loaded provides, or its loading fails on an
+//! undefined `Py`/`_Py` symbol ([`after_failure`]), the shared `libpython` of the Python the
+//! importer runs beside is found ([`PYTHON_ENV`], else `python3` on `PATH`: its sysconfig `LIBDIR`
+//! with `INSTSONAME` or `LDLIBRARY`; else a `libpython3.N.so.1.0` the dynamic linker finds),
+//! loaded with `RTLD_GLOBAL`, and the importer is handed a sentence saying which and why (it
+//! prints it; [`loaded`] keeps them all). If there is none, the error names the missing symbol,
+//! the library it comes from and how to give one. Child processes inherit the libraries given
+//! through [`ENV`] ([`for_child`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 /// The environment variable of the libraries to load before any FMU binary (paths separated
-/// by `:`); `--preload-lib` adds to it, and isolated components' processes inherit it.
+/// by `:`); [`preload`] adds to it, and child processes inherit it ([`for_child`]).
 pub const ENV: &str = "RUSTFMU_RUNNER_PRELOAD";
 
 /// The environment variable naming the Python interpreter whose `libpython` is loaded where an
@@ -31,14 +33,25 @@ pub const PYTHON_ENV: &str = "RUSTFMU_RUNNER_PYTHON";
 #[cfg(unix)]
 static LOADED: Mutex<Vec<(PathBuf, libloading::os::unix::Library)>> = Mutex::new(Vec::new());
 
-/// The libraries given on the command line (`--preload-lib`), passed on to child processes.
+/// The libraries given to [`preload`], passed on to child processes.
 static GIVEN: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
+/// What [`before`] and [`after_failure`] loaded in this process, each as the sentence they
+/// returned.
+static NOTES: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+/// Every sentence [`before`] and [`after_failure`] returned in this process: which libpython was
+/// loaded, before which FMU binary, why, and how it was found.
+pub fn loaded() -> Vec<String> {
+    lock(&NOTES).clone()
+}
+
 /// Loads the libraries `paths` now, with `RTLD_GLOBAL`, and before every FMU binary of this
-/// process and its isolated components' processes (`--preload-lib`).
-pub fn preload(paths: &[PathBuf]) -> Result<(), String> {
+/// process and its child processes ([`for_child`]); `option` names how the user gave them (the
+/// runner's `--preload-lib`), for the error.
+pub fn preload(paths: &[PathBuf], option: &str) -> Result<(), String> {
     for path in paths {
-        load_global(path).map_err(|e| format!("--preload-lib {}: {e}", path.display()))?;
+        load_global(path).map_err(|e| format!("{option} {}: {e}", path.display()))?;
         lock(&GIVEN).push(path.clone());
     }
     Ok(())
@@ -93,8 +106,11 @@ fn load_global(path: &Path) -> Result<bool, String> {
 }
 
 /// Before the FMU binary `path` is loaded: the libraries of [`ENV`], and libpython if its ELF
-/// needs the Python C API and nothing loaded provides it.
-pub(crate) fn before(path: &Path) -> Result<(), String> {
+/// needs the Python C API and nothing loaded provides it. `option`: the importer's own way to
+/// give a library (the runner's `--preload-lib`; None: [`ENV`] only), named in what it says.
+/// Ok(Some(sentence)): libpython loaded now, the sentence saying which, why, how it was found
+/// and how to choose another, for the importer to print.
+pub fn before(path: &Path, option: Option<&str>) -> Result<Option<String>, String> {
     for p in from_env() {
         load_global(&p).map_err(|e| format!("{ENV}={}: {e}", p.display()))?;
     }
@@ -110,19 +126,20 @@ pub(crate) fn before(path: &Path) -> Result<(), String> {
                 String::new()
             }
         );
-        load_libpython(path, &symbols[0], &why)?;
+        return load_libpython(path, &symbols[0], &why, option);
     }
-    Ok(())
+    Ok(None)
 }
 
-/// After the FMU binary `path` failed to load with `error`: libpython loaded if the error is an
-/// undefined Python symbol (true: try again), or the error saying what is missing.
-pub(crate) fn after_failure(path: &Path, error: &str) -> Result<bool, String> {
+/// After the FMU binary `path` failed to load with `error`: Ok(None), not an undefined Python
+/// symbol (the error stands); Ok(Some(sentence)), libpython loaded (try again; the sentence is
+/// empty when an earlier call had loaded it); Err, the error saying what is missing.
+pub fn after_failure(path: &Path, error: &str, option: Option<&str>) -> Result<Option<String>, String> {
     let Some(symbol) = undefined_python_symbol(error) else {
-        return Ok(false);
+        return Ok(None);
     };
-    load_libpython(path, symbol, &format!("loading it failed: undefined symbol {symbol}"))?;
-    Ok(true)
+    let why = format!("loading it failed: undefined symbol {symbol}");
+    load_libpython(path, symbol, &why, option).map(|s| Some(s.unwrap_or_default()))
 }
 
 /// The symbol of `undefined symbol: NAME` in a dynamic linker's message, if of the Python C API.
@@ -195,28 +212,39 @@ fn provided(_symbols: &[String]) -> bool {
 }
 
 /// Finds and loads the shared libpython for the FMU binary `path`, which needs `symbol`
-/// (`why`), saying which on standard error; or the error naming the symbol and the option.
-fn load_libpython(path: &Path, symbol: &str, why: &str) -> Result<(), String> {
+/// (`why`): the sentence saying which (None: loaded before), kept in [`NOTES`]; or the error
+/// naming the symbol and how to give a library (`option`, [`ENV`], [`PYTHON_ENV`]).
+fn load_libpython(path: &Path, symbol: &str, why: &str, option: Option<&str>) -> Result<Option<String>, String> {
     let mut tried = Vec::new();
     for (candidate, found_by) in candidates(&mut tried) {
         match load_global(&candidate) {
-            Ok(fresh) => {
-                if fresh {
-                    eprintln!(
-                        "rustfmu-runner: loaded {} (RTLD_GLOBAL) before {}: {why}; found by {found_by} (--preload-lib PATH or {ENV} chooses another)",
-                        candidate.display(),
-                        path.display(),
-                    );
-                }
-                return Ok(());
+            Ok(true) => {
+                let sentence = format!(
+                    "loaded {} (RTLD_GLOBAL) before {}: {why}; found by {found_by} ({} chooses another)",
+                    candidate.display(),
+                    path.display(),
+                    match option {
+                        Some(o) => format!("{o} PATH or {ENV}"),
+                        None => format!("{ENV}=PATH"),
+                    }
+                );
+                lock(&NOTES).push(sentence.clone());
+                return Ok(Some(sentence));
             }
+            Ok(false) => return Ok(None),
             // A bare name not on the search path: said once, by `candidates`.
             Err(_) if candidate.parent() == Some(Path::new("")) => {}
             Err(e) => tried.push(format!("{}: {e}", candidate.display())),
         }
     }
+    let give = match option {
+        Some(o) => format!(
+            "{o} /path/to/libpython3.X.so.1.0 (or {ENV}=PATH, or {PYTHON_ENV}=a python3 built with --enable-shared)"
+        ),
+        None => format!("{ENV}=/path/to/libpython3.X.so.1.0 (or {PYTHON_ENV}=a python3 built with --enable-shared)"),
+    };
     Err(format!(
-        "it needs the symbol {symbol} of the Python C library (libpython3.X.so, which PythonFMU and PythonFMU3 binaries expect the importer to load) and no libpython was found ({}); give it with --preload-lib /path/to/libpython3.X.so.1.0 (or {ENV}=PATH, or {PYTHON_ENV}=a python3 built with --enable-shared)",
+        "it needs the symbol {symbol} of the Python C library (libpython3.X.so, which PythonFMU and PythonFMU3 binaries expect the importer to load) and no libpython was found ({}); give it with {give}",
         tried.join("; ")
     ))
 }
