@@ -551,3 +551,49 @@ fn a_known_outside_initialization_modes_knowns_is_refused_with_a_message() {
         "{refused}"
     );
 }
+
+type GetState2 = unsafe extern "C" fn(fmi2Component, *mut fmi2FMUstate) -> fmi2Status;
+type StateSize2 = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut usize) -> fmi2Status;
+type Serialize2 = unsafe extern "C" fn(fmi2Component, fmi2FMUstate, *mut fmi2Byte, usize) -> fmi2Status;
+
+/// The instance's FMU state, serialized (fmi2GetFMUstate, fmi2SerializeFMUstate, fmi2FreeFMUstate).
+fn serialized(lib: &Library, host: &Fmi2) -> Vec<u8> {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let mut size = 0usize;
+    // SAFETY: the functions of fmi2Functions.h with their signatures; a live instance, a state it
+    // made, a buffer of the size it announced.
+    unsafe {
+        assert_eq!(lib.get::<GetState2>("fmi2GetFMUstate")(host.c, &mut state), fmi2OK);
+        assert_eq!(
+            lib.get::<StateSize2>("fmi2SerializedFMUstateSize")(host.c, state, &mut size),
+            fmi2OK
+        );
+        let mut bytes = vec![0u8; size];
+        assert_eq!(
+            lib.get::<Serialize2>("fmi2SerializeFMUstate")(host.c, state, bytes.as_mut_ptr().cast(), size),
+            fmi2OK
+        );
+        assert_eq!(lib.get::<GetState2>("fmi2FreeFMUstate")(host.c, &mut state), fmi2OK);
+        bytes
+    }
+}
+
+#[test]
+fn a_derivative_refused_in_initialization_mode_leaves_the_fmu_state_as_it_was() {
+    // The conformance suite's random model-exchange sequence of seed 6646168119972039503: the
+    // inductance L set to a subnormal, then fmi2GetDirectionalDerivative in Initialization Mode:
+    // d der(i) / dU = 1 / L overflows, refused with fmi2Error. The initialization the call
+    // brought up to date for it must be taken back with the refusal (FMI 2.0.5 2.1.3: fmi2Error,
+    // nothing changed), which it was not.
+    let lib = Library::load("DCMotor", "dc_motor_fmu");
+    let host = Fmi2::initialization_mode(&lib);
+    host.set(lib.vr("L"), 6.73587195522396e-310);
+    let before = serialized(&lib, &host);
+    let refused = host.derivative(lib.vr("der(i)"), lib.vr("U")).unwrap_err();
+    assert!(refused.contains("in Initialization Mode is inf"), "{refused}");
+    assert!(serialized(&lib, &host) == before, "fmi2Error changed the FMU state");
+    // With a finite L the same call answers, and the initialization stays brought up to date.
+    host.set(lib.vr("L"), 1e-3);
+    let d = host.derivative(lib.vr("der(i)"), lib.vr("U")).unwrap();
+    assert!((d - 1e3).abs() < 1e-6, "d der(i)/dU = 1/L: {d}");
+}

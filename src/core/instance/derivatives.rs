@@ -155,10 +155,31 @@ impl<M: CoSimulation> Instance<M> {
             }
         }
         if initialization {
+            // The initialization brought up to date for the derivatives is taken back with a
+            // refusal: an fmi2Error leaves the FMU state as it was (a getter would bring it up
+            // to date again). Found by the conformance suite's random model-exchange sequences
+            // (seed 6646168119972039503: L = 6.7e-310, then d der(i) = -inf refused, and the
+            // serialized state had changed).
+            let before = self.sim.init_dirty.then(|| {
+                (
+                    self.sim.model.clone(),
+                    self.sim.stale_derivatives,
+                    self.sim.stale_outputs,
+                )
+            });
             if let Err(status) = self.initialize_model(f, false) {
                 return status;
             }
-            return self.initial_directional_derivative(f, unknowns, knowns, dv_known, dv_unknown);
+            let status = self.initial_directional_derivative(f, unknowns, knowns, dv_known, dv_unknown);
+            if status != OK
+                && let Some((model, stale_derivatives, stale_outputs)) = before
+            {
+                self.sim.model = model;
+                self.sim.init_dirty = true;
+                self.sim.stale_derivatives = stale_derivatives;
+                self.sim.stale_outputs = stale_outputs;
+            }
+            return status;
         }
         let model = &self.sim.model;
         let elements = |vr: u32| {
