@@ -15,6 +15,12 @@
 //! `ssc:Int32`, ..., `ssc:Binary` with the variable's `mime-type`, `ssc:Clock`) and the
 //! variables' causalities as their kinds (a countdown Tx_Clock that starts a clock connection
 //! is an `input` connector), its parameter values `ssv:<type>` (a Binary as hexadecimal digits).
+//! There SSP 2.0's own forms are written, as its schemas define them: an Enumeration connector
+//! `ssc:Enumeration` naming a type of `ssd:Enumerations`, an Enumeration value
+//! `ssv:Enumeration value="<item name>"`, an array connector or value with its `ssc:Dimension`s
+//! (a connector's `sizeConnector` the structural parameter that sets its size, a connector of
+//! the component too), an array of numbers or Booleans as a list in `value` (row-major), an
+//! array of Strings, Binaries or Enumerations as `ssv:Value` elements.
 //!
 //! A system comes from a systems file ([`crate::systems`]); the SSD is generated from it after
 //! [`System::check`] has checked it against the packaged FMUs' modelDescription.xml (every
@@ -42,8 +48,8 @@
 //!   `ssd:Enumerations`, as SSP defines it (fmpy accepts it; libcosim has no Enumeration
 //!   connectors and aborts on them).
 
-use crate::systems::{Checked, Enumeration, Fmus, System, Systems, Value};
-use crate::systems_fmi3::{Checked3, Fmus3, Type3};
+use crate::systems::{Checked, Fmus, System, Systems, Value};
+use crate::systems_fmi3::{Checked3, Fmus3, Size, Type3, Value3};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -94,15 +100,16 @@ fn connector_type(t: crate::systems::VarType, v2: bool) -> &'static str {
     }
 }
 
-/// What an SSD says of a system's components: each one's connectors (variable, kind, type
-/// element) and parameter values (variable, SSV element, value text escaped), the
-/// Enumeration types its connections carry, and the SSP version.
+/// What an SSD says of a system's components: each one's connectors (variable, kind, the
+/// connector's content: its type element and dimensions) and parameter values (variable, the
+/// `ssv:Parameter`'s content), the Enumeration types (name, items) its connections and
+/// parameters carry, and the SSP version.
 struct Layout<'a> {
     system: &'a System,
     version: &'static str,
     connectors: Vec<Vec<(&'a str, &'static str, String)>>,
-    parameters: Vec<Vec<(&'a str, &'static str, String)>>,
-    enumerations: Vec<Enumeration>,
+    parameters: Vec<Vec<(&'a str, String)>>,
+    enumerations: Vec<(String, Vec<(String, i64)>)>,
 }
 
 impl<'a> Layout<'a> {
@@ -114,6 +121,13 @@ impl<'a> Layout<'a> {
             connectors: vec![Vec::new(); n],
             parameters: vec![Vec::new(); n],
             enumerations: Vec::new(),
+        }
+    }
+
+    /// An Enumeration type of the SSD's `ssd:Enumerations`, the first time one names it.
+    fn enumeration(&mut self, name: &str, items: Vec<(String, i64)>) {
+        if !self.enumerations.iter().any(|(n, _)| n == name) {
+            self.enumerations.push((name.to_owned(), items));
         }
     }
 
@@ -139,9 +153,8 @@ fn write_ssd(checked: &Checked, v2: bool) -> String {
         let c = tc.connection;
         let type_element = match &tc.enumeration {
             Some(e) => {
-                if !layout.enumerations.iter().any(|d| d.name == e.name) {
-                    layout.enumerations.push(e.clone());
-                }
+                let items = e.items.iter().map(|(n, v)| (n.clone(), i64::from(*v))).collect();
+                layout.enumeration(&e.name, items);
                 format!(r#"<ssc:Enumeration name="{}"/>"#, escape(&e.name))
             }
             None => format!("<ssc:{}/>", connector_type(tc.var_type, v2)),
@@ -152,7 +165,7 @@ fn write_ssd(checked: &Checked, v2: bool) -> String {
     for (k, parameters) in checked.parameters.iter().enumerate() {
         for (name, value) in parameters {
             let (element, text) = ssv_value(value, v2);
-            layout.parameters[k].push((name, element, text));
+            layout.parameters[k].push((name, format!(r#"<ssv:{element} value="{text}"/>"#)));
         }
     }
     layout.write()
@@ -169,26 +182,72 @@ pub fn write_ssd_fmi3(checked: &Checked3) -> String {
     let mut layout = Layout::new(checked.system, "2.0");
     for tc in &checked.connections {
         let c = tc.connection;
-        let type_element = match (&tc.var_type, &tc.mime_type) {
-            (Type3::Binary, Some(m)) if m != "application/octet-stream" => {
+        let type_element = match (&tc.var_type, &tc.mime_type, &tc.enumeration) {
+            (Type3::Binary, Some(m), _) if m != "application/octet-stream" => {
                 format!(r#"<ssc:Binary mime-type="{}"/>"#, escape(m))
             }
-            (t, _) => format!("<ssc:{}/>", t.name()),
+            (Type3::Enumeration, _, Some(e)) => {
+                layout.enumeration(&e.name, e.items.clone());
+                format!(r#"<ssc:Enumeration name="{}"/>"#, escape(&e.name))
+            }
+            (t, _, _) => format!("<ssc:{}/>", t.name()),
         };
-        layout.connector(
-            &c.from.component,
-            &c.from.variable,
-            tc.from_causality.name(),
-            &type_element,
-        );
-        layout.connector(&c.to.component, &c.to.variable, tc.to_causality.name(), &type_element);
+        for (port, causality, dims) in [
+            (&c.from, tc.from_causality, &tc.from_dimensions),
+            (&c.to, tc.to_causality, &tc.to_dimensions),
+        ] {
+            // An array connector's dimensions (SSP 2.0, ssc:GDimensions): a fixed size, or the
+            // structural parameter that sets it, itself a connector of the component.
+            let mut content = type_element.clone();
+            for d in dims {
+                match d {
+                    Size::Fixed(n) => content += &format!(r#"<ssc:Dimension size="{n}"/>"#),
+                    Size::Parameter {
+                        name, ty, causality, ..
+                    } => {
+                        content += &format!(r#"<ssc:Dimension sizeConnector="{}"/>"#, escape(name));
+                        layout.connector(&port.component, name, causality.name(), &format!("<ssc:{ty}/>"));
+                    }
+                }
+            }
+            layout.connector(&port.component, &port.variable, causality.name(), &content);
+        }
     }
     for (k, parameters) in checked.parameters.iter().enumerate() {
         for (name, value) in parameters {
-            layout.parameters[k].push((name, value.ty.name(), escape(&value.text)));
+            let content = ssv_value3(value);
+            if let Some(e) = &value.enumeration {
+                layout.enumeration(&e.name, e.items.clone());
+            }
+            layout.parameters[k].push((name, content));
         }
     }
     layout.write()
+}
+
+/// The content of the `ssv:Parameter` of an FMI 3.0 value (SSP 2.0,
+/// SystemStructureParameterValues.xsd): numbers and Booleans in the element's `value`, an
+/// array's as a list, row-major; a String, Binary or Enumeration (its item's name, the type
+/// named) in `value`, an array's as `ssv:Value` elements; an array's dimensions as
+/// `ssc:Dimension`s after it.
+fn ssv_value3(value: &Value3) -> String {
+    let ty = value.ty.name();
+    let named = match &value.enumeration {
+        Some(e) => format!(r#" name="{}""#, escape(&e.name)),
+        None => String::new(),
+    };
+    let texts: Vec<String> = value.values.iter().map(|t| escape(t)).collect();
+    let mut out = match value.ty {
+        Type3::String | Type3::Binary | Type3::Enumeration if !value.dimensions.is_empty() => {
+            let each: String = texts.iter().map(|t| format!(r#"<ssv:Value value="{t}"/>"#)).collect();
+            format!("<ssv:{ty}{named}>{each}</ssv:{ty}>")
+        }
+        _ => format!(r#"<ssv:{ty} value="{}"{named}/>"#, texts.join(" ")),
+    };
+    for n in &value.dimensions {
+        out += &format!(r#"<ssc:Dimension size="{n}"/>"#);
+    }
+    out
 }
 
 impl Layout<'_> {
@@ -216,15 +275,18 @@ impl Layout<'_> {
                 escape(&c.name),
                 escape(&c.fmu)
             );
-            let _ = writeln!(w, "        <ssd:Connectors>");
-            for (var, kind, type_element) in &connectors[k] {
-                let _ = writeln!(
-                    w,
-                    r#"          <ssd:Connector name="{}" kind="{kind}">{type_element}</ssd:Connector>"#,
-                    escape(var)
-                );
+            // A component no connection names has no ssd:Connectors (which holds one or more).
+            if !connectors[k].is_empty() {
+                let _ = writeln!(w, "        <ssd:Connectors>");
+                for (var, kind, type_element) in &connectors[k] {
+                    let _ = writeln!(
+                        w,
+                        r#"          <ssd:Connector name="{}" kind="{kind}">{type_element}</ssd:Connector>"#,
+                        escape(var)
+                    );
+                }
+                let _ = writeln!(w, "        </ssd:Connectors>");
             }
-            let _ = writeln!(w, "        </ssd:Connectors>");
             let parameters = &self.parameters[k];
             if !parameters.is_empty() {
                 let _ = writeln!(
@@ -237,10 +299,10 @@ impl Layout<'_> {
                     escape(&system.name)
                 );
                 let _ = writeln!(w, "                <ssv:Parameters>");
-                for (name, element, text) in parameters {
+                for (name, content) in parameters {
                     let _ = writeln!(
                         w,
-                        r#"                  <ssv:Parameter name="{}"><ssv:{element} value="{text}"/></ssv:Parameter>"#,
+                        r#"                  <ssv:Parameter name="{}">{content}</ssv:Parameter>"#,
                         escape(name)
                     );
                 }
@@ -284,9 +346,9 @@ impl Layout<'_> {
         let _ = writeln!(w, "  </ssd:System>");
         if !enumerations.is_empty() {
             let _ = writeln!(w, "  <ssd:Enumerations>");
-            for e in enumerations {
-                let _ = writeln!(w, r#"    <ssc:Enumeration name="{}">"#, escape(&e.name));
-                for (item, value) in &e.items {
+            for (name, items) in enumerations {
+                let _ = writeln!(w, r#"    <ssc:Enumeration name="{}">"#, escape(name));
+                for (item, value) in items {
                     let _ = writeln!(w, r#"      <ssc:Item name="{}" value="{value}"/>"#, escape(item));
                 }
                 let _ = writeln!(w, "    </ssc:Enumeration>");
@@ -695,6 +757,45 @@ mod tests {
         let mut bad = system.clone();
         bad.connections[10] = "sensor.CAN.Tx_Clock -> bus.Node1.Tx_Clock".parse().unwrap();
         assert!(ssd_fmi3(&bad, &crate::systems_fmi3::tests::fmus3()).is_err());
+    }
+
+    #[test]
+    // The file reader parse_ssd takes returns the runner's Error, whatever its size.
+    #[allow(clippy::result_large_err)]
+    fn arrays_and_enumerations_of_fmi3_fmus_are_written_as_ssp2_defines_them() {
+        use crate::systems_fmi3::tests::{arrays_and_enumerations, described};
+        let system = arrays_and_enumerations(
+            &["s1.y -> s2.u", "f1.Enumeration_output -> f2.Enumeration_input"],
+            ["A = [[-1, 0, 0], [0, -2, 0], [0, 0, -3]]", "", "", "", "mode = 2"],
+        );
+        let fmus = described(&["StateSpace", "Feedthrough", "Controller"]);
+        let text = ssd_fmi3(&system, &fmus).unwrap_or_else(|e| panic!("{e}"));
+        for line in [
+            // An array connector sized by a structural parameter, itself a connector.
+            r#"<ssd:Connector name="r" kind="structuralParameter"><ssc:UInt64/></ssd:Connector>"#,
+            r#"<ssd:Connector name="y" kind="output"><ssc:Float64/><ssc:Dimension sizeConnector="r"/></ssd:Connector>"#,
+            r#"<ssd:Connector name="u" kind="input"><ssc:Float64/><ssc:Dimension sizeConnector="m"/></ssd:Connector>"#,
+            r#"<ssd:Connector name="Enumeration_input" kind="input"><ssc:Enumeration name="Option"/></ssd:Connector>"#,
+            // A list, row-major, with its dimensions; an item by its name, its type named.
+            r#"<ssv:Parameter name="A"><ssv:Float64 value="-1.0 0.0 0.0 0.0 -2.0 0.0 0.0 0.0 -3.0"/><ssc:Dimension size="3"/><ssc:Dimension size="3"/></ssv:Parameter>"#,
+            r#"<ssv:Parameter name="mode"><ssv:Enumeration value="PID" name="ControlMode"/></ssv:Parameter>"#,
+            r#"<ssc:Enumeration name="Option">"#,
+            r#"<ssc:Item name="Option 2" value="2"/>"#,
+            r#"<ssc:Enumeration name="ControlMode">"#,
+        ] {
+            assert!(text.contains(line), "expected {line} in:\n{text}");
+        }
+        // The runner reads it (its SSP 2.0 structure checked first).
+        let ssd = rustfmu_runner::ssp::parse_ssd(&text, &mut |f| panic!("reads no file: {f}"))
+            .unwrap_or_else(|e| panic!("{}\n{text}", e.message));
+        assert_eq!(ssd.connections.len(), 2);
+        let s1 = &ssd.components[0];
+        assert!(
+            s1.declared.contains(&("y".into(), "Float64".into(), vec![None])),
+            "{:?}",
+            s1.declared
+        );
+        assert_eq!(ssd.components[4].parameters[0].0, "mode");
     }
 
     /// A system of FMI 3.0 FMUs goes to fmi3/ alone (no SSP 1.0 twin); its missing FMU is an

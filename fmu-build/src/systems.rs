@@ -57,6 +57,8 @@ pub enum Literal {
     Integer(i64),
     Boolean(bool),
     String(String),
+    /// `[1.0, 0.0]`: the value of an FMI 3.0 array, row-major (nested arrays are its rows).
+    Array(Vec<Literal>),
 }
 
 impl fmt::Display for Literal {
@@ -66,6 +68,10 @@ impl fmt::Display for Literal {
             Literal::Integer(x) => write!(f, "{x}"),
             Literal::Boolean(x) => write!(f, "{x}"),
             Literal::String(s) => write!(f, "{s:?}"),
+            Literal::Array(xs) => {
+                let xs: Vec<String> = xs.iter().map(Literal::to_string).collect();
+                write!(f, "[{}]", xs.join(", "))
+            }
         }
     }
 }
@@ -73,10 +79,10 @@ impl fmt::Display for Literal {
 impl<'de> Deserialize<'de> for Literal {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         struct V;
-        impl Visitor<'_> for V {
+        impl<'de> Visitor<'de> for V {
             type Value = Literal;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number, true or false, or a string")
+                f.write_str("a number, true or false, a string, or an array of them")
             }
             fn visit_f64<E: de::Error>(self, x: f64) -> Result<Literal, E> {
                 Ok(Literal::Float(x))
@@ -94,6 +100,13 @@ impl<'de> Deserialize<'de> for Literal {
             }
             fn visit_str<E: de::Error>(self, s: &str) -> Result<Literal, E> {
                 Ok(Literal::String(s.to_owned()))
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Literal, A::Error> {
+                let mut xs = Vec::new();
+                while let Some(x) = seq.next_element::<Literal>()? {
+                    xs.push(x);
+                }
+                Ok(Literal::Array(xs))
             }
         }
         d.deserialize_any(V)
@@ -545,12 +558,12 @@ impl System {
 
     /// The check of either FMI version: each connection's ends looked up and judged by
     /// `connect` (which gives the connection its type), no input driven twice, each parameter's
-    /// variable looked up and its value typed by `parameter`.
+    /// variable looked up and its value typed by `parameter` (given the component).
     pub(crate) fn check_with<'a, D: Description, C, V>(
         &'a self,
         fmus: &BTreeMap<String, D>,
         connect: impl Fn(&'a Connection, End<'_, D>, End<'_, D>) -> Result<C, String>,
-        parameter: impl Fn(&Literal, End<'_, D>) -> Result<V, Refusal>,
+        parameter: impl Fn(&Component, &Literal, End<'_, D>) -> Result<V, Refusal>,
     ) -> Result<(Vec<C>, Parameters<'a, V>), String> {
         let mut connections = Vec::new();
         for (i, c) in self.connections.iter().enumerate() {
@@ -576,7 +589,7 @@ impl System {
                     component: c.name.clone(),
                     variable: p.name.clone(),
                 };
-                let value = parameter(&p.value, self.lookup(fmus, &port)?).map_err(|refusal| match refusal {
+                let value = parameter(c, &p.value, self.lookup(fmus, &port)?).map_err(|refusal| match refusal {
                     Refusal::Valueless { variable, why } => format!(
                         "{}: parameter {port}: {}.fmu's {variable} cannot be given a value: {why}",
                         self.at(),
@@ -627,7 +640,7 @@ impl System {
                 enumeration: oe.filter(|_| o.ty == VarType::Enumeration).cloned(),
             })
         };
-        let parameter = |literal: &Literal, (fmu, v): End<FmuDescription>| {
+        let parameter = |_: &Component, literal: &Literal, (fmu, v): End<FmuDescription>| {
             if !v.takes_start_value() {
                 let why = if v.causality == Causality::Input {
                     "it is an input (its value comes from its connection)"

@@ -5,8 +5,13 @@
 //! (md-reader); [`crate::ssp`] writes it in SSP 2.0 only (`<out>/fmi3/<system>.ssp`).
 //!
 //! What the check asks of a connection `a.x -> b.y`:
-//! - both ends exist and have one type (Float64, Int8 .. UInt64, Boolean, String, Binary, Clock);
-//! - data: `x` is an output, `y` an input; two Binaries carry one mime type;
+//! - both ends exist and have one type (Float64, Int8 .. UInt64, Boolean, String, Binary,
+//!   Enumeration, Clock); two Enumerations have the same items (names and values), two
+//!   Binaries one mime type;
+//! - both are scalars, or both arrays of the same dimensions: fixed (`<Dimension start>`) or
+//!   set by a structural parameter (`<Dimension valueReference>`, of the value the system gives
+//!   it, else its start), each dimension of one size at both ends;
+//! - data: `x` is an output, `y` an input;
 //! - clocks: `y` is a triggered input clock (`intervalVariability="triggered"`), the one a
 //!   connection can tick; `x` an output clock, or an input clock the importer ticks, its ticks
 //!   passed on (FMI-LS-BUS 1.0.0, Time-based Tx Clocks: a node's countdown Tx_Clock connects to
@@ -15,16 +20,19 @@
 //!
 //! A parameter names a variable that takes a start value (not an input, a constant or a
 //! clock) and gets a value of its type: a number for a Float, an integer in range for an Int or
-//! UInt, `true`/`false`, a string, for a Binary a string of hexadecimal digits (two a byte).
-//! Arrays and Enumerations are refused, with the variable: md-reader reads no FMI 3.0 type
-//! definitions, and no system of this workspace has them.
+//! UInt, `true`/`false`, a string, for a Binary a string of hexadecimal digits (two a byte), for
+//! an Enumeration one of its items' values or names. An array takes a TOML array of as many
+//! such values as it has elements (row-major; nested arrays are its rows), its dimensions
+//! sized as for a connection.
 
-use crate::systems::{Connection, Description, End, Literal, Refusal, System};
+use crate::systems::{Component, Connection, Description, End, Literal, Refusal, System};
 use md_reader::Causality;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use md_reader::fmi3::{ModelDescription as Fmu3Description, Type as Type3, Variable as Variable3};
+pub use md_reader::fmi3::{
+    Dimension, Enumeration as Enumeration3, ModelDescription as Fmu3Description, Type as Type3, Variable as Variable3,
+};
 
 /// The FMI 3.0 FMUs of a system, by the name its components give them (`fmu`).
 pub type Fmus3 = BTreeMap<String, Fmu3Description>;
@@ -60,14 +68,97 @@ pub struct TypedConnection3<'a> {
     /// The causality of the start and end variables (an input clock may start a connection).
     pub from_causality: Causality,
     pub to_causality: Causality,
+    /// An Enumeration's type (the same items at both ends).
+    pub enumeration: Option<Enumeration3>,
+    /// The dimensions of the start and end variables, outermost first (empty: scalars).
+    pub from_dimensions: Vec<Size>,
+    pub to_dimensions: Vec<Size>,
 }
 
-/// A parameter value typed by its FMI 3.0 variable: its type and the text of its SSV value
-/// (`ssv:<type> value="<text>"`).
+/// One dimension of an array variable in a system: fixed, or set by a structural parameter of
+/// its FMU.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Size {
+    Fixed(u64),
+    Parameter {
+        /// The structural parameter's name, type and causality (the SSD's `sizeConnector`, a
+        /// connector of that kind).
+        name: String,
+        ty: Type3,
+        causality: Causality,
+        /// The value the system gives it, else its start; `None`: neither is a size.
+        value: Option<u64>,
+    },
+}
+
+impl Size {
+    fn value(&self) -> Option<u64> {
+        match self {
+            Size::Fixed(n) => Some(*n),
+            Size::Parameter { value, .. } => *value,
+        }
+    }
+}
+
+/// `[3]`, `[n = 3, 2]`, `[m = ?]`
+fn show_dimensions(dims: &[Size]) -> String {
+    let shown: Vec<String> = dims
+        .iter()
+        .map(|d| match d {
+            Size::Fixed(n) => n.to_string(),
+            Size::Parameter { name, value, .. } => {
+                format!("{name} = {}", value.map_or("?".into(), |n| n.to_string()))
+            }
+        })
+        .collect();
+    format!("[{}]", shown.join(", "))
+}
+
+/// The dimensions of `v`, a variable of `component`'s FMU `fmu`: a structural parameter's size
+/// is the value `component` gives it, else its start.
+fn dimensions(fmu: &Fmu3Description, component: Option<&Component>, v: &Variable3) -> Vec<Size> {
+    v.dimensions
+        .iter()
+        .map(|d| match d {
+            Dimension::Fixed(n) => Size::Fixed(*n),
+            Dimension::Parameter(vr) => match fmu.by_vr(*vr) {
+                Some(p) => {
+                    let given = component.and_then(|c| c.parameters.iter().find(|q| q.name == p.name));
+                    let value = match given {
+                        Some(q) => match q.value {
+                            Literal::Integer(n) => u64::try_from(n).ok(),
+                            _ => None,
+                        },
+                        None => p.start.as_deref().and_then(|s| s.trim().parse().ok()),
+                    };
+                    Size::Parameter {
+                        name: p.name.clone(),
+                        ty: p.ty,
+                        causality: p.causality,
+                        value,
+                    }
+                }
+                None => Size::Parameter {
+                    name: format!("(value reference {vr}, no variable)"),
+                    ty: Type3::UInt64,
+                    causality: Causality::StructuralParameter,
+                    value: None,
+                },
+            },
+        })
+        .collect()
+}
+
+/// A parameter value typed by its FMI 3.0 variable: its type and the SSV text of each element.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Value3 {
     pub ty: Type3,
-    pub text: String,
+    /// The SSV text of each element, row-major (one for a scalar); an Enumeration's item names.
+    pub values: Vec<String>,
+    /// An array's sizes, outermost first (empty: a scalar).
+    pub dimensions: Vec<u64>,
+    /// An Enumeration's type.
+    pub enumeration: Option<Enumeration3>,
 }
 
 /// An FMI 3.0 system that has passed [`System::check_fmi3`].
@@ -80,11 +171,16 @@ pub struct Checked3<'a> {
     pub connections: Vec<TypedConnection3<'a>>,
 }
 
-/// `output Float64`, `input Clock (triggered)`
-fn describe(v: &Variable3) -> String {
+/// `output Float64`, `input Clock (triggered)`, `output Float64 array`,
+/// `input Enumeration Option (Option 1 = 1, Option 2 = 2)`
+fn describe(fmu: &Fmu3Description, v: &Variable3) -> String {
     let mut s = format!("{} {}", v.causality.name(), v.ty);
     if let Some(c) = &v.clock {
         s += &format!(" ({})", c.interval_variability);
+    }
+    if let Some(e) = fmu.enumeration_of(v).filter(|_| v.ty == Type3::Enumeration) {
+        let items: Vec<String> = e.items.iter().map(|(n, k)| format!("{n} = {k}")).collect();
+        s += &format!(" {} ({})", e.name, items.join(", "));
     }
     if v.array {
         s += " array";
@@ -115,15 +211,15 @@ impl System {
     /// Checks the system against the FMI 3.0 descriptions of its FMUs (see the module).
     pub fn check_fmi3<'a>(&'a self, fmus: &Fmus3) -> Result<Checked3<'a>, String> {
         let mime = |v: &Variable3| v.mime_type.clone().unwrap_or_else(|| OCTET_STREAM.into());
-        let connect = |c: &'a Connection, (_, o): End<Fmu3Description>, (_, inp): End<Fmu3Description>| {
+        let connect = |c: &'a Connection, (ofmu, o): End<Fmu3Description>, (ifmu, inp): End<Fmu3Description>| {
             let wrong = |why: String| {
                 format!(
                     "{}: connection {c}: {} is {}, {} is {}: {why}",
                     self.at(),
                     c.from,
-                    describe(o),
+                    describe(ofmu, o),
                     c.to,
-                    describe(inp)
+                    describe(ifmu, inp)
                 )
             };
             if o.ty != inp.ty {
@@ -149,15 +245,41 @@ impl System {
             } else if o.causality != Causality::Output || inp.causality != Causality::Input {
                 return Err(wrong("a connection goes from an output to an input".into()));
             }
-            for v in [o, inp] {
-                if v.array || v.ty == Type3::Enumeration {
-                    let port = if std::ptr::eq(v, o) { &c.from } else { &c.to };
-                    return Err(wrong(format!(
-                        "{port} is {}: fmu-build writes no connection of arrays or Enumerations in an FMI 3.0 system",
-                        if v.array { "an array" } else { "an Enumeration" }
-                    )));
-                }
+            let from_dimensions = dimensions(ofmu, self.component(&c.from.component), o);
+            let to_dimensions = dimensions(ifmu, self.component(&c.to.component), inp);
+            let sizes = |d: &[Size]| d.iter().map(Size::value).collect::<Vec<_>>();
+            let (fs, ts) = (sizes(&from_dimensions), sizes(&to_dimensions));
+            if fs != ts || fs.contains(&None) {
+                let show = |d: &[Size]| {
+                    if d.is_empty() {
+                        "a scalar".to_owned()
+                    } else {
+                        show_dimensions(d)
+                    }
+                };
+                return Err(wrong(format!(
+                    "a connection joins a scalar to a scalar or an array to an array of the same dimensions, each of a known size: {} is {}, {} is {}",
+                    c.from,
+                    show(&from_dimensions),
+                    c.to,
+                    show(&to_dimensions)
+                )));
             }
+            let enumeration = if o.ty == Type3::Enumeration {
+                let (oe, ie) = (ofmu.enumeration_of(o), ifmu.enumeration_of(inp));
+                let (Some(oe), Some(ie)) = (oe, ie) else {
+                    let port = if oe.is_none() { &c.from } else { &c.to };
+                    return Err(wrong(format!(
+                        "{port}'s declaredType names no EnumerationType of its FMU's TypeDefinitions"
+                    )));
+                };
+                if oe.items != ie.items {
+                    return Err(wrong("the Enumerations have different items".into()));
+                }
+                Some(oe.clone())
+            } else {
+                None
+            };
             if o.ty == Type3::Binary && mime(o) != mime(inp) {
                 return Err(wrong(format!(
                     "the Binaries carry different mime types: '{}' and '{}'",
@@ -171,11 +293,14 @@ impl System {
                 mime_type: (o.ty == Type3::Binary).then(|| mime(o)),
                 from_causality: o.causality,
                 to_causality: inp.causality,
+                enumeration,
+                from_dimensions,
+                to_dimensions,
             })
         };
-        let parameter = |literal: &Literal, (_, v): End<Fmu3Description>| {
+        let parameter = |component: &Component, literal: &Literal, (fmu, v): End<Fmu3Description>| {
             let refused = |why| Refusal::Valueless {
-                variable: format!("'{}' ({})", v.name, describe(v)),
+                variable: format!("'{}' ({})", v.name, describe(fmu, v)),
                 why,
             };
             if v.causality == Causality::Input {
@@ -190,13 +315,58 @@ impl System {
             if v.start.is_none() {
                 return Err(refused("it declares no start value"));
             }
-            if v.array || v.ty == Type3::Enumeration {
+            let enumeration = fmu.enumeration_of(v).filter(|_| v.ty == Type3::Enumeration);
+            if v.ty == Type3::Enumeration && enumeration.is_none() {
                 return Err(refused(
-                    "fmu-build writes no array or Enumeration value in an FMI 3.0 system",
+                    "its declaredType names no EnumerationType of its FMU's TypeDefinitions",
                 ));
             }
-            let text = typed_text(literal, v.ty).map_err(Refusal::Mistyped)?;
-            Ok(Value3 { ty: v.ty, text })
+            let typed = |x: &Literal| match enumeration {
+                Some(e) => item_of(x, e),
+                None => typed_text(x, v.ty),
+            };
+            let (values, dimensions) = if v.array {
+                let dims = dimensions(fmu, Some(component), v);
+                let sizes: Option<Vec<u64>> = dims.iter().map(Size::value).collect();
+                let Some(sizes) = sizes else {
+                    return Err(Refusal::Mistyped(format!(
+                        "an array of dimensions {}, one of them of no known size",
+                        show_dimensions(&dims)
+                    )));
+                };
+                let Literal::Array(_) = literal else {
+                    return Err(Refusal::Mistyped(format!(
+                        "an array of {} {}: give it an array of values (row-major)",
+                        show_dimensions(&dims),
+                        v.ty
+                    )));
+                };
+                let mut elements = Vec::new();
+                flatten(literal, &mut elements);
+                let count: u64 = sizes.iter().product();
+                if elements.len() as u64 != count {
+                    return Err(Refusal::Mistyped(format!(
+                        "an array of {} {}, {count} values, and the value has {}",
+                        show_dimensions(&dims),
+                        v.ty,
+                        elements.len()
+                    )));
+                }
+                let values = elements
+                    .into_iter()
+                    .map(|x| typed(x).map_err(|e| format!("{e} (an element of the array {})", show_dimensions(&dims))))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(Refusal::Mistyped)?;
+                (values, sizes)
+            } else {
+                (vec![typed(literal).map_err(Refusal::Mistyped)?], Vec::new())
+            };
+            Ok(Value3 {
+                ty: v.ty,
+                values,
+                dimensions,
+                enumeration: enumeration.cloned(),
+            })
         };
         let (connections, parameters) = self.check_with(fmus, connect, parameter)?;
         Ok(Checked3 {
@@ -204,6 +374,31 @@ impl System {
             parameters,
             connections,
         })
+    }
+}
+
+/// The elements of an array literal, row-major (nested arrays are its rows).
+fn flatten<'l>(literal: &'l Literal, out: &mut Vec<&'l Literal>) {
+    match literal {
+        Literal::Array(xs) => xs.iter().for_each(|x| flatten(x, out)),
+        x => out.push(x),
+    }
+}
+
+/// The name of the item of `e` that `literal` names (by its value or its name); the error
+/// completes "declares 'v' ...".
+fn item_of(literal: &Literal, e: &Enumeration3) -> Result<String, String> {
+    let items: Vec<String> = e.items.iter().map(|(n, k)| format!("{n} = {k}")).collect();
+    let described = format!("Enumeration {} ({})", e.name, items.join(", "));
+    let item = e.items.iter().find(|(name, value)| match literal {
+        Literal::Integer(x) => value == x,
+        Literal::String(s) => name == s,
+        _ => false,
+    });
+    match (item, literal) {
+        (Some((name, _)), _) => Ok(name.clone()),
+        (None, Literal::Integer(_) | Literal::String(_)) => Err(format!("{described}, which has no item {literal}")),
+        (None, _) => Err(format!("{described}, which takes an item's value or name")),
     }
 }
 
@@ -276,6 +471,16 @@ pub(crate) mod tests {
             .collect()
     }
 
+    /// A scalar value of a type without items.
+    fn scalar(ty: Type3, text: &str) -> Value3 {
+        Value3 {
+            ty,
+            values: vec![text.into()],
+            dimensions: vec![],
+            enumeration: None,
+        }
+    }
+
     fn networked() -> System {
         paper_systems().get("NetworkedPendulum").unwrap().clone()
     }
@@ -314,13 +519,7 @@ pub(crate) mod tests {
         let sensor = s.components.iter().position(|c| c.name == "sensor").unwrap();
         assert_eq!(
             checked.parameters[sensor][0],
-            (
-                "tx_id",
-                Value3 {
-                    ty: Type3::Int32,
-                    text: "32".into()
-                }
-            ),
+            ("tx_id", scalar(Type3::Int32, "32")),
             "0x020 typed by the FMU's Int32"
         );
     }
@@ -431,20 +630,8 @@ pub(crate) mod tests {
         assert_eq!(
             ok,
             [
-                (
-                    "baud_rate".to_string(),
-                    Value3 {
-                        ty: Type3::Int32,
-                        text: "250000".into()
-                    }
-                ),
-                (
-                    "background_load".to_string(),
-                    Value3 {
-                        ty: Type3::Float64,
-                        text: "1.0".into()
-                    }
-                )
+                ("baud_rate".to_string(), scalar(Type3::Int32, "250000")),
+                ("background_load".to_string(), scalar(Type3::Float64, "1.0"))
             ]
         );
         let e = with("bus", "CanBus", "baud_rate = 4294967296").unwrap_err();
@@ -479,5 +666,173 @@ pub(crate) mod tests {
     fn an_fmi2_description_is_refused_for_an_fmi3_system() {
         let e = parse_description(&xml("Pendulum")).unwrap_err();
         assert!(e.contains("fmiVersion is \"2.0\", expected \"3.0\""), "{e}");
+    }
+
+    /// The descriptions of these of our FMI 3.0 FMUs (the committed modelDescription/fmi3/).
+    pub(crate) fn described(ids: &[&str]) -> Fmus3 {
+        ids.iter()
+            .map(|id| {
+                let path = workspace_root().join("modelDescription/fmi3").join(format!("{id}.xml"));
+                let xml = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                (
+                    id.to_string(),
+                    parse_description(&xml).unwrap_or_else(|e| panic!("{id}: {e}")),
+                )
+            })
+            .collect()
+    }
+
+    /// An FMI 3.0 system of two StateSpace FMUs (`s1`, `s2`), two Feedthroughs (`f1`, `f2`)
+    /// and a Controller (`c`), with `connections` and each component's parameters (TOML inline
+    /// table bodies).
+    pub(crate) fn arrays_and_enumerations(connections: &[&str], parameters: [&str; 5]) -> System {
+        let mut text = String::from("[[system]]\nname = \"AE\"\nfmi-version = \"3.0\"\nconnections = [");
+        for c in connections {
+            text += &format!("\"{c}\", ");
+        }
+        text += "]\n";
+        for ((name, fmu), p) in [
+            ("s1", "StateSpace"),
+            ("s2", "StateSpace"),
+            ("f1", "Feedthrough"),
+            ("f2", "Feedthrough"),
+            ("c", "Controller"),
+        ]
+        .into_iter()
+        .zip(parameters)
+        {
+            text += &format!("[[system.component]]\nname = \"{name}\"\nfmu = \"{fmu}\"\nparameters = {{ {p} }}\n");
+        }
+        one_system(&text)
+    }
+
+    fn ae_fmus() -> Fmus3 {
+        described(&["StateSpace", "Feedthrough", "Controller"])
+    }
+
+    #[test]
+    fn arrays_of_the_same_dimensions_connect_and_others_are_refused_naming_both_ends() {
+        let s = arrays_and_enumerations(&["s1.y -> s2.u"], ["", "", "", "", ""]);
+        let checked = s.check_fmi3(&ae_fmus()).unwrap_or_else(|e| panic!("{e}"));
+        let sized = |name: &str| Size::Parameter {
+            name: name.into(),
+            ty: Type3::UInt64,
+            causality: Causality::StructuralParameter,
+            value: Some(3),
+        };
+        let c = &checked.connections[0];
+        assert_eq!(
+            (c.var_type, &c.from_dimensions, &c.to_dimensions),
+            (Type3::Float64, &vec![sized("r")], &vec![sized("m")])
+        );
+        // s2's structural parameter m set to 2: 3 outputs into 2 inputs.
+        let s = arrays_and_enumerations(&["s1.y -> s2.u"], ["", "m = 2", "", "", ""]);
+        let e = s.check_fmi3(&ae_fmus()).unwrap_err();
+        assert!(
+            e.contains("test.toml: system 'AE': connection s1.y -> s2.u")
+                && e.contains("s1.y is output Float64 array, s2.u is input Float64 array")
+                && e.contains("same dimensions, each of a known size: s1.y is [r = 3], s2.u is [m = 2]"),
+            "expected both ends' dimensions named, got: {e}"
+        );
+        // Set alike at both ends, they connect again.
+        let s = arrays_and_enumerations(&["s1.y -> s2.u"], ["r = 2", "m = 2", "", "", ""]);
+        s.check_fmi3(&ae_fmus()).unwrap_or_else(|e| panic!("{e}"));
+        let e = arrays_and_enumerations(&["f1.Float64_continuous_output -> s2.u"], ["", "", "", "", ""])
+            .check_fmi3(&ae_fmus())
+            .unwrap_err();
+        assert!(
+            e.contains("f1.Float64_continuous_output is a scalar, s2.u is [m = 3]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn enumerations_connect_when_their_items_are_the_same() {
+        let s = arrays_and_enumerations(&["f1.Enumeration_output -> f2.Enumeration_input"], ["", "", "", "", ""]);
+        let checked = s.check_fmi3(&ae_fmus()).unwrap_or_else(|e| panic!("{e}"));
+        let e = checked.connections[0]
+            .enumeration
+            .as_ref()
+            .expect("an Enumeration's type");
+        assert_eq!(
+            (e.name.as_str(), e.items.clone()),
+            ("Option", vec![("Option 1".into(), 1), ("Option 2".into(), 2)])
+        );
+        // f2 a Feedthrough whose Option's second item has another value.
+        let mut s = arrays_and_enumerations(&["f1.Enumeration_output -> f2.Enumeration_input"], ["", "", "", "", ""]);
+        s.components[3].fmu = "Feedthrough2".into();
+        let mut fmus = ae_fmus();
+        let mut other = fmus["Feedthrough"].clone();
+        other.enumerations[0].items[1].1 = 3;
+        fmus.insert("Feedthrough2".into(), other);
+        let e = s.check_fmi3(&fmus).unwrap_err();
+        assert!(
+            e.contains("connection f1.Enumeration_output -> f2.Enumeration_input")
+                && e.contains("output Enumeration Option (Option 1 = 1, Option 2 = 2)")
+                && e.contains("input Enumeration Option (Option 1 = 1, Option 2 = 3)")
+                && e.contains("the Enumerations have different items"),
+            "{e}"
+        );
+        let s = arrays_and_enumerations(&["f1.Enumeration_output -> f2.Enumeration_input"], ["", "", "", "", ""]);
+        let mut fmus = ae_fmus();
+        let ft = fmus.get_mut("Feedthrough").unwrap();
+        let out = ft
+            .variables
+            .iter_mut()
+            .find(|v| v.name == "Enumeration_output")
+            .unwrap();
+        out.declared_type = Some("ControlMode".into());
+        let e = s.check_fmi3(&fmus).unwrap_err();
+        assert!(
+            e.contains("f1.Enumeration_output's declaredType names no EnumerationType"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn array_and_enumeration_parameters_are_typed_element_by_element() {
+        let values = |p: [&str; 5], k: usize| {
+            arrays_and_enumerations(&[], p)
+                .check_fmi3(&ae_fmus())
+                .map(|c| c.parameters[k][0].1.clone())
+        };
+        let a = values(["A = [[-1, 0, 0], [0, -2, 0], [0, 0, -3.5]]", "", "", "", ""], 0).unwrap();
+        assert_eq!(a.dimensions, [3, 3]);
+        assert_eq!(
+            a.values,
+            ["-1.0", "0.0", "0.0", "0.0", "-2.0", "0.0", "0.0", "0.0", "-3.5"]
+        );
+        // A structural parameter given before or after the array sizes it.
+        let x0 = values(["x0 = [1, 2], n = 2", "", "", "", ""], 0).unwrap();
+        assert_eq!(
+            (x0.values, x0.dimensions),
+            (vec!["1.0".to_string(), "2.0".into()], vec![2])
+        );
+        let e = values(["x0 = [1, 2]", "", "", "", ""], 0).unwrap_err();
+        assert!(
+            e.contains("parameter s1.x0 = [1, 2]: StateSpace.fmu declares 'x0' an array of [n = 3] Float64, 3 values, and the value has 2"),
+            "{e}"
+        );
+        let e = values(["x0 = 1.0", "", "", "", ""], 0).unwrap_err();
+        assert!(e.contains("give it an array of values"), "{e}");
+        let e = values(["x0 = [1, true, 0]", "", "", "", ""], 0).unwrap_err();
+        assert!(
+            e.contains("Float64, which takes a number (an element of the array [n = 3])"),
+            "{e}"
+        );
+        let e = values(["n = [3]", "", "", "", ""], 0).unwrap_err();
+        assert!(e.contains("UInt64, which takes an integer"), "{e}");
+        // An Enumeration by its item's name or value, written as the name.
+        let mode = values(["", "", "", "", "mode = \"PID\""], 4).unwrap();
+        assert_eq!(mode.values, ["PID"]);
+        assert_eq!(mode.enumeration.as_ref().map(|e| e.name.as_str()), Some("ControlMode"));
+        assert_eq!(values(["", "", "", "", "mode = 3"], 4).unwrap().values, ["LQR_PID"]);
+        let e = values(["", "", "", "", "mode = \"LQR_PLUS\""], 4).unwrap_err();
+        assert!(
+            e.contains("declares 'mode' Enumeration ControlMode (LQR = 1, PID = 2, LQR_PID = 3), which has no item \"LQR_PLUS\""),
+            "{e}"
+        );
+        let e = values(["", "", "", "", "mode = 1.0"], 4).unwrap_err();
+        assert!(e.contains("which takes an item's value or name"), "{e}");
     }
 }

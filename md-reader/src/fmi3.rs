@@ -168,6 +168,15 @@ impl Variable {
     }
 }
 
+/// An `<EnumerationType>` of `<TypeDefinitions>` (FMI 3.0, 2.4.6.4): what an Enumeration
+/// variable's `declaredType` names.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Enumeration {
+    pub name: String,
+    /// (item name, value), in order; an FMI 3.0 item's value is an Int64.
+    pub items: Vec<(String, i64)>,
+}
+
 /// One `<Dimension>` of an array variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Dimension {
@@ -241,6 +250,8 @@ pub struct ModelDescription {
     pub default_experiment: DefaultExperiment,
     /// `<UnitDefinitions>`.
     pub units: Vec<Unit>,
+    /// The `<EnumerationType>`s of `<TypeDefinitions>`.
+    pub enumerations: Vec<Enumeration>,
     pub variables: Vec<Variable>,
     pub outputs: Vec<Unknown>,
     pub derivatives: Vec<Unknown>,
@@ -261,6 +272,8 @@ impl ModelDescription {
         // The variable being read (its <Start>/<Dimension> children follow).
         let mut open: Option<usize> = None;
         let mut in_variables = false;
+        // Inside an <EnumerationType>: its <Item>s follow.
+        let mut in_enumeration = false;
         loop {
             let (e, empty) = match events.next()? {
                 Node::Eof => break,
@@ -271,6 +284,9 @@ impl ModelDescription {
                     }
                     if name == b"ModelVariables" {
                         in_variables = false;
+                    }
+                    if name == b"EnumerationType" {
+                        in_enumeration = false;
                     }
                     continue;
                 }
@@ -359,6 +375,25 @@ impl ModelDescription {
                     d.se_interface = Some(interface());
                 }
                 b"ModelVariables" => in_variables = !empty,
+                b"EnumerationType" => {
+                    d.enumerations.push(Enumeration {
+                        name: e.string("name").unwrap_or_default(),
+                        items: Vec::new(),
+                    });
+                    in_enumeration = !empty;
+                }
+                b"Item" if in_enumeration => {
+                    let en = d.enumerations.last_mut().expect("in an EnumerationType");
+                    let name = e.string("name").unwrap_or_default();
+                    let value = e.number("value").ok_or_else(|| {
+                        format!(
+                            "{}: EnumerationType {}: item '{name}' has no Int64 value",
+                            events.here(),
+                            en.name
+                        )
+                    })?;
+                    en.items.push((name, value));
+                }
                 b"Category" => d.log_categories.push(e.string("name").unwrap_or_default()),
                 b"DefaultExperiment" => d.default_experiment = DefaultExperiment::read(&e),
                 b"Start" => {
@@ -459,6 +494,12 @@ impl ModelDescription {
 
     pub fn vrs_of_type(&self, ty: Type) -> Vec<u32> {
         self.of_type(ty).map(|v| v.vr).collect()
+    }
+
+    /// The `<EnumerationType>` an Enumeration variable's `declaredType` names.
+    pub fn enumeration_of(&self, v: &Variable) -> Option<&Enumeration> {
+        let t = v.declared_type.as_deref()?;
+        self.enumerations.iter().find(|e| e.name == t)
     }
 
     pub fn by_vr(&self, vr: u32) -> Option<&Variable> {
@@ -695,6 +736,55 @@ mod tests {
                 ("m", vec![shown("ft", 3.280839895, false)]),
                 ("S", vec![shown("Ohm", 1.0, true)])
             ]
+        );
+    }
+
+    #[test]
+    fn enumeration_types_and_dimensions_are_read() {
+        // The Reference-FMUs' Feedthrough (Option) and StateSpace (y of r outputs), v0.0.41.
+        let xml = r#"<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="E" instantiationToken="{t}">
+  <CoSimulation modelIdentifier="E"/>
+  <TypeDefinitions>
+    <Float64Type name="Angle" unit="rad"/>
+    <EnumerationType name="Option">
+      <Item name="Option 1" value="1" description="First option"/>
+      <Item name="Option 2" value=" 2 "/>
+    </EnumerationType>
+    <EnumerationType name="Empty"/>
+  </TypeDefinitions>
+  <ModelVariables>
+    <UInt64 name="r" valueReference="3" causality="structuralParameter" variability="tunable" start="3"/>
+    <Enumeration name="e" valueReference="1" causality="output" declaredType="Option"/>
+    <Float64 name="y" valueReference="10" causality="output"><Dimension valueReference="3"/><Dimension start="2"/></Float64>
+  </ModelVariables>
+</fmiModelDescription>"#;
+        let d = ModelDescription::parse(xml).unwrap();
+        let item = |n: &str, v| (n.to_string(), v);
+        assert_eq!(
+            d.enumerations,
+            [
+                Enumeration {
+                    name: "Option".into(),
+                    items: vec![item("Option 1", 1), item("Option 2", 2)]
+                },
+                Enumeration {
+                    name: "Empty".into(),
+                    items: vec![]
+                }
+            ]
+        );
+        assert_eq!(
+            d.enumeration_of(d.by_vr(1).unwrap()).map(|e| e.name.as_str()),
+            Some("Option")
+        );
+        let y = d.by_vr(10).unwrap();
+        assert!(y.array);
+        assert_eq!(y.dimensions, [Dimension::Parameter(3), Dimension::Fixed(2)]);
+        let e = ModelDescription::parse(&xml.replace(r#"value=" 2 ""#, r#"value="two""#)).unwrap_err();
+        assert!(
+            e.contains("EnumerationType Option: item 'Option 2' has no Int64 value"),
+            "{e}"
         );
     }
 }

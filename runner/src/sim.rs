@@ -579,14 +579,33 @@ impl Simulation {
                 CString::new(s.as_str())
                     .map_err(|_| Error::variable(c, v, format!("component '{c}': {v}: a String with a NUL")))?,
             ),
+            // SSP: "the actual numeric value this value is mapped to at run time will depend on
+            // the item mapping of the enumeration type of the variables being parameterized".
             (Type::Enumeration, Value::Enumeration(item)) => {
-                return Err(Error::unsupported(
-                    Some(c),
-                    Some(v),
-                    format!(
-                        "component '{c}': {v} = ssv:Enumeration '{item}': item names are not supported, give the item's value as ssv:Integer"
-                    ),
-                ));
+                let fmu = self.fmu_of(self.slave_index(c)?);
+                let var = fmu.variable(c, v)?;
+                let e = fmu.description.enumeration_of(var).ok_or_else(|| {
+                    Error::variable(
+                        c,
+                        v,
+                        format!(
+                            "component '{c}' ({id}): {v} = ssv:Enumeration '{item}': its declaredType names no enumeration type of the FMU's TypeDefinitions"
+                        ),
+                    )
+                })?;
+                let (_, value) = e.items.iter().find(|(n, _)| n == item).ok_or_else(|| {
+                    let items: Vec<&str> = e.items.iter().map(|(n, _)| n.as_str()).collect();
+                    Error::variable(
+                        c,
+                        v,
+                        format!(
+                            "component '{c}' ({id}): {v} = ssv:Enumeration '{item}': {} has no such item (it has: {})",
+                            e.name,
+                            items.join(", ")
+                        ),
+                    )
+                })?;
+                Setter::Integer(*value)
             }
             _ => return Err(mismatch()),
         })

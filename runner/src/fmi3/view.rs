@@ -224,7 +224,20 @@ pub fn as_fmi2(d: &d3::ModelDescription) -> Fmi3Parts {
         number_of_event_indicators: elements(&d.event_indicators),
         cs,
         me,
-        enumerations: Vec::new(),
+        // The items an ssv:Enumeration names (set through fmi3SetInt64; an item beyond the
+        // FMI 2.0 view's 32 bits is left out, and naming it is refused as an unknown item).
+        enumerations: d
+            .enumerations
+            .iter()
+            .map(|e| d2::Enumeration {
+                name: e.name.clone(),
+                items: e
+                    .items
+                    .iter()
+                    .filter_map(|(n, v)| Some((n.clone(), i32::try_from(*v).ok()?)))
+                    .collect(),
+            })
+            .collect(),
         log_categories: d.log_categories.clone(),
         default_experiment: d.default_experiment.clone(),
         variables,
