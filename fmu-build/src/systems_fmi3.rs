@@ -16,6 +16,11 @@
 //!   connection can tick; `x` an output clock, or an input clock the importer ticks, its ticks
 //!   passed on (FMI-LS-BUS 1.0.0, Time-based Tx Clocks: a node's countdown Tx_Clock connects to
 //!   the bus's triggered Rx_Clock);
+//! - a connection of two clocked variables (`clocks`) comes with a clock connection from one of
+//!   the output's clocks to one of the input's, where the input's clocks are triggered ones:
+//!   a clocked input is set only while its clock ticks, and a triggered clock ticks only through
+//!   a connection, so without one from the output's clock the input never takes the value (the
+//!   FMI-LS-BUS Bus Terminal: `Tx_Data` and `Tx_Clock` connect to `Rx_Data` and `Rx_Clock`);
 //! - no input is driven twice.
 //!
 //! A parameter names a variable that takes a start value (not an input, a constant or a
@@ -245,6 +250,9 @@ impl System {
             } else if o.causality != Causality::Output || inp.causality != Causality::Input {
                 return Err(wrong("a connection goes from an output to an input".into()));
             }
+            if let Some(missing) = self.missing_clock_connection(c, (ofmu, o), (ifmu, inp)) {
+                return Err(wrong(missing));
+            }
             let from_dimensions = dimensions(ofmu, self.component(&c.from.component), o);
             let to_dimensions = dimensions(ifmu, self.component(&c.to.component), inp);
             let sizes = |d: &[Size]| d.iter().map(Size::value).collect::<Vec<_>>();
@@ -374,6 +382,52 @@ impl System {
             parameters,
             connections,
         })
+    }
+}
+
+impl System {
+    /// Why the data connection `c` of two clocked variables misses its clock connection (see the
+    /// module); None: it has one, or the input is unclocked or has a clock that ticks by itself.
+    fn missing_clock_connection(
+        &self,
+        c: &Connection,
+        (ofmu, o): End<Fmu3Description>,
+        (ifmu, inp): End<Fmu3Description>,
+    ) -> Option<String> {
+        let clocks = |fmu: &Fmu3Description, v: &Variable3| -> Vec<(String, bool)> {
+            v.clocks
+                .iter()
+                .filter_map(|vr| fmu.by_vr(*vr))
+                .map(|k| {
+                    let triggered = k.clock.as_ref().is_some_and(|a| a.interval_variability == "triggered");
+                    (k.name.clone(), triggered && k.causality == Causality::Input)
+                })
+                .collect()
+        };
+        let (senders, receivers) = (clocks(ofmu, o), clocks(ifmu, inp));
+        if senders.is_empty() || receivers.is_empty() || !receivers.iter().all(|(_, triggered)| *triggered) {
+            return None;
+        }
+        let joined = self.connections.iter().any(|k| {
+            k.from.component == c.from.component
+                && k.to.component == c.to.component
+                && senders.iter().any(|(n, _)| *n == k.from.variable)
+                && receivers.iter().any(|(n, _)| *n == k.to.variable)
+        });
+        if joined {
+            return None;
+        }
+        let names = |component: &str, list: &[(String, bool)]| {
+            list.iter()
+                .map(|(n, _)| format!("{component}.{n}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
+        };
+        let (from, to) = (names(&c.from.component, &senders), names(&c.to.component, &receivers));
+        Some(format!(
+            "{} is clocked by {from}, {} by the triggered {to}, which ticks only through a clock connection: without the clock connection {from} -> {to} the input is never set (FMI 3.0: a clocked variable is set only while its clock ticks); add \"{from} -> {to}\"",
+            c.from, c.to
+        ))
     }
 }
 
@@ -556,6 +610,42 @@ pub(crate) mod tests {
             "sensor.CAN.Rx_Clock -> bus.Node1.Tx_Clock",
         );
         assert!(e.contains("bus.Node1.Tx_Clock is not one"), "{e}");
+    }
+
+    #[test]
+    fn a_clocked_binary_without_the_clock_connection_of_its_clocks_is_refused() {
+        // The sensor's Tx_Data into the bus's port, its Tx_Clock -> Rx_Clock connection left out.
+        let mut s = networked();
+        s.connections
+            .retain(|c| c.to_string() != "sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock");
+        let e = s.check_fmi3(&fmus3()).unwrap_err();
+        assert!(
+            e.contains("holonomic/systems.toml: system 'NetworkedPendulum': connection sensor.CAN.Tx_Data -> bus.Node1.Rx_Data")
+                && e.contains("sensor.CAN.Tx_Data is clocked by sensor.CAN.Tx_Clock, bus.Node1.Rx_Data by the triggered bus.Node1.Rx_Clock")
+                && e.contains("without the clock connection sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock"),
+            "expected both variables and the missing clock connection named, got: {e}"
+        );
+        // The other way: the bus's Tx_Data to the sensor without the bus's Tx_Clock -> the
+        // sensor's Rx_Clock.
+        let mut s = networked();
+        s.connections
+            .retain(|c| c.to_string() != "bus.Node1.Tx_Clock -> sensor.CAN.Rx_Clock");
+        let e = s.check_fmi3(&fmus3()).unwrap_err();
+        assert!(
+            e.contains("connection bus.Node1.Tx_Data -> sensor.CAN.Rx_Data")
+                && e.contains("without the clock connection bus.Node1.Tx_Clock -> sensor.CAN.Rx_Clock"),
+            "{e}"
+        );
+        // A clock connection from another node's clock does not stand for it.
+        let e = refused_with(
+            "sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock",
+            "drive1.CAN.Tx_Clock -> bus.Node1.Rx_Clock",
+        );
+        assert!(
+            e.contains("connection sensor.CAN.Tx_Data -> bus.Node1.Rx_Data")
+                && e.contains("without the clock connection sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock"),
+            "{e}"
+        );
     }
 
     #[test]

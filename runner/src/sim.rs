@@ -317,10 +317,12 @@ impl Simulation {
                 })?;
             }
         }
-        sim.build_clock_links(&ssd.clock_connections).map_err(|e| Error {
-            message: format!("{}: {}", archive.path, e.message),
-            ..e
-        })?;
+        sim.build_clock_links(&ssd.clock_connections)
+            .and_then(|()| sim.check_clocked_connections(&ssd.connections))
+            .map_err(|e| Error {
+                message: format!("{}: {}", archive.path, e.message),
+                ..e
+            })?;
         sim.system_connectors = ssd.connectors;
         Ok(sim)
     }

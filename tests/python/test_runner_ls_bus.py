@@ -25,6 +25,7 @@ from fmpy.fmi3 import FMU3Slave, fmi3Float64, fmi3IntervalQualifier, fmi3ValueRe
 
 from conftest import fmu3
 from test_ls_bus_can import Bus, Node, operations, transmitted
+from test_runner import cli
 from test_runner_fmi3_types import runner
 from test_ssp2 import valid, write_ssp2
 
@@ -37,9 +38,10 @@ RECORD = [f"{n}.{v}" for n in NODES for v in ("y", "frames_sent", "frames_receiv
          [f"bus.{v}" for v in ("bus_load", "frames_delivered", "bus_errors", "arbitration_losses")] + ["vdp.x0", "vdp.x1"]
 
 
-def network_ssp(tmp_path, error_every):
+def network_ssp(tmp_path, error_every, leave_out=()):
     """The SSP 2.0 file of the network (VanDerPol first: the nodes' u are set before their Tx_Data
-    is read, which CanSignal's ModelStructure does not order)."""
+    is read, which CanSignal's ModelStructure does not order), without the connections
+    `leave_out` [(a, out, b, in)]."""
     comps = [("vdp", fmu3("VanDerPol"))] + [(n, fmu3("CanSignal")) for n in NODES] + [("bus", fmu3("CanBus"))]
     connectors = {"vdp": [("x0", "output", "Float64", ()), ("x1", "output", "Float64", ())], "bus": []}
     connections, parameters = [], {"bus": [("error_every", "Int32", error_every, ())]}
@@ -55,9 +57,21 @@ def network_ssp(tmp_path, error_every):
                         ("bus", f"Node{p}.Tx_Clock", n, "CAN.Rx_Clock"), ("bus", f"Node{p}.Tx_Data", n, "CAN.Rx_Data")]
         parameters[n] = [("tx_id", "Int32", d["tx_id"], ()), ("rx_id", "Int32", d["rx_id"], ()),
                          ("period", "Float64", PERIOD, ()), ("BusNotifications", "Boolean", "true", ())]
+    connections = [c for c in connections if c not in leave_out]
     path, ssd = write_ssp2(tmp_path / "CanNetwork.ssp", comps, connectors, connections, parameters)
     valid(ssd)
     return path
+
+
+def test_a_clocked_binary_without_the_clock_connection_of_its_clocks_is_refused(tmp_path):
+    """A file written by others: the sensor's Tx_Data into the bus's Rx_Data without the Tx_Clock
+    -> Rx_Clock connection (the bus's triggered Rx_Clock would never tick, Rx_Data never be set)
+    is refused naming both variables and the clock connection, as `cargo fmu build` refuses it."""
+    path = network_ssp(tmp_path, 0, leave_out=[("sensor", "CAN.Tx_Clock", "bus", "Node1.Rx_Clock")])
+    r = cli("run", path, "--stop-time", "0.1", "--step", STEP, "--no-progress")
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "connection sensor.CAN.Tx_Data -> bus.Node1.Rx_Data: sensor.CAN.Tx_Data is clocked by sensor.CAN.Tx_Clock" \
+        in r.stderr and "without the clock connection sensor.CAN.Tx_Clock -> bus.Node1.Rx_Clock" in r.stderr, r.stderr
 
 
 def tx_interval(node):

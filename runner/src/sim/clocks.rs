@@ -1,5 +1,9 @@
 //! Clocks across components: clock connections, and steps that end at the clocks' ticks.
 //!
+//! A data connection of two clocked variables whose input is clocked by triggered clocks comes
+//! with the clock connection of their clocks, or the system is refused
+//! ([`Simulation::check_clocked_connections`]).
+//!
 //! A clock connection (SSP 2.0: a connection of two `ssc:Clock` connectors) ticks the
 //! receiver's triggered input clock whenever the sender's clock ticks: an output clock the
 //! sender reports (fmi3GetClock in its Event Mode, after fmi3DoStep said eventHandlingNeeded), a
@@ -78,6 +82,73 @@ impl Simulation {
         }
         self.clock_links.sort_by_key(|k| rank[k.from.0]);
         Ok(())
+    }
+
+    /// The data connections `conns` of two clocked variables whose input's clocks all are
+    /// triggered: each needs a clock connection from one of the output's clocks to one of the
+    /// input's, else the input is never set (a clocked variable is set only while its clock
+    /// ticks, a triggered clock ticks only through a clock connection; the FMI-LS-BUS Bus
+    /// Terminal: Tx_Data and Tx_Clock connect to Rx_Data and Rx_Clock). Refused, as
+    /// `cargo fmu build` refuses to write it, naming both variables and the clock connection.
+    pub(super) fn check_clocked_connections(&self, conns: &[Connection]) -> Result<(), Error> {
+        for k in conns {
+            let (Some(from), Some(to)) = (self.clocks_of(&k.start), self.clocks_of(&k.end)) else {
+                continue;
+            };
+            if from.1.is_empty()
+                || to.1.is_empty()
+                || !to.1.iter().all(|c| c.interval == crate::fmi3::Interval::Triggered)
+            {
+                continue;
+            }
+            let joined = self.clock_links.iter().any(|l| {
+                l.from.0 == from.0
+                    && l.to.0 == to.0
+                    && from.1.iter().any(|c| c.vr == l.from.1)
+                    && to.1.iter().any(|c| c.vr == l.to.1)
+            });
+            if joined {
+                continue;
+            }
+            let names = |component: &str, list: &[&crate::fmi3::ClockDecl]| {
+                list.iter()
+                    .map(|c| format!("{component}.{}", c.name))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            };
+            let (a, b) = (names(&k.start.0, &from.1), names(&k.end.0, &to.1));
+            return Err(Error::variable(
+                &k.end.0,
+                &k.end.1,
+                format!(
+                    "connection {}.{} -> {}.{}: {}.{} is clocked by {a}, {}.{} by the triggered {b}, which ticks only through a clock connection: without the clock connection {a} -> {b} the input is never set (FMI 3.0: a clocked variable is set only while its clock ticks)",
+                    k.start.0, k.start.1, k.end.0, k.end.1, k.start.0, k.start.1, k.end.0, k.end.1
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The component of `end` and the clocks of its variable (empty: not clocked); None: not a
+    /// variable of an FMI 3.0 co-simulation component with clocks.
+    fn clocks_of(&self, end: &(String, String)) -> Option<(usize, Vec<&crate::fmi3::ClockDecl>)> {
+        let slave = self.slave_index(&end.0).ok()?;
+        let s = &self.slaves[slave];
+        let fmu = &self.fmus[s.fmu];
+        let plan = match &fmu.import {
+            crate::fmu::Import::V3(i) if !s.me => i.clock_plan()?,
+            _ => return None,
+        };
+        let vr = fmu
+            .var3(&end.1)
+            .map(|v| v.vr)
+            .or_else(|| fmu.description.variables.iter().find(|v| v.name == end.1).map(|v| v.vr))?;
+        let clocks = plan
+            .clocked
+            .get(&vr)
+            .map(|ix| ix.iter().map(|&i| &plan.inputs[i]).collect())
+            .unwrap_or_default();
+        Some((slave, clocks))
     }
 
     fn clock_decl(&self, slave: usize, vr: u32) -> Option<&crate::fmi3::ClockDecl> {
