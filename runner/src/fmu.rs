@@ -360,35 +360,38 @@ impl Fmu {
     /// the events it reports are handled in Event Mode and its early returns end every
     /// component's step there (`sim/clocks.rs`).
     pub fn instantiate_events(&self, component: &str) -> Result<InstanceCS, Error> {
-        let fail = |why: String| {
-            Error::unsupported(
+        self.event_mode_import(component)?
+            .instantiate_cs_events(component)
+            .map(InstanceCS::V3)
+            .map_err(|e| Error {
+                component: Some(component.to_owned()),
+                function: Some("fmi3InstantiateCoSimulation".into()),
+                ..Error::new(
+                    crate::ErrorKind::Fmi,
+                    format!(
+                        "component '{component}' ({}): fmi3InstantiateCoSimulation failed: {e}",
+                        self.model_identifier()
+                    ),
+                )
+            })
+    }
+
+    /// The FMI 3.0 import of an FMU whose co-simulation has Event Mode, or why it has none.
+    fn event_mode_import(&self, component: &str) -> Result<&Fmi3Import, Error> {
+        let fail = |why: &str| {
+            Err(Error::unsupported(
                 Some(component),
                 None,
                 format!(
                     "component '{component}' ({}): no event mode: {why}",
                     self.model_identifier()
                 ),
-            )
+            ))
         };
         match &self.import {
-            Import::V3(_) if !self.has_event_mode => {
-                Err(fail("its <CoSimulation> does not say hasEventMode=\"true\"".into()))
-            }
-            Import::V3(i) => i
-                .instantiate_cs_events(component)
-                .map(InstanceCS::V3)
-                .map_err(|e| Error {
-                    component: Some(component.to_owned()),
-                    function: Some("fmi3InstantiateCoSimulation".into()),
-                    ..Error::new(
-                        crate::ErrorKind::Fmi,
-                        format!(
-                            "component '{component}' ({}): fmi3InstantiateCoSimulation failed: {e}",
-                            self.model_identifier()
-                        ),
-                    )
-                }),
-            Import::V2(_) => Err(fail("an FMI 2.0 FMU has no Event Mode in co-simulation".into())),
+            Import::V3(_) if !self.has_event_mode => fail("its <CoSimulation> does not say hasEventMode=\"true\""),
+            Import::V3(i) => Ok(i),
+            Import::V2(_) => fail("an FMI 2.0 FMU has no Event Mode in co-simulation"),
         }
     }
 
@@ -448,26 +451,29 @@ impl Fmu {
         Ok(InstanceCS::Me(crate::me::MeInstance::new(inner, nx, nz)))
     }
 
-    /// An instance in a child process of its own ([`crate::isolate`]); `me`: model exchange,
-    /// integrated by the runner in the child.
+    /// An instance in a child process of its own ([`crate::isolate`]), instantiated there for
+    /// `interface` (model exchange: integrated by the runner in the child).
     pub fn instantiate_isolated(
         &self,
         component: &str,
-        me: bool,
+        interface: crate::isolate::Interface,
         isolation: &crate::isolate::Isolation,
     ) -> Result<InstanceCS, Error> {
+        if interface == crate::isolate::Interface::EventMode {
+            self.event_mode_import(component)?;
+        }
         #[cfg(target_os = "linux")]
         {
             let dir = match &self.import {
                 Import::V2(i) => i.dir(),
                 Import::V3(i) => i.dir(),
             };
-            crate::isolate::Isolated::spawn(isolation, component, &self.label, dir, me)
+            crate::isolate::Isolated::spawn(isolation, component, &self.label, dir, interface)
                 .map(|i| InstanceCS::Isolated(Box::new(i)))
         }
         #[cfg(not(target_os = "linux"))]
         {
-            let _ = (me, isolation);
+            let _ = (interface, isolation);
             Err(Error::unsupported(
                 Some(component),
                 None,

@@ -120,6 +120,8 @@ enum Command {
         shm: PathBuf,
         #[arg(long)]
         jacobi: bool,
+        #[arg(long)]
+        event_mode: Vec<String>,
     },
     /// Serves one component to the runner that started this process (--isolate).
     #[command(hide = true)]
@@ -134,6 +136,8 @@ enum Command {
         shm: PathBuf,
         #[arg(long)]
         model_exchange: bool,
+        #[arg(long)]
+        event_mode: bool,
     },
     /// Prints the system: components, evaluation order, parameters, outputs.
     Info { ssp: PathBuf },
@@ -174,19 +178,25 @@ fn run(cli: Cli) -> Result<(), String> {
             label,
             shm,
             model_exchange,
-        } => std::process::exit(rustfmu_runner::isolate::serve(
-            &dir,
-            &name,
-            &label,
-            model_exchange,
-            &shm,
-        )),
+            event_mode,
+        } => {
+            use rustfmu_runner::isolate::Interface;
+            let interface = match (model_exchange, event_mode) {
+                (true, _) => Interface::ModelExchange,
+                (_, true) => Interface::EventMode,
+                _ => Interface::CoSimulation,
+            };
+            std::process::exit(rustfmu_runner::isolate::serve(&dir, &name, &label, interface, &shm))
+        }
         #[cfg(not(target_os = "linux"))]
         Command::ServeComponent { .. } => Err("serve-component: isolation runs on Linux only".into()),
         #[cfg(target_os = "linux")]
-        Command::ServeSystem { ssp, shm, jacobi } => {
-            std::process::exit(rustfmu_runner::isolate::serve_system(&ssp, &shm, jacobi))
-        }
+        Command::ServeSystem {
+            ssp,
+            shm,
+            jacobi,
+            event_mode,
+        } => std::process::exit(rustfmu_runner::isolate::serve_system(&ssp, &shm, jacobi, &event_mode)),
         #[cfg(not(target_os = "linux"))]
         Command::ServeSystem { .. } => Err("serve-system: isolation runs on Linux only".into()),
         Command::Info { ssp } => {
@@ -255,6 +265,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     iso,
                     &ssp,
                     order == "jacobi",
+                    &event_mode,
                 )?),
                 (_, Some(iso)) => Backend::Here(Simulation::from_ssp_isolated(&ssp, iso)?),
                 _ => Backend::Here(Simulation::from_ssp(&ssp)?),
@@ -264,10 +275,9 @@ fn run(cli: Cli) -> Result<(), String> {
             {
                 sim.scheme = Scheme::Jacobi;
             }
-            for c in &event_mode {
-                match &mut system {
-                    Backend::Here(sim) => sim.use_event_mode(c)?,
-                    Backend::Process(_) => return Err(format!("--event-mode {c}: not with --isolate system")),
+            if let Backend::Here(sim) = &mut system {
+                for c in &event_mode {
+                    sim.use_event_mode(c)?;
                 }
             }
             let (name, outputs) = match &system {

@@ -204,7 +204,7 @@ struct StepBack {
     /// Each event-mode component's FMU state (and its clocks' importer side) at the start of
     /// the step, where two or more may return early ([`Simulation::do_step_events`]: the one
     /// that went past the other's early return is taken back); freed after the run.
-    early_states: Vec<Option<(FmuState, Option<crate::fmi3::ClockState>)>>,
+    early_states: Vec<Option<(FmuState, Option<crate::instance::ClockSnapshot>)>>,
 }
 
 fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl Fn(Fmi2Error) -> Error {
@@ -225,7 +225,12 @@ fn make_instance(
                 // The in-process refusal, with its reason.
                 return fmu.instantiate_me(component);
             }
-            fmu.instantiate_isolated(component, me, iso)
+            let interface = if me {
+                crate::isolate::Interface::ModelExchange
+            } else {
+                crate::isolate::Interface::CoSimulation
+            };
+            fmu.instantiate_isolated(component, interface, iso)
         }
         None if me => fmu.instantiate_me(component),
         None => fmu.instantiate(component),
@@ -897,17 +902,23 @@ impl Simulation {
         if self.slaves[i].events {
             return Ok(());
         }
-        if self.slaves[i].me || self.slaves[i].scheduled || self.isolation.is_some() {
+        if self.slaves[i].me || self.slaves[i].scheduled {
             return Err(Error::usage(format!(
-                "component '{component}': event mode is for a co-simulation component run in this process (not as model exchange, not with --isolate)"
+                "component '{component}': event mode is for a co-simulation component (not run as model exchange or in Scheduled Execution)"
             )));
         }
         self.slaves[i].instance = None;
-        let inst = self.fmu_of(i).instantiate_events(component);
+        let inst = match &self.isolation {
+            Some(iso) => self
+                .fmu_of(i)
+                .instantiate_isolated(component, crate::isolate::Interface::EventMode, iso),
+            None => self.fmu_of(i).instantiate_events(component),
+        };
         let inst = match inst {
             Ok(inst) => inst,
             Err(e) => {
-                self.slaves[i].instance = Some(make_instance(self.fmu_of(i), component, false, None)?);
+                let again = make_instance(self.fmu_of(i), component, false, self.isolation.as_ref())?;
+                self.slaves[i].instance = Some(again);
                 return Err(e);
             }
         };

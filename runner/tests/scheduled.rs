@@ -11,75 +11,15 @@
 
 mod support;
 
-use rustfmu_runner::fmu::Fmu;
-use rustfmu_runner::ssp::Connection;
-use rustfmu_runner::{RunOptions, RunResult, Simulation, Value};
-use std::io::Write;
+use rustfmu_runner::{RunOptions, RunResult, Simulation};
 use std::path::{Path, PathBuf};
-use support::{ours, theirs};
-
-fn connect(pairs: &[(&str, &str, &str, &str)]) -> Vec<Connection> {
-    pairs
-        .iter()
-        .map(|(a, x, b, y)| Connection {
-            start: (a.to_string(), x.to_string()),
-            end: (b.to_string(), y.to_string()),
-        })
-        .collect()
-}
-
-/// A system of `components` (name, FMU file) with `connections` and `parameters`.
-fn system(
-    components: &[(&str, &Path)],
-    connections: &[(&str, &str, &str, &str)],
-    parameters: Vec<(String, String, Value)>,
-) -> Simulation {
-    let fmus = components
-        .iter()
-        .map(|(c, p)| Fmu::from_path(c, p).unwrap_or_else(|e| panic!("{e}")))
-        .collect();
-    let names = components
-        .iter()
-        .enumerate()
-        .map(|(i, (c, _))| (c.to_string(), i))
-        .collect();
-    Simulation::new("S", fmus, names, &connect(connections), parameters).unwrap_or_else(|e| panic!("{e}"))
-}
+use support::{COUNTERS, archive, first_difference, ours, system, theirs, two_clocks_ssp};
 
 fn run(sim: &mut Simulation, stop: f64, step: f64, record: &[&str]) -> RunResult {
     let mut opts = RunOptions::new(stop, step);
     opts.record = record.iter().map(|r| r.to_string()).collect();
     sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"))
 }
-
-/// The first row where `a` and `b` differ (time or any value, bit for bit), or None.
-fn first_difference(a: &RunResult, b: &RunResult) -> Option<String> {
-    assert_eq!(a.names, b.names);
-    if a.time.len() != b.time.len() {
-        return Some(format!(
-            "{} rows against {}: {:?} / {:?}",
-            a.time.len(),
-            b.time.len(),
-            a.time,
-            b.time
-        ));
-    }
-    let m = a.names.len();
-    (0..a.time.len()).find_map(|k| {
-        let (ra, rb) = (&a.values[k * m..(k + 1) * m], &b.values[k * m..(k + 1) * m]);
-        (a.time[k].to_bits() != b.time[k].to_bits() || ra.iter().zip(rb).any(|(x, y)| x.to_bits() != y.to_bits()))
-            .then(|| format!("row {k}: t = {} {ra:?} against t = {} {rb:?}", a.time[k], b.time[k]))
-    })
-}
-
-const COUNTERS: [&str; 6] = [
-    "inClock1Ticks",
-    "inClock2Ticks",
-    "inClock3Ticks",
-    "totalInClockTicks",
-    "result2",
-    "output3",
-];
 
 #[test]
 fn the_reference_clocks_alone_runs_its_partitions_at_their_ticks_as_the_model_defines_them() {
@@ -108,51 +48,6 @@ fn the_reference_clocks_alone_runs_its_partitions_at_their_ticks_as_the_model_de
             assert_eq!(got, want, "t = {t}, step {step}: {COUNTERS:?}");
         }
     }
-}
-
-/// An SSP 2.0 file of two of our Clocks, `a` and `b`, with `implementation`: a's output clock
-/// triggers b's inClock2, whose partition adds b.input2 (a's output3) to b.result2.
-fn two_clocks_ssp(dir: &str, implementation: &str) -> PathBuf {
-    let component = |name: &str, connectors: &str| {
-        format!(
-            r#"<ssd:Component name="{name}" source="resources/Clocks.fmu" type="application/x-fmu-sharedlibrary" implementation="{implementation}"><ssd:Connectors>{connectors}</ssd:Connectors></ssd:Component>"#
-        )
-    };
-    let a = component(
-        "a",
-        r#"<ssd:Connector name="outClock" kind="output"><ssc:Clock/></ssd:Connector><ssd:Connector name="output3" kind="output"><ssc:Int32/></ssd:Connector>"#,
-    );
-    let b = component(
-        "b",
-        r#"<ssd:Connector name="inClock2" kind="input"><ssc:Clock/></ssd:Connector><ssd:Connector name="input2" kind="input"><ssc:Int32/></ssd:Connector>"#,
-    );
-    let ssd = format!(
-        r#"<?xml version="1.0" encoding="UTF-8"?>
-<ssd:SystemStructureDescription xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription"
-  xmlns:ssc="http://ssp-standard.org/SSP1/SystemStructureCommon" version="2.0" name="TwoClocks">
-<ssd:System name="TwoClocks"><ssd:Elements>{a}{b}</ssd:Elements><ssd:Connections>
-<ssd:Connection startElement="a" startConnector="outClock" endElement="b" endConnector="inClock2"/>
-<ssd:Connection startElement="a" startConnector="output3" endElement="b" endConnector="input2"/>
-</ssd:Connections></ssd:System></ssd:SystemStructureDescription>"#
-    );
-    archive(dir, "TwoClocks", &ssd, &[("Clocks", &ours("Clocks", true))])
-}
-
-/// An SSP file `<name>.ssp` in a folder of its own (`dir`) with `ssd` and `fmus` (resources/<name>.fmu).
-fn archive(dir: &str, name: &str, ssd: &str, fmus: &[(&str, &Path)]) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rustfmu-runner-scheduled-{dir}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let path = d.join(format!("{name}.ssp"));
-    let mut z = zip::ZipWriter::new(std::fs::File::create(&path).unwrap());
-    let opts = zip::write::SimpleFileOptions::default();
-    z.start_file("SystemStructure.ssd", opts).unwrap();
-    z.write_all(ssd.as_bytes()).unwrap();
-    for (n, f) in fmus {
-        z.start_file(format!("resources/{n}.fmu"), opts).unwrap();
-        z.write_all(&std::fs::read(f).unwrap()).unwrap();
-    }
-    z.finish().unwrap();
-    path
 }
 
 #[test]
@@ -188,51 +83,12 @@ fn our_clocks_in_scheduled_execution_equals_its_event_mode_co_simulation_row_for
     assert!(col("b.result2").last().unwrap() >= &1000.0, "{:?}", col("b.result2"));
 }
 
-/// The Pendulum (FMI 3.0) and the SampledController (`sample` every Ts = 10 ms), its loop closed
-/// as in holonomic/systems.toml's PendulumLQR.
-fn sampled_loop(scheduled: bool) -> (Simulation, Vec<&'static str>) {
-    let conns = [
-        ("pendulum", "alpha1", "controller", "alpha1"),
-        ("pendulum", "omega1", "controller", "omega1"),
-        ("pendulum", "alpha2", "controller", "alpha2"),
-        ("pendulum", "omega2", "controller", "omega2"),
-        ("controller", "M1", "pendulum", "M1"),
-        ("controller", "M2", "pendulum", "M2"),
-    ];
-    let params = vec![
-        ("pendulum".into(), "alpha1_0".into(), Value::Real(0.1)),
-        ("pendulum".into(), "alpha2_0".into(), Value::Real(-0.05)),
-        ("controller".into(), "mode".into(), Value::Integer(1)),
-    ];
-    let mut sim = system(
-        &[
-            ("pendulum", &ours("Pendulum", true)),
-            ("controller", &ours("SampledController", true)),
-        ],
-        &conns,
-        params,
-    );
-    if scheduled {
-        sim.use_scheduled_execution("controller").unwrap();
-    }
-    let record = vec![
-        "pendulum.alpha1",
-        "pendulum.omega1",
-        "pendulum.alpha2",
-        "pendulum.omega2",
-        "controller.M1",
-        "controller.M2",
-        "pendulum.M1",
-        "pendulum.M2",
-    ];
-    (sim, record)
-}
-
 #[test]
 fn the_sampled_controller_in_scheduled_execution_closes_the_pendulum_loop_as_in_event_mode() {
     for step in [1e-3, 1e-2] {
-        let (mut a, record) = sampled_loop(false);
-        let (mut b, _) = sampled_loop(true);
+        let (mut a, record) = support::sampled_loop(None);
+        let (mut b, _) = support::sampled_loop(None);
+        b.use_scheduled_execution("controller").unwrap();
         let event_mode = run(&mut a, 2.0, step, &record);
         let scheduled = run(&mut b, 2.0, step, &record);
         assert_eq!(first_difference(&scheduled, &event_mode), None, "step {step}");
@@ -243,7 +99,8 @@ fn the_sampled_controller_in_scheduled_execution_closes_the_pendulum_loop_as_in_
         assert!(alpha1.last().unwrap().abs() < 0.1 * alpha1[0].abs(), "{alpha1:?}");
     }
     // A tick inside a communication step is refused as in event mode (Ts = 10 ms, step 15 ms).
-    let (mut b, record) = sampled_loop(true);
+    let (mut b, record) = support::sampled_loop(None);
+    b.use_scheduled_execution("controller").unwrap();
     let mut opts = RunOptions::new(0.1, 0.015);
     opts.record = record.iter().map(|r| r.to_string()).collect();
     let f = b.run(&opts, &mut |_, _| {}).expect_err("a tick inside a step");

@@ -367,8 +367,9 @@ def test_an_early_return_ends_every_components_step_at_the_event_as_in_fmpy(tmp_
 
 def test_the_python_module_runs_event_mode_components_as_the_command_line(tmp_path):
     """System(path, event_mode=[...]) is the command line's --event-mode: the BouncingBall beside
-    the VanDerPol, the same points (the grid and every bounce) and values, bit for bit; refused
-    with isolate and for a name that is no component."""
+    the VanDerPol, the same points (the grid and every bounce) and values, bit for bit, also with
+    isolate (each component or the whole system in a child process); refused for a name that is
+    no component."""
     import rustfmu_runner
 
     comps = [("ball", fmu3("BouncingBall")), ("vdp", fmu3("VanDerPol"))]
@@ -383,8 +384,11 @@ def test_the_python_module_runs_event_mode_components_as_the_command_line(tmp_pa
         assert np.array_equal(r[name], got[name]), name
     plain = rustfmu_runner.System(path).run(stop, h, record=record)
     assert len(plain["time"]) == round(stop / h) + 1
-    with pytest.raises(rustfmu_runner.VariableError, match="not with --isolate"):
-        rustfmu_runner.System(path, isolate=True, event_mode=["ball"])
+    for isolate in ("component", "system"):
+        iso = rustfmu_runner.System(path, isolate=isolate, event_mode=["ball"]).run(stop, h, record=record)
+        assert np.array_equal(iso["time"], got["time"]), isolate
+        for name in record:
+            assert np.array_equal(iso[name], got[name]), (isolate, name)
     with pytest.raises(rustfmu_runner.VariableError, match="nope"):
         rustfmu_runner.System(path, event_mode=["nope"])
 

@@ -63,7 +63,7 @@ fn run() -> Result<(), String> {
         let mut there = Simulation::from_ssp_isolated(&ssp, iso.clone())?;
         let start_there = t0.elapsed().as_secs_f64();
         let t0 = Instant::now();
-        let mut whole = SystemProcess::spawn(iso, &ssp, false)?;
+        let mut whole = SystemProcess::spawn(iso, &ssp, false, &[])?;
         let start_whole = t0.elapsed().as_secs_f64();
         let mut all = RunOptions::new(args.run.seconds, args.run.step);
         all.record = here.outputs();

@@ -194,7 +194,7 @@ impl PySystem {
     /// `event_mode`: FMI 3.0 co-simulation components (names) run with eventModeUsed and
     /// earlyReturnAllowed, as the command line's `--event-mode`: the events each reports are
     /// handled in Event Mode at their time, and a step one ends early ends every component's step
-    /// there (each such point a row of its own); not with `isolate`.
+    /// there (each such point a row of its own); with `isolate` too.
     #[new]
     #[pyo3(signature = (path, order = "gauss-seidel", isolate = None, call_timeout = None, worker = None, event_mode = None))]
     fn new(
@@ -256,10 +256,12 @@ impl PySystem {
             None
         };
         let jacobi = scheme == Scheme::Jacobi;
+        let event_mode = event_mode.unwrap_or_default();
+        let in_child = event_mode.clone();
         let sim = py
             .detach(move || match (granularity, isolation) {
                 (Some("system"), Some(iso)) => {
-                    runner::isolate::SystemProcess::spawn(iso, &path, jacobi).map(Sim::Process)
+                    runner::isolate::SystemProcess::spawn(iso, &path, jacobi, &in_child).map(Sim::Process)
                 }
                 (_, Some(iso)) => Simulation::from_ssp_isolated(&path, iso).map(Sim::Here),
                 _ => Simulation::from_ssp(&path).map(Sim::Here),
@@ -291,14 +293,9 @@ impl PySystem {
         if let Sim::Here(s) = &mut sim {
             s.scheme = scheme;
         }
-        for c in event_mode.unwrap_or_default() {
-            match &mut sim {
-                Sim::Here(s) => s.use_event_mode(&c).map_err(|e| to_pyerr(py, &e, None))?,
-                Sim::Process(_) => {
-                    return Err(PyValueError::new_err(format!(
-                        "event_mode {c}: not with isolate=\"system\" (the runner steps to the events in its own process)"
-                    )));
-                }
+        if let Sim::Here(s) = &mut sim {
+            for c in &event_mode {
+                s.use_event_mode(c).map_err(|e| to_pyerr(py, &e, None))?;
             }
         }
         Ok(PySystem {

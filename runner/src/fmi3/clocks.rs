@@ -310,9 +310,19 @@ impl Instance3 {
         self.state()
     }
 
+    /// Where its last step returned early, not taken.
+    pub fn early_return(&self) -> Option<f64> {
+        self.clocks.as_ref().and_then(|s| s.early_at)
+    }
+
     /// Where its last step returned early (taken: None until the next early return).
     pub fn take_early_return(&mut self) -> Option<f64> {
         self.clocks.as_mut().and_then(|s| s.early_at.take())
+    }
+
+    /// Whether the importer keeps clocks for it (input clocks it ticks, or Event Mode).
+    pub fn has_clock_state(&self) -> bool {
+        self.clocks.is_some()
     }
 
     /// The importer's side of its clocks now (ticks planned, Event Mode, held values), kept with

@@ -1,7 +1,7 @@
 //! [`Isolated`]: a component's instance in a child process, the parent's side of the wire
 //! ([`super::wire`]): calls batched, the ones that answer only a status not waited for.
 
-use super::options::Isolation;
+use super::options::{Interface, Isolation};
 use super::wire::*;
 use crate::common::{Deferred, Directional, Fmi2Error, FmuState};
 use crate::{Error, ErrorKind};
@@ -42,6 +42,20 @@ pub struct Isolated {
     reads: Vec<u32>,
     ahead: Vec<u32>,
     ask: Vec<u32>,
+    /// FMI 3.0: the child's importer keeps clocks for the instance (input clocks it ticks, or
+    /// Event Mode). Its reads are then made as asked, none ahead (a read of a clocked variable
+    /// counts as its tick's evaluation), and its steps are waited for (a step's end opens an
+    /// Event Mode, whose failures and requests to terminate are the step's).
+    clocks: bool,
+    /// Answers that came with a call's, valid until the next call: the next tick after an
+    /// Event Mode ended, where the last step returned early (None: not known).
+    tick: Option<Option<f64>>,
+    early: Option<Option<f64>>,
+}
+
+/// A time the wire carries as f64, NaN for none.
+fn time_or_none(x: f64) -> Option<f64> {
+    (!x.is_nan()).then_some(x)
 }
 
 impl Drop for Isolated {
@@ -66,7 +80,13 @@ impl Drop for Isolated {
 impl Isolated {
     /// Starts the child process of `component` (its FMU unpacked in `dir`) and instantiates it
     /// there (`me`: model exchange, integrated by the runner in the child).
-    pub fn spawn(iso: &Isolation, component: &str, label: &str, dir: &Path, me: bool) -> Result<Isolated, Error> {
+    pub fn spawn(
+        iso: &Isolation,
+        component: &str,
+        label: &str,
+        dir: &Path,
+        interface: Interface,
+    ) -> Result<Isolated, Error> {
         let fail = |m: String| Error {
             component: Some(component.to_owned()),
             function: Some("fmi2Instantiate".into()),
@@ -82,7 +102,11 @@ impl Isolated {
             ("--name", component.as_ref()),
             ("--label", label.as_ref()),
         ];
-        let flag = me.then_some("--model-exchange");
+        let flag = match interface {
+            Interface::CoSimulation => None,
+            Interface::ModelExchange => Some("--model-exchange"),
+            Interface::EventMode => Some("--event-mode"),
+        };
         let child = start_worker(&iso.worker, "serve-component", &options, &path, flag).map_err(&fail)?;
         let mut iso_inst = Isolated {
             component: component.to_owned(),
@@ -101,9 +125,22 @@ impl Isolated {
             reads: Vec::new(),
             ahead: Vec::new(),
             ask: Vec::new(),
+            clocks: false,
+            tick: None,
+            early: None,
         };
         // The child opens the file before it answers: then it can go.
-        let r = iso_inst.call(HELLO, None, |_| Ok(()), |_| Ok(()));
+        let mut clocks = false;
+        let r = iso_inst.call(
+            HELLO,
+            None,
+            |_| Ok(()),
+            |r| {
+                clocks = r.u8() != 0;
+                Ok(())
+            },
+        );
+        iso_inst.clocks = clocks;
         let _ = std::fs::remove_file(&path);
         iso_inst.timeout = iso.timeout;
         r.map_err(|e| {
@@ -136,6 +173,8 @@ impl Isolated {
         ) {
             self.cache_valid = false;
         }
+        self.tick = None;
+        self.early = None;
         let start = 4 + self.pending_len;
         let mut w = W {
             buf: self.shm.req(),
@@ -154,6 +193,8 @@ impl Isolated {
         self.shm.req()[..4].copy_from_slice(&n.to_ne_bytes());
         let h = self.shm.header();
         h.req_len.store((4 + self.pending_len) as u32, Relaxed);
+        // A child that dies before it starts the batch dies in its first call.
+        h.current.store(0, Relaxed);
         self.seq = self.seq.wrapping_add(1);
         h.req.store(self.seq, SeqCst);
         if h.child_sleeps.load(SeqCst) == 1 {
@@ -201,7 +242,7 @@ impl Isolated {
                     let _ = self.child.kill();
                     let _ = self.child.wait();
                     return Err(self.died(format!(
-                        "it did not return within {} s: its process was killed",
+                        "did not return within {} s: it was killed",
                         limit.as_secs_f64()
                     )));
                 }
@@ -230,8 +271,9 @@ impl Isolated {
     }
 
     /// Waits for the outstanding batch (if any) and reads its answer's failure and messages;
-    /// `last` reads the values of its last call.
-    fn collect(&mut self, last: impl FnOnce(&mut R) -> Result<(), Fmi2Error>) -> Result<(), Fmi2Error> {
+    /// `last` reads the values of its last call. `waited`: the last call is the caller's (its
+    /// failure is its own); else it was posted, and its failure comes as the one before.
+    fn collect(&mut self, waited: bool, last: impl FnOnce(&mut R) -> Result<(), Fmi2Error>) -> Result<(), Fmi2Error> {
         if self.outstanding.is_empty() {
             return Ok(());
         }
@@ -263,12 +305,7 @@ impl Isolated {
         if failed != u32::MAX {
             let error = r.err();
             let i = failed as usize;
-            if i + 1 == calls.len()
-                && !matches!(
-                    calls[i].0,
-                    DO_STEP | SET_REAL | SET_INTEGER | SET_BOOLEAN | SET_STRING | INPUT_DERIVATIVES
-                )
-            {
+            if waited && i + 1 == calls.len() {
                 return Err(error);
             }
             let (op, time) = calls.get(i).copied().unwrap_or((QUIT, None));
@@ -286,7 +323,7 @@ impl Isolated {
         if let Some(m) = &self.dead {
             return Err(Fmi2Error::Died(m.clone()));
         }
-        self.collect(|_| Ok(()))
+        self.collect(false, |_| Ok(()))
     }
 
     /// Sends what is written and waits for it: a failure of a call before now.
@@ -294,7 +331,7 @@ impl Isolated {
         self.flush_wait()?;
         if !self.pending.is_empty() {
             self.publish()?;
-            self.collect(|_| Ok(()))?;
+            self.collect(false, |_| Ok(()))?;
         }
         Ok(())
     }
@@ -326,7 +363,7 @@ impl Isolated {
         self.flush_wait()?;
         self.push(op, time, args)?;
         self.publish()?;
-        self.collect(answer)
+        self.collect(true, answer)
     }
 
     fn lengths(a: usize, b: usize) -> Result<(), Fmi2Error> {
@@ -384,17 +421,166 @@ impl Isolated {
     pub fn do_step(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Fmi2Error> {
         std::mem::swap(&mut self.ahead, &mut self.reads);
         self.reads.clear();
-        self.post(DO_STEP, Some(t), true, |w| {
+        let args = |w: &mut W| {
             w.f64(t)?;
             w.f64(h)?;
             w.u8(no_set_prior as u8)
-        })?;
+        };
+        if self.clocks {
+            // Answered with where it returned early (taken by take_early_return).
+            let mut early = None;
+            let r = self.call(DO_STEP, Some(t), args, |r| {
+                early = time_or_none(r.f64());
+                Ok(())
+            });
+            self.time = Some(early.unwrap_or(t + h));
+            r?;
+            self.early = Some(early);
+            return Ok(());
+        }
+        self.post(DO_STEP, Some(t), true, args)?;
         self.time = Some(t + h);
         Ok(())
     }
 
+    /// An Event Mode ends at `t` in the child's importer (fmi3UpdateDiscreteStates, the
+    /// intervals read, fmi3EnterStepMode), answered with the next tick.
+    pub fn settle(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if !self.clocks {
+            return Ok(());
+        }
+        let mut next = None;
+        self.call(
+            SETTLE,
+            Some(t),
+            |w| w.f64(t),
+            |r| {
+                next = time_or_none(r.f64());
+                Ok(())
+            },
+        )?;
+        self.tick = Some(next);
+        Ok(())
+    }
+
+    /// The next tick of its time-based clocks (what [`Isolated::settle`] answered, if nothing
+    /// was called since).
+    pub fn next_tick(&mut self) -> Result<Option<f64>, Fmi2Error> {
+        if !self.clocks {
+            return Ok(None);
+        }
+        if let Some(next) = self.tick {
+            return Ok(next);
+        }
+        self.clock_time(NEXT_TICK, |_| Ok(()))
+    }
+
+    /// A call answered with a time or none.
+    fn clock_time(
+        &mut self,
+        op: u8,
+        args: impl FnOnce(&mut W) -> Result<(), Fmi2Error>,
+    ) -> Result<Option<f64>, Fmi2Error> {
+        let mut at = None;
+        self.call(op, self.time, args, |r| {
+            at = time_or_none(r.f64());
+            Ok(())
+        })?;
+        Ok(at)
+    }
+
+    /// Where its last step returned early, taken (what the step answered: taken in the child with
+    /// the next call).
+    pub fn take_early_return(&mut self) -> Result<Option<f64>, Fmi2Error> {
+        if !self.clocks {
+            return Ok(None);
+        }
+        match self.early.take() {
+            Some(None) => Ok(None),
+            Some(Some(at)) => {
+                self.post(EARLY_RETURN, self.time, false, |_| Ok(()))?;
+                Ok(Some(at))
+            }
+            None => self.clock_time(EARLY_RETURN, |_| Ok(())),
+        }
+    }
+
+    /// The clocks due at `t` tick.
+    pub fn tick_now(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if !self.clocks {
+            return Ok(());
+        }
+        self.call(TICK_NOW, Some(t), |w| w.f64(t), |_| Ok(()))
+    }
+
+    /// Its input clock `vr` ticks at `t`.
+    pub fn trigger(&mut self, vr: u32, t: f64) -> Result<(), Fmi2Error> {
+        self.call(
+            TRIGGER,
+            Some(t),
+            |w| {
+                w.u32(vr)?;
+                w.f64(t)
+            },
+            |_| Ok(()),
+        )
+    }
+
+    /// Its output clocks read (once an Event Mode).
+    pub fn poll_output_clocks(&mut self, t: f64) -> Result<(), Fmi2Error> {
+        if !self.clocks {
+            return Ok(());
+        }
+        self.call(POLL_OUTPUT_CLOCKS, Some(t), |w| w.f64(t), |_| Ok(()))
+    }
+
+    /// Whether its clock `vr` ticks now.
+    pub fn clock_active(&mut self, vr: u32) -> Result<bool, Fmi2Error> {
+        if !self.clocks {
+            return Ok(false);
+        }
+        let mut on = false;
+        self.call(
+            CLOCK_ACTIVE,
+            self.time,
+            |w| w.u32(vr),
+            |r| {
+                on = r.u8() != 0;
+                Ok(())
+            },
+        )?;
+        Ok(on)
+    }
+
+    /// The importer's side of its clocks kept in the child (the last one kept: the master keeps
+    /// one per instance), answered with its number.
+    pub fn clock_snapshot(&mut self) -> Result<Option<u32>, Fmi2Error> {
+        if !self.clocks {
+            return Ok(None);
+        }
+        let mut n = 0;
+        self.call(
+            CLOCK_SNAPSHOT,
+            self.time,
+            |_| Ok(()),
+            |r| {
+                n = r.u32();
+                Ok(())
+            },
+        )?;
+        Ok(Some(n))
+    }
+
+    /// Its clocks as the snapshot `n` kept them, sent with the next call.
+    pub fn restore_clocks(&mut self, n: u32) -> Result<(), Fmi2Error> {
+        self.post(RESTORE_CLOCKS, self.time, false, |w| w.u32(n))
+    }
+
     pub fn get_real(&mut self, vrs: &[u32], out: &mut [f64]) -> Result<(), Fmi2Error> {
         Self::lengths(vrs.len(), out.len())?;
+        if self.clocks {
+            return self.get_values(GET_REAL, vrs, out, |r| r.f64());
+        }
         if self.dead.is_none() && self.outstanding.is_empty() && self.pending.is_empty() && self.cache_valid {
             let cached = |vr: &u32| self.cache.iter().find(|(v, _)| v == vr).map(|(_, x)| *x);
             if vrs.iter().all(|vr| cached(vr).is_some()) {
@@ -493,22 +679,29 @@ impl Isolated {
         })
     }
 
-    /// FMI 3.0 values of any type and shape, `out`'s type and length asked for.
+    /// FMI 3.0 values of any type and shape, `out`'s type and length asked for. With clocks,
+    /// `out`'s values go along: a clocked variable read between its ticks, never read or set
+    /// before, leaves them as they are (`fmi3/typed.rs`).
     pub fn get_typed(&mut self, vrs: &[u32], out: &mut crate::values::Values) -> Result<(), Fmi2Error> {
-        let (code, n) = (out.code(), out.len() as u32);
-        self.call(
-            GET_TYPED,
-            self.time,
-            |w| {
-                w.u32s(vrs)?;
-                w.u8(code)?;
-                w.u32(n)
-            },
-            |r| {
-                out.take(&mut |k| r.bytes(k));
-                Ok(())
-            },
-        )
+        let (code, n, clocks) = (out.code(), out.len() as u32, self.clocks);
+        // A call (as `call`), its arguments and its answer written and read in turn.
+        self.flush_wait()?;
+        let was: &crate::values::Values = out;
+        self.push(GET_TYPED, self.time, |w| {
+            w.u32s(vrs)?;
+            w.u8(code)?;
+            w.u32(n)?;
+            w.u8(clocks as u8)?;
+            if clocks {
+                was.put(&mut |b| w.bytes(b))?;
+            }
+            Ok(())
+        })?;
+        self.publish()?;
+        self.collect(true, |r| {
+            out.take(&mut |k| r.bytes(k));
+            Ok(())
+        })
     }
 
     /// FMI 3.0 values of any type and shape, posted as the other setters are.

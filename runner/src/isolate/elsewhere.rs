@@ -8,7 +8,7 @@ use std::path::Path;
 pub struct SystemProcess(SystemInfo);
 
 impl SystemProcess {
-    pub fn spawn(_iso: Isolation, ssp: &Path, _jacobi: bool) -> Result<SystemProcess, Error> {
+    pub fn spawn(_iso: Isolation, ssp: &Path, _jacobi: bool, _event_mode: &[String]) -> Result<SystemProcess, Error> {
         Err(Error::unsupported(
             None,
             None,

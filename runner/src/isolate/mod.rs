@@ -11,6 +11,12 @@
 //! file in /dev/shm (removed as soon as the child has it open). The FMUs' log messages travel back
 //! with each answer and reach the parent's `log` logger as an in-process FMU's would.
 //!
+//! An FMI 3.0 component with clocks or Event Mode keeps its importer's clocks in the child too:
+//! the master's calls of its clocks (an Event Mode ended, a clock ticked or read, an early
+//! return taken, ...) cross the wire as the other calls, and the child makes the same FMI calls
+//! as the runner's own process would (runner/README.md, "Clocks and Event Mode in child
+//! processes").
+//!
 //! What keeps a step cheap (`bench/src/bin/isolation-cost.rs` measures it):
 //! - calls that answer nothing but a status (the setters, fmi2DoStep, input derivatives) are not
 //!   waited for: the setters travel with the next call that answers values, fmi2DoStep is sent at
@@ -38,7 +44,7 @@ mod wire;
 pub use client::Isolated;
 #[cfg(not(target_os = "linux"))]
 pub use elsewhere::SystemProcess;
-pub use options::{Granularity, Isolation, SystemInfo, find_worker};
+pub use options::{Granularity, Interface, Isolation, SystemInfo, find_worker};
 #[cfg(not(target_os = "linux"))]
 pub use options::{crumb, crumb_time};
 #[cfg(target_os = "linux")]

@@ -35,6 +35,18 @@ pub enum Granularity {
     System,
 }
 
+/// How an isolated component is instantiated in its process.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interface {
+    /// Co-simulation (FMI 3.0: eventModeUsed where the runner ticks its input clocks).
+    CoSimulation,
+    /// Model exchange, integrated by the runner in the child ([`crate::me`]).
+    ModelExchange,
+    /// FMI 3.0 co-simulation with eventModeUsed and earlyReturnAllowed
+    /// ([`crate::Simulation::use_event_mode`]).
+    EventMode,
+}
+
 /// How the components of a system are isolated.
 #[derive(Debug, Clone)]
 pub struct Isolation {

@@ -1,6 +1,7 @@
 //! The child's side of one isolated component (`rustfmu-runner serve-component`): the FMU
 //! loaded and instantiated, each call of a batch answered, the FMUs' messages sent back.
 
+use super::options::Interface;
 use super::wire::*;
 use crate::common::{Directional, Fmi2Error, FmuState};
 use crate::fmu_log::{FmuMessages, Status};
@@ -55,7 +56,7 @@ pub(super) fn watch_parent() -> u32 {
 // ~250 lines: the child's loop, one arm per call code of the wire ([`super::wire`]), each a few
 // lines that decode the arguments in place, call the instance and encode the answer into the
 // same reused buffers; the arms stay beside each other so that the codes are read in one place.
-pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> i32 {
+pub fn serve(dir: &Path, component: &str, label: &str, interface: Interface, shm: &Path) -> i32 {
     let parent = watch_parent();
     let _ = log::set_logger(&COLLECTOR);
     log::set_max_level(log::LevelFilter::Trace);
@@ -72,6 +73,9 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
     let (mut vrs, mut vrs2, mut reals, mut ints) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut strings: Vec<CString> = Vec::new();
     let mut typed: Vec<crate::values::Values> = Vec::new();
+    // The clocks' snapshot kept to take a step back, and its number.
+    let mut snapshot: Option<(u32, crate::fmi3::ClockState)> = None;
+    let mut snapshots = 0u32;
     let mut quit = false;
     let mut patience = Patience::new(50, 200);
     while !quit {
@@ -111,12 +115,14 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                 if op == HELLO {
                     let f =
                         crate::fmu::Fmu::from_dir(component, label, dir).map_err(|e| Fmi2Error::Importer(e.message))?;
-                    let i = if me {
-                        f.instantiate_me(component)
-                    } else {
-                        f.instantiate(component)
+                    let i = match interface {
+                        Interface::CoSimulation => f.instantiate(component),
+                        Interface::ModelExchange => f.instantiate_me(component),
+                        Interface::EventMode => f.instantiate_events(component),
                     }
                     .map_err(|e| Fmi2Error::Importer(e.message))?;
+                    let clocks = matches!(&i, InstanceCS::V3(i) if i.has_clock_state());
+                    values.push(clocks as u8);
                     inst = Some(i);
                     fmu = Some(f);
                     return Ok(());
@@ -152,7 +158,59 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                     RESET => inst.reset(),
                     DO_STEP => {
                         let (t, h, nsp) = (r.f64(), r.f64(), r.u8() != 0);
-                        inst.do_step(t, h, nsp)
+                        inst.do_step(t, h, nsp)?;
+                        if let InstanceCS::V3(i) = inst
+                            && i.has_clock_state()
+                        {
+                            values.extend(i.early_return().unwrap_or(f64::NAN).to_ne_bytes());
+                        }
+                        Ok(())
+                    }
+                    SETTLE => {
+                        inst.settle(r.f64())?;
+                        values.extend(inst.next_tick()?.unwrap_or(f64::NAN).to_ne_bytes());
+                        Ok(())
+                    }
+                    NEXT_TICK => {
+                        values.extend(inst.next_tick()?.unwrap_or(f64::NAN).to_ne_bytes());
+                        Ok(())
+                    }
+                    EARLY_RETURN => {
+                        values.extend(inst.take_early_return()?.unwrap_or(f64::NAN).to_ne_bytes());
+                        Ok(())
+                    }
+                    TICK_NOW => inst.tick_now(r.f64()),
+                    TRIGGER => {
+                        let (vr, t) = (r.u32(), r.f64());
+                        inst.trigger(vr, t)
+                    }
+                    POLL_OUTPUT_CLOCKS => inst.poll_output_clocks(r.f64()),
+                    CLOCK_ACTIVE => {
+                        values.push(inst.clock_active(r.u32())? as u8);
+                        Ok(())
+                    }
+                    CLOCK_SNAPSHOT => {
+                        let InstanceCS::V3(i) = inst else {
+                            return Err(Fmi2Error::Importer(
+                                "isolation: clocks of an instance without them".into(),
+                            ));
+                        };
+                        snapshots = snapshots.wrapping_add(1);
+                        snapshot = i.clock_snapshot().map(|c| (snapshots, c));
+                        values.extend(snapshots.to_ne_bytes());
+                        Ok(())
+                    }
+                    RESTORE_CLOCKS => {
+                        let n = r.u32();
+                        match (&mut *inst, &snapshot) {
+                            (InstanceCS::V3(i), Some((kept, c))) if *kept == n => {
+                                i.restore_clocks(c);
+                                Ok(())
+                            }
+                            _ => Err(Fmi2Error::Importer(format!(
+                                "isolation: the clocks' snapshot {n} is not the one kept (the child keeps the last)"
+                            ))),
+                        }
                     }
                     GET_REAL => answer(&mut r, &mut vrs, &mut reals, &mut values, |v, o| inst.get_real(v, o)),
                     OUTPUT_DERIVATIVES => answer(&mut r, &mut vrs, &mut reals, &mut values, |v, o| {
@@ -184,6 +242,9 @@ pub fn serve(dir: &Path, component: &str, label: &str, me: bool, shm: &Path) -> 
                         };
                         let buf = &mut typed[k];
                         if op == GET_TYPED {
+                            if r.u8() != 0 {
+                                buf.take(&mut |k| r.bytes(k));
+                            }
                             inst.get_typed(&vrs, buf)?;
                             buf.put(&mut |b| {
                                 values.extend_from_slice(b);

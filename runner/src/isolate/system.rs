@@ -37,6 +37,8 @@ pub struct SystemProcess {
     iso: Isolation,
     ssp: PathBuf,
     jacobi: bool,
+    /// The components run with Event Mode ([`crate::Simulation::use_event_mode`]).
+    event_mode: Vec<String>,
     info: SystemInfo,
     live: Option<(Child, Shared, u32)>,
 }
@@ -64,9 +66,10 @@ fn json_from<T: serde::de::DeserializeOwned>(shm: &[u8]) -> Result<(T, usize), S
 }
 
 impl SystemProcess {
-    /// Starts the child of the SSP file `ssp` (`jacobi`: that evaluation order).
-    pub fn spawn(iso: Isolation, ssp: &Path, jacobi: bool) -> Result<SystemProcess, Error> {
-        let (child, shm) = Self::start(&iso, ssp, jacobi)?;
+    /// Starts the child of the SSP file `ssp` (`jacobi`: that evaluation order; `event_mode`:
+    /// the components it runs with Event Mode).
+    pub fn spawn(iso: Isolation, ssp: &Path, jacobi: bool, event_mode: &[String]) -> Result<SystemProcess, Error> {
+        let (child, shm) = Self::start(&iso, ssp, jacobi, event_mode)?;
         let (info, _) = json_from::<Result<SystemInfo, Error>>(&shm.map[RESP_OFF..]).map_err(|e| {
             Error::io(format!(
                 "{}: the system's process answered no description: {e}",
@@ -77,6 +80,7 @@ impl SystemProcess {
             iso,
             ssp: ssp.to_path_buf(),
             jacobi,
+            event_mode: event_mode.to_vec(),
             info: SystemInfo {
                 name: String::new(),
                 evaluation_order: Vec::new(),
@@ -91,7 +95,7 @@ impl SystemProcess {
     }
 
     /// The child started and its system loaded (the answer to batch 1 in the answer area).
-    fn start(iso: &Isolation, ssp: &Path, jacobi: bool) -> Result<(Child, Shared), Error> {
+    fn start(iso: &Isolation, ssp: &Path, jacobi: bool, event_mode: &[String]) -> Result<(Child, Shared), Error> {
         let fail = |m: String| Error::io(format!("{}: isolated: {m}", ssp.display()));
         let (file, path) = shm_file().map_err(fail)?;
         let shm = Shared {
@@ -100,8 +104,9 @@ impl SystemProcess {
         // Batch 1: load the system (answered with its description).
         shm.header().req.store(1, SeqCst);
         let flag = jacobi.then_some("--jacobi");
-        let mut child =
-            start_worker(&iso.worker, "serve-system", &[("--ssp", ssp.as_os_str())], &path, flag).map_err(fail)?;
+        let mut options = vec![("--ssp", ssp.as_os_str())];
+        options.extend(event_mode.iter().map(|c| ("--event-mode", c.as_ref())));
+        let mut child = start_worker(&iso.worker, "serve-system", &options, &path, flag).map_err(fail)?;
         let r = wait_done(&shm, &mut child, 1, None);
         let _ = std::fs::remove_file(&path);
         if let Err(how) = r {
@@ -141,7 +146,7 @@ impl SystemProcess {
             },
         };
         if self.live.is_none() {
-            let (child, shm) = Self::start(&self.iso, &self.ssp, self.jacobi).map_err(failure)?;
+            let (child, shm) = Self::start(&self.iso, &self.ssp, self.jacobi, &self.event_mode).map_err(failure)?;
             self.live = Some((child, shm, 1));
         }
         let (child, shm, seq) = self.live.as_mut().expect("started");
@@ -253,9 +258,10 @@ fn name_of(table: &[u8], addr: u64) -> Option<(String, bool)> {
     None
 }
 
-/// `rustfmu-runner serve-system`: loads the SSP file and runs it for the parent that started
-/// this process, until it says quit or goes away. Returns the process's exit code.
-pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool) -> i32 {
+/// `rustfmu-runner serve-system`: loads the SSP file (`event_mode`: the components run with
+/// Event Mode) and runs it for the parent that started this process, until it says quit or goes
+/// away. Returns the process's exit code.
+pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool, event_mode: &[String]) -> i32 {
     let parent = watch_parent();
     let mut shm = match Shared::open(shm) {
         Ok(shm) => shm,
@@ -272,14 +278,15 @@ pub fn serve_system(ssp: &Path, shm: &Path, jacobi: bool) -> i32 {
             futex_wake(&h.done);
         }
     };
-    let sim = crate::Simulation::from_ssp(ssp);
-    let mut sim = match sim {
-        Ok(mut sim) => {
-            if jacobi {
-                sim.scheme = crate::Scheme::Jacobi;
-            }
-            sim
+    let sim = crate::Simulation::from_ssp(ssp).and_then(|mut sim| {
+        if jacobi {
+            sim.scheme = crate::Scheme::Jacobi;
         }
+        event_mode.iter().try_for_each(|c| sim.use_event_mode(c))?;
+        Ok(sim)
+    });
+    let mut sim = match sim {
+        Ok(sim) => sim,
         Err(e) => {
             let n = json_into(shm.resp(), &Err::<SystemInfo, Error>(e)).unwrap_or(0);
             answer(&mut shm, 1, n);

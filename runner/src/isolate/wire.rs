@@ -174,6 +174,19 @@ pub(super) const DIRECTIONAL: u8 = 23;
 /// FMI 3.0 values of any type and shape ([`crate::values::Values`]).
 pub(super) const GET_TYPED: u8 = 24;
 pub(super) const SET_TYPED: u8 = 25;
+/// FMI 3.0 clocks and Event Mode: the master's calls of an instance's clocks
+/// ([`crate::instance::InstanceCS`]: settle, next_tick, ...), each made in the child by its
+/// importer, which makes the FMI calls (fmi3EnterEventMode, fmi3SetClock, fmi3GetClock,
+/// fmi3UpdateDiscreteStates, fmi3GetIntervalDecimal, fmi3EnterStepMode) exactly as in process.
+pub(super) const SETTLE: u8 = 26;
+pub(super) const NEXT_TICK: u8 = 27;
+pub(super) const TICK_NOW: u8 = 28;
+pub(super) const EARLY_RETURN: u8 = 29;
+pub(super) const CLOCK_ACTIVE: u8 = 30;
+pub(super) const TRIGGER: u8 = 31;
+pub(super) const POLL_OUTPUT_CLOCKS: u8 = 32;
+pub(super) const CLOCK_SNAPSHOT: u8 = 33;
+pub(super) const RESTORE_CLOCKS: u8 = 34;
 /// The first batch: instantiate (the answer: ok, or the error's message).
 pub(super) const HELLO: u8 = 98;
 pub(super) const QUIT: u8 = 99;
@@ -329,6 +342,11 @@ pub(super) fn function_of(op: u8) -> &'static str {
         DIRECTIONAL => "fmi2GetDirectionalDerivative",
         GET_TYPED => "fmi3Get{Type}",
         SET_TYPED => "fmi3Set{Type}",
+        SETTLE => "fmi3UpdateDiscreteStates",
+        NEXT_TICK | CLOCK_ACTIVE | CLOCK_SNAPSHOT | RESTORE_CLOCKS => "fmi3GetClock",
+        TICK_NOW | TRIGGER => "fmi3SetClock",
+        EARLY_RETURN => "fmi3DoStep",
+        POLL_OUTPUT_CLOCKS => "fmi3GetClock",
         HELLO => "fmi2Instantiate",
         _ => "fmi2FreeInstance",
     }

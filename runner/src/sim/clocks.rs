@@ -191,16 +191,6 @@ impl Simulation {
             })
     }
 
-    /// Why a system that steps to its ticks cannot run as asked (None: it can).
-    pub(super) fn why_not_ticks(&self) -> Option<String> {
-        if self.isolation.is_some() && self.steps_to_ticks() {
-            return Some(
-                "clock connections and countdown, changing, triggered or output clocks are not run with --isolate (the runner steps to their ticks in its own process): run without it".into(),
-            );
-        }
-        None
-    }
-
     /// At `t`, after every instance reached it: each clock connection whose sender ticks ticks
     /// its receiver, until none is left (a chain of connections). `outputs` false: only the
     /// connections from input clocks (known without evaluating the sender's tick); true: also
@@ -208,22 +198,22 @@ impl Simulation {
     /// Event Mode only by a connection here is read when its Event Mode ends, too late for its
     /// own connections at this time). Returns whether a receiver ticked.
     pub(super) fn link_clocks(&mut self, t: f64, outputs: bool) -> Result<bool, Error> {
-        let ticking = self.ticking_senders(outputs);
+        let ticking = self.ticking_senders(t, outputs)?;
         Ok(!self.tick_links(t, ticking, false)?.is_empty())
     }
 
     /// The senders' clocks that tick now (those of output clocks too where `outputs`), as they
     /// are before any receiver takes its tick: a receiver whose round ends for a tick stops
     /// ticking its own clocks, which tick at this time all the same.
-    fn ticking_senders(&mut self, outputs: bool) -> Vec<(usize, u32)> {
+    fn ticking_senders(&mut self, t: f64, outputs: bool) -> Result<Vec<(usize, u32)>, Error> {
         let mut ticking: Vec<(usize, u32)> = Vec::new();
         for k in 0..self.clock_links.len() {
             let ClockLink { from, output, .. } = self.clock_links[k];
-            if (outputs || !output) && !ticking.contains(&from) && self.instance(from.0).clock_active(from.1) {
+            if (outputs || !output) && !ticking.contains(&from) && self.ticks(from, t, k)? {
                 ticking.push(from);
             }
         }
-        ticking
+        Ok(ticking)
     }
 
     /// Whether each clock connection is *late*: its receiver's outputs are read before its
@@ -255,7 +245,7 @@ impl Simulation {
                     continue;
                 }
                 *finished = true;
-                if !self.instance(to.0).clock_active(to.1) {
+                if !self.ticks(to, t, k)? {
                     let s = &mut self.slaves[to.0];
                     s.instance
                         .as_mut()
@@ -316,6 +306,24 @@ impl Simulation {
         self.typed_into(&receivers, jacobi, t)
     }
 
+    /// Whether the clock `end` (component, value reference) of the clock connection `k` ticks now.
+    fn ticks(&mut self, end: (usize, u32), t: f64, k: usize) -> Result<bool, Error> {
+        let s = &mut self.slaves[end.0];
+        s.instance
+            .as_mut()
+            .expect("instantiated")
+            .clock_active(end.1)
+            .map_err(|e| {
+                Error::fmi(
+                    &s.name,
+                    "fmi3GetClock",
+                    &e,
+                    Some(t),
+                    &format!("clock connection {}", self.clock_links[k].text),
+                )
+            })
+    }
+
     /// The senders of connections from output clocks read their output clocks (their ticks
     /// evaluated), before any value is exchanged.
     fn poll_senders(&mut self, t: f64) -> Result<(), Error> {
@@ -350,7 +358,7 @@ impl Simulation {
         self.link_clocks(t, false)?;
         self.poll_senders(t)?;
         self.exchange(t)?;
-        let ticking = self.ticking_senders(true);
+        let ticking = self.ticking_senders(t, true)?;
         if !self.tick_links(t, ticking.clone(), false)?.is_empty() {
             // A round the receivers of output clocks take their values in.
             self.propagate(t)?;
@@ -388,9 +396,10 @@ impl Simulation {
         let mut next: Option<f64> = None;
         for s in &mut self.slaves {
             let inst = s.instance.as_mut().expect("instantiated");
-            inst.settle(t)
+            let settled = inst.settle(t).and_then(|_| inst.next_tick());
+            let tick = settled
                 .map_err(|e| Error::fmi(&s.name, "fmi3UpdateDiscreteStates", &e, Some(t), "ending Event Mode"))?;
-            if let Some(n) = inst.next_tick() {
+            if let Some(n) = tick {
                 next = Some(next.map_or(n, |m: f64| m.min(n)));
             }
         }
@@ -438,7 +447,12 @@ impl Simulation {
                 }
                 self.step_one(i, t, end - t, !rollback, k, &order)?;
                 let s = &mut self.slaves[i];
-                let at = s.instance.as_mut().expect("instantiated").take_early_return();
+                let at = s
+                    .instance
+                    .as_mut()
+                    .expect("instantiated")
+                    .take_early_return()
+                    .map_err(|e| Error::fmi(&s.name, "fmi3DoStep", &e, Some(t), &format!("step {} s", end - t)))?;
                 match at {
                     Some(at) if at < end - close(end) => {
                         end = at;
@@ -508,7 +522,7 @@ impl Simulation {
                     .get_fmu_state()
                     .map(|state| self.back.early_states[i] = Some((state, None))),
             };
-            r.map_err(|e| {
+            let clocks = r.and_then(|_| inst.clock_snapshot()).map_err(|e| {
                 Error::fmi(
                     &s.name,
                     "fmi3GetFMUState",
@@ -517,7 +531,6 @@ impl Simulation {
                     "kept to take an early return back",
                 )
             })?;
-            let clocks = inst.clock_snapshot();
             if let Some(slot) = &mut self.back.early_states[i] {
                 slot.1 = clocks;
             }
@@ -560,7 +573,15 @@ impl Simulation {
             )
         })?;
         if let Some(c) = clocks {
-            inst.restore_clocks(c);
+            inst.restore_clocks(c).map_err(|e| {
+                Error::fmi(
+                    &s.name,
+                    "fmi3SetFMUState",
+                    &e,
+                    Some(t),
+                    &format!("taking back its step to {past} s: another component returned early at {end} s"),
+                )
+            })?;
         }
         // The samples of the step taken back: the step again gives its own.
         let _ = inst.take_intermediate();

@@ -173,7 +173,13 @@ impl Simulation {
                 self.fmu_of(i)
                     .instantiate_intermediate(&name, &vrs, self.slaves[i].events)?
             } else if self.slaves[i].events {
-                self.fmu_of(i).instantiate_events(&name)?
+                match &self.isolation {
+                    Some(iso) => {
+                        self.fmu_of(i)
+                            .instantiate_isolated(&name, crate::isolate::Interface::EventMode, iso)?
+                    }
+                    None => self.fmu_of(i).instantiate_events(&name)?,
+                }
             } else {
                 make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?
             };

@@ -166,12 +166,6 @@ impl Simulation {
         let ticks = self.steps_to_ticks();
         // Scheduled Execution components: their partitions activated between two propagations.
         let scheduled = self.slaves.iter().any(|s| s.scheduled);
-        if let Some(why) = self.why_not_ticks() {
-            return Err(Failure {
-                error: Error::usage(why),
-                partial: result,
-            });
-        }
         let mut row = vec![0.0; m];
         for k in 0..=n {
             let t = k as f64 * opts.step;
