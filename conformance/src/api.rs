@@ -173,11 +173,11 @@ impl Api {
 /// # Safety
 /// Loading runs the binary's initializers (and those of the libpython loaded for it).
 pub unsafe fn open_library(so: &Path) -> Result<libloading::Library, String> {
-    rustfmu_libpython::before(so, None).map_err(|e| format!("{}: {e}", so.display()))?;
+    rustfmu_libpython::before(so, Some("--preload-lib")).map_err(|e| format!("{}: {e}", so.display()))?;
     // SAFETY: the caller of this `unsafe fn` accepts that loading runs the binary's initializers.
     let lib = unsafe { dlopen(so) };
     match lib {
-        Err(e) => match rustfmu_libpython::after_failure(so, &e.to_string(), None) {
+        Err(e) => match rustfmu_libpython::after_failure(so, &e.to_string(), Some("--preload-lib")) {
             // SAFETY: as above (libpython is loaded now).
             Ok(Some(_)) => unsafe { dlopen(so) },
             Ok(None) => Err(e),

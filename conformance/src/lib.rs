@@ -331,6 +331,13 @@ pub(crate) fn binary_and_tool(
     })
 }
 
+/// Loads `paths` (`RTLD_GLOBAL`) before any FMU binary of this process and of the checks'
+/// workers: the checker's and `cargo fmu replay`'s `--preload-lib` (the runner's option; see
+/// [`rustfmu_libpython::preload`]).
+pub fn preload_libraries(paths: &[PathBuf]) -> Result<(), String> {
+    rustfmu_libpython::preload(paths, "--preload-lib")
+}
+
 /// The FMI version of the FMU file's model description (its `fmiVersion`).
 pub fn file_version(path: &Path) -> Result<Version, String> {
     let mut zip = archive::open(path)?;

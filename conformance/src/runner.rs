@@ -47,6 +47,10 @@ pub struct RunOptions {
     /// Where a failing random check writes its reproducer (passed to the workers in
     /// `$RUSTFMU_REPRODUCERS`; default [`crate::replay::default_reproducers_dir`]).
     pub reproducers: Option<PathBuf>,
+    /// Libraries loaded (`RTLD_GLOBAL`) before the FMU's binary, in every worker (the runner's
+    /// `--preload-lib`: a PythonFMU binary's libpython; passed to the workers in
+    /// `$RUSTFMU_RUNNER_PRELOAD`, after the libraries that variable already names).
+    pub preload: Vec<PathBuf>,
 }
 
 impl RunOptions {
@@ -63,6 +67,7 @@ impl RunOptions {
             as_foreign: false,
             strict: false,
             reproducers: None,
+            preload: vec![],
         }
     }
 
@@ -327,6 +332,13 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
             })
             .collect();
     };
+    // The libraries given with --preload-lib must load (in this process first: an error is then
+    // one, not one per check); the workers load them before the FMU's binary.
+    if let Err(e) = rustfmu_libpython::preload(&opts.preload, "--preload-lib") {
+        report.load_error = Some(e);
+        skip_all(&mut report, "the FMU cannot be checked");
+        return report;
+    }
     // What the archive says, read here (no FMU code runs in this process).
     let about = match version {
         Version::Fmi2 => Fmu::describe(fmu_path),
@@ -636,6 +648,9 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
     }
     if let Some(dir) = &opts.reproducers {
         cmd.env(crate::replay::REPRODUCERS_VAR, dir);
+    }
+    if let Some(libraries) = rustfmu_libpython::for_child() {
+        cmd.env(rustfmu_libpython::ENV, libraries);
     }
     cmd.arg("--tmp")
         .arg(run_dir)

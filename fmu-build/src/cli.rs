@@ -106,6 +106,10 @@ enum Cmd {
         /// The reproducer (conformance/README.md, "Reproducers").
         file: PathBuf,
         fmu: PathBuf,
+        /// Load this library (RTLD_GLOBAL) before the FMU's binary (repeatable; also
+        /// RUSTFMU_RUNNER_PRELOAD), as `cargo fmu check --preload-lib`.
+        #[arg(long = "preload-lib", value_name = "PATH")]
+        preload_lib: Vec<PathBuf>,
     },
     /// Compare (or with --write, refresh) the committed model descriptions of the workspace
     /// (`[workspace.metadata.fmu] model-descriptions`) with the packaged FMUs.
@@ -262,7 +266,10 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             validate_all(&fmus, python.as_deref(), false)
         }
         Cmd::Check { fmu, options } => check(fmu.as_deref(), options),
-        Cmd::Replay { file, fmu } => replay(&file, &fmu),
+        Cmd::Replay { file, fmu, preload_lib } => {
+            fmi_conformance::preload_libraries(&preload_lib)?;
+            replay(&file, &fmu)
+        }
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
             Ok(())
@@ -351,6 +358,12 @@ struct CheckOptions {
     /// Also write the report as JSON.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// Load this library (RTLD_GLOBAL) before the FMU's binary, in every check (repeatable; also
+    /// RUSTFMU_RUNNER_PRELOAD, paths separated by ':'), as `rustfmu-runner --preload-lib`: the
+    /// libpython a PythonFMU binary expects its importer to have loaded. Without it, such a
+    /// binary gets the libpython of `python3` on PATH (or RUSTFMU_RUNNER_PYTHON).
+    #[arg(long = "preload-lib", value_name = "PATH")]
+    preload_lib: Vec<PathBuf>,
 }
 
 fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
@@ -363,6 +376,7 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
         reproducers,
         junit,
         json,
+        preload_lib,
     } = o;
     use fmi_conformance::runner::{RunOptions, run_with};
     if list {
@@ -391,6 +405,7 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
     opts.random_sequences = random_sequences;
     opts.strict = strict;
     opts.reproducers = reproducers;
+    opts.preload = preload_lib;
     if let Some(t) = timeout {
         if !(t.is_finite() && t > 0.0) {
             return Err(format!("--timeout {t}: seconds > 0"));

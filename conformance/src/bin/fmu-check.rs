@@ -7,7 +7,8 @@
 //! `fmu-check --replay FILE X.fmu` replays a reproducer in this process (as `cargo fmu replay`,
 //! [`fmi_conformance::replay`]): exits 1 when the FMU does not answer as the file expects.
 //! `--junit FILE` and `--json FILE` write the report for CI systems too
-//! ([`fmi_conformance::report`]).
+//! ([`fmi_conformance::report`]). `--preload-lib PATH` (repeatable; also
+//! `$RUSTFMU_RUNNER_PRELOAD`) loads a library before the FMU's binary, as the runner's option.
 //!
 //! `fmu-check __worker ...` is the child's side ([`fmi_conformance::runner::worker_main`]).
 
@@ -17,7 +18,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] [--junit FILE] [--json FILE] | --list | --replay FILE X.fmu";
+const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] [--junit FILE] [--json FILE] [--preload-lib PATH]... | --list | --replay FILE X.fmu [--preload-lib PATH]...";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -31,6 +32,7 @@ struct Args {
     replay: Option<PathBuf>,
     junit: Option<PathBuf>,
     json: Option<PathBuf>,
+    preload: Vec<PathBuf>,
 }
 
 fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -46,6 +48,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         replay: None,
         junit: None,
         json: None,
+        preload: vec![],
     };
     let mut it = args;
     while let Some(arg) = it.next() {
@@ -71,6 +74,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
             "--replay" => a.replay = Some(PathBuf::from(value("--replay")?)),
             "--junit" => a.junit = Some(PathBuf::from(value("--junit")?)),
             "--json" => a.json = Some(PathBuf::from(value("--json")?)),
+            "--preload-lib" => a.preload.push(PathBuf::from(value("--preload-lib")?)),
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s if a.fmu.is_none() => a.fmu = Some(PathBuf::from(s)),
@@ -107,6 +111,11 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     };
     if let Some(file) = a.replay {
+        // Loaded now, before the FMU's binary (the replay runs in this process).
+        if let Err(e) = rustfmu_libpython::preload(&a.preload, "--preload-lib") {
+            eprintln!("fmu-check: {e}");
+            return ExitCode::from(2);
+        }
         return match fmi_conformance::replay::replay(&file, &fmu, &mut |line| println!("{line}")) {
             Ok(report) => match report.difference {
                 None => {
@@ -137,6 +146,7 @@ fn main() -> ExitCode {
     opts.as_foreign = a.as_foreign;
     opts.strict = a.strict;
     opts.reproducers = a.reproducers;
+    opts.preload = a.preload;
     if let Some(t) = a.timeout {
         opts.timeout = t;
     }
