@@ -48,27 +48,39 @@ pub fn instantiate_refuses_a_wrong_null_or_empty_guid_with_a_message(fmu: &Fmu) 
     }
 }
 
+/// fmi2Instantiate with an empty or a NULL instanceName should return NULL, with a message that
+/// names the argument.
+///
+/// Verdict: an instance for such a name is warned, not failed (the reading of the GUID's
+/// verdict). FMI 2.0.5 §2.1.5 (fmi2Instantiate): "Argument instanceName is a unique identifier
+/// for the FMU instance. [...] It is not allowed to provide a null pointer and this string must be
+/// non-empty (in other words must have at least one character that is no white space)": the
+/// importer's obligation; no sentence requires fmi2Instantiate to return NULL for such a name. A
+/// refusal without a message fails: "If a null pointer is returned, then instantiation failed. In
+/// that case, function logger is called with detailed information about the reason" (ibid.);
+/// that it names instanceName is this exporter's convention ([`says`]).
 pub fn instantiate_refuses_a_null_or_empty_instance_name_with_a_message(fmu: &Fmu) {
     for name in [Some(""), None] {
         let args = Args {
             name: name.map(String::from),
             ..Args::valid(fmu)
         };
-        refused_with_message(fmu, &args, &format!("name {name:?}"), "instanceName", "");
+        let what = format!("instanceName {name:?}");
+        match Instance::with(fmu, &args) {
+            Ok(_accepted) => crate::outcome::warn(format!(
+                "{}: fmi2Instantiate with {what} returned an instance: the importer's mistake is not detected \
+                 (FMI 2.0.5 §2.1.5: \"It is not allowed to provide a null pointer and this string must be \
+                 non-empty\" binds the importer; no sentence requires the FMU to refuse it)",
+                fmu.id
+            )),
+            Err(log) => assert!(
+                says(fmu, &log, fmi2Error, &["instanceName"]),
+                "{}: {what}: no message about the instance name (FMI 2.0.5 §2.1.5: when fmi2Instantiate returns \
+                 NULL, \"function logger is called with detailed information about the reason\"): {log:?}",
+                fmu.id
+            ),
+        }
     }
-}
-
-/// fmi2Instantiate with `args` (`what` names the argument tried) must fail, with an fmi2Error
-/// message that says `word` (else the failure says `what`, then `missing`, then the log).
-fn refused_with_message(fmu: &Fmu, args: &Args, what: &str, word: &str, missing: &str) {
-    let log = Instance::with(fmu, args)
-        .err()
-        .unwrap_or_else(|| panic!("{}: {what} accepted", fmu.id));
-    assert!(
-        says(fmu, &log, fmi2Error, &[word]),
-        "{}: {what}{missing}: {log:?}",
-        fmu.id
-    );
 }
 
 /// fmi2ModelExchange is refused unless the FMU declares `<ModelExchange>` (then it is
