@@ -22,6 +22,11 @@
  *                           value after the one their output pointer holds
  *   DEFECT_TOKEN=\"...\"    the binary does not check the GUID / instantiationToken: it
  *                           instantiates with the given one whatever the importer passes
+ *   DEFECT_EMPTY_REFUSED    fmi2GetInteger / fmi3GetFloat64 refuse a call of no values with NULL
+ *                           arrays (legal: the arrays have n = 0 elements)
+ *   DEFECT_NULL_COMPONENT   fmi2DoStep answers OK on a NULL component
+ *   DEFECT_STATUS_KIND      fmi2GetBooleanStatus answers OK for a kind that is not its own
+ *   DEFECT_LOGGING          fmi3SetDebugLogging accepts a category the description does not declare
  *
  * The forwarding functions are two instructions of x86-64 assembly each (a jump through the
  * address looked up in the inner library): they pass every argument on, whatever the
@@ -40,17 +45,17 @@
 #define FMI2_COMMON(X)                                                                                            \
     X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2SetupExperiment)                       \
     X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset)                    \
-    X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean)        \
+    X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean)        \
     X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize)                          \
     X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative) X(fmi2SetRealInputDerivatives)                     \
     X(fmi2GetRealOutputDerivatives) X(fmi2CancelStep) X(fmi2GetStatus)                                            \
-    X(fmi2GetIntegerStatus) X(fmi2GetBooleanStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                  \
+    X(fmi2GetIntegerStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                  \
     X(fmi2NewDiscreteStates) X(fmi2EnterContinuousTimeMode) X(fmi2CompletedIntegratorStep) X(fmi2SetTime)         \
     X(fmi2SetContinuousStates) X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                               \
     X(fmi2GetNominalsOfContinuousStates)
 
 #define FMI3_COMMON(X)                                                                                            \
-    X(fmi3GetVersion) X(fmi3SetDebugLogging) X(fmi3InstantiateScheduledExecution) X(fmi3EnterInitializationMode)  \
+    X(fmi3GetVersion) X(fmi3InstantiateScheduledExecution) X(fmi3EnterInitializationMode)  \
     X(fmi3ExitInitializationMode) X(fmi3EnterEventMode) X(fmi3Terminate) X(fmi3Reset) X(fmi3GetFloat32)           \
     X(fmi3GetInt8) X(fmi3GetUInt8) X(fmi3GetInt16) X(fmi3GetUInt16) X(fmi3GetInt32) X(fmi3GetUInt32)               \
     X(fmi3GetInt64) X(fmi3GetUInt64) X(fmi3GetBoolean) X(fmi3GetString) X(fmi3GetBinary) X(fmi3GetClock)           \
@@ -73,7 +78,8 @@
     X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2GetReal) X(fmi2DoStep) X(fmi2SerializeFMUstate)                  \
     X(fmi2SetFMUstate) X(fmi2GetDerivatives) X(fmi3InstantiateModelExchange) X(fmi3InstantiateCoSimulation)       \
     X(fmi3FreeInstance) X(fmi3GetFloat64) X(fmi3DoStep) X(fmi3SerializeFMUState) X(fmi3SetFMUState)               \
-    X(fmi3GetContinuousStateDerivatives) X(fmi2GetRealStatus) X(fmi3GetNumberOfContinuousStates)
+    X(fmi3GetContinuousStateDerivatives) X(fmi2GetRealStatus) X(fmi3GetNumberOfContinuousStates)                  \
+    X(fmi2GetInteger) X(fmi2GetBooleanStatus) X(fmi3SetDebugLogging)
 
 #define POINTER(f) HIDDEN void *next_##f;
 FMI2_COMMON(POINTER)
@@ -97,11 +103,24 @@ TRAMPOLINE(fmi3FreeInstance)
 #endif
 #ifndef DEFECT_GET_PAST
 TRAMPOLINE(fmi2GetReal)
+#endif
+#if !defined(DEFECT_GET_PAST) && !defined(DEFECT_EMPTY_REFUSED)
 TRAMPOLINE(fmi3GetFloat64)
 #endif
-#ifndef DEFECT_STEP_STUCK
+#ifndef DEFECT_EMPTY_REFUSED
+TRAMPOLINE(fmi2GetInteger)
+#endif
+#if !defined(DEFECT_STEP_STUCK) && !defined(DEFECT_NULL_COMPONENT)
 TRAMPOLINE(fmi2DoStep)
+#endif
+#ifndef DEFECT_STEP_STUCK
 TRAMPOLINE(fmi3DoStep)
+#endif
+#ifndef DEFECT_STATUS_KIND
+TRAMPOLINE(fmi2GetBooleanStatus)
+#endif
+#ifndef DEFECT_LOGGING
+TRAMPOLINE(fmi3SetDebugLogging)
 #endif
 #ifndef DEFECT_STATE_OVERRUN
 TRAMPOLINE(fmi2SerializeFMUstate)
@@ -259,5 +278,37 @@ S fmi3GetNumberOfContinuousStates(void *c, size_t *n) {
     S s = ((S(*)(void *, size_t *))next_fmi3GetNumberOfContinuousStates)(c, n);
     if (s == 0) n[1] = n[0];
     return s;
+}
+#endif
+
+#ifdef DEFECT_EMPTY_REFUSED
+S fmi2GetInteger(void *c, const unsigned *vr, size_t n, int *value) {
+    if (n == 0) return 3; /* fmi2Error */
+    return ((S(*)(void *, const unsigned *, size_t, int *))next_fmi2GetInteger)(c, vr, n, value);
+}
+S fmi3GetFloat64(void *c, const unsigned *vr, size_t nvr, double *values, size_t n) {
+    if (nvr == 0 && n == 0) return 3; /* fmi3Error */
+    return ((S(*)(void *, const unsigned *, size_t, double *, size_t))next_fmi3GetFloat64)(c, vr, nvr, values, n);
+}
+#endif
+
+#ifdef DEFECT_NULL_COMPONENT
+S fmi2DoStep(void *c, double t, double h, int noSetPrior) {
+    if (!c) return 0;
+    return ((S(*)(void *, double, double, int))next_fmi2DoStep)(c, t, h, noSetPrior);
+}
+#endif
+
+#ifdef DEFECT_STATUS_KIND
+S fmi2GetBooleanStatus(void *c, int kind, int *value) {
+    S s = ((S(*)(void *, int, int *))next_fmi2GetBooleanStatus)(c, kind, value);
+    return s == 2 ? 0 : s; /* fmi2Discard answered as fmi2OK */
+}
+#endif
+
+#ifdef DEFECT_LOGGING
+S fmi3SetDebugLogging(void *c, bool on, size_t n, const char *const *categories) {
+    S s = ((S(*)(void *, bool, size_t, const char *const *))next_fmi3SetDebugLogging)(c, on, n, categories);
+    return n == 1 && categories && s == 3 ? 0 : s; /* an unknown category's fmi3Error answered as fmi3OK */
 }
 #endif

@@ -38,6 +38,8 @@ pub enum Val {
     Null,
     /// An FMU state, by its number in the log (the first one made is 1).
     State(usize),
+    /// Written as it is (already in the file's words: a list with NULL elements).
+    Raw(String),
 }
 
 impl std::fmt::Display for Val {
@@ -72,6 +74,7 @@ impl std::fmt::Display for Val {
             Val::Texts(t) => f.write_str(&list(t.iter().map(|t| encode(t)))),
             Val::Null => f.write_str("NULL"),
             Val::State(n) => write!(f, "{n}"),
+            Val::Raw(t) => f.write_str(t),
         }
     }
 }

@@ -299,3 +299,337 @@ impl Instance<'_> {
         (st, bytes)
     }
 }
+
+/// The getters and setters [`Instance::array_probe`] calls, as the standard names them.
+pub const ARRAY_PROBES: [&str; 8] = [
+    "fmi2GetReal",
+    "fmi2GetInteger",
+    "fmi2GetBoolean",
+    "fmi2GetString",
+    "fmi2SetReal",
+    "fmi2SetInteger",
+    "fmi2SetBoolean",
+    "fmi2SetString",
+];
+
+/// The functions [`Instance::null_component`] calls with a NULL component, in the order the check
+/// calls them.
+pub const NULL_COMPONENT_PROBES: [&str; 30] = [
+    "fmi2SetDebugLogging",
+    "fmi2SetupExperiment",
+    "fmi2EnterInitializationMode",
+    "fmi2ExitInitializationMode",
+    "fmi2Terminate",
+    "fmi2Reset",
+    "fmi2GetReal",
+    "fmi2GetInteger",
+    "fmi2GetBoolean",
+    "fmi2GetString",
+    "fmi2SetReal",
+    "fmi2SetInteger",
+    "fmi2SetBoolean",
+    "fmi2SetString",
+    "fmi2GetFMUstate",
+    "fmi2SetFMUstate",
+    "fmi2FreeFMUstate",
+    "fmi2SerializedFMUstateSize",
+    "fmi2SerializeFMUstate",
+    "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative",
+    "fmi2SetRealInputDerivatives",
+    "fmi2GetRealOutputDerivatives",
+    "fmi2DoStep",
+    "fmi2CancelStep",
+    "fmi2GetStatus",
+    "fmi2GetRealStatus",
+    "fmi2GetIntegerStatus",
+    "fmi2GetBooleanStatus",
+    "fmi2GetStringStatus",
+];
+
+/// `name` as the `&'static str` of `list` (a function a reproducer's line names).
+pub fn named(list: &[&'static str], name: &str) -> Option<&'static str> {
+    list.iter().copied().find(|f| *f == name)
+}
+
+impl Instance<'_> {
+    /// A getter or setter of [`ARRAY_PROBES`] with its arrays as given: `vr` (None: NULL), `nvr`,
+    /// and the values' array (`value` false: NULL; else `nvr` zeros, or empty texts, and for a
+    /// getter a guard after them). The probes of an importer's mistakes (NULL arrays with
+    /// nvr > 0) and of nvr = 0 with NULL arrays, which FMI 2.0.5 §2.1.7 allows. Recorded as
+    /// `fmi2GetReal vr=NULL nvr=1` (`value=NULL` where the values' array was NULL).
+    pub fn array_probe(&self, function: &'static str, vr: Option<&[u32]>, nvr: usize, value: bool) -> Status {
+        use crate::guard::fill;
+        assert!(
+            vr.is_none_or(|v| v.len() >= nvr),
+            "{function}: a vr array shorter than nvr"
+        );
+        let mut args = vec![("vr", arg(vr, Val::U32s)), ("nvr", Val::U64(nvr as u64))];
+        if !value {
+            args.push(("value", Val::Null));
+        }
+        let i = self.record(function, args);
+        let (api, c, v) = (&self.fmu.api, self.c, ptr_of(vr));
+        let (mut real, mut int) = (vec![0.0; nvr], vec![0; nvr]);
+        let empty = c"";
+        let mut texts: Vec<fmi2String> = vec![empty.as_ptr(); nvr];
+        let s = if value {
+            // SAFETY: `v` holds nvr value references or is NULL (on purpose: the FMU must check);
+            // each values' array holds nvr elements (a getter's, the guard after them).
+            unsafe {
+                match function {
+                    "fmi2GetReal" => fill(&mut real, function, "nvr", GETTER_RULE2, |p| {
+                        (api.get_real)(c, v, nvr, p)
+                    }),
+                    "fmi2GetInteger" => fill(&mut int, function, "nvr", GETTER_RULE2, |p| {
+                        (api.get_integer)(c, v, nvr, p)
+                    }),
+                    "fmi2GetBoolean" => fill(&mut int, function, "nvr", GETTER_RULE2, |p| {
+                        (api.get_boolean)(c, v, nvr, p)
+                    }),
+                    "fmi2GetString" => fill(&mut texts, function, "nvr", GETTER_RULE2, |p| {
+                        (api.get_string)(c, v, nvr, p)
+                    }),
+                    "fmi2SetReal" => (api.set_real)(c, v, nvr, real.as_ptr()),
+                    "fmi2SetInteger" => (api.set_integer)(c, v, nvr, int.as_ptr()),
+                    "fmi2SetBoolean" => (api.set_boolean)(c, v, nvr, int.as_ptr()),
+                    "fmi2SetString" => (api.set_string)(c, v, nvr, texts.as_ptr()),
+                    f => panic!("{f} is not one of the getters and setters of ARRAY_PROBES"),
+                }
+            }
+        } else {
+            // SAFETY: NULL values with nvr = 0 (allowed) or nvr > 0 (on purpose: the FMU must
+            // check before writing or reading).
+            unsafe {
+                match function {
+                    "fmi2GetReal" => (api.get_real)(c, v, nvr, ptr::null_mut()),
+                    "fmi2GetInteger" => (api.get_integer)(c, v, nvr, ptr::null_mut()),
+                    "fmi2GetBoolean" => (api.get_boolean)(c, v, nvr, ptr::null_mut()),
+                    "fmi2GetString" => (api.get_string)(c, v, nvr, ptr::null_mut()),
+                    "fmi2SetReal" => (api.set_real)(c, v, nvr, ptr::null()),
+                    "fmi2SetInteger" => (api.set_integer)(c, v, nvr, ptr::null()),
+                    "fmi2SetBoolean" => (api.set_boolean)(c, v, nvr, ptr::null()),
+                    "fmi2SetString" => (api.set_string)(c, v, nvr, ptr::null()),
+                    f => panic!("{f} is not one of the getters and setters of ARRAY_PROBES"),
+                }
+            }
+        };
+        self.answered(i, s)
+    }
+
+    /// fmi2GetRealStatus of `kind` (any kind: one of another getter is answered fmi2Discard),
+    /// into a value that holds `value` before the call (None: a NULL value pointer, an
+    /// importer's mistake): the status and the value after it.
+    pub fn real_status(&self, kind: fmi2StatusKind, value: Option<f64>) -> (Status, f64) {
+        let mut args = vec![("kind", Val::Text(kind_name(kind)))];
+        if value.is_none() {
+            args.push(("value", Val::Null));
+        }
+        let i = self.record("fmi2GetRealStatus", args);
+        let f = self.fmu.api.get_real_status;
+        let Some(mut v) = value else {
+            // SAFETY: a NULL out pointer on purpose: the FMU must check before writing.
+            let s = unsafe { f(self.c, kind, ptr::null_mut()) };
+            return (self.answered(i, s), f64::NAN);
+        };
+        // SAFETY: a valid out pointer (and the guard after it).
+        let s = unsafe {
+            fill_one(&mut v, "fmi2GetRealStatus", "one value", STATUS_RULE2, |p| {
+                self.answered(i, f(self.c, kind, p))
+            })
+        };
+        (s, v)
+    }
+
+    /// fmi2GetBooleanStatus of `kind` (any kind, or a number no kind has) into a value that holds
+    /// -1 before the call: the status and the value after it.
+    pub fn boolean_status(&self, kind: fmi2StatusKind) -> (Status, fmi2Boolean) {
+        let mut b = -1;
+        let i = self.record("fmi2GetBooleanStatus", vec![("kind", Val::Text(kind_name(kind)))]);
+        // SAFETY: a valid out pointer (and the guard after it).
+        let s = unsafe {
+            fill_one(&mut b, "fmi2GetBooleanStatus", "one value", STATUS_RULE2, |p| {
+                self.answered(i, (self.fmu.api.get_boolean_status)(self.c, kind, p))
+            })
+        };
+        (s, b)
+    }
+
+    /// fmi2SetDebugLogging with `n` categories as given: `categories` None is a NULL array, an
+    /// element None a NULL string (the probes of an importer's mistakes). Recorded as
+    /// `fmi2SetDebugLogging loggingOn=true nCategories=2 categories=NULL` (or
+    /// `categories=[logEvents,NULL]`; a category named NULL is written `%4EULL`).
+    pub fn set_debug_logging_raw(&mut self, on: bool, n: usize, categories: Option<&[Option<&str>]>) -> Status {
+        let owned: Option<Vec<Option<CString>>> = categories.map(|cs| {
+            cs.iter()
+                .map(|c| c.map(|c| CString::new(c).unwrap_or_default()))
+                .collect()
+        });
+        let ptrs: Option<Vec<fmi2String>> = owned.as_ref().map(|cs| {
+            cs.iter()
+                .map(|c| c.as_ref().map_or(ptr::null(), |c| c.as_ptr()))
+                .collect()
+        });
+        assert!(
+            ptrs.as_ref().is_none_or(|p| p.len() >= n),
+            "fmi2SetDebugLogging: fewer categories than nCategories"
+        );
+        let written = categories.map_or(Val::Null, |cs| {
+            Val::Raw(crate::replay::list(cs.iter().map(|c| match c {
+                None => "NULL".to_string(),
+                Some("NULL") => "%4EULL".to_string(),
+                Some(c) => crate::calllog::encode(c),
+            })))
+        });
+        let i = self.record(
+            "fmi2SetDebugLogging",
+            vec![
+                ("loggingOn", Val::Bool(on)),
+                ("nCategories", Val::U64(n as u64)),
+                ("categories", written),
+            ],
+        );
+        let p = ptrs.as_ref().map_or(ptr::null(), |p| p.as_ptr());
+        // SAFETY: `p` holds n strings (some NULL on purpose) or is NULL (on purpose, with n > 0):
+        // the FMU must check each before reading it.
+        self.answered(i, unsafe {
+            (self.fmu.api.set_debug_logging)(self.c, on as fmi2Boolean, n, p)
+        })
+    }
+
+    /// fmi2FreeFMUstate with a NULL `fmi2FMUstate*` (not a pointer to a NULL state): an
+    /// importer's mistake. Recorded as `fmi2FreeFMUstate statePointer=NULL`.
+    pub fn free_state_pointer_null(&mut self) -> Status {
+        let i = self.record("fmi2FreeFMUstate", vec![("statePointer", Val::Null)]);
+        // SAFETY: a NULL fmi2FMUstate* on purpose, which a careful FMU refuses or ignores.
+        self.answered(i, unsafe { (self.fmu.api.free_fmu_state)(self.c, ptr::null_mut()) })
+    }
+
+    /// fmi2DeSerializeFMUstate with its arguments as given: `bytes` None is a NULL
+    /// serializedState of `size` bytes, `out` false a NULL `fmi2FMUstate*` (the probes of an
+    /// importer's mistakes). A state it makes is not kept (the probes expect a refusal).
+    /// Recorded as `fmi2DeSerializeFMUstate bytes=NULL size=16` or `... bytes=hex:...
+    /// statePointer=NULL`.
+    pub fn deserialize_raw(&mut self, bytes: Option<&[u8]>, size: usize, out: bool) -> Status {
+        assert!(
+            bytes.is_none_or(|b| b.len() == size),
+            "fmi2DeSerializeFMUstate: size is the bytes' length"
+        );
+        let mut args = vec![("bytes", arg(bytes, Val::Bytes))];
+        if bytes.is_none() {
+            args.push(("size", Val::U64(size as u64)));
+        }
+        if !out {
+            args.push(("statePointer", Val::Null));
+        }
+        let i = self.record("fmi2DeSerializeFMUstate", args);
+        let b = ptr_of(bytes) as *const fmi2Byte;
+        let f = self.fmu.api.deserialize_fmu_state;
+        if !out {
+            // SAFETY: a NULL fmi2FMUstate* on purpose: the FMU must check before writing.
+            return self.answered(i, unsafe { f(self.c, b, size, ptr::null_mut()) });
+        }
+        let mut st: fmi2FMUstate = ptr::null_mut();
+        // SAFETY: `b` holds `size` bytes or is NULL (on purpose); a valid out pointer.
+        let s = unsafe {
+            crate::guard::fill_state2(&mut st, "fmi2DeSerializeFMUstate", |q| {
+                self.answered(i, f(self.c, b, size, q))
+            })
+        };
+        // A state the FMU made though it should have refused is left as the check left it.
+        s
+    }
+
+    /// `function` of [`NULL_COMPONENT_PROBES`] called with a NULL
+    /// component (its other arguments valid or empty, as the check passes them): the status.
+    /// Recorded as `fmi2DoStep component=NULL`. Panics where the call wrote an FMU state.
+    pub fn null_component(&self, function: &'static str) -> Status {
+        let i = self.record(function, vec![("component", Val::Null)]);
+        let s = null_component_call(self.fmu, function);
+        self.answered(i, s)
+    }
+}
+
+/// `function` called on a NULL component, its other arguments as the check of a NULL component
+/// passes them (one value reference 0 and valid arrays for the getters and setters, NULL
+/// arrays with 0 elements elsewhere).
+#[allow(clippy::too_many_lines)]
+fn null_component_call(fmu: &crate::Fmu, function: &str) -> Status {
+    use crate::guard::{GETTER_RULE2 as R, STATUS_RULE2 as S, fill};
+    let api = &fmu.api;
+    let c: fmi2Component = ptr::null_mut();
+    let vr = [0u32];
+    let mut real = [0.0];
+    let mut int = [0];
+    let mut st: fmi2FMUstate = ptr::null_mut();
+    let mut size = 0usize;
+    let mut status = 0;
+    let mut string: fmi2String = ptr::null();
+    let empty = c"";
+    let text: fmi2String = empty.as_ptr();
+    // SAFETY: every function must check the component before touching anything; the other
+    // arguments are valid (or NULL with a count of 0).
+    let s = unsafe {
+        match function {
+            "fmi2SetDebugLogging" => (api.set_debug_logging)(c, 1, 0, ptr::null()),
+            "fmi2SetupExperiment" => (api.setup_experiment)(c, 0, 0.0, 0.0, 0, 0.0),
+            "fmi2EnterInitializationMode" => (api.enter_initialization_mode)(c),
+            "fmi2ExitInitializationMode" => (api.exit_initialization_mode)(c),
+            "fmi2Terminate" => (api.terminate)(c),
+            "fmi2Reset" => (api.reset)(c),
+            "fmi2GetReal" => fill(&mut real, function, "nvr", R, |p| (api.get_real)(c, vr.as_ptr(), 1, p)),
+            "fmi2GetInteger" => fill(&mut int, function, "nvr", R, |p| {
+                (api.get_integer)(c, vr.as_ptr(), 1, p)
+            }),
+            "fmi2GetBoolean" => fill(&mut int, function, "nvr", R, |p| {
+                (api.get_boolean)(c, vr.as_ptr(), 1, p)
+            }),
+            "fmi2GetString" => fill_one(&mut string, function, "nvr", R, |p| {
+                (api.get_string)(c, vr.as_ptr(), 1, p)
+            }),
+            "fmi2SetReal" => (api.set_real)(c, vr.as_ptr(), 1, real.as_ptr()),
+            "fmi2SetInteger" => (api.set_integer)(c, vr.as_ptr(), 1, int.as_ptr()),
+            "fmi2SetBoolean" => (api.set_boolean)(c, vr.as_ptr(), 1, int.as_ptr()),
+            "fmi2SetString" => (api.set_string)(c, vr.as_ptr(), 1, &text),
+            "fmi2GetFMUstate" => crate::guard::fill_state2(&mut st, function, |q| (api.get_fmu_state)(c, q)),
+            "fmi2SetFMUstate" => (api.set_fmu_state)(c, st),
+            "fmi2FreeFMUstate" => crate::guard::fill_state2(&mut st, function, |q| (api.free_fmu_state)(c, q)),
+            "fmi2SerializedFMUstateSize" => {
+                crate::guard::fill_state_size2(&mut size, function, |p| (api.serialized_fmu_state_size)(c, st, p))
+            }
+            "fmi2SerializeFMUstate" => (api.serialize_fmu_state)(c, st, ptr::null_mut(), 0),
+            "fmi2DeSerializeFMUstate" => {
+                crate::guard::fill_state2(&mut st, function, |q| (api.deserialize_fmu_state)(c, ptr::null(), 0, q))
+            }
+            "fmi2GetDirectionalDerivative" => {
+                (api.get_directional_derivative)(c, ptr::null(), 0, ptr::null(), 0, ptr::null(), ptr::null_mut())
+            }
+            "fmi2SetRealInputDerivatives" => {
+                (api.set_real_input_derivatives)(c, ptr::null(), 0, ptr::null(), ptr::null())
+            }
+            "fmi2GetRealOutputDerivatives" => {
+                (api.get_real_output_derivatives)(c, ptr::null(), 0, ptr::null(), ptr::null_mut())
+            }
+            "fmi2DoStep" => (api.do_step)(c, 0.0, 0.1, 0),
+            "fmi2CancelStep" => (api.cancel_step)(c),
+            "fmi2GetStatus" => fill_one(&mut status, function, "one value", S, |p| (api.get_status)(c, 0, p)),
+            "fmi2GetRealStatus" => fill(&mut real, function, "one value", S, |p| (api.get_real_status)(c, 2, p)),
+            "fmi2GetIntegerStatus" => fill(&mut int, function, "one value", S, |p| {
+                (api.get_integer_status)(c, 0, p)
+            }),
+            "fmi2GetBooleanStatus" => fill(&mut int, function, "one value", S, |p| {
+                (api.get_boolean_status)(c, 3, p)
+            }),
+            "fmi2GetStringStatus" => fill_one(&mut string, function, "one value", S, |p| {
+                (api.get_string_status)(c, 0, p)
+            }),
+            f => panic!("{f} is not a function the check of a NULL component calls"),
+        }
+    };
+    assert!(
+        st.is_null(),
+        "{}: {function} on a NULL component wrote an FMU state",
+        fmu.id
+    );
+    s
+}

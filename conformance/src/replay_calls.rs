@@ -56,6 +56,10 @@ const FMI3_WITH_ARGUMENTS: &[&str] = &[
     "fmi3SetClock",
     "fmi3GetIntervalDecimal",
     "fmi3GetShiftDecimal",
+    "fmi3GetBinary",
+    "fmi3GetNumberOfVariableDependencies",
+    "fmi3GetVariableDependencies",
+    "fmi3SetDebugLogging",
 ];
 
 /// Whether the replay gets and sets values of the type called `name`: the numbers and Boolean
@@ -262,7 +266,26 @@ fn replay2_line(
 ) -> Result<(), String> {
     let mut details = vec![];
     let mut values: Option<Vec<f64>> = None;
+    let probe = |list: &[&'static str]| crate::instance_calls::named(list, &l.function);
     let s = match l.function.as_str() {
+        // The probes of a NULL component (no other argument is written: they are the check's).
+        _ if l.raw("component").ok() == Some("NULL") => {
+            let f = probe(&crate::instance_calls::NULL_COMPONENT_PROBES)
+                .ok_or_else(|| l.error("not a function the check of a NULL component calls"))?;
+            inst.null_component(f)
+        }
+        // A getter or setter with its arrays as given (NULL with nvr > 0, nvr = 0).
+        _ if l.has("nvr") => {
+            let f = probe(&crate::instance_calls::ARRAY_PROBES).ok_or_else(|| {
+                l.error("nvr= is written for the getters and setters of Real, Integer, Boolean, String")
+            })?;
+            let vr = l.list::<u32>("vr")?;
+            let nvr: usize = l.parse("nvr")?;
+            if vr.as_ref().is_some_and(|v| v.len() < nvr) {
+                return Err(l.error("vr holds fewer value references than nvr"));
+            }
+            inst.array_probe(f, vr.as_deref(), nvr, l.raw("value").ok() != Some("NULL"))
+        }
         "fmi2SetupExperiment" => {
             let stop = if l.raw("stopTime")? == "NULL" {
                 None
@@ -303,6 +326,15 @@ fn replay2_line(
                 .collect();
             inst.set_boolean(&vrs(l)?, &v)
         }
+        "fmi2DeSerializeFMUstate" if l.raw("bytes")? == "NULL" || l.has("statePointer") => {
+            if l.raw("bytes")? == "NULL" {
+                inst.deserialize_raw(None, l.parse("size")?, !l.has("statePointer"))
+            } else {
+                let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
+                inst.deserialize_raw(Some(&bytes), bytes.len(), false)
+            }
+        }
+        "fmi2FreeFMUstate" if l.has("statePointer") => inst.free_state_pointer_null(),
         "fmi2GetFMUstate" | "fmi2DeSerializeFMUstate" => {
             let (s, st) = if l.function == "fmi2GetFMUstate" {
                 inst.get_state()
@@ -331,16 +363,26 @@ fn replay2_line(
         "fmi2SerializeFMUstate" => {
             let (s, bytes) = inst.serialize_into(states.get(l, std::ptr::null_mut())?, l.parse("size")?);
             details.push(format!("{} bytes", bytes.len()));
+            // Compared only where the line expects bytes (a refusal that wrote into the buffer).
+            values = Some(bytes.iter().map(|b| f64::from(*b)).collect());
             s
         }
         "fmi2GetRealStatus" => match l.raw("kind")? {
-            "fmi2LastSuccessfulTime" => {
+            "fmi2LastSuccessfulTime" if !l.has("value") => {
                 let (s, t) = inst.last_successful_time();
                 details.push(format!("value {}", real(t)));
                 values = Some(vec![t]);
                 s
             }
-            k => return Err(l.error(format!("kind={k}: the replay asks fmi2LastSuccessfulTime"))),
+            k => {
+                let null = l.raw("value").ok() == Some("NULL");
+                let (s, v) = inst.real_status(kind_of(k).map_err(|e| l.error(e))?, (!null).then_some(-1.0));
+                if !null {
+                    details.push(format!("value {} (-1.0 before the call)", real(v)));
+                    values = Some(vec![v]);
+                }
+                s
+            }
         },
         "fmi2GetBooleanStatus" => match l.raw("kind")? {
             "fmi2Terminated" => {
@@ -348,8 +390,31 @@ fn replay2_line(
                 details.push(format!("value {b}"));
                 s
             }
-            k => return Err(l.error(format!("kind={k}: the replay asks fmi2Terminated"))),
+            k => {
+                let (s, b) = inst.boolean_status(kind_of(k).map_err(|e| l.error(e))?);
+                details.push(format!("value {b} (-1 before the call)"));
+                values = Some(vec![f64::from(b)]);
+                s
+            }
         },
+        "fmi2SetDebugLogging" if l.has("nCategories") => {
+            let categories: Option<Vec<Option<String>>> = match l.list::<String>("categories")? {
+                None => None,
+                Some(cs) => Some(
+                    cs.iter()
+                        .map(|c| if c == "NULL" { Ok(None) } else { decode(c).map(Some) })
+                        .collect::<Result<_, _>>()
+                        .map_err(|e| l.error(e))?,
+                ),
+            };
+            let refs: Option<Vec<Option<&str>>> =
+                categories.as_ref().map(|cs| cs.iter().map(Option::as_deref).collect());
+            let n: usize = l.parse("nCategories")?;
+            if refs.as_ref().is_some_and(|r| r.len() < n) {
+                return Err(l.error("fewer categories than nCategories"));
+            }
+            inst.set_debug_logging_raw(l.parse("loggingOn")?, n, refs.as_deref())
+        }
         "fmi2SetDebugLogging" => {
             let names: Vec<String> = l
                 .list::<String>("categories")?
@@ -770,6 +835,67 @@ fn replay3_line(
             let out = out.into_values(|| "fmi3GetShiftDecimal".into(), crate::guard::CLOCK_RULE3);
             details.push(format!("values {}", list(out.iter().map(|x| real(*x)))));
             values = Some(out);
+            s
+        }
+        // fmi3GetFloat64 and fmi3SetFloat64 with their arrays as given (NULL, a wrong nValues).
+        "fmi3GetFloat64" | "fmi3SetFloat64" if l.has("nValueReferences") => {
+            let vr = l.list::<u32>("vr")?;
+            let n_vr: usize = l.parse("nValueReferences")?;
+            let n_values: usize = l.parse("nValues")?;
+            if vr.as_ref().is_some_and(|v| v.len() < n_vr) {
+                return Err(l.error("vr holds fewer value references than nValueReferences"));
+            }
+            let set = f == "fmi3SetFloat64";
+            let given = if l.has("values") {
+                l.list::<f64>("values")?
+            } else {
+                Some(vec![0.0; n_values])
+            };
+            if set && given.as_ref().is_some_and(|x| x.len() < n_values) {
+                return Err(l.error("values holds fewer values than nValues"));
+            }
+            inst.float64_probe(set, vr.as_deref(), n_vr, given.as_deref(), n_values)
+        }
+        "fmi3SetDebugLogging" => {
+            let categories: Option<Vec<String>> = match l.list::<String>("categories")? {
+                None => None,
+                Some(cs) => Some(
+                    cs.iter()
+                        .map(|c| decode(c))
+                        .collect::<Result<_, _>>()
+                        .map_err(|e| l.error(e))?,
+                ),
+            };
+            let n: usize = l.parse("nCategories")?;
+            if categories.as_ref().is_some_and(|c| c.len() < n) {
+                return Err(l.error("fewer categories than nCategories"));
+            }
+            inst.set_debug_logging(l.parse("loggingOn")?, n, categories.as_deref())
+        }
+        "fmi3GetBinary" => {
+            let (s, sizes, bytes) = inst.get_binary(&vrs(l)?, l.parse("nValues")?);
+            details.push(format!(
+                "valueSizes {} values {}",
+                list(&sizes),
+                list(bytes.into_iter().map(crate::calllog::Val::Bytes))
+            ));
+            s
+        }
+        "fmi3GetNumberOfVariableDependencies" => {
+            let (s, n) = inst.number_of_dependencies(l.parse("dependent")?);
+            details.push(format!("nDependencies {n}"));
+            s
+        }
+        "fmi3GetVariableDependencies" => {
+            let (s, (e_dep, ind, e_ind, kinds)) = inst.dependencies(l.parse("dependent")?, l.parse("nDependencies")?);
+            details.push(format!(
+                "elementIndicesOfDependent {} independents {} elementIndicesOfIndependents {} dependencyKinds {}",
+                list(&e_dep),
+                list(&ind),
+                list(&e_ind),
+                list(&kinds)
+            ));
+            values = Some(ind.iter().map(|x| f64::from(*x)).collect());
             s
         }
         "fmi3GetFloat64" if !l.has("bytes") => {

@@ -641,8 +641,9 @@ fn replay(file: &Path, fmu: &Path) -> (Option<i32>, String) {
 
 /// Issue 51 item 3: a named check that fails leaves a reproducer, the calls of the instance it
 /// failed on, which replays the failure on the defective FMU (exit 1, saying what differs: a
-/// guard overwritten, a value other than the check expected) and not on the FMU it wraps (exit
-/// 0); the same check passing on that FMU leaves no file. Four defects, FMI 2.0 and 3.0.
+/// guard overwritten, a value other than the check expected, a status other than the standard
+/// requires) and not on the FMU it wraps (exit 0); the same check passing on that FMU leaves no
+/// file. Nine defects, FMI 2.0 and 3.0.
 #[test]
 fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_passing_one_none() {
     let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
@@ -689,6 +690,39 @@ fn a_failing_named_check_leaves_a_reproducer_that_replays_the_failure_and_a_pass
             3,
             "fmi3_model_exchange_states_and_derivatives_are_consistent",
             "fmi3GetNumberOfContinuousStates, given one size_t, wrote past the end",
+        ),
+        // Checks whose failing call was made on the C functions directly before the call log
+        // took it (issue 51 item 1): a getter with no values and NULL arrays, a NULL component,
+        // a status getter of another kind, fmi3SetDebugLogging.
+        (
+            "EMPTY_REFUSED",
+            2,
+            "zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_refused",
+            "fmi2GetInteger answered Error, the file expects OK",
+        ),
+        (
+            "EMPTY_REFUSED",
+            3,
+            "fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing",
+            "fmi3GetFloat64 answered Error, the file expects OK",
+        ),
+        (
+            "NULL_COMPONENT",
+            2,
+            "a_null_component_is_refused_by_every_function",
+            "fmi2DoStep answered OK, the file expects Error",
+        ),
+        (
+            "STATUS_KIND",
+            2,
+            "status_functions_report_the_last_successful_time_and_no_termination_request",
+            "fmi2GetBooleanStatus answered OK, the file expects Discard",
+        ),
+        (
+            "LOGGING",
+            3,
+            "fmi3_set_debug_logging_refuses_unknown_categories",
+            "fmi3SetDebugLogging answered OK, the file expects Error",
         ),
     ] {
         let fmu = fixture(dir.path(), v, defect, &[format!("-DDEFECT_{defect}")]);
@@ -777,4 +811,91 @@ fn a_countdown_clock_given_the_interval_zero_ticks_at_once_and_is_not_failed() {
         "{name} on the C Clocks: {:?}\n{report}",
         c.outcome
     );
+}
+
+/// Issue 51 item 1: every kind of line the call log now records for the probes of NULL arguments
+/// and the FMI 3.0 calls once recorded without their arguments (strings, binaries, clocks,
+/// intervals, dependencies, fmi3SetDebugLogging, fmi3GetFloat64 with NULL arrays) replays, line by
+/// line, on this workspace's FMUs: each file replays to exit 0 as written, and to exit 1 with one
+/// expectation changed (so the replay made the call and compared its status).
+#[test]
+fn every_kind_of_recorded_probe_line_replays_on_our_fmus() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    let fmi2 = dahlquist(2).0;
+    let fmi3 = fmi_conformance::fmi3::fmu3_dir();
+    let cases: [(&str, PathBuf, &str, &str); 3] = [
+        (
+            "fmi2",
+            fmi2,
+            "fmi2Instantiate instanceName=replay fmuType=CoSimulation guid=own resourceLocation=own loggingOn=false
+fmi2SetupExperiment startTime=0.0 stopTime=NULL -> OK
+fmi2EnterInitializationMode -> OK
+fmi2ExitInitializationMode -> OK
+fmi2GetReal vr=NULL nvr=0 value=NULL -> OK
+fmi2SetString vr=NULL nvr=0 value=NULL -> OK
+fmi2GetInteger vr=NULL nvr=1 -> Error
+fmi2SetReal vr=[0] nvr=1 value=NULL -> Error
+fmi2GetRealStatus kind=fmi2Terminated -> Discard
+fmi2GetBooleanStatus kind=99 -> Discard
+fmi2GetRealStatus kind=fmi2LastSuccessfulTime value=NULL -> Error
+fmi2SetDebugLogging loggingOn=true nCategories=2 categories=NULL -> Error
+fmi2SetDebugLogging loggingOn=true nCategories=2 categories=[logEvents,NULL] -> Error
+fmi2FreeFMUstate statePointer=NULL -> OK|Error
+fmi2DeSerializeFMUstate bytes=NULL size=16 -> Error
+fmi2DeSerializeFMUstate bytes=hex:00 statePointer=NULL -> Error
+fmi2DoStep component=NULL -> Error
+fmi2GetStringStatus component=NULL -> Error
+",
+            "fmi2GetBooleanStatus kind=99 -> Discard",
+        ),
+        (
+            "fmi3 strings, binaries, probes",
+            fmi3.join("Feedthrough.fmu"),
+            "fmi3InstantiateCoSimulation instanceName=replay eventModeUsed=false earlyReturnAllowed=false intermediateUpdate=false
+fmi3EnterInitializationMode startTime=0.0 -> OK
+fmi3ExitInitializationMode -> OK
+fmi3GetString vr=[30] nValues=1 -> OK
+fmi3GetBinary vr=[32] nValues=1 -> OK
+fmi3GetFloat64 vr=NULL nValueReferences=0 values=NULL nValues=0 -> OK
+fmi3SetDebugLogging loggingOn=true nCategories=0 categories=NULL -> OK
+fmi3GetNumberOfVariableDependencies dependent=8 -> any
+fmi3GetFloat64 vr=NULL nValueReferences=1 nValues=1 -> Error
+fmi3SetFloat64 vr=[7] nValueReferences=1 values=NULL nValues=1 -> Error
+fmi3SetDebugLogging loggingOn=true nCategories=1 categories=[noSuchCategory] -> Error
+",
+            "fmi3GetString vr=[30] nValues=1 -> OK",
+        ),
+        (
+            "fmi3 clocks",
+            fmi3.join("Clocks.fmu"),
+            "fmi3InstantiateCoSimulation instanceName=replay eventModeUsed=true earlyReturnAllowed=false intermediateUpdate=false
+fmi3EnterInitializationMode startTime=0.0 -> OK
+fmi3ExitInitializationMode -> OK
+fmi3SetClock vr=[1002] values=[1] -> OK
+fmi3GetClock vr=[1005] -> OK
+fmi3GetIntervalDecimal vr=[1001] -> OK
+fmi3GetShiftDecimal vr=[1001] -> OK
+fmi3UpdateDiscreteStates -> OK
+",
+            "fmi3GetClock vr=[1005] -> OK",
+        ),
+    ];
+    for (what, fmu, text, changed) in cases {
+        let file = dir.path().join(format!("{}.txt", what.replace(' ', "_")));
+        std::fs::write(&file, text).unwrap();
+        let (code, out) = replay(&file, &fmu);
+        assert_eq!(code, Some(0), "{what}: the replay as written:\n{out}");
+        // Every line was made (each printed with its status).
+        let made = out.lines().filter(|l| l.contains(" -> ")).count();
+        assert_eq!(made, text.lines().count(), "{what}: a line a call:\n{out}");
+        let wrong = text.replace(
+            changed,
+            &changed.replace("-> OK", "-> Error").replace("-> Discard", "-> OK"),
+        );
+        assert_ne!(wrong, text);
+        std::fs::write(&file, &wrong).unwrap();
+        let (code, out) = replay(&file, &fmu);
+        assert_eq!(code, Some(1), "{what}: the replay with '{changed}' changed:\n{out}");
+        assert!(out.contains("the failure reproduces"), "{what}:\n{out}");
+    }
 }

@@ -7,6 +7,7 @@
 
 pub mod api;
 pub mod checks;
+pub mod probes;
 pub mod standard;
 pub mod types;
 
@@ -1017,22 +1018,9 @@ impl<'a> Inst<'a> {
         let vr = &v.vr;
         let what = format!("fmi3Get{}", accessor(v.ty));
         if v.ty == Type::Binary {
-            let (mut size, mut data) = (0usize, std::ptr::null::<u8>());
-            // SAFETY: a live instance; each pointer is to a live local of the length passed.
-            let s = self.call(&what, |c| unsafe {
-                crate::guard::fill_one(&mut size, "fmi3GetBinary (valueSizes)", "nValues", GETTER_RULE3, |ps| {
-                    crate::guard::fill_one(&mut data, "fmi3GetBinary (values)", "nValues", GETTER_RULE3, |pd| {
-                        (api.get_binary)(c, vr, 1, ps, pd, 1)
-                    })
-                })
-            });
-            let bytes = if s == fmi3OK && !data.is_null() {
-                // SAFETY: the FMU's answer: `size` bytes at `data`, valid until the next call.
-                unsafe { std::slice::from_raw_parts(data, size) }.to_vec()
-            } else {
-                Vec::new()
-            };
-            return (s, bytes);
+            // Through the call log (Inst::get_binary): a failure leaves a reproducer with it.
+            let (s, _, mut bytes) = self.get_binary(&[*vr], 1);
+            return (s, bytes.pop().unwrap_or_default());
         }
         let s = self
             .args(vec![("vr", Val::U32s(vec![*vr])), ("nValues", Val::U64(n as u64))])

@@ -11,7 +11,6 @@ use crate::standard::REACHABLE;
 use crate::state::{STATES, State};
 use crate::{Fmu, Type};
 use md_reader::{Causality, Initial};
-use std::ptr;
 
 pub fn do_step_refuses_a_step_size_that_is_not_finite_and_positive(fmu: &Fmu) {
     let h = step_size(fmu);
@@ -285,35 +284,23 @@ pub fn status_functions_report_the_last_successful_time_and_no_termination_reque
         }
         assert_eq!(inst.terminated(), (fmi2OK, fmi2False));
     }
-    // Kinds that belong to another getter: fmi2Discard with a message, value untouched.
-    let mut r = -1.0;
-    // SAFETY: a valid out pointer.
-    let s = unsafe {
-        crate::guard::fill_status2(&mut r, "fmi2GetRealStatus", |p| {
-            (fmu.api.get_real_status)(inst.c, fmi2Terminated, p)
-        })
-    };
+    // Kinds that belong to another getter: fmi2Discard with a message, value untouched. Through
+    // the call log, so that a failure leaves a reproducer ending with the call.
+    let discard = crate::replay::Expected(1 << fmi2Discard);
+    let (s, r) = inst.real_status(fmi2Terminated, Some(-1.0));
+    crate::calllog::standard_requires(discard);
     assert_eq!(
         (s, r),
         (fmi2Discard, -1.0),
         "{}: fmi2GetRealStatus(fmi2Terminated)",
         fmu.id
     );
-    let mut b = -1;
-    // SAFETY: a valid out pointer.
-    let s = unsafe {
-        crate::guard::fill_status2(&mut b, "fmi2GetBooleanStatus", |p| {
-            (fmu.api.get_boolean_status)(inst.c, 99, p)
-        })
-    };
+    let (s, b) = inst.boolean_status(99);
+    crate::calllog::standard_requires(discard);
     assert_eq!((s, b), (fmi2Discard, -1), "{}: fmi2GetBooleanStatus(99)", fmu.id);
     // A NULL out pointer is the importer's mistake (FMI 2.0.5 §4.2.3 has the importer provide
     // `value`): a crash in it is a warning.
-    let s = crate::outcome::on_purpose(|| {
-        crate::outcome::breadcrumb("fmi2GetRealStatus(fmi2LastSuccessfulTime, value = NULL)");
-        // SAFETY: NULL out pointer: refused.
-        unsafe { (fmu.api.get_real_status)(inst.c, fmi2LastSuccessfulTime, ptr::null_mut()) }
-    });
+    let s = crate::outcome::on_purpose(|| inst.real_status(fmi2LastSuccessfulTime, None).0);
     refused(&inst, "fmi2GetRealStatus(NULL)", s, &["NULL"]);
     assert_eq!(inst.terminate(), fmi2OK);
     // The time itself: do_step_advances_time_by_the_step's verdict (see above).

@@ -5,12 +5,11 @@
 
 use super::{initialized, refused};
 use crate::fmi2::*;
-use crate::instance::{Instance, excitation, excite, run, status_name, step_size};
+use crate::instance::{Instance, Status, excitation, excite, run, status_name, step_size};
 use crate::outcome::{convention, info};
 use crate::state::{State, name};
 use crate::{Fmu, Type};
 use md_reader::{Causality, Variability};
-use std::ptr;
 
 /// Verdict: warned, never failed. An unknown value reference is the importer's mistake; FMI 2.0.5
 /// requires no detection of it (§2.1.3: on fmi2Error "the simulation cannot be continued with this
@@ -61,68 +60,33 @@ pub fn unknown_value_references_are_refused_with_a_message_naming_them(fmu: &Fmu
 /// mistake, which the standard leaves undefined: not refusing them, or crashing on them, is a
 /// warning (a crash takes the importer down).
 pub fn zero_values_with_null_arrays_are_fine_and_null_arrays_with_values_are_refused(fmu: &Fmu) {
-    use crate::guard::{GETTER_RULE2 as R2, fill};
+    use crate::instance_calls::ARRAY_PROBES;
     let mut inst = initialized(fmu);
-    let api = &fmu.api;
-    let c = inst.c;
     let vr = [fmu.md.vrs_of_type(Type::Real)[0]];
-    let mut r = [0.0];
-    let mut i = [0];
-    let mut st: [fmi2String; 1] = [ptr::null()];
-    // SAFETY: nvr = 0 with NULL arrays is valid; with nvr = 1 the FMU must check for NULL.
-    unsafe {
-        let empty = [
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.get_real)(c, ptr::null(), 0, ptr::null_mut())
-            ),
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.get_integer)(c, ptr::null(), 0, ptr::null_mut())
-            ),
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.get_boolean)(c, ptr::null(), 0, ptr::null_mut())
-            ),
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.get_string)(c, ptr::null(), 0, ptr::null_mut())
-            ),
-            raw!("nvr = 0, NULL arrays", (api.set_real)(c, ptr::null(), 0, ptr::null())),
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.set_integer)(c, ptr::null(), 0, ptr::null())
-            ),
-            raw!(
-                "nvr = 0, NULL arrays",
-                (api.set_boolean)(c, ptr::null(), 0, ptr::null())
-            ),
-            raw!("nvr = 0, NULL arrays", (api.set_string)(c, ptr::null(), 0, ptr::null())),
-        ];
-        assert_eq!(
-            empty.map(|(_, s)| s),
-            [fmi2OK; 8],
-            "{}: nvr = 0 with NULL arrays",
-            fmu.id
-        );
-        let null_cases = [
-            raw!(mistake "fmi2GetReal", fill(&mut r[..1], "fmi2GetReal", "nvr", R2, |p| (api.get_real)(c, ptr::null(), 1, p))),
-            raw!(mistake "fmi2GetReal", (api.get_real)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetInteger", fill(&mut i[..1], "fmi2GetInteger", "nvr", R2, |p| (api.get_integer)(c, ptr::null(), 1, p))),
-            raw!(mistake "fmi2GetInteger", (api.get_integer)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetBoolean", fill(&mut i[..1], "fmi2GetBoolean", "nvr", R2, |p| (api.get_boolean)(c, ptr::null(), 1, p))),
-            raw!(mistake "fmi2GetBoolean", (api.get_boolean)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2GetString", fill(&mut st[..1], "fmi2GetString", "nvr", R2, |p| (api.get_string)(c, ptr::null(), 1, p))),
-            raw!(mistake "fmi2GetString", (api.get_string)(c, vr.as_ptr(), 1, ptr::null_mut())),
-            raw!(mistake "fmi2SetReal", (api.set_real)(c, ptr::null(), 1, r.as_ptr())),
-            raw!(mistake "fmi2SetReal", (api.set_real)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!(mistake "fmi2SetInteger", (api.set_integer)(c, ptr::null(), 1, i.as_ptr())),
-            raw!(mistake "fmi2SetInteger", (api.set_integer)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!(mistake "fmi2SetBoolean", (api.set_boolean)(c, ptr::null(), 1, i.as_ptr())),
-            raw!(mistake "fmi2SetBoolean", (api.set_boolean)(c, vr.as_ptr(), 1, ptr::null())),
-            raw!(mistake "fmi2SetString", (api.set_string)(c, ptr::null(), 1, st.as_ptr())),
-            raw!(mistake "fmi2SetString", (api.set_string)(c, vr.as_ptr(), 1, ptr::null())),
-        ];
+    // Through the call log (Instance::array_probe), so that a failure leaves a reproducer with
+    // these calls, which `cargo fmu replay` makes again.
+    let empty = ARRAY_PROBES.map(|f| {
+        let s = inst.array_probe(f, None, 0, false);
+        // FMI 2.0.5 §2.1.7: the arrays have nvr elements; with nvr = 0 the call is legal.
+        crate::calllog::standard_requires(crate::replay::Expected::OK);
+        s
+    });
+    assert_eq!(empty, [fmi2OK; 8], "{}: nvr = 0 with NULL arrays", fmu.id);
+    {
+        // Each call alone is the importer's mistake (outcome::on_purpose): a crash in it is a
+        // warning.
+        let null_cases: Vec<(&str, Status)> = ARRAY_PROBES
+            .iter()
+            .flat_map(|&f| {
+                [
+                    (f, crate::outcome::on_purpose(|| inst.array_probe(f, None, 1, true))),
+                    (
+                        f,
+                        crate::outcome::on_purpose(|| inst.array_probe(f, Some(&vr[..]), 1, false)),
+                    ),
+                ]
+            })
+            .collect();
         // NULL arrays with nvr > 0 are the importer's mistake (FMI 2.0.5 §2.1.7 gives the
         // arrays nvr elements): detecting them is beyond the standard, a warning otherwise.
         let log = inst.log();

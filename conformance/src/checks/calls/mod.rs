@@ -18,27 +18,6 @@ use crate::fmi2::*;
 use crate::instance::{Instance, status_name};
 use crate::outcome::convention;
 
-/// `(name, status)` of a raw call of the C API, with a breadcrumb naming it first (so that a
-/// crash in it is reported with the call).
-macro_rules! raw {
-    ($name:literal, $call:expr) => {{
-        crate::outcome::breadcrumb(concat!($name, ": ", stringify!($call)));
-        ($name, $call)
-    }};
-    // An importer's mistake made on purpose: a crash in it is a warning (outcome::IMPORTERS_MISTAKE).
-    (mistake $name:literal, $call:expr) => {{
-        if crate::outcome::breadcrumbs_on() {
-            crate::outcome::breadcrumb(&format!(
-                "{}{}: {}",
-                crate::outcome::IMPORTERS_MISTAKE,
-                $name,
-                stringify!($call)
-            ));
-        }
-        ($name, $call)
-    }};
-}
-
 mod do_step;
 mod get_set;
 mod instantiate;

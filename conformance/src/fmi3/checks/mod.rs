@@ -302,8 +302,14 @@ fn run(fmu: &Fmu3, me: bool, steps: usize, h: f64) -> Vec<Vec<u64>> {
 /// simulation cannot be continued" with the instance, so what it shows then is beyond the
 /// standard too. A crash in `f` is a warning ([`crate::outcome::on_purpose`]).
 fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) {
+    refused_by(inst, what, || inst.call(what, f));
+}
+
+/// [`refused`] of a call `call` makes (through a method of [`Inst`] that records its arguments
+/// in the call log, so that a failure after it leaves a reproducer that makes it again).
+fn refused_by(inst: &Inst, what: &str, call: impl FnOnce() -> fmi3Status) {
     let before = inst.observe();
-    let s = crate::outcome::on_purpose(|| inst.call(what, f));
+    let s = crate::outcome::on_purpose(call);
     if s != fmi3Error {
         crate::outcome::warn(format!(
             "{}: {what}: expected fmi3Error, got {} (an importer's mistake not detected)",

@@ -367,24 +367,14 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
         ),
     ] {
         let inst = in_state(fmu, me, state);
-        let api = inst.api();
         for u in unknowns {
             let want: std::collections::BTreeSet<u32> = match &u.dependencies {
                 Some(d) => d.iter().copied().collect(),
                 None => knowns.clone(),
             };
-            let mut count = usize::MAX;
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            let s = inst.call("fmi3GetNumberOfVariableDependencies", |c| unsafe {
-                crate::guard::fill_one(
-                    &mut count,
-                    "fmi3GetNumberOfVariableDependencies",
-                    "one nDependencies",
-                    crate::guard::DEPENDENCIES_RULE3,
-                    |p| (api.get_number_of_variable_dependencies)(c, u.vr, p),
-                )
-            });
+            // Through the call log (Inst::number_of_dependencies, Inst::dependencies): a failure
+            // leaves a reproducer that makes these calls again.
+            let (s, count) = inst.number_of_dependencies(u.vr);
             // FMI 3.0.2 offers these functions only where the FMU declares
             // providesPerElementDependencies: without it, a refusal is the FMU's right (skipped);
             // an FMU that answers anyway is held to its answers.
@@ -401,27 +391,7 @@ pub fn fmi3_variable_dependencies_equal_the_model_structure(fmu: &Fmu3) {
                 u.vr,
                 inst.log_text()
             );
-            let (mut e_dep, mut ind, mut e_ind, mut kinds) = (
-                vec![9usize; count],
-                vec![0u32; count],
-                vec![9usize; count],
-                vec![99u32; count],
-            );
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            let s = inst.call("fmi3GetVariableDependencies", |c| unsafe {
-                use crate::guard::{DEPENDENCIES_RULE3 as R, fill};
-                let f = "fmi3GetVariableDependencies";
-                fill(&mut e_dep, f, "nDependencies (elementIndicesOfDependent)", R, |a| {
-                    fill(&mut ind, f, "nDependencies (independents)", R, |b| {
-                        fill(&mut e_ind, f, "nDependencies (elementIndicesOfIndependents)", R, |d| {
-                            fill(&mut kinds, f, "nDependencies (dependencyKinds)", R, |k| {
-                                (api.get_variable_dependencies)(c, u.vr, a, b, d, k, count)
-                            })
-                        })
-                    })
-                })
-            });
+            let (s, (e_dep, ind, e_ind, kinds)) = inst.dependencies(u.vr, count);
             assert_eq!(
                 s,
                 fmi3OK,
