@@ -293,7 +293,7 @@ impl Instance<'_> {
             (self.fmu.api.serialize_fmu_state)(self.c, s, bytes.as_mut_ptr() as *mut fmi2Byte, size)
         });
         let bytes = bytes.into_values(
-            || format!("fmi2SerializeFMUstate with size = {size} (fmi2SerializedFMUstateSize's answer)"),
+            || format!("fmi2SerializeFMUstate into a buffer of size = {size}"),
             STATE_RULE2,
         );
         (st, bytes)
