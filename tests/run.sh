@@ -225,9 +225,14 @@ reference_checks() {
 ) &
 beside=$!
 
-echo "== Python tests"
+echo "== Python tests (two workers, one test file each at a time)"
+# Two pytest-xdist workers, each taking whole files (--dist loadfile: a file's module and session
+# fixtures, its `cargo fmu new` crates and its tmp folders stay in one process): most tests run one
+# simulation on one core, so one worker left the second core to the builds and runs beside it,
+# which need less than the Python suite's 1729 s (session 10; issue 53).
 set +e
-python -m pytest tests/python -q -p no:cacheprovider --durations=15 --ignore=tests/python/test_windows.py --ignore=tests/python/test_aarch64.py 2>&1 | tee "$logs/pytest.log"
+python -m pytest tests/python -q -p no:cacheprovider -n 2 --dist loadfile --durations=25 \
+  --ignore=tests/python/test_windows.py --ignore=tests/python/test_aarch64.py 2>&1 | tee "$logs/pytest.log"
 py_status=${PIPESTATUS[0]}
 set -e
 line=$(tail -n 1 "$logs/pytest.log")
