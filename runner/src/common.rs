@@ -307,6 +307,8 @@ macro_rules! dispatch_with {
             /// FMI 3.0: variables of any type but Clock, arrays whole ([`crate::values::Values`]).
             fn get_typed(&mut self, vrs: &[u32], out: &mut $crate::values::Values) -> Result<(), $crate::common::Fmi2Error>;
             fn set_typed(&mut self, vrs: &[u32], values: &$crate::values::Values) -> Result<(), $crate::common::Fmi2Error>;
+            /// FMI 3.0: fmi3EnterConfigurationMode (`enter`) or fmi3ExitConfigurationMode.
+            fn configuration_mode(&mut self, enter: bool) -> Result<(), $crate::common::Fmi2Error>;
             fn get_directional_derivative(&mut self, d: $crate::common::Directional<'_>) -> Result<(), $crate::common::Fmi2Error>;
             fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<(), $crate::common::Fmi2Error>;
             fn enter_initialization_mode(&mut self) -> Result<(), $crate::common::Fmi2Error>;

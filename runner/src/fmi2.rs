@@ -657,6 +657,13 @@ impl Instance2 {
         )))
     }
 
+    /// FMI 2.0 has no Configuration Mode (nor structural parameters).
+    pub fn configuration_mode(&mut self, _enter: bool) -> Result<(), Fmi2Error> {
+        Err(Fmi2Error::Importer(
+            "an FMI 2.0 FMU has no Configuration Mode (no structural parameters)".into(),
+        ))
+    }
+
     /// As [`Instance2::get_typed`].
     pub fn set_typed(&mut self, _vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
         Err(Fmi2Error::Importer(format!(

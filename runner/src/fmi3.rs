@@ -191,6 +191,9 @@ struct Api {
     exit_initialization_mode: InstanceFunction,
     terminate: InstanceFunction,
     reset: InstanceFunction,
+    /// fmi3EnterConfigurationMode, fmi3ExitConfigurationMode (structural parameters).
+    enter_configuration_mode: Option<InstanceFunction>,
+    exit_configuration_mode: Option<InstanceFunction>,
     get_float64: Get<f64>,
     get_int32: Get<i32>,
     get_int64: Get<i64>,
@@ -286,6 +289,8 @@ impl Library {
                 exit_initialization_mode: symbol(&lib, path, "fmi3ExitInitializationMode")?,
                 terminate: symbol(&lib, path, "fmi3Terminate")?,
                 reset: symbol(&lib, path, "fmi3Reset")?,
+                enter_configuration_mode: optional(&lib, "fmi3EnterConfigurationMode"),
+                exit_configuration_mode: optional(&lib, "fmi3ExitConfigurationMode"),
                 get_float64: symbol(&lib, path, "fmi3GetFloat64")?,
                 get_int32: symbol(&lib, path, "fmi3GetInt32")?,
                 get_int64: symbol(&lib, path, "fmi3GetInt64")?,
@@ -754,6 +759,19 @@ impl Instance3 {
         }
         // SAFETY: a live instance.
         check(unsafe { (self.api().exit_initialization_mode)(self.c) })
+    }
+
+    /// fmi3EnterConfigurationMode (`enter`) or fmi3ExitConfigurationMode: the structural
+    /// parameters are set between the two (FMI 3.0.2, Configuration Mode).
+    pub fn configuration_mode(&mut self, enter: bool) -> Result<(), Fmi2Error> {
+        let (f, name) = if enter {
+            (self.api().enter_configuration_mode, "fmi3EnterConfigurationMode")
+        } else {
+            (self.api().exit_configuration_mode, "fmi3ExitConfigurationMode")
+        };
+        let f = f.ok_or_else(|| Fmi2Error::Importer(format!("the binary has no {name}")))?;
+        // SAFETY: a live instance.
+        check(unsafe { f(self.c) })
     }
 
     pub fn reset(&mut self) -> Result<(), Fmi2Error> {

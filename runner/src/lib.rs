@@ -220,6 +220,14 @@ pub enum Value {
         ty: String,
         text: String,
     },
+    /// An SSV 2.0 array of `ssv:Value` elements (SSP 2.0, SystemStructureParameterValues.xsd:
+    /// String, Enumeration and Binary arrays, row-major): `ty` the element (`String`,
+    /// `Enumeration`, `Binary`), `items` each element's `value` (a String as it is, an
+    /// Enumeration item's name, a Binary as hexadecimal digits).
+    Items {
+        ty: String,
+        items: Vec<String>,
+    },
 }
 
 impl Value {
@@ -231,6 +239,7 @@ impl Value {
             Value::String(_) => "String",
             Value::Enumeration(_) => "Enumeration",
             Value::List { .. } => "SSV 2.0 list",
+            Value::Items { .. } => "SSV 2.0 list of ssv:Value elements",
         }
     }
 }

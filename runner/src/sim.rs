@@ -66,6 +66,11 @@ struct Slave {
     /// The recorded variables its intermediateUpdate callback reads, (component.variable, value
     /// reference) ([`Simulation::record_intermediate_values`]; empty: no callback).
     intermediate: Vec<(String, u32)>,
+    /// The values the system gives its structural parameters that size arrays, (value
+    /// reference, value): set in Configuration Mode at every run, they size its arrays on
+    /// connections, parameters and records ([`crate::fmi3::Var3::sized`]); a structural
+    /// parameter not among them keeps its start value.
+    sizes: Vec<(u32, usize)>,
 }
 
 /// The name of the FMI 2.0 function `name` in an FMU of FMI 3.0 (`v3`), for messages.
@@ -387,6 +392,7 @@ impl Simulation {
                 events: false,
                 scheduled,
                 intermediate: Vec::new(),
+                sizes: Vec::new(),
             });
         }
         let mut sim = Simulation {
@@ -413,12 +419,17 @@ impl Simulation {
             clock_links: Vec::new(),
             back: Box::default(),
         };
+        // The structural parameters' values first: they size the arrays the connections join.
+        for (c, v, value) in &parameters {
+            sim.note_size(c, v, value)?;
+        }
         sim.build_ports(connections)?;
         for (c, v, value) in parameters {
             let (target, setter) = match sim.typed_start(&c, &v, &value)? {
                 Some(typed) => typed,
                 None => {
                     let target = sim.resolve(&c, &v)?;
+                    let value = typed::one_item(value);
                     (target, sim.typed_setter(&c, &v, target.ty, &value)?)
                 }
             };
@@ -492,7 +503,8 @@ impl Simulation {
     /// variable this constitutes an error" (SSP 2.0, `SystemStructureDescription.xsd`, the
     /// connector's type). SSP 1.0's Real and Integer stand for Float64 and Int32.
     fn check_declared(&self, c: &str, connector: &str, ty: &str, dims: &[Option<u64>]) -> Result<(), Error> {
-        let fmu = self.fmu_of(self.slave_index(c)?);
+        let slave = self.slave_index(c)?;
+        let fmu = self.fmu_of(slave);
         let clock = match &fmu.import {
             crate::fmu::Import::V3(i) => i.clock_plan().and_then(|p| p.clock(connector)),
             _ => None,
@@ -512,7 +524,8 @@ impl Simulation {
             ));
         }
         let (actual, shape): (String, Vec<usize>) = match fmu.var3(connector) {
-            Some(v) => (v.ty.name().to_owned(), v.shape.clone()),
+            // Its dimensions as the component's structural parameters set them.
+            Some(v) => (v.ty.name().to_owned(), v.sized(&self.slaves[slave].sizes).shape),
             None => {
                 let v = fmu.variable(c, connector)?;
                 let name = match v.ty {

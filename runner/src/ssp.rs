@@ -153,15 +153,55 @@ fn typed_value2(file: &str, param: &str, kind: &str, text: String) -> Result<Val
 
 const SSV_TYPES: [&str; 5] = ["Real", "Integer", "Boolean", "String", "Enumeration"];
 
-/// An SSV 2.0 array of String, Enumeration or Binary (`ssv:Value` elements): refused.
-fn array_of_values(file: &str, param: &str) -> Error {
-    Error::unsupported(
-        None,
-        Some(param),
-        format!(
-            "{file}: parameter '{param}': an array of ssv:Value elements (String, Enumeration or Binary) is not supported: only arrays of numbers and Booleans (a value list)"
-        ),
-    )
+/// The SSV 2.0 value elements whose array values are `ssv:Value` elements.
+const ITEM_TYPES: [&str; 3] = ["String", "Enumeration", "Binary"];
+
+/// An SSV 2.0 array of String, Enumeration or Binary values being read: its parameter, its
+/// element and the `ssv:Value`s so far.
+#[derive(Default)]
+struct Items {
+    open: Option<(String, String, Vec<String>)>,
+}
+
+impl Items {
+    /// `<ssv:String>` (Enumeration, Binary) of `param` without a `value`: its `ssv:Value`s follow
+    /// (`empty`: none, an array of no element).
+    fn start(&mut self, param: &str, ty: &str, empty: bool) -> Option<Value> {
+        if empty {
+            return Some(Value::Items {
+                ty: ty.to_owned(),
+                items: Vec::new(),
+            });
+        }
+        self.open = Some((param.to_owned(), ty.to_owned(), Vec::new()));
+        None
+    }
+
+    /// An `ssv:Value` of the open array.
+    fn value(&mut self, file: &str, param: &str, value: Option<String>) -> Result<(), Error> {
+        let Some((_, ty, items)) = &mut self.open else {
+            return Err(Error::io(format!(
+                "{file}: parameter '{param}': an ssv:Value outside an ssv:String, ssv:Enumeration or ssv:Binary"
+            )));
+        };
+        let v = value.ok_or_else(|| Error::io(format!("{file}: parameter '{param}': ssv:Value without a value")))?;
+        if ty == "Binary" && !(v.trim().len() % 2 == 0 && v.trim().bytes().all(|b| b.is_ascii_hexdigit())) {
+            return Err(Error::io(format!(
+                "{file}: parameter '{param}': ssv:Value '{v}' of an ssv:Binary is not hexadecimal digits (xs:hexBinary)"
+            )));
+        }
+        items.push(v);
+        Ok(())
+    }
+
+    /// The end of element `tag`: the array, (parameter, value), if it closes one.
+    fn end(&mut self, tag: &str) -> Option<(String, Value)> {
+        if self.open.as_ref().is_some_and(|(_, ty, _)| ty == tag) {
+            let (param, ty, items) = self.open.take()?;
+            return Some((param, Value::Items { ty, items }));
+        }
+        None
+    }
 }
 
 /// The root's `version`, if the document has a root.
@@ -186,8 +226,11 @@ pub fn parse_ssv(file: &str, xml: &str, v2: bool) -> Result<Vec<(String, Value)>
     let mut reader = Reader::from_str(xml);
     let mut out = Vec::new();
     let mut param: Option<String> = None;
+    let mut items = Items::default();
     loop {
-        match reader.read_event().map_err(|e| xml_error(file, &reader, e))? {
+        let event = reader.read_event().map_err(|e| xml_error(file, &reader, e))?;
+        let empty = matches!(event, Event::Empty(_));
+        match event {
             Event::Eof => break,
             Event::Start(e) | Event::Empty(e) => {
                 let tag = local(&e);
@@ -195,10 +238,17 @@ pub fn parse_ssv(file: &str, xml: &str, v2: bool) -> Result<Vec<(String, Value)>
                     param = Some(
                         attr(&e, "name").ok_or_else(|| Error::io(format!("{file}: ssv:Parameter without a name")))?,
                     );
+                } else if let (Some(p), true, None) =
+                    (&param, v2 && ITEM_TYPES.contains(&tag.as_str()), attr(&e, "value"))
+                {
+                    // An array of ssv:Value elements (SSP 2.0).
+                    if let Some(v) = items.start(p, &tag, empty) {
+                        out.push((p.clone(), v));
+                    }
                 } else if let (Some(p), true) = (&param, types.contains(&tag.as_str())) {
                     out.push((p.clone(), typed_value(file, p, &tag, attr(&e, "value"))?));
                 } else if v2 && tag == "Value" && param.is_some() {
-                    return Err(array_of_values(file, param.as_deref().unwrap_or("")));
+                    items.value(file, param.as_deref().unwrap_or(""), attr(&e, "value"))?;
                 } else if !v2 && tag == "Binary" || tag == "Unit" && param.is_some() {
                     return Err(Error::unsupported(
                         None,
@@ -210,7 +260,14 @@ pub fn parse_ssv(file: &str, xml: &str, v2: bool) -> Result<Vec<(String, Value)>
                     ));
                 }
             }
-            Event::End(e) if e.local_name().as_ref() == b"Parameter" => param = None,
+            Event::End(e) => {
+                let tag = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                if tag == "Parameter" {
+                    param = None;
+                } else if let Some(array) = items.end(&tag) {
+                    out.push(array);
+                }
+            }
             _ => {}
         }
     }
@@ -259,12 +316,17 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
     let mut connection: Option<String> = None;
     // The components' Clock connectors (component, connector).
     let mut clock_connectors: Vec<(String, String)> = Vec::new();
+    // An array of ssv:Value elements being read.
+    let mut items = Items::default();
     loop {
         let event = reader.read_event().map_err(|e| xml_error(FILE, &reader, e))?;
         let (e, empty) = match event {
             Event::Eof => break,
             Event::End(e) => {
                 let tag = String::from_utf8_lossy(e.local_name().as_ref()).into_owned();
+                if let Some(array) = items.end(&tag) {
+                    ssd.components.last_mut().expect("inside").parameters.push(array);
+                }
                 match tag.as_str() {
                     "Parameter" => param = None,
                     "Connector" => {
@@ -469,7 +531,14 @@ pub fn parse_ssd(xml: &str, read: &mut dyn FnMut(&str) -> Result<String, Error>)
                     Some(attr(&e, "name").ok_or_else(|| Error::io(format!("{FILE}: ssv:Parameter without a name")))?);
             }
             "Value" if v2 && param.is_some() => {
-                return Err(array_of_values(FILE, param.as_deref().unwrap_or("")));
+                items.value(FILE, param.as_deref().unwrap_or(""), attr(&e, "value"))?;
+            }
+            t if v2 && param.is_some() && ITEM_TYPES.contains(&t) && attr(&e, "value").is_none() => {
+                // An array of ssv:Value elements (SSP 2.0).
+                let p = param.clone().expect("checked");
+                if let Some(v) = items.start(&p, t, empty) {
+                    ssd.components.last_mut().expect("inside").parameters.push((p, v));
+                }
             }
             t if param.is_some() && ssv_types.contains(&t) => {
                 let p = param.clone().expect("checked");

@@ -199,6 +199,39 @@ impl Values {
         Ok(v)
     }
 
+    /// `n` String or Binary values of `ty`, one an element of `items` (SSV 2.0 `ssv:Value`s): a
+    /// String as it is, a Binary as hexadecimal digits.
+    pub fn from_items(ty: Type, n: usize, items: &[String]) -> Result<Values, String> {
+        if !matches!(ty, Type::String | Type::Binary) {
+            return Err(format!("ssv:Value elements for a {} variable", ty.name()));
+        }
+        if items.len() != n {
+            return Err(format!(
+                "{} value(s) given, the variable has {n} (one ssv:Value an element)",
+                items.len()
+            ));
+        }
+        let each = |item: &String| -> Result<Vec<u8>, String> {
+            match ty {
+                Type::String => {
+                    let mut b = item.as_bytes().to_vec();
+                    if b.contains(&0) {
+                        return Err(format!("the String {item:?} has a NUL"));
+                    }
+                    b.push(0);
+                    Ok(b)
+                }
+                _ => hex(item),
+            }
+        };
+        let list = items.iter().map(each).collect::<Result<Vec<_>, String>>()?;
+        Ok(if ty == Type::String {
+            Values::String(list)
+        } else {
+            Values::Binary(list)
+        })
+    }
+
     /// One value of `ty` from a number (an SSV Real or Integer, an override): a Float32 rounded,
     /// an integer type's range checked.
     pub fn from_number(ty: Type, x: f64, integral: Option<i64>) -> Result<Values, String> {

@@ -37,20 +37,56 @@ pub struct Var3 {
     pub vr: u32,
     pub ty: d3::Type,
     pub causality: Causality,
-    /// Its dimensions' sizes, outermost first (empty: a scalar): a fixed size, or the start
-    /// value of the structural parameter that sets it (the size the instance has until one is
-    /// set, which the runner does not do).
+    /// Its dimensions' sizes, outermost first (empty: a scalar): a fixed size, or the value of
+    /// the structural parameter that sets it: its start value in the FMU's variables, the value
+    /// in force in a component's ([`Var3::sized`]: the system sets it in Configuration Mode).
     pub shape: Vec<usize>,
-    /// The structural parameters that size it (value references).
-    pub sized_by: Vec<u32>,
+    /// For each dimension, the structural parameter (or constant) that sets it, (value
+    /// reference, name); None: a fixed size.
+    pub dims: Vec<Option<(u32, String)>>,
     pub start: Option<String>,
     pub unit: Option<String>,
+    /// Its `declaredType` (an Enumeration's type, whose items an SSV value names).
+    pub declared_type: Option<String>,
 }
 
 impl Var3 {
     /// The number of values (an array's elements, 1 for a scalar).
     pub fn count(&self) -> usize {
         self.shape.iter().product()
+    }
+
+    /// This variable in an instance whose structural parameters have the values `sizes`
+    /// ((value reference, value); a parameter not among them keeps its start value): each
+    /// dimension a structural parameter sets takes its value.
+    pub fn sized(&self, sizes: &[(u32, usize)]) -> Var3 {
+        let mut v = self.clone();
+        for (n, dim) in v.shape.iter_mut().zip(&self.dims) {
+            if let Some((vr, _)) = dim
+                && let Some(&(_, size)) = sizes.iter().find(|(p, _)| p == vr)
+            {
+                *n = size;
+            }
+        }
+        v
+    }
+
+    /// Its dimensions as they resolve, each set by a structural parameter named with its value:
+    /// `[n = 2,m = 3]`, `[3]`; empty for a scalar.
+    pub fn dimensions(&self) -> String {
+        if self.shape.is_empty() {
+            return String::new();
+        }
+        let dims: Vec<String> = self
+            .shape
+            .iter()
+            .zip(&self.dims)
+            .map(|(n, d)| match d {
+                Some((_, name)) => format!("{name} = {n}"),
+                None => n.to_string(),
+            })
+            .collect();
+        format!("[{}]", dims.join(","))
     }
 
     /// Its type and shape as messages say them: `Float64`, `Float64[3,3]`.
@@ -109,17 +145,20 @@ fn sort(
             vr: v.vr,
             ty: v.ty,
             causality: v.causality,
-            sized_by: v
+            dims: v
                 .dimensions
                 .iter()
-                .filter_map(|dim| match dim {
-                    d3::Dimension::Parameter(vr) => Some(*vr),
+                .map(|dim| match dim {
+                    d3::Dimension::Parameter(vr) => {
+                        Some((*vr, d.by_vr(*vr).map_or_else(String::new, |p| p.name.clone())))
+                    }
                     d3::Dimension::Fixed(_) => None,
                 })
                 .collect(),
             shape,
             start: v.start.clone(),
             unit: v.unit.clone(),
+            declared_type: v.declared_type.clone(),
         }),
         Err(why) => skipped.push((v.name.clone(), format!("{} array ({why})", v.ty))),
     }

@@ -705,6 +705,10 @@ impl Isolated {
     }
 
     /// FMI 3.0 values of any type and shape, posted as the other setters are.
+    pub fn configuration_mode(&mut self, enter: bool) -> Result<(), Fmi2Error> {
+        self.call(CONFIGURATION, None, |w| w.u8(enter as u8), |_| Ok(()))
+    }
+
     pub fn set_typed(&mut self, vrs: &[u32], values: &crate::values::Values) -> Result<(), Fmi2Error> {
         self.post(SET_TYPED, self.time, false, |w| {
             w.u32s(vrs)?;

@@ -156,6 +156,7 @@ pub fn serve(dir: &Path, component: &str, label: &str, interface: Interface, shm
                     EXIT_INIT => inst.exit_initialization_mode(),
                     TERMINATE => inst.terminate(),
                     RESET => inst.reset(),
+                    CONFIGURATION => inst.configuration_mode(r.u8() != 0),
                     DO_STEP => {
                         let (t, h, nsp) = (r.f64(), r.f64(), r.u8() != 0);
                         inst.do_step(t, h, nsp)?;

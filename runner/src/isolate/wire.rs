@@ -187,6 +187,8 @@ pub(super) const TRIGGER: u8 = 31;
 pub(super) const POLL_OUTPUT_CLOCKS: u8 = 32;
 pub(super) const CLOCK_SNAPSHOT: u8 = 33;
 pub(super) const RESTORE_CLOCKS: u8 = 34;
+/// fmi3EnterConfigurationMode (argument 1) or fmi3ExitConfigurationMode (0).
+pub(super) const CONFIGURATION: u8 = 35;
 /// The first batch: instantiate (the answer: ok, or the error's message).
 pub(super) const HELLO: u8 = 98;
 pub(super) const QUIT: u8 = 99;
@@ -342,6 +344,7 @@ pub(super) fn function_of(op: u8) -> &'static str {
         DIRECTIONAL => "fmi2GetDirectionalDerivative",
         GET_TYPED => "fmi3Get{Type}",
         SET_TYPED => "fmi3Set{Type}",
+        CONFIGURATION => "fmi3EnterConfigurationMode/fmi3ExitConfigurationMode",
         SETTLE => "fmi3UpdateDiscreteStates",
         NEXT_TICK | CLOCK_ACTIVE | CLOCK_SNAPSHOT | RESTORE_CLOCKS => "fmi3GetClock",
         TICK_NOW | TRIGGER => "fmi3SetClock",
@@ -479,6 +482,7 @@ pub(super) fn fmi_function(method: &str) -> &'static str {
         "exit_initialization_mode" => "fmi2ExitInitializationMode",
         "terminate" => "fmi2Terminate",
         "reset" => "fmi2Reset",
+        "configuration_mode" => "fmi3EnterConfigurationMode/fmi3ExitConfigurationMode",
         "do_step" => "fmi2DoStep",
         "get_real" => "fmi2GetReal",
         "get_integer" => "fmi2GetInteger",

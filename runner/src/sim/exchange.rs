@@ -249,8 +249,12 @@ impl Simulation {
             self.each_instance("fmi2Reset", None, "", |_, i| i.reset())?;
         }
         self.runs += 1;
+        // FMI 3.0.2: structural parameters are set in Configuration Mode, before the others.
+        self.configure(values)?;
         for (key, target, value) in values {
-            self.set(key, *target, value)?;
+            if !self.is_structural(*target) {
+                self.set(key, *target, value)?;
+            }
         }
         self.reset_loops(values);
         self.each_instance("fmi2SetupExperiment", None, "", |_, i| {

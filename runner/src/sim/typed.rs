@@ -68,7 +68,117 @@ impl Simulation {
             return Ok(None);
         };
         let in_fmi2_view = fmu.description.variables.iter().any(|d| d.name == variable);
-        Ok((any || !in_fmi2_view).then(|| (slave, v.clone())))
+        // Its dimensions as this component's structural parameters set them.
+        Ok((any || !in_fmi2_view).then(|| (slave, v.sized(&self.slaves[slave].sizes))))
+    }
+
+    /// The names of the arrays of `slave`'s FMU whose dimensions the structural parameter `vr`
+    /// sets (empty: it sizes none).
+    fn sized_by(&self, slave: usize, vr: u32) -> Vec<&str> {
+        self.fmu_of(slave)
+            .typed
+            .iter()
+            .filter(|x| x.dims.iter().flatten().any(|(p, _)| *p == vr))
+            .map(|x| x.name.as_str())
+            .collect()
+    }
+
+    /// The size the structural parameter `var` of `slave` gives its arrays in a run: the
+    /// system's value, or its start value.
+    fn size_in_force(&self, slave: usize, var: &Var3) -> Option<usize> {
+        match self.slaves[slave].sizes.iter().find(|(p, _)| *p == var.vr) {
+            Some(&(_, n)) => Some(n),
+            None => var.start.as_deref().and_then(|s| s.trim().parse().ok()),
+        }
+    }
+
+    /// A system's value `value` of `c.v`: if `v` is a structural parameter that sizes arrays,
+    /// its value is kept as the size of those arrays in `c` ([`Slave::sizes`]), which the
+    /// connections, parameters and records of the system take.
+    pub(super) fn note_size(&mut self, c: &str, v: &str, value: &Value) -> Result<(), Error> {
+        let slave = self.slave_index(c)?;
+        let Some(var) = self.fmu_of(slave).var3(v) else {
+            return Ok(());
+        };
+        let sized = self.sized_by(slave, var.vr);
+        if var.causality != Causality::StructuralParameter || !var.shape.is_empty() || sized.is_empty() {
+            return Ok(());
+        }
+        let n = match value {
+            Value::Integer(i) => usize::try_from(*i).ok(),
+            Value::List { ty, text } if ty == "UInt64" => text.trim().parse::<usize>().ok(),
+            _ => None,
+        }
+        .ok_or_else(|| {
+            Error::variable(
+                c,
+                v,
+                format!(
+                    "component '{c}': {v} = {value:?}: a structural parameter that sets the size of {} takes one integer >= 0",
+                    sized.join(", ")
+                ),
+            )
+        })?;
+        let vr = var.vr;
+        let sizes = &mut self.slaves[slave].sizes;
+        match sizes.iter_mut().find(|(p, _)| *p == vr) {
+            Some(slot) => slot.1 = n,
+            None => sizes.push((vr, n)),
+        }
+        Ok(())
+    }
+
+    /// Whether `t` is a structural parameter (set in Configuration Mode).
+    pub(super) fn is_structural(&self, t: Target) -> bool {
+        self.fmu_of(t.slave)
+            .typed
+            .iter()
+            .any(|v| v.vr == t.vr && v.causality == Causality::StructuralParameter)
+    }
+
+    /// The structural parameters among `values`, set in Configuration Mode (FMI 3.0.2:
+    /// fmi3EnterConfigurationMode, their fmi3Set{Type}, fmi3ExitConfigurationMode) component by
+    /// component, before any other value: the arrays they size take their sizes then.
+    pub(super) fn configure(&mut self, values: &[(String, Target, Setter)]) -> Result<(), Error> {
+        for slave in 0..self.slaves.len() {
+            let mine: Vec<&(String, Target, Setter)> = values
+                .iter()
+                .filter(|(_, t, _)| t.slave == slave && self.is_structural(*t))
+                .collect();
+            if mine.is_empty() {
+                continue;
+            }
+            let name = self.slaves[slave].name.clone();
+            let keys: Vec<&str> = mine.iter().map(|(k, _, _)| k.as_str()).collect();
+            if self.slaves[slave].me {
+                return Err(Error::unsupported(
+                    Some(&name),
+                    None,
+                    format!(
+                        "component '{name}' runs as model exchange: the runner integrates it with the number of states its structural parameters' start values give, so it does not set {} (run it as co-simulation)",
+                        keys.join(", ")
+                    ),
+                ));
+            }
+            let what = format!("the structural parameters {}", keys.join(", "));
+            for enter in [true, false] {
+                if !enter {
+                    for (key, target, value) in &mine {
+                        self.set(key, *target, value)?;
+                    }
+                }
+                let function = if enter {
+                    "fmi3EnterConfigurationMode"
+                } else {
+                    "fmi3ExitConfigurationMode"
+                };
+                let inst = self.instance(slave);
+                inst.configuration_mode(enter)
+                    .and_then(|()| inst.sync())
+                    .map_err(|e| Error::fmi(&name, function, &e, None, &what))?;
+            }
+        }
+        Ok(())
     }
 
     /// The connection `k` if it is one of typed values (an end of an FMI 3.0 component that is
@@ -118,11 +228,26 @@ impl Simulation {
         // FMI 3.0, 2.4.7.1: an Enumeration is set and got as an Int64; both ends must still
         // be of one declared type to mean the same.
         if fv.ty != tv.ty || fv.shape != tv.shape {
+            // The dimensions as the components' structural parameters set them (the system's
+            // values, or their start values).
+            let resolved = if fv.dims.iter().chain(&tv.dims).any(Option::is_some) {
+                format!(
+                    "; their dimensions as the structural parameters in force set them: {}.{} {}, {}.{} {}",
+                    k.start.0,
+                    k.start.1,
+                    fv.dimensions(),
+                    k.end.0,
+                    k.end.1,
+                    tv.dimensions()
+                )
+            } else {
+                String::new()
+            };
             return Err(Error::unsupported(
                 Some(&k.end.0),
                 Some(&k.end.1),
                 format!(
-                    "connection {text}: {}.{} is {} and {}.{} is {}: a connection joins two variables of one type and shape (arrays element by element)",
+                    "connection {text}: {}.{} is {} and {}.{} is {}: a connection joins two variables of one type and shape (arrays element by element){resolved}",
                     k.start.0,
                     k.start.1,
                     fv.kind(),
@@ -338,11 +463,15 @@ impl Simulation {
                 format!("component '{c}': {v} ({}) = {value:?}: {why}", var.kind()),
             )
         };
-        settable(&var).map_err(&bad)?;
         let count = var.count();
         let values = match value {
             Value::List { ty, text } if same_type(ty, var.ty) => Values::parse(var.ty, count, text),
             Value::List { ty, .. } => Err(format!("an ssv:{ty} value for a {} variable", var.ty)),
+            Value::Items { ty, items } if same_type(ty, var.ty) && var.ty == Type3::Enumeration => {
+                self.enumeration_items(slave, &var, count, items)
+            }
+            Value::Items { ty, items } if same_type(ty, var.ty) => Values::from_items(var.ty, count, items),
+            Value::Items { ty, .. } => Err(format!("ssv:{ty} values (ssv:Value elements) for a {} variable", var.ty)),
             _ if !var.shape.is_empty() => Err(format!(
                 "an array of {count}: SSP 1.0 values are scalars; give it to the run as \"{count} values separated by spaces\""
             )),
@@ -356,6 +485,38 @@ impl Simulation {
         Ok(Some((target(slave, &var), Setter::Values(values))))
     }
 
+    /// The values of the Enumeration `var` of `slave` whose items `items` names (SSP 2.0: "the
+    /// actual numeric value this value is mapped to at run time will depend on the item mapping
+    /// of the enumeration type of the variables being parameterized"), as fmi3SetInt64 sets them.
+    fn enumeration_items(&self, slave: usize, var: &Var3, count: usize, items: &[String]) -> Result<Values, String> {
+        if items.len() != count {
+            return Err(format!(
+                "{} value(s) given, the variable has {count} (one ssv:Value an element)",
+                items.len()
+            ));
+        }
+        let fmu = self.fmu_of(slave);
+        let e = var
+            .declared_type
+            .as_deref()
+            .and_then(|t| fmu.description.enumerations.iter().find(|e| e.name == t))
+            .ok_or("its declaredType names no enumeration type of the FMU's TypeDefinitions")?;
+        items
+            .iter()
+            .map(|item| {
+                e.items
+                    .iter()
+                    .find(|(n, _)| n == item)
+                    .map(|(_, x)| i64::from(*x))
+                    .ok_or_else(|| {
+                        let names: Vec<&str> = e.items.iter().map(|(n, _)| n.as_str()).collect();
+                        format!("{} has no item '{item}' (it has: {})", e.name, names.join(", "))
+                    })
+            })
+            .collect::<Result<Vec<i64>, String>>()
+            .map(Values::Int64)
+    }
+
     /// A run's override of an FMI 3.0 variable FMI 2.0's view leaves out; None: any other.
     pub(super) fn typed_override(&self, qualified: &str, value: &Override) -> Result<Option<(Target, Setter)>, Error> {
         let (c, v) = qualified
@@ -365,7 +526,6 @@ impl Simulation {
             return Ok(None);
         };
         let bad = |why: String| Error::variable(c, v, format!("{qualified} ({}) = {value:?}: {why}", var.kind()));
-        settable(&var).map_err(&bad)?;
         let count = var.count();
         let values = match value {
             Override::Text(s) => Values::parse(var.ty, count, s),
@@ -375,8 +535,32 @@ impl Simulation {
             Override::Boolean(b) if var.ty == Type3::Boolean => Ok(Values::Boolean(vec![*b])),
             Override::Boolean(_) => Err(format!("a Boolean for a {} variable", var.ty)),
         }
-        .map_err(bad)?;
+        .map_err(&bad)?;
+        self.fixed_size(slave, &var, &values).map_err(bad)?;
         Ok(Some((target(slave, &var), Setter::Values(values))))
+    }
+
+    /// A run's override `values` of `var` of `slave`: a structural parameter that sizes arrays
+    /// keeps the size the system was built with (its connections' and parameters' buffers are
+    /// made then); any other value is the run's.
+    fn fixed_size(&self, slave: usize, var: &Var3, values: &Values) -> Result<(), String> {
+        if var.causality != Causality::StructuralParameter {
+            return Ok(());
+        }
+        let sized = self.sized_by(slave, var.vr);
+        if sized.is_empty() {
+            return Ok(());
+        }
+        let given = if values.len() == 1 { values.number(0) } else { None };
+        let now = self.size_in_force(slave, var);
+        if given.is_some() && given == now.map(|n| n as f64) {
+            return Ok(());
+        }
+        Err(format!(
+            "a structural parameter that sets the size of {} ({} in this system): a run does not change the sizes the system was built with; give its value in the system's parameter values (SSP)",
+            sized.join(", "),
+            now.map_or_else(|| "?".to_owned(), |n| n.to_string())
+        ))
     }
 
     /// The recorded FMI 3.0 variable `key` FMI 2.0's view leaves out, its columns from `first`
@@ -462,19 +646,6 @@ impl Simulation {
     }
 }
 
-/// Whether the runner sets `var`: not a structural parameter (FMI 3.0, 2.4.7.4: set in
-/// Configuration Mode only, which the runner does not enter; its arrays keep the sizes of
-/// their structural parameters' start values).
-fn settable(var: &Var3) -> Result<(), String> {
-    if var.causality == Causality::StructuralParameter {
-        return Err(
-            "a structural parameter: the runner does not enter Configuration Mode to set one (arrays keep the sizes of their structural parameters' start values)"
-                .into(),
-        );
-    }
-    Ok(())
-}
-
 /// The target of a typed value: its type there is FMI 2.0's nearest, for messages only (a
 /// [`Setter::Values`] carries its own).
 fn target(slave: usize, var: &Var3) -> Target {
@@ -496,4 +667,17 @@ fn same_type(ty: &str, var: Type3) -> bool {
         t => t,
     };
     ty == var.name() || ty == "Int64" && var == Type3::Enumeration
+}
+
+/// A value of one `ssv:Value` element (SSP 2.0: "for scalar and one element array parameters
+/// the Value element CAN be used") for a scalar of FMI 2.0's view: the String, or the
+/// Enumeration item, it gives; any other value as it is.
+pub(super) fn one_item(value: Value) -> Value {
+    match value {
+        Value::Items { ty, mut items } if items.len() == 1 && ty == "String" => Value::String(items.remove(0)),
+        Value::Items { ty, mut items } if items.len() == 1 && ty == "Enumeration" => {
+            Value::Enumeration(items.remove(0))
+        }
+        other => other,
+    }
 }
