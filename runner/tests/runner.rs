@@ -582,10 +582,9 @@ fn structural_parameters_the_system_sets_size_connections_parameters_and_records
     assert_eq!(again.values, r.values);
     // An override of a structural parameter keeps the size the system was built with.
     opts.overrides = vec![("s2.n".into(), Override::Integer(3))];
-    let e = sim
-        .run(&opts, &mut |_, _| {})
-        .err()
-        .expect("a size the run changes is refused");
+    let Err(e) = sim.run(&opts, &mut |_, _| {}) else {
+        panic!("a size the run changes is refused")
+    };
     assert!(
         e.error.message.contains("s2.n") && e.error.message.contains("(4 in this system)"),
         "{}",
@@ -599,7 +598,9 @@ fn structural_parameters_the_system_sets_size_connections_parameters_and_records
     // upstream since): the run fails naming the call, the value and what the FMU said.
     let mut theirs =
         Simulation::from_ssp(&two_state_spaces(&dir, 2, reference3("StateSpace"))).unwrap_or_else(|e| panic!("{e}"));
-    let e = theirs.run(&opts, &mut |_, _| {}).err().expect("theirs refuses m");
+    let Err(e) = theirs.run(&opts, &mut |_, _| {}) else {
+        panic!("theirs refuses m")
+    };
     assert!(
         e.error.message.contains("component 's1': fmi3SetUInt64 (m = 2)")
             && e.error.message.contains("Expected nValues >= 2 but was 1"),
@@ -656,9 +657,9 @@ fn ssv_value_elements_are_read_and_set() {
     );
     // A Binary ssv:Value that is no hexBinary is refused, naming the parameter.
     let bad = xml.replace("0aFF", "0aF");
-    let e = parse_ssd(&bad, &mut |f: &str| panic!("no file {f}"))
-        .err()
-        .expect("an odd hexBinary");
+    let Err(e) = parse_ssd(&bad, &mut |f: &str| panic!("no file {f}")) else {
+        panic!("an odd hexBinary")
+    };
     assert!(
         e.message.contains("parameter 'b'") && e.message.contains("'0aF'"),
         "{e}"
