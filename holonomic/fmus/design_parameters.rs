@@ -32,7 +32,7 @@ macro_rules! control_mode {
 /// `with_design_parameters! { controller | sampled; <attributes> pub struct Name { <fields
 /// before> } { <fields after> } }`: the struct with the design parameters between the two
 /// groups of fields, each with the description and variability of the FMU named first; and what
-/// is computed from them alone: `plant()`, `law_with_gain(k)`.
+/// is computed from them alone: `plant()`, `lqr_gain_rows()`, `law_with_gain(k)`.
 macro_rules! with_design_parameters {
     ($which:ident; $(# $attr:tt)* pub struct $name:ident { $($head:tt)* } { $($tail:tt)* }) => {
         with_design_parameters!(@row $which [$($head)*] [$(# $attr)* pub struct $name] [$($tail)*] $name
@@ -92,6 +92,18 @@ macro_rules! with_design_parameters {
                     j1: self.J1,
                     j2: self.J2,
                 }
+            }
+
+            /// The LQR gain K of eq. (14) for this plant and these weights, row i the torque M_i
+            /// (the 2 x 4 array `K` every one of these FMUs declares).
+            fn lqr_gain_rows(&self) -> Result<[[f64; 4]; 2], String> {
+                let q = Matrix4::from_diagonal(&Vector4::new(self.Q11, self.Q22, self.Q33, self.Q44));
+                let r = Matrix2::from_diagonal(&Vector2::new(self.R11, self.R22));
+                let k = lqr_gain(&self.plant(), &q, &r)?;
+                Ok([
+                    [k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]],
+                    [k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]],
+                ])
             }
 
             /// The control law of the parameters, with the LQR gain `k`. Their domains are

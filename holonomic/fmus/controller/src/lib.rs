@@ -224,16 +224,11 @@ impl Model for Controller {
         self.sampled_events = self.sampled && ctx.model_exchange();
         self.samples_taken = 0;
         self.hold();
-        let v = &*self;
-        let q = Matrix4::from_diagonal(&Vector4::new(v.Q11, v.Q22, v.Q33, v.Q44));
-        let r = Matrix2::from_diagonal(&Vector2::new(v.R11, v.R22));
-        let k = lqr_gain(&self.plant(), &q, &r)?;
-        (self.K11, self.K12, self.K13, self.K14) = (k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]);
-        (self.K21, self.K22, self.K23, self.K24) = (k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]);
-        self.K = [
-            [k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]],
-            [k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]],
-        ];
+        self.K = self.lqr_gain_rows()?;
+        [
+            [self.K11, self.K12, self.K13, self.K14],
+            [self.K21, self.K22, self.K23, self.K24],
+        ] = self.K;
         // The filters start at the measured speeds (no derivative kick); the integrals at
         // their start values.
         let (x, _) = self.measurement();

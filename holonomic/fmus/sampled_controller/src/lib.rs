@@ -115,13 +115,7 @@ fn split(p: &[f64; 6]) -> (Vector4<f64>, Vector2<f64>) {
 
 impl Model for SampledController {
     fn initialize(&mut self, _ctx: &Context) -> Result<(), String> {
-        let q = Matrix4::from_diagonal(&Vector4::new(self.Q11, self.Q22, self.Q33, self.Q44));
-        let r = Matrix2::from_diagonal(&Vector2::new(self.R11, self.R22));
-        let k = lqr_gain(&self.plant(), &q, &r)?;
-        self.K = [
-            [k[(0, 0)], k[(0, 1)], k[(0, 2)], k[(0, 3)]],
-            [k[(1, 0)], k[(1, 1)], k[(1, 2)], k[(1, 3)]],
-        ];
+        self.K = self.lqr_gain_rows()?;
         // The memory's start: integrals 0, filters at the measured speeds (no derivative kick).
         let (x, _) = split(&self.measurement());
         self.memory = self.law().initial_state(&x);
