@@ -45,6 +45,17 @@ impl<M: CoSimulation> Instance<M> {
         Err(self.wrong_states_len(function, n))
     }
 
+    /// Before a vector of `n` continuous states or derivatives is read: its length checked, and in
+    /// Initialization Mode the initialization run, so that it reads the initial values.
+    #[inline]
+    fn states_to_read(&mut self, function: &str, n: usize) -> Outcome {
+        self.check_states_len(function, n)?;
+        if self.sim.state == State::InitializationMode {
+            self.initialize_model(function, false)?;
+        }
+        Ok(())
+    }
+
     #[cold]
     fn wrong_states_len(&self, function: &str, n: usize) -> Status {
         self.error(&format!(
@@ -131,12 +142,7 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn get_continuous_states(&mut self, function: &str, x: &mut [f64]) -> Status {
-        if let Err(status) = self.check_states_len(function, x.len()) {
-            return status;
-        }
-        if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(function, false)
-        {
+        if let Err(status) = self.states_to_read(function, x.len()) {
             return status;
         }
         let full = self.sim.model.states();
@@ -187,12 +193,7 @@ impl<M: CoSimulation> Instance<M> {
     /// The get-derivatives function: the right-hand side only (the outputs stay for when they are read).
     #[inline]
     pub fn get_derivatives(&mut self, function: &str, dx: &mut [f64]) -> Status {
-        if let Err(status) = self.check_states_len(function, dx.len()) {
-            return status;
-        }
-        if self.sim.state == State::InitializationMode
-            && let Err(status) = self.initialize_model(function, false)
-        {
+        if let Err(status) = self.states_to_read(function, dx.len()) {
             return status;
         }
         if self.sim.stale_derivatives {
