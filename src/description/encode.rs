@@ -8,6 +8,32 @@ pub const MAGIC: &[u8; 24] = b"\0RUSTFMU-DESCRIPTION-V1\0";
 /// Bump when the encoding changes shape.
 pub const FORMAT_VERSION: u32 = 1;
 
+/// The FMI 3.0 parts of a variable that the encoding carries in blocks of their own
+/// ([`Enc::parts`]), each added after the ones before it so that older encodings stay as they were.
+#[derive(Clone, Copy)]
+enum Part {
+    /// `fmi3_only`, `maxSize`, `mimeType`, the array dimensions ([`FMI3_EXTRAS_TAG`]).
+    Extras,
+    /// A Clock's declaration and a clocked variable's clocks ([`CLOCKS_TAG`]).
+    Clock,
+    /// The structural parameters that size an array ([`SIZED_TAG`]).
+    Sized,
+    /// A Clock's priority ([`PRIORITIES_TAG`]).
+    Priority,
+}
+
+impl Part {
+    /// Whether `v` has this part.
+    const fn of(self, v: &Variable) -> bool {
+        match self {
+            Part::Extras => !v.fmi3.is_none(),
+            Part::Clock => v.fmi3.has_clock_part(),
+            Part::Sized => v.is_sized(),
+            Part::Priority => matches!(v.fmi3.clock, Some(ClockDecl { priority: Some(_), .. })),
+        }
+    }
+}
+
 /// A const-evaluable byte writer; with an empty buffer it only counts.
 struct Enc<'a> {
     buf: &'a mut [u8],
@@ -282,9 +308,10 @@ impl Enc<'_> {
     }
 
     /// The whole description, block after block in the order of the format (which
-    /// [`decode`] reads in the same order). One function of ~260 lines on purpose: the order
-    /// of the blocks is the format, and the GUIDs of every FMU built are its hash, so it reads
-    /// top to bottom beside `decode` rather than spread over helpers whose order could drift.
+    /// [`decode`] reads in the same order). One function on purpose: the order of the blocks is
+    /// the format, and the GUIDs of every FMU built are its hash, so every block is written from
+    /// here, top to bottom beside `decode`; the four per-variable FMI 3.0 blocks share one
+    /// writer ([`Enc::parts`]), called here in their order.
     const fn description(&mut self, d: &ModelDescription, interfaces: Interfaces) {
         self.str(d.model_identifier);
         self.str(d.description);
@@ -336,7 +363,6 @@ impl Enc<'_> {
         // (`K[1,2]`) with the value references vr, vr + 1, .. ([`Variable::element_name`]).
         let version = interfaces.version;
         let mut n = 0u32;
-        let mut extras = 0u32;
         let mut i = 0;
         while i < d.variables.len() {
             let v = &d.variables[i];
@@ -345,9 +371,6 @@ impl Enc<'_> {
                     n += v.element_count() as u32;
                 } else {
                     n += 1;
-                    if !v.fmi3.is_none() {
-                        extras += 1;
-                    }
                 }
             }
             i += 1;
@@ -405,145 +428,19 @@ impl Enc<'_> {
                 self.u8(BUS_SIMULATION_TAG);
             }
         }
-        // Likewise the FMI 3.0 declarations: only where some variable has one.
-        if extras > 0 {
-            self.u8(FMI3_EXTRAS_TAG);
-            self.u32(extras);
-            let (mut i, mut at) = (0, 0u32);
-            while i < d.variables.len() {
-                let v = &d.variables[i];
-                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
-                    at += v.element_count() as u32;
-                } else if v.in_version(version) {
-                    if !v.fmi3.is_none() {
-                        self.u32(at);
-                        self.u8(v.fmi3.only as u8);
-                        match v.fmi3.max_size {
-                            None => self.u8(0),
-                            Some(m) => {
-                                self.u8(1);
-                                self.u32(m);
-                            }
-                        }
-                        self.str(v.fmi3.mime_type);
-                        self.u32(v.fmi3.dimensions.len() as u32);
-                        let mut k = 0;
-                        while k < v.fmi3.dimensions.len() {
-                            self.u32(v.fmi3.dimensions[k]);
-                            k += 1;
-                        }
-                    }
-                    at += 1;
-                }
-                i += 1;
-            }
-        }
-        // The clocks and the clocked variables (FMI 3.0): only where there are some, so the
-        // encodings (and instantiation tokens) of the models without clocks are those before.
-        let mut clocked = 0u32;
-        let mut i = 0;
-        while i < d.variables.len() {
-            if d.variables[i].in_version(version) && d.variables[i].fmi3.has_clock_part() {
-                clocked += 1;
-            }
-            i += 1;
-        }
-        if clocked > 0 {
-            self.u8(CLOCKS_TAG);
-            self.u32(clocked);
-            let (mut i, mut at) = (0, 0u32);
-            while i < d.variables.len() {
-                let v = &d.variables[i];
-                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
-                    at += v.element_count() as u32;
-                } else if v.in_version(version) {
-                    if v.fmi3.has_clock_part() {
-                        self.u32(at);
-                        match v.fmi3.clock {
-                            None => self.u8(0),
-                            Some(c) => {
-                                self.u8(1);
-                                self.u8(c.interval_variability as u8);
-                                self.opt_f64(c.interval);
-                                self.str(c.interval_parameter);
-                                self.f64(c.shift);
-                                self.u8(c.can_be_deactivated as u8);
-                            }
-                        }
-                        self.names(Some(v.fmi3.clocks));
-                    }
-                    at += 1;
-                }
-                i += 1;
-            }
-        }
-        // The arrays sized by structural parameters: only where there are some, so the other
-        // encodings are those before.
-        let mut sized = 0u32;
-        let mut i = 0;
-        while i < d.variables.len() {
-            if d.variables[i].in_version(version) && d.variables[i].is_sized() {
-                sized += 1;
-            }
-            i += 1;
-        }
-        if sized > 0 {
-            self.u8(SIZED_TAG);
-            self.u32(sized);
-            let (mut i, mut at) = (0, 0u32);
-            while i < d.variables.len() {
-                let v = &d.variables[i];
-                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
-                    at += v.element_count() as u32;
-                } else if v.in_version(version) {
-                    if v.is_sized() {
-                        self.u32(at);
-                        self.u32(v.fmi3.sized_by.len() as u32);
-                        let mut k = 0;
-                        while k < v.fmi3.sized_by.len() {
-                            self.u32(v.fmi3.sized_by[k]);
-                            k += 1;
-                        }
-                    }
-                    at += 1;
-                }
-                i += 1;
-            }
-        }
+        // Likewise the FMI 3.0 declarations, then the clocks and the clocked variables, then the
+        // arrays sized by structural parameters: each block only where some variable has its
+        // part, so the encodings (and instantiation tokens) of the models without are those before.
+        self.parts(d, version, FMI3_EXTRAS_TAG, Part::Extras);
+        self.parts(d, version, CLOCKS_TAG, Part::Clock);
+        self.parts(d, version, SIZED_TAG, Part::Sized);
         // canInterpolateInputs: only where it is true, so the other encodings are those before.
         if interfaces.can_interpolate_inputs {
             self.u8(INTERPOLATES_INPUTS_TAG);
         }
         // The clocks' priorities (FMI 3.0): only where a clock has one, so the other encodings
         // are those before.
-        let mut prioritized = 0u32;
-        let mut i = 0;
-        while i < d.variables.len() {
-            if d.variables[i].in_version(version)
-                && let Some(ClockDecl { priority: Some(_), .. }) = d.variables[i].fmi3.clock
-            {
-                prioritized += 1;
-            }
-            i += 1;
-        }
-        if prioritized > 0 {
-            self.u8(PRIORITIES_TAG);
-            self.u32(prioritized);
-            let (mut i, mut at) = (0, 0u32);
-            while i < d.variables.len() {
-                let v = &d.variables[i];
-                if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
-                    at += v.element_count() as u32;
-                } else if v.in_version(version) {
-                    if let Some(ClockDecl { priority: Some(p), .. }) = v.fmi3.clock {
-                        self.u32(at);
-                        self.u32(p);
-                    }
-                    at += 1;
-                }
-                i += 1;
-            }
-        }
+        self.parts(d, version, PRIORITIES_TAG, Part::Priority);
         // Scheduled Execution: only where it is offered.
         if interfaces.scheduled_execution {
             self.u8(SCHEDULED_EXECUTION_TAG);
@@ -560,6 +457,90 @@ impl Enc<'_> {
 }
 
 impl Enc<'_> {
+    /// The block `tag` of the variables that have `part`, written only where some variable has
+    /// it: their count, then for each its index among the version's scalar variables (an FMI 2.0
+    /// array counts as its elements, and has no FMI 3.0 part) and the part.
+    const fn parts(&mut self, d: &ModelDescription, version: FmiVersion, tag: u8, part: Part) {
+        let mut count = 0u32;
+        let mut i = 0;
+        while i < d.variables.len() {
+            let v = &d.variables[i];
+            if v.in_version(version) && !(v.is_array() && matches!(version, FmiVersion::V2)) && part.of(v) {
+                count += 1;
+            }
+            i += 1;
+        }
+        if count == 0 {
+            return;
+        }
+        self.u8(tag);
+        self.u32(count);
+        let (mut i, mut at) = (0, 0u32);
+        while i < d.variables.len() {
+            let v = &d.variables[i];
+            if v.in_version(version) && v.is_array() && matches!(version, FmiVersion::V2) {
+                at += v.element_count() as u32;
+            } else if v.in_version(version) {
+                if part.of(v) {
+                    self.u32(at);
+                    self.part(v, part);
+                }
+                at += 1;
+            }
+            i += 1;
+        }
+    }
+
+    /// `part` of `v` (which has it).
+    const fn part(&mut self, v: &Variable, part: Part) {
+        match part {
+            Part::Extras => {
+                self.u8(v.fmi3.only as u8);
+                match v.fmi3.max_size {
+                    None => self.u8(0),
+                    Some(m) => {
+                        self.u8(1);
+                        self.u32(m);
+                    }
+                }
+                self.str(v.fmi3.mime_type);
+                self.u32(v.fmi3.dimensions.len() as u32);
+                let mut k = 0;
+                while k < v.fmi3.dimensions.len() {
+                    self.u32(v.fmi3.dimensions[k]);
+                    k += 1;
+                }
+            }
+            Part::Clock => {
+                match v.fmi3.clock {
+                    None => self.u8(0),
+                    Some(c) => {
+                        self.u8(1);
+                        self.u8(c.interval_variability as u8);
+                        self.opt_f64(c.interval);
+                        self.str(c.interval_parameter);
+                        self.f64(c.shift);
+                        self.u8(c.can_be_deactivated as u8);
+                    }
+                }
+                self.names(Some(v.fmi3.clocks));
+            }
+            Part::Sized => {
+                self.u32(v.fmi3.sized_by.len() as u32);
+                let mut k = 0;
+                while k < v.fmi3.sized_by.len() {
+                    self.u32(v.fmi3.sized_by[k]);
+                    k += 1;
+                }
+            }
+            Part::Priority => {
+                if let Some(ClockDecl { priority: Some(p), .. }) = v.fmi3.clock {
+                    self.u32(p);
+                }
+            }
+        }
+    }
+
     /// The block of display units and aliases ([`DISPLAY_TAG`]): the units' display units (by
     /// the unit's index), then each variable's display unit and aliases (by its index in the
     /// version's variables; in FMI 2.0 an array's display unit is each element's, and an array
