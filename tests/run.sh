@@ -114,6 +114,17 @@ echo "== fmutool -check (fmu-manipulation-toolbox) on every FMU, FMI 2.0 and 3.0
 for fmu in "${fmus[@]}"; do fmutool -input "$fmu" -check && n=$((n + 1)) || record "fmutool -check $fmu" 0 1; done
 record "fmutool -check" "$n" 0
 
+# The conformance suite's fmu-check cross-compiled for Windows, for test_windows.py (it runs inside
+# the Python tests now, issue 53): built here, beside the checks below, which use one core each,
+# and handed to the test in RUSTFMU_FMU_CHECK_EXE. Built by the test's fixture, it waited for the
+# cargo lock that clippy holds beside the Python tests (about 450 s).
+(
+  nice -n 10 cargo build --release --target x86_64-pc-windows-gnu -p fmi-conformance --bin fmu-check \
+    >"$logs/fmu-check-exe.log" 2>&1
+  echo $? >"$logs/fmu-check-exe.rc"
+) &
+fmu_check_exe_build=$!
+
 echo "== independent importers (../shared/independent/: fmusim, fmusim-rs, fmuCheck) on every FMU, beside cargo fmu check"
 # tests/independent/README.md: validation, every interface, fmuCheck's step sizes, results against
 # fmpy and beside the C Reference-FMUs; one record per tool and FMU. It runs one simulation at a
@@ -149,6 +160,14 @@ nf=0
 while IFS=$'\t' read -r name p f; do record "$name" "$p" "$f"; nf=$((nf + f)); done < <(cat "$logs/independent.tsv" 2>/dev/null)
 [ "$st" -eq 0 ] || [ "$nf" -ne 0 ] || record "independent importers (exit $st)" 0 1
 
+
+wait "$fmu_check_exe_build" || true
+if [ "$(cat "$logs/fmu-check-exe.rc")" = 0 ]; then
+  export RUSTFMU_FMU_CHECK_EXE="$PWD/target/x86_64-pc-windows-gnu/release/fmu-check.exe"
+else
+  echo "fmu-check.exe did not build (test_windows.py's fixture tries again and fails with cargo's message):"
+  tail -n 30 "$logs/fmu-check-exe.log"
+fi
 
 echo "== Rust tests (cargo test --workspace --no-fail-fast)"
 # --no-fail-fast: a failing test binary does not stop the ones after it (without it one failure
@@ -193,11 +212,11 @@ reference_checks() {
   echo "$n $nf" >"$logs/ref.counts"
 }
 
-# Clippy, and the conformance suite's fmu-check cross-compiled for Windows (test_windows.py's
-# fixture then finds it built), the Reference-FMU checks and the wine/qemu tests run beside the
-# Python tests: those run one simulation at a time, on one core of two most of the time, and these
-# are builds that use both (about 130 s and 45 s of CI when they ran alone) and runs on one core.
-# Their output goes to logs, printed after the Python tests.
+# Clippy, cargo doc and the Reference-FMU checks run beside the Python tests: those run one
+# simulation at a time per worker, and these are a build that uses both cores and runs on one.
+# Their output goes to logs, printed after the Python tests. (The wine and qemu tests ran here
+# too, after them, and ended about 385 s after the Python tests in session 11's CI: they are in
+# the Python tests' own run now, issue 53.)
 (
   set +e
   started=$SECONDS
@@ -208,38 +227,46 @@ reference_checks() {
   # examples' markup): what a model author reads. Reuses clippy's check build of the dependencies.
   RUSTDOCFLAGS="-D warnings" cargo doc --release --no-deps -p rustfmu -p rustfmu-derive >"$logs/doc.log" 2>&1
   echo $? >"$logs/doc.rc"
-  nice -n 19 cargo build --release --target x86_64-pc-windows-gnu -p fmi-conformance --bin fmu-check \
-    >"$logs/fmu-check-exe.log" 2>&1 || true
   started=$SECONDS
   reference_checks >"$logs/ref.log" 2>&1
   echo $((SECONDS - started)) >"$logs/ref.seconds"
-  # The Windows binaries under wine and the aarch64 ones under qemu (their own pytest run: they
-  # need fmu-check.exe, built just above), also beside the main Python tests: they ran alone
-  # after them before (about 190 s of CI on one core; issue 53).
-  started=$SECONDS
-  rm -f target/wine-test/report.txt
-  nice -n 10 python -m pytest tests/python/test_windows.py tests/python/test_aarch64.py -q -p no:cacheprovider --durations=15 \
-    >"$logs/pytest-windows.log" 2>&1
-  echo $? >"$logs/pytest-windows.rc"
-  echo $((SECONDS - started)) >"$logs/pytest-windows.seconds"
 ) &
 beside=$!
 
-echo "== Python tests (two workers, one test file each at a time)"
+echo "== Python tests (two workers, one test file each at a time), the wine and qemu tests among them"
 # Two pytest-xdist workers, each taking whole files (--dist loadfile: a file's module and session
 # fixtures, its `cargo fmu new` crates and its tmp folders stay in one process): most tests run one
 # simulation on one core, so one worker left the second core to the builds and runs beside it,
-# which need less than the Python suite's 1729 s (session 10; issue 53).
+# which need less than the Python suite's 1729 s (session 10; issue 53). The JUnit file gives the
+# wine/qemu files' counts apart (their own line in the summary, as when they ran alone).
 set +e
+rm -f target/wine-test/report.txt
 python -m pytest tests/python -q -p no:cacheprovider -n 2 --dist loadfile --durations=25 \
-  --ignore=tests/python/test_windows.py --ignore=tests/python/test_aarch64.py 2>&1 | tee "$logs/pytest.log"
+  --junitxml="$logs/pytest.xml" 2>&1 | tee "$logs/pytest.log"
 py_status=${PIPESTATUS[0]}
 set -e
-line=$(tail -n 1 "$logs/pytest.log")
-p=$( (echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+') || echo 0)
-f=$( (echo "$line" | grep -oE '[0-9]+ (failed|error|errors)' | grep -oE '[0-9]+' || true) | awk '{s+=$1} END {print s+0}')
+# "all|platforms passed failed": every test of the run, and those of test_windows.py and
+# test_aarch64.py; a file that could not be read counts as one failure.
+counts=$(python - "$logs/pytest.xml" <<'PY' || echo "0 1 0 1"
+import sys, xml.etree.ElementTree as E
+n = {"all": [0, 0], "platforms": [0, 0]}
+for case in E.parse(sys.argv[1]).iter("testcase"):
+    kinds = {child.tag for child in case}
+    if "skipped" in kinds:
+        continue
+    failed = bool(kinds & {"failure", "error"})
+    groups = ["all"] + (["platforms"] if case.get("classname", "").split(".")[-1] in ("test_windows", "test_aarch64") else [])
+    for g in groups:
+        n[g][failed] += 1
+print(*n["all"], *n["platforms"])
+PY
+)
+read -r p f wp wf <<<"$counts"
+cat target/wine-test/report.txt 2>/dev/null || true
 [ "$py_status" -eq 0 ] || f=$(( ${f:-0} > 0 ? f : 1 ))
-record "Python tests" "${p:-0}" "${f:-0}"
+record "Python tests (all but wine/qemu)" "$((p - wp))" "$((f - wf))"
+suite_started=$SECONDS
+record "Windows (wine), aarch64 (qemu) in it" "$wp" "$wf"
 
 wait "$beside"
 echo "== cargo clippy -D warnings (ran beside the Python tests)"
@@ -255,18 +282,6 @@ cat "$logs/ref.log"
 read -r n nf < <(cat "$logs/ref.counts" 2>/dev/null || echo "0 1")
 suite_started=$((SECONDS - $(cat "$logs/ref.seconds" 2>/dev/null || echo 0)))
 record "cargo fmu check Reference FMUs" "$n" "$nf"
-
-echo "== Windows binaries under wine (C hosts against Linux, the conformance suite's fmu-check.exe), aarch64 under qemu (ran beside the Python tests)"
-cat "$logs/pytest-windows.log" 2>/dev/null || echo "(no output: the run beside the Python tests stopped before it)"
-win_status=$(cat "$logs/pytest-windows.rc" 2>/dev/null || echo 1)
-cat target/wine-test/report.txt 2>/dev/null || true
-echo "wine and qemu tests: $(cat "$logs/pytest-windows.seconds" 2>/dev/null || echo '?') s"
-suite_started=$((SECONDS - $(cat "$logs/pytest-windows.seconds" 2>/dev/null || echo 0)))
-line=$(tail -n 1 "$logs/pytest-windows.log" 2>/dev/null || true)
-p=$( (echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || true) | awk '{s+=$1} END {print s+0}')
-f=$( (echo "$line" | grep -oE '[0-9]+ (failed|error|errors|xpassed)' | grep -oE '[0-9]+' || true) | awk '{s+=$1} END {print s+0}')
-[ "$win_status" -eq 0 ] || f=$(( ${f:-0} > 0 ? f : 1 ))
-record "Windows (wine), aarch64 (qemu)" "${p:-0}" "${f:-0}"
 
 step "benchmarks still run (quick mode)" bash bench/quick.sh
 

@@ -237,6 +237,13 @@ NATIVE = "native C host/valgrind"
 
 @pytest.fixture(scope="session")
 def fmu_check_exe(hosts):
+    # tests/run.sh builds it before the Python tests (beside the conformance checks) and says where:
+    # a cargo build here would wait for the lock of the clippy run beside the Python tests.
+    built = os.environ.get("RUSTFMU_FMU_CHECK_EXE")
+    if built:
+        shutil.copy(built, hosts / "fmu-check.exe")
+        report(f"fmu-check.exe for x86_64-pc-windows-gnu: built by tests/run.sh ({built})")
+        return hosts / "fmu-check.exe"
     started = time.monotonic()
     out = run(
         ["cargo", "build", "--release", "--target", "x86_64-pc-windows-gnu", "-p", "fmi-conformance", "--bin", "fmu-check"],
