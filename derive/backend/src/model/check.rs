@@ -4,7 +4,7 @@
 //! display units declared, alias names unique. The first broken rule is the one error.
 
 use super::decl::{Kind, Var, by_name, is_state};
-use super::fmu_attr::ModelAttr;
+use super::model_attr::ModelAttr;
 use super::variable_attr::{ClockAttr, ClockInterval};
 use crate::units;
 use fmi_standard::{Causality, Initial, Variability};
@@ -85,7 +85,7 @@ fn scheduled_execution(vars: &[Var], model: &ModelAttr) -> Result<()> {
 /// once in its terminal; the FMI-LS-BUS rules of every `can_network` first (their messages name
 /// the role of the variable).
 fn terminals(vars: &[Var], model: &ModelAttr) -> Result<()> {
-    fn members(vars: &[Var], t: &super::fmu_attr::TerminalAttr) -> Result<()> {
+    fn members(vars: &[Var], t: &super::model_attr::TerminalAttr) -> Result<()> {
         let mut seen = Vec::new();
         for (variable, member, _, span) in &t.members {
             if !vars.iter().any(|v| v.is_named(variable)) {

@@ -3,47 +3,12 @@
 //! grammar of [`super::grammar`], each nested list its own small parser.
 
 use super::grammar::{Key, MetaParser, find, key_names, name_or_ident, unknown_key};
+use super::model_attr::{ModelAttr, TerminalAttr};
 use crate::units::{self, Base};
 use proc_macro2::Span;
 use syn::meta::ParseNestedMeta;
 use syn::spanned::Spanned;
 use syn::{Error, Expr, LitStr, Result};
-
-/// `#[fmu(...)]` on the struct.
-#[derive(Default)]
-pub(crate) struct ModelAttr {
-    pub identifier: Option<LitStr>,
-    pub description: Option<String>,
-    /// `co_simulation_only` / `model_exchange_only`: (model exchange, co-simulation) offered.
-    pub interfaces: Option<(bool, bool, Span)>,
-    /// `fmi3_only`: the model has no FMI 2.0 export.
-    pub fmi3_only: Option<Span>,
-    /// `scheduled_execution`: the FMU offers FMI 3.0 Scheduled Execution too.
-    pub scheduled_execution: Option<Span>,
-    pub units: Vec<(String, Base, Span)>,
-    /// `display_unit(unit = .., name = .., factor = .., offset = .., inverse)`: (unit, name,
-    /// conversion, span).
-    pub display_units: Vec<(String, String, units::Display, Span)>,
-    pub categories: Vec<(String, String, Span)>,
-    pub terminals: Vec<TerminalAttr>,
-    /// `bus_simulation`: an FMI-LS-BUS bus simulation FMU (its networks' rules are a bus
-    /// simulation's; the manifest says so).
-    pub bus_simulation: Option<Span>,
-    /// `can_network(..)`: FMI-LS-BUS CAN networks (each also one of `terminals`).
-    pub networks: Vec<super::network::NetworkAttr>,
-}
-
-/// `terminal(name = .., kind = .., matching_rule = .., description = .., member(..), ..)`.
-pub(crate) struct TerminalAttr {
-    pub name: String,
-    pub kind: String,
-    pub matching_rule: String,
-    pub description: String,
-    /// (variable, memberName, variableKind, span of the variable)
-    pub members: Vec<(String, String, String, Span)>,
-    /// Nested `terminal(..)`s.
-    pub terminals: Vec<TerminalAttr>,
-}
 
 /// Every key of `#[fmu(...)]` on a model struct, in the order the error lists them.
 const FMU_GRAMMAR: [Key<MetaParser<ModelAttr>>; 12] = [

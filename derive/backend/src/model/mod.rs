@@ -3,7 +3,7 @@
 //! generates the typed description, the start values and the get/set dispatch.
 //!
 //! Each step is a room: `grammar` (one typed grammar for every attribute) below
-//! `variable_attr` and `fmu_attr` (the attributes' keys), `decl` (the declarations as the rest
+//! `variable_attr` and `fmu_attr` (the attributes' keys) writing `model_attr` (what `#[fmu]` says), `decl` (the declarations as the rest
 //! sees them), `field` (one field's declaration and its own rules), `network` (FMI-LS-BUS network
 //! terminals: their terminal, MIME types and rules), `check` (the rules between declarations),
 //! `codegen` (the generated code); this file runs them in that order.
@@ -14,6 +14,7 @@ pub(crate) mod decl;
 mod field;
 pub(crate) mod fmu_attr;
 mod grammar;
+pub(crate) mod model_attr;
 mod network;
 pub(crate) mod variable_attr;
 

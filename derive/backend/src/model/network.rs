@@ -6,8 +6,8 @@
 //! Definitions" sections do not allow.
 
 use super::decl::{Kind, Var, by_name};
-use super::fmu_attr::{ModelAttr, TerminalAttr};
 use super::grammar::name_or_ident;
+use super::model_attr::{ModelAttr, NetworkAttr, TerminalAttr};
 use fmi_standard::{Causality, Variability};
 use proc_macro2::Span;
 use syn::meta::ParseNestedMeta;
@@ -22,17 +22,6 @@ pub(crate) const NETWORK_KIND: &str = "org.fmi-ls-bus.network-terminal";
 const NETWORK_RULE: &str = "org.fmi-ls-bus.transceiver";
 /// "Configuration Terminal": its name, kind and matching rule.
 const CONFIGURATION_KIND: &str = "org.fmi-ls-bus.network-terminal.configuration";
-
-/// One `can_network(..)`: the variables of its roles, by field or FMI name, with their spans.
-pub(crate) struct NetworkAttr {
-    pub name: String,
-    pub span: Span,
-    pub rx_clock: (String, Span),
-    pub rx_data: (String, Span),
-    pub tx_clock: (String, Span),
-    pub tx_data: (String, Span),
-    pub bus_notifications: Option<(String, Span)>,
-}
 
 /// `can_network(name = "..", rx_clock = .., rx_data = .., tx_clock = .., tx_data = ..,
 /// bus_notifications = .., description = "..")`: the network and its terminal.

@@ -5,7 +5,7 @@
 
 use crate::metadata::Metadata;
 use crate::model::decl::{Kind, Var};
-use crate::model::fmu_attr::ModelAttr;
+use crate::model::model_attr::ModelAttr;
 use fmi_standard::Causality;
 use proc_macro2::TokenStream;
 use quote::quote;

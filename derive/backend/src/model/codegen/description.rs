@@ -4,7 +4,7 @@
 use super::values::{array_value, option};
 use crate::metadata::Metadata;
 use crate::model::decl::{Kind, Var, fmi_name};
-use crate::model::fmu_attr::ModelAttr;
+use crate::model::model_attr::ModelAttr;
 use crate::model::variable_attr::{ClockAttr, ClockInterval};
 use crate::units::{self, Base};
 use proc_macro2::{Span, TokenStream};
@@ -56,7 +56,7 @@ pub(crate) fn model_description(
         .iter()
         .filter(|v| v.event_indicator.is_some())
         .map(|v| v.name.clone());
-    fn terminal(rt: &TokenStream, vars: &[Var], t: &crate::model::fmu_attr::TerminalAttr) -> TokenStream {
+    fn terminal(rt: &TokenStream, vars: &[Var], t: &crate::model::model_attr::TerminalAttr) -> TokenStream {
         let (name, kind, rule, description) = (&t.name, &t.kind, &t.matching_rule, &t.description);
         let members = t.members.iter().map(|(variable, member, kind, _)| {
             let variable = fmi_name(vars, variable);

@@ -10,7 +10,7 @@ mod states;
 mod values;
 
 use super::decl::Var;
-use super::fmu_attr::ModelAttr;
+use super::model_attr::ModelAttr;
 use equations::Equations;
 use proc_macro2::TokenStream;
 use quote::quote;
