@@ -1,17 +1,17 @@
 //! Random co-simulation call sequences: the calls ([`Op`]) and their strategies, the shadow of
-//! the FMI 2.0 state machine, one call with what the shadow expects of it, and the check.
+//! the FMI 2.0 state machine, one call with what the shadow expects of it (the check that runs them: [`super::checks`]).
 
-use super::{Expect, SLOTS, Vr, config, real, resolve, vr};
+use super::{Expect, SLOTS, Vr, real, resolve, vr};
 use crate::fmi2::*;
 use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::instance::{Args, Instance, status_name};
-use crate::outcome::{breadcrumb, info, limitation};
+use crate::outcome::{breadcrumb, limitation};
 use crate::replay::Expected;
 use crate::standard::allowed_states;
 use crate::state::State;
 use crate::{Fmu, Type, state};
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestError, TestRunner};
+use proptest::test_runner::TestCaseError;
 use std::ptr;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -762,74 +762,3 @@ pub(super) fn note_limitations(fmu: &Fmu) {
 /// steps its components at its internal step: a random step of 60 s is 60,000 of them) runs the
 /// sequences that fit, and the pass is partial.
 pub(super) const SEQUENCE_BUDGET_S: f64 = 20.0;
-
-pub fn random_call_sequences_keep_every_fmu_conformant(fmu: &Fmu) {
-    // First, so that the report shows the seed whatever happens next.
-    info(crate::seed_note());
-    note_limitations(fmu);
-    let clock = Instant::now();
-    let mut runner = TestRunner::new(config());
-    let strategy = (any::<bool>(), prop::collection::vec(op(), 1..100));
-    let ran = AtomicUsize::new(0);
-    let result = runner.run(&strategy, |(logging_on, ops)| {
-        if clock.elapsed().as_secs_f64() > SEQUENCE_BUDGET_S {
-            return Ok(());
-        }
-        ran.fetch_add(1, Ordering::Relaxed);
-        execute(fmu, logging_on, &ops)
-    });
-    if let Err(e) = result {
-        let note = match &e {
-            TestError::Fail(reason, (logging_on, ops)) => super::text::write(
-                fmu,
-                "random_call_sequences_keep_every_fmu_conformant",
-                "co-simulation",
-                &format!("fmi2Instantiate fmuType=CoSimulation loggingOn={logging_on}"),
-                &super::text::record_cs(fmu, *logging_on, ops),
-                reason.message(),
-            ),
-            TestError::Abort(_) => String::new(),
-        };
-        panic!("{}: {e}\n{}\n{note}", fmu.id, crate::seed_note());
-    }
-    let ran = ran.into_inner();
-    if ran < config().cases as usize {
-        limitation(format!(
-            "{ran} of {} random sequences ran in the {SEQUENCE_BUDGET_S} s budget (the FMU's long steps are slow)",
-            config().cases
-        ));
-    }
-    let counts = |c: &[AtomicUsize; 8]| -> Vec<usize> { c.iter().map(|x| x.swap(0, Ordering::Relaxed)).collect() };
-    let (calls, ok) = (counts(&CALLS), counts(&OK_CALLS));
-    info(format!(
-        "{} random sequences in {:.1} s; calls per state {:?}: {:?}, of which fmi2OK {:?}; {} steps done",
-        config().cases,
-        clock.elapsed().as_secs_f64(),
-        state::STATES,
-        calls,
-        ok,
-        OK_STEPS.swap(0, Ordering::Relaxed)
-    ));
-    // The sequences must reach the states where the interesting calls are allowed.
-    for s in [
-        State::Instantiated,
-        State::InitializationMode,
-        State::StepComplete,
-        State::Terminated,
-    ] {
-        // On another exporter's FMU a sequence ends at its first fmi2Error (see run_ops): a
-        // state no sequence reached is a limitation there.
-        if !(fmu.own_state_format() || crate::outcome::strict()) && calls[s as usize] == 0 {
-            crate::outcome::limitation(format!(
-                "no random call was made in {s:?} (the sequences end at the FMU's first fmi2Error)"
-            ));
-            continue;
-        }
-        assert!(
-            calls[s as usize] > 0,
-            "{}: no random call was made in {s:?}\n{}",
-            fmu.id,
-            crate::seed_note()
-        );
-    }
-}

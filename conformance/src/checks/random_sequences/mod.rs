@@ -29,12 +29,12 @@ use crate::Fmu;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 
+mod checks;
 mod co_simulation;
 mod model_exchange;
 mod regressions;
 mod text;
-pub use co_simulation::*;
-pub use model_exchange::*;
+pub use checks::*;
 pub use regressions::*;
 pub use text::{replay, reproducer_of_a_random_sequence};
 

@@ -1,16 +1,16 @@
 //! Random model-exchange call sequences: the calls ([`MeOp`]), the shadow of the
-//! model-exchange state machine, and the check.
+//! model-exchange state machine (the check that runs them: [`super::checks`]).
 
 use super::co_simulation::{Hook, answered, expected_of};
-use super::{Expect, SLOTS, Vr, config, real, resolve, vr};
+use super::{Expect, SLOTS, Vr, real, resolve, vr};
 use crate::Fmu;
 use crate::fmi2::*;
 use crate::guard::{GETTER_RULE2, Guarded, STATE_RULE2};
 use crate::instance::{Args, Instance, status_name};
-use crate::me::{MeState, needs_me};
-use crate::outcome::{breadcrumb, info, limitation};
+use crate::me::MeState;
+use crate::outcome::breadcrumb;
 use proptest::prelude::*;
-use proptest::test_runner::{TestCaseError, TestError, TestRunner};
+use proptest::test_runner::TestCaseError;
 use std::ptr;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -530,61 +530,4 @@ pub(super) fn me_run_ops(
         }
     }
     Ok(())
-}
-
-pub fn random_model_exchange_call_sequences_keep_every_fmu_conformant(fmu: &Fmu) {
-    needs_me(fmu);
-    if fmu.me_state_codes().is_err() {
-        limitation(
-            "the state machine is not read from the FMU after each call (only this exporter's serialized state shows it)",
-        );
-    }
-    if !crate::me::can_snapshot_me(fmu) {
-        limitation(
-            "<ModelExchange> does not declare canGetAndSetFMUstate and canSerializeFMUstate: that a refused call changes nothing is not checked",
-        );
-    }
-    info(crate::seed_note());
-    let clock = Instant::now();
-    let mut runner = TestRunner::new(config());
-    let strategy = prop::collection::vec(me_op(), 1..100);
-    if let Err(e) = runner.run(&strategy, |ops| me_execute(fmu, &ops)) {
-        let note = match &e {
-            TestError::Fail(reason, ops) => super::text::write(
-                fmu,
-                "random_model_exchange_call_sequences_keep_every_fmu_conformant",
-                "model-exchange",
-                "fmi2Instantiate fmuType=ModelExchange",
-                &super::text::record_me(fmu, ops),
-                reason.message(),
-            ),
-            TestError::Abort(_) => String::new(),
-        };
-        panic!("{}: {e}\n{}\n{note}", fmu.id, crate::seed_note());
-    }
-    let calls: Vec<usize> = ME_CALLS.iter().map(|x| x.swap(0, Ordering::Relaxed)).collect();
-    info(format!(
-        "{} random model-exchange sequences in {:.1} s; calls per state {:?}: {:?}",
-        config().cases,
-        clock.elapsed().as_secs_f64(),
-        crate::me::ME_STATES,
-        calls
-    ));
-    // On another exporter's FMU a sequence ends at its first fmi2Error (see me_run_ops): a state
-    // no sequence reached is a limitation there.
-    let own = fmu.own_state_format() || crate::outcome::strict();
-    for s in crate::me::ME_REACHABLE {
-        if !own && calls[s as usize] == 0 {
-            crate::outcome::limitation(format!(
-                "no random call was made in {s:?} (the sequences end at the FMU's first fmi2Error)"
-            ));
-            continue;
-        }
-        assert!(
-            calls[s as usize] > 0,
-            "{}: no random call was made in {s:?}\n{}",
-            fmu.id,
-            crate::seed_note()
-        );
-    }
 }
