@@ -248,9 +248,9 @@ impl Fmu {
         self.description.cs.is_none() && self.description.me.is_none() && self.scheduled_execution.is_some()
     }
 
-    /// An instance for Scheduled Execution (FMI 3.0, chapter 5: `fmi3/scheduled.rs`), or why
-    /// the FMU has none.
-    pub fn instantiate_scheduled(&self, component: &str) -> Result<InstanceCS, Error> {
+    /// Its FMI 3.0 importer, if the FMU offers Scheduled Execution in the binary loaded; else
+    /// why not.
+    fn scheduled_import(&self, component: &str) -> Result<&Fmi3Import, Error> {
         let fail = |why: String| {
             Error::unsupported(
                 Some(component),
@@ -275,7 +275,14 @@ impl Fmu {
             }
             Some(_) => {}
         }
-        i.instantiate_scheduled(component)
+        Ok(i)
+    }
+
+    /// An instance for Scheduled Execution (FMI 3.0, chapter 5: `fmi3/scheduled.rs`), or why
+    /// the FMU has none.
+    pub fn instantiate_scheduled(&self, component: &str) -> Result<InstanceCS, Error> {
+        self.scheduled_import(component)?
+            .instantiate_scheduled(component)
             .map(InstanceCS::V3)
             .map_err(|e| Error {
                 component: Some(component.to_owned()),
@@ -459,8 +466,18 @@ impl Fmu {
         interface: crate::isolate::Interface,
         isolation: &crate::isolate::Isolation,
     ) -> Result<InstanceCS, Error> {
-        if interface == crate::isolate::Interface::EventMode {
-            self.event_mode_import(component)?;
+        // The in-process refusals, with their reasons.
+        match interface {
+            crate::isolate::Interface::EventMode => {
+                self.event_mode_import(component)?;
+            }
+            crate::isolate::Interface::ScheduledExecution => {
+                self.scheduled_import(component)?;
+            }
+            crate::isolate::Interface::ModelExchange if self.description.me.is_none() => {
+                return self.instantiate_me(component);
+            }
+            _ => {}
         }
         #[cfg(target_os = "linux")]
         {

@@ -139,6 +139,8 @@ impl InstanceCS {
         self.crumb("activate_scheduled");
         match self {
             InstanceCS::V3(i) => i.activate_pending(t),
+            #[cfg(target_os = "linux")]
+            InstanceCS::Isolated(i) => i.activate_scheduled(t),
             _ => Ok(false),
         }
     }

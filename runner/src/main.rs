@@ -138,6 +138,8 @@ enum Command {
         model_exchange: bool,
         #[arg(long)]
         event_mode: bool,
+        #[arg(long)]
+        scheduled_execution: bool,
     },
     /// Prints the system: components, evaluation order, parameters, outputs.
     Info { ssp: PathBuf },
@@ -179,11 +181,13 @@ fn run(cli: Cli) -> Result<(), String> {
             shm,
             model_exchange,
             event_mode,
+            scheduled_execution,
         } => {
             use rustfmu_runner::isolate::Interface;
-            let interface = match (model_exchange, event_mode) {
-                (true, _) => Interface::ModelExchange,
-                (_, true) => Interface::EventMode,
+            let interface = match (model_exchange, event_mode, scheduled_execution) {
+                (true, _, _) => Interface::ModelExchange,
+                (_, true, _) => Interface::EventMode,
+                (_, _, true) => Interface::ScheduledExecution,
                 _ => Interface::CoSimulation,
             };
             std::process::exit(rustfmu_runner::isolate::serve(&dir, &name, &label, interface, &shm))

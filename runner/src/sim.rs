@@ -217,28 +217,34 @@ fn fmi_err(slave: &str, function: &str, time: Option<f64>, what: &str) -> impl F
     move |e| Error::fmi(&slave, &function, &e, time, &what)
 }
 
-/// A component's instance: model exchange (`me`) or co-simulation, here or in a child process.
+/// A component's instance for `interface` (co-simulation, model exchange, Event Mode or
+/// Scheduled Execution), here or in a child process.
 fn make_instance(
     fmu: &Fmu,
     component: &str,
-    me: bool,
+    interface: crate::isolate::Interface,
     isolation: Option<&crate::isolate::Isolation>,
 ) -> Result<InstanceCS, Error> {
-    match isolation {
-        Some(iso) => {
-            if me && fmu.description.me.is_none() {
-                // The in-process refusal, with its reason.
-                return fmu.instantiate_me(component);
-            }
-            let interface = if me {
-                crate::isolate::Interface::ModelExchange
-            } else {
-                crate::isolate::Interface::CoSimulation
-            };
-            fmu.instantiate_isolated(component, interface, iso)
+    use crate::isolate::Interface;
+    match (isolation, interface) {
+        (Some(iso), _) => fmu.instantiate_isolated(component, interface, iso),
+        (None, Interface::CoSimulation) => fmu.instantiate(component),
+        (None, Interface::ModelExchange) => fmu.instantiate_me(component),
+        (None, Interface::EventMode) => fmu.instantiate_events(component),
+        (None, Interface::ScheduledExecution) => fmu.instantiate_scheduled(component),
+    }
+}
+
+impl Slave {
+    /// The interface it runs in.
+    fn interface(&self) -> crate::isolate::Interface {
+        use crate::isolate::Interface;
+        match (self.me, self.events, self.scheduled) {
+            (true, _, _) => Interface::ModelExchange,
+            (_, true, _) => Interface::EventMode,
+            (_, _, true) => Interface::ScheduledExecution,
+            _ => Interface::CoSimulation,
         }
-        None if me => fmu.instantiate_me(component),
-        None => fmu.instantiate(component),
     }
 }
 
@@ -372,17 +378,12 @@ impl Simulation {
             // only runs so.
             let scheduled = fmu.scheduled_execution_only();
             let me = fmu.description.cs.is_none() && !scheduled;
-            let instance = if scheduled {
-                if isolation.is_some() {
-                    return Err(Error::usage(format!(
-                        "component '{c}' ({}) runs in Scheduled Execution (its only interface): not with --isolate (the runner activates its partitions in its own process)",
-                        fmu.model_identifier()
-                    )));
-                }
-                fmu.instantiate_scheduled(c)?
-            } else {
-                make_instance(fmu, c, me, isolation.as_ref())?
+            let interface = match (scheduled, me) {
+                (true, _) => crate::isolate::Interface::ScheduledExecution,
+                (_, true) => crate::isolate::Interface::ModelExchange,
+                _ => crate::isolate::Interface::CoSimulation,
             };
+            let instance = make_instance(fmu, c, interface, isolation.as_ref())?;
             slaves.push(Slave {
                 name: c.clone(),
                 fmu: *f,
@@ -901,7 +902,12 @@ impl Simulation {
             return Ok(());
         }
         self.slaves[i].instance = None;
-        let inst = make_instance(self.fmu_of(i), component, true, self.isolation.as_ref())?;
+        let inst = make_instance(
+            self.fmu_of(i),
+            component,
+            crate::isolate::Interface::ModelExchange,
+            self.isolation.as_ref(),
+        )?;
         self.slaves[i].instance = Some(inst);
         self.slaves[i].me = true;
         Ok(())
@@ -921,16 +927,11 @@ impl Simulation {
             )));
         }
         self.slaves[i].instance = None;
-        let inst = match &self.isolation {
-            Some(iso) => self
-                .fmu_of(i)
-                .instantiate_isolated(component, crate::isolate::Interface::EventMode, iso),
-            None => self.fmu_of(i).instantiate_events(component),
-        };
-        let inst = match inst {
+        let iso = self.isolation.as_ref();
+        let inst = match make_instance(self.fmu_of(i), component, crate::isolate::Interface::EventMode, iso) {
             Ok(inst) => inst,
             Err(e) => {
-                let again = make_instance(self.fmu_of(i), component, false, self.isolation.as_ref())?;
+                let again = make_instance(self.fmu_of(i), component, self.slaves[i].interface(), iso)?;
                 self.slaves[i].instance = Some(again);
                 return Err(e);
             }
@@ -949,12 +950,12 @@ impl Simulation {
         if self.slaves[i].scheduled {
             return Ok(());
         }
-        if self.isolation.is_some() {
-            return Err(Error::usage(format!(
-                "component '{component}': Scheduled Execution is run in this process (not with --isolate)"
-            )));
-        }
-        let inst = self.fmu_of(i).instantiate_scheduled(component)?;
+        let inst = make_instance(
+            self.fmu_of(i),
+            component,
+            crate::isolate::Interface::ScheduledExecution,
+            self.isolation.as_ref(),
+        )?;
         let s = &mut self.slaves[i];
         s.instance = Some(inst);
         (s.scheduled, s.me, s.events) = (true, false, false);

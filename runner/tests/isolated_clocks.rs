@@ -4,7 +4,8 @@
 //! Mode), two of our Clocks connected by a clock, the LS-BUS networked pendulum (clock
 //! connections and Binary frames), the BouncingBall's events and early returns (two of them: one
 //! set back with its clocks); and a crash or hang of an isolated event-mode component fails the
-//! run naming the component, the call and the time.
+//! run naming the component, the call and the time. Scheduled Execution components too: the
+//! child's importer activates the partitions (ACTIVATE on the wire), with the same rows.
 //! Needs target/fmu/fmi3 (Pendulum, SampledController, Clocks, BouncingBall, VanDerPol, the CAN
 //! FMUs and NetworkedPendulum.ssp: `cargo fmu build`).
 
@@ -16,7 +17,7 @@ mod support;
 use rustfmu_runner::isolate::Isolation;
 use rustfmu_runner::{RunOptions, RunResult, Simulation, Value};
 use std::time::Duration;
-use support::{COUNTERS, first_difference, ours, sampled_loop, system_isolated, two_clocks_ssp};
+use support::{COUNTERS, first_difference, ours, sampled_loop, system_isolated, theirs, two_clocks_ssp};
 
 /// Each component in a child process of the runner built with these tests.
 fn isolation(timeout: Option<Duration>) -> Isolation {
@@ -220,4 +221,67 @@ fn a_crash_or_hang_of_an_isolated_event_mode_component_fails_the_run_naming_the_
     assert_eq!(hang.component.as_deref(), Some("controller"), "{hang}");
     assert!(hang.message.contains("did not return within 0.5 s"), "{}", hang.message);
     assert_eq!((&hang.function, hang.time), (&e.function, e.time), "{hang}");
+}
+
+#[test]
+fn scheduled_execution_components_isolated_give_the_in_process_rows_bit_for_bit() {
+    // Two of our Clocks in Scheduled Execution, a's output clock ticking b's inClock2 (the
+    // countdown's point at 4.5 s).
+    let record: Vec<String> = ["a", "b"]
+        .iter()
+        .flat_map(|c| COUNTERS.iter().map(move |v| format!("{c}.{v}")))
+        .collect();
+    let record: Vec<&str> = record.iter().map(String::as_str).collect();
+    let ssp = two_clocks_ssp("isolated-se", "ScheduledExecution");
+    let r = same_rows_isolated("two clocks in Scheduled Execution", 10.0, 1.0, &record, |iso| {
+        let sim = match iso {
+            Some(iso) => Simulation::from_ssp_isolated(&ssp, iso),
+            None => Simulation::from_ssp(&ssp),
+        }
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert!(sim.is_scheduled("a") && sim.is_scheduled("b"));
+        sim
+    });
+    assert!(r.time.contains(&4.5), "{:?}", r.time);
+    let col = |n: &str| r.column(record.iter().position(|r| *r == n).unwrap());
+    assert!(*col("b.inClock2Ticks").last().unwrap() > 0.0, "{:?}", col("b.inClock2Ticks"));
+    assert!(*col("b.result2").last().unwrap() >= 1000.0, "{:?}", col("b.result2"));
+
+    // The command line: the same CSV bytes with --isolate as in process.
+    let csv = |isolate: bool| {
+        let out = ssp.with_file_name(format!("rows-{isolate}.csv"));
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_rustfmu-runner"));
+        cmd.arg("run").arg(&ssp).args(["--stop-time", "10", "--step", "1", "--no-progress", "-o"]);
+        cmd.arg(&out);
+        for r in &record {
+            cmd.args(["--record", r]);
+        }
+        if isolate {
+            cmd.arg("--isolate");
+        }
+        let status = cmd.status().unwrap();
+        assert!(status.success(), "isolate {isolate}: {status}");
+        std::fs::read(&out).unwrap()
+    };
+    let (here, there) = (csv(false), csv(true));
+    assert!(here.len() > 100, "{}", String::from_utf8_lossy(&here));
+    assert_eq!(String::from_utf8_lossy(&there), String::from_utf8_lossy(&here));
+    std::fs::remove_dir_all(ssp.parent().unwrap()).ok();
+
+    // The C Reference-FMUs' Clocks (Scheduled Execution only) alone, and the SampledController
+    // in Scheduled Execution closing the Pendulum's loop.
+    let clocks = theirs("3.0", "Clocks");
+    let record: Vec<String> = COUNTERS.iter().map(|v| format!("clocks.{v}")).collect();
+    let record: Vec<&str> = record.iter().map(String::as_str).collect();
+    let r = same_rows_isolated("the C Clocks", 10.0, 0.5, &record, |iso| {
+        system_isolated(&[("clocks", &clocks)], &[], Vec::new(), iso)
+    });
+    assert_eq!(*r.column(5).last().unwrap(), 1000.0, "output3: {:?}", r.column(5));
+    let (_, record) = sampled_loop(None);
+    let r = same_rows_isolated("sampled loop in Scheduled Execution", 0.5, 1e-3, &record, |iso| {
+        let (mut sim, _) = sampled_loop(iso);
+        sim.use_scheduled_execution("controller").unwrap_or_else(|e| panic!("{e}"));
+        sim
+    });
+    assert!(r.column(4).iter().any(|x| x.abs() > 1e-3), "{:?}", r.column(4));
 }

@@ -106,6 +106,7 @@ impl Isolated {
             Interface::CoSimulation => None,
             Interface::ModelExchange => Some("--model-exchange"),
             Interface::EventMode => Some("--event-mode"),
+            Interface::ScheduledExecution => Some("--scheduled-execution"),
         };
         let child = start_worker(&iso.worker, "serve-component", &options, &path, flag).map_err(&fail)?;
         let mut iso_inst = Isolated {
@@ -532,6 +533,25 @@ impl Isolated {
             return Ok(());
         }
         self.call(POLL_OUTPUT_CLOCKS, Some(t), |w| w.f64(t), |_| Ok(()))
+    }
+
+    /// Scheduled Execution: the partitions of the clocks that tick at `t` activated in the child
+    /// (once the inputs are set); whether one was.
+    pub fn activate_scheduled(&mut self, t: f64) -> Result<bool, Fmi2Error> {
+        if !self.clocks {
+            return Ok(false);
+        }
+        let mut any = false;
+        self.call(
+            ACTIVATE,
+            Some(t),
+            |w| w.f64(t),
+            |r| {
+                any = r.u8() != 0;
+                Ok(())
+            },
+        )?;
+        Ok(any)
     }
 
     /// Whether its clock `vr` ticks now.

@@ -45,6 +45,9 @@ pub enum Interface {
     /// FMI 3.0 co-simulation with eventModeUsed and earlyReturnAllowed
     /// ([`crate::Simulation::use_event_mode`]).
     EventMode,
+    /// FMI 3.0 Scheduled Execution: the partitions activated by the child's importer
+    /// ([`crate::Simulation::use_scheduled_execution`]).
+    ScheduledExecution,
 }
 
 /// How the components of a system are isolated.

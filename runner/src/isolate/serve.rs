@@ -119,6 +119,7 @@ pub fn serve(dir: &Path, component: &str, label: &str, interface: Interface, shm
                         Interface::CoSimulation => f.instantiate(component),
                         Interface::ModelExchange => f.instantiate_me(component),
                         Interface::EventMode => f.instantiate_events(component),
+                        Interface::ScheduledExecution => f.instantiate_scheduled(component),
                     }
                     .map_err(|e| Fmi2Error::Importer(e.message))?;
                     let clocks = matches!(&i, InstanceCS::V3(i) if i.has_clock_state());
@@ -186,6 +187,10 @@ pub fn serve(dir: &Path, component: &str, label: &str, interface: Interface, shm
                         inst.trigger(vr, t)
                     }
                     POLL_OUTPUT_CLOCKS => inst.poll_output_clocks(r.f64()),
+                    ACTIVATE => {
+                        values.push(inst.activate_scheduled(r.f64())? as u8);
+                        Ok(())
+                    }
                     CLOCK_ACTIVE => {
                         values.push(inst.clock_active(r.u32())? as u8);
                         Ok(())

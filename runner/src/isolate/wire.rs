@@ -189,6 +189,9 @@ pub(super) const CLOCK_SNAPSHOT: u8 = 33;
 pub(super) const RESTORE_CLOCKS: u8 = 34;
 /// fmi3EnterConfigurationMode (argument 1) or fmi3ExitConfigurationMode (0).
 pub(super) const CONFIGURATION: u8 = 35;
+/// Scheduled Execution: fmi3ActivateModelPartition of the clocks that tick at the time given,
+/// with what their clockUpdate callbacks announce (answered: whether one was activated).
+pub(super) const ACTIVATE: u8 = 36;
 /// The first batch: instantiate (the answer: ok, or the error's message).
 pub(super) const HELLO: u8 = 98;
 pub(super) const QUIT: u8 = 99;
@@ -350,6 +353,7 @@ pub(super) fn function_of(op: u8) -> &'static str {
         TICK_NOW | TRIGGER => "fmi3SetClock",
         EARLY_RETURN => "fmi3DoStep",
         POLL_OUTPUT_CLOCKS => "fmi3GetClock",
+        ACTIVATE => "fmi3ActivateModelPartition",
         HELLO => "fmi2Instantiate",
         _ => "fmi2FreeInstance",
     }

@@ -181,7 +181,12 @@ impl Simulation {
                     None => self.fmu_of(i).instantiate_events(&name)?,
                 }
             } else {
-                make_instance(self.fmu_of(i), &name, self.slaves[i].me, self.isolation.as_ref())?
+                let interface = if self.slaves[i].me {
+                    crate::isolate::Interface::ModelExchange
+                } else {
+                    crate::isolate::Interface::CoSimulation
+                };
+                make_instance(self.fmu_of(i), &name, interface, self.isolation.as_ref())?
             };
             self.slaves[i].instance = Some(inst);
         }

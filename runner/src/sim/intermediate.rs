@@ -63,11 +63,7 @@ impl Simulation {
             match self.fmu_of(i).instantiate_intermediate(&name, &vrs, events) {
                 Ok(inst) => self.slaves[i].instance = Some(inst),
                 Err(e) => {
-                    let again = if events {
-                        self.fmu_of(i).instantiate_events(&name)
-                    } else {
-                        make_instance(self.fmu_of(i), &name, false, None)
-                    };
+                    let again = make_instance(self.fmu_of(i), &name, self.slaves[i].interface(), None);
                     self.slaves[i].instance = Some(again?);
                     return Err(e);
                 }
