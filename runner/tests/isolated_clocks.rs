@@ -285,3 +285,33 @@ fn scheduled_execution_components_isolated_give_the_in_process_rows_bit_for_bit(
     });
     assert!(r.column(4).iter().any(|x| x.abs() > 1e-3), "{:?}", r.column(4));
 }
+
+#[test]
+fn a_scheduled_execution_component_whose_process_died_runs_again_in_scheduled_execution() {
+    // The C Reference-FMUs' Clocks has only <ScheduledExecution>: instantiated again after its
+    // process died (fmi2Fatal) as anything else, the next run would fail at its instantiation.
+    let clocks = theirs("3.0", "Clocks");
+    let record: Vec<String> = COUNTERS.iter().map(|v| format!("clocks.{v}")).collect();
+    let record: Vec<&str> = record.iter().map(String::as_str).collect();
+    let mut sim = system_isolated(&[("clocks", &clocks)], &[], Vec::new(), Some(isolation(None)));
+    let mut opts = RunOptions::new(10.0, 0.5);
+    opts.record = record.iter().map(|r| r.to_string()).collect();
+    let whole = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    let mut sent = false;
+    let failure = sim
+        .run(&opts, &mut |k, _| {
+            if k >= 4 && !sent {
+                sent = true;
+                // SAFETY: a signal to a process this test started (through the Simulation).
+                assert_eq!(unsafe { libc::kill(child_of("clocks"), libc::SIGKILL) }, 0);
+            }
+        })
+        .expect_err("the process of 'clocks' is gone");
+    assert_eq!(failure.error.status.as_deref(), Some("Fatal"), "{}", failure.error);
+    assert!(failure.error.message.contains("SIGKILL"), "{}", failure.error);
+    // The next run starts it anew, in Scheduled Execution: the rows of the first run.
+    let again = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert!(sim.is_scheduled("clocks"));
+    assert_eq!(first_difference(&again, &whole), None);
+    assert_eq!(*again.column(5).last().unwrap(), 1000.0, "output3: {:?}", again.column(5));
+}

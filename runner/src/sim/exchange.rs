@@ -172,21 +172,9 @@ impl Simulation {
                 let vrs: Vec<u32> = self.slaves[i].intermediate.iter().map(|(_, vr)| *vr).collect();
                 self.fmu_of(i)
                     .instantiate_intermediate(&name, &vrs, self.slaves[i].events)?
-            } else if self.slaves[i].events {
-                match &self.isolation {
-                    Some(iso) => {
-                        self.fmu_of(i)
-                            .instantiate_isolated(&name, crate::isolate::Interface::EventMode, iso)?
-                    }
-                    None => self.fmu_of(i).instantiate_events(&name)?,
-                }
             } else {
-                let interface = if self.slaves[i].me {
-                    crate::isolate::Interface::ModelExchange
-                } else {
-                    crate::isolate::Interface::CoSimulation
-                };
-                make_instance(self.fmu_of(i), &name, interface, self.isolation.as_ref())?
+                // As it ran: co-simulation, model exchange, Event Mode or Scheduled Execution.
+                make_instance(self.fmu_of(i), &name, self.slaves[i].interface(), self.isolation.as_ref())?
             };
             self.slaves[i].instance = Some(inst);
         }
