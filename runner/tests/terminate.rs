@@ -7,6 +7,7 @@
 #![allow(clippy::result_large_err)]
 
 use rustfmu_runner::fmu::Fmu;
+use rustfmu_runner::isolate::Isolation;
 use rustfmu_runner::{RunOptions, RunResult, Simulation};
 use std::path::{Path, PathBuf};
 
@@ -25,6 +26,17 @@ fn reference(version: &str, name: &str) -> PathBuf {
 
 /// Stair and Dahlquist of FMI `version`, in the order `order` names them, run 10 s at `step`.
 fn run(version: &str, order: [&str; 2], step: f64) -> RunResult {
+    run_with(version, order, step, None, &["stair.counter", "d.x"])
+}
+
+/// [`run`], each component in a child process with `isolation`, `record` recorded.
+fn run_with(
+    version: &str,
+    order: [&str; 2],
+    step: f64,
+    isolation: Option<Isolation>,
+    record: &[&str],
+) -> RunResult {
     let fmus = order
         .iter()
         .map(|c| {
@@ -33,9 +45,10 @@ fn run(version: &str, order: [&str; 2], step: f64) -> RunResult {
         })
         .collect();
     let components = order.iter().enumerate().map(|(i, c)| (c.to_string(), i)).collect();
-    let mut sim = Simulation::new("S", fmus, components, &[], Vec::new()).unwrap_or_else(|e| panic!("{e}"));
+    let mut sim =
+        Simulation::new_with("S", fmus, components, &[], Vec::new(), isolation).unwrap_or_else(|e| panic!("{e}"));
     let mut opts = RunOptions::new(10.0, step);
-    opts.record = vec!["stair.counter".into(), "d.x".into()];
+    opts.record = record.iter().map(|r| r.to_string()).collect();
     sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"))
 }
 
@@ -73,5 +86,38 @@ fn stair_asking_to_end_at_9_s_ends_the_run_there_with_its_last_row() {
             "{}",
             end.message
         );
+    }
+}
+
+#[test]
+fn an_isolated_stair_asking_to_end_ends_the_run_in_the_step_it_asked_in() {
+    // An unclocked isolated component's step is not waited for when it is sent; its request to
+    // end comes back once every component's step is sent, and ends the run in that step as in
+    // process: no row after 9 s, even where nothing of Stair is read at the points after it.
+    let isolated = || {
+        Some(Isolation {
+            worker: env!("CARGO_BIN_EXE_rustfmu-runner").into(),
+            timeout: None,
+        })
+    };
+    for version in ["2.0", "3.0"] {
+        for record in [&["stair.counter", "d.x"][..], &["d.x"][..]] {
+            // Both at 9 s after the step from 8.8 s: the same rows as in process.
+            let here = run_with(version, ["stair", "d"], 0.2, None, record);
+            let there = run_with(version, ["stair", "d"], 0.2, isolated(), record);
+            assert_eq!((&there.time, &there.values), (&here.time, &here.values), "{version} {record:?}");
+            let end = there.terminated.as_ref().expect("Stair asks to end the simulation");
+            assert_eq!((end.component.as_str(), end.time), ("stair", 9.0), "{version} {record:?}");
+            // Stair stops at 9 s in the step from 8.8 s to 9.2 s, Dahlquist (stepped at once, in
+            // its process) reaches 9.2 s: no time both are at, the rows end at 8.8 s.
+            let there = run_with(version, ["stair", "d"], 0.4, isolated(), record);
+            let end = there.terminated.as_ref().expect("Stair asks to end the simulation");
+            assert_eq!(*there.time.last().unwrap(), 8.8, "{version} {record:?}: {}", end.message);
+            assert!(
+                end.message.contains("the rows end at t = 8.8 s (no row at t = 9 s"),
+                "{version} {record:?}: {}",
+                end.message
+            );
+        }
     }
 }

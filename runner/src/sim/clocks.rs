@@ -475,6 +475,7 @@ impl Simulation {
         for (k, &i) in order.iter().enumerate().skip(early.len()) {
             self.step_one(i, t, end - t, true, k, &order)?;
         }
+        self.steps_answered(t, end - t, true)?;
         Ok(end)
     }
 

@@ -293,6 +293,22 @@ impl Simulation {
                 return Err(self.step_failed(i, e, t, h, no_set_prior));
             }
         }
+        self.steps_answered(t, h, no_set_prior)
+    }
+
+    /// Isolated components: the steps sent and not waited for (an unclocked component's; they
+    /// ran in parallel in their processes) waited for, once every component's step is sent, so
+    /// that a request to end the simulation made in this step ends the run at it
+    /// ([`Simulation::complete_ended_step`]), not at the component's next call.
+    pub(super) fn steps_answered(&mut self, t: f64, h: f64, no_set_prior: bool) -> Result<(), Error> {
+        if self.isolation.is_none() {
+            return Ok(());
+        }
+        for i in 0..self.slaves.len() {
+            if let Err(e) = self.instance(i).sync() {
+                return Err(self.step_failed(i, e, t, h, no_set_prior));
+            }
+        }
         Ok(())
     }
 
@@ -303,11 +319,19 @@ impl Simulation {
     fn step_failed(&mut self, i: usize, e: Fmi2Error, t: f64, h: f64, no_set_prior: bool) -> Error {
         let s = &self.slaves[i];
         let error = Error::fmi(&s.name, fname(s.v3, "fmi2DoStep"), &e, Some(t), &format!("step {h} s"));
-        if let Fmi2Error::Terminate(at) = e {
-            let pending: Vec<usize> = (i + 1..self.slaves.len()).collect();
-            if let Err(other) = self.complete_ended_step(t, at, t + h, i > 0, &pending, no_set_prior) {
-                return other;
-            }
+        let (at, pending): (f64, Vec<usize>) = match e {
+            Fmi2Error::Terminate(at) => (at, (i + 1..self.slaves.len()).collect()),
+            // An isolated component's step, answered once every component's step was sent:
+            // the others have stepped.
+            Fmi2Error::Deferred(d) if d.function == "fmi2DoStep" && d.time == Some(t) => match d.error {
+                Fmi2Error::Terminate(at) => (at, Vec::new()),
+                _ => return error,
+            },
+            _ => return error,
+        };
+        let others_stepped = i > 0 || (pending.is_empty() && self.slaves.len() > 1);
+        if let Err(other) = self.complete_ended_step(t, at, t + h, others_stepped, &pending, no_set_prior) {
+            return other;
         }
         error
     }
