@@ -127,7 +127,11 @@ struct MeApi {
     enter_event_mode: InstanceFunction,
     update_discrete_states: UpdateDiscreteStates,
     enter_continuous_time_mode: InstanceFunction,
+    /// fmi3GetNumberOfContinuousStates, fmi3GetNumberOfEventIndicators: what the structural
+    /// parameters in force give.
+    number_of: Option<(GetCount, GetCount)>,
 }
+type GetCount = unsafe extern "C" fn(fmi3Instance, *mut usize) -> fmi3Status;
 /// The Event Mode and clock functions of co-simulation with eventModeUsed ([`clocks`]).
 struct EventApi {
     enter_event_mode: InstanceFunction,
@@ -263,6 +267,8 @@ impl Library {
                     enter_event_mode: optional(&lib, "fmi3EnterEventMode")?,
                     update_discrete_states: optional(&lib, "fmi3UpdateDiscreteStates")?,
                     enter_continuous_time_mode: optional(&lib, "fmi3EnterContinuousTimeMode")?,
+                    number_of: optional(&lib, "fmi3GetNumberOfContinuousStates")
+                        .zip(optional(&lib, "fmi3GetNumberOfEventIndicators")),
                 })
             })();
             let events = (|| {
@@ -592,6 +598,20 @@ impl Instance3 {
     crate::common::calls!(me time, states and indicators);
     crate::common::calls!(me vectors: get_derivatives, get_continuous_states, get_nominals);
     crate::common::calls!(me: enter_event_mode, enter_continuous_time_mode);
+
+    /// (continuous states, event indicators) as the FMU counts them now (after Configuration
+    /// Mode: as its structural parameters give them); None where its binary lacks the functions.
+    pub fn me_sizes(&mut self) -> Result<Option<(usize, usize)>, Fmi2Error> {
+        let Some((states, indicators)) = self.me()?.number_of else {
+            return Ok(None);
+        };
+        let (mut nx, mut nz) = (0usize, 0usize);
+        // SAFETY: a live model-exchange instance; the outputs point to locals.
+        check(unsafe { states(self.c, &mut nx) })?;
+        // SAFETY: as above.
+        check(unsafe { indicators(self.c, &mut nz) })?;
+        Ok(Some((nx, nz)))
+    }
 
     /// (enterEventMode, terminateSimulation).
     pub fn completed_integrator_step(&mut self, no_set_prior: bool) -> Result<(bool, bool), Fmi2Error> {

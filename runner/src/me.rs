@@ -172,6 +172,7 @@ impl MeInstance {
     /// and enters continuous-time mode.
     pub fn exit_initialization_mode(&mut self) -> Result<(), Fmi2Error> {
         self.inner.exit_initialization_mode()?;
+        self.resize()?;
         self.iterate_events()?;
         self.inner.enter_continuous_time_mode()?;
         self.read_back()
@@ -180,6 +181,27 @@ impl MeInstance {
     pub fn reset(&mut self) -> Result<(), Fmi2Error> {
         self.clock = Clock::at(0.0);
         self.inner.reset()
+    }
+
+    /// FMI 3.0: the numbers of continuous states and event indicators the FMU gives once
+    /// initialized (its structural parameters, set in Configuration Mode, may change them from
+    /// the description's), and the integrator's vectors sized by them.
+    fn resize(&mut self) -> Result<(), Fmi2Error> {
+        let MeInner::V3(i) = &mut self.inner else {
+            return Ok(());
+        };
+        let Some((nx, nz)) = i.me_sizes()? else {
+            return Ok(());
+        };
+        if (nx, nz) != (self.nx, self.nz) {
+            (self.nx, self.nz) = (nx, nz);
+            self.x = vec![0.0; nx];
+            self.nominal = vec![1.0; nx];
+            self.z = vec![0.0; nz];
+            self.k = vec![vec![0.0; nx]; 7];
+            self.scratch = vec![0.0; nx];
+        }
+        Ok(())
     }
 
     /// fmi2NewDiscreteStates until none are needed (the instance in Event Mode).

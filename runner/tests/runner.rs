@@ -611,6 +611,54 @@ fn structural_parameters_the_system_sets_size_connections_parameters_and_records
 }
 
 #[test]
+fn model_exchange_components_whose_structural_parameters_the_system_sets_integrate_their_states() {
+    // The two StateSpaces of sizes (2, 2, 2) and (2, 4, 2) run as model exchange: the runner
+    // integrates the number of states fmi3GetNumberOfContinuousStates gives after
+    // Configuration Mode (2 and 4), not the start values' 3.
+    let dir = tmpdir("structural-me");
+    let ssp = two_state_spaces(&dir, 2, our_state_space());
+    let mut opts = RunOptions::new(2.0, 0.1);
+    opts.record = vec!["s1.y".into(), "s2.y".into(), "s2.x".into()];
+    let cs = Simulation::from_ssp(&ssp)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .run(&opts, &mut |_, _| {})
+        .unwrap_or_else(|f| panic!("{f}"));
+    let mut sim = Simulation::from_ssp(&ssp).unwrap_or_else(|e| panic!("{e}"));
+    for c in ["s1", "s2"] {
+        sim.use_model_exchange(c).unwrap_or_else(|e| panic!("{e}"));
+        assert!(sim.is_model_exchange(c));
+    }
+    let me = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!((&me.names, &me.time), (&cs.names, &cs.time));
+    let width = me.names.len();
+    for (k, (a, b)) in me.values.chunks(width).zip(cs.values.chunks(width)).enumerate() {
+        let t = me.time[k];
+        // s1 (A = diag(-1, -2), B = C = D = I, u = (1, 2), x0 = 0): y = x + u exactly.
+        let y1 = [2.0 - (-t).exp(), 3.0 - (-2.0 * t).exp()];
+        for j in 0..2 {
+            assert!((a[j] - y1[j]).abs() < 1e-5, "t = {t}: s1.y[{}] {} against {}", j + 1, a[j], y1[j]);
+        }
+        // s2 (4 states) against the same system in co-simulation.
+        for j in 0..width {
+            assert!(
+                (a[j] - b[j]).abs() < 1e-5 * (1.0 + b[j].abs()),
+                "t = {t}: {} {} (model exchange) against {} (co-simulation)",
+                me.names[j],
+                a[j],
+                b[j]
+            );
+        }
+        // The last two of s2's four states are not driven (B = [I; 0]).
+        assert_eq!((a[6], a[7]), (0.0, 0.0), "t = {t}");
+    }
+    assert!(me.values[me.values.len() - 4] > 0.5, "{:?}", &me.values[me.values.len() - 8..]);
+    // A second run configures the reset instances again, with the same rows.
+    let again = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
+    assert_eq!(again.values, me.values);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
 fn a_connection_of_arrays_the_system_sizes_differently_names_both_ends_dimensions() {
     let dir = tmpdir("structural-mismatch");
     let e = Simulation::from_ssp(&two_state_spaces(&dir, 3, reference3("StateSpace")))

@@ -150,16 +150,6 @@ impl Simulation {
             }
             let name = self.slaves[slave].name.clone();
             let keys: Vec<&str> = mine.iter().map(|(k, _, _)| k.as_str()).collect();
-            if self.slaves[slave].me {
-                return Err(Error::unsupported(
-                    Some(&name),
-                    None,
-                    format!(
-                        "component '{name}' runs as model exchange: the runner integrates it with the number of states its structural parameters' start values give, so it does not set {} (run it as co-simulation)",
-                        keys.join(", ")
-                    ),
-                ));
-            }
             let what = format!("the structural parameters {}", keys.join(", "));
             for enter in [true, false] {
                 if !enter {
