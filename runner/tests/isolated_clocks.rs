@@ -244,14 +244,20 @@ fn scheduled_execution_components_isolated_give_the_in_process_rows_bit_for_bit(
     });
     assert!(r.time.contains(&4.5), "{:?}", r.time);
     let col = |n: &str| r.column(record.iter().position(|r| *r == n).unwrap());
-    assert!(*col("b.inClock2Ticks").last().unwrap() > 0.0, "{:?}", col("b.inClock2Ticks"));
+    assert!(
+        *col("b.inClock2Ticks").last().unwrap() > 0.0,
+        "{:?}",
+        col("b.inClock2Ticks")
+    );
     assert!(*col("b.result2").last().unwrap() >= 1000.0, "{:?}", col("b.result2"));
 
     // The command line: the same CSV bytes with --isolate as in process.
     let csv = |isolate: bool| {
         let out = ssp.with_file_name(format!("rows-{isolate}.csv"));
         let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_rustfmu-runner"));
-        cmd.arg("run").arg(&ssp).args(["--stop-time", "10", "--step", "1", "--no-progress", "-o"]);
+        cmd.arg("run")
+            .arg(&ssp)
+            .args(["--stop-time", "10", "--step", "1", "--no-progress", "-o"]);
         cmd.arg(&out);
         for r in &record {
             cmd.args(["--record", r]);
@@ -280,7 +286,8 @@ fn scheduled_execution_components_isolated_give_the_in_process_rows_bit_for_bit(
     let (_, record) = sampled_loop(None);
     let r = same_rows_isolated("sampled loop in Scheduled Execution", 0.5, 1e-3, &record, |iso| {
         let (mut sim, _) = sampled_loop(iso);
-        sim.use_scheduled_execution("controller").unwrap_or_else(|e| panic!("{e}"));
+        sim.use_scheduled_execution("controller")
+            .unwrap_or_else(|e| panic!("{e}"));
         sim
     });
     assert!(r.column(4).iter().any(|x| x.abs() > 1e-3), "{:?}", r.column(4));
@@ -313,5 +320,10 @@ fn a_scheduled_execution_component_whose_process_died_runs_again_in_scheduled_ex
     let again = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
     assert!(sim.is_scheduled("clocks"));
     assert_eq!(first_difference(&again, &whole), None);
-    assert_eq!(*again.column(5).last().unwrap(), 1000.0, "output3: {:?}", again.column(5));
+    assert_eq!(
+        *again.column(5).last().unwrap(),
+        1000.0,
+        "output3: {:?}",
+        again.column(5)
+    );
 }

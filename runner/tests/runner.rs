@@ -636,7 +636,13 @@ fn model_exchange_components_whose_structural_parameters_the_system_sets_integra
         // s1 (A = diag(-1, -2), B = C = D = I, u = (1, 2), x0 = 0): y = x + u exactly.
         let y1 = [2.0 - (-t).exp(), 3.0 - (-2.0 * t).exp()];
         for j in 0..2 {
-            assert!((a[j] - y1[j]).abs() < 1e-5, "t = {t}: s1.y[{}] {} against {}", j + 1, a[j], y1[j]);
+            assert!(
+                (a[j] - y1[j]).abs() < 1e-5,
+                "t = {t}: s1.y[{}] {} against {}",
+                j + 1,
+                a[j],
+                y1[j]
+            );
         }
         // s2 (4 states) against the same system in co-simulation.
         for j in 0..width {
@@ -651,7 +657,11 @@ fn model_exchange_components_whose_structural_parameters_the_system_sets_integra
         // The last two of s2's four states are not driven (B = [I; 0]).
         assert_eq!((a[6], a[7]), (0.0, 0.0), "t = {t}");
     }
-    assert!(me.values[me.values.len() - 4] > 0.5, "{:?}", &me.values[me.values.len() - 8..]);
+    assert!(
+        me.values[me.values.len() - 4] > 0.5,
+        "{:?}",
+        &me.values[me.values.len() - 8..]
+    );
     // A second run configures the reset instances again, with the same rows.
     let again = sim.run(&opts, &mut |_, _| {}).unwrap_or_else(|f| panic!("{f}"));
     assert_eq!(again.values, me.values);

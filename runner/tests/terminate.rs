@@ -30,13 +30,7 @@ fn run(version: &str, order: [&str; 2], step: f64) -> RunResult {
 }
 
 /// [`run`], each component in a child process with `isolation`, `record` recorded.
-fn run_with(
-    version: &str,
-    order: [&str; 2],
-    step: f64,
-    isolation: Option<Isolation>,
-    record: &[&str],
-) -> RunResult {
+fn run_with(version: &str, order: [&str; 2], step: f64, isolation: Option<Isolation>, record: &[&str]) -> RunResult {
     let fmus = order
         .iter()
         .map(|c| {
@@ -105,14 +99,27 @@ fn an_isolated_stair_asking_to_end_ends_the_run_in_the_step_it_asked_in() {
             // Both at 9 s after the step from 8.8 s: the same rows as in process.
             let here = run_with(version, ["stair", "d"], 0.2, None, record);
             let there = run_with(version, ["stair", "d"], 0.2, isolated(), record);
-            assert_eq!((&there.time, &there.values), (&here.time, &here.values), "{version} {record:?}");
+            assert_eq!(
+                (&there.time, &there.values),
+                (&here.time, &here.values),
+                "{version} {record:?}"
+            );
             let end = there.terminated.as_ref().expect("Stair asks to end the simulation");
-            assert_eq!((end.component.as_str(), end.time), ("stair", 9.0), "{version} {record:?}");
+            assert_eq!(
+                (end.component.as_str(), end.time),
+                ("stair", 9.0),
+                "{version} {record:?}"
+            );
             // Stair stops at 9 s in the step from 8.8 s to 9.2 s, Dahlquist (stepped at once, in
             // its process) reaches 9.2 s: no time both are at, the rows end at 8.8 s.
             let there = run_with(version, ["stair", "d"], 0.4, isolated(), record);
             let end = there.terminated.as_ref().expect("Stair asks to end the simulation");
-            assert_eq!(*there.time.last().unwrap(), 8.8, "{version} {record:?}: {}", end.message);
+            assert_eq!(
+                *there.time.last().unwrap(),
+                8.8,
+                "{version} {record:?}: {}",
+                end.message
+            );
             assert!(
                 end.message.contains("the rows end at t = 8.8 s (no row at t = 9 s"),
                 "{version} {record:?}: {}",

@@ -174,7 +174,12 @@ impl Simulation {
                     .instantiate_intermediate(&name, &vrs, self.slaves[i].events)?
             } else {
                 // As it ran: co-simulation, model exchange, Event Mode or Scheduled Execution.
-                make_instance(self.fmu_of(i), &name, self.slaves[i].interface(), self.isolation.as_ref())?
+                make_instance(
+                    self.fmu_of(i),
+                    &name,
+                    self.slaves[i].interface(),
+                    self.isolation.as_ref(),
+                )?
             };
             self.slaves[i].instance = Some(inst);
         }
