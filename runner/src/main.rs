@@ -100,7 +100,7 @@ enum Command {
         call_timeout: Option<f64>,
         /// An FMI 3.0 co-simulation component run with eventModeUsed and earlyReturnAllowed
         /// (repeatable): the events it reports are handled in Event Mode at their time, and a
-        /// step it ends early ends every component's step there (not with --isolate).
+        /// step it ends early ends every component's step there, under --isolate too.
         #[arg(long = "event-mode", value_name = "COMPONENT")]
         event_mode: Vec<String>,
         /// Also the values the FMI 3.0 co-simulation components give inside their steps: the
