@@ -44,11 +44,10 @@ import tomllib
 import fmpy
 import numpy as np
 import pytest
+from fmu_manipulation_toolbox.assembly import AssemblyNode  # tests/python/requirements.txt: ==2.0
 
 from conftest import ROOT, fmu3
 from fmi_harness import EventModeSlave, fmu3_with_vrs
-
-from fmu_manipulation_toolbox.assembly import AssemblyNode  # tests/python/requirements.txt: ==2.0
 
 sys.path.insert(0, str(ROOT / "examples"))
 import ls_bus_loop as L  # noqa: E402
@@ -195,6 +194,9 @@ def own_loop(stop, set_rx_data=True):
     counters = {f"{n}.{c}": s.get(c) for n, s in nodes.items() for c in ("frames_sent", "frames_received")}
     counters |= {f"{n}.y": s.get("y", "Float64") for n, s in nodes.items()}
     counters |= {"bus.frames_delivered": bus.get("frames_delivered"), "bus.bus_load": bus.get("bus_load", "Float64")}
+    for s in (*nodes.values(), bus):
+        s.f.terminate()
+        s.f.freeInstance()
     return sent, delivered, counters
 
 
