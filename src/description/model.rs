@@ -243,6 +243,12 @@ impl ModelDescription {
         any_variable!(self, |v| v.fmi3.clock.is_some())
     }
 
+    /// Whether some variable is an output Clock (a triggered clock the model ticks itself).
+    pub const fn has_output_clocks(&self) -> bool {
+        any_variable!(self, |v| v.fmi3.clock.is_some()
+            && matches!(v.causality, Causality::Output))
+    }
+
     /// Whether some variable is an array (FMI 3.0 `<Dimension>`s). (`const`: the runtime takes
     /// the scalar-only paths of a model without arrays at compile time.)
     pub const fn has_arrays(&self) -> bool {

@@ -295,10 +295,15 @@ pub(crate) fn integrate_with_events<M: CoSimulation>(
         // Event mode without early return: a time event a few ulps before the step's end (an
         // importer's t += h passing 0.01 as 0.010000000000000002) is the communication point's,
         // at the end, for the importer's Event Mode. Handled inside the step instead, a triggered
-        // output clock it ticks would be over before the importer could ask fmi3GetClock.
+        // output clock it ticks would be over before the importer could ask fmi3GetClock. So is
+        // every time event inside the step of a model with output clocks: its tick is signalled
+        // at the step's end (FMI-LS-BUS 1.0.0, Triggered Tx Clocks: "Pending Tx data shall be
+        // signaled by returning from fmi3DoStep with the eventHandlingNeeded arguments set to
+        // fmi3True"), where an importer that moved its grid (a step shortened to another FMU's
+        // countdown tick) can ask fmi3GetClock.
         if ctx.return_at_events == ReturnAtEvents::AtStepEnd
             && !clock.time_event_due
-            && time_event.is_some_and(|te| te < end && due(end, te))
+            && time_event.is_some_and(|te| te < end && (due(end, te) || M::DESCRIPTION.has_output_clocks()))
         {
             target = end;
         }

@@ -194,6 +194,7 @@ def own_loop(stop, set_rx_data=True):
     counters = {f"{n}.{c}": s.get(c) for n, s in nodes.items() for c in ("frames_sent", "frames_received")}
     counters |= {f"{n}.y": s.get("y", "Float64") for n, s in nodes.items()}
     counters |= {"bus.frames_delivered": bus.get("frames_delivered"), "bus.bus_load": bus.get("bus_load", "Float64")}
+    counters["t"] = t
     for s in (*nodes.values(), bus):
         s.f.terminate()
         s.f.freeInstance()
@@ -245,6 +246,7 @@ def test_the_container_equals_the_loop_of_this_test_where_it_gives_the_bus_no_rx
     _, delivered, counters = own_loop(STOP, set_rx_data=False)
     for out, source in SIGNAL_OUTPUTS.items():
         assert result[out][-1] == counters[source], out
+    assert abs(result["time"][-1] - counters["t"]) < TIME_TOL
     assert counters["bus.frames_delivered"] == 0 and delivered == {n: [] for n in PORTS}
 
 
@@ -260,19 +262,26 @@ def test_the_bus_in_the_container_delivers_the_frames_as_the_loop_of_this_test(s
     assert abs(delivered["actuator"][0][0] - (0.01 + 123 / 500e3)) < TIME_TOL
     for out, source in SIGNAL_OUTPUTS.items():
         assert result[out][-1] == counters[source], out
+    assert abs(result["time"][-1] - counters["t"]) < TIME_TOL
 
 
-@pytest.mark.xfail(strict=True, reason="ours: a triggered Tx_Clock's send time that falls strictly inside a step "
-                   "(the container shortened a step to the bus's tick, and the grid moved) is handled inside the "
-                   "step and its tick never reaches the importer; FMI-LS-BUS 1.0.0, Triggered Tx Clocks: 'Pending "
-                   "Tx data shall be signaled by returning from fmi3DoStep with the eventHandlingNeeded arguments "
-                   "set to fmi3True'")
 def test_every_frame_of_a_triggered_node_reaches_the_bus_when_the_importer_moves_its_grid():
+    """The loop shortens a step to the bus's tick, as the container does: the nodes' later send
+    times fall inside steps, and each is signalled at the end of its step (FMI-LS-BUS 1.0.0,
+    Triggered Tx Clocks; before, the runtime handled them inside the step and only the first
+    frame left the node)."""
     sent, delivered, counters = own_loop(STOP)
-    # 10 sends of the sensor in 0.1 s, every one delivered to the actuator (the last one's
-    # delivery, 0.1 + 0.25 ms, is after the stop).
-    assert len(sent["sensor"]) == 10, [t for t, _ in sent["sensor"]]
-    assert counters["actuator.frames_received"] == 9
+    period, frame_time = SENSOR["period"], 123 / 500e3  # the frame's 123 bits at 500 kbit/s
+    # Every send time k period up to the loop's end, each at the end of the step that holds it.
+    times = [t for t, _ in sent["sensor"]]
+    assert len(times) == math.floor(counters["t"] / period) == 9, times
+    for k, t in enumerate(times, start=1):
+        assert k * period - TIME_TOL <= t < k * period + H, (k, t)
+    # Every one delivered to the actuator one frame time later (0x123 wins over 0x200 where both
+    # send), and applied.
+    got = [t for t, f in delivered["actuator"] if f]
+    assert np.allclose(got, np.array(times) + frame_time, rtol=0, atol=TIME_TOL), got
+    assert counters["actuator.frames_received"] == len(times) and counters["actuator.y"] == 2.5
 
 
 def networked_pendulum():

@@ -131,3 +131,27 @@ def test_between_send_times_the_tx_clock_does_not_tick_and_tx_data_is_empty(trig
         node.settle()
         node.f.enterStepMode()
     assert node.get("frames_sent") == 1
+
+
+def test_a_send_time_inside_a_step_ticks_the_tx_clock_at_the_steps_end(triggered):
+    """An importer whose grid moved (FMU Manipulation Toolbox's container shortens a step to a
+    bus simulation's countdown tick, then steps by h from there): the send times 0.01, 0.02, ...
+    fall strictly inside steps. Each is signalled at the end of the step that holds it (FMI-LS-BUS
+    1.0.0, Triggered Tx Clocks: "Pending Tx data shall be signaled by returning from fmi3DoStep
+    with the eventHandlingNeeded arguments set to fmi3True"), the next one still a period after
+    the send time (no drift with the grid)."""
+    node = Node(triggered, "node", tx_id=0x100, period=PERIOD, u=1.5)
+    t, ticks = 0.0, []
+    for dt in [0.0004] + [H] * 40:
+        event = node.f.doStep(t, dt)[0]
+        t += dt
+        node.f.enterEventMode()
+        ticked = node.f.getClock([node.vr["CAN.Tx_Clock"]])[0]
+        assert ticked == event, t
+        if ticked:
+            ticks.append((t, frames(node.f.getBinary([node.vr["CAN.Tx_Data"]])[0])))
+        node.settle()
+        node.f.enterStepMode()
+    assert [round(t, 9) for t, _ in ticks] == [0.0104, 0.0204, 0.0304, 0.0404]
+    assert all(f == [(0x100, struct.pack("<d", 1.5))] for _, f in ticks)
+    assert node.get("frames_sent") == 4

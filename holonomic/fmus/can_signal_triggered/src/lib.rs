@@ -15,10 +15,11 @@
 //! provide a corresponding Clock source", Time-based Tx Clocks).
 //!
 //! A triggered Tx_Clock "must only be set when returning from fmi3DoStep with the earlyReturn
-//! argument set to fmi3False" (FMI-LS-BUS 1.0.0, Triggered Tx Clocks): the send times must be
-//! communication points of the importer (`period` a multiple of its step), where the step ends
-//! at the node's time event. A send time strictly inside a step is handled inside it, and its
-//! frame never reaches the importer.
+//! argument set to fmi3False" (FMI-LS-BUS 1.0.0, Triggered Tx Clocks): the bus communication
+//! points are the importer's communication points. A send time at a communication point ticks
+//! there; one strictly inside a step (an importer whose grid moved) is signalled at the end of
+//! that step ("Pending Tx data shall be signaled by returning from fmi3DoStep with the
+//! eventHandlingNeeded arguments set to fmi3True"), the next send still a period after it.
 
 #[macro_use]
 #[path = "../../can_signal_node.rs"]
