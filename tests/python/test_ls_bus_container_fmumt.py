@@ -22,7 +22,9 @@ What it found, in two CanSignalTriggered nodes (sensor: 0x123 every 10 ms, actua
   receives. FMI-LS-BUS 1.0.0, 4 (Time-based Tx Clocks): "To make sure that the Rx_Data variable is
   set properly, an importer has to activate the Rx_Clock respecting the Tx_Data and Rx_Data
   dependency"; Tx/Rx Data Variables: they "contain zero, one or multiple Bus Operations, as sent
-  or received by the FMU". Theirs: the test of the frames arriving is an xfail (strict).
+  or received by the FMU". Theirs: the test of the frames arriving is an xfail (strict). In the
+  loop they arrive, each one frame time (123 bits at 500 kbit/s) after its send, also after the
+  loop moved its grid to the bus's tick (a send time inside a step is signalled at its end).
 - The networked pendulum (CanSensor, CanController, two CanMotorDrives, countdown Tx clocks) stops
   at its first send: the container activates the sensor's Tx_Clock, reads its Tx_Data, then sets
   the sensor's inputs alpha1 .. omega2 in the same Event Mode. Tx_Data depends on them (the
