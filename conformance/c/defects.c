@@ -27,6 +27,17 @@
  *   DEFECT_NULL_COMPONENT   fmi2DoStep answers OK on a NULL component
  *   DEFECT_STATUS_KIND      fmi2GetBooleanStatus answers OK for a kind that is not its own
  *   DEFECT_LOGGING          fmi3SetDebugLogging accepts a category the description does not declare
+ *   DEFECT_PROBES           answers the probes of an importer's mistakes otherwise than the model
+ *                           it wraps: fmi*OK for NULL arrays and outputs (fmi2GetDerivatives,
+ *                           fmi2SetContinuousStates, fmi2CompletedIntegratorStep,
+ *                           fmi2NewDiscreteStates, fmi3GetContinuousStateDerivatives,
+ *                           fmi3DeserializeFMUState, a NULL seed of fmi3GetDirectionalDerivative,
+ *                           fmi2SetContinuousStates on a NULL component),
+ *                           for fmi3GetInt32 of any variable (Dahlquist has no Int32) and for
+ *                           fmi3GetContinuousStates of another nContinuousStates; fmi3Discard for
+ *                           fmi3DoStep with NULL outputs; fmi2Error for fmi2GetFMUstate into an
+ *                           existing state (legal: FMI 2.0.5 §2.1.8); a crash in
+ *                           fmi2FreeInstance(NULL) (a no-op by FMI 2.0.5 §2.1.5)
  *
  * The forwarding functions are two instructions of x86-64 assembly each (a jump through the
  * address looked up in the inner library): they pass every argument on, whatever the
@@ -46,29 +57,29 @@
     X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2SetupExperiment)                       \
     X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset)                    \
     X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger) X(fmi2SetBoolean)        \
-    X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize)                          \
+    X(fmi2SetString) X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize)                          \
     X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative) X(fmi2SetRealInputDerivatives)                     \
     X(fmi2GetRealOutputDerivatives) X(fmi2CancelStep) X(fmi2GetStatus)                                            \
     X(fmi2GetIntegerStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                  \
-    X(fmi2NewDiscreteStates) X(fmi2EnterContinuousTimeMode) X(fmi2CompletedIntegratorStep) X(fmi2SetTime)         \
-    X(fmi2SetContinuousStates) X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                               \
+    X(fmi2EnterContinuousTimeMode) X(fmi2SetTime)         \
+    X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                               \
     X(fmi2GetNominalsOfContinuousStates)
 
 #define FMI3_COMMON(X)                                                                                            \
     X(fmi3GetVersion) X(fmi3InstantiateScheduledExecution) X(fmi3EnterInitializationMode)  \
     X(fmi3ExitInitializationMode) X(fmi3EnterEventMode) X(fmi3Terminate) X(fmi3Reset) X(fmi3GetFloat32)           \
-    X(fmi3GetInt8) X(fmi3GetUInt8) X(fmi3GetInt16) X(fmi3GetUInt16) X(fmi3GetInt32) X(fmi3GetUInt32)               \
+    X(fmi3GetInt8) X(fmi3GetUInt8) X(fmi3GetInt16) X(fmi3GetUInt16) X(fmi3GetUInt32)               \
     X(fmi3GetInt64) X(fmi3GetUInt64) X(fmi3GetBoolean) X(fmi3GetString) X(fmi3GetBinary) X(fmi3GetClock)           \
     X(fmi3SetFloat32) X(fmi3SetFloat64) X(fmi3SetInt8) X(fmi3SetUInt8) X(fmi3SetInt16) X(fmi3SetUInt16)           \
     X(fmi3SetInt32) X(fmi3SetUInt32) X(fmi3SetInt64) X(fmi3SetUInt64) X(fmi3SetBoolean) X(fmi3SetString)           \
     X(fmi3SetBinary) X(fmi3SetClock) X(fmi3GetNumberOfVariableDependencies) X(fmi3GetVariableDependencies)        \
-    X(fmi3GetFMUState) X(fmi3FreeFMUState) X(fmi3SerializedFMUStateSize) X(fmi3DeserializeFMUState)               \
-    X(fmi3GetDirectionalDerivative) X(fmi3GetAdjointDerivative) X(fmi3EnterConfigurationMode)                     \
+    X(fmi3GetFMUState) X(fmi3FreeFMUState) X(fmi3SerializedFMUStateSize)                \
+    X(fmi3GetAdjointDerivative) X(fmi3EnterConfigurationMode)                     \
     X(fmi3ExitConfigurationMode) X(fmi3GetIntervalDecimal) X(fmi3GetIntervalFraction) X(fmi3GetShiftDecimal)      \
     X(fmi3GetShiftFraction) X(fmi3SetIntervalDecimal) X(fmi3SetIntervalFraction) X(fmi3SetShiftDecimal)           \
     X(fmi3SetShiftFraction) X(fmi3EvaluateDiscreteStates) X(fmi3UpdateDiscreteStates)                             \
     X(fmi3EnterContinuousTimeMode) X(fmi3CompletedIntegratorStep) X(fmi3SetTime) X(fmi3SetContinuousStates)       \
-    X(fmi3GetEventIndicators) X(fmi3GetContinuousStates) X(fmi3GetNominalsOfContinuousStates)                     \
+    X(fmi3GetEventIndicators) X(fmi3GetNominalsOfContinuousStates)                     \
     X(fmi3GetNumberOfEventIndicators) X(fmi3EnterStepMode)                                                        \
     X(fmi3GetOutputDerivatives) X(fmi3ActivateModelPartition)
 
@@ -79,7 +90,9 @@
     X(fmi2SetFMUstate) X(fmi2GetDerivatives) X(fmi3InstantiateModelExchange) X(fmi3InstantiateCoSimulation)       \
     X(fmi3FreeInstance) X(fmi3GetFloat64) X(fmi3DoStep) X(fmi3SerializeFMUState) X(fmi3SetFMUState)               \
     X(fmi3GetContinuousStateDerivatives) X(fmi2GetRealStatus) X(fmi3GetNumberOfContinuousStates)                  \
-    X(fmi2GetInteger) X(fmi2GetBooleanStatus) X(fmi3SetDebugLogging)
+    X(fmi2GetInteger) X(fmi2GetBooleanStatus) X(fmi3SetDebugLogging) X(fmi2GetFMUstate)                          \
+    X(fmi2CompletedIntegratorStep) X(fmi2NewDiscreteStates) X(fmi2SetContinuousStates) X(fmi3GetInt32)            \
+    X(fmi3DeserializeFMUState) X(fmi3GetDirectionalDerivative) X(fmi3GetContinuousStates)
 
 #define POINTER(f) HIDDEN void *next_##f;
 FMI2_COMMON(POINTER)
@@ -97,9 +110,21 @@ TRAMPOLINE(fmi2Instantiate)
 TRAMPOLINE(fmi3InstantiateModelExchange)
 TRAMPOLINE(fmi3InstantiateCoSimulation)
 #endif
-#ifndef DEFECT_FREE_CRASH
+#if !defined(DEFECT_FREE_CRASH) && !defined(DEFECT_PROBES)
 TRAMPOLINE(fmi2FreeInstance)
+#endif
+#ifndef DEFECT_FREE_CRASH
 TRAMPOLINE(fmi3FreeInstance)
+#endif
+#ifndef DEFECT_PROBES
+TRAMPOLINE(fmi2GetFMUstate)
+TRAMPOLINE(fmi2CompletedIntegratorStep)
+TRAMPOLINE(fmi2NewDiscreteStates)
+TRAMPOLINE(fmi2SetContinuousStates)
+TRAMPOLINE(fmi3GetInt32)
+TRAMPOLINE(fmi3DeserializeFMUState)
+TRAMPOLINE(fmi3GetDirectionalDerivative)
+TRAMPOLINE(fmi3GetContinuousStates)
 #endif
 #ifndef DEFECT_GET_PAST
 TRAMPOLINE(fmi2GetReal)
@@ -113,7 +138,7 @@ TRAMPOLINE(fmi2GetInteger)
 #if !defined(DEFECT_STEP_STUCK) && !defined(DEFECT_NULL_COMPONENT)
 TRAMPOLINE(fmi2DoStep)
 #endif
-#ifndef DEFECT_STEP_STUCK
+#if !defined(DEFECT_STEP_STUCK) && !defined(DEFECT_PROBES)
 TRAMPOLINE(fmi3DoStep)
 #endif
 #ifndef DEFECT_STATUS_KIND
@@ -134,7 +159,7 @@ TRAMPOLINE(fmi3SetFMUState)
 TRAMPOLINE(fmi2GetRealStatus)
 TRAMPOLINE(fmi3GetNumberOfContinuousStates)
 #endif
-#ifndef DEFECT_ME_EQUATIONS
+#if !defined(DEFECT_ME_EQUATIONS) && !defined(DEFECT_PROBES)
 TRAMPOLINE(fmi2GetDerivatives)
 TRAMPOLINE(fmi3GetContinuousStateDerivatives)
 #endif
@@ -310,5 +335,66 @@ S fmi2GetBooleanStatus(void *c, int kind, int *value) {
 S fmi3SetDebugLogging(void *c, bool on, size_t n, const char *const *categories) {
     S s = ((S(*)(void *, bool, size_t, const char *const *))next_fmi3SetDebugLogging)(c, on, n, categories);
     return n == 1 && categories && s == 3 ? 0 : s; /* an unknown category's fmi3Error answered as fmi3OK */
+}
+#endif
+
+#ifdef DEFECT_PROBES
+S fmi2GetDerivatives(void *c, double *d, size_t n) {
+    if (!d) return 0;
+    return ((S(*)(void *, double *, size_t))next_fmi2GetDerivatives)(c, d, n);
+}
+S fmi2SetContinuousStates(void *c, const double *x, size_t n) {
+    if (!x || !c) return 0; /* NULL states, or a NULL component, accepted */
+    return ((S(*)(void *, const double *, size_t))next_fmi2SetContinuousStates)(c, x, n);
+}
+S fmi2CompletedIntegratorStep(void *c, int noSetPrior, int *enter, int *terminate) {
+    if (!enter || !terminate) return 0;
+    return ((S(*)(void *, int, int *, int *))next_fmi2CompletedIntegratorStep)(c, noSetPrior, enter, terminate);
+}
+S fmi2NewDiscreteStates(void *c, void *eventInfo) {
+    if (!eventInfo) return 0;
+    return ((S(*)(void *, void *))next_fmi2NewDiscreteStates)(c, eventInfo);
+}
+S fmi2GetFMUstate(void *c, void **state) {
+    if (state && *state) return 3; /* fmi2Error: an existing state is not overwritten */
+    return ((S(*)(void *, void **))next_fmi2GetFMUstate)(c, state);
+}
+void fmi2FreeInstance(void *c) {
+    volatile int *volatile nowhere = NULL;
+    if (!c) *nowhere = 1; /* SIGSEGV */
+    ((void (*)(void *))next_fmi2FreeInstance)(c);
+}
+S fmi3GetContinuousStateDerivatives(void *c, double *d, size_t n) {
+    if (!d) return 0;
+    return ((S(*)(void *, double *, size_t))next_fmi3GetContinuousStateDerivatives)(c, d, n);
+}
+S fmi3GetContinuousStates(void *c, double *x, size_t n) {
+    size_t nx = 0;
+    S s = ((S(*)(void *, size_t *))next_fmi3GetNumberOfContinuousStates)(c, &nx);
+    if (s == 0 && n != nx) return 0; /* another nContinuousStates accepted, nothing written */
+    return ((S(*)(void *, double *, size_t))next_fmi3GetContinuousStates)(c, x, n);
+}
+S fmi3DeserializeFMUState(void *c, const unsigned char *bytes, size_t size, void **state) {
+    if (!bytes) return 0;
+    return ((S(*)(void *, const unsigned char *, size_t, void **))next_fmi3DeserializeFMUState)(c, bytes, size, state);
+}
+S fmi3GetInt32(void *c, const unsigned *vr, size_t nvr, int *values, size_t n) {
+    (void)c, (void)vr, (void)nvr;
+    for (size_t i = 0; values && i < n; i++) values[i] = 0;
+    return 0; /* any value reference, whatever its type */
+}
+S fmi3GetDirectionalDerivative(void *c, const unsigned *unknowns, size_t nUnknowns, const unsigned *knowns,
+                               size_t nKnowns, const double *seed, size_t nSeed, double *sensitivity,
+                               size_t nSensitivity) {
+    if (!seed) return 0;
+    return ((S(*)(void *, const unsigned *, size_t, const unsigned *, size_t, const double *, size_t, double *,
+                  size_t))next_fmi3GetDirectionalDerivative)(c, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                                                             sensitivity, nSensitivity);
+}
+S fmi3DoStep(void *c, double t, double h, bool noSetPrior, bool *eventHandlingNeeded, bool *terminate,
+             bool *earlyReturn, double *lastSuccessfulTime) {
+    if (!eventHandlingNeeded || !terminate || !earlyReturn || !lastSuccessfulTime) return 2; /* fmi3Discard */
+    return ((S(*)(void *, double, double, bool, bool *, bool *, bool *, double *))next_fmi3DoStep)(
+        c, t, h, noSetPrior, eventHandlingNeeded, terminate, earlyReturn, lastSuccessfulTime);
 }
 #endif

@@ -174,6 +174,8 @@ thread_local! {
     static NOTES: RefCell<Vec<(u64, Note)>> = const { RefCell::new(Vec::new()) };
     /// The call a check said it failed on ([`fails_at`]), the first one said.
     static FAILING: Cell<Option<u64>> = const { Cell::new(None) };
+    /// The last call made before the check's first warning ([`warned_at`]).
+    static WARNED: Cell<Option<u64>> = const { Cell::new(None) };
 }
 
 /// What a check said about a call.
@@ -181,6 +183,9 @@ thread_local! {
 pub enum Note {
     Requires(Expected),
     Values(Vec<f64>, f64),
+    /// What the standard requires of a call a warning was about ([`warning_requires`]): the
+    /// expectation of a warning's reproducer only (a failure's replays the path the check took).
+    WarnedRequires(Expected),
 }
 
 fn next_seq() -> u64 {
@@ -296,6 +301,7 @@ pub fn begin() {
     LAST.with(|l| *l.borrow_mut() = None);
     NOTES.with(|n| n.borrow_mut().clear());
     FAILING.with(|f| f.set(None));
+    WARNED.with(|f| f.set(None));
 }
 
 /// An instance's log, handed over when the instance is dropped.
@@ -305,7 +311,9 @@ pub fn retire(log: Log) {
     }
     // The instance of the call the check said it failed on is kept, though the check goes on
     // with other instances (and fails when it has gathered every failure).
-    if std::thread::panicking() || FAILING.with(Cell::get).is_some_and(|s| log.holds(s)) {
+    let holds =
+        |at: &'static std::thread::LocalKey<Cell<Option<u64>>>| at.with(Cell::get).is_some_and(|s| log.holds(s));
+    if std::thread::panicking() || holds(&FAILING) || holds(&WARNED) {
         RETIRED.with(|r| r.borrow_mut().push(log));
     } else {
         LAST.with(|l| *l.borrow_mut() = Some(log));
@@ -317,6 +325,23 @@ pub fn retire(log: Log) {
 pub fn standard_requires(expected: Expected) {
     let seq = SEQ.with(Cell::get);
     NOTES.with(|n| n.borrow_mut().push((seq, Note::Requires(expected))));
+}
+
+/// The check warned ([`crate::outcome::warn`]) just after call `seq` ([`last_call`]): the first
+/// warning's call ends the reproducer of a check that only warned ([`take_warned`]).
+pub fn warned_at(seq: u64) {
+    if seq > 0 && WARNED.with(Cell::get).is_none() {
+        WARNED.with(|w| w.set(Some(seq)));
+    }
+}
+
+/// The check warned because its last call answered otherwise than `expected`, what the standard
+/// requires there (an importer's mistake the FMU must refuse with fmi3Error, FMI 3.0.2 §2.2.4):
+/// a warning's reproducer expects that, so that its replay exits 1 where the FMU does it again;
+/// a failure's reproducer (the check went on past it) expects what the FMU answered.
+pub fn warning_requires(expected: Expected) {
+    let seq = SEQ.with(Cell::get);
+    NOTES.with(|n| n.borrow_mut().push((seq, Note::WarnedRequires(expected))));
 }
 
 /// The check expected its last call (a getter, a step's lastSuccessfulTime) to give `values`,
@@ -362,6 +387,19 @@ pub fn take_failing() -> Option<(Log, Vec<(u64, Note)>)> {
     Some((log, notes))
 }
 
+/// The log of the instance of the call the check's first warning followed ([`warned_at`]), cut
+/// after that call, with the notes the check made; None where no instance made it (a warning
+/// about the archive, the description or the binary's exports).
+pub fn take_warned() -> Option<(Log, Vec<(u64, Note)>)> {
+    let seq = WARNED.with(|w| w.take())?;
+    let mut logs = RETIRED.with(|r| std::mem::take(&mut *r.borrow_mut()));
+    logs.extend(LAST.with(|l| l.borrow_mut().take()));
+    let notes = NOTES.with(|n| std::mem::take(&mut *n.borrow_mut()));
+    let mut log = logs.into_iter().find(|l| l.holds(seq))?;
+    log.calls.retain(|r| r.seq <= seq);
+    Some((log, notes))
+}
+
 /// A record's line: `function key=value ...`.
 fn line_of(r: &Rec) -> String {
     line_of_at_most(r, usize::MAX)
@@ -393,18 +431,28 @@ fn line_of_at_most(r: &Rec, max: usize) -> String {
 /// The reproducer of a failed check from the log of the instance it failed on: `about` (the FMU,
 /// the check) and the failure as comments, the instantiation, and every call up to the last
 /// one, each expecting the status it answered (or what the check said the standard requires).
-pub fn reproducer_text(log: &Log, notes: &[(u64, Note)], about: &[String], failure: &str) -> String {
-    let mut t = String::from(
+///
+/// `warning`: the check only warned, and the log ends with the call its first warning followed
+/// (the file says so; a call the warning said the standard requires another status of expects
+/// that status, [`warning_requires`]).
+pub fn reproducer_text(log: &Log, notes: &[(u64, Note)], about: &[String], failure: &str, warning: bool) -> String {
+    let mut t = String::from(if warning {
+        "# A reproducer written by fmi-conformance: the calls a named check made on the instance of its first\n\
+         # warning, up to the call the warning followed, one a line, each expecting the status it answered (where\n\
+         # the warning is about a status, the status the standard requires). conformance/README.md, \"Reproducers\".\n\
+         # Run it again: cargo fmu replay THIS_FILE X.fmu\n"
+    } else {
         "# A reproducer written by fmi-conformance: the calls a named check made on the instance it failed on,\n\
          # up to its last call, one a line, each expecting the status it answered (where the check failed on a\n\
          # status, the status the standard requires). conformance/README.md, \"Reproducers\".\n\
-         # Run it again: cargo fmu replay THIS_FILE X.fmu\n",
-    );
+         # Run it again: cargo fmu replay THIS_FILE X.fmu\n"
+    });
     for a in about {
         let _ = writeln!(t, "# {a}");
     }
+    let kind = if warning { "warning" } else { "failure" };
     for l in failure.lines().take(30) {
-        let _ = writeln!(t, "# failure: {l}");
+        let _ = writeln!(t, "# {kind}: {l}");
     }
     if log.cut > 0 {
         let _ = writeln!(
@@ -435,7 +483,8 @@ pub fn reproducer_text(log: &Log, notes: &[(u64, Note)], about: &[String], failu
         let mut comment = String::new();
         for (_, n) in notes.iter().filter(|(s, _)| *s == r.seq) {
             match n {
-                Note::Requires(e) => {
+                Note::WarnedRequires(_) if !warning => {}
+                Note::Requires(e) | Note::WarnedRequires(e) => {
                     if let Some(s) = r.status.filter(|s| !e.contains(*s)) {
                         let _ = write!(comment, " # answered {}: the standard requires {e}", status_word(s));
                     }
@@ -486,7 +535,7 @@ mod tests {
         retire(a);
         retire(b);
         let (log, notes) = take_failing().expect("a log");
-        let text = reproducer_text(&log, &notes, &[], "the failure");
+        let text = reproducer_text(&log, &notes, &[], "the failure", false);
         assert!(text.contains("fmi2Instantiate instanceName=b\n"), "{text}");
         assert!(
             text.contains("fmi2GetReal vr=[1] expect=[0.5] within=1e-9 -> OK\n"),
@@ -517,7 +566,7 @@ mod tests {
         b.answered(i, 0);
         retire(b);
         let (log, notes) = take_failing().expect("a log");
-        let text = reproducer_text(&log, &notes, &[], "the failure");
+        let text = reproducer_text(&log, &notes, &[], "the failure", false);
         assert!(text.contains("fmi2Instantiate instanceName=a\n"), "{text}");
         assert!(
             text.ends_with("fmi2GetDirectionalDerivative unknowns=[1] expect=[1.0] within=1e-5 -> OK\n"),

@@ -171,7 +171,7 @@ impl<'a> Instance<'a> {
     }
 
     /// The number of the FMU state `s` in the log (`made`: a state this call made).
-    fn state_val(&self, s: fmi2FMUstate, made: bool) -> Option<Val> {
+    pub(crate) fn state_val(&self, s: fmi2FMUstate, made: bool) -> Option<Val> {
         if s.is_null() {
             return Some(Val::Null);
         }

@@ -347,6 +347,10 @@ pub const NULL_COMPONENT_PROBES: [&str; 30] = [
     "fmi2GetStringStatus",
 ];
 
+/// The model-exchange functions the check of a NULL component calls (`fmi2SetTime
+/// component=NULL`), besides [`NULL_COMPONENT_PROBES`]: every one model exchange has alone.
+pub use crate::api::ME_FUNCTIONS as ME_NULL_COMPONENT_PROBES;
+
 /// `name` as the `&'static str` of `list` (a function a reproducer's line names).
 pub fn named(list: &[&'static str], name: &str) -> Option<&'static str> {
     list.iter().copied().find(|f| *f == name)
@@ -540,6 +544,109 @@ impl Instance<'_> {
         s
     }
 
+    /// One of the model-exchange vector getters (`name`, [`crate::me::VECTOR_GETTERS`]) into
+    /// NULL with `n` values: an importer's mistake. Recorded as `fmi2GetDerivatives n=1
+    /// values=NULL`.
+    pub fn get_vector_null(&self, name: &'static str, n: usize) -> Status {
+        let f = self.vector_getter(name);
+        let i = self.record(name, vec![("n", Val::U64(n as u64)), ("values", Val::Null)]);
+        // SAFETY: NULL on purpose (n > 0): the FMU must check before writing.
+        self.answered(i, unsafe { f(self.c, ptr::null_mut(), n) })
+    }
+
+    /// fmi2SetContinuousStates of NULL with `nx` values: an importer's mistake. Recorded as
+    /// `fmi2SetContinuousStates x=NULL nx=1`.
+    pub fn set_continuous_states_null(&mut self, nx: usize) -> Status {
+        let i = self.record(
+            "fmi2SetContinuousStates",
+            vec![("x", Val::Null), ("nx", Val::U64(nx as u64))],
+        );
+        // SAFETY: NULL on purpose (nx > 0): the FMU must check before reading.
+        self.answered(i, unsafe { (self.me().set_continuous_states)(self.c, ptr::null(), nx) })
+    }
+
+    /// fmi2CompletedIntegratorStep with one output pointer NULL (`enter_null`: enterEventMode,
+    /// else terminateSimulation; the other a value with a guard after it): an importer's
+    /// mistake. Recorded as `fmi2CompletedIntegratorStep noSetFMUStatePriorToCurrentPoint=false
+    /// enterEventMode=NULL`.
+    pub fn completed_integrator_step_null(&mut self, enter_null: bool) -> Status {
+        let null = if enter_null {
+            "enterEventMode"
+        } else {
+            "terminateSimulation"
+        };
+        let i = self.record(
+            "fmi2CompletedIntegratorStep",
+            vec![
+                ("noSetFMUStatePriorToCurrentPoint", Val::Bool(false)),
+                (null, Val::Null),
+            ],
+        );
+        let f = self.me().completed_integrator_step;
+        let mut other: fmi2Boolean = 77;
+        // SAFETY: one output NULL on purpose (the FMU must check before writing), the other a
+        // live value with a guard after it.
+        let s = unsafe {
+            fill_one(
+                &mut other,
+                "fmi2CompletedIntegratorStep",
+                "one value",
+                GETTER_RULE2,
+                |p| {
+                    if enter_null {
+                        f(self.c, fmi2False, ptr::null_mut(), p)
+                    } else {
+                        f(self.c, fmi2False, p, ptr::null_mut())
+                    }
+                },
+            )
+        };
+        self.answered(i, s)
+    }
+
+    /// fmi2NewDiscreteStates with a NULL eventInfo: an importer's mistake. Recorded as
+    /// `fmi2NewDiscreteStates eventInfo=NULL`.
+    pub fn new_discrete_states_null(&mut self) -> Status {
+        let i = self.record("fmi2NewDiscreteStates", vec![("eventInfo", Val::Null)]);
+        // SAFETY: NULL on purpose: the FMU must check before writing.
+        self.answered(i, unsafe { (self.me().new_discrete_states)(self.c, ptr::null_mut()) })
+    }
+
+    /// fmi2GetFMUstate into the existing FMU state `st` (FMI 2.0.5 §2.1.8: "If on entry
+    /// *FMUstate is not a null pointer, fmi2GetFMUstate typically reuses the memory of this
+    /// FMUstate"): `st` is then the state the FMU answered. Recorded as `fmi2GetFMUstate into=1`
+    /// (and `state=N` where the FMU answered another state than it was given).
+    pub fn get_state_into(&mut self, st: &mut fmi2FMUstate) -> Status {
+        let i = match self.state_val(*st, false) {
+            Some(v) => self.record("fmi2GetFMUstate", vec![("into", v)]),
+            None => self.record_unreplayable("fmi2GetFMUstate"),
+        };
+        let old = *st;
+        // SAFETY: a live instance; `st` is a live FMU state it returned, to be overwritten in
+        // place (a guard after it).
+        let s = unsafe {
+            crate::guard::fill_state2(st, "fmi2GetFMUstate", |q| {
+                self.answered(i, (self.fmu.api.get_fmu_state)(self.c, q))
+            })
+        };
+        if *st != old
+            && let Some(v) = self.state_val(*st, true)
+        {
+            self.calls.borrow_mut().add_arg(i, "state", v);
+        }
+        s
+    }
+
+    /// fmi2FreeInstance(NULL), which FMI 2.0.5 §2.1.5 makes a no-op ("If a null pointer is
+    /// provided for c, the function call is ignored"); it returns nothing, and is recorded as
+    /// answering OK: `fmi2FreeInstance component=NULL`.
+    pub fn free_instance_null(&self) {
+        let i = self.record("fmi2FreeInstance", vec![("component", Val::Null)]);
+        // SAFETY: fmi2FreeInstance(NULL) is a no-op by the standard.
+        unsafe { (self.fmu.api.free_instance)(ptr::null_mut()) };
+        self.answered(i, fmi2OK);
+    }
+
     /// `function` of [`NULL_COMPONENT_PROBES`] called with a NULL
     /// component (its other arguments valid or empty, as the check passes them): the status.
     /// Recorded as `fmi2DoStep component=NULL`. Panics where the call wrote an FMU state.
@@ -623,7 +730,7 @@ fn null_component_call(fmu: &crate::Fmu, function: &str) -> Status {
             "fmi2GetStringStatus" => fill_one(&mut string, function, "one value", S, |p| {
                 (api.get_string_status)(c, 0, p)
             }),
-            f => panic!("{f} is not a function the check of a NULL component calls"),
+            f => return null_component_me(fmu, f),
         }
     };
     assert!(
@@ -632,4 +739,54 @@ fn null_component_call(fmu: &crate::Fmu, function: &str) -> Status {
         fmu.id
     );
     s
+}
+
+/// [`null_component_call`] of a function of [`ME_NULL_COMPONENT_PROBES`] (valid outputs of a
+/// few values, each with a guard after it).
+fn null_component_me(fmu: &crate::Fmu, function: &str) -> Status {
+    use crate::guard::{GETTER_RULE2 as R, fill};
+    let me = fmu
+        .api
+        .me
+        .as_ref()
+        .unwrap_or_else(|e| panic!("{}: {function}: no model-exchange functions: {e}", fmu.id));
+    let c: fmi2Component = ptr::null_mut();
+    let n = fmu.md.number_of_continuous_states().min(4);
+    let ni = fmu.md.number_of_event_indicators.min(4);
+    let mut v = [0.0; 4];
+    let mut info = fmi2EventInfo::default();
+    let (mut a, mut b) = (0, 0);
+    // SAFETY: every function must check the component before touching anything; the outputs
+    // are valid, each with a guard after it.
+    unsafe {
+        match function {
+            "fmi2EnterEventMode" => (me.enter_event_mode)(c),
+            "fmi2NewDiscreteStates" => (me.new_discrete_states)(c, &mut info),
+            "fmi2EnterContinuousTimeMode" => (me.enter_continuous_time_mode)(c),
+            "fmi2CompletedIntegratorStep" => fill_one(
+                &mut a,
+                "fmi2CompletedIntegratorStep (enterEventMode)",
+                "one value",
+                R,
+                |pa| {
+                    fill_one(
+                        &mut b,
+                        "fmi2CompletedIntegratorStep (terminateSimulation)",
+                        "one value",
+                        R,
+                        |pb| (me.completed_integrator_step)(c, 0, pa, pb),
+                    )
+                },
+            ),
+            "fmi2SetTime" => (me.set_time)(c, 0.0),
+            "fmi2SetContinuousStates" => (me.set_continuous_states)(c, v.as_ptr(), n),
+            "fmi2GetDerivatives" => fill(&mut v[..n], function, "nx", R, |p| (me.get_derivatives)(c, p, n)),
+            "fmi2GetEventIndicators" => fill(&mut v[..ni], function, "ni", R, |p| (me.get_event_indicators)(c, p, ni)),
+            "fmi2GetContinuousStates" => fill(&mut v[..n], function, "nx", R, |p| (me.get_continuous_states)(c, p, n)),
+            "fmi2GetNominalsOfContinuousStates" => fill(&mut v[..n], function, "nx", R, |p| {
+                (me.get_nominals_of_continuous_states)(c, p, n)
+            }),
+            f => panic!("{f} is not a function the check of a NULL component calls"),
+        }
+    }
 }

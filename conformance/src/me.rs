@@ -146,7 +146,7 @@ impl<'a> Instance<'a> {
             .unwrap_or_else(|log| panic!("{}: fmi2Instantiate(fmi2ModelExchange) refused: {log:#?}", fmu.id))
     }
 
-    fn me(&self) -> &'a MeApi {
+    pub(crate) fn me(&self) -> &'a MeApi {
         self.fmu
             .api
             .me
@@ -185,15 +185,22 @@ impl<'a> Instance<'a> {
 
     /// One of [`VECTOR_GETTERS`] (`name`) with `n` values.
     pub fn get_vector_n(&self, name: &'static str, n: usize) -> (Status, Vec<f64>) {
+        self.get_vector(name, self.vector_getter(name), n)
+    }
+
+    /// The function of one of [`VECTOR_GETTERS`] (`name`).
+    pub(crate) fn vector_getter(
+        &self,
+        name: &str,
+    ) -> unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status {
         let me = self.me();
-        let f = match name {
+        match name {
             "fmi2GetContinuousStates" => me.get_continuous_states,
             "fmi2GetDerivatives" => me.get_derivatives,
             "fmi2GetEventIndicators" => me.get_event_indicators,
             "fmi2GetNominalsOfContinuousStates" => me.get_nominals_of_continuous_states,
             other => panic!("{other} is not a model-exchange vector getter"),
-        };
-        self.get_vector(name, f, n)
+        }
     }
 
     fn get_vector(

@@ -151,6 +151,8 @@ pub fn warn(text: impl Into<String>) {
         let mut f = f.borrow_mut();
         if !f.warnings.contains(&text) {
             f.warnings.push(text);
+            // The call the first warning followed ends a warned check's reproducer.
+            crate::calllog::warned_at(crate::calllog::last_call());
         }
     });
 }

@@ -89,10 +89,30 @@ impl Check {
         let run = F::check_fn(self.run)
             .unwrap_or_else(|| panic!("{} checks {:?} FMUs, not {:?}", self.name, self.version(), F::VERSION));
         crate::calllog::begin();
-        let (outcome, findings) = capture(|| {
+        let (outcome, mut findings) = capture(|| {
             fmu.runnable(self.name);
             run(fmu)
         });
+        // A check that only warned: the calls up to its first warning's (a failure under
+        // --strict, and an importer's mistake the vendor may want to see refused).
+        if let Outcome::Warn(m) = &outcome
+            && self.group != Group::RandomSequences
+            && let Some(first) = findings.warnings.first_mut()
+            && let Some((log, notes)) = crate::calllog::take_warned().filter(|(log, _)| log.replayable())
+        {
+            let note = crate::replay::write_check_reproducer(
+                fmu.id(),
+                fmu.archive(),
+                F::VERSION,
+                self.name,
+                first,
+                &log,
+                &notes,
+                true,
+            );
+            first.push_str(&format!("\n{note}"));
+            return (Outcome::Warn(format!("{m}\n{note}")), findings);
+        }
         let failing = crate::calllog::take_failing();
         let outcome = match outcome {
             // The random checks write their own (shrunk) reproducers.
@@ -113,6 +133,7 @@ impl Check {
                             &m,
                             &log,
                             &notes,
+                            false,
                         );
                         Outcome::Fail(format!("{m}\n{note}"))
                     }

@@ -286,7 +286,8 @@ pub const REPRODUCER_SENTENCE: &str = "reproducer (";
 
 /// Writes the reproducer of the named check `check` that failed with `failure` on the FMU `id`
 /// (its file `archive`): the calls of `log`, the instance it failed on ([`crate::calllog`]), as
-/// `<id>-fmi2-<check>-<n>.txt` (`-fmi3-`); the sentence that ends the failure message.
+/// `<id>-fmi2-<check>-<n>.txt` (`-fmi3-`); the sentence that ends the failure message. `warning`:
+/// the check only warned, `failure` is its first warning and `log` ends with the call it followed.
 pub fn write_check_reproducer(
     id: &str,
     archive: &Path,
@@ -295,6 +296,7 @@ pub fn write_check_reproducer(
     failure: &str,
     log: &crate::calllog::Log,
     notes: &[(u64, crate::calllog::Note)],
+    warning: bool,
 ) -> String {
     let v = match version {
         crate::Version::Fmi2 => "fmi2",
@@ -308,11 +310,16 @@ pub fn write_check_reproducer(
         ),
         format!("check: {check}"),
     ];
-    let text = crate::calllog::reproducer_text(log, notes, &about, failure);
+    let text = crate::calllog::reproducer_text(log, notes, &about, failure, warning);
     let written = write_reproducer(&format!("{id}-{v}-{check}"), &text);
+    let of = if warning {
+        "the calls of the instance of the first warning, up to the call it followed, one a line"
+    } else {
+        "the calls of the instance the check failed on, one a line"
+    };
     match written {
         Ok(path) => format!(
-            "reproducer (the calls of the instance the check failed on, one a line): {}; replay it with \
+            "reproducer ({of}): {}; replay it with \
              `cargo fmu replay {} {}` (or `fmu-check --replay {} {}`)",
             path.display(),
             path.display(),

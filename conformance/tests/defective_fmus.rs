@@ -899,3 +899,255 @@ fmi3UpdateDiscreteStates -> OK
         assert!(out.contains("the failure reproduces"), "{what}:\n{out}");
     }
 }
+
+/// The first lines of a reproducer on Dahlquist, as the checks' instances start: FMI 2.0
+/// co-simulation initialized, model exchange in Continuous-Time Mode (`event`: left in Event
+/// Mode), FMI 3.0 co-simulation in Step Mode, model exchange in Continuous-Time Mode.
+fn head(v: u32, me: bool, event: bool) -> String {
+    match (v, me) {
+        (2, false) => "fmi2Instantiate instanceName=replay fmuType=CoSimulation guid=own resourceLocation=own loggingOn=false
+fmi2SetupExperiment startTime=0.0 stopTime=NULL -> OK
+fmi2EnterInitializationMode -> OK
+fmi2ExitInitializationMode -> OK
+"
+        .into(),
+        (2, true) => format!(
+            "fmi2Instantiate instanceName=replay fmuType=ModelExchange guid=own resourceLocation=own loggingOn=false
+fmi2SetupExperiment startTime=0.0 stopTime=NULL -> OK
+fmi2EnterInitializationMode -> OK
+fmi2ExitInitializationMode -> OK
+fmi2NewDiscreteStates -> OK
+{}",
+            if event { "" } else { "fmi2EnterContinuousTimeMode -> OK\n" }
+        ),
+        (_, false) => "fmi3InstantiateCoSimulation instanceName=replay eventModeUsed=false earlyReturnAllowed=false intermediateUpdate=false
+fmi3EnterInitializationMode startTime=0.0 -> OK
+fmi3ExitInitializationMode -> OK
+"
+        .into(),
+        (_, true) => "fmi3InstantiateModelExchange instanceName=replay
+fmi3EnterInitializationMode startTime=0.0 -> OK
+fmi3ExitInitializationMode -> OK
+fmi3UpdateDiscreteStates -> OK
+fmi3EnterContinuousTimeMode -> OK
+"
+        .into(),
+    }
+}
+
+/// Issue 51 items 1 and 2: each kind of line the call log now records for the probes once made
+/// on the C functions directly or through `Inst::call` without their arguments (a getter of
+/// another type, fmi3DoStep with NULL outputs, fmi3DeserializeFMUState of NULL bytes, a
+/// model-exchange vector into NULL or of another length, a NULL seed, fmi2SetContinuousStates of
+/// NULL, fmi2CompletedIntegratorStep and fmi2NewDiscreteStates with a NULL output, a
+/// model-exchange function on a NULL component, fmi2GetFMUstate into an existing state,
+/// fmi2FreeInstance(NULL)) round-trips: a file of that line, as the check writes it, replays to
+/// exit 0 on Dahlquist and to exit 1 on the fixture `DEFECT_PROBES` (fmi2FreeInstance(NULL): the
+/// replay dies in the call, as the check's worker would).
+#[test]
+fn each_new_kind_of_probe_line_replays_to_exit_1_on_its_defect_and_0_on_our_fmu() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    // (version, model exchange, Event Mode, the lines after the head, what the replay on the
+    // defect says differs)
+    let cases: &[(u32, bool, bool, &str, &str)] = &[
+        (
+            2,
+            true,
+            false,
+            "fmi2GetDerivatives n=1 values=NULL -> Error\n",
+            "fmi2GetDerivatives answered OK",
+        ),
+        (
+            2,
+            true,
+            false,
+            "fmi2SetContinuousStates x=NULL nx=1 -> Error\n",
+            "fmi2SetContinuousStates answered OK",
+        ),
+        (
+            2,
+            true,
+            false,
+            "fmi2CompletedIntegratorStep noSetFMUStatePriorToCurrentPoint=false enterEventMode=NULL -> Error\n",
+            "fmi2CompletedIntegratorStep answered OK",
+        ),
+        (
+            2,
+            true,
+            false,
+            "fmi2CompletedIntegratorStep noSetFMUStatePriorToCurrentPoint=false terminateSimulation=NULL -> Error\n",
+            "fmi2CompletedIntegratorStep answered OK",
+        ),
+        (
+            2,
+            true,
+            true,
+            "fmi2NewDiscreteStates eventInfo=NULL -> Error\n",
+            "fmi2NewDiscreteStates answered OK",
+        ),
+        (
+            2,
+            true,
+            false,
+            "fmi2SetContinuousStates component=NULL -> Error\n",
+            "fmi2SetContinuousStates answered OK",
+        ),
+        (
+            2,
+            false,
+            false,
+            "fmi2GetFMUstate state=1 -> OK\nfmi2DoStep currentCommunicationPoint=0.0 communicationStepSize=0.1 -> OK\nfmi2GetFMUstate into=1 -> OK\nfmi2SetFMUstate state=1 -> OK\nfmi2FreeFMUstate state=1 -> OK\n",
+            "fmi2GetFMUstate answered Error",
+        ),
+        (
+            3,
+            false,
+            false,
+            "fmi3GetInt32 vr=[1] nValues=1 -> Error\n",
+            "fmi3GetInt32 answered OK",
+        ),
+        (
+            3,
+            false,
+            false,
+            "fmi3GetInt32 vr=[3] nValues=1 -> Error\n",
+            "fmi3GetInt32 answered OK",
+        ),
+        (
+            3,
+            false,
+            false,
+            "fmi3DoStep currentCommunicationPoint=0.0 communicationStepSize=0.1 outputs=NULL -> OK|Error\n",
+            "fmi3DoStep answered Discard",
+        ),
+        (
+            3,
+            false,
+            false,
+            "fmi3DeserializeFMUState bytes=NULL size=16 -> Error\n",
+            "fmi3DeserializeFMUState answered OK",
+        ),
+        (
+            3,
+            true,
+            false,
+            "fmi3GetContinuousStateDerivatives n=1 values=NULL -> Error\n",
+            "fmi3GetContinuousStateDerivatives answered OK",
+        ),
+        (
+            3,
+            true,
+            false,
+            "fmi3GetContinuousStates n=2 -> Error\n",
+            "fmi3GetContinuousStates answered OK",
+        ),
+        (
+            3,
+            true,
+            false,
+            "fmi3GetDirectionalDerivative unknowns=[2] knowns=[1] seed=NULL nSeed=1 nSensitivity=1 -> Error\n",
+            "fmi3GetDirectionalDerivative answered OK",
+        ),
+        (
+            3,
+            true,
+            false,
+            "fmi3GetDirectionalDerivative unknowns=[2] knowns=[1] seed=[1.0,1.0] nSeed=2 nSensitivity=1 -> Error\n",
+            "",
+        ),
+    ];
+    let defective = [2, 3].map(|v| fixture(dir.path(), v, "PROBES", &["-DDEFECT_PROBES".to_string()]));
+    for (i, (v, me, event, lines, differs)) in cases.iter().enumerate() {
+        let text = format!("{}{lines}", head(*v, *me, *event));
+        let file = dir.path().join(format!("probe-{i}.txt"));
+        std::fs::write(&file, &text).unwrap();
+        let (code, out) = replay(&file, &dahlquist(*v).0);
+        assert_eq!(code, Some(0), "our Dahlquist, FMI {v}.0:\n{text}\n{out}");
+        let made = out.lines().filter(|l| l.contains(" -> ")).count();
+        assert_eq!(made, text.lines().count(), "a line a call:\n{out}");
+        if differs.is_empty() {
+            // A probe the fixture answers as the model does (a wrong nSeed is forwarded).
+            continue;
+        }
+        let (code, out) = replay(&file, &defective[*v as usize - 2]);
+        assert_eq!(code, Some(1), "DEFECT_PROBES, FMI {v}.0:\n{text}\n{out}");
+        assert!(
+            out.contains("the failure reproduces") && out.contains(differs),
+            "DEFECT_PROBES, FMI {v}.0: the replay says '{differs}':\n{out}"
+        );
+    }
+    // fmi2FreeInstance(NULL), which the standard makes a no-op: the defect crashes in it, and so
+    // does its replay (the check's worker dies in the same call).
+    let text = format!("{}fmi2FreeInstance component=NULL -> OK\n", head(2, false, false));
+    let file = dir.path().join("free-null.txt");
+    std::fs::write(&file, &text).unwrap();
+    let (code, out) = replay(&file, &dahlquist(2).0);
+    assert_eq!(code, Some(0), "our Dahlquist:\n{out}");
+    let (code, out) = replay(&file, &defective[0]);
+    assert_ne!(code, Some(0), "DEFECT_PROBES: fmi2FreeInstance(NULL):\n{out}");
+}
+
+/// Issue 51 item 3: a check that only warns leaves a reproducer too, up to the call its first
+/// warning followed, which expects what the standard requires there (fmi2Error, fmi3Error), so
+/// that its replay exits 1 on the FMU that warned and 0 on one that refuses the mistake; under
+/// `--strict` the warning is a failure with the same file. FMI 2.0 (a NULL array of model
+/// exchange) and 3.0 (a getter of another type).
+#[test]
+fn a_check_that_only_warns_leaves_a_reproducer_of_its_first_warning() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    for (v, name, last) in [
+        (
+            2,
+            "model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing",
+            "fmi2GetDerivatives n=1 values=NULL -> Error",
+        ),
+        (
+            3,
+            "fmi3_bad_arguments_are_refused_with_a_message_and_change_nothing",
+            "fmi3GetInt32 vr=[",
+        ),
+    ] {
+        let fmu = fixture(dir.path(), v, "PROBES", &["-DDEFECT_PROBES".to_string()]);
+        for strict in [false, true] {
+            let reproducers = dir.path().join(format!("warned-{v}-{strict}"));
+            let mut o = RunOptions::new(env!("CARGO_BIN_EXE_fmu-check"), vec!["__worker".into()]);
+            o.temp_dir = Some(dir.path().to_path_buf());
+            o.as_foreign = true;
+            o.strict = strict;
+            o.filter = Some(name.into());
+            o.reproducers = Some(reproducers.clone());
+            let report = run(&fmu, &o);
+            let c = report
+                .checks
+                .iter()
+                .find(|c| c.name == name)
+                .unwrap_or_else(|| panic!("no check {name}:\n{report}"));
+            let message = match (&c.outcome, strict) {
+                (Outcome::Warn(m), false) => m.clone(),
+                (Outcome::Fail(m), true) => {
+                    assert!(m.starts_with(fmi_conformance::outcome::STRICT_PREFIX), "{m}");
+                    m.clone()
+                }
+                (other, _) => panic!("FMI {v}.0, strict {strict}: {name}: {other:?}\n{report}"),
+            };
+            let file = reproducer_of(&message);
+            assert!(file.starts_with(&reproducers), "{}", file.display());
+            let text = std::fs::read_to_string(&file).unwrap();
+            assert!(
+                text.contains(&format!("# check: {name}")) && text.contains("# warning: "),
+                "FMI {v}.0: the file names the check and its warning:\n{text}"
+            );
+            let end = text.trim_end().lines().last().unwrap_or_default();
+            // (after the expectation, a comment says what the FMU answered)
+            let end = end.split(" #").next().unwrap_or_default().trim_end();
+            assert!(
+                end.starts_with(last) && end.ends_with("-> Error"),
+                "FMI {v}.0: the file ends with the call the warning followed ('{last}...'), expecting the fmi2Error / fmi3Error the standard requires:\n{text}"
+            );
+            let (code, out) = replay(&file, &fmu);
+            assert_eq!(code, Some(1), "FMI {v}.0: the replay on the defect:\n{out}\n{text}");
+            let (code, out) = replay(&file, &dahlquist(v).0);
+            assert_eq!(code, Some(0), "FMI {v}.0: the replay on Dahlquist:\n{out}\n{text}");
+        }
+    }
+}

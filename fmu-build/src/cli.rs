@@ -422,14 +422,16 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
         .checks
         .iter()
         .filter_map(|c| match &c.outcome {
-            fmi_conformance::outcome::Outcome::Fail(m) => Some(fmi_conformance::replay::reproducer_paths(m)),
+            fmi_conformance::outcome::Outcome::Fail(m) | fmi_conformance::outcome::Outcome::Warn(m) => {
+                Some(fmi_conformance::replay::reproducer_paths(m))
+            }
             _ => None,
         })
         .flatten()
         .collect();
     if !reproducers.is_empty() {
         println!(
-            "reproducers of the failures (the calls that show each, one a line; `cargo fmu replay FILE {}` runs one \
+            "reproducers of the failures and warnings (the calls that show each, one a line; `cargo fmu replay FILE {}` runs one \
              again, under a debugger if you like):",
             fmu.display()
         );

@@ -95,11 +95,13 @@ pub fn get_set_free_round_trip_continues_bit_identically(fmu: &Fmu) {
     }
     // Re-using an existing FMUstate: fmi2GetFMUstate overwrites it in place.
     let (before, old_ptr) = (inst.observe(), saved);
-    // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
+    // Through the call log: `fmi2GetFMUstate into=1`.
     assert_eq!(
-        // SAFETY: a live instance; `saved` is a live FMUstate it returned, to be overwritten in place.
-        unsafe { crate::guard::fill_state2(&mut saved, "fmi2GetFMUstate", |q| (fmu.api.get_fmu_state)(inst.c, q)) },
-        fmi2OK
+        inst.get_state_into(&mut saved),
+        fmi2OK,
+        "{}: {}",
+        fmu.id,
+        inst.log_text()
     );
     // FMI 2.0.5 §2.1.8: fmi2GetFMUstate "typically reuses the memory of this FMUstate": not
     // required, a warning.

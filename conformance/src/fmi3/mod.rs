@@ -1012,26 +1012,34 @@ impl<'a> Inst<'a> {
 
     /// [`Inst::get_raw`] with `n` as nValues (which may be wrong on purpose).
     pub fn get_raw_n(&self, v: &Variable, n: usize) -> (fmi3Status, Vec<u8>) {
-        let api = self.api();
-        let mut guarded = Guarded::aligned_bytes(n * c_size(v.ty));
-        let p = guarded.as_mut_ptr();
-        let vr = &v.vr;
-        let what = format!("fmi3Get{}", accessor(v.ty));
         if v.ty == Type::Binary {
             // Through the call log (Inst::get_binary): a failure leaves a reproducer with it.
-            let (s, _, mut bytes) = self.get_binary(&[*vr], 1);
+            let (s, _, mut bytes) = self.get_binary(&[v.vr], 1);
             return (s, bytes.pop().unwrap_or_default());
         }
+        self.get_as(v.ty, v.vr, n)
+    }
+
+    /// The getter of type `ty` (a number or Boolean) of the value reference `vr`, whatever the
+    /// variable's own type (a getter of another type: an importer's mistake, on purpose), into
+    /// `n` values of that type with a guard after them: the status and the C bytes. Recorded as
+    /// `fmi3GetInt32 vr=[1] nValues=1`.
+    pub fn get_as(&self, ty: Type, vr: u32, n: usize) -> (fmi3Status, Vec<u8>) {
+        let api = self.api();
+        let mut guarded = Guarded::aligned_bytes(n * c_size(ty));
+        let p = guarded.as_mut_ptr();
+        let vr = &vr;
+        let what = format!("fmi3Get{}", accessor(ty));
         let s = self
             .args(vec![("vr", Val::U32s(vec![*vr])), ("nValues", Val::U64(n as u64))])
             // SAFETY: this instance's live handle; `words` holds `n` values of any of the types,
             // 8-byte aligned.
-            .call(&what, |c| unsafe { api.get_values(c, v.ty, vr, p, n) });
+            .call(&what, |c| unsafe { api.get_values(c, ty, vr, p, n) });
         let words = guarded.into_values(|| format!("{what} with nValues = {n}"), GETTER_RULE3);
         let bytes: Vec<u8> = words
             .iter()
             .flat_map(|w| w.to_ne_bytes())
-            .take(n * c_size(v.ty))
+            .take(n * c_size(ty))
             .collect();
         (s, bytes)
     }

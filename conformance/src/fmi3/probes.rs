@@ -4,7 +4,9 @@
 //! fmi3SetFloat64 with their arrays as given (NULL arrays, nValues other than the variables'
 //! elements: the probes of an importer's mistakes, and no values with NULL arrays),
 //! fmi3SetDebugLogging, fmi3GetBinary, fmi3GetNumberOfVariableDependencies and
-//! fmi3GetVariableDependencies, fmi3DeserializeFMUState of NULL bytes.
+//! fmi3GetVariableDependencies, fmi3DeserializeFMUState of NULL bytes, a model-exchange vector
+//! into NULL, fmi3DoStep with NULL outputs, fmi3Get/AdjointDerivative with their counts as given
+//! (a NULL seed, nSeed or nSensitivity other than the elements).
 
 use super::Inst;
 use super::types::*;
@@ -188,5 +190,94 @@ impl Inst<'_> {
                 })
             });
         (s, (e_dep, ind, e_ind, kinds))
+    }
+
+    /// fmi3GetContinuousStates (or another model-exchange vector `what`, `f`) into NULL with
+    /// `n` values. Recorded as `fmi3GetContinuousStateDerivatives n=1 values=NULL`.
+    pub fn vector_null(&self, what: &str, f: super::api::Vector, n: usize) -> fmi3Status {
+        self.args(vec![("n", Val::U64(n as u64)), ("values", Val::Null)])
+            // SAFETY: NULL on purpose (with n > 0): the FMU must check before writing.
+            .call(what, |c| unsafe { f(c, null_mut(), n) })
+    }
+
+    /// fmi3DoStep from `t` of `h` with NULL output pointers (noSetFMUStatePriorToCurrentPoint
+    /// true). Recorded as `fmi3DoStep currentCommunicationPoint=0.0 communicationStepSize=0.1
+    /// outputs=NULL`.
+    pub fn do_step_null_outputs(&self, t: f64, h: f64) -> fmi3Status {
+        let api = self.api();
+        self.args(vec![
+            ("currentCommunicationPoint", Val::F64(t)),
+            ("communicationStepSize", Val::F64(h)),
+            ("outputs", Val::Null),
+        ])
+        // SAFETY: NULL output pointers on purpose: the FMU must not write through them.
+        .call("fmi3DoStep", |c| unsafe {
+            (api.do_step)(c, t, h, true, null_mut(), null_mut(), null_mut(), null_mut())
+        })
+    }
+
+    /// fmi3DeserializeFMUState of NULL bytes with the size `size`, into one FMU state with a
+    /// guard after it (the state it made, if any, left to the instance). Recorded as
+    /// `fmi3DeserializeFMUState bytes=NULL size=64`.
+    pub fn deserialize_null(&self, size: usize) -> fmi3Status {
+        let api = self.api();
+        let mut st: fmi3FMUState = null_mut();
+        self.args(vec![("bytes", Val::Null), ("size", Val::U64(size as u64))])
+            // SAFETY: NULL bytes with a size on purpose: the FMU must refuse without reading
+            // them; `st` is a live local with a guard after it.
+            .call("fmi3DeserializeFMUState", |c| unsafe {
+                crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
+                    (api.deserialize_fmu_state)(c, null(), size, q)
+                })
+            })
+    }
+
+    /// fmi3GetDirectionalDerivative, or (`adjoint`) fmi3GetAdjointDerivative, with every count
+    /// as given: `unknowns` (nUnknowns their length), `knowns`, the seed (None: NULL) with
+    /// nSeed `n_seed`, and nSensitivity `n_sensitivity` values (a guard after them). Recorded
+    /// as `fmi3GetDirectionalDerivative unknowns=[1] knowns=[0] seed=NULL nSeed=1
+    /// nSensitivity=1`.
+    pub fn derivative_probe(
+        &self,
+        adjoint: bool,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: Option<&[f64]>,
+        n_seed: usize,
+        n_sensitivity: usize,
+    ) -> fmi3Status {
+        assert!(seed.is_none_or(|x| x.len() >= n_seed), "a seed shorter than nSeed");
+        let api = self.api();
+        let (what, f) = if adjoint {
+            ("fmi3GetAdjointDerivative", api.get_adjoint_derivative)
+        } else {
+            ("fmi3GetDirectionalDerivative", api.get_directional_derivative)
+        };
+        let mut out = vec![0.0; n_sensitivity];
+        let p = ptr_of(seed);
+        self.args(vec![
+            ("unknowns", Val::U32s(unknowns.to_vec())),
+            ("knowns", Val::U32s(knowns.to_vec())),
+            ("seed", arg(seed.map(|x| &x[..n_seed]), Val::F64s)),
+            ("nSeed", Val::U64(n_seed as u64)),
+            ("nSensitivity", Val::U64(n_sensitivity as u64)),
+        ])
+        // SAFETY: each array holds the count passed (the seed may be NULL on purpose: the FMU
+        // must check); the sensitivity has a guard after it.
+        .call(what, |c| unsafe {
+            fill(&mut out, what, "nSensitivity", GETTER_RULE3, |q| {
+                f(
+                    c,
+                    unknowns.as_ptr(),
+                    unknowns.len(),
+                    knowns.as_ptr(),
+                    knowns.len(),
+                    p,
+                    n_seed,
+                    q,
+                    n_sensitivity,
+                )
+            })
+        })
     }
 }

@@ -11,7 +11,6 @@ use crate::outcome::{limitation, skip_not_declared};
 use crate::standard::REACHABLE;
 use crate::state::{STATES, State};
 use crate::{Fmu, Type};
-use std::ptr;
 
 /// The model-exchange functions, for [`one_me_call`].
 pub(super) const ME_CALLS: usize = 10;
@@ -94,6 +93,7 @@ pub(super) fn one_me_call(inst: &mut Instance, k: usize) -> (&'static str, fmi2S
 pub(super) fn refused(inst: &Instance, function: &str, what: &str, status: fmi2Status) {
     let log = inst.log();
     if status != fmi2Error {
+        crate::calllog::warning_requires(crate::replay::Expected::ERROR);
         crate::outcome::warn(format!(
             "{}: {function} with {what}: expected fmi2Error, got {} (an importer's mistake not detected); log {log:?}",
             inst.fmu.id,
@@ -110,20 +110,14 @@ pub(super) fn refused(inst: &Instance, function: &str, what: &str, status: fmi2S
 /// Verdict: warned, never failed: wrong vector sizes, NULL arrays and non-finite times are the
 /// importer's mistakes, which FMI 2.0.5 leaves undefined (the helper `refused`).
 pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothing(fmu: &Fmu) {
-    let me = needs_me(fmu);
+    needs_me(fmu);
     let (mut inst, _) = advanced(fmu, 10);
     let (nx, ni) = (inst.nx(), inst.ni());
-    let c = inst.c;
-    type Vector = unsafe extern "C" fn(fmi2Component, *mut fmi2Real, usize) -> fmi2Status;
-    let getters: [(&str, Vector, usize); 4] = [
-        ("fmi2GetContinuousStates", me.get_continuous_states, nx),
-        ("fmi2GetDerivatives", me.get_derivatives, nx),
-        (
-            "fmi2GetNominalsOfContinuousStates",
-            me.get_nominals_of_continuous_states,
-            nx,
-        ),
-        ("fmi2GetEventIndicators", me.get_event_indicators, ni),
+    let getters: [(&'static str, usize); 4] = [
+        ("fmi2GetContinuousStates", nx),
+        ("fmi2GetDerivatives", nx),
+        ("fmi2GetNominalsOfContinuousStates", nx),
+        ("fmi2GetEventIndicators", ni),
     ];
     let reference = me_observe(&inst);
     let check_unchanged = |inst: &mut Instance, what: &str, before: &Option<Vec<u8>>| {
@@ -137,7 +131,7 @@ pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothin
         });
     };
     let mut sizes: Vec<usize> = vec![];
-    for (function, f, n) in getters {
+    for (function, n) in getters {
         // Wrong lengths, with a buffer of that length; NULL with the right length.
         sizes.clear();
         sizes.extend([n + 1, n + 7]);
@@ -146,17 +140,16 @@ pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothin
         }
         for m in sizes.iter().copied() {
             let before = inst.fingerprint();
-            let mut buf = vec![0.0; m];
-            // SAFETY: a buffer of m elements.
-            let s = unsafe { f(c, buf.as_mut_ptr(), m) };
+            // Through the call log (a guard after the m values): `fmi2GetDerivatives n=M`.
+            let s = crate::outcome::on_purpose(|| inst.get_vector_n(function, m).0);
             let what = format!("n = {m} (the FMU has {n})");
             refused(&inst, function, &what, s);
             check_unchanged(&mut inst, &format!("{function}({what})"), &before);
         }
         let before = inst.fingerprint();
         let m = n.max(1);
-        // SAFETY: NULL with n > 0, which the FMU must refuse.
-        let s = unsafe { f(c, ptr::null_mut(), m) };
+        // NULL with n > 0, which the FMU must refuse: `fmi2GetDerivatives n=M values=NULL`.
+        let s = crate::outcome::on_purpose(|| inst.get_vector_null(function, m));
         refused(&inst, function, &format!("NULL and n = {m}"), s);
         check_unchanged(&mut inst, &format!("{function}(NULL, {m})"), &before);
     }
@@ -186,13 +179,11 @@ pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothin
     }
     for (what, y, null) in bad_states {
         let before = inst.fingerprint();
-        let (p, n) = if null {
-            (ptr::null(), nx.max(1))
+        let s = if null {
+            crate::outcome::on_purpose(|| inst.set_continuous_states_null(nx.max(1)))
         } else {
-            (y.as_ptr(), y.len())
+            crate::outcome::on_purpose(|| inst.set_continuous_states(&y))
         };
-        // SAFETY: an array of n elements, or NULL on purpose.
-        let s = unsafe { (me.set_continuous_states)(c, p, n) };
         refused(&inst, "fmi2SetContinuousStates", &what, s);
         check_unchanged(&mut inst, &format!("fmi2SetContinuousStates({what})"), &before);
     }
@@ -206,21 +197,15 @@ pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothin
     }
     inst.time = t;
     // fmi2CompletedIntegratorStep: NULL out pointers.
-    let (mut a, mut b) = (0, 0);
-    for (what, pa, pb) in [
-        ("enterEventMode NULL", ptr::null_mut(), &mut b as *mut fmi2Boolean),
-        ("terminateSimulation NULL", &mut a as *mut fmi2Boolean, ptr::null_mut()),
-    ] {
+    for (what, enter_null) in [("enterEventMode NULL", true), ("terminateSimulation NULL", false)] {
         let before = inst.fingerprint();
-        // SAFETY: NULL on purpose, a valid pointer otherwise.
-        let s = unsafe { (me.completed_integrator_step)(c, fmi2False, pa, pb) };
+        let s = crate::outcome::on_purpose(|| inst.completed_integrator_step_null(enter_null));
         refused(&inst, "fmi2CompletedIntegratorStep", what, s);
         check_unchanged(&mut inst, &format!("fmi2CompletedIntegratorStep({what})"), &before);
     }
     // fmi2NewDiscreteStates(NULL), in EventMode, on a fresh instance: after fmi2Error the first
     // one may not go on (FMI 2.0.5 §2.1.3).
     let (mut inst, _) = advanced(fmu, 10);
-    let c = inst.c;
     assert_eq!(inst.enter_event_mode(), fmi2OK, "{}", inst.log_text());
     inst.log();
     let before = inst.fingerprint();
@@ -228,12 +213,8 @@ pub fn model_exchange_bad_arguments_are_refused_with_a_message_and_change_nothin
     let (mut twin, _) = advanced(fmu, 10);
     assert_eq!(twin.enter_event_mode(), fmi2OK, "{}", twin.log_text());
     let (s_ref, info_ref) = twin.new_discrete_states();
-    crate::outcome::breadcrumb(&format!(
-        "{}fmi2NewDiscreteStates(eventInfo NULL)",
-        crate::outcome::IMPORTERS_MISTAKE
-    ));
-    // SAFETY: NULL on purpose.
-    let s = unsafe { (me.new_discrete_states)(c, ptr::null_mut()) };
+    // On purpose: its breadcrumb says so, and a crash in it is a warning.
+    let s = crate::outcome::on_purpose(|| inst.new_discrete_states_null());
     refused(&inst, "fmi2NewDiscreteStates", "eventInfo NULL", s);
     inst.warn_if_changed(&before, s, "fmi2NewDiscreteStates(NULL)");
     let (s, info) = inst.new_discrete_states();
@@ -333,87 +314,33 @@ pub fn model_exchange_each_variable_can_be_set_exactly_where_the_standard_allows
 }
 
 pub fn model_exchange_functions_refuse_a_null_component(fmu: &Fmu) {
-    let Ok(me) = &fmu.api.me else {
+    if fmu.api.me.is_err() {
         if fmu.md.me.is_some() {
             needs_me(fmu);
         }
         skip_not_declared("<ModelExchange>, and the binary does not export the model-exchange functions")
+    }
+    // Through the call log of a live instance (made first and given to no call; model exchange
+    // where the description declares it), so that a failure leaves a reproducer with them:
+    // `fmi2SetTime component=NULL -> Error`.
+    let args = crate::instance::Args {
+        fmu_type: if fmu.md.me.is_some() {
+            fmi2ModelExchange
+        } else {
+            fmi2CoSimulation
+        },
+        ..crate::instance::Args::valid(fmu)
     };
-    let c: fmi2Component = ptr::null_mut();
-    let mut v = [0.0; 4];
-    let mut info = fmi2EventInfo::default();
-    let (mut a, mut b) = (0, 0);
-    let n = fmu.md.number_of_continuous_states().min(4);
-    let ni = fmu.md.number_of_event_indicators.min(4);
+    let inst = Instance::with(fmu, &args).unwrap_or_else(|log| panic!("{}: fmi2Instantiate refused: {log:?}", fmu.id));
     crate::outcome::breadcrumb("model-exchange functions with a NULL component");
-    // SAFETY: every function must check the component before touching anything.
-    let answers = unsafe {
-        [
-            ("fmi2EnterEventMode", (me.enter_event_mode)(c)),
-            ("fmi2NewDiscreteStates", (me.new_discrete_states)(c, &mut info)),
-            ("fmi2EnterContinuousTimeMode", (me.enter_continuous_time_mode)(c)),
-            (
-                "fmi2CompletedIntegratorStep",
-                crate::guard::fill_one(
-                    &mut a,
-                    "fmi2CompletedIntegratorStep (enterEventMode)",
-                    "one value",
-                    crate::guard::GETTER_RULE2,
-                    |pa| {
-                        crate::guard::fill_one(
-                            &mut b,
-                            "fmi2CompletedIntegratorStep (terminateSimulation)",
-                            "one value",
-                            crate::guard::GETTER_RULE2,
-                            |pb| (me.completed_integrator_step)(c, 0, pa, pb),
-                        )
-                    },
-                ),
-            ),
-            ("fmi2SetTime", (me.set_time)(c, 0.0)),
-            ("fmi2SetContinuousStates", (me.set_continuous_states)(c, v.as_ptr(), n)),
-            (
-                "fmi2GetDerivatives",
-                crate::guard::fill(
-                    &mut v[..n],
-                    "fmi2GetDerivatives",
-                    "nx",
-                    crate::guard::GETTER_RULE2,
-                    |p| (me.get_derivatives)(c, p, n),
-                ),
-            ),
-            (
-                "fmi2GetEventIndicators",
-                crate::guard::fill(
-                    &mut v[..ni],
-                    "fmi2GetEventIndicators",
-                    "ni",
-                    crate::guard::GETTER_RULE2,
-                    |p| (me.get_event_indicators)(c, p, ni),
-                ),
-            ),
-            (
-                "fmi2GetContinuousStates",
-                crate::guard::fill(
-                    &mut v[..n],
-                    "fmi2GetContinuousStates",
-                    "nx",
-                    crate::guard::GETTER_RULE2,
-                    |p| (me.get_continuous_states)(c, p, n),
-                ),
-            ),
-            (
-                "fmi2GetNominalsOfContinuousStates",
-                crate::guard::fill(
-                    &mut v[..n],
-                    "fmi2GetNominalsOfContinuousStates",
-                    "nx",
-                    crate::guard::GETTER_RULE2,
-                    |p| (me.get_nominals_of_continuous_states)(c, p, n),
-                ),
-            ),
-        ]
-    };
+    let answers: Vec<_> = crate::instance_calls::ME_NULL_COMPONENT_PROBES
+        .iter()
+        .map(|f| {
+            let s = inst.null_component(f);
+            crate::calllog::standard_requires(crate::replay::Expected::ERROR);
+            (f, s)
+        })
+        .collect();
     for (f, s) in answers {
         assert_eq!(s, fmi2Error, "{}: {f}(NULL, ...) answered {}", fmu.id, status_name(s));
     }

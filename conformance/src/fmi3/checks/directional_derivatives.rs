@@ -274,154 +274,41 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
     // vr, a NULL seed.
     let (nuv, nkv) = (u.len(), k.len());
     let seed = vec![1.0; nk + 1];
-    let mut sens = vec![0.0; nu + 1];
-    refused(
+    // Each through the call log (Inst::derivative_probe): the reproducer's line makes it again.
+    refused_by(
         &inst,
         "fmi3GetDirectionalDerivative(nSeed = the knowns' elements + 1)",
-        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-        // lengths passed.
-        |c| unsafe {
-            {
-                let m = nu;
-                crate::guard::fill(
-                    &mut sens[..m],
-                    "fmi3GetDirectionalDerivative",
-                    "nSensitivity",
-                    crate::guard::GETTER_RULE3,
-                    |p| {
-                        (api.get_directional_derivative)(
-                            c,
-                            u.as_ptr(),
-                            nuv,
-                            k.as_ptr(),
-                            nkv,
-                            seed.as_ptr(),
-                            nk + 1,
-                            p,
-                            m,
-                        )
-                    },
-                )
-            }
-        },
+        || inst.derivative_probe(false, &u, &k, Some(&seed), nk + 1, nu),
     );
-    refused(
+    refused_by(
         &inst,
         "fmi3GetDirectionalDerivative(nSensitivity = the unknowns' elements + 1)",
-        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-        // lengths passed.
-        |c| unsafe {
-            {
-                let m = nu + 1;
-                crate::guard::fill(
-                    &mut sens[..m],
-                    "fmi3GetDirectionalDerivative",
-                    "nSensitivity",
-                    crate::guard::GETTER_RULE3,
-                    |p| (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, seed.as_ptr(), nk, p, m),
-                )
-            }
-        },
+        || inst.derivative_probe(false, &u, &k, Some(&seed), nk, nu + 1),
     );
     if nu != nuv || nk != nkv {
         // nSeed and nSensitivity counting variables, not elements (an importer's mistake with
         // arrays): refused.
-        refused(
+        refused_by(
             &inst,
             &format!(
                 "fmi3GetDirectionalDerivative(nSeed = nKnowns = {nkv}, nSensitivity = nUnknowns = {nuv}: the arrays' elements are {nk} and {nu})"
             ),
-            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-            // lengths passed.
-            |c| unsafe {
-                {
-                    let m = nuv;
-                    crate::guard::fill(
-                        &mut sens[..m],
-                        "fmi3GetDirectionalDerivative",
-                        "nSensitivity",
-                        crate::guard::GETTER_RULE3,
-                        |p| {
-                            (api.get_directional_derivative)(
-                                c,
-                                u.as_ptr(),
-                                nuv,
-                                k.as_ptr(),
-                                nkv,
-                                seed.as_ptr(),
-                                nkv,
-                                p,
-                                m,
-                            )
-                        },
-                    )
-                }
-            },
+            || inst.derivative_probe(false, &u, &k, Some(&seed), nkv, nuv),
         );
     }
     let bad = [fmu.md.unknown_vr()];
-    refused(
-        &inst,
-        "fmi3GetDirectionalDerivative(unknown vr as unknown)",
-        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-        // lengths passed.
-        |c| unsafe {
-            {
-                let m = 1;
-                crate::guard::fill(
-                    &mut sens[..m],
-                    "fmi3GetDirectionalDerivative",
-                    "nSensitivity",
-                    crate::guard::GETTER_RULE3,
-                    |p| (api.get_directional_derivative)(c, bad.as_ptr(), 1, k.as_ptr(), nkv, seed.as_ptr(), nk, p, m),
-                )
-            }
-        },
-    );
-    // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the lengths
-    // passed.
-    refused(&inst, "fmi3GetDirectionalDerivative(seed = NULL)", |c| unsafe {
-        {
-            let m = nu;
-            crate::guard::fill(
-                &mut sens[..m],
-                "fmi3GetDirectionalDerivative",
-                "nSensitivity",
-                crate::guard::GETTER_RULE3,
-                |p| (api.get_directional_derivative)(c, u.as_ptr(), nuv, k.as_ptr(), nkv, null(), nk, p, m),
-            )
-        }
+    refused_by(&inst, "fmi3GetDirectionalDerivative(unknown vr as unknown)", || {
+        inst.derivative_probe(false, &bad, &k, Some(&seed), nk, 1)
+    });
+    refused_by(&inst, "fmi3GetDirectionalDerivative(seed = NULL)", || {
+        inst.derivative_probe(false, &u, &k, None, nk, nu)
     });
     if i.provides_adjoint_derivatives {
-        refused(
+        let (n_seed, m) = if nk == nu { (nu + 1, nk) } else { (nk, nu) };
+        refused_by(
             &inst,
             "fmi3GetAdjointDerivative(nSeed = the knowns' elements: the adjoint's seed has the unknowns')",
-            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-            // lengths passed.
-            |c| unsafe {
-                {
-                    let m = if nk == nu { nk } else { nu };
-                    crate::guard::fill(
-                        &mut sens[..m],
-                        "fmi3GetAdjointDerivative",
-                        "nSensitivity",
-                        crate::guard::GETTER_RULE3,
-                        |p| {
-                            (api.get_adjoint_derivative)(
-                                c,
-                                u.as_ptr(),
-                                nuv,
-                                k.as_ptr(),
-                                nkv,
-                                seed.as_ptr(),
-                                if nk == nu { nu + 1 } else { nk },
-                                p,
-                                m,
-                            )
-                        },
-                    )
-                }
-            },
+            || inst.derivative_probe(true, &u, &k, Some(&seed), n_seed, m),
         );
     }
 }

@@ -294,23 +294,20 @@ fn run(fmu: &Fmu3, me: bool, steps: usize, h: f64) -> Vec<Vec<u64>> {
         .collect()
 }
 
-/// Runs `f`, an importer's mistake made on purpose, which should be refused with fmi3Error,
-/// with a message; then the Float64 values should be what they were (`what` says what was
-/// passed). Warnings, not failures: FMI 3.0.2 §2.2.4 says "When detecting illegal arguments or a
-/// function call not allowed in the current state according to the respective state machine,
-/// the FMU must return fmi3Error" and leaves the detection to the FMU; after fmi3Error "the
-/// simulation cannot be continued" with the instance, so what it shows then is beyond the
-/// standard too. A crash in `f` is a warning ([`crate::outcome::on_purpose`]).
-fn refused(inst: &Inst, what: &str, f: impl FnOnce(fmi3Instance) -> fmi3Status) {
-    refused_by(inst, what, || inst.call(what, f));
-}
-
-/// [`refused`] of a call `call` makes (through a method of [`Inst`] that records its arguments
-/// in the call log, so that a failure after it leaves a reproducer that makes it again).
+/// Runs `call`, an importer's mistake made on purpose through a method of [`Inst`] that records
+/// its arguments in the call log (so that a failure or warning after it leaves a reproducer that
+/// makes it again), which should be refused with fmi3Error, with a message; then the Float64
+/// values should be what they were (`what` says what was passed). Warnings, not failures: FMI
+/// 3.0.2 §2.2.4 says "When detecting illegal arguments or a function call not allowed in the
+/// current state according to the respective state machine, the FMU must return fmi3Error" and
+/// leaves the detection to the FMU; after fmi3Error "the simulation cannot be continued" with the
+/// instance, so what it shows then is beyond the standard too. A crash in `call` is a warning
+/// ([`crate::outcome::on_purpose`]). A warning's reproducer expects fmi3Error of the call.
 fn refused_by(inst: &Inst, what: &str, call: impl FnOnce() -> fmi3Status) {
     let before = inst.observe();
     let s = crate::outcome::on_purpose(call);
     if s != fmi3Error {
+        crate::calllog::warning_requires(crate::replay::Expected::ERROR);
         crate::outcome::warn(format!(
             "{}: {what}: expected fmi3Error, got {} (an importer's mistake not detected)",
             inst.fmu.id,

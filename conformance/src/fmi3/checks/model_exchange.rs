@@ -28,7 +28,7 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
     assert_eq!(
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
-        i.call("n", |c| unsafe {
+        i.call("fmi3GetNumberOfEventIndicators", |c| unsafe {
             crate::guard::fill_one(
                 &mut ne,
                 "fmi3GetNumberOfEventIndicators",
@@ -97,7 +97,10 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
         assert_eq!(
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
-            i.call("sx", |c| unsafe { (api.set_continuous_states)(c, x.as_ptr(), n) }),
+            i.args(vec![("values", crate::calllog::Val::F64s(x[..n].to_vec()))])
+                .call("fmi3SetContinuousStates", |c| unsafe {
+                    (api.set_continuous_states)(c, x.as_ptr(), n)
+                }),
             fmi3OK
         );
         let (_, dx2) = i.vector(

@@ -10,6 +10,7 @@
 //! nowhere else, nothing else is set there, values outside min/max are refused.
 
 use super::*;
+use crate::calllog::Val;
 use crate::fmi3::{Sizes, Variable, euler_step_n, floats};
 use crate::outcome::NOT_DECLARED;
 use md_reader::fmi3::Dimension;
@@ -83,21 +84,21 @@ fn readable_in_instantiated(v: &Variable) -> bool {
 }
 
 fn get_u64(inst: &Inst, vr: u32) -> (fmi3Status, u64) {
-    let mut x = 0xdead_beef_u64;
-    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
-    // state.
-    let s = inst.call("fmi3GetUInt64", |c| unsafe {
-        crate::guard::fill_one(&mut x, "fmi3GetUInt64", "nValues", crate::guard::GETTER_RULE3, |p| {
-            (inst.api().get_uint64)(c, &vr, 1, p as Values, 1)
-        })
-    });
+    // Through the call log (Inst::get_as): `fmi3GetUInt64 vr=[..] nValues=1`.
+    let (s, bytes) = inst.get_as(Type::UInt64, vr, 1);
+    let x = bytes.try_into().map_or(0xdead_beef_u64, u64::from_ne_bytes);
     (s, x)
 }
 
 fn set_u64(inst: &Inst, vr: u32, x: u64) -> fmi3Status {
+    inst.args(vec![
+        ("vr", Val::U32s(vec![vr])),
+        ("nValues", Val::U64(1)),
+        ("bytes", Val::Bytes(x.to_ne_bytes().to_vec())),
+    ])
     // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
     // state.
-    inst.call("fmi3SetUInt64", |c| unsafe {
+    .call("fmi3SetUInt64", |c| unsafe {
         (inst.api().set_uint64)(c, &vr, 1, &x as *const u64 as *const c_void, 1)
     })
 }
@@ -349,6 +350,7 @@ impl<'a> Setup<'a> {
     /// `call` on `inst` must be refused with fmi3Error (and a message: [`Inst::call`]).
     fn refused(&self, inst: &Inst, what: &str, call: impl FnOnce(&Inst) -> fmi3Status) {
         let s = call(inst);
+        crate::calllog::standard_requires(crate::replay::Expected::ERROR);
         assert_eq!(
             s,
             fmi3Error,
@@ -845,9 +847,10 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     st.refused(&inst, "fmi3EnterInitializationMode in Configuration Mode", |i| {
         // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
         // lengths passed.
-        i.call("fmi3EnterInitializationMode", |c| unsafe {
-            (fmu.api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
-        })
+        i.args(vec![("startTime", Val::F64(0.0))])
+            .call("fmi3EnterInitializationMode", |c| unsafe {
+                (fmu.api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
+            })
     });
     let inst = st.fresh();
     st.ok(&inst, enter_config(&inst), "fmi3EnterConfigurationMode");
