@@ -98,7 +98,7 @@ impl Check {
         if let Outcome::Warn(m) = &outcome
             && self.group != Group::RandomSequences
             && let Some(first) = findings.warnings.first_mut()
-            && let Some((log, notes)) = crate::calllog::take_warned().filter(|(log, _)| log.replayable())
+            && let Some(warned) = crate::calllog::take_warned().filter(|(log, _)| log.replayable())
         {
             let note = crate::replay::write_check_reproducer(
                 fmu.id(),
@@ -106,8 +106,7 @@ impl Check {
                 F::VERSION,
                 self.name,
                 first,
-                &log,
-                &notes,
+                &warned,
                 true,
             );
             first.push_str(&format!("\n{note}"));
@@ -124,15 +123,14 @@ impl Check {
                         "{m}\nno reproducer: the check failed on an instance the replay does not make ({})",
                         log.instantiate.as_ref().map_or("", |i| &*i.function)
                     )),
-                    Some((log, notes)) => {
+                    Some(failed) => {
                         let note = crate::replay::write_check_reproducer(
                             fmu.id(),
                             fmu.archive(),
                             F::VERSION,
                             self.name,
                             &m,
-                            &log,
-                            &notes,
+                            &failed,
                             false,
                         );
                         Outcome::Fail(format!("{m}\n{note}"))

@@ -285,7 +285,8 @@ pub fn write_reproducer(stem: &str, text: &str) -> Result<PathBuf, String> {
 pub const REPRODUCER_SENTENCE: &str = "reproducer (";
 
 /// Writes the reproducer of the named check `check` that failed with `failure` on the FMU `id`
-/// (its file `archive`): the calls of `log`, the instance it failed on ([`crate::calllog`]), as
+/// (its file `archive`): the calls of `log`, the instance it failed on ([`crate::calllog`]) with the
+/// check's `notes` on them, as
 /// `<id>-fmi2-<check>-<n>.txt` (`-fmi3-`); the sentence that ends the failure message. `warning`:
 /// the check only warned, `failure` is its first warning and `log` ends with the call it followed.
 pub fn write_check_reproducer(
@@ -294,8 +295,7 @@ pub fn write_check_reproducer(
     version: crate::Version,
     check: &str,
     failure: &str,
-    log: &crate::calllog::Log,
-    notes: &[(u64, crate::calllog::Note)],
+    (log, notes): &(crate::calllog::Log, Vec<(u64, crate::calllog::Note)>),
     warning: bool,
 ) -> String {
     let v = match version {

@@ -95,9 +95,8 @@ pub fn fmi3_model_exchange_states_and_derivatives_are_consistent(fmu: &Fmu3) {
         );
         // deterministic: the same states give the same derivatives
         assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
             i.args(vec![("values", crate::calllog::Val::F64s(x[..n].to_vec()))])
+                // SAFETY: a live instance; `x` holds n values.
                 .call("fmi3SetContinuousStates", |c| unsafe {
                     (api.set_continuous_states)(c, x.as_ptr(), n)
                 }),
