@@ -909,13 +909,13 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     let t = i.time;
     for bad in [0.0, -h, f64::NAN, f64::INFINITY] {
         let (mut flags, mut last) = ([0u8; 3], 0.0);
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
         let s = i
             .args(vec![
                 ("currentCommunicationPoint", Val::F64(t)),
                 ("communicationStepSize", Val::F64(bad)),
             ])
+            // SAFETY: a live instance; each pointer is to a live local of the length passed, or
+            // is an FMU state.
             .call("fmi3DoStep", |c| unsafe {
                 crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, c2], l| {
                     (api.do_step)(c, t, bad, true, a, b, c2, l)
@@ -938,13 +938,13 @@ pub fn fmi3_do_step_output_arguments_are_truthful(fmu: &Fmu3) {
     excite(&j);
     j.initialize();
     let (mut flags, mut last) = ([0u8; 3], 0.0);
-    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
-    // state.
     let s = j
         .args(vec![
             ("currentCommunicationPoint", Val::F64(1.0 + 10.0 * h)),
             ("communicationStepSize", Val::F64(h)),
         ])
+        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
+        // FMU state.
         .call("fmi3DoStep", |c| unsafe {
             crate::guard::fill_outputs("fmi3DoStep", &mut flags, &mut last, |[a, b, c2], l| {
                 (api.do_step)(c, 1.0 + 10.0 * h, h, true, a, b, c2, l)

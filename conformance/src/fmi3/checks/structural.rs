@@ -845,9 +845,9 @@ fn one_interface(fmu: &Fmu3, me: bool) -> Counts {
     let inst = st.fresh();
     st.ok(&inst, enter_config(&inst), "fmi3EnterConfigurationMode");
     st.refused(&inst, "fmi3EnterInitializationMode in Configuration Mode", |i| {
-        // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of the
-        // lengths passed.
         i.args(vec![("startTime", Val::F64(0.0))])
+            // SAFETY: bad on purpose, for the FMU to refuse; pointers NULL or to live locals of
+            // the lengths passed.
             .call("fmi3EnterInitializationMode", |c| unsafe {
                 (fmu.api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)
             })
