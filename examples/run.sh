@@ -61,8 +61,8 @@ here=()
 host=$(rustc -vV | sed -n 's/^host: //p')
 [[ "$host" == *-linux-gnu ]] && host="$host.2.17"  # as the FMUs' Linux binaries: glibc 2.17 and newer
 $everything || here=(--target "$host")
-for s in PendulumLQR PendulumMotors; do
-  target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" --python .venv/bin/python "${here[@]}"
+for s in PendulumLQR PendulumMotors fmi3/NetworkedPendulum; do
+  target/release/cargo-fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/${s#fmi3/}.fmu" --python .venv/bin/python "${here[@]}"
 done
 lap "container FMUs (cargo fmu container)"
 phase 5 "the paper's numbers, Figures 6-8, the composed demo in fmpy, the clocked controller, the container"

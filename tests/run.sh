@@ -99,13 +99,13 @@ step "FMU build reused the test build" reuses_test_build
 # tests/python/test_container.py, test_container_fmi3.py and test_windows.py run them (FMI 2.0
 # and FMI 3.0, containers/fmi3/).
 containers() {
-  for s in PendulumLQR PendulumMotors; do
-    target/release/cargo-fmu fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/$s.fmu" \
+  for s in PendulumLQR PendulumMotors fmi3/NetworkedPendulum; do
+    target/release/cargo-fmu fmu container "target/fmu/$s.ssp" -o "target/fmu/containers/${s#fmi3/}.fmu" \
       --python .venv/bin/python || return 1
   done
 }
 mkdir -p target/fmu/containers
-step "cargo fmu container (PendulumLQR, PendulumMotors)" containers
+step "cargo fmu container (PendulumLQR, PendulumMotors, NetworkedPendulum)" containers
 # The build refreshes modelDescription/ from the built libraries: a committed file it changed was stale.
 step "modelDescription/ is up to date" git diff --exit-code --stat -- modelDescription
 n=0

@@ -339,7 +339,9 @@ impl Container {
     /// Keeps every component's state for [`Container::restore`] (false: a component cannot
     /// get its state, so a failure cannot be undone).
     fn snapshot(&mut self) -> bool {
-        if !self.all_components(|cs| cs.can_get_and_set_fmu_state) {
+        // A system that steps to its clocks' ticks: the components' states alone would not take
+        // the clocks back (`Container::can_state`).
+        if self.sim.steps_to_clock_ticks() || !self.all_components(|cs| cs.can_get_and_set_fmu_state) {
             return false;
         }
         let slots = self.rollback.take();

@@ -6,6 +6,13 @@ use crate::*;
 // FMU states (the same in both versions: FMI 3.0 renamed FMUstate to FMUState).
 impl Container {
     pub(crate) fn can_state(&self, function: &str) -> Result<(), Status> {
+        if self.sim.steps_to_clock_ticks() {
+            return Err(self.error(&format!(
+                "{function}: this system steps to its components' clock ticks, and the importer's side of their \
+                 clocks (ticks planned, Event Mode, held values) is not part of the container's FMU state \
+                 (canGetAndSetFMUstate = false)"
+            )));
+        }
         if self.all_components(|cs| cs.can_get_and_set_fmu_state) {
             Ok(())
         } else {

@@ -168,7 +168,17 @@ impl Container {
             State::StepComplete,
             "fmi2ExitInitializationMode",
             |i| i.exit_initialization_mode(),
-        )
+        )?;
+        if self.sim.steps_to_clock_ticks() {
+            // The run's first point (its clocks tick at the start time, every Event Mode ends),
+            // which the first step starts from.
+            let t = self.time;
+            if let Err(e) = self.sim.communication_point(t) {
+                return Err(self.failed(function, e));
+            }
+            self.dirty = false;
+        }
+        Ok(fmi2OK)
     }
 
     pub(crate) fn terminate(&mut self, function: &str) -> Outcome {
@@ -478,10 +488,11 @@ impl Container {
         }
         let saved = self.snapshot();
         let (time0, dirty0) = (self.time, self.dirty);
+        let ticks = self.sim.steps_to_clock_ticks();
         for k in 0..n {
             let tk = t + k as f64 * h;
             self.time = tk;
-            if k > 0 {
+            if k > 0 && !ticks {
                 self.dirty = true;
             }
             let r = if self.dirty {
@@ -490,15 +501,26 @@ impl Container {
                 Ok(())
             };
             let last = k + 1 == n;
-            let r = r.and_then(|_| self.sim.do_step_with(tk, h, false)).and_then(|_| {
-                // The connections at the step's end, inside the step (undone with it): what the
-                // runner does before it reads the outputs.
-                if last {
-                    self.sim.propagate(end).map(|_| self.dirty = false)
-                } else {
-                    Ok(())
-                }
-            });
+            let r = if ticks {
+                // A system that steps to its clocks' ticks (LS-BUS networks, clock connections):
+                // the internal step as the runner's run takes it, through every tick between,
+                // and the point at its end (the clocks tick, every Event Mode ends), so that the
+                // next internal step starts from it as the run's does.
+                let next = if last { end } else { t + (k + 1) as f64 * h };
+                r.and_then(|_| self.sim.step_between_points(tk, next, false))
+                    .and_then(|_| self.sim.communication_point(next))
+                    .map(|_| self.dirty = false)
+            } else {
+                r.and_then(|_| self.sim.do_step_with(tk, h, false)).and_then(|_| {
+                    // The connections at the step's end, inside the step (undone with it): what
+                    // the runner does before it reads the outputs.
+                    if last {
+                        self.sim.propagate(end).map(|_| self.dirty = false)
+                    } else {
+                        Ok(())
+                    }
+                })
+            };
             if let Err(e) = r {
                 let discard = e.status.as_deref() == Some("Discard");
                 let status = self.undo(function, e, saved);

@@ -330,7 +330,10 @@ fn capabilities(sim: &Simulation) -> (bool, bool, Vec<String>) {
     let descriptions = sim.component_descriptions();
     let all =
         |f: fn(&md_reader::fmi2::CoSimulation) -> bool| descriptions.iter().all(|(_, d)| d.cs.as_ref().is_some_and(f));
-    let state = all(|cs| cs.can_get_and_set_fmu_state);
+    // A system that steps to its clocks' ticks keeps the importer's side of the components'
+    // clocks (ticks planned, Event Mode, held values) in the runner, not in the components'
+    // FMU states: the container offers no FMU state then (runner/container, `can_state`).
+    let state = !sim.steps_to_clock_ticks() && all(|cs| cs.can_get_and_set_fmu_state);
     let serialize = state && all(|cs| cs.can_serialize_fmu_state);
     let names = descriptions
         .iter()

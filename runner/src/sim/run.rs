@@ -4,6 +4,13 @@
 use super::*;
 use crate::ErrorKind;
 
+/// What [`Simulation::through_ticks`] passed: a step taken (from, reached), or a point between
+/// two steps where clocks ticked or a component returned early.
+pub(super) enum Passed {
+    Stepped(f64, f64),
+    Point(f64),
+}
+
 impl Simulation {
     /// The recorded variables of each instance and type, and the names of the row's columns
     /// (an array's elements each a column: [`Simulation::typed_record`]); the FMI 3.0 variables
@@ -229,18 +236,47 @@ impl Simulation {
         Ok(result)
     }
 
-    /// From the communication point `t` to `end` (`sim/clocks.rs`): every Event Mode ended,
-    /// then a step to each tick before `end` and to each time a component returns early at, where
-    /// the clocks and connections tick, the values are propagated and a row is recorded; then the
-    /// step to `end`. Returns false where a stop condition ended the run.
+    /// [`Simulation::through_ticks`] from the communication point `t` to `end`, each tick's
+    /// point recorded as a row. Returns false where a stop condition ended the run.
     fn step_to_ticks(
         &mut self,
-        mut t: f64,
+        t: f64,
         end: f64,
         groups: &mut [RecordGroup],
         row: &mut [f64],
         result: &mut RunResult,
         stops: &[(usize, f64)],
+    ) -> Result<bool, Error> {
+        self.through_ticks(t, end, &mut |sim, passed| match passed {
+            Passed::Stepped(from, reached) => {
+                sim.intermediate_rows(from, reached, result)?;
+                result.fmu_steps += 1;
+                Ok(true)
+            }
+            Passed::Point(t) => {
+                sim.read_record(groups, row, t)?;
+                result.time.push(t);
+                result.values.extend_from_slice(row);
+                if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
+                    result.stopped = true;
+                    return Ok(false);
+                }
+                Ok(true)
+            }
+        })
+    }
+
+    /// From the communication point `t` to `end` (`sim/clocks.rs`): every Event Mode ended,
+    /// then a step to each tick before `end` and to each time a component returns early at, where
+    /// the clocks and connections tick and the values are propagated
+    /// ([`Simulation::event_point`]); then the step to `end` (whose point is the caller's).
+    /// `passed` hears of every step taken and every point between; it returns false to stop
+    /// there, and then so does this.
+    pub(super) fn through_ticks(
+        &mut self,
+        mut t: f64,
+        end: f64,
+        passed: &mut dyn FnMut(&mut Simulation, Passed) -> Result<bool, Error>,
     ) -> Result<bool, Error> {
         let close = |x: f64| 1e-9 * x.abs().max(1.0);
         let mut same = 0;
@@ -257,8 +293,7 @@ impl Simulation {
                         _ => end,
                     };
                     let reached = self.do_step_events(t, to - t)?;
-                    self.intermediate_rows(t, reached, result)?;
-                    result.fmu_steps += 1;
+                    passed(self, Passed::Stepped(t, reached))?;
                     same = 0;
                     if reached == end {
                         return Ok(true);
@@ -268,17 +303,55 @@ impl Simulation {
             };
             t = at;
             self.event_point(t)?;
-            self.read_record(groups, row, t)?;
-            result.time.push(t);
-            result.values.extend_from_slice(row);
-            if stops.iter().any(|&(c, limit)| row[c].abs() > limit) {
-                result.stopped = true;
+            if !passed(self, Passed::Point(t))? {
                 return Ok(false);
             }
         }
         Err(Error::usage(format!(
             "clocks ticked 1000 times at t = {t} s without time advancing (a countdown clock of interval 0 set again at every tick)"
         )))
+    }
+
+    /// A communication point `t` as a run takes it, for an importer that runs the whole system
+    /// as one FMU (the container, `runner/container`): where the system steps to its clocks'
+    /// ticks, the clocks and connections tick and every Event Mode ends
+    /// ([`Simulation::event_point`]); where Scheduled Execution components are, their partitions
+    /// run ([`Simulation::exchange`]); else the values are propagated.
+    pub fn communication_point(&mut self, t: f64) -> Result<(), Error> {
+        let r = if self.steps_to_ticks() {
+            self.event_point(t)
+        } else if self.slaves.iter().any(|s| s.scheduled) {
+            self.exchange(t)
+        } else {
+            self.propagate(t)
+        };
+        if let Err(e) = &r {
+            self.note(e);
+        }
+        r
+    }
+
+    /// The step from the communication point `t` to `end` as a run takes it, for the container:
+    /// where the system steps to its clocks' ticks, a step to each tick between, with its point
+    /// ([`Simulation::through_ticks`]); else fmi2DoStep of every instance. Not the point at
+    /// `end`: [`Simulation::communication_point`] is.
+    pub fn step_between_points(&mut self, t: f64, end: f64, no_set_prior: bool) -> Result<(), Error> {
+        let r = if self.steps_to_ticks() {
+            self.through_ticks(t, end, &mut |_, _| Ok(true)).map(|_| ())
+        } else {
+            self.do_step_with(t, end - t, no_set_prior)
+        };
+        if let Err(e) = &r {
+            self.note(e);
+        }
+        r
+    }
+
+    /// Whether this system steps to its clocks' ticks (a clock connection, or a clock whose
+    /// ticks no fixed step meets): its steps and points are then
+    /// [`Simulation::step_between_points`] and [`Simulation::communication_point`].
+    pub fn steps_to_clock_ticks(&self) -> bool {
+        self.steps_to_ticks()
     }
 
     /// Why this system cannot take error-controlled steps (None: it can).
