@@ -458,12 +458,19 @@ pub fn a_tunable_parameter_set_between_steps_takes_effect_at_the_next_step(fmu: 
             tunables.iter().map(|p| &p.name).collect::<Vec<_>>()
         ));
     }
-    assert!(
-        must_act.is_empty() || !effective.is_empty(),
-        "{}: none of the tunable parameters {:?} changed anything after it was set between steps \
-         (neither in the excited run nor with the inputs {:?} stepped at the same step)",
-        fmu.id,
-        must_act.iter().map(|p| &p.name).collect::<Vec<_>>(),
-        inputs
-    );
+    // Not seeing a change is no proof the FMU ignored the value: a tolerance the integration
+    // already meets (the networked pendulum container's `pendulum.rtol`: its 1 ms steps' error is
+    // below both values tried), or a parameter that acts only in conditions these steps do not
+    // reach. FMI 2.0.5 §4.2.4 lets tunable parameters be set between steps; it does not require
+    // that they change the outputs. A warning, with the values tried.
+    crate::outcome::warn_unless(must_act.is_empty() || !effective.is_empty(), || {
+        format!(
+            "{}: none of the tunable parameters {:?} changed anything after it was set between steps \
+             (neither in the excited run nor with the inputs {:?} stepped at the same step): either the FMU \
+             ignores them or they act only where these steps did not go",
+            fmu.id,
+            must_act.iter().map(|p| &p.name).collect::<Vec<_>>(),
+            inputs
+        )
+    });
 }

@@ -37,6 +37,21 @@ fn state_table(fmu: &Fmu3, me: bool) {
             if !provided {
                 want = Expect::Error;
             }
+            // The FMU-state functions of an FMU that does not declare canGetAndSetFMUState (and
+            // canSerializeFMUState for the serializing ones) are not to be called (FMI 3.0.2
+            // §2.2.6.4): the FMU may refuse them or answer them, as FMI 2.0's check skips them.
+            let state_offered = match row.f.name() {
+                "fmi3GetFMUState" | "fmi3SetFMUState" | "fmi3FreeFMUState" => {
+                    interface.is_some_and(|x| x.can_get_and_set_fmu_state)
+                }
+                "fmi3SerializedFMUStateSize" | "fmi3SerializeFMUState" | "fmi3DeserializeFMUState" => {
+                    interface.is_some_and(|x| x.can_get_and_set_fmu_state && x.can_serialize_fmu_state)
+                }
+                _ => true,
+            };
+            if !state_offered && want == Expect::Ok {
+                want = Expect::Either;
+            }
             // fmi3EvaluateDiscreteStates is offered where the FMU declares
             // providesEvaluateDiscreteStates (FMI 3.0.2 §3.2.1): otherwise the FMU may refuse it
             // or answer it.
