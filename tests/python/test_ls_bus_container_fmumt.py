@@ -25,12 +25,17 @@ What it found, in two CanSignalTriggered nodes (sensor: 0x123 every 10 ms, actua
   or received by the FMU". Theirs: the test of the frames arriving is an xfail (strict). In the
   loop they arrive, each one frame time (123 bits at 500 kbit/s) after its send, also after the
   loop moved its grid to the bus's tick (a send time inside a step is signalled at its end).
-- The networked pendulum (CanSensor, CanController, two CanMotorDrives, countdown Tx clocks) stops
-  at its first send: the container activates the sensor's Tx_Clock, reads its Tx_Data, then sets
-  the sensor's inputs alpha1 .. omega2 in the same Event Mode. Tx_Data depends on them (the
-  description's dependencies), so the frame it read already holds the old sample; our FMU refuses
-  the set with an error rather than let the tick stand on values it never saw. Theirs too (the
-  same rule of the standard: an importer respects the Tx_Data dependencies); an xfail (strict).
+- The networked pendulum (CanSensor, CanController, two CanMotorDrives, countdown Tx clocks): the
+  container activates the sensor's Tx_Clock, reads its Tx_Data, then sets the sensor's inputs
+  alpha1 .. omega2 in the same Event Mode. Tx_Data depends on them (the description's
+  dependencies), so the frame it read holds the old sample (theirs: "an importer has to activate
+  the Rx_Clock respecting the Tx_Data and Rx_Data dependency"). Our FMU refused that set until
+  session 13 and the run stopped at t = 0.01 s; FMI 3.0.2 §3.2.1 lets inputs be set and outputs
+  read "interchangeably according to the model structure", so the FMU now takes the tick's
+  evaluation back and evaluates it again with the new inputs. The run goes on, and the pendulum
+  falls: no frame reaches the bus (no Rx_Data, above), so the ECU never commands the motors. An
+  xfail (strict) against the scheduler of examples/ls_bus_loop.py. The system runs as one
+  container of ours (test_container_ls_bus.py), equal to the runner bit for bit.
 """
 
 import csv
@@ -295,10 +300,9 @@ def networked_pendulum():
     return components, links, starts
 
 
-@pytest.mark.xfail(strict=True, raises=fmpy.fmi1.FMICallException,
-                   reason="FMU Manipulation Toolbox 2.0's container sets the sensor's inputs after it has read the "
-                   "Tx_Data of the same tick, which depends on them (our FMU refuses the set: fmi3DoStep error at "
-                   "t = 0.01); and it never sets Rx_Data (above)")
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="FMU Manipulation Toolbox 2.0's container never sets the bus's Rx_Data (above): no frame "
+                   "reaches the ECU or the drives, and the pendulum falls")
 def test_the_networked_pendulum_in_the_container_equals_the_fmpy_scheduler(tmp_path, monkeypatch):
     components, links, starts = networked_pendulum()
     outputs = {f"pendulum_{v}": f"pendulum.{v}" for v in L.STATE}

@@ -43,19 +43,9 @@ impl<M: CoSimulation> Instance<M> {
             // clockUpdate callback).
             State::ClockActivationMode => Ok(()),
             State::ClockUpdateMode if !setting => Ok(()),
-            State::EventMode if clocks.iter().any(|c| self.clock_active(c)) => {
-                if setting && self.evaluated_tick.is_some() {
-                    return Err(self.error(&format!(
-                        "{function}: '{}' (vr {}) is set after the tick of its clock {} was evaluated (a clocked \
-                         variable was read, or fmi3EvaluateDiscreteStates ran): set the clocked inputs first; refused, \
-                         value unchanged",
-                        decl.name,
-                        decl.value_reference,
-                        names()
-                    )));
-                }
-                Ok(())
-            }
+            // A clocked input set after the tick was evaluated: the setter took the evaluation
+            // back first ([`Instance::reopen_tick`]).
+            State::EventMode if clocks.iter().any(|c| self.clock_active(c)) => Ok(()),
             state => Err(self.error(&format!(
                 "{function}: '{}' (vr {}) is clocked by {}, which is not active{}: a clocked variable is {} in Event \
                  Mode while one of its clocks is active (fmi3SetClock), and in Initialization Mode (FMI 3.0, 2.2.9)",
@@ -118,6 +108,34 @@ impl<M: CoSimulation> Instance<M> {
             self.evaluate_tick(function, by_output_clock)?;
         }
         Ok(())
+    }
+
+    /// Before an input is set in Event Mode after the active clocks' tick was evaluated (a
+    /// clocked variable read, a clock asked for, or fmi3EvaluateDiscreteStates): the evaluation is
+    /// taken back (the model and its clock as before it, kept in `tick_before`), so that the next
+    /// clocked read or fmi3UpdateDiscreteStates evaluates the tick again with the new value, and
+    /// the event's round is still taken once. FMI 3.0.2 §3.2.1: "during Initialization, Event
+    /// Mode, and Continuous-Time Mode, input variables can be set with fmi3Set{VariableType} and
+    /// output variables can be retrieved with fmi3Get{VariableType} interchangeably according to
+    /// the model structure", and a set "re-initialize[s] caching of variables that depend on these
+    /// variables". (Refused before: an importer that reads a node's Tx_Data, then sets the inputs
+    /// it depends on, FMU Manipulation Toolbox's container, stopped there.)
+    pub(super) fn reopen_tick(&mut self) {
+        if self.sim.state != State::EventMode || self.evaluated_tick.is_none() {
+            return;
+        }
+        if let Some(before) = &self.tick_before {
+            (self.sim.model, self.sim.events) = (before.0.clone(), before.1);
+            self.evaluated_tick = None;
+            self.sim.stale_outputs = true;
+            self.sim.stale_derivatives = true;
+            self.trace(|| {
+                format!(
+                    "an input set after the tick at t = {} was evaluated: evaluated again when read",
+                    self.sim.time
+                )
+            });
+        }
     }
 
     /// The clocks' activity ends with the event's update (FMI 3.0, 2.2.9: "Any Clock active

@@ -52,6 +52,9 @@ impl<M: CoSimulation> Instance<M> {
     }
 
     pub fn set_strings(&mut self, vrs: &[u32], values: &[String]) -> Status {
+        if const { M::DESCRIPTION.has_clocks() } {
+            self.reopen_tick();
+        }
         let f = self.terms.name(Function::SetString);
         let mut parameter_changed = false;
         for vr in vrs {
@@ -109,15 +112,6 @@ impl<M: CoSimulation> Instance<M> {
     fn check_settable_as(&self, function: &str, decl: &Variable, element: Option<usize>) -> Outcome {
         if M::DESCRIPTION.has_clocks() && decl.is_clocked() {
             self.clocked_access(function, decl, true)?;
-        }
-        if M::DESCRIPTION.has_clocks() && self.evaluated_tick.is_some() && self.sim.state == State::EventMode {
-            // The event's update already ran (for a clock's tick): a value set now would be missing
-            // from it.
-            return Err(self.error(&format!(
-                "{function}: '{}' (vr {}) is set after this event was evaluated (a clock was asked for, or a \
-                 clocked variable read): set the inputs first; refused, value unchanged",
-                decl.name, decl.value_reference
-            )));
         }
         if self.settable(decl) {
             return Ok(());
@@ -219,6 +213,9 @@ impl<M: CoSimulation> Instance<M> {
 
     /// Sets all values or none: each is checked before any is stored.
     pub fn set_values<T: FmiType>(&mut self, function: &str, vrs: &[u32], values: &[T]) -> Status {
+        if const { M::DESCRIPTION.has_clocks() } {
+            self.reopen_tick();
+        }
         if const { M::DESCRIPTION.has_structural_parameters() } {
             self.keep_before_configuration();
         }
@@ -256,6 +253,9 @@ impl<M: CoSimulation> Instance<M> {
     /// [`Instance::set_values`] of values that may differ in type (FMI 3.0's fmi3SetInt64
     /// reaches Int64 and Enumeration variables in one call): all or none.
     pub fn set_value_list(&mut self, function: &str, vrs: &[u32], values: &[Value]) -> Status {
+        if const { M::DESCRIPTION.has_clocks() } {
+            self.reopen_tick();
+        }
         if const { M::DESCRIPTION.has_structural_parameters() } {
             self.keep_before_configuration();
         }
@@ -325,6 +325,9 @@ impl<M: CoSimulation> Instance<M> {
     /// The Binary setter (FMI 3.0): all or none; a value longer than the variable's `maxSize`
     /// is refused.
     pub fn set_binaries(&mut self, function: &str, vrs: &[u32], values: &[&[u8]]) -> Status {
+        if const { M::DESCRIPTION.has_clocks() } {
+            self.reopen_tick();
+        }
         let mut parameter_changed = false;
         for (vr, bytes) in vrs.iter().zip(values) {
             let decl = match self.lookup(function, *vr, VarType::Binary) {
