@@ -295,8 +295,10 @@ impl Log {
     }
 }
 
-/// Starts a check: forgets the logs and notes of the one before.
+/// Starts a check: forgets the logs and notes of the one before (and makes sure a warning
+/// notes the call it followed, [`warned_at`]).
 pub fn begin() {
+    crate::outcome::on_warning(|| warned_at(last_call()));
     RETIRED.with(|r| r.borrow_mut().clear());
     LAST.with(|l| *l.borrow_mut() = None);
     NOTES.with(|n| n.borrow_mut().clear());

@@ -45,7 +45,7 @@ pub struct RunOptions {
     /// Warnings are failures ([`Outcome::strict`]): what this exporter's own FMUs must pass.
     pub strict: bool,
     /// Where a failing random check writes its reproducer (passed to the workers in
-    /// `$RUSTFMU_REPRODUCERS`; default [`crate::replay::default_reproducers_dir`]).
+    /// `$RUSTFMU_REPRODUCERS`; default [`crate::replay::write::default_reproducers_dir`]).
     pub reproducers: Option<PathBuf>,
     /// Libraries loaded (`RTLD_GLOBAL`) before the FMU's binary, in every worker (the runner's
     /// `--preload-lib`: a PythonFMU binary's libpython; passed to the workers in
@@ -647,7 +647,7 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
         cmd.env(crate::SEED_VAR, seed.to_string());
     }
     if let Some(dir) = &opts.reproducers {
-        cmd.env(crate::replay::REPRODUCERS_VAR, dir);
+        cmd.env(crate::replay::write::REPRODUCERS_VAR, dir);
     }
     if let Some(libraries) = rustfmu_libpython::for_child() {
         cmd.env(rustfmu_libpython::ENV, libraries);

@@ -618,7 +618,7 @@ fn a_description_of_scheduled_execution_only_is_checked_with_its_co_simulation_a
 
 /// The file a failure message names as its reproducer.
 fn reproducer_of(message: &str) -> PathBuf {
-    let paths = fmi_conformance::replay::reproducer_paths(message);
+    let paths = fmi_conformance::replay::write::reproducer_paths(message);
     assert_eq!(paths.len(), 1, "one reproducer in: {message}");
     paths[0].clone()
 }

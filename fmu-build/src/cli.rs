@@ -423,7 +423,7 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
         .iter()
         .filter_map(|c| match &c.outcome {
             fmi_conformance::outcome::Outcome::Fail(m) | fmi_conformance::outcome::Outcome::Warn(m) => {
-                Some(fmi_conformance::replay::reproducer_paths(m))
+                Some(fmi_conformance::replay::write::reproducer_paths(m))
             }
             _ => None,
         })
@@ -446,7 +446,7 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
 /// `cargo fmu replay FILE FMU`: the calls on stdout as they are made, then whether the FMU
 /// answered as the file expects (Err: it did not, or the file or FMU could not be read).
 fn replay(file: &Path, fmu: &Path) -> Result<(), String> {
-    let report = fmi_conformance::replay::replay(file, fmu, &mut |line| println!("{line}"))?;
+    let report = fmi_conformance::replay::run::replay(file, fmu, &mut |line| println!("{line}"))?;
     match report.difference {
         None => {
             println!("replay: every call answered as {} expects", file.display());

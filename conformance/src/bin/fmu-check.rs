@@ -116,7 +116,7 @@ fn main() -> ExitCode {
             eprintln!("fmu-check: {e}");
             return ExitCode::from(2);
         }
-        return match fmi_conformance::replay::replay(&file, &fmu, &mut |line| println!("{line}")) {
+        return match fmi_conformance::replay::run::replay(&file, &fmu, &mut |line| println!("{line}")) {
             Ok(report) => match report.difference {
                 None => {
                     println!("replay: every call answered as {} expects", file.display());

@@ -403,7 +403,7 @@ pub struct Inst<'a> {
     pub calls: RefCell<Log>,
     /// The arguments of the call [`Inst::call`] makes next, as its wrapper gives them
     /// ([`Inst::args`]); a call made without them is recorded as not replayable, unless it
-    /// takes none ([`crate::replay_calls::fmi3_call`]).
+    /// takes none ([`crate::replay::fmi3::fmi3_call`]).
     pending: RefCell<Option<Vec<(&'static str, Val)>>>,
     /// The index of the last call in [`Inst::calls`].
     last_call: Cell<usize>,
@@ -681,7 +681,7 @@ impl<'a> Inst<'a> {
             // Not logged (no instance): the breadcrumb the call log writes for the others.
             crate::outcome::breadcrumb(what);
         } else {
-            let i = match crate::replay_calls::fmi3_call(what) {
+            let i = match crate::replay::fmi3::fmi3_call(what) {
                 Some((name, no_arguments)) => {
                     let replayable = args.is_some() || no_arguments;
                     self.calls.borrow_mut().call(name, args.unwrap_or_default(), replayable)

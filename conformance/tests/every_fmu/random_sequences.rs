@@ -66,7 +66,7 @@ fn a_reproducer_replays_as_written_and_a_changed_expectation_fails_the_replay() 
     for (i, (what, archive, text)) in cases.iter().enumerate() {
         let file = dir.join(format!("{i}.txt"));
         std::fs::write(&file, text).unwrap();
-        let report = fmi_conformance::replay::replay(&file, archive, &mut |_| {}).unwrap();
+        let report = fmi_conformance::replay::run::replay(&file, archive, &mut |_| {}).unwrap();
         assert_eq!(
             report.difference,
             None,
@@ -80,7 +80,7 @@ fn a_reproducer_replays_as_written_and_a_changed_expectation_fails_the_replay() 
         let changed = format!("{} -> Error\n{}", &text[..at], &text[at + " -> OK\n".len()..]);
         let number = text[..at].lines().count();
         std::fs::write(&file, &changed).unwrap();
-        let report = fmi_conformance::replay::replay(&file, archive, &mut |_| {}).unwrap();
+        let report = fmi_conformance::replay::run::replay(&file, archive, &mut |_| {}).unwrap();
         let difference = report
             .difference
             .unwrap_or_else(|| panic!("{what}: the changed file replays without a difference:\n{changed}"));

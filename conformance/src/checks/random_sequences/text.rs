@@ -8,7 +8,8 @@ use super::co_simulation::{CATEGORIES, Op, When, execute_with, function_of};
 use super::model_exchange::{MeOp, me_execute_with, me_function_of};
 use super::{Vr, resolve};
 use crate::Fmu;
-use crate::replay::{Expected, Line, Recorded, ReplayReport, list, real, replay_line};
+use crate::replay::write::Recorded;
+use crate::replay::{Expected, Line, ReplayReport, list, real, replay_line};
 use proptest::test_runner::TestCaseError;
 
 fn vrs(fmu: &Fmu, v: &[Vr]) -> String {
@@ -408,9 +409,9 @@ pub(super) fn write(
         format!("FMU: {} (model {}, FMI 2.0 {interface})", fmu.archive.display(), fmu.id),
         format!("check: {check}; {}", crate::seed_note()),
     ];
-    let text = crate::replay::reproducer_text(&about, instantiate, calls, failure);
-    let written = crate::replay::write_reproducer(&format!("{}-fmi2-{interface}", fmu.id), &text);
-    crate::replay::reproducer_note(written, &fmu.archive)
+    let text = crate::replay::write::reproducer_text(&about, instantiate, calls, failure);
+    let written = crate::replay::write::write_reproducer(&format!("{}-fmi2-{interface}", fmu.id), &text);
+    crate::replay::write::reproducer_note(written, &fmu.archive)
 }
 
 /// Replays the lines of a reproducer (the first one `fmi2Instantiate`) on `fmu`.
@@ -523,5 +524,5 @@ pub fn reproducer_of_a_random_sequence(fmu: &Fmu, me: bool, seed: u64) -> String
             record_cs(fmu, true, &ops),
         )
     };
-    crate::replay::reproducer_text(&about, instantiate, &calls, "none (the sequence of a test)")
+    crate::replay::write::reproducer_text(&about, instantiate, &calls, "none (the sequence of a test)")
 }

@@ -115,27 +115,6 @@ crate::registry::registry! {
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-/// The checks that run on an FMU of Scheduled Execution only (as the Reference-FMUs' Clocks):
-/// they drive no co-simulation or model-exchange instance.
-const SCHEDULED_EXECUTION_CHECKS: [&str; 4] = [
-    "fmi3_the_binary_exports_every_fmi3_function_and_no_others",
-    "fmi3_get_version_is_3_0",
-    "fmi3_instantiate_refuses_a_wrong_or_null_token_or_name_and_event_mode_with_null",
-    "fmi3_scheduled_execution_activates_the_partitions_at_their_clocks_and_signals_the_clock_updates",
-];
-
-/// Skips the check `name` on an FMU that declares only `<ScheduledExecution>` unless it is one
-/// of [`SCHEDULED_EXECUTION_CHECKS`]: the others drive a co-simulation or model-exchange instance,
-/// which such an FMU does not offer (the reason names both declarations).
-pub fn skip_unless_the_interfaces_allow(fmu: &Fmu3, name: &str) {
-    if fmu.md.scheduled_execution_only() && !SCHEDULED_EXECUTION_CHECKS.contains(&name) {
-        skip_not_declared(
-            "<CoSimulation> or <ModelExchange> (the FMU declares <ScheduledExecution> only; this check drives \
-             co-simulation or model exchange)",
-        );
-    }
-}
-
 fn cs_only(fmu: &Fmu3) {
     if fmu.md.cs.is_none() {
         skip_not_declared("<CoSimulation>");

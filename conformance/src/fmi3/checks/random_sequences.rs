@@ -2,7 +2,8 @@
 //! [`crate::seed`] (`$RUSTFMU_SEED`, else drawn), which the report and a failure message print.
 
 use super::*;
-use crate::replay::{Expected, Line, Recorded, ReplayReport, replay_line};
+use crate::replay::write::Recorded;
+use crate::replay::{Expected, Line, ReplayReport, replay_line};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
@@ -403,9 +404,9 @@ fn write_reproducer(fmu: &Fmu3, me: bool, ops: &[Op], failure: &str) -> String {
             crate::seed_note()
         ),
     ];
-    let text = crate::replay::reproducer_text(&about, instantiate_line(me), &calls, failure);
-    let written = crate::replay::write_reproducer(&format!("{}-fmi3-{interface}", fmu.id), &text);
-    crate::replay::reproducer_note(written, &fmu.archive)
+    let text = crate::replay::write::reproducer_text(&about, instantiate_line(me), &calls, failure);
+    let written = crate::replay::write::write_reproducer(&format!("{}-fmi3-{interface}", fmu.id), &text);
+    crate::replay::write::reproducer_note(written, &fmu.archive)
 }
 
 /// Replays the lines of a reproducer (the first one fmi3InstantiateCoSimulation or
@@ -476,5 +477,5 @@ pub fn reproducer_of_a_random_sequence(fmu: &Fmu3, me: bool, seed: u64) -> Strin
         "FMU: {} (a test's sequence, seed {seed})",
         fmu.archive.display()
     )];
-    crate::replay::reproducer_text(&about, instantiate_line(me), &calls, "none (the sequence of a test)")
+    crate::replay::write::reproducer_text(&about, instantiate_line(me), &calls, "none (the sequence of a test)")
 }
