@@ -204,12 +204,23 @@ impl Instance<'_> {
 
     /// fmi2GetStatus of `kind`: the status and the value (99 if the FMU wrote none).
     pub fn get_status(&self, kind: fmi2StatusKind) -> (Status, fmi2Status) {
-        let mut v = 99;
-        let i = self.record("fmi2GetStatus", vec![("kind", Val::Text(kind_name(kind)))]);
+        self.status_value("fmi2GetStatus", kind, 99, self.fmu.api.get_status)
+    }
+
+    /// The fmi2Get*Status `function` (`f`) of `kind` into a value that holds `v` before the call:
+    /// the status and the value after it.
+    fn status_value<T: crate::guard::Plain>(
+        &self,
+        function: &'static str,
+        kind: fmi2StatusKind,
+        mut v: T,
+        f: fmi2GetStatusTYPE<T>,
+    ) -> (Status, T) {
+        let i = self.record(function, vec![("kind", Val::Text(kind_name(kind)))]);
         // SAFETY: a valid out pointer (and the guard after it).
         let s = unsafe {
-            fill_one(&mut v, "fmi2GetStatus", "one value", STATUS_RULE2, |p| {
-                self.answered(i, (self.fmu.api.get_status)(self.c, kind, p))
+            fill_one(&mut v, function, "one value", STATUS_RULE2, |p| {
+                self.answered(i, f(self.c, kind, p))
             })
         };
         (s, v)
@@ -217,27 +228,12 @@ impl Instance<'_> {
 
     /// fmi2GetIntegerStatus of `kind`: the status and the value.
     pub fn get_integer_status(&self, kind: fmi2StatusKind) -> (Status, fmi2Integer) {
-        let mut v = 0;
-        let i = self.record("fmi2GetIntegerStatus", vec![("kind", Val::Text(kind_name(kind)))]);
-        // SAFETY: a valid out pointer (and the guard after it).
-        let s = unsafe {
-            fill_one(&mut v, "fmi2GetIntegerStatus", "one value", STATUS_RULE2, |p| {
-                self.answered(i, (self.fmu.api.get_integer_status)(self.c, kind, p))
-            })
-        };
-        (s, v)
+        self.status_value("fmi2GetIntegerStatus", kind, 0, self.fmu.api.get_integer_status)
     }
 
     /// fmi2GetStringStatus of `kind`: the status and the text (None for NULL).
     pub fn get_string_status(&self, kind: fmi2StatusKind) -> (Status, Option<String>) {
-        let mut v: fmi2String = ptr::null();
-        let i = self.record("fmi2GetStringStatus", vec![("kind", Val::Text(kind_name(kind)))]);
-        // SAFETY: a valid out pointer (and the guard after it).
-        let s = unsafe {
-            fill_one(&mut v, "fmi2GetStringStatus", "one value", STATUS_RULE2, |p| {
-                self.answered(i, (self.fmu.api.get_string_status)(self.c, kind, p))
-            })
-        };
+        let (s, v) = self.status_value("fmi2GetStringStatus", kind, ptr::null(), self.fmu.api.get_string_status);
         let gave = !v.is_null() && (s == fmi2OK || s == fmi2Warning);
         // SAFETY: a string the FMU returned, valid until its next call.
         let text = gave.then(|| unsafe { CStr::from_ptr(v) }.to_string_lossy().into_owned());
@@ -301,51 +297,20 @@ impl Instance<'_> {
 }
 
 /// The getters and setters [`Instance::array_probe`] calls, as the standard names them.
-pub const ARRAY_PROBES: [&str; 8] = [
-    "fmi2GetReal",
-    "fmi2GetInteger",
-    "fmi2GetBoolean",
-    "fmi2GetString",
-    "fmi2SetReal",
-    "fmi2SetInteger",
-    "fmi2SetBoolean",
-    "fmi2SetString",
-];
+pub use fmi_standard::functions::FMI2_VALUE_FUNCTIONS as ARRAY_PROBES;
 
 /// The functions [`Instance::null_component`] calls with a NULL component, in the order the check
-/// calls them.
-pub const NULL_COMPONENT_PROBES: [&str; 30] = [
-    "fmi2SetDebugLogging",
-    "fmi2SetupExperiment",
-    "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode",
-    "fmi2Terminate",
-    "fmi2Reset",
-    "fmi2GetReal",
-    "fmi2GetInteger",
-    "fmi2GetBoolean",
-    "fmi2GetString",
-    "fmi2SetReal",
-    "fmi2SetInteger",
-    "fmi2SetBoolean",
-    "fmi2SetString",
-    "fmi2GetFMUstate",
-    "fmi2SetFMUstate",
-    "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize",
-    "fmi2SerializeFMUstate",
-    "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative",
-    "fmi2SetRealInputDerivatives",
-    "fmi2GetRealOutputDerivatives",
-    "fmi2DoStep",
-    "fmi2CancelStep",
-    "fmi2GetStatus",
-    "fmi2GetRealStatus",
-    "fmi2GetIntegerStatus",
-    "fmi2GetBooleanStatus",
-    "fmi2GetStringStatus",
-];
+/// calls them: every co-simulation function that takes the instance, but fmi2FreeInstance (of a
+/// NULL instance a no-op).
+pub const NULL_COMPONENT_PROBES: [&str; 30] = fmi_standard::functions::without(
+    fmi_standard::functions::FMI2_CS_FUNCTIONS,
+    &[
+        "fmi2GetTypesPlatform",
+        "fmi2GetVersion",
+        "fmi2Instantiate",
+        "fmi2FreeInstance",
+    ],
+);
 
 /// The model-exchange functions the check of a NULL component calls (`fmi2SetTime
 /// component=NULL`), besides [`NULL_COMPONENT_PROBES`]: every one model exchange has alone.
@@ -425,38 +390,21 @@ impl Instance<'_> {
     /// into a value that holds `value` before the call (None: a NULL value pointer, an
     /// importer's mistake): the status and the value after it.
     pub fn real_status(&self, kind: fmi2StatusKind, value: Option<f64>) -> (Status, f64) {
-        let mut args = vec![("kind", Val::Text(kind_name(kind)))];
-        if value.is_none() {
-            args.push(("value", Val::Null));
-        }
-        let i = self.record("fmi2GetRealStatus", args);
         let f = self.fmu.api.get_real_status;
-        let Some(mut v) = value else {
+        let Some(v) = value else {
+            let args = vec![("kind", Val::Text(kind_name(kind))), ("value", Val::Null)];
+            let i = self.record("fmi2GetRealStatus", args);
             // SAFETY: a NULL out pointer on purpose: the FMU must check before writing.
             let s = unsafe { f(self.c, kind, ptr::null_mut()) };
             return (self.answered(i, s), f64::NAN);
         };
-        // SAFETY: a valid out pointer (and the guard after it).
-        let s = unsafe {
-            fill_one(&mut v, "fmi2GetRealStatus", "one value", STATUS_RULE2, |p| {
-                self.answered(i, f(self.c, kind, p))
-            })
-        };
-        (s, v)
+        self.status_value("fmi2GetRealStatus", kind, v, f)
     }
 
     /// fmi2GetBooleanStatus of `kind` (any kind, or a number no kind has) into a value that holds
     /// -1 before the call: the status and the value after it.
     pub fn boolean_status(&self, kind: fmi2StatusKind) -> (Status, fmi2Boolean) {
-        let mut b = -1;
-        let i = self.record("fmi2GetBooleanStatus", vec![("kind", Val::Text(kind_name(kind)))]);
-        // SAFETY: a valid out pointer (and the guard after it).
-        let s = unsafe {
-            fill_one(&mut b, "fmi2GetBooleanStatus", "one value", STATUS_RULE2, |p| {
-                self.answered(i, (self.fmu.api.get_boolean_status)(self.c, kind, p))
-            })
-        };
-        (s, b)
+        self.status_value("fmi2GetBooleanStatus", kind, -1, self.fmu.api.get_boolean_status)
     }
 
     /// fmi2SetDebugLogging with `n` categories as given: `categories` None is a NULL array, an

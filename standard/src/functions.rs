@@ -2,19 +2,8 @@
 //! what a binary must export (`cargo fmu` checks a built binary against these lists) and what an
 //! importer looks up (the conformance suite).
 
-/// The functions FMI 2.0's co-simulation and model exchange interfaces share
-/// (`fmi2Functions.h`, "common functions").
-pub const FMI2_COMMON_FUNCTIONS: &[&str] = &[
-    "fmi2GetTypesPlatform",
-    "fmi2GetVersion",
-    "fmi2SetDebugLogging",
-    "fmi2Instantiate",
-    "fmi2FreeInstance",
-    "fmi2SetupExperiment",
-    "fmi2EnterInitializationMode",
-    "fmi2ExitInitializationMode",
-    "fmi2Terminate",
-    "fmi2Reset",
+/// The getters and setters of variables' values, of both FMI 2.0 interfaces.
+pub const FMI2_VALUE_FUNCTIONS: [&str; 8] = [
     "fmi2GetReal",
     "fmi2GetInteger",
     "fmi2GetBoolean",
@@ -23,14 +12,36 @@ pub const FMI2_COMMON_FUNCTIONS: &[&str] = &[
     "fmi2SetInteger",
     "fmi2SetBoolean",
     "fmi2SetString",
-    "fmi2GetFMUstate",
-    "fmi2SetFMUstate",
-    "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize",
-    "fmi2SerializeFMUstate",
-    "fmi2DeSerializeFMUstate",
-    "fmi2GetDirectionalDerivative",
 ];
+
+/// The functions FMI 2.0's co-simulation and model exchange interfaces share
+/// (`fmi2Functions.h`, "common functions").
+pub const FMI2_COMMON_FUNCTIONS: &[&str] = &concat::<25>(
+    &concat::<18>(
+        &[
+            "fmi2GetTypesPlatform",
+            "fmi2GetVersion",
+            "fmi2SetDebugLogging",
+            "fmi2Instantiate",
+            "fmi2FreeInstance",
+            "fmi2SetupExperiment",
+            "fmi2EnterInitializationMode",
+            "fmi2ExitInitializationMode",
+            "fmi2Terminate",
+            "fmi2Reset",
+        ],
+        &FMI2_VALUE_FUNCTIONS,
+    ),
+    &[
+        "fmi2GetFMUstate",
+        "fmi2SetFMUstate",
+        "fmi2FreeFMUstate",
+        "fmi2SerializedFMUstateSize",
+        "fmi2SerializeFMUstate",
+        "fmi2DeSerializeFMUstate",
+        "fmi2GetDirectionalDerivative",
+    ],
+);
 
 /// The functions of FMI 2.0's co-simulation interface that model exchange does not have: an
 /// instance of fmuType fmi2ModelExchange refuses them in every state.
@@ -77,6 +88,35 @@ const fn concat<const N: usize>(a: &[&'static str], b: &[&'static str]) -> [&'st
         out[i] = if i < a.len() { a[i] } else { b[i - a.len()] };
         i += 1;
     }
+    out
+}
+
+/// `all` without the functions of `leave_out`, in order, as one array of `N` (how many are left:
+/// another `N` fails to compile).
+pub const fn without<const N: usize>(all: &[&'static str], leave_out: &[&str]) -> [&'static str; N] {
+    /// `a == b` (which a const fn cannot write for `&str`).
+    const fn same(a: &str, b: &str) -> bool {
+        let (a, b) = (a.as_bytes(), b.as_bytes());
+        let mut i = 0;
+        while i < a.len() && i < b.len() && a[i] == b[i] {
+            i += 1;
+        }
+        i == a.len() && i == b.len()
+    }
+    let mut out = [""; N];
+    let (mut i, mut n) = (0, 0);
+    while i < all.len() {
+        let mut j = 0;
+        while j < leave_out.len() && !same(all[i], leave_out[j]) {
+            j += 1;
+        }
+        if j == leave_out.len() {
+            out[n] = all[i];
+            n += 1;
+        }
+        i += 1;
+    }
+    assert!(n == N);
     out
 }
 

@@ -212,3 +212,20 @@ fn names_and_codes_round_trip() {
             .eq([&Causality::StructuralParameter])
     );
 }
+
+#[test]
+fn without_leaves_out_the_named_functions_and_keeps_the_order() {
+    use crate::functions::{FMI2_COMMON_FUNCTIONS, FMI2_VALUE_FUNCTIONS, without};
+    const LEFT: [&str; 23] = without(
+        FMI2_COMMON_FUNCTIONS,
+        &["fmi2GetVersion", "fmi2Reset", "fmi2NotAFunction"],
+    );
+    let mut kept = FMI2_COMMON_FUNCTIONS
+        .iter()
+        .filter(|f| **f != "fmi2GetVersion" && **f != "fmi2Reset");
+    assert!(LEFT.iter().all(|f| Some(f) == kept.next()) && kept.next().is_none());
+    // The getters and setters stand in the common functions as one run, after fmi2Reset.
+    let at = FMI2_COMMON_FUNCTIONS.iter().position(|f| *f == "fmi2Reset").unwrap() + 1;
+    assert_eq!(FMI2_COMMON_FUNCTIONS[at..at + 8], FMI2_VALUE_FUNCTIONS);
+    assert_eq!(FMI2_COMMON_FUNCTIONS.len(), 25);
+}
