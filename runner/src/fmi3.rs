@@ -625,20 +625,18 @@ impl Instance3 {
     /// fmi3UpdateDiscreteStates, its answers as FMI 2.0's event info.
     pub fn new_discrete_states(&mut self) -> Result<rustfmu::fmi2::abi::fmi2EventInfo, Fmi2Error> {
         let f = self.me()?.update_discrete_states;
-        let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
-            (false, false, false, false, false, 0.0);
-        // SAFETY: a live model-exchange instance; the outputs point to locals.
-        check(unsafe {
-            f(
-                self.c,
-                &mut update,
-                &mut terminate,
-                &mut nominals,
-                &mut values,
-                &mut defined,
-                &mut next,
-            )
-        })?;
+        let (
+            status,
+            Discrete {
+                update,
+                terminate,
+                nominals,
+                values,
+                defined,
+                next,
+            },
+        ) = self.update_discrete_states(f);
+        check(status)?;
         let b = |x: bool| rustfmu::fmi2::abi::fmi2Boolean::from(x);
         Ok(rustfmu::fmi2::abi::fmi2EventInfo {
             newDiscreteStatesNeeded: b(update),
@@ -648,6 +646,48 @@ impl Instance3 {
             nextEventTimeDefined: b(defined),
             nextEventTime: next,
         })
+    }
+}
+
+/// What fmi3UpdateDiscreteStates answered besides its status: discreteStatesNeedUpdate,
+/// terminateSimulation, nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged,
+/// nextEventTimeDefined, nextEventTime.
+struct Discrete {
+    update: bool,
+    terminate: bool,
+    nominals: bool,
+    values: bool,
+    defined: bool,
+    next: f64,
+}
+
+impl Instance3 {
+    /// fmi3UpdateDiscreteStates through `f` (the model-exchange functions' or the event
+    /// functions' of co-simulation): its status and answers.
+    fn update_discrete_states(&self, f: UpdateDiscreteStates) -> (fmi3Status, Discrete) {
+        let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
+            (false, false, false, false, false, 0.0);
+        // SAFETY: a live instance in Event Mode (the callers'); the outputs point to locals.
+        let status = unsafe {
+            f(
+                self.c,
+                &mut update,
+                &mut terminate,
+                &mut nominals,
+                &mut values,
+                &mut defined,
+                &mut next,
+            )
+        };
+        let answers = Discrete {
+            update,
+            terminate,
+            nominals,
+            values,
+            defined,
+            next,
+        };
+        (status, answers)
     }
 }
 

@@ -202,6 +202,15 @@ pub struct ClockState {
 }
 
 impl ClockState {
+    /// A round of Event Mode ended: no clock ticks any more, and nothing is polled, evaluated or
+    /// fresh for the next one.
+    pub(super) fn end_round(&mut self) {
+        self.active.iter_mut().for_each(|a| *a = false);
+        self.polled = false;
+        self.evaluated = false;
+        self.fresh.clear();
+    }
+
     pub fn new(plan: std::sync::Arc<ClockPlan>) -> ClockState {
         let n = plan.inputs.len();
         ClockState {
@@ -498,10 +507,7 @@ impl Instance3 {
             check(unsafe { f(self.c) })?;
             let state = self.state();
             state.event_mode = false;
-            state.polled = false;
-            state.evaluated = false;
-            state.fresh.clear();
-            state.active.iter_mut().for_each(|a| *a = false);
+            state.end_round();
         }
         Ok(())
     }
@@ -537,21 +543,8 @@ impl Instance3 {
         self.hold_outputs()?;
         let f = self.events().update_discrete_states;
         for _ in 0..1000 {
-            let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
-                (false, false, false, false, false, 0.0);
-            // SAFETY: a live instance in Event Mode; the outputs point to locals.
-            check(unsafe {
-                f(
-                    self.c,
-                    &mut update,
-                    &mut terminate,
-                    &mut nominals,
-                    &mut values,
-                    &mut defined,
-                    &mut next,
-                )
-            })
-            .map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
+            let (status, super::Discrete { update, terminate, .. }) = self.update_discrete_states(f);
+            check(status).map_err(|e| Fmi2Error::Importer(format!("fmi3UpdateDiscreteStates at t = {t}: {e}")))?;
             if terminate {
                 // FMI 3.0.2 3.2.1 (fmi3UpdateDiscreteStates): the FMU asks to end the simulation.
                 return Err(Fmi2Error::Terminate(t));
@@ -560,11 +553,7 @@ impl Instance3 {
                 break;
             }
         }
-        let state = self.state();
-        state.active.iter_mut().for_each(|a| *a = false);
-        state.polled = false;
-        state.evaluated = false;
-        state.fresh.clear();
+        self.state().end_round();
         Ok(())
     }
 

@@ -266,10 +266,7 @@ impl Instance3 {
         self.hold_outputs()?;
         let state = self.state_mut();
         state.event_mode = false;
-        state.polled = false;
-        state.evaluated = false;
-        state.fresh.clear();
-        state.active.iter_mut().for_each(|a| *a = false);
+        state.end_round();
         state.pending.iter_mut().for_each(|a| *a = false);
         Ok(())
     }
