@@ -273,22 +273,9 @@ impl Values {
     }
 }
 
-/// The types in the order of their wire codes ([`Values::code`]).
-const CODES: [Type; 13] = [
-    Type::Float32,
-    Type::Float64,
-    Type::Int8,
-    Type::UInt8,
-    Type::Int16,
-    Type::UInt16,
-    Type::Int32,
-    Type::UInt32,
-    Type::Int64,
-    Type::UInt64,
-    Type::Boolean,
-    Type::String,
-    Type::Binary,
-];
+/// The types in the order of their wire codes ([`Values::code`]): md-reader's [`Type::ALL`] up to
+/// Binary (Enumeration and Clock travel as the values they hold).
+const CODES: &[Type] = Type::ALL.split_at(13).0;
 
 /// Applies `$body` to each numeric vector `$x` of `$v` with `$t` its element type; `$bool` for
 /// Boolean, `$other` for String and Binary (`$s`).

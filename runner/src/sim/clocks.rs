@@ -308,20 +308,8 @@ impl Simulation {
 
     /// Whether the clock `end` (component, value reference) of the clock connection `k` ticks now.
     fn ticks(&mut self, end: (usize, u32), t: f64, k: usize) -> Result<bool, Error> {
-        let s = &mut self.slaves[end.0];
-        s.instance
-            .as_mut()
-            .expect("instantiated")
-            .clock_active(end.1)
-            .map_err(|e| {
-                Error::fmi(
-                    &s.name,
-                    "fmi3GetClock",
-                    &e,
-                    Some(t),
-                    &format!("clock connection {}", self.clock_links[k].text),
-                )
-            })
+        let text = &self.clock_links[k].text;
+        clock_call(&mut self.slaves[end.0], t, text, |i| i.clock_active(end.1))
     }
 
     /// The senders of connections from output clocks read their output clocks (their ticks
@@ -330,20 +318,8 @@ impl Simulation {
         for k in 0..self.clock_links.len() {
             let ClockLink { from, output, .. } = self.clock_links[k];
             if output {
-                let s = &mut self.slaves[from.0];
-                s.instance
-                    .as_mut()
-                    .expect("instantiated")
-                    .poll_output_clocks(t)
-                    .map_err(|e| {
-                        Error::fmi(
-                            &s.name,
-                            "fmi3GetClock",
-                            &e,
-                            Some(t),
-                            &format!("clock connection {}", self.clock_links[k].text),
-                        )
-                    })?;
+                let text = &self.clock_links[k].text;
+                clock_call(&mut self.slaves[from.0], t, text, |i| i.poll_output_clocks(t))?;
             }
         }
         Ok(())
@@ -564,7 +540,7 @@ impl Simulation {
         let (state, clocks) = self.back.early_states[i].as_ref().expect("saved before the step");
         let s = &mut self.slaves[i];
         let inst = s.instance.as_mut().expect("instantiated");
-        inst.set_fmu_state(state).map_err(|e| {
+        let taken_back = |e: crate::fmi2::Fmi2Error| {
             Error::fmi(
                 &s.name,
                 "fmi3SetFMUState",
@@ -572,17 +548,10 @@ impl Simulation {
                 Some(t),
                 &format!("taking back its step to {past} s: another component returned early at {end} s"),
             )
-        })?;
+        };
+        inst.set_fmu_state(state).map_err(taken_back)?;
         if let Some(c) = clocks {
-            inst.restore_clocks(c).map_err(|e| {
-                Error::fmi(
-                    &s.name,
-                    "fmi3SetFMUState",
-                    &e,
-                    Some(t),
-                    &format!("taking back its step to {past} s: another component returned early at {end} s"),
-                )
-            })?;
+            inst.restore_clocks(c).map_err(taken_back)?;
         }
         // The samples of the step taken back: the step again gives its own.
         let _ = inst.take_intermediate();
@@ -611,4 +580,23 @@ impl Simulation {
         }
         Ok(())
     }
+}
+
+/// `call` on the instance of `s` at `t`, for the clock connection `text`: its failure as
+/// fmi3GetClock's, which reads the clocks.
+fn clock_call<R>(
+    s: &mut Slave,
+    t: f64,
+    text: &str,
+    call: impl FnOnce(&mut InstanceCS) -> Result<R, crate::fmi2::Fmi2Error>,
+) -> Result<R, Error> {
+    call(s.instance.as_mut().expect("instantiated")).map_err(|e| {
+        Error::fmi(
+            &s.name,
+            "fmi3GetClock",
+            &e,
+            Some(t),
+            &format!("clock connection {text}"),
+        )
+    })
 }

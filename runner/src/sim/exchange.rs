@@ -127,27 +127,38 @@ impl Simulation {
         (vrs, du)
     }
 
+    /// Gauss-Seidel's exchange at entry `i` of [`Simulation::steps`]: the component's inputs
+    /// set from the outputs read before, then its outputs read.
+    pub(super) fn exchange_at_step(&mut self, i: usize, t: f64) -> Result<(), Error> {
+        self.typed_inputs(self.steps[i].0, t)?;
+        for j in 0..self.steps[i].1.len() {
+            let w = self.steps[i].1[j];
+            self.write(w, t)?;
+        }
+        if let Some(r) = self.read_of[self.steps[i].0] {
+            self.read(r, t)?;
+        }
+        self.typed_outputs(self.steps[i].0, t)
+    }
+
+    /// Gauss-Seidel's last exchange: the inputs set after every output was read.
+    pub(super) fn exchange_late(&mut self, t: f64) -> Result<(), Error> {
+        for j in 0..self.late.len() {
+            let w = self.late[j];
+            self.write(w, t)?;
+        }
+        self.typed_late(t)
+    }
+
     /// Sets every connected input from its output, as [`Simulation::scheme`] says.
     pub(super) fn propagate_values(&mut self, t: f64) -> Result<(), Error> {
         match self.scheme {
             Scheme::GaussSeidel if !self.loops.is_empty() => self.propagate_with_loops(t)?,
             Scheme::GaussSeidel => {
                 for i in 0..self.steps.len() {
-                    self.typed_inputs(self.steps[i].0, t)?;
-                    for j in 0..self.steps[i].1.len() {
-                        let w = self.steps[i].1[j];
-                        self.write(w, t)?;
-                    }
-                    if let Some(r) = self.read_of[self.steps[i].0] {
-                        self.read(r, t)?;
-                    }
-                    self.typed_outputs(self.steps[i].0, t)?;
+                    self.exchange_at_step(i, t)?;
                 }
-                for j in 0..self.late.len() {
-                    let w = self.late[j];
-                    self.write(w, t)?;
-                }
-                self.typed_late(t)?;
+                self.exchange_late(t)?;
             }
             Scheme::Jacobi => {
                 for r in 0..self.reads.len() {

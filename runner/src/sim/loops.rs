@@ -434,22 +434,10 @@ impl Simulation {
                 next += 1;
                 continue;
             }
-            self.typed_inputs(self.steps[i].0, t)?;
-            for j in 0..self.steps[i].1.len() {
-                let w = self.steps[i].1[j];
-                self.write(w, t)?;
-            }
-            if let Some(r) = self.read_of[self.steps[i].0] {
-                self.read(r, t)?;
-            }
-            self.typed_outputs(self.steps[i].0, t)?;
+            self.exchange_at_step(i, t)?;
             i += 1;
         }
-        for j in 0..self.late.len() {
-            let w = self.late[j];
-            self.write(w, t)?;
-        }
-        self.typed_late(t)
+        self.exchange_late(t)
     }
 
     /// g(`lp.u`) into `lp.g`, the residual into `lp.r`; returns the scaled residual
