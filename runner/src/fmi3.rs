@@ -625,26 +625,16 @@ impl Instance3 {
     /// fmi3UpdateDiscreteStates, its answers as FMI 2.0's event info.
     pub fn new_discrete_states(&mut self) -> Result<rustfmu::fmi2::abi::fmi2EventInfo, Fmi2Error> {
         let f = self.me()?.update_discrete_states;
-        let (
-            status,
-            Discrete {
-                update,
-                terminate,
-                nominals,
-                values,
-                defined,
-                next,
-            },
-        ) = self.update_discrete_states(f);
+        let (status, d) = self.update_discrete_states(f);
         check(status)?;
         let b = |x: bool| rustfmu::fmi2::abi::fmi2Boolean::from(x);
         Ok(rustfmu::fmi2::abi::fmi2EventInfo {
-            newDiscreteStatesNeeded: b(update),
-            terminateSimulation: b(terminate),
-            nominalsOfContinuousStatesChanged: b(nominals),
-            valuesOfContinuousStatesChanged: b(values),
-            nextEventTimeDefined: b(defined),
-            nextEventTime: next,
+            newDiscreteStatesNeeded: b(d.update),
+            terminateSimulation: b(d.terminate),
+            nominalsOfContinuousStatesChanged: b(d.nominals),
+            valuesOfContinuousStatesChanged: b(d.values),
+            nextEventTimeDefined: b(d.defined),
+            nextEventTime: d.next,
         })
     }
 }
@@ -652,6 +642,7 @@ impl Instance3 {
 /// What fmi3UpdateDiscreteStates answered besides its status: discreteStatesNeedUpdate,
 /// terminateSimulation, nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged,
 /// nextEventTimeDefined, nextEventTime.
+#[derive(Default)]
 struct Discrete {
     update: bool,
     terminate: bool,
@@ -665,29 +656,21 @@ impl Instance3 {
     /// fmi3UpdateDiscreteStates through `f` (the model-exchange functions' or the event
     /// functions' of co-simulation): its status and answers.
     fn update_discrete_states(&self, f: UpdateDiscreteStates) -> (fmi3Status, Discrete) {
-        let (mut update, mut terminate, mut nominals, mut values, mut defined, mut next) =
-            (false, false, false, false, false, 0.0);
-        // SAFETY: a live instance in Event Mode (the callers'); the outputs point to locals.
+        let mut d = Discrete::default();
+        // SAFETY: a live instance in Event Mode (the callers'); the outputs point to the fields of
+        // a local.
         let status = unsafe {
             f(
                 self.c,
-                &mut update,
-                &mut terminate,
-                &mut nominals,
-                &mut values,
-                &mut defined,
-                &mut next,
+                &mut d.update,
+                &mut d.terminate,
+                &mut d.nominals,
+                &mut d.values,
+                &mut d.defined,
+                &mut d.next,
             )
         };
-        let answers = Discrete {
-            update,
-            terminate,
-            nominals,
-            values,
-            defined,
-            next,
-        };
-        (status, answers)
+        (status, d)
     }
 }
 
