@@ -301,6 +301,18 @@ pub fn breadcrumb(text: &str) {
     } else {
         text
     };
+    let within;
+    let text = if CONTEXT_ON.load(std::sync::atomic::Ordering::Relaxed) {
+        let context = CONTEXT.lock().unwrap_or_else(|e| e.into_inner());
+        within = if text.is_empty() {
+            context.clone()
+        } else {
+            format!("{context}: {text}")
+        };
+        within.as_str()
+    } else {
+        text
+    };
     let mut guard = BREADCRUMB.lock().unwrap_or_else(|e| e.into_inner());
     if let Some(map) = guard.as_mut() {
         let n = text.len().min(BREADCRUMB_BYTES);
@@ -310,6 +322,21 @@ pub fn breadcrumb(text: &str) {
             map[n] = 0;
         }
     }
+}
+
+static CONTEXT: Mutex<String> = Mutex::new(String::new());
+static CONTEXT_ON: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// What every breadcrumb after it is part of, written before it (`line 7: fmi2FreeInstance
+/// component=NULL`: the line of a reproducer the replay makes, [`crate::replay_calls`]), and at
+/// once as the breadcrumb; the empty text: nothing.
+pub fn breadcrumb_context(text: &str) {
+    if !breadcrumbs_on() {
+        return;
+    }
+    *CONTEXT.lock().unwrap_or_else(|e| e.into_inner()) = text.to_string();
+    CONTEXT_ON.store(!text.is_empty(), std::sync::atomic::Ordering::Relaxed);
+    breadcrumb("");
 }
 
 /// The last breadcrumb in a breadcrumb file, if any.

@@ -87,6 +87,7 @@ impl<'o> Printer<'o> {
             "replaying {} calls of a named check on {fmu} (FMI {version}), each as the file writes it",
             lines.len() - 1
         ));
+        next_line(lines, 0);
         p
     }
 
@@ -95,6 +96,9 @@ impl<'o> Printer<'o> {
         let first = &lines[0];
         self.print(format!("{:>4} {} -> an instance", first.number, first.function));
         for l in &lines[1..] {
+            // A crash in the FMU names the line it died in (a replay in a worker process,
+            // `crate::runner::replay_in_worker`).
+            next_line(std::slice::from_ref(l), 0);
             // A wrapper's assertion (a guard overwritten, ...) is a difference at this line.
             let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| one(l, self)))
                 .unwrap_or_else(|payload| Err(format!("line {}: {}: {}", l.number, l.function, panic_text(&*payload))));
@@ -103,6 +107,7 @@ impl<'o> Printer<'o> {
                 break;
             }
         }
+        next_line(&[], 0);
     }
 
     fn print(&mut self, text: String) {
@@ -140,6 +145,16 @@ impl<'o> Printer<'o> {
             Some(v) => compare(l, &v),
             None => Ok(()),
         }
+    }
+}
+
+/// Names the line a replay makes next (`lines[k]`; past the end: the instance's end) in the
+/// breadcrumb, so that a crash in the FMU says which line it died in (a replay in a worker
+/// process, [`crate::runner::replay_in_worker`]).
+pub fn next_line(lines: &[Line], k: usize) {
+    match lines.get(k) {
+        Some(l) => crate::outcome::breadcrumb_context(&format!("line {} ({})", l.number, l.function)),
+        None => crate::outcome::breadcrumb_context("after the last line replayed, freeing the instance"),
     }
 }
 
@@ -565,6 +580,29 @@ fn replay3_line(
         "fmi3ExitConfigurationMode" => inst.unary(f, api.exit_configuration_mode),
         "fmi3Terminate" => inst.unary(f, api.terminate),
         "fmi3Reset" => inst.unary(f, api.reset),
+        "fmi3EvaluateDiscreteStates" => inst.unary(f, api.evaluate_discrete_states),
+        // A getter or setter of no variable (the state table's): every array NULL, counts 0.
+        _ if l.has("nValueReferences") && !matches!(f, "fmi3GetFloat64" | "fmi3SetFloat64") => {
+            if l.raw("vr")? != "NULL" || l.parse::<usize>("nValueReferences")? != 0 {
+                return Err(l.error("nValueReferences= is written for no variable: vr=NULL nValueReferences=0"));
+            }
+            inst.with_no_variable(f)
+                .ok_or_else(|| l.error("not a getter or setter the replay calls with no variable"))?
+        }
+        "fmi3GetOutputDerivatives" => {
+            let order = l.list::<i32>("order")?.unwrap_or_default();
+            let vr = vrs(l)?;
+            if order.len() != vr.len() {
+                return Err(l.error("order: one for each value reference"));
+            }
+            let (s, v) = inst.get_output_derivatives(&vr, &order);
+            details.push(format!("values {}", list(v.iter().map(|x| real(*x)))));
+            values = Some(v);
+            s
+        }
+        "fmi3ActivateModelPartition" => {
+            inst.activate_model_partition(l.parse("clockReference")?, l.parse("activationTime")?)
+        }
         "fmi3UpdateDiscreteStates" => {
             let mut flags = [0u8; 5];
             let mut next = 0.0;
@@ -669,37 +707,35 @@ fn replay3_line(
         }
         "fmi3GetFMUState" | "fmi3DeserializeFMUState" => {
             let mut st: fmi3FMUState = std::ptr::null_mut();
-            let s = if f == "fmi3GetFMUState" {
-                // SAFETY: a live instance; one FMU state with a guard after it.
-                inst.call(f, |c| unsafe {
-                    crate::guard::fill_state3(&mut st, f, |q| (api.get_fmu_state)(c, q))
-                })
+            let into = if l.has("into") {
+                Some(l.parse::<usize>("into")?)
             } else {
-                let bytes = unhex(l.raw("bytes")?).map_err(|e| l.error(e))?;
-                // SAFETY: a live instance; `bytes.len()` bytes; one FMU state with a guard after it.
-                inst.call(f, |c| unsafe {
-                    crate::guard::fill_state3(&mut st, f, |q| {
-                        (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
-                    })
-                })
+                None
             };
+            let s = if f == "fmi3GetFMUState" {
+                if let Some(n) = into {
+                    st = *states
+                        .0
+                        .get(&n)
+                        .ok_or_else(|| l.error(format!("into={n}: no call before made FMU state {n}")))?;
+                }
+                inst.get_state(&mut st)
+            } else {
+                inst.deserialize(&unhex(l.raw("bytes")?).map_err(|e| l.error(e))?, &mut st)
+            };
+            if let Some(n) = into {
+                states.0.insert(n, st);
+            }
             if l.has("state") && l.raw("state")? != "NULL" {
                 states.0.insert(l.parse("state")?, st);
             }
             details.push(format!("FMUState {st:?}"));
             s
         }
-        "fmi3SetFMUState" => {
-            let st = states.get(l, std::ptr::null_mut())?;
-            // SAFETY: a live instance and a state it made (or NULL).
-            inst.call(f, |c| unsafe { (api.set_fmu_state)(c, st) })
-        }
+        "fmi3SetFMUState" => inst.set_state(states.get(l, std::ptr::null_mut())?),
         "fmi3FreeFMUState" => {
             let mut st = states.get(l, std::ptr::null_mut())?;
-            // SAFETY: a live instance and a state it made, freed once.
-            let s = inst.call(f, |c| unsafe {
-                crate::guard::fill_state3(&mut st, f, |q| (api.free_fmu_state)(c, q))
-            });
+            let s = inst.free_state(&mut st);
             details.push(format!("FMUState after the call {st:?}"));
             s
         }

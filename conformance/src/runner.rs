@@ -394,6 +394,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         run_dir.path(),
         &["probe".into(), fmu_path.display().to_string()],
         seed,
+        false,
     );
     match probe.result.clone() {
         Some(r) if r.outcome == Outcome::Pass => {
@@ -436,7 +437,7 @@ pub fn run_with(fmu_path: &Path, opts: &RunOptions, progress: &mut dyn FnMut(&Ch
         for a in &opts.worker_args_prefix {
             args.extend(["--self-arg".to_string(), a.clone()]);
         }
-        let w = run_worker(opts, run_dir.path(), &args, seed);
+        let w = run_worker(opts, run_dir.path(), &args, seed, false);
         // A random check whose worker died wrote no report: its failure names the seed.
         let seed_note = match seed {
             Some(s) if group == Group::RandomSequences => format!(
@@ -607,27 +608,29 @@ fn drain(mut pipe: impl Read + Send + 'static) -> Arc<Mutex<(Vec<u8>, bool)>> {
 /// DLLs were loaded, before its `main` ran.
 const STATUS_DLL_INIT_FAILED: i32 = 0xC000_0142_u32 as i32;
 
-/// Runs a worker; `seed`: the random checks' seed, passed in `$RUSTFMU_SEED`.
+/// Runs a worker; `seed`: the random checks' seed, passed in `$RUSTFMU_SEED`; `stdout`: the
+/// worker writes to this process's stdout (a replay's lines, as it makes the calls), else into a
+/// pipe this process reads and leaves.
 ///
 /// A worker that ended with STATUS_DLL_INIT_FAILED before it wrote a breadcrumb never reached
 /// the FMU (wine answered so once in about 2,000 process starts of a CI run, for a check that
 /// passes on every other start): it is started once more, and the report says so.
 /// Any other ending, and that one after the check began, is the FMU's.
-fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Option<u64>) -> WorkerRun {
-    let first = run_worker_once(opts, run_dir, args, seed);
+fn run_worker(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Option<u64>, stdout: bool) -> WorkerRun {
+    let first = run_worker_once(opts, run_dir, args, seed, stdout);
     let never_started = first.result.is_none()
         && first.breadcrumb.is_none()
         && first.crash.as_deref() == Some(&*format!("exited with code {STATUS_DLL_INIT_FAILED}"));
     if !never_started {
         return first;
     }
-    let mut again = run_worker_once(opts, run_dir, args, seed);
+    let mut again = run_worker_once(opts, run_dir, args, seed, stdout);
     again.restarted = true;
     again.duration += first.duration;
     again
 }
 
-fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Option<u64>) -> WorkerRun {
+fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Option<u64>, stdout: bool) -> WorkerRun {
     #[cfg(unix)]
     use std::os::unix::process::{CommandExt, ExitStatusExt};
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -659,7 +662,7 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
         .arg("--breadcrumb")
         .arg(&crumb_file)
         .stdin(Stdio::null())
-        .stdout(Stdio::piped())
+        .stdout(if stdout { Stdio::inherit() } else { Stdio::piped() })
         .stderr(Stdio::piped());
     // A group of its own, so that a timeout kills whatever the worker started too.
     #[cfg(unix)]
@@ -684,7 +687,11 @@ fn run_worker_once(opts: &RunOptions, run_dir: &Path, args: &[String], seed: Opt
             };
         }
     };
-    let out = drain(child.stdout.take().expect("piped"));
+    let out = match child.stdout.take() {
+        Some(pipe) => drain(pipe),
+        // This process's stdout: nothing to read.
+        None => Arc::new(Mutex::new((Vec::new(), true))),
+    };
     let err = drain(child.stderr.take().expect("piped"));
     let mut crash = None;
     loop {
@@ -828,6 +835,7 @@ fn parse_result(text: &str) -> Option<Parsed> {
 /// - `probe <fmu>`: load the FMU, report what its state format is;
 /// - `check <fmu> <check> [--random-sequences N] [--self EXE] [--self-arg A]...`: run one check
 ///   (`--self`: how a check starts a worker of its own);
+/// - `replay <file> <fmu>`: replay a reproducer ([`replay_in_worker`]);
 /// - `state-child <fmu> <state file> <steps> <step size>`: restore a serialized state, then
 ///   print the re-serialized state (hex) and the observations after each step (for the check
 ///   of restoring a state in another process).
@@ -920,6 +928,16 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
                 Version::Fmi3 => check_in_worker::<Fmu3>(check, Path::new(fmu), &tmp, write),
             }
         }
+        ["replay", file, fmu] => {
+            // The replay's lines on stdout as the calls are made; what it found in the result
+            // (pass: every call as the file expects; fail: the difference; skip: the file or the
+            // FMU could not be read).
+            let outcome = match crate::replay::run::replay(Path::new(file), Path::new(fmu), &mut |l| println!("{l}")) {
+                Ok(report) => report.difference.map_or(Outcome::Pass, Outcome::Fail),
+                Err(e) => Outcome::Skip(e),
+            };
+            write(outcome, Findings::default())
+        }
         ["state-child", fmu, file, steps, h, interface, t] if is_fmi3_file(fmu) => {
             match state_child3(Path::new(fmu), &tmp, file, steps, h, interface, t) {
                 Ok(()) => ExitCode::SUCCESS,
@@ -944,6 +962,57 @@ pub fn worker_main(args: impl IntoIterator<Item = String>) -> ExitCode {
             }
         },
         _ => usage(),
+    }
+}
+
+/// The longest a replay in a worker may take by default ([`replay_in_worker`]): a reproducer
+/// holds at most one instance's calls, which the check made within its own timeout.
+pub const DEFAULT_REPLAY_TIMEOUT_SECONDS: u64 = 300;
+
+/// What [`replay_in_worker`] found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Replayed {
+    /// The FMU answered every call as the file expects.
+    AsExpected,
+    /// Where it did not: a status, a value, a guard overwritten, or the worker process that died
+    /// or hung (which line, which signal or exit code, the end of its stderr).
+    Differs(String),
+}
+
+/// `cargo fmu replay FILE X.fmu` (`fmu-check --replay`): replays the reproducer `file` on `fmu`
+/// ([`crate::replay::run::replay`]) in a worker process, as [`run`] runs each check (`opts`: the
+/// worker, the timeout, the libraries to preload; the worker's lines go to this process's
+/// stdout as it makes the calls), so that an FMU that crashes, aborts or hangs during the replay
+/// is reported as a crash in a check is: the line it died in (the worker's breadcrumb), the
+/// signal or exit code, the end of its stderr. Err: the file or the FMU could not be read.
+pub fn replay_in_worker(file: &Path, fmu: &Path, opts: &RunOptions) -> Result<Replayed, String> {
+    rustfmu_libpython::preload(&opts.preload, "--preload-lib")?;
+    let base = opts.temp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let run_dir = PrivateDir::new_in(&base)?;
+    let args = [
+        "replay".to_string(),
+        file.display().to_string(),
+        fmu.display().to_string(),
+    ];
+    let w = run_worker(opts, run_dir.path(), &args, None, true);
+    match (w.result.clone(), &w.crash) {
+        (Some(r), None) => match r.outcome {
+            Outcome::Pass => Ok(Replayed::AsExpected),
+            Outcome::Fail(d) | Outcome::Warn(d) => Ok(Replayed::Differs(d)),
+            Outcome::Skip(e) => Err(e),
+        },
+        (Some(r), Some(_)) => Ok(Replayed::Differs(format!(
+            "the replay ended ({}), but then its process {}",
+            match r.outcome {
+                Outcome::Pass => "every call as the file expects".to_string(),
+                Outcome::Fail(d) | Outcome::Warn(d) | Outcome::Skip(d) => d,
+            },
+            w.describe_crash()
+        ))),
+        (None, _) => Ok(Replayed::Differs(format!(
+            "the FMU crashed: the replay's process {}",
+            w.describe_crash()
+        ))),
     }
 }
 

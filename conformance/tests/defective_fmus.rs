@@ -1076,15 +1076,104 @@ fn each_new_kind_of_probe_line_replays_to_exit_1_on_its_defect_and_0_on_our_fmu(
             "DEFECT_PROBES, FMI {v}.0: the replay says '{differs}':\n{out}"
         );
     }
-    // fmi2FreeInstance(NULL), which the standard makes a no-op: the defect crashes in it, and so
-    // does its replay (the check's worker dies in the same call).
+    // fmi2FreeInstance(NULL), which the standard makes a no-op: the defect crashes in it. The
+    // replay runs in a worker process, as the check does: the crash is reported with the line and
+    // the signal, exit 1.
     let text = format!("{}fmi2FreeInstance component=NULL -> OK\n", head(2, false, false));
+    let line = text.lines().count();
     let file = dir.path().join("free-null.txt");
     std::fs::write(&file, &text).unwrap();
     let (code, out) = replay(&file, &dahlquist(2).0);
     assert_eq!(code, Some(0), "our Dahlquist:\n{out}");
     let (code, out) = replay(&file, &defective[0]);
-    assert_ne!(code, Some(0), "DEFECT_PROBES: fmi2FreeInstance(NULL):\n{out}");
+    assert_eq!(code, Some(1), "DEFECT_PROBES: fmi2FreeInstance(NULL):\n{out}");
+    assert!(
+        out.contains("the failure reproduces: the FMU crashed")
+            && out.contains(&format!(
+                "line {line} (fmi2FreeInstance): fmi2FreeInstance component=NULL"
+            ))
+            && out.contains("SIGSEGV"),
+        "DEFECT_PROBES: the replay names the line and the signal:\n{out}"
+    );
+    // The calls before it were printed as they were made.
+    assert!(out.contains("fmi2ExitInitializationMode -> OK"), "{out}");
+}
+
+/// Issue 51 item 1: the checks' own valid calls once recorded without their arguments (a
+/// comment in the reproducer) are lines the replay makes: fmi3GetOutputDerivatives, the state
+/// table's getters and setters of no variable (every array NULL), fmi3ActivateModelPartition,
+/// fmi3EvaluateDiscreteStates, fmi3GetFMUState into an existing state. Each file (FMI 3.0
+/// Dahlquist) replays to exit 0 as written, and to exit 1 with the expectation of its last line
+/// changed (so the replay made that call and compared its status).
+#[test]
+fn each_kind_of_line_of_the_checks_own_calls_replays() {
+    let dir = PrivateDir::new_in(&std::env::temp_dir()).unwrap();
+    // (model exchange, the lines after the head, the last line's expectation changed to)
+    let cases: &[(bool, &str, &str)] = &[
+        (
+            false,
+            "fmi3DoStep currentCommunicationPoint=0.0 communicationStepSize=0.1 -> OK\nfmi3GetOutputDerivatives vr=[1] order=[1] -> OK\n",
+            "Error",
+        ),
+        (
+            false,
+            "fmi3ActivateModelPartition clockReference=0 activationTime=0.0 -> Error\n",
+            "OK",
+        ),
+        (
+            false,
+            "fmi3GetUInt16 vr=NULL nValueReferences=0 values=NULL nValues=0 -> OK\n",
+            "Error",
+        ),
+        (
+            false,
+            "fmi3SetBinary vr=NULL nValueReferences=0 values=NULL nValues=0 -> OK\n",
+            "Error",
+        ),
+        (
+            false,
+            "fmi3GetFloat64 vr=NULL nValueReferences=0 values=NULL nValues=0 -> OK\n",
+            "Error",
+        ),
+        (
+            false,
+            "fmi3GetIntervalFraction vr=NULL nValueReferences=0 values=NULL nValues=0 -> any\n",
+            "Fatal",
+        ),
+        (
+            false,
+            "fmi3SetShiftDecimal vr=NULL nValueReferences=0 values=NULL nValues=0 -> any\n",
+            "Fatal",
+        ),
+        (
+            false,
+            "fmi3GetFMUState state=1 -> OK\nfmi3DoStep currentCommunicationPoint=0.0 communicationStepSize=0.1 -> OK\nfmi3SetFMUState state=1 -> OK\nfmi3GetFMUState into=1 -> OK\nfmi3FreeFMUState state=1 -> OK\n",
+            "Error",
+        ),
+        (true, "fmi3EvaluateDiscreteStates -> any\n", "Fatal"),
+        (
+            true,
+            "fmi3SetTime time=0.5 -> OK\nfmi3CompletedIntegratorStep -> OK\n",
+            "Error",
+        ),
+    ];
+    let fmu = dahlquist(3).0;
+    for (i, (me, lines, wrong)) in cases.iter().enumerate() {
+        let text = format!("{}{lines}", head(3, *me, false));
+        let file = dir.path().join(format!("own-{i}.txt"));
+        std::fs::write(&file, &text).unwrap();
+        let (code, out) = replay(&file, &fmu);
+        assert_eq!(code, Some(0), "as written:\n{text}\n{out}");
+        let made = out.lines().filter(|l| l.contains(" -> ")).count();
+        assert_eq!(made, text.lines().count(), "a line a call:\n{out}");
+        let last = text.trim_end().lines().last().unwrap();
+        let changed = format!("{} -> {wrong}", last.rsplit_once(" -> ").unwrap().0);
+        let wrong_text = text.replace(last, &changed);
+        std::fs::write(&file, &wrong_text).unwrap();
+        let (code, out) = replay(&file, &fmu);
+        assert_eq!(code, Some(1), "with '{changed}':\n{out}");
+        assert!(out.contains("the failure reproduces"), "{out}");
+    }
 }
 
 /// Issue 51 item 3: a check that only warns leaves a reproducer too, up to the call its first

@@ -99,9 +99,11 @@ enum Cmd {
         options: CheckOptions,
     },
     /// Replay a reproducer (the calls of a failed check, one a line, as `cargo fmu check` writes
-    /// them) on an FMU, in this process (so that it runs under a debugger): prints each call, its
-    /// status and the values it returned; exits 1 when a status or value is not the one the file
-    /// expects, a buffer's guard was overwritten, or a check of the sequence fails.
+    /// them) on an FMU, in a child process as the checks run (`--in-process`: in this one, so
+    /// that it runs under a debugger): prints each call, its status and the values it returned;
+    /// exits 1 when a status or value is not the one the file expects, a buffer's guard was
+    /// overwritten, a check of the sequence fails, or the FMU crashes (the line and the signal
+    /// said).
     Replay {
         /// The reproducer (conformance/README.md, "Reproducers").
         file: PathBuf,
@@ -110,6 +112,10 @@ enum Cmd {
         /// RUSTFMU_RUNNER_PRELOAD), as `cargo fmu check --preload-lib`.
         #[arg(long = "preload-lib", value_name = "PATH")]
         preload_lib: Vec<PathBuf>,
+        /// Replay in this process, not a child (a crash of the FMU ends it; under a debugger,
+        /// it stops in the FMU).
+        #[arg(long)]
+        in_process: bool,
     },
     /// Compare (or with --write, refresh) the committed model descriptions of the workspace
     /// (`[workspace.metadata.fmu] model-descriptions`) with the packaged FMUs.
@@ -266,10 +272,12 @@ fn run(cmd: Cmd, tool: &str) -> Result<(), String> {
             validate_all(&fmus, python.as_deref(), false)
         }
         Cmd::Check { fmu, options } => check(fmu.as_deref(), options),
-        Cmd::Replay { file, fmu, preload_lib } => {
-            fmi_conformance::preload_libraries(&preload_lib)?;
-            replay(&file, &fmu)
-        }
+        Cmd::Replay {
+            file,
+            fmu,
+            preload_lib,
+            in_process,
+        } => replay(&file, &fmu, preload_lib, in_process),
         Cmd::Info { fmu } => {
             print!("{}", crate::validate::info(&fmu)?);
             Ok(())
@@ -443,16 +451,28 @@ fn check(fmu: Option<&Path>, o: CheckOptions) -> Result<(), String> {
     if report.success() { Ok(()) } else { Err(String::new()) }
 }
 
-/// `cargo fmu replay FILE FMU`: the calls on stdout as they are made, then whether the FMU
-/// answered as the file expects (Err: it did not, or the file or FMU could not be read).
-fn replay(file: &Path, fmu: &Path) -> Result<(), String> {
-    let report = fmi_conformance::replay::run::replay(file, fmu, &mut |line| println!("{line}"))?;
-    match report.difference {
-        None => {
+/// `cargo fmu replay FILE FMU`: the calls on stdout as they are made (by a child process, or
+/// `in_process` by this one), then whether the FMU answered as the file expects (Err: it did not,
+/// it crashed, or the file or FMU could not be read).
+fn replay(file: &Path, fmu: &Path, preload: Vec<PathBuf>, in_process: bool) -> Result<(), String> {
+    use fmi_conformance::runner::{DEFAULT_REPLAY_TIMEOUT_SECONDS, Replayed, RunOptions, replay_in_worker};
+    let replayed = if in_process {
+        fmi_conformance::preload_libraries(&preload)?;
+        let report = fmi_conformance::replay::run::replay(file, fmu, &mut |line| println!("{line}"))?;
+        report.difference.map_or(Replayed::AsExpected, Replayed::Differs)
+    } else {
+        let exe = std::env::current_exe().map_err(|e| format!("cannot find my own executable: {e}"))?;
+        let mut opts = RunOptions::new(exe, vec![CHECK_WORKER.into()]);
+        opts.preload = preload;
+        opts.timeout = std::time::Duration::from_secs(DEFAULT_REPLAY_TIMEOUT_SECONDS);
+        replay_in_worker(file, fmu, &opts)?
+    };
+    match replayed {
+        Replayed::AsExpected => {
             println!("replay: every call answered as {} expects", file.display());
             Ok(())
         }
-        Some(d) => Err(format!("replay: the failure reproduces: {d}")),
+        Replayed::Differs(d) => Err(format!("replay: the failure reproduces: {d}")),
     }
 }
 

@@ -4,8 +4,11 @@
 //! `--as-foreign` checks even this exporter's FMU as another exporter's (to test the checks);
 //! `--strict` makes every warning a failure (what this exporter's own FMUs must pass);
 //! `--reproducers DIR`: where failing random sequences leave their reproducers.
-//! `fmu-check --replay FILE X.fmu` replays a reproducer in this process (as `cargo fmu replay`,
-//! [`fmi_conformance::replay`]): exits 1 when the FMU does not answer as the file expects.
+//! `fmu-check --replay FILE X.fmu` replays a reproducer in a worker process (as `cargo fmu
+//! replay`, [`fmi_conformance::runner::replay_in_worker`]; `--in-process`: in this process, for a
+//! debugger): exits 1 when the FMU does not answer as the file expects or crashes (the line and
+//! the signal said), 2 when the file or the FMU cannot be read. `--timeout` limits the replay too
+//! (default 300 s).
 //! `--junit FILE` and `--json FILE` write the report for CI systems too
 //! ([`fmi_conformance::report`]). `--preload-lib PATH` (repeatable; also
 //! `$RUSTFMU_RUNNER_PRELOAD`) loads a library before the FMU's binary, as the runner's option.
@@ -18,7 +21,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] [--junit FILE] [--json FILE] [--preload-lib PATH]... | --list | --replay FILE X.fmu [--preload-lib PATH]...";
+const USAGE: &str = "usage: fmu-check X.fmu [--filter TEXT] [--timeout SECONDS] [--random-sequences N] [--as-foreign] [--strict] [--reproducers DIR] [--junit FILE] [--json FILE] [--preload-lib PATH]... | --list | --replay FILE X.fmu [--in-process] [--timeout SECONDS] [--preload-lib PATH]...";
 
 struct Args {
     fmu: Option<PathBuf>,
@@ -30,6 +33,7 @@ struct Args {
     strict: bool,
     reproducers: Option<PathBuf>,
     replay: Option<PathBuf>,
+    in_process: bool,
     junit: Option<PathBuf>,
     json: Option<PathBuf>,
     preload: Vec<PathBuf>,
@@ -46,6 +50,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
         strict: false,
         reproducers: None,
         replay: None,
+        in_process: false,
         junit: None,
         json: None,
         preload: vec![],
@@ -72,6 +77,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Args, String> {
             "--strict" => a.strict = true,
             "--reproducers" => a.reproducers = Some(PathBuf::from(value("--reproducers")?)),
             "--replay" => a.replay = Some(PathBuf::from(value("--replay")?)),
+            "--in-process" => a.in_process = true,
             "--junit" => a.junit = Some(PathBuf::from(value("--junit")?)),
             "--json" => a.json = Some(PathBuf::from(value("--json")?)),
             "--preload-lib" => a.preload.push(PathBuf::from(value("--preload-lib")?)),
@@ -106,32 +112,12 @@ fn main() -> ExitCode {
         }
         return ExitCode::SUCCESS;
     }
-    let Some(fmu) = a.fmu else {
+    let Some(fmu) = a.fmu.clone() else {
         eprintln!("{USAGE}");
         return ExitCode::from(2);
     };
-    if let Some(file) = a.replay {
-        // Loaded now, before the FMU's binary (the replay runs in this process).
-        if let Err(e) = rustfmu_libpython::preload(&a.preload, "--preload-lib") {
-            eprintln!("fmu-check: {e}");
-            return ExitCode::from(2);
-        }
-        return match fmi_conformance::replay::run::replay(&file, &fmu, &mut |line| println!("{line}")) {
-            Ok(report) => match report.difference {
-                None => {
-                    println!("replay: every call answered as {} expects", file.display());
-                    ExitCode::SUCCESS
-                }
-                Some(d) => {
-                    eprintln!("fmu-check: replay: the failure reproduces: {d}");
-                    ExitCode::FAILURE
-                }
-            },
-            Err(e) => {
-                eprintln!("fmu-check: {e}");
-                ExitCode::from(2)
-            }
-        };
+    if let Some(file) = &a.replay {
+        return replay(file, &fmu, &a);
     }
     let exe = match std::env::current_exe() {
         Ok(e) => e,
@@ -165,5 +151,44 @@ fn main() -> ExitCode {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
+    }
+}
+
+/// `--replay FILE X.fmu`: in a worker process (a crash of the FMU is a difference, exit 1), or
+/// `--in-process` in this one (under a debugger: it stops in the FMU).
+fn replay(file: &std::path::Path, fmu: &std::path::Path, a: &Args) -> ExitCode {
+    use fmi_conformance::runner::{DEFAULT_REPLAY_TIMEOUT_SECONDS, Replayed, replay_in_worker};
+    let replayed = if a.in_process {
+        // Loaded now, before the FMU's binary (the replay runs in this process).
+        if let Err(e) = rustfmu_libpython::preload(&a.preload, "--preload-lib") {
+            eprintln!("fmu-check: {e}");
+            return ExitCode::from(2);
+        }
+        fmi_conformance::replay::run::replay(file, fmu, &mut |line| println!("{line}"))
+            .map(|r| r.difference.map_or(Replayed::AsExpected, Replayed::Differs))
+    } else {
+        match std::env::current_exe() {
+            Ok(exe) => {
+                let mut opts = RunOptions::new(exe, vec!["__worker".into()]);
+                opts.preload = a.preload.clone();
+                opts.timeout = a.timeout.unwrap_or(Duration::from_secs(DEFAULT_REPLAY_TIMEOUT_SECONDS));
+                replay_in_worker(file, fmu, &opts)
+            }
+            Err(e) => Err(format!("cannot find my own executable: {e}")),
+        }
+    };
+    match replayed {
+        Ok(Replayed::AsExpected) => {
+            println!("replay: every call answered as {} expects", file.display());
+            ExitCode::SUCCESS
+        }
+        Ok(Replayed::Differs(d)) => {
+            eprintln!("fmu-check: replay: the failure reproduces: {d}");
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("fmu-check: {e}");
+            ExitCode::from(2)
+        }
     }
 }

@@ -1052,6 +1052,11 @@ impl<'a> Inst<'a> {
         let what = format!("fmi3Set{}", accessor(v.ty));
         if v.ty == Type::Binary {
             let (size, data) = (bytes.len(), bytes.as_ptr());
+            self.args(vec![
+                ("vr", Val::U32s(vec![*vr])),
+                ("nValues", Val::U64(1)),
+                ("bytes", Val::Bytes(bytes.to_vec())),
+            ]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             return self.call(&what, |c| unsafe { (api.set_binary)(c, vr, 1, &size, &data, 1) });
@@ -1127,18 +1132,7 @@ impl<'a> Inst<'a> {
         let api = self.api();
         let mut st: fmi3FMUState = std::ptr::null_mut();
         assert_eq!(
-            {
-                self.args(vec![]);
-                // SAFETY: a live instance; each pointer is to a live local of the length passed,
-                // or is an FMU state.
-                let s = self.call("fmi3GetFMUState", |c| unsafe {
-                    crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
-                });
-                if let Some(v) = self.state_val(st, true) {
-                    self.output("state", v);
-                }
-                s
-            },
+            self.get_state(&mut st),
             fmi3OK,
             "{}: fmi3GetFMUState: {}",
             self.fmu.id,
@@ -1171,14 +1165,7 @@ impl<'a> Inst<'a> {
             || format!("fmi3SerializeFMUState with size = {size} (fmi3SerializedFMUStateSize's answer)"),
             STATE_RULE3,
         );
-        assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
+        assert_eq!(self.free_state(&mut st), fmi3OK);
         assert!(
             st.is_null(),
             "{}: fmi3FreeFMUState did not set the state pointer to NULL",
@@ -1189,33 +1176,13 @@ impl<'a> Inst<'a> {
 
     /// Deserializes and sets a state; returns the status of the first call that was not OK.
     pub fn restore(&self, bytes: &[u8]) -> fmi3Status {
-        let api = self.api();
         let mut st: fmi3FMUState = std::ptr::null_mut();
-        let s = self
-            .args(vec![("bytes", Val::Bytes(bytes.to_vec()))])
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-            // FMU state.
-            .call("fmi3DeserializeFMUState", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
-                    (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
-                })
-            });
-        if let Some(v) = self.state_val(st, true) {
-            self.output("state", v);
-        }
+        let s = self.deserialize(bytes, &mut st);
         if s != fmi3OK {
             return s;
         }
-        let s = self
-            .state_args(st, vec![])
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-            // FMU state.
-            .call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) });
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        let f = self.state_args(st, vec![]).call("fmi3FreeFMUState", |c| unsafe {
-            crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-        });
+        let s = self.set_state(st);
+        let f = self.free_state(&mut st);
         assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState: {}", self.fmu.id, self.log_text());
         s
     }

@@ -6,12 +6,14 @@
 //! fmi3SetDebugLogging, fmi3GetBinary, fmi3GetNumberOfVariableDependencies and
 //! fmi3GetVariableDependencies, fmi3DeserializeFMUState of NULL bytes, a model-exchange vector
 //! into NULL, fmi3DoStep with NULL outputs, fmi3Get/AdjointDerivative with their counts as given
-//! (a NULL seed, nSeed or nSensitivity other than the elements).
+//! (a NULL seed, nSeed or nSensitivity other than the elements); and the checks' own valid calls
+//! that had no wrapper: fmi3GetOutputDerivatives, the FMU-state calls, fmi3ActivateModelPartition,
+//! and the state table's getters and setters of no variable.
 
 use super::Inst;
 use super::types::*;
 use crate::calllog::Val;
-use crate::guard::{DEPENDENCIES_RULE3, GETTER_RULE3, fill, fill_one};
+use crate::guard::{DEPENDENCIES_RULE3, GETTER_RULE3, Guarded, fill, fill_one};
 use std::ffi::CString;
 use std::ptr::{null, null_mut};
 
@@ -280,4 +282,166 @@ impl Inst<'_> {
             })
         })
     }
+
+    /// fmi3GetOutputDerivatives of `vrs` with `orders`, into as many values with a guard after
+    /// them: the status and the values. Recorded as `fmi3GetOutputDerivatives vr=[3] order=[1]`.
+    pub fn get_output_derivatives(&self, vrs: &[u32], orders: &[i32]) -> (fmi3Status, Vec<f64>) {
+        assert_eq!(vrs.len(), orders.len(), "one order for each value reference");
+        let api = self.api();
+        let n = vrs.len();
+        let mut out = Guarded::new(n, f64::NAN);
+        let p = out.as_mut_ptr();
+        let s = self
+            .args(vec![
+                ("vr", Val::U32s(vrs.to_vec())),
+                ("order", Val::I64s(orders.iter().map(|o| i64::from(*o)).collect())),
+            ])
+            // SAFETY: a live instance; `vrs` and `orders` hold n elements, `p` n values (and the
+            // guard after them).
+            .call("fmi3GetOutputDerivatives", |c| unsafe {
+                (api.get_output_derivatives)(c, vrs.as_ptr(), n, orders.as_ptr(), p, n)
+            });
+        (
+            s,
+            out.into_values(|| format!("fmi3GetOutputDerivatives with nValues = {n}"), GETTER_RULE3),
+        )
+    }
+
+    /// fmi3GetFMUState into `st` (NULL: a new state; else the state it holds, which the FMU
+    /// updates), with a guard after the pointer. Recorded as `fmi3GetFMUState state=N` (N the
+    /// state it made), or `fmi3GetFMUState into=N` (`state=M` added where the FMU answered
+    /// another state than it was given).
+    pub fn get_state(&self, st: &mut fmi3FMUState) -> fmi3Status {
+        let api = self.api();
+        let given = *st;
+        if given.is_null() {
+            self.args(vec![]);
+        } else if let Some(v) = self.state_val(given, false) {
+            self.args(vec![("into", v)]);
+        }
+        // SAFETY: a live instance; `st` is NULL or a state it made, with a guard after it.
+        let s = self.call("fmi3GetFMUState", |c| unsafe {
+            crate::guard::fill_state3(st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
+        });
+        if !st.is_null()
+            && *st != given
+            && let Some(v) = self.state_val(*st, true)
+        {
+            self.output("state", v);
+        }
+        s
+    }
+
+    /// fmi3SetFMUState of `st`. Recorded as `fmi3SetFMUState state=N` (without arguments, not
+    /// replayable, for a state another instance made).
+    pub fn set_state(&self, st: fmi3FMUState) -> fmi3Status {
+        let api = self.api();
+        // SAFETY: a live instance and an FMU state of this FMU (or NULL, which it must refuse).
+        self.state_args(st, vec![])
+            .call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) })
+    }
+
+    /// fmi3FreeFMUState of `st` (which the FMU sets to NULL), with a guard after the pointer.
+    /// Recorded as `fmi3FreeFMUState state=N`.
+    pub fn free_state(&self, st: &mut fmi3FMUState) -> fmi3Status {
+        let api = self.api();
+        let given = *st;
+        // SAFETY: a live instance; `st` is NULL or a state it made, freed once, with a guard
+        // after it.
+        self.state_args(given, vec![]).call("fmi3FreeFMUState", |c| unsafe {
+            crate::guard::fill_state3(st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
+        })
+    }
+
+    /// fmi3DeserializeFMUState of `bytes` into `st`, with a guard after the pointer. Recorded as
+    /// `fmi3DeserializeFMUState bytes=hex:... state=N`.
+    pub fn deserialize(&self, bytes: &[u8], st: &mut fmi3FMUState) -> fmi3Status {
+        let api = self.api();
+        let s = self
+            .args(vec![("bytes", Val::Bytes(bytes.to_vec()))])
+            // SAFETY: a live instance; `bytes` is readable for the length passed; `st` a live
+            // local with a guard after it.
+            .call("fmi3DeserializeFMUState", |c| unsafe {
+                crate::guard::fill_state3(st, "fmi3DeserializeFMUState", |q| {
+                    (api.deserialize_fmu_state)(c, bytes.as_ptr(), bytes.len(), q)
+                })
+            });
+        if let Some(v) = self.state_val(*st, true) {
+            self.output("state", v);
+        }
+        s
+    }
+
+    /// fmi3ActivateModelPartition of the clock `clock` at `time`. Recorded as
+    /// `fmi3ActivateModelPartition clockReference=0 activationTime=0.0`.
+    pub fn activate_model_partition(&self, clock: u32, time: f64) -> fmi3Status {
+        let api = self.api();
+        self.args(vec![
+            ("clockReference", Val::U64(u64::from(clock))),
+            ("activationTime", Val::F64(time)),
+        ])
+        // SAFETY: a live instance; no pointer.
+        .call("fmi3ActivateModelPartition", |c| unsafe {
+            (api.activate_model_partition)(c, clock, time)
+        })
+    }
+
+    /// `function` ([`crate::replay::fmi3::takes_no_variable`]: a getter or setter of values, clocks, intervals or
+    /// shifts) of no variable: every array NULL, nValueReferences and nValues 0
+    /// (the state table's valid call of it). Recorded as `fmi3GetUInt16 vr=NULL
+    /// nValueReferences=0 values=NULL nValues=0`; None for another function.
+    pub fn with_no_variable(&self, function: &str) -> Option<fmi3Status> {
+        let f = crate::replay::fmi3::takes_no_variable(function)?;
+        let a = self.api();
+        let (v, z) = (null(), null_mut());
+        self.args(vec![
+            ("vr", Val::Null),
+            ("nValueReferences", Val::U64(0)),
+            ("values", Val::Null),
+            ("nValues", Val::U64(0)),
+        ]);
+        // SAFETY: every array NULL with a count of 0: the FMU reads and writes none of them.
+        Some(self.call(f, |c| unsafe {
+            match f {
+                "fmi3GetFloat32" => (a.get_float32)(c, v, 0, z, 0),
+                "fmi3GetFloat64" => (a.get_float64)(c, v, 0, null_mut(), 0),
+                "fmi3GetInt8" => (a.get_int8)(c, v, 0, z, 0),
+                "fmi3GetUInt8" => (a.get_uint8)(c, v, 0, z, 0),
+                "fmi3GetInt16" => (a.get_int16)(c, v, 0, z, 0),
+                "fmi3GetUInt16" => (a.get_uint16)(c, v, 0, z, 0),
+                "fmi3GetInt32" => (a.get_int32)(c, v, 0, null_mut(), 0),
+                "fmi3GetUInt32" => (a.get_uint32)(c, v, 0, z, 0),
+                "fmi3GetInt64" => (a.get_int64)(c, v, 0, null_mut(), 0),
+                "fmi3GetUInt64" => (a.get_uint64)(c, v, 0, z, 0),
+                "fmi3GetBoolean" => (a.get_boolean)(c, v, 0, null_mut(), 0),
+                "fmi3GetString" => (a.get_string)(c, v, 0, null_mut(), 0),
+                "fmi3GetBinary" => (a.get_binary)(c, v, 0, null_mut(), null_mut(), 0),
+                "fmi3GetClock" => (a.get_clock)(c, v, 0, null_mut()),
+                "fmi3SetFloat32" => (a.set_float32)(c, v, 0, null(), 0),
+                "fmi3SetFloat64" => (a.set_float64)(c, v, 0, null(), 0),
+                "fmi3SetInt8" => (a.set_int8)(c, v, 0, null(), 0),
+                "fmi3SetUInt8" => (a.set_uint8)(c, v, 0, null(), 0),
+                "fmi3SetInt16" => (a.set_int16)(c, v, 0, null(), 0),
+                "fmi3SetUInt16" => (a.set_uint16)(c, v, 0, null(), 0),
+                "fmi3SetInt32" => (a.set_int32)(c, v, 0, null(), 0),
+                "fmi3SetUInt32" => (a.set_uint32)(c, v, 0, null(), 0),
+                "fmi3SetInt64" => (a.set_int64)(c, v, 0, null(), 0),
+                "fmi3SetUInt64" => (a.set_uint64)(c, v, 0, null(), 0),
+                "fmi3SetBoolean" => (a.set_boolean)(c, v, 0, null(), 0),
+                "fmi3SetString" => (a.set_string)(c, v, 0, null(), 0),
+                "fmi3SetBinary" => (a.set_binary)(c, v, 0, null(), null(), 0),
+                "fmi3SetClock" => (a.set_clock)(c, v, 0, null()),
+                "fmi3GetIntervalDecimal" => (a.get_interval_decimal)(c, v, 0, null_mut(), null_mut()),
+                "fmi3GetIntervalFraction" => (a.get_interval_fraction)(c, v, 0, null_mut(), null_mut(), null_mut()),
+                "fmi3GetShiftDecimal" => (a.get_shift_decimal)(c, v, 0, null_mut()),
+                "fmi3GetShiftFraction" => (a.get_shift_fraction)(c, v, 0, null_mut(), null_mut()),
+                "fmi3SetIntervalDecimal" => (a.set_interval_decimal)(c, v, 0, null()),
+                "fmi3SetIntervalFraction" => (a.set_interval_fraction)(c, v, 0, null(), null()),
+                "fmi3SetShiftDecimal" => (a.set_shift_decimal)(c, v, 0, null()),
+                "fmi3SetShiftFraction" => (a.set_shift_fraction)(c, v, 0, null(), null()),
+                other => unreachable!("{other} is a getter or setter takes_no_variable knows"),
+            }
+        }))
+    }
 }
+

@@ -15,10 +15,12 @@ const FMI3_NO_ARGUMENTS: &[&str] = &[
     "fmi3UpdateDiscreteStates",
     "fmi3GetNumberOfContinuousStates",
     "fmi3GetNumberOfEventIndicators",
+    "fmi3EvaluateDiscreteStates",
 ];
 
 /// The other FMI 3.0 calls the replay makes, with the arguments the call log records, besides
-/// the getters and setters of [`replays_values_of`] and every function of the FMU state.
+/// the getters and setters of [`replays_values_of`], every function of the FMU state and the
+/// calls of no variable ([`takes_no_variable`]).
 const FMI3_WITH_ARGUMENTS: &[&str] = &[
     "fmi3EnterInitializationMode",
     "fmi3GetContinuousStates",
@@ -40,6 +42,8 @@ const FMI3_WITH_ARGUMENTS: &[&str] = &[
     "fmi3GetNumberOfVariableDependencies",
     "fmi3GetVariableDependencies",
     "fmi3SetDebugLogging",
+    "fmi3GetOutputDerivatives",
+    "fmi3ActivateModelPartition",
 ];
 
 /// Whether the replay gets and sets values of the type called `name`: the numbers and Boolean
@@ -63,5 +67,18 @@ pub fn fmi3_call(function: &str) -> Option<(&'static str, bool)> {
         .any(|prefix| name.strip_prefix(prefix).is_some_and(replays_values_of));
     let no_arguments = FMI3_NO_ARGUMENTS.contains(&name);
     let state = name.contains("FMUState");
-    (no_arguments || values || state || FMI3_WITH_ARGUMENTS.contains(&name)).then_some((name, no_arguments))
+    let listed = FMI3_WITH_ARGUMENTS.contains(&name) || takes_no_variable(name).is_some();
+    (no_arguments || values || state || listed).then_some((name, no_arguments))
+}
+
+/// `function` as the standard names it where [`crate::fmi3::Inst::with_no_variable`] calls it: a
+/// getter or setter of the values of a type (Strings, Binaries and Clocks too), of intervals or of
+/// shifts.
+pub fn takes_no_variable(function: &str) -> Option<&'static str> {
+    let name = *fmi_standard::functions::FMI3_FUNCTIONS
+        .iter()
+        .find(|f| **f == function)?;
+    let rest = name.strip_prefix("fmi3Get").or_else(|| name.strip_prefix("fmi3Set"))?;
+    let of_type = md_reader::fmi3::Type::ALL.iter().any(|t| t.name() == rest);
+    (of_type || rest.starts_with("Interval") || rest.starts_with("Shift")).then_some(name)
 }

@@ -460,8 +460,10 @@ pub fn replay(fmu: &Fmu, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<Re
                 crate::replay::status_word(status)
             )));
         }
+        crate::replay_calls::next_line(calls, i + 1);
         Ok(())
     };
+    crate::replay_calls::next_line(calls, 0);
     let result = if me {
         if fmu.md.me.is_none() {
             return Err(format!("{} does not declare <ModelExchange>", fmu.id));

@@ -510,7 +510,6 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                     })
             }) {
                 let inst = in_state(fmu, me, state);
-                let api = &fmu.api;
                 let s = match v.ty {
                     Type::Float64 if v.array => {
                         // the values it has (where readable), else its start, else zeros
@@ -534,47 +533,23 @@ pub fn fmi3_each_variable_can_be_set_exactly_where_the_standard_allows_it(fmu: &
                         inst.set_f64(&[v.vr], &x)
                     }
                     Type::Float64 => {
-                        let mut x = 0.0;
                         // the value it has (where readable), else its start, else 0
-                        let got = state != State::Instantiated
-                            // SAFETY: the standard's function from the library the FMU keeps
-                            // loaded, on this instance's live handle; each pointer we pass is to a
-                            // live local of at least the length passed (or is an FMU state, the
-                            // FMU's own handle).
-                            && inst.call("get", |c| unsafe {
-                                fill_one(&mut x, "fmi3GetFloat64", "nValues", RULE, |p| {
-                                    (api.get_float64)(c, &v.vr, 1, p, 1)
-                                })
-                            }) == fmi3OK;
-                        if !got {
-                            x = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0.0);
-                        }
-                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
-                        // this instance's live handle; each pointer we pass is to a live local of
-                        // at least the length passed (or is an FMU state, the FMU's own handle).
-                        inst.call("fmi3SetFloat64", |c| unsafe { (api.set_float64)(c, &v.vr, 1, &x, 1) })
+                        let got = (state != State::Instantiated)
+                            .then(|| inst.get_f64(&[v.vr]))
+                            .filter(|(s, _)| *s == fmi3OK)
+                            .map(|(_, x)| x[0]);
+                        let x = got.unwrap_or_else(|| v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0.0));
+                        inst.set_f64(&[v.vr], &[x])
                     }
                     Type::Int32 => {
                         let x: i32 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(0);
-                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
-                        // this instance's live handle; each pointer we pass is to a live local of
-                        // at least the length passed (or is an FMU state, the FMU's own handle).
-                        inst.call("fmi3SetInt32", |c| unsafe { (api.set_int32)(c, &v.vr, 1, &x, 1) })
+                        inst.set_raw(v, &x.to_ne_bytes())
                     }
                     Type::Enumeration => {
                         let x: i64 = v.start.as_deref().and_then(|s| s.parse().ok()).unwrap_or(1);
-                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
-                        // this instance's live handle; each pointer we pass is to a live local of
-                        // at least the length passed (or is an FMU state, the FMU's own handle).
-                        inst.call("fmi3SetInt64", |c| unsafe { (api.set_int64)(c, &v.vr, 1, &x, 1) })
+                        inst.set_raw(v, &x.to_ne_bytes())
                     }
-                    _ => {
-                        let x = v.start.as_deref() == Some("true");
-                        // SAFETY: the standard's function from the library the FMU keeps loaded, on
-                        // this instance's live handle; each pointer we pass is to a live local of
-                        // at least the length passed (or is an FMU state, the FMU's own handle).
-                        inst.call("fmi3SetBoolean", |c| unsafe { (api.set_boolean)(c, &v.vr, 1, &x, 1) })
-                    }
+                    _ => inst.set_raw(v, &[u8::from(v.start.as_deref() == Some("true"))]),
                 };
                 let want = settable_in(v, state);
                 cases += 1;
@@ -660,6 +635,10 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
                         .parse()
                         .unwrap_or_else(|e| panic!("{id}: start '{start}' of {}: {e}", v.name));
                     let mut got: [$t; 1] = [0];
+                    inst.args(vec![
+                        ("vr", crate::calllog::Val::U32s(vec![v.vr])),
+                        ("nValues", crate::calllog::Val::U64(1)),
+                    ]);
                     // SAFETY: the standard's function from the library the FMU keeps loaded, on
                     // this instance's live handle; each pointer we pass is to a live local of at
                     // least the length passed (or is an FMU state, the FMU's own handle).
@@ -685,6 +664,10 @@ pub fn fmi3_start_values_are_readable_in_instantiated(fmu: &Fmu3) {
         for v in with_start(fmu, Type::Boolean) {
             let want = matches!(v.start.as_deref(), Some("true" | "1"));
             let mut got = [2u8];
+            inst.args(vec![
+                ("vr", crate::calllog::Val::U32s(vec![v.vr])),
+                ("nValues", crate::calllog::Val::U64(1)),
+            ]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3GetBoolean", |c| unsafe {
@@ -842,7 +825,10 @@ pub fn fmi3_the_time_variable_reads_the_current_time_and_cannot_be_set(fmu: &Fmu
         assert_eq!(i.exit_init(), fmi3OK);
         if me {
             i.event_iteration();
-            assert_eq!(i.unary("ctm", api.enter_continuous_time_mode), fmi3OK);
+            assert_eq!(
+                i.unary("fmi3EnterContinuousTimeMode", api.enter_continuous_time_mode),
+                fmi3OK
+            );
         }
         let h = fmu.step_size();
         for _ in 0..3 {

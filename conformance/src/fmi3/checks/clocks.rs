@@ -248,6 +248,7 @@ fn run(
                     euler_step(&mut inst, h);
                 }
                 inst.time = next;
+                inst.args(vec![("time", crate::calllog::Val::F64(next))]);
                 // SAFETY: a live instance; each pointer is to a live local of the length passed, or
                 // is an FMU state.
                 assert_eq!(inst.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, next) }), fmi3OK);

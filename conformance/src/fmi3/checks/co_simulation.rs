@@ -2,7 +2,6 @@
 //! and output derivatives. (Registered with the calls, [`super::calls`] re-exports them.)
 
 use super::*;
-use crate::guard::{GETTER_RULE3, Guarded};
 
 /// Intermediate update (FMI 3.0, 4.2.2; `providesIntermediateUpdate`): over ten steps, every
 /// call of the importer's callback names a time inside the step in progress, never earlier than
@@ -281,15 +280,7 @@ impl crate::checks::calls::OutputDerivatives for Inst<'_> {
         v
     }
     fn output_derivatives(&mut self, vrs: &[u32], orders: &[i32]) -> Result<Vec<f64>, String> {
-        let api = self.api();
-        let n = vrs.len();
-        let mut out = Guarded::new(n, f64::NAN);
-        let p = out.as_mut_ptr();
-        // SAFETY: a live instance; `p` holds `n` values (and the guard after them).
-        let s = self.call("fmi3GetOutputDerivatives", |c| unsafe {
-            (api.get_output_derivatives)(c, vrs.as_ptr(), n, orders.as_ptr(), p, n)
-        });
-        let out = out.into_values(|| format!("fmi3GetOutputDerivatives with nValues = {n}"), GETTER_RULE3);
+        let (s, out) = self.get_output_derivatives(vrs, orders);
         if s == fmi3OK { Ok(out) } else { Err(self.log_text()) }
     }
 }

@@ -186,6 +186,7 @@ fn derivatives_check(fmu: &Fmu3, me: bool) {
         if let Some(slot) = slots.iter().find(|p| p.0.vr == vr) {
             let mut x = base_x.clone();
             x[slot.2 + e] = value;
+            inst.args(vec![("values", crate::calllog::Val::F64s(x.clone()))]);
             assert_eq!(
                 // SAFETY: a live instance; each pointer is to a live local of the length passed, or
                 // is an FMU state.

@@ -36,14 +36,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         let t_saved = a.time;
         // get/set through a pointer
         let mut st: fmi3FMUState = null_mut();
-        assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            a.call("fmi3GetFMUState", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
+        assert_eq!(a.get_state(&mut st), fmi3OK);
         let bytes = a.snapshot();
         let reference: Vec<Vec<u64>> = (0..10)
             .map(|_| {
@@ -51,15 +44,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
                 a.observe()
             })
             .collect();
-        assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            a.call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) }),
-            fmi3OK,
-            "{}: fmi3SetFMUState: {}",
-            fmu.id,
-            a.log_text()
-        );
+        assert_eq!(a.set_state(st), fmi3OK, "{}: fmi3SetFMUState: {}", fmu.id, a.log_text());
         a.time = t_saved;
         let again: Vec<Vec<u64>> = (0..10)
             .map(|_| {
@@ -76,12 +61,9 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         // Another instance of the same FMU continues from that state like the first (as FMI 2.0
         // importers use it: a state is a copy of the FMU's state, not of one instance).
         let mut other = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
+        // (Recorded without its arguments, not replayable: a state another instance made.)
         assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            other.call("fmi3SetFMUState (of another instance)", |c| unsafe {
-                (api.set_fmu_state)(c, st)
-            }),
+            other.set_state(st),
             fmi3OK,
             "{}: fmi3SetFMUState with a state of another instance of the same FMU: {}",
             fmu.id,
@@ -101,21 +83,8 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         );
         drop(other);
         // Overwriting a state with fmi3GetFMUState on the same pointer.
-        assert_eq!(
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            a.call("fmi3GetFMUState (update)", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
-        assert_eq!(
-            // SAFETY: a live instance; `st` is the state it returned, freed once (it sets `st` to NULL).
-            a.call("fmi3FreeFMUState", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
+        assert_eq!(a.get_state(&mut st), fmi3OK);
+        assert_eq!(a.free_state(&mut st), fmi3OK);
         assert!(st.is_null(), "{}: fmi3FreeFMUState left the pointer non-NULL", fmu.id);
         // serialize / deserialize into a new instance
         let mut b = if me { Inst::me(fmu) } else { Inst::cs(fmu) };
@@ -149,20 +118,13 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
         );
         // size and serialize with a too small buffer
         let mut st: fmi3FMUState = null_mut();
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        assert_eq!(
-            // SAFETY: a live instance; the pointer is to a live local (and the guard after it).
-            a.call("get", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
+        assert_eq!(a.get_state(&mut st), fmi3OK);
         let n = bytes.len().saturating_sub(1);
         let mut small = Guarded::new(n, 0u8);
         let p = small.as_mut_ptr();
+        a.state_args(st, vec![("size", crate::calllog::Val::U64(n as u64))]);
         // SAFETY: a live instance; `p` holds `n` bytes (and the guard after them).
-        let s = a.call("fmi3SerializeFMUState(size - 1)", |c| unsafe {
+        let s = a.call("fmi3SerializeFMUState", |c| unsafe {
             (api.serialize_fmu_state)(c, st, p, n)
         });
         // Refused or not, nothing may be written past the buffer the call names.
@@ -177,15 +139,7 @@ pub fn fmi3_fmu_state_get_set_and_serialize_round_trips_continue_bit_identically
             fmu.id,
             status_name(s)
         );
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        assert_eq!(
-            // SAFETY: a live instance and the FMU state it returned (and the guard after the pointer).
-            a.call("free", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-            }),
-            fmi3OK
-        );
+        assert_eq!(a.free_state(&mut st), fmi3OK);
     }
     if tested == 0 {
         skip_not_declared("canGetAndSetFMUState and canSerializeFMUState");
@@ -205,7 +159,6 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     a.initialize();
     a.step(fmu.step_size());
     let bytes = a.snapshot();
-    let api = &fmu.api;
     let before = a.observe();
     // Damage of the length is refused whatever the format; damage only a checksum (or the
     // token in the state) can find is required to be refused of this exporter's format, and of
@@ -218,22 +171,9 @@ pub fn fmi3_damaged_serialized_states_and_states_of_other_fmus_are_refused(fmu: 
     }
     let attempt = |what: &str, b: &[u8], strict: bool| {
         let mut st: fmi3FMUState = null_mut();
-        // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
-        // FMU state.
-        let s = crate::outcome::on_purpose(|| {
-            // SAFETY: a live instance; `b` is readable for the length passed; `st` a live local.
-            a.call(what, |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3DeserializeFMUState", |q| {
-                    (api.deserialize_fmu_state)(c, b.as_ptr(), b.len(), q)
-                })
-            })
-        });
+        let s = crate::outcome::on_purpose(|| a.deserialize(b, &mut st));
         if s == fmi3OK {
-            // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
-            // an FMU state.
-            let _ = a.call("free", |c| unsafe {
-                crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-            });
+            let _ = a.free_state(&mut st);
         }
         // A damaged buffer is the importer's mistake (FMI 3.0.2 §2.2.6.4 defines deserializing
         // what fmi3SerializeFMUState wrote): not detected, a warning.

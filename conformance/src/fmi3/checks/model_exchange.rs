@@ -316,9 +316,11 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
             ));
             break;
         }
+        i.args(vec![("time", crate::calllog::Val::F64(t1))]);
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = i.call("fmi3SetTime", |c| unsafe { (api.set_time)(c, t1) });
+        i.args(vec![("values", crate::calllog::Val::F64s(x1[..n].to_vec()))]);
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {
@@ -327,6 +329,7 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         assert_eq!([s, s2], [fmi3OK; 2], "{id}: at t = {t1}: {}", i.log_text());
         i.time = t1;
         let (mut enter, mut term) = (7u8, 7u8);
+        i.args(vec![]);
         // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an
         // FMU state.
         let s = i.call("fmi3CompletedIntegratorStep", |c| unsafe {
@@ -365,6 +368,7 @@ fn me_events_run(fmu: &Fmu3, h: f64, stop: f64, excited: bool) -> EventsRun {
         }
         if steps % 50 == 0 && nz > 0 {
             let (s, x) = i.vector("fmi3GetContinuousStates", api.get_continuous_states, n);
+            i.args(vec![("values", crate::calllog::Val::F64s(x[..n].to_vec()))]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s2 = i.call("fmi3SetContinuousStates", |c| unsafe {

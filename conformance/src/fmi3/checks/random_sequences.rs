@@ -427,6 +427,7 @@ pub fn replay(fmu: &Fmu3, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<R
     );
     out(&head);
     report.lines.push(head);
+    crate::replay_calls::next_line(calls, 0);
     let result = run_sequence(fmu, me, &ops, &mut |k, op, status, standard, inst| {
         let line = &calls[k];
         let expected = line.expected.unwrap_or(standard);
@@ -442,6 +443,7 @@ pub fn replay(fmu: &Fmu3, lines: &[Line], out: &mut dyn FnMut(&str)) -> Result<R
                 inst.log_text()
             )));
         }
+        crate::replay_calls::next_line(calls, k + 1);
         Ok(())
     });
     report.difference = result.err().map(|e| match e {

@@ -558,6 +558,7 @@ impl<'a> Setup<'a> {
         let (s, x0) = inst.vector("fmi3GetContinuousStates", api.get_continuous_states, nx);
         self.ok(inst, s, "fmi3GetContinuousStates");
         let derivatives = |x: &[f64]| {
+            inst.args(vec![("values", Val::F64s(x[..nx].to_vec()))]);
             // SAFETY: a live instance; each pointer is to a live local of the length passed, or is
             // an FMU state.
             let s = inst.call("fmi3SetContinuousStates", |c| unsafe {

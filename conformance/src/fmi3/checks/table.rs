@@ -6,6 +6,7 @@
 
 use super::directional_derivatives::{knowns, unknowns};
 use super::*;
+use crate::calllog::Val;
 use crate::guard::{GETTER_RULE3, Guarded};
 use State::*;
 
@@ -234,28 +235,31 @@ impl F {
                 i.call(name, |$c| unsafe { $call })
             };
         }
+        /// This getter or setter (of values, clocks, intervals or shifts) of no variable: NULL
+        /// arrays of length 0.
+        macro_rules! none {
+            () => {
+                i.with_no_variable(name)
+                    .unwrap_or_else(|| panic!("{name} takes no variable"))
+            };
+        }
         /// A getter of one readable variable of that type.
         macro_rules! get {
             ($f:ident, $ty:expr, $t:ty) => {{
                 let v = readable(i.fmu, $ty);
+                if v.is_empty() {
+                    return none!();
+                }
+                i.args(vec![
+                    ("vr", Val::U32s(v.clone())),
+                    ("nValues", Val::U64(v.len() as u64)),
+                ]);
                 let mut out = Guarded::<$t>::new(v.len(), Default::default());
                 let p = out.as_mut_ptr();
                 let s = valid!(|c| (api.$f)(c, v.as_ptr(), v.len(), p, v.len()));
                 out.into_values(|| format!("{name} with nValues = {}", v.len()), GETTER_RULE3);
                 s
             }};
-        }
-        /// A getter of no variable.
-        macro_rules! none {
-            ($f:ident) => {
-                valid!(|c| (api.$f)(c, null(), 0, null_mut(), 0))
-            };
-        }
-        /// A setter of no variable.
-        macro_rules! none_set {
-            ($f:ident) => {
-                valid!(|c| (api.$f)(c, null(), 0, null(), 0))
-            };
         }
         macro_rules! unary {
             ($f:ident) => {
@@ -272,8 +276,11 @@ impl F {
         // arrays (the structural parameters at their starts).
         let n_states = i.fmu.n_states_declared();
         match self {
-            F::SetDebugLogging => valid!(|c| (api.set_debug_logging)(c, false, 0, null())),
-            F::EnterInitializationMode => valid!(|c| (api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0)),
+            F::SetDebugLogging => i.set_debug_logging(false, 0, None),
+            F::EnterInitializationMode => {
+                i.args(vec![("startTime", Val::F64(0.0))]);
+                valid!(|c| (api.enter_initialization_mode)(c, false, 0.0, 0.0, false, 0.0))
+            }
             F::ExitInitializationMode => unary!(exit_initialization_mode),
             F::EnterEventMode => unary!(enter_event_mode),
             F::Terminate => unary!(terminate),
@@ -284,6 +291,13 @@ impl F {
             F::GetBoolean => get!(get_boolean, Type::Boolean, u8),
             F::GetString => {
                 let v = readable(i.fmu, Type::String);
+                if v.is_empty() {
+                    return none!();
+                }
+                i.args(vec![
+                    ("vr", Val::U32s(v.clone())),
+                    ("nValues", Val::U64(v.len() as u64)),
+                ]);
                 let mut out = vec![null(); v.len()];
                 let n = out.len();
                 valid!(
@@ -292,77 +306,57 @@ impl F {
                     })
                 )
             }
-            F::GetFloat32 => none!(get_float32),
-            F::GetInt8 => none!(get_int8),
-            F::GetUInt8 => none!(get_uint8),
-            F::GetInt16 => none!(get_int16),
-            F::GetUInt16 => none!(get_uint16),
-            F::GetUInt32 => none!(get_uint32),
-            F::GetUInt64 => none!(get_uint64),
-            F::GetBinary => valid!(|c| (api.get_binary)(c, null(), 0, null_mut(), null_mut(), 0)),
-            F::SetFloat64 => none_set!(set_float64),
-            F::SetInt32 => none_set!(set_int32),
-            F::SetInt64 => none_set!(set_int64),
-            F::SetBoolean => none_set!(set_boolean),
-            F::SetString => none_set!(set_string),
-            F::SetFloat32 => none_set!(set_float32),
-            F::SetInt8 => none_set!(set_int8),
-            F::SetUInt8 => none_set!(set_uint8),
-            F::SetInt16 => none_set!(set_int16),
-            F::SetUInt16 => none_set!(set_uint16),
-            F::SetUInt32 => none_set!(set_uint32),
-            F::SetUInt64 => none_set!(set_uint64),
-            F::SetBinary => valid!(|c| (api.set_binary)(c, null(), 0, null(), null(), 0)),
-            F::GetClock => valid!(|c| (api.get_clock)(c, null(), 0, null_mut())),
-            F::SetClock => valid!(|c| (api.set_clock)(c, null(), 0, null())),
+            F::GetFloat32 => none!(),
+            F::GetInt8 => none!(),
+            F::GetUInt8 => none!(),
+            F::GetInt16 => none!(),
+            F::GetUInt16 => none!(),
+            F::GetUInt32 => none!(),
+            F::GetUInt64 => none!(),
+            F::GetBinary => none!(),
+            F::SetFloat64 => none!(),
+            F::SetInt32 => none!(),
+            F::SetInt64 => none!(),
+            F::SetBoolean => none!(),
+            F::SetString => none!(),
+            F::SetFloat32 => none!(),
+            F::SetInt8 => none!(),
+            F::SetUInt8 => none!(),
+            F::SetInt16 => none!(),
+            F::SetUInt16 => none!(),
+            F::SetUInt32 => none!(),
+            F::SetUInt64 => none!(),
+            F::SetBinary | F::GetClock | F::SetClock => none!(),
             F::GetNumberOfVariableDependencies => {
-                let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
-                let mut n = 0;
-                valid!(|c| crate::guard::fill_one(
-                    &mut n,
-                    "fmi3GetNumberOfVariableDependencies",
-                    "one nDependencies",
-                    crate::guard::DEPENDENCIES_RULE3,
-                    |q| (api.get_number_of_variable_dependencies)(c, vr, q)
-                ))
+                i.number_of_dependencies(first_of(i.fmu, Type::Float64).unwrap_or(0)).0
             }
-            F::GetVariableDependencies => {
-                let vr = first_of(i.fmu, Type::Float64).unwrap_or(0);
-                valid!(|c| (api.get_variable_dependencies)(c, vr, null_mut(), null_mut(), null_mut(), null_mut(), 0))
-            }
+            F::GetVariableDependencies => i.dependencies(first_of(i.fmu, Type::Float64).unwrap_or(0), 0).0,
             F::GetFMUState => {
                 let mut st: fmi3FMUState = null_mut();
-                let s =
-                    valid!(|c| crate::guard::fill_state3(&mut st, "fmi3GetFMUState", |q| (api.get_fmu_state)(c, q)));
+                let s = i.get_state(&mut st);
                 if s == fmi3OK {
-                    // SAFETY: the standard's function from the library the FMU keeps loaded, on
-                    // this instance's live handle; each pointer we pass is to a live local of at
-                    // least the length passed (or is an FMU state, the FMU's own handle).
-                    let f = i.call("fmi3FreeFMUState", |c| unsafe {
-                        crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q))
-                    });
-                    assert_eq!(f, fmi3OK, "{}: fmi3FreeFMUState of a state just taken", i.fmu.id);
+                    assert_eq!(
+                        i.free_state(&mut st),
+                        fmi3OK,
+                        "{}: fmi3FreeFMUState of a state just taken",
+                        i.fmu.id
+                    );
                 }
                 s
             }
-            F::FreeFMUState => {
-                let mut st: fmi3FMUState = null_mut();
-                valid!(|c| crate::guard::fill_state3(&mut st, "fmi3FreeFMUState", |q| (api.free_fmu_state)(c, q)))
-            }
+            F::FreeFMUState => i.free_state(&mut null_mut()),
             F::GetDirectionalDerivative => derivative_call(i, false),
             F::GetAdjointDerivative => derivative_call(i, true),
             F::EnterConfigurationMode => unary!(enter_configuration_mode),
             F::ExitConfigurationMode => unary!(exit_configuration_mode),
-            F::GetIntervalDecimal => valid!(|c| (api.get_interval_decimal)(c, null(), 0, null_mut(), null_mut())),
-            F::GetIntervalFraction => {
-                valid!(|c| (api.get_interval_fraction)(c, null(), 0, null_mut(), null_mut(), null_mut()))
-            }
-            F::GetShiftDecimal => valid!(|c| (api.get_shift_decimal)(c, null(), 0, null_mut())),
-            F::GetShiftFraction => valid!(|c| (api.get_shift_fraction)(c, null(), 0, null_mut(), null_mut())),
-            F::SetIntervalDecimal => valid!(|c| (api.set_interval_decimal)(c, null(), 0, null())),
-            F::SetIntervalFraction => valid!(|c| (api.set_interval_fraction)(c, null(), 0, null(), null())),
-            F::SetShiftDecimal => valid!(|c| (api.set_shift_decimal)(c, null(), 0, null())),
-            F::SetShiftFraction => valid!(|c| (api.set_shift_fraction)(c, null(), 0, null(), null())),
+            F::GetIntervalDecimal
+            | F::GetIntervalFraction
+            | F::GetShiftDecimal
+            | F::GetShiftFraction
+            | F::SetIntervalDecimal
+            | F::SetIntervalFraction
+            | F::SetShiftDecimal
+            | F::SetShiftFraction => none!(),
             F::EvaluateDiscreteStates => unary!(evaluate_discrete_states),
             F::UpdateDiscreteStates => {
                 let mut f = [0u8; 5];
@@ -377,14 +371,19 @@ impl F {
             F::EnterContinuousTimeMode => unary!(enter_continuous_time_mode),
             F::CompletedIntegratorStep => {
                 let (mut a, mut b) = (0u8, 0u8);
+                i.args(vec![]);
                 valid!(|c| crate::guard::fill_integrator_step3(&mut a, &mut b, |qa, qb| (api
                     .completed_integrator_step)(
                     c, true, qa, qb
                 )))
             }
-            F::SetTime => valid!(|c| (api.set_time)(c, 0.0)),
+            F::SetTime => {
+                i.args(vec![("time", Val::F64(0.0))]);
+                valid!(|c| (api.set_time)(c, 0.0))
+            }
             F::SetContinuousStates => {
                 let x = vec![0.0; n_states];
+                i.args(vec![("values", Val::F64s(x.clone()))]);
                 valid!(|c| (api.set_continuous_states)(c, x.as_ptr(), n_states))
             }
             F::GetContinuousStateDerivatives => vector!(get_continuous_state_derivatives, n_states),
@@ -414,27 +413,22 @@ impl F {
             F::EnterStepMode => unary!(enter_step_mode),
             F::GetOutputDerivatives => {
                 let v = vr_list(i.fmu, Type::Float64);
-                let orders = vec![1i32; v.len()];
-                let mut out = vec![0.0; v.len()];
-                valid!(|c| (api.get_output_derivatives)(
-                    c,
-                    v.as_ptr(),
-                    v.len(),
-                    orders.as_ptr(),
-                    out.as_mut_ptr(),
-                    out.len()
-                ))
+                i.get_output_derivatives(&v, &vec![1i32; v.len()]).0
             }
             F::DoStep => {
                 let (mut f, mut t) = ([0u8; 3], 0.0);
                 let h = i.fmu.step_size();
+                i.args(vec![
+                    ("currentCommunicationPoint", Val::F64(0.0)),
+                    ("communicationStepSize", Val::F64(h)),
+                ]);
                 valid!(
                     |c| crate::guard::fill_outputs("fmi3DoStep", &mut f, &mut t, |[a, b, d], t| {
                         (api.do_step)(c, 0.0, h, true, a, b, d, t)
                     })
                 )
             }
-            F::ActivateModelPartition => valid!(|c| (api.activate_model_partition)(c, 0, 0.0)),
+            F::ActivateModelPartition => i.activate_model_partition(0, 0.0),
         }
     }
 }
@@ -462,26 +456,7 @@ fn derivative_call(i: &Inst, adjoint: bool) -> fmi3Status {
     let k: Vec<u32> = k_var.iter().map(|v| v.vr).collect();
     let seed = vec![1.0; if adjoint { nu } else { nk }];
     let mut sens = vec![0.0; if adjoint { nk } else { nu }];
-    let f = if adjoint {
-        i.api().get_adjoint_derivative
-    } else {
-        i.api().get_directional_derivative
-    };
-    // SAFETY: a live instance; each pointer is to a live local of the length passed, or is an FMU
-    // state.
-    i.call("fmi3Get*Derivative", |c| unsafe {
-        f(
-            c,
-            u.as_ptr(),
-            u.len(),
-            k.as_ptr(),
-            k.len(),
-            seed.as_ptr(),
-            seed.len(),
-            sens.as_mut_ptr(),
-            sens.len(),
-        )
-    })
+    i.derivative(adjoint, &u, &k, &seed, &mut sens)
 }
 
 fn derivative_pair(fmu: &Fmu3, me: bool) -> (Vec<&Variable>, Vec<&Variable>) {
