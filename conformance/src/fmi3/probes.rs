@@ -339,8 +339,8 @@ impl Inst<'_> {
     #[allow(clippy::not_unsafe_ptr_arg_deref)]
     pub fn set_state(&self, st: fmi3FMUState) -> fmi3Status {
         let api = self.api();
-        // SAFETY: a live instance and an FMU state of this FMU (or NULL, which it must refuse).
         self.state_args(st, vec![])
+            // SAFETY: a live instance and an FMU state of this FMU (or NULL, which it must refuse).
             .call("fmi3SetFMUState", |c| unsafe { (api.set_fmu_state)(c, st) })
     }
 
