@@ -30,6 +30,9 @@ impl<const N: usize> StateVector for [f64; N] {
     ) -> Result<(), crate::solver::OdeError> {
         let mut v = nalgebra::SVector::<f64, N>::from(*x);
         let result = solver.integrate(
+            // Inlined into each stage of the integrator, as `f` is where `Context::integrate`
+            // passes it (src/step/integrate.rs says what the call cost).
+            #[inline(always)]
             |t, v: &nalgebra::SVector<f64, N>| nalgebra::SVector::from(f(t, &(*v).into())),
             t0,
             span,
