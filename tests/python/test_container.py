@@ -291,7 +291,10 @@ def test_the_components_messages_reach_the_importers_logger_with_their_names(tmp
 
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_cargo_fmu_check_passes_on_the_container(name):
-    r = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", container(name)], capture_output=True, text=True, timeout=1800)
+    # --timeout 120: the memory check's 10,000 instantiations of a container (it unpacks its
+    # components) passed the default 30 s per check in session 13's CI rehearsal beside clippy
+    # and the other worker; the test judges verdicts, not the checker's time.
+    r = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", "--timeout", "120", container(name)], capture_output=True, text=True, timeout=1800)
     tail = (r.stdout + r.stderr)[-6000:]
     assert r.returncode == 0, tail
     assert re.search(r"\b0 failed\b", r.stdout + r.stderr), tail

@@ -114,7 +114,7 @@ def test_the_fmi3_container_is_valid_for_fmpy_fmutool_and_cargo_fmu_check(name):
     r = subprocess.run([fmutool, "-input", path, "-check"], capture_output=True, text=True, timeout=300)
     errors = [line for line in (r.stdout + r.stderr).splitlines() if re.match(r"^\s*(ERROR|CRITICAL)\b", line)]
     assert r.returncode == 0 and not errors and "No semantic error against the FMI-3" in r.stdout + r.stderr, r.stdout + r.stderr
-    r = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", path], capture_output=True, text=True, timeout=1800)
+    r = subprocess.run([CARGO_FMU, "fmu", "check", "--strict", "--timeout", "120", path], capture_output=True, text=True, timeout=1800)
     tail = (r.stdout + r.stderr)[-6000:]
     assert r.returncode == 0, tail
     assert re.search(r"\b0 failed\b", r.stdout + r.stderr), tail

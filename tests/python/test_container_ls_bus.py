@@ -163,7 +163,7 @@ def test_cargo_fmu_check_passes_the_networked_pendulum_container(version):
     container declares no FMU state for such a system, and the state functions are refused saying
     why. FMI 2.0: its only tunable parameters, the pendulum's rtol and atol, change nothing in the
     check's steps (the 1 ms steps' error is below both values tried): a warning, not a failure."""
-    r = subprocess.run([CARGO_FMU, "fmu", "check", container(version)], capture_output=True, text=True, timeout=1800)
+    r = subprocess.run([CARGO_FMU, "fmu", "check", "--timeout", "120", container(version)], capture_output=True, text=True, timeout=1800)
     out = r.stdout + r.stderr
     assert r.returncode == 0, out[-4000:]
     line = [x for x in out.splitlines() if " passed, " in x and " failed" in x][-1]
